@@ -1,0 +1,58 @@
+# One place that applies the language level, warnings and sanitizers to every tellus target.
+
+function(tellus_apply_options target)
+  target_compile_features(${target} PUBLIC cxx_std_23)
+  set_target_properties(${target} PROPERTIES CXX_EXTENSIONS OFF)
+  target_compile_options(${target} PRIVATE
+    -Wall -Wextra -Wpedantic -Wconversion -Wsign-conversion -Wshadow -Wnon-virtual-dtor
+    -Wold-style-cast -Wcast-align -Wnull-dereference -Wdouble-promotion -Wformat=2
+    -Wimplicit-fallthrough)
+  if(TELLUS_WARNINGS_AS_ERRORS)
+    target_compile_options(${target} PRIVATE -Werror)
+  endif()
+  if(TELLUS_SANITIZE)
+    target_compile_options(${target} PRIVATE -fsanitize=${TELLUS_SANITIZE} -fno-omit-frame-pointer
+                                             -fno-sanitize-recover=all)
+    target_link_options(${target} PRIVATE -fsanitize=${TELLUS_SANITIZE})
+  endif()
+endfunction()
+
+# tellus_add_library(<module> SOURCES ... [PUBLIC_DEPS ...] [PRIVATE_DEPS ...])
+# Creates tellus_<module> with the alias tellus::<module>; include/ is public, src/ private.
+function(tellus_add_library name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
+  add_library(tellus_${name} STATIC ${ARG_SOURCES})
+  add_library(tellus::${name} ALIAS tellus_${name})
+  target_include_directories(tellus_${name}
+    PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include
+    PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src)
+  target_link_libraries(tellus_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
+  tellus_apply_options(tellus_${name})
+endfunction()
+
+# tellus_add_test(<name> SOURCES ... LIBS ...): one GoogleTest executable per module. ctest labels
+# come from the test suite's name, so one executable can hold several kinds of test:
+#   suite name ends in Extremes    -> label "extremes"
+#   suite name ends in Integration -> label "integration"
+#   suite name ends in Slow        -> labels "slow;integration"
+#   suite name ends in Gl          -> label "gl" (run under xvfb-run by `make test`)
+#   anything else                  -> label "unit"
+function(tellus_add_test name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;LIBS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gtest_main)
+  target_compile_definitions(${name} PRIVATE
+    TELLUS_TEST_DATA_DIR="${TELLUS_SOURCE_DATA_DIR}"
+    TELLUS_TEST_TMP_DIR="${CMAKE_BINARY_DIR}/test-tmp")
+  tellus_apply_options(${name})
+  set(kinds Extremes Integration Slow Gl)
+  set(labels extremes integration "slow\\;integration" gl)
+  set(exclude "")
+  foreach(kind label IN ZIP_LISTS kinds labels)
+    gtest_discover_tests(${name} TEST_FILTER "*${kind}.*" PROPERTIES LABELS "${label}"
+                         DISCOVERY_TIMEOUT 60)
+    string(APPEND exclude ":*${kind}.*")
+  endforeach()
+  string(SUBSTRING "${exclude}" 1 -1 exclude)
+  gtest_discover_tests(${name} TEST_FILTER "-${exclude}" PROPERTIES LABELS unit DISCOVERY_TIMEOUT 60)
+endfunction()
