@@ -33,9 +33,10 @@ struct TileKey {
 /** Hash for unordered containers. */
 struct TileKeyHash {
   std::size_t operator()(const TileKey& k) const noexcept {
-    std::uint64_t h = static_cast<std::uint64_t>(k.level) * 0x9E3779B97F4A7C15ULL;
-    h ^= static_cast<std::uint64_t>(k.row) + 0x9E3779B97F4A7C15ULL + (h << 6) + (h >> 2);
-    h ^= static_cast<std::uint64_t>(k.col) + 0x9E3779B97F4A7C15ULL + (h << 6) + (h >> 2);
+    constexpr std::uint64_t kGolden = 0x9E3779B97F4A7C15u;
+    std::uint64_t h = static_cast<std::uint64_t>(k.level) * kGolden;
+    h ^= static_cast<std::uint64_t>(k.row) + kGolden + (h << 6) + (h >> 2);
+    h ^= static_cast<std::uint64_t>(k.col) + kGolden + (h << 6) + (h >> 2);
     return static_cast<std::size_t>(h);
   }
 };

@@ -1,0 +1,183 @@
+#pragma once
+/**
+ * @file TileCache.hpp
+ * @brief The tile cache: files in a World Wind tree plus one SQLite index per cache root.
+ *
+ * Layout: `<root>/index.sqlite` and `<root>/<server>/<name>-<hash>/<level>/<row>/<row>_<col>.<ext>`,
+ * each dataset folder holding a `dataset.txt` descriptor. The index is the source of truth for what
+ * is cached; files are only read through it.
+ *
+ * Guarantees:
+ * - a tile is never visible half written: bytes go to a temp file, are fsynced and renamed into place,
+ *   and only then does the index row appear (one batched transaction for many writers);
+ * - a full disk (ENOSPC, EFBIG, SQLITE_FULL) is reported as CacheErrc::DiskFull, the temp file is
+ *   removed and the index is left as it was;
+ * - many threads may read at once (pooled read connections, WAL); one writer thread per process
+ *   batches writes; two processes (a server and a seeder) may share one cache without
+ *   "database is locked" (WAL, BEGIN IMMEDIATE, a busy timeout);
+ * - opening costs the same for an empty cache and for millions of tiles (no scan); a damaged index
+ *   is detected at open, moved aside and rebuilt from the tree.
+ *
+ * Thread safety: every public method may be called from any thread concurrently.
+ */
+
+#include <tellus/cache/CacheError.hpp>
+#include <tellus/cache/Dataset.hpp>
+#include <tellus/cache/TileKey.hpp>
+
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <expected>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace tellus {
+
+/** Milliseconds since the Unix epoch (the cache's clock unit). */
+using UnixMillis = std::int64_t;
+
+/** HTTP-ish metadata kept with a tile. */
+struct TileMeta {
+  std::string contentType;                ///< e.g. "image/jpeg"
+  std::string etag;                       ///< upstream ETag, "" if none
+  std::string lastModified;               ///< upstream Last-Modified, "" if none
+  std::optional<UnixMillis> expiresAt;    ///< after this the tile is stale; nullopt = never
+  UnixMillis fetchedAt = 0;               ///< when it was fetched (0 = now, filled in by put)
+};
+
+/** Result of a lookup. */
+struct CacheLookup {
+  enum class Kind {
+    Miss,   ///< nothing known: fetch it
+    Absent, ///< upstream said "no tile here"; ask again after retryAfter
+    Hit,    ///< bytes are there
+  };
+  Kind kind = Kind::Miss;
+  std::vector<std::byte> bytes; ///< Hit only
+  TileMeta meta;                ///< Hit only
+  bool stale = false;           ///< Hit: expiresAt has passed (serve, but refresh)
+  std::int64_t size = 0;        ///< Hit: byte count recorded in the index
+  UnixMillis retryAfter = 0;    ///< Absent only
+};
+
+/** A registered dataset with its id. */
+struct DatasetInfo {
+  DatasetId id = 0;
+  DatasetSpec spec;
+  std::string folder; ///< relative to the cache root
+};
+
+/** Tiles and bytes of one dataset at one level (absent markers count as tiles of 0 bytes). */
+struct LevelStats {
+  std::int32_t level = 0;
+  std::int64_t tiles = 0;
+  std::int64_t absent = 0;
+  std::int64_t bytes = 0;
+};
+struct DatasetStats {
+  DatasetInfo dataset;
+  std::int64_t tiles = 0;
+  std::int64_t bytes = 0;
+  std::vector<LevelStats> levels;
+};
+
+/** What `verify` found. Paths are relative to the cache root. */
+struct VerifyReport {
+  std::vector<std::string> filesWithoutRows;  ///< tile files the index does not know
+  std::vector<std::string> rowsWithoutFiles;  ///< index rows whose file is missing
+  std::vector<std::string> sizeMismatches;    ///< index bytes != file size
+  std::vector<std::string> strayTempFiles;    ///< leftovers of interrupted writes
+  std::string integrity;                      ///< "ok" or SQLite's quick_check message
+  bool ok() const {
+    return filesWithoutRows.empty() && rowsWithoutFiles.empty() && sizeMismatches.empty() &&
+           integrity == "ok";
+  }
+};
+
+/** Which tiles `prune` removes. */
+struct PruneOptions {
+  std::optional<std::chrono::milliseconds> olderThan; ///< fetched longer ago than this
+  std::optional<std::string> datasetName;             ///< only datasets with this name
+  bool includePinned = false;                         ///< pinned datasets are kept unless set
+};
+
+class TileCache {
+public:
+  struct Options {
+    std::filesystem::path root;                          ///< created if missing (unless readOnly)
+    std::uint64_t sizeLimitBytes = 0;                    ///< 0 = unlimited; LRU beyond it
+    bool readOnly = false;                               ///< offline media: no writes at all
+    bool fsyncTiles = true;                              ///< fsync each tile before its rename
+    std::chrono::milliseconds busyTimeout{60000};        ///< wait for another process's writer
+    std::chrono::milliseconds accessFlushInterval{1000}; ///< how often last-access times are written
+    int readConnections = 4;                             ///< pooled read connections
+  };
+
+  /** Opens (creating or migrating) the cache. A damaged index is moved aside to
+   * `index.sqlite.corrupt-<millis>` and rebuilt from the tree. Fails for an unusable root, an index of
+   * a newer schema, or an index that cannot be created. */
+  static std::expected<std::unique_ptr<TileCache>, CacheError> open(const Options& options);
+
+  ~TileCache();
+  TileCache(const TileCache&) = delete;
+  TileCache& operator=(const TileCache&) = delete;
+
+  const std::filesystem::path& root() const noexcept;
+  /** True when open() found the index damaged and rebuilt it. */
+  bool wasRebuiltAtOpen() const noexcept;
+
+  // --- datasets -------------------------------------------------------------------------------
+  /** Registers a dataset (idempotent: the same spec gives the same id; `pinned` is updated). */
+  std::expected<DatasetId, CacheError> registerDataset(const DatasetSpec& spec);
+  std::optional<DatasetInfo> dataset(DatasetId id) const;
+  std::vector<DatasetInfo> datasets() const;
+  std::expected<void, CacheError> setPinned(DatasetId id, bool pinned);
+
+  // --- tiles ----------------------------------------------------------------------------------
+  /** Looks a tile up. A row whose file vanished or changed size is a Miss (and the row is dropped). */
+  std::expected<CacheLookup, CacheError> get(DatasetId id, const TileKey& key);
+  /** Index-only check (no file access): Hit/Absent/Miss kind and staleness, no bytes, no touch. */
+  std::expected<CacheLookup, CacheError> peek(DatasetId id, const TileKey& key) const;
+  /** Stores a tile durably; returns when the index row is committed. */
+  std::expected<void, CacheError> put(DatasetId id, const TileKey& key,
+                                      std::span<const std::byte> bytes, const TileMeta& meta);
+  /** Remembers that upstream has no tile here until retryAfter (its file, if any, is removed). */
+  std::expected<void, CacheError> putAbsent(DatasetId id, const TileKey& key, UnixMillis retryAfter);
+  /** Removes a tile (row first, then the file). Removing an unknown tile is not an error. */
+  std::expected<void, CacheError> erase(DatasetId id, const TileKey& key);
+
+  // --- maintenance ----------------------------------------------------------------------------
+  std::expected<std::vector<DatasetStats>, CacheError> stats() const;
+  std::expected<VerifyReport, CacheError> verify() const;
+  /** Rebuilds the index from the tree (datasets from their descriptors, tiles from file names);
+   * removes stray temp files. Returns the number of tiles indexed. */
+  std::expected<std::int64_t, CacheError> rebuild();
+  /** Removes tiles as selected; returns how many. */
+  std::expected<std::int64_t, CacheError> prune(const PruneOptions& options);
+  /** Evicts least recently used tiles of unpinned datasets until the total is at most the limit.
+   * Runs by itself after writes; returns the number evicted. */
+  std::expected<std::int64_t, CacheError> evictToLimit();
+  /** Total bytes of all cached tiles (from the index's counters, no scan). */
+  std::expected<std::int64_t, CacheError> totalBytes() const;
+  /** Writes pending last-access times and waits until every queued write is committed. */
+  void flush();
+
+private:
+  struct Impl;
+  explicit TileCache(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+/** Milliseconds since the Unix epoch, now. */
+UnixMillis unixMillisNow() noexcept;
+
+/** File extension for a MIME type ("image/jpeg" -> "jpg", "application/bil16" -> "bil"), and back. */
+std::string extensionForMimeType(std::string_view mimeType);
+std::string mimeTypeForExtension(std::string_view extension);
+
+} // namespace tellus

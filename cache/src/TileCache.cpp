@@ -1,0 +1,1083 @@
+#include <tellus/cache/TileCache.hpp>
+#include <tellus/cache/TilePath.hpp>
+
+#include "FileIo.hpp"
+#include "Schema.hpp"
+#include "Sqlite.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <limits>
+#include <future>
+#include <map>
+#include <mutex>
+#include <set>
+#include <shared_mutex>
+#include <thread>
+#include <unordered_map>
+#include <unordered_set>
+
+namespace tellus {
+
+namespace fs = std::filesystem;
+
+UnixMillis unixMillisNow() noexcept {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+std::string extensionForMimeType(std::string_view m) {
+  if (m == "image/jpeg" || m == "image/jpg") return "jpg";
+  if (m == "image/png" || m.starts_with("image/png;")) return "png";
+  if (m == "image/tiff" || m == "image/geotiff") return "tif";
+  if (m == "application/bil16" || m == "application/bil" || m == "image/bil") return "bil";
+  if (m == "image/webp") return "webp";
+  if (m == "image/gif") return "gif";
+  if (m == "image/dds") return "dds";
+  return "bin";
+}
+
+std::string mimeTypeForExtension(std::string_view e) {
+  if (e == "jpg" || e == "jpeg") return "image/jpeg";
+  if (e == "png") return "image/png";
+  if (e == "tif" || e == "tiff") return "image/tiff";
+  if (e == "bil") return "application/bil16";
+  if (e == "webp") return "image/webp";
+  if (e == "gif") return "image/gif";
+  if (e == "dds") return "image/dds";
+  return "application/octet-stream";
+}
+
+namespace {
+
+constexpr const char* kIndexName = "index.sqlite";
+constexpr const char* kCorruptMarker = "index.corrupt";
+constexpr const char* kDescriptorName = "dataset.txt";
+constexpr int kStatePresent = 1;
+constexpr int kStateAbsent = 2;
+constexpr std::size_t kMaxBatch = 1024;
+
+using Result = std::expected<void, CacheError>;
+
+CacheError invalid(std::string msg) { return CacheError{CacheErrc::InvalidArgument, std::move(msg)}; }
+
+std::string keyText(const TileKey& k) {
+  return "L" + std::to_string(k.level) + " R" + std::to_string(k.row) + " C" + std::to_string(k.col);
+}
+
+struct TouchKey {
+  DatasetId dataset;
+  TileKey key;
+  bool operator==(const TouchKey&) const = default;
+};
+struct TouchKeyHash {
+  std::size_t operator()(const TouchKey& t) const noexcept {
+    return TileKeyHash{}(t.key) ^ (static_cast<std::size_t>(t.dataset) * 0x9E3779B97F4A7C15ULL);
+  }
+};
+
+/** One read connection with its prepared statements. */
+struct ReadConn {
+  sql::DbPtr db;
+  sql::Stmt lookup;
+};
+
+/** A dataset as the cache uses it. */
+struct DatasetEntry {
+  DatasetInfo info;
+  TileGrid grid;
+  fs::path dir; // absolute
+};
+
+sql::DbPtr openDb(const fs::path& path, bool readOnly, bool create, int busyMs, int* rcOut) {
+  sqlite3* raw = nullptr;
+  int flags = SQLITE_OPEN_NOMUTEX;
+  flags |= readOnly ? SQLITE_OPEN_READONLY : (SQLITE_OPEN_READWRITE | (create ? SQLITE_OPEN_CREATE : 0));
+  const int rc = sqlite3_open_v2(path.c_str(), &raw, flags, nullptr);
+  sql::DbPtr db(raw);
+  *rcOut = rc;
+  if (rc != SQLITE_OK) return nullptr;
+  sqlite3_busy_timeout(db.get(), busyMs);
+  sqlite3_extended_result_codes(db.get(), 1);
+  return db;
+}
+
+} // namespace
+
+// ------------------------------------------------------------------------------------------------
+
+struct TileCache::Impl {
+  Options options;
+  fs::path indexPath;
+  bool rebuiltAtOpen = false;
+
+  // Datasets, loaded at open, refreshed on an unknown id (another process may register some).
+  mutable std::shared_mutex datasetsMutex;
+  mutable std::map<DatasetId, DatasetEntry> datasetsById;
+
+  // Directories known to exist (saves a stat per put).
+  std::mutex dirsMutex;
+  std::unordered_set<std::string> knownDirs;
+
+  // Read connections.
+  mutable std::mutex readMutex;
+  mutable std::vector<std::unique_ptr<ReadConn>> idleReaders;
+
+  // The single writer: a thread owning the write connection, fed by a queue of operations that it
+  // commits in batches (group commit).
+  struct WriteOp {
+    std::function<Result(Impl&)> apply;               // inside the transaction
+    std::function<void(bool committed)> after;        // after commit/rollback (file clean-up)
+    bool ownTransactions = false;                     // runs alone and manages its transactions
+    std::promise<Result> done;
+  };
+  sql::DbPtr writeDb;
+  std::mutex queueMutex;
+  std::condition_variable queueCv;
+  std::condition_variable idleCv;
+  std::deque<std::unique_ptr<WriteOp>> queue;
+  bool busy = false;
+  bool stopping = false;
+  std::unordered_map<TouchKey, UnixMillis, TouchKeyHash> touches; // guarded by queueMutex
+  std::thread writer;
+
+  // Writer-side prepared statements (used by the writer thread only).
+  sql::Stmt upsertTile, deleteTile, touchTile, totalStmt;
+
+  ~Impl() { stopWriter(); }
+
+  // ---------------------------------------------------------------------------- connections
+  std::expected<std::unique_ptr<ReadConn>, CacheError> makeReader() const {
+    int rc = 0;
+    auto db = openDb(indexPath, true, false, static_cast<int>(options.busyTimeout.count()), &rc);
+    if (!db) return std::unexpected(sql::errorFrom(nullptr, rc, "opening index for reading"));
+    auto c = std::make_unique<ReadConn>();
+    c->lookup = sql::Stmt(db.get(),
+                          "SELECT state, bytes, content_type, etag, last_modified, expires, "
+                          "fetched_at, retry_after FROM tiles "
+                          "WHERE dataset = ?1 AND level = ?2 AND row = ?3 AND col = ?4");
+    if (!c->lookup.ok()) {
+      return std::unexpected(sql::errorFrom(db.get(), c->lookup.prepareRc(), "preparing lookup"));
+    }
+    c->db = std::move(db);
+    return c;
+  }
+
+  struct ReaderLease {
+    const Impl* impl;
+    std::unique_ptr<ReadConn> conn;
+    ReaderLease(const Impl* i, std::unique_ptr<ReadConn> c) : impl(i), conn(std::move(c)) {}
+    ReaderLease(ReaderLease&&) noexcept = default;
+    ReaderLease& operator=(ReaderLease&&) = delete;
+    ~ReaderLease() {
+      if (!conn) return;
+      std::lock_guard lock(impl->readMutex);
+      if (impl->idleReaders.size() < static_cast<std::size_t>(std::max(1, impl->options.readConnections))) {
+        impl->idleReaders.push_back(std::move(conn));
+      }
+    }
+  };
+
+  std::expected<ReaderLease, CacheError> acquireReader() const {
+    {
+      std::lock_guard lock(readMutex);
+      if (!idleReaders.empty()) {
+        auto c = std::move(idleReaders.back());
+        idleReaders.pop_back();
+        return ReaderLease{this, std::move(c)};
+      }
+    }
+    auto c = makeReader();
+    if (!c) return std::unexpected(c.error());
+    return ReaderLease{this, std::move(*c)};
+  }
+
+  // ---------------------------------------------------------------------------- datasets
+  static DatasetSpec specFromRow(const sql::Stmt::Use& u) {
+    DatasetSpec s;
+    s.server = u.text(1);
+    s.name = u.text(2);
+    s.grid.sector = Sector{u.f64(4), u.f64(5), u.f64(6), u.f64(7)};
+    s.grid.levelZeroDeltaDeg = u.f64(8);
+    s.grid.tileWidth = static_cast<std::int32_t>(u.i64(9));
+    s.grid.tileHeight = static_cast<std::int32_t>(u.i64(10));
+    s.grid.numLevels = static_cast<std::int32_t>(u.i64(11));
+    s.mimeType = u.text(12);
+    s.extension = u.text(13);
+    s.style = u.text(14);
+    s.time = u.text(15);
+    s.pinned = u.i64(16) != 0;
+    return s;
+  }
+
+  /** Reloads the dataset table into memory (any connection). */
+  Result loadDatasets(sqlite3* db) const {
+    sql::Stmt s(db, "SELECT id, server, name, folder, west, south, east, north, level_zero_delta, "
+                    "tile_width, tile_height, num_levels, mime_type, extension, style, time, pinned "
+                    "FROM datasets ORDER BY id");
+    if (!s.ok()) return std::unexpected(sql::errorFrom(db, s.prepareRc(), "reading datasets"));
+    std::map<DatasetId, DatasetEntry> loaded;
+    sql::Stmt::Use u(s);
+    int rc = 0;
+    while ((rc = u.step()) == SQLITE_ROW) {
+      DatasetSpec spec = specFromRow(u);
+      auto grid = TileGrid::create(spec.grid);
+      if (!grid) continue; // a row this build cannot use; `verify` will not touch it either
+      const DatasetId id = u.i64(0);
+      std::string folder = u.text(3);
+      fs::path dir = options.root / folder;
+      loaded.emplace(id, DatasetEntry{DatasetInfo{id, std::move(spec), std::move(folder)},
+                                      std::move(*grid), std::move(dir)});
+    }
+    if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "reading datasets"));
+    std::unique_lock lock(datasetsMutex);
+    datasetsById = std::move(loaded);
+    return {};
+  }
+
+  std::optional<DatasetEntry> findDataset(DatasetId id) const {
+    {
+      std::shared_lock lock(datasetsMutex);
+      if (auto it = datasetsById.find(id); it != datasetsById.end()) return it->second;
+    }
+    auto r = acquireReader();
+    if (!r) return std::nullopt;
+    if (!loadDatasets(r->conn->db.get())) return std::nullopt;
+    std::shared_lock lock(datasetsMutex);
+    if (auto it = datasetsById.find(id); it != datasetsById.end()) return it->second;
+    return std::nullopt;
+  }
+
+  std::expected<DatasetEntry, CacheError> checkedDataset(DatasetId id, const TileKey& key) const {
+    auto d = findDataset(id);
+    if (!d) return std::unexpected(invalid("unknown dataset id " + std::to_string(id)));
+    if (key.level < 0 || key.level >= d->grid.numLevels() || !d->grid.isValid(key)) {
+      return std::unexpected(invalid("tile " + keyText(key) + " is outside the grid of dataset '" +
+                                     d->info.spec.name + "'"));
+    }
+    return *d;
+  }
+
+  fs::path tilePath(const DatasetEntry& d, const TileKey& key) const {
+    return d.dir / tileRelativePath(key, d.info.spec.extension);
+  }
+
+  Result ensureDir(const fs::path& dir) {
+    {
+      std::lock_guard lock(dirsMutex);
+      if (knownDirs.contains(dir.native())) return {};
+    }
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) {
+      const bool full = ec == std::errc::no_space_on_device || ec == std::errc::file_too_large;
+      return std::unexpected(CacheError{full ? CacheErrc::DiskFull : CacheErrc::Io,
+                                        "cannot create " + dir.string() + ": " + ec.message()});
+    }
+    std::lock_guard lock(dirsMutex);
+    knownDirs.insert(dir.native());
+    return {};
+  }
+
+  // ---------------------------------------------------------------------------- writer
+  Result prepareWriter() {
+    sqlite3* db = writeDb.get();
+    upsertTile = sql::Stmt(db,
+                           "INSERT INTO tiles(dataset, level, row, col, state, bytes, content_type, "
+                           "etag, last_modified, expires, fetched_at, last_access, retry_after) "
+                           "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?11, ?12) "
+                           "ON CONFLICT(dataset, level, row, col) DO UPDATE SET "
+                           "state = excluded.state, bytes = excluded.bytes, "
+                           "content_type = excluded.content_type, etag = excluded.etag, "
+                           "last_modified = excluded.last_modified, expires = excluded.expires, "
+                           "fetched_at = excluded.fetched_at, last_access = excluded.last_access, "
+                           "retry_after = excluded.retry_after");
+    deleteTile = sql::Stmt(db, "DELETE FROM tiles WHERE dataset = ?1 AND level = ?2 AND row = ?3 "
+                               "AND col = ?4");
+    touchTile = sql::Stmt(db, "UPDATE tiles SET last_access = max(last_access, ?5) WHERE "
+                              "dataset = ?1 AND level = ?2 AND row = ?3 AND col = ?4");
+    totalStmt = sql::Stmt(db, "SELECT coalesce(sum(bytes), 0) FROM usage");
+    for (const sql::Stmt* s : {&upsertTile, &deleteTile, &touchTile, &totalStmt}) {
+      if (!s->ok()) return std::unexpected(sql::errorFrom(db, s->prepareRc(), "preparing writer"));
+    }
+    return {};
+  }
+
+  void startWriter() {
+    writer = std::thread([this] { writerLoop(); });
+  }
+
+  void stopWriter() {
+    if (!writer.joinable()) return;
+    {
+      std::lock_guard lock(queueMutex);
+      stopping = true;
+    }
+    queueCv.notify_all();
+    writer.join();
+  }
+
+  /** Queues an operation for the writer thread and waits for its commit. */
+  Result submit(std::function<Result(Impl&)> apply, std::function<void(bool)> after = {},
+                bool ownTransactions = false) {
+    if (options.readOnly) return std::unexpected(CacheError{CacheErrc::ReadOnly, "the cache is read-only"});
+    auto op = std::make_unique<WriteOp>();
+    op->apply = std::move(apply);
+    op->after = std::move(after);
+    op->ownTransactions = ownTransactions;
+    auto fut = op->done.get_future();
+    {
+      std::lock_guard lock(queueMutex);
+      if (stopping) return std::unexpected(CacheError{CacheErrc::Io, "the cache is closing"});
+      queue.push_back(std::move(op));
+    }
+    queueCv.notify_one();
+    return fut.get();
+  }
+
+  /** Queues without waiting (self-healing clean-ups from readers). */
+  void submitDetached(std::function<Result(Impl&)> apply, std::function<void(bool)> after = {}) {
+    if (options.readOnly) return;
+    auto op = std::make_unique<WriteOp>();
+    op->apply = std::move(apply);
+    op->after = std::move(after);
+    {
+      std::lock_guard lock(queueMutex);
+      if (stopping) return;
+      queue.push_back(std::move(op));
+    }
+    queueCv.notify_one();
+  }
+
+  static bool isSqlFailure(const CacheError& e) { return e.code != CacheErrc::InvalidArgument; }
+
+  Result begin() {
+    const int rc = sql::exec(writeDb.get(), "BEGIN IMMEDIATE");
+    if (rc != SQLITE_OK) return std::unexpected(sql::errorFrom(writeDb.get(), rc, "starting a write"));
+    return {};
+  }
+  Result commit() {
+    const int rc = sql::exec(writeDb.get(), "COMMIT");
+    if (rc != SQLITE_OK) {
+      sql::exec(writeDb.get(), "ROLLBACK");
+      return std::unexpected(sql::errorFrom(writeDb.get(), rc, "committing"));
+    }
+    return {};
+  }
+
+  void flushTouches(std::unordered_map<TouchKey, UnixMillis, TouchKeyHash>& batch) {
+    if (batch.empty()) return;
+    if (!begin()) return; // last-access times are advisory: a failure only delays them
+    for (const auto& [tk, when] : batch) {
+      sql::Stmt::Use u(touchTile);
+      u.bind(1, tk.dataset).bind(2, std::int64_t{tk.key.level}).bind(3, tk.key.row).bind(4, tk.key.col);
+      u.bind(5, when);
+      u.step();
+    }
+    (void)commit();
+    batch.clear();
+  }
+
+  void runBatch(std::vector<std::unique_ptr<WriteOp>>& ops) {
+    std::vector<Result> results(ops.size());
+    auto started = begin();
+    if (!started) {
+      for (std::size_t i = 0; i < ops.size(); ++i) {
+        if (ops[i]->after) ops[i]->after(false);
+        ops[i]->done.set_value(std::unexpected(started.error()));
+      }
+      return;
+    }
+    for (std::size_t i = 0; i < ops.size(); ++i) {
+      sql::exec(writeDb.get(), "SAVEPOINT op");
+      results[i] = ops[i]->apply(*this);
+      if (!results[i]) sql::exec(writeDb.get(), "ROLLBACK TO op");
+      sql::exec(writeDb.get(), "RELEASE op");
+    }
+    const auto committed = commit();
+    for (std::size_t i = 0; i < ops.size(); ++i) {
+      const bool ok = committed && results[i];
+      if (ops[i]->after) ops[i]->after(ok);
+      ops[i]->done.set_value(!committed ? std::unexpected(committed.error()) : results[i]);
+    }
+  }
+
+  void writerLoop() {
+    auto lastTouchFlush = std::chrono::steady_clock::now();
+    for (;;) {
+      std::vector<std::unique_ptr<WriteOp>> ops;
+      std::unordered_map<TouchKey, UnixMillis, TouchKeyHash> touchBatch;
+      bool stop = false;
+      {
+        std::unique_lock lock(queueMutex);
+        queueCv.wait_for(lock, options.accessFlushInterval,
+                         [this] { return stopping || !queue.empty(); });
+        while (!queue.empty() && ops.size() < kMaxBatch) {
+          ops.push_back(std::move(queue.front()));
+          queue.pop_front();
+        }
+        const auto now = std::chrono::steady_clock::now();
+        if (stopping || now - lastTouchFlush >= options.accessFlushInterval || touches.size() > 65536) {
+          touchBatch.swap(touches);
+          lastTouchFlush = now;
+        }
+        stop = stopping && queue.empty() && ops.empty();
+        busy = !ops.empty() || !touchBatch.empty();
+      }
+      flushTouches(touchBatch);
+      bool wrote = false;
+      std::vector<std::unique_ptr<WriteOp>> group;
+      for (auto& op : ops) {
+        if (!op->ownTransactions) {
+          group.push_back(std::move(op));
+          continue;
+        }
+        if (!group.empty()) runBatch(group);
+        group.clear();
+        auto r = op->apply(*this);
+        if (op->after) op->after(r.has_value());
+        op->done.set_value(std::move(r));
+      }
+      if (!group.empty()) runBatch(group);
+      wrote = !ops.empty();
+      if (wrote && options.sizeLimitBytes > 0) (void)evictLocked();
+      {
+        std::lock_guard lock(queueMutex);
+        busy = false;
+      }
+      idleCv.notify_all();
+      if (stop) return;
+    }
+  }
+
+  std::expected<std::int64_t, CacheError> totalLocked() {
+    sql::Stmt::Use u(totalStmt);
+    const int rc = u.step();
+    if (rc != SQLITE_ROW) return std::unexpected(sql::errorFrom(writeDb.get(), rc, "reading totals"));
+    return u.i64(0);
+  }
+
+  /** Deletes rows chosen by a query (dataset, level, row, col, folder, extension, bytes), in chunks
+   * of at most 1000 rows per transaction, rows first and then their files. Stops after `maxRows`
+   * rows or once `bytesToFree` bytes are gone. Writer thread only. Returns the number removed. */
+  std::expected<std::int64_t, CacheError> deleteSelected(const char* selectSql,
+                                                         const std::function<void(sql::Stmt::Use&)>& bind,
+                                                         std::int64_t maxRows,
+                                                         std::optional<std::int64_t> bytesToFree = std::nullopt) {
+    std::int64_t removed = 0;
+    std::int64_t freed = 0;
+    auto done = [&] { return removed >= maxRows || (bytesToFree && freed >= *bytesToFree); };
+    while (!done()) {
+      std::vector<std::pair<TouchKey, fs::path>> victims;
+      {
+        sql::Stmt sel(writeDb.get(), selectSql);
+        if (!sel.ok()) return std::unexpected(sql::errorFrom(writeDb.get(), sel.prepareRc(), "selecting tiles"));
+        sql::Stmt::Use u(sel);
+        bind(u);
+        int rc = 0;
+        std::int64_t chunkFreed = 0;
+        while ((rc = u.step()) == SQLITE_ROW) {
+          const TileKey k{static_cast<std::int32_t>(u.i64(1)), u.i64(2), u.i64(3)};
+          victims.push_back({TouchKey{u.i64(0), k}, options.root / u.text(4) / tileRelativePath(k, u.text(5))});
+          chunkFreed += u.i64(6);
+          const auto n = static_cast<std::int64_t>(victims.size());
+          if (n >= 1000 || removed + n >= maxRows || (bytesToFree && freed + chunkFreed >= *bytesToFree)) break;
+        }
+        if (rc != SQLITE_ROW && rc != SQLITE_DONE) {
+          return std::unexpected(sql::errorFrom(writeDb.get(), rc, "selecting tiles"));
+        }
+        freed += chunkFreed;
+      }
+      if (victims.empty()) break;
+      if (auto b = begin(); !b) return std::unexpected(b.error());
+      for (const auto& [tk, path] : victims) {
+        sql::Stmt::Use d(deleteTile);
+        d.bind(1, tk.dataset).bind(2, std::int64_t{tk.key.level}).bind(3, tk.key.row).bind(4, tk.key.col);
+        d.step();
+      }
+      if (auto c = commit(); !c) return std::unexpected(c.error());
+      for (const auto& [tk, path] : victims) ::unlink(path.c_str());
+      removed += static_cast<std::int64_t>(victims.size());
+    }
+    return removed;
+  }
+
+  /** LRU eviction of unpinned tiles down to 95% of the limit. Writer thread only. */
+  std::expected<std::int64_t, CacheError> evictLocked() {
+    const auto limit = static_cast<std::int64_t>(options.sizeLimitBytes);
+    if (limit <= 0) return 0;
+    auto total = totalLocked();
+    if (!total) return std::unexpected(total.error());
+    if (*total <= limit) return 0;
+    const std::int64_t target = limit - limit / 20;
+    // Only pinned data left over the limit: nothing is selected and the limit stays exceeded.
+    return deleteSelected(
+        "SELECT t.dataset, t.level, t.row, t.col, d.folder, d.extension, t.bytes FROM tiles t "
+        "JOIN datasets d ON d.id = t.dataset WHERE d.pinned = 0 AND t.state = 1 "
+        "ORDER BY t.last_access",
+        [](sql::Stmt::Use&) {}, std::numeric_limits<std::int64_t>::max(), *total - target);
+  }
+
+  void waitIdle() {
+    std::unique_lock lock(queueMutex);
+    idleCv.wait(lock, [this] { return queue.empty() && !busy; });
+  }
+
+  // ---------------------------------------------------------------------------- tiles
+  Result writeRow(const DatasetEntry& d, const TileKey& key, int state, std::int64_t bytes,
+                  const TileMeta& meta, std::optional<UnixMillis> retryAfter) {
+    sql::Stmt::Use u(upsertTile);
+    u.bind(1, d.info.id).bind(2, std::int64_t{key.level}).bind(3, key.row).bind(4, key.col);
+    u.bind(5, std::int64_t{state}).bind(6, bytes);
+    u.bind(7, std::string_view(meta.contentType)).bind(8, std::string_view(meta.etag));
+    u.bind(9, std::string_view(meta.lastModified)).bind(10, meta.expiresAt);
+    u.bind(11, meta.fetchedAt ? meta.fetchedAt : unixMillisNow()).bind(12, retryAfter);
+    const int rc = u.step();
+    if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(writeDb.get(), rc, "indexing tile"));
+    return {};
+  }
+
+  Result deleteRow(DatasetId id, const TileKey& key) {
+    sql::Stmt::Use u(deleteTile);
+    u.bind(1, id).bind(2, std::int64_t{key.level}).bind(3, key.row).bind(4, key.col);
+    const int rc = u.step();
+    if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(writeDb.get(), rc, "removing tile"));
+    return {};
+  }
+};
+
+// ------------------------------------------------------------------------------------------------
+
+namespace {
+
+/** Cheap damage checks at open: header, schema, both edges of the tiles b-tree. No scan. */
+Result probe(sqlite3* db) {
+  for (const char* q : {"SELECT count(*) FROM datasets",
+                        "SELECT dataset FROM tiles ORDER BY dataset, level, row, col LIMIT 1",
+                        "SELECT dataset FROM tiles ORDER BY dataset DESC, level DESC, row DESC, "
+                        "col DESC LIMIT 1",
+                        "SELECT last_access FROM tiles ORDER BY last_access DESC LIMIT 1",
+                        "SELECT count(*) FROM usage"}) {
+    sql::Stmt s(db, q);
+    if (!s.ok()) return std::unexpected(sql::errorFrom(db, s.prepareRc(), "checking index"));
+    sql::Stmt::Use u(s);
+    const int rc = u.step();
+    if (rc != SQLITE_ROW && rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "checking index"));
+  }
+  return {};
+}
+
+Result configure(sqlite3* db, bool readOnly) {
+  if (readOnly) return {};
+  for (const char* p : {"PRAGMA journal_mode = WAL", "PRAGMA synchronous = NORMAL"}) {
+    sql::Stmt s(db, p);
+    if (!s.ok()) return std::unexpected(sql::errorFrom(db, s.prepareRc(), "configuring index"));
+    sql::Stmt::Use u(s);
+    const int rc = u.step();
+    if (rc != SQLITE_ROW && rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "configuring index"));
+  }
+  return {};
+}
+
+void moveAside(const fs::path& indexPath) {
+  const std::string suffix = ".corrupt-" + std::to_string(unixMillisNow());
+  std::error_code ec;
+  for (const char* extra : {"", "-wal", "-shm"}) {
+    const fs::path p = indexPath.string() + extra;
+    if (fs::exists(p, ec)) fs::rename(p, indexPath.string() + suffix + extra, ec);
+  }
+}
+
+} // namespace
+
+std::expected<std::unique_ptr<TileCache>, CacheError> TileCache::open(const Options& options) {
+  fileio::ignoreFileSizeSignal();
+  auto impl = std::make_unique<Impl>();
+  impl->options = options;
+  impl->indexPath = options.root / kIndexName;
+  std::error_code ec;
+  if (!options.readOnly) {
+    fs::create_directories(options.root, ec);
+    if (ec) return std::unexpected(CacheError{CacheErrc::Io, "cannot create cache root " + options.root.string() + ": " + ec.message()});
+  } else if (!fs::exists(impl->indexPath, ec)) {
+    return std::unexpected(CacheError{CacheErrc::Io, "no cache index at " + impl->indexPath.string()});
+  }
+  const int busyMs = static_cast<int>(options.busyTimeout.count());
+
+  bool damaged = !options.readOnly && fs::exists(options.root / kCorruptMarker, ec);
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    if (damaged) {
+      moveAside(impl->indexPath);
+      fs::remove(options.root / kCorruptMarker, ec);
+      impl->rebuiltAtOpen = true;
+    }
+    int rc = 0;
+    impl->writeDb = openDb(impl->indexPath, options.readOnly, true, busyMs, &rc);
+    if (!impl->writeDb) return std::unexpected(sql::errorFrom(nullptr, rc, "opening " + impl->indexPath.string()));
+    Result r = configure(impl->writeDb.get(), options.readOnly);
+    if (r && !options.readOnly) r = schema::ensure(impl->writeDb.get());
+    if (r) r = probe(impl->writeDb.get());
+    if (r) break;
+    if (r.error().code != CacheErrc::Corrupt || options.readOnly || attempt == 1) return std::unexpected(r.error());
+    impl->writeDb.reset();
+    damaged = true;
+  }
+  if (!options.readOnly) {
+    if (auto r = impl->prepareWriter(); !r) return std::unexpected(r.error());
+  }
+  if (auto r = impl->loadDatasets(impl->writeDb.get()); !r) return std::unexpected(r.error());
+  std::unique_ptr<TileCache> cache(new TileCache(std::move(impl)));
+  if (!options.readOnly) cache->impl_->startWriter();
+  if (cache->impl_->rebuiltAtOpen) {
+    if (auto n = cache->rebuild(); !n) return std::unexpected(n.error());
+  }
+  return cache;
+}
+
+TileCache::TileCache(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+TileCache::~TileCache() {
+  if (impl_) impl_->stopWriter();
+}
+
+const fs::path& TileCache::root() const noexcept { return impl_->options.root; }
+bool TileCache::wasRebuiltAtOpen() const noexcept { return impl_->rebuiltAtOpen; }
+
+// ---------------------------------------------------------------------------------- datasets
+
+std::expected<DatasetId, CacheError> TileCache::registerDataset(const DatasetSpec& spec) {
+  auto grid = TileGrid::create(spec.grid);
+  if (!grid) return std::unexpected(invalid("dataset '" + spec.name + "': " + grid.error()));
+  if (spec.extension.empty() || spec.extension.size() > 8 ||
+      !std::all_of(spec.extension.begin(), spec.extension.end(),
+                   [](char c) { return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9'); })) {
+    return std::unexpected(invalid("dataset '" + spec.name + "': extension must be 1-8 of [a-z0-9]"));
+  }
+  const std::string folder = datasetFolder(spec);
+  const fs::path dir = impl_->options.root / folder;
+  if (auto r = impl_->ensureDir(dir); !r) return std::unexpected(r.error());
+  // The descriptor goes first: a rebuild from the tree needs it, and it is harmless without a row.
+  const std::string descriptor = serializeDatasetSpec(spec);
+  if (auto r = fileio::writeFileAtomic(dir / kDescriptorName,
+                                       std::as_bytes(std::span(descriptor.data(), descriptor.size())),
+                                       impl_->options.fsyncTiles);
+      !r) {
+    return std::unexpected(r.error());
+  }
+  DatasetId id = 0;
+  auto r = impl_->submit([&](Impl& im) -> Result {
+    sqlite3* db = im.writeDb.get();
+    sql::Stmt find(db, "SELECT id FROM datasets WHERE folder = ?1");
+    {
+      sql::Stmt::Use u(find);
+      u.bind(1, std::string_view(folder));
+      const int rc = u.step();
+      if (rc == SQLITE_ROW) {
+        id = u.i64(0);
+      } else if (rc != SQLITE_DONE) {
+        return std::unexpected(sql::errorFrom(db, rc, "finding dataset"));
+      }
+    }
+    if (id != 0) {
+      sql::Stmt upd(db, "UPDATE datasets SET pinned = ?2 WHERE id = ?1");
+      sql::Stmt::Use u(upd);
+      u.bind(1, id).bind(2, std::int64_t{spec.pinned ? 1 : 0});
+      const int rc = u.step();
+      if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "updating dataset"));
+      return {};
+    }
+    sql::Stmt ins(db, "INSERT INTO datasets(server, name, folder, west, south, east, north, "
+                      "level_zero_delta, tile_width, tile_height, num_levels, mime_type, extension, "
+                      "style, time, pinned, created_at) VALUES "
+                      "(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17)");
+    sql::Stmt::Use u(ins);
+    const GridSpec& g = spec.grid;
+    u.bind(1, std::string_view(spec.server)).bind(2, std::string_view(spec.name)).bind(3, std::string_view(folder));
+    u.bind(4, g.sector.west).bind(5, g.sector.south).bind(6, g.sector.east).bind(7, g.sector.north);
+    u.bind(8, g.levelZeroDeltaDeg).bind(9, std::int64_t{g.tileWidth}).bind(10, std::int64_t{g.tileHeight});
+    u.bind(11, std::int64_t{g.numLevels}).bind(12, std::string_view(spec.mimeType));
+    u.bind(13, std::string_view(spec.extension)).bind(14, std::string_view(spec.style));
+    u.bind(15, std::string_view(spec.time)).bind(16, std::int64_t{spec.pinned ? 1 : 0});
+    u.bind(17, unixMillisNow());
+    const int rc = u.step();
+    if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "registering dataset"));
+    id = sqlite3_last_insert_rowid(db);
+    return {};
+  });
+  if (!r) return std::unexpected(r.error());
+  {
+    std::unique_lock lock(impl_->datasetsMutex);
+    DatasetSpec stored = spec;
+    impl_->datasetsById.insert_or_assign(id, DatasetEntry{DatasetInfo{id, std::move(stored), folder}, *grid, dir});
+  }
+  return id;
+}
+
+std::optional<DatasetInfo> TileCache::dataset(DatasetId id) const {
+  auto d = impl_->findDataset(id);
+  if (!d) return std::nullopt;
+  return d->info;
+}
+
+std::vector<DatasetInfo> TileCache::datasets() const {
+  if (auto r = impl_->acquireReader()) (void)impl_->loadDatasets(r->conn->db.get());
+  std::shared_lock lock(impl_->datasetsMutex);
+  std::vector<DatasetInfo> out;
+  for (const auto& [id, d] : impl_->datasetsById) out.push_back(d.info);
+  return out;
+}
+
+std::expected<void, CacheError> TileCache::setPinned(DatasetId id, bool pinned) {
+  auto d = impl_->findDataset(id);
+  if (!d) return std::unexpected(invalid("unknown dataset id " + std::to_string(id)));
+  auto r = impl_->submit([&](Impl& im) -> Result {
+    sql::Stmt upd(im.writeDb.get(), "UPDATE datasets SET pinned = ?2 WHERE id = ?1");
+    sql::Stmt::Use u(upd);
+    u.bind(1, id).bind(2, std::int64_t{pinned ? 1 : 0});
+    const int rc = u.step();
+    if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(im.writeDb.get(), rc, "pinning"));
+    return {};
+  });
+  if (!r) return r;
+  std::unique_lock lock(impl_->datasetsMutex);
+  if (auto it = impl_->datasetsById.find(id); it != impl_->datasetsById.end()) it->second.info.spec.pinned = pinned;
+  return {};
+}
+
+// ---------------------------------------------------------------------------------- tiles
+
+std::expected<CacheLookup, CacheError> TileCache::peek(DatasetId id, const TileKey& key) const {
+  auto d = impl_->checkedDataset(id, key);
+  if (!d) return std::unexpected(d.error());
+  auto lease = impl_->acquireReader();
+  if (!lease) return std::unexpected(lease.error());
+  sql::Stmt::Use u(lease->conn->lookup);
+  u.bind(1, id).bind(2, std::int64_t{key.level}).bind(3, key.row).bind(4, key.col);
+  const int rc = u.step();
+  CacheLookup out;
+  if (rc == SQLITE_DONE) return out;
+  if (rc != SQLITE_ROW) {
+    auto err = sql::errorFrom(lease->conn->db.get(), rc, "looking up tile");
+    if (err.code == CacheErrc::Corrupt) {
+      // Remember the damage: the next open moves the index aside and rebuilds it.
+      const std::string note = err.message;
+      (void)fileio::writeFileAtomic(impl_->options.root / kCorruptMarker,
+                                    std::as_bytes(std::span(note.data(), note.size())), false);
+    }
+    return std::unexpected(std::move(err));
+  }
+  const UnixMillis now = unixMillisNow();
+  if (u.i64(0) == kStateAbsent) {
+    out.kind = CacheLookup::Kind::Absent;
+    out.retryAfter = u.isNull(7) ? 0 : u.i64(7);
+    return out;
+  }
+  out.kind = CacheLookup::Kind::Hit;
+  out.meta.contentType = u.text(2);
+  out.meta.etag = u.text(3);
+  out.meta.lastModified = u.text(4);
+  if (!u.isNull(5)) out.meta.expiresAt = u.i64(5);
+  out.meta.fetchedAt = u.i64(6);
+  out.stale = out.meta.expiresAt && *out.meta.expiresAt <= now;
+  out.size = u.i64(1);
+  return out;
+}
+
+std::expected<CacheLookup, CacheError> TileCache::get(DatasetId id, const TileKey& key) {
+  auto found = peek(id, key);
+  if (!found || found->kind != CacheLookup::Kind::Hit) return found;
+  auto d = impl_->findDataset(id);
+  assert(d);
+  const auto expectedBytes = static_cast<std::size_t>(found->size);
+  auto bytes = fileio::readFile(impl_->tilePath(*d, key), expectedBytes);
+  if (!bytes) {
+    // The file vanished or changed under us: forget the row (self-healing) and report a miss.
+    impl_->submitDetached([id, key](Impl& im) { return im.deleteRow(id, key); });
+    return CacheLookup{};
+  }
+  found->bytes = std::move(*bytes);
+  {
+    std::lock_guard lock(impl_->queueMutex);
+    impl_->touches[TouchKey{id, key}] = unixMillisNow();
+  }
+  return found;
+}
+
+std::expected<void, CacheError> TileCache::put(DatasetId id, const TileKey& key,
+                                               std::span<const std::byte> bytes, const TileMeta& meta) {
+  if (impl_->options.readOnly) return std::unexpected(CacheError{CacheErrc::ReadOnly, "the cache is read-only"});
+  auto d = impl_->checkedDataset(id, key);
+  if (!d) return std::unexpected(d.error());
+  const fs::path path = impl_->tilePath(*d, key);
+  if (auto r = impl_->ensureDir(path.parent_path()); !r) return r;
+  if (auto r = fileio::writeFileAtomic(path, bytes, impl_->options.fsyncTiles); !r) return r;
+  TileMeta m = meta;
+  if (m.contentType.empty()) m.contentType = d->info.spec.mimeType;
+  if (m.fetchedAt == 0) m.fetchedAt = unixMillisNow();
+  const auto n = static_cast<std::int64_t>(bytes.size());
+  return impl_->submit(
+      [entry = *d, key, n, m](Impl& im) { return im.writeRow(entry, key, kStatePresent, n, m, std::nullopt); },
+      [path](bool committed) {
+        // Without its row the new file must not linger (the index stays as it was).
+        if (!committed) ::unlink(path.c_str());
+      });
+}
+
+std::expected<void, CacheError> TileCache::putAbsent(DatasetId id, const TileKey& key, UnixMillis retryAfter) {
+  auto d = impl_->checkedDataset(id, key);
+  if (!d) return std::unexpected(d.error());
+  const fs::path path = impl_->tilePath(*d, key);
+  return impl_->submit(
+      [entry = *d, key, retryAfter](Impl& im) {
+        TileMeta m;
+        m.fetchedAt = unixMillisNow();
+        return im.writeRow(entry, key, kStateAbsent, 0, m, retryAfter);
+      },
+      [path](bool committed) {
+        if (committed) ::unlink(path.c_str());
+      });
+}
+
+std::expected<void, CacheError> TileCache::erase(DatasetId id, const TileKey& key) {
+  auto d = impl_->checkedDataset(id, key);
+  if (!d) return std::unexpected(d.error());
+  const fs::path path = impl_->tilePath(*d, key);
+  return impl_->submit([id, key](Impl& im) { return im.deleteRow(id, key); },
+                       [path](bool committed) {
+                         if (committed) ::unlink(path.c_str());
+                       });
+}
+
+// ---------------------------------------------------------------------------------- maintenance
+
+std::expected<std::int64_t, CacheError> TileCache::totalBytes() const {
+  auto lease = impl_->acquireReader();
+  if (!lease) return std::unexpected(lease.error());
+  sql::Stmt s(lease->conn->db.get(), "SELECT coalesce(sum(bytes), 0) FROM usage");
+  sql::Stmt::Use u(s);
+  const int rc = u.step();
+  if (rc != SQLITE_ROW) return std::unexpected(sql::errorFrom(lease->conn->db.get(), rc, "reading totals"));
+  return u.i64(0);
+}
+
+std::expected<std::vector<DatasetStats>, CacheError> TileCache::stats() const {
+  const auto infos = datasets();
+  auto lease = impl_->acquireReader();
+  if (!lease) return std::unexpected(lease.error());
+  sqlite3* db = lease->conn->db.get();
+  std::map<DatasetId, DatasetStats> byId;
+  for (const auto& info : infos) byId[info.id].dataset = info;
+  sql::Stmt s(db, "SELECT dataset, level, count(*), sum(state = 2), sum(bytes) FROM tiles "
+                  "GROUP BY dataset, level ORDER BY dataset, level");
+  if (!s.ok()) return std::unexpected(sql::errorFrom(db, s.prepareRc(), "reading stats"));
+  sql::Stmt::Use u(s);
+  int rc = 0;
+  while ((rc = u.step()) == SQLITE_ROW) {
+    auto it = byId.find(u.i64(0));
+    if (it == byId.end()) continue;
+    LevelStats l{static_cast<std::int32_t>(u.i64(1)), u.i64(2), u.i64(3), u.i64(4)};
+    it->second.tiles += l.tiles;
+    it->second.bytes += l.bytes;
+    it->second.levels.push_back(l);
+  }
+  if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "reading stats"));
+  std::vector<DatasetStats> out;
+  for (auto& [id, st] : byId) out.push_back(std::move(st));
+  return out;
+}
+
+std::expected<VerifyReport, CacheError> TileCache::verify() const {
+  VerifyReport report;
+  const auto infos = datasets();
+  auto lease = impl_->acquireReader();
+  if (!lease) return std::unexpected(lease.error());
+  sqlite3* db = lease->conn->db.get();
+  {
+    sql::Stmt q(db, "PRAGMA quick_check");
+    sql::Stmt::Use u(q);
+    const int rc = u.step();
+    report.integrity = rc == SQLITE_ROW ? u.text(0) : std::string(sqlite3_errmsg(db));
+  }
+  // Rows -> files.
+  sql::Stmt rows(db, "SELECT level, row, col, bytes FROM tiles WHERE dataset = ?1 AND state = 1");
+  for (const auto& info : infos) {
+    sql::Stmt::Use u(rows);
+    u.bind(1, info.id);
+    int rc = 0;
+    while ((rc = u.step()) == SQLITE_ROW) {
+      const TileKey k{static_cast<std::int32_t>(u.i64(0)), u.i64(1), u.i64(2)};
+      const std::string rel = info.folder + "/" + tileRelativePath(k, info.spec.extension);
+      std::error_code ec;
+      const auto size = fs::file_size(impl_->options.root / rel, ec);
+      if (ec) report.rowsWithoutFiles.push_back(rel);
+      else if (static_cast<std::int64_t>(size) != u.i64(3)) report.sizeMismatches.push_back(rel);
+    }
+    if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "verifying"));
+  }
+  // Files -> rows.
+  for (const auto& info : infos) {
+    const fs::path dir = impl_->options.root / info.folder;
+    std::error_code ec;
+    for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator();
+         it.increment(ec)) {
+      if (!it->is_regular_file(ec)) continue;
+      const std::string name = it->path().filename().string();
+      const std::string rel = fs::relative(it->path(), dir, ec).generic_string();
+      if (fileio::isTempName(name)) {
+        report.strayTempFiles.push_back(info.folder + "/" + rel);
+        continue;
+      }
+      if (name == kDescriptorName) continue;
+      std::string ext;
+      const auto key = parseTileRelativePath(rel, &ext);
+      if (!key || ext != info.spec.extension) {
+        report.filesWithoutRows.push_back(info.folder + "/" + rel);
+        continue;
+      }
+      sql::Stmt::Use u(lease->conn->lookup);
+      u.bind(1, info.id).bind(2, std::int64_t{key->level}).bind(3, key->row).bind(4, key->col);
+      if (u.step() != SQLITE_ROW || u.i64(0) != kStatePresent) report.filesWithoutRows.push_back(info.folder + "/" + rel);
+    }
+  }
+  return report;
+}
+
+std::expected<std::int64_t, CacheError> TileCache::rebuild() {
+  if (impl_->options.readOnly) return std::unexpected(CacheError{CacheErrc::ReadOnly, "the cache is read-only"});
+  std::int64_t indexed = 0;
+  auto r = impl_->submit([&](Impl& im) -> Result {
+    sqlite3* db = im.writeDb.get();
+    if (sql::exec(db, "DELETE FROM tiles; DELETE FROM datasets; DELETE FROM usage;") != SQLITE_OK) {
+      return std::unexpected(sql::errorFrom(db, sqlite3_errcode(db), "clearing index"));
+    }
+    const fs::path& root = im.options.root;
+    std::error_code ec;
+    for (const auto& server : fs::directory_iterator(root, ec)) {
+      if (!server.is_directory(ec)) continue;
+      for (const auto& dsDir : fs::directory_iterator(server.path(), ec)) {
+        const fs::path descPath = dsDir.path() / kDescriptorName;
+        const auto text = fileio::readFile(descPath, std::nullopt);
+        if (!text) continue;
+        const auto spec = parseDatasetSpec(std::string_view(reinterpret_cast<const char*>(text->data()), text->size()));
+        if (!spec) continue;
+        auto grid = TileGrid::create(spec->grid);
+        if (!grid) continue;
+        const std::string folder = fs::relative(dsDir.path(), root, ec).generic_string();
+        sql::Stmt ins(db, "INSERT INTO datasets(server, name, folder, west, south, east, north, "
+                          "level_zero_delta, tile_width, tile_height, num_levels, mime_type, "
+                          "extension, style, time, pinned, created_at) VALUES "
+                          "(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17)");
+        DatasetId id = 0;
+        {
+          sql::Stmt::Use u(ins);
+          const GridSpec& g = spec->grid;
+          u.bind(1, std::string_view(spec->server)).bind(2, std::string_view(spec->name)).bind(3, std::string_view(folder));
+          u.bind(4, g.sector.west).bind(5, g.sector.south).bind(6, g.sector.east).bind(7, g.sector.north);
+          u.bind(8, g.levelZeroDeltaDeg).bind(9, std::int64_t{g.tileWidth}).bind(10, std::int64_t{g.tileHeight});
+          u.bind(11, std::int64_t{g.numLevels}).bind(12, std::string_view(spec->mimeType));
+          u.bind(13, std::string_view(spec->extension)).bind(14, std::string_view(spec->style));
+          u.bind(15, std::string_view(spec->time)).bind(16, std::int64_t{spec->pinned ? 1 : 0});
+          u.bind(17, unixMillisNow());
+          const int rc = u.step();
+          if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "re-registering dataset"));
+          id = sqlite3_last_insert_rowid(db);
+        }
+        const DatasetEntry entry{DatasetInfo{id, *spec, folder}, *grid, dsDir.path()};
+        for (auto it = fs::recursive_directory_iterator(dsDir.path(), ec);
+             !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+          if (!it->is_regular_file(ec)) continue;
+          const std::string name = it->path().filename().string();
+          if (fileio::isTempName(name)) {
+            fs::remove(it->path(), ec); // an interrupted write: never a valid tile
+            ec.clear();
+            continue;
+          }
+          std::string ext;
+          const auto key = parseTileRelativePath(fs::relative(it->path(), dsDir.path(), ec).generic_string(), &ext);
+          if (!key || ext != spec->extension || !grid->isValid(*key)) continue;
+          const auto size = it->file_size(ec);
+          if (ec) continue;
+          const auto mtime = fs::last_write_time(it->path(), ec);
+          TileMeta m;
+          m.contentType = spec->mimeType;
+          m.fetchedAt = std::chrono::duration_cast<std::chrono::milliseconds>(
+                            std::chrono::file_clock::to_sys(mtime).time_since_epoch())
+                            .count();
+          if (auto w = im.writeRow(entry, *key, kStatePresent, static_cast<std::int64_t>(size), m, std::nullopt); !w) {
+            return w;
+          }
+          ++indexed;
+        }
+        ec.clear();
+      }
+    }
+    return im.loadDatasets(db); // inside the writer thread, which owns this connection
+  });
+  {
+    std::lock_guard lock(impl_->dirsMutex);
+    impl_->knownDirs.clear();
+  }
+  if (!r) {
+    if (auto lease = impl_->acquireReader()) (void)impl_->loadDatasets(lease->conn->db.get());
+    return std::unexpected(r.error());
+  }
+  return indexed;
+}
+
+std::expected<std::int64_t, CacheError> TileCache::prune(const PruneOptions& options) {
+  const UnixMillis cutoff = options.olderThan ? unixMillisNow() - options.olderThan->count()
+                                              : std::numeric_limits<UnixMillis>::max();
+  std::expected<std::int64_t, CacheError> removed = 0;
+  auto r = impl_->submit([&](Impl& im) -> Result {
+    removed = im.deleteSelected(
+        "SELECT t.dataset, t.level, t.row, t.col, d.folder, d.extension, t.bytes FROM tiles t "
+        "JOIN datasets d ON d.id = t.dataset WHERE t.fetched_at < ?1 "
+        "AND (?2 IS NULL OR d.name = ?2) AND (?3 = 1 OR d.pinned = 0)",
+        [&](sql::Stmt::Use& u) {
+          u.bind(1, cutoff);
+          if (options.datasetName) u.bind(2, std::string_view(*options.datasetName));
+          else u.bindNull(2);
+          u.bind(3, std::int64_t{options.includePinned ? 1 : 0});
+        },
+        std::numeric_limits<std::int64_t>::max());
+    return {};
+  }, {}, true);
+  if (!r) return std::unexpected(r.error());
+  return removed;
+}
+
+std::expected<std::int64_t, CacheError> TileCache::evictToLimit() {
+  std::expected<std::int64_t, CacheError> evicted = 0;
+  auto r = impl_->submit([&](Impl& im) -> Result {
+    evicted = im.evictLocked();
+    return {};
+  }, {}, true);
+  if (!r) return std::unexpected(r.error());
+  return evicted;
+}
+
+void TileCache::flush() {
+  if (impl_->options.readOnly) return;
+  // An operation that writes the pending last-access times, then wait for the queue to drain.
+  (void)impl_->submit([](Impl& im) -> Result {
+    std::unordered_map<TouchKey, UnixMillis, TouchKeyHash> batch;
+    {
+      std::lock_guard lock(im.queueMutex);
+      batch.swap(im.touches);
+    }
+    for (const auto& [tk, when] : batch) {
+      sql::Stmt::Use u(im.touchTile);
+      u.bind(1, tk.dataset).bind(2, std::int64_t{tk.key.level}).bind(3, tk.key.row).bind(4, tk.key.col);
+      u.bind(5, when);
+      u.step();
+    }
+    return {};
+  });
+  impl_->waitIdle();
+}
+
+} // namespace tellus

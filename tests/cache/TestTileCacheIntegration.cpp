@@ -1,0 +1,238 @@
+// Bad input, a full disk, two processes on one cache and a crash in the middle of writing.
+
+#include <tellus/cache/TileCache.hpp>
+#include <tellus/cache/TilePath.hpp>
+
+#include "../support/TempDir.hpp"
+
+#include <gtest/gtest.h>
+
+#include <csignal>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+using namespace tellus;
+namespace fs = std::filesystem;
+
+namespace {
+
+DatasetSpec imagery() {
+  DatasetSpec s;
+  s.server = "local";
+  s.name = "bluemarble";
+  s.grid = GridSpec{Sector{}, 36.0, 512, 512, 12};
+  s.mimeType = "image/jpeg";
+  s.extension = "jpg";
+  return s;
+}
+
+std::vector<std::byte> payload(const TileKey& k, std::size_t base = 2000) {
+  const std::size_t n = base + static_cast<std::size_t>((k.row * 7 + k.col * 13 + k.level) % 997);
+  std::vector<std::byte> v(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    v[i] = static_cast<std::byte>((static_cast<std::size_t>(k.row) * 31 + static_cast<std::size_t>(k.col) + i) & 0xFF);
+  }
+  return v;
+}
+
+std::unique_ptr<TileCache> openCache(const fs::path& root, bool fsyncTiles = false) {
+  TileCache::Options o;
+  o.root = root;
+  o.fsyncTiles = fsyncTiles;
+  auto c = TileCache::open(o);
+  return c ? std::move(*c) : nullptr;
+}
+
+std::size_t countTempFiles(const fs::path& root) {
+  std::size_t n = 0;
+  for (const auto& e : fs::recursive_directory_iterator(root)) {
+    const auto name = e.path().filename().string();
+    n += name.starts_with(".") && name.ends_with(".tmp");
+  }
+  return n;
+}
+
+/** Runs fn in a child process (before this process opens anything), returns its exit code. */
+template <class Fn> pid_t spawn(Fn fn) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    int rc = 1;
+    try {
+      rc = fn();
+    } catch (...) {
+      rc = 2;
+    }
+    ::_exit(rc);
+  }
+  return pid;
+}
+
+int waitExit(pid_t pid) {
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+} // namespace
+
+TEST(TileCacheExtremes, RejectsKeysOutsideTheGrid) {
+  test::TempDir dir("bad");
+  auto cache = openCache(dir.path());
+  const auto id = *cache->registerDataset(imagery());
+  const std::vector<std::byte> b(10, std::byte{1});
+  for (const TileKey k : {TileKey{-1, 0, 0}, TileKey{12, 0, 0}, TileKey{31, 0, 0}, TileKey{0, -1, 0},
+                          TileKey{0, 0, -1}, TileKey{0, 5, 0}, TileKey{0, 0, 10},
+                          TileKey{11, 5 << 11, 0}, TileKey{0, INT64_MAX, INT64_MAX},
+                          TileKey{INT32_MAX, 0, 0}, TileKey{INT32_MIN, INT64_MIN, INT64_MIN}}) {
+    SCOPED_TRACE(tileRelativePath(k, "jpg"));
+    auto p = cache->put(id, k, b, {});
+    ASSERT_FALSE(p);
+    EXPECT_EQ(p.error().code, CacheErrc::InvalidArgument);
+    auto g = cache->get(id, k);
+    ASSERT_FALSE(g);
+    EXPECT_EQ(g.error().code, CacheErrc::InvalidArgument);
+  }
+  // The deepest tile of the grid is fine.
+  EXPECT_TRUE(cache->put(id, TileKey{11, (5LL << 11) - 1, (10LL << 11) - 1}, b, {}));
+  auto unknown = cache->put(id + 100, TileKey{0, 0, 0}, b, {});
+  ASSERT_FALSE(unknown);
+  EXPECT_EQ(unknown.error().code, CacheErrc::InvalidArgument);
+  EXPECT_EQ(*cache->totalBytes(), 10);
+}
+
+TEST(TileCacheExtremes, RejectsBadDatasets) {
+  test::TempDir dir("bad");
+  auto cache = openCache(dir.path());
+  auto s = imagery();
+  s.grid.levelZeroDeltaDeg = 37.0;
+  EXPECT_FALSE(cache->registerDataset(s));
+  s = imagery();
+  s.extension = "../x";
+  EXPECT_FALSE(cache->registerDataset(s));
+  s = imagery();
+  s.grid.numLevels = 40;
+  EXPECT_FALSE(cache->registerDataset(s));
+}
+
+TEST(TileCacheExtremes, FullDiskIsReportedAndLosesNothing) {
+  test::TempDir dir("full");
+  auto cache = openCache(dir.path());
+  const auto id = *cache->registerDataset(imagery());
+  const TileKey k{3, 1, 2};
+  ASSERT_TRUE(cache->put(id, k, payload(k), {}));
+  cache->flush();
+  const auto before = *cache->totalBytes();
+
+  // Simulate a full disk for files: a file-size limit below the tile (EFBIG, SIGXFSZ ignored).
+  rlimit old{};
+  ::getrlimit(RLIMIT_FSIZE, &old);
+  rlimit lim = old;
+  lim.rlim_cur = 64 * 1024;
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &lim), 0);
+  const std::vector<std::byte> big(256 * 1024, std::byte{0x5A});
+  auto r = cache->put(id, k, big, {});
+  auto r2 = cache->put(id, TileKey{3, 1, 3}, big, {});
+  ::setrlimit(RLIMIT_FSIZE, &old);
+
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().code, CacheErrc::DiskFull) << r.error().message;
+  EXPECT_NE(r.error().message.find("3/1/1_2.jpg"), std::string::npos) << r.error().message;
+  ASSERT_FALSE(r2);
+  EXPECT_EQ(r2.error().code, CacheErrc::DiskFull);
+  EXPECT_EQ(countTempFiles(dir.path()), 0u);
+  EXPECT_EQ(*cache->totalBytes(), before);
+  EXPECT_EQ(cache->get(id, k)->bytes, payload(k)); // the old tile is intact
+  EXPECT_EQ(cache->get(id, TileKey{3, 1, 3})->kind, CacheLookup::Kind::Miss);
+  EXPECT_TRUE(cache->verify()->ok());
+}
+
+TEST(TileCacheIntegration, TwoProcessesShareOneCache) {
+  test::TempDir dir("two");
+  {
+    auto setup = openCache(dir.path());
+    ASSERT_TRUE(setup->registerDataset(imagery()));
+  }
+  constexpr int kTiles = 300;
+  // Two writers (a "server" and a "seeder") plus reads, at once, in separate processes.
+  auto worker = [&](std::int64_t row) {
+    return spawn([&, row] {
+      auto cache = openCache(dir.path());
+      if (!cache) return 3;
+      const auto id = cache->datasets().at(0).id;
+      for (std::int64_t c = 0; c < kTiles; ++c) {
+        const TileKey k{9, row, c};
+        auto p = cache->put(id, k, payload(k, 200), {});
+        if (!p) {
+          std::fprintf(stderr, "put failed: %s\n", p.error().message.c_str());
+          return 4;
+        }
+        auto g = cache->get(id, TileKey{9, 1 - row, c});
+        if (!g) {
+          std::fprintf(stderr, "get failed: %s\n", g.error().message.c_str());
+          return 5;
+        }
+      }
+      return 0;
+    });
+  };
+  const pid_t a = worker(0);
+  const pid_t b = worker(1);
+  EXPECT_EQ(waitExit(a), 0);
+  EXPECT_EQ(waitExit(b), 0);
+  auto cache = openCache(dir.path());
+  const auto id = cache->datasets().at(0).id;
+  for (std::int64_t row = 0; row < 2; ++row) {
+    for (std::int64_t c = 0; c < kTiles; ++c) {
+      const TileKey k{9, row, c};
+      EXPECT_EQ(cache->get(id, k)->bytes, payload(k, 200));
+    }
+  }
+  EXPECT_TRUE(cache->verify()->ok());
+}
+
+TEST(TileCacheIntegration, CrashMidWriteNeverLeavesACorruptTile) {
+  test::TempDir dir("crash");
+  {
+    auto setup = openCache(dir.path());
+    ASSERT_TRUE(setup->registerDataset(imagery()));
+  }
+  for (int round = 0; round < 3; ++round) {
+    const pid_t child = spawn([&] {
+      auto cache = openCache(dir.path(), /*fsyncTiles=*/true);
+      if (!cache) return 3;
+      const auto id = cache->datasets().at(0).id;
+      // Overwrite the same keys again and again with content of different lengths.
+      for (std::int64_t i = 0;; ++i) {
+        const TileKey k{8, i % 7, (i * 5) % 11};
+        (void)cache->put(id, k, payload(k, 1000 + static_cast<std::size_t>(i % 3) * 40000), {});
+      }
+    });
+    ::usleep(static_cast<useconds_t>(150000 + round * 70000));
+    ::kill(child, SIGKILL);
+    EXPECT_EQ(waitExit(child), 128 + SIGKILL);
+  }
+  auto cache = openCache(dir.path());
+  ASSERT_TRUE(cache);
+  EXPECT_FALSE(cache->wasRebuiltAtOpen());
+  const auto id = cache->datasets().at(0).id;
+  int hits = 0;
+  for (std::int64_t r = 0; r < 7; ++r) {
+    for (std::int64_t c = 0; c < 11; ++c) {
+      const TileKey k{8, r, c};
+      auto g = cache->get(id, k);
+      ASSERT_TRUE(g);
+      if (g->kind != CacheLookup::Kind::Hit) continue;
+      ++hits;
+      // Whatever version is there is one of the complete versions, never a torn one.
+      bool complete = false;
+      for (std::size_t v = 0; v < 3; ++v) complete |= g->bytes == payload(k, 1000 + v * 40000);
+      EXPECT_TRUE(complete) << "torn tile " << tileRelativePath(k, "jpg") << " size " << g->bytes.size();
+    }
+  }
+  EXPECT_GT(hits, 0);
+  auto report = cache->verify();
+  ASSERT_TRUE(report);
+  EXPECT_EQ(report->integrity, "ok");
+  EXPECT_TRUE(report->rowsWithoutFiles.empty());
+}
