@@ -46,8 +46,13 @@ std::expected<RasterGeoref, std::string> readWorldFile(const fs::path& path) {
 std::expected<LocalRasterSource, std::string> LocalRasterSource::open(const fs::path& image) {
   auto georef = readWorldFile(worldFileFor(image));
   if (!georef) return std::unexpected(georef.error());
+  // tellus runs its own workers: OpenImageIO's global pool would only oversubscribe the cores (and
+  // it is invisible to ThreadSanitizer). Set once, before the first image is opened.
+  static const bool singleThreaded = OIIO::attribute("threads", 1);
+  (void)singleThreaded;
   auto in = OIIO::ImageInput::open(image.string());
   if (!in) return std::unexpected("cannot open " + image.string() + ": " + OIIO::geterror());
+  in->threads(1);
   const OIIO::ImageSpec& spec = in->spec();
   LocalRasterSource src;
   src.width_ = spec.width;

@@ -1,0 +1,71 @@
+#pragma once
+/**
+ * @file TileSource.hpp
+ * @brief How the planet renderer gets tiles: request a key with a priority, receive the bytes
+ * asynchronously, cancel, observe "absent".
+ *
+ * Implemented in-process by the proxy's tile service (cache-through with upstream fetches), by an
+ * HTTP client of a remote `tellus serve`, and here by CacheTileSource (the cache alone: offline
+ * browsing of what is cached).
+ */
+
+#include <tellus/cache/Dataset.hpp>
+#include <tellus/cache/TileKey.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace tellus {
+
+/** A tile of a layer at a time ("" = the layer's default time). */
+struct TileAddress {
+  std::string layer;
+  std::string time;
+  TileKey key;
+  friend bool operator==(const TileAddress&, const TileAddress&) = default;
+};
+
+enum class TileStatus {
+  Ok,     ///< bytes hold the encoded tile
+  Absent, ///< there is no tile here (upstream said so, outside coverage, or offline and not cached)
+  Failed, ///< an error; message says which. The caller may ask again later
+};
+
+struct TileResult {
+  TileStatus status = TileStatus::Failed;
+  std::vector<std::byte> bytes;
+  std::string contentType;
+  std::string message;
+};
+
+using TileRequestId = std::uint64_t;
+
+/**
+ * @brief The asynchronous tile interface. Thread safety: every method may be called from any thread.
+ *
+ * `done` is called exactly once per request, on a worker thread, unless cancel() returned true. It must
+ * not throw and should only hand the result over (e.g. push it into a queue the main thread drains).
+ * Destroying a source drops queued requests without calling them and waits for running callbacks.
+ */
+class ITileSource {
+public:
+  using Callback = std::function<void(TileResult&&)>;
+
+  virtual ~ITileSource() = default;
+
+  /** The dataset behind a layer (grid, format), or nullopt for an unknown layer. */
+  virtual std::optional<DatasetSpec> describe(std::string_view layer, std::string_view time = {}) const = 0;
+  /** Queues a request; higher priority runs first, equal priorities in request order. */
+  virtual TileRequestId request(const TileAddress& address, double priority, Callback done) = 0;
+  /** Changes the priority of a queued request (no effect once it runs). */
+  virtual void reprioritize(TileRequestId id, double priority) = 0;
+  /** Removes a queued request; true when its callback will never be called. */
+  virtual bool cancel(TileRequestId id) = 0;
+};
+
+} // namespace tellus

@@ -1,0 +1,184 @@
+#include <tellus/cache/CacheTileSource.hpp>
+
+#include <cassert>
+#include <condition_variable>
+#include <map>
+#include <mutex>
+#include <thread>
+#include <unordered_map>
+
+namespace tellus {
+
+struct CacheTileSource::Impl {
+  struct Pending {
+    TileAddress address;
+    Callback done;
+    double priority;
+    std::uint64_t seq;
+  };
+  // Ordered by (priority descending, request order): the first element runs next.
+  using Order = std::pair<double, std::uint64_t>;
+  struct OrderLess {
+    bool operator()(const Order& a, const Order& b) const {
+      return a.first != b.first ? a.first > b.first : a.second < b.second;
+    }
+  };
+
+  TileCache& cache;
+  int workerCount;
+  mutable std::mutex mutex;
+  std::condition_variable cv;
+  std::map<Order, TileRequestId, OrderLess> order;
+  std::unordered_map<TileRequestId, Pending> pending;
+  std::uint64_t nextId = 1;
+  bool started = false;
+  bool stopping = false;
+  std::vector<std::thread> workers;
+
+  Impl(TileCache& c, int n) : cache(c), workerCount(n < 1 ? 1 : n) {}
+
+  void startLocked() {
+    if (started) return;
+    started = true;
+    for (int i = 0; i < workerCount; ++i) workers.emplace_back([this] { loop(); });
+  }
+
+  // Layer lookups are remembered: a dataset id never changes for the life of a cache.
+  mutable std::mutex layersMutex;
+  mutable std::map<std::pair<std::string, std::string>, DatasetInfo, std::less<>> layers;
+
+  /** The dataset for a layer and time: the most recently registered one with that name and time. */
+  std::optional<DatasetInfo> find(std::string_view layer, std::string_view time) const {
+    const std::pair<std::string, std::string> key{layer, time};
+    {
+      std::lock_guard lock(layersMutex);
+      if (const auto it = layers.find(key); it != layers.end()) return it->second;
+    }
+    std::optional<DatasetInfo> best;
+    for (auto& d : cache.datasets()) {
+      if (d.spec.name == layer && d.spec.time == time && (!best || d.id > best->id)) best = std::move(d);
+    }
+    if (best) {
+      std::lock_guard lock(layersMutex);
+      layers.insert_or_assign(key, *best);
+    }
+    return best;
+  }
+
+  TileResult fetch(const TileAddress& a) const {
+    TileResult r;
+    const auto d = find(a.layer, a.time);
+    if (!d) {
+      r.status = TileStatus::Failed;
+      r.message = "no cached layer '" + a.layer + "'" + (a.time.empty() ? "" : " at time " + a.time);
+      return r;
+    }
+    auto got = cache.get(d->id, a.key);
+    if (!got) {
+      // A key outside the grid has no tile; anything else is an error worth retrying.
+      r.status = got.error().code == CacheErrc::InvalidArgument ? TileStatus::Absent : TileStatus::Failed;
+      r.message = got.error().message;
+      return r;
+    }
+    switch (got->kind) {
+    case CacheLookup::Kind::Hit:
+      r.status = TileStatus::Ok;
+      r.bytes = std::move(got->bytes);
+      r.contentType = std::move(got->meta.contentType);
+      break;
+    case CacheLookup::Kind::Absent:
+      r.status = TileStatus::Absent;
+      r.message = "upstream has no tile here";
+      break;
+    case CacheLookup::Kind::Miss:
+      r.status = TileStatus::Absent;
+      r.message = "not cached (offline)";
+      break;
+    }
+    return r;
+  }
+
+  void loop() {
+    for (;;) {
+      Pending job;
+      {
+        std::unique_lock lock(mutex);
+        cv.wait(lock, [this] { return stopping || !order.empty(); });
+        if (stopping) return;
+        const auto first = order.begin();
+        const auto it = pending.find(first->second);
+        assert(it != pending.end());
+        job = std::move(it->second);
+        pending.erase(it);
+        order.erase(first);
+      }
+      TileResult result = fetch(job.address);
+      job.done(std::move(result));
+    }
+  }
+};
+
+CacheTileSource::CacheTileSource(TileCache& cache, int workers, bool startPaused)
+    : impl_(std::make_unique<Impl>(cache, workers)) {
+  if (!startPaused) start();
+}
+
+CacheTileSource::~CacheTileSource() {
+  {
+    std::lock_guard lock(impl_->mutex);
+    impl_->stopping = true;
+    impl_->order.clear();
+    impl_->pending.clear();
+  }
+  impl_->cv.notify_all();
+  for (auto& t : impl_->workers) t.join();
+}
+
+void CacheTileSource::start() {
+  std::lock_guard lock(impl_->mutex);
+  impl_->startLocked();
+}
+
+std::optional<DatasetSpec> CacheTileSource::describe(std::string_view layer, std::string_view time) const {
+  auto d = impl_->find(layer, time);
+  if (!d) return std::nullopt;
+  return d->spec;
+}
+
+TileRequestId CacheTileSource::request(const TileAddress& address, double priority, Callback done) {
+  TileRequestId id = 0;
+  {
+    std::lock_guard lock(impl_->mutex);
+    id = impl_->nextId++;
+    const std::uint64_t seq = id;
+    impl_->pending.emplace(id, Impl::Pending{address, std::move(done), priority, seq});
+    impl_->order.emplace(Impl::Order{priority, seq}, id);
+  }
+  impl_->cv.notify_one();
+  return id;
+}
+
+void CacheTileSource::reprioritize(TileRequestId id, double priority) {
+  std::lock_guard lock(impl_->mutex);
+  const auto it = impl_->pending.find(id);
+  if (it == impl_->pending.end()) return;
+  impl_->order.erase(Impl::Order{it->second.priority, it->second.seq});
+  it->second.priority = priority;
+  impl_->order.emplace(Impl::Order{priority, it->second.seq}, id);
+}
+
+bool CacheTileSource::cancel(TileRequestId id) {
+  std::lock_guard lock(impl_->mutex);
+  const auto it = impl_->pending.find(id);
+  if (it == impl_->pending.end()) return false;
+  impl_->order.erase(Impl::Order{it->second.priority, it->second.seq});
+  impl_->pending.erase(it);
+  return true;
+}
+
+std::size_t CacheTileSource::queued() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->pending.size();
+}
+
+} // namespace tellus

@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# End to end through the tellus executable, as a user runs it: seed, stats, verify, damage, rebuild,
+# prune, and the commands that are not built yet.
+set -euo pipefail
+tellus=$1
+work=$(mktemp -d "${TMPDIR:-/tmp}/tellus-cli.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+cache="$work/cache"
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+out=$("$tellus" seed --cache "$cache" --layer bluemarble --levels 0-1 --dry-run)
+echo "$out" | grep -q "250 tiles planned" || fail "dry run count: $out"
+
+out=$("$tellus" seed --cache "$cache" --layer bluemarble --levels 0-1 --bbox -40,-10,40,10)
+echo "$out" | grep -q "16 tiles planned, 0 already cached, 16 written" || fail "seed: $out"
+out=$("$tellus" seed --cache "$cache" --layer bluemarble --levels 0-1 --bbox -40,-10,40,10)
+echo "$out" | grep -q "16 already cached, 0 written" || fail "resume: $out"
+[ -f "$cache"/local/bluemarble-*/0/2/2_4.jpg ] || fail "World Wind path 0/2/2_4.jpg missing"
+
+json=$("$tellus" cache stats --json --cache "$cache")
+python3 - "$json" <<'PY'
+import json, sys
+s = json.loads(sys.argv[1])
+assert s["tiles"] == 16, s
+d = s["datasets"][0]
+assert d["name"] == "bluemarble" and d["pinned"] is True, d
+assert [l["tiles"] for l in d["levels"]] == [4, 12], d
+PY
+
+"$tellus" cache verify --cache "$cache" >/dev/null || fail "verify on a clean cache"
+rm "$cache"/local/bluemarble-*/0/2/2_4.jpg
+set +e
+"$tellus" cache verify --cache "$cache" >"$work/verify.txt"
+rc=$?
+set -e
+[ $rc -eq 3 ] || fail "verify should exit 3 on a damaged cache, got $rc"
+grep -q "index rows without files: 1" "$work/verify.txt" || fail "verify report: $(cat "$work/verify.txt")"
+"$tellus" cache rebuild --cache "$cache" | grep -q "15 tiles" || fail "rebuild count"
+"$tellus" cache verify --cache "$cache" >/dev/null || fail "verify after rebuild"
+
+"$tellus" cache prune --older-than 0s --cache "$cache" | grep -q "pruned 0 tiles" || fail "prune keeps pinned"
+"$tellus" cache prune --older-than 0s --include-pinned --cache "$cache" | grep -q "pruned 15 tiles" || fail "prune pinned"
+
+set +e
+"$tellus" serve >/dev/null 2>"$work/serve.txt"; rc=$?
+set -e
+[ $rc -eq 2 ] && grep -q "not built yet" "$work/serve.txt" || fail "serve should say it is not built yet"
+set +e
+"$tellus" seed --levels 3-1 >/dev/null 2>&1; rc=$?
+set -e
+[ $rc -eq 2 ] || fail "bad --levels should be a usage error, got $rc"
+echo "cli: all checks passed"
