@@ -40,7 +40,8 @@ struct CacheTileSource::Impl {
   void startLocked() {
     if (started) return;
     started = true;
-    for (int i = 0; i < workerCount; ++i) workers.emplace_back([this] { loop(); });
+    for (int i = 0; i < workerCount; ++i)
+      workers.emplace_back([this] { loop(); });
   }
 
   // Layer lookups are remembered: a dataset id never changes for the life of a cache.
@@ -56,7 +57,8 @@ struct CacheTileSource::Impl {
     }
     std::optional<DatasetInfo> best;
     for (auto& d : cache.datasets()) {
-      if (d.spec.name == layer && d.spec.time == time && (!best || d.id > best->id)) best = std::move(d);
+      if (d.spec.name == layer && d.spec.time == time && (!best || d.id > best->id))
+        best = std::move(d);
     }
     if (best) {
       std::lock_guard lock(layersMutex);
@@ -70,13 +72,15 @@ struct CacheTileSource::Impl {
     const auto d = find(a.layer, a.time);
     if (!d) {
       r.status = TileStatus::Failed;
-      r.message = "no cached layer '" + a.layer + "'" + (a.time.empty() ? "" : " at time " + a.time);
+      r.message =
+          "no cached layer '" + a.layer + "'" + (a.time.empty() ? "" : " at time " + a.time);
       return r;
     }
     auto got = cache.get(d->id, a.key);
     if (!got) {
       // A key outside the grid has no tile; anything else is an error worth retrying.
-      r.status = got.error().code == CacheErrc::InvalidArgument ? TileStatus::Absent : TileStatus::Failed;
+      r.status =
+          got.error().code == CacheErrc::InvalidArgument ? TileStatus::Absent : TileStatus::Failed;
       r.message = got.error().message;
       return r;
     }
@@ -131,7 +135,8 @@ CacheTileSource::~CacheTileSource() {
     impl_->pending.clear();
   }
   impl_->cv.notify_all();
-  for (auto& t : impl_->workers) t.join();
+  for (auto& t : impl_->workers)
+    t.join();
 }
 
 void CacheTileSource::start() {
@@ -139,7 +144,8 @@ void CacheTileSource::start() {
   impl_->startLocked();
 }
 
-std::optional<DatasetSpec> CacheTileSource::describe(std::string_view layer, std::string_view time) const {
+std::optional<DatasetSpec> CacheTileSource::describe(std::string_view layer,
+                                                     std::string_view time) const {
   auto d = impl_->find(layer, time);
   if (!d) return std::nullopt;
   return d->spec;

@@ -20,7 +20,8 @@ std::string formatDouble(double v) {
 std::string variantKey(const DatasetSpec& s) {
   const GridSpec& g = s.grid;
   std::string k;
-  for (double v : {g.sector.west, g.sector.south, g.sector.east, g.sector.north, g.levelZeroDeltaDeg}) {
+  for (double v :
+       {g.sector.west, g.sector.south, g.sector.east, g.sector.north, g.levelZeroDeltaDeg}) {
     k += formatDouble(v);
     k += ',';
   }
@@ -33,10 +34,14 @@ std::string variantKey(const DatasetSpec& s) {
 std::string escapeValue(std::string_view v) {
   std::string out;
   for (const char c : v) {
-    if (c == '\\') out += "\\\\";
-    else if (c == '\n') out += "\\n";
-    else if (c == '\r') out += "\\r";
-    else out.push_back(c);
+    if (c == '\\')
+      out += "\\\\";
+    else if (c == '\n')
+      out += "\\n";
+    else if (c == '\r')
+      out += "\\r";
+    else
+      out.push_back(c);
   }
   return out;
 }
@@ -73,8 +78,8 @@ std::optional<std::int32_t> toInt(const std::string& s) {
 
 std::string datasetVariant(const DatasetSpec& spec) {
   char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx",
-                static_cast<unsigned long long>(stableHash64(variantKey(spec))));
+  std::snprintf(
+      buf, sizeof buf, "%016llx", static_cast<unsigned long long>(stableHash64(variantKey(spec))));
   return std::string(buf, 8);
 }
 
@@ -127,8 +132,18 @@ std::optional<DatasetSpec> parseDatasetSpec(std::string_view text) {
     const auto it = kv.find(k);
     return it == kv.end() ? nullptr : &it->second;
   };
-  for (const char* k : {"server", "name", "west", "south", "east", "north", "level_zero_delta",
-                        "tile_width", "tile_height", "num_levels", "mime_type", "extension"}) {
+  for (const char* k : {"server",
+                        "name",
+                        "west",
+                        "south",
+                        "east",
+                        "north",
+                        "level_zero_delta",
+                        "tile_width",
+                        "tile_height",
+                        "num_levels",
+                        "mime_type",
+                        "extension"}) {
     if (!get(k)) return std::nullopt;
   }
   DatasetSpec s;

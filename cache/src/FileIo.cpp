@@ -34,7 +34,8 @@ bool isTempName(const std::string& name) {
 }
 
 std::expected<void, CacheError> writeFileAtomic(const std::filesystem::path& target,
-                                                std::span<const std::byte> bytes, bool fsyncFile) {
+                                                std::span<const std::byte> bytes,
+                                                bool fsyncFile) {
   // Built with append: g++ 12 reports a false -Wrestrict on `"." + std::string`.
   std::string name(1, '.');
   name.append(target.filename().native());

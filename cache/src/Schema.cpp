@@ -91,10 +91,10 @@ std::expected<void, CacheError> ensure(sqlite3* db) {
   if (!v) return std::unexpected(v.error());
   if (*v == kVersion) return {};
   if (*v > kVersion) {
-    return std::unexpected(CacheError{
-        CacheErrc::Schema, "the index has schema version " + std::to_string(*v) +
-                               ", newer than this tellus understands (" +
-                               std::to_string(kVersion) + "); upgrade tellus"});
+    return std::unexpected(CacheError{CacheErrc::Schema,
+                                      "the index has schema version " + std::to_string(*v) +
+                                          ", newer than this tellus understands (" +
+                                          std::to_string(kVersion) + "); upgrade tellus"});
   }
   // Another process may be doing the same right now: decide inside the write transaction.
   if (auto r = run(db, "BEGIN IMMEDIATE", "starting schema transaction"); !r) return r;

@@ -26,11 +26,15 @@ using StmtPtr = std::unique_ptr<sqlite3_stmt, StmtFinalizer>;
 /** Maps an SQLite result code to the cache's error taxonomy. */
 inline CacheErrc errcFor(int rc) noexcept {
   switch (rc & 0xFF) {
-  case SQLITE_FULL: return CacheErrc::DiskFull;
+  case SQLITE_FULL:
+    return CacheErrc::DiskFull;
   case SQLITE_CORRUPT:
-  case SQLITE_NOTADB: return CacheErrc::Corrupt;
-  case SQLITE_READONLY: return CacheErrc::ReadOnly;
-  default: return CacheErrc::Io;
+  case SQLITE_NOTADB:
+    return CacheErrc::Corrupt;
+  case SQLITE_READONLY:
+    return CacheErrc::ReadOnly;
+  default:
+    return CacheErrc::Io;
   }
 }
 
@@ -81,9 +85,7 @@ public:
       sqlite3_bind_null(s_, i);
       return *this;
     }
-    Use& bind(int i, const std::optional<std::int64_t>& v) {
-      return v ? bind(i, *v) : bindNull(i);
-    }
+    Use& bind(int i, const std::optional<std::int64_t>& v) { return v ? bind(i, *v) : bindNull(i); }
     int step() { return sqlite3_step(s_); }
     std::int64_t i64(int c) const { return sqlite3_column_int64(s_, c); }
     double f64(int c) const { return sqlite3_column_double(s_, c); }

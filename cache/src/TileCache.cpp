@@ -1,17 +1,17 @@
-#include <tellus/cache/TileCache.hpp>
-#include <tellus/cache/TilePath.hpp>
-
 #include "FileIo.hpp"
 #include "Schema.hpp"
 #include "Sqlite.hpp"
+
+#include <tellus/cache/TileCache.hpp>
+#include <tellus/cache/TilePath.hpp>
 
 #include <algorithm>
 #include <cassert>
 #include <condition_variable>
 #include <deque>
 #include <functional>
-#include <limits>
 #include <future>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <set>
@@ -63,10 +63,13 @@ constexpr std::size_t kMaxBatch = 1024;
 
 using Result = std::expected<void, CacheError>;
 
-CacheError invalid(std::string msg) { return CacheError{CacheErrc::InvalidArgument, std::move(msg)}; }
+CacheError invalid(std::string msg) {
+  return CacheError{CacheErrc::InvalidArgument, std::move(msg)};
+}
 
 std::string keyText(const TileKey& k) {
-  return "L" + std::to_string(k.level) + " R" + std::to_string(k.row) + " C" + std::to_string(k.col);
+  return "L" + std::to_string(k.level) + " R" + std::to_string(k.row) + " C" +
+         std::to_string(k.col);
 }
 
 struct TouchKey {
@@ -96,7 +99,8 @@ struct DatasetEntry {
 sql::DbPtr openDb(const fs::path& path, bool readOnly, bool create, int busyMs, int* rcOut) {
   sqlite3* raw = nullptr;
   int flags = SQLITE_OPEN_NOMUTEX;
-  flags |= readOnly ? SQLITE_OPEN_READONLY : (SQLITE_OPEN_READWRITE | (create ? SQLITE_OPEN_CREATE : 0));
+  flags |=
+      readOnly ? SQLITE_OPEN_READONLY : (SQLITE_OPEN_READWRITE | (create ? SQLITE_OPEN_CREATE : 0));
   const int rc = sqlite3_open_v2(path.c_str(), &raw, flags, nullptr);
   sql::DbPtr db(raw);
   *rcOut = rc;
@@ -130,9 +134,9 @@ struct TileCache::Impl {
   // The single writer: a thread owning the write connection, fed by a queue of operations that it
   // commits in batches (group commit).
   struct WriteOp {
-    std::function<Result(Impl&)> apply;               // inside the transaction
-    std::function<void(bool committed)> after;        // after commit/rollback (file clean-up)
-    bool ownTransactions = false;                     // runs alone and manages its transactions
+    std::function<Result(Impl&)> apply;        // inside the transaction
+    std::function<void(bool committed)> after; // after commit/rollback (file clean-up)
+    bool ownTransactions = false;              // runs alone and manages its transactions
     std::promise<Result> done;
   };
   sql::DbPtr writeDb;
@@ -176,7 +180,8 @@ struct TileCache::Impl {
     ~ReaderLease() {
       if (!conn) return;
       std::lock_guard lock(impl->readMutex);
-      if (impl->idleReaders.size() < static_cast<std::size_t>(std::max(1, impl->options.readConnections))) {
+      if (impl->idleReaders.size() <
+          static_cast<std::size_t>(std::max(1, impl->options.readConnections))) {
         impl->idleReaders.push_back(std::move(conn));
       }
     }
@@ -216,9 +221,10 @@ struct TileCache::Impl {
 
   /** Reloads the dataset table into memory (any connection). */
   Result loadDatasets(sqlite3* db) const {
-    sql::Stmt s(db, "SELECT id, server, name, folder, west, south, east, north, level_zero_delta, "
-                    "tile_width, tile_height, num_levels, mime_type, extension, style, time, pinned "
-                    "FROM datasets ORDER BY id");
+    sql::Stmt s(db,
+                "SELECT id, server, name, folder, west, south, east, north, level_zero_delta, "
+                "tile_width, tile_height, num_levels, mime_type, extension, style, time, pinned "
+                "FROM datasets ORDER BY id");
     if (!s.ok()) return std::unexpected(sql::errorFrom(db, s.prepareRc(), "reading datasets"));
     std::map<DatasetId, DatasetEntry> loaded;
     sql::Stmt::Use u(s);
@@ -230,8 +236,10 @@ struct TileCache::Impl {
       const DatasetId id = u.i64(0);
       std::string folder = u.text(3);
       fs::path dir = options.root / folder;
-      loaded.emplace(id, DatasetEntry{DatasetInfo{id, std::move(spec), std::move(folder)},
-                                      std::move(*grid), std::move(dir)});
+      loaded.emplace(id,
+                     DatasetEntry{DatasetInfo{id, std::move(spec), std::move(folder)},
+                                  std::move(*grid),
+                                  std::move(dir)});
     }
     if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "reading datasets"));
     std::unique_lock lock(datasetsMutex);
@@ -286,20 +294,23 @@ struct TileCache::Impl {
   // ---------------------------------------------------------------------------- writer
   Result prepareWriter() {
     sqlite3* db = writeDb.get();
-    upsertTile = sql::Stmt(db,
-                           "INSERT INTO tiles(dataset, level, row, col, state, bytes, content_type, "
-                           "etag, last_modified, expires, fetched_at, last_access, retry_after) "
-                           "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?11, ?12) "
-                           "ON CONFLICT(dataset, level, row, col) DO UPDATE SET "
-                           "state = excluded.state, bytes = excluded.bytes, "
-                           "content_type = excluded.content_type, etag = excluded.etag, "
-                           "last_modified = excluded.last_modified, expires = excluded.expires, "
-                           "fetched_at = excluded.fetched_at, last_access = excluded.last_access, "
-                           "retry_after = excluded.retry_after");
-    deleteTile = sql::Stmt(db, "DELETE FROM tiles WHERE dataset = ?1 AND level = ?2 AND row = ?3 "
-                               "AND col = ?4");
-    touchTile = sql::Stmt(db, "UPDATE tiles SET last_access = max(last_access, ?5) WHERE "
-                              "dataset = ?1 AND level = ?2 AND row = ?3 AND col = ?4");
+    upsertTile =
+        sql::Stmt(db,
+                  "INSERT INTO tiles(dataset, level, row, col, state, bytes, content_type, "
+                  "etag, last_modified, expires, fetched_at, last_access, retry_after) "
+                  "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?11, ?12) "
+                  "ON CONFLICT(dataset, level, row, col) DO UPDATE SET "
+                  "state = excluded.state, bytes = excluded.bytes, "
+                  "content_type = excluded.content_type, etag = excluded.etag, "
+                  "last_modified = excluded.last_modified, expires = excluded.expires, "
+                  "fetched_at = excluded.fetched_at, last_access = excluded.last_access, "
+                  "retry_after = excluded.retry_after");
+    deleteTile = sql::Stmt(db,
+                           "DELETE FROM tiles WHERE dataset = ?1 AND level = ?2 AND row = ?3 "
+                           "AND col = ?4");
+    touchTile = sql::Stmt(db,
+                          "UPDATE tiles SET last_access = max(last_access, ?5) WHERE "
+                          "dataset = ?1 AND level = ?2 AND row = ?3 AND col = ?4");
     totalStmt = sql::Stmt(db, "SELECT coalesce(sum(bytes), 0) FROM usage");
     for (const sql::Stmt* s : {&upsertTile, &deleteTile, &touchTile, &totalStmt}) {
       if (!s->ok()) return std::unexpected(sql::errorFrom(db, s->prepareRc(), "preparing writer"));
@@ -322,9 +333,11 @@ struct TileCache::Impl {
   }
 
   /** Queues an operation for the writer thread and waits for its commit. */
-  Result submit(std::function<Result(Impl&)> apply, std::function<void(bool)> after = {},
+  Result submit(std::function<Result(Impl&)> apply,
+                std::function<void(bool)> after = {},
                 bool ownTransactions = false) {
-    if (options.readOnly) return std::unexpected(CacheError{CacheErrc::ReadOnly, "the cache is read-only"});
+    if (options.readOnly)
+      return std::unexpected(CacheError{CacheErrc::ReadOnly, "the cache is read-only"});
     auto op = std::make_unique<WriteOp>();
     op->apply = std::move(apply);
     op->after = std::move(after);
@@ -357,7 +370,8 @@ struct TileCache::Impl {
 
   Result begin() {
     const int rc = sql::exec(writeDb.get(), "BEGIN IMMEDIATE");
-    if (rc != SQLITE_OK) return std::unexpected(sql::errorFrom(writeDb.get(), rc, "starting a write"));
+    if (rc != SQLITE_OK)
+      return std::unexpected(sql::errorFrom(writeDb.get(), rc, "starting a write"));
     return {};
   }
   Result commit() {
@@ -374,7 +388,10 @@ struct TileCache::Impl {
     if (!begin()) return; // last-access times are advisory: a failure only delays them
     for (const auto& [tk, when] : batch) {
       sql::Stmt::Use u(touchTile);
-      u.bind(1, tk.dataset).bind(2, std::int64_t{tk.key.level}).bind(3, tk.key.row).bind(4, tk.key.col);
+      u.bind(1, tk.dataset)
+          .bind(2, std::int64_t{tk.key.level})
+          .bind(3, tk.key.row)
+          .bind(4, tk.key.col);
       u.bind(5, when);
       u.step();
     }
@@ -414,14 +431,15 @@ struct TileCache::Impl {
       bool stop = false;
       {
         std::unique_lock lock(queueMutex);
-        queueCv.wait_for(lock, options.accessFlushInterval,
-                         [this] { return stopping || !queue.empty(); });
+        queueCv.wait_for(
+            lock, options.accessFlushInterval, [this] { return stopping || !queue.empty(); });
         while (!queue.empty() && ops.size() < kMaxBatch) {
           ops.push_back(std::move(queue.front()));
           queue.pop_front();
         }
         const auto now = std::chrono::steady_clock::now();
-        if (stopping || now - lastTouchFlush >= options.accessFlushInterval || touches.size() > 65536) {
+        if (stopping || now - lastTouchFlush >= options.accessFlushInterval ||
+            touches.size() > 65536) {
           touchBatch.swap(touches);
           lastTouchFlush = now;
         }
@@ -457,17 +475,19 @@ struct TileCache::Impl {
   std::expected<std::int64_t, CacheError> totalLocked() {
     sql::Stmt::Use u(totalStmt);
     const int rc = u.step();
-    if (rc != SQLITE_ROW) return std::unexpected(sql::errorFrom(writeDb.get(), rc, "reading totals"));
+    if (rc != SQLITE_ROW)
+      return std::unexpected(sql::errorFrom(writeDb.get(), rc, "reading totals"));
     return u.i64(0);
   }
 
   /** Deletes rows chosen by a query (dataset, level, row, col, folder, extension, bytes), in chunks
    * of at most 1000 rows per transaction, rows first and then their files. Stops after `maxRows`
    * rows or once `bytesToFree` bytes are gone. Writer thread only. Returns the number removed. */
-  std::expected<std::int64_t, CacheError> deleteSelected(const char* selectSql,
-                                                         const std::function<void(sql::Stmt::Use&)>& bind,
-                                                         std::int64_t maxRows,
-                                                         std::optional<std::int64_t> bytesToFree = std::nullopt) {
+  std::expected<std::int64_t, CacheError>
+  deleteSelected(const char* selectSql,
+                 const std::function<void(sql::Stmt::Use&)>& bind,
+                 std::int64_t maxRows,
+                 std::optional<std::int64_t> bytesToFree = std::nullopt) {
     std::int64_t removed = 0;
     std::int64_t freed = 0;
     auto done = [&] { return removed >= maxRows || (bytesToFree && freed >= *bytesToFree); };
@@ -475,17 +495,21 @@ struct TileCache::Impl {
       std::vector<std::pair<TouchKey, fs::path>> victims;
       {
         sql::Stmt sel(writeDb.get(), selectSql);
-        if (!sel.ok()) return std::unexpected(sql::errorFrom(writeDb.get(), sel.prepareRc(), "selecting tiles"));
+        if (!sel.ok())
+          return std::unexpected(sql::errorFrom(writeDb.get(), sel.prepareRc(), "selecting tiles"));
         sql::Stmt::Use u(sel);
         bind(u);
         int rc = 0;
         std::int64_t chunkFreed = 0;
         while ((rc = u.step()) == SQLITE_ROW) {
           const TileKey k{static_cast<std::int32_t>(u.i64(1)), u.i64(2), u.i64(3)};
-          victims.push_back({TouchKey{u.i64(0), k}, options.root / u.text(4) / tileRelativePath(k, u.text(5))});
+          victims.push_back(
+              {TouchKey{u.i64(0), k}, options.root / u.text(4) / tileRelativePath(k, u.text(5))});
           chunkFreed += u.i64(6);
           const auto n = static_cast<std::int64_t>(victims.size());
-          if (n >= 1000 || removed + n >= maxRows || (bytesToFree && freed + chunkFreed >= *bytesToFree)) break;
+          if (n >= 1000 || removed + n >= maxRows ||
+              (bytesToFree && freed + chunkFreed >= *bytesToFree))
+            break;
         }
         if (rc != SQLITE_ROW && rc != SQLITE_DONE) {
           return std::unexpected(sql::errorFrom(writeDb.get(), rc, "selecting tiles"));
@@ -496,11 +520,15 @@ struct TileCache::Impl {
       if (auto b = begin(); !b) return std::unexpected(b.error());
       for (const auto& [tk, path] : victims) {
         sql::Stmt::Use d(deleteTile);
-        d.bind(1, tk.dataset).bind(2, std::int64_t{tk.key.level}).bind(3, tk.key.row).bind(4, tk.key.col);
+        d.bind(1, tk.dataset)
+            .bind(2, std::int64_t{tk.key.level})
+            .bind(3, tk.key.row)
+            .bind(4, tk.key.col);
         d.step();
       }
       if (auto c = commit(); !c) return std::unexpected(c.error());
-      for (const auto& [tk, path] : victims) ::unlink(path.c_str());
+      for (const auto& [tk, path] : victims)
+        ::unlink(path.c_str());
       removed += static_cast<std::int64_t>(victims.size());
     }
     return removed;
@@ -519,7 +547,9 @@ struct TileCache::Impl {
         "SELECT t.dataset, t.level, t.row, t.col, d.folder, d.extension, t.bytes FROM tiles t "
         "JOIN datasets d ON d.id = t.dataset WHERE d.pinned = 0 AND t.state = 1 "
         "ORDER BY t.last_access",
-        [](sql::Stmt::Use&) {}, std::numeric_limits<std::int64_t>::max(), *total - target);
+        [](sql::Stmt::Use&) {},
+        std::numeric_limits<std::int64_t>::max(),
+        *total - target);
   }
 
   void waitIdle() {
@@ -528,8 +558,12 @@ struct TileCache::Impl {
   }
 
   // ---------------------------------------------------------------------------- tiles
-  Result writeRow(const DatasetEntry& d, const TileKey& key, int state, std::int64_t bytes,
-                  const TileMeta& meta, std::optional<UnixMillis> retryAfter) {
+  Result writeRow(const DatasetEntry& d,
+                  const TileKey& key,
+                  int state,
+                  std::int64_t bytes,
+                  const TileMeta& meta,
+                  std::optional<UnixMillis> retryAfter) {
     sql::Stmt::Use u(upsertTile);
     u.bind(1, d.info.id).bind(2, std::int64_t{key.level}).bind(3, key.row).bind(4, key.col);
     u.bind(5, std::int64_t{state}).bind(6, bytes);
@@ -537,7 +571,8 @@ struct TileCache::Impl {
     u.bind(9, std::string_view(meta.lastModified)).bind(10, meta.expiresAt);
     u.bind(11, meta.fetchedAt ? meta.fetchedAt : unixMillisNow()).bind(12, retryAfter);
     const int rc = u.step();
-    if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(writeDb.get(), rc, "indexing tile"));
+    if (rc != SQLITE_DONE)
+      return std::unexpected(sql::errorFrom(writeDb.get(), rc, "indexing tile"));
     return {};
   }
 
@@ -545,7 +580,8 @@ struct TileCache::Impl {
     sql::Stmt::Use u(deleteTile);
     u.bind(1, id).bind(2, std::int64_t{key.level}).bind(3, key.row).bind(4, key.col);
     const int rc = u.step();
-    if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(writeDb.get(), rc, "removing tile"));
+    if (rc != SQLITE_DONE)
+      return std::unexpected(sql::errorFrom(writeDb.get(), rc, "removing tile"));
     return {};
   }
 };
@@ -566,7 +602,8 @@ Result probe(sqlite3* db) {
     if (!s.ok()) return std::unexpected(sql::errorFrom(db, s.prepareRc(), "checking index"));
     sql::Stmt::Use u(s);
     const int rc = u.step();
-    if (rc != SQLITE_ROW && rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "checking index"));
+    if (rc != SQLITE_ROW && rc != SQLITE_DONE)
+      return std::unexpected(sql::errorFrom(db, rc, "checking index"));
   }
   return {};
 }
@@ -578,7 +615,8 @@ Result configure(sqlite3* db, bool readOnly) {
     if (!s.ok()) return std::unexpected(sql::errorFrom(db, s.prepareRc(), "configuring index"));
     sql::Stmt::Use u(s);
     const int rc = u.step();
-    if (rc != SQLITE_ROW && rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "configuring index"));
+    if (rc != SQLITE_ROW && rc != SQLITE_DONE)
+      return std::unexpected(sql::errorFrom(db, rc, "configuring index"));
   }
   return {};
 }
@@ -602,9 +640,13 @@ std::expected<std::unique_ptr<TileCache>, CacheError> TileCache::open(const Opti
   std::error_code ec;
   if (!options.readOnly) {
     fs::create_directories(options.root, ec);
-    if (ec) return std::unexpected(CacheError{CacheErrc::Io, "cannot create cache root " + options.root.string() + ": " + ec.message()});
+    if (ec)
+      return std::unexpected(
+          CacheError{CacheErrc::Io,
+                     "cannot create cache root " + options.root.string() + ": " + ec.message()});
   } else if (!fs::exists(impl->indexPath, ec)) {
-    return std::unexpected(CacheError{CacheErrc::Io, "no cache index at " + impl->indexPath.string()});
+    return std::unexpected(
+        CacheError{CacheErrc::Io, "no cache index at " + impl->indexPath.string()});
   }
   const int busyMs = static_cast<int>(options.busyTimeout.count());
 
@@ -617,12 +659,14 @@ std::expected<std::unique_ptr<TileCache>, CacheError> TileCache::open(const Opti
     }
     int rc = 0;
     impl->writeDb = openDb(impl->indexPath, options.readOnly, true, busyMs, &rc);
-    if (!impl->writeDb) return std::unexpected(sql::errorFrom(nullptr, rc, "opening " + impl->indexPath.string()));
+    if (!impl->writeDb)
+      return std::unexpected(sql::errorFrom(nullptr, rc, "opening " + impl->indexPath.string()));
     Result r = configure(impl->writeDb.get(), options.readOnly);
     if (r && !options.readOnly) r = schema::ensure(impl->writeDb.get());
     if (r) r = probe(impl->writeDb.get());
     if (r) break;
-    if (r.error().code != CacheErrc::Corrupt || options.readOnly || attempt == 1) return std::unexpected(r.error());
+    if (r.error().code != CacheErrc::Corrupt || options.readOnly || attempt == 1)
+      return std::unexpected(r.error());
     impl->writeDb.reset();
     damaged = true;
   }
@@ -644,8 +688,12 @@ TileCache::~TileCache() {
   if (impl_) impl_->stopWriter();
 }
 
-const fs::path& TileCache::root() const noexcept { return impl_->options.root; }
-bool TileCache::wasRebuiltAtOpen() const noexcept { return impl_->rebuiltAtOpen; }
+const fs::path& TileCache::root() const noexcept {
+  return impl_->options.root;
+}
+bool TileCache::wasRebuiltAtOpen() const noexcept {
+  return impl_->rebuiltAtOpen;
+}
 
 // ---------------------------------------------------------------------------------- datasets
 
@@ -653,18 +701,21 @@ std::expected<DatasetId, CacheError> TileCache::registerDataset(const DatasetSpe
   auto grid = TileGrid::create(spec.grid);
   if (!grid) return std::unexpected(invalid("dataset '" + spec.name + "': " + grid.error()));
   if (spec.extension.empty() || spec.extension.size() > 8 ||
-      !std::all_of(spec.extension.begin(), spec.extension.end(),
-                   [](char c) { return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9'); })) {
-    return std::unexpected(invalid("dataset '" + spec.name + "': extension must be 1-8 of [a-z0-9]"));
+      !std::all_of(spec.extension.begin(), spec.extension.end(), [](char c) {
+        return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9');
+      })) {
+    return std::unexpected(
+        invalid("dataset '" + spec.name + "': extension must be 1-8 of [a-z0-9]"));
   }
   const std::string folder = datasetFolder(spec);
   const fs::path dir = impl_->options.root / folder;
   if (auto r = impl_->ensureDir(dir); !r) return std::unexpected(r.error());
   // The descriptor goes first: a rebuild from the tree needs it, and it is harmless without a row.
   const std::string descriptor = serializeDatasetSpec(spec);
-  if (auto r = fileio::writeFileAtomic(dir / kDescriptorName,
-                                       std::as_bytes(std::span(descriptor.data(), descriptor.size())),
-                                       impl_->options.fsyncTiles);
+  if (auto r =
+          fileio::writeFileAtomic(dir / kDescriptorName,
+                                  std::as_bytes(std::span(descriptor.data(), descriptor.size())),
+                                  impl_->options.fsyncTiles);
       !r) {
     return std::unexpected(r.error());
   }
@@ -690,15 +741,20 @@ std::expected<DatasetId, CacheError> TileCache::registerDataset(const DatasetSpe
       if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "updating dataset"));
       return {};
     }
-    sql::Stmt ins(db, "INSERT INTO datasets(server, name, folder, west, south, east, north, "
-                      "level_zero_delta, tile_width, tile_height, num_levels, mime_type, extension, "
-                      "style, time, pinned, created_at) VALUES "
-                      "(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17)");
+    sql::Stmt ins(db,
+                  "INSERT INTO datasets(server, name, folder, west, south, east, north, "
+                  "level_zero_delta, tile_width, tile_height, num_levels, mime_type, extension, "
+                  "style, time, pinned, created_at) VALUES "
+                  "(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17)");
     sql::Stmt::Use u(ins);
     const GridSpec& g = spec.grid;
-    u.bind(1, std::string_view(spec.server)).bind(2, std::string_view(spec.name)).bind(3, std::string_view(folder));
+    u.bind(1, std::string_view(spec.server))
+        .bind(2, std::string_view(spec.name))
+        .bind(3, std::string_view(folder));
     u.bind(4, g.sector.west).bind(5, g.sector.south).bind(6, g.sector.east).bind(7, g.sector.north);
-    u.bind(8, g.levelZeroDeltaDeg).bind(9, std::int64_t{g.tileWidth}).bind(10, std::int64_t{g.tileHeight});
+    u.bind(8, g.levelZeroDeltaDeg)
+        .bind(9, std::int64_t{g.tileWidth})
+        .bind(10, std::int64_t{g.tileHeight});
     u.bind(11, std::int64_t{g.numLevels}).bind(12, std::string_view(spec.mimeType));
     u.bind(13, std::string_view(spec.extension)).bind(14, std::string_view(spec.style));
     u.bind(15, std::string_view(spec.time)).bind(16, std::int64_t{spec.pinned ? 1 : 0});
@@ -712,7 +768,8 @@ std::expected<DatasetId, CacheError> TileCache::registerDataset(const DatasetSpe
   {
     std::unique_lock lock(impl_->datasetsMutex);
     DatasetSpec stored = spec;
-    impl_->datasetsById.insert_or_assign(id, DatasetEntry{DatasetInfo{id, std::move(stored), folder}, *grid, dir});
+    impl_->datasetsById.insert_or_assign(
+        id, DatasetEntry{DatasetInfo{id, std::move(stored), folder}, *grid, dir});
   }
   return id;
 }
@@ -727,7 +784,8 @@ std::vector<DatasetInfo> TileCache::datasets() const {
   if (auto r = impl_->acquireReader()) (void)impl_->loadDatasets(r->conn->db.get());
   std::shared_lock lock(impl_->datasetsMutex);
   std::vector<DatasetInfo> out;
-  for (const auto& [id, d] : impl_->datasetsById) out.push_back(d.info);
+  for (const auto& [id, d] : impl_->datasetsById)
+    out.push_back(d.info);
   return out;
 }
 
@@ -744,7 +802,8 @@ std::expected<void, CacheError> TileCache::setPinned(DatasetId id, bool pinned) 
   });
   if (!r) return r;
   std::unique_lock lock(impl_->datasetsMutex);
-  if (auto it = impl_->datasetsById.find(id); it != impl_->datasetsById.end()) it->second.info.spec.pinned = pinned;
+  if (auto it = impl_->datasetsById.find(id); it != impl_->datasetsById.end())
+    it->second.info.spec.pinned = pinned;
   return {};
 }
 
@@ -766,7 +825,8 @@ std::expected<CacheLookup, CacheError> TileCache::peek(DatasetId id, const TileK
       // Remember the damage: the next open moves the index aside and rebuilds it.
       const std::string note = err.message;
       (void)fileio::writeFileAtomic(impl_->options.root / kCorruptMarker,
-                                    std::as_bytes(std::span(note.data(), note.size())), false);
+                                    std::as_bytes(std::span(note.data(), note.size())),
+                                    false);
     }
     return std::unexpected(std::move(err));
   }
@@ -807,9 +867,12 @@ std::expected<CacheLookup, CacheError> TileCache::get(DatasetId id, const TileKe
   return found;
 }
 
-std::expected<void, CacheError> TileCache::put(DatasetId id, const TileKey& key,
-                                               std::span<const std::byte> bytes, const TileMeta& meta) {
-  if (impl_->options.readOnly) return std::unexpected(CacheError{CacheErrc::ReadOnly, "the cache is read-only"});
+std::expected<void, CacheError> TileCache::put(DatasetId id,
+                                               const TileKey& key,
+                                               std::span<const std::byte> bytes,
+                                               const TileMeta& meta) {
+  if (impl_->options.readOnly)
+    return std::unexpected(CacheError{CacheErrc::ReadOnly, "the cache is read-only"});
   auto d = impl_->checkedDataset(id, key);
   if (!d) return std::unexpected(d.error());
   const fs::path path = impl_->tilePath(*d, key);
@@ -820,14 +883,17 @@ std::expected<void, CacheError> TileCache::put(DatasetId id, const TileKey& key,
   if (m.fetchedAt == 0) m.fetchedAt = unixMillisNow();
   const auto n = static_cast<std::int64_t>(bytes.size());
   return impl_->submit(
-      [entry = *d, key, n, m](Impl& im) { return im.writeRow(entry, key, kStatePresent, n, m, std::nullopt); },
+      [entry = *d, key, n, m](Impl& im) {
+        return im.writeRow(entry, key, kStatePresent, n, m, std::nullopt);
+      },
       [path](bool committed) {
         // Without its row the new file must not linger (the index stays as it was).
         if (!committed) ::unlink(path.c_str());
       });
 }
 
-std::expected<void, CacheError> TileCache::putAbsent(DatasetId id, const TileKey& key, UnixMillis retryAfter) {
+std::expected<void, CacheError>
+TileCache::putAbsent(DatasetId id, const TileKey& key, UnixMillis retryAfter) {
   auto d = impl_->checkedDataset(id, key);
   if (!d) return std::unexpected(d.error());
   const fs::path path = impl_->tilePath(*d, key);
@@ -860,7 +926,8 @@ std::expected<std::int64_t, CacheError> TileCache::totalBytes() const {
   sql::Stmt s(lease->conn->db.get(), "SELECT coalesce(sum(bytes), 0) FROM usage");
   sql::Stmt::Use u(s);
   const int rc = u.step();
-  if (rc != SQLITE_ROW) return std::unexpected(sql::errorFrom(lease->conn->db.get(), rc, "reading totals"));
+  if (rc != SQLITE_ROW)
+    return std::unexpected(sql::errorFrom(lease->conn->db.get(), rc, "reading totals"));
   return u.i64(0);
 }
 
@@ -870,9 +937,11 @@ std::expected<std::vector<DatasetStats>, CacheError> TileCache::stats() const {
   if (!lease) return std::unexpected(lease.error());
   sqlite3* db = lease->conn->db.get();
   std::map<DatasetId, DatasetStats> byId;
-  for (const auto& info : infos) byId[info.id].dataset = info;
-  sql::Stmt s(db, "SELECT dataset, level, count(*), sum(state = 2), sum(bytes) FROM tiles "
-                  "GROUP BY dataset, level ORDER BY dataset, level");
+  for (const auto& info : infos)
+    byId[info.id].dataset = info;
+  sql::Stmt s(db,
+              "SELECT dataset, level, count(*), sum(state = 2), sum(bytes) FROM tiles "
+              "GROUP BY dataset, level ORDER BY dataset, level");
   if (!s.ok()) return std::unexpected(sql::errorFrom(db, s.prepareRc(), "reading stats"));
   sql::Stmt::Use u(s);
   int rc = 0;
@@ -886,7 +955,8 @@ std::expected<std::vector<DatasetStats>, CacheError> TileCache::stats() const {
   }
   if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "reading stats"));
   std::vector<DatasetStats> out;
-  for (auto& [id, st] : byId) out.push_back(std::move(st));
+  for (auto& [id, st] : byId)
+    out.push_back(std::move(st));
   return out;
 }
 
@@ -913,8 +983,10 @@ std::expected<VerifyReport, CacheError> TileCache::verify() const {
       const std::string rel = info.folder + "/" + tileRelativePath(k, info.spec.extension);
       std::error_code ec;
       const auto size = fs::file_size(impl_->options.root / rel, ec);
-      if (ec) report.rowsWithoutFiles.push_back(rel);
-      else if (static_cast<std::int64_t>(size) != u.i64(3)) report.sizeMismatches.push_back(rel);
+      if (ec)
+        report.rowsWithoutFiles.push_back(rel);
+      else if (static_cast<std::int64_t>(size) != u.i64(3))
+        report.sizeMismatches.push_back(rel);
     }
     if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "verifying"));
   }
@@ -922,7 +994,8 @@ std::expected<VerifyReport, CacheError> TileCache::verify() const {
   for (const auto& info : infos) {
     const fs::path dir = impl_->options.root / info.folder;
     std::error_code ec;
-    for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator();
+    for (auto it = fs::recursive_directory_iterator(dir, ec);
+         !ec && it != fs::recursive_directory_iterator();
          it.increment(ec)) {
       if (!it->is_regular_file(ec)) continue;
       const std::string name = it->path().filename().string();
@@ -940,14 +1013,16 @@ std::expected<VerifyReport, CacheError> TileCache::verify() const {
       }
       sql::Stmt::Use u(lease->conn->lookup);
       u.bind(1, info.id).bind(2, std::int64_t{key->level}).bind(3, key->row).bind(4, key->col);
-      if (u.step() != SQLITE_ROW || u.i64(0) != kStatePresent) report.filesWithoutRows.push_back(info.folder + "/" + rel);
+      if (u.step() != SQLITE_ROW || u.i64(0) != kStatePresent)
+        report.filesWithoutRows.push_back(info.folder + "/" + rel);
     }
   }
   return report;
 }
 
 std::expected<std::int64_t, CacheError> TileCache::rebuild() {
-  if (impl_->options.readOnly) return std::unexpected(CacheError{CacheErrc::ReadOnly, "the cache is read-only"});
+  if (impl_->options.readOnly)
+    return std::unexpected(CacheError{CacheErrc::ReadOnly, "the cache is read-only"});
   std::int64_t indexed = 0;
   auto r = impl_->submit([&](Impl& im) -> Result {
     sqlite3* db = im.writeDb.get();
@@ -962,33 +1037,45 @@ std::expected<std::int64_t, CacheError> TileCache::rebuild() {
         const fs::path descPath = dsDir.path() / kDescriptorName;
         const auto text = fileio::readFile(descPath, std::nullopt);
         if (!text) continue;
-        const auto spec = parseDatasetSpec(std::string_view(reinterpret_cast<const char*>(text->data()), text->size()));
+        const auto spec = parseDatasetSpec(
+            std::string_view(reinterpret_cast<const char*>(text->data()), text->size()));
         if (!spec) continue;
         auto grid = TileGrid::create(spec->grid);
         if (!grid) continue;
         const std::string folder = fs::relative(dsDir.path(), root, ec).generic_string();
-        sql::Stmt ins(db, "INSERT INTO datasets(server, name, folder, west, south, east, north, "
-                          "level_zero_delta, tile_width, tile_height, num_levels, mime_type, "
-                          "extension, style, time, pinned, created_at) VALUES "
-                          "(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17)");
+        sql::Stmt ins(
+            db,
+            "INSERT INTO datasets(server, name, folder, west, south, east, north, "
+            "level_zero_delta, tile_width, tile_height, num_levels, mime_type, "
+            "extension, style, time, pinned, created_at) VALUES "
+            "(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17)");
         DatasetId id = 0;
         {
           sql::Stmt::Use u(ins);
           const GridSpec& g = spec->grid;
-          u.bind(1, std::string_view(spec->server)).bind(2, std::string_view(spec->name)).bind(3, std::string_view(folder));
-          u.bind(4, g.sector.west).bind(5, g.sector.south).bind(6, g.sector.east).bind(7, g.sector.north);
-          u.bind(8, g.levelZeroDeltaDeg).bind(9, std::int64_t{g.tileWidth}).bind(10, std::int64_t{g.tileHeight});
+          u.bind(1, std::string_view(spec->server))
+              .bind(2, std::string_view(spec->name))
+              .bind(3, std::string_view(folder));
+          u.bind(4, g.sector.west)
+              .bind(5, g.sector.south)
+              .bind(6, g.sector.east)
+              .bind(7, g.sector.north);
+          u.bind(8, g.levelZeroDeltaDeg)
+              .bind(9, std::int64_t{g.tileWidth})
+              .bind(10, std::int64_t{g.tileHeight});
           u.bind(11, std::int64_t{g.numLevels}).bind(12, std::string_view(spec->mimeType));
           u.bind(13, std::string_view(spec->extension)).bind(14, std::string_view(spec->style));
           u.bind(15, std::string_view(spec->time)).bind(16, std::int64_t{spec->pinned ? 1 : 0});
           u.bind(17, unixMillisNow());
           const int rc = u.step();
-          if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "re-registering dataset"));
+          if (rc != SQLITE_DONE)
+            return std::unexpected(sql::errorFrom(db, rc, "re-registering dataset"));
           id = sqlite3_last_insert_rowid(db);
         }
         const DatasetEntry entry{DatasetInfo{id, *spec, folder}, *grid, dsDir.path()};
         for (auto it = fs::recursive_directory_iterator(dsDir.path(), ec);
-             !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+             !ec && it != fs::recursive_directory_iterator();
+             it.increment(ec)) {
           if (!it->is_regular_file(ec)) continue;
           const std::string name = it->path().filename().string();
           if (fileio::isTempName(name)) {
@@ -997,7 +1084,8 @@ std::expected<std::int64_t, CacheError> TileCache::rebuild() {
             continue;
           }
           std::string ext;
-          const auto key = parseTileRelativePath(fs::relative(it->path(), dsDir.path(), ec).generic_string(), &ext);
+          const auto key = parseTileRelativePath(
+              fs::relative(it->path(), dsDir.path(), ec).generic_string(), &ext);
           if (!key || ext != spec->extension || !grid->isValid(*key)) continue;
           const auto size = it->file_size(ec);
           if (ec) continue;
@@ -1007,7 +1095,9 @@ std::expected<std::int64_t, CacheError> TileCache::rebuild() {
           m.fetchedAt = std::chrono::duration_cast<std::chrono::milliseconds>(
                             std::chrono::file_clock::to_sys(mtime).time_since_epoch())
                             .count();
-          if (auto w = im.writeRow(entry, *key, kStatePresent, static_cast<std::int64_t>(size), m, std::nullopt); !w) {
+          if (auto w = im.writeRow(
+                  entry, *key, kStatePresent, static_cast<std::int64_t>(size), m, std::nullopt);
+              !w) {
             return w;
           }
           ++indexed;
@@ -1032,30 +1122,38 @@ std::expected<std::int64_t, CacheError> TileCache::prune(const PruneOptions& opt
   const UnixMillis cutoff = options.olderThan ? unixMillisNow() - options.olderThan->count()
                                               : std::numeric_limits<UnixMillis>::max();
   std::expected<std::int64_t, CacheError> removed = 0;
-  auto r = impl_->submit([&](Impl& im) -> Result {
-    removed = im.deleteSelected(
-        "SELECT t.dataset, t.level, t.row, t.col, d.folder, d.extension, t.bytes FROM tiles t "
-        "JOIN datasets d ON d.id = t.dataset WHERE t.fetched_at < ?1 "
-        "AND (?2 IS NULL OR d.name = ?2) AND (?3 = 1 OR d.pinned = 0)",
-        [&](sql::Stmt::Use& u) {
-          u.bind(1, cutoff);
-          if (options.datasetName) u.bind(2, std::string_view(*options.datasetName));
-          else u.bindNull(2);
-          u.bind(3, std::int64_t{options.includePinned ? 1 : 0});
-        },
-        std::numeric_limits<std::int64_t>::max());
-    return {};
-  }, {}, true);
+  auto r = impl_->submit(
+      [&](Impl& im) -> Result {
+        removed = im.deleteSelected(
+            "SELECT t.dataset, t.level, t.row, t.col, d.folder, d.extension, t.bytes FROM tiles t "
+            "JOIN datasets d ON d.id = t.dataset WHERE t.fetched_at < ?1 "
+            "AND (?2 IS NULL OR d.name = ?2) AND (?3 = 1 OR d.pinned = 0)",
+            [&](sql::Stmt::Use& u) {
+              u.bind(1, cutoff);
+              if (options.datasetName)
+                u.bind(2, std::string_view(*options.datasetName));
+              else
+                u.bindNull(2);
+              u.bind(3, std::int64_t{options.includePinned ? 1 : 0});
+            },
+            std::numeric_limits<std::int64_t>::max());
+        return {};
+      },
+      {},
+      true);
   if (!r) return std::unexpected(r.error());
   return removed;
 }
 
 std::expected<std::int64_t, CacheError> TileCache::evictToLimit() {
   std::expected<std::int64_t, CacheError> evicted = 0;
-  auto r = impl_->submit([&](Impl& im) -> Result {
-    evicted = im.evictLocked();
-    return {};
-  }, {}, true);
+  auto r = impl_->submit(
+      [&](Impl& im) -> Result {
+        evicted = im.evictLocked();
+        return {};
+      },
+      {},
+      true);
   if (!r) return std::unexpected(r.error());
   return evicted;
 }
@@ -1071,7 +1169,10 @@ void TileCache::flush() {
     }
     for (const auto& [tk, when] : batch) {
       sql::Stmt::Use u(im.touchTile);
-      u.bind(1, tk.dataset).bind(2, std::int64_t{tk.key.level}).bind(3, tk.key.row).bind(4, tk.key.col);
+      u.bind(1, tk.dataset)
+          .bind(2, std::int64_t{tk.key.level})
+          .bind(3, tk.key.row)
+          .bind(4, tk.key.col);
       u.bind(5, when);
       u.step();
     }

@@ -55,7 +55,8 @@ std::string encodeNameComponent(std::string_view name) {
   if (out.size() > kMaxNameComponent) {
     // Cut without splitting an escape, then make it unique again with a hash of the whole name.
     std::size_t cut = kMaxNameComponent - 17;
-    while (cut > 0 && (out[cut - 1] == '%' || (cut > 1 && out[cut - 2] == '%'))) --cut;
+    while (cut > 0 && (out[cut - 1] == '%' || (cut > 1 && out[cut - 2] == '%')))
+      --cut;
     out.resize(cut);
     out.push_back('~');
     appendHex(out, stableHash64(name), 16);

@@ -12,7 +12,8 @@ const LayerConfig* Config::layer(std::string_view name) const noexcept {
   return nullptr;
 }
 
-Config embeddedDefault(const std::filesystem::path& dataDir, const std::filesystem::path& cacheRoot) {
+Config embeddedDefault(const std::filesystem::path& dataDir,
+                       const std::filesystem::path& cacheRoot) {
   Config c;
   c.cache.root = cacheRoot;
 
@@ -55,14 +56,17 @@ std::expected<void, std::string> validate(const Config& config) {
     const std::string where = "layer '" + l.name + "'";
     if (l.name.empty()) return std::unexpected("a layer has no name");
     if (!names.insert(l.name).second) return std::unexpected(where + ": name used twice");
-    if (auto g = TileGrid::create(l.dataset.grid); !g) return std::unexpected(where + ": grid: " + g.error());
+    if (auto g = TileGrid::create(l.dataset.grid); !g)
+      return std::unexpected(where + ": grid: " + g.error());
     const auto& m = l.dataset.mimeType;
     if (m != "image/jpeg" && m != "image/png" && m != "application/bil16" && m != "image/tiff") {
-      return std::unexpected(where + ": format '" + m + "' is not one of image/jpeg, image/png, "
-                                     "application/bil16, image/tiff");
+      return std::unexpected(where + ": format '" + m +
+                             "' is not one of image/jpeg, image/png, "
+                             "application/bil16, image/tiff");
     }
     if (!std::filesystem::exists(l.upstream.path)) {
-      return std::unexpected(where + ": upstream file " + l.upstream.path.string() + " does not exist");
+      return std::unexpected(where + ": upstream file " + l.upstream.path.string() +
+                             " does not exist");
     }
   }
   return {};
@@ -70,8 +74,10 @@ std::expected<void, std::string> validate(const Config& config) {
 
 std::filesystem::path defaultCacheRoot() {
   if (const char* t = std::getenv("TELLUS_CACHE"); t && *t) return t;
-  if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) return std::filesystem::path(x) / "tellus";
-  if (const char* h = std::getenv("HOME"); h && *h) return std::filesystem::path(h) / ".cache" / "tellus";
+  if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x)
+    return std::filesystem::path(x) / "tellus";
+  if (const char* h = std::getenv("HOME"); h && *h)
+    return std::filesystem::path(h) / ".cache" / "tellus";
   return std::filesystem::current_path() / "tellus-cache";
 }
 

@@ -19,25 +19,31 @@ struct Geodesy::Impl {
 };
 
 Geodesy::Geodesy(EarthModel model)
-    : impl_(std::make_unique<Impl>(Impl{
-          model, model == EarthModel::Wgs84
-                     ? GeographicLib::Geocentric(GeographicLib::Constants::WGS84_a(),
-                                                 GeographicLib::Constants::WGS84_f())
-                     : GeographicLib::Geocentric(kMeanEarthRadius, 0.0)})) {}
+    : impl_(std::make_unique<Impl>(
+          Impl{model,
+               model == EarthModel::Wgs84
+                   ? GeographicLib::Geocentric(GeographicLib::Constants::WGS84_a(),
+                                               GeographicLib::Constants::WGS84_f())
+                   : GeographicLib::Geocentric(kMeanEarthRadius, 0.0)})) {}
 
 Geodesy::~Geodesy() = default;
 Geodesy::Geodesy(Geodesy&&) noexcept = default;
 Geodesy& Geodesy::operator=(Geodesy&&) noexcept = default;
 
-EarthModel Geodesy::model() const noexcept { return impl_->model; }
-double Geodesy::equatorialRadius() const noexcept { return impl_->geocentric.EquatorialRadius(); }
+EarthModel Geodesy::model() const noexcept {
+  return impl_->model;
+}
+double Geodesy::equatorialRadius() const noexcept {
+  return impl_->geocentric.EquatorialRadius();
+}
 double Geodesy::polarRadius() const noexcept {
   return impl_->geocentric.EquatorialRadius() * (1.0 - impl_->geocentric.Flattening());
 }
 
 Ecef Geodesy::toEcef(double latDeg, double lonDeg, double heightM) const noexcept {
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  if (!(std::abs(latDeg) <= 90.0) || !std::isfinite(lonDeg) || !std::isfinite(heightM)) return {nan, nan, nan};
+  if (!(std::abs(latDeg) <= 90.0) || !std::isfinite(lonDeg) || !std::isfinite(heightM))
+    return {nan, nan, nan};
   Ecef p;
   impl_->geocentric.Forward(latDeg, lonDeg, heightM, p.x, p.y, p.z);
   return p;

@@ -33,9 +33,11 @@ std::expected<RasterGeoref, std::string> readWorldFile(const fs::path& path) {
   if (!in) return std::unexpected("cannot read world file " + path.string());
   double v[6];
   for (double& x : v) {
-    if (!(in >> x) || !std::isfinite(x)) return std::unexpected("world file " + path.string() + " needs six numbers");
+    if (!(in >> x) || !std::isfinite(x))
+      return std::unexpected("world file " + path.string() + " needs six numbers");
   }
-  if (v[1] != 0.0 || v[2] != 0.0) return std::unexpected("world file " + path.string() + " is rotated");
+  if (v[1] != 0.0 || v[2] != 0.0)
+    return std::unexpected("world file " + path.string() + " is rotated");
   if (!(v[0] > 0.0) || !(v[3] < 0.0)) {
     return std::unexpected("world file " + path.string() + " must have x size > 0 and y size < 0");
   }
@@ -66,17 +68,22 @@ std::expected<LocalRasterSource, std::string> LocalRasterSource::open(const fs::
   if (spec.format == OIIO::TypeDesc::UINT8) {
     std::vector<unsigned char> raw(n);
     ok = in->read_image(0, 0, 0, src.channels_, OIIO::TypeDesc::UINT8, raw.data());
-    std::transform(raw.begin(), raw.end(), pixels->begin(), [](unsigned char c) { return static_cast<float>(c); });
+    std::transform(raw.begin(), raw.end(), pixels->begin(), [](unsigned char c) {
+      return static_cast<float>(c);
+    });
   } else {
     // Heights and other measurements keep their raw values (no normalisation to 0..1).
     std::vector<double> raw(n);
     ok = in->read_image(0, 0, 0, src.channels_, OIIO::TypeDesc::DOUBLE, raw.data());
     if (spec.format == OIIO::TypeDesc::INT16) {
-      for (auto& x : raw) x = std::round(x * 32767.0);
+      for (auto& x : raw)
+        x = std::round(x * 32767.0);
     } else if (spec.format == OIIO::TypeDesc::UINT16) {
-      for (auto& x : raw) x = std::round(x * 65535.0);
+      for (auto& x : raw)
+        x = std::round(x * 65535.0);
     }
-    std::transform(raw.begin(), raw.end(), pixels->begin(), [](double d) { return static_cast<float>(d); });
+    std::transform(
+        raw.begin(), raw.end(), pixels->begin(), [](double d) { return static_cast<float>(d); });
   }
   if (!ok) return std::unexpected("cannot read " + image.string() + ": " + in->geterror());
   src.pixels_ = std::move(pixels);
@@ -84,8 +91,10 @@ std::expected<LocalRasterSource, std::string> LocalRasterSource::open(const fs::
 }
 
 Sector LocalRasterSource::coverage() const noexcept {
-  return Sector{georef_.west, georef_.north - georef_.pixelHeightDeg * height_,
-                georef_.west + georef_.pixelWidthDeg * width_, georef_.north};
+  return Sector{georef_.west,
+                georef_.north - georef_.pixelHeightDeg * height_,
+                georef_.west + georef_.pixelWidthDeg * width_,
+                georef_.north};
 }
 
 double LocalRasterSource::sample(double latDeg, double lonDeg, int channel) const noexcept {
@@ -97,7 +106,8 @@ double LocalRasterSource::sample(double latDeg, double lonDeg, int channel) cons
   double x = (lonDeg - georef_.west) / georef_.pixelWidthDeg - 0.5;
   const double y = (georef_.north - latDeg) / georef_.pixelHeightDeg - 0.5;
   if (y < -0.5 - 1e-9 || y > height_ - 0.5 + 1e-9) return std::numeric_limits<double>::quiet_NaN();
-  if (!wraps && (x < -0.5 - 1e-9 || x > width_ - 0.5 + 1e-9)) return std::numeric_limits<double>::quiet_NaN();
+  if (!wraps && (x < -0.5 - 1e-9 || x > width_ - 0.5 + 1e-9))
+    return std::numeric_limits<double>::quiet_NaN();
   const double yc = std::clamp(y, 0.0, static_cast<double>(height_ - 1));
   const auto y0 = static_cast<int>(std::floor(yc));
   const int y1 = std::min(y0 + 1, height_ - 1);
@@ -131,13 +141,17 @@ double LocalRasterSource::sample(double latDeg, double lonDeg, int channel) cons
 
 namespace {
 
-std::expected<std::vector<std::byte>, std::string> encode(const char* formatName, const OIIO::ImageSpec& spec,
-                                                          const void* pixels, OIIO::TypeDesc type) {
+std::expected<std::vector<std::byte>, std::string> encode(const char* formatName,
+                                                          const OIIO::ImageSpec& spec,
+                                                          const void* pixels,
+                                                          OIIO::TypeDesc type) {
   std::vector<unsigned char> buffer;
   OIIO::Filesystem::IOVecOutput vec(buffer);
   auto out = OIIO::ImageOutput::create(formatName);
-  if (!out) return std::unexpected(std::string("no encoder for ") + formatName + ": " + OIIO::geterror());
-  if (!out->set_ioproxy(&vec)) return std::unexpected(std::string("encoder cannot write to memory: ") + formatName);
+  if (!out)
+    return std::unexpected(std::string("no encoder for ") + formatName + ": " + OIIO::geterror());
+  if (!out->set_ioproxy(&vec))
+    return std::unexpected(std::string("encoder cannot write to memory: ") + formatName);
   const std::string name = std::string("tile.") + formatName;
   if (!out->open(name, spec) || !out->write_image(type, pixels) || !out->close()) {
     return std::unexpected("cannot encode " + name + ": " + out->geterror());
@@ -150,10 +164,14 @@ std::expected<std::vector<std::byte>, std::string> encode(const char* formatName
 } // namespace
 
 std::expected<std::vector<std::byte>, std::string>
-LocalRasterSource::renderTile(const Sector& box, int width, int height, std::string_view mimeType,
+LocalRasterSource::renderTile(const Sector& box,
+                              int width,
+                              int height,
+                              std::string_view mimeType,
                               std::int16_t noData) const {
   if (width <= 0 || height <= 0 || width > 8192 || height > 8192) {
-    return std::unexpected("tile size " + std::to_string(width) + "x" + std::to_string(height) + " out of range");
+    return std::unexpected("tile size " + std::to_string(width) + "x" + std::to_string(height) +
+                           " out of range");
   }
   if (!std::isfinite(box.west) || !std::isfinite(box.east) || !std::isfinite(box.south) ||
       !std::isfinite(box.north) || !(box.north > box.south) || !(box.east > box.west)) {
@@ -171,8 +189,9 @@ LocalRasterSource::renderTile(const Sector& box, int width, int height, std::str
       for (std::size_t i = 0; i < w; ++i) {
         const double lon = box.west + (static_cast<double>(i) + 0.5) * dx;
         const double v = sample(lat, lon, 0);
-        heights[j * w + i] = std::isnan(v) ? noData
-                                           : static_cast<std::int16_t>(std::clamp(std::round(v), -32767.0, 32767.0));
+        heights[j * w + i] =
+            std::isnan(v) ? noData
+                          : static_cast<std::int16_t>(std::clamp(std::round(v), -32767.0, 32767.0));
       }
     }
     if (mimeType == "image/tiff") {
@@ -189,7 +208,8 @@ LocalRasterSource::renderTile(const Sector& box, int width, int height, std::str
     return out;
   }
   const bool png = mimeType == "image/png";
-  if (!png && mimeType != "image/jpeg") return std::unexpected("unsupported format " + std::string(mimeType));
+  if (!png && mimeType != "image/jpeg")
+    return std::unexpected("unsupported format " + std::string(mimeType));
   const int outChannels = png ? 4 : 3;
   const auto oc = static_cast<std::size_t>(outChannels);
   std::vector<unsigned char> rgba(w * h * oc);

@@ -3,10 +3,12 @@
 
 namespace tellus {
 
-std::expected<SeedReport, CacheError> seedFromRaster(TileCache& cache, DatasetId dataset,
-                                                     const LocalRasterSource& source,
-                                                     const SeedOptions& options,
-                                                     const std::function<void(const SeedReport&)>& progress) {
+std::expected<SeedReport, CacheError>
+seedFromRaster(TileCache& cache,
+               DatasetId dataset,
+               const LocalRasterSource& source,
+               const SeedOptions& options,
+               const std::function<void(const SeedReport&)>& progress) {
   const auto info = cache.dataset(dataset);
   if (!info) return std::unexpected(CacheError{CacheErrc::InvalidArgument, "unknown dataset"});
   const auto grid = TileGrid::create(info->spec.grid);
@@ -14,11 +16,13 @@ std::expected<SeedReport, CacheError> seedFromRaster(TileCache& cache, DatasetId
   const Sector box = options.box.value_or(info->spec.grid.sector);
   SeedReport report;
   for (std::int32_t level = std::max(0, options.fromLevel);
-       level <= std::min(options.toLevel, grid->numLevels() - 1); ++level) {
+       level <= std::min(options.toLevel, grid->numLevels() - 1);
+       ++level) {
     const auto keys = grid->keysCovering(box, level);
     if (!keys) {
-      return std::unexpected(CacheError{CacheErrc::InvalidArgument,
-                                        "level " + std::to_string(level) + " has too many tiles to seed at once"});
+      return std::unexpected(
+          CacheError{CacheErrc::InvalidArgument,
+                     "level " + std::to_string(level) + " has too many tiles to seed at once"});
     }
     report.planned += static_cast<std::int64_t>(keys->size());
     if (options.dryRun) continue;
@@ -28,7 +32,9 @@ std::expected<SeedReport, CacheError> seedFromRaster(TileCache& cache, DatasetId
         ++report.skipped;
         continue;
       }
-      auto bytes = source.renderTile(grid->sectorOf(key), grid->spec().tileWidth, grid->spec().tileHeight,
+      auto bytes = source.renderTile(grid->sectorOf(key),
+                                     grid->spec().tileWidth,
+                                     grid->spec().tileHeight,
                                      info->spec.mimeType);
       if (!bytes) {
         ++report.failed;

@@ -1,6 +1,6 @@
-#include <tellus/cache/CacheTileSource.hpp>
-
 #include "../support/TempDir.hpp"
+
+#include <tellus/cache/CacheTileSource.hpp>
 
 #include <gtest/gtest.h>
 
@@ -90,7 +90,8 @@ TEST(CacheTileSource, HighestPriorityFirstCancelAndReprioritize) {
   Sink sink;
   std::vector<TileRequestId> ids;
   for (std::int64_t c = 0; c < 6; ++c) {
-    ids.push_back(src.request({"bluemarble", "", {2, 0, c}}, static_cast<double>(c % 3), sink.callback({2, 0, c})));
+    ids.push_back(src.request(
+        {"bluemarble", "", {2, 0, c}}, static_cast<double>(c % 3), sink.callback({2, 0, c})));
   }
   EXPECT_TRUE(src.cancel(ids[4]));
   EXPECT_FALSE(src.cancel(ids[4]));
@@ -99,8 +100,10 @@ TEST(CacheTileSource, HighestPriorityFirstCancelAndReprioritize) {
   src.start();
   sink.waitFor(5);
   std::vector<std::int64_t> order;
-  for (auto& [k, r] : sink.got) order.push_back(k.col);
-  // c=0 raised to 10; then priority 2 (c=5; c=2 before it), then 1 (c=1; c=4 cancelled), then 0 (c=3).
+  for (auto& [k, r] : sink.got)
+    order.push_back(k.col);
+  // c=0 raised to 10; then priority 2 (c=5; c=2 before it), then 1 (c=1; c=4 cancelled), then 0
+  // (c=3).
   EXPECT_EQ(order, (std::vector<std::int64_t>{0, 2, 5, 1, 3}));
   EXPECT_FALSE(src.cancel(ids[0])); // already delivered
 }
@@ -108,7 +111,8 @@ TEST(CacheTileSource, HighestPriorityFirstCancelAndReprioritize) {
 TEST(CacheTileSource, ManyClientsEveryCallbackOnce) {
   Fixture f;
   const std::vector<std::byte> bytes(64, std::byte{1});
-  for (std::int64_t c = 0; c < 20; ++c) ASSERT_TRUE(f.cache->put(f.id, TileKey{3, 1, c}, bytes, {}));
+  for (std::int64_t c = 0; c < 20; ++c)
+    ASSERT_TRUE(f.cache->put(f.id, TileKey{3, 1, c}, bytes, {}));
   std::atomic<int> calls{0};
   std::atomic<int> ok{0};
   {
@@ -117,15 +121,18 @@ TEST(CacheTileSource, ManyClientsEveryCallbackOnce) {
     for (int t = 0; t < 4; ++t) {
       clients.emplace_back([&] {
         for (std::int64_t i = 0; i < 100; ++i) {
-          src.request({"bluemarble", "", {3, 1, i % 40}}, static_cast<double>(i), [&](TileResult&& r) {
-            ++calls;
-            ok += r.status == TileStatus::Ok;
-          });
+          src.request(
+              {"bluemarble", "", {3, 1, i % 40}}, static_cast<double>(i), [&](TileResult&& r) {
+                ++calls;
+                ok += r.status == TileStatus::Ok;
+              });
         }
       });
     }
-    for (auto& c : clients) c.join();
-    while (src.queued() > 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    for (auto& c : clients)
+      c.join();
+    while (src.queued() > 0)
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
   } // destruction waits for running callbacks
   EXPECT_EQ(calls.load(), 400);
   EXPECT_EQ(ok.load(), 4 * 60); // columns 0..19 of i % 40 over i < 100

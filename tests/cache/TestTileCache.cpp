@@ -1,10 +1,9 @@
+#include "../support/TempDir.hpp"
+
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/cache/TilePath.hpp>
 
-#include "../support/TempDir.hpp"
-
 #include <gtest/gtest.h>
-
 #include <sqlite3.h>
 
 #include <atomic>
@@ -32,7 +31,8 @@ std::vector<std::byte> payload(const TileKey& k, std::size_t base = 100) {
   const std::size_t n = base + static_cast<std::size_t>((k.row * 7 + k.col * 13 + k.level) % 97);
   std::vector<std::byte> v(n);
   for (std::size_t i = 0; i < n; ++i) {
-    v[i] = static_cast<std::byte>((static_cast<std::size_t>(k.row) * 31 + static_cast<std::size_t>(k.col) + i) & 0xFF);
+    v[i] = static_cast<std::byte>(
+        (static_cast<std::size_t>(k.row) * 31 + static_cast<std::size_t>(k.col) + i) & 0xFF);
   }
   return v;
 }
@@ -145,12 +145,14 @@ TEST(TileCache, PersistsAcrossReopen) {
   {
     auto cache = openCache(dir.path());
     id = *cache->registerDataset(imagery());
-    for (std::int64_t c = 0; c < 10; ++c) ASSERT_TRUE(cache->put(id, TileKey{1, 2, c}, payload({1, 2, c}), {}));
+    for (std::int64_t c = 0; c < 10; ++c)
+      ASSERT_TRUE(cache->put(id, TileKey{1, 2, c}, payload({1, 2, c}), {}));
   }
   auto cache = openCache(dir.path());
   EXPECT_FALSE(cache->wasRebuiltAtOpen());
   ASSERT_TRUE(cache->dataset(id));
-  for (std::int64_t c = 0; c < 10; ++c) EXPECT_EQ(cache->get(id, TileKey{1, 2, c})->bytes, payload({1, 2, c}));
+  for (std::int64_t c = 0; c < 10; ++c)
+    EXPECT_EQ(cache->get(id, TileKey{1, 2, c})->bytes, payload({1, 2, c}));
   EXPECT_EQ(userVersion(dir.path() / "index.sqlite"), 2);
 }
 
@@ -187,24 +189,32 @@ TEST(TileCache, LruEvictionKeepsRecentAndPinned) {
   const auto pinned = *cache->registerDataset(pinnedSpec);
   const auto id = *cache->registerDataset(imagery());
   const std::vector<std::byte> kb(1000, std::byte{7});
-  for (std::int64_t c = 0; c < 8; ++c) ASSERT_TRUE(cache->put(pinned, TileKey{1, 0, c}, kb, {}));
-  for (std::int64_t c = 0; c < 10; ++c) ASSERT_TRUE(cache->put(id, TileKey{1, 1, c}, kb, {}));
+  for (std::int64_t c = 0; c < 8; ++c)
+    ASSERT_TRUE(cache->put(pinned, TileKey{1, 0, c}, kb, {}));
+  for (std::int64_t c = 0; c < 10; ++c)
+    ASSERT_TRUE(cache->put(id, TileKey{1, 1, c}, kb, {}));
   // Touch tiles 0..4 so that 5..9 are the least recently used.
   std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  for (std::int64_t c = 0; c < 5; ++c) ASSERT_EQ(cache->get(id, TileKey{1, 1, c})->kind, CacheLookup::Kind::Hit);
+  for (std::int64_t c = 0; c < 5; ++c)
+    ASSERT_EQ(cache->get(id, TileKey{1, 1, c})->kind, CacheLookup::Kind::Hit);
   cache->flush();
-  for (std::int64_t c = 0; c < 6; ++c) ASSERT_TRUE(cache->put(id, TileKey{1, 2, c}, kb, {}));
+  for (std::int64_t c = 0; c < 6; ++c)
+    ASSERT_TRUE(cache->put(id, TileKey{1, 2, c}, kb, {}));
   cache->flush();
   EXPECT_LE(*cache->totalBytes(), 20000);
-  for (std::int64_t c = 0; c < 8; ++c) EXPECT_EQ(cache->peek(pinned, TileKey{1, 0, c})->kind, CacheLookup::Kind::Hit);
-  for (std::int64_t c = 0; c < 5; ++c) EXPECT_EQ(cache->peek(id, TileKey{1, 1, c})->kind, CacheLookup::Kind::Hit) << c;
+  for (std::int64_t c = 0; c < 8; ++c)
+    EXPECT_EQ(cache->peek(pinned, TileKey{1, 0, c})->kind, CacheLookup::Kind::Hit);
+  for (std::int64_t c = 0; c < 5; ++c)
+    EXPECT_EQ(cache->peek(id, TileKey{1, 1, c})->kind, CacheLookup::Kind::Hit) << c;
   int evicted = 0;
-  for (std::int64_t c = 5; c < 10; ++c) evicted += cache->peek(id, TileKey{1, 1, c})->kind == CacheLookup::Kind::Miss;
+  for (std::int64_t c = 5; c < 10; ++c)
+    evicted += cache->peek(id, TileKey{1, 1, c})->kind == CacheLookup::Kind::Miss;
   EXPECT_GE(evicted, 4);
   // Only pinned data over the limit: it stays.
   auto small = openCache(dir.path() / "small", 1000);
   const auto p2 = *small->registerDataset(pinnedSpec);
-  for (std::int64_t c = 0; c < 3; ++c) ASSERT_TRUE(small->put(p2, TileKey{1, 0, c}, kb, {}));
+  for (std::int64_t c = 0; c < 3; ++c)
+    ASSERT_TRUE(small->put(p2, TileKey{1, 0, c}, kb, {}));
   EXPECT_EQ(*small->evictToLimit(), 0);
   EXPECT_EQ(*small->totalBytes(), 3000);
 }
@@ -235,7 +245,8 @@ TEST(TileCache, VerifyFindsBothKindsOfDriftAndRebuildRepairs) {
   test::TempDir dir("cache");
   auto cache = openCache(dir.path());
   const auto id = *cache->registerDataset(imagery());
-  for (std::int64_t c = 0; c < 4; ++c) ASSERT_TRUE(cache->put(id, TileKey{1, 0, c}, payload({1, 0, c}), {}));
+  for (std::int64_t c = 0; c < 4; ++c)
+    ASSERT_TRUE(cache->put(id, TileKey{1, 0, c}, payload({1, 0, c}), {}));
   auto report = cache->verify();
   ASSERT_TRUE(report);
   EXPECT_TRUE(report->ok()) << report->integrity;
@@ -277,7 +288,8 @@ TEST(TileCache, CorruptIndexIsMovedAsideAndRebuilt) {
   {
     auto cache = openCache(dir.path());
     id = *cache->registerDataset(imagery());
-    for (std::int64_t c = 0; c < 5; ++c) ASSERT_TRUE(cache->put(id, TileKey{1, 0, c}, payload({1, 0, c}), {}));
+    for (std::int64_t c = 0; c < 5; ++c)
+      ASSERT_TRUE(cache->put(id, TileKey{1, 0, c}, payload({1, 0, c}), {}));
   }
   {
     std::fstream f(dir.path() / "index.sqlite", std::ios::in | std::ios::out | std::ios::binary);
@@ -393,14 +405,18 @@ TEST(TileCache, ManyThreadsReadAndWriteWithoutErrors) {
       for (std::int64_t i = 0; i < 200; ++i) {
         const TileKey k{4, t, i % 100};
         auto r = cache->get(id, k);
-        if (!r) ++failures;
-        else if (r->kind == CacheLookup::Kind::Hit && r->bytes != payload(k)) ++failures;
+        if (!r)
+          ++failures;
+        else if (r->kind == CacheLookup::Kind::Hit && r->bytes != payload(k))
+          ++failures;
       }
     });
   }
-  for (auto& th : threads) th.join();
+  for (auto& th : threads)
+    th.join();
   EXPECT_EQ(failures.load(), 0);
   for (int t = 0; t < 4; ++t) {
-    for (std::int64_t i = 0; i < 100; ++i) EXPECT_EQ(cache->peek(id, TileKey{4, t, i})->kind, CacheLookup::Kind::Hit);
+    for (std::int64_t i = 0; i < 100; ++i)
+      EXPECT_EQ(cache->peek(id, TileKey{4, t, i})->kind, CacheLookup::Kind::Hit);
   }
 }

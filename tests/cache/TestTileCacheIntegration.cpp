@@ -1,9 +1,9 @@
 // Bad input, a full disk, two processes on one cache and a crash in the middle of writing.
 
+#include "../support/TempDir.hpp"
+
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/cache/TilePath.hpp>
-
-#include "../support/TempDir.hpp"
 
 #include <gtest/gtest.h>
 
@@ -31,7 +31,8 @@ std::vector<std::byte> payload(const TileKey& k, std::size_t base = 2000) {
   const std::size_t n = base + static_cast<std::size_t>((k.row * 7 + k.col * 13 + k.level) % 997);
   std::vector<std::byte> v(n);
   for (std::size_t i = 0; i < n; ++i) {
-    v[i] = static_cast<std::byte>((static_cast<std::size_t>(k.row) * 31 + static_cast<std::size_t>(k.col) + i) & 0xFF);
+    v[i] = static_cast<std::byte>(
+        (static_cast<std::size_t>(k.row) * 31 + static_cast<std::size_t>(k.col) + i) & 0xFF);
   }
   return v;
 }
@@ -81,10 +82,17 @@ TEST(TileCacheExtremes, RejectsKeysOutsideTheGrid) {
   auto cache = openCache(dir.path());
   const auto id = *cache->registerDataset(imagery());
   const std::vector<std::byte> b(10, std::byte{1});
-  for (const TileKey k : {TileKey{-1, 0, 0}, TileKey{12, 0, 0}, TileKey{31, 0, 0}, TileKey{0, -1, 0},
-                          TileKey{0, 0, -1}, TileKey{0, 5, 0}, TileKey{0, 0, 10},
-                          TileKey{11, 5 << 11, 0}, TileKey{0, INT64_MAX, INT64_MAX},
-                          TileKey{INT32_MAX, 0, 0}, TileKey{INT32_MIN, INT64_MIN, INT64_MIN}}) {
+  for (const TileKey k : {TileKey{-1, 0, 0},
+                          TileKey{12, 0, 0},
+                          TileKey{31, 0, 0},
+                          TileKey{0, -1, 0},
+                          TileKey{0, 0, -1},
+                          TileKey{0, 5, 0},
+                          TileKey{0, 0, 10},
+                          TileKey{11, 5 << 11, 0},
+                          TileKey{0, INT64_MAX, INT64_MAX},
+                          TileKey{INT32_MAX, 0, 0},
+                          TileKey{INT32_MIN, INT64_MIN, INT64_MIN}}) {
     SCOPED_TRACE(tileRelativePath(k, "jpg"));
     auto p = cache->put(id, k, b, {});
     ASSERT_FALSE(p);
@@ -226,8 +234,10 @@ TEST(TileCacheIntegration, CrashMidWriteNeverLeavesACorruptTile) {
       ++hits;
       // Whatever version is there is one of the complete versions, never a torn one.
       bool complete = false;
-      for (std::size_t v = 0; v < 3; ++v) complete |= g->bytes == payload(k, 1000 + v * 40000);
-      EXPECT_TRUE(complete) << "torn tile " << tileRelativePath(k, "jpg") << " size " << g->bytes.size();
+      for (std::size_t v = 0; v < 3; ++v)
+        complete |= g->bytes == payload(k, 1000 + v * 40000);
+      EXPECT_TRUE(complete) << "torn tile " << tileRelativePath(k, "jpg") << " size "
+                            << g->bytes.size();
     }
   }
   EXPECT_GT(hits, 0);

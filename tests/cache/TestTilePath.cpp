@@ -34,7 +34,8 @@ TEST(TilePath, WorldWindLayoutWithoutPadding) {
 }
 
 TEST(TilePath, ParseRoundTrip) {
-  for (const TileKey k : {TileKey{0, 0, 0}, TileKey{5, 31, 17}, TileKey{30, 5368709119, 10737418239}}) {
+  for (const TileKey k :
+       {TileKey{0, 0, 0}, TileKey{5, 31, 17}, TileKey{30, 5368709119, 10737418239}}) {
     std::string ext;
     const auto parsed = parseTileRelativePath(tileRelativePath(k, "jpg"), &ext);
     ASSERT_TRUE(parsed);
@@ -44,21 +45,42 @@ TEST(TilePath, ParseRoundTrip) {
 }
 
 TEST(TilePath, ParseRejectsEverythingElse) {
-  for (const char* bad : {"", "0", "0/0", "0/0/0.jpg", "0/0/0_0", "00/0/0_0.jpg", "0/01/01_0.jpg",
-                          "0/1/2_0.jpg", "-1/0/0_0.jpg", "0/-1/-1_0.jpg", "0/0/0_-1.jpg",
-                          "31/0/0_0.jpg", "0/0/0_0./x", "0/0/0_99999999999999999999.jpg",
-                          "a/0/0_0.jpg", "0/0/0_0x.jpg", "+1/0/0_0.jpg"}) {
+  for (const char* bad : {"",
+                          "0",
+                          "0/0",
+                          "0/0/0.jpg",
+                          "0/0/0_0",
+                          "00/0/0_0.jpg",
+                          "0/01/01_0.jpg",
+                          "0/1/2_0.jpg",
+                          "-1/0/0_0.jpg",
+                          "0/-1/-1_0.jpg",
+                          "0/0/0_-1.jpg",
+                          "31/0/0_0.jpg",
+                          "0/0/0_0./x",
+                          "0/0/0_99999999999999999999.jpg",
+                          "a/0/0_0.jpg",
+                          "0/0/0_0x.jpg",
+                          "+1/0/0_0.jpg"}) {
     EXPECT_FALSE(parseTileRelativePath(bad)) << bad;
   }
 }
 
 TEST(TilePath, NameEncodingCannotEscape) {
   const std::string nul("a\0b", 3);
-  for (const std::string& name :
-       {std::string(".."), std::string("."), std::string("../../etc/passwd"), std::string("a/b"),
-        std::string("a\\b"), nul, std::string("\x01\x1f\x7f"), std::string(".hidden"), std::string(""),
-        std::string(400, 'x'), std::string(400, '/'), std::string("Blue Marble (2004) – 5.2004"),
-        std::string("%2e%2e")}) {
+  for (const std::string& name : {std::string(".."),
+                                  std::string("."),
+                                  std::string("../../etc/passwd"),
+                                  std::string("a/b"),
+                                  std::string("a\\b"),
+                                  nul,
+                                  std::string("\x01\x1f\x7f"),
+                                  std::string(".hidden"),
+                                  std::string(""),
+                                  std::string(400, 'x'),
+                                  std::string(400, '/'),
+                                  std::string("Blue Marble (2004) – 5.2004"),
+                                  std::string("%2e%2e")}) {
     expectSafe(encodeNameComponent(name));
   }
   EXPECT_EQ(encodeNameComponent("bluemarble"), "bluemarble");
@@ -70,10 +92,23 @@ TEST(TilePath, NameEncodingCannotEscape) {
 
 TEST(TilePath, NameEncodingIsInjective) {
   std::set<std::string> seen;
-  const std::string names[] = {"a", "A", "a.", ".a", "%2e", "a%", "a/", "a_", "a-", "", "%00",
-                               std::string(1, '\0'), std::string(300, 'y'), std::string(301, 'y'),
+  const std::string names[] = {"a",
+                               "A",
+                               "a.",
+                               ".a",
+                               "%2e",
+                               "a%",
+                               "a/",
+                               "a_",
+                               "a-",
+                               "",
+                               "%00",
+                               std::string(1, '\0'),
+                               std::string(300, 'y'),
+                               std::string(301, 'y'),
                                std::string(300, 'y') + "z"};
-  for (const auto& n : names) EXPECT_TRUE(seen.insert(encodeNameComponent(n)).second) << n;
+  for (const auto& n : names)
+    EXPECT_TRUE(seen.insert(encodeNameComponent(n)).second) << n;
 }
 
 TEST(TilePath, DatasetFolderDependsOnWhatMakesTilesDiffer) {

@@ -8,7 +8,9 @@
 using namespace tellus;
 
 namespace {
-double dist(const Ecef& a, const Ecef& b) { return std::hypot(a.x - b.x, a.y - b.y, a.z - b.z); }
+double dist(const Ecef& a, const Ecef& b) {
+  return std::hypot(a.x - b.x, a.y - b.y, a.z - b.z);
+}
 } // namespace
 
 TEST(Geodesy, Wgs84AxesAndPoles) {
@@ -45,7 +47,8 @@ TEST(Geodesy, RoundTripIsSubMillimetre) {
 TEST(Geodesy, SphereDiffersFromTheEllipsoidByKilometres) {
   const Geodesy wgs(EarthModel::Wgs84), sphere(EarthModel::Sphere);
   double worst = 0;
-  for (double lat = -90; lat <= 90; lat += 0.5) worst = std::max(worst, dist(wgs.toEcef(lat, 30, 0), sphere.toEcef(lat, 30, 0)));
+  for (double lat = -90; lat <= 90; lat += 0.5)
+    worst = std::max(worst, dist(wgs.toEcef(lat, 30, 0), sphere.toEcef(lat, 30, 0)));
   EXPECT_GT(worst, 7000.0);
   EXPECT_LT(worst, 25000.0);
 }
@@ -59,8 +62,13 @@ TEST(GeodesyExtremes, AntimeridianSignedZeroAndNonFinite) {
   EXPECT_EQ(std::abs(b.y), 0.0);
   const Ecef z1 = g.toEcef(-0.0, -0.0, 0), z2 = g.toEcef(0.0, 0.0, 0);
   EXPECT_EQ(z1.x, z2.x);
-  for (const Ecef p : {g.toEcef(NAN, 0, 0), g.toEcef(0, NAN, 0), g.toEcef(0, 0, NAN), g.toEcef(90.5, 0, 0),
-                       g.toEcef(0, INFINITY, 0), g.toEcef(-INFINITY, 0, 0), g.toEcef(0, 0, INFINITY)}) {
+  for (const Ecef p : {g.toEcef(NAN, 0, 0),
+                       g.toEcef(0, NAN, 0),
+                       g.toEcef(0, 0, NAN),
+                       g.toEcef(90.5, 0, 0),
+                       g.toEcef(0, INFINITY, 0),
+                       g.toEcef(-INFINITY, 0, 0),
+                       g.toEcef(0, 0, INFINITY)}) {
     EXPECT_TRUE(std::isnan(p.x) && std::isnan(p.y) && std::isnan(p.z));
   }
   EXPECT_TRUE(std::isnan(g.surfaceNormal(NAN, 0).x));

@@ -1,8 +1,8 @@
+#include "../support/TempDir.hpp"
+
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/proxy/LocalRasterSource.hpp>
 #include <tellus/proxy/Seeder.hpp>
-
-#include "../support/TempDir.hpp"
 
 #include <gtest/gtest.h>
 
@@ -29,7 +29,8 @@ const LocalRasterSource& etopo() {
 }
 
 std::int16_t bilAt(const std::vector<std::byte>& bil, int width, int x, int y) {
-  const auto i = 2 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x));
+  const auto i = 2 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
+                      static_cast<std::size_t>(x));
   return static_cast<std::int16_t>(std::to_integer<std::uint16_t>(bil[i]) |
                                    (std::to_integer<std::uint16_t>(bil[i + 1]) << 8));
 }

@@ -62,7 +62,8 @@ struct Args {
   }
   std::vector<std::string> all(const std::string& k) const {
     std::vector<std::string> v;
-    for (auto [it, end] = options.equal_range(k); it != end; ++it) v.push_back(it->second);
+    for (auto [it, end] = options.equal_range(k); it != end; ++it)
+      v.push_back(it->second);
     return v;
   }
 };
@@ -102,7 +103,8 @@ std::optional<std::pair<int, int>> parseLevels(std::string_view s) {
   if (dash == std::string_view::npos) return std::pair{a, a};
   const std::string_view second = s.substr(dash + 1);
   auto r2 = std::from_chars(second.data(), second.data() + second.size(), b);
-  if (r2.ec != std::errc{} || r2.ptr != second.data() + second.size() || b < a || a < 0) return std::nullopt;
+  if (r2.ec != std::errc{} || r2.ptr != second.data() + second.size() || b < a || a < 0)
+    return std::nullopt;
   return std::pair{a, b};
 }
 
@@ -129,11 +131,16 @@ std::optional<std::chrono::milliseconds> parseDuration(std::string_view s) {
   const auto r = std::from_chars(s.data(), s.data() + s.size() - 1, n);
   if (r.ec != std::errc{} || r.ptr != s.data() + s.size() - 1 || n < 0) return std::nullopt;
   switch (s.back()) {
-  case 's': return std::chrono::seconds(n);
-  case 'm': return std::chrono::minutes(n);
-  case 'h': return std::chrono::hours(n);
-  case 'd': return std::chrono::hours(24 * n);
-  default: return std::nullopt;
+  case 's':
+    return std::chrono::seconds(n);
+  case 'm':
+    return std::chrono::minutes(n);
+  case 'h':
+    return std::chrono::hours(n);
+  case 'd':
+    return std::chrono::hours(24 * n);
+  default:
+    return std::nullopt;
   }
 }
 
@@ -162,10 +169,14 @@ std::string jsonString(std::string_view s) {
 
 std::string humanBytes(std::int64_t b) {
   char buf[32];
-  if (b >= 1LL << 30) std::snprintf(buf, sizeof buf, "%.1f GiB", static_cast<double>(b) / (1LL << 30));
-  else if (b >= 1LL << 20) std::snprintf(buf, sizeof buf, "%.1f MiB", static_cast<double>(b) / (1LL << 20));
-  else if (b >= 1LL << 10) std::snprintf(buf, sizeof buf, "%.1f KiB", static_cast<double>(b) / (1LL << 10));
-  else std::snprintf(buf, sizeof buf, "%lld B", static_cast<long long>(b));
+  if (b >= 1LL << 30)
+    std::snprintf(buf, sizeof buf, "%.1f GiB", static_cast<double>(b) / (1LL << 30));
+  else if (b >= 1LL << 20)
+    std::snprintf(buf, sizeof buf, "%.1f MiB", static_cast<double>(b) / (1LL << 20));
+  else if (b >= 1LL << 10)
+    std::snprintf(buf, sizeof buf, "%.1f KiB", static_cast<double>(b) / (1LL << 10));
+  else
+    std::snprintf(buf, sizeof buf, "%lld B", static_cast<long long>(b));
   return buf;
 }
 
@@ -174,11 +185,14 @@ struct Context {
   std::unique_ptr<TileCache> cache;
 };
 
-/** Builds the configuration and opens the cache; prints the error and returns nullopt on failure. */
+/** Builds the configuration and opens the cache; prints the error and returns nullopt on failure.
+ */
 std::optional<Context> setUp(const Args& a) {
   if (a.get("config")) {
-    std::fprintf(stderr, "tellus: --config (YAML) is not built yet (issue #3); the embedded default is used "
-                         "without it\n");
+    std::fprintf(
+        stderr,
+        "tellus: --config (YAML) is not built yet (issue #3); the embedded default is used "
+        "without it\n");
     return std::nullopt;
   }
   const fs::path root = a.get("cache") ? fs::path(*a.get("cache")) : defaultCacheRoot();
@@ -196,7 +210,9 @@ std::optional<Context> setUp(const Args& a) {
     return std::nullopt;
   }
   if ((*cache)->wasRebuiltAtOpen()) {
-    std::fprintf(stderr, "tellus: the cache index was damaged; it was moved aside and rebuilt from the tree\n");
+    std::fprintf(
+        stderr,
+        "tellus: the cache index was damaged; it was moved aside and rebuilt from the tree\n");
   }
   ctx.cache = std::move(*cache);
   return ctx;
@@ -207,7 +223,9 @@ int cmdSeed(const Args& a) {
   if (auto l = a.get("levels")) {
     auto r = parseLevels(*l);
     if (!r) {
-      std::fprintf(stderr, "tellus seed: --levels must be A or A-B with 0 <= A <= B, got '%s'\n", l->c_str());
+      std::fprintf(stderr,
+                   "tellus seed: --levels must be A or A-B with 0 <= A <= B, got '%s'\n",
+                   l->c_str());
       return kExitUsage;
     }
     so.fromLevel = r->first;
@@ -216,7 +234,8 @@ int cmdSeed(const Args& a) {
   if (auto b = a.get("bbox")) {
     so.box = parseBbox(*b);
     if (!so.box) {
-      std::fprintf(stderr, "tellus seed: --bbox must be W,S,E,N in degrees, got '%s'\n", b->c_str());
+      std::fprintf(
+          stderr, "tellus seed: --bbox must be W,S,E,N in degrees, got '%s'\n", b->c_str());
       return kExitUsage;
     }
   }
@@ -233,13 +252,15 @@ int cmdSeed(const Args& a) {
     layers.push_back(l);
   }
   if (layers.empty()) {
-    for (const auto& l : ctx->config.layers) layers.push_back(&l);
+    for (const auto& l : ctx->config.layers)
+      layers.push_back(&l);
   }
   int rc = kExitOk;
   for (const auto* layer : layers) {
     auto id = ctx->cache->registerDataset(layer->dataset);
     if (!id) {
-      std::fprintf(stderr, "tellus seed: %s: %s\n", layer->name.c_str(), id.error().message.c_str());
+      std::fprintf(
+          stderr, "tellus seed: %s: %s\n", layer->name.c_str(), id.error().message.c_str());
       return kExitError;
     }
     auto source = LocalRasterSource::open(layer->upstream.path);
@@ -249,15 +270,23 @@ int cmdSeed(const Args& a) {
     }
     auto report = seedFromRaster(*ctx->cache, *id, *source, so);
     if (!report) {
-      std::fprintf(stderr, "tellus seed: %s: %s\n", layer->name.c_str(), report.error().message.c_str());
+      std::fprintf(
+          stderr, "tellus seed: %s: %s\n", layer->name.c_str(), report.error().message.c_str());
       return kExitError;
     }
-    std::printf("%-12s levels %d-%d: %lld tiles planned, %lld already cached, %lld written (%s), %lld failed%s\n",
-                layer->name.c_str(), so.fromLevel, std::min(so.toLevel, layer->dataset.grid.numLevels - 1),
-                static_cast<long long>(report->planned), static_cast<long long>(report->skipped),
-                static_cast<long long>(report->written), humanBytes(report->bytes).c_str(),
-                static_cast<long long>(report->failed), so.dryRun ? " (dry run)" : "");
-    for (const auto& f : report->failures) std::fprintf(stderr, "  failed: %s\n", f.c_str());
+    std::printf("%-12s levels %d-%d: %lld tiles planned, %lld already cached, %lld written (%s), "
+                "%lld failed%s\n",
+                layer->name.c_str(),
+                so.fromLevel,
+                std::min(so.toLevel, layer->dataset.grid.numLevels - 1),
+                static_cast<long long>(report->planned),
+                static_cast<long long>(report->skipped),
+                static_cast<long long>(report->written),
+                humanBytes(report->bytes).c_str(),
+                static_cast<long long>(report->failed),
+                so.dryRun ? " (dry run)" : "");
+    for (const auto& f : report->failures)
+      std::fprintf(stderr, "  failed: %s\n", f.c_str());
     if (report->failed > 0) rc = kExitProblems;
   }
   return rc;
@@ -276,36 +305,58 @@ int cmdCacheStats(Context& ctx, bool json) {
     totalBytes += d.bytes;
   }
   if (json) {
-    std::printf("{\"root\":%s,\"tiles\":%lld,\"bytes\":%lld,\"datasets\":[", jsonString(ctx.cache->root().string()).c_str(),
-                static_cast<long long>(totalTiles), static_cast<long long>(totalBytes));
+    std::printf("{\"root\":%s,\"tiles\":%lld,\"bytes\":%lld,\"datasets\":[",
+                jsonString(ctx.cache->root().string()).c_str(),
+                static_cast<long long>(totalTiles),
+                static_cast<long long>(totalBytes));
     for (std::size_t i = 0; i < st->size(); ++i) {
       const auto& d = (*st)[i];
-      std::printf("%s{\"id\":%lld,\"server\":%s,\"name\":%s,\"folder\":%s,\"format\":%s,\"time\":%s,\"pinned\":%s,"
+      std::printf("%s{\"id\":%lld,\"server\":%s,\"name\":%s,\"folder\":%s,\"format\":%s,\"time\":%"
+                  "s,\"pinned\":%s,"
                   "\"tiles\":%lld,\"bytes\":%lld,\"levels\":[",
-                  i ? "," : "", static_cast<long long>(d.dataset.id), jsonString(d.dataset.spec.server).c_str(),
-                  jsonString(d.dataset.spec.name).c_str(), jsonString(d.dataset.folder).c_str(),
-                  jsonString(d.dataset.spec.mimeType).c_str(), jsonString(d.dataset.spec.time).c_str(),
-                  d.dataset.spec.pinned ? "true" : "false", static_cast<long long>(d.tiles),
+                  i ? "," : "",
+                  static_cast<long long>(d.dataset.id),
+                  jsonString(d.dataset.spec.server).c_str(),
+                  jsonString(d.dataset.spec.name).c_str(),
+                  jsonString(d.dataset.folder).c_str(),
+                  jsonString(d.dataset.spec.mimeType).c_str(),
+                  jsonString(d.dataset.spec.time).c_str(),
+                  d.dataset.spec.pinned ? "true" : "false",
+                  static_cast<long long>(d.tiles),
                   static_cast<long long>(d.bytes));
       for (std::size_t j = 0; j < d.levels.size(); ++j) {
         const auto& l = d.levels[j];
-        std::printf("%s{\"level\":%d,\"tiles\":%lld,\"absent\":%lld,\"bytes\":%lld}", j ? "," : "", l.level,
-                    static_cast<long long>(l.tiles), static_cast<long long>(l.absent), static_cast<long long>(l.bytes));
+        std::printf("%s{\"level\":%d,\"tiles\":%lld,\"absent\":%lld,\"bytes\":%lld}",
+                    j ? "," : "",
+                    l.level,
+                    static_cast<long long>(l.tiles),
+                    static_cast<long long>(l.absent),
+                    static_cast<long long>(l.bytes));
       }
       std::printf("]}");
     }
     std::printf("]}\n");
     return kExitOk;
   }
-  std::printf("cache %s: %lld tiles, %s\n", ctx.cache->root().c_str(), static_cast<long long>(totalTiles),
+  std::printf("cache %s: %lld tiles, %s\n",
+              ctx.cache->root().c_str(),
+              static_cast<long long>(totalTiles),
               humanBytes(totalBytes).c_str());
   for (const auto& d : *st) {
-    std::printf("  %s/%s  %s%s%s  %lld tiles  %s\n", d.dataset.spec.server.c_str(), d.dataset.spec.name.c_str(),
-                d.dataset.spec.mimeType.c_str(), d.dataset.spec.time.empty() ? "" : ("  time " + d.dataset.spec.time).c_str(),
-                d.dataset.spec.pinned ? "  pinned" : "", static_cast<long long>(d.tiles), humanBytes(d.bytes).c_str());
+    std::printf("  %s/%s  %s%s%s  %lld tiles  %s\n",
+                d.dataset.spec.server.c_str(),
+                d.dataset.spec.name.c_str(),
+                d.dataset.spec.mimeType.c_str(),
+                d.dataset.spec.time.empty() ? "" : ("  time " + d.dataset.spec.time).c_str(),
+                d.dataset.spec.pinned ? "  pinned" : "",
+                static_cast<long long>(d.tiles),
+                humanBytes(d.bytes).c_str());
     for (const auto& l : d.levels) {
-      std::printf("    level %2d: %8lld tiles%s  %s\n", l.level, static_cast<long long>(l.tiles),
-                  l.absent ? (" (" + std::to_string(l.absent) + " absent)").c_str() : "", humanBytes(l.bytes).c_str());
+      std::printf("    level %2d: %8lld tiles%s  %s\n",
+                  l.level,
+                  static_cast<long long>(l.tiles),
+                  l.absent ? (" (" + std::to_string(l.absent) + " absent)").c_str() : "",
+                  humanBytes(l.bytes).c_str());
     }
   }
   return kExitOk;
@@ -322,7 +373,8 @@ int cmdCache(const Args& a) {
     const auto d = a.get("older-than");
     olderThan = d ? parseDuration(*d) : std::nullopt;
     if (!olderThan) {
-      std::fprintf(stderr, "tellus cache prune: --older-than DURATION is required (e.g. 30d, 12h)\n");
+      std::fprintf(stderr,
+                   "tellus cache prune: --older-than DURATION is required (e.g. 30d, 12h)\n");
       return kExitUsage;
     }
   } else if (sub != "stats" && sub != "verify" && sub != "rebuild") {
@@ -341,14 +393,16 @@ int cmdCache(const Args& a) {
     std::printf("index integrity: %s\n", r->integrity.c_str());
     auto list = [](const char* what, const std::vector<std::string>& v) {
       std::printf("%s: %zu\n", what, v.size());
-      for (std::size_t i = 0; i < v.size() && i < 20; ++i) std::printf("  %s\n", v[i].c_str());
+      for (std::size_t i = 0; i < v.size() && i < 20; ++i)
+        std::printf("  %s\n", v[i].c_str());
       if (v.size() > 20) std::printf("  ... and %zu more\n", v.size() - 20);
     };
     list("files without index rows", r->filesWithoutRows);
     list("index rows without files", r->rowsWithoutFiles);
     list("size mismatches", r->sizeMismatches);
     list("stray temp files", r->strayTempFiles);
-    std::printf(r->ok() ? "cache is consistent\n" : "cache has problems: `tellus cache rebuild` repairs the index\n");
+    std::printf(r->ok() ? "cache is consistent\n"
+                        : "cache has problems: `tellus cache rebuild` repairs the index\n");
     return r->ok() ? kExitOk : kExitProblems;
   }
   if (sub == "rebuild") {
@@ -384,7 +438,8 @@ int run(int argc, char** argv) {
     return kExitOk;
   }
   const Args a = parseArgs(argc, argv, 2, {"json", "dry-run", "include-pinned"});
-  for (const auto& e : a.errors) std::fprintf(stderr, "tellus %s: %s\n", argv[1], e.c_str());
+  for (const auto& e : a.errors)
+    std::fprintf(stderr, "tellus %s: %s\n", argv[1], e.c_str());
   if (!a.errors.empty()) return kExitUsage;
   if (cmd == "seed") return cmdSeed(a);
   if (cmd == "cache") return cmdCache(a);

@@ -1,8 +1,8 @@
 #pragma once
 /**
  * @file CacheTileSource.hpp
- * @brief An ITileSource over a TileCache alone, with its own worker threads: offline browsing of what
- * is cached. A tile that is not cached is Absent (there is no upstream to ask).
+ * @brief An ITileSource over a TileCache alone, with its own worker threads: offline browsing of
+ * what is cached. A tile that is not cached is Absent (there is no upstream to ask).
  */
 
 #include <tellus/cache/TileCache.hpp>
@@ -23,7 +23,8 @@ public:
 
   void start();
 
-  std::optional<DatasetSpec> describe(std::string_view layer, std::string_view time = {}) const override;
+  std::optional<DatasetSpec> describe(std::string_view layer,
+                                      std::string_view time = {}) const override;
   TileRequestId request(const TileAddress& address, double priority, Callback done) override;
   void reprioritize(TileRequestId id, double priority) override;
   bool cancel(TileRequestId id) override;

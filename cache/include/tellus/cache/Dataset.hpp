@@ -1,5 +1,6 @@
 #pragma once
-/** @file Dataset.hpp @brief What a cached dataset is: a grid, a format and what makes tiles differ. */
+/** @file Dataset.hpp @brief What a cached dataset is: a grid, a format and what makes tiles differ.
+ */
 
 #include <tellus/cache/TileGrid.hpp>
 

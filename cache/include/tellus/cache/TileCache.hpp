@@ -3,13 +3,14 @@
  * @file TileCache.hpp
  * @brief The tile cache: files in a World Wind tree plus one SQLite index per cache root.
  *
- * Layout: `<root>/index.sqlite` and `<root>/<server>/<name>-<hash>/<level>/<row>/<row>_<col>.<ext>`,
- * each dataset folder holding a `dataset.txt` descriptor. The index is the source of truth for what
- * is cached; files are only read through it.
+ * Layout: `<root>/index.sqlite` and
+ * `<root>/<server>/<name>-<hash>/<level>/<row>/<row>_<col>.<ext>`, each dataset folder holding a
+ * `dataset.txt` descriptor. The index is the source of truth for what is cached; files are only
+ * read through it.
  *
  * Guarantees:
- * - a tile is never visible half written: bytes go to a temp file, are fsynced and renamed into place,
- *   and only then does the index row appear (one batched transaction for many writers);
+ * - a tile is never visible half written: bytes go to a temp file, are fsynced and renamed into
+ * place, and only then does the index row appear (one batched transaction for many writers);
  * - a full disk (ENOSPC, EFBIG, SQLITE_FULL) is reported as CacheErrc::DiskFull, the temp file is
  *   removed and the index is left as it was;
  * - many threads may read at once (pooled read connections, WAL); one writer thread per process
@@ -43,11 +44,11 @@ using UnixMillis = std::int64_t;
 
 /** HTTP-ish metadata kept with a tile. */
 struct TileMeta {
-  std::string contentType;                ///< e.g. "image/jpeg"
-  std::string etag;                       ///< upstream ETag, "" if none
-  std::string lastModified;               ///< upstream Last-Modified, "" if none
-  std::optional<UnixMillis> expiresAt;    ///< after this the tile is stale; nullopt = never
-  UnixMillis fetchedAt = 0;               ///< when it was fetched (0 = now, filled in by put)
+  std::string contentType;             ///< e.g. "image/jpeg"
+  std::string etag;                    ///< upstream ETag, "" if none
+  std::string lastModified;            ///< upstream Last-Modified, "" if none
+  std::optional<UnixMillis> expiresAt; ///< after this the tile is stale; nullopt = never
+  UnixMillis fetchedAt = 0;            ///< when it was fetched (0 = now, filled in by put)
 };
 
 /** Result of a lookup. */
@@ -88,11 +89,11 @@ struct DatasetStats {
 
 /** What `verify` found. Paths are relative to the cache root. */
 struct VerifyReport {
-  std::vector<std::string> filesWithoutRows;  ///< tile files the index does not know
-  std::vector<std::string> rowsWithoutFiles;  ///< index rows whose file is missing
-  std::vector<std::string> sizeMismatches;    ///< index bytes != file size
-  std::vector<std::string> strayTempFiles;    ///< leftovers of interrupted writes
-  std::string integrity;                      ///< "ok" or SQLite's quick_check message
+  std::vector<std::string> filesWithoutRows; ///< tile files the index does not know
+  std::vector<std::string> rowsWithoutFiles; ///< index rows whose file is missing
+  std::vector<std::string> sizeMismatches;   ///< index bytes != file size
+  std::vector<std::string> strayTempFiles;   ///< leftovers of interrupted writes
+  std::string integrity;                     ///< "ok" or SQLite's quick_check message
   bool ok() const {
     return filesWithoutRows.empty() && rowsWithoutFiles.empty() && sizeMismatches.empty() &&
            integrity == "ok";
@@ -109,18 +110,19 @@ struct PruneOptions {
 class TileCache {
 public:
   struct Options {
-    std::filesystem::path root;                          ///< created if missing (unless readOnly)
-    std::uint64_t sizeLimitBytes = 0;                    ///< 0 = unlimited; LRU beyond it
-    bool readOnly = false;                               ///< offline media: no writes at all
-    bool fsyncTiles = true;                              ///< fsync each tile before its rename
-    std::chrono::milliseconds busyTimeout{60000};        ///< wait for another process's writer
-    std::chrono::milliseconds accessFlushInterval{1000}; ///< how often last-access times are written
-    int readConnections = 4;                             ///< pooled read connections
+    std::filesystem::path root;                   ///< created if missing (unless readOnly)
+    std::uint64_t sizeLimitBytes = 0;             ///< 0 = unlimited; LRU beyond it
+    bool readOnly = false;                        ///< offline media: no writes at all
+    bool fsyncTiles = true;                       ///< fsync each tile before its rename
+    std::chrono::milliseconds busyTimeout{60000}; ///< wait for another process's writer
+    std::chrono::milliseconds accessFlushInterval{
+        1000};               ///< how often last-access times are written
+    int readConnections = 4; ///< pooled read connections
   };
 
   /** Opens (creating or migrating) the cache. A damaged index is moved aside to
-   * `index.sqlite.corrupt-<millis>` and rebuilt from the tree. Fails for an unusable root, an index of
-   * a newer schema, or an index that cannot be created. */
+   * `index.sqlite.corrupt-<millis>` and rebuilt from the tree. Fails for an unusable root, an index
+   * of a newer schema, or an index that cannot be created. */
   static std::expected<std::unique_ptr<TileCache>, CacheError> open(const Options& options);
 
   ~TileCache();
@@ -139,15 +141,17 @@ public:
   std::expected<void, CacheError> setPinned(DatasetId id, bool pinned);
 
   // --- tiles ----------------------------------------------------------------------------------
-  /** Looks a tile up. A row whose file vanished or changed size is a Miss (and the row is dropped). */
+  /** Looks a tile up. A row whose file vanished or changed size is a Miss (and the row is dropped).
+   */
   std::expected<CacheLookup, CacheError> get(DatasetId id, const TileKey& key);
   /** Index-only check (no file access): Hit/Absent/Miss kind and staleness, no bytes, no touch. */
   std::expected<CacheLookup, CacheError> peek(DatasetId id, const TileKey& key) const;
   /** Stores a tile durably; returns when the index row is committed. */
-  std::expected<void, CacheError> put(DatasetId id, const TileKey& key,
-                                      std::span<const std::byte> bytes, const TileMeta& meta);
+  std::expected<void, CacheError>
+  put(DatasetId id, const TileKey& key, std::span<const std::byte> bytes, const TileMeta& meta);
   /** Remembers that upstream has no tile here until retryAfter (its file, if any, is removed). */
-  std::expected<void, CacheError> putAbsent(DatasetId id, const TileKey& key, UnixMillis retryAfter);
+  std::expected<void, CacheError>
+  putAbsent(DatasetId id, const TileKey& key, UnixMillis retryAfter);
   /** Removes a tile (row first, then the file). Removing an unknown tile is not an error. */
   std::expected<void, CacheError> erase(DatasetId id, const TileKey& key);
 
@@ -176,7 +180,8 @@ private:
 /** Milliseconds since the Unix epoch, now. */
 UnixMillis unixMillisNow() noexcept;
 
-/** File extension for a MIME type ("image/jpeg" -> "jpg", "application/bil16" -> "bil"), and back. */
+/** File extension for a MIME type ("image/jpeg" -> "jpg", "application/bil16" -> "bil"), and back.
+ */
 std::string extensionForMimeType(std::string_view mimeType);
 std::string mimeTypeForExtension(std::string_view extension);
 

@@ -57,8 +57,9 @@ struct GridSpec {
 class TileGrid {
 public:
   /** Validates the spec: delta > 0 and finite, 180/delta and 360/delta whole numbers, sector inside
-   * the globe with south < north and west < east (a dataset sector does not cross the antimeridian),
-   * tile sizes in [1, 65536], numLevels in [1, kMaxLevel+1]. Returns a message naming the bad field. */
+   * the globe with south < north and west < east (a dataset sector does not cross the
+   * antimeridian), tile sizes in [1, 65536], numLevels in [1, kMaxLevel+1]. Returns a message
+   * naming the bad field. */
   static std::expected<TileGrid, std::string> create(const GridSpec& spec);
 
   const GridSpec& spec() const noexcept { return spec_; }
@@ -81,12 +82,13 @@ public:
    * std::nullopt for NaN, inf, out-of-range position or level, or a position outside the sector. */
   std::optional<TileKey> keyAt(double latDeg, double lonDeg, std::int32_t level) const noexcept;
 
-  /** Keys of all valid tiles intersecting the box with non-zero area, row-major from the south-west.
-   * A box with west > east crosses the antimeridian and is split in two. A box is clipped to
+  /** Keys of all valid tiles intersecting the box with non-zero area, row-major from the
+   * south-west. A box with west > east crosses the antimeridian and is split in two. A box is
+   * clipped to
    * [-90, 90]; NaN/inf or an empty box gives an empty vector. maxKeys caps the result: beyond it
    * returns std::nullopt (a caller must not allocate billions of keys). */
-  std::optional<std::vector<TileKey>> keysCovering(const Sector& box, std::int32_t level,
-                                                   std::size_t maxKeys = 1u << 20) const;
+  std::optional<std::vector<TileKey>>
+  keysCovering(const Sector& box, std::int32_t level, std::size_t maxKeys = 1u << 20) const;
 
   /** Parent tile; std::nullopt at level 0 or for an invalid key. */
   std::optional<TileKey> parent(const TileKey& key) const noexcept;
@@ -103,7 +105,9 @@ public:
    * span (default 1e-9). std::nullopt when not aligned (any level), when sizes differ, or for
    * NaN/inf input.
    */
-  std::optional<TileKey> keyForBbox(const Sector& bbox, std::int32_t width, std::int32_t height,
+  std::optional<TileKey> keyForBbox(const Sector& bbox,
+                                    std::int32_t width,
+                                    std::int32_t height,
                                     double relTolerance = 1e-9) const noexcept;
 
 private:

@@ -31,8 +31,10 @@ std::string encodeNameComponent(std::string_view name);
 std::string tileRelativePath(const TileKey& key, std::string_view extension);
 
 /** Parses "level/row/row_col.ext" (also with a trailing folder prefix stripped by the caller);
- * std::nullopt for anything else (zero padding, signs, mismatched rows, overflow, level > kMaxLevel). */
-std::optional<TileKey> parseTileRelativePath(std::string_view path, std::string* extension = nullptr);
+ * std::nullopt for anything else (zero padding, signs, mismatched rows, overflow, level >
+ * kMaxLevel). */
+std::optional<TileKey> parseTileRelativePath(std::string_view path,
+                                             std::string* extension = nullptr);
 
 /** 64-bit FNV-1a of a byte string (stable across platforms and runs; used in folder names). */
 std::uint64_t stableHash64(std::string_view bytes) noexcept;

@@ -46,11 +46,13 @@ struct TileResult {
 using TileRequestId = std::uint64_t;
 
 /**
- * @brief The asynchronous tile interface. Thread safety: every method may be called from any thread.
+ * @brief The asynchronous tile interface. Thread safety: every method may be called from any
+ * thread.
  *
- * `done` is called exactly once per request, on a worker thread, unless cancel() returned true. It must
- * not throw and should only hand the result over (e.g. push it into a queue the main thread drains).
- * Destroying a source drops queued requests without calling them and waits for running callbacks.
+ * `done` is called exactly once per request, on a worker thread, unless cancel() returned true. It
+ * must not throw and should only hand the result over (e.g. push it into a queue the main thread
+ * drains). Destroying a source drops queued requests without calling them and waits for running
+ * callbacks.
  */
 class ITileSource {
 public:
@@ -59,7 +61,8 @@ public:
   virtual ~ITileSource() = default;
 
   /** The dataset behind a layer (grid, format), or nullopt for an unknown layer. */
-  virtual std::optional<DatasetSpec> describe(std::string_view layer, std::string_view time = {}) const = 0;
+  virtual std::optional<DatasetSpec> describe(std::string_view layer,
+                                              std::string_view time = {}) const = 0;
   /** Queues a request; higher priority runs first, equal priorities in request order. */
   virtual TileRequestId request(const TileAddress& address, double priority, Callback done) = 0;
   /** Changes the priority of a queued request (no effect once it runs). */

@@ -18,7 +18,7 @@
 namespace tellus {
 
 struct CacheSettings {
-  std::filesystem::path root;      ///< cache root (index.sqlite + the tile tree)
+  std::filesystem::path root;       ///< cache root (index.sqlite + the tile tree)
   std::uint64_t sizeLimitBytes = 0; ///< 0 = unlimited
 };
 
@@ -30,7 +30,7 @@ struct LocalRasterUpstream {
 enum class LayerKind { Imagery, Elevation };
 
 struct LayerConfig {
-  std::string name;  ///< WMS layer / World Wind dataset name
+  std::string name; ///< WMS layer / World Wind dataset name
   std::string title;
   LayerKind kind = LayerKind::Imagery;
   DatasetSpec dataset; ///< server, grid, format; dataset.name == name
@@ -46,7 +46,8 @@ struct Config {
 };
 
 /** The embedded default over the bundled data in dataDir, with the cache at cacheRoot. */
-Config embeddedDefault(const std::filesystem::path& dataDir, const std::filesystem::path& cacheRoot);
+Config embeddedDefault(const std::filesystem::path& dataDir,
+                       const std::filesystem::path& cacheRoot);
 
 /** Checks a configuration: unique layer names, valid grids, known formats, existing upstream
  * files. The message names the layer and the field. */

@@ -46,7 +46,8 @@ public:
   Ecef toEcef(double latDeg, double lonDeg, double heightM) const noexcept;
   /** Inverse of toEcef; at the poles the longitude is 0. */
   Geodetic fromEcef(const Ecef& p) const noexcept;
-  /** Unit outward surface normal (the ellipsoid normal on WGS84, the radial direction on the sphere). */
+  /** Unit outward surface normal (the ellipsoid normal on WGS84, the radial direction on the
+   * sphere). */
   Ecef surfaceNormal(double latDeg, double lonDeg) const noexcept;
 
 private:

@@ -60,7 +60,8 @@ public:
    * "image/tiff" (Int16). Sampling is at pixel centres; longitudes wrap when the image spans 360
    * degrees. Errors name what failed.
    */
-  std::expected<std::vector<std::byte>, std::string> renderTile(const Sector& box, int width,
+  std::expected<std::vector<std::byte>, std::string> renderTile(const Sector& box,
+                                                                int width,
                                                                 int height,
                                                                 std::string_view mimeType,
                                                                 std::int16_t noData = -32768) const;

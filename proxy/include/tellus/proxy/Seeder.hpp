@@ -24,8 +24,8 @@ class LocalRasterSource;
 struct SeedOptions {
   std::int32_t fromLevel = 0;
   std::int32_t toLevel = 0;
-  std::optional<Sector> box;   ///< default: the dataset's sector
-  bool dryRun = false;         ///< count only
+  std::optional<Sector> box; ///< default: the dataset's sector
+  bool dryRun = false;       ///< count only
 };
 
 struct SeedReport {
@@ -33,14 +33,16 @@ struct SeedReport {
   std::int64_t skipped = 0; ///< already in the index
   std::int64_t written = 0;
   std::int64_t failed = 0;
-  std::int64_t bytes = 0;   ///< bytes written
+  std::int64_t bytes = 0;            ///< bytes written
   std::vector<std::string> failures; ///< first few failure messages
 };
 
 /** Seeds one registered dataset from a local raster. Stops early only for a full disk. */
-std::expected<SeedReport, CacheError> seedFromRaster(TileCache& cache, DatasetId dataset,
-                                                     const LocalRasterSource& source,
-                                                     const SeedOptions& options,
-                                                     const std::function<void(const SeedReport&)>& progress = {});
+std::expected<SeedReport, CacheError>
+seedFromRaster(TileCache& cache,
+               DatasetId dataset,
+               const LocalRasterSource& source,
+               const SeedOptions& options,
+               const std::function<void(const SeedReport&)>& progress = {});
 
 } // namespace tellus
