@@ -72,6 +72,11 @@ std::string keyText(const TileKey& k) {
          std::to_string(k.col);
 }
 
+/** Binds ?1..?4 = dataset, level, row, col: the tiles table's primary key. */
+void bindKey(sql::Stmt::Use& u, DatasetId id, const TileKey& k) {
+  u.bind(1, id).bind(2, std::int64_t{k.level}).bind(3, k.row).bind(4, k.col);
+}
+
 struct TouchKey {
   DatasetId dataset;
   TileKey key;
@@ -388,10 +393,7 @@ struct TileCache::Impl {
     if (!begin()) return; // last-access times are advisory: a failure only delays them
     for (const auto& [tk, when] : batch) {
       sql::Stmt::Use u(touchTile);
-      u.bind(1, tk.dataset)
-          .bind(2, std::int64_t{tk.key.level})
-          .bind(3, tk.key.row)
-          .bind(4, tk.key.col);
+      bindKey(u, tk.dataset, tk.key);
       u.bind(5, when);
       u.step();
     }
@@ -520,10 +522,7 @@ struct TileCache::Impl {
       if (auto b = begin(); !b) return std::unexpected(b.error());
       for (const auto& [tk, path] : victims) {
         sql::Stmt::Use d(deleteTile);
-        d.bind(1, tk.dataset)
-            .bind(2, std::int64_t{tk.key.level})
-            .bind(3, tk.key.row)
-            .bind(4, tk.key.col);
+        bindKey(d, tk.dataset, tk.key);
         d.step();
       }
       if (auto c = commit(); !c) return std::unexpected(c.error());
@@ -565,7 +564,7 @@ struct TileCache::Impl {
                   const TileMeta& meta,
                   std::optional<UnixMillis> retryAfter) {
     sql::Stmt::Use u(upsertTile);
-    u.bind(1, d.info.id).bind(2, std::int64_t{key.level}).bind(3, key.row).bind(4, key.col);
+    bindKey(u, d.info.id, key);
     u.bind(5, std::int64_t{state}).bind(6, bytes);
     u.bind(7, std::string_view(meta.contentType)).bind(8, std::string_view(meta.etag));
     u.bind(9, std::string_view(meta.lastModified)).bind(10, meta.expiresAt);
@@ -578,7 +577,7 @@ struct TileCache::Impl {
 
   Result deleteRow(DatasetId id, const TileKey& key) {
     sql::Stmt::Use u(deleteTile);
-    u.bind(1, id).bind(2, std::int64_t{key.level}).bind(3, key.row).bind(4, key.col);
+    bindKey(u, id, key);
     const int rc = u.step();
     if (rc != SQLITE_DONE)
       return std::unexpected(sql::errorFrom(writeDb.get(), rc, "removing tile"));
@@ -590,35 +589,61 @@ struct TileCache::Impl {
 
 namespace {
 
-/** Cheap damage checks at open: header, schema, both edges of the tiles b-tree. No scan. */
-Result probe(sqlite3* db) {
-  for (const char* q : {"SELECT count(*) FROM datasets",
-                        "SELECT dataset FROM tiles ORDER BY dataset, level, row, col LIMIT 1",
-                        "SELECT dataset FROM tiles ORDER BY dataset DESC, level DESC, row DESC, "
-                        "col DESC LIMIT 1",
-                        "SELECT last_access FROM tiles ORDER BY last_access DESC LIMIT 1",
-                        "SELECT count(*) FROM usage"}) {
+/** Inserts a dataset row (the usage row follows by trigger); returns its id. */
+std::expected<DatasetId, CacheError>
+insertDataset(sqlite3* db, const DatasetSpec& spec, const std::string& folder) {
+  sql::Stmt ins(db,
+                "INSERT INTO datasets(server, name, folder, west, south, east, north, "
+                "level_zero_delta, tile_width, tile_height, num_levels, mime_type, extension, "
+                "style, time, pinned, created_at) VALUES "
+                "(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17)");
+  if (!ins.ok()) return std::unexpected(sql::errorFrom(db, ins.prepareRc(), "registering dataset"));
+  sql::Stmt::Use u(ins);
+  const GridSpec& g = spec.grid;
+  u.bind(1, std::string_view(spec.server))
+      .bind(2, std::string_view(spec.name))
+      .bind(3, std::string_view(folder));
+  u.bind(4, g.sector.west).bind(5, g.sector.south).bind(6, g.sector.east).bind(7, g.sector.north);
+  u.bind(8, g.levelZeroDeltaDeg)
+      .bind(9, std::int64_t{g.tileWidth})
+      .bind(10, std::int64_t{g.tileHeight});
+  u.bind(11, std::int64_t{g.numLevels}).bind(12, std::string_view(spec.mimeType));
+  u.bind(13, std::string_view(spec.extension)).bind(14, std::string_view(spec.style));
+  u.bind(15, std::string_view(spec.time)).bind(16, std::int64_t{spec.pinned ? 1 : 0});
+  u.bind(17, unixMillisNow());
+  const int rc = u.step();
+  if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "registering dataset"));
+  return sqlite3_last_insert_rowid(db);
+}
+
+/** Runs statements that return at most rows nobody reads; the first failure is the result. */
+Result runAll(sqlite3* db, std::initializer_list<const char*> statements, const char* what) {
+  for (const char* q : statements) {
     sql::Stmt s(db, q);
-    if (!s.ok()) return std::unexpected(sql::errorFrom(db, s.prepareRc(), "checking index"));
+    if (!s.ok()) return std::unexpected(sql::errorFrom(db, s.prepareRc(), what));
     sql::Stmt::Use u(s);
     const int rc = u.step();
-    if (rc != SQLITE_ROW && rc != SQLITE_DONE)
-      return std::unexpected(sql::errorFrom(db, rc, "checking index"));
+    if (rc != SQLITE_ROW && rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, what));
   }
   return {};
 }
 
+/** Cheap damage checks at open: header, schema, both edges of the tiles b-tree. No scan. */
+Result probe(sqlite3* db) {
+  return runAll(db,
+                {"SELECT count(*) FROM datasets",
+                 "SELECT dataset FROM tiles ORDER BY dataset, level, row, col LIMIT 1",
+                 "SELECT dataset FROM tiles ORDER BY dataset DESC, level DESC, row DESC, "
+                 "col DESC LIMIT 1",
+                 "SELECT last_access FROM tiles ORDER BY last_access DESC LIMIT 1",
+                 "SELECT count(*) FROM usage"},
+                "checking index");
+}
+
 Result configure(sqlite3* db, bool readOnly) {
   if (readOnly) return {};
-  for (const char* p : {"PRAGMA journal_mode = WAL", "PRAGMA synchronous = NORMAL"}) {
-    sql::Stmt s(db, p);
-    if (!s.ok()) return std::unexpected(sql::errorFrom(db, s.prepareRc(), "configuring index"));
-    sql::Stmt::Use u(s);
-    const int rc = u.step();
-    if (rc != SQLITE_ROW && rc != SQLITE_DONE)
-      return std::unexpected(sql::errorFrom(db, rc, "configuring index"));
-  }
-  return {};
+  return runAll(
+      db, {"PRAGMA journal_mode = WAL", "PRAGMA synchronous = NORMAL"}, "configuring index");
 }
 
 void moveAside(const fs::path& indexPath) {
@@ -741,27 +766,9 @@ std::expected<DatasetId, CacheError> TileCache::registerDataset(const DatasetSpe
       if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "updating dataset"));
       return {};
     }
-    sql::Stmt ins(db,
-                  "INSERT INTO datasets(server, name, folder, west, south, east, north, "
-                  "level_zero_delta, tile_width, tile_height, num_levels, mime_type, extension, "
-                  "style, time, pinned, created_at) VALUES "
-                  "(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17)");
-    sql::Stmt::Use u(ins);
-    const GridSpec& g = spec.grid;
-    u.bind(1, std::string_view(spec.server))
-        .bind(2, std::string_view(spec.name))
-        .bind(3, std::string_view(folder));
-    u.bind(4, g.sector.west).bind(5, g.sector.south).bind(6, g.sector.east).bind(7, g.sector.north);
-    u.bind(8, g.levelZeroDeltaDeg)
-        .bind(9, std::int64_t{g.tileWidth})
-        .bind(10, std::int64_t{g.tileHeight});
-    u.bind(11, std::int64_t{g.numLevels}).bind(12, std::string_view(spec.mimeType));
-    u.bind(13, std::string_view(spec.extension)).bind(14, std::string_view(spec.style));
-    u.bind(15, std::string_view(spec.time)).bind(16, std::int64_t{spec.pinned ? 1 : 0});
-    u.bind(17, unixMillisNow());
-    const int rc = u.step();
-    if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "registering dataset"));
-    id = sqlite3_last_insert_rowid(db);
+    auto inserted = insertDataset(db, spec, folder);
+    if (!inserted) return std::unexpected(inserted.error());
+    id = *inserted;
     return {};
   });
   if (!r) return std::unexpected(r.error());
@@ -815,7 +822,7 @@ std::expected<CacheLookup, CacheError> TileCache::peek(DatasetId id, const TileK
   auto lease = impl_->acquireReader();
   if (!lease) return std::unexpected(lease.error());
   sql::Stmt::Use u(lease->conn->lookup);
-  u.bind(1, id).bind(2, std::int64_t{key.level}).bind(3, key.row).bind(4, key.col);
+  bindKey(u, id, key);
   const int rc = u.step();
   CacheLookup out;
   if (rc == SQLITE_DONE) return out;
@@ -1012,7 +1019,7 @@ std::expected<VerifyReport, CacheError> TileCache::verify() const {
         continue;
       }
       sql::Stmt::Use u(lease->conn->lookup);
-      u.bind(1, info.id).bind(2, std::int64_t{key->level}).bind(3, key->row).bind(4, key->col);
+      bindKey(u, info.id, *key);
       if (u.step() != SQLITE_ROW || u.i64(0) != kStatePresent)
         report.filesWithoutRows.push_back(info.folder + "/" + rel);
     }
@@ -1043,35 +1050,9 @@ std::expected<std::int64_t, CacheError> TileCache::rebuild() {
         auto grid = TileGrid::create(spec->grid);
         if (!grid) continue;
         const std::string folder = fs::relative(dsDir.path(), root, ec).generic_string();
-        sql::Stmt ins(
-            db,
-            "INSERT INTO datasets(server, name, folder, west, south, east, north, "
-            "level_zero_delta, tile_width, tile_height, num_levels, mime_type, "
-            "extension, style, time, pinned, created_at) VALUES "
-            "(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17)");
-        DatasetId id = 0;
-        {
-          sql::Stmt::Use u(ins);
-          const GridSpec& g = spec->grid;
-          u.bind(1, std::string_view(spec->server))
-              .bind(2, std::string_view(spec->name))
-              .bind(3, std::string_view(folder));
-          u.bind(4, g.sector.west)
-              .bind(5, g.sector.south)
-              .bind(6, g.sector.east)
-              .bind(7, g.sector.north);
-          u.bind(8, g.levelZeroDeltaDeg)
-              .bind(9, std::int64_t{g.tileWidth})
-              .bind(10, std::int64_t{g.tileHeight});
-          u.bind(11, std::int64_t{g.numLevels}).bind(12, std::string_view(spec->mimeType));
-          u.bind(13, std::string_view(spec->extension)).bind(14, std::string_view(spec->style));
-          u.bind(15, std::string_view(spec->time)).bind(16, std::int64_t{spec->pinned ? 1 : 0});
-          u.bind(17, unixMillisNow());
-          const int rc = u.step();
-          if (rc != SQLITE_DONE)
-            return std::unexpected(sql::errorFrom(db, rc, "re-registering dataset"));
-          id = sqlite3_last_insert_rowid(db);
-        }
+        auto inserted = insertDataset(db, *spec, folder);
+        if (!inserted) return std::unexpected(inserted.error());
+        const DatasetId id = *inserted;
         const DatasetEntry entry{DatasetInfo{id, *spec, folder}, *grid, dsDir.path()};
         for (auto it = fs::recursive_directory_iterator(dsDir.path(), ec);
              !ec && it != fs::recursive_directory_iterator();
@@ -1169,10 +1150,7 @@ void TileCache::flush() {
     }
     for (const auto& [tk, when] : batch) {
       sql::Stmt::Use u(im.touchTile);
-      u.bind(1, tk.dataset)
-          .bind(2, std::int64_t{tk.key.level})
-          .bind(3, tk.key.row)
-          .bind(4, tk.key.col);
+      bindKey(u, tk.dataset, tk.key);
       u.bind(5, when);
       u.step();
     }

@@ -1,3 +1,4 @@
+#include "../support/CacheFixtures.hpp"
 #include "../support/TempDir.hpp"
 
 #include <tellus/cache/CacheTileSource.hpp>
@@ -18,17 +19,8 @@ struct Fixture {
   std::unique_ptr<TileCache> cache;
   DatasetId id = 0;
   Fixture() {
-    TileCache::Options o;
-    o.root = dir.path();
-    o.fsyncTiles = false;
-    cache = std::move(*TileCache::open(o));
-    DatasetSpec s;
-    s.server = "local";
-    s.name = "bluemarble";
-    s.grid = GridSpec{Sector{}, 36.0, 512, 512, 6};
-    s.mimeType = "image/jpeg";
-    s.extension = "jpg";
-    id = *cache->registerDataset(s);
+    cache = test::openTestCache(dir.path());
+    id = *cache->registerDataset(test::imagerySpec());
   }
 };
 

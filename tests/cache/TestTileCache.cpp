@@ -1,3 +1,4 @@
+#include "../support/CacheFixtures.hpp"
 #include "../support/TempDir.hpp"
 
 #include <tellus/cache/TileCache.hpp>
@@ -12,39 +13,17 @@
 #include <thread>
 
 using namespace tellus;
+using tellus::test::payload;
 namespace fs = std::filesystem;
 
 namespace {
 
 DatasetSpec imagery(const std::string& name = "bluemarble") {
-  DatasetSpec s;
-  s.server = "local";
-  s.name = name;
-  s.grid = GridSpec{Sector{}, 36.0, 512, 512, 10};
-  s.mimeType = "image/jpeg";
-  s.extension = "jpg";
-  return s;
-}
-
-/** Deterministic content for a key: its length and bytes depend on the key. */
-std::vector<std::byte> payload(const TileKey& k, std::size_t base = 100) {
-  const std::size_t n = base + static_cast<std::size_t>((k.row * 7 + k.col * 13 + k.level) % 97);
-  std::vector<std::byte> v(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    v[i] = static_cast<std::byte>(
-        (static_cast<std::size_t>(k.row) * 31 + static_cast<std::size_t>(k.col) + i) & 0xFF);
-  }
-  return v;
+  return test::imagerySpec(name);
 }
 
 std::unique_ptr<TileCache> openCache(const fs::path& root, std::uint64_t limit = 0) {
-  TileCache::Options o;
-  o.root = root;
-  o.sizeLimitBytes = limit;
-  o.fsyncTiles = false; // tests do not need durability across power loss
-  auto c = TileCache::open(o);
-  EXPECT_TRUE(c) << (c ? "" : c.error().message);
-  return c ? std::move(*c) : nullptr;
+  return test::openTestCache(root, limit);
 }
 
 int userVersion(const fs::path& db) {

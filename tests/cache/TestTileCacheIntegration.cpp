@@ -1,5 +1,6 @@
 // Bad input, a full disk, two processes on one cache and a crash in the middle of writing.
 
+#include "../support/CacheFixtures.hpp"
 #include "../support/TempDir.hpp"
 
 #include <tellus/cache/TileCache.hpp>
@@ -18,31 +19,15 @@ namespace fs = std::filesystem;
 namespace {
 
 DatasetSpec imagery() {
-  DatasetSpec s;
-  s.server = "local";
-  s.name = "bluemarble";
-  s.grid = GridSpec{Sector{}, 36.0, 512, 512, 12};
-  s.mimeType = "image/jpeg";
-  s.extension = "jpg";
-  return s;
+  return test::imagerySpec();
 }
 
 std::vector<std::byte> payload(const TileKey& k, std::size_t base = 2000) {
-  const std::size_t n = base + static_cast<std::size_t>((k.row * 7 + k.col * 13 + k.level) % 997);
-  std::vector<std::byte> v(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    v[i] = static_cast<std::byte>(
-        (static_cast<std::size_t>(k.row) * 31 + static_cast<std::size_t>(k.col) + i) & 0xFF);
-  }
-  return v;
+  return test::payload(k, base);
 }
 
 std::unique_ptr<TileCache> openCache(const fs::path& root, bool fsyncTiles = false) {
-  TileCache::Options o;
-  o.root = root;
-  o.fsyncTiles = fsyncTiles;
-  auto c = TileCache::open(o);
-  return c ? std::move(*c) : nullptr;
+  return test::openTestCache(root, 0, fsyncTiles);
 }
 
 std::size_t countTempFiles(const fs::path& root) {

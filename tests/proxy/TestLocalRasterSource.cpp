@@ -1,3 +1,4 @@
+#include "../support/CacheFixtures.hpp"
 #include "../support/TempDir.hpp"
 
 #include <tellus/cache/TileCache.hpp>
@@ -138,10 +139,7 @@ TEST(LocalRasterSourceExtremes, PolesAntimeridianAndNonFinite) {
 
 TEST(SeederIntegration, SeedsResumesAndCountsADryRun) {
   test::TempDir dir("seed");
-  TileCache::Options o;
-  o.root = dir.path();
-  o.fsyncTiles = false;
-  auto cache = TileCache::open(o);
+  auto cache = test::openTestCache(dir.path());
   ASSERT_TRUE(cache);
   DatasetSpec spec;
   spec.server = "local";
@@ -149,27 +147,27 @@ TEST(SeederIntegration, SeedsResumesAndCountsADryRun) {
   spec.grid = GridSpec{Sector{}, 36.0, 128, 128, 3};
   spec.mimeType = "image/jpeg";
   spec.extension = "jpg";
-  const auto id = *(*cache)->registerDataset(spec);
+  const auto id = *cache->registerDataset(spec);
   SeedOptions so;
   so.fromLevel = 0;
   so.toLevel = 1;
   so.dryRun = true;
-  auto dry = seedFromRaster(**cache, id, blueMarble(), so);
+  auto dry = seedFromRaster(*cache, id, blueMarble(), so);
   ASSERT_TRUE(dry);
   EXPECT_EQ(dry->planned, 50 + 200);
   EXPECT_EQ(dry->written, 0);
-  EXPECT_EQ(*(*cache)->totalBytes(), 0);
+  EXPECT_EQ(*cache->totalBytes(), 0);
   so.dryRun = false;
   so.box = Sector{-40, -10, 40, 10}; // level 0: 4 columns x 1 row; level 1: 6 x 2
-  auto first = seedFromRaster(**cache, id, blueMarble(), so);
+  auto first = seedFromRaster(*cache, id, blueMarble(), so);
   ASSERT_TRUE(first);
   EXPECT_EQ(first->planned, 4 + 12);
   EXPECT_EQ(first->written, first->planned);
-  auto second = seedFromRaster(**cache, id, blueMarble(), so);
+  auto second = seedFromRaster(*cache, id, blueMarble(), so);
   ASSERT_TRUE(second);
   EXPECT_EQ(second->skipped, first->planned);
   EXPECT_EQ(second->written, 0);
-  auto hit = (*cache)->get(id, TileKey{0, 2, 4});
+  auto hit = cache->get(id, TileKey{0, 2, 4});
   ASSERT_TRUE(hit);
   EXPECT_EQ(hit->kind, CacheLookup::Kind::Hit);
   EXPECT_EQ(hit->meta.contentType, "image/jpeg");
