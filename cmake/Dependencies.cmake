@@ -29,6 +29,8 @@ find_package(glm CONFIG REQUIRED)
 find_package(glfw3 CONFIG REQUIRED)
 find_package(fmt CONFIG REQUIRED)
 find_package(yaml-cpp CONFIG REQUIRED)
+# Boost.Beast + Asio (header-only) for the HTTP server; see docs/ARCHITECTURE.md.
+find_package(Boost 1.74 REQUIRED)
 pkg_check_modules(EPOXY REQUIRED IMPORTED_TARGET epoxy)
 if(TELLUS_BUILD_TESTS)
   find_package(GTest CONFIG REQUIRED)

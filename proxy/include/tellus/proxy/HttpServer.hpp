@@ -1,0 +1,86 @@
+#pragma once
+/**
+ * @file HttpServer.hpp
+ * @brief The event-driven HTTP/1.1 server adapter (Boost.Beast over Asio, kept private to
+ * proxy/src).
+ *
+ * A fixed pool of threads runs one event loop; each connection lives on its own strand. A handler
+ * gets the parsed request and a Responder it may call later from any thread (the proxy answers
+ * misses after an upstream fetch without ever blocking the loop). Limits: header bytes, request
+ * time (slow clients are cut off), keep-alive idle time, connection count.
+ */
+
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <expected>
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace tellus {
+
+struct HttpRequest {
+  std::string method; ///< "GET", "HEAD", ...
+  std::string target; ///< as sent: path and query
+  std::string path;   ///< percent-encoded path, without the query
+  std::string query;  ///< raw query string without '?', "" if none
+  std::vector<std::pair<std::string, std::string>> headers; ///< names in lower case
+  std::string remoteAddress;
+
+  /** First header with this lower-case name, or "". */
+  std::string_view header(std::string_view lowerName) const noexcept;
+};
+
+struct HttpResponse {
+  int status = 200;
+  std::vector<std::pair<std::string, std::string>> headers; ///< Content-Type etc.
+  std::vector<std::byte> body;
+
+  void setHeader(std::string name, std::string value);
+  static HttpResponse text(int status, std::string_view contentType, std::string_view body);
+};
+
+/** Call exactly once, from any thread. */
+using Responder = std::function<void(HttpResponse&&)>;
+/** Must not throw; may keep the Responder and call it later. */
+using HttpHandler = std::function<void(HttpRequest&&, Responder)>;
+
+struct HttpServerOptions {
+  std::string host = "127.0.0.1";
+  std::uint16_t port = 0; ///< 0: any free port (read it back with port())
+  int threads = 0;        ///< 0: one per core
+  std::size_t maxConnections = 4096;
+  std::size_t maxHeaderBytes = 16384;
+  std::chrono::milliseconds requestTimeout{10000};
+  std::chrono::milliseconds keepAliveTimeout{60000};
+  std::string serverName = "tellus";
+};
+
+class HttpServer {
+public:
+  HttpServer(HttpServerOptions options, HttpHandler handler);
+  ~HttpServer();
+  HttpServer(const HttpServer&) = delete;
+  HttpServer& operator=(const HttpServer&) = delete;
+
+  /** Binds, listens and starts the threads. The error names the address. */
+  std::expected<void, std::string> start();
+  /** The bound port (after start). */
+  std::uint16_t port() const noexcept;
+  /** Stops accepting, closes connections, joins the threads. Idempotent. */
+  void stop();
+
+  /** Connections open now. */
+  std::size_t connections() const noexcept;
+
+  struct Impl; ///< implementation detail (public only so that the connection type can name it)
+
+private:
+  std::shared_ptr<Impl> impl_;
+};
+
+} // namespace tellus

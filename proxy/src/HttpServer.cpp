@@ -1,0 +1,291 @@
+#include <tellus/proxy/HttpServer.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/strand.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <cctype>
+#include <mutex>
+#include <optional>
+#include <thread>
+#include <unordered_set>
+
+namespace tellus {
+
+namespace beast = boost::beast;
+namespace http = boost::beast::http;
+namespace net = boost::asio;
+using tcp = boost::asio::ip::tcp;
+
+std::string_view HttpRequest::header(std::string_view lowerName) const noexcept {
+  for (const auto& [k, v] : headers) {
+    if (k == lowerName) return v;
+  }
+  return {};
+}
+
+void HttpResponse::setHeader(std::string name, std::string value) {
+  for (auto& [k, v] : headers) {
+    if (std::equal(k.begin(), k.end(), name.begin(), name.end(), [](char a, char b) {
+          return std::tolower(static_cast<unsigned char>(a)) ==
+                 std::tolower(static_cast<unsigned char>(b));
+        })) {
+      v = std::move(value);
+      return;
+    }
+  }
+  headers.emplace_back(std::move(name), std::move(value));
+}
+
+HttpResponse HttpResponse::text(int status, std::string_view contentType, std::string_view body) {
+  HttpResponse r;
+  r.status = status;
+  r.headers.emplace_back("Content-Type", std::string(contentType));
+  r.body.resize(body.size());
+  std::transform(
+      body.begin(), body.end(), r.body.begin(), [](char c) { return static_cast<std::byte>(c); });
+  return r;
+}
+
+namespace {
+class Session;
+}
+
+struct HttpServer::Impl : std::enable_shared_from_this<Impl> {
+  HttpServerOptions options;
+  HttpHandler handler;
+  net::io_context ioc;
+  std::optional<tcp::acceptor> acceptor;
+  std::vector<std::thread> threads;
+  std::atomic<std::size_t> connections{0};
+  std::uint16_t boundPort = 0;
+
+  // Responders post back into the loop only while it runs (see stop()).
+  std::mutex postMutex;
+  bool stopped = false;
+
+  std::mutex sessionsMutex;
+  std::unordered_set<Session*> sessions;
+
+  Impl(HttpServerOptions o, HttpHandler h) : options(std::move(o)), handler(std::move(h)) {}
+
+  void doAccept();
+};
+
+namespace {
+
+class Session : public std::enable_shared_from_this<Session> {
+public:
+  Session(tcp::socket&& socket, std::shared_ptr<HttpServer::Impl> server)
+      : stream_(std::move(socket)), server_(std::move(server)) {
+    server_->connections.fetch_add(1);
+    std::lock_guard lock(server_->sessionsMutex);
+    server_->sessions.insert(this);
+  }
+  ~Session() {
+    server_->connections.fetch_sub(1);
+    std::lock_guard lock(server_->sessionsMutex);
+    server_->sessions.erase(this);
+  }
+
+  void start() {
+    net::dispatch(stream_.get_executor(), [self = shared_from_this()] { self->doRead(true); });
+  }
+
+  /** Closes the socket from the session's own strand (used by stop()). */
+  void close() {
+    net::post(stream_.get_executor(), [self = shared_from_this()] {
+      beast::error_code ec;
+      self->stream_.socket().shutdown(tcp::socket::shutdown_both, ec);
+      self->stream_.close();
+    });
+  }
+
+private:
+  void doRead(bool first) {
+    parser_.emplace();
+    parser_->header_limit(static_cast<std::uint32_t>(server_->options.maxHeaderBytes));
+    parser_->body_limit(8192); // tellus serves GET and HEAD; a small body is read to answer 405
+    // The first request must arrive within the request timeout; later ones within keep-alive.
+    stream_.expires_after(first ? server_->options.requestTimeout
+                                : server_->options.keepAliveTimeout);
+    http::async_read(
+        stream_, buffer_, *parser_, [self = shared_from_this()](beast::error_code ec, std::size_t) {
+          self->onRead(ec);
+        });
+  }
+
+  void onRead(beast::error_code ec) {
+    if (ec == http::error::header_limit) {
+      keepAlive_ = false;
+      write(HttpResponse::text(431, "text/plain", "request header fields too large\n"));
+      return;
+    }
+    if (ec == http::error::body_limit) {
+      keepAlive_ = false;
+      write(HttpResponse::text(413, "text/plain", "request body too large\n"));
+      return;
+    }
+    if (ec) return shutdownSend(); // timeout, end of stream, malformed request
+    auto& msg = parser_->get();
+    HttpRequest req;
+    req.method = std::string(msg.method_string());
+    req.target = std::string(msg.target());
+    const auto q = req.target.find('?');
+    req.path = req.target.substr(0, q);
+    if (q != std::string::npos) req.query = req.target.substr(q + 1);
+    for (const auto& field : msg) {
+      std::string name(field.name_string());
+      std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) {
+        return static_cast<char>(std::tolower(c));
+      });
+      req.headers.emplace_back(std::move(name), std::string(field.value()));
+    }
+    beast::error_code epEc;
+    const auto ep = stream_.socket().remote_endpoint(epEc);
+    if (!epEc) req.remoteAddress = ep.address().to_string();
+    keepAlive_ = msg.keep_alive();
+    head_ = msg.method() == http::verb::head;
+    version_ = msg.version();
+    stream_.expires_never(); // the handler's own timeouts bound the wait for the answer
+    if (msg.method() != http::verb::get && msg.method() != http::verb::head) {
+      auto r = HttpResponse::text(405, "text/plain", "only GET and HEAD\n");
+      r.setHeader("Allow", "GET, HEAD");
+      write(std::move(r));
+      return;
+    }
+    auto server = server_;
+    Responder respond = [self = shared_from_this(), server](HttpResponse&& r) {
+      std::lock_guard lock(server->postMutex);
+      if (server->stopped) return;
+      net::post(self->stream_.get_executor(),
+                [self, r = std::move(r)]() mutable { self->write(std::move(r)); });
+    };
+    server_->handler(std::move(req), std::move(respond));
+  }
+
+  void write(HttpResponse&& r) {
+    out_ = std::move(r);
+    res_.emplace();
+    res_->version(version_);
+    res_->result(static_cast<unsigned>(out_.status));
+    res_->set(http::field::server, server_->options.serverName);
+    for (const auto& [k, v] : out_.headers)
+      res_->set(k, v);
+    res_->keep_alive(keepAlive_);
+    const std::size_t n = out_.body.size();
+    if (head_) {
+      res_->body() = http::span_body<const char>::value_type();
+      res_->set(http::field::content_length, std::to_string(n));
+    } else {
+      res_->body() = http::span_body<const char>::value_type(
+          reinterpret_cast<const char*>(out_.body.data()), n);
+      res_->prepare_payload();
+    }
+    stream_.expires_after(
+        server_->options.requestTimeout); // a client that does not read is cut off
+    http::async_write(
+        stream_, *res_, [self = shared_from_this()](beast::error_code ec, std::size_t) {
+          if (ec || !self->keepAlive_) return self->shutdownSend();
+          self->doRead(false);
+        });
+  }
+
+  void shutdownSend() {
+    beast::error_code ec;
+    stream_.socket().shutdown(tcp::socket::shutdown_send, ec);
+  }
+
+  beast::tcp_stream stream_;
+  beast::flat_buffer buffer_;
+  std::optional<http::request_parser<http::string_body>> parser_;
+  std::optional<http::response<http::span_body<const char>>> res_;
+  HttpResponse out_;
+  std::shared_ptr<HttpServer::Impl> server_;
+  bool keepAlive_ = true;
+  bool head_ = false;
+  unsigned version_ = 11;
+};
+
+} // namespace
+
+void HttpServer::Impl::doAccept() {
+  acceptor->async_accept(
+      net::make_strand(ioc), [self = shared_from_this()](beast::error_code ec, tcp::socket socket) {
+        if (ec) {
+          if (ec == net::error::operation_aborted) return; // stopping
+        } else if (self->connections.load() >= self->options.maxConnections) {
+          beast::error_code ignored;
+          socket.close(ignored); // over the limit: refuse rather than stall everyone
+        } else {
+          std::make_shared<Session>(std::move(socket), self)->start();
+        }
+        self->doAccept();
+      });
+}
+
+HttpServer::HttpServer(HttpServerOptions options, HttpHandler handler)
+    : impl_(std::make_shared<Impl>(std::move(options), std::move(handler))) {}
+
+HttpServer::~HttpServer() {
+  stop();
+}
+
+std::expected<void, std::string> HttpServer::start() {
+  auto& im = *impl_;
+  beast::error_code ec;
+  const auto address = net::ip::make_address(im.options.host, ec);
+  if (ec) return std::unexpected("bad listen address '" + im.options.host + "': " + ec.message());
+  const tcp::endpoint endpoint(address, im.options.port);
+  im.acceptor.emplace(im.ioc);
+  const std::string where = im.options.host + ":" + std::to_string(im.options.port);
+  im.acceptor->open(endpoint.protocol(), ec);
+  if (!ec) im.acceptor->set_option(net::socket_base::reuse_address(true), ec);
+  if (!ec) im.acceptor->bind(endpoint, ec);
+  if (!ec) im.acceptor->listen(net::socket_base::max_listen_connections, ec);
+  if (ec) return std::unexpected("cannot listen on " + where + ": " + ec.message());
+  im.boundPort = im.acceptor->local_endpoint().port();
+  im.doAccept();
+  int n = im.options.threads > 0 ? im.options.threads
+                                 : static_cast<int>(std::thread::hardware_concurrency());
+  n = std::max(n, 1);
+  for (int i = 0; i < n; ++i)
+    im.threads.emplace_back([&im] { im.ioc.run(); });
+  return {};
+}
+
+std::uint16_t HttpServer::port() const noexcept {
+  return impl_->boundPort;
+}
+
+std::size_t HttpServer::connections() const noexcept {
+  return impl_->connections.load();
+}
+
+void HttpServer::stop() {
+  auto& im = *impl_;
+  if (im.threads.empty()) return;
+  {
+    std::lock_guard lock(im.postMutex);
+    im.stopped = true; // answers that arrive from now on are dropped
+  }
+  net::post(im.ioc, [&im] {
+    beast::error_code ec;
+    if (im.acceptor) im.acceptor->close(ec);
+  });
+  {
+    std::lock_guard lock(im.sessionsMutex);
+    for (Session* s : im.sessions) {
+      if (auto sp = s->weak_from_this().lock()) sp->close();
+    }
+  }
+  // With the acceptor and every socket closed, the loop runs out of work and the threads return.
+  for (auto& t : im.threads)
+    t.join();
+  im.threads.clear();
+}
+
+} // namespace tellus

@@ -1,0 +1,262 @@
+#include <tellus/proxy/HttpServer.hpp>
+
+#include <gtest/gtest.h>
+
+#include <arpa/inet.h>
+#include <atomic>
+#include <chrono>
+#include <cstring>
+#include <netinet/in.h>
+#include <poll.h>
+#include <string>
+#include <sys/resource.h>
+#include <sys/socket.h>
+#include <thread>
+#include <unistd.h>
+
+using namespace tellus;
+using namespace std::chrono_literals;
+
+namespace {
+
+/** A raw loopback client: exactly the bytes we send, exactly the bytes we get. */
+class RawClient {
+public:
+  explicit RawClient(std::uint16_t port) {
+    fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(port);
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    connected_ = ::connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
+  }
+  ~RawClient() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  RawClient(const RawClient&) = delete;
+  RawClient& operator=(const RawClient&) = delete;
+  bool connected() const { return connected_; }
+  void send(std::string_view s) { (void)::send(fd_, s.data(), s.size(), MSG_NOSIGNAL); }
+  /** Reads until `marker` has arrived (and, with a Content-Length, the body), EOF or timeout. */
+  std::string readResponse(std::chrono::milliseconds timeout = 3000ms) {
+    std::string got;
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < deadline) {
+      if (complete(got)) break;
+      pollfd p{fd_, POLLIN, 0};
+      if (::poll(&p, 1, 20) <= 0) continue;
+      char buf[65536];
+      const auto n = ::recv(fd_, buf, sizeof buf, 0);
+      if (n <= 0) {
+        closedByPeer_ = true;
+        break;
+      }
+      got.append(buf, static_cast<std::size_t>(n));
+    }
+    return got;
+  }
+  /** True when the server closed the connection within the timeout. */
+  bool closedWithin(std::chrono::milliseconds timeout) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < deadline) {
+      pollfd p{fd_, POLLIN, 0};
+      if (::poll(&p, 1, 20) <= 0) continue;
+      char buf[4096];
+      if (::recv(fd_, buf, sizeof buf, 0) <= 0) return true;
+    }
+    return false;
+  }
+
+private:
+  static bool complete(const std::string& s) {
+    const auto end = s.find("\r\n\r\n");
+    if (end == std::string::npos) return false;
+    const auto cl = s.find("Content-Length: ");
+    if (cl == std::string::npos || cl > end) return true;
+    const auto len = std::stoul(s.substr(cl + 16));
+    return s.size() >= end + 4 + len;
+  }
+  int fd_ = -1;
+  bool connected_ = false;
+  bool closedByPeer_ = false;
+};
+
+HttpServerOptions quickOptions() {
+  HttpServerOptions o;
+  o.threads = 2;
+  o.requestTimeout = 300ms;
+  o.keepAliveTimeout = 2000ms;
+  return o;
+}
+
+/** Echoes the path and query; "/slow" answers from another thread after 100 ms. */
+HttpHandler echoHandler(std::atomic<int>* calls = nullptr) {
+  return [calls](HttpRequest&& req, Responder respond) {
+    if (calls) ++*calls;
+    std::string body = req.method + " " + req.path + " ?" + req.query +
+                       " ua=" + std::string(req.header("user-agent"));
+    if (req.path == "/slow") {
+      std::thread([respond = std::move(respond), body] {
+        std::this_thread::sleep_for(100ms);
+        respond(HttpResponse::text(200, "text/plain", body));
+      }).detach();
+      return;
+    }
+    auto r = HttpResponse::text(req.path == "/missing" ? 404 : 200, "text/plain", body);
+    r.setHeader("X-Test", "1");
+    respond(std::move(r));
+  };
+}
+
+} // namespace
+
+TEST(HttpServer, AnswersGetAndHeadOnAnAnyPort) {
+  HttpServer server(quickOptions(), echoHandler());
+  ASSERT_TRUE(server.start());
+  ASSERT_NE(server.port(), 0);
+  RawClient c(server.port());
+  ASSERT_TRUE(c.connected());
+  c.send("GET /wms?SERVICE=WMS&x=%20 HTTP/1.1\r\nHost: a\r\nUser-Agent: t\r\n\r\n");
+  const std::string r = c.readResponse();
+  EXPECT_TRUE(r.starts_with("HTTP/1.1 200 OK\r\n")) << r;
+  EXPECT_NE(r.find("X-Test: 1"), std::string::npos);
+  EXPECT_NE(r.find("Server: tellus"), std::string::npos);
+  EXPECT_TRUE(r.ends_with("GET /wms ?SERVICE=WMS&x=%20 ua=t")) << r;
+  c.send("HEAD /x HTTP/1.1\r\nHost: a\r\n\r\n");
+  const std::string h = c.readResponse(500ms);
+  EXPECT_TRUE(h.starts_with("HTTP/1.1 200 OK\r\n")) << h;
+  EXPECT_NE(h.find("Content-Length: 13"), std::string::npos) << h; // "HEAD /x ? ua="
+  EXPECT_TRUE(h.ends_with("\r\n\r\n")) << "HEAD must carry no body: " << h;
+}
+
+TEST(HttpServer, KeepAliveServesManyRequestsOnOneConnection) {
+  std::atomic<int> calls{0};
+  HttpServer server(quickOptions(), echoHandler(&calls));
+  ASSERT_TRUE(server.start());
+  RawClient c(server.port());
+  for (int i = 0; i < 20; ++i) {
+    c.send("GET /n" + std::to_string(i) + " HTTP/1.1\r\nHost: a\r\n\r\n");
+    const std::string r = c.readResponse();
+    ASSERT_NE(r.find("GET /n" + std::to_string(i) + " "), std::string::npos) << r;
+  }
+  EXPECT_EQ(calls.load(), 20);
+  EXPECT_EQ(server.connections(), 1u);
+}
+
+TEST(HttpServer, AnswersLaterFromAnotherThread) {
+  HttpServer server(quickOptions(), echoHandler());
+  ASSERT_TRUE(server.start());
+  RawClient slow(server.port());
+  RawClient fast(server.port());
+  slow.send("GET /slow HTTP/1.1\r\nHost: a\r\n\r\n");
+  fast.send("GET /fast HTTP/1.1\r\nHost: a\r\n\r\n");
+  // The fast answer is not held up by the pending slow one.
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_NE(fast.readResponse().find("/fast"), std::string::npos);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, 90ms);
+  EXPECT_NE(slow.readResponse().find("/slow"), std::string::npos);
+}
+
+TEST(HttpServer, RefusesWhatItDoesNotServe) {
+  HttpServerOptions o = quickOptions();
+  o.maxHeaderBytes = 1024;
+  HttpServer server(o, echoHandler());
+  ASSERT_TRUE(server.start());
+  {
+    RawClient c(server.port());
+    c.send("POST /x HTTP/1.1\r\nHost: a\r\nContent-Length: 3\r\n\r\nabc");
+    const std::string r = c.readResponse();
+    EXPECT_TRUE(r.starts_with("HTTP/1.1 405")) << r;
+    EXPECT_NE(r.find("Allow: GET, HEAD"), std::string::npos);
+  }
+  {
+    RawClient c(server.port());
+    c.send("GET /x HTTP/1.1\r\nHost: a\r\nX-Big: " + std::string(4000, 'a') + "\r\n\r\n");
+    EXPECT_TRUE(c.readResponse().starts_with("HTTP/1.1 431")) << "oversized headers";
+  }
+  {
+    RawClient c(server.port());
+    c.send("NONSENSE\r\n\r\n");
+    EXPECT_TRUE(c.closedWithin(1000ms));
+  }
+}
+
+TEST(HttpServerIntegration, SlowClientsAreCutOff) {
+  HttpServer server(quickOptions(), echoHandler());
+  ASSERT_TRUE(server.start());
+  RawClient c(server.port());
+  c.send("GET /x HTTP/1.1\r\nHo"); // never finishes its request
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_TRUE(c.closedWithin(2000ms));
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, 1500ms);
+  EXPECT_GE(std::chrono::steady_clock::now() - t0, 250ms);
+}
+
+TEST(HttpServerIntegration, AThousandIdleConnectionsDoNotStallIt) {
+  rlimit lim{};
+  ::getrlimit(RLIMIT_NOFILE, &lim);
+  if (lim.rlim_cur < 2200 && lim.rlim_max >= 2200) {
+    lim.rlim_cur = 2200;
+    ::setrlimit(RLIMIT_NOFILE, &lim);
+  }
+  ASSERT_GE(lim.rlim_cur, 2200u) << "needs 2 x 1000 descriptors (client and server side)";
+  HttpServerOptions o = quickOptions();
+  o.keepAliveTimeout = 10s;
+  o.requestTimeout = 10s;
+  HttpServer server(o, echoHandler());
+  ASSERT_TRUE(server.start());
+  std::vector<std::unique_ptr<RawClient>> idle;
+  for (int i = 0; i < 1000; ++i) {
+    idle.push_back(std::make_unique<RawClient>(server.port()));
+    ASSERT_TRUE(idle.back()->connected());
+  }
+  // Half of them have made a request and keep the connection open.
+  for (int i = 0; i < 1000; i += 2)
+    idle[static_cast<std::size_t>(i)]->send("GET /k HTTP/1.1\r\nHost: a\r\n\r\n");
+  for (int i = 0; i < 1000; i += 2)
+    ASSERT_NE(idle[static_cast<std::size_t>(i)]->readResponse().find("/k"), std::string::npos);
+  RawClient c(server.port());
+  const auto t0 = std::chrono::steady_clock::now();
+  c.send("GET /fresh HTTP/1.1\r\nHost: a\r\n\r\n");
+  EXPECT_NE(c.readResponse().find("/fresh"), std::string::npos);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, 500ms);
+  EXPECT_GE(server.connections(), 1001u);
+}
+
+TEST(HttpServerIntegration, ConnectionLimitRefusesTheRest) {
+  HttpServerOptions o = quickOptions();
+  o.maxConnections = 3;
+  o.keepAliveTimeout = 5s;
+  o.requestTimeout = 5s;
+  HttpServer server(o, echoHandler());
+  ASSERT_TRUE(server.start());
+  std::vector<std::unique_ptr<RawClient>> held;
+  for (int i = 0; i < 3; ++i) {
+    held.push_back(std::make_unique<RawClient>(server.port()));
+    held.back()->send("GET /a HTTP/1.1\r\nHost: a\r\n\r\n");
+    ASSERT_NE(held.back()->readResponse().find("/a"), std::string::npos);
+  }
+  RawClient extra(server.port());
+  EXPECT_TRUE(extra.closedWithin(1000ms));
+}
+
+TEST(HttpServer, StopsWithAnAnswerStillPending) {
+  std::atomic<bool> release{false};
+  Responder kept;
+  std::mutex m;
+  HttpServer server(quickOptions(), [&](HttpRequest&&, Responder respond) {
+    std::lock_guard lock(m);
+    kept = std::move(respond); // never answered before stop()
+  });
+  ASSERT_TRUE(server.start());
+  RawClient c(server.port());
+  c.send("GET /hang HTTP/1.1\r\nHost: a\r\n\r\n");
+  for (int i = 0; i < 100 && !kept; ++i)
+    std::this_thread::sleep_for(5ms);
+  server.stop();
+  std::lock_guard lock(m);
+  ASSERT_TRUE(kept);
+  kept(HttpResponse::text(200, "text/plain", "late")); // after stop: dropped, not a crash
+  kept = nullptr;
+  (void)release;
+}
