@@ -900,6 +900,27 @@ std::expected<void, CacheError> TileCache::put(DatasetId id,
 }
 
 std::expected<void, CacheError>
+TileCache::revalidated(DatasetId id, const TileKey& key, const TileMeta& meta) {
+  auto d = impl_->checkedDataset(id, key);
+  if (!d) return std::unexpected(d.error());
+  return impl_->submit([id, key, meta](Impl& im) -> Result {
+    sql::Stmt upd(im.writeDb.get(),
+                  "UPDATE tiles SET expires = ?5, etag = ?6, last_modified = ?7, fetched_at = ?8 "
+                  "WHERE dataset = ?1 AND level = ?2 AND row = ?3 AND col = ?4 AND state = 1");
+    sql::Stmt::Use u(upd);
+    bindKey(u, id, key);
+    u.bind(5, meta.expiresAt)
+        .bind(6, std::string_view(meta.etag))
+        .bind(7, std::string_view(meta.lastModified))
+        .bind(8, meta.fetchedAt ? meta.fetchedAt : unixMillisNow());
+    const int rc = u.step();
+    if (rc != SQLITE_DONE)
+      return std::unexpected(sql::errorFrom(im.writeDb.get(), rc, "revalidating"));
+    return {};
+  });
+}
+
+std::expected<void, CacheError>
 TileCache::putAbsent(DatasetId id, const TileKey& key, UnixMillis retryAfter) {
   auto d = impl_->checkedDataset(id, key);
   if (!d) return std::unexpected(d.error());

@@ -80,8 +80,17 @@ TEST(TileCache, MissAbsentEraseAndStale) {
   auto s = cache->get(id, k);
   EXPECT_EQ(s->kind, CacheLookup::Kind::Hit);
   EXPECT_TRUE(s->stale);
+  TileMeta fresh;
+  fresh.expiresAt = unixMillisNow() + 60000;
+  fresh.etag = "\"v2\"";
+  ASSERT_TRUE(cache->revalidated(id, k, fresh));
+  auto r = cache->get(id, k);
+  EXPECT_FALSE(r->stale);
+  EXPECT_EQ(r->meta.etag, "\"v2\"");
+  EXPECT_EQ(r->bytes, payload(k));
   ASSERT_TRUE(cache->erase(id, k));
   EXPECT_EQ(cache->get(id, k)->kind, CacheLookup::Kind::Miss);
+  EXPECT_TRUE(cache->revalidated(id, k, fresh)); // nothing there: nothing to update
   EXPECT_FALSE(fs::exists(dir.path() / datasetFolder(imagery()) / tileRelativePath(k, "jpg")));
   EXPECT_TRUE(cache->erase(id, k)); // erasing nothing is fine
 }

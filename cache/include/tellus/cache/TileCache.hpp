@@ -149,6 +149,9 @@ public:
   /** Stores a tile durably; returns when the index row is committed. */
   std::expected<void, CacheError>
   put(DatasetId id, const TileKey& key, std::span<const std::byte> bytes, const TileMeta& meta);
+  /** Records a successful revalidation (HTTP 304): new expiry, ETag, Last-Modified, fetched-at;
+   * the bytes stay. A tile that is not present is not an error (nothing to update). */
+  std::expected<void, CacheError> revalidated(DatasetId id, const TileKey& key, const TileMeta& meta);
   /** Remembers that upstream has no tile here until retryAfter (its file, if any, is removed). */
   std::expected<void, CacheError>
   putAbsent(DatasetId id, const TileKey& key, UnixMillis retryAfter);
