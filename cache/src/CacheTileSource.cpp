@@ -1,11 +1,10 @@
 #include <tellus/cache/CacheTileSource.hpp>
+#include <tellus/cache/RequestQueue.hpp>
 
-#include <cassert>
 #include <condition_variable>
 #include <map>
 #include <mutex>
 #include <thread>
-#include <unordered_map>
 
 namespace tellus {
 
@@ -13,24 +12,13 @@ struct CacheTileSource::Impl {
   struct Pending {
     TileAddress address;
     Callback done;
-    double priority;
-    std::uint64_t seq;
-  };
-  // Ordered by (priority descending, request order): the first element runs next.
-  using Order = std::pair<double, std::uint64_t>;
-  struct OrderLess {
-    bool operator()(const Order& a, const Order& b) const {
-      return a.first != b.first ? a.first > b.first : a.second < b.second;
-    }
   };
 
   TileCache& cache;
   int workerCount;
   mutable std::mutex mutex;
   std::condition_variable cv;
-  std::map<Order, TileRequestId, OrderLess> order;
-  std::unordered_map<TileRequestId, Pending> pending;
-  std::uint64_t nextId = 1;
+  RequestQueue<Pending> queue;
   bool started = false;
   bool stopping = false;
   std::vector<std::thread> workers;
@@ -107,14 +95,9 @@ struct CacheTileSource::Impl {
       Pending job;
       {
         std::unique_lock lock(mutex);
-        cv.wait(lock, [this] { return stopping || !order.empty(); });
+        cv.wait(lock, [this] { return stopping || !queue.empty(); });
         if (stopping) return;
-        const auto first = order.begin();
-        const auto it = pending.find(first->second);
-        assert(it != pending.end());
-        job = std::move(it->second);
-        pending.erase(it);
-        order.erase(first);
+        job = std::move(queue.pop()->second);
       }
       TileResult result = fetch(job.address);
       job.done(std::move(result));
@@ -131,8 +114,7 @@ CacheTileSource::~CacheTileSource() {
   {
     std::lock_guard lock(impl_->mutex);
     impl_->stopping = true;
-    impl_->order.clear();
-    impl_->pending.clear();
+    impl_->queue.clear();
   }
   impl_->cv.notify_all();
   for (auto& t : impl_->workers)
@@ -155,10 +137,7 @@ TileRequestId CacheTileSource::request(const TileAddress& address, double priori
   TileRequestId id = 0;
   {
     std::lock_guard lock(impl_->mutex);
-    id = impl_->nextId++;
-    const std::uint64_t seq = id;
-    impl_->pending.emplace(id, Impl::Pending{address, std::move(done), priority, seq});
-    impl_->order.emplace(Impl::Order{priority, seq}, id);
+    id = impl_->queue.push(priority, Impl::Pending{address, std::move(done)});
   }
   impl_->cv.notify_one();
   return id;
@@ -166,25 +145,17 @@ TileRequestId CacheTileSource::request(const TileAddress& address, double priori
 
 void CacheTileSource::reprioritize(TileRequestId id, double priority) {
   std::lock_guard lock(impl_->mutex);
-  const auto it = impl_->pending.find(id);
-  if (it == impl_->pending.end()) return;
-  impl_->order.erase(Impl::Order{it->second.priority, it->second.seq});
-  it->second.priority = priority;
-  impl_->order.emplace(Impl::Order{priority, it->second.seq}, id);
+  impl_->queue.reprioritize(id, priority);
 }
 
 bool CacheTileSource::cancel(TileRequestId id) {
   std::lock_guard lock(impl_->mutex);
-  const auto it = impl_->pending.find(id);
-  if (it == impl_->pending.end()) return false;
-  impl_->order.erase(Impl::Order{it->second.priority, it->second.seq});
-  impl_->pending.erase(it);
-  return true;
+  return impl_->queue.cancel(id);
 }
 
 std::size_t CacheTileSource::queued() const {
   std::lock_guard lock(impl_->mutex);
-  return impl_->pending.size();
+  return impl_->queue.size();
 }
 
 } // namespace tellus
