@@ -1,3 +1,4 @@
+#include <tellus/proxy/ImageCodec.hpp>
 #include <tellus/proxy/LocalRasterSource.hpp>
 
 #include <OpenImageIO/filesystem.h>
@@ -139,30 +140,6 @@ double LocalRasterSource::sample(double latDeg, double lonDeg, int channel) cons
   return top * (1 - fy) + bottom * fy;
 }
 
-namespace {
-
-std::expected<std::vector<std::byte>, std::string> encode(const char* formatName,
-                                                          const OIIO::ImageSpec& spec,
-                                                          const void* pixels,
-                                                          OIIO::TypeDesc type) {
-  std::vector<unsigned char> buffer;
-  OIIO::Filesystem::IOVecOutput vec(buffer);
-  auto out = OIIO::ImageOutput::create(formatName);
-  if (!out)
-    return std::unexpected(std::string("no encoder for ") + formatName + ": " + OIIO::geterror());
-  if (!out->set_ioproxy(&vec))
-    return std::unexpected(std::string("encoder cannot write to memory: ") + formatName);
-  const std::string name = std::string("tile.") + formatName;
-  if (!out->open(name, spec) || !out->write_image(type, pixels) || !out->close()) {
-    return std::unexpected("cannot encode " + name + ": " + out->geterror());
-  }
-  std::vector<std::byte> bytes(buffer.size());
-  std::memcpy(bytes.data(), buffer.data(), buffer.size());
-  return bytes;
-}
-
-} // namespace
-
 std::expected<std::vector<std::byte>, std::string>
 LocalRasterSource::renderTile(const Sector& box,
                               int width,
@@ -194,18 +171,7 @@ LocalRasterSource::renderTile(const Sector& box,
                           : static_cast<std::int16_t>(std::clamp(std::round(v), -32767.0, 32767.0));
       }
     }
-    if (mimeType == "image/tiff") {
-      OIIO::ImageSpec spec(width, height, 1, OIIO::TypeDesc::INT16);
-      spec.attribute("compression", "zip");
-      return encode("tiff", spec, heights.data(), OIIO::TypeDesc::INT16);
-    }
-    std::vector<std::byte> out(w * h * 2);
-    for (std::size_t k = 0; k < heights.size(); ++k) { // little-endian whatever the host
-      const auto u = static_cast<std::uint16_t>(heights[k]);
-      out[2 * k] = static_cast<std::byte>(u & 0xFF);
-      out[2 * k + 1] = static_cast<std::byte>(u >> 8);
-    }
-    return out;
+    return encodeHeights(mimeType, width, height, heights.data());
   }
   const bool png = mimeType == "image/png";
   if (!png && mimeType != "image/jpeg")
@@ -230,9 +196,7 @@ LocalRasterSource::renderTile(const Sector& box,
       }
     }
   }
-  OIIO::ImageSpec spec(width, height, outChannels, OIIO::TypeDesc::UINT8);
-  if (!png) spec.attribute("CompressionQuality", 90);
-  return encode(png ? "png" : "jpg", spec, rgba.data(), OIIO::TypeDesc::UINT8);
+  return encodeImage(mimeType, width, height, outChannels, rgba.data());
 }
 
 } // namespace tellus

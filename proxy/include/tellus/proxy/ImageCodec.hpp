@@ -1,0 +1,38 @@
+#pragma once
+/**
+ * @file ImageCodec.hpp
+ * @brief Encoding pixels into the formats tellus serves (OpenImageIO stays inside proxy/src).
+ */
+
+#include <cstddef>
+#include <cstdint>
+#include <expected>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace tellus {
+
+/** Encodes 8-bit pixels (channels 1, 3 or 4, row-major, top row first) as "image/jpeg" (alpha is
+ * dropped) or "image/png". */
+std::expected<std::vector<std::byte>, std::string> encodeImage(
+    std::string_view mimeType, int width, int height, int channels, const std::uint8_t* pixels);
+
+/** Encodes 16-bit signed heights as "application/bil16" (little-endian) or "image/tiff" (Int16). */
+std::expected<std::vector<std::byte>, std::string>
+encodeHeights(std::string_view mimeType, int width, int height, const std::int16_t* heights);
+
+/**
+ * A plain image for WMS EXCEPTIONS=BLANK (and, with `text`, INIMAGE): BGCOLOR (default white),
+ * fully transparent when `transparent` and the format has alpha. The text, if any, is drawn in
+ * black with the DejaVu Sans Mono font when it is installed (else the image stays plain).
+ */
+std::expected<std::vector<std::byte>, std::string> blankImage(std::string_view mimeType,
+                                                              int width,
+                                                              int height,
+                                                              std::optional<std::uint32_t> bgcolor,
+                                                              bool transparent,
+                                                              std::string_view text = {});
+
+} // namespace tellus
