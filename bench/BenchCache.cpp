@@ -167,11 +167,14 @@ std::int64_t nanos(Clock::duration d) {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(d).count();
 }
 
-std::unique_ptr<TileCache>
-openCache(const fs::path& root, bool fsyncTiles = false, int readConnections = 4) {
+std::unique_ptr<TileCache> openCache(const fs::path& root,
+                                     bool fsyncTiles = false,
+                                     int readConnections = 4,
+                                     bool writeBehind = false) {
   TileCache::Options o;
   o.root = root;
   o.fsyncTiles = fsyncTiles;
+  o.indexWriteBehind = writeBehind;
   o.readConnections = readConnections;
   auto c = TileCache::open(o);
   if (!c) die("cannot open cache " + root.string() + ": " + c.error().message);
@@ -804,7 +807,8 @@ std::vector<TileKey> blockKeys(std::int64_t firstRow, std::int64_t rows, std::in
 }
 
 /**
- * Args: fsync (0/1), threads, target (0 = a fresh cache, 1 = the 1M-tile cache).
+ * Args: fsync (0/1), threads, target (0 = a fresh cache, 1 = the 1M-tile cache), write-behind
+ * (0 = put() returns when its row is committed, 1 = TileCache::Options::indexWriteBehind).
  *
  * Each round writes the same block of keys once through put() and once with PlainWriter into its
  * own fresh directory; the two sides alternate in chunks of tiles (and who goes first alternates),
@@ -815,6 +819,7 @@ void BM_Put(benchmark::State& state) {
   const bool fsyncOn = state.range(0) != 0;
   const int threads = static_cast<int>(state.range(1));
   const bool intoBig = state.range(2) != 0;
+  const bool writeBehind = state.range(3) != 0;
   const int rounds = fsyncOn ? 2 : 3;
   const std::int64_t blockRows = fsyncOn ? 20 : 40;
   const std::int64_t blockCols = fsyncOn ? 20 : 50;
@@ -839,7 +844,7 @@ void BM_Put(benchmark::State& state) {
       const std::vector<TileKey> keys = blockKeys(firstRow, blockRows, blockCols);
 
       const fs::path cacheRoot = intoBig ? big->root : freshDir("put-cache");
-      auto cache = openCache(cacheRoot, fsyncOn);
+      auto cache = openCache(cacheRoot, fsyncOn, 4, writeBehind);
       DatasetId id = 0;
       if (intoBig) {
         id = big->id;
@@ -914,7 +919,7 @@ void BM_Put(benchmark::State& state) {
   // depend on how expensive creating a file happens to be on the machine at the time.
   const double overheadUs = (cacheSec - plainSec) / static_cast<double>(tiles) * 1e6;
   state.counters["overhead_us_per_tile"] = overheadUs;
-  summary(format("put() of %d x %" PRId64 " x 20 KiB tiles into %s, fsync %s, %d thread(s), "
+  summary(format("put() of %d x %" PRId64 " x 20 KiB tiles into %s%s, fsync %s, %d thread(s), "
                  "interleaved in chunks of %zu:\n"
                  "    put(): %.0f tiles/s   plain write%s+rename: %.0f tiles/s   "
                  "(put costs %+.0f us/tile more)\n"
@@ -924,6 +929,7 @@ void BM_Put(benchmark::State& state) {
                  rounds,
                  blockRows * blockCols,
                  intoBig ? "the 1M-tile cache" : "a fresh cache",
+                 writeBehind ? " (index write-behind)" : "",
                  fsyncOn ? "on" : "off",
                  threads,
                  chunk,
@@ -953,13 +959,17 @@ BENCHMARK(BM_Lookup)
 BENCHMARK(BM_Get)->ArgName("threads")->Arg(1)->Arg(2)->Iterations(1)->UseManualTime()->Unit(
     benchmark::kMillisecond);
 BENCHMARK(BM_Put)
-    ->ArgNames({"fsync", "threads", "into1M"})
-    ->Args({0, 1, 0})
-    ->Args({0, 4, 0})
-    ->Args({1, 1, 0})
-    ->Args({1, 4, 0})
-    ->Args({0, 1, 1})
-    ->Args({0, 4, 1})
+    ->ArgNames({"fsync", "threads", "into1M", "writebehind"})
+    ->Args({0, 1, 0, 0})
+    ->Args({0, 4, 0, 0})
+    ->Args({1, 1, 0, 0})
+    ->Args({1, 4, 0, 0})
+    ->Args({0, 1, 0, 1})
+    ->Args({0, 4, 0, 1})
+    ->Args({1, 1, 0, 1})
+    ->Args({0, 1, 1, 0})
+    ->Args({0, 4, 1, 0})
+    ->Args({0, 1, 1, 1})
     ->Iterations(1)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);

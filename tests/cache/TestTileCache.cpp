@@ -408,3 +408,30 @@ TEST(TileCache, ManyThreadsReadAndWriteWithoutErrors) {
       EXPECT_EQ(cache->peek(id, TileKey{4, t, i})->kind, CacheLookup::Kind::Hit);
   }
 }
+
+TEST(TileCache, WriteBehindIsVisibleAtOnceAndCommittedSoon) {
+  test::TempDir dir("cache");
+  DatasetId id = 0;
+  {
+    TileCache::Options o;
+    o.root = dir.path();
+    o.fsyncTiles = false;
+    o.indexWriteBehind = true;
+    auto cache = std::move(*TileCache::open(o));
+    id = *cache->registerDataset(imagery());
+    for (std::int64_t c = 0; c < 50; ++c) {
+      const TileKey k{2, 3, c};
+      ASSERT_TRUE(cache->put(id, k, payload(k), {}));
+      auto got = cache->get(id, k); // before any commit is guaranteed
+      ASSERT_EQ(got->kind, CacheLookup::Kind::Hit);
+      EXPECT_EQ(got->bytes, payload(k));
+    }
+    ASSERT_TRUE(cache->erase(id, TileKey{2, 3, 0}));
+    EXPECT_EQ(cache->peek(id, TileKey{2, 3, 0})->kind, CacheLookup::Kind::Miss);
+  } // closing commits whatever is queued
+  auto cache = openCache(dir.path());
+  EXPECT_EQ(cache->peek(id, TileKey{2, 3, 0})->kind, CacheLookup::Kind::Miss);
+  for (std::int64_t c = 1; c < 50; ++c)
+    EXPECT_EQ(cache->get(id, TileKey{2, 3, c})->bytes, payload({2, 3, c}));
+  EXPECT_TRUE(cache->verify()->ok());
+}

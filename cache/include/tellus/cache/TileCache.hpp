@@ -110,10 +110,15 @@ struct PruneOptions {
 class TileCache {
 public:
   struct Options {
-    std::filesystem::path root;                   ///< created if missing (unless readOnly)
-    std::uint64_t sizeLimitBytes = 0;             ///< 0 = unlimited; LRU beyond it
-    bool readOnly = false;                        ///< offline media: no writes at all
-    bool fsyncTiles = true;                       ///< fsync each tile before its rename
+    std::filesystem::path root;       ///< created if missing (unless readOnly)
+    std::uint64_t sizeLimitBytes = 0; ///< 0 = unlimited; LRU beyond it
+    bool readOnly = false;            ///< offline media: no writes at all
+    bool fsyncTiles = true;           ///< fsync each tile before its rename
+    /// Write-behind (for seeding): put() returns once the file is in place; the row is visible to
+    /// this process at once and committed by the writer thread with everything else queued. A
+    /// crash can lose rows (never tiles: `rebuild` adopts the files), another process sees the row
+    /// a few milliseconds later, and an index failure is logged and drops the tile, not returned.
+    bool indexWriteBehind = false;
     std::chrono::milliseconds busyTimeout{60000}; ///< wait for another process's writer
     std::chrono::milliseconds accessFlushInterval{
         1000};               ///< how often last-access times are written
@@ -151,7 +156,8 @@ public:
   put(DatasetId id, const TileKey& key, std::span<const std::byte> bytes, const TileMeta& meta);
   /** Records a successful revalidation (HTTP 304): new expiry, ETag, Last-Modified, fetched-at;
    * the bytes stay. A tile that is not present is not an error (nothing to update). */
-  std::expected<void, CacheError> revalidated(DatasetId id, const TileKey& key, const TileMeta& meta);
+  std::expected<void, CacheError>
+  revalidated(DatasetId id, const TileKey& key, const TileMeta& meta);
   /** Remembers that upstream has no tile here until retryAfter (its file, if any, is removed). */
   std::expected<void, CacheError>
   putAbsent(DatasetId id, const TileKey& key, UnixMillis retryAfter);
