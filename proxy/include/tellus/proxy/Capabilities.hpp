@@ -1,0 +1,72 @@
+#pragma once
+/**
+ * @file Capabilities.hpp
+ * @brief The WMS 1.1.1 and 1.3.0 GetCapabilities documents, written from a protocol-neutral
+ * model. Pure functions: the server fills the model from its configuration and sends the text
+ * (1.1.1 as application/vnd.ogc.wms_xml, 1.3.0 as text/xml).
+ */
+
+#include <tellus/cache/TileGrid.hpp>
+#include <tellus/proxy/Wms.hpp>
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace tellus {
+
+/** One named layer. */
+struct CapabilitiesLayer {
+  std::string name;
+  std::string title;
+  std::string abstract;            ///< omitted when empty
+  Sector bbox{};                   ///< lon/lat (west, south, east, north)
+  std::vector<std::string> styles; ///< style names; none means only the default style
+  /** TIME dimension: explicit values and/or a period "start/end/resolution", written comma-joined
+   * (values first). No Dimension is written when both are empty. */
+  std::vector<std::string> timeValues;
+  std::string timePeriod;
+  std::string timeDefault; ///< the default attribute, omitted when empty
+  bool opaque = true;
+
+  friend bool operator==(const CapabilitiesLayer&, const CapabilitiesLayer&) = default;
+};
+
+/** The whole service. */
+struct CapabilitiesModel {
+  std::string title;
+  std::string abstract;       ///< omitted when empty
+  std::string onlineResource; ///< base URL as clients reach it, e.g. "http://host:port/wms?"
+  std::vector<std::string> getMapFormats;
+  std::string updateSequence; ///< root updateSequence attribute, omitted when empty
+  /** ISO 8601 UTC (e.g. 2026-11-23T00:00:00Z); written as the Service keyword
+   * "LastUpdate=<value>", omitted when empty. */
+  std::string lastUpdate;
+  std::vector<CapabilitiesLayer> layers;
+  std::int32_t maxWidth = 0;  ///< 1.3.0 MaxWidth, omitted when <= 0
+  std::int32_t maxHeight = 0; ///< 1.3.0 MaxHeight, omitted when <= 0
+};
+
+/**
+ * @brief The capabilities document of one version, UTF-8, one element per line.
+ *
+ * 1.1.1: WMT_MS_Capabilities with the WMS_MS_Capabilities.dtd DOCTYPE; SRS EPSG:4326 on the root
+ * layer; LatLonBoundingBox and BoundingBox SRS="EPSG:4326" (lon/lat) per layer; time as Dimension
+ * plus Extent. 1.3.0: WMS_Capabilities in the http://www.opengis.net/wms namespace; CRS
+ * EPSG:4326 and CRS:84; EX_GeographicBoundingBox, BoundingBox CRS="CRS:84" (lon/lat) and
+ * BoundingBox CRS="EPSG:4326" in EPSG axis order (minx = south latitude, miny = west longitude);
+ * time as Dimension with the values as content. The root layer's box is the union of the layers'
+ * (the globe when there are none). Numbers are printed shortest round-trip; text is XML-escaped.
+ */
+std::string capabilitiesXml(WmsVersion version, const CapabilitiesModel& model);
+
+/** The content type of a capabilities document: application/vnd.ogc.wms_xml (1.1.1) or text/xml
+ * (1.3.0). */
+std::string_view capabilitiesContentType(WmsVersion version) noexcept;
+
+/** Shortest decimal text that reads back as the same double ("0.1", "-180", "1e-05"); -0 is "0".
+ * Precondition: finite. */
+std::string formatCoordinate(double value);
+
+} // namespace tellus

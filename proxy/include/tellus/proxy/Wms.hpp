@@ -1,0 +1,187 @@
+#pragma once
+/**
+ * @file Wms.hpp
+ * @brief The WMS 1.1.1 / 1.3.0 and World Wind front ends' request parsing: from decoded query
+ * parameters to typed requests or an OGC exception. Pure functions, no sockets; the server looks
+ * layers and formats up and renders the answers.
+ */
+
+#include <tellus/cache/TileGrid.hpp>
+#include <tellus/cache/TileKey.hpp>
+#include <tellus/proxy/Query.hpp>
+
+#include <cstdint>
+#include <expected>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+namespace tellus {
+
+/** The WMS exception codes (WMS 1.1.1 and 1.3.0, section 6.11 / annex A) plus OWS'
+ * NoApplicableCode for everything else. */
+namespace ogc {
+inline constexpr std::string_view kLayerNotDefined = "LayerNotDefined";
+inline constexpr std::string_view kInvalidCrs = "InvalidCRS"; ///< WMS 1.3.0
+inline constexpr std::string_view kInvalidSrs = "InvalidSRS"; ///< WMS 1.1.1
+inline constexpr std::string_view kInvalidFormat = "InvalidFormat";
+inline constexpr std::string_view kStyleNotDefined = "StyleNotDefined";
+inline constexpr std::string_view kLayerNotQueryable = "LayerNotQueryable";
+inline constexpr std::string_view kInvalidPoint = "InvalidPoint";
+inline constexpr std::string_view kMissingDimensionValue = "MissingDimensionValue";
+inline constexpr std::string_view kInvalidDimensionValue = "InvalidDimensionValue";
+inline constexpr std::string_view kOperationNotSupported = "OperationNotSupported";
+inline constexpr std::string_view kMissingParameterValue = "MissingParameterValue";
+inline constexpr std::string_view kInvalidParameterValue = "InvalidParameterValue";
+inline constexpr std::string_view kInvalidUpdateSequence = "InvalidUpdateSequence";
+inline constexpr std::string_view kCurrentUpdateSequence = "CurrentUpdateSequence";
+inline constexpr std::string_view kNoApplicableCode = "NoApplicableCode";
+} // namespace ogc
+
+/** One OGC service exception: code (one of ogc::k...), locator (usually the parameter name, may
+ * be empty) and a human-readable message. */
+struct OgcException {
+  std::string code;
+  std::string locator;
+  std::string message;
+
+  friend bool operator==(const OgcException&, const OgcException&) = default;
+};
+
+enum class WmsVersion { V111, V130 };
+
+/** "1.1.1" or "1.3.0". */
+std::string_view toString(WmsVersion version) noexcept;
+/** The invalid-CRS code of a version: InvalidSRS for 1.1.1, InvalidCRS for 1.3.0. */
+std::string_view invalidCrsCode(WmsVersion version) noexcept;
+
+/** Limits the server enforces on GetMap (also advertised as MaxWidth/MaxHeight in 1.3.0). */
+struct WmsLimits {
+  std::int32_t maxWidth = 4096;
+  std::int32_t maxHeight = 4096;
+};
+
+/** Largest |coordinate| accepted in a BBOX (degrees). Boxes past +-180/+-90 are legal WMS
+ * requests (the outside is drawn empty), but a box of 1e300 degrees is an attack, not a map. */
+inline constexpr double kMaxBboxMagnitudeDeg = 1.0e6;
+
+struct GetCapabilitiesRequest {
+  WmsVersion version = WmsVersion::V130; ///< after version negotiation
+  std::string updateSequence;            ///< UPDATESEQUENCE, empty when absent
+  std::string format;                    ///< FORMAT verbatim, empty when absent
+
+  friend bool operator==(const GetCapabilitiesRequest&, const GetCapabilitiesRequest&) = default;
+};
+
+struct GetMapRequest {
+  WmsVersion version = WmsVersion::V130;
+  std::vector<std::string> layers; ///< non-empty, names verbatim (case-sensitive), none empty
+  /** Always exactly one entry per layer; "" is the layer's default style. */
+  std::vector<std::string> styles;
+  std::string crs; ///< normalised: "EPSG:4326" or "CRS:84"
+  /** ALWAYS lon/lat (west, south, east, north) after the axis-order handling; west < east and
+   * south < north; may extend past +-180 / +-90; -0 is normalised to 0. */
+  Sector bbox{};
+  std::int32_t width = 0;  ///< 1 .. WmsLimits::maxWidth
+  std::int32_t height = 0; ///< 1 .. WmsLimits::maxHeight
+  std::string format; ///< FORMAT verbatim (non-empty); checking it against a layer is the caller's
+  bool transparent = false;
+  std::optional<std::uint32_t> bgcolor; ///< 0xRRGGBB; std::nullopt = not given (white)
+  std::string time;                     ///< TIME verbatim, empty when absent
+  enum class Exceptions { Xml, InImage, Blank } exceptions = Exceptions::Xml;
+
+  friend bool operator==(const GetMapRequest&, const GetMapRequest&) = default;
+};
+
+using WmsRequest = std::variant<GetCapabilitiesRequest, GetMapRequest>;
+
+/**
+ * @brief Parses a WMS request (keys as parseQuery stores them).
+ *
+ * - REQUEST missing -> MissingParameterValue (locator REQUEST); GetCapabilities (also WMS 1.0's
+ *   "capabilities") and GetMap ("map") are served; GetFeatureInfo, GetLegendGraphic and anything
+ *   else -> OperationNotSupported (locator REQUEST). REQUEST values are case-insensitive.
+ * - SERVICE=WMS is required for GetCapabilities and for GetMap 1.3.0; GetMap 1.1.1 may omit it.
+ *   A SERVICE other than WMS -> InvalidParameterValue (locator SERVICE).
+ * - GetCapabilities negotiates VERSION (or WMTVER): none or above 1.3.0 -> 1.3.0, 1.3.0 ->
+ *   1.3.0, anything below -> 1.1.1; an unparseable version -> InvalidParameterValue.
+ * - GetMap needs VERSION 1.1.1 or 1.3.0 (missing -> MissingParameterValue, other ->
+ *   InvalidParameterValue); 1.1.1 reads SRS, 1.3.0 reads CRS, each with the other as fallback.
+ *   EPSG:4326 under 1.3.0 has a lat/lon BBOX; CRS:84 and EPSG:4326 under 1.1.1 are lon/lat;
+ *   any other CRS -> InvalidCRS (1.3.0) / InvalidSRS (1.1.1).
+ * - BBOX: four finite numbers with min < max on both axes and |value| <= kMaxBboxMagnitudeDeg,
+ *   else InvalidParameterValue (locator BBOX).
+ * - WIDTH/HEIGHT: whole numbers in [1, limits], else InvalidParameterValue.
+ * - FORMAT, LAYERS (non-empty) and, for 1.3.0, STYLES are required (MissingParameterValue);
+ *   an empty layer name in LAYERS -> LayerNotDefined; a STYLES list whose count differs from
+ *   LAYERS -> InvalidParameterValue (locator STYLES).
+ * - TRANSPARENT TRUE/FALSE, BGCOLOR 0xRRGGBB, EXCEPTIONS in either version's spelling, else
+ *   InvalidParameterValue. Unknown parameters are ignored.
+ * Messages quote client values only shortened; format them with formatWmsException.
+ */
+std::expected<WmsRequest, OgcException> parseWms(const QueryParams& params,
+                                                 const WmsLimits& limits = {});
+
+/**
+ * @brief How to report an error for a request that may not have parsed: the version (from
+ * VERSION/WMTVER, 1.3.0 when absent or unreadable), and the EXCEPTIONS mode with the image
+ * parameters needed to honour INIMAGE/BLANK. When any of those (FORMAT, WIDTH, HEIGHT,
+ * TRANSPARENT, BGCOLOR) is missing or invalid, or the request is no GetMap, exceptions is Xml.
+ */
+struct WmsErrorContext {
+  WmsVersion version = WmsVersion::V130;
+  GetMapRequest::Exceptions exceptions = GetMapRequest::Exceptions::Xml;
+  std::string format;
+  std::int32_t width = 0;
+  std::int32_t height = 0;
+  bool transparent = false;
+  std::optional<std::uint32_t> bgcolor;
+};
+WmsErrorContext wmsErrorContext(const QueryParams& params, const WmsLimits& limits = {});
+
+/**
+ * @brief The UPDATESEQUENCE rule of GetCapabilities: equal to the server's ->
+ * CurrentUpdateSequence, greater -> InvalidUpdateSequence, lower or absent (either side empty) ->
+ * std::nullopt (send the document). Sequences of digits compare numerically, anything else as
+ * strings (ISO 8601 times compare correctly that way).
+ */
+std::optional<OgcException> checkUpdateSequence(std::string_view requested,
+                                                std::string_view current);
+
+/** A World Wind tile-service request `?T=<dataset>&L=<level>&X=<column>&Y=<row>` (row 0 in the
+ * south, column 0 at -180). */
+struct WorldWindTileRequest {
+  std::string dataset; ///< T, verbatim, non-empty
+  std::int32_t level = 0;
+  std::int64_t col = 0; ///< X
+  std::int64_t row = 0; ///< Y
+
+  friend bool operator==(const WorldWindTileRequest&, const WorldWindTileRequest&) = default;
+};
+
+/** Parses T, L, X, Y: T non-empty; L, X, Y non-negative decimal integers without sign or junk;
+ * L <= kMaxLevel; X, Y fit in 64 bits. Whether the tile exists is the caller's (TileGrid). */
+std::expected<WorldWindTileRequest, std::string> parseWorldWindTile(const QueryParams& params);
+
+/** Longest layer name in a static tile path. */
+inline constexpr std::size_t kMaxStaticLayerName = 128;
+
+/** A static tile path `<layer>/<level>/<row>/<row>_<col>.<ext>` (WebWorldWind's
+ * LevelRowColumnUrlBuilder, World Wind Java's cache layout). */
+struct StaticTilePath {
+  std::string layer;
+  TileKey key{};
+  std::string extension; ///< without the dot
+
+  friend bool operator==(const StaticTilePath&, const StaticTilePath&) = default;
+};
+
+/** Parses the path after the service prefix. The layer is [A-Za-z0-9_.-]{1,128} and never "."
+ * or ".."; the rest follows parseTileRelativePath (no padding, no signs, level <= kMaxLevel) with
+ * an extension of 1 to 16 ASCII letters and digits. No percent-decoding: '%' is not a layer
+ * character. std::nullopt for anything else. */
+std::optional<StaticTilePath> parseStaticTilePath(std::string_view pathAfterPrefix);
+
+} // namespace tellus

@@ -1,0 +1,295 @@
+#include <tellus/proxy/Capabilities.hpp>
+#include <tellus/proxy/Query.hpp>
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+
+namespace tellus {
+
+namespace {
+
+constexpr std::string_view kXlinkNs = "http://www.w3.org/1999/xlink";
+
+// Appends lines with two-space indentation.
+class XmlWriter {
+public:
+  explicit XmlWriter(std::string& out) : out_(out) {}
+
+  void line(int depth, std::string_view text) {
+    out_.append(static_cast<std::size_t>(depth) * 2, ' ');
+    out_.append(text);
+    out_.push_back('\n');
+  }
+  // <tag>escaped text</tag>
+  void element(int depth, std::string_view tag, std::string_view text) {
+    std::string s = "<";
+    s.append(tag);
+    s += '>';
+    s += xmlEscape(text);
+    s += "</";
+    s.append(tag);
+    s += '>';
+    line(depth, s);
+  }
+
+private:
+  std::string& out_;
+};
+
+std::string attr(std::string_view name, std::string_view value) {
+  std::string s = " ";
+  s.append(name);
+  s += "=\"";
+  s += xmlEscape(value);
+  s += '"';
+  return s;
+}
+
+std::string attrNum(std::string_view name, double value) {
+  return attr(name, formatCoordinate(value));
+}
+
+Sector unionOf(const std::vector<CapabilitiesLayer>& layers) {
+  if (layers.empty()) return Sector{};
+  Sector u = layers.front().bbox;
+  for (const CapabilitiesLayer& l : layers) {
+    u.west = std::min(u.west, l.bbox.west);
+    u.south = std::min(u.south, l.bbox.south);
+    u.east = std::max(u.east, l.bbox.east);
+    u.north = std::max(u.north, l.bbox.north);
+  }
+  return u;
+}
+
+std::string timeExtent(const CapabilitiesLayer& layer) {
+  std::string s;
+  for (const std::string& v : layer.timeValues) {
+    if (!s.empty()) s += ',';
+    s += v;
+  }
+  if (!layer.timePeriod.empty()) {
+    if (!s.empty()) s += ',';
+    s += layer.timePeriod;
+  }
+  return s;
+}
+
+bool hasTime(const CapabilitiesLayer& layer) {
+  return !layer.timeValues.empty() || !layer.timePeriod.empty();
+}
+
+std::string onlineResource(std::string_view href, bool declareXlink) {
+  std::string s = "<OnlineResource";
+  if (declareXlink) s += attr("xmlns:xlink", kXlinkNs);
+  s += attr("xlink:type", "simple");
+  s += attr("xlink:href", href);
+  s += "/>";
+  return s;
+}
+
+void writeDcpType(XmlWriter& w, int depth, std::string_view href, bool declareXlink) {
+  w.line(depth, "<DCPType>");
+  w.line(depth + 1, "<HTTP>");
+  w.line(depth + 2, "<Get>");
+  w.line(depth + 3, onlineResource(href, declareXlink));
+  w.line(depth + 2, "</Get>");
+  w.line(depth + 1, "</HTTP>");
+  w.line(depth, "</DCPType>");
+}
+
+void writeServiceCommon(XmlWriter& w,
+                        const CapabilitiesModel& m,
+                        std::string_view name,
+                        bool declareXlink) {
+  w.element(2, "Name", name);
+  w.element(2, "Title", m.title);
+  if (!m.abstract.empty()) w.element(2, "Abstract", m.abstract);
+  if (!m.lastUpdate.empty()) {
+    w.line(2, "<KeywordList>");
+    w.element(3, "Keyword", "LastUpdate=" + m.lastUpdate);
+    w.line(2, "</KeywordList>");
+  }
+  w.line(2, onlineResource(m.onlineResource, declareXlink));
+  w.element(2, "Fees", "none");
+  w.element(2, "AccessConstraints", "none");
+}
+
+void writeRequest(XmlWriter& w,
+                  const CapabilitiesModel& m,
+                  std::string_view capsFormat,
+                  bool declareXlink) {
+  w.line(2, "<Request>");
+  w.line(3, "<GetCapabilities>");
+  w.element(4, "Format", capsFormat);
+  writeDcpType(w, 4, m.onlineResource, declareXlink);
+  w.line(3, "</GetCapabilities>");
+  w.line(3, "<GetMap>");
+  for (const std::string& f : m.getMapFormats)
+    w.element(4, "Format", f);
+  writeDcpType(w, 4, m.onlineResource, declareXlink);
+  w.line(3, "</GetMap>");
+  w.line(2, "</Request>");
+}
+
+void writeExceptionFormats(XmlWriter& w, const std::array<std::string_view, 3>& formats) {
+  w.line(2, "<Exception>");
+  for (const std::string_view f : formats)
+    w.element(3, "Format", f);
+  w.line(2, "</Exception>");
+}
+
+void writeStyles(XmlWriter& w, int depth, const CapabilitiesLayer& layer) {
+  for (const std::string& s : layer.styles) {
+    w.line(depth, "<Style>");
+    w.element(depth + 1, "Name", s);
+    w.element(depth + 1, "Title", s);
+    w.line(depth, "</Style>");
+  }
+}
+
+std::string layerOpen(const CapabilitiesLayer& layer) {
+  return std::string("<Layer") + attr("queryable", "0") + attr("opaque", layer.opaque ? "1" : "0") +
+         ">";
+}
+
+// ---- 1.1.1 -----------------------------------------------------------------------------------
+
+void writeBoxes111(XmlWriter& w, int depth, const Sector& b) {
+  w.line(depth,
+         "<LatLonBoundingBox" + attrNum("minx", b.west) + attrNum("miny", b.south) +
+             attrNum("maxx", b.east) + attrNum("maxy", b.north) + "/>");
+  w.line(depth,
+         "<BoundingBox" + attr("SRS", "EPSG:4326") + attrNum("minx", b.west) +
+             attrNum("miny", b.south) + attrNum("maxx", b.east) + attrNum("maxy", b.north) + "/>");
+}
+
+std::string capabilities111(const CapabilitiesModel& m) {
+  std::string out;
+  XmlWriter w(out);
+  w.line(0, R"(<?xml version="1.0" encoding="UTF-8"?>)");
+  w.line(0,
+         R"(<!DOCTYPE WMT_MS_Capabilities SYSTEM )"
+         R"("http://schemas.opengis.net/wms/1.1.1/WMS_MS_Capabilities.dtd">)");
+  std::string root = "<WMT_MS_Capabilities" + attr("version", "1.1.1");
+  if (!m.updateSequence.empty()) root += attr("updateSequence", m.updateSequence);
+  w.line(0, root + ">");
+  w.line(1, "<Service>");
+  writeServiceCommon(w, m, "OGC:WMS", true);
+  w.line(1, "</Service>");
+  w.line(1, "<Capability>");
+  writeRequest(w, m, "application/vnd.ogc.wms_xml", true);
+  writeExceptionFormats(w,
+                        {"application/vnd.ogc.se_xml",
+                         "application/vnd.ogc.se_inimage",
+                         "application/vnd.ogc.se_blank"});
+  w.line(2, "<Layer>");
+  w.element(3, "Title", m.title);
+  w.element(3, "SRS", "EPSG:4326");
+  writeBoxes111(w, 3, unionOf(m.layers));
+  for (const CapabilitiesLayer& layer : m.layers) {
+    w.line(3, layerOpen(layer));
+    w.element(4, "Name", layer.name);
+    w.element(4, "Title", layer.title);
+    if (!layer.abstract.empty()) w.element(4, "Abstract", layer.abstract);
+    writeBoxes111(w, 4, layer.bbox);
+    if (hasTime(layer)) {
+      w.line(4, "<Dimension" + attr("name", "time") + attr("units", "ISO8601") + "/>");
+      std::string extent = "<Extent" + attr("name", "time");
+      if (!layer.timeDefault.empty()) extent += attr("default", layer.timeDefault);
+      extent += ">" + xmlEscape(timeExtent(layer)) + "</Extent>";
+      w.line(4, extent);
+    }
+    writeStyles(w, 4, layer);
+    w.line(3, "</Layer>");
+  }
+  w.line(2, "</Layer>");
+  w.line(1, "</Capability>");
+  w.line(0, "</WMT_MS_Capabilities>");
+  return out;
+}
+
+// ---- 1.3.0 -----------------------------------------------------------------------------------
+
+void writeBoxes130(XmlWriter& w, int depth, const Sector& b) {
+  w.line(depth, "<EX_GeographicBoundingBox>");
+  w.element(depth + 1, "westBoundLongitude", formatCoordinate(b.west));
+  w.element(depth + 1, "eastBoundLongitude", formatCoordinate(b.east));
+  w.element(depth + 1, "southBoundLatitude", formatCoordinate(b.south));
+  w.element(depth + 1, "northBoundLatitude", formatCoordinate(b.north));
+  w.line(depth, "</EX_GeographicBoundingBox>");
+  w.line(depth,
+         "<BoundingBox" + attr("CRS", "CRS:84") + attrNum("minx", b.west) +
+             attrNum("miny", b.south) + attrNum("maxx", b.east) + attrNum("maxy", b.north) + "/>");
+  // EPSG:4326 in WMS 1.3.0 follows the EPSG axis order: x is latitude, y is longitude.
+  w.line(depth,
+         "<BoundingBox" + attr("CRS", "EPSG:4326") + attrNum("minx", b.south) +
+             attrNum("miny", b.west) + attrNum("maxx", b.north) + attrNum("maxy", b.east) + "/>");
+}
+
+std::string capabilities130(const CapabilitiesModel& m) {
+  std::string out;
+  XmlWriter w(out);
+  w.line(0, R"(<?xml version="1.0" encoding="UTF-8"?>)");
+  std::string root = "<WMS_Capabilities" + attr("version", "1.3.0");
+  if (!m.updateSequence.empty()) root += attr("updateSequence", m.updateSequence);
+  root += attr("xmlns", "http://www.opengis.net/wms");
+  root += attr("xmlns:xlink", kXlinkNs);
+  root += attr("xmlns:xsi", "http://www.w3.org/2001/XMLSchema-instance");
+  root += attr("xsi:schemaLocation",
+               "http://www.opengis.net/wms "
+               "http://schemas.opengis.net/wms/1.3.0/capabilities_1_3_0.xsd");
+  w.line(0, root + ">");
+  w.line(1, "<Service>");
+  writeServiceCommon(w, m, "WMS", false);
+  if (m.maxWidth > 0) w.element(2, "MaxWidth", std::to_string(m.maxWidth));
+  if (m.maxHeight > 0) w.element(2, "MaxHeight", std::to_string(m.maxHeight));
+  w.line(1, "</Service>");
+  w.line(1, "<Capability>");
+  writeRequest(w, m, "text/xml", false);
+  writeExceptionFormats(w, {"XML", "INIMAGE", "BLANK"});
+  w.line(2, "<Layer>");
+  w.element(3, "Title", m.title);
+  w.element(3, "CRS", "EPSG:4326");
+  w.element(3, "CRS", "CRS:84");
+  writeBoxes130(w, 3, unionOf(m.layers));
+  for (const CapabilitiesLayer& layer : m.layers) {
+    w.line(3, layerOpen(layer));
+    w.element(4, "Name", layer.name);
+    w.element(4, "Title", layer.title);
+    if (!layer.abstract.empty()) w.element(4, "Abstract", layer.abstract);
+    writeBoxes130(w, 4, layer.bbox);
+    if (hasTime(layer)) {
+      std::string dim = "<Dimension" + attr("name", "time") + attr("units", "ISO8601");
+      if (!layer.timeDefault.empty()) dim += attr("default", layer.timeDefault);
+      dim += ">" + xmlEscape(timeExtent(layer)) + "</Dimension>";
+      w.line(4, dim);
+    }
+    writeStyles(w, 4, layer);
+    w.line(3, "</Layer>");
+  }
+  w.line(2, "</Layer>");
+  w.line(1, "</Capability>");
+  w.line(0, "</WMS_Capabilities>");
+  return out;
+}
+
+} // namespace
+
+std::string formatCoordinate(double value) {
+  if (value == 0.0) return "0"; // also -0
+  std::array<char, 32> buf{};
+  const auto [ptr, ec] = std::to_chars(buf.data(), buf.data() + buf.size(), value);
+  if (ec != std::errc{}) return "0";
+  return std::string(buf.data(), ptr);
+}
+
+std::string capabilitiesXml(WmsVersion version, const CapabilitiesModel& model) {
+  return version == WmsVersion::V111 ? capabilities111(model) : capabilities130(model);
+}
+
+std::string_view capabilitiesContentType(WmsVersion version) noexcept {
+  return version == WmsVersion::V111 ? "application/vnd.ogc.wms_xml" : "text/xml";
+}
+
+} // namespace tellus
