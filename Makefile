@@ -18,10 +18,13 @@ build: setup build/build.ninja
 	cmake --build build -j$(JOBS)
 	@ln -sf build/compile_commands.json compile_commands.json
 
-# The main job on the embedded default (bundled Blue Marble + ETOPO 20'): fill the cache, show it.
+# The main job on the embedded default (bundled Blue Marble + ETOPO 20'): fill the cache (levels
+# 0-1, resumable), show it, and serve it on LISTEN until Ctrl-C.
+LISTEN ?= 127.0.0.1:8080
 run: build
 	$(TELLUS) seed --cache $(CACHE) --levels 0-1
 	$(TELLUS) cache stats --cache $(CACHE)
+	$(TELLUS) serve --cache $(CACHE) --listen $(LISTEN)
 
 # Every test: Release (GL tests under xvfb-run), then the ASan+UBSan and TSan configurations.
 test: test-release test-sanitizers

@@ -48,6 +48,7 @@ function(tellus_add_test name)
   target_link_libraries(${name} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gtest_main)
   target_compile_definitions(${name} PRIVATE
     TELLUS_TEST_DATA_DIR="${TELLUS_SOURCE_DATA_DIR}"
+    TELLUS_TEST_SOURCE_DIR="${CMAKE_SOURCE_DIR}/tests"
     TELLUS_TEST_TMP_DIR="${CMAKE_BINARY_DIR}/test-tmp")
   tellus_apply_options(${name})
   set(kinds Extremes Integration Slow Gl)

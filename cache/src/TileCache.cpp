@@ -640,7 +640,7 @@ struct TileCache::Impl {
 
   void waitIdle() {
     std::unique_lock lock(queueMutex);
-    idleCv.wait(lock, [this] { return queue.empty() && busy == 0; });
+    idleCv.wait(lock, [this] { return queue.empty() && busy == 0 && !evictDue; });
   }
 
   // ---------------------------------------------------------------------------- tiles

@@ -41,10 +41,22 @@ grep -q "index rows without files: 1" "$work/verify.txt" || fail "verify report:
 "$tellus" cache prune --older-than 0s --cache "$cache" | grep -q "pruned 0 tiles" || fail "prune keeps pinned"
 "$tellus" cache prune --older-than 0s --include-pinned --cache "$cache" | grep -q "pruned 15 tiles" || fail "prune pinned"
 
-set +e
-"$tellus" serve >/dev/null 2>"$work/serve.txt"; rc=$?
-set -e
-[ $rc -eq 2 ] && grep -q "not built yet" "$work/serve.txt" || fail "serve should say it is not built yet"
+# tellus serve as a user starts it: any free port, read back from what it prints; then SIGTERM.
+"$tellus" serve --cache "$cache" --listen 127.0.0.1:0 >"$work/serve.txt" 2>&1 &
+server=$!
+for _ in $(seq 50); do grep -q "listening on" "$work/serve.txt" && break; sleep 0.1; done
+port=$(grep -o "127.0.0.1:[0-9]*" "$work/serve.txt" | head -n 1 | cut -d: -f2)
+[ -n "$port" ] || fail "serve did not say where it listens: $(cat "$work/serve.txt")"
+code=$(curl -s -o "$work/tile.jpg" -w "%{http_code}" "http://127.0.0.1:$port/wwtile?T=bluemarble&L=0&X=5&Y=2")
+[ "$code" = 200 ] || fail "wwtile answered $code"
+head -c 3 "$work/tile.jpg" | od -An -tx1 | grep -q "ff d8 ff" || fail "not a JPEG"
+code=$(curl -s -o /dev/null -w "%{http_code}" "http://127.0.0.1:$port/wwtile?T=bluemarble&L=0&X=99&Y=2")
+[ "$code" = 404 ] || fail "outside the grid answered $code"
+curl -s "http://127.0.0.1:$port/wms?SERVICE=WMS&REQUEST=GetCapabilities" | grep -q "<Name>etopo</Name>" \
+  || fail "capabilities without the etopo layer"
+kill -TERM $server
+wait $server || fail "serve did not stop cleanly on SIGTERM"
+
 set +e
 "$tellus" seed --levels 3-1 >/dev/null 2>&1; rc=$?
 set -e

@@ -3,12 +3,41 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <fstream>
+#include <optional>
+#include <sstream>
 
 using namespace tellus;
+namespace fs = std::filesystem;
 
 namespace {
-const std::filesystem::path kData = TELLUS_TEST_DATA_DIR;
-}
+const fs::path kData = TELLUS_TEST_DATA_DIR;
+const fs::path kExamples = kData.parent_path() / "config" / "examples";
+
+/** Sets an environment variable for the scope and puts the old value back. */
+class ScopedEnv {
+public:
+  ScopedEnv(const char* name, const char* value) : name_(name) {
+    if (const char* old = std::getenv(name)) old_ = old;
+    if (value)
+      ::setenv(name, value, 1);
+    else
+      ::unsetenv(name);
+  }
+  ~ScopedEnv() {
+    if (old_)
+      ::setenv(name_, old_->c_str(), 1);
+    else
+      ::unsetenv(name_);
+  }
+  ScopedEnv(const ScopedEnv&) = delete;
+  ScopedEnv& operator=(const ScopedEnv&) = delete;
+
+private:
+  const char* name_;
+  std::optional<std::string> old_;
+};
+} // namespace
 
 TEST(Config, EmbeddedDefaultIsValidAndServesTheBundledData) {
   const Config c = embeddedDefault(kData, "/tmp/cache");
@@ -17,11 +46,54 @@ TEST(Config, EmbeddedDefaultIsValidAndServesTheBundledData) {
   ASSERT_NE(c.layer("etopo"), nullptr);
   EXPECT_EQ(c.layer("nope"), nullptr);
   EXPECT_EQ(c.layer("bluemarble")->dataset.grid.levelZeroDeltaDeg, 36.0);
+  EXPECT_EQ(c.layer("bluemarble")->dataset.grid.tileWidth, 512);
+  EXPECT_EQ(c.layer("bluemarble")->dataset.grid.numLevels, 3);
+  EXPECT_EQ(c.layer("bluemarble")->dataset.mimeType, "image/jpeg");
+  EXPECT_EQ(c.layer("bluemarble")->dataset.extension, "jpg");
+  EXPECT_EQ(c.layer("bluemarble")->dataset.server, "local");
+  EXPECT_EQ(c.layer("bluemarble")->kind, LayerKind::Imagery);
   EXPECT_EQ(c.layer("etopo")->dataset.grid.levelZeroDeltaDeg, 20.0);
   EXPECT_EQ(c.layer("etopo")->dataset.grid.tileWidth, 150);
+  EXPECT_EQ(c.layer("etopo")->dataset.grid.tileHeight, 150);
   EXPECT_EQ(c.layer("etopo")->dataset.mimeType, "application/bil16");
+  EXPECT_EQ(c.layer("etopo")->dataset.extension, "bil");
+  EXPECT_EQ(c.layer("etopo")->kind, LayerKind::Elevation);
   EXPECT_TRUE(c.layer("bluemarble")->dataset.pinned);
+  EXPECT_TRUE(c.layer("etopo")->dataset.pinned);
   EXPECT_EQ(c.cache.root, "/tmp/cache");
+
+  const UpstreamConfig* bmng = c.upstream(c.layer("bluemarble")->upstream);
+  ASSERT_NE(bmng, nullptr);
+  EXPECT_EQ(bmng->type, UpstreamConfig::Type::Local);
+  EXPECT_EQ(bmng->path, (kData / "bmng_2048x1024.jpg").lexically_normal());
+  const UpstreamConfig* etopo = c.upstream(c.layer("etopo")->upstream);
+  ASSERT_NE(etopo, nullptr);
+  EXPECT_EQ(etopo->path, (kData / "etopo20_int16.tif").lexically_normal());
+  EXPECT_EQ(c.upstream("nope"), nullptr);
+}
+
+TEST(Config, EmbeddedDefaultIsDefaultYamlCompiledIn) {
+  std::ifstream in(kExamples / "default.yaml", std::ios::binary);
+  ASSERT_TRUE(in);
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_EQ(embeddedDefaultYaml(), text.str());
+
+  // The same file loaded from disk resolves data_dir (../../data) to the bundled data.
+  const auto loaded = loadConfig(kExamples / "default.yaml");
+  ASSERT_TRUE(loaded) << loaded.error().toString();
+  const Config embedded = embeddedDefault(kData, "/tmp/cache");
+  ASSERT_EQ(loaded->layers.size(), embedded.layers.size());
+  for (std::size_t i = 0; i < embedded.layers.size(); ++i) {
+    EXPECT_EQ(datasetFolder(loaded->layers[i].dataset), datasetFolder(embedded.layers[i].dataset));
+    EXPECT_EQ(loaded->upstream(loaded->layers[i].upstream)->path,
+              embedded.upstream(embedded.layers[i].upstream)->path);
+  }
+}
+
+TEST(Config, EmbeddedDefaultWithoutCacheRootUsesTheDefaultRoot) {
+  const ScopedEnv env("TELLUS_CACHE", "/srv/tellus-cache");
+  EXPECT_EQ(embeddedDefault(kData, {}).cache.root, "/srv/tellus-cache");
 }
 
 TEST(Config, ValidationNamesTheLayerAndTheField) {
@@ -44,15 +116,73 @@ TEST(Config, ValidationNamesTheLayerAndTheField) {
   Config unnamed = c;
   unnamed.layers[0].name.clear();
   EXPECT_FALSE(validate(unnamed));
+  Config noUpstream = c;
+  noUpstream.layers[0].upstream = "elsewhere";
+  ASSERT_FALSE(validate(noUpstream));
+  EXPECT_NE(validate(noUpstream).error().find("no upstream named 'elsewhere'"), std::string::npos);
+  Config dupUpstream = c;
+  dupUpstream.upstreams.push_back(dupUpstream.upstreams[0]);
+  ASSERT_FALSE(validate(dupUpstream));
+  EXPECT_NE(validate(dupUpstream).error().find("used twice"), std::string::npos);
+  Config badUrl = c;
+  badUrl.upstreams[0].type = UpstreamConfig::Type::Wms;
+  badUrl.upstreams[0].url = "ftp://example.org/wms";
+  ASSERT_FALSE(validate(badUrl));
+  EXPECT_NE(validate(badUrl).error().find("http"), std::string::npos);
+  Config badTimeout = c;
+  badTimeout.upstreams[0].type = UpstreamConfig::Type::Wms;
+  badTimeout.upstreams[0].url = "http://example.org/wms";
+  badTimeout.upstreams[0].timeout = std::chrono::milliseconds(0);
+  ASSERT_FALSE(validate(badTimeout));
+  EXPECT_NE(validate(badTimeout).error().find("timeout"), std::string::npos);
 }
 
 TEST(Config, DefaultCacheRootFollowsTheEnvironment) {
-  ::setenv("TELLUS_CACHE", "/srv/tellus", 1);
+  const ScopedEnv cache("TELLUS_CACHE", "/srv/tellus");
+  const ScopedEnv xdg("XDG_CACHE_HOME", nullptr);
+  const ScopedEnv home("HOME", "/home/u");
   EXPECT_EQ(defaultCacheRoot(), "/srv/tellus");
   ::unsetenv("TELLUS_CACHE");
   ::setenv("XDG_CACHE_HOME", "/x", 1);
   EXPECT_EQ(defaultCacheRoot(), "/x/tellus");
   ::unsetenv("XDG_CACHE_HOME");
-  ::setenv("HOME", "/home/u", 1);
   EXPECT_EQ(defaultCacheRoot(), "/home/u/.cache/tellus");
+}
+
+TEST(Config, DurationsAndSizes) {
+  using std::chrono::milliseconds;
+  EXPECT_EQ(parseDurationText("500ms"), milliseconds(500));
+  EXPECT_EQ(parseDurationText("30s"), milliseconds(30'000));
+  EXPECT_EQ(parseDurationText("5m"), milliseconds(300'000));
+  EXPECT_EQ(parseDurationText("12h"), milliseconds(43'200'000));
+  EXPECT_EQ(parseDurationText("30d"), milliseconds(2'592'000'000));
+  EXPECT_EQ(parseDurationText("0"), milliseconds(0));
+  EXPECT_EQ(parseDurationText("0s"), milliseconds(0));
+  EXPECT_FALSE(parseDurationText("30"));
+  EXPECT_FALSE(parseDurationText("10 parsecs"));
+  EXPECT_FALSE(parseDurationText("-5s"));
+  EXPECT_FALSE(parseDurationText("1.5s"));
+  EXPECT_FALSE(parseDurationText(""));
+  EXPECT_FALSE(parseDurationText("s"));
+
+  EXPECT_EQ(parseSizeText("1000000"), 1'000'000U);
+  EXPECT_EQ(parseSizeText("512MiB"), 512ULL << 20);
+  EXPECT_EQ(parseSizeText("10GiB"), 10ULL << 30);
+  EXPECT_EQ(parseSizeText("2 GB"), 2'000'000'000ULL);
+  EXPECT_EQ(parseSizeText("1TiB"), 1ULL << 40);
+  EXPECT_EQ(parseSizeText("0"), 0U);
+  EXPECT_FALSE(parseSizeText("lots"));
+  EXPECT_FALSE(parseSizeText("10 GiBs"));
+  EXPECT_FALSE(parseSizeText("-1"));
+  EXPECT_FALSE(parseSizeText("1.5GiB"));
+}
+
+TEST(Config, ErrorTextNamesFileLineColumnAndKey) {
+  ConfigError e{"a.yaml", 3, 7, "layers[1].grid.levels", "must be in [1, 31]"};
+  EXPECT_EQ(e.toString(), "a.yaml:3:7: layers[1].grid.levels: must be in [1, 31]");
+  e.column = 0;
+  EXPECT_EQ(e.toString(), "a.yaml:3: layers[1].grid.levels: must be in [1, 31]");
+  e.line = 0;
+  e.key.clear();
+  EXPECT_EQ(e.toString(), "a.yaml: must be in [1, 31]");
 }

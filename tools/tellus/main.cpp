@@ -3,18 +3,24 @@
 
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/config/Config.hpp>
+#include <tellus/proxy/Fetcher.hpp>
+#include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/LocalRasterSource.hpp>
+#include <tellus/proxy/ProxyFrontEnd.hpp>
 #include <tellus/proxy/Seeder.hpp>
+#include <tellus/proxy/TileService.hpp>
 
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <pthread.h>
 #include <string>
 #include <string_view>
 #include <unistd.h>
@@ -38,14 +44,15 @@ commands:
   cache    inspect and maintain the cache
              stats [--json] | verify | rebuild | prune --older-than DURATION [--layer NAME]
              [--include-pinned]       DURATION: e.g. 30d, 12h, 15m, 45s
-  serve    WMS / World Wind tile server             (not built yet: issue #3)
+  serve    the WMS / World Wind tile server
+             [--listen HOST:PORT] [--offline]
   view     interactive globe                        (not built yet: issue #5)
   render   headless globe rendering to PNG          (not built yet: issue #5)
 
 options for every command:
   --cache DIR   cache root (default: $TELLUS_CACHE, $XDG_CACHE_HOME/tellus or ~/.cache/tellus)
   --data DIR    bundled data of the embedded default (default: $TELLUS_DATA_DIR or the source tree)
-  --config F    a configuration file (YAML: arrives with `tellus serve`, issue #3)
+  --config F    a YAML configuration (docs/CONFIG.md; default: the embedded default)
 )";
 
 /** Command-line arguments after the command words: --key value pairs and flags. */
@@ -187,23 +194,30 @@ struct Context {
 
 /** Builds the configuration and opens the cache; prints the error and returns nullopt on failure.
  */
-std::optional<Context> setUp(const Args& a) {
-  if (a.get("config")) {
-    std::fprintf(
-        stderr,
-        "tellus: --config (YAML) is not built yet (issue #3); the embedded default is used "
-        "without it\n");
-    return std::nullopt;
+std::optional<Context> setUp(const Args& a, bool seeding = false) {
+  Context ctx;
+  if (auto file = a.get("config")) {
+    auto loaded = loadConfig(*file);
+    if (!loaded) {
+      std::fprintf(stderr, "tellus: configuration: %s\n", loaded.error().toString().c_str());
+      return std::nullopt;
+    }
+    ctx.config = std::move(*loaded);
+    if (auto c = a.get("cache")) ctx.config.cache.root = *c;
+  } else {
+    const fs::path root = a.get("cache") ? fs::path(*a.get("cache")) : defaultCacheRoot();
+    ctx.config = embeddedDefault(dataDir(a), root);
   }
-  const fs::path root = a.get("cache") ? fs::path(*a.get("cache")) : defaultCacheRoot();
-  Context ctx{embeddedDefault(dataDir(a), root), nullptr};
   if (auto v = validate(ctx.config); !v) {
     std::fprintf(stderr, "tellus: configuration: %s\n", v.error().c_str());
     return std::nullopt;
   }
+  const fs::path root = ctx.config.cache.root;
   TileCache::Options o;
   o.root = ctx.config.cache.root;
   o.sizeLimitBytes = ctx.config.cache.sizeLimitBytes;
+  // A seeder writes many tiles: rows are committed behind the files in batches (bench/RESULTS.md).
+  o.indexWriteBehind = seeding;
   auto cache = TileCache::open(o);
   if (!cache) {
     std::fprintf(stderr, "tellus: cache %s: %s\n", root.c_str(), cache.error().message.c_str());
@@ -240,7 +254,7 @@ int cmdSeed(const Args& a) {
     }
   }
   so.dryRun = a.flag("dry-run");
-  auto ctx = setUp(a);
+  auto ctx = setUp(a, /*seeding=*/true);
   if (!ctx) return kExitError;
   std::vector<const LayerConfig*> layers;
   for (const auto& name : a.all("layer")) {
@@ -257,13 +271,21 @@ int cmdSeed(const Args& a) {
   }
   int rc = kExitOk;
   for (const auto* layer : layers) {
+    const UpstreamConfig* upstream = ctx->config.upstream(layer->upstream);
+    if (!upstream || upstream->type != UpstreamConfig::Type::Local) {
+      std::fprintf(stderr,
+                   "layer %s: upstream type %s is not seeded yet\n",
+                   layer->name.c_str(),
+                   upstream && upstream->type == UpstreamConfig::Type::Wms ? "wms" : "worldwind");
+      continue;
+    }
     auto id = ctx->cache->registerDataset(layer->dataset);
     if (!id) {
       std::fprintf(
           stderr, "tellus seed: %s: %s\n", layer->name.c_str(), id.error().message.c_str());
       return kExitError;
     }
-    auto source = LocalRasterSource::open(layer->upstream.path);
+    auto source = LocalRasterSource::open(upstream->path);
     if (!source) {
       std::fprintf(stderr, "tellus seed: %s: %s\n", layer->name.c_str(), source.error().c_str());
       return kExitError;
@@ -427,6 +449,150 @@ int cmdCache(const Args& a) {
   return kExitOk;
 }
 
+/** The configuration's upstreams and layers in the proxy's terms. */
+std::pair<std::vector<UpstreamSpec>, std::vector<LayerSpec>> proxySpecs(const Config& c) {
+  std::vector<UpstreamSpec> ups;
+  for (const auto& u : c.upstreams) {
+    UpstreamSpec s;
+    s.name = u.name;
+    s.type = u.type == UpstreamConfig::Type::Local ? UpstreamSpec::Type::Local
+             : u.type == UpstreamConfig::Type::Wms ? UpstreamSpec::Type::Wms
+                                                   : UpstreamSpec::Type::WorldWind;
+    s.path = u.path;
+    s.url = u.url;
+    s.wmsVersion = u.wmsVersion;
+    s.crs = u.crs;
+    s.policy.maxConnections = u.maxConnections;
+    s.policy.connectTimeout = u.connectTimeout;
+    s.policy.timeout = u.timeout;
+    s.policy.retries = u.retries;
+    s.policy.retryBackoff = u.retryBackoff;
+    s.policy.failureThreshold = u.failureThreshold;
+    s.policy.openInterval = u.openInterval;
+    s.policy.headers = u.headers;
+    ups.push_back(std::move(s));
+  }
+  std::vector<LayerSpec> layers;
+  for (const auto& l : c.layers) {
+    LayerSpec s;
+    s.name = l.name;
+    s.title = l.title;
+    s.abstract = l.abstract;
+    s.dataset = l.dataset;
+    s.upstream = l.upstream;
+    s.upstreamLayer = l.upstreamLayer;
+    s.firstLevel = l.firstLevel;
+    s.elevation = l.kind == LayerKind::Elevation;
+    s.noData = static_cast<std::int16_t>(std::clamp(l.elevation.noData, -32768.0, 32767.0));
+    s.ttl = l.ttl;
+    s.maxAge = l.maxAge;
+    s.timeValues = l.time.values;
+    s.timePeriod = l.time.period;
+    s.timeDefault = l.time.defaultValue;
+    layers.push_back(std::move(s));
+  }
+  return {std::move(ups), std::move(layers)};
+}
+
+int cmdServe(const Args& a) {
+  auto ctx = setUp(a);
+  if (!ctx) return kExitError;
+  ServerSettings server = ctx->config.server;
+  if (auto listen = a.get("listen")) {
+    const auto colon = listen->rfind(':');
+    int port = -1;
+    if (colon != std::string::npos) {
+      const std::string p = listen->substr(colon + 1);
+      auto [ptr, ec] = std::from_chars(p.data(), p.data() + p.size(), port);
+      if (ec != std::errc{} || ptr != p.data() + p.size()) port = -1;
+    }
+    if (colon == std::string::npos || port < 0 || port > 65535) {
+      std::fprintf(stderr,
+                   "tellus serve: --listen must be HOST:PORT (port 0 = any), got '%s'\n",
+                   listen->c_str());
+      return kExitUsage;
+    }
+    server.listenHost = listen->substr(0, colon);
+    server.listenPort = static_cast<std::uint16_t>(port);
+  }
+  if (a.flag("offline")) server.offline = true;
+
+  // Signals are taken by sigwait below: block them before any thread starts.
+  sigset_t stopSignals;
+  sigemptyset(&stopSignals);
+  sigaddset(&stopSignals, SIGINT);
+  sigaddset(&stopSignals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stopSignals, nullptr);
+
+  Fetcher fetcher;
+  auto [upstreams, layers] = proxySpecs(ctx->config);
+  TileServiceOptions tso;
+  tso.offline = server.offline;
+  auto tiles =
+      TileService::create(*ctx->cache, fetcher, std::move(upstreams), std::move(layers), tso);
+  if (!tiles) {
+    std::fprintf(stderr, "tellus serve: %s\n", tiles.error().c_str());
+    return kExitError;
+  }
+  FrontEndOptions fo;
+  fo.publicUrl = server.publicUrl;
+  fo.cors = server.cors;
+  fo.exceptionsHttpStatus = server.exceptionsHttpStatus;
+  fo.offlineResponse = server.offlineResponse == OfflineResponse::Blank
+                           ? FrontEndOptions::OfflineResponse::Blank
+                           : FrontEndOptions::OfflineResponse::Exception;
+  fo.limits.maxWidth = server.limits.maxWidth;
+  fo.limits.maxHeight = server.limits.maxHeight;
+  fo.maxParamBytes = server.limits.maxParamBytes;
+  ProxyFrontEnd front(**tiles, fo);
+  HttpServerOptions ho;
+  ho.host = server.listenHost;
+  ho.port = server.listenPort;
+  ho.maxConnections = static_cast<std::size_t>(std::max(1, server.limits.maxConnections));
+  ho.maxHeaderBytes = server.limits.maxHeaderBytes;
+  ho.requestTimeout = server.limits.requestTimeout;
+  ho.keepAliveTimeout = server.limits.keepaliveTimeout;
+  HttpServer http(ho, [&front](HttpRequest&& r, Responder respond) {
+    front.handle(std::move(r), std::move(respond));
+  });
+  if (auto started = http.start(); !started) {
+    std::fprintf(stderr, "tellus serve: %s\n", started.error().c_str());
+    return kExitError;
+  }
+  const std::string host = ho.host == "0.0.0.0" || ho.host == "::" ? "127.0.0.1" : ho.host;
+  const std::string base = "http://" + host + ":" + std::to_string(http.port());
+  std::printf("tellus serve: listening on %s (cache %s%s)\n",
+              base.c_str(),
+              ctx->config.cache.root.c_str(),
+              server.offline ? ", offline" : "");
+  std::printf("  capabilities  %s/wms?SERVICE=WMS&REQUEST=GetCapabilities\n", base.c_str());
+  for (const auto& l : (*tiles)->layers()) {
+    const auto& g = l.dataset.grid;
+    std::printf(
+        "  %-12s  %s/wwtile?T=%s&L=0&X=0&Y=0\n", l.name.c_str(), base.c_str(), l.name.c_str());
+    std::printf(
+        "  %-12s  %s/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.3.0&LAYERS=%s&STYLES=&CRS=CRS:84"
+        "&BBOX=%g,%g,%g,%g&WIDTH=%d&HEIGHT=%d&FORMAT=%s\n",
+        "",
+        base.c_str(),
+        l.name.c_str(),
+        g.sector.west,
+        g.sector.south,
+        g.sector.west + g.levelZeroDeltaDeg,
+        g.sector.south + g.levelZeroDeltaDeg,
+        g.tileWidth,
+        g.tileHeight,
+        l.dataset.mimeType.c_str());
+  }
+  std::printf("Ctrl-C stops it.\n");
+  std::fflush(stdout);
+  int signal = 0;
+  sigwait(&stopSignals, &signal);
+  std::printf("tellus serve: stopping (%s)\n", signal == SIGINT ? "SIGINT" : "SIGTERM");
+  http.stop();
+  return kExitOk;
+}
+
 int run(int argc, char** argv) {
   if (argc < 2 || std::string_view(argv[1]) == "help" || std::string_view(argv[1]) == "--help") {
     std::fputs(kUsage, argc < 2 ? stderr : stdout);
@@ -437,16 +603,13 @@ int run(int argc, char** argv) {
     std::printf("tellus %s\n", TELLUS_VERSION);
     return kExitOk;
   }
-  const Args a = parseArgs(argc, argv, 2, {"json", "dry-run", "include-pinned"});
+  const Args a = parseArgs(argc, argv, 2, {"json", "dry-run", "include-pinned", "offline"});
   for (const auto& e : a.errors)
     std::fprintf(stderr, "tellus %s: %s\n", argv[1], e.c_str());
   if (!a.errors.empty()) return kExitUsage;
   if (cmd == "seed") return cmdSeed(a);
   if (cmd == "cache") return cmdCache(a);
-  if (cmd == "serve") {
-    std::fprintf(stderr, "tellus serve: not built yet (issue #3: the WMS / World Wind proxy)\n");
-    return kExitUsage;
-  }
+  if (cmd == "serve") return cmdServe(a);
   if (cmd == "view" || cmd == "render") {
     std::fprintf(stderr, "tellus %s: not built yet (issue #5: the planet renderer)\n", argv[1]);
     return kExitUsage;

@@ -1,59 +1,203 @@
 #pragma once
 /**
  * @file Config.hpp
- * @brief The typed configuration of tellus: the cache, and the layers with their grids and sources.
+ * @brief The typed configuration of tellus: the server, the cache, the upstreams and the layers,
+ * read from YAML (docs/CONFIG.md is the reference of every key).
  *
- * The embedded default serves the bundled public-domain data (data/): Blue Marble imagery and ETOPO
- * 20' heights. Reading YAML files into this structure comes with `tellus serve` (issue #3).
+ * A configuration comes from a YAML file (`loadConfig`), from YAML text (`parseConfig`) or from the
+ * embedded default (`embeddedDefault`: config/examples/default.yaml compiled into the library,
+ * which serves the bundled public-domain data: Blue Marble imagery and ETOPO 20' heights). Loading
+ * never throws: a bad file gives a `ConfigError` that names the file, the line, the column and the
+ * key.
  */
 
 #include <tellus/cache/Dataset.hpp>
 
+#include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <expected>
 #include <filesystem>
+#include <optional>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 namespace tellus {
 
+/** What a WMS client gets for a tile that is not cached while the proxy is offline. */
+enum class OfflineResponse {
+  Exception, ///< an OGC ServiceException
+  Blank,     ///< a transparent / empty tile of the requested format
+};
+
+/** Protection of the HTTP server against misbehaving clients (YAML `server.limits`). */
+struct ServerLimits {
+  int maxConnections = 4096;                          ///< open client connections
+  std::size_t maxHeaderBytes = 16384;                 ///< request line + headers
+  std::size_t maxParamBytes = 2048;                   ///< one query parameter value
+  std::int32_t maxWidth = 4096;                       ///< WMS WIDTH, pixels
+  std::int32_t maxHeight = 4096;                      ///< WMS HEIGHT, pixels
+  std::chrono::milliseconds requestTimeout{10'000};   ///< to receive a whole request
+  std::chrono::milliseconds keepaliveTimeout{60'000}; ///< idle keep-alive; 0 = close after each
+  double requestsPerSecond = 0.0;                     ///< per client address; 0 = unlimited
+};
+
+/** YAML `server`. */
+struct ServerSettings {
+  std::string listenHost = "127.0.0.1"; ///< IPv6 without brackets
+  std::uint16_t listenPort = 8080;      ///< 0 = any free port
+  std::string publicUrl;                ///< base URL for capabilities; "" = from the request
+  std::string cors = "*";               ///< Access-Control-Allow-Origin; "" = no header
+  bool exceptionsHttpStatus = false;    ///< WMS exceptions with 4xx/5xx instead of 200
+  OfflineResponse offlineResponse = OfflineResponse::Exception;
+  bool offline = false; ///< start offline (the --offline flag sets it too)
+  ServerLimits limits;
+};
+
+/** YAML `cache`. */
 struct CacheSettings {
   std::filesystem::path root;       ///< cache root (index.sqlite + the tile tree)
   std::uint64_t sizeLimitBytes = 0; ///< 0 = unlimited
 };
 
-/** A layer whose upstream is a georeferenced file read with OpenImageIO. */
-struct LocalRasterUpstream {
-  std::filesystem::path path;
+/** One entry of YAML `upstreams`: where tiles come from. */
+struct UpstreamConfig {
+  enum class Type {
+    Local,     ///< a georeferenced image on disk (world file next to it)
+    Wms,       ///< an OGC WMS 1.1.1 / 1.3.0 server (GetMap)
+    WorldWind, ///< a World Wind tile server (T=&L=&X=&Y= appended to the URL)
+  };
+
+  std::string name; ///< referenced by layers; also the cache's server folder
+  Type type = Type::Local;
+  std::filesystem::path path;       ///< Local: the image, absolute after loading
+  std::string url;                  ///< Wms / WorldWind: http(s) URL, a query string is allowed
+  std::string wmsVersion = "1.3.0"; ///< Wms: "1.1.1" or "1.3.0"
+  std::string crs = "EPSG:4326";    ///< Wms: "EPSG:4326" or "CRS:84"
+  std::chrono::milliseconds connectTimeout{5'000};
+  std::chrono::milliseconds timeout{30'000};      ///< a whole request
+  std::chrono::milliseconds retryBackoff{200};    ///< base of exponential backoff with jitter
+  std::chrono::milliseconds openInterval{30'000}; ///< circuit breaker open before one probe
+  int maxConnections = 4;                         ///< concurrent requests to this upstream
+  int retries = 3;                                ///< for 5xx and timeouts
+  int failureThreshold = 5; ///< consecutive failures that open the circuit breaker
+  std::vector<std::pair<std::string, std::string>> headers; ///< sent with every request, in order
 };
 
 enum class LayerKind { Imagery, Elevation };
 
+/** How the raw samples of an elevation layer become metres. */
+enum class ElevationEncoding {
+  Bil16,     ///< application/bil16: little-endian Int16, no header
+  Int16Tiff, ///< image/tiff with one Int16 band
+  Png16,     ///< image/png with one 16-bit band (values as signed Int16)
+};
+
+/** YAML `layers[].elevation` (elevation layers only): metres = raw * scale + offset. */
+struct ElevationSettings {
+  ElevationEncoding encoding = ElevationEncoding::Bil16;
+  double scale = 1.0;
+  double offset = 0.0;
+  double noData = -32768.0; ///< raw value that means "no data"
+};
+
+/** YAML `layers[].time`: the WMS TIME dimension. Empty (no values, no period) = no dimension. */
+struct TimeDimension {
+  /** Every allowed value: as listed, or expanded from `period` when that gives at most
+   * kMaxExpandedValues values (otherwise empty and only `period` describes them). */
+  std::vector<std::string> values;
+  /** ISO 8601 "start/end/period" as written (e.g. "2024-01-01/2024-12-31/P1D"); "" when the
+   * values were listed. */
+  std::string period;
+  /** The default TIME; when not written: the last value, or the end of the period. */
+  std::string defaultValue;
+
+  static constexpr std::size_t kMaxExpandedValues = 10000;
+
+  bool enabled() const noexcept { return !values.empty() || !period.empty(); }
+};
+
+/** One entry of YAML `layers`: a WMS layer / World Wind dataset served by tellus. */
 struct LayerConfig {
-  std::string name; ///< WMS layer / World Wind dataset name
+  std::string name; ///< [A-Za-z0-9_.-]+, unique; the WMS layer / World Wind dataset name
   std::string title;
+  std::string abstract;
   LayerKind kind = LayerKind::Imagery;
-  DatasetSpec dataset; ///< server, grid, format; dataset.name == name
-  LocalRasterUpstream upstream;
+  std::string upstream;        ///< name of an entry of Config::upstreams
+  std::string upstreamLayer;   ///< WMS LAYERS / World Wind T= value sent upstream (default: name)
+  std::int32_t firstLevel = 0; ///< WorldWind: level L here is level L + firstLevel upstream
+  /** The cached dataset: server = upstream, name = name, grid, mimeType (YAML `format`),
+   * extension (jpg, png, bil, tif from the format), style (WMS STYLES sent upstream), pinned
+   * (YAML `cache.pinned`). time stays "": one dataset per TIME value is made by the proxy. */
+  DatasetSpec dataset;
+  ElevationSettings elevation; ///< meaningful for kind == Elevation
+  TimeDimension time;
+  std::chrono::milliseconds ttl{0};    ///< after this a tile is stale and revalidated; 0 = never
+  std::chrono::seconds maxAge{86'400}; ///< Cache-Control max-age sent to clients
 };
 
 struct Config {
+  std::filesystem::path sourceFile; ///< the YAML it came from ("<embedded default.yaml>" for that)
+  ServerSettings server;
   CacheSettings cache;
+  std::vector<UpstreamConfig> upstreams;
   std::vector<LayerConfig> layers;
 
   /** The layer with this name, or nullptr. */
   const LayerConfig* layer(std::string_view name) const noexcept;
+  /** The upstream with this name, or nullptr. */
+  const UpstreamConfig* upstream(std::string_view name) const noexcept;
 };
 
-/** The embedded default over the bundled data in dataDir, with the cache at cacheRoot. */
+/** Why a configuration could not be loaded. line and column are 1-based; 0 = unknown (e.g. the
+ * file could not be read). key is the dotted path of the offending key, e.g.
+ * "layers[1].grid.level_zero_delta" ("" for the whole document). */
+struct ConfigError {
+  std::string file;
+  int line = 0;
+  int column = 0;
+  std::string key;
+  std::string message;
+
+  /** "file:line:column: key.path: message" (the parts that are unknown are left out). */
+  std::string toString() const;
+};
+
+/** Reads, parses and validates a YAML file. Relative paths in it resolve against its folder. */
+std::expected<Config, ConfigError> loadConfig(const std::filesystem::path& file);
+
+/** Parses and validates YAML text. sourceName names it in errors; relative paths in it resolve
+ * against baseDir. */
+std::expected<Config, ConfigError> parseConfig(std::string_view yamlText,
+                                               std::string_view sourceName,
+                                               const std::filesystem::path& baseDir);
+
+/** The embedded default (config/examples/default.yaml, compiled in) over the bundled data in
+ * dataDir (its relative paths resolve against dataDir), with the cache at cacheRoot (empty: the
+ * default cache root). Does not check that the data files exist: call validate(). */
 Config embeddedDefault(const std::filesystem::path& dataDir,
                        const std::filesystem::path& cacheRoot);
 
-/** Checks a configuration: unique layer names, valid grids, known formats, existing upstream
- * files. The message names the layer and the field. */
+/** The text of the embedded default YAML. */
+std::string_view embeddedDefaultYaml() noexcept;
+
+/** Checks a configuration: unique names, upstream references, valid grids, known formats, kinds
+ * and encodings, existing local upstream files, http(s) URLs, positive durations, limits. The
+ * message names the layer or upstream and the field. loadConfig / parseConfig run it too. */
 std::expected<void, std::string> validate(const Config& config);
 
 /** The default cache root: $TELLUS_CACHE, else $XDG_CACHE_HOME/tellus, else ~/.cache/tellus. */
 std::filesystem::path defaultCacheRoot();
+
+/** A duration as written in a configuration: an integer and a unit, ms, s, m, h or d ("500ms",
+ * "30s", "5m", "12h", "30d"); a bare "0" is zero. std::nullopt for anything else or on overflow. */
+std::optional<std::chrono::milliseconds> parseDurationText(std::string_view text) noexcept;
+
+/** A size in bytes: an integer, optionally with B, KB, MB, GB, TB (powers of 1000) or KiB, MiB,
+ * GiB, TiB (powers of 1024): "1000000", "512MiB", "10GiB". std::nullopt on anything else or on
+ * overflow of 64 bits. */
+std::optional<std::uint64_t> parseSizeText(std::string_view text) noexcept;
 
 } // namespace tellus

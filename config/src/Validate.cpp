@@ -1,0 +1,297 @@
+// Validation of a typed configuration: what YAML types cannot say (cross references, grids,
+// formats, ranges, files). Each problem names its YAML key so that the parser can point at the
+// line.
+
+#include "ConfigInternal.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <system_error>
+
+namespace tellus {
+namespace detail {
+
+namespace {
+
+std::string str(std::int64_t v) {
+  return std::to_string(v);
+}
+
+bool hasControl(std::string_view s) noexcept {
+  return std::any_of(s.begin(), s.end(), [](char c) {
+    const auto u = static_cast<unsigned char>(c);
+    return u < 0x20 || u == 0x7f;
+  });
+}
+
+/** The file suffix of a known format, or "". */
+std::string_view extensionOf(std::string_view mimeType) noexcept {
+  if (mimeType == "image/jpeg") return "jpg";
+  if (mimeType == "image/png") return "png";
+  if (mimeType == "application/bil16") return "bil";
+  if (mimeType == "image/tiff") return "tif";
+  return {};
+}
+
+/** TileGrid's field names in YAML words, and the key of the grid field the message is about. */
+std::pair<std::string, std::string> gridMessage(const std::string& message) {
+  std::string key = "grid";
+  if (message.starts_with("levelZeroDeltaDeg"))
+    key = "grid.level_zero_delta";
+  else if (message.starts_with("numLevels"))
+    key = "grid.levels";
+  else if (message.starts_with("tile"))
+    key = "grid.tile_size";
+  else if (message.starts_with("sector"))
+    key = "grid.sector";
+  std::string m = message;
+  const std::pair<std::string_view, std::string_view> words[] = {
+      {"levelZeroDeltaDeg", "level_zero_delta"},
+      {"numLevels", "levels"},
+      {"tileWidth", "tile width"},
+      {"tileHeight", "tile height"},
+      {"sector.", "sector "},
+  };
+  for (const auto& [from, to] : words) {
+    for (auto pos = m.find(from); pos != std::string::npos; pos = m.find(from, pos + to.size()))
+      m.replace(pos, from.size(), to);
+  }
+  return {key, m};
+}
+
+using UpstreamIndex = std::map<std::string_view, const UpstreamConfig*>;
+
+std::optional<ValidationIssue> checkServer(const ServerSettings& s) {
+  const auto issue = [](std::string key, std::string message) {
+    return ValidationIssue{"server." + key, "server", std::move(message)};
+  };
+  if (s.listenHost.empty() || hasControl(s.listenHost) ||
+      s.listenHost.find(' ') != std::string::npos)
+    return issue("listen", "the listen host '" + s.listenHost + "' is empty or has blanks");
+  if (!s.publicUrl.empty()) {
+    if (auto e = checkHttpUrl(s.publicUrl)) return issue("public_url", *e);
+  }
+  if (hasControl(s.cors)) return issue("cors", "has a control character");
+  const ServerLimits& l = s.limits;
+  if (l.maxConnections < 1 || l.maxConnections > 1'000'000)
+    return issue("limits.max_connections", "must be in [1, 1000000], got " + str(l.maxConnections));
+  if (l.maxHeaderBytes < 256 || l.maxHeaderBytes > (1U << 20))
+    return issue("limits.max_header_bytes",
+                 "must be in [256, 1048576] bytes, got " +
+                     std::to_string(static_cast<unsigned long long>(l.maxHeaderBytes)));
+  if (l.maxParamBytes < 1 || l.maxParamBytes > l.maxHeaderBytes)
+    return issue("limits.max_param_bytes",
+                 "must be in [1, max_header_bytes], got " +
+                     std::to_string(static_cast<unsigned long long>(l.maxParamBytes)));
+  if (l.maxWidth < 1 || l.maxWidth > 65536)
+    return issue("limits.max_width", "must be in [1, 65536] pixels, got " + str(l.maxWidth));
+  if (l.maxHeight < 1 || l.maxHeight > 65536)
+    return issue("limits.max_height", "must be in [1, 65536] pixels, got " + str(l.maxHeight));
+  if (l.requestTimeout.count() <= 0)
+    return issue("limits.request_timeout", "must be longer than 0");
+  if (l.keepaliveTimeout.count() < 0)
+    return issue("limits.keepalive_timeout", "must not be negative");
+  if (!std::isfinite(l.requestsPerSecond) || l.requestsPerSecond < 0.0)
+    return issue("limits.requests_per_second", "must be a finite number >= 0");
+  return std::nullopt;
+}
+
+std::optional<ValidationIssue>
+checkUpstream(const UpstreamConfig& u, std::size_t i, bool checkFiles) {
+  const std::string base = "upstreams[" + std::to_string(i) + "]";
+  const std::string subject = "upstream '" + u.name + "'";
+  const auto issue = [&](const std::string& key, std::string message) {
+    return ValidationIssue{base + (key.empty() ? "" : "." + key), subject, std::move(message)};
+  };
+  if (!isValidName(u.name))
+    return issue("name", "the name must be non-empty and use only A-Z a-z 0-9 _ . -");
+  if (u.type == UpstreamConfig::Type::Local) {
+    if (u.path.empty()) return issue("path", "a local upstream needs one");
+    if (checkFiles) {
+      std::error_code ec;
+      const auto st = std::filesystem::status(u.path, ec);
+      if (!std::filesystem::exists(st))
+        return issue("path", "the file " + u.path.string() + " does not exist");
+      if (!std::filesystem::is_regular_file(st))
+        return issue("path", u.path.string() + " is not a regular file");
+    }
+    return std::nullopt;
+  }
+  if (u.url.empty()) return issue("url", "a wms / worldwind upstream needs one");
+  if (auto e = checkHttpUrl(u.url)) return issue("url", *e);
+  if (u.type == UpstreamConfig::Type::Wms) {
+    if (u.wmsVersion != "1.1.1" && u.wmsVersion != "1.3.0")
+      return issue("version", "must be 1.1.1 or 1.3.0, got '" + u.wmsVersion + "'");
+    if (u.crs != "EPSG:4326" && u.crs != "CRS:84")
+      return issue("crs", "must be EPSG:4326 or CRS:84, got '" + u.crs + "'");
+  }
+  if (u.connectTimeout.count() <= 0) return issue("connect_timeout", "must be longer than 0");
+  if (u.timeout.count() <= 0) return issue("timeout", "must be longer than 0");
+  if (u.retryBackoff.count() < 0) return issue("retry_backoff", "must not be negative");
+  if (u.openInterval.count() <= 0) return issue("open_interval", "must be longer than 0");
+  if (u.maxConnections < 1 || u.maxConnections > 1024)
+    return issue("max_connections", "must be in [1, 1024], got " + str(u.maxConnections));
+  if (u.retries < 0 || u.retries > 100)
+    return issue("retries", "must be in [0, 100], got " + str(u.retries));
+  if (u.failureThreshold < 1 || u.failureThreshold > 1'000'000)
+    return issue("failure_threshold", "must be in [1, 1000000], got " + str(u.failureThreshold));
+  if (u.headers.size() > 100) return issue("headers", "more than 100 headers");
+  for (const auto& [name, value] : u.headers) {
+    if (!isHttpToken(name))
+      return issue("headers", "'" + name + "' is not a valid HTTP header name");
+    const bool control = std::any_of(value.begin(), value.end(), [](char ch) {
+      const auto b = static_cast<unsigned char>(ch);
+      return (b < 0x20 && ch != '\t') || b == 0x7f;
+    });
+    if (control)
+      return issue("headers." + name, "the value has a control character (CR, LF, NUL ...)");
+  }
+  return std::nullopt;
+}
+
+std::optional<ValidationIssue>
+checkTime(const TimeDimension& t, const std::string& base, const std::string& subject) {
+  const auto issue = [&](const std::string& key, std::string message) {
+    return ValidationIssue{
+        base + ".time" + (key.empty() ? "" : "." + key), subject, std::move(message)};
+  };
+  if (!t.enabled()) {
+    if (!t.defaultValue.empty()) return issue("default", "a default without values or a period");
+    return std::nullopt;
+  }
+  std::optional<TimePeriod> period;
+  if (!t.period.empty()) {
+    auto p = parseTimePeriod(t.period, TimeDimension::kMaxExpandedValues);
+    if (!p) return issue("period", p.error());
+    period = std::move(*p);
+  }
+  std::set<std::string_view> seen;
+  for (const auto& v : t.values) {
+    if (v.empty() || hasControl(v) || v.find_first_of(", ") != std::string::npos)
+      return issue("values", "'" + v + "' is empty or has a comma, a blank or a control character");
+    if (!seen.insert(v).second) return issue("values", "'" + v + "' is listed twice");
+  }
+  if (t.defaultValue.empty()) return issue("default", "the default is empty");
+  if (!t.values.empty()) {
+    if (!seen.contains(t.defaultValue))
+      return issue("default", "the default '" + t.defaultValue + "' is not one of the values");
+  } else if (period) {
+    const auto d = parseIsoInstant(t.defaultValue);
+    if (!d || d->seconds < period->start.seconds || d->seconds > period->end.seconds)
+      return issue("default",
+                   "the default '" + t.defaultValue + "' is not a time inside the period");
+  }
+  return std::nullopt;
+}
+
+std::optional<ValidationIssue>
+checkLayer(const Config& c, const UpstreamIndex& upstreams, const LayerConfig& l, std::size_t i) {
+  const std::string base = "layers[" + std::to_string(i) + "]";
+  const std::string subject = "layer '" + l.name + "'";
+  const auto issue = [&](const std::string& key, std::string message) {
+    return ValidationIssue{base + (key.empty() ? "" : "." + key), subject, std::move(message)};
+  };
+  if (!isValidName(l.name))
+    return issue("name", "the name must be non-empty and use only A-Z a-z 0-9 _ . -");
+  const auto found = upstreams.find(l.upstream);
+  const UpstreamConfig* up = found == upstreams.end() ? nullptr : found->second;
+  if (!up) {
+    std::string names;
+    for (std::size_t k = 0; k < c.upstreams.size() && k < 10; ++k)
+      names += (names.empty() ? "" : ", ") + c.upstreams[k].name;
+    if (c.upstreams.size() > 10) names += ", ...";
+    return issue("upstream",
+                 "no upstream named '" + l.upstream +
+                     "' (upstreams: " + (names.empty() ? "none" : names) + ")");
+  }
+  if (l.dataset.name != l.name)
+    return issue("", "dataset.name '" + l.dataset.name + "' differs from the layer name");
+  if (l.dataset.server != l.upstream)
+    return issue("", "dataset.server '" + l.dataset.server + "' differs from the upstream name");
+  if (auto g = TileGrid::create(l.dataset.grid); !g) {
+    auto [key, message] = gridMessage(g.error());
+    return issue(key, message);
+  }
+  const std::string& m = l.dataset.mimeType;
+  const std::string_view ext = extensionOf(m);
+  if (ext.empty())
+    return issue("format",
+                 "'" + m + "' is not one of image/jpeg, image/png, application/bil16, image/tiff");
+  if (l.dataset.extension != ext)
+    return issue("format",
+                 "extension '" + l.dataset.extension + "' does not match format " + m +
+                     " (expected " + std::string(ext) + ")");
+  if (hasControl(l.dataset.style)) return issue("style", "has a control character");
+  if (l.upstreamLayer.empty() || hasControl(l.upstreamLayer))
+    return issue("upstream_layer", "is empty or has a control character");
+  if (l.kind == LayerKind::Imagery && m == "application/bil16")
+    return issue("kind", "format application/bil16 carries heights: the kind must be elevation");
+  if (l.kind == LayerKind::Elevation) {
+    if (m == "image/jpeg")
+      return issue("format", "an elevation layer needs a lossless format, not image/jpeg");
+    const auto enc = l.elevation.encoding;
+    const bool matches = (enc == ElevationEncoding::Bil16 && m == "application/bil16") ||
+                         (enc == ElevationEncoding::Int16Tiff && m == "image/tiff") ||
+                         (enc == ElevationEncoding::Png16 && m == "image/png");
+    if (!matches)
+      return issue("elevation.encoding",
+                   "the encoding does not fit format " + m +
+                       " (bil16: application/bil16, int16-tiff: image/tiff, png16: image/png)");
+    if (!std::isfinite(l.elevation.scale) || l.elevation.scale == 0.0)
+      return issue("elevation.scale", "must be a finite number other than 0");
+    if (!std::isfinite(l.elevation.offset))
+      return issue("elevation.offset", "must be a finite number");
+    if (!std::isfinite(l.elevation.noData))
+      return issue("elevation.no_data", "must be a finite number");
+  }
+  if (l.firstLevel != 0) {
+    if (up->type != UpstreamConfig::Type::WorldWind)
+      return issue("grid.first_level", "applies to worldwind upstreams only");
+    if (l.firstLevel < 0 || l.firstLevel > kMaxLevel + 1 - l.dataset.grid.numLevels)
+      return issue("grid.first_level",
+                   "must be in [0, " + str(kMaxLevel + 1 - l.dataset.grid.numLevels) +
+                       "] so that first_level + levels <= " + str(kMaxLevel + 1) + ", got " +
+                       str(l.firstLevel));
+  }
+  if (auto t = checkTime(l.time, base, subject)) return t;
+  if (l.ttl.count() < 0) return issue("cache.ttl", "must not be negative");
+  if (l.maxAge.count() < 0) return issue("cache.max_age", "must not be negative");
+  return std::nullopt;
+}
+
+} // namespace
+
+std::optional<ValidationIssue> findIssue(const Config& c, bool checkFiles) {
+  if (auto s = checkServer(c.server)) return s;
+  if (c.cache.root.empty()) return ValidationIssue{"cache.root", "cache", "is empty"};
+  UpstreamIndex upstreams;
+  for (std::size_t i = 0; i < c.upstreams.size(); ++i) {
+    const auto& u = c.upstreams[i];
+    if (auto e = checkUpstream(u, i, checkFiles)) return e;
+    if (!upstreams.emplace(u.name, &u).second)
+      return ValidationIssue{"upstreams[" + std::to_string(i) + "].name",
+                             "upstream '" + u.name + "'",
+                             "the name is used twice"};
+  }
+  std::set<std::string_view> layers;
+  for (std::size_t i = 0; i < c.layers.size(); ++i) {
+    const auto& l = c.layers[i];
+    if (auto e = checkLayer(c, upstreams, l, i)) return e;
+    if (!layers.insert(l.name).second)
+      return ValidationIssue{"layers[" + std::to_string(i) + "].name",
+                             "layer '" + l.name + "'",
+                             "the name is used twice"};
+  }
+  return std::nullopt;
+}
+
+} // namespace detail
+
+std::expected<void, std::string> validate(const Config& config) {
+  if (auto issue = detail::findIssue(config, true)) return std::unexpected(issue->text());
+  return {};
+}
+
+} // namespace tellus

@@ -1,0 +1,132 @@
+#pragma once
+/**
+ * @file Fetcher.hpp
+ * @brief The upstream fetcher: HTTP(S) GETs over one libcurl multi handle driven by one thread,
+ * with per-upstream concurrency caps, retries with jittered exponential backoff and a circuit
+ * breaker per upstream. libcurl stays inside proxy/src/Fetcher.cpp.
+ */
+
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <expected>
+#include <functional>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace tellus {
+
+/** How one upstream (a named server) is talked to. */
+struct UpstreamPolicy {
+  int maxConnections = 4; ///< concurrent transfers to this upstream; the rest wait FIFO
+  std::chrono::milliseconds connectTimeout{5000};
+  std::chrono::milliseconds timeout{30000}; ///< one attempt, connect included
+  int retries = 3; ///< extra attempts for 5xx, timeouts, connect, truncation
+  std::chrono::milliseconds retryBackoff{200}; ///< base: retry n waits random(0, base * 2^n)
+  int failureThreshold = 5; ///< consecutive failed fetches (after retries) that open the breaker
+  std::chrono::milliseconds openInterval{30000}; ///< open breaker: no traffic for this long
+  std::size_t maxBodyBytes = 64 << 20;
+  std::vector<std::pair<std::string, std::string>> headers; ///< sent with every request
+};
+
+struct FetchRequest {
+  std::string upstream; ///< the unit of concurrency caps and circuit breaking
+  std::string url;      ///< http or https only
+  std::string ifNoneMatch;
+  std::string ifModifiedSince;
+};
+
+/** An HTTP answer: 2xx, 304, or any 4xx (the caller decides: 304 revalidated, 404 absent). */
+struct FetchResponse {
+  int status = 0;
+  std::string contentType;
+  std::vector<std::byte> body;
+  std::string etag;
+  std::string lastModified;
+  std::string cacheControl;
+  std::string expires;
+  int attempts = 0;
+  std::chrono::milliseconds elapsed{0}; ///< from fetch() to completion, retries included
+};
+
+enum class FetchErrc {
+  Timeout,     ///< an attempt ran past its timeout (after retries)
+  Connect,     ///< refused, DNS failure, reset, nothing received, TLS handshake (after retries)
+  CircuitOpen, ///< the upstream's breaker is open: no network was touched
+  HttpError,   ///< 5xx after retries, or another status that is not 2xx/304/4xx (3xx loops)
+  Truncated,   ///< the body ended before its announced length (after retries)
+  TooLarge,    ///< the body exceeds UpstreamPolicy::maxBodyBytes (not retried)
+  Cancelled,   ///< the fetcher was destroyed first
+  Unknown      ///< bad URL, unsupported protocol, invalid header, internal failure
+};
+
+struct FetchError {
+  FetchErrc code = FetchErrc::Unknown;
+  std::string message;
+  int httpStatus = 0; ///< for HttpError
+  int attempts = 0;   ///< 0 when no request was sent (CircuitOpen, Cancelled before start)
+};
+
+using FetchResult = std::expected<FetchResponse, FetchError>;
+
+enum class BreakerState { Closed, Open, HalfOpen };
+
+/** A short name for logs: "timeout", "connect", "circuit-open", ... */
+const char* toString(FetchErrc code) noexcept;
+
+/**
+ * @brief Fetches URLs on one background thread (libcurl multi, curl_multi_poll).
+ *
+ * Thread safety: every method may be called from any thread. `done` callbacks run on the fetcher
+ * thread, exactly once per fetch(), and must not block for long; they may call fetch(). An
+ * exception thrown by a callback is swallowed (it never crosses into the fetcher thread's loop).
+ *
+ * Retries: 5xx, timeouts, connection failures and truncated bodies are retried up to
+ * `retries` times after random(0, retryBackoff * 2^n) (timers on the fetcher thread, nothing
+ * sleeps). 304 and 4xx are answers, not failures, and are never retried.
+ *
+ * Circuit breaker: `failureThreshold` consecutive failed fetches (transport failures, 5xx; after
+ * retries) open it; fetches then fail at once with CircuitOpen until `openInterval` has passed;
+ * then one probe fetch (a single attempt) goes through (HalfOpen) while others still fail fast;
+ * the probe's success closes the breaker, its failure re-opens it for another interval.
+ */
+class Fetcher {
+public:
+  /** Starts the fetcher thread. `maxTotalConnections` caps transfers over all upstreams (and sizes
+   * libcurl's connection cache). Throws std::runtime_error only if libcurl cannot initialise. */
+  explicit Fetcher(std::size_t maxTotalConnections = 64);
+  /** Stops the thread; pending, waiting and running fetches complete with Cancelled. */
+  ~Fetcher();
+  Fetcher(const Fetcher&) = delete;
+  Fetcher& operator=(const Fetcher&) = delete;
+
+  /** Sets an upstream's policy (upstreams without one use the defaults). Applies to fetches
+   * issued afterwards; the concurrency cap applies at once. */
+  void setPolicy(const std::string& upstream, UpstreamPolicy policy);
+
+  /** Queues a GET; never blocks. `done` runs on the fetcher thread exactly once. */
+  void fetch(FetchRequest request, std::function<void(FetchResult&&)> done);
+
+  /** The breaker as a new fetch would meet it: an open breaker whose interval has passed reads
+   * HalfOpen (the next fetch is the probe). */
+  BreakerState breaker(const std::string& upstream) const;
+  /** False while the breaker is open and its interval has not passed (fetches fail with
+   * CircuitOpen); true when closed or when a half-open probe may go or is going. */
+  bool reachable(const std::string& upstream) const;
+
+  struct Stats {
+    std::uint64_t requests = 0; ///< fetch() calls
+    std::uint64_t retries = 0;  ///< extra attempts started
+    std::uint64_t failures = 0; ///< fetches that completed with an error (CircuitOpen included)
+    std::uint64_t inFlight = 0; ///< fetches accepted and not yet completed (queued included)
+  };
+  Stats stats(const std::string& upstream) const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+} // namespace tellus

@@ -1,0 +1,52 @@
+#pragma once
+/**
+ * @file ProxyFrontEnd.hpp
+ * @brief The protocol front end of `tellus serve`: routes HTTP requests to WMS (GetCapabilities,
+ * tile-aligned GetMap), World Wind tiles (`/wwtile?T=&L=&X=&Y=`) and the static World Wind layout
+ * (`/tiles/<layer>/<level>/<row>/<row>_<col>.<ext>`), and is the one place where HTTP status codes,
+ * caching headers and OGC exception bodies are made.
+ */
+
+#include <tellus/proxy/HttpServer.hpp>
+#include <tellus/proxy/TileService.hpp>
+#include <tellus/proxy/Wms.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+namespace tellus {
+
+struct FrontEndOptions {
+  std::string title = "tellus tile cache";
+  std::string publicUrl;   ///< base URL for capabilities; "" = from Host / X-Forwarded-*
+  std::string cors = "*";  ///< Access-Control-Allow-Origin; "" = none
+  bool exceptionsHttpStatus = false; ///< WMS exceptions with 4xx/5xx instead of 200
+  enum class OfflineResponse { Exception, Blank } offlineResponse = OfflineResponse::Exception;
+  WmsLimits limits;
+  std::size_t maxParamBytes = 2048;
+  std::size_t maxQueryBytes = 16384;
+  std::string updateSequence; ///< capabilities UpdateSequence ("" = derived from the start time)
+};
+
+class ProxyFrontEnd {
+public:
+  ProxyFrontEnd(TileService& tiles, FrontEndOptions options);
+  ~ProxyFrontEnd();
+
+  /** The HttpHandler: never throws, answers exactly once. */
+  void handle(HttpRequest&& request, Responder respond);
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/** "Sun, 06 Nov 1994 08:49:37 GMT" for a Unix time in milliseconds (whole seconds). */
+std::string formatHttpDate(std::int64_t unixMillis);
+/** Parses an IMF-fixdate (also RFC 850 and asctime forms); milliseconds since the epoch. */
+std::optional<std::int64_t> parseHttpDate(std::string_view text);
+/** RFC 9110 If-None-Match: `*`, or a list of (weak or strong) tags compared weakly with `etag`. */
+bool ifNoneMatchHits(std::string_view ifNoneMatch, std::string_view etag);
+
+} // namespace tellus

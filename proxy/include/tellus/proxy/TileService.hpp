@@ -1,0 +1,123 @@
+#pragma once
+/**
+ * @file TileService.hpp
+ * @brief Cache-through tiles: look in the cache, fetch a miss from the layer's upstream once
+ * (single-flight), keep only real tiles, remember "absent", revalidate expired tiles and serve them
+ * stale when the refresh fails, and answer at once while offline.
+ *
+ * It is also an ITileSource, so the planet renderer can use it in-process.
+ */
+
+#include <tellus/cache/TileCache.hpp>
+#include <tellus/cache/TileGrid.hpp>
+#include <tellus/cache/TileSource.hpp>
+#include <tellus/proxy/Fetcher.hpp>
+
+#include <chrono>
+#include <cstdint>
+#include <expected>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace tellus {
+
+/** An upstream as the proxy uses it (the composition root maps the configuration onto this). */
+struct UpstreamSpec {
+  enum class Type { Local, Wms, WorldWind };
+  std::string name;
+  Type type = Type::Local;
+  std::filesystem::path path; ///< Local: a georeferenced image
+  std::string url;            ///< Wms / WorldWind: base URL (may hold a query)
+  std::string wmsVersion = "1.3.0";
+  std::string crs = "EPSG:4326"; ///< EPSG:4326 or CRS:84
+  UpstreamPolicy policy;
+};
+
+/** A layer as the proxy serves it. */
+struct LayerSpec {
+  std::string name;
+  std::string title;
+  std::string abstract;
+  DatasetSpec dataset; ///< server = upstream name, name = layer name, time = "" (per request)
+  std::string upstream;
+  std::string upstreamLayer; ///< WMS LAYERS / World Wind T= (default: name)
+  std::int32_t firstLevel = 0;
+  bool elevation = false;
+  std::int16_t noData = -32768;
+  std::chrono::milliseconds ttl{0}; ///< 0: tiles never expire
+  std::chrono::seconds maxAge{86400};
+  std::vector<std::string> timeValues; ///< empty: no TIME dimension (or a period, see timePeriod)
+  std::string timePeriod;
+  std::string timeDefault;
+};
+
+/** Where an answer came from (the X-Cache header). */
+enum class TileOrigin { Hit, Miss, Stale, Offline };
+
+struct TileAnswer {
+  enum class Kind { Tile, Absent, Error };
+  Kind kind = Kind::Error;
+  TileOrigin origin = TileOrigin::Miss;
+  std::vector<std::byte> bytes;
+  std::string contentType;
+  UnixMillis fetchedAt = 0;    ///< Last-Modified
+  std::string etag;            ///< strong validator of these bytes, quoted
+  std::string message;         ///< Absent/Error: why (safe to show a client)
+};
+
+struct TileServiceOptions {
+  bool offline = false;                          ///< never contact upstreams
+  std::chrono::milliseconds absentRetry{3600000}; ///< how long "no tile here" is believed
+  int renderThreads = 2;                         ///< workers for local rasters
+};
+
+class TileService final : public ITileSource {
+public:
+  /** Registers every layer's dataset (time "") and opens local rasters; fails with a message naming
+   * the layer or upstream. The cache and fetcher must outlive the service. */
+  static std::expected<std::unique_ptr<TileService>, std::string>
+  create(TileCache& cache, Fetcher& fetcher, std::vector<UpstreamSpec> upstreams,
+         std::vector<LayerSpec> layers, TileServiceOptions options);
+  ~TileService() override;
+
+  const std::vector<LayerSpec>& layers() const noexcept;
+  const LayerSpec* layer(std::string_view name) const noexcept;
+  /** The grid of a layer (nullptr for an unknown layer). */
+  const TileGrid* grid(std::string_view layer) const noexcept;
+
+  /** One tile; `done` runs exactly once, possibly on another thread, possibly before return.
+   * `time` must already be validated ("" = no time). */
+  void getTile(std::string_view layer, std::string_view time, const TileKey& key,
+               std::function<void(TileAnswer&&)> done);
+
+  void setOffline(bool offline) noexcept;
+  /** Explicitly offline, or every remote upstream's breaker open. */
+  bool offline() const noexcept;
+
+  /** Upstream requests started for tiles (not counting revalidations), for tests and metrics. */
+  std::uint64_t upstreamFetches() const noexcept;
+
+  // ITileSource
+  std::optional<DatasetSpec> describe(std::string_view layer, std::string_view time = {}) const override;
+  TileRequestId request(const TileAddress& address, double priority, Callback done) override;
+  void reprioritize(TileRequestId id, double priority) override;
+  bool cancel(TileRequestId id) override;
+
+  /** The WMS or World Wind URL that fetches a tile from a remote upstream (for tests and logs). */
+  static std::string upstreamUrl(const UpstreamSpec& upstream, const LayerSpec& layer,
+                                 const Sector& sector, const TileKey& key, std::string_view time);
+
+  struct Impl;
+
+private:
+  explicit TileService(std::shared_ptr<Impl> impl);
+  std::shared_ptr<Impl> impl_; // shared: fetch callbacks hold it weakly
+};
+
+const char* toString(TileOrigin origin) noexcept;
+
+} // namespace tellus

@@ -1,0 +1,540 @@
+#include <tellus/cache/RequestQueue.hpp>
+#include <tellus/cache/TilePath.hpp>
+#include <tellus/proxy/LocalRasterSource.hpp>
+#include <tellus/proxy/TileService.hpp>
+#include <tellus/proxy/TileValidation.hpp>
+
+#include <atomic>
+#include <charconv>
+#include <condition_variable>
+#include <cstdio>
+#include <deque>
+#include <map>
+#include <mutex>
+#include <thread>
+#include <unordered_map>
+
+namespace tellus {
+
+const char* toString(TileOrigin origin) noexcept {
+  switch (origin) {
+  case TileOrigin::Hit: return "HIT";
+  case TileOrigin::Miss: return "MISS";
+  case TileOrigin::Stale: return "STALE";
+  case TileOrigin::Offline: return "OFFLINE";
+  }
+  return "MISS";
+}
+
+namespace {
+
+/** A fixed set of worker threads for CPU work (rendering local rasters, validating and storing
+ * fetched tiles) so that neither the HTTP loop nor the fetcher thread waits for it. */
+class WorkerPool {
+public:
+  explicit WorkerPool(int n) {
+    for (int i = 0; i < std::max(1, n); ++i) threads_.emplace_back([this] { loop(); });
+  }
+  ~WorkerPool() {
+    {
+      std::lock_guard lock(m_);
+      stop_ = true;
+    }
+    cv_.notify_all();
+    for (auto& t : threads_) t.join();
+  }
+  void post(std::function<void()> job) {
+    {
+      std::lock_guard lock(m_);
+      jobs_.push_back(std::move(job));
+    }
+    cv_.notify_one();
+  }
+
+private:
+  void loop() {
+    for (;;) {
+      std::function<void()> job;
+      {
+        std::unique_lock lock(m_);
+        cv_.wait(lock, [this] { return stop_ || !jobs_.empty(); });
+        if (jobs_.empty()) return; // stopping with nothing left to do
+        job = std::move(jobs_.front());
+        jobs_.pop_front();
+      }
+      job();
+    }
+  }
+  std::mutex m_;
+  std::condition_variable cv_;
+  std::deque<std::function<void()>> jobs_;
+  bool stop_ = false;
+  std::vector<std::thread> threads_;
+};
+
+std::string formatNumber(double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+std::string urlEncode(std::string_view s) {
+  static constexpr char kHex[] = "0123456789ABCDEF";
+  std::string out;
+  for (const char ch : s) {
+    const auto c = static_cast<unsigned char>(ch);
+    if ((c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' ||
+        c == '_' || c == '.' || c == '~' || c == ':' || c == ',') {
+      out.push_back(ch);
+    } else {
+      out.push_back('%');
+      out.push_back(kHex[c >> 4]);
+      out.push_back(kHex[c & 15]);
+    }
+  }
+  return out;
+}
+
+std::string strongEtag(const std::string& folder, const TileKey& k, UnixMillis fetchedAt, std::size_t size) {
+  char buf[80];
+  std::snprintf(buf, sizeof buf, "\"%016llx-%llx-%zx\"",
+                static_cast<unsigned long long>(stableHash64(folder + "/" + tileRelativePath(k, ""))),
+                static_cast<unsigned long long>(fetchedAt), size);
+  return buf;
+}
+
+struct FlightKey {
+  DatasetId dataset;
+  TileKey key;
+  bool operator==(const FlightKey&) const = default;
+};
+struct FlightKeyHash {
+  std::size_t operator()(const FlightKey& f) const noexcept {
+    return TileKeyHash{}(f.key) ^ static_cast<std::size_t>(f.dataset) * 0x9E3779B97F4A7C15u;
+  }
+};
+
+using Done = std::function<void(TileAnswer&&)>;
+
+} // namespace
+
+struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
+  TileCache& cache;
+  Fetcher& fetcher;
+  TileServiceOptions options;
+  std::vector<LayerSpec> layers;
+  std::map<std::string, std::size_t, std::less<>> layerIndex;
+  std::vector<TileGrid> grids; // parallel to layers
+  std::map<std::string, UpstreamSpec, std::less<>> upstreams;
+  std::map<std::string, LocalRasterSource, std::less<>> rasters; // by upstream name
+  std::atomic<bool> forcedOffline{false};
+  std::atomic<std::uint64_t> fetches{0};
+
+  // (layer, time) -> dataset id, registered on first use.
+  std::mutex datasetsMutex;
+  std::map<std::pair<std::string, std::string>, std::pair<DatasetId, std::string>> datasets;
+
+  std::mutex flightsMutex;
+  std::unordered_map<FlightKey, std::vector<Done>, FlightKeyHash> flights;
+
+  // ITileSource: a bounded number of tiles in flight, the rest queued by priority.
+  struct Queued {
+    TileAddress address;
+    Callback done;
+  };
+  std::mutex queueMutex;
+  RequestQueue<Queued> queue;
+  int inFlight = 0;
+  static constexpr int kMaxInFlight = 32;
+
+  std::unique_ptr<WorkerPool> workers; // last member: destroyed first, while the rest still lives
+
+  Impl(TileCache& c, Fetcher& f, TileServiceOptions o) : cache(c), fetcher(f), options(o) {}
+
+  std::expected<std::pair<DatasetId, std::string>, std::string> dataset(const LayerSpec& l,
+                                                                        std::string_view time) {
+    std::lock_guard lock(datasetsMutex);
+    const auto key = std::make_pair(l.name, std::string(time));
+    if (const auto it = datasets.find(key); it != datasets.end()) return it->second;
+    DatasetSpec spec = l.dataset;
+    spec.time = std::string(time);
+    auto id = cache.registerDataset(spec);
+    if (!id) return std::unexpected("cache: " + id.error().message);
+    const auto value = std::make_pair(*id, datasetFolder(spec));
+    datasets.emplace(key, value);
+    return value;
+  }
+
+  bool remoteReachable(const UpstreamSpec& u) const {
+    return u.type == UpstreamSpec::Type::Local || fetcher.reachable(u.name);
+  }
+
+  /** Joins a flight; true when the caller is the first and must start the work. */
+  bool join(const FlightKey& k, Done done) {
+    std::lock_guard lock(flightsMutex);
+    auto [it, inserted] = flights.try_emplace(k);
+    it->second.push_back(std::move(done));
+    return inserted;
+  }
+
+  void land(const FlightKey& k, TileAnswer&& answer) {
+    std::vector<Done> waiters;
+    {
+      std::lock_guard lock(flightsMutex);
+      const auto it = flights.find(k);
+      if (it == flights.end()) return;
+      waiters = std::move(it->second);
+      flights.erase(it);
+    }
+    for (std::size_t i = 0; i + 1 < waiters.size(); ++i) {
+      TileAnswer copy = answer;
+      waiters[i](std::move(copy));
+    }
+    if (!waiters.empty()) waiters.back()(std::move(answer));
+  }
+
+  static TileAnswer absent(TileOrigin origin, std::string message) {
+    TileAnswer a;
+    a.kind = TileAnswer::Kind::Absent;
+    a.origin = origin;
+    a.message = std::move(message);
+    return a;
+  }
+  static TileAnswer error(std::string message) {
+    TileAnswer a;
+    a.kind = TileAnswer::Kind::Error;
+    a.message = std::move(message);
+    return a;
+  }
+  static TileAnswer tile(TileOrigin origin, std::vector<std::byte> bytes, std::string contentType,
+                         UnixMillis fetchedAt, const std::string& folder, const TileKey& key) {
+    TileAnswer a;
+    a.kind = TileAnswer::Kind::Tile;
+    a.origin = origin;
+    a.etag = strongEtag(folder, key, fetchedAt, bytes.size());
+    a.bytes = std::move(bytes);
+    a.contentType = std::move(contentType);
+    a.fetchedAt = fetchedAt;
+    return a;
+  }
+
+  /** Stores a good tile and lands the flight (worker thread). */
+  void store(const FlightKey& fk, const std::string& folder, std::vector<std::byte> bytes, TileMeta meta) {
+    if (auto put = cache.put(fk.dataset, fk.key, bytes, meta); !put) {
+      // A full disk must not fail the client: serve what we have, the error is in the log.
+      std::fprintf(stderr, "tellus: cannot cache tile: %s\n", put.error().message.c_str());
+    }
+    land(fk, tile(TileOrigin::Miss, std::move(bytes), meta.contentType, meta.fetchedAt, folder, fk.key));
+  }
+
+  TileMeta freshMeta(const LayerSpec& l) const {
+    TileMeta m;
+    m.contentType = l.dataset.mimeType;
+    m.fetchedAt = unixMillisNow();
+    if (l.ttl.count() > 0) m.expiresAt = m.fetchedAt + l.ttl.count();
+    return m;
+  }
+
+  void renderLocal(const FlightKey& fk, const LayerSpec& l, const TileGrid& g, const std::string& folder,
+                   std::optional<CacheLookup> stale) {
+    workers->post([this, fk, &l, &g, folder, stale = std::move(stale)]() mutable {
+      const auto& src = rasters.at(l.upstream);
+      auto bytes = src.renderTile(g.sectorOf(fk.key), g.spec().tileWidth, g.spec().tileHeight,
+                                  l.dataset.mimeType, l.noData);
+      if (!bytes) {
+        if (stale) {
+          land(fk, tile(TileOrigin::Stale, std::move(stale->bytes), stale->meta.contentType,
+                        stale->meta.fetchedAt, folder, fk.key));
+        } else {
+          land(fk, error("cannot render the tile: " + bytes.error()));
+        }
+        return;
+      }
+      store(fk, folder, std::move(*bytes), freshMeta(l));
+    });
+  }
+
+  void fetchRemote(const FlightKey& fk, const LayerSpec& l, const UpstreamSpec& u, const TileGrid& g,
+                   const std::string& folder, std::string time, std::optional<CacheLookup> stale) {
+    FetchRequest req;
+    req.upstream = u.name;
+    req.url = upstreamUrl(u, l, g.sectorOf(fk.key), fk.key, time);
+    if (stale) {
+      req.ifNoneMatch = stale->meta.etag;
+      req.ifModifiedSince = stale->meta.lastModified;
+    }
+    fetches.fetch_add(1);
+    fetcher.fetch(std::move(req), [weak = weak_from_this(), fk, &l, &g, folder,
+                                   stale = std::move(stale)](FetchResult&& r) mutable {
+      // The fetcher thread only hands over: validation and the cache write run on a worker. A
+      // service already destroyed has no one left to answer.
+      const auto self = weak.lock();
+      if (!self) return;
+      self->workers->post([im = self.get(), fk, &l, &g, folder, stale = std::move(stale),
+                           r = std::move(r)]() mutable {
+        im->onFetched(fk, l, g, folder, std::move(stale), std::move(r));
+      });
+    });
+  }
+
+  void onFetched(const FlightKey& fk, const LayerSpec& l, const TileGrid& g, const std::string& folder,
+                 std::optional<CacheLookup> stale, FetchResult&& r) {
+    auto serveStale = [&](const std::string& why) {
+      if (!stale) return false;
+      (void)why;
+      land(fk, tile(TileOrigin::Stale, std::move(stale->bytes), stale->meta.contentType,
+                    stale->meta.fetchedAt, folder, fk.key));
+      return true;
+    };
+    if (!r) {
+      if (serveStale(r.error().message)) return;
+      const auto code = r.error().code;
+      if (code == FetchErrc::Connect || code == FetchErrc::CircuitOpen) {
+        land(fk, absent(TileOrigin::Offline, "the upstream is unreachable and the tile is not cached"));
+      } else {
+        land(fk, error(std::string("the upstream failed (") + toString(code) + ")"));
+      }
+      return;
+    }
+    FetchResponse& resp = *r;
+    if (resp.status == 304 && stale) {
+      TileMeta m = freshMeta(l);
+      m.etag = resp.etag.empty() ? stale->meta.etag : resp.etag;
+      m.lastModified = resp.lastModified.empty() ? stale->meta.lastModified : resp.lastModified;
+      (void)cache.revalidated(fk.dataset, fk.key, m);
+      land(fk, tile(TileOrigin::Hit, std::move(stale->bytes), stale->meta.contentType, m.fetchedAt,
+                    folder, fk.key));
+      return;
+    }
+    if (resp.status == 404) {
+      (void)cache.putAbsent(fk.dataset, fk.key, unixMillisNow() + options.absentRetry.count());
+      land(fk, absent(TileOrigin::Miss, "the upstream has no tile here"));
+      return;
+    }
+    if (resp.status != 200) {
+      if (serveStale("status")) return;
+      land(fk, error("the upstream answered HTTP " + std::to_string(resp.status)));
+      return;
+    }
+    if (auto ok = validateTile(resp, l.dataset.mimeType, g.spec().tileWidth, g.spec().tileHeight); !ok) {
+      // Never cached: an error page, a ServiceException, a truncated or wrong-sized image.
+      if (serveStale(ok.error())) return;
+      land(fk, error("the upstream did not send a tile: " + ok.error()));
+      return;
+    }
+    TileMeta m = freshMeta(l);
+    m.etag = resp.etag;
+    m.lastModified = resp.lastModified;
+    store(fk, folder, std::move(resp.body), std::move(m));
+  }
+
+  void getTile(std::string_view layerName, std::string_view time, const TileKey& key, Done done) {
+    const auto li = layerIndex.find(layerName);
+    if (li == layerIndex.end()) return done(error("no layer '" + std::string(layerName) + "'"));
+    const LayerSpec& l = layers[li->second];
+    const TileGrid& g = grids[li->second];
+    if (key.level < 0 || key.level >= g.numLevels() || !g.isValid(key)) {
+      return done(absent(TileOrigin::Hit, "outside the layer's coverage"));
+    }
+    auto ds = dataset(l, time);
+    if (!ds) return done(error(ds.error()));
+    const auto& [id, folder] = *ds;
+    auto found = cache.get(id, key);
+    if (!found) return done(error("cache: " + std::string(toString(found.error().code))));
+    const UnixMillis now = unixMillisNow();
+    if (found->kind == CacheLookup::Kind::Hit && !found->stale) {
+      return done(tile(TileOrigin::Hit, std::move(found->bytes), std::move(found->meta.contentType),
+                       found->meta.fetchedAt, folder, key));
+    }
+    if (found->kind == CacheLookup::Kind::Absent && found->retryAfter > now) {
+      return done(absent(TileOrigin::Hit, "the upstream has no tile here"));
+    }
+    const UpstreamSpec& u = upstreams.at(l.upstream);
+    const bool isOffline = forcedOffline.load() || !remoteReachable(u);
+    std::optional<CacheLookup> stale;
+    if (found->kind == CacheLookup::Kind::Hit) stale = std::move(*found);
+    if (isOffline) {
+      if (stale) {
+        return done(tile(TileOrigin::Stale, std::move(stale->bytes), std::move(stale->meta.contentType),
+                         stale->meta.fetchedAt, folder, key));
+      }
+      return done(absent(TileOrigin::Offline, "offline: the tile is not cached"));
+    }
+    const FlightKey fk{id, key};
+    if (!join(fk, std::move(done))) return; // someone is already fetching it
+    if (u.type == UpstreamSpec::Type::Local) {
+      renderLocal(fk, l, g, folder, std::move(stale));
+    } else {
+      fetchRemote(fk, l, u, g, folder, std::string(time), std::move(stale));
+    }
+  }
+
+  // ITileSource dispatch: start queued requests while fewer than kMaxInFlight run.
+  void pump() {
+    for (;;) {
+      std::optional<std::pair<TileRequestId, Queued>> next;
+      {
+        std::lock_guard lock(queueMutex);
+        if (inFlight >= kMaxInFlight) return;
+        next = queue.pop();
+        if (!next) return;
+        ++inFlight;
+      }
+      Queued job = std::move(next->second);
+      getTile(job.address.layer, job.address.time, job.address.key,
+              [this, done = std::move(job.done)](TileAnswer&& a) {
+                TileResult r;
+                r.status = a.kind == TileAnswer::Kind::Tile     ? TileStatus::Ok
+                           : a.kind == TileAnswer::Kind::Absent ? TileStatus::Absent
+                                                                : TileStatus::Failed;
+                r.bytes = std::move(a.bytes);
+                r.contentType = std::move(a.contentType);
+                r.message = std::move(a.message);
+                done(std::move(r));
+                {
+                  std::lock_guard lock(queueMutex);
+                  --inFlight;
+                }
+                pump();
+              });
+    }
+  }
+};
+
+std::expected<std::unique_ptr<TileService>, std::string>
+TileService::create(TileCache& cache, Fetcher& fetcher, std::vector<UpstreamSpec> upstreams,
+                    std::vector<LayerSpec> layers, TileServiceOptions options) {
+  auto impl = std::make_shared<Impl>(cache, fetcher, options);
+  for (auto& u : upstreams) {
+    if (u.type == UpstreamSpec::Type::Local) {
+      auto src = LocalRasterSource::open(u.path);
+      if (!src) return std::unexpected("upstream '" + u.name + "': " + src.error());
+      impl->rasters.emplace(u.name, std::move(*src));
+    } else {
+      fetcher.setPolicy(u.name, u.policy);
+    }
+    const std::string name = u.name;
+    impl->upstreams.emplace(name, std::move(u));
+  }
+  for (auto& l : layers) {
+    if (!impl->upstreams.contains(l.upstream)) {
+      return std::unexpected("layer '" + l.name + "': no upstream '" + l.upstream + "'");
+    }
+    auto grid = TileGrid::create(l.dataset.grid);
+    if (!grid) return std::unexpected("layer '" + l.name + "': " + grid.error());
+    if (impl->layerIndex.contains(l.name)) return std::unexpected("layer '" + l.name + "' twice");
+    if (l.upstreamLayer.empty()) l.upstreamLayer = l.name;
+    l.dataset.name = l.name;
+    l.dataset.server = l.upstream;
+    l.dataset.time.clear();
+    if (l.dataset.extension.empty()) l.dataset.extension = extensionForMimeType(l.dataset.mimeType);
+    impl->layerIndex.emplace(l.name, impl->layers.size());
+    impl->grids.push_back(*grid);
+    impl->layers.push_back(std::move(l));
+  }
+  for (const auto& l : impl->layers) {
+    if (auto ds = impl->dataset(l, ""); !ds) return std::unexpected("layer '" + l.name + "': " + ds.error());
+  }
+  impl->forcedOffline = options.offline;
+  impl->workers = std::make_unique<WorkerPool>(options.renderThreads);
+  return std::unique_ptr<TileService>(new TileService(std::move(impl)));
+}
+
+TileService::TileService(std::shared_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+// The workers are Impl's last member: they finish what they hold (landing flights) before anything
+// they use goes away, whichever thread drops the last reference.
+TileService::~TileService() = default;
+
+const std::vector<LayerSpec>& TileService::layers() const noexcept { return impl_->layers; }
+
+const LayerSpec* TileService::layer(std::string_view name) const noexcept {
+  const auto it = impl_->layerIndex.find(name);
+  return it == impl_->layerIndex.end() ? nullptr : &impl_->layers[it->second];
+}
+
+const TileGrid* TileService::grid(std::string_view name) const noexcept {
+  const auto it = impl_->layerIndex.find(name);
+  return it == impl_->layerIndex.end() ? nullptr : &impl_->grids[it->second];
+}
+
+void TileService::getTile(std::string_view layer, std::string_view time, const TileKey& key,
+                          std::function<void(TileAnswer&&)> done) {
+  impl_->getTile(layer, time, key, std::move(done));
+}
+
+void TileService::setOffline(bool offline) noexcept { impl_->forcedOffline = offline; }
+
+bool TileService::offline() const noexcept {
+  if (impl_->forcedOffline) return true;
+  bool anyRemote = false;
+  for (const auto& [name, u] : impl_->upstreams) {
+    if (u.type == UpstreamSpec::Type::Local) continue;
+    anyRemote = true;
+    if (impl_->fetcher.reachable(name)) return false;
+  }
+  return anyRemote;
+}
+
+std::uint64_t TileService::upstreamFetches() const noexcept { return impl_->fetches.load(); }
+
+std::optional<DatasetSpec> TileService::describe(std::string_view layer, std::string_view time) const {
+  const LayerSpec* l = this->layer(layer);
+  if (!l) return std::nullopt;
+  DatasetSpec s = l->dataset;
+  s.time = std::string(time);
+  return s;
+}
+
+TileRequestId TileService::request(const TileAddress& address, double priority, Callback done) {
+  TileRequestId id = 0;
+  {
+    std::lock_guard lock(impl_->queueMutex);
+    id = impl_->queue.push(priority, Impl::Queued{address, std::move(done)});
+  }
+  impl_->pump();
+  return id;
+}
+
+void TileService::reprioritize(TileRequestId id, double priority) {
+  std::lock_guard lock(impl_->queueMutex);
+  impl_->queue.reprioritize(id, priority);
+}
+
+bool TileService::cancel(TileRequestId id) {
+  std::lock_guard lock(impl_->queueMutex);
+  return impl_->queue.cancel(id);
+}
+
+std::string TileService::upstreamUrl(const UpstreamSpec& u, const LayerSpec& l, const Sector& s,
+                                     const TileKey& key, std::string_view time) {
+  std::string url = u.url;
+  if (url.find('?') == std::string::npos) {
+    url += '?';
+  } else if (url.back() != '?' && url.back() != '&') {
+    url += '&';
+  }
+  if (u.type == UpstreamSpec::Type::WorldWind) {
+    url += "T=" + urlEncode(l.upstreamLayer) + "&L=" + std::to_string(key.level + l.firstLevel) +
+           "&X=" + std::to_string(key.col) + "&Y=" + std::to_string(key.row);
+    return url;
+  }
+  const bool v111 = u.wmsVersion == "1.1.1";
+  const bool latLon = !v111 && u.crs == "EPSG:4326"; // WMS 1.3.0 EPSG:4326 is lat/lon
+  const auto& g = l.dataset.grid;
+  url += "SERVICE=WMS&REQUEST=GetMap&VERSION=" + u.wmsVersion;
+  url += "&LAYERS=" + urlEncode(l.upstreamLayer) + "&STYLES=" + urlEncode(l.dataset.style);
+  url += "&FORMAT=" + urlEncode(l.dataset.mimeType);
+  url += "&WIDTH=" + std::to_string(g.tileWidth) + "&HEIGHT=" + std::to_string(g.tileHeight);
+  url += v111 ? "&SRS=EPSG:4326" : "&CRS=" + urlEncode(u.crs);
+  url += "&BBOX=";
+  url += latLon ? formatNumber(s.south) + "," + formatNumber(s.west) + "," + formatNumber(s.north) + "," +
+                      formatNumber(s.east)
+                : formatNumber(s.west) + "," + formatNumber(s.south) + "," + formatNumber(s.east) + "," +
+                      formatNumber(s.north);
+  url += l.dataset.mimeType == "image/png" ? "&TRANSPARENT=TRUE" : "&TRANSPARENT=FALSE";
+  if (!time.empty()) url += "&TIME=" + urlEncode(time);
+  return url;
+}
+
+} // namespace tellus

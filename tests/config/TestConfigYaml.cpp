@@ -1,0 +1,858 @@
+// YAML configurations: the examples, defaults, every key, and errors that name file, line and key.
+
+#include "../support/TempDir.hpp"
+
+#include <tellus/config/Config.hpp>
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <string>
+
+using namespace tellus;
+namespace fs = std::filesystem;
+using std::chrono::milliseconds;
+using std::chrono::seconds;
+
+namespace {
+
+const fs::path kData = TELLUS_TEST_DATA_DIR;
+const fs::path kExamples = kData.parent_path() / "config" / "examples";
+
+/** A valid configuration with a WMS upstream; tests append to it or replace parts. */
+constexpr std::string_view kMinimal = R"(upstreams:
+  - name: up
+    type: wms
+    url: http://example.org/wms
+layers:
+  - name: a
+    upstream: up
+    format: image/jpeg
+    grid:
+      levels: 3
+)";
+
+std::expected<Config, ConfigError> parse(std::string_view yaml, const fs::path& base = "/base") {
+  return parseConfig(yaml, "test.yaml", base);
+}
+
+/** The error of a configuration that must not parse. */
+ConfigError errorOf(std::string_view yaml, const fs::path& base = "/base") {
+  auto c = parse(yaml, base);
+  EXPECT_FALSE(c) << "parsed although it should not:\n" << yaml;
+  if (c) return {};
+  EXPECT_EQ(c.error().file, "test.yaml");
+  return c.error();
+}
+
+/** text with the first `from` replaced by `to`. */
+std::string swap(std::string_view text, std::string_view from, std::string_view to) {
+  std::string s(text);
+  const auto at = s.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) s.replace(at, from.size(), to);
+  return s;
+}
+
+void writeFile(const fs::path& p, std::string_view text) {
+  fs::create_directories(p.parent_path());
+  std::ofstream out(p, std::ios::binary);
+  out << text;
+}
+
+} // namespace
+
+// ---- examples and defaults ---------------------------------------------------------------------
+
+TEST(ConfigYaml, EveryExampleParses) {
+  for (const char* name : {"default.yaml", "mapserver.yaml", "public.yaml"}) {
+    const auto c = loadConfig(kExamples / name);
+    ASSERT_TRUE(c) << c.error().toString();
+    EXPECT_EQ(c->sourceFile, kExamples / name);
+    EXPECT_FALSE(c->layers.empty()) << name;
+    EXPECT_TRUE(validate(*c)) << name;
+  }
+}
+
+TEST(ConfigYaml, MapserverExample) {
+  const auto c = loadConfig(kExamples / "mapserver.yaml");
+  ASSERT_TRUE(c) << c.error().toString();
+  const UpstreamConfig* ms = c->upstream("mapserver");
+  ASSERT_NE(ms, nullptr);
+  EXPECT_EQ(ms->type, UpstreamConfig::Type::Wms);
+  EXPECT_TRUE(ms->url.starts_with("http://127.0.0.1:8081/cgi-bin/mapserv?map="));
+  EXPECT_EQ(ms->wmsVersion, "1.3.0");
+  EXPECT_EQ(ms->crs, "EPSG:4326");
+  const LayerConfig* bmng = c->layer("bmng");
+  ASSERT_NE(bmng, nullptr);
+  EXPECT_EQ(bmng->dataset.mimeType, "image/jpeg");
+  EXPECT_EQ(bmng->dataset.grid.levelZeroDeltaDeg, 36.0);
+  EXPECT_EQ(bmng->dataset.grid.tileWidth, 512);
+  EXPECT_EQ(bmng->dataset.server, "mapserver");
+  const LayerConfig* etopo = c->layer("etopo5");
+  ASSERT_NE(etopo, nullptr);
+  EXPECT_EQ(etopo->kind, LayerKind::Elevation);
+  EXPECT_EQ(etopo->dataset.mimeType, "application/bil16");
+  EXPECT_EQ(etopo->dataset.grid.levelZeroDeltaDeg, 20.0);
+  EXPECT_EQ(etopo->dataset.grid.tileWidth, 150);
+  EXPECT_EQ(etopo->upstreamLayer, "etopo5");
+  EXPECT_EQ(c->cache.sizeLimitBytes, 2ULL << 30);
+}
+
+TEST(ConfigYaml, PublicExample) {
+  const auto c = loadConfig(kExamples / "public.yaml");
+  ASSERT_TRUE(c) << c.error().toString();
+  const UpstreamConfig* gibs = c->upstream("gibs");
+  ASSERT_NE(gibs, nullptr);
+  EXPECT_EQ(gibs->url, "https://gibs.earthdata.nasa.gov/wms/epsg4326/best/wms.cgi");
+  ASSERT_EQ(gibs->headers.size(), 1U);
+  EXPECT_EQ(gibs->headers[0].first, "User-Agent");
+  EXPECT_EQ(gibs->retryBackoff, milliseconds(500));
+  EXPECT_EQ(c->upstream("neo")->wmsVersion, "1.1.1");
+  EXPECT_EQ(c->upstream("ww-tiles")->type, UpstreamConfig::Type::WorldWind);
+
+  const LayerConfig* modis = c->layer("modis-truecolor");
+  ASSERT_NE(modis, nullptr);
+  EXPECT_EQ(modis->upstreamLayer, "MODIS_Terra_CorrectedReflectance_TrueColor");
+  ASSERT_EQ(modis->time.values.size(), 9443U);
+  EXPECT_EQ(modis->time.values.front(), "2000-02-24");
+  EXPECT_EQ(modis->time.values[6], "2000-03-01"); // 2000 is a leap year
+  EXPECT_EQ(modis->time.values.back(), "2025-12-31");
+  EXPECT_EQ(modis->time.period, "2000-02-24/2025-12-31/P1D");
+  EXPECT_EQ(modis->time.defaultValue, "2025-06-01");
+
+  const LayerConfig* sst = c->layer("sea-surface-temperature");
+  ASSERT_NE(sst, nullptr);
+  ASSERT_FALSE(sst->time.values.empty());
+  EXPECT_EQ(sst->time.values[1], "2002-08-01");
+  EXPECT_EQ(sst->time.defaultValue, "2024-12-01"); // the last value
+  EXPECT_FALSE(c->layer("land-temperature-climatology")->time.enabled());
+
+  const LayerConfig* elev = c->layer("earth-elevation");
+  ASSERT_NE(elev, nullptr);
+  EXPECT_EQ(elev->kind, LayerKind::Elevation);
+  EXPECT_EQ(elev->upstreamLayer, "GEBCO,aster_v2,USGS-NED");
+  EXPECT_EQ(elev->maxAge, seconds(30 * 86400));
+  EXPECT_EQ(c->layer("srtm30plus")->dataset.grid.numLevels, 10);
+  EXPECT_TRUE(c->layer("bluemarble")->dataset.pinned);
+  EXPECT_EQ(c->server.offlineResponse, OfflineResponse::Blank);
+  EXPECT_EQ(c->server.limits.requestsPerSecond, 50.0);
+}
+
+TEST(ConfigYaml, DefaultsAreApplied) {
+  const auto c = parse(kMinimal);
+  ASSERT_TRUE(c) << c.error().toString();
+  EXPECT_EQ(c->sourceFile, "test.yaml");
+  EXPECT_EQ(c->server.listenHost, "127.0.0.1");
+  EXPECT_EQ(c->server.listenPort, 8080);
+  EXPECT_EQ(c->server.publicUrl, "");
+  EXPECT_EQ(c->server.cors, "*");
+  EXPECT_FALSE(c->server.exceptionsHttpStatus);
+  EXPECT_EQ(c->server.offlineResponse, OfflineResponse::Exception);
+  EXPECT_FALSE(c->server.offline);
+  EXPECT_EQ(c->server.limits.maxConnections, 4096);
+  EXPECT_EQ(c->server.limits.maxHeaderBytes, 16384U);
+  EXPECT_EQ(c->server.limits.maxParamBytes, 2048U);
+  EXPECT_EQ(c->server.limits.maxWidth, 4096);
+  EXPECT_EQ(c->server.limits.maxHeight, 4096);
+  EXPECT_EQ(c->server.limits.requestTimeout, seconds(10));
+  EXPECT_EQ(c->server.limits.keepaliveTimeout, seconds(60));
+  EXPECT_EQ(c->server.limits.requestsPerSecond, 0.0);
+  EXPECT_EQ(c->cache.root, defaultCacheRoot());
+  EXPECT_EQ(c->cache.sizeLimitBytes, 0U);
+
+  const UpstreamConfig& u = c->upstreams.at(0);
+  EXPECT_EQ(u.wmsVersion, "1.3.0");
+  EXPECT_EQ(u.crs, "EPSG:4326");
+  EXPECT_EQ(u.connectTimeout, seconds(5));
+  EXPECT_EQ(u.timeout, seconds(30));
+  EXPECT_EQ(u.retryBackoff, milliseconds(200));
+  EXPECT_EQ(u.openInterval, seconds(30));
+  EXPECT_EQ(u.maxConnections, 4);
+  EXPECT_EQ(u.retries, 3);
+  EXPECT_EQ(u.failureThreshold, 5);
+  EXPECT_TRUE(u.headers.empty());
+
+  const LayerConfig& l = c->layers.at(0);
+  EXPECT_EQ(l.title, "a");
+  EXPECT_EQ(l.abstract, "");
+  EXPECT_EQ(l.upstreamLayer, "a");
+  EXPECT_EQ(l.kind, LayerKind::Imagery);
+  EXPECT_EQ(l.firstLevel, 0);
+  EXPECT_EQ(l.dataset.server, "up");
+  EXPECT_EQ(l.dataset.name, "a");
+  EXPECT_EQ(l.dataset.extension, "jpg");
+  EXPECT_EQ(l.dataset.style, "");
+  EXPECT_EQ(l.dataset.time, "");
+  EXPECT_FALSE(l.dataset.pinned);
+  EXPECT_EQ(l.dataset.grid, (GridSpec{Sector{}, 36.0, 512, 512, 3}));
+  EXPECT_FALSE(l.time.enabled());
+  EXPECT_EQ(l.ttl, milliseconds(0));
+  EXPECT_EQ(l.maxAge, seconds(86400));
+}
+
+TEST(ConfigYaml, EveryKeyIsRead) {
+  const auto c = parse(R"(
+server:
+  listen: "[::1]:0"
+  public_url: https://tiles.example.org/tellus/
+  cors: ""
+  exceptions_http_status: true
+  offline_response: blank
+  offline: yes
+  limits:
+    max_connections: 10
+    max_header_bytes: 8KiB
+    max_param_bytes: 1000
+    max_width: 2048
+    max_height: 1024
+    request_timeout: 500ms
+    keepalive_timeout: 0
+    requests_per_second: 2.5
+cache:
+  root: cache/here
+  size_limit: 10GiB
+upstreams:
+  - name: ww
+    type: worldwind
+    url: https://ww.example.org/tiles.aspx?key=1
+    connect_timeout: 1s
+    timeout: 2m
+    max_connections: 16
+    retries: 0
+    retry_backoff: 0
+    failure_threshold: 1
+    open_interval: 1h
+    headers: {User-Agent: "tellus/0.1", Referer: "https://example.org/"}
+  - name: w
+    type: wms
+    url: http://127.0.0.1:9/wms
+    version: 1.1.1
+    crs: CRS:84
+layers:
+  - name: heights.v2
+    title: Heights
+    abstract: "SRTM heights"
+    upstream: ww
+    upstream_layer: srtm30
+    style: ""
+    format: image/png
+    kind: elevation
+    grid:
+      sector: [-10, -20.5, 30, 40]
+      level_zero_delta: 20
+      tile_size: [150, 100]
+      levels: 5
+      first_level: 2
+    elevation:
+      encoding: png16
+      scale: 0.5
+      offset: -1000
+      no_data: 0
+    time:
+      values: [2024-01-01, 2024-01-02]
+      default: 2024-01-01
+    cache:
+      ttl: 12h
+      pinned: true
+      max_age: 5m
+  - name: pic
+    upstream: w
+    style: rainbow
+    format: image/tiff
+    kind: imagery
+    grid: {levels: 1, level_zero_delta: 45, tile_size: 256}
+)",
+                       "/srv/conf");
+  ASSERT_TRUE(c) << c.error().toString();
+  const ServerSettings& s = c->server;
+  EXPECT_EQ(s.listenHost, "::1");
+  EXPECT_EQ(s.listenPort, 0);
+  EXPECT_EQ(s.publicUrl, "https://tiles.example.org/tellus/");
+  EXPECT_EQ(s.cors, "");
+  EXPECT_TRUE(s.exceptionsHttpStatus);
+  EXPECT_EQ(s.offlineResponse, OfflineResponse::Blank);
+  EXPECT_TRUE(s.offline);
+  EXPECT_EQ(s.limits.maxConnections, 10);
+  EXPECT_EQ(s.limits.maxHeaderBytes, 8192U);
+  EXPECT_EQ(s.limits.maxParamBytes, 1000U);
+  EXPECT_EQ(s.limits.maxWidth, 2048);
+  EXPECT_EQ(s.limits.maxHeight, 1024);
+  EXPECT_EQ(s.limits.requestTimeout, milliseconds(500));
+  EXPECT_EQ(s.limits.keepaliveTimeout, milliseconds(0));
+  EXPECT_EQ(s.limits.requestsPerSecond, 2.5);
+  EXPECT_EQ(c->cache.root, "/srv/conf/cache/here");
+  EXPECT_EQ(c->cache.sizeLimitBytes, 10ULL << 30);
+
+  const UpstreamConfig& ww = c->upstreams.at(0);
+  EXPECT_EQ(ww.type, UpstreamConfig::Type::WorldWind);
+  EXPECT_EQ(ww.url, "https://ww.example.org/tiles.aspx?key=1");
+  EXPECT_EQ(ww.connectTimeout, seconds(1));
+  EXPECT_EQ(ww.timeout, std::chrono::minutes(2));
+  EXPECT_EQ(ww.maxConnections, 16);
+  EXPECT_EQ(ww.retries, 0);
+  EXPECT_EQ(ww.retryBackoff, milliseconds(0));
+  EXPECT_EQ(ww.failureThreshold, 1);
+  EXPECT_EQ(ww.openInterval, std::chrono::hours(1));
+  ASSERT_EQ(ww.headers.size(), 2U);
+  EXPECT_EQ(ww.headers[0], (std::pair<std::string, std::string>{"User-Agent", "tellus/0.1"}));
+  EXPECT_EQ(ww.headers[1].first, "Referer");
+  const UpstreamConfig& w = c->upstreams.at(1);
+  EXPECT_EQ(w.wmsVersion, "1.1.1");
+  EXPECT_EQ(w.crs, "CRS:84");
+
+  const LayerConfig& l = c->layers.at(0);
+  EXPECT_EQ(l.name, "heights.v2");
+  EXPECT_EQ(l.title, "Heights");
+  EXPECT_EQ(l.abstract, "SRTM heights");
+  EXPECT_EQ(l.upstream, "ww");
+  EXPECT_EQ(l.upstreamLayer, "srtm30");
+  EXPECT_EQ(l.kind, LayerKind::Elevation);
+  EXPECT_EQ(l.dataset.mimeType, "image/png");
+  EXPECT_EQ(l.dataset.extension, "png");
+  EXPECT_EQ(l.dataset.grid, (GridSpec{Sector{-10, -20.5, 30, 40}, 20.0, 150, 100, 5}));
+  EXPECT_EQ(l.firstLevel, 2);
+  EXPECT_EQ(l.elevation.encoding, ElevationEncoding::Png16);
+  EXPECT_EQ(l.elevation.scale, 0.5);
+  EXPECT_EQ(l.elevation.offset, -1000.0);
+  EXPECT_EQ(l.elevation.noData, 0.0);
+  EXPECT_EQ(l.time.values, (std::vector<std::string>{"2024-01-01", "2024-01-02"}));
+  EXPECT_EQ(l.time.period, "");
+  EXPECT_EQ(l.time.defaultValue, "2024-01-01");
+  EXPECT_EQ(l.ttl, std::chrono::hours(12));
+  EXPECT_TRUE(l.dataset.pinned);
+  EXPECT_EQ(l.maxAge, seconds(300));
+  const LayerConfig& pic = c->layers.at(1);
+  EXPECT_EQ(pic.kind, LayerKind::Imagery); // tiff defaults to elevation; kind overrides it
+  EXPECT_EQ(pic.dataset.style, "rainbow");
+  EXPECT_EQ(pic.dataset.extension, "tif");
+  EXPECT_EQ(pic.dataset.grid.levelZeroDeltaDeg, 45.0);
+}
+
+TEST(ConfigYaml, KindFollowsTheFormat) {
+  std::string yaml(kMinimal);
+  yaml.replace(yaml.find("image/jpeg"), 10, "image/tiff");
+  const auto c = parse(yaml);
+  ASSERT_TRUE(c) << c.error().toString();
+  EXPECT_EQ(c->layers[0].kind, LayerKind::Elevation);
+  EXPECT_EQ(c->layers[0].elevation.encoding, ElevationEncoding::Int16Tiff);
+  EXPECT_EQ(c->layers[0].dataset.extension, "tif");
+}
+
+TEST(ConfigYaml, TimeValuesAndPeriods) {
+  const auto c = parse(std::string(kMinimal) + R"(    time:
+      period: 2024-01-30/2024-05-31/P1M
+  - name: hourly
+    upstream: up
+    format: image/png
+    grid: {levels: 1}
+    time:
+      period: 2024-03-01T00:00:00Z/2024-03-01T12:00:00Z/PT6H
+      default: 2024-03-01T06:00:00Z
+  - name: day-in-hours
+    upstream: up
+    format: image/png
+    grid: {levels: 1}
+    time: {period: 2024-01-01/2024-01-02/PT12H}
+)");
+  ASSERT_TRUE(c) << c.error().toString();
+  // Months are added on the calendar from the start: the 30th becomes the 29th in February 2024.
+  EXPECT_EQ(c->layers[0].time.values,
+            (std::vector<std::string>{
+                "2024-01-30", "2024-02-29", "2024-03-30", "2024-04-30", "2024-05-30"}));
+  EXPECT_EQ(c->layers[0].time.defaultValue, "2024-05-30");
+  EXPECT_EQ(c->layers[1].time.values,
+            (std::vector<std::string>{
+                "2024-03-01T00:00:00Z", "2024-03-01T06:00:00Z", "2024-03-01T12:00:00Z"}));
+  EXPECT_EQ(c->layers[1].time.defaultValue, "2024-03-01T06:00:00Z");
+  EXPECT_EQ(c->layers[2].time.values,
+            (std::vector<std::string>{
+                "2024-01-01T00:00:00Z", "2024-01-01T12:00:00Z", "2024-01-02T00:00:00Z"}));
+}
+
+TEST(ConfigYaml, RelativePathsResolveAgainstTheFilesFolder) {
+  const test::TempDir dir("config-paths");
+  const fs::path conf = dir.path() / "etc" / "tellus.yaml";
+  fs::create_directories(dir.path() / "etc" / "images");
+  fs::create_directories(dir.path() / "shared");
+  fs::copy_file(kData / "bmng_2048x1024.jpg", dir.path() / "etc" / "images" / "world.jpg");
+  fs::copy_file(kData / "etopo20_int16.tif", dir.path() / "shared" / "heights.tif");
+  writeFile(conf, R"(cache:
+  root: ../var/cache
+upstreams:
+  - name: img
+    type: local
+    path: images/world.jpg
+layers:
+  - name: world
+    upstream: img
+    format: image/jpeg
+    grid: {levels: 1}
+)");
+  const auto c = loadConfig(conf);
+  ASSERT_TRUE(c) << c.error().toString();
+  EXPECT_EQ(c->upstreams[0].path, dir.path() / "etc" / "images" / "world.jpg");
+  EXPECT_EQ(c->cache.root, dir.path() / "var" / "cache");
+
+  // data_dir moves the base of local paths (not of the cache root).
+  writeFile(conf, R"(data_dir: ../shared
+cache: {root: cache}
+upstreams:
+  - {name: h, type: local, path: heights.tif}
+layers:
+  - {name: h, upstream: h, format: application/bil16, grid: {levels: 1, level_zero_delta: 20, tile_size: 150}}
+)");
+  const auto d = loadConfig(conf);
+  ASSERT_TRUE(d) << d.error().toString();
+  EXPECT_EQ(d->upstreams[0].path, dir.path() / "shared" / "heights.tif");
+  EXPECT_EQ(d->cache.root, dir.path() / "etc" / "cache");
+
+  // An absolute path stays as it is; a missing file is an error at its line.
+  writeFile(conf, R"(upstreams:
+  - name: img
+    type: local
+    path: images/nothing.jpg
+layers:
+  - {name: world, upstream: img, format: image/jpeg, grid: {levels: 1}}
+)");
+  const auto e = loadConfig(conf);
+  ASSERT_FALSE(e);
+  EXPECT_EQ(e.error().file, conf.string());
+  EXPECT_EQ(e.error().line, 4);
+  EXPECT_EQ(e.error().key, "upstreams[0].path");
+  EXPECT_NE(e.error().message.find("does not exist"), std::string::npos);
+}
+
+// ---- errors: file, line, key --------------------------------------------------------------------
+
+TEST(ConfigYaml, UnknownKeySuggestsTheClosest) {
+  std::string yaml(kMinimal);
+  yaml += "      tiel_size: 256\n";
+  const ConfigError e = errorOf(yaml);
+  EXPECT_EQ(e.line, 11);
+  EXPECT_EQ(e.column, 7);
+  EXPECT_EQ(e.key, "layers[0].grid.tiel_size");
+  EXPECT_EQ(e.message, "unknown key 'tiel_size' (did you mean 'tile_size'?)");
+  EXPECT_EQ(e.toString(),
+            "test.yaml:11:7: layers[0].grid.tiel_size: unknown key 'tiel_size' (did you mean "
+            "'tile_size'?)");
+
+  const ConfigError camel = errorOf(std::string(kMinimal) + "    upstreamLayer: x\n");
+  EXPECT_NE(camel.message.find("did you mean 'upstream_layer'"), std::string::npos);
+  const ConfigError none = errorOf(std::string(kMinimal) + "colour: blue\n");
+  EXPECT_EQ(none.key, "colour");
+  EXPECT_EQ(none.line, 11);
+  EXPECT_NE(none.message.find("expected one of: server, cache"), std::string::npos);
+}
+
+TEST(ConfigYaml, WrongTypes) {
+  const ConfigError levels = errorOf(R"(upstreams:
+  - {name: up, type: wms, url: "http://example.org/"}
+layers:
+  - name: a
+    upstream: up
+    format: image/jpeg
+    grid:
+      levels: [1, 2]
+)");
+  EXPECT_EQ(levels.line, 8);
+  EXPECT_EQ(levels.key, "layers[0].grid.levels");
+  EXPECT_EQ(levels.message, "expected a whole number, got a list");
+
+  const ConfigError half = errorOf(swap(kMinimal, "levels: 3", "levels: 2.5"));
+  EXPECT_EQ(half.key, "layers[0].grid.levels");
+  EXPECT_EQ(half.message, "expected a whole number, got '2.5'");
+
+  const ConfigError grid = errorOf(swap(kMinimal, "grid:\n      levels: 3", "grid: 5"));
+  EXPECT_EQ(grid.key, "layers[0].grid");
+  EXPECT_EQ(grid.line, 9);
+  EXPECT_NE(grid.message.find("expected a mapping"), std::string::npos);
+
+  const ConfigError layers = errorOf("upstreams: []\nlayers: {a: 1}\n");
+  EXPECT_EQ(layers.key, "layers");
+  EXPECT_EQ(layers.line, 2);
+  EXPECT_EQ(layers.message, "expected a list, got a mapping");
+
+  const ConfigError flag = errorOf("server: {offline: maybe}\n" + std::string(kMinimal));
+  EXPECT_EQ(flag.key, "server.offline");
+  EXPECT_EQ(flag.line, 1);
+  EXPECT_EQ(flag.message, "expected true or false, got 'maybe'");
+
+  const ConfigError title = errorOf(std::string(kMinimal) + "    title: {a: b}\n");
+  EXPECT_EQ(title.key, "layers[0].title");
+  EXPECT_EQ(title.message, "expected a string, got a mapping");
+
+  const ConfigError type = errorOf(R"(upstreams:
+  - name: up
+    type: wmts
+)");
+  EXPECT_EQ(type.key, "upstreams[0].type");
+  EXPECT_EQ(type.line, 3);
+  EXPECT_EQ(type.message, "'wmts' is not one of local, wms, worldwind");
+}
+
+TEST(ConfigYaml, BadDurationAndSize) {
+  const ConfigError d = errorOf(R"(upstreams:
+  - name: up
+    type: wms
+    url: http://example.org/wms
+    timeout: 10 parsecs
+)");
+  EXPECT_EQ(d.line, 5);
+  EXPECT_EQ(d.column, 14);
+  EXPECT_EQ(d.key, "upstreams[0].timeout");
+  EXPECT_NE(d.message.find("'10 parsecs' is not a duration"), std::string::npos);
+
+  const ConfigError bare = errorOf("server: {limits: {request_timeout: 30}}\n");
+  EXPECT_EQ(bare.key, "server.limits.request_timeout");
+  EXPECT_NE(bare.message.find("not a duration"), std::string::npos);
+
+  const ConfigError s = errorOf("cache:\n  size_limit: lots\n" + std::string(kMinimal));
+  EXPECT_EQ(s.line, 2);
+  EXPECT_EQ(s.key, "cache.size_limit");
+  EXPECT_NE(s.message.find("'lots' is not a size"), std::string::npos);
+
+  const ConfigError age = errorOf(std::string(kMinimal) + "    cache: {max_age: 1500ms}\n");
+  EXPECT_EQ(age.key, "layers[0].cache.max_age");
+  EXPECT_NE(age.message.find("whole seconds"), std::string::npos);
+}
+
+TEST(ConfigYaml, MissingRequiredKeys) {
+  const ConfigError name = errorOf(R"(upstreams:
+  - name: up
+    type: wms
+    url: http://example.org/wms
+layers:
+  - upstream: up
+    format: image/jpeg
+    grid: {levels: 1}
+)");
+  EXPECT_EQ(name.line, 6);
+  EXPECT_EQ(name.key, "layers[0].name");
+  EXPECT_EQ(name.message, "required key 'name' is missing");
+
+  const ConfigError empty = errorOf(R"(upstreams:
+  - name:
+    type: wms
+)");
+  EXPECT_EQ(empty.line, 2);
+  EXPECT_EQ(empty.key, "upstreams[0].name");
+  EXPECT_EQ(empty.message, "'name' needs a value");
+
+  const ConfigError url = errorOf("upstreams:\n  - {name: up, type: wms}\n");
+  EXPECT_EQ(url.key, "upstreams[0].url");
+  EXPECT_EQ(url.line, 2);
+
+  const ConfigError levels = errorOf(swap(kMinimal, "levels: 3", "tile_size: 256"));
+  EXPECT_EQ(levels.key, "layers[0].grid.levels");
+  EXPECT_EQ(levels.line, 10);
+
+  const ConfigError layers = errorOf("upstreams: []\n");
+  EXPECT_EQ(layers.key, "layers");
+  EXPECT_EQ(layers.message, "required key 'layers' is missing");
+  const ConfigError noLayers = errorOf("upstreams: []\nlayers: []\n");
+  EXPECT_EQ(noLayers.key, "layers");
+  EXPECT_EQ(noLayers.line, 2);
+}
+
+TEST(ConfigYaml, DuplicateNamesAndKeys) {
+  const ConfigError layer = errorOf(std::string(kMinimal) + R"(  - name: a
+    upstream: up
+    format: image/png
+    grid: {levels: 1}
+)");
+  EXPECT_EQ(layer.line, 11);
+  EXPECT_EQ(layer.column, 11);
+  EXPECT_EQ(layer.key, "layers[1].name");
+  EXPECT_EQ(layer.message, "layer 'a': the name is used twice");
+
+  const ConfigError upstream = errorOf(R"(upstreams:
+  - {name: up, type: wms, url: "http://a.example/"}
+  - {name: up, type: wms, url: "http://b.example/"}
+layers:
+  - {name: a, upstream: up, format: image/jpeg, grid: {levels: 1}}
+)");
+  EXPECT_EQ(upstream.line, 3);
+  EXPECT_EQ(upstream.key, "upstreams[1].name");
+
+  const ConfigError key = errorOf(std::string(kMinimal) + "    format: image/png\n");
+  EXPECT_EQ(key.line, 11);
+  EXPECT_EQ(key.key, "layers[0].format");
+  EXPECT_EQ(key.message, "key 'format' is given twice (first on line 8)");
+
+  const ConfigError header = errorOf(R"(upstreams:
+  - name: up
+    type: wms
+    url: http://example.org/wms
+    headers:
+      User-Agent: a
+      user-agent: b
+)");
+  EXPECT_EQ(header.line, 7);
+  EXPECT_EQ(header.key, "upstreams[0].headers.user-agent");
+}
+
+TEST(ConfigYaml, UnknownUpstreamReference) {
+  std::string yaml(kMinimal);
+  yaml.replace(yaml.find("upstream: up"), 12, "upstream: upp");
+  const ConfigError e = errorOf(yaml);
+  EXPECT_EQ(e.line, 7);
+  EXPECT_EQ(e.column, 15);
+  EXPECT_EQ(e.key, "layers[0].upstream");
+  EXPECT_EQ(e.message, "layer 'a': no upstream named 'upp' (upstreams: up)");
+}
+
+TEST(ConfigYaml, BadGrids) {
+  const auto withGrid = [](std::string_view grid) {
+    std::string yaml(kMinimal);
+    yaml.replace(yaml.find("      levels: 3\n"), 16, grid);
+    return yaml;
+  };
+  const ConfigError delta = errorOf(withGrid("      levels: 3\n      level_zero_delta: 37\n"));
+  EXPECT_EQ(delta.line, 11);
+  EXPECT_EQ(delta.key, "layers[0].grid.level_zero_delta");
+  EXPECT_NE(delta.message.find("level_zero_delta must divide 180"), std::string::npos);
+
+  const ConfigError sector =
+      errorOf(withGrid("      levels: 3\n      sector: [-190, -90, 180, 90]\n"));
+  EXPECT_EQ(sector.line, 11);
+  EXPECT_EQ(sector.key, "layers[0].grid.sector");
+  EXPECT_NE(sector.message.find("sector west must be finite and in [-180, 180]"),
+            std::string::npos);
+
+  const ConfigError flipped = errorOf(withGrid("      levels: 3\n      sector: [0, 10, 20, 5]\n"));
+  EXPECT_EQ(flipped.key, "layers[0].grid.sector");
+  EXPECT_NE(flipped.message.find("must be <"), std::string::npos);
+
+  const ConfigError nan =
+      errorOf(withGrid("      levels: 3\n      sector: [-180, .nan, 180, 90]\n"));
+  EXPECT_EQ(nan.line, 11);
+  EXPECT_EQ(nan.column, 22);
+  EXPECT_EQ(nan.key, "layers[0].grid.sector[1]");
+  EXPECT_EQ(nan.message, "must be a finite number, got '.nan'");
+
+  const ConfigError inf = errorOf(withGrid("      levels: 3\n      level_zero_delta: -.Inf\n"));
+  EXPECT_EQ(inf.key, "layers[0].grid.level_zero_delta");
+  EXPECT_EQ(inf.message, "must be a finite number, got '-.Inf'");
+
+  const ConfigError three = errorOf(withGrid("      levels: 3\n      sector: [1, 2, 3]\n"));
+  EXPECT_EQ(three.key, "layers[0].grid.sector");
+  EXPECT_NE(three.message.find("expected 4 numbers"), std::string::npos);
+
+  const ConfigError tile = errorOf(withGrid("      levels: 3\n      tile_size: 0\n"));
+  EXPECT_EQ(tile.key, "layers[0].grid.tile_size");
+  EXPECT_EQ(tile.line, 11);
+
+  const ConfigError first = errorOf(withGrid("      levels: 3\n      first_level: 1\n"));
+  EXPECT_EQ(first.key, "layers[0].grid.first_level");
+  EXPECT_NE(first.message.find("worldwind upstreams only"), std::string::npos);
+}
+
+TEST(ConfigYaml, HugeLevelCounts) {
+  const ConfigError huge = errorOf(swap(kMinimal, "levels: 3", "levels: 99999999999999999999"));
+  EXPECT_EQ(huge.line, 10);
+  EXPECT_EQ(huge.key, "layers[0].grid.levels");
+  EXPECT_NE(huge.message.find("out of range"), std::string::npos);
+  const ConfigError big = errorOf(swap(kMinimal, "levels: 3", "levels: 4000000000"));
+  EXPECT_EQ(big.key, "layers[0].grid.levels");
+  EXPECT_NE(big.message.find("out of range"), std::string::npos);
+  const ConfigError deep = errorOf(swap(kMinimal, "levels: 3", "levels: 1000"));
+  EXPECT_EQ(deep.line, 10);
+  EXPECT_EQ(deep.key, "layers[0].grid.levels");
+  EXPECT_NE(deep.message.find("levels must be in [1, 31], got 1000"), std::string::npos);
+  const ConfigError zero = errorOf(swap(kMinimal, "levels: 3", "levels: 0"));
+  EXPECT_EQ(zero.key, "layers[0].grid.levels");
+}
+
+TEST(ConfigYaml, EmptyAndNonMappingDocuments) {
+  for (const char* text : {"", "\n\n", "# only a comment\n", "~\n", "---\n"}) {
+    const ConfigError e = errorOf(text);
+    EXPECT_EQ(e.key, "") << text;
+    EXPECT_GE(e.line, 1) << text;
+    EXPECT_NE(e.message.find("empty"), std::string::npos) << text;
+  }
+  const ConfigError list = errorOf("- a\n- b\n");
+  EXPECT_EQ(list.line, 1);
+  EXPECT_EQ(list.key, "");
+  EXPECT_NE(list.message.find("the top level must be a mapping"), std::string::npos);
+  EXPECT_NE(list.message.find("got a list"), std::string::npos);
+  const ConfigError scalar = errorOf("hello\n");
+  EXPECT_NE(scalar.message.find("got 'hello'"), std::string::npos);
+  const ConfigError two = errorOf(std::string(kMinimal) + "---\nlayers: []\n");
+  EXPECT_EQ(two.line, 12);
+  EXPECT_NE(two.message.find("more than one YAML document"), std::string::npos);
+}
+
+TEST(ConfigYaml, SyntaxErrorsCarryYamlCppsLine) {
+  const ConfigError tab = errorOf("upstreams:\n  - name: up\n\ttype: wms\n");
+  EXPECT_EQ(tab.line, 3);
+  EXPECT_NE(tab.message.find("YAML syntax"), std::string::npos);
+  const ConfigError tab2 = errorOf("layers:\n\t- name: a\n");
+  EXPECT_EQ(tab2.line, 2);
+  const ConfigError flow = errorOf("upstreams: [1, 2\nlayers: []\n");
+  EXPECT_EQ(flow.line, 2);
+  EXPECT_NE(flow.message.find("YAML syntax"), std::string::npos);
+  const ConfigError alias = errorOf("layers: *nope\n");
+  EXPECT_EQ(alias.line, 1);
+  EXPECT_NE(alias.message.find("anchor"), std::string::npos);
+}
+
+TEST(ConfigYaml, KeysThatDoNotApply) {
+  const ConfigError path = errorOf(R"(upstreams:
+  - name: up
+    type: wms
+    url: http://example.org/wms
+    path: /tmp/x.jpg
+)");
+  EXPECT_EQ(path.line, 5);
+  EXPECT_EQ(path.key, "upstreams[0].path");
+  EXPECT_EQ(path.message, "'path' applies to local upstreams only");
+  const ConfigError url = errorOf(R"(upstreams:
+  - name: up
+    type: local
+    path: x.jpg
+    url: http://example.org/
+)");
+  EXPECT_EQ(url.line, 5);
+  EXPECT_EQ(url.key, "upstreams[0].url");
+  const ConfigError version = errorOf(R"(upstreams:
+  - {name: ww, type: worldwind, url: "http://example.org/", version: 1.3.0}
+)");
+  EXPECT_EQ(version.key, "upstreams[0].version");
+  const ConfigError elevation = errorOf(std::string(kMinimal) + "    elevation: {scale: 2}\n");
+  EXPECT_EQ(elevation.line, 11);
+  EXPECT_EQ(elevation.key, "layers[0].elevation");
+  EXPECT_NE(elevation.message.find("elevation layers only"), std::string::npos);
+}
+
+TEST(ConfigYaml, FormatsKindsAndEncodings) {
+  const auto withFormat = [](std::string_view format, std::string_view extra = {}) {
+    std::string yaml(kMinimal);
+    yaml.replace(yaml.find("image/jpeg"), 10, format);
+    return yaml + std::string(extra);
+  };
+  const ConfigError bmp = errorOf(withFormat("image/bmp"));
+  EXPECT_EQ(bmp.key, "layers[0].format");
+  EXPECT_EQ(bmp.line, 8);
+  EXPECT_NE(bmp.message.find("is not one of image/jpeg"), std::string::npos);
+  const ConfigError bilImagery = errorOf(withFormat("application/bil16", "    kind: imagery\n"));
+  EXPECT_EQ(bilImagery.key, "layers[0].kind");
+  EXPECT_EQ(bilImagery.line, 11);
+  const ConfigError jpegHeights = errorOf(withFormat("image/jpeg", "    kind: elevation\n"));
+  EXPECT_EQ(jpegHeights.key, "layers[0].format");
+  EXPECT_NE(jpegHeights.message.find("lossless"), std::string::npos);
+  const ConfigError encoding =
+      errorOf(withFormat("application/bil16", "    elevation: {encoding: png16}\n"));
+  EXPECT_EQ(encoding.key, "layers[0].elevation.encoding");
+  EXPECT_EQ(encoding.line, 11);
+  const ConfigError scale = errorOf(withFormat("application/bil16", "    elevation: {scale: 0}\n"));
+  EXPECT_EQ(scale.key, "layers[0].elevation.scale");
+  const ConfigError kind = errorOf(withFormat("image/png", "    kind: terrain\n"));
+  EXPECT_EQ(kind.key, "layers[0].kind");
+  EXPECT_EQ(kind.message, "'terrain' is not one of imagery, elevation");
+}
+
+TEST(ConfigYaml, BadUrlsAndAddresses) {
+  const auto withUrl = [](std::string_view url) {
+    std::string yaml(kMinimal);
+    yaml.replace(yaml.find("http://example.org/wms"), 22, url);
+    return yaml;
+  };
+  for (const char* url : {"ftp://example.org/wms",
+                          "http://",
+                          "http:///wms",
+                          "\"http://exa mple.org/\"",
+                          "example.org/wms",
+                          "http://example.org:99999/",
+                          "http://user:secret@example.org/",
+                          "http://example.org/wms#top"}) {
+    const ConfigError e = errorOf(withUrl(url));
+    EXPECT_EQ(e.key, "upstreams[0].url") << url;
+    EXPECT_EQ(e.line, 4) << url;
+  }
+  EXPECT_TRUE(parse(withUrl("\"HTTPS://[::1]:8443/wms?map=/x/y.map&a=b\"")));
+
+  for (const char* listen :
+       {"localhost", "127.0.0.1:", ":8080", "::1:8080", "[::1]", "host:65536", "host:-1"}) {
+    const ConfigError e =
+        errorOf("server:\n  listen: \"" + std::string(listen) + "\"\n" + std::string(kMinimal));
+    EXPECT_EQ(e.key, "server.listen") << listen;
+    EXPECT_EQ(e.line, 2) << listen;
+  }
+  const auto any = parse("server: {listen: 0.0.0.0:0}\n" + std::string(kMinimal));
+  ASSERT_TRUE(any) << any.error().toString();
+  EXPECT_EQ(any->server.listenPort, 0);
+
+  const ConfigError pub =
+      errorOf("server: {public_url: tiles.example.org}\n" + std::string(kMinimal));
+  EXPECT_EQ(pub.key, "server.public_url");
+  const ConfigError header = errorOf(R"(upstreams:
+  - name: up
+    type: wms
+    url: http://example.org/wms
+    headers: {X-Evil: "a\r\nHost: b"}
+layers:
+  - {name: a, upstream: up, format: image/jpeg, grid: {levels: 1}}
+)");
+  EXPECT_EQ(header.key, "upstreams[0].headers.X-Evil");
+  EXPECT_EQ(header.line, 5);
+  const ConfigError headerName = errorOf(R"(upstreams:
+  - name: up
+    type: wms
+    url: http://example.org/wms
+    headers: {"Bad Name": x}
+layers:
+  - {name: a, upstream: up, format: image/jpeg, grid: {levels: 1}}
+)");
+  EXPECT_EQ(headerName.key, "upstreams[0].headers");
+}
+
+TEST(ConfigYaml, TimeErrors) {
+  const auto withTime = [](std::string_view time) {
+    return std::string(kMinimal) + "    time:\n" + std::string(time);
+  };
+  const ConfigError both =
+      errorOf(withTime("      values: [2024-01-01]\n      period: 2024-01-01/2024-02-01/P1D\n"));
+  EXPECT_EQ(both.line, 13);
+  EXPECT_EQ(both.key, "layers[0].time.period");
+  const ConfigError neither = errorOf(withTime("      default: 2024-01-01\n"));
+  EXPECT_EQ(neither.key, "layers[0].time");
+  const ConfigError period = errorOf(withTime("      period: 2024-01-01/2023-01-01/P1D\n"));
+  EXPECT_EQ(period.line, 12);
+  EXPECT_EQ(period.key, "layers[0].time.period");
+  EXPECT_NE(period.message.find("ends before it starts"), std::string::npos);
+  for (const char* bad : {"2024-01-01/2024-02-01",
+                          "2024-01-01/2024-02-01/1D",
+                          "2024-02-30/2024-03-01/P1D",
+                          "2024-01-01/2024-02-01/P",
+                          "2024-01-01/2024-02-01/PT",
+                          "2024-01-01/2024-02-01/P0D",
+                          "2024-01-01/2024-02-01/P1H",
+                          "2024-01-01T25:00Z/2024-02-01/P1D"}) {
+    const ConfigError e = errorOf(withTime("      period: \"" + std::string(bad) + "\"\n"));
+    EXPECT_EQ(e.key, "layers[0].time.period") << bad;
+  }
+  const ConfigError notListed =
+      errorOf(withTime("      values: [2024-01-01, 2024-01-02]\n      default: 2024-01-03\n"));
+  EXPECT_EQ(notListed.key, "layers[0].time.default");
+  EXPECT_EQ(notListed.line, 13);
+  const ConfigError twice = errorOf(withTime("      values: [2024-01-01, 2024-01-01]\n"));
+  EXPECT_EQ(twice.key, "layers[0].time.values");
+  const ConfigError comma = errorOf(withTime("      values: [\"a,b\"]\n"));
+  EXPECT_EQ(comma.key, "layers[0].time.values");
+  const ConfigError outside =
+      errorOf(withTime("      period: 2024-01-01/2024-02-01/P1D\n      default: 2025-01-01\n"));
+  EXPECT_EQ(outside.key, "layers[0].time.default");
+}
+
+TEST(ConfigYaml, LoadConfigReportsUnreadableFiles) {
+  const auto missing = loadConfig("/nonexistent/tellus.yaml");
+  ASSERT_FALSE(missing);
+  EXPECT_EQ(missing.error().file, "/nonexistent/tellus.yaml");
+  EXPECT_EQ(missing.error().line, 0);
+  EXPECT_NE(missing.error().message.find("no such file"), std::string::npos);
+  const test::TempDir dir("config-dir");
+  const auto directory = loadConfig(dir.path());
+  ASSERT_FALSE(directory);
+  EXPECT_NE(directory.error().message.find("directory"), std::string::npos);
+}

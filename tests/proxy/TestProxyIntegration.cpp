@@ -1,0 +1,494 @@
+// tellus serve's pieces wired as the executable wires them (cache, fetcher, tile service, front end,
+// HTTP server on a loopback port), against a scriptable fake upstream and a real MapServer.
+
+#include <tellus/cache/TileCache.hpp>
+#include <tellus/cache/TilePath.hpp>
+#include <tellus/proxy/Fetcher.hpp>
+#include <tellus/proxy/HttpServer.hpp>
+#include <tellus/proxy/ImageCodec.hpp>
+#include <tellus/proxy/ProxyFrontEnd.hpp>
+#include <tellus/proxy/TileService.hpp>
+
+#include "../support/CacheFixtures.hpp"
+#include "../support/FakeUpstream.hpp"
+#include "../support/HttpClient.hpp"
+#include "../support/TempDir.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <future>
+#include <sys/wait.h>
+#include <thread>
+#include <unistd.h>
+
+using namespace tellus;
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+
+namespace {
+
+/** A real JPEG whose colour depends on the request, so different tiles have different bytes. */
+std::string jpegFor(const std::string& target, int size = 256) {
+  const auto h = stableHash64(target);
+  std::vector<std::uint8_t> px(static_cast<std::size_t>(size * size * 3));
+  for (std::size_t i = 0; i < px.size(); i += 3) {
+    px[i] = static_cast<std::uint8_t>(h);
+    px[i + 1] = static_cast<std::uint8_t>(h >> 8);
+    px[i + 2] = static_cast<std::uint8_t>(h >> 16);
+  }
+  const auto bytes = *encodeImage("image/jpeg", size, size, 3, px.data());
+  return std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+}
+
+test::FakeReply tileReply(const test::FakeRequest& req) {
+  auto r = test::FakeReply::ok(jpegFor(req.target), "image/jpeg");
+  r.headers.emplace_back("ETag", "\"v1\"");
+  return r;
+}
+
+struct Proxy {
+  test::TempDir dir{"proxy"};
+  std::unique_ptr<TileCache> cache;
+  std::unique_ptr<Fetcher> fetcher;
+  std::unique_ptr<TileService> tiles;
+  std::unique_ptr<ProxyFrontEnd> front;
+  std::unique_ptr<HttpServer> server;
+
+  /** One WMS (or World Wind) layer "sat": 36-degree grid, 256-px JPEG, 4 levels. */
+  explicit Proxy(const std::string& upstreamUrl, UpstreamSpec::Type type = UpstreamSpec::Type::Wms,
+                 std::chrono::milliseconds ttl = 0ms, UpstreamPolicy policy = fastPolicy(),
+                 const std::string& upstreamLayer = "upsat") {
+    cache = test::openTestCache(dir.path());
+    fetcher = std::make_unique<Fetcher>();
+    UpstreamSpec u;
+    u.name = "up";
+    u.type = type;
+    u.url = upstreamUrl;
+    u.wmsVersion = "1.3.0";
+    u.crs = "EPSG:4326";
+    u.policy = policy;
+    LayerSpec l;
+    l.name = "sat";
+    l.title = "Satellite";
+    l.upstream = "up";
+    l.upstreamLayer = upstreamLayer;
+    l.dataset.grid = GridSpec{Sector{}, 36.0, 256, 256, 4};
+    l.dataset.mimeType = "image/jpeg";
+    l.ttl = ttl;
+    l.maxAge = 3600s;
+    auto t = TileService::create(*cache, *fetcher, {u}, {l}, TileServiceOptions{});
+    EXPECT_TRUE(t) << (t ? "" : t.error());
+    tiles = std::move(*t);
+    front = std::make_unique<ProxyFrontEnd>(*tiles, FrontEndOptions{});
+    HttpServerOptions so;
+    so.threads = 2;
+    server = std::make_unique<HttpServer>(so, [this](HttpRequest&& r, Responder respond) {
+      front->handle(std::move(r), std::move(respond));
+    });
+    EXPECT_TRUE(server->start());
+  }
+  ~Proxy() {
+    server->stop(); // no more requests
+    tiles.reset();  // then the service (its workers finish)
+    fetcher.reset();
+  }
+  static UpstreamPolicy fastPolicy() {
+    UpstreamPolicy p;
+    p.timeout = 2000ms;
+    p.connectTimeout = 500ms;
+    p.retries = 1;
+    p.retryBackoff = 10ms;
+    return p;
+  }
+  std::string url(const std::string& target) const {
+    return "http://127.0.0.1:" + std::to_string(server->port()) + target;
+  }
+  test::HttpResult get(const std::string& target,
+                       const std::vector<std::pair<std::string, std::string>>& headers = {}) const {
+    return test::httpGet(url(target), headers);
+  }
+};
+
+const std::string kWms111 =
+    "/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.1.1&LAYERS=sat&STYLES=&SRS=EPSG:4326"
+    "&BBOX=-180,-90,-144,-54&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg";
+const std::string kWms130 =
+    "/wms?service=WMS&request=GetMap&version=1.3.0&layers=sat&styles=&crs=EPSG:4326"
+    "&bbox=-90,-180,-54,-144&width=256&height=256&format=image%2Fjpeg";
+const std::string kWms130Crs84 =
+    "/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.3.0&LAYERS=sat&STYLES=&CRS=CRS:84"
+    "&BBOX=-180,-90,-144,-54&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg";
+
+} // namespace
+
+TEST(ProxyIntegration, EveryProtocolGivesTheSameCachedBytes) {
+  test::FakeUpstream up(tileReply);
+  Proxy p(up.url("/wms"));
+  const auto first = p.get("/wwtile?T=sat&L=0&X=0&Y=0");
+  ASSERT_EQ(first.status, 200) << first.body;
+  EXPECT_EQ(first.header("x-cache"), "MISS");
+  EXPECT_EQ(first.header("content-type"), "image/jpeg");
+  EXPECT_EQ(first.header("access-control-allow-origin"), "*");
+  EXPECT_EQ(first.header("cache-control"), "public, max-age=3600");
+  for (const auto& target : {kWms111, kWms130, kWms130Crs84, std::string("/tiles/sat/0/0/0_0.jpg"),
+                             std::string("/wwtile?T=sat&L=0&X=0&Y=0")}) {
+    const auto r = p.get(target);
+    EXPECT_EQ(r.status, 200) << target << "\n" << r.body;
+    EXPECT_EQ(r.body, first.body) << target; // byte for byte, no re-encoding
+    EXPECT_EQ(r.header("x-cache"), "HIT") << target;
+    EXPECT_EQ(r.header("etag"), first.header("etag"));
+  }
+  ASSERT_EQ(up.requests(), 1u);
+  // What went upstream: WMS 1.3.0 EPSG:4326 in lat/lon order, the upstream's layer name.
+  const std::string sent = up.received().at(0).target;
+  EXPECT_NE(sent.find("CRS=EPSG:4326"), std::string::npos) << sent;
+  EXPECT_NE(sent.find("BBOX=-90,-180,-54,-144"), std::string::npos) << sent;
+  EXPECT_NE(sent.find("LAYERS=upsat"), std::string::npos) << sent;
+  EXPECT_NE(sent.find("WIDTH=256&HEIGHT=256"), std::string::npos) << sent;
+  // Another tile is another upstream request with another box.
+  EXPECT_EQ(p.get("/wwtile?T=sat&L=1&X=19&Y=9").status, 200);
+  EXPECT_NE(up.received().at(1).target.find("BBOX=72,162,90,180"), std::string::npos) << up.received().at(1).target;
+  // The file is where World Wind Java and WebWorldWind expect it.
+  EXPECT_TRUE(fs::exists(p.dir.path() / "up"));
+}
+
+TEST(ProxyIntegration, SixtyFourClientsOneUpstreamRequest) {
+  test::FakeUpstream up([](const test::FakeRequest& r) {
+    auto reply = tileReply(r);
+    reply.delayBeforeHeaders = 300ms; // all 64 arrive while the first fetch is under way
+    return reply;
+  });
+  Proxy p(up.url("/wms"));
+  std::vector<std::thread> clients;
+  std::vector<test::HttpResult> results(64);
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    clients.emplace_back([&, i] { results[i] = p.get(i % 2 ? kWms130 : "/wwtile?T=sat&L=0&X=0&Y=0"); });
+  }
+  for (auto& c : clients) c.join();
+  for (const auto& r : results) {
+    EXPECT_EQ(r.status, 200);
+    EXPECT_EQ(r.body, results[0].body);
+  }
+  EXPECT_EQ(up.requests(), 1u);
+  EXPECT_EQ(p.tiles->upstreamFetches(), 1u);
+}
+
+TEST(ProxyIntegration, WhatIsNotATileIsNeverCached) {
+  std::atomic<int> mode{0};
+  test::FakeUpstream up([&](const test::FakeRequest& r) {
+    switch (mode.load()) {
+    case 0: // a ServiceException with status 200 and an image content type
+      return test::FakeReply::ok(R"(<?xml version="1.0"?><ServiceExceptionReport><ServiceException>
+        Layer upsat is broken at http://secret.example/internal</ServiceException></ServiceExceptionReport>)",
+                                 "image/jpeg");
+    case 1: return test::FakeReply::ok("<html>Bad gateway</html>", "text/html");
+    case 2: return test::FakeReply::ok(jpegFor(r.target, 128), "image/jpeg"); // wrong size
+    default: return tileReply(r);
+    }
+  });
+  Proxy p(up.url("/wms"));
+  for (int m = 0; m < 3; ++m) {
+    mode = m;
+    const auto ww = p.get("/wwtile?T=sat&L=0&X=0&Y=0");
+    EXPECT_EQ(ww.status, 502) << m << ww.body;
+    const auto wms = p.get(kWms130);
+    EXPECT_EQ(wms.status, 200) << m; // WMS exceptions are HTTP 200 by default
+    EXPECT_NE(wms.body.find("ServiceException"), std::string::npos) << wms.body;
+    EXPECT_EQ(wms.body.find("secret.example"), std::string::npos) << "upstream URLs never reach clients";
+  }
+  EXPECT_EQ(*p.cache->totalBytes(), 0);
+  mode = 3;
+  const auto good = p.get("/wwtile?T=sat&L=0&X=0&Y=0");
+  EXPECT_EQ(good.status, 200);
+  EXPECT_EQ(good.header("x-cache"), "MISS");
+  EXPECT_EQ(up.requests(), 7u); // nothing was cached in between
+}
+
+TEST(ProxyIntegration, AbsentIsRememberedServerErrorsAreNot) {
+  std::atomic<int> status{404};
+  test::FakeUpstream up([&](const test::FakeRequest& r) {
+    if (status == 200) return tileReply(r);
+    return test::FakeReply::withStatus(status.load(), "nope");
+  });
+  Proxy p(up.url("/wms"));
+  EXPECT_EQ(p.get("/wwtile?T=sat&L=2&X=3&Y=4").status, 404);
+  EXPECT_EQ(p.get("/wwtile?T=sat&L=2&X=3&Y=4").status, 404);
+  EXPECT_EQ(up.requests(), 1u); // the second answer came from the cache's "absent" row
+  // A WMS client gets an empty map there, not an error.
+  const auto wms = p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.1.1&LAYERS=sat&STYLES=&SRS=EPSG:4326"
+                         "&BBOX=-153,-54,-144,-45&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg");
+  EXPECT_EQ(wms.status, 200);
+  EXPECT_EQ(wms.header("content-type"), "image/jpeg");
+  status = 500;
+  EXPECT_EQ(p.get("/wwtile?T=sat&L=1&X=0&Y=0").status, 502);
+  const auto before = up.requests();
+  EXPECT_EQ(before, 1u + 2u); // one retry
+  status = 200;
+  EXPECT_EQ(p.get("/wwtile?T=sat&L=1&X=0&Y=0").status, 200);
+  EXPECT_GT(up.requests(), before);
+  // Outside the grid: a fast 404 without asking anybody.
+  EXPECT_EQ(p.get("/wwtile?T=sat&L=0&X=10&Y=0").status, 404);
+  EXPECT_EQ(p.get("/wwtile?T=sat&L=9&X=0&Y=0").status, 404);
+  EXPECT_EQ(p.get("/wwtile?T=nope&L=0&X=0&Y=0").status, 404);
+  EXPECT_EQ(p.get("/wwtile?T=sat&L=0&X=-1&Y=0").status, 400);
+}
+
+TEST(ProxyIntegration, ConditionalRequestsGet304) {
+  test::FakeUpstream up(tileReply);
+  Proxy p(up.url("/wms"));
+  const auto r = p.get(kWms111);
+  ASSERT_EQ(r.status, 200);
+  const std::string etag = r.header("etag");
+  ASSERT_TRUE(etag.size() > 2 && etag.front() == '"' && etag.back() == '"') << "strong, quoted: " << etag;
+  EXPECT_EQ(p.get(kWms111, {{"If-None-Match", etag}}).status, 304);
+  EXPECT_EQ(p.get(kWms111, {{"If-None-Match", "W/" + etag}}).status, 304); // weak comparison
+  EXPECT_EQ(p.get(kWms111, {{"If-None-Match", "\"x\", " + etag}}).status, 304);
+  EXPECT_EQ(p.get(kWms111, {{"If-None-Match", "*"}}).status, 304);
+  EXPECT_EQ(p.get(kWms111, {{"If-None-Match", "\"other\""}}).status, 200);
+  const std::string lm = r.header("last-modified");
+  EXPECT_EQ(p.get(kWms111, {{"If-Modified-Since", lm}}).status, 304); // same second
+  EXPECT_EQ(p.get(kWms111, {{"If-Modified-Since", "Mon, 01 Jan 2001 00:00:00 GMT"}}).status, 200);
+  const auto notModified = p.get("/tiles/sat/0/0/0_0.jpg", {{"If-None-Match", etag}});
+  EXPECT_EQ(notModified.status, 304);
+  EXPECT_TRUE(notModified.body.empty());
+  EXPECT_EQ(notModified.header("etag"), etag);
+}
+
+TEST(ProxyIntegration, OfflineServesTheCacheAndAnswersTheRestAtOnce) {
+  test::FakeUpstream up(tileReply);
+  Proxy p(up.url("/wms"));
+  ASSERT_EQ(p.get("/wwtile?T=sat&L=0&X=0&Y=0").status, 200);
+  p.tiles->setOffline(true);
+  EXPECT_TRUE(p.tiles->offline());
+  const auto hit = p.get("/wwtile?T=sat&L=0&X=0&Y=0");
+  EXPECT_EQ(hit.status, 200);
+  EXPECT_EQ(hit.header("x-cache"), "HIT");
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto miss = p.get("/wwtile?T=sat&L=0&X=1&Y=0");
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, 500ms);
+  EXPECT_EQ(miss.status, 404);
+  EXPECT_EQ(miss.header("x-cache"), "OFFLINE");
+  const auto wms = p.get(kWms130Crs84.substr(0, kWms130Crs84.find("BBOX")) +
+                         "BBOX=-144,-90,-108,-54&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg");
+  EXPECT_NE(wms.body.find("ServiceException"), std::string::npos) << wms.body;
+  EXPECT_EQ(up.requests(), 1u);
+}
+
+TEST(ProxyIntegration, ADeadUpstreamOpensTheBreakerAndGoesOffline) {
+  auto policy = Proxy::fastPolicy();
+  policy.retries = 0;
+  policy.failureThreshold = 2;
+  policy.openInterval = 60s;
+  Proxy p("http://127.0.0.1:" + std::to_string(test::FakeUpstream::closedPort()) + "/wms",
+          UpstreamSpec::Type::Wms, 0ms, policy);
+  EXPECT_EQ(p.get("/wwtile?T=sat&L=0&X=0&Y=0").status, 404);
+  EXPECT_EQ(p.get("/wwtile?T=sat&L=0&X=1&Y=0").status, 404);
+  EXPECT_TRUE(p.tiles->offline());
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto r = p.get("/wwtile?T=sat&L=0&X=2&Y=0");
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, 200ms);
+  EXPECT_EQ(r.status, 404);
+  EXPECT_EQ(r.header("x-cache"), "OFFLINE");
+}
+
+TEST(ProxyIntegration, ExpiredTilesAreRevalidatedOrServedStale) {
+  std::atomic<int> mode{0};
+  test::FakeUpstream up([&](const test::FakeRequest& r) {
+    if (mode == 1 && r.header("if-none-match") == "\"v1\"") return test::FakeReply::withStatus(304);
+    if (mode == 2) return test::FakeReply::withStatus(503, "down");
+    return tileReply(r);
+  });
+  Proxy p(up.url("/wms"), UpstreamSpec::Type::Wms, 100ms);
+  const auto first = p.get("/wwtile?T=sat&L=0&X=0&Y=0");
+  ASSERT_EQ(first.status, 200);
+  std::this_thread::sleep_for(150ms);
+  mode = 1;
+  const auto revalidated = p.get("/wwtile?T=sat&L=0&X=0&Y=0");
+  EXPECT_EQ(revalidated.status, 200);
+  EXPECT_EQ(revalidated.header("x-cache"), "HIT");
+  EXPECT_EQ(revalidated.body, first.body);
+  EXPECT_EQ(up.received().back().header("if-none-match"), "\"v1\"");
+  std::this_thread::sleep_for(150ms);
+  mode = 2;
+  const auto stale = p.get("/wwtile?T=sat&L=0&X=0&Y=0");
+  EXPECT_EQ(stale.status, 200);
+  EXPECT_EQ(stale.header("x-cache"), "STALE");
+  EXPECT_EQ(stale.body, first.body);
+}
+
+TEST(ProxyIntegration, WmsErrorsAreExceptionsOfTheRightVersion) {
+  test::FakeUpstream up(tileReply);
+  Proxy p(up.url("/wms"));
+  const auto undefined = p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.3.0&LAYERS=nope&STYLES=&CRS=CRS:84"
+                               "&BBOX=-180,-90,-144,-54&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg");
+  EXPECT_EQ(undefined.status, 200);
+  EXPECT_EQ(undefined.header("content-type"), "text/xml");
+  EXPECT_NE(undefined.body.find("code=\"LayerNotDefined\""), std::string::npos) << undefined.body;
+  const auto v111 = p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.1.1&LAYERS=sat&STYLES=&SRS=EPSG:4326"
+                          "&BBOX=-180,-90,-144,-54&WIDTH=256&HEIGHT=256&FORMAT=image/png");
+  EXPECT_EQ(v111.header("content-type"), "application/vnd.ogc.se_xml");
+  EXPECT_NE(v111.body.find("InvalidFormat"), std::string::npos) << v111.body;
+  const auto unaligned = p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.3.0&LAYERS=sat&STYLES=&CRS=CRS:84"
+                               "&BBOX=-170,-90,-134,-54&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg");
+  EXPECT_NE(unaligned.body.find("InvalidParameterValue"), std::string::npos) << unaligned.body;
+  const auto inverted = p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.3.0&LAYERS=sat&STYLES=&CRS=CRS:84"
+                              "&BBOX=-144,-90,-180,-54&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg");
+  EXPECT_NE(inverted.body.find("InvalidParameterValue"), std::string::npos) << inverted.body;
+  const auto blank = p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.3.0&LAYERS=nope&STYLES=&CRS=CRS:84"
+                           "&BBOX=-180,-90,-144,-54&WIDTH=64&HEIGHT=32&FORMAT=image/jpeg&EXCEPTIONS=BLANK");
+  EXPECT_EQ(blank.status, 200);
+  EXPECT_EQ(blank.header("content-type"), "image/jpeg");
+  EXPECT_EQ(up.requests(), 0u);
+  const auto caps = p.get("/wms?SERVICE=WMS&REQUEST=GetCapabilities", {{"Host", "maps.example.org:8080"}});
+  EXPECT_EQ(caps.status, 200);
+  EXPECT_NE(caps.body.find("<WMS_Capabilities"), std::string::npos);
+  EXPECT_NE(caps.body.find("http://maps.example.org:8080/wms?"), std::string::npos);
+  EXPECT_NE(caps.body.find("<Name>sat</Name>"), std::string::npos);
+  const auto caps111 = p.get("/wms?SERVICE=WMS&REQUEST=GetCapabilities&VERSION=1.1.1",
+                             {{"Host", "<script>"}, {"X-Forwarded-Proto", "https"}});
+  EXPECT_NE(caps111.body.find("WMT_MS_Capabilities"), std::string::npos);
+  EXPECT_EQ(caps111.body.find("<script>"), std::string::npos) << "a hostile Host header is not echoed";
+}
+
+TEST(ProxyIntegration, AProxyChainOfTwoTellus) {
+  test::FakeUpstream up(tileReply);
+  Proxy origin(up.url("/wms"));
+  // The second tellus's upstream is the first one's World Wind endpoint.
+  Proxy edge(origin.url("/wwtile"), UpstreamSpec::Type::WorldWind, 0ms, Proxy::fastPolicy(), "sat");
+  const auto viaEdge = edge.get("/tiles/sat/1/3/3_7.jpg");
+  ASSERT_EQ(viaEdge.status, 200) << viaEdge.body;
+  const auto direct = origin.get("/wwtile?T=sat&L=1&X=7&Y=3");
+  EXPECT_EQ(direct.header("x-cache"), "HIT");
+  EXPECT_EQ(viaEdge.body, direct.body);
+  EXPECT_EQ(up.requests(), 1u);
+}
+
+// ------------------------------------------------------------------------------------------------
+// A real MapServer (Debian's mapserv CGI) behind a CGI bridge on a loopback port.
+
+namespace {
+
+const char* kMapserv = "/usr/lib/cgi-bin/mapserv";
+
+/** Runs mapserv once as a CGI program and turns its output into a reply. */
+test::FakeReply runMapserv(const test::FakeRequest& req, const fs::path& conf, const fs::path& map) {
+  const auto q = req.target.find('?');
+  const std::string query = q == std::string::npos ? "" : req.target.substr(q + 1);
+  int out[2];
+  if (::pipe(out) != 0) return test::FakeReply::withStatus(500, "pipe");
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::dup2(out[1], 1);
+    ::close(out[0]);
+    ::close(out[1]);
+    ::setenv("QUERY_STRING", query.c_str(), 1);
+    ::setenv("REQUEST_METHOD", "GET", 1);
+    ::setenv("MAPSERVER_CONFIG_FILE", conf.c_str(), 1);
+    ::setenv("MS_MAPFILE", map.c_str(), 1);
+    ::execl(kMapserv, kMapserv, static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  ::close(out[1]);
+  std::string all;
+  char buf[65536];
+  ssize_t n = 0;
+  while ((n = ::read(out[0], buf, sizeof buf)) > 0) all.append(buf, static_cast<std::size_t>(n));
+  ::close(out[0]);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  const auto end = all.find("\r\n\r\n");
+  if (end == std::string::npos) return test::FakeReply::withStatus(500, "mapserv: " + all);
+  test::FakeReply r;
+  r.body = all.substr(end + 4);
+  std::string head = all.substr(0, end);
+  std::size_t pos = 0;
+  while (pos < head.size()) {
+    auto eol = head.find("\r\n", pos);
+    if (eol == std::string::npos) eol = head.size();
+    const std::string line = head.substr(pos, eol - pos);
+    if (const auto colon = line.find(':'); colon != std::string::npos) {
+      std::string value = line.substr(colon + 1);
+      while (!value.empty() && value.front() == ' ') value.erase(0, 1);
+      if (line.substr(0, colon) == "Status") r.status = std::stoi(value);
+      else r.headers.emplace_back(line.substr(0, colon), value);
+    }
+    pos = eol + 2;
+  }
+  return r;
+}
+
+} // namespace
+
+TEST(ProxyIntegration, RealMapServerUpstream) {
+  if (!fs::exists(kMapserv)) GTEST_SKIP() << "Debian's cgi-mapserver is not installed";
+  test::TempDir dir("mapserv");
+  // The project's mapfile, pointed at the bundled data, and the config file MapServer 8 requires.
+  std::ifstream in(fs::path(TELLUS_TEST_SOURCE_DIR) / "data" / "mapserver" / "tellus-test.map.in");
+  std::string mapText((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (auto at = mapText.find("@DATA@"); at != std::string::npos; at = mapText.find("@DATA@")) {
+    mapText.replace(at, 6, TELLUS_TEST_DATA_DIR);
+  }
+  const fs::path map = dir.path() / "tellus-test.map";
+  std::ofstream(map) << mapText;
+  const fs::path conf = dir.path() / "mapserver.conf";
+  std::ofstream(conf) << "CONFIG\n  ENV\n    MS_MAP_PATTERN \"tellus-test\\.map$\"\n    MS_MAPFILE \""
+                      << map.string() << "\"\n  END\nEND\n";
+  test::FakeUpstream mapserver([&](const test::FakeRequest& r) { return runMapserv(r, conf, map); });
+
+  test::TempDir cacheDir("mapserv-cache");
+  auto cache = test::openTestCache(cacheDir.path());
+  Fetcher fetcher;
+  UpstreamSpec u;
+  u.name = "mapserver";
+  u.type = UpstreamSpec::Type::Wms;
+  u.url = mapserver.url("/cgi-bin/mapserv");
+  u.policy = Proxy::fastPolicy();
+  u.policy.timeout = 10s;
+  LayerSpec imagery;
+  imagery.name = "bmng";
+  imagery.upstream = "mapserver";
+  imagery.dataset.grid = GridSpec{Sector{}, 36.0, 512, 512, 3};
+  imagery.dataset.mimeType = "image/jpeg";
+  LayerSpec heights;
+  heights.name = "etopo";
+  heights.upstream = "mapserver";
+  heights.dataset.grid = GridSpec{Sector{}, 20.0, 150, 150, 3};
+  heights.dataset.mimeType = "application/bil16";
+  heights.elevation = true;
+  for (const char* version : {"1.3.0", "1.1.1"}) {
+    SCOPED_TRACE(version);
+    u.wmsVersion = version;
+    u.name = std::string("mapserver-") + version;
+    imagery.upstream = heights.upstream = u.name;
+    auto tiles = TileService::create(*cache, fetcher, {u}, {imagery, heights}, TileServiceOptions{});
+    ASSERT_TRUE(tiles) << tiles.error();
+    auto fetch = [&](const std::string& layer, TileKey k) {
+      std::promise<TileAnswer> done;
+      (*tiles)->getTile(layer, "", k, [&](TileAnswer&& a) { done.set_value(std::move(a)); });
+      return done.get_future().get();
+    };
+    // Africa at level 0: a real 512x512 JPEG from MapServer, validated and cached.
+    const auto africa = fetch("bmng", TileKey{0, 2, 5});
+    ASSERT_EQ(africa.kind, TileAnswer::Kind::Tile) << africa.message;
+    EXPECT_EQ(africa.contentType, "image/jpeg");
+    // The Himalaya at level 0 of the 20-degree elevation grid: 150x150 Int16 little-endian.
+    const auto himalaya = fetch("etopo", TileKey{0, 5, 13});
+    ASSERT_EQ(himalaya.kind, TileAnswer::Kind::Tile) << himalaya.message;
+    ASSERT_EQ(himalaya.bytes.size(), 150u * 150u * 2u);
+    int highest = -32768;
+    for (std::size_t i = 0; i < himalaya.bytes.size(); i += 2) {
+      const auto h = static_cast<std::int16_t>(std::to_integer<std::uint16_t>(himalaya.bytes[i]) |
+                                               (std::to_integer<std::uint16_t>(himalaya.bytes[i + 1]) << 8));
+      highest = std::max(highest, static_cast<int>(h));
+    }
+    EXPECT_GT(highest, 5000) << "Tibet and the Himalaya";
+    EXPECT_LT(highest, 8900);
+    const auto again = fetch("bmng", TileKey{0, 2, 5});
+    EXPECT_EQ(again.origin, TileOrigin::Hit);
+  }
+  EXPECT_EQ(mapserver.requests(), 4u);
+}
