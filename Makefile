@@ -4,7 +4,7 @@ JOBS ?= 2
 TELLUS := build/tools/tellus/tellus
 CACHE ?= var/cache
 
-.PHONY: all setup build run test test-release test-sanitizers bench format clean
+.PHONY: all setup build run test test-release test-sanitizers fuzz bench format clean
 
 all: build
 
@@ -26,8 +26,9 @@ run: build
 	$(TELLUS) cache stats --cache $(CACHE)
 	$(TELLUS) serve --cache $(CACHE) --listen $(LISTEN)
 
-# Every test: Release (GL tests under xvfb-run), then the ASan+UBSan and TSan configurations.
-test: test-release test-sanitizers
+# Every test: Release (GL tests under xvfb-run), then the ASan+UBSan and TSan configurations, then
+# a short fuzzing run of the request parsers.
+test: test-release test-sanitizers fuzz
 
 test-release: build
 	cd build && ctest --output-on-failure -j$(JOBS) -LE gl
@@ -43,11 +44,42 @@ test-sanitizers: setup
 	cmake --build build-tsan -j$(JOBS)
 	cd build-tsan && TSAN_OPTIONS=halt_on_error=1 ctest --output-on-failure -j$(JOBS) -LE 'gl|slow'
 
+# libFuzzer on the request parsers (fuzz/, clang, ASan+UBSan): each target runs FUZZ_SECONDS on a
+# copy of its seeds (build-fuzz/corpus-work/<target>, which keeps what it finds between runs; the
+# seeds in fuzz/corpus/ are not touched). Any crash, sanitizer report, leak, slow input (-timeout)
+# or memory blow-up fails the target; the input lands in build-fuzz/artifacts/<target>/ and the
+# log in build-fuzz/<target>.log. Replay one: build-fuzz/fuzz/<target> <file>.
+FUZZ_SECONDS ?= 20
+FUZZ_TARGETS := fuzz_query fuzz_static_path fuzz_config
+fuzz: setup
+	@[ -f build-fuzz/build.ninja ] || cmake --preset fuzz
+	cmake --build build-fuzz -j$(JOBS) --target tellus_fuzz
+	@set -e; for t in $(FUZZ_TARGETS); do \
+	  dict=fuzz/wms.dict; [ $$t != fuzz_config ] || dict=fuzz/config.dict; \
+	  mkdir -p build-fuzz/corpus-work/$$t build-fuzz/artifacts/$$t; \
+	  cp fuzz/corpus/$$t/* build-fuzz/corpus-work/$$t/; \
+	  echo "fuzz: $$t for $(FUZZ_SECONDS) s (log: build-fuzz/$$t.log)"; \
+	  if ! ASAN_SYMBOLIZER_PATH=/usr/bin/llvm-symbolizer-16 UBSAN_OPTIONS=print_stacktrace=1 \
+	      build-fuzz/fuzz/$$t -max_total_time=$(FUZZ_SECONDS) \
+	      -rss_limit_mb=2048 -timeout=10 -dict=$$dict -artifact_prefix=build-fuzz/artifacts/$$t/ \
+	      -print_final_stats=1 build-fuzz/corpus-work/$$t > build-fuzz/$$t.log 2>&1; then \
+	    tail -n 60 build-fuzz/$$t.log; echo "fuzz: $$t FAILED, input in build-fuzz/artifacts/$$t/"; \
+	    exit 1; \
+	  fi; \
+	  grep -E '^(Done|stat::new_units_added)' build-fuzz/$$t.log || true; \
+	done
+
 bench: build
 	bench/run.sh
+
+# Cached tiles through tellus serve against nginx on the same files, and RSS with 1,000 idle
+# connections (needs wrk and nginx: apt-get install --no-install-recommends wrk nginx-light).
+.PHONY: bench-proxy
+bench-proxy: build
+	bench/proxy/run.sh
 
 format:
 	git ls-files '*.cpp' '*.hpp' | xargs clang-format -i
 
 clean:
-	rm -rf build build-debug build-asan build-tsan var
+	rm -rf build build-debug build-asan build-tsan build-fuzz var

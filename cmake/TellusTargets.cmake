@@ -6,9 +6,18 @@ function(tellus_apply_options target)
   target_compile_options(${target} PRIVATE
     -Wall -Wextra -Wpedantic -Wconversion -Wsign-conversion -Wshadow -Wnon-virtual-dtor
     -Wold-style-cast -Wcast-align -Wdouble-promotion -Wformat=2
-    -Wimplicit-fallthrough
+    -Wimplicit-fallthrough)
+  if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
     # g++ 12 reports false -Wrestrict positives inside std::string at -O2/-O3 (GCC bug 105329).
-    -Wno-restrict)
+    # g++ only: clang has no -Wrestrict and rejects the unknown option under -Werror.
+    target_compile_options(${target} PRIVATE -Wno-restrict)
+  endif()
+  if(CMAKE_CXX_COMPILER_ID STREQUAL "Clang" AND CMAKE_CXX_COMPILER_VERSION VERSION_LESS 19)
+    # libstdc++ 12 offers <expected> only when __cpp_concepts >= 202002L; clang before 19 says
+    # 201907L although clang 16+ implements what the header needs (P0848, conditionally trivial
+    # special members). Clang is the fuzzing compiler (TELLUS_FUZZ, the "fuzz" preset).
+    target_compile_options(${target} PRIVATE -U__cpp_concepts -D__cpp_concepts=202002L)
+  endif()
   # Same floating-point results on every platform: no fused multiply-add contraction (tile edges
   # must be bit-identical to what World Wind computes).
   target_compile_options(${target} PRIVATE -ffp-contract=off)

@@ -29,8 +29,9 @@ void appendHex(std::string& out, std::uint64_t value, int digits) {
 }
 
 // Parses a non-negative decimal without sign or leading zeros (World Wind paths are unpadded).
+// Digits only: from_chars alone would take "-0" (and "-00") as 0.
 std::optional<std::int64_t> parseIndex(std::string_view s) {
-  if (s.empty() || (s.size() > 1 && s[0] == '0')) return std::nullopt;
+  if (s.empty() || s[0] < '0' || s[0] > '9' || (s.size() > 1 && s[0] == '0')) return std::nullopt;
   std::int64_t v = 0;
   const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
   if (ec != std::errc{} || ptr != s.data() + s.size() || v < 0) return std::nullopt;

@@ -6,6 +6,7 @@
 #include "EmbeddedDefaultYaml.hpp"
 
 #include <yaml-cpp/depthguard.h>
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -16,6 +17,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <sstream>
 
 namespace tellus {
 
@@ -717,15 +719,85 @@ Config build(Reader& r, const YAML::Node& doc, const fs::path& baseDir, const Pa
   return c;
 }
 
+/** A document of a YAML stream: where it starts (its first token) and where its root node is. */
+struct DocumentMarks {
+  YAML::Mark start;
+  YAML::Mark root;
+};
+
+/** The documents of a YAML stream, up to the first one that starts where the one before it did.
+ *
+ * yaml-cpp 0.7 (Debian 12) does not consume a token that cannot start a node at the top level (a
+ * stray ',' as in ", a" or "a: 1\n,\n"): it reports an empty document and leaves the token, so the
+ * next document starts at the same place, and YAML::LoadAll loops forever, allocating until the
+ * memory is gone (yaml-cpp issue #1040, fixed after 0.7; found by fuzz/FuzzConfig.cpp). Two
+ * documents starting at the same position mean exactly that. */
+std::vector<DocumentMarks> documentMarks(const std::string& text) {
+  class Handler final : public YAML::EventHandler {
+  public:
+    std::vector<DocumentMarks> docs;
+    void OnDocumentStart(const YAML::Mark& m) override {
+      docs.push_back({m, m});
+      nodes_ = 0;
+    }
+    void OnDocumentEnd() override {}
+    void OnNull(const YAML::Mark& m, YAML::anchor_t) override { node(m); }
+    void OnAlias(const YAML::Mark& m, YAML::anchor_t) override { node(m); }
+    void
+    OnScalar(const YAML::Mark& m, const std::string&, YAML::anchor_t, const std::string&) override {
+      node(m);
+    }
+    void OnSequenceStart(const YAML::Mark& m,
+                         const std::string&,
+                         YAML::anchor_t,
+                         YAML::EmitterStyle::value) override {
+      node(m);
+    }
+    void OnSequenceEnd() override {}
+    void OnMapStart(const YAML::Mark& m,
+                    const std::string&,
+                    YAML::anchor_t,
+                    YAML::EmitterStyle::value) override {
+      node(m);
+    }
+    void OnMapEnd() override {}
+
+  private:
+    void node(const YAML::Mark& m) {
+      if (nodes_++ == 0 && !docs.empty()) docs.back().root = m;
+    }
+    std::size_t nodes_ = 0; // of the current document; the first is its root
+  };
+  Handler h;
+  std::istringstream in(text);
+  YAML::Parser parser(in);
+  // Every other document consumes at least one token, so this ends.
+  while (parser.HandleNextDocument(h)) {
+    const auto& d = h.docs;
+    if (d.size() >= 2 && d[d.size() - 1].start.pos == d[d.size() - 2].start.pos) break;
+  }
+  return std::move(h.docs);
+}
+
 std::expected<Config, ConfigError> parseDocument(std::string_view yamlText,
                                                  std::string_view sourceName,
                                                  const fs::path& baseDir,
                                                  const ParseOptions& o) {
   Reader r{std::string(sourceName)};
   try {
-    std::vector<YAML::Node> docs;
+    YAML::Node doc;
     try {
-      docs = YAML::LoadAll(std::string(yamlText));
+      const std::string text(yamlText);
+      // One document: counted first (YAML::LoadAll can loop forever, see documentMarks), then
+      // loaded with YAML::Load, which reads only the first.
+      const std::vector<DocumentMarks> docs = documentMarks(text);
+      if (docs.empty())
+        r.fail(YAML::Mark(), "", "the file is empty: it needs at least 'upstreams' and 'layers'");
+      if (docs.size() >= 2 && docs.back().start.pos == docs[docs.size() - 2].start.pos)
+        r.fail(docs.back().start, "", "YAML syntax: unexpected character here (a stray ','?)");
+      if (docs.size() > 1)
+        r.fail(docs[1].root, "", "more than one YAML document (---): put everything in one");
+      doc = YAML::Load(text);
     } catch (const YAML::DeepRecursion& e) {
       r.fail(e.mark, "", "YAML syntax: nested too deeply");
     } catch (const YAML::Exception& e) {
@@ -735,11 +807,7 @@ std::expected<Config, ConfigError> parseDocument(std::string_view yamlText,
              e.msg == "bad file" ? "YAML syntax: cannot parse this (nested too deeply?)"
                                  : "YAML syntax: " + e.msg);
     }
-    if (docs.empty())
-      r.fail(YAML::Mark(), "", "the file is empty: it needs at least 'upstreams' and 'layers'");
-    if (docs.size() > 1)
-      r.fail(docs[1].Mark(), "", "more than one YAML document (---): put everything in one");
-    Config c = build(r, docs[0], baseDir, o);
+    Config c = build(r, doc, baseDir, o);
     c.sourceFile = fs::path(sourceName);
     return c;
   } catch (const Failure& f) {

@@ -139,6 +139,13 @@ void writeExceptionFormats(XmlWriter& w, const std::array<std::string_view, 3>& 
   w.line(2, "</Exception>");
 }
 
+void writeLayerKeywords(XmlWriter& w, int depth, const CapabilitiesLayer& layer) {
+  if (layer.lastUpdateMillis <= 0) return;
+  w.line(depth, "<KeywordList>");
+  w.element(depth + 1, "Keyword", "LastUpdate=" + std::to_string(layer.lastUpdateMillis));
+  w.line(depth, "</KeywordList>");
+}
+
 void writeStyles(XmlWriter& w, int depth, const CapabilitiesLayer& layer) {
   for (const std::string& s : layer.styles) {
     w.line(depth, "<Style>");
@@ -192,6 +199,7 @@ std::string capabilities111(const CapabilitiesModel& m) {
     w.element(4, "Name", layer.name);
     w.element(4, "Title", layer.title);
     if (!layer.abstract.empty()) w.element(4, "Abstract", layer.abstract);
+    writeLayerKeywords(w, 4, layer);
     writeBoxes111(w, 4, layer.bbox);
     if (hasTime(layer)) {
       w.line(4, "<Dimension" + attr("name", "time") + attr("units", "ISO8601") + "/>");
@@ -258,6 +266,7 @@ std::string capabilities130(const CapabilitiesModel& m) {
     w.element(4, "Name", layer.name);
     w.element(4, "Title", layer.title);
     if (!layer.abstract.empty()) w.element(4, "Abstract", layer.abstract);
+    writeLayerKeywords(w, 4, layer);
     writeBoxes130(w, 4, layer.bbox);
     if (hasTime(layer)) {
       std::string dim = "<Dimension" + attr("name", "time") + attr("units", "ISO8601");

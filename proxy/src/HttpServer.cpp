@@ -11,6 +11,7 @@
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <unordered_map>
 #include <unordered_set>
 
 namespace tellus {
@@ -69,6 +70,38 @@ struct HttpServer::Impl : std::enable_shared_from_this<Impl> {
 
   std::mutex sessionsMutex;
   std::unordered_set<Session*> sessions;
+
+  // Token buckets per client address (requestsPerSecond > 0).
+  struct Bucket {
+    double tokens;
+    std::chrono::steady_clock::time_point last;
+  };
+  std::mutex bucketsMutex;
+  std::unordered_map<std::string, Bucket> buckets;
+
+  /** Takes a token for this address; false when its bucket is empty. */
+  bool admit(const std::string& address) {
+    const double rate = options.requestsPerSecond;
+    if (rate <= 0) return true;
+    const double burst = std::max(1.0, 2 * rate);
+    const auto now = std::chrono::steady_clock::now();
+    std::lock_guard lock(bucketsMutex);
+    if (buckets.size() > 100000) { // forget addresses whose buckets are full again
+      std::erase_if(buckets, [&](const auto& kv) {
+        return std::chrono::duration<double>(now - kv.second.last).count() * rate >= burst;
+      });
+    }
+    auto [it, fresh] = buckets.try_emplace(address, Bucket{burst, now});
+    Bucket& b = it->second;
+    if (!fresh) {
+      b.tokens =
+          std::min(burst, b.tokens + std::chrono::duration<double>(now - b.last).count() * rate);
+      b.last = now;
+    }
+    if (b.tokens < 1.0) return false;
+    b.tokens -= 1.0;
+    return true;
+  }
 
   Impl(HttpServerOptions o, HttpHandler h) : options(std::move(o)), handler(std::move(h)) {}
 
@@ -154,6 +187,12 @@ private:
     if (msg.method() != http::verb::get && msg.method() != http::verb::head) {
       auto r = HttpResponse::text(405, "text/plain", "only GET and HEAD\n");
       r.setHeader("Allow", "GET, HEAD");
+      write(std::move(r));
+      return;
+    }
+    if (!server_->admit(req.remoteAddress)) {
+      auto r = HttpResponse::text(429, "text/plain", "too many requests\n");
+      r.setHeader("Retry-After", "1");
       write(std::move(r));
       return;
     }
@@ -272,19 +311,29 @@ void HttpServer::stop() {
     std::lock_guard lock(im.postMutex);
     im.stopped = true; // answers that arrive from now on are dropped
   }
+  // Sessions first: the pending accept keeps the loop running until their closes have run.
+  std::vector<std::shared_ptr<Session>> open;
+  {
+    std::lock_guard lock(im.sessionsMutex);
+    for (Session* s : im.sessions) {
+      if (auto sp = s->weak_from_this().lock()) open.push_back(std::move(sp));
+    }
+  }
+  // Outside the lock: dropping the last reference runs ~Session, which takes it too.
+  for (auto& sp : open)
+    sp->close();
+  open.clear();
   net::post(im.ioc, [&im] {
     beast::error_code ec;
     if (im.acceptor) im.acceptor->close(ec);
   });
-  {
-    std::lock_guard lock(im.sessionsMutex);
-    for (Session* s : im.sessions) {
-      if (auto sp = s->weak_from_this().lock()) sp->close();
-    }
-  }
   // With the acceptor and every socket closed, the loop runs out of work and the threads return.
   for (auto& t : im.threads)
     t.join();
+  // Anything posted after the last thread left (it would hold a session, which holds this
+  // object: a cycle) runs here, on the caller's thread.
+  im.ioc.restart();
+  im.ioc.poll();
   im.threads.clear();
 }
 

@@ -26,7 +26,8 @@ std::string formatHttpDate(std::int64_t unixMillis) {
 std::optional<std::int64_t> parseHttpDate(std::string_view text) {
   const std::string s(text);
   // IMF-fixdate, RFC 850, asctime (RFC 9110 section 5.6.7); strptime with the C locale's names.
-  for (const char* fmt : {"%a, %d %b %Y %H:%M:%S GMT", "%A, %d-%b-%y %H:%M:%S GMT", "%a %b %e %H:%M:%S %Y"}) {
+  for (const char* fmt :
+       {"%a, %d %b %Y %H:%M:%S GMT", "%A, %d-%b-%y %H:%M:%S GMT", "%a %b %e %H:%M:%S %Y"}) {
     std::tm tm{};
     const char* end = strptime(s.c_str(), fmt, &tm);
     if (end && *end == '\0') return static_cast<std::int64_t>(timegm(&tm)) * 1000;
@@ -43,9 +44,12 @@ bool ifNoneMatchHits(std::string_view header, std::string_view etag) {
   std::size_t pos = 0;
   while (pos < header.size()) {
     const auto comma = header.find(',', pos);
-    std::string_view item = header.substr(pos, comma == std::string_view::npos ? std::string_view::npos : comma - pos);
-    while (!item.empty() && (item.front() == ' ' || item.front() == '\t')) item.remove_prefix(1);
-    while (!item.empty() && (item.back() == ' ' || item.back() == '\t')) item.remove_suffix(1);
+    std::string_view item =
+        header.substr(pos, comma == std::string_view::npos ? std::string_view::npos : comma - pos);
+    while (!item.empty() && (item.front() == ' ' || item.front() == '\t'))
+      item.remove_prefix(1);
+    while (!item.empty() && (item.back() == ' ' || item.back() == '\t'))
+      item.remove_suffix(1);
     if (item == "*" || (!item.empty() && opaque(item) == mine)) return true;
     if (comma == std::string_view::npos) break;
     pos = comma + 1;
@@ -60,10 +64,12 @@ struct ProxyFrontEnd::Impl {
   FrontEndOptions options;
   std::string updateSequence;
   std::string lastUpdate;
+  std::int64_t startedMillis = unixMillisNow();
 
   Impl(TileService& t, FrontEndOptions o) : tiles(t), options(std::move(o)) {
     const auto now = unixMillisNow();
-    updateSequence = options.updateSequence.empty() ? std::to_string(now / 1000) : options.updateSequence;
+    updateSequence =
+        options.updateSequence.empty() ? std::to_string(now / 1000) : options.updateSequence;
     const std::time_t secs = static_cast<std::time_t>(now / 1000);
     std::tm tm{};
     gmtime_r(&secs, &tm);
@@ -84,7 +90,8 @@ struct ProxyFrontEnd::Impl {
 
   static bool safeHost(std::string_view h) {
     return !h.empty() && h.size() < 256 && std::all_of(h.begin(), h.end(), [](char c) {
-      return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == ':' || c == '[' || c == ']';
+      return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == ':' ||
+             c == '[' || c == ']';
     });
   }
 
@@ -92,34 +99,42 @@ struct ProxyFrontEnd::Impl {
   std::string baseUrl(const HttpRequest& req) const {
     if (!options.publicUrl.empty()) {
       std::string u = options.publicUrl;
-      while (!u.empty() && u.back() == '/') u.pop_back();
+      while (!u.empty() && u.back() == '/')
+        u.pop_back();
       return u;
     }
     std::string_view proto = req.header("x-forwarded-proto");
     if (proto != "https") proto = "http";
     std::string_view host = req.header("x-forwarded-host");
-    if (const auto comma = host.find(','); comma != std::string_view::npos) host = host.substr(0, comma);
+    if (const auto comma = host.find(','); comma != std::string_view::npos)
+      host = host.substr(0, comma);
     if (!safeHost(host)) host = req.header("host");
     if (!safeHost(host)) host = "localhost";
     std::string prefix(req.header("x-forwarded-prefix"));
     const bool prefixOk = std::all_of(prefix.begin(), prefix.end(), [](char c) {
-      return std::isalnum(static_cast<unsigned char>(c)) || c == '/' || c == '-' || c == '_' || c == '.';
+      return std::isalnum(static_cast<unsigned char>(c)) || c == '/' || c == '-' || c == '_' ||
+             c == '.';
     });
     if (!prefixOk || (!prefix.empty() && prefix.front() != '/')) prefix.clear();
-    while (!prefix.empty() && prefix.back() == '/') prefix.pop_back();
+    while (!prefix.empty() && prefix.back() == '/')
+      prefix.pop_back();
     return std::string(proto) + "://" + std::string(host) + prefix;
   }
 
   // ----------------------------------------------------------------------------- tiles
 
-  void sendTile(const HttpRequest& req, TileAnswer&& a, const LayerSpec& l, const Responder& respond) const {
+  void sendTile(const HttpRequest& req,
+                TileAnswer&& a,
+                const LayerSpec& l,
+                const Responder& respond) const {
     HttpResponse r;
     common(r);
     r.setHeader("ETag", a.etag);
     r.setHeader("Last-Modified", formatHttpDate(a.fetchedAt));
-    r.setHeader("Cache-Control", a.origin == TileOrigin::Stale
-                                     ? std::string("public, max-age=60")
-                                     : "public, max-age=" + std::to_string(l.maxAge.count()));
+    r.setHeader("Cache-Control",
+                a.origin == TileOrigin::Stale
+                    ? std::string("public, max-age=60")
+                    : "public, max-age=" + std::to_string(l.maxAge.count()));
     r.setHeader("X-Cache", toString(a.origin));
     const std::string_view inm = req.header("if-none-match");
     bool notModified = false;
@@ -139,18 +154,19 @@ struct ProxyFrontEnd::Impl {
   }
 
   /** World Wind and static requests: 404 when there is no tile, fast. */
-  void serveTilePath(const HttpRequest& req, const std::string& layerName, const TileKey& key,
+  void serveTilePath(const HttpRequest& req,
+                     const std::string& layerName,
+                     const TileKey& key,
                      const Responder& respond) {
     const LayerSpec* l = tiles.layer(layerName);
     if (!l) return respond(plain(404, "no such layer\n"));
-    tiles.getTile(layerName, l->timeDefault, key,
-                  [this, req, l, respond](TileAnswer&& a) {
-                    if (a.kind == TileAnswer::Kind::Tile) return sendTile(req, std::move(a), *l, respond);
-                    auto r = plain(a.kind == TileAnswer::Kind::Absent ? 404 : 502, a.message + "\n");
-                    r.setHeader("X-Cache", toString(a.origin));
-                    if (a.kind == TileAnswer::Kind::Absent) r.setHeader("Cache-Control", "public, max-age=60");
-                    respond(std::move(r));
-                  });
+    tiles.getTile(layerName, l->timeDefault, key, [this, req, l, respond](TileAnswer&& a) {
+      if (a.kind == TileAnswer::Kind::Tile) return sendTile(req, std::move(a), *l, respond);
+      auto r = plain(a.kind == TileAnswer::Kind::Absent ? 404 : 502, a.message + "\n");
+      r.setHeader("X-Cache", toString(a.origin));
+      if (a.kind == TileAnswer::Kind::Absent) r.setHeader("Cache-Control", "public, max-age=60");
+      respond(std::move(r));
+    });
   }
 
   void worldWind(const HttpRequest& req, const Responder& respond) {
@@ -162,22 +178,29 @@ struct ProxyFrontEnd::Impl {
   }
 
   void staticTile(const HttpRequest& req, const Responder& respond) {
-    const auto parsed = parseStaticTilePath(std::string_view(req.path).substr(std::string_view("/tiles/").size()));
-    if (!parsed) return respond(plain(404, "not a tile path: /tiles/<layer>/<level>/<row>/<row>_<col>.<ext>\n"));
+    const auto parsed =
+        parseStaticTilePath(std::string_view(req.path).substr(std::string_view("/tiles/").size()));
+    if (!parsed)
+      return respond(
+          plain(404, "not a tile path: /tiles/<layer>/<level>/<row>/<row>_<col>.<ext>\n"));
     const LayerSpec* l = tiles.layer(parsed->layer);
-    if (!l || parsed->extension != l->dataset.extension) return respond(plain(404, "no such layer\n"));
+    if (!l || parsed->extension != l->dataset.extension)
+      return respond(plain(404, "no such layer\n"));
     serveTilePath(req, parsed->layer, parsed->key, respond);
   }
 
   // ----------------------------------------------------------------------------- WMS
 
-  void exception(const WmsErrorContext& ctx, const OgcException& e, const Responder& respond) const {
+  void
+  exception(const WmsErrorContext& ctx, const OgcException& e, const Responder& respond) const {
     const bool image = ctx.format == "image/png" || ctx.format == "image/jpeg";
-    if (ctx.exceptions != GetMapRequest::Exceptions::Xml && image && ctx.width > 0 && ctx.height > 0) {
+    if (ctx.exceptions != GetMapRequest::Exceptions::Xml && image && ctx.width > 0 &&
+        ctx.height > 0) {
       const std::string text = ctx.exceptions == GetMapRequest::Exceptions::InImage
                                    ? sanitizeForClient(e.code + ": " + e.message)
                                    : std::string();
-      if (auto img = blankImage(ctx.format, ctx.width, ctx.height, ctx.bgcolor, ctx.transparent, text)) {
+      if (auto img =
+              blankImage(ctx.format, ctx.width, ctx.height, ctx.bgcolor, ctx.transparent, text)) {
         HttpResponse r;
         common(r);
         r.status = 200;
@@ -192,11 +215,22 @@ struct ProxyFrontEnd::Impl {
     respond(std::move(r));
   }
 
-  void emptyImage(const GetMapRequest& m, std::string_view why, TileOrigin origin, const Responder& respond) const {
-    auto img = blankImage(m.format, m.width, m.height, m.bgcolor, m.transparent || m.format == "image/png");
+  void emptyImage(const GetMapRequest& m,
+                  std::string_view why,
+                  TileOrigin origin,
+                  const Responder& respond) const {
+    auto img = blankImage(
+        m.format, m.width, m.height, m.bgcolor, m.transparent || m.format == "image/png");
     if (!img) {
-      WmsErrorContext ctx{m.version, GetMapRequest::Exceptions::Xml, m.format, m.width, m.height, m.transparent, m.bgcolor};
-      return exception(ctx, OgcException{std::string(ogc::kNoApplicableCode), "", std::string(why)}, respond);
+      WmsErrorContext ctx{m.version,
+                          GetMapRequest::Exceptions::Xml,
+                          m.format,
+                          m.width,
+                          m.height,
+                          m.transparent,
+                          m.bgcolor};
+      return exception(
+          ctx, OgcException{std::string(ogc::kNoApplicableCode), "", std::string(why)}, respond);
     }
     HttpResponse r;
     common(r);
@@ -207,15 +241,20 @@ struct ProxyFrontEnd::Impl {
     respond(std::move(r));
   }
 
-  static std::expected<std::string, OgcException> resolveTime(const LayerSpec& l, std::string_view t) {
-    if (l.timeValues.empty() && l.timePeriod.empty()) return std::string(); // no TIME dimension: ignored
+  static std::expected<std::string, OgcException> resolveTime(const LayerSpec& l,
+                                                              std::string_view t) {
+    if (l.timeValues.empty() && l.timePeriod.empty())
+      return std::string(); // no TIME dimension: ignored
     if (t.empty()) {
       if (!l.timeDefault.empty()) return l.timeDefault;
-      return std::unexpected(OgcException{std::string(ogc::kMissingDimensionValue), "TIME",
+      return std::unexpected(OgcException{std::string(ogc::kMissingDimensionValue),
+                                          "TIME",
                                           "layer '" + l.name + "' needs a TIME value"});
     }
-    if (std::find(l.timeValues.begin(), l.timeValues.end(), t) != l.timeValues.end()) return std::string(t);
-    if (!l.timePeriod.empty()) { // start/end/period: ISO 8601 strings of one shape compare lexically
+    if (std::find(l.timeValues.begin(), l.timeValues.end(), t) != l.timeValues.end())
+      return std::string(t);
+    if (!l.timePeriod
+             .empty()) { // start/end/period: ISO 8601 strings of one shape compare lexically
       const auto a = l.timePeriod.find('/');
       const auto b = l.timePeriod.find('/', a == std::string::npos ? a : a + 1);
       if (a != std::string::npos && b != std::string::npos) {
@@ -224,8 +263,8 @@ struct ProxyFrontEnd::Impl {
         if (t.size() == start.size() && t >= start && t <= end) return std::string(t);
       }
     }
-    return std::unexpected(OgcException{std::string(ogc::kInvalidDimensionValue), "TIME",
-                                        "TIME is not one of the layer's times"});
+    return std::unexpected(OgcException{
+        std::string(ogc::kInvalidDimensionValue), "TIME", "TIME is not one of the layer's times"});
   }
 
   CapabilitiesModel capabilitiesModel(const HttpRequest& req) const {
@@ -235,7 +274,8 @@ struct ProxyFrontEnd::Impl {
     m.onlineResource = baseUrl(req) + "/wms?";
     std::vector<std::string> formats;
     for (const auto& l : tiles.layers()) {
-      if (std::find(formats.begin(), formats.end(), l.dataset.mimeType) == formats.end()) formats.push_back(l.dataset.mimeType);
+      if (std::find(formats.begin(), formats.end(), l.dataset.mimeType) == formats.end())
+        formats.push_back(l.dataset.mimeType);
     }
     m.getMapFormats = formats;
     m.updateSequence = updateSequence;
@@ -253,6 +293,7 @@ struct ProxyFrontEnd::Impl {
       c.timePeriod = l.timePeriod;
       c.timeDefault = l.timeDefault;
       c.opaque = l.dataset.mimeType == "image/jpeg";
+      c.lastUpdateMillis = startedMillis; // the configuration this server serves dates from here
       m.layers.push_back(std::move(c));
     }
     return m;
@@ -261,20 +302,23 @@ struct ProxyFrontEnd::Impl {
   void wms(const HttpRequest& req, const Responder& respond) {
     auto params = parseQuery(req.query, options.maxParamBytes, options.maxQueryBytes);
     if (!params) {
-      return exception(WmsErrorContext{}, OgcException{std::string(ogc::kInvalidParameterValue), "", params.error()},
+      return exception(WmsErrorContext{},
+                       OgcException{std::string(ogc::kInvalidParameterValue), "", params.error()},
                        respond);
     }
     const WmsErrorContext ctx = wmsErrorContext(*params, options.limits);
     auto parsed = parseWms(*params, options.limits);
     if (!parsed) return exception(ctx, parsed.error(), respond);
     if (const auto* caps = std::get_if<GetCapabilitiesRequest>(&*parsed)) {
-      if (auto e = checkUpdateSequence(caps->updateSequence, updateSequence)) return exception(ctx, *e, respond);
+      if (auto e = checkUpdateSequence(caps->updateSequence, updateSequence))
+        return exception(ctx, *e, respond);
       const std::string xml = capabilitiesXml(caps->version, capabilitiesModel(req));
       HttpResponse r = HttpResponse::text(
           200, caps->version == WmsVersion::V111 ? "application/vnd.ogc.wms_xml" : "text/xml", xml);
       common(r);
       char etag[24];
-      std::snprintf(etag, sizeof etag, "\"%016llx\"", static_cast<unsigned long long>(stableHash64(xml)));
+      std::snprintf(
+          etag, sizeof etag, "\"%016llx\"", static_cast<unsigned long long>(stableHash64(xml)));
       r.setHeader("ETag", etag);
       r.setHeader("Cache-Control", "public, max-age=60");
       if (ifNoneMatchHits(req.header("if-none-match"), etag)) {
@@ -285,23 +329,33 @@ struct ProxyFrontEnd::Impl {
     }
     const auto& m = std::get<GetMapRequest>(*parsed);
     if (m.layers.size() != 1) {
-      return exception(ctx, OgcException{std::string(ogc::kInvalidParameterValue), "LAYERS",
-                                         "one layer per GetMap: composing several layers is not supported yet"},
-                       respond);
+      return exception(
+          ctx,
+          OgcException{std::string(ogc::kInvalidParameterValue),
+                       "LAYERS",
+                       "one layer per GetMap: composing several layers is not supported yet"},
+          respond);
     }
     const LayerSpec* l = tiles.layer(m.layers[0]);
     if (!l) {
-      return exception(ctx, OgcException{std::string(ogc::kLayerNotDefined), "LAYERS", "no layer '" + m.layers[0] + "'"},
+      return exception(ctx,
+                       OgcException{std::string(ogc::kLayerNotDefined),
+                                    "LAYERS",
+                                    "no layer '" + m.layers[0] + "'"},
                        respond);
     }
     const std::string& style = m.styles[0];
     if (!style.empty() && style != "default" && style != l->dataset.style) {
-      return exception(ctx, OgcException{std::string(ogc::kStyleNotDefined), "STYLES", "no style '" + style + "'"},
-                       respond);
+      return exception(
+          ctx,
+          OgcException{std::string(ogc::kStyleNotDefined), "STYLES", "no style '" + style + "'"},
+          respond);
     }
     if (m.format != l->dataset.mimeType) {
-      return exception(ctx, OgcException{std::string(ogc::kInvalidFormat), "FORMAT",
-                                         "layer '" + l->name + "' is served as " + l->dataset.mimeType},
+      return exception(ctx,
+                       OgcException{std::string(ogc::kInvalidFormat),
+                                    "FORMAT",
+                                    "layer '" + l->name + "' is served as " + l->dataset.mimeType},
                        respond);
     }
     auto time = resolveTime(*l, m.time);
@@ -309,18 +363,24 @@ struct ProxyFrontEnd::Impl {
     const TileGrid* g = tiles.grid(l->name);
     const auto key = g->keyForBbox(m.bbox, m.width, m.height);
     if (!key) {
-      return exception(ctx, OgcException{std::string(ogc::kInvalidParameterValue), "BBOX",
-                                         "only tile-aligned requests are served: BBOX, WIDTH and HEIGHT must match "
-                                         "one tile of the layer's grid"},
-                       respond);
+      return exception(
+          ctx,
+          OgcException{std::string(ogc::kInvalidParameterValue),
+                       "BBOX",
+                       "only tile-aligned requests are served: BBOX, WIDTH and HEIGHT must match "
+                       "one tile of the layer's grid"},
+          respond);
     }
     tiles.getTile(l->name, *time, *key, [this, req, l, m, ctx, respond](TileAnswer&& a) {
       if (a.kind == TileAnswer::Kind::Tile) return sendTile(req, std::move(a), *l, respond);
       if (a.kind == TileAnswer::Kind::Absent) {
-        if (a.origin == TileOrigin::Offline && options.offlineResponse == FrontEndOptions::OfflineResponse::Exception) {
-          return exception(ctx, OgcException{std::string(ogc::kNoApplicableCode), "", a.message}, respond);
+        if (a.origin == TileOrigin::Offline &&
+            options.offlineResponse == FrontEndOptions::OfflineResponse::Exception) {
+          return exception(
+              ctx, OgcException{std::string(ogc::kNoApplicableCode), "", a.message}, respond);
         }
-        return emptyImage(m, a.message, a.origin, respond); // no tile there: an empty map, not an error
+        return emptyImage(
+            m, a.message, a.origin, respond); // no tile there: an empty map, not an error
       }
       exception(ctx, OgcException{std::string(ogc::kNoApplicableCode), "", a.message}, respond);
     });
@@ -333,9 +393,10 @@ struct ProxyFrontEnd::Impl {
     t += "World Wind: " + base + "/wwtile?T=<layer>&L=<level>&X=<column>&Y=<row>\n";
     t += "Static:     " + base + "/tiles/<layer>/<level>/<row>/<row>_<column>.<ext>\n\nlayers:\n";
     for (const auto& l : tiles.layers()) {
-      t += "  " + l.name + "  " + l.dataset.mimeType + "  " + std::to_string(l.dataset.grid.levelZeroDeltaDeg) +
-           " deg level 0, " + std::to_string(l.dataset.grid.numLevels) + " levels  e.g. " + base + "/wwtile?T=" +
-           l.name + "&L=0&X=0&Y=0\n";
+      t += "  " + l.name + "  " + l.dataset.mimeType + "  " +
+           std::to_string(l.dataset.grid.levelZeroDeltaDeg) + " deg level 0, " +
+           std::to_string(l.dataset.grid.numLevels) + " levels  e.g. " + base +
+           "/wwtile?T=" + l.name + "&L=0&X=0&Y=0\n";
     }
     respond(plain(200, t));
   }
@@ -349,7 +410,8 @@ ProxyFrontEnd::~ProxyFrontEnd() = default;
 void ProxyFrontEnd::handle(HttpRequest&& req, Responder respond) {
   try {
     auto& im = *impl_;
-    if (req.path == "/wms" || req.path == "/wms/" || (req.path == "/" && !req.query.empty())) return im.wms(req, respond);
+    if (req.path == "/wms" || req.path == "/wms/" || (req.path == "/" && !req.query.empty()))
+      return im.wms(req, respond);
     if (req.path == "/wwtile") return im.worldWind(req, respond);
     if (req.path.starts_with("/tiles/")) return im.staticTile(req, respond);
     if (req.path == "/") return im.index(req, respond);

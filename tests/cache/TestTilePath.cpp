@@ -61,7 +61,12 @@ TEST(TilePath, ParseRejectsEverythingElse) {
                           "0/0/0_99999999999999999999.jpg",
                           "a/0/0_0.jpg",
                           "0/0/0_0x.jpg",
-                          "+1/0/0_0.jpg"}) {
+                          "+1/0/0_0.jpg",
+                          // negative zero (from_chars takes it; found by fuzz_static_path)
+                          "-0/0/0_0.jpg",
+                          "0/-0/-0_0.jpg",
+                          "5/100/100_-00.b1",
+                          "0/0/0_-0.jpg"}) {
     EXPECT_FALSE(parseTileRelativePath(bad)) << bad;
   }
 }

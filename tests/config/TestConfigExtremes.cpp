@@ -199,6 +199,31 @@ TEST(ConfigExtremes, DeepNestingAndAliasesDoNotCrash) {
   EXPECT_EQ(values.error().key, "layers[0].time.values[0]");
 }
 
+// yaml-cpp 0.7 leaves a stray top-level ',' unread and YAML::LoadAll then makes empty documents
+// at that place forever, allocating (found by fuzz/FuzzConfig.cpp): a syntax error instead.
+TEST(ConfigExtremes, StrayTopLevelCommaIsASyntaxErrorNotAHang) {
+  const std::string minimal = layerWith("");
+  for (const std::string& text : {std::string(","),
+                                  std::string(",\n"),
+                                  std::string(" , a, b\nserver:\n  x: 1\n"),
+                                  "# comment\n, Layer names\n" + minimal,
+                                  minimal + ",\n",
+                                  minimal + "---\n,\n"}) {
+    const auto c = parse(text);
+    ASSERT_FALSE(c) << text;
+    EXPECT_EQ(c.error().key, "") << text;
+    EXPECT_GE(c.error().line, 1) << text;
+    EXPECT_NE(c.error().message.find("YAML syntax"), std::string::npos) << c.error().message;
+  }
+  const auto first = parse("# comment\n, Layer names\n" + minimal);
+  ASSERT_FALSE(first);
+  EXPECT_EQ(first.error().line, 2);
+  EXPECT_EQ(first.error().column, 1);
+  const auto last = parse(minimal + ",\n");
+  ASSERT_FALSE(last);
+  EXPECT_EQ(last.error().line, 10);
+}
+
 TEST(ConfigExtremes, LongKeysNamesAndOddBytes) {
   const auto k = parse(std::string(1000, 'k') + ": 1\n");
   ASSERT_FALSE(k);

@@ -365,3 +365,15 @@ TEST(Capabilities, CoordinatesPrintShortestRoundTrip) {
     EXPECT_EQ(back, v) << s;
   }
 }
+
+TEST(Capabilities, LayerLastUpdateKeywordForWorldWindJava) {
+  CapabilitiesModel m = fixedModel();
+  m.layers[0].lastUpdateMillis = 1795477530123;
+  for (const WmsVersion v : {WmsVersion::V111, WmsVersion::V130}) {
+    const std::string xml = capabilitiesXml(v, m);
+    const auto name = xml.find("<Name>" + m.layers[0].name + "</Name>");
+    const auto keyword = xml.find("<Keyword>LastUpdate=1795477530123</Keyword>");
+    ASSERT_NE(keyword, std::string::npos);
+    EXPECT_GT(keyword, name) << "inside the layer, after its name";
+  }
+}

@@ -1,5 +1,10 @@
-// tellus serve's pieces wired as the executable wires them (cache, fetcher, tile service, front end,
-// HTTP server on a loopback port), against a scriptable fake upstream and a real MapServer.
+// tellus serve's pieces wired as the executable wires them (cache, fetcher, tile service, front
+// end, HTTP server on a loopback port), against a scriptable fake upstream and a real MapServer.
+
+#include "../support/CacheFixtures.hpp"
+#include "../support/FakeUpstream.hpp"
+#include "../support/HttpClient.hpp"
+#include "../support/TempDir.hpp"
 
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/cache/TilePath.hpp>
@@ -8,11 +13,6 @@
 #include <tellus/proxy/ImageCodec.hpp>
 #include <tellus/proxy/ProxyFrontEnd.hpp>
 #include <tellus/proxy/TileService.hpp>
-
-#include "../support/CacheFixtures.hpp"
-#include "../support/FakeUpstream.hpp"
-#include "../support/HttpClient.hpp"
-#include "../support/TempDir.hpp"
 
 #include <gtest/gtest.h>
 
@@ -59,8 +59,10 @@ struct Proxy {
   std::unique_ptr<HttpServer> server;
 
   /** One WMS (or World Wind) layer "sat": 36-degree grid, 256-px JPEG, 4 levels. */
-  explicit Proxy(const std::string& upstreamUrl, UpstreamSpec::Type type = UpstreamSpec::Type::Wms,
-                 std::chrono::milliseconds ttl = 0ms, UpstreamPolicy policy = fastPolicy(),
+  explicit Proxy(const std::string& upstreamUrl,
+                 UpstreamSpec::Type type = UpstreamSpec::Type::Wms,
+                 std::chrono::milliseconds ttl = 0ms,
+                 UpstreamPolicy policy = fastPolicy(),
                  const std::string& upstreamLayer = "upsat") {
     cache = test::openTestCache(dir.path());
     fetcher = std::make_unique<Fetcher>();
@@ -134,7 +136,10 @@ TEST(ProxyIntegration, EveryProtocolGivesTheSameCachedBytes) {
   EXPECT_EQ(first.header("content-type"), "image/jpeg");
   EXPECT_EQ(first.header("access-control-allow-origin"), "*");
   EXPECT_EQ(first.header("cache-control"), "public, max-age=3600");
-  for (const auto& target : {kWms111, kWms130, kWms130Crs84, std::string("/tiles/sat/0/0/0_0.jpg"),
+  for (const auto& target : {kWms111,
+                             kWms130,
+                             kWms130Crs84,
+                             std::string("/tiles/sat/0/0/0_0.jpg"),
                              std::string("/wwtile?T=sat&L=0&X=0&Y=0")}) {
     const auto r = p.get(target);
     EXPECT_EQ(r.status, 200) << target << "\n" << r.body;
@@ -151,7 +156,8 @@ TEST(ProxyIntegration, EveryProtocolGivesTheSameCachedBytes) {
   EXPECT_NE(sent.find("WIDTH=256&HEIGHT=256"), std::string::npos) << sent;
   // Another tile is another upstream request with another box.
   EXPECT_EQ(p.get("/wwtile?T=sat&L=1&X=19&Y=9").status, 200);
-  EXPECT_NE(up.received().at(1).target.find("BBOX=72,162,90,180"), std::string::npos) << up.received().at(1).target;
+  EXPECT_NE(up.received().at(1).target.find("BBOX=72,162,90,180"), std::string::npos)
+      << up.received().at(1).target;
   // The file is where World Wind Java and WebWorldWind expect it.
   EXPECT_TRUE(fs::exists(p.dir.path() / "up"));
 }
@@ -166,9 +172,11 @@ TEST(ProxyIntegration, SixtyFourClientsOneUpstreamRequest) {
   std::vector<std::thread> clients;
   std::vector<test::HttpResult> results(64);
   for (std::size_t i = 0; i < results.size(); ++i) {
-    clients.emplace_back([&, i] { results[i] = p.get(i % 2 ? kWms130 : "/wwtile?T=sat&L=0&X=0&Y=0"); });
+    clients.emplace_back(
+        [&, i] { results[i] = p.get(i % 2 ? kWms130 : "/wwtile?T=sat&L=0&X=0&Y=0"); });
   }
-  for (auto& c : clients) c.join();
+  for (auto& c : clients)
+    c.join();
   for (const auto& r : results) {
     EXPECT_EQ(r.status, 200);
     EXPECT_EQ(r.body, results[0].body);
@@ -185,9 +193,12 @@ TEST(ProxyIntegration, WhatIsNotATileIsNeverCached) {
       return test::FakeReply::ok(R"(<?xml version="1.0"?><ServiceExceptionReport><ServiceException>
         Layer upsat is broken at http://secret.example/internal</ServiceException></ServiceExceptionReport>)",
                                  "image/jpeg");
-    case 1: return test::FakeReply::ok("<html>Bad gateway</html>", "text/html");
-    case 2: return test::FakeReply::ok(jpegFor(r.target, 128), "image/jpeg"); // wrong size
-    default: return tileReply(r);
+    case 1:
+      return test::FakeReply::ok("<html>Bad gateway</html>", "text/html");
+    case 2:
+      return test::FakeReply::ok(jpegFor(r.target, 128), "image/jpeg"); // wrong size
+    default:
+      return tileReply(r);
     }
   });
   Proxy p(up.url("/wms"));
@@ -198,7 +209,8 @@ TEST(ProxyIntegration, WhatIsNotATileIsNeverCached) {
     const auto wms = p.get(kWms130);
     EXPECT_EQ(wms.status, 200) << m; // WMS exceptions are HTTP 200 by default
     EXPECT_NE(wms.body.find("ServiceException"), std::string::npos) << wms.body;
-    EXPECT_EQ(wms.body.find("secret.example"), std::string::npos) << "upstream URLs never reach clients";
+    EXPECT_EQ(wms.body.find("secret.example"), std::string::npos)
+        << "upstream URLs never reach clients";
   }
   EXPECT_EQ(*p.cache->totalBytes(), 0);
   mode = 3;
@@ -219,8 +231,9 @@ TEST(ProxyIntegration, AbsentIsRememberedServerErrorsAreNot) {
   EXPECT_EQ(p.get("/wwtile?T=sat&L=2&X=3&Y=4").status, 404);
   EXPECT_EQ(up.requests(), 1u); // the second answer came from the cache's "absent" row
   // A WMS client gets an empty map there, not an error.
-  const auto wms = p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.1.1&LAYERS=sat&STYLES=&SRS=EPSG:4326"
-                         "&BBOX=-153,-54,-144,-45&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg");
+  const auto wms =
+      p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.1.1&LAYERS=sat&STYLES=&SRS=EPSG:4326"
+            "&BBOX=-153,-54,-144,-45&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg");
   EXPECT_EQ(wms.status, 200);
   EXPECT_EQ(wms.header("content-type"), "image/jpeg");
   status = 500;
@@ -243,7 +256,8 @@ TEST(ProxyIntegration, ConditionalRequestsGet304) {
   const auto r = p.get(kWms111);
   ASSERT_EQ(r.status, 200);
   const std::string etag = r.header("etag");
-  ASSERT_TRUE(etag.size() > 2 && etag.front() == '"' && etag.back() == '"') << "strong, quoted: " << etag;
+  ASSERT_TRUE(etag.size() > 2 && etag.front() == '"' && etag.back() == '"')
+      << "strong, quoted: " << etag;
   EXPECT_EQ(p.get(kWms111, {{"If-None-Match", etag}}).status, 304);
   EXPECT_EQ(p.get(kWms111, {{"If-None-Match", "W/" + etag}}).status, 304); // weak comparison
   EXPECT_EQ(p.get(kWms111, {{"If-None-Match", "\"x\", " + etag}}).status, 304);
@@ -269,7 +283,8 @@ TEST(ProxyIntegration, OfflineServesTheCacheAndAnswersTheRestAtOnce) {
   EXPECT_EQ(hit.header("x-cache"), "HIT");
   const auto t0 = std::chrono::steady_clock::now();
   const auto miss = p.get("/wwtile?T=sat&L=0&X=1&Y=0");
-  EXPECT_LT(std::chrono::steady_clock::now() - t0, 500ms);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0,
+            1500ms); // no upstream timeout (2 s) was waited for
   EXPECT_EQ(miss.status, 404);
   EXPECT_EQ(miss.header("x-cache"), "OFFLINE");
   const auto wms = p.get(kWms130Crs84.substr(0, kWms130Crs84.find("BBOX")) +
@@ -284,13 +299,15 @@ TEST(ProxyIntegration, ADeadUpstreamOpensTheBreakerAndGoesOffline) {
   policy.failureThreshold = 2;
   policy.openInterval = 60s;
   Proxy p("http://127.0.0.1:" + std::to_string(test::FakeUpstream::closedPort()) + "/wms",
-          UpstreamSpec::Type::Wms, 0ms, policy);
+          UpstreamSpec::Type::Wms,
+          0ms,
+          policy);
   EXPECT_EQ(p.get("/wwtile?T=sat&L=0&X=0&Y=0").status, 404);
   EXPECT_EQ(p.get("/wwtile?T=sat&L=0&X=1&Y=0").status, 404);
   EXPECT_TRUE(p.tiles->offline());
   const auto t0 = std::chrono::steady_clock::now();
   const auto r = p.get("/wwtile?T=sat&L=0&X=2&Y=0");
-  EXPECT_LT(std::chrono::steady_clock::now() - t0, 200ms);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, 1500ms); // the breaker answers, not a timeout
   EXPECT_EQ(r.status, 404);
   EXPECT_EQ(r.header("x-cache"), "OFFLINE");
 }
@@ -323,35 +340,44 @@ TEST(ProxyIntegration, ExpiredTilesAreRevalidatedOrServedStale) {
 TEST(ProxyIntegration, WmsErrorsAreExceptionsOfTheRightVersion) {
   test::FakeUpstream up(tileReply);
   Proxy p(up.url("/wms"));
-  const auto undefined = p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.3.0&LAYERS=nope&STYLES=&CRS=CRS:84"
-                               "&BBOX=-180,-90,-144,-54&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg");
+  const auto undefined =
+      p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.3.0&LAYERS=nope&STYLES=&CRS=CRS:84"
+            "&BBOX=-180,-90,-144,-54&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg");
   EXPECT_EQ(undefined.status, 200);
   EXPECT_EQ(undefined.header("content-type"), "text/xml");
   EXPECT_NE(undefined.body.find("code=\"LayerNotDefined\""), std::string::npos) << undefined.body;
-  const auto v111 = p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.1.1&LAYERS=sat&STYLES=&SRS=EPSG:4326"
-                          "&BBOX=-180,-90,-144,-54&WIDTH=256&HEIGHT=256&FORMAT=image/png");
+  const auto v111 =
+      p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.1.1&LAYERS=sat&STYLES=&SRS=EPSG:4326"
+            "&BBOX=-180,-90,-144,-54&WIDTH=256&HEIGHT=256&FORMAT=image/png");
   EXPECT_EQ(v111.header("content-type"), "application/vnd.ogc.se_xml");
   EXPECT_NE(v111.body.find("InvalidFormat"), std::string::npos) << v111.body;
-  const auto unaligned = p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.3.0&LAYERS=sat&STYLES=&CRS=CRS:84"
-                               "&BBOX=-170,-90,-134,-54&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg");
+  const auto unaligned =
+      p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.3.0&LAYERS=sat&STYLES=&CRS=CRS:84"
+            "&BBOX=-170,-90,-134,-54&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg");
   EXPECT_NE(unaligned.body.find("InvalidParameterValue"), std::string::npos) << unaligned.body;
-  const auto inverted = p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.3.0&LAYERS=sat&STYLES=&CRS=CRS:84"
-                              "&BBOX=-144,-90,-180,-54&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg");
+  const auto inverted =
+      p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.3.0&LAYERS=sat&STYLES=&CRS=CRS:84"
+            "&BBOX=-144,-90,-180,-54&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg");
   EXPECT_NE(inverted.body.find("InvalidParameterValue"), std::string::npos) << inverted.body;
-  const auto blank = p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.3.0&LAYERS=nope&STYLES=&CRS=CRS:84"
-                           "&BBOX=-180,-90,-144,-54&WIDTH=64&HEIGHT=32&FORMAT=image/jpeg&EXCEPTIONS=BLANK");
+  const auto blank =
+      p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.3.0&LAYERS=nope&STYLES=&CRS=CRS:84"
+            "&BBOX=-180,-90,-144,-54&WIDTH=64&HEIGHT=32&FORMAT=image/jpeg&EXCEPTIONS=BLANK");
   EXPECT_EQ(blank.status, 200);
   EXPECT_EQ(blank.header("content-type"), "image/jpeg");
   EXPECT_EQ(up.requests(), 0u);
-  const auto caps = p.get("/wms?SERVICE=WMS&REQUEST=GetCapabilities", {{"Host", "maps.example.org:8080"}});
+  const auto caps =
+      p.get("/wms?SERVICE=WMS&REQUEST=GetCapabilities", {{"Host", "maps.example.org:8080"}});
   EXPECT_EQ(caps.status, 200);
   EXPECT_NE(caps.body.find("<WMS_Capabilities"), std::string::npos);
   EXPECT_NE(caps.body.find("http://maps.example.org:8080/wms?"), std::string::npos);
   EXPECT_NE(caps.body.find("<Name>sat</Name>"), std::string::npos);
+  EXPECT_NE(caps.body.find("<Keyword>LastUpdate="), std::string::npos)
+      << "World Wind Java's cache expiry";
   const auto caps111 = p.get("/wms?SERVICE=WMS&REQUEST=GetCapabilities&VERSION=1.1.1",
                              {{"Host", "<script>"}, {"X-Forwarded-Proto", "https"}});
   EXPECT_NE(caps111.body.find("WMT_MS_Capabilities"), std::string::npos);
-  EXPECT_EQ(caps111.body.find("<script>"), std::string::npos) << "a hostile Host header is not echoed";
+  EXPECT_EQ(caps111.body.find("<script>"), std::string::npos)
+      << "a hostile Host header is not echoed";
 }
 
 TEST(ProxyIntegration, AProxyChainOfTwoTellus) {
@@ -375,7 +401,8 @@ namespace {
 const char* kMapserv = "/usr/lib/cgi-bin/mapserv";
 
 /** Runs mapserv once as a CGI program and turns its output into a reply. */
-test::FakeReply runMapserv(const test::FakeRequest& req, const fs::path& conf, const fs::path& map) {
+test::FakeReply
+runMapserv(const test::FakeRequest& req, const fs::path& conf, const fs::path& map) {
   const auto q = req.target.find('?');
   const std::string query = q == std::string::npos ? "" : req.target.substr(q + 1);
   int out[2];
@@ -396,7 +423,8 @@ test::FakeReply runMapserv(const test::FakeRequest& req, const fs::path& conf, c
   std::string all;
   char buf[65536];
   ssize_t n = 0;
-  while ((n = ::read(out[0], buf, sizeof buf)) > 0) all.append(buf, static_cast<std::size_t>(n));
+  while ((n = ::read(out[0], buf, sizeof buf)) > 0)
+    all.append(buf, static_cast<std::size_t>(n));
   ::close(out[0]);
   int status = 0;
   ::waitpid(pid, &status, 0);
@@ -412,9 +440,12 @@ test::FakeReply runMapserv(const test::FakeRequest& req, const fs::path& conf, c
     const std::string line = head.substr(pos, eol - pos);
     if (const auto colon = line.find(':'); colon != std::string::npos) {
       std::string value = line.substr(colon + 1);
-      while (!value.empty() && value.front() == ' ') value.erase(0, 1);
-      if (line.substr(0, colon) == "Status") r.status = std::stoi(value);
-      else r.headers.emplace_back(line.substr(0, colon), value);
+      while (!value.empty() && value.front() == ' ')
+        value.erase(0, 1);
+      if (line.substr(0, colon) == "Status")
+        r.status = std::stoi(value);
+      else
+        r.headers.emplace_back(line.substr(0, colon), value);
     }
     pos = eol + 2;
   }
@@ -435,9 +466,11 @@ TEST(ProxyIntegration, RealMapServerUpstream) {
   const fs::path map = dir.path() / "tellus-test.map";
   std::ofstream(map) << mapText;
   const fs::path conf = dir.path() / "mapserver.conf";
-  std::ofstream(conf) << "CONFIG\n  ENV\n    MS_MAP_PATTERN \"tellus-test\\.map$\"\n    MS_MAPFILE \""
-                      << map.string() << "\"\n  END\nEND\n";
-  test::FakeUpstream mapserver([&](const test::FakeRequest& r) { return runMapserv(r, conf, map); });
+  std::ofstream(conf)
+      << "CONFIG\n  ENV\n    MS_MAP_PATTERN \"tellus-test\\.map$\"\n    MS_MAPFILE \""
+      << map.string() << "\"\n  END\nEND\n";
+  test::FakeUpstream mapserver(
+      [&](const test::FakeRequest& r) { return runMapserv(r, conf, map); });
 
   test::TempDir cacheDir("mapserv-cache");
   auto cache = test::openTestCache(cacheDir.path());
@@ -464,7 +497,8 @@ TEST(ProxyIntegration, RealMapServerUpstream) {
     u.wmsVersion = version;
     u.name = std::string("mapserver-") + version;
     imagery.upstream = heights.upstream = u.name;
-    auto tiles = TileService::create(*cache, fetcher, {u}, {imagery, heights}, TileServiceOptions{});
+    auto tiles =
+        TileService::create(*cache, fetcher, {u}, {imagery, heights}, TileServiceOptions{});
     ASSERT_TRUE(tiles) << tiles.error();
     auto fetch = [&](const std::string& layer, TileKey k) {
       std::promise<TileAnswer> done;
@@ -481,8 +515,9 @@ TEST(ProxyIntegration, RealMapServerUpstream) {
     ASSERT_EQ(himalaya.bytes.size(), 150u * 150u * 2u);
     int highest = -32768;
     for (std::size_t i = 0; i < himalaya.bytes.size(); i += 2) {
-      const auto h = static_cast<std::int16_t>(std::to_integer<std::uint16_t>(himalaya.bytes[i]) |
-                                               (std::to_integer<std::uint16_t>(himalaya.bytes[i + 1]) << 8));
+      const auto h =
+          static_cast<std::int16_t>(std::to_integer<std::uint16_t>(himalaya.bytes[i]) |
+                                    (std::to_integer<std::uint16_t>(himalaya.bytes[i + 1]) << 8));
       highest = std::max(highest, static_cast<int>(h));
     }
     EXPECT_GT(highest, 5000) << "Tibet and the Himalaya";

@@ -578,6 +578,8 @@ TEST(StaticTilePathExtremes, RejectsUnsafeOrMalformedPaths) {
                           "bmng/31/0/0_0.jpg",
                           "bmng/0/-1/-1_0.jpg",
                           "bmng/0/+1/+1_0.jpg",
+                          "bmng/0/0/0_-0.jpg", // negative zero: one tile, two paths (fuzz)
+                          "bmng/-0/-0/-0_-00.jpg",
                           "bmng/0/99999999999999999999/99999999999999999999_0.jpg",
                           "\xCE\xA9/0/0/0_0.jpg"}) {
     EXPECT_FALSE(parseStaticTilePath(bad).has_value()) << bad;

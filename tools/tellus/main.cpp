@@ -552,6 +552,7 @@ int cmdServe(const Args& a) {
   ho.maxHeaderBytes = server.limits.maxHeaderBytes;
   ho.requestTimeout = server.limits.requestTimeout;
   ho.keepAliveTimeout = server.limits.keepaliveTimeout;
+  ho.requestsPerSecond = server.limits.requestsPerSecond;
   HttpServer http(ho, [&front](HttpRequest&& r, Responder respond) {
     front.handle(std::move(r), std::move(respond));
   });

@@ -29,6 +29,9 @@ struct CapabilitiesLayer {
   std::string timePeriod;
   std::string timeDefault; ///< the default attribute, omitted when empty
   bool opaque = true;
+  /** Written as the layer keyword "LastUpdate=<Unix ms>", which World Wind Java reads to expire its
+   * own tile cache (WMSCapabilities.getLayerLatestLastUpdateTime); omitted when 0. */
+  std::int64_t lastUpdateMillis = 0;
 
   friend bool operator==(const CapabilitiesLayer&, const CapabilitiesLayer&) = default;
 };

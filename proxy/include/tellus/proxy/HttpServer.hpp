@@ -58,6 +58,9 @@ struct HttpServerOptions {
   std::chrono::milliseconds requestTimeout{10000};
   std::chrono::milliseconds keepAliveTimeout{60000};
   std::string serverName = "tellus";
+  /// Per client address: sustained requests per second (0 = unlimited) with a burst of twice that;
+  /// requests beyond it get 429 with Retry-After, before any handler runs.
+  double requestsPerSecond = 0;
 };
 
 class HttpServer {
