@@ -59,6 +59,9 @@ struct HttpServer::Impl : std::enable_shared_from_this<Impl> {
   HttpServerOptions options;
   HttpHandler handler;
   net::io_context ioc;
+  // The acceptor lives on its own strand: accept completions and the close from stop() never run
+  // at the same time.
+  net::strand<net::io_context::executor_type> acceptStrand{net::make_strand(ioc)};
   std::optional<tcp::acceptor> acceptor;
   std::vector<std::thread> threads;
   std::atomic<std::size_t> connections{0};
@@ -115,8 +118,6 @@ public:
   Session(tcp::socket&& socket, std::shared_ptr<HttpServer::Impl> server)
       : stream_(std::move(socket)), server_(std::move(server)) {
     server_->connections.fetch_add(1);
-    std::lock_guard lock(server_->sessionsMutex);
-    server_->sessions.insert(this);
   }
   ~Session() {
     server_->connections.fetch_sub(1);
@@ -125,6 +126,11 @@ public:
   }
 
   void start() {
+    {
+      // Registered only now: make_shared has set up weak_from_this(), which stop() reads.
+      std::lock_guard lock(server_->sessionsMutex);
+      server_->sessions.insert(this);
+    }
     net::dispatch(stream_.get_executor(), [self = shared_from_this()] { self->doRead(true); });
   }
 
@@ -279,7 +285,7 @@ std::expected<void, std::string> HttpServer::start() {
   const auto address = net::ip::make_address(im.options.host, ec);
   if (ec) return std::unexpected("bad listen address '" + im.options.host + "': " + ec.message());
   const tcp::endpoint endpoint(address, im.options.port);
-  im.acceptor.emplace(im.ioc);
+  im.acceptor.emplace(im.acceptStrand);
   const std::string where = im.options.host + ":" + std::to_string(im.options.port);
   im.acceptor->open(endpoint.protocol(), ec);
   if (!ec) im.acceptor->set_option(net::socket_base::reuse_address(true), ec);
@@ -323,7 +329,7 @@ void HttpServer::stop() {
   for (auto& sp : open)
     sp->close();
   open.clear();
-  net::post(im.ioc, [&im] {
+  net::post(im.acceptStrand, [&im] {
     beast::error_code ec;
     if (im.acceptor) im.acceptor->close(ec);
   });

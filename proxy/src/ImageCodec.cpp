@@ -12,6 +12,13 @@ namespace tellus {
 
 namespace {
 
+/** tellus runs its own workers: OpenImageIO's global pool (which TIFF writing and ImageBufAlgo
+ * start) would only oversubscribe the cores, and ThreadSanitizer cannot see its synchronisation. */
+void useCallingThreadOnly() {
+  static const bool once = OIIO::attribute("threads", 1);
+  (void)once;
+}
+
 constexpr const char* kFont = "/usr/share/fonts/truetype/dejavu/DejaVuSansMono.ttf";
 
 std::expected<std::vector<std::byte>, std::string> encode(const char* formatName,
@@ -86,6 +93,7 @@ std::expected<std::vector<std::byte>, std::string> blankImage(std::string_view m
                                                               bool transparent,
                                                               std::string_view text) {
   if (width <= 0 || height <= 0) return std::unexpected("bad image shape");
+  useCallingThreadOnly();
   const std::uint32_t c = bgcolor.value_or(0xFFFFFF);
   const float rgba[4] = {static_cast<float>((c >> 16) & 0xFF) / 255.0f,
                          static_cast<float>((c >> 8) & 0xFF) / 255.0f,
