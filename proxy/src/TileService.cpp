@@ -18,10 +18,14 @@ namespace tellus {
 
 const char* toString(TileOrigin origin) noexcept {
   switch (origin) {
-  case TileOrigin::Hit: return "HIT";
-  case TileOrigin::Miss: return "MISS";
-  case TileOrigin::Stale: return "STALE";
-  case TileOrigin::Offline: return "OFFLINE";
+  case TileOrigin::Hit:
+    return "HIT";
+  case TileOrigin::Miss:
+    return "MISS";
+  case TileOrigin::Stale:
+    return "STALE";
+  case TileOrigin::Offline:
+    return "OFFLINE";
   }
   return "MISS";
 }
@@ -33,7 +37,8 @@ namespace {
 class WorkerPool {
 public:
   explicit WorkerPool(int n) {
-    for (int i = 0; i < std::max(1, n); ++i) threads_.emplace_back([this] { loop(); });
+    for (int i = 0; i < std::max(1, n); ++i)
+      threads_.emplace_back([this] { loop(); });
   }
   ~WorkerPool() {
     {
@@ -41,7 +46,8 @@ public:
       stop_ = true;
     }
     cv_.notify_all();
-    for (auto& t : threads_) t.join();
+    for (auto& t : threads_)
+      t.join();
   }
   void post(std::function<void()> job) {
     {
@@ -95,11 +101,16 @@ std::string urlEncode(std::string_view s) {
   return out;
 }
 
-std::string strongEtag(const std::string& folder, const TileKey& k, UnixMillis fetchedAt, std::size_t size) {
+std::string
+strongEtag(const std::string& folder, const TileKey& k, UnixMillis fetchedAt, std::size_t size) {
   char buf[80];
-  std::snprintf(buf, sizeof buf, "\"%016llx-%llx-%zx\"",
-                static_cast<unsigned long long>(stableHash64(folder + "/" + tileRelativePath(k, ""))),
-                static_cast<unsigned long long>(fetchedAt), size);
+  std::snprintf(
+      buf,
+      sizeof buf,
+      "\"%016llx-%llx-%zx\"",
+      static_cast<unsigned long long>(stableHash64(folder + "/" + tileRelativePath(k, ""))),
+      static_cast<unsigned long long>(fetchedAt),
+      size);
   return buf;
 }
 
@@ -206,8 +217,12 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     a.message = std::move(message);
     return a;
   }
-  static TileAnswer tile(TileOrigin origin, std::vector<std::byte> bytes, std::string contentType,
-                         UnixMillis fetchedAt, const std::string& folder, const TileKey& key) {
+  static TileAnswer tile(TileOrigin origin,
+                         std::vector<std::byte> bytes,
+                         std::string contentType,
+                         UnixMillis fetchedAt,
+                         const std::string& folder,
+                         const TileKey& key) {
     TileAnswer a;
     a.kind = TileAnswer::Kind::Tile;
     a.origin = origin;
@@ -219,12 +234,17 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
   }
 
   /** Stores a good tile and lands the flight (worker thread). */
-  void store(const FlightKey& fk, const std::string& folder, std::vector<std::byte> bytes, TileMeta meta) {
+  void store(const FlightKey& fk,
+             const std::string& folder,
+             std::vector<std::byte> bytes,
+             TileMeta meta) {
     if (auto put = cache.put(fk.dataset, fk.key, bytes, meta); !put) {
       // A full disk must not fail the client: serve what we have, the error is in the log.
       std::fprintf(stderr, "tellus: cannot cache tile: %s\n", put.error().message.c_str());
     }
-    land(fk, tile(TileOrigin::Miss, std::move(bytes), meta.contentType, meta.fetchedAt, folder, fk.key));
+    land(
+        fk,
+        tile(TileOrigin::Miss, std::move(bytes), meta.contentType, meta.fetchedAt, folder, fk.key));
   }
 
   TileMeta freshMeta(const LayerSpec& l) const {
@@ -235,16 +255,27 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     return m;
   }
 
-  void renderLocal(const FlightKey& fk, const LayerSpec& l, const TileGrid& g, const std::string& folder,
+  void renderLocal(const FlightKey& fk,
+                   const LayerSpec& l,
+                   const TileGrid& g,
+                   const std::string& folder,
                    std::optional<CacheLookup> stale) {
     workers->post([this, fk, &l, &g, folder, stale = std::move(stale)]() mutable {
       const auto& src = rasters.at(l.upstream);
-      auto bytes = src.renderTile(g.sectorOf(fk.key), g.spec().tileWidth, g.spec().tileHeight,
-                                  l.dataset.mimeType, l.noData);
+      auto bytes = src.renderTile(g.sectorOf(fk.key),
+                                  g.spec().tileWidth,
+                                  g.spec().tileHeight,
+                                  l.dataset.mimeType,
+                                  l.noData);
       if (!bytes) {
         if (stale) {
-          land(fk, tile(TileOrigin::Stale, std::move(stale->bytes), stale->meta.contentType,
-                        stale->meta.fetchedAt, folder, fk.key));
+          land(fk,
+               tile(TileOrigin::Stale,
+                    std::move(stale->bytes),
+                    stale->meta.contentType,
+                    stale->meta.fetchedAt,
+                    folder,
+                    fk.key));
         } else {
           land(fk, error("cannot render the tile: " + bytes.error()));
         }
@@ -254,8 +285,13 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     });
   }
 
-  void fetchRemote(const FlightKey& fk, const LayerSpec& l, const UpstreamSpec& u, const TileGrid& g,
-                   const std::string& folder, std::string time, std::optional<CacheLookup> stale) {
+  void fetchRemote(const FlightKey& fk,
+                   const LayerSpec& l,
+                   const UpstreamSpec& u,
+                   const TileGrid& g,
+                   const std::string& folder,
+                   std::string time,
+                   std::optional<CacheLookup> stale) {
     FetchRequest req;
     req.upstream = u.name;
     req.url = upstreamUrl(u, l, g.sectorOf(fk.key), fk.key, time);
@@ -264,33 +300,49 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
       req.ifModifiedSince = stale->meta.lastModified;
     }
     fetches.fetch_add(1);
-    fetcher.fetch(std::move(req), [weak = weak_from_this(), fk, &l, &g, folder,
-                                   stale = std::move(stale)](FetchResult&& r) mutable {
-      // The fetcher thread only hands over: validation and the cache write run on a worker. A
-      // service already destroyed has no one left to answer.
-      const auto self = weak.lock();
-      if (!self) return;
-      self->workers->post([im = self.get(), fk, &l, &g, folder, stale = std::move(stale),
-                           r = std::move(r)]() mutable {
-        im->onFetched(fk, l, g, folder, std::move(stale), std::move(r));
-      });
-    });
+    fetcher.fetch(std::move(req),
+                  [weak = weak_from_this(), fk, &l, &g, folder, stale = std::move(stale)](
+                      FetchResult&& r) mutable {
+                    // The fetcher thread only hands over: validation and the cache write run on a
+                    // worker. A service already destroyed has no one left to answer.
+                    const auto self = weak.lock();
+                    if (!self) return;
+                    self->workers->post([im = self.get(),
+                                         fk,
+                                         &l,
+                                         &g,
+                                         folder,
+                                         stale = std::move(stale),
+                                         r = std::move(r)]() mutable {
+                      im->onFetched(fk, l, g, folder, std::move(stale), std::move(r));
+                    });
+                  });
   }
 
-  void onFetched(const FlightKey& fk, const LayerSpec& l, const TileGrid& g, const std::string& folder,
-                 std::optional<CacheLookup> stale, FetchResult&& r) {
+  void onFetched(const FlightKey& fk,
+                 const LayerSpec& l,
+                 const TileGrid& g,
+                 const std::string& folder,
+                 std::optional<CacheLookup> stale,
+                 FetchResult&& r) {
     auto serveStale = [&](const std::string& why) {
       if (!stale) return false;
       (void)why;
-      land(fk, tile(TileOrigin::Stale, std::move(stale->bytes), stale->meta.contentType,
-                    stale->meta.fetchedAt, folder, fk.key));
+      land(fk,
+           tile(TileOrigin::Stale,
+                std::move(stale->bytes),
+                stale->meta.contentType,
+                stale->meta.fetchedAt,
+                folder,
+                fk.key));
       return true;
     };
     if (!r) {
       if (serveStale(r.error().message)) return;
       const auto code = r.error().code;
       if (code == FetchErrc::Connect || code == FetchErrc::CircuitOpen) {
-        land(fk, absent(TileOrigin::Offline, "the upstream is unreachable and the tile is not cached"));
+        land(fk,
+             absent(TileOrigin::Offline, "the upstream is unreachable and the tile is not cached"));
       } else {
         land(fk, error(std::string("the upstream failed (") + toString(code) + ")"));
       }
@@ -302,8 +354,13 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
       m.etag = resp.etag.empty() ? stale->meta.etag : resp.etag;
       m.lastModified = resp.lastModified.empty() ? stale->meta.lastModified : resp.lastModified;
       (void)cache.revalidated(fk.dataset, fk.key, m);
-      land(fk, tile(TileOrigin::Hit, std::move(stale->bytes), stale->meta.contentType, m.fetchedAt,
-                    folder, fk.key));
+      land(fk,
+           tile(TileOrigin::Hit,
+                std::move(stale->bytes),
+                stale->meta.contentType,
+                m.fetchedAt,
+                folder,
+                fk.key));
       return;
     }
     if (resp.status == 404) {
@@ -316,7 +373,8 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
       land(fk, error("the upstream answered HTTP " + std::to_string(resp.status)));
       return;
     }
-    if (auto ok = validateTile(resp, l.dataset.mimeType, g.spec().tileWidth, g.spec().tileHeight); !ok) {
+    if (auto ok = validateTile(resp, l.dataset.mimeType, g.spec().tileWidth, g.spec().tileHeight);
+        !ok) {
       // Never cached: an error page, a ServiceException, a truncated or wrong-sized image.
       if (serveStale(ok.error())) return;
       land(fk, error("the upstream did not send a tile: " + ok.error()));
@@ -343,8 +401,12 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     if (!found) return done(error("cache: " + std::string(toString(found.error().code))));
     const UnixMillis now = unixMillisNow();
     if (found->kind == CacheLookup::Kind::Hit && !found->stale) {
-      return done(tile(TileOrigin::Hit, std::move(found->bytes), std::move(found->meta.contentType),
-                       found->meta.fetchedAt, folder, key));
+      return done(tile(TileOrigin::Hit,
+                       std::move(found->bytes),
+                       std::move(found->meta.contentType),
+                       found->meta.fetchedAt,
+                       folder,
+                       key));
     }
     if (found->kind == CacheLookup::Kind::Absent && found->retryAfter > now) {
       return done(absent(TileOrigin::Hit, "the upstream has no tile here"));
@@ -355,8 +417,12 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     if (found->kind == CacheLookup::Kind::Hit) stale = std::move(*found);
     if (isOffline) {
       if (stale) {
-        return done(tile(TileOrigin::Stale, std::move(stale->bytes), std::move(stale->meta.contentType),
-                         stale->meta.fetchedAt, folder, key));
+        return done(tile(TileOrigin::Stale,
+                         std::move(stale->bytes),
+                         std::move(stale->meta.contentType),
+                         stale->meta.fetchedAt,
+                         folder,
+                         key));
       }
       return done(absent(TileOrigin::Offline, "offline: the tile is not cached"));
     }
@@ -381,7 +447,9 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
         ++inFlight;
       }
       Queued job = std::move(next->second);
-      getTile(job.address.layer, job.address.time, job.address.key,
+      getTile(job.address.layer,
+              job.address.time,
+              job.address.key,
               [this, done = std::move(job.done)](TileAnswer&& a) {
                 TileResult r;
                 r.status = a.kind == TileAnswer::Kind::Tile     ? TileStatus::Ok
@@ -402,8 +470,11 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
 };
 
 std::expected<std::unique_ptr<TileService>, std::string>
-TileService::create(TileCache& cache, Fetcher& fetcher, std::vector<UpstreamSpec> upstreams,
-                    std::vector<LayerSpec> layers, TileServiceOptions options) {
+TileService::create(TileCache& cache,
+                    Fetcher& fetcher,
+                    std::vector<UpstreamSpec> upstreams,
+                    std::vector<LayerSpec> layers,
+                    TileServiceOptions options) {
   auto impl = std::make_shared<Impl>(cache, fetcher, options);
   for (auto& u : upstreams) {
     if (u.type == UpstreamSpec::Type::Local) {
@@ -433,7 +504,8 @@ TileService::create(TileCache& cache, Fetcher& fetcher, std::vector<UpstreamSpec
     impl->layers.push_back(std::move(l));
   }
   for (const auto& l : impl->layers) {
-    if (auto ds = impl->dataset(l, ""); !ds) return std::unexpected("layer '" + l.name + "': " + ds.error());
+    if (auto ds = impl->dataset(l, ""); !ds)
+      return std::unexpected("layer '" + l.name + "': " + ds.error());
   }
   impl->forcedOffline = options.offline;
   impl->workers = std::make_unique<WorkerPool>(options.renderThreads);
@@ -446,7 +518,9 @@ TileService::TileService(std::shared_ptr<Impl> impl) : impl_(std::move(impl)) {}
 // they use goes away, whichever thread drops the last reference.
 TileService::~TileService() = default;
 
-const std::vector<LayerSpec>& TileService::layers() const noexcept { return impl_->layers; }
+const std::vector<LayerSpec>& TileService::layers() const noexcept {
+  return impl_->layers;
+}
 
 const LayerSpec* TileService::layer(std::string_view name) const noexcept {
   const auto it = impl_->layerIndex.find(name);
@@ -458,12 +532,16 @@ const TileGrid* TileService::grid(std::string_view name) const noexcept {
   return it == impl_->layerIndex.end() ? nullptr : &impl_->grids[it->second];
 }
 
-void TileService::getTile(std::string_view layer, std::string_view time, const TileKey& key,
+void TileService::getTile(std::string_view layer,
+                          std::string_view time,
+                          const TileKey& key,
                           std::function<void(TileAnswer&&)> done) {
   impl_->getTile(layer, time, key, std::move(done));
 }
 
-void TileService::setOffline(bool offline) noexcept { impl_->forcedOffline = offline; }
+void TileService::setOffline(bool offline) noexcept {
+  impl_->forcedOffline = offline;
+}
 
 bool TileService::offline() const noexcept {
   if (impl_->forcedOffline) return true;
@@ -476,9 +554,12 @@ bool TileService::offline() const noexcept {
   return anyRemote;
 }
 
-std::uint64_t TileService::upstreamFetches() const noexcept { return impl_->fetches.load(); }
+std::uint64_t TileService::upstreamFetches() const noexcept {
+  return impl_->fetches.load();
+}
 
-std::optional<DatasetSpec> TileService::describe(std::string_view layer, std::string_view time) const {
+std::optional<DatasetSpec> TileService::describe(std::string_view layer,
+                                                 std::string_view time) const {
   const LayerSpec* l = this->layer(layer);
   if (!l) return std::nullopt;
   DatasetSpec s = l->dataset;
@@ -506,8 +587,11 @@ bool TileService::cancel(TileRequestId id) {
   return impl_->queue.cancel(id);
 }
 
-std::string TileService::upstreamUrl(const UpstreamSpec& u, const LayerSpec& l, const Sector& s,
-                                     const TileKey& key, std::string_view time) {
+std::string TileService::upstreamUrl(const UpstreamSpec& u,
+                                     const LayerSpec& l,
+                                     const Sector& s,
+                                     const TileKey& key,
+                                     std::string_view time) {
   std::string url = u.url;
   if (url.find('?') == std::string::npos) {
     url += '?';
@@ -528,10 +612,10 @@ std::string TileService::upstreamUrl(const UpstreamSpec& u, const LayerSpec& l, 
   url += "&WIDTH=" + std::to_string(g.tileWidth) + "&HEIGHT=" + std::to_string(g.tileHeight);
   url += v111 ? "&SRS=EPSG:4326" : "&CRS=" + urlEncode(u.crs);
   url += "&BBOX=";
-  url += latLon ? formatNumber(s.south) + "," + formatNumber(s.west) + "," + formatNumber(s.north) + "," +
-                      formatNumber(s.east)
-                : formatNumber(s.west) + "," + formatNumber(s.south) + "," + formatNumber(s.east) + "," +
-                      formatNumber(s.north);
+  url += latLon ? formatNumber(s.south) + "," + formatNumber(s.west) + "," + formatNumber(s.north) +
+                      "," + formatNumber(s.east)
+                : formatNumber(s.west) + "," + formatNumber(s.south) + "," + formatNumber(s.east) +
+                      "," + formatNumber(s.north);
   url += l.dataset.mimeType == "image/png" ? "&TRANSPARENT=TRUE" : "&TRANSPARENT=FALSE";
   if (!time.empty()) url += "&TIME=" + urlEncode(time);
   return url;

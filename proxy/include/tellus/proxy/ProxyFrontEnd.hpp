@@ -19,8 +19,8 @@ namespace tellus {
 
 struct FrontEndOptions {
   std::string title = "tellus tile cache";
-  std::string publicUrl;   ///< base URL for capabilities; "" = from Host / X-Forwarded-*
-  std::string cors = "*";  ///< Access-Control-Allow-Origin; "" = none
+  std::string publicUrl;             ///< base URL for capabilities; "" = from Host / X-Forwarded-*
+  std::string cors = "*";            ///< Access-Control-Allow-Origin; "" = none
   bool exceptionsHttpStatus = false; ///< WMS exceptions with 4xx/5xx instead of 200
   enum class OfflineResponse { Exception, Blank } offlineResponse = OfflineResponse::Exception;
   WmsLimits limits;

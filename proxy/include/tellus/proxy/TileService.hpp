@@ -64,15 +64,15 @@ struct TileAnswer {
   TileOrigin origin = TileOrigin::Miss;
   std::vector<std::byte> bytes;
   std::string contentType;
-  UnixMillis fetchedAt = 0;    ///< Last-Modified
-  std::string etag;            ///< strong validator of these bytes, quoted
-  std::string message;         ///< Absent/Error: why (safe to show a client)
+  UnixMillis fetchedAt = 0; ///< Last-Modified
+  std::string etag;         ///< strong validator of these bytes, quoted
+  std::string message;      ///< Absent/Error: why (safe to show a client)
 };
 
 struct TileServiceOptions {
-  bool offline = false;                          ///< never contact upstreams
+  bool offline = false;                           ///< never contact upstreams
   std::chrono::milliseconds absentRetry{3600000}; ///< how long "no tile here" is believed
-  int renderThreads = 2;                         ///< workers for local rasters
+  int renderThreads = 2;                          ///< workers for local rasters
 };
 
 class TileService final : public ITileSource {
@@ -80,8 +80,11 @@ public:
   /** Registers every layer's dataset (time "") and opens local rasters; fails with a message naming
    * the layer or upstream. The cache and fetcher must outlive the service. */
   static std::expected<std::unique_ptr<TileService>, std::string>
-  create(TileCache& cache, Fetcher& fetcher, std::vector<UpstreamSpec> upstreams,
-         std::vector<LayerSpec> layers, TileServiceOptions options);
+  create(TileCache& cache,
+         Fetcher& fetcher,
+         std::vector<UpstreamSpec> upstreams,
+         std::vector<LayerSpec> layers,
+         TileServiceOptions options);
   ~TileService() override;
 
   const std::vector<LayerSpec>& layers() const noexcept;
@@ -91,7 +94,9 @@ public:
 
   /** One tile; `done` runs exactly once, possibly on another thread, possibly before return.
    * `time` must already be validated ("" = no time). */
-  void getTile(std::string_view layer, std::string_view time, const TileKey& key,
+  void getTile(std::string_view layer,
+               std::string_view time,
+               const TileKey& key,
                std::function<void(TileAnswer&&)> done);
 
   void setOffline(bool offline) noexcept;
@@ -102,14 +107,18 @@ public:
   std::uint64_t upstreamFetches() const noexcept;
 
   // ITileSource
-  std::optional<DatasetSpec> describe(std::string_view layer, std::string_view time = {}) const override;
+  std::optional<DatasetSpec> describe(std::string_view layer,
+                                      std::string_view time = {}) const override;
   TileRequestId request(const TileAddress& address, double priority, Callback done) override;
   void reprioritize(TileRequestId id, double priority) override;
   bool cancel(TileRequestId id) override;
 
   /** The WMS or World Wind URL that fetches a tile from a remote upstream (for tests and logs). */
-  static std::string upstreamUrl(const UpstreamSpec& upstream, const LayerSpec& layer,
-                                 const Sector& sector, const TileKey& key, std::string_view time);
+  static std::string upstreamUrl(const UpstreamSpec& upstream,
+                                 const LayerSpec& layer,
+                                 const Sector& sector,
+                                 const TileKey& key,
+                                 std::string_view time);
 
   struct Impl;
 
