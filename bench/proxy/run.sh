@@ -454,6 +454,10 @@ print(f"1-minute load at the start of the runs: {min(loads):.2f}-{max(loads):.2f
 print("CPU us/req: the server's user+system CPU time (all threads/workers) per answered request;")
 print(f"srv/wrk CPU%: the server's and wrk's CPU time in % of one CPU; other%/steal%: CPU taken by every")
 print(f"other task on the machine / stolen by the hypervisor, in % of all {ncpu} CPUs (medians over rounds).")
+disturbed = [f"{s}{r['round']}" for s in label for r in rows[s] if r["other"] > 10]
+if disturbed:
+    print(f"WARNING: other tasks took more than 10% of the CPUs during {len(disturbed)} of "
+          f"{sum(len(v) for v in rows.values())} runs ({' '.join(disturbed)}): compare those with care")
 print("Per run (series round req/s p99 ms other%):",
       "  ".join(f"{s}{r['round']} {float(r['req_s']):.0f} {int(r['p99_us']) / 1000:.1f} {r['other']:.0f}"
                 for s in label for r in rows[s]))
