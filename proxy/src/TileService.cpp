@@ -233,6 +233,16 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     return a;
   }
 
+  /** The answer for an expired tile served because no fresh one could be had. */
+  static TileAnswer staleTile(CacheLookup&& old, const std::string& folder, const TileKey& key) {
+    return tile(TileOrigin::Stale,
+                std::move(old.bytes),
+                std::move(old.meta.contentType),
+                old.meta.fetchedAt,
+                folder,
+                key);
+  }
+
   /** Stores a good tile and lands the flight (worker thread). */
   void store(const FlightKey& fk,
              const std::string& folder,
@@ -269,13 +279,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                                   l.noData);
       if (!bytes) {
         if (stale) {
-          land(fk,
-               tile(TileOrigin::Stale,
-                    std::move(stale->bytes),
-                    stale->meta.contentType,
-                    stale->meta.fetchedAt,
-                    folder,
-                    fk.key));
+          land(fk, staleTile(std::move(*stale), folder, fk.key));
         } else {
           land(fk, error("cannot render the tile: " + bytes.error()));
         }
@@ -325,20 +329,13 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                  const std::string& folder,
                  std::optional<CacheLookup> stale,
                  FetchResult&& r) {
-    auto serveStale = [&](const std::string& why) {
+    auto serveStale = [&] {
       if (!stale) return false;
-      (void)why;
-      land(fk,
-           tile(TileOrigin::Stale,
-                std::move(stale->bytes),
-                stale->meta.contentType,
-                stale->meta.fetchedAt,
-                folder,
-                fk.key));
+      land(fk, staleTile(std::move(*stale), folder, fk.key));
       return true;
     };
     if (!r) {
-      if (serveStale(r.error().message)) return;
+      if (serveStale()) return;
       const auto code = r.error().code;
       if (code == FetchErrc::Connect || code == FetchErrc::CircuitOpen) {
         land(fk,
@@ -369,14 +366,14 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
       return;
     }
     if (resp.status != 200) {
-      if (serveStale("status")) return;
+      if (serveStale()) return;
       land(fk, error("the upstream answered HTTP " + std::to_string(resp.status)));
       return;
     }
     if (auto ok = validateTile(resp, l.dataset.mimeType, g.spec().tileWidth, g.spec().tileHeight);
         !ok) {
       // Never cached: an error page, a ServiceException, a truncated or wrong-sized image.
-      if (serveStale(ok.error())) return;
+      if (serveStale()) return;
       land(fk, error("the upstream did not send a tile: " + ok.error()));
       return;
     }
@@ -417,12 +414,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     if (found->kind == CacheLookup::Kind::Hit) stale = std::move(*found);
     if (isOffline) {
       if (stale) {
-        return done(tile(TileOrigin::Stale,
-                         std::move(stale->bytes),
-                         std::move(stale->meta.contentType),
-                         stale->meta.fetchedAt,
-                         folder,
-                         key));
+        return done(staleTile(std::move(*stale), folder, key));
       }
       return done(absent(TileOrigin::Offline, "offline: the tile is not cached"));
     }
