@@ -49,6 +49,29 @@ function(tellus_add_library name)
   tellus_apply_options(tellus_${name})
 endfunction()
 
+# tellus_add_module(<module> SOURCES ... [PRIVATE_DEPS ...])
+# A module loaded at run time with dlopen() and never linked: tellus_<module> is a MODULE library
+# built from src/ that exports one extern "C" function table and nothing else (hidden visibility);
+# tellus::<module>_api is an INTERFACE target with include/, the table's header, for the loader.
+# Third-party libraries linked here (PRIVATE) are mapped only when the module is loaded.
+function(tellus_add_module name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;PRIVATE_DEPS" ${ARGN})
+  add_library(tellus_${name}_api INTERFACE)
+  add_library(tellus::${name}_api ALIAS tellus_${name}_api)
+  target_include_directories(tellus_${name}_api INTERFACE ${CMAKE_CURRENT_SOURCE_DIR}/include)
+  add_library(tellus_${name} MODULE ${ARG_SOURCES})
+  target_include_directories(tellus_${name} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src)
+  target_link_libraries(tellus_${name} PRIVATE tellus_${name}_api ${ARG_PRIVATE_DEPS})
+  set_target_properties(tellus_${name} PROPERTIES
+    CXX_VISIBILITY_PRESET hidden VISIBILITY_INLINES_HIDDEN ON)
+  if(NOT TELLUS_SANITIZE)
+    # An unresolved symbol fails the link, not the first dlopen(). (Sanitized modules leave the
+    # runtime's symbols to the executable, which clang does not link into shared objects.)
+    target_link_options(tellus_${name} PRIVATE LINKER:--no-undefined)
+  endif()
+  tellus_apply_options(tellus_${name})
+endfunction()
+
 # tellus_add_test(<name> SOURCES ... LIBS ...): one GoogleTest executable per module. ctest labels
 # come from the test suite's name, so one executable can hold several kinds of test:
 #   suite name ends in Extremes    -> label "extremes"

@@ -1,7 +1,6 @@
-#include <tellus/proxy/TileValidation.hpp>
+#include "ImagingLoader.hpp"
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
+#include <tellus/proxy/TileValidation.hpp>
 
 #include <algorithm>
 #include <array>
@@ -328,57 +327,41 @@ std::string sizeText(int w, int h) {
   return std::to_string(w) + "x" + std::to_string(h);
 }
 
-/** Decodes a whole JPEG, PNG or TIFF from memory and checks its size. */
+/** Decodes a whole JPEG, PNG or TIFF from memory (in the imaging module, loaded on the first
+ * call) and checks its size. */
 std::expected<void, std::string>
 decodeImage(std::span<const std::byte> bytes, ImageKind kind, int width, int height) {
-  const char* name = kind == ImageKind::Jpeg  ? "tile.jpg"
-                     : kind == ImageKind::Png ? "tile.png"
-                                              : "tile.tif";
-  OIIO::Filesystem::IOMemReader memory(bytes.data(), bytes.size());
-  // By format name: OpenImageIO 2.4 would look for a file called `name` on disk otherwise.
+  auto api = imaging::table();
+  if (!api)
+    return std::unexpected(std::string("cannot decode ") + toString(kind) + ": " + api.error());
+  // By format name: OpenImageIO 2.4 would look for a file on disk otherwise.
   const char* format = kind == ImageKind::Jpeg ? "jpeg" : kind == ImageKind::Png ? "png" : "tiff";
-  auto in = OIIO::ImageInput::create(format);
-  if (!in) return std::unexpected(std::string("no decoder for ") + toString(kind));
-  // Decoded on the caller's thread: a tile is small, and OpenImageIO's worker pool would only
-  // oversubscribe the cores that tellus's own workers use.
-  in->threads(1);
-  OIIO::ImageSpec spec0;
-  if (!in->set_ioproxy(&memory) || !in->open(name, spec0)) {
-    const std::string why = in->has_error() ? in->geterror() : OIIO::geterror();
-    return std::unexpected(std::string("cannot decode ") + toString(kind) + ": " + sanitise(why));
-  }
-  in->threads(1); // again: open() may reset it
-  const OIIO::ImageSpec& spec = in->spec();
-  if (spec.width != width || spec.height != height) {
-    return std::unexpected(std::string(toString(kind)) + " is " +
-                           sizeText(spec.width, spec.height) + ", expected " +
-                           sizeText(width, height));
-  }
-  if (spec.nchannels < 1 || spec.nchannels > 16)
+  TellusImagingDecodeResult shape{};
+  imaging::ErrorSink errors;
+  switch ((*api)->decodeImage(
+      bytes.data(), bytes.size(), format, width, height, &shape, errors.get())) {
+  case TELLUS_IMAGING_OK:
+    return {};
+  case TELLUS_IMAGING_NO_CODEC:
+    return std::unexpected(std::string("no decoder for ") + toString(kind));
+  case TELLUS_IMAGING_OPEN_FAILED:
+    return std::unexpected(std::string("cannot decode ") + toString(kind) + ": " +
+                           sanitise(errors.error()));
+  case TELLUS_IMAGING_SHAPE:
+    if (shape.width != width || shape.height != height) {
+      return std::unexpected(std::string(toString(kind)) + " is " +
+                             sizeText(shape.width, shape.height) + ", expected " +
+                             sizeText(width, height));
+    }
     return std::unexpected(std::string(toString(kind)) + " has an unusable channel count");
-  bool ok = true;
-  if (spec.tile_width == 0) {
-    // Row by row into one row: OpenImageIO 2.4's whole-image TIFF read starts its worker pool
-    // even with threads(1); the single-scanline path does not.
-    std::vector<unsigned char> row(static_cast<std::size_t>(width) *
-                                   static_cast<std::size_t>(spec.nchannels));
-    for (int y = 0; y < height && ok; ++y)
-      ok = in->read_scanline(y, 0, OIIO::TypeDesc::UINT8, row.data());
-  } else {
-    std::vector<unsigned char> pixels(static_cast<std::size_t>(width) *
-                                      static_cast<std::size_t>(height) *
-                                      static_cast<std::size_t>(spec.nchannels));
-    ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UINT8, pixels.data());
+  case TELLUS_IMAGING_READ_FAILED:
+    return std::unexpected(
+        std::string(toString(kind)) + " does not decode: " +
+        (errors.error().empty() ? std::string("read failed") : sanitise(errors.error())));
+  default:
+    return std::unexpected(std::string("cannot decode ") + toString(kind) + ": " +
+                           sanitise(errors.error()));
   }
-  // OpenImageIO 2.4 reports a truncated JPEG or TIFF only as error text: the reads succeed (with
-  // grey or missing rows) and has_error() is false, so the text is what counts.
-  const std::string error = in->geterror();
-  in->close();
-  if (!ok || !error.empty()) {
-    return std::unexpected(std::string(toString(kind)) + " does not decode: " +
-                           (error.empty() ? std::string("read failed") : sanitise(error)));
-  }
-  return {};
 }
 
 /** The end-of-image marker: libjpeg pads a truncated JPEG with grey and only warns. */

@@ -41,15 +41,37 @@ grep -q "index rows without files: 1" "$work/verify.txt" || fail "verify report:
 "$tellus" cache prune --older-than 0s --cache "$cache" | grep -q "pruned 0 tiles" || fail "prune keeps pinned"
 "$tellus" cache prune --older-than 0s --include-pinned --cache "$cache" | grep -q "pruned 15 tiles" || fail "prune pinned"
 
+# The imaging module (OpenImageIO inside) is loaded only where a tile is encoded or decoded: a
+# missing one fails the tiles that need it, with a message that names it.
+set +e
+TELLUS_IMAGING_MODULE=/nonexistent/libtellus_imaging.so "$tellus" seed --cache "$work/nomodule" \
+  --layer bluemarble --levels 0-0 --bbox 1,-1,2,1 >"$work/nomodule.txt" 2>&1; rc=$?
+set -e
+[ $rc -eq 3 ] || fail "seed without the imaging module should exit 3, got $rc"
+grep -q "cannot load the imaging module /nonexistent/libtellus_imaging.so" "$work/nomodule.txt" \
+  || fail "no clear error without the imaging module: $(cat "$work/nomodule.txt")"
+
+# Tile 0/2/5 cached again, for serve to answer from the cache.
+"$tellus" seed --cache "$cache" --layer bluemarble --levels 0-0 --bbox 1,-1,2,1 | grep -q "1 written" \
+  || fail "reseed of 0/2/5"
+
 # tellus serve as a user starts it: any free port, read back from what it prints; then SIGTERM.
 "$tellus" serve --cache "$cache" --listen 127.0.0.1:0 >"$work/serve.txt" 2>&1 &
 server=$!
 for _ in $(seq 50); do grep -q "listening on" "$work/serve.txt" && break; sleep 0.1; done
 port=$(grep -o "127.0.0.1:[0-9]*" "$work/serve.txt" | head -n 1 | cut -d: -f2)
 [ -n "$port" ] || fail "serve did not say where it listens: $(cat "$work/serve.txt")"
-code=$(curl -s -o "$work/tile.jpg" -w "%{http_code}" "http://127.0.0.1:$port/wwtile?T=bluemarble&L=0&X=5&Y=2")
+imaging_mapped() { grep -Eq "libtellus_imaging|libOpenImageIO" "/proc/$server/maps"; }
+! imaging_mapped || fail "serve loaded OpenImageIO before any tile needed it"
+code=$(curl -s -D "$work/hit.hdr" -o "$work/tile.jpg" -w "%{http_code}" "http://127.0.0.1:$port/wwtile?T=bluemarble&L=0&X=5&Y=2")
 [ "$code" = 200 ] || fail "wwtile answered $code"
 head -c 3 "$work/tile.jpg" | od -An -tx1 | grep -q "ff d8 ff" || fail "not a JPEG"
+grep -qi "^X-Cache: HIT" "$work/hit.hdr" || fail "0/2/5 was not a cache hit: $(cat "$work/hit.hdr")"
+! imaging_mapped || fail "a cache hit loaded OpenImageIO"
+code=$(curl -s -o "$work/miss.jpg" -w "%{http_code}" "http://127.0.0.1:$port/wwtile?T=bluemarble&L=0&X=0&Y=0")
+[ "$code" = 200 ] || fail "a miss answered $code"
+head -c 3 "$work/miss.jpg" | od -An -tx1 | grep -q "ff d8 ff" || fail "the miss is not a JPEG"
+imaging_mapped || fail "a miss rendered without loading the imaging module?"
 code=$(curl -s -o /dev/null -w "%{http_code}" "http://127.0.0.1:$port/wwtile?T=bluemarble&L=0&X=99&Y=2")
 [ "$code" = 404 ] || fail "outside the grid answered $code"
 curl -s "http://127.0.0.1:$port/wms?SERVICE=WMS&REQUEST=GetCapabilities" | grep -q "<Name>etopo</Name>" \

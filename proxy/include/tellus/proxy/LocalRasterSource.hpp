@@ -6,6 +6,7 @@
  */
 
 #include <tellus/cache/TileGrid.hpp>
+#include <tellus/proxy/RasterHeader.hpp>
 
 #include <cstddef>
 #include <cstdint>
@@ -37,21 +38,37 @@ std::expected<RasterGeoref, std::string> readWorldFile(const std::filesystem::pa
 std::filesystem::path worldFileFor(const std::filesystem::path& image);
 
 /**
- * @brief A whole image held in memory as float samples, resampled bilinearly into tiles.
+ * @brief A georeferenced image, resampled bilinearly into tiles.
  *
- * Thread safety: const methods may be called concurrently (the image is immutable after open).
+ * open() reads the world file and the image's header only (tellus/proxy/RasterHeader.hpp): it
+ * does not decode and does not load the imaging module (OpenImageIO). The pixels are decoded once,
+ * by the imaging module, on the first renderTile() or sample() (or load()), and kept as they are
+ * stored: 8-bit images as uint8, Int16 heights as int16, anything else as float.
+ *
+ * Thread safety: const methods may be called concurrently (the pixels are loaded once, by the first
+ * caller, while the others wait). Copies share the pixels.
  */
 class LocalRasterSource {
 public:
-  /** Opens an image (any format OpenImageIO reads) with its world file. */
+  /** Opens an image (JPEG, PNG, TIFF, or any other format the imaging module reads) with its world
+   * file. Errors name the file and what is wrong. */
   static std::expected<LocalRasterSource, std::string> open(const std::filesystem::path& image);
 
   int width() const noexcept { return width_; }
   int height() const noexcept { return height_; }
+  /** The channels used: the file's, at most 4. */
   int channels() const noexcept { return channels_; }
+  /** The file's sample type (from its header). */
+  SampleType sampleType() const noexcept { return sampleType_; }
   const RasterGeoref& georef() const noexcept { return georef_; }
   /** The area the image covers. */
   Sector coverage() const noexcept;
+
+  /** Decodes the pixels now if that has not happened (renderTile and sample do it on first use).
+   * A failure is remembered: every later call returns the same error. */
+  std::expected<void, std::string> load() const;
+  /** Whether the pixels have been decoded (for tests and diagnostics). */
+  bool loaded() const noexcept;
 
   /**
    * Resamples the box (west, south, east, north in degrees) into width x height pixels and encodes
@@ -66,17 +83,22 @@ public:
                                                                 std::string_view mimeType,
                                                                 std::int16_t noData = -32768) const;
 
-  /** Bilinear sample of one channel at a position (NaN outside the coverage). */
+  /** Bilinear sample of one channel at a position (NaN outside the coverage, or when the pixels
+   * cannot be decoded). */
   double sample(double latDeg, double lonDeg, int channel) const noexcept;
 
 private:
+  struct Pixels;
   LocalRasterSource() = default;
+  /** The decoded pixels, or why they cannot be had. */
+  std::expected<const Pixels*, std::string> pixels() const;
   int width_ = 0;
   int height_ = 0;
   int channels_ = 0;
+  SampleType sampleType_ = SampleType::UInt8;
   RasterGeoref georef_{};
-  /// Row-major, north row first; 8-bit images as 0..255, others as raw values (heights in metres).
-  std::shared_ptr<const std::vector<float>> pixels_;
+  /// The file and, once loaded, its samples: row-major, north row first.
+  std::shared_ptr<Pixels> pixels_;
 };
 
 } // namespace tellus
