@@ -124,6 +124,10 @@ load1() { cut -d' ' -f1 /proc/loadavg; }
 
 say "tellus proxy vs nginx: $(date -u '+%Y-%m-%d %H:%M:%S UTC'), $(nproc) CPU(s), load: $(cut -d' ' -f1-3 /proc/loadavg)"
 cp "$TELLUS" "$work/tellus"
+# The imaging module (OpenImageIO inside, dlopen()ed on the first miss) goes next to the copy, where
+# the loader looks first (else it would use the build tree's, which a rebuild may change).
+imaging_module="$(dirname "$TELLUS")/../../imaging/libtellus_imaging.so"
+[[ ! -f $imaging_module ]] || cp "$imaging_module" "$work/"
 tellus="$work/tellus"
 say "binary: $TELLUS ($(stat -c '%y' "$TELLUS" | cut -d. -f1)), $($NGINX -v 2>&1), $(wrk -v 2>&1 | head -1 | cut -d' ' -f1-2)"
 
