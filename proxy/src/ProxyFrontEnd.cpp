@@ -24,6 +24,7 @@ std::string formatHttpDate(std::int64_t unixMillis) {
 }
 
 std::optional<std::int64_t> parseHttpDate(std::string_view text) {
+  if (text.empty()) return std::nullopt;
   const std::string s(text);
   // IMF-fixdate, RFC 850, asctime (RFC 9110 section 5.6.7); strptime with the C locale's names.
   for (const char* fmt :
@@ -123,7 +124,16 @@ struct ProxyFrontEnd::Impl {
 
   // ----------------------------------------------------------------------------- tiles
 
-  void sendTile(const HttpRequest& req,
+  /** What a tile answer needs of the request: its validators (not a copy of the request). */
+  struct Validators {
+    std::string ifNoneMatch;
+    std::string ifModifiedSince;
+    explicit Validators(const HttpRequest& req)
+        : ifNoneMatch(req.header("if-none-match")),
+          ifModifiedSince(req.header("if-modified-since")) {}
+  };
+
+  void sendTile(const Validators& req,
                 TileAnswer&& a,
                 const LayerSpec& l,
                 const Responder& respond) const {
@@ -136,11 +146,11 @@ struct ProxyFrontEnd::Impl {
                     ? std::string("public, max-age=60")
                     : "public, max-age=" + std::to_string(l.maxAge.count()));
     r.setHeader("X-Cache", toString(a.origin));
-    const std::string_view inm = req.header("if-none-match");
+    const std::string_view inm = req.ifNoneMatch;
     bool notModified = false;
     if (!inm.empty()) {
       notModified = ifNoneMatchHits(inm, a.etag);
-    } else if (const auto ims = parseHttpDate(req.header("if-modified-since"))) {
+    } else if (const auto ims = parseHttpDate(req.ifModifiedSince)) {
       notModified = a.fetchedAt / 1000 <= *ims / 1000; // HTTP dates have whole seconds
     }
     if (notModified) {
@@ -148,7 +158,13 @@ struct ProxyFrontEnd::Impl {
     } else {
       r.status = 200;
       r.setHeader("Content-Type", a.contentType);
-      r.body = std::move(a.bytes);
+      if (a.file) {
+        const auto size = a.file->size();
+        const int fd = a.file->fd();
+        r.file = HttpFileBody{fd, size, std::move(a.file)};
+      } else {
+        r.body = std::move(a.bytes);
+      }
     }
     respond(std::move(r));
   }
@@ -160,8 +176,11 @@ struct ProxyFrontEnd::Impl {
                      const Responder& respond) {
     const LayerSpec* l = tiles.layer(layerName);
     if (!l) return respond(plain(404, "no such layer\n"));
-    tiles.getTile(layerName, l->timeDefault, key, [this, req, l, respond](TileAnswer&& a) {
-      if (a.kind == TileAnswer::Kind::Tile) return sendTile(req, std::move(a), *l, respond);
+    tiles.getTile(layerName,
+                  l->timeDefault,
+                  key,
+                  [this, v = Validators(req), l, respond](TileAnswer&& a) {
+      if (a.kind == TileAnswer::Kind::Tile) return sendTile(v, std::move(a), *l, respond);
       auto r = plain(a.kind == TileAnswer::Kind::Absent ? 404 : 502, a.message + "\n");
       r.setHeader("X-Cache", toString(a.origin));
       if (a.kind == TileAnswer::Kind::Absent) r.setHeader("Cache-Control", "public, max-age=60");
@@ -371,8 +390,11 @@ struct ProxyFrontEnd::Impl {
                        "one tile of the layer's grid"},
           respond);
     }
-    tiles.getTile(l->name, *time, *key, [this, req, l, m, ctx, respond](TileAnswer&& a) {
-      if (a.kind == TileAnswer::Kind::Tile) return sendTile(req, std::move(a), *l, respond);
+    tiles.getTile(l->name,
+                  *time,
+                  *key,
+                  [this, v = Validators(req), l, m, ctx, respond](TileAnswer&& a) {
+      if (a.kind == TileAnswer::Kind::Tile) return sendTile(v, std::move(a), *l, respond);
       if (a.kind == TileAnswer::Kind::Absent) {
         if (a.origin == TileOrigin::Offline &&
             options.offlineResponse == FrontEndOptions::OfflineResponse::Exception) {

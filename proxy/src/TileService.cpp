@@ -222,12 +222,15 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                          std::string contentType,
                          UnixMillis fetchedAt,
                          const std::string& folder,
-                         const TileKey& key) {
+                         const TileKey& key,
+                         std::shared_ptr<const TileFile> file = nullptr) {
     TileAnswer a;
     a.kind = TileAnswer::Kind::Tile;
     a.origin = origin;
-    a.etag = strongEtag(folder, key, fetchedAt, bytes.size());
+    a.etag = strongEtag(
+        folder, key, fetchedAt, file ? static_cast<std::size_t>(file->size()) : bytes.size());
     a.bytes = std::move(bytes);
+    a.file = std::move(file);
     a.contentType = std::move(contentType);
     a.fetchedAt = fetchedAt;
     return a;
@@ -240,7 +243,8 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                 std::move(old.meta.contentType),
                 old.meta.fetchedAt,
                 folder,
-                key);
+                key,
+                std::move(old.file));
   }
 
   /** Stores a good tile and lands the flight (worker thread). */
@@ -357,7 +361,8 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                 stale->meta.contentType,
                 m.fetchedAt,
                 folder,
-                fk.key));
+                fk.key,
+                std::move(stale->file)));
       return;
     }
     if (resp.status == 404) {
@@ -394,16 +399,18 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     auto ds = dataset(l, time);
     if (!ds) return done(error(ds.error()));
     const auto& [id, folder] = *ds;
-    auto found = cache.get(id, key);
+    // The file held open, not read: the HTTP server sends it with sendfile(2).
+    auto found = cache.openTile(id, key);
     if (!found) return done(error("cache: " + std::string(toString(found.error().code))));
     const UnixMillis now = unixMillisNow();
     if (found->kind == CacheLookup::Kind::Hit && !found->stale) {
       return done(tile(TileOrigin::Hit,
-                       std::move(found->bytes),
+                       {},
                        std::move(found->meta.contentType),
                        found->meta.fetchedAt,
                        folder,
-                       key));
+                       key,
+                       std::move(found->file)));
     }
     if (found->kind == CacheLookup::Kind::Absent && found->retryAfter > now) {
       return done(absent(TileOrigin::Hit, "the upstream has no tile here"));
@@ -448,6 +455,14 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                            : a.kind == TileAnswer::Kind::Absent ? TileStatus::Absent
                                                                 : TileStatus::Failed;
                 r.bytes = std::move(a.bytes);
+                if (a.file && r.bytes.empty()) {
+                  if (auto b = a.file->readAll()) {
+                    r.bytes = std::move(*b);
+                  } else {
+                    r.status = TileStatus::Failed;
+                    a.message = "cannot read the cached tile";
+                  }
+                }
                 r.contentType = std::move(a.contentType);
                 r.message = std::move(a.message);
                 done(std::move(r));

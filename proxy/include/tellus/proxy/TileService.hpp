@@ -62,7 +62,8 @@ struct TileAnswer {
   enum class Kind { Tile, Absent, Error };
   Kind kind = Kind::Error;
   TileOrigin origin = TileOrigin::Miss;
-  std::vector<std::byte> bytes;
+  std::vector<std::byte> bytes;         ///< Tile: the bytes, unless `file` holds them
+  std::shared_ptr<const TileFile> file; ///< Tile from the cache: its open file (bytes empty)
   std::string contentType;
   UnixMillis fetchedAt = 0; ///< Last-Modified
   std::string etag;         ///< strong validator of these bytes, quoted
