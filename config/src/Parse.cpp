@@ -338,6 +338,7 @@ void readServer(Reader& r, const Map& root, ServerSettings& s) {
                "exceptions_http_status",
                "offline_response",
                "offline",
+               "threads",
                "limits"});
   if (auto v = m.get("listen")) {
     auto a = detail::parseListenAddress(text(r, *v, m.path("listen")));
@@ -354,6 +355,7 @@ void readServer(Reader& r, const Map& root, ServerSettings& s) {
                             ? OfflineResponse::Exception
                             : OfflineResponse::Blank;
   if (auto v = m.get("offline")) s.offline = boolean(r, *v, m.path("offline"));
+  if (auto v = m.get("threads")) s.threads = int32(r, *v, m.path("threads"));
 
   const auto [ln, lwhere] = m.child("limits");
   const Map l(r,

@@ -553,6 +553,7 @@ int cmdServe(const Args& a) {
   ho.requestTimeout = server.limits.requestTimeout;
   ho.keepAliveTimeout = server.limits.keepaliveTimeout;
   ho.requestsPerSecond = server.limits.requestsPerSecond;
+  ho.threads = server.threads;
   HttpServer http(ho, [&front](HttpRequest&& r, Responder respond) {
     front.handle(std::move(r), std::move(respond));
   });
