@@ -62,10 +62,13 @@ class Session;
 struct HttpServer::Impl : std::enable_shared_from_this<Impl> {
   HttpServerOptions options;
   HttpHandler handler;
-  net::io_context ioc;
-  // The acceptor lives on its own strand: accept completions and the close from stop() never run
-  // at the same time.
-  net::strand<net::io_context::executor_type> acceptStrand{net::make_strand(ioc)};
+  // One event loop per thread, as nginx has one per worker: a connection lives on one loop for its
+  // whole life, so its handlers need no strand, and a loop never wakes another to run them (one
+  // shared io_context with N threads cost a futex wake-up per request). The acceptor is on loop 0
+  // and hands new connections out round-robin.
+  std::vector<std::unique_ptr<net::io_context>> loops;
+  std::vector<net::executor_work_guard<net::io_context::executor_type>> keepRunning;
+  std::size_t nextLoop = 0; // acceptor's handler only
   std::optional<tcp::acceptor> acceptor;
   std::vector<std::thread> threads;
   std::atomic<std::size_t> connections{0};
@@ -117,7 +120,7 @@ struct HttpServer::Impl : std::enable_shared_from_this<Impl> {
 
 namespace {
 
-using Strand = net::strand<net::io_context::executor_type>;
+using LoopExecutor = net::io_context::executor_type;
 
 class Session : public std::enable_shared_from_this<Session> {
 public:
@@ -226,8 +229,8 @@ private:
 
   bool onOwnStrand() {
     const auto executor = stream_.get_executor();
-    const auto* strand = executor.target<Strand>();
-    return strand && strand->running_in_this_thread();
+    const auto* loop = executor.target<LoopExecutor>();
+    return loop && loop->running_in_this_thread();
   }
 
   void write(HttpResponse&& r) {
@@ -392,7 +395,8 @@ private:
 
 void HttpServer::Impl::doAccept() {
   acceptor->async_accept(
-      net::make_strand(ioc), [self = shared_from_this()](beast::error_code ec, tcp::socket socket) {
+      *loops[nextLoop], [self = shared_from_this()](beast::error_code ec, tcp::socket socket) {
+        self->nextLoop = (self->nextLoop + 1) % self->loops.size();
         if (ec) {
           if (ec == net::error::operation_aborted) return; // stopping
         } else if (self->connections.load() >= self->options.maxConnections) {
@@ -418,7 +422,14 @@ std::expected<void, std::string> HttpServer::start() {
   const auto address = net::ip::make_address(im.options.host, ec);
   if (ec) return std::unexpected("bad listen address '" + im.options.host + "': " + ec.message());
   const tcp::endpoint endpoint(address, im.options.port);
-  im.acceptor.emplace(im.acceptStrand);
+  int n = im.options.threads > 0 ? im.options.threads
+                                 : static_cast<int>(std::thread::hardware_concurrency());
+  n = std::max(n, 1);
+  for (int i = 0; i < n; ++i) {
+    im.loops.push_back(std::make_unique<net::io_context>(1)); // one thread: no scheduler locking
+    im.keepRunning.push_back(net::make_work_guard(*im.loops.back()));
+  }
+  im.acceptor.emplace(*im.loops.front());
   const std::string where = im.options.host + ":" + std::to_string(im.options.port);
   im.acceptor->open(endpoint.protocol(), ec);
   if (!ec) im.acceptor->set_option(net::socket_base::reuse_address(true), ec);
@@ -427,11 +438,8 @@ std::expected<void, std::string> HttpServer::start() {
   if (ec) return std::unexpected("cannot listen on " + where + ": " + ec.message());
   im.boundPort = im.acceptor->local_endpoint().port();
   im.doAccept();
-  int n = im.options.threads > 0 ? im.options.threads
-                                 : static_cast<int>(std::thread::hardware_concurrency());
-  n = std::max(n, 1);
-  for (int i = 0; i < n; ++i)
-    im.threads.emplace_back([&im] { im.ioc.run(); });
+  for (auto& loop : im.loops)
+    im.threads.emplace_back([io = loop.get()] { io->run(); });
   return {};
 }
 
@@ -462,17 +470,20 @@ void HttpServer::stop() {
   for (auto& sp : open)
     sp->close();
   open.clear();
-  net::post(im.acceptStrand, [&im] {
+  net::post(*im.loops.front(), [&im] {
     beast::error_code ec;
     if (im.acceptor) im.acceptor->close(ec);
   });
+  im.keepRunning.clear(); // loops with nothing left to do may return now
   // With the acceptor and every socket closed, the loop runs out of work and the threads return.
   for (auto& t : im.threads)
     t.join();
   // Anything posted after the last thread left (it would hold a session, which holds this
   // object: a cycle) runs here, on the caller's thread.
-  im.ioc.restart();
-  im.ioc.poll();
+  for (auto& loop : im.loops) {
+    loop->restart();
+    loop->poll();
+  }
   im.threads.clear();
 }
 
