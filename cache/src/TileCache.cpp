@@ -1062,7 +1062,6 @@ std::expected<CacheLookup, CacheError> TileCache::openTile(DatasetId id, const T
   auto d = im.checkedDataset(id, key);
   if (!d) return std::unexpected(d.error());
   const TouchKey tk{id, key};
-  const fs::path path = im.tilePath(**d, key);
   auto hit = [&](const detail::CachedRow& r) {
     CacheLookup out;
     out.kind = CacheLookup::Kind::Hit;
@@ -1087,6 +1086,7 @@ std::expected<CacheLookup, CacheError> TileCache::openTile(DatasetId id, const T
       if (now - r->checkedAtNs.load(std::memory_order_relaxed) < recheck) return hit(*r);
       // Still the file the index names? (replaced or deleted behind the cache's back otherwise)
       struct stat st {};
+      const fs::path path = im.tilePath(**d, key);
       if (::stat(path.c_str(), &st) == 0 && st.st_dev == r->dev && st.st_ino == r->ino) {
         r->checkedAtNs.store(now, std::memory_order_relaxed);
         return hit(*r);
@@ -1097,7 +1097,7 @@ std::expected<CacheLookup, CacheError> TileCache::openTile(DatasetId id, const T
   const std::uint64_t generation = im.rows.generation();
   auto found = peek(id, key);
   if (!found || found->kind != CacheLookup::Kind::Hit) return found;
-  auto row = openRowFile(path, *found);
+  auto row = openRowFile(im.tilePath(**d, key), *found);
   if (!row) {
     // The file vanished or changed under us: forget the row (self-healing) and report a miss.
     im.submitDetached([id, key](Impl& w) { return w.deleteRow(id, key); });

@@ -346,7 +346,7 @@ struct ProxyFrontEnd::Impl {
       }
       return respond(std::move(r));
     }
-    const auto& m = std::get<GetMapRequest>(*parsed);
+    auto& m = std::get<GetMapRequest>(*parsed);
     if (m.layers.size() != 1) {
       return exception(
           ctx,
@@ -393,7 +393,7 @@ struct ProxyFrontEnd::Impl {
     tiles.getTile(l->name,
                   *time,
                   *key,
-                  [this, v = Validators(req), l, m, ctx, respond](TileAnswer&& a) {
+                  [this, v = Validators(req), l, m = std::move(m), ctx, respond](TileAnswer&& a) {
       if (a.kind == TileAnswer::Kind::Tile) return sendTile(v, std::move(a), *l, respond);
       if (a.kind == TileAnswer::Kind::Absent) {
         if (a.origin == TileOrigin::Offline &&
