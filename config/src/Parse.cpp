@@ -415,6 +415,7 @@ readUpstream(Reader& r, const YAML::Node& node, std::string path, const fs::path
                "retry_backoff",
                "failure_threshold",
                "open_interval",
+               "max_retry_after_wait",
                "headers"});
   if (node.IsNull())
     r.fail(node.Mark(), m.path(), "expected a mapping (name, type, ...), got nothing");
@@ -447,6 +448,7 @@ readUpstream(Reader& r, const YAML::Node& node, std::string path, const fs::path
                            "retry_backoff",
                            "failure_threshold",
                            "open_interval",
+                           "max_retry_after_wait",
                            "headers"})
       notFor(key, "wms and worldwind");
     notFor("version", "wms");
@@ -471,6 +473,8 @@ readUpstream(Reader& r, const YAML::Node& node, std::string path, const fs::path
   if (auto v = m.get("timeout")) u.timeout = duration(r, *v, m.path("timeout"));
   if (auto v = m.get("retry_backoff")) u.retryBackoff = duration(r, *v, m.path("retry_backoff"));
   if (auto v = m.get("open_interval")) u.openInterval = duration(r, *v, m.path("open_interval"));
+  if (auto v = m.get("max_retry_after_wait"))
+    u.maxRetryAfterWait = duration(r, *v, m.path("max_retry_after_wait"));
   if (auto v = m.get("max_connections")) u.maxConnections = int32(r, *v, m.path("max_connections"));
   if (auto v = m.get("retries")) u.retries = int32(r, *v, m.path("retries"));
   if (auto v = m.get("failure_threshold"))

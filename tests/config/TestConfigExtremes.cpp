@@ -144,6 +144,7 @@ TEST(ConfigExtremes, UpstreamCountsOutOfRange) {
   check("connect_timeout", "0s");
   check("timeout", "0");
   check("open_interval", "0ms");
+  check("max_retry_after_wait", "-1s");
   check("version", "1.0.0");
   check("crs", "EPSG:3857");
 }

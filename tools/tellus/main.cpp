@@ -487,6 +487,7 @@ std::pair<std::vector<UpstreamSpec>, std::vector<LayerSpec>> proxySpecs(const Co
     s.policy.retryBackoff = u.retryBackoff;
     s.policy.failureThreshold = u.failureThreshold;
     s.policy.openInterval = u.openInterval;
+    s.policy.maxRetryAfterWait = u.maxRetryAfterWait;
     s.policy.headers = u.headers;
     ups.push_back(std::move(s));
   }
