@@ -316,8 +316,8 @@ struct TileCache::Impl {
   Result loadDatasets(sqlite3* db) const {
     sql::Stmt s(db,
                 "SELECT id, server, name, folder, west, south, east, north, level_zero_delta, "
-                "tile_width, tile_height, num_levels, mime_type, extension, style, time, pinned "
-                "FROM datasets ORDER BY id");
+                "tile_width, tile_height, num_levels, mime_type, extension, style, time, pinned, "
+                "created_at FROM datasets ORDER BY id");
     if (!s.ok()) return std::unexpected(sql::errorFrom(db, s.prepareRc(), "reading datasets"));
     std::map<DatasetId, std::shared_ptr<const DatasetEntry>> loaded;
     sql::Stmt::Use u(s);
@@ -329,9 +329,10 @@ struct TileCache::Impl {
       const DatasetId id = u.i64(0);
       std::string folder = u.text(3);
       fs::path dir = options.root / folder;
+      const std::int64_t createdAt = u.i64(17);
       loaded.emplace(id,
                      std::make_shared<const DatasetEntry>(
-                         DatasetEntry{DatasetInfo{id, std::move(spec), std::move(folder)},
+                         DatasetEntry{DatasetInfo{id, std::move(spec), std::move(folder), createdAt},
                                       std::move(*grid),
                                       std::move(dir)}));
     }
@@ -752,7 +753,10 @@ namespace {
 
 /** Inserts a dataset row (the usage row follows by trigger); returns its id. */
 std::expected<DatasetId, CacheError>
-insertDataset(sqlite3* db, const DatasetSpec& spec, const std::string& folder) {
+insertDataset(sqlite3* db,
+              const DatasetSpec& spec,
+              const std::string& folder,
+              UnixMillis createdAt = unixMillisNow()) {
   sql::Stmt ins(db,
                 "INSERT INTO datasets(server, name, folder, west, south, east, north, "
                 "level_zero_delta, tile_width, tile_height, num_levels, mime_type, extension, "
@@ -771,7 +775,7 @@ insertDataset(sqlite3* db, const DatasetSpec& spec, const std::string& folder) {
   u.bind(11, std::int64_t{g.numLevels}).bind(12, std::string_view(spec.mimeType));
   u.bind(13, std::string_view(spec.extension)).bind(14, std::string_view(spec.style));
   u.bind(15, std::string_view(spec.time)).bind(16, std::int64_t{spec.pinned ? 1 : 0});
-  u.bind(17, unixMillisNow());
+  u.bind(17, createdAt);
   const int rc = u.step();
   if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "registering dataset"));
   return sqlite3_last_insert_rowid(db);
@@ -908,15 +912,17 @@ std::expected<DatasetId, CacheError> TileCache::registerDataset(const DatasetSpe
     return std::unexpected(r.error());
   }
   DatasetId id = 0;
+  UnixMillis createdAt = unixMillisNow();
   auto r = impl_->submit([&](Impl& im) -> Result {
     sqlite3* db = im.writeDb.get();
-    sql::Stmt find(db, "SELECT id FROM datasets WHERE folder = ?1");
+    sql::Stmt find(db, "SELECT id, created_at FROM datasets WHERE folder = ?1");
     {
       sql::Stmt::Use u(find);
       u.bind(1, std::string_view(folder));
       const int rc = u.step();
       if (rc == SQLITE_ROW) {
         id = u.i64(0);
+        createdAt = u.i64(1);
       } else if (rc != SQLITE_DONE) {
         return std::unexpected(sql::errorFrom(db, rc, "finding dataset"));
       }
@@ -929,7 +935,7 @@ std::expected<DatasetId, CacheError> TileCache::registerDataset(const DatasetSpe
       if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "updating dataset"));
       return {};
     }
-    auto inserted = insertDataset(db, spec, folder);
+    auto inserted = insertDataset(db, spec, folder, createdAt);
     if (!inserted) return std::unexpected(inserted.error());
     id = *inserted;
     return {};
@@ -941,7 +947,7 @@ std::expected<DatasetId, CacheError> TileCache::registerDataset(const DatasetSpe
     impl_->datasetsById.insert_or_assign(
         id,
         std::make_shared<const DatasetEntry>(
-            DatasetEntry{DatasetInfo{id, std::move(stored), folder}, *grid, dir}));
+            DatasetEntry{DatasetInfo{id, std::move(stored), folder, createdAt}, *grid, dir}));
   }
   return id;
 }

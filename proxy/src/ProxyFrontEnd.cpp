@@ -71,7 +71,11 @@ struct ProxyFrontEnd::Impl {
     const auto now = unixMillisNow();
     updateSequence =
         options.updateSequence.empty() ? std::to_string(now / 1000) : options.updateSequence;
-    const std::time_t secs = static_cast<std::time_t>(now / 1000);
+    // The service's LastUpdate: the newest of its layers' (see capabilitiesModel).
+    UnixMillis newest = 0;
+    for (const auto& l : tiles.layers())
+      newest = std::max(newest, tiles.layerSince(l.name));
+    const std::time_t secs = static_cast<std::time_t>((newest > 0 ? newest : now) / 1000);
     std::tm tm{};
     gmtime_r(&secs, &tm);
     char buf[32];
@@ -312,7 +316,10 @@ struct ProxyFrontEnd::Impl {
       c.timePeriod = l.timePeriod;
       c.timeDefault = l.timeDefault;
       c.opaque = l.dataset.mimeType == "image/jpeg";
-      c.lastUpdateMillis = startedMillis; // the configuration this server serves dates from here
+      // Since when this layer's tiles are what they are: World Wind Java drops its own cached
+      // tiles older than this, so it must not move with every restart (only with a new definition).
+      const UnixMillis since = tiles.layerSince(l.name);
+      c.lastUpdateMillis = since > 0 ? since : startedMillis;
       m.layers.push_back(std::move(c));
     }
     return m;

@@ -135,6 +135,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
   TileServiceOptions options;
   std::vector<LayerSpec> layers;
   std::map<std::string, std::size_t, std::less<>> layerIndex;
+  std::vector<UnixMillis> layerSince; // per layer: its dataset's registration time
   std::vector<TileGrid> grids; // parallel to layers
   std::map<std::string, UpstreamSpec, std::less<>> upstreams;
   std::map<std::string, LocalRasterSource, std::less<>> rasters; // by upstream name
@@ -511,8 +512,10 @@ TileService::create(TileCache& cache,
     impl->layers.push_back(std::move(l));
   }
   for (const auto& l : impl->layers) {
-    if (auto ds = impl->dataset(l, ""); !ds)
-      return std::unexpected("layer '" + l.name + "': " + ds.error());
+    auto ds = impl->dataset(l, "");
+    if (!ds) return std::unexpected("layer '" + l.name + "': " + ds.error());
+    const auto info = cache.dataset(ds->first);
+    impl->layerSince.push_back(info ? info->createdAt : 0);
   }
   impl->forcedOffline = options.offline;
   impl->workers = std::make_unique<WorkerPool>(options.renderThreads);
@@ -532,6 +535,11 @@ const std::vector<LayerSpec>& TileService::layers() const noexcept {
 const LayerSpec* TileService::layer(std::string_view name) const noexcept {
   const auto it = impl_->layerIndex.find(name);
   return it == impl_->layerIndex.end() ? nullptr : &impl_->layers[it->second];
+}
+
+UnixMillis TileService::layerSince(std::string_view name) const noexcept {
+  const auto it = impl_->layerIndex.find(name);
+  return it == impl_->layerIndex.end() ? 0 : impl_->layerSince[it->second];
 }
 
 const TileGrid* TileService::grid(std::string_view name) const noexcept {

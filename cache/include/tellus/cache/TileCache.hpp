@@ -73,6 +73,9 @@ struct DatasetInfo {
   DatasetId id = 0;
   DatasetSpec spec;
   std::string folder; ///< relative to the cache root
+  /// When this dataset was first registered (its definition has not changed since: another
+  /// definition is another dataset). WMS capabilities give it as a layer's LastUpdate.
+  std::int64_t createdAt = 0;
 };
 
 /** Tiles and bytes of one dataset at one level (absent markers count as tiles of 0 bytes). */

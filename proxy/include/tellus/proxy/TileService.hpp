@@ -90,6 +90,9 @@ public:
 
   const std::vector<LayerSpec>& layers() const noexcept;
   const LayerSpec* layer(std::string_view name) const noexcept;
+  /** When the layer's dataset (as now defined) was first registered in the cache: stable across
+   * restarts, new when the definition changes (the capabilities' LastUpdate). 0 if unknown. */
+  UnixMillis layerSince(std::string_view layer) const noexcept;
   /** The grid of a layer (nullptr for an unknown layer). */
   const TileGrid* grid(std::string_view layer) const noexcept;
 
