@@ -1,5 +1,7 @@
 #include "FileIo.hpp"
 
+#include <tellus/cache/TileFile.hpp>
+
 #include <atomic>
 #include <cerrno>
 #include <csignal>
@@ -101,3 +103,25 @@ std::optional<std::vector<std::byte>> readFile(const std::filesystem::path& path
 }
 
 } // namespace tellus::fileio
+
+namespace tellus {
+
+TileFile::~TileFile() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+std::optional<std::vector<std::byte>> TileFile::readAll() const {
+  if (size_ < 0) return std::nullopt;
+  std::vector<std::byte> out(static_cast<std::size_t>(size_));
+  std::size_t done = 0;
+  while (done < out.size()) {
+    const ssize_t n =
+        ::pread(fd_, out.data() + done, out.size() - done, static_cast<off_t>(done));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return std::nullopt;
+    done += static_cast<std::size_t>(n);
+  }
+  return out;
+}
+
+} // namespace tellus

@@ -1,4 +1,5 @@
 #include "FileIo.hpp"
+#include "RowCache.hpp"
 #include "Schema.hpp"
 #include "Sqlite.hpp"
 
@@ -7,6 +8,10 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cerrno>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <condition_variable>
 #include <cstdio>
 #include <deque>
@@ -79,16 +84,14 @@ void bindKey(sql::Stmt::Use& u, DatasetId id, const TileKey& k) {
   u.bind(1, id).bind(2, std::int64_t{k.level}).bind(3, k.row).bind(4, k.col);
 }
 
-struct TouchKey {
-  DatasetId dataset;
-  TileKey key;
-  bool operator==(const TouchKey&) const = default;
-};
-struct TouchKeyHash {
-  std::size_t operator()(const TouchKey& t) const noexcept {
-    return TileKeyHash{}(t.key) ^ (static_cast<std::size_t>(t.dataset) * 0x9E3779B97F4A7C15ULL);
-  }
-};
+using TouchKey = detail::RowKey;
+using TouchKeyHash = detail::RowKeyHash;
+
+std::int64_t steadyNanos() noexcept {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
 
 /** One read connection with its prepared statements. */
 struct ReadConn {
@@ -128,7 +131,8 @@ struct TileCache::Impl {
 
   // Datasets, loaded at open, refreshed on an unknown id (another process may register some).
   mutable std::shared_mutex datasetsMutex;
-  mutable std::map<DatasetId, DatasetEntry> datasetsById;
+  // Shared and immutable: the hit path takes a reference count, not a copy of the grid.
+  mutable std::map<DatasetId, std::shared_ptr<const DatasetEntry>> datasetsById;
 
   // Directories known to exist (saves a stat per put).
   std::mutex dirsMutex;
@@ -174,6 +178,66 @@ struct TileCache::Impl {
   }
   std::unordered_map<TouchKey, UnixMillis, TouchKeyHash> touches; // guarded by queueMutex
   std::thread writer;
+
+  // Rows and open files of present tiles, for openTile()/get() (RowCache.hpp).
+  detail::RowCache rows;
+  // Rows the writer changed since its last commit (under writeMutex): invalidated right after the
+  // commit, before the writer reports success, so this process reads its own writes.
+  std::vector<TouchKey> changedRows;
+  bool allRowsChanged = false;
+  // Other processes' commits move writeDb's PRAGMA data_version (its own commits do not).
+  std::atomic<std::int64_t> nextVersionCheckNs{0};
+  sql::Stmt dataVersionStmt; // on writeDb, under writeMutex
+  std::int64_t lastDataVersion = -1; // under writeMutex
+
+  void rowChanged(DatasetId id, const TileKey& key) {
+    if (changedRows.size() < 4096)
+      changedRows.push_back(TouchKey{id, key});
+    else
+      allRowsChanged = true;
+  }
+
+  /** After a commit (or rollback) of the writer: forget what changed. Under writeMutex. */
+  void publishRowChanges() {
+    if (allRowsChanged) {
+      rows.clear();
+    } else {
+      for (const auto& k : changedRows)
+        rows.invalidate(k);
+    }
+    changedRows.clear();
+    allRowsChanged = false;
+  }
+
+  /** Drops every remembered row when another process has committed since the last look; runs at
+   * most every otherWritersCheck, on whichever reader comes first, and never waits for the
+   * writer. */
+  void noticeOtherWriters() {
+    const auto interval = options.otherWritersCheck.count();
+    if (interval <= 0) {
+      rows.clear(); // every lookup goes to SQLite
+      return;
+    }
+    const std::int64_t now = steadyNanos();
+    if (now < nextVersionCheckNs.load(std::memory_order_relaxed)) return;
+    std::unique_lock w(writeMutex, std::try_to_lock);
+    if (!w) return; // the writer is busy; the next reader looks
+    nextVersionCheckNs.store(now + interval * 1000000, std::memory_order_relaxed);
+    if (!dataVersionStmt.ok()) {
+      rows.clear();
+      return;
+    }
+    sql::Stmt::Use u(dataVersionStmt);
+    if (u.step() != SQLITE_ROW) {
+      rows.clear();
+      return;
+    }
+    const std::int64_t v = u.i64(0);
+    if (v != lastDataVersion) {
+      lastDataVersion = v;
+      rows.clear();
+    }
+  }
 
   // Writer-side prepared statements (used under writeMutex only).
   sql::Stmt upsertTile, deleteTile, touchTile, totalStmt;
@@ -252,10 +316,10 @@ struct TileCache::Impl {
   Result loadDatasets(sqlite3* db) const {
     sql::Stmt s(db,
                 "SELECT id, server, name, folder, west, south, east, north, level_zero_delta, "
-                "tile_width, tile_height, num_levels, mime_type, extension, style, time, pinned "
-                "FROM datasets ORDER BY id");
+                "tile_width, tile_height, num_levels, mime_type, extension, style, time, pinned, "
+                "created_at FROM datasets ORDER BY id");
     if (!s.ok()) return std::unexpected(sql::errorFrom(db, s.prepareRc(), "reading datasets"));
-    std::map<DatasetId, DatasetEntry> loaded;
+    std::map<DatasetId, std::shared_ptr<const DatasetEntry>> loaded;
     sql::Stmt::Use u(s);
     int rc = 0;
     while ((rc = u.step()) == SQLITE_ROW) {
@@ -265,10 +329,12 @@ struct TileCache::Impl {
       const DatasetId id = u.i64(0);
       std::string folder = u.text(3);
       fs::path dir = options.root / folder;
+      const std::int64_t createdAt = u.i64(17);
       loaded.emplace(id,
-                     DatasetEntry{DatasetInfo{id, std::move(spec), std::move(folder)},
-                                  std::move(*grid),
-                                  std::move(dir)});
+                     std::make_shared<const DatasetEntry>(
+                         DatasetEntry{DatasetInfo{id, std::move(spec), std::move(folder), createdAt},
+                                      std::move(*grid),
+                                      std::move(dir)}));
     }
     if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "reading datasets"));
     std::unique_lock lock(datasetsMutex);
@@ -276,27 +342,28 @@ struct TileCache::Impl {
     return {};
   }
 
-  std::optional<DatasetEntry> findDataset(DatasetId id) const {
+  std::shared_ptr<const DatasetEntry> findDataset(DatasetId id) const {
     {
       std::shared_lock lock(datasetsMutex);
       if (auto it = datasetsById.find(id); it != datasetsById.end()) return it->second;
     }
     auto r = acquireReader();
-    if (!r) return std::nullopt;
-    if (!loadDatasets(r->conn->db.get())) return std::nullopt;
+    if (!r) return nullptr;
+    if (!loadDatasets(r->conn->db.get())) return nullptr;
     std::shared_lock lock(datasetsMutex);
     if (auto it = datasetsById.find(id); it != datasetsById.end()) return it->second;
-    return std::nullopt;
+    return nullptr;
   }
 
-  std::expected<DatasetEntry, CacheError> checkedDataset(DatasetId id, const TileKey& key) const {
+  std::expected<std::shared_ptr<const DatasetEntry>, CacheError>
+  checkedDataset(DatasetId id, const TileKey& key) const {
     auto d = findDataset(id);
     if (!d) return std::unexpected(invalid("unknown dataset id " + std::to_string(id)));
     if (key.level < 0 || key.level >= d->grid.numLevels() || !d->grid.isValid(key)) {
       return std::unexpected(invalid("tile " + keyText(key) + " is outside the grid of dataset '" +
                                      d->info.spec.name + "'"));
     }
-    return *d;
+    return d;
   }
 
   fs::path tilePath(const DatasetEntry& d, const TileKey& key) const {
@@ -465,6 +532,7 @@ struct TileCache::Impl {
       results[0] = ops[0]->apply(*this);
       if (!results[0]) {
         run(rollbackStmt);
+        publishRowChanges();
         if (ops[0]->after) ops[0]->after(false);
         ops[0]->done.set_value(std::move(results[0]));
         return;
@@ -479,6 +547,7 @@ struct TileCache::Impl {
       }
     }
     const auto committed = commit();
+    publishRowChanges(); // before anyone is told: a put is visible to the next get
     for (std::size_t i = 0; i < ops.size(); ++i) {
       const bool ok = committed && results[i];
       if (ops[i]->after) ops[i]->after(ok);
@@ -508,6 +577,7 @@ struct TileCache::Impl {
         if (!group.empty()) runBatch(group);
         group.clear();
         auto r = op->apply(*this);
+        publishRowChanges();
         if (op->after) op->after(r.has_value());
         op->done.set_value(std::move(r));
       }
@@ -611,8 +681,11 @@ struct TileCache::Impl {
         sql::Stmt::Use d(deleteTile);
         bindKey(d, tk.dataset, tk.key);
         d.step();
+        rowChanged(tk.dataset, tk.key);
       }
-      if (auto c = commit(); !c) return std::unexpected(c.error());
+      auto c = commit();
+      publishRowChanges();
+      if (!c) return std::unexpected(c.error());
       for (const auto& [tk, path] : victims)
         ::unlink(path.c_str());
       removed += static_cast<std::int64_t>(victims.size());
@@ -656,6 +729,7 @@ struct TileCache::Impl {
     u.bind(7, std::string_view(meta.contentType)).bind(8, std::string_view(meta.etag));
     u.bind(9, std::string_view(meta.lastModified)).bind(10, meta.expiresAt);
     u.bind(11, meta.fetchedAt ? meta.fetchedAt : unixMillisNow()).bind(12, retryAfter);
+    rowChanged(d.info.id, key);
     const int rc = u.step();
     if (rc != SQLITE_DONE)
       return std::unexpected(sql::errorFrom(writeDb.get(), rc, "indexing tile"));
@@ -663,6 +737,7 @@ struct TileCache::Impl {
   }
 
   Result deleteRow(DatasetId id, const TileKey& key) {
+    rowChanged(id, key);
     sql::Stmt::Use u(deleteTile);
     bindKey(u, id, key);
     const int rc = u.step();
@@ -678,7 +753,10 @@ namespace {
 
 /** Inserts a dataset row (the usage row follows by trigger); returns its id. */
 std::expected<DatasetId, CacheError>
-insertDataset(sqlite3* db, const DatasetSpec& spec, const std::string& folder) {
+insertDataset(sqlite3* db,
+              const DatasetSpec& spec,
+              const std::string& folder,
+              UnixMillis createdAt = unixMillisNow()) {
   sql::Stmt ins(db,
                 "INSERT INTO datasets(server, name, folder, west, south, east, north, "
                 "level_zero_delta, tile_width, tile_height, num_levels, mime_type, extension, "
@@ -697,7 +775,7 @@ insertDataset(sqlite3* db, const DatasetSpec& spec, const std::string& folder) {
   u.bind(11, std::int64_t{g.numLevels}).bind(12, std::string_view(spec.mimeType));
   u.bind(13, std::string_view(spec.extension)).bind(14, std::string_view(spec.style));
   u.bind(15, std::string_view(spec.time)).bind(16, std::int64_t{spec.pinned ? 1 : 0});
-  u.bind(17, unixMillisNow());
+  u.bind(17, createdAt);
   const int rc = u.step();
   if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "registering dataset"));
   return sqlite3_last_insert_rowid(db);
@@ -786,6 +864,8 @@ std::expected<std::unique_ptr<TileCache>, CacheError> TileCache::open(const Opti
     if (auto r = impl->prepareWriter(); !r) return std::unexpected(r.error());
   }
   if (auto r = impl->loadDatasets(impl->writeDb.get()); !r) return std::unexpected(r.error());
+  impl->rows.configure(options.rowCacheEntries, options.openFiles);
+  impl->dataVersionStmt = sql::Stmt(impl->writeDb.get(), "PRAGMA data_version");
   std::unique_ptr<TileCache> cache(new TileCache(std::move(impl)));
   if (!options.readOnly) cache->impl_->startWriter();
   if (cache->impl_->rebuiltAtOpen) {
@@ -832,15 +912,17 @@ std::expected<DatasetId, CacheError> TileCache::registerDataset(const DatasetSpe
     return std::unexpected(r.error());
   }
   DatasetId id = 0;
+  UnixMillis createdAt = unixMillisNow();
   auto r = impl_->submit([&](Impl& im) -> Result {
     sqlite3* db = im.writeDb.get();
-    sql::Stmt find(db, "SELECT id FROM datasets WHERE folder = ?1");
+    sql::Stmt find(db, "SELECT id, created_at FROM datasets WHERE folder = ?1");
     {
       sql::Stmt::Use u(find);
       u.bind(1, std::string_view(folder));
       const int rc = u.step();
       if (rc == SQLITE_ROW) {
         id = u.i64(0);
+        createdAt = u.i64(1);
       } else if (rc != SQLITE_DONE) {
         return std::unexpected(sql::errorFrom(db, rc, "finding dataset"));
       }
@@ -853,7 +935,7 @@ std::expected<DatasetId, CacheError> TileCache::registerDataset(const DatasetSpe
       if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "updating dataset"));
       return {};
     }
-    auto inserted = insertDataset(db, spec, folder);
+    auto inserted = insertDataset(db, spec, folder, createdAt);
     if (!inserted) return std::unexpected(inserted.error());
     id = *inserted;
     return {};
@@ -863,7 +945,9 @@ std::expected<DatasetId, CacheError> TileCache::registerDataset(const DatasetSpe
     std::unique_lock lock(impl_->datasetsMutex);
     DatasetSpec stored = spec;
     impl_->datasetsById.insert_or_assign(
-        id, DatasetEntry{DatasetInfo{id, std::move(stored), folder}, *grid, dir});
+        id,
+        std::make_shared<const DatasetEntry>(
+            DatasetEntry{DatasetInfo{id, std::move(stored), folder, createdAt}, *grid, dir}));
   }
   return id;
 }
@@ -879,7 +963,7 @@ std::vector<DatasetInfo> TileCache::datasets() const {
   std::shared_lock lock(impl_->datasetsMutex);
   std::vector<DatasetInfo> out;
   for (const auto& [id, d] : impl_->datasetsById)
-    out.push_back(d.info);
+    out.push_back(d->info);
   return out;
 }
 
@@ -896,8 +980,11 @@ std::expected<void, CacheError> TileCache::setPinned(DatasetId id, bool pinned) 
   });
   if (!r) return r;
   std::unique_lock lock(impl_->datasetsMutex);
-  if (auto it = impl_->datasetsById.find(id); it != impl_->datasetsById.end())
-    it->second.info.spec.pinned = pinned;
+  if (auto it = impl_->datasetsById.find(id); it != impl_->datasetsById.end()) {
+    auto updated = std::make_shared<DatasetEntry>(*it->second);
+    updated->info.spec.pinned = pinned;
+    it->second = std::move(updated);
+  }
   return {};
 }
 
@@ -953,23 +1040,90 @@ std::expected<CacheLookup, CacheError> TileCache::peek(DatasetId id, const TileK
   return out;
 }
 
-std::expected<CacheLookup, CacheError> TileCache::get(DatasetId id, const TileKey& key) {
+namespace {
+
+/** Opens a tile file and checks it has the size the index recorded. */
+std::shared_ptr<detail::CachedRow> openRowFile(const fs::path& path, const CacheLookup& row) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return nullptr;
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || st.st_size != row.size) {
+    ::close(fd);
+    return nullptr;
+  }
+  auto r = std::make_shared<detail::CachedRow>();
+  r->meta = row.meta;
+  r->size = row.size;
+  r->file = std::make_shared<const TileFile>(fd, row.size);
+  r->dev = st.st_dev;
+  r->ino = st.st_ino;
+  r->checkedAtNs.store(steadyNanos(), std::memory_order_relaxed);
+  return r;
+}
+
+} // namespace
+
+std::expected<CacheLookup, CacheError> TileCache::openTile(DatasetId id, const TileKey& key) {
+  Impl& im = *impl_;
+  auto d = im.checkedDataset(id, key);
+  if (!d) return std::unexpected(d.error());
+  const TouchKey tk{id, key};
+  auto hit = [&](const detail::CachedRow& r) {
+    CacheLookup out;
+    out.kind = CacheLookup::Kind::Hit;
+    out.meta = r.meta;
+    out.size = r.size;
+    out.file = r.file;
+    out.stale = out.meta.expiresAt && *out.meta.expiresAt <= unixMillisNow();
+    std::lock_guard lock(im.queueMutex);
+    im.touches[tk] = unixMillisNow();
+    return out;
+  };
+  im.noticeOtherWriters();
+  const bool pending = [&] {
+    if (!im.options.indexWriteBehind) return false;
+    std::lock_guard lock(im.pendingMutex);
+    return im.pendingRows.contains(tk);
+  }();
+  if (!pending) {
+    if (auto r = im.rows.find(tk)) {
+      const auto recheck = im.options.fileRecheck.count() * 1000000;
+      const std::int64_t now = steadyNanos();
+      if (now - r->checkedAtNs.load(std::memory_order_relaxed) < recheck) return hit(*r);
+      // Still the file the index names? (replaced or deleted behind the cache's back otherwise)
+      struct stat st {};
+      const fs::path path = im.tilePath(**d, key);
+      if (::stat(path.c_str(), &st) == 0 && st.st_dev == r->dev && st.st_ino == r->ino) {
+        r->checkedAtNs.store(now, std::memory_order_relaxed);
+        return hit(*r);
+      }
+      im.rows.invalidate(tk);
+    }
+  }
+  const std::uint64_t generation = im.rows.generation();
   auto found = peek(id, key);
   if (!found || found->kind != CacheLookup::Kind::Hit) return found;
-  auto d = impl_->findDataset(id);
-  assert(d);
-  const auto expectedBytes = static_cast<std::size_t>(found->size);
-  auto bytes = fileio::readFile(impl_->tilePath(*d, key), expectedBytes);
-  if (!bytes) {
+  auto row = openRowFile(im.tilePath(**d, key), *found);
+  if (!row) {
     // The file vanished or changed under us: forget the row (self-healing) and report a miss.
-    impl_->submitDetached([id, key](Impl& im) { return im.deleteRow(id, key); });
+    im.submitDetached([id, key](Impl& w) { return w.deleteRow(id, key); });
+    return CacheLookup{};
+  }
+  if (!pending) im.rows.insert(tk, row, generation);
+  return hit(*row);
+}
+
+std::expected<CacheLookup, CacheError> TileCache::get(DatasetId id, const TileKey& key) {
+  auto found = openTile(id, key);
+  if (!found || found->kind != CacheLookup::Kind::Hit) return found;
+  auto bytes = found->file->readAll();
+  if (!bytes) {
+    impl_->rows.invalidate(TouchKey{id, key});
+    impl_->submitDetached([id, key](Impl& w) { return w.deleteRow(id, key); });
     return CacheLookup{};
   }
   found->bytes = std::move(*bytes);
-  {
-    std::lock_guard lock(impl_->queueMutex);
-    impl_->touches[TouchKey{id, key}] = unixMillisNow();
-  }
+  found->file.reset();
   return found;
 }
 
@@ -981,15 +1135,15 @@ std::expected<void, CacheError> TileCache::put(DatasetId id,
     return std::unexpected(CacheError{CacheErrc::ReadOnly, "the cache is read-only"});
   auto d = impl_->checkedDataset(id, key);
   if (!d) return std::unexpected(d.error());
-  const fs::path path = impl_->tilePath(*d, key);
+  const fs::path path = impl_->tilePath(**d, key);
   if (auto r = impl_->ensureDir(path.parent_path()); !r) return r;
   if (auto r = fileio::writeFileAtomic(path, bytes, impl_->options.fsyncTiles); !r) return r;
   TileMeta m = meta;
-  if (m.contentType.empty()) m.contentType = d->info.spec.mimeType;
+  if (m.contentType.empty()) m.contentType = (*d)->info.spec.mimeType;
   if (m.fetchedAt == 0) m.fetchedAt = unixMillisNow();
   const auto n = static_cast<std::int64_t>(bytes.size());
   auto apply = [entry = *d, key, n, m](Impl& im) {
-    return im.writeRow(entry, key, kStatePresent, n, m, std::nullopt);
+    return im.writeRow(*entry, key, kStatePresent, n, m, std::nullopt);
   };
   if (!impl_->options.indexWriteBehind) {
     return impl_->submit(std::move(apply), [path](bool committed) {
@@ -1036,6 +1190,7 @@ TileCache::revalidated(DatasetId id, const TileKey& key, const TileMeta& meta) {
         .bind(6, std::string_view(meta.etag))
         .bind(7, std::string_view(meta.lastModified))
         .bind(8, meta.fetchedAt ? meta.fetchedAt : unixMillisNow());
+    im.rowChanged(id, key);
     const int rc = u.step();
     if (rc != SQLITE_DONE)
       return std::unexpected(sql::errorFrom(im.writeDb.get(), rc, "revalidating"));
@@ -1048,12 +1203,12 @@ TileCache::putAbsent(DatasetId id, const TileKey& key, UnixMillis retryAfter) {
   auto d = impl_->checkedDataset(id, key);
   if (!d) return std::unexpected(d.error());
   impl_->dropPending(id, key);
-  const fs::path path = impl_->tilePath(*d, key);
+  const fs::path path = impl_->tilePath(**d, key);
   return impl_->submit(
       [entry = *d, key, retryAfter](Impl& im) {
         TileMeta m;
         m.fetchedAt = unixMillisNow();
-        return im.writeRow(entry, key, kStateAbsent, 0, m, retryAfter);
+        return im.writeRow(*entry, key, kStateAbsent, 0, m, retryAfter);
       },
       [path](bool committed) {
         if (committed) ::unlink(path.c_str());
@@ -1064,7 +1219,7 @@ std::expected<void, CacheError> TileCache::erase(DatasetId id, const TileKey& ke
   auto d = impl_->checkedDataset(id, key);
   if (!d) return std::unexpected(d.error());
   impl_->dropPending(id, key);
-  const fs::path path = impl_->tilePath(*d, key);
+  const fs::path path = impl_->tilePath(**d, key);
   return impl_->submit([id, key](Impl& im) { return im.deleteRow(id, key); },
                        [path](bool committed) {
                          if (committed) ::unlink(path.c_str());
@@ -1179,6 +1334,7 @@ std::expected<std::int64_t, CacheError> TileCache::rebuild() {
   std::int64_t indexed = 0;
   auto r = impl_->submit([&](Impl& im) -> Result {
     sqlite3* db = im.writeDb.get();
+    im.allRowsChanged = true;
     if (sql::exec(db, "DELETE FROM tiles; DELETE FROM datasets; DELETE FROM usage;") != SQLITE_OK) {
       return std::unexpected(sql::errorFrom(db, sqlite3_errcode(db), "clearing index"));
     }

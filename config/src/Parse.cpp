@@ -338,6 +338,7 @@ void readServer(Reader& r, const Map& root, ServerSettings& s) {
                "exceptions_http_status",
                "offline_response",
                "offline",
+               "threads",
                "limits"});
   if (auto v = m.get("listen")) {
     auto a = detail::parseListenAddress(text(r, *v, m.path("listen")));
@@ -354,6 +355,7 @@ void readServer(Reader& r, const Map& root, ServerSettings& s) {
                             ? OfflineResponse::Exception
                             : OfflineResponse::Blank;
   if (auto v = m.get("offline")) s.offline = boolean(r, *v, m.path("offline"));
+  if (auto v = m.get("threads")) s.threads = int32(r, *v, m.path("threads"));
 
   const auto [ln, lwhere] = m.child("limits");
   const Map l(r,
@@ -413,6 +415,7 @@ readUpstream(Reader& r, const YAML::Node& node, std::string path, const fs::path
                "retry_backoff",
                "failure_threshold",
                "open_interval",
+               "max_retry_after_wait",
                "headers"});
   if (node.IsNull())
     r.fail(node.Mark(), m.path(), "expected a mapping (name, type, ...), got nothing");
@@ -445,6 +448,7 @@ readUpstream(Reader& r, const YAML::Node& node, std::string path, const fs::path
                            "retry_backoff",
                            "failure_threshold",
                            "open_interval",
+                           "max_retry_after_wait",
                            "headers"})
       notFor(key, "wms and worldwind");
     notFor("version", "wms");
@@ -469,6 +473,8 @@ readUpstream(Reader& r, const YAML::Node& node, std::string path, const fs::path
   if (auto v = m.get("timeout")) u.timeout = duration(r, *v, m.path("timeout"));
   if (auto v = m.get("retry_backoff")) u.retryBackoff = duration(r, *v, m.path("retry_backoff"));
   if (auto v = m.get("open_interval")) u.openInterval = duration(r, *v, m.path("open_interval"));
+  if (auto v = m.get("max_retry_after_wait"))
+    u.maxRetryAfterWait = duration(r, *v, m.path("max_retry_after_wait"));
   if (auto v = m.get("max_connections")) u.maxConnections = int32(r, *v, m.path("max_connections"));
   if (auto v = m.get("retries")) u.retries = int32(r, *v, m.path("retries"));
   if (auto v = m.get("failure_threshold"))

@@ -74,6 +74,8 @@ std::optional<ValidationIssue> checkServer(const ServerSettings& s) {
     if (auto e = checkHttpUrl(s.publicUrl)) return issue("public_url", *e);
   }
   if (hasControl(s.cors)) return issue("cors", "has a control character");
+  if (s.threads < 0 || s.threads > 256)
+    return issue("threads", "must be in [0, 256] (0 = one per core), got " + str(s.threads));
   const ServerLimits& l = s.limits;
   if (l.maxConnections < 1 || l.maxConnections > 1'000'000)
     return issue("limits.max_connections", "must be in [1, 1000000], got " + str(l.maxConnections));
@@ -131,6 +133,8 @@ checkUpstream(const UpstreamConfig& u, std::size_t i, bool checkFiles) {
   if (u.timeout.count() <= 0) return issue("timeout", "must be longer than 0");
   if (u.retryBackoff.count() < 0) return issue("retry_backoff", "must not be negative");
   if (u.openInterval.count() <= 0) return issue("open_interval", "must be longer than 0");
+  if (u.maxRetryAfterWait.count() < 0)
+    return issue("max_retry_after_wait", "must not be negative");
   if (u.maxConnections < 1 || u.maxConnections > 1024)
     return issue("max_connections", "must be in [1, 1024], got " + str(u.maxConnections));
   if (u.retries < 0 || u.retries > 100)

@@ -1,4 +1,5 @@
 #include <tellus/proxy/Fetcher.hpp>
+#include <tellus/proxy/ProxyFrontEnd.hpp> // parseHttpDate
 
 #include <curl/curl.h>
 
@@ -17,6 +18,23 @@
 
 namespace tellus {
 
+std::optional<std::chrono::milliseconds> parseRetryAfter(std::string_view value,
+                                                         std::chrono::system_clock::time_point now) {
+  if (value.empty()) return std::nullopt;
+  if (std::all_of(value.begin(), value.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+    if (value.size() > 9) return std::chrono::hours(24 * 365); // absurdly long: capped by callers
+    std::int64_t s = 0;
+    for (char c : value)
+      s = s * 10 + (c - '0');
+    return std::chrono::seconds(s);
+  }
+  const auto at = parseHttpDate(value);
+  if (!at) return std::nullopt;
+  const auto nowMs =
+      std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count();
+  return std::chrono::milliseconds(std::max<std::int64_t>(0, *at - nowMs));
+}
+
 const char* toString(FetchErrc code) noexcept {
   switch (code) {
   case FetchErrc::Timeout:
@@ -33,6 +51,8 @@ const char* toString(FetchErrc code) noexcept {
     return "too-large";
   case FetchErrc::Cancelled:
     return "cancelled";
+  case FetchErrc::Throttled:
+    return "throttled";
   case FetchErrc::Unknown:
     return "unknown";
   }
@@ -107,6 +127,7 @@ struct Fetcher::Impl {
     BreakerState state = BreakerState::Closed; ///< HalfOpen: the probe is in flight
     int consecutiveFailures = 0;
     Clock::time_point openUntil{};
+    Clock::time_point pausedUntil{}; ///< Retry-After: no requests before this
     Fetcher::Stats stats{};
     // Fetcher thread only.
     bool known = false;
@@ -123,7 +144,7 @@ struct Fetcher::Impl {
     std::size_t maxBody = 0;
     bool tooLarge = false;
     bool outOfMemory = false;
-    std::string contentType, etag, lastModified, cacheControl, expires;
+    std::string contentType, etag, lastModified, cacheControl, expires, retryAfter;
     char errbuf[CURL_ERROR_SIZE] = {};
     Transfer() = default;
     Transfer(const Transfer&) = delete;
@@ -288,13 +309,21 @@ struct Fetcher::Impl {
       known_.push_back(&up);
     }
     bool reject = false;
+    bool paused = false;
     {
       std::lock_guard lock(mutex_);
       reject = up.state == BreakerState::HalfOpen ||
                (up.state == BreakerState::Open && Clock::now() < up.openUntil);
+      paused = Clock::now() < up.pausedUntil;
     }
     if (reject) {
       circuitOpen(std::move(job));
+      return;
+    }
+    if (paused) {
+      fail(std::move(job),
+           FetchErrc::Throttled,
+           "upstream '" + job->request.upstream + "' asked for a pause (Retry-After)");
       return;
     }
     up.queue.push_back(std::move(job));
@@ -487,6 +516,7 @@ struct Fetcher::Impl {
         t->lastModified.clear();
         t->cacheControl.clear();
         t->expires.clear();
+        t->retryAfter.clear();
         return bytes;
       }
       const auto colon = line.find(':');
@@ -503,6 +533,8 @@ struct Fetcher::Impl {
         t->cacheControl = value;
       else if (iequals(name, "expires"))
         t->expires = value;
+      else if (iequals(name, "retry-after"))
+        t->retryAfter = value;
       else if (iequals(name, "content-length")) {
         std::size_t n = 0;
         bool digits = !value.empty() && value.size() < 19;
@@ -537,6 +569,7 @@ struct Fetcher::Impl {
     FetchError error;
     bool retryable = false;
     Verdict verdict = Verdict::Neutral;
+    std::optional<milliseconds> retryAfter; ///< 429/503 with a valid Retry-After
   };
 
   static Classified classify(Transfer& t, CURLcode rc, long status) {
@@ -548,6 +581,16 @@ struct Fetcher::Impl {
     };
     const std::string detail = t.errbuf[0] ? std::string(t.errbuf) : curl_easy_strerror(rc);
     if (rc == CURLE_OK) {
+      if (status == 429 || status == 503) {
+        // The upstream is alive and asks us to slow down: not a failure for the breaker when it
+        // says for how long; a bare 503 still counts as one.
+        c.retryAfter = parseRetryAfter(t.retryAfter, std::chrono::system_clock::now());
+        err(FetchErrc::HttpError,
+            true,
+            c.retryAfter || status == 429 ? Verdict::Neutral : Verdict::Failure,
+            "HTTP " + std::to_string(status));
+        return c;
+      }
       if ((status >= 200 && status < 300) || status == 304 || (status >= 400 && status < 500)) {
         FetchResponse r;
         r.status = static_cast<int>(status);
@@ -638,14 +681,31 @@ struct Fetcher::Impl {
       curl_easy_cleanup(easy);
 
     const UpstreamPolicy& policy = *job->policy;
-    if (!c.response && c.retryable && !job->probe && job->attempts <= policy.retries &&
+    bool waitable = true;
+    if (c.retryAfter) {
+      const auto asked = std::min<milliseconds>(*c.retryAfter, std::chrono::hours(1));
+      std::lock_guard lock(mutex_);
+      up.pausedUntil = std::max(up.pausedUntil, Clock::now() + asked);
+      waitable = asked <= policy.maxRetryAfterWait;
+      if (!waitable) {
+        c.error.message += " (asked to retry after " +
+                           std::to_string(std::chrono::ceil<std::chrono::seconds>(asked).count()) +
+                           " s)";
+      }
+    }
+    if (!c.response && c.retryable && waitable && !job->probe && job->attempts <= policy.retries &&
         breakerClosed) {
       c.error.attempts = job->attempts;
       job->lastError = std::move(c.error);
-      timers_.emplace(Clock::now() + backoff(policy.retryBackoff, job->attempts - 1),
-                      std::move(job));
+      auto at = Clock::now() + backoff(policy.retryBackoff, job->attempts - 1);
+      {
+        std::lock_guard lock(mutex_);
+        at = std::max(at, up.pausedUntil); // never earlier than the upstream asked
+      }
+      timers_.emplace(at, std::move(job));
       return;
     }
+    c.error.attempts = job->attempts;
 
     const bool opened = recordVerdict(up, job->probe, c.verdict);
     if (c.response)

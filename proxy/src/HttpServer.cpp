@@ -7,7 +7,11 @@
 #include <boost/asio/strand.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/asio/steady_timer.hpp>
 #include <cctype>
+#include <cerrno>
+#include <sys/sendfile.h>
+#include <sys/socket.h>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -58,10 +62,13 @@ class Session;
 struct HttpServer::Impl : std::enable_shared_from_this<Impl> {
   HttpServerOptions options;
   HttpHandler handler;
-  net::io_context ioc;
-  // The acceptor lives on its own strand: accept completions and the close from stop() never run
-  // at the same time.
-  net::strand<net::io_context::executor_type> acceptStrand{net::make_strand(ioc)};
+  // One event loop per thread, as nginx has one per worker: a connection lives on one loop for its
+  // whole life, so its handlers need no strand, and a loop never wakes another to run them (one
+  // shared io_context with N threads cost a futex wake-up per request). The acceptor is on loop 0
+  // and hands new connections out round-robin.
+  std::vector<std::unique_ptr<net::io_context>> loops;
+  std::vector<net::executor_work_guard<net::io_context::executor_type>> keepRunning;
+  std::size_t nextLoop = 0; // acceptor's handler only
   std::optional<tcp::acceptor> acceptor;
   std::vector<std::thread> threads;
   std::atomic<std::size_t> connections{0};
@@ -113,11 +120,18 @@ struct HttpServer::Impl : std::enable_shared_from_this<Impl> {
 
 namespace {
 
+using LoopExecutor = net::io_context::executor_type;
+
 class Session : public std::enable_shared_from_this<Session> {
 public:
   Session(tcp::socket&& socket, std::shared_ptr<HttpServer::Impl> server)
-      : stream_(std::move(socket)), server_(std::move(server)) {
+      : stream_(std::move(socket)), writeTimer_(stream_.get_executor()),
+        server_(std::move(server)) {
     server_->connections.fetch_add(1);
+    // Once per connection, not per request.
+    beast::error_code ec;
+    const auto ep = stream_.socket().remote_endpoint(ec);
+    if (!ec) remoteAddress_ = ep.address().to_string();
   }
   ~Session() {
     server_->connections.fetch_sub(1);
@@ -183,9 +197,7 @@ private:
       });
       req.headers.emplace_back(std::move(name), std::string(field.value()));
     }
-    beast::error_code epEc;
-    const auto ep = stream_.socket().remote_endpoint(epEc);
-    if (!epEc) req.remoteAddress = ep.address().to_string();
+    req.remoteAddress = remoteAddress_;
     keepAlive_ = msg.keep_alive();
     head_ = msg.method() == http::verb::head;
     version_ = msg.version();
@@ -204,6 +216,9 @@ private:
     }
     auto server = server_;
     Responder respond = [self = shared_from_this(), server](HttpResponse&& r) {
+      // Answered on the connection's own strand (a cache hit, an error): write at once. Posting
+      // would hand the connection to whichever loop thread is free, a thread hop per request.
+      if (self->onOwnStrand()) return self->write(std::move(r));
       std::lock_guard lock(server->postMutex);
       if (server->stopped) return;
       net::post(self->stream_.get_executor(),
@@ -212,7 +227,14 @@ private:
     server_->handler(std::move(req), std::move(respond));
   }
 
+  bool onOwnStrand() {
+    const auto executor = stream_.get_executor();
+    const auto* loop = executor.target<LoopExecutor>();
+    return loop && loop->running_in_this_thread();
+  }
+
   void write(HttpResponse&& r) {
+    if (r.file) return writeFile(std::move(r));
     out_ = std::move(r);
     res_.emplace();
     res_->version(version_);
@@ -234,9 +256,115 @@ private:
         server_->options.requestTimeout); // a client that does not read is cut off
     http::async_write(
         stream_, *res_, [self = shared_from_this()](beast::error_code ec, std::size_t) {
+          // An idle keep-alive connection holds no response.
+          self->res_.reset();
+          self->out_ = HttpResponse{};
           if (ec || !self->keepAlive_) return self->shutdownSend();
           self->doRead(false);
         });
+  }
+
+  // ------------------------------------------------------------------------ file bodies
+  // The header goes out with MSG_MORE and the body with sendfile(2) from the tile's descriptor,
+  // as nginx does: no read into a buffer and no copy from user space into the socket.
+
+  static bool headerValueOk(std::string_view v) {
+    return v.find_first_of("\r\n") == std::string_view::npos;
+  }
+
+  void writeFile(HttpResponse&& r) {
+    file_ = std::move(*r.file);
+    fileOffset_ = 0;
+    fileEnd_ = head_ ? 0 : file_.size;
+    headSent_ = 0;
+    std::string& h = headText_;
+    h.clear();
+    h += version_ == 10 ? "HTTP/1.0 " : "HTTP/1.1 ";
+    h += std::to_string(r.status);
+    h += ' ';
+    const auto reason = http::obsolete_reason(static_cast<http::status>(r.status));
+    h.append(reason.data(), reason.size());
+    h += "\r\nServer: ";
+    h += server_->options.serverName;
+    h += "\r\n";
+    for (const auto& [k, v] : r.headers) {
+      if (!headerValueOk(k) || !headerValueOk(v)) continue;
+      h += k;
+      h += ": ";
+      h += v;
+      h += "\r\n";
+    }
+    h += "Content-Length: ";
+    h += std::to_string(file_.size);
+    h += "\r\n";
+    if (version_ == 10 && keepAlive_) h += "Connection: keep-alive\r\n";
+    if (version_ != 10 && !keepAlive_) h += "Connection: close\r\n";
+    h += "\r\n";
+    beast::error_code ec;
+    stream_.socket().native_non_blocking(true, ec);
+    if (ec) return fileDone(false);
+    lastProgress_ = std::chrono::steady_clock::now();
+    armWriteTimer(server_->options.requestTimeout);
+    continueFile();
+  }
+
+  /** A client that reads nothing for requestTimeout is cut off (as nginx's send_timeout: the time
+   * between two successful writes, not for the whole body). */
+  void armWriteTimer(std::chrono::steady_clock::duration after) {
+    writeTimer_.expires_after(after);
+    writeTimer_.async_wait([self = shared_from_this()](beast::error_code e) {
+      if (e) return; // cancelled: the write finished
+      const auto idle = std::chrono::steady_clock::now() - self->lastProgress_;
+      const auto limit = self->server_->options.requestTimeout;
+      if (idle < limit) return self->armWriteTimer(limit - idle);
+      beast::error_code ignored;
+      self->stream_.socket().cancel(ignored); // fails the pending wait, which closes
+    });
+  }
+
+  void continueFile() {
+    const int sock = stream_.socket().native_handle();
+    while (headSent_ < headText_.size()) {
+      const bool more = fileOffset_ < fileEnd_;
+      const ssize_t n = ::send(sock,
+                               headText_.data() + headSent_,
+                               headText_.size() - headSent_,
+                               MSG_NOSIGNAL | (more ? MSG_MORE : 0));
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return waitWritable();
+      if (n <= 0) return fileDone(false);
+      headSent_ += static_cast<std::size_t>(n);
+      lastProgress_ = std::chrono::steady_clock::now();
+    }
+    while (fileOffset_ < fileEnd_) {
+      off_t off = static_cast<off_t>(fileOffset_);
+      const ssize_t n =
+          ::sendfile(sock, file_.fd, &off, static_cast<std::size_t>(fileEnd_ - fileOffset_));
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return waitWritable();
+      // 0: the file is shorter than promised; the Content-Length cannot be kept, so close.
+      if (n <= 0) return fileDone(false);
+      fileOffset_ += n;
+      lastProgress_ = std::chrono::steady_clock::now();
+    }
+    fileDone(true);
+  }
+
+  void waitWritable() {
+    stream_.socket().async_wait(tcp::socket::wait_write,
+                                [self = shared_from_this()](beast::error_code ec) {
+                                  if (ec) return self->fileDone(false);
+                                  self->continueFile();
+                                });
+  }
+
+  void fileDone(bool ok) {
+    writeTimer_.cancel();
+    file_ = HttpFileBody{}; // an idle keep-alive connection holds no descriptor
+    headText_.clear();
+    headText_.shrink_to_fit();
+    if (!ok || !keepAlive_) return shutdownSend();
+    doRead(false);
   }
 
   void shutdownSend() {
@@ -245,6 +373,14 @@ private:
   }
 
   beast::tcp_stream stream_;
+  net::steady_timer writeTimer_; // bounds a file body's write
+  std::string remoteAddress_;
+  HttpFileBody file_;
+  std::string headText_;
+  std::size_t headSent_ = 0;
+  std::int64_t fileOffset_ = 0;
+  std::int64_t fileEnd_ = 0;
+  std::chrono::steady_clock::time_point lastProgress_{};
   beast::flat_buffer buffer_;
   std::optional<http::request_parser<http::string_body>> parser_;
   std::optional<http::response<http::span_body<const char>>> res_;
@@ -259,7 +395,8 @@ private:
 
 void HttpServer::Impl::doAccept() {
   acceptor->async_accept(
-      net::make_strand(ioc), [self = shared_from_this()](beast::error_code ec, tcp::socket socket) {
+      *loops[nextLoop], [self = shared_from_this()](beast::error_code ec, tcp::socket socket) {
+        self->nextLoop = (self->nextLoop + 1) % self->loops.size();
         if (ec) {
           if (ec == net::error::operation_aborted) return; // stopping
         } else if (self->connections.load() >= self->options.maxConnections) {
@@ -285,7 +422,14 @@ std::expected<void, std::string> HttpServer::start() {
   const auto address = net::ip::make_address(im.options.host, ec);
   if (ec) return std::unexpected("bad listen address '" + im.options.host + "': " + ec.message());
   const tcp::endpoint endpoint(address, im.options.port);
-  im.acceptor.emplace(im.acceptStrand);
+  int n = im.options.threads > 0 ? im.options.threads
+                                 : static_cast<int>(std::thread::hardware_concurrency());
+  n = std::max(n, 1);
+  for (int i = 0; i < n; ++i) {
+    im.loops.push_back(std::make_unique<net::io_context>(1)); // one thread: no scheduler locking
+    im.keepRunning.push_back(net::make_work_guard(*im.loops.back()));
+  }
+  im.acceptor.emplace(*im.loops.front());
   const std::string where = im.options.host + ":" + std::to_string(im.options.port);
   im.acceptor->open(endpoint.protocol(), ec);
   if (!ec) im.acceptor->set_option(net::socket_base::reuse_address(true), ec);
@@ -294,11 +438,8 @@ std::expected<void, std::string> HttpServer::start() {
   if (ec) return std::unexpected("cannot listen on " + where + ": " + ec.message());
   im.boundPort = im.acceptor->local_endpoint().port();
   im.doAccept();
-  int n = im.options.threads > 0 ? im.options.threads
-                                 : static_cast<int>(std::thread::hardware_concurrency());
-  n = std::max(n, 1);
-  for (int i = 0; i < n; ++i)
-    im.threads.emplace_back([&im] { im.ioc.run(); });
+  for (auto& loop : im.loops)
+    im.threads.emplace_back([io = loop.get()] { io->run(); });
   return {};
 }
 
@@ -329,17 +470,20 @@ void HttpServer::stop() {
   for (auto& sp : open)
     sp->close();
   open.clear();
-  net::post(im.acceptStrand, [&im] {
+  net::post(*im.loops.front(), [&im] {
     beast::error_code ec;
     if (im.acceptor) im.acceptor->close(ec);
   });
+  im.keepRunning.clear(); // loops with nothing left to do may return now
   // With the acceptor and every socket closed, the loop runs out of work and the threads return.
   for (auto& t : im.threads)
     t.join();
   // Anything posted after the last thread left (it would hold a session, which holds this
   // object: a cycle) runs here, on the caller's thread.
-  im.ioc.restart();
-  im.ioc.poll();
+  for (auto& loop : im.loops) {
+    loop->restart();
+    loop->poll();
+  }
   im.threads.clear();
 }
 

@@ -24,6 +24,7 @@ std::string formatHttpDate(std::int64_t unixMillis) {
 }
 
 std::optional<std::int64_t> parseHttpDate(std::string_view text) {
+  if (text.empty()) return std::nullopt;
   const std::string s(text);
   // IMF-fixdate, RFC 850, asctime (RFC 9110 section 5.6.7); strptime with the C locale's names.
   for (const char* fmt :
@@ -70,7 +71,11 @@ struct ProxyFrontEnd::Impl {
     const auto now = unixMillisNow();
     updateSequence =
         options.updateSequence.empty() ? std::to_string(now / 1000) : options.updateSequence;
-    const std::time_t secs = static_cast<std::time_t>(now / 1000);
+    // The service's LastUpdate: the newest of its layers' (see capabilitiesModel).
+    UnixMillis newest = 0;
+    for (const auto& l : tiles.layers())
+      newest = std::max(newest, tiles.layerSince(l.name));
+    const std::time_t secs = static_cast<std::time_t>((newest > 0 ? newest : now) / 1000);
     std::tm tm{};
     gmtime_r(&secs, &tm);
     char buf[32];
@@ -123,7 +128,16 @@ struct ProxyFrontEnd::Impl {
 
   // ----------------------------------------------------------------------------- tiles
 
-  void sendTile(const HttpRequest& req,
+  /** What a tile answer needs of the request: its validators (not a copy of the request). */
+  struct Validators {
+    std::string ifNoneMatch;
+    std::string ifModifiedSince;
+    explicit Validators(const HttpRequest& req)
+        : ifNoneMatch(req.header("if-none-match")),
+          ifModifiedSince(req.header("if-modified-since")) {}
+  };
+
+  void sendTile(const Validators& req,
                 TileAnswer&& a,
                 const LayerSpec& l,
                 const Responder& respond) const {
@@ -136,11 +150,11 @@ struct ProxyFrontEnd::Impl {
                     ? std::string("public, max-age=60")
                     : "public, max-age=" + std::to_string(l.maxAge.count()));
     r.setHeader("X-Cache", toString(a.origin));
-    const std::string_view inm = req.header("if-none-match");
+    const std::string_view inm = req.ifNoneMatch;
     bool notModified = false;
     if (!inm.empty()) {
       notModified = ifNoneMatchHits(inm, a.etag);
-    } else if (const auto ims = parseHttpDate(req.header("if-modified-since"))) {
+    } else if (const auto ims = parseHttpDate(req.ifModifiedSince)) {
       notModified = a.fetchedAt / 1000 <= *ims / 1000; // HTTP dates have whole seconds
     }
     if (notModified) {
@@ -148,7 +162,13 @@ struct ProxyFrontEnd::Impl {
     } else {
       r.status = 200;
       r.setHeader("Content-Type", a.contentType);
-      r.body = std::move(a.bytes);
+      if (a.file) {
+        const auto size = a.file->size();
+        const int fd = a.file->fd();
+        r.file = HttpFileBody{fd, size, std::move(a.file)};
+      } else {
+        r.body = std::move(a.bytes);
+      }
     }
     respond(std::move(r));
   }
@@ -160,8 +180,11 @@ struct ProxyFrontEnd::Impl {
                      const Responder& respond) {
     const LayerSpec* l = tiles.layer(layerName);
     if (!l) return respond(plain(404, "no such layer\n"));
-    tiles.getTile(layerName, l->timeDefault, key, [this, req, l, respond](TileAnswer&& a) {
-      if (a.kind == TileAnswer::Kind::Tile) return sendTile(req, std::move(a), *l, respond);
+    tiles.getTile(layerName,
+                  l->timeDefault,
+                  key,
+                  [this, v = Validators(req), l, respond](TileAnswer&& a) {
+      if (a.kind == TileAnswer::Kind::Tile) return sendTile(v, std::move(a), *l, respond);
       auto r = plain(a.kind == TileAnswer::Kind::Absent ? 404 : 502, a.message + "\n");
       r.setHeader("X-Cache", toString(a.origin));
       if (a.kind == TileAnswer::Kind::Absent) r.setHeader("Cache-Control", "public, max-age=60");
@@ -293,7 +316,10 @@ struct ProxyFrontEnd::Impl {
       c.timePeriod = l.timePeriod;
       c.timeDefault = l.timeDefault;
       c.opaque = l.dataset.mimeType == "image/jpeg";
-      c.lastUpdateMillis = startedMillis; // the configuration this server serves dates from here
+      // Since when this layer's tiles are what they are: World Wind Java drops its own cached
+      // tiles older than this, so it must not move with every restart (only with a new definition).
+      const UnixMillis since = tiles.layerSince(l.name);
+      c.lastUpdateMillis = since > 0 ? since : startedMillis;
       m.layers.push_back(std::move(c));
     }
     return m;
@@ -327,7 +353,7 @@ struct ProxyFrontEnd::Impl {
       }
       return respond(std::move(r));
     }
-    const auto& m = std::get<GetMapRequest>(*parsed);
+    auto& m = std::get<GetMapRequest>(*parsed);
     if (m.layers.size() != 1) {
       return exception(
           ctx,
@@ -371,8 +397,11 @@ struct ProxyFrontEnd::Impl {
                        "one tile of the layer's grid"},
           respond);
     }
-    tiles.getTile(l->name, *time, *key, [this, req, l, m, ctx, respond](TileAnswer&& a) {
-      if (a.kind == TileAnswer::Kind::Tile) return sendTile(req, std::move(a), *l, respond);
+    tiles.getTile(l->name,
+                  *time,
+                  *key,
+                  [this, v = Validators(req), l, m = std::move(m), ctx, respond](TileAnswer&& a) {
+      if (a.kind == TileAnswer::Kind::Tile) return sendTile(v, std::move(a), *l, respond);
       if (a.kind == TileAnswer::Kind::Absent) {
         if (a.origin == TileOrigin::Offline &&
             options.offlineResponse == FrontEndOptions::OfflineResponse::Exception) {

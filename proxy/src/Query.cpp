@@ -100,18 +100,20 @@ bool QueryParams::hasDuplicates() const noexcept {
 }
 
 void QueryParams::add(std::string_view key, std::string_view value) {
+  take(std::string(key), std::string(value));
+}
+
+void QueryParams::take(std::string&& key, std::string&& value) {
   for (Entry& e : entries_) {
     if (equalsIgnoreCase(e.key, key)) {
       ++e.occurrences;
       return;
     }
   }
-  Entry entry;
-  entry.key.reserve(key.size());
-  for (const char c : key)
-    entry.key.push_back(toLowerAscii(c));
-  entry.value = std::string(value);
-  entries_.push_back(std::move(entry));
+  for (char& c : key)
+    c = toLowerAscii(c);
+  if (entries_.empty()) entries_.reserve(16); // a GetMap has about a dozen parameters
+  entries_.push_back(Entry{std::move(key), std::move(value), 1});
 }
 
 std::expected<std::string, std::string> percentDecode(std::string_view text, bool plusIsSpace) {
@@ -177,7 +179,7 @@ parseQuery(std::string_view query, std::size_t maxParamBytes, std::size_t maxQue
                              std::to_string(maxParamBytes) + " bytes");
     }
     if (key->empty()) continue;
-    params.add(*key, *value);
+    params.take(std::move(*key), std::move(*value));
   }
   return params;
 }

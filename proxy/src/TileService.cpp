@@ -135,6 +135,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
   TileServiceOptions options;
   std::vector<LayerSpec> layers;
   std::map<std::string, std::size_t, std::less<>> layerIndex;
+  std::vector<UnixMillis> layerSince; // per layer: its dataset's registration time
   std::vector<TileGrid> grids; // parallel to layers
   std::map<std::string, UpstreamSpec, std::less<>> upstreams;
   std::map<std::string, LocalRasterSource, std::less<>> rasters; // by upstream name
@@ -222,12 +223,15 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                          std::string contentType,
                          UnixMillis fetchedAt,
                          const std::string& folder,
-                         const TileKey& key) {
+                         const TileKey& key,
+                         std::shared_ptr<const TileFile> file = nullptr) {
     TileAnswer a;
     a.kind = TileAnswer::Kind::Tile;
     a.origin = origin;
-    a.etag = strongEtag(folder, key, fetchedAt, bytes.size());
+    a.etag = strongEtag(
+        folder, key, fetchedAt, file ? static_cast<std::size_t>(file->size()) : bytes.size());
     a.bytes = std::move(bytes);
+    a.file = std::move(file);
     a.contentType = std::move(contentType);
     a.fetchedAt = fetchedAt;
     return a;
@@ -240,7 +244,8 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                 std::move(old.meta.contentType),
                 old.meta.fetchedAt,
                 folder,
-                key);
+                key,
+                std::move(old.file));
   }
 
   /** Stores a good tile and lands the flight (worker thread). */
@@ -357,7 +362,8 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                 stale->meta.contentType,
                 m.fetchedAt,
                 folder,
-                fk.key));
+                fk.key,
+                std::move(stale->file)));
       return;
     }
     if (resp.status == 404) {
@@ -394,16 +400,18 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     auto ds = dataset(l, time);
     if (!ds) return done(error(ds.error()));
     const auto& [id, folder] = *ds;
-    auto found = cache.get(id, key);
+    // The file held open, not read: the HTTP server sends it with sendfile(2).
+    auto found = cache.openTile(id, key);
     if (!found) return done(error("cache: " + std::string(toString(found.error().code))));
     const UnixMillis now = unixMillisNow();
     if (found->kind == CacheLookup::Kind::Hit && !found->stale) {
       return done(tile(TileOrigin::Hit,
-                       std::move(found->bytes),
+                       {},
                        std::move(found->meta.contentType),
                        found->meta.fetchedAt,
                        folder,
-                       key));
+                       key,
+                       std::move(found->file)));
     }
     if (found->kind == CacheLookup::Kind::Absent && found->retryAfter > now) {
       return done(absent(TileOrigin::Hit, "the upstream has no tile here"));
@@ -448,6 +456,14 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                            : a.kind == TileAnswer::Kind::Absent ? TileStatus::Absent
                                                                 : TileStatus::Failed;
                 r.bytes = std::move(a.bytes);
+                if (a.file && r.bytes.empty()) {
+                  if (auto b = a.file->readAll()) {
+                    r.bytes = std::move(*b);
+                  } else {
+                    r.status = TileStatus::Failed;
+                    a.message = "cannot read the cached tile";
+                  }
+                }
                 r.contentType = std::move(a.contentType);
                 r.message = std::move(a.message);
                 done(std::move(r));
@@ -496,8 +512,10 @@ TileService::create(TileCache& cache,
     impl->layers.push_back(std::move(l));
   }
   for (const auto& l : impl->layers) {
-    if (auto ds = impl->dataset(l, ""); !ds)
-      return std::unexpected("layer '" + l.name + "': " + ds.error());
+    auto ds = impl->dataset(l, "");
+    if (!ds) return std::unexpected("layer '" + l.name + "': " + ds.error());
+    const auto info = cache.dataset(ds->first);
+    impl->layerSince.push_back(info ? info->createdAt : 0);
   }
   impl->forcedOffline = options.offline;
   impl->workers = std::make_unique<WorkerPool>(options.renderThreads);
@@ -517,6 +535,11 @@ const std::vector<LayerSpec>& TileService::layers() const noexcept {
 const LayerSpec* TileService::layer(std::string_view name) const noexcept {
   const auto it = impl_->layerIndex.find(name);
   return it == impl_->layerIndex.end() ? nullptr : &impl_->layers[it->second];
+}
+
+UnixMillis TileService::layerSince(std::string_view name) const noexcept {
+  const auto it = impl_->layerIndex.find(name);
+  return it == impl_->layerIndex.end() ? 0 : impl_->layerSince[it->second];
 }
 
 const TileGrid* TileService::grid(std::string_view name) const noexcept {

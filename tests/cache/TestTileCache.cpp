@@ -436,3 +436,118 @@ TEST(TileCache, WriteBehindIsVisibleAtOnceAndCommittedSoon) {
     EXPECT_EQ(cache->get(id, TileKey{3, 3, c})->bytes, payload({3, 3, c}));
   EXPECT_TRUE(cache->verify()->ok());
 }
+
+// ------------------------------------------------------------------ remembered rows and open files
+
+namespace {
+
+std::vector<std::byte> filled(std::size_t n, unsigned char value) {
+  return std::vector<std::byte>(n, static_cast<std::byte>(value));
+}
+
+std::unique_ptr<TileCache> openWith(const fs::path& root,
+                                    std::chrono::milliseconds otherWritersCheck,
+                                    std::chrono::milliseconds fileRecheck) {
+  TileCache::Options o;
+  o.root = root;
+  o.fsyncTiles = false;
+  o.otherWritersCheck = otherWritersCheck;
+  o.fileRecheck = fileRecheck;
+  auto c = TileCache::open(o);
+  EXPECT_TRUE(c) << (c ? "" : c.error().message);
+  return c ? std::move(*c) : nullptr;
+}
+
+} // namespace
+
+TEST(TileCache, OwnReplacementIsSeenByTheNextGet) {
+  test::TempDir dir("cache");
+  auto cache = openWith(dir.path(), std::chrono::hours(1), std::chrono::hours(1));
+  const auto id = *cache->registerDataset(imagery());
+  const TileKey k{1, 0, 1};
+  ASSERT_TRUE(cache->put(id, k, filled(300, 1), {}));
+  ASSERT_EQ(cache->get(id, k)->bytes, filled(300, 1)); // now remembered, file held open
+  ASSERT_TRUE(cache->put(id, k, filled(300, 2), {}));  // same size, new bytes
+  EXPECT_EQ(cache->get(id, k)->bytes, filled(300, 2));
+  ASSERT_TRUE(cache->put(id, k, filled(120, 3), {})); // new size
+  EXPECT_EQ(cache->openTile(id, k)->file->size(), 120);
+  EXPECT_EQ(cache->get(id, k)->bytes, filled(120, 3));
+  ASSERT_TRUE(cache->erase(id, k));
+  EXPECT_EQ(cache->get(id, k)->kind, CacheLookup::Kind::Miss);
+  ASSERT_TRUE(cache->putAbsent(id, k, unixMillisNow() + 60000));
+  EXPECT_EQ(cache->openTile(id, k)->kind, CacheLookup::Kind::Absent);
+}
+
+TEST(TileCache, OpenTileKeepsItsBytesWhileTheTileIsReplaced) {
+  test::TempDir dir("cache");
+  auto cache = openCache(dir.path());
+  const auto id = *cache->registerDataset(imagery());
+  const TileKey k{2, 1, 1};
+  ASSERT_TRUE(cache->put(id, k, filled(500, 7), {}));
+  auto held = cache->openTile(id, k);
+  ASSERT_TRUE(held && held->file);
+  ASSERT_TRUE(cache->put(id, k, filled(200, 8), {}));
+  ASSERT_TRUE(cache->erase(id, k));
+  // A response being sent from the old descriptor is never torn.
+  EXPECT_EQ(held->file->readAll(), filled(500, 7));
+}
+
+TEST(TileCache, AnotherWritersChangesAreSeenWithinTheCheckInterval) {
+  test::TempDir dir("cache");
+  // Two caches on one root: as two processes, each with its own connections.
+  auto writer = openWith(dir.path(), std::chrono::milliseconds(20), std::chrono::hours(1));
+  auto reader = openWith(dir.path(), std::chrono::milliseconds(20), std::chrono::hours(1));
+  const auto id = *writer->registerDataset(imagery());
+  const TileKey k{1, 0, 0};
+  ASSERT_TRUE(writer->put(id, k, filled(256, 1), {}));
+  ASSERT_EQ(reader->get(id, k)->bytes, filled(256, 1));
+  ASSERT_TRUE(writer->put(id, k, filled(256, 9), {}));
+  std::this_thread::sleep_for(std::chrono::milliseconds(80));
+  EXPECT_EQ(reader->get(id, k)->bytes, filled(256, 9));
+  ASSERT_TRUE(writer->erase(id, k));
+  std::this_thread::sleep_for(std::chrono::milliseconds(80));
+  EXPECT_EQ(reader->get(id, k)->kind, CacheLookup::Kind::Miss);
+}
+
+TEST(TileCache, FileReplacedOrRemovedBehindTheIndexIsNoticed) {
+  test::TempDir dir("cache");
+  auto cache = openWith(dir.path(), std::chrono::hours(1), std::chrono::milliseconds(0));
+  const auto id = *cache->registerDataset(imagery());
+  const TileKey k{1, 1, 0};
+  ASSERT_TRUE(cache->put(id, k, filled(64, 1), {}));
+  ASSERT_EQ(cache->get(id, k)->bytes, filled(64, 1));
+  const fs::path file = dir.path() / datasetFolder(imagery()) / tileRelativePath(k, "jpg");
+  {
+    std::ofstream out(file.string() + ".new", std::ios::binary);
+    const auto b = filled(64, 5);
+    out.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
+  }
+  fs::rename(file.string() + ".new", file);
+  EXPECT_EQ(cache->get(id, k)->bytes, filled(64, 5));
+  fs::remove(file);
+  EXPECT_EQ(cache->get(id, k)->kind, CacheLookup::Kind::Miss);
+}
+
+TEST(TileCache, HeldOpenFilesStayWithinTheirLimit) {
+  test::TempDir dir("cache");
+  TileCache::Options o;
+  o.root = dir.path();
+  o.fsyncTiles = false;
+  o.openFiles = 8;
+  auto cache = std::move(*TileCache::open(o));
+  const auto id = *cache->registerDataset(imagery());
+  auto openFds = [] {
+    std::size_t n = 0;
+    for ([[maybe_unused]] const auto& e : fs::directory_iterator("/proc/self/fd"))
+      ++n;
+    return n;
+  };
+  const std::size_t before = openFds();
+  for (std::int64_t c = 0; c < 32; ++c) {
+    const TileKey k{3, 2, c};
+    ASSERT_TRUE(cache->put(id, k, payload(k), {}));
+    ASSERT_EQ(cache->get(id, k)->bytes, payload(k));
+  }
+  // Read connections may open as well; the tiles themselves add at most `openFiles`.
+  EXPECT_LE(openFds(), before + 8 + 4);
+}

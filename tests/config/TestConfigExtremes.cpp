@@ -114,6 +114,20 @@ TEST(ConfigExtremes, LimitsOutOfRange) {
   EXPECT_TRUE(ok) << ok.error().toString();
 }
 
+TEST(ConfigExtremes, ServerThreadsOutOfRange) {
+  for (const char* bad : {"-1", "257", "1e9", "two"}) {
+    const auto c = parse("server: {threads: " + std::string(bad) + "}\n" + layerWith(""));
+    ASSERT_FALSE(c) << bad;
+    EXPECT_EQ(c.error().key, "server.threads") << bad;
+    EXPECT_EQ(c.error().line, 1) << bad;
+  }
+  for (const char* good : {"0", "1", "256"}) {
+    const auto c = parse("server: {threads: " + std::string(good) + "}\n" + layerWith(""));
+    ASSERT_TRUE(c) << good << ": " << c.error().toString();
+    EXPECT_EQ(c->server.threads, std::stoi(good));
+  }
+}
+
 TEST(ConfigExtremes, UpstreamCountsOutOfRange) {
   const auto check = [](std::string_view key, std::string_view value) {
     std::string yaml = layerWith("");
@@ -130,6 +144,7 @@ TEST(ConfigExtremes, UpstreamCountsOutOfRange) {
   check("connect_timeout", "0s");
   check("timeout", "0");
   check("open_interval", "0ms");
+  check("max_retry_after_wait", "-1s");
   check("version", "1.0.0");
   check("crs", "EPSG:3857");
 }

@@ -223,6 +223,7 @@ upstreams:
     retry_backoff: 0
     failure_threshold: 1
     open_interval: 1h
+    max_retry_after_wait: 90s
     headers: {User-Agent: "tellus/0.1", Referer: "https://example.org/"}
   - name: w
     type: wms
@@ -294,6 +295,7 @@ layers:
   EXPECT_EQ(ww.retryBackoff, milliseconds(0));
   EXPECT_EQ(ww.failureThreshold, 1);
   EXPECT_EQ(ww.openInterval, std::chrono::hours(1));
+  EXPECT_EQ(ww.maxRetryAfterWait, seconds(90));
   ASSERT_EQ(ww.headers.size(), 2U);
   EXPECT_EQ(ww.headers[0], (std::pair<std::string, std::string>{"User-Agent", "tellus/0.1"}));
   EXPECT_EQ(ww.headers[1].first, "Referer");

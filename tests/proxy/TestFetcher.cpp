@@ -139,6 +139,7 @@ TEST(Fetcher, ErrorCodesHaveNames) {
   EXPECT_STREQ(toString(FetchErrc::Timeout), "timeout");
   EXPECT_STREQ(toString(FetchErrc::CircuitOpen), "circuit-open");
   EXPECT_STREQ(toString(FetchErrc::TooLarge), "too-large");
+  EXPECT_STREQ(toString(FetchErrc::Throttled), "throttled");
 }
 
 // ---- FetcherIntegration: against FakeUpstream on 127.0.0.1 ------------------------------------
@@ -630,4 +631,75 @@ TEST(FetcherIntegration, CallbacksMayFetchAgainAndMayThrow) {
   auto third = fetchNow(f, get("u", server.url("/third"))); // the fetcher thread survived
   EXPECT_TRUE(third);
   EXPECT_EQ(server.requests(), 3u);
+}
+
+// ---- Retry-After (429 / 503) ------------------------------------------------------------------
+
+TEST(Fetcher, RetryAfterIsSecondsOrAnHttpDate) {
+  using std::chrono::seconds;
+  const auto now = std::chrono::system_clock::time_point(seconds(1'700'000'000));
+  EXPECT_EQ(parseRetryAfter("120", now), std::chrono::milliseconds(120000));
+  EXPECT_EQ(parseRetryAfter("0", now), std::chrono::milliseconds(0));
+  // 1700000000 is Tue, 14 Nov 2023 22:13:20 GMT.
+  EXPECT_EQ(parseRetryAfter("Tue, 14 Nov 2023 22:14:00 GMT", now), std::chrono::milliseconds(40000));
+  EXPECT_EQ(parseRetryAfter("Tue, 14 Nov 2023 22:00:00 GMT", now), std::chrono::milliseconds(0));
+  EXPECT_GE(*parseRetryAfter("99999999999999999999", now), std::chrono::hours(24));
+  for (const char* bad : {"", "soon", "-5", "1.5", " 12", "12 "})
+    EXPECT_FALSE(parseRetryAfter(bad, now)) << "'" << bad << "'";
+}
+
+TEST(FetcherIntegration, A503WithAShortRetryAfterIsRetriedNoEarlierThanAsked) {
+  std::atomic<int> calls{0};
+  FakeUpstream server([&](const FakeRequest&) {
+    if (++calls > 1) return FakeReply::ok("fine");
+    auto r = FakeReply::withStatus(503, "busy");
+    r.headers.emplace_back("Retry-After", "1");
+    return r;
+  });
+  Fetcher f;
+  f.setPolicy("u", fastPolicy()); // 5 ms backoff: without Retry-After it would retry at once
+  const auto started = Clock::now();
+  auto r = fetchNow(f, get("u", server.url("/t")));
+  ASSERT_TRUE(r) << r.error().message;
+  EXPECT_EQ(text(r->body), "fine");
+  EXPECT_EQ(r->attempts, 2);
+  EXPECT_GE(Clock::now() - started, 950ms);
+  EXPECT_EQ(f.stats("u").failures, 0u);
+  EXPECT_EQ(f.breaker("u"), BreakerState::Closed);
+}
+
+TEST(FetcherIntegration, A429WithALongRetryAfterPausesTheUpstream) {
+  FakeUpstream server([](const FakeRequest&) {
+    auto r = FakeReply::withStatus(429, "slow down");
+    r.headers.emplace_back("Retry-After", "3600");
+    return r;
+  });
+  Fetcher f;
+  f.setPolicy("u", fastPolicy());
+  auto r = fetchNow(f, get("u", server.url("/a")));
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().code, FetchErrc::HttpError);
+  EXPECT_EQ(r.error().httpStatus, 429);
+  EXPECT_NE(r.error().message.find("3600 s"), std::string::npos) << r.error().message;
+  EXPECT_EQ(server.requests(), 1u); // not retried: the wait is longer than maxRetryAfterWait
+  for (int i = 0; i < 5; ++i) {
+    auto again = fetchNow(f, get("u", server.url("/b")));
+    ASSERT_FALSE(again);
+    EXPECT_EQ(again.error().code, FetchErrc::Throttled);
+    EXPECT_EQ(again.error().attempts, 0);
+  }
+  EXPECT_EQ(server.requests(), 1u); // the paused upstream saw nothing more
+  EXPECT_EQ(f.breaker("u"), BreakerState::Closed); // throttling is not a failure
+}
+
+TEST(FetcherIntegration, A429WithoutRetryAfterIsRetriedWithBackoff) {
+  std::atomic<int> calls{0};
+  FakeUpstream server([&](const FakeRequest&) {
+    return ++calls == 1 ? FakeReply::withStatus(429, "slow down") : FakeReply::ok("fine");
+  });
+  Fetcher f;
+  f.setPolicy("u", fastPolicy());
+  auto r = fetchNow(f, get("u", server.url("/t")));
+  ASSERT_TRUE(r) << r.error().message;
+  EXPECT_EQ(r->attempts, 2);
 }

@@ -1,3 +1,5 @@
+#include "../support/TempDir.hpp"
+
 #include <tellus/proxy/HttpServer.hpp>
 
 #include <gtest/gtest.h>
@@ -6,6 +8,8 @@
 #include <atomic>
 #include <chrono>
 #include <cstring>
+#include <fcntl.h>
+#include <fstream>
 #include <future>
 #include <netinet/in.h>
 #include <poll.h>
@@ -74,7 +78,7 @@ private:
     if (end == std::string::npos) return false;
     const auto cl = s.find("Content-Length: ");
     if (cl == std::string::npos || cl > end) return true;
-    const auto len = std::stoul(s.substr(cl + 16));
+    const auto len = std::stoul(s.substr(cl + 16, 20));
     return s.size() >= end + 4 + len;
   }
   int fd_ = -1;
@@ -294,4 +298,123 @@ TEST(HttpServer, RateLimitPerClientAnswers429) {
   EXPECT_GE(limited, 5); // the loop is far faster than 5 a second, even on a loaded machine
   EXPECT_EQ(ok + limited, 30);
   EXPECT_EQ(calls.load(), ok); // refused requests never reach the handler
+}
+
+// ------------------------------------------------------------------------ file bodies (sendfile)
+
+namespace {
+
+/** A file of `n` bytes with a position-dependent pattern, opened read-only. */
+struct PatternFile {
+  test::TempDir dir{"http-file"};
+  std::string bytes;
+  std::shared_ptr<int> fd;
+  explicit PatternFile(std::size_t n) {
+    bytes.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+      bytes[i] = static_cast<char>((i * 131 + i / 251) & 0xFF);
+    const auto path = dir.path() / "tile.bin";
+    std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(n));
+    fd = std::shared_ptr<int>(new int(::open(path.c_str(), O_RDONLY | O_CLOEXEC)), [](int* p) {
+      ::close(*p);
+      delete p;
+    });
+  }
+  HttpResponse response(std::int64_t promised = -1) const {
+    HttpResponse r;
+    r.setHeader("Content-Type", "image/jpeg");
+    r.setHeader("ETag", "\"e1\"");
+    r.file = HttpFileBody{*fd, promised < 0 ? static_cast<std::int64_t>(bytes.size()) : promised, fd};
+    return r;
+  }
+};
+
+HttpHandler fileHandler(const PatternFile& f) {
+  return [&f](HttpRequest&& req, Responder respond) {
+    if (req.path == "/short") return respond(f.response(static_cast<std::int64_t>(f.bytes.size()) + 100));
+    if (req.path == "/later") {
+      std::thread([&f, respond = std::move(respond)] { respond(f.response()); }).detach();
+      return;
+    }
+    respond(f.response());
+  };
+}
+
+std::string bodyOf(const std::string& r) {
+  const auto end = r.find("\r\n\r\n");
+  return end == std::string::npos ? std::string() : r.substr(end + 4);
+}
+
+} // namespace
+
+TEST(HttpServer, FileBodiesAreSentWholeOnAKeptAliveConnection) {
+  const PatternFile f(3 * 1024 * 1024 + 17); // larger than the socket buffers: partial sends
+  HttpServer server(quickOptions(), fileHandler(f));
+  ASSERT_TRUE(server.start());
+  RawClient c(server.port());
+  for (const char* path : {"/now", "/later", "/now"}) {
+    c.send(std::string("GET ") + path + " HTTP/1.1\r\nHost: a\r\n\r\n");
+    const std::string r = c.readResponse(5000ms);
+    ASSERT_TRUE(r.starts_with("HTTP/1.1 200 OK\r\n")) << r.substr(0, 200);
+    EXPECT_NE(r.find("Content-Length: " + std::to_string(f.bytes.size()) + "\r\n"), std::string::npos);
+    EXPECT_NE(r.find("Content-Type: image/jpeg\r\n"), std::string::npos);
+    EXPECT_NE(r.find("Server: tellus\r\n"), std::string::npos);
+    EXPECT_EQ(r.find("Connection: close"), std::string::npos);
+    EXPECT_TRUE(bodyOf(r) == f.bytes) << path << ": body differs";
+  }
+  c.send("HEAD /now HTTP/1.1\r\nHost: a\r\n\r\n");
+  const std::string h = c.readResponse(500ms);
+  EXPECT_NE(h.find("Content-Length: " + std::to_string(f.bytes.size())), std::string::npos) << h;
+  EXPECT_TRUE(h.ends_with("\r\n\r\n")) << "HEAD must carry no body";
+}
+
+TEST(HttpServer, FileBodiesHonourHttp10AndConnectionClose) {
+  const PatternFile f(5000);
+  HttpServer server(quickOptions(), fileHandler(f));
+  ASSERT_TRUE(server.start());
+  {
+    RawClient c(server.port());
+    c.send("GET /now HTTP/1.0\r\nConnection: keep-alive\r\n\r\n");
+    const std::string r = c.readResponse();
+    EXPECT_TRUE(r.starts_with("HTTP/1.0 200 OK\r\n")) << r.substr(0, 100);
+    EXPECT_NE(r.find("Connection: keep-alive\r\n"), std::string::npos);
+    EXPECT_TRUE(bodyOf(r) == f.bytes);
+    c.send("GET /now HTTP/1.0\r\n\r\n"); // no keep-alive: closed after the answer
+    EXPECT_TRUE(bodyOf(c.readResponse()) == f.bytes);
+    EXPECT_TRUE(c.closedWithin(1000ms));
+  }
+  RawClient c(server.port());
+  c.send("GET /now HTTP/1.1\r\nHost: a\r\nConnection: close\r\n\r\n");
+  const std::string r = c.readResponse();
+  EXPECT_NE(r.find("Connection: close\r\n"), std::string::npos);
+  EXPECT_TRUE(c.closedWithin(1000ms));
+}
+
+TEST(HttpServer, AFileShorterThanPromisedClosesTheConnection) {
+  const PatternFile f(1000);
+  HttpServer server(quickOptions(), fileHandler(f));
+  ASSERT_TRUE(server.start());
+  RawClient c(server.port());
+  c.send("GET /short HTTP/1.1\r\nHost: a\r\n\r\n");
+  (void)c.readResponse(300ms);
+  EXPECT_TRUE(c.closedWithin(1000ms)); // never a hang, never the next response mid-body
+}
+
+TEST(HttpServer, AClientThatDoesNotReadAFileBodyIsCutOff) {
+  const PatternFile f(16 * 1024 * 1024);
+  HttpServer server(quickOptions(), fileHandler(f)); // request timeout 300 ms
+  ASSERT_TRUE(server.start());
+  {
+    RawClient stuck(server.port());
+    stuck.send("GET /now HTTP/1.1\r\nHost: a\r\n\r\n");
+    std::this_thread::sleep_for(100ms);
+    // Meanwhile others are served.
+    RawClient other(server.port());
+    other.send("GET /now HTTP/1.1\r\nHost: a\r\n\r\n");
+    EXPECT_TRUE(bodyOf(other.readResponse(5000ms)) == f.bytes);
+    const auto deadline = std::chrono::steady_clock::now() + 3s;
+    while (server.connections() > 1 && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(20ms);
+    EXPECT_LE(server.connections(), 1u) << "the stuck connection is still open";
+  }
 }

@@ -527,3 +527,31 @@ TEST(ProxyIntegration, RealMapServerUpstream) {
   }
   EXPECT_EQ(mapserver.requests(), 4u);
 }
+
+TEST(ProxyIntegration, LayerLastUpdateSurvivesRestartsAndMovesWithTheDefinition) {
+  test::TempDir dir("lastupdate");
+  auto cache = test::openTestCache(dir.path());
+  Fetcher fetcher;
+  UpstreamSpec u;
+  u.name = "up";
+  u.type = UpstreamSpec::Type::Wms;
+  u.url = "http://127.0.0.1:9/wms";
+  LayerSpec l;
+  l.name = "sat";
+  l.upstream = "up";
+  l.dataset.grid = GridSpec{Sector{}, 36.0, 256, 256, 4};
+  l.dataset.mimeType = "image/jpeg";
+  auto since = [&](const LayerSpec& layer) {
+    auto t = TileService::create(*cache, fetcher, {u}, {layer}, TileServiceOptions{});
+    EXPECT_TRUE(t) << (t ? "" : t.error());
+    return t ? (*t)->layerSince("sat") : 0;
+  };
+  const UnixMillis first = since(l);
+  EXPECT_GT(first, 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_EQ(since(l), first) << "a restart must not make World Wind Java drop its tiles";
+  LayerSpec changed = l;
+  changed.dataset.mimeType = "image/png"; // another definition: another dataset
+  EXPECT_GT(since(changed), first);
+  EXPECT_EQ(since(l), first);
+}

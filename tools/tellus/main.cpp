@@ -21,6 +21,7 @@
 #include <map>
 #include <optional>
 #include <pthread.h>
+#include <sys/resource.h>
 #include <string>
 #include <string_view>
 #include <unistd.h>
@@ -192,9 +193,25 @@ struct Context {
   std::unique_ptr<TileCache> cache;
 };
 
+/** Raises the soft descriptor limit as far as the hard one allows (nginx's worker_rlimit_nofile)
+ * and returns how many tile files the cache may hold open: half of what the connections leave. */
+std::size_t descriptorBudget(int maxConnections) {
+  rlimit rl{};
+  if (::getrlimit(RLIMIT_NOFILE, &rl) != 0) return 64;
+  const rlim_t wanted = std::min<rlim_t>(rl.rlim_max, 1 << 20);
+  if (rl.rlim_cur < wanted) {
+    rlimit raised = rl;
+    raised.rlim_cur = wanted;
+    if (::setrlimit(RLIMIT_NOFILE, &raised) == 0) rl = raised;
+  }
+  const auto limit = static_cast<long long>(std::min<rlim_t>(rl.rlim_cur, 1 << 20));
+  const long long spare = limit - maxConnections - 256; // SQLite, libcurl, logs, the listener
+  return static_cast<std::size_t>(std::clamp(spare / 2, 64LL, 16384LL));
+}
+
 /** Builds the configuration and opens the cache; prints the error and returns nullopt on failure.
  */
-std::optional<Context> setUp(const Args& a, bool seeding = false) {
+std::optional<Context> setUp(const Args& a, bool seeding = false, bool serving = false) {
   Context ctx;
   if (auto file = a.get("config")) {
     auto loaded = loadConfig(*file);
@@ -218,6 +235,7 @@ std::optional<Context> setUp(const Args& a, bool seeding = false) {
   o.sizeLimitBytes = ctx.config.cache.sizeLimitBytes;
   // A seeder writes many tiles: rows are committed behind the files in batches (bench/RESULTS.md).
   o.indexWriteBehind = seeding;
+  if (serving) o.openFiles = descriptorBudget(ctx.config.server.limits.maxConnections);
   auto cache = TileCache::open(o);
   if (!cache) {
     std::fprintf(stderr, "tellus: cache %s: %s\n", root.c_str(), cache.error().message.c_str());
@@ -469,6 +487,7 @@ std::pair<std::vector<UpstreamSpec>, std::vector<LayerSpec>> proxySpecs(const Co
     s.policy.retryBackoff = u.retryBackoff;
     s.policy.failureThreshold = u.failureThreshold;
     s.policy.openInterval = u.openInterval;
+    s.policy.maxRetryAfterWait = u.maxRetryAfterWait;
     s.policy.headers = u.headers;
     ups.push_back(std::move(s));
   }
@@ -495,7 +514,7 @@ std::pair<std::vector<UpstreamSpec>, std::vector<LayerSpec>> proxySpecs(const Co
 }
 
 int cmdServe(const Args& a) {
-  auto ctx = setUp(a);
+  auto ctx = setUp(a, false, /*serving=*/true);
   if (!ctx) return kExitError;
   ServerSettings server = ctx->config.server;
   if (auto listen = a.get("listen")) {
@@ -553,6 +572,7 @@ int cmdServe(const Args& a) {
   ho.requestTimeout = server.limits.requestTimeout;
   ho.keepAliveTimeout = server.limits.keepaliveTimeout;
   ho.requestsPerSecond = server.limits.requestsPerSecond;
+  ho.threads = server.threads;
   HttpServer http(ho, [&front](HttpRequest&& r, Responder respond) {
     front.handle(std::move(r), std::move(respond));
   });

@@ -24,6 +24,7 @@
 
 #include <tellus/cache/CacheError.hpp>
 #include <tellus/cache/Dataset.hpp>
+#include <tellus/cache/TileFile.hpp>
 #include <tellus/cache/TileKey.hpp>
 
 #include <chrono>
@@ -59,7 +60,8 @@ struct CacheLookup {
     Hit,    ///< bytes are there
   };
   Kind kind = Kind::Miss;
-  std::vector<std::byte> bytes; ///< Hit only
+  std::vector<std::byte> bytes; ///< Hit from get() only
+  std::shared_ptr<const TileFile> file; ///< Hit from openTile() only
   TileMeta meta;                ///< Hit only
   bool stale = false;           ///< Hit: expiresAt has passed (serve, but refresh)
   std::int64_t size = 0;        ///< Hit: byte count recorded in the index
@@ -71,6 +73,9 @@ struct DatasetInfo {
   DatasetId id = 0;
   DatasetSpec spec;
   std::string folder; ///< relative to the cache root
+  /// When this dataset was first registered (its definition has not changed since: another
+  /// definition is another dataset). WMS capabilities give it as a layer's LastUpdate.
+  std::int64_t createdAt = 0;
 };
 
 /** Tiles and bytes of one dataset at one level (absent markers count as tiles of 0 bytes). */
@@ -123,6 +128,18 @@ public:
     std::chrono::milliseconds accessFlushInterval{
         1000};               ///< how often last-access times are written
     int readConnections = 4; ///< pooled read connections
+    /// Rows of present tiles remembered in memory (0: every lookup asks SQLite), and how many of
+    /// their files are held open for openTile()/get(). Size the open files well below the
+    /// process's descriptor limit.
+    std::size_t rowCacheEntries = 65536;
+    std::size_t openFiles = 256;
+    /// How often another process's writes are looked for (PRAGMA data_version): at most this long
+    /// after a seeder or `cache prune` in another process commits, this one still answers from
+    /// the rows it remembered. This process's own writes are seen at once.
+    std::chrono::milliseconds otherWritersCheck{100};
+    /// How often a held-open file is checked (stat) against the path it came from, to notice a
+    /// file replaced or deleted behind the index.
+    std::chrono::milliseconds fileRecheck{1000};
   };
 
   /** Opens (creating or migrating) the cache. A damaged index is moved aside to
@@ -149,6 +166,10 @@ public:
   /** Looks a tile up. A row whose file vanished or changed size is a Miss (and the row is dropped).
    */
   std::expected<CacheLookup, CacheError> get(DatasetId id, const TileKey& key);
+  /** Like get(), but the Hit holds the tile's file open (`file`, no `bytes`): for sendfile and
+   * for readers that want the bytes later. Repeated lookups of a tile cost neither SQLite nor
+   * open(2): rows and descriptors are remembered (see Options::rowCacheEntries). */
+  std::expected<CacheLookup, CacheError> openTile(DatasetId id, const TileKey& key);
   /** Index-only check (no file access): Hit/Absent/Miss kind and staleness, no bytes, no touch. */
   std::expected<CacheLookup, CacheError> peek(DatasetId id, const TileKey& key) const;
   /** Stores a tile durably; returns when the index row is committed. */

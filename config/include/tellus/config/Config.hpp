@@ -53,6 +53,7 @@ struct ServerSettings {
   bool exceptionsHttpStatus = false;    ///< WMS exceptions with 4xx/5xx instead of 200
   OfflineResponse offlineResponse = OfflineResponse::Exception;
   bool offline = false; ///< start offline (the --offline flag sets it too)
+  int threads = 0;      ///< event-loop threads; 0 = one per core
   ServerLimits limits;
 };
 
@@ -80,6 +81,7 @@ struct UpstreamConfig {
   std::chrono::milliseconds timeout{30'000};      ///< a whole request
   std::chrono::milliseconds retryBackoff{200};    ///< base of exponential backoff with jitter
   std::chrono::milliseconds openInterval{30'000}; ///< circuit breaker open before one probe
+  std::chrono::milliseconds maxRetryAfterWait{10'000}; ///< longer Retry-After: pause, fail now
   int maxConnections = 4;                         ///< concurrent requests to this upstream
   int retries = 3;                                ///< for 5xx and timeouts
   int failureThreshold = 5; ///< consecutive failures that open the circuit breaker

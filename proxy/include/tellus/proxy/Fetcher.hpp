@@ -12,7 +12,9 @@
 #include <expected>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -27,6 +29,10 @@ struct UpstreamPolicy {
   std::chrono::milliseconds retryBackoff{200}; ///< base: retry n waits random(0, base * 2^n)
   int failureThreshold = 5; ///< consecutive failed fetches (after retries) that open the breaker
   std::chrono::milliseconds openInterval{30000}; ///< open breaker: no traffic for this long
+  /// 429 or 503 with Retry-After: a wait up to this long is waited out within the fetch (the retry
+  /// goes no earlier than asked); a longer one fails the fetch at once and pauses the upstream
+  /// for the time asked (at most an hour): fetches meanwhile fail with Throttled, no network.
+  std::chrono::milliseconds maxRetryAfterWait{10000};
   std::size_t maxBodyBytes = 64 << 20;
   std::vector<std::pair<std::string, std::string>> headers; ///< sent with every request
 };
@@ -59,6 +65,7 @@ enum class FetchErrc {
   Truncated,   ///< the body ended before its announced length (after retries)
   TooLarge,    ///< the body exceeds UpstreamPolicy::maxBodyBytes (not retried)
   Cancelled,   ///< the fetcher was destroyed first
+  Throttled,   ///< the upstream asked for a pause (Retry-After) that has not ended: no network
   Unknown      ///< bad URL, unsupported protocol, invalid header, internal failure
 };
 
@@ -70,6 +77,11 @@ struct FetchError {
 };
 
 using FetchResult = std::expected<FetchResponse, FetchError>;
+
+/** An HTTP Retry-After value (RFC 9110 10.2.3): delay-seconds or an HTTP-date, as the wait from
+ * `now` (0 for a date in the past); nullopt when it is neither. */
+std::optional<std::chrono::milliseconds>
+parseRetryAfter(std::string_view value, std::chrono::system_clock::time_point now);
 
 enum class BreakerState { Closed, Open, HalfOpen };
 

@@ -16,6 +16,7 @@
 #include <expected>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -35,10 +36,18 @@ struct HttpRequest {
   std::string_view header(std::string_view lowerName) const noexcept;
 };
 
+/** A body sent straight from a file with sendfile(2): no copy through user space. */
+struct HttpFileBody {
+  int fd = -1;                       ///< read-only, positioned reads only (never seeked)
+  std::int64_t size = 0;             ///< bytes from offset 0; the file must not shrink
+  std::shared_ptr<const void> owner; ///< keeps `fd` open until the response is sent
+};
+
 struct HttpResponse {
   int status = 200;
   std::vector<std::pair<std::string, std::string>> headers; ///< Content-Type etc.
   std::vector<std::byte> body;
+  std::optional<HttpFileBody> file; ///< instead of `body`
 
   void setHeader(std::string name, std::string value);
   static HttpResponse text(int status, std::string_view contentType, std::string_view body);

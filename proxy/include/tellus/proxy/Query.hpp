@@ -49,6 +49,8 @@ public:
   /** Adds a parameter as parseQuery does (key lower-cased, first value wins). For callers that
    * build parameters from another source (a form body, a test). */
   void add(std::string_view key, std::string_view value);
+  /** As add(), taking the strings (no copies). */
+  void take(std::string&& key, std::string&& value);
 
 private:
   const Entry* find(std::string_view key) const noexcept;

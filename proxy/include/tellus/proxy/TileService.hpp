@@ -62,7 +62,8 @@ struct TileAnswer {
   enum class Kind { Tile, Absent, Error };
   Kind kind = Kind::Error;
   TileOrigin origin = TileOrigin::Miss;
-  std::vector<std::byte> bytes;
+  std::vector<std::byte> bytes;         ///< Tile: the bytes, unless `file` holds them
+  std::shared_ptr<const TileFile> file; ///< Tile from the cache: its open file (bytes empty)
   std::string contentType;
   UnixMillis fetchedAt = 0; ///< Last-Modified
   std::string etag;         ///< strong validator of these bytes, quoted
@@ -89,6 +90,9 @@ public:
 
   const std::vector<LayerSpec>& layers() const noexcept;
   const LayerSpec* layer(std::string_view name) const noexcept;
+  /** When the layer's dataset (as now defined) was first registered in the cache: stable across
+   * restarts, new when the definition changes (the capabilities' LastUpdate). 0 if unknown. */
+  UnixMillis layerSince(std::string_view layer) const noexcept;
   /** The grid of a layer (nullptr for an unknown layer). */
   const TileGrid* grid(std::string_view layer) const noexcept;
 
