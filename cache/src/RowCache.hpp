@@ -46,6 +46,7 @@ struct CachedRow {
   dev_t dev = 0;
   ino_t ino = 0;
   mutable std::atomic<std::int64_t> checkedAtNs{0}; ///< steady clock: last time dev/ino matched
+  mutable std::atomic<std::int64_t> touchedAtMs{0}; ///< last access recorded for LRU (Unix ms)
 };
 
 class RowCache {

@@ -67,6 +67,7 @@ constexpr const char* kDescriptorName = "dataset.txt";
 constexpr int kStatePresent = 1;
 constexpr int kStateAbsent = 2;
 constexpr std::size_t kMaxBatch = 1024;
+constexpr std::int64_t kTouchResolutionMs = 60000; // last-access times of remembered rows
 
 using Result = std::expected<void, CacheError>;
 
@@ -1074,9 +1075,14 @@ std::expected<CacheLookup, CacheError> TileCache::openTile(DatasetId id, const T
     out.meta = r.meta;
     out.size = r.size;
     out.file = r.file;
-    out.stale = out.meta.expiresAt && *out.meta.expiresAt <= unixMillisNow();
+    const UnixMillis now = unixMillisNow();
+    out.stale = out.meta.expiresAt && *out.meta.expiresAt <= now;
+    // Last access only steers LRU eviction: a minute's resolution is plenty, and a hot tile then
+    // costs the writer one update a minute instead of one a second (its bursts hurt tail latency).
+    if (now - r.touchedAtMs.load(std::memory_order_relaxed) < kTouchResolutionMs) return out;
+    r.touchedAtMs.store(now, std::memory_order_relaxed);
     std::lock_guard lock(im.queueMutex);
-    im.touches[tk] = unixMillisNow();
+    im.touches[tk] = now;
     return out;
   };
   im.noticeOtherWriters();

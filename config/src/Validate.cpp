@@ -75,7 +75,7 @@ std::optional<ValidationIssue> checkServer(const ServerSettings& s) {
   }
   if (hasControl(s.cors)) return issue("cors", "has a control character");
   if (s.threads < 0 || s.threads > 256)
-    return issue("threads", "must be in [0, 256] (0 = one per core), got " + str(s.threads));
+    return issue("threads", "must be in [0, 256] (0 = automatic), got " + str(s.threads));
   const ServerLimits& l = s.limits;
   if (l.maxConnections < 1 || l.maxConnections > 1'000'000)
     return issue("limits.max_connections", "must be in [1, 1000000], got " + str(l.maxConnections));

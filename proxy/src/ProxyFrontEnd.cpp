@@ -142,6 +142,7 @@ struct ProxyFrontEnd::Impl {
                 const LayerSpec& l,
                 const Responder& respond) const {
     HttpResponse r;
+    r.headers.reserve(8);
     common(r);
     r.setHeader("ETag", a.etag);
     r.setHeader("Last-Modified", formatHttpDate(a.fetchedAt));

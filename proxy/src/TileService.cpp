@@ -136,6 +136,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
   std::vector<LayerSpec> layers;
   std::map<std::string, std::size_t, std::less<>> layerIndex;
   std::vector<UnixMillis> layerSince; // per layer: its dataset's registration time
+  std::vector<std::pair<DatasetId, std::string>> defaultDatasets; // per layer: time "" (id, folder)
   std::vector<TileGrid> grids; // parallel to layers
   std::map<std::string, UpstreamSpec, std::less<>> upstreams;
   std::map<std::string, LocalRasterSource, std::less<>> rasters; // by upstream name
@@ -397,8 +398,15 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     if (key.level < 0 || key.level >= g.numLevels() || !g.isValid(key)) {
       return done(absent(TileOrigin::Hit, "outside the layer's coverage"));
     }
-    auto ds = dataset(l, time);
-    if (!ds) return done(error(ds.error()));
+    // Layers without TIME (most requests) use the dataset registered at start: no lock, no copy.
+    std::pair<DatasetId, std::string> timed;
+    const std::pair<DatasetId, std::string>* ds = &defaultDatasets[li->second];
+    if (!time.empty()) {
+      auto found = dataset(l, time);
+      if (!found) return done(error(found.error()));
+      timed = std::move(*found);
+      ds = &timed;
+    }
     const auto& [id, folder] = *ds;
     // The file held open, not read: the HTTP server sends it with sendfile(2).
     auto found = cache.openTile(id, key);
@@ -516,6 +524,7 @@ TileService::create(TileCache& cache,
     if (!ds) return std::unexpected("layer '" + l.name + "': " + ds.error());
     const auto info = cache.dataset(ds->first);
     impl->layerSince.push_back(info ? info->createdAt : 0);
+    impl->defaultDatasets.push_back(*ds);
   }
   impl->forcedOffline = options.offline;
   impl->workers = std::make_unique<WorkerPool>(options.renderThreads);

@@ -53,7 +53,7 @@ struct ServerSettings {
   bool exceptionsHttpStatus = false;    ///< WMS exceptions with 4xx/5xx instead of 200
   OfflineResponse offlineResponse = OfflineResponse::Exception;
   bool offline = false; ///< start offline (the --offline flag sets it too)
-  int threads = 0;      ///< event-loop threads; 0 = one per core
+  int threads = 0;      ///< event-loop threads; 0 = cores - 1 (at least 1)
   ServerLimits limits;
 };
 
