@@ -32,7 +32,8 @@
 #   SERVE_ARGS=           more arguments for `tellus serve` (e.g. "--config my.yaml")
 #   HTTP_THREADS=         event-loop threads of tellus serve (default: one per core, its own
 #                         default); set through an LD_PRELOAD shim (threads_shim.c, built with cc)
-#                         because tellus has no option for it yet
+#                         (tellus serve also has server.threads in a config; the shim keeps the
+#                         embedded default config)
 #   COMPARE_THREADS=      also start a second tellus serve with this many loop threads (same shim)
 #                         and add series T (/wwtile on it) to every round, just before N
 #   LOAD_WAIT_S=0 MAX_LOAD=0.8  before the runs (after seeding), wait up to LOAD_WAIT_S seconds for
