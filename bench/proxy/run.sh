@@ -30,11 +30,9 @@
 #   NGINX_OPEN_FILE_CACHE=0  1: open_file_cache in nginx (keeps descriptors of hot files open)
 #   NGINX_TCP_NOPUSH=0       1: tcp_nopush on (two setsockopt calls per response)
 #   SERVE_ARGS=           more arguments for `tellus serve` (e.g. "--config my.yaml")
-#   HTTP_THREADS=         event-loop threads of tellus serve (default: one per core, its own
-#                         default); set through an LD_PRELOAD shim (threads_shim.c, built with cc)
-#                         (tellus serve also has server.threads in a config; the shim keeps the
-#                         embedded default config)
-#   COMPARE_THREADS=      also start a second tellus serve with this many loop threads (same shim)
+#   HTTP_THREADS=         event-loop threads of tellus serve (`--threads`; default: its own, one
+#                         per core but one)
+#   COMPARE_THREADS=      also start a second tellus serve with `--threads COMPARE_THREADS`
 #                         and add series T (/wwtile on it) to every round, just before N
 #   LOAD_WAIT_S=0 MAX_LOAD=0.8  before the runs (after seeding), wait up to LOAD_WAIT_S seconds for
 #                         a 1-minute load below MAX_LOAD (polled every 30 s)
@@ -194,13 +192,8 @@ print(f"== {len(keys)} random keys on levels {lo}-{hi} (seed {seed}), {distinct}
 EOF
 
 # ------------------------------------------------------------------------------ servers
-serve_env=()
-if [[ -n "$HTTP_THREADS$COMPARE_THREADS" ]]; then
-  command -v cc >/dev/null || die "HTTP_THREADS and COMPARE_THREADS need a C compiler (cc)"
-  cc -shared -fPIC -O2 -o "$work/threads_shim.so" "$here/threads_shim.c"
-fi
-[[ -n "$HTTP_THREADS" ]] &&
-  serve_env=(env "LD_PRELOAD=$work/threads_shim.so" "TELLUS_BENCH_THREADS=$HTTP_THREADS")
+serve_env=(env)
+[[ -n "$HTTP_THREADS" ]] && SERVE_ARGS="--threads $HTTP_THREADS $SERVE_ARGS"
 # shellcheck disable=SC2086  # SERVE_ARGS is a list of words
 "${serve_env[@]}" "$tellus" serve --cache "$cache" --data "$repo/data" --listen 127.0.0.1:0 $SERVE_ARGS \
   >"$work/serve.log" 2>&1 &
@@ -224,8 +217,8 @@ tellus_port="$(wait_port "$work/serve.log")" || die "tellus serve did not start"
 series="A B C D N"
 if [[ -n "$COMPARE_THREADS" ]]; then
   # shellcheck disable=SC2086
-  env "LD_PRELOAD=$work/threads_shim.so" "TELLUS_BENCH_THREADS=$COMPARE_THREADS" \
-    "$tellus" serve --cache "$cache" --data "$repo/data" --listen 127.0.0.1:0 $SERVE_ARGS \
+  "$tellus" serve --cache "$cache" --data "$repo/data" --listen 127.0.0.1:0 $SERVE_ARGS \
+    --threads "$COMPARE_THREADS" \
     >"$work/serve-t.log" 2>&1 &
   tellus_t_pid=$!
   pids+=("$tellus_t_pid")

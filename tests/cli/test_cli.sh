@@ -55,8 +55,16 @@ grep -q "cannot load the imaging module /nonexistent/libtellus_imaging.so" "$wor
 "$tellus" seed --cache "$cache" --layer bluemarble --levels 0-0 --bbox 1,-1,2,1 | grep -q "1 written" \
   || fail "reseed of 0/2/5"
 
+# A bad --threads is a usage error (exit 2) that names the option.
+set +e
+"$tellus" serve --cache "$cache" --listen 127.0.0.1:0 --threads many >"$work/threads.txt" 2>&1
+rc=$?
+set -e
+[ "$rc" = 2 ] || fail "--threads many exited $rc"
+grep -q -- "--threads must be 0-256" "$work/threads.txt" || fail "no --threads message: $(cat "$work/threads.txt")"
+
 # tellus serve as a user starts it: any free port, read back from what it prints; then SIGTERM.
-"$tellus" serve --cache "$cache" --listen 127.0.0.1:0 >"$work/serve.txt" 2>&1 &
+"$tellus" serve --cache "$cache" --listen 127.0.0.1:0 --threads 2 >"$work/serve.txt" 2>&1 &
 server=$!
 for _ in $(seq 50); do grep -q "listening on" "$work/serve.txt" && break; sleep 0.1; done
 port=$(grep -o "127.0.0.1:[0-9]*" "$work/serve.txt" | head -n 1 | cut -d: -f2)

@@ -46,7 +46,7 @@ commands:
              stats [--json] | verify | rebuild | prune --older-than DURATION [--layer NAME]
              [--include-pinned]       DURATION: e.g. 30d, 12h, 15m, 45s
   serve    the WMS / World Wind tile server
-             [--listen HOST:PORT] [--offline]
+             [--listen HOST:PORT] [--threads N] [--offline]
   view     interactive globe                        (not built yet: issue #5)
   render   headless globe rendering to PNG          (not built yet: issue #5)
 
@@ -533,6 +533,17 @@ int cmdServe(const Args& a) {
     }
     server.listenHost = listen->substr(0, colon);
     server.listenPort = static_cast<std::uint16_t>(port);
+  }
+  if (auto t = a.get("threads")) {
+    int n = -1;
+    auto [ptr, ec] = std::from_chars(t->data(), t->data() + t->size(), n);
+    if (ec != std::errc{} || ptr != t->data() + t->size() || n < 0 || n > 256) {
+      std::fprintf(stderr,
+                   "tellus serve: --threads must be 0-256 (0 = one per core but one), got '%s'\n",
+                   t->c_str());
+      return kExitUsage;
+    }
+    server.threads = n;
   }
   if (a.flag("offline")) server.offline = true;
 
