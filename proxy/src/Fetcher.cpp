@@ -230,9 +230,23 @@ struct Fetcher::Impl {
   }
 
   Fetcher::Stats stats(const std::string& name) const {
+    Fetcher::Stats s;
+    {
+      std::lock_guard lock(mutex_);
+      const Upstream* up = findLocked(name);
+      if (!up) return s;
+      s = up->stats;
+    }
+    s.breaker = breaker(name);
+    return s;
+  }
+
+  std::vector<std::string> upstreamNames() const {
     std::lock_guard lock(mutex_);
-    const Upstream* up = findLocked(name);
-    return up ? up->stats : Fetcher::Stats{};
+    std::vector<std::string> out;
+    for (const auto& [name, up] : upstreams_)
+      out.push_back(name);
+    return out;
   }
 
   // ---- fetcher thread ---------------------------------------------------------------------------
@@ -256,8 +270,22 @@ struct Fetcher::Impl {
     }
     if (job->upstream) {
       std::lock_guard lock(mutex_);
-      --job->upstream->stats.inFlight;
-      if (!result) ++job->upstream->stats.failures;
+      Fetcher::Stats& st = job->upstream->stats;
+      --st.inFlight;
+      if (!result) {
+        ++st.failures;
+        const auto code = static_cast<std::size_t>(result.error().code);
+        if (code < st.errorsByCode.size()) ++st.errorsByCode[code];
+      }
+      if (job->attempts > 0) {
+        const double s = std::chrono::duration<double>(now - job->start).count();
+        for (std::size_t i = 0; i < Fetcher::kLatencyBounds.size(); ++i) {
+          if (s <= Fetcher::kLatencyBounds[i]) ++st.latencyBuckets[i];
+        }
+        ++st.latencyBuckets.back();
+        ++st.latencyCount;
+        st.latencySumSeconds += s;
+      }
     }
     invoke(*job, std::move(result));
   }
@@ -850,4 +878,12 @@ Fetcher::Stats Fetcher::stats(const std::string& upstream) const {
   return impl_->stats(upstream);
 }
 
+std::vector<std::string> Fetcher::upstreams() const {
+  return impl_->upstreamNames();
+}
+
 } // namespace tellus
+
+static_assert(static_cast<std::size_t>(tellus::FetchErrc::Unknown) + 1 ==
+                  std::tuple_size_v<decltype(tellus::Fetcher::Stats::errorsByCode)>,
+              "Fetcher::Stats::errorsByCode needs one slot per FetchErrc");

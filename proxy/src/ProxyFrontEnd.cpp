@@ -63,11 +63,49 @@ bool ifNoneMatchHits(std::string_view header, std::string_view etag) {
 struct ProxyFrontEnd::Impl {
   TileService& tiles;
   FrontEndOptions options;
+  ProxyMetrics metrics;
   std::string updateSequence;
   std::string lastUpdate;
   std::int64_t startedMillis = unixMillisNow();
 
-  Impl(TileService& t, FrontEndOptions o) : tiles(t), options(std::move(o)) {
+  static std::vector<std::string> layerNames(const TileService& t) {
+    std::vector<std::string> names;
+    for (const auto& l : t.layers())
+      names.push_back(l.name);
+    return names;
+  }
+
+  static TileOutcome outcomeOf(const TileAnswer& a) {
+    if (a.kind == TileAnswer::Kind::Error) return TileOutcome::Error;
+    if (a.kind == TileAnswer::Kind::Absent)
+      return a.origin == TileOrigin::Offline ? TileOutcome::Offline : TileOutcome::Absent;
+    switch (a.origin) {
+    case TileOrigin::Hit:
+      return TileOutcome::Hit;
+    case TileOrigin::Miss:
+      return TileOutcome::Miss;
+    case TileOrigin::Stale:
+      return TileOutcome::Stale;
+    case TileOrigin::Offline:
+      return TileOutcome::Offline;
+    }
+    return TileOutcome::Error;
+  }
+
+  void countTile(const LayerSpec* l, const TileAnswer& a) {
+    metrics.tile(static_cast<std::size_t>(l - tiles.layers().data()), outcomeOf(a));
+  }
+
+  void metricsPage(const Responder& respond) const {
+    auto r = HttpResponse::text(200,
+                                "text/plain; version=0.0.4; charset=utf-8",
+                                metrics.render(tiles.upstreamMetrics(), tiles.cachedBytes()));
+    r.setHeader("Cache-Control", "no-store");
+    respond(std::move(r));
+  }
+
+  Impl(TileService& t, FrontEndOptions o)
+      : tiles(t), options(std::move(o)), metrics(layerNames(t)) {
     const auto now = unixMillisNow();
     updateSequence =
         options.updateSequence.empty() ? std::to_string(now / 1000) : options.updateSequence;
@@ -185,6 +223,7 @@ struct ProxyFrontEnd::Impl {
                   l->timeDefault,
                   key,
                   [this, v = Validators(req), l, respond](TileAnswer&& a) {
+      countTile(l, a);
       if (a.kind == TileAnswer::Kind::Tile) return sendTile(v, std::move(a), *l, respond);
       auto r = plain(a.kind == TileAnswer::Kind::Absent ? 404 : 502, a.message + "\n");
       r.setHeader("X-Cache", toString(a.origin));
@@ -402,6 +441,7 @@ struct ProxyFrontEnd::Impl {
                   *time,
                   *key,
                   [this, v = Validators(req), l, m = std::move(m), ctx, respond](TileAnswer&& a) {
+      countTile(l, a);
       if (a.kind == TileAnswer::Kind::Tile) return sendTile(v, std::move(a), *l, respond);
       if (a.kind == TileAnswer::Kind::Absent) {
         if (a.origin == TileOrigin::Offline &&
@@ -438,17 +478,41 @@ ProxyFrontEnd::ProxyFrontEnd(TileService& tiles, FrontEndOptions options)
 ProxyFrontEnd::~ProxyFrontEnd() = default;
 
 void ProxyFrontEnd::handle(HttpRequest&& req, Responder respond) {
+  auto& im = *impl_;
+  const bool wms =
+      req.path == "/wms" || req.path == "/wms/" || (req.path == "/" && !req.query.empty());
+  const Protocol protocol = wms                              ? Protocol::Wms
+                            : req.path == "/wwtile"          ? Protocol::WorldWind
+                            : req.path.starts_with("/tiles/") ? Protocol::Static
+                            : req.path == "/"                ? Protocol::Page
+                            : req.path == "/metrics"         ? Protocol::Metrics
+                                                             : Protocol::Other;
+  im.metrics.requestStarted(protocol);
+  Responder counted = [metrics = &im.metrics, protocol, respond = std::move(respond)](
+                          HttpResponse&& r) {
+    const auto bytes = r.file ? static_cast<std::uint64_t>(r.file->size) : r.body.size();
+    metrics->requestFinished(protocol, r.status, bytes);
+    respond(std::move(r));
+  };
   try {
-    auto& im = *impl_;
-    if (req.path == "/wms" || req.path == "/wms/" || (req.path == "/" && !req.query.empty()))
-      return im.wms(req, respond);
-    if (req.path == "/wwtile") return im.worldWind(req, respond);
-    if (req.path.starts_with("/tiles/")) return im.staticTile(req, respond);
-    if (req.path == "/") return im.index(req, respond);
-    respond(im.plain(404, "not found\n"));
+    switch (protocol) {
+    case Protocol::Wms:
+      return im.wms(req, counted);
+    case Protocol::WorldWind:
+      return im.worldWind(req, counted);
+    case Protocol::Static:
+      return im.staticTile(req, counted);
+    case Protocol::Page:
+      return im.index(req, counted);
+    case Protocol::Metrics:
+      return im.metricsPage(counted);
+    case Protocol::Other:
+      break;
+    }
+    counted(im.plain(404, "not found\n"));
   } catch (const std::exception&) {
     // Last line of defence: nothing may escape an HTTP handler (this is a bug if it happens).
-    respond(HttpResponse::text(500, "text/plain", "internal error\n"));
+    counted(HttpResponse::text(500, "text/plain", "internal error\n"));
   }
 }
 

@@ -546,6 +546,21 @@ const LayerSpec* TileService::layer(std::string_view name) const noexcept {
   return it == impl_->layerIndex.end() ? nullptr : &impl_->layers[it->second];
 }
 
+std::vector<UpstreamMetrics> TileService::upstreamMetrics() const {
+  std::vector<UpstreamMetrics> out;
+  for (const auto& [name, u] : impl_->upstreams) {
+    if (u.type == UpstreamSpec::Type::Local) continue;
+    out.push_back(UpstreamMetrics{name, impl_->fetcher.stats(name)});
+  }
+  return out;
+}
+
+std::optional<std::int64_t> TileService::cachedBytes() const {
+  auto b = impl_->cache.totalBytes();
+  if (!b) return std::nullopt;
+  return *b;
+}
+
 UnixMillis TileService::layerSince(std::string_view name) const noexcept {
   const auto it = impl_->layerIndex.find(name);
   return it == impl_->layerIndex.end() ? 0 : impl_->layerSince[it->second];

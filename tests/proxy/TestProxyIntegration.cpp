@@ -555,3 +555,35 @@ TEST(ProxyIntegration, LayerLastUpdateSurvivesRestartsAndMovesWithTheDefinition)
   EXPECT_GT(since(changed), first);
   EXPECT_EQ(since(l), first);
 }
+
+TEST(ProxyIntegration, MetricsCountWhatHappened) {
+  test::FakeUpstream up(tileReply);
+  Proxy p(up.url("/wms"));
+  ASSERT_EQ(p.get("/wwtile?T=sat&L=0&X=0&Y=0").status, 200); // miss
+  ASSERT_EQ(p.get("/wwtile?T=sat&L=0&X=0&Y=0").status, 200); // hit
+  ASSERT_EQ(p.get(kWms130).status, 200);                      // hit
+  ASSERT_EQ(p.get("/tiles/sat/0/0/0_0.jpg").status, 200);      // hit
+  ASSERT_EQ(p.get("/wwtile?T=sat&L=0&X=99&Y=0").status, 404); // outside the grid
+  ASSERT_EQ(p.get("/nothing-here").status, 404);
+  const auto m = p.get("/metrics");
+  ASSERT_EQ(m.status, 200);
+  EXPECT_EQ(m.header("content-type"), "text/plain; version=0.0.4; charset=utf-8");
+  auto has = [&](const std::string& line) {
+    EXPECT_NE(m.body.find("\n" + line + "\n"), std::string::npos) << line << "\n" << m.body;
+  };
+  has("tellus_http_requests_total{protocol=\"worldwind\",code=\"200\"} 2");
+  has("tellus_http_requests_total{protocol=\"worldwind\",code=\"404\"} 1");
+  has("tellus_http_requests_total{protocol=\"wms\",code=\"200\"} 1");
+  has("tellus_http_requests_total{protocol=\"static\",code=\"200\"} 1");
+  has("tellus_http_requests_total{protocol=\"other\",code=\"404\"} 1");
+  has("tellus_tiles_total{layer=\"sat\",result=\"miss\"} 1");
+  has("tellus_tiles_total{layer=\"sat\",result=\"hit\"} 3");
+  has("tellus_tiles_total{layer=\"sat\",result=\"absent\"} 1");
+  has("tellus_upstream_requests_total{upstream=\"up\"} 1");
+  has("tellus_upstream_request_duration_seconds_count{upstream=\"up\"} 1");
+  has("tellus_upstream_breaker_open{upstream=\"up\"} 0");
+  has("tellus_http_requests_in_flight{protocol=\"metrics\"} 1"); // this very request
+  const auto bytes = m.body.find("\ntellus_cache_bytes ");
+  ASSERT_NE(bytes, std::string::npos);
+  EXPECT_GT(std::stoll(m.body.substr(bytes + 20)), 0);
+}

@@ -598,6 +598,7 @@ int cmdServe(const Args& a) {
               ctx->config.cache.root.c_str(),
               server.offline ? ", offline" : "");
   std::printf("  capabilities  %s/wms?SERVICE=WMS&REQUEST=GetCapabilities\n", base.c_str());
+  std::printf("  metrics       %s/metrics  (Prometheus)\n", base.c_str());
   for (const auto& l : (*tiles)->layers()) {
     const auto& g = l.dataset.grid;
     std::printf(

@@ -6,6 +6,7 @@
  * breaker per upstream. libcurl stays inside proxy/src/Fetcher.cpp.
  */
 
+#include <array>
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
@@ -128,13 +129,26 @@ public:
    * CircuitOpen); true when closed or when a half-open probe may go or is going. */
   bool reachable(const std::string& upstream) const;
 
+  /// Upper bounds (seconds) of the latency histogram buckets; the last bucket is +Inf.
+  static constexpr std::array<double, 11> kLatencyBounds{
+      0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 2.5, 5.0, 10.0};
   struct Stats {
     std::uint64_t requests = 0; ///< fetch() calls
     std::uint64_t retries = 0;  ///< extra attempts started
     std::uint64_t failures = 0; ///< fetches that completed with an error (CircuitOpen included)
     std::uint64_t inFlight = 0; ///< fetches accepted and not yet completed (queued included)
+    /// Completed fetches that reached the network (attempts > 0), by time from fetch() to the end:
+    /// cumulative counts per bound of kLatencyBounds, then +Inf (= latencyCount).
+    std::array<std::uint64_t, kLatencyBounds.size() + 1> latencyBuckets{};
+    std::uint64_t latencyCount = 0;
+    double latencySumSeconds = 0.0;
+    /// Failed fetches by FetchErrc (index = the enum's value).
+    std::array<std::uint64_t, 9> errorsByCode{};
+    BreakerState breaker = BreakerState::Closed;
   };
   Stats stats(const std::string& upstream) const;
+  /** Names of the upstreams that have a policy or have been fetched from. */
+  std::vector<std::string> upstreams() const;
 
 private:
   struct Impl;

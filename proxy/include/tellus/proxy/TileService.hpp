@@ -12,6 +12,7 @@
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/cache/TileSource.hpp>
 #include <tellus/proxy/Fetcher.hpp>
+#include <tellus/proxy/Metrics.hpp>
 
 #include <chrono>
 #include <cstdint>
@@ -106,6 +107,11 @@ public:
   void setOffline(bool offline) noexcept;
   /** Explicitly offline, or every remote upstream's breaker open. */
   bool offline() const noexcept;
+
+  /** The remote upstreams' fetch statistics, for /metrics. */
+  std::vector<UpstreamMetrics> upstreamMetrics() const;
+  /** Bytes of all cached tiles (the index's counters, no scan); nullopt if the index fails. */
+  std::optional<std::int64_t> cachedBytes() const;
 
   /** Upstream requests started for tiles (not counting revalidations), for tests and metrics. */
   std::uint64_t upstreamFetches() const noexcept;

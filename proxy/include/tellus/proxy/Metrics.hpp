@@ -1,0 +1,70 @@
+#pragma once
+/**
+ * @file Metrics.hpp
+ * @brief Counters of `tellus serve` and their Prometheus text exposition (format 0.0.4) at
+ * `/metrics`: requests by protocol and status, bytes, in-flight, tile outcomes per layer (hit, miss,
+ * stale, offline, absent, error), upstream requests, errors by kind, latency histograms, breaker
+ * state, and the cache's size.
+ *
+ * Counting is lock-free (relaxed atomics in fixed arrays): the hit path pays a few increments.
+ */
+
+#include <tellus/proxy/Fetcher.hpp>
+
+#include <array>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace tellus {
+
+enum class Protocol : std::uint8_t { Wms, WorldWind, Static, Page, Metrics, Other };
+inline constexpr std::size_t kProtocolCount = 6;
+const char* toString(Protocol p) noexcept;
+
+/** What a tile request came to (the X-Cache header, plus the two non-tile answers). */
+enum class TileOutcome : std::uint8_t { Hit, Miss, Stale, Offline, Absent, Error };
+inline constexpr std::size_t kTileOutcomeCount = 6;
+const char* toString(TileOutcome o) noexcept;
+
+/** One upstream as /metrics shows it. */
+struct UpstreamMetrics {
+  std::string name;
+  Fetcher::Stats stats;
+};
+
+class ProxyMetrics {
+public:
+  explicit ProxyMetrics(std::vector<std::string> layerNames);
+
+  void requestStarted(Protocol p) noexcept;
+  void requestFinished(Protocol p, int status, std::uint64_t bodyBytes) noexcept;
+  /** `layer` indexes the names given at construction; others are ignored. */
+  void tile(std::size_t layer, TileOutcome outcome) noexcept;
+
+  /** The exposition: these counters plus the upstreams' and the cache's figures. */
+  std::string render(const std::vector<UpstreamMetrics>& upstreams,
+                     std::optional<std::int64_t> cacheBytes) const;
+
+  /** HTTP statuses counted one by one; any other is counted as "other". */
+  static constexpr std::array<int, 14> kStatuses{
+      200, 204, 304, 400, 403, 404, 405, 413, 429, 431, 500, 502, 503, 504};
+
+private:
+  using Counter = std::atomic<std::uint64_t>;
+  std::vector<std::string> layers_;
+  std::array<std::array<Counter, kStatuses.size() + 1>, kProtocolCount> requests_{};
+  std::array<Counter, kProtocolCount> bytes_{};
+  std::array<std::atomic<std::int64_t>, kProtocolCount> inFlight_{};
+  std::unique_ptr<std::array<Counter, kTileOutcomeCount>[]> tiles_;
+};
+
+/** A Prometheus label value with `\`, `"` and newlines escaped. */
+std::string prometheusLabel(std::string_view value);
+
+} // namespace tellus
