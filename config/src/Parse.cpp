@@ -10,6 +10,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -339,6 +340,8 @@ void readServer(Reader& r, const Map& root, ServerSettings& s) {
                "offline_response",
                "offline",
                "threads",
+               "log_level",
+               "access_log",
                "limits"});
   if (auto v = m.get("listen")) {
     auto a = detail::parseListenAddress(text(r, *v, m.path("listen")));
@@ -356,6 +359,10 @@ void readServer(Reader& r, const Map& root, ServerSettings& s) {
                             : OfflineResponse::Blank;
   if (auto v = m.get("offline")) s.offline = boolean(r, *v, m.path("offline"));
   if (auto v = m.get("threads")) s.threads = int32(r, *v, m.path("threads"));
+  if (auto v = m.get("log_level"))
+    s.logLevel = std::array{"error", "warn", "info", "debug"}[static_cast<std::size_t>(
+        choice(r, *v, m.path("log_level"), {"error", "warn", "info", "debug"}))];
+  if (auto v = m.get("access_log")) s.accessLog = text(r, *v, m.path("access_log"));
 
   const auto [ln, lwhere] = m.child("limits");
   const Map l(r,

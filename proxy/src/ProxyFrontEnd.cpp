@@ -1,11 +1,13 @@
 #include <tellus/cache/TilePath.hpp>
 #include <tellus/proxy/Capabilities.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
+#include <tellus/proxy/Log.hpp>
 #include <tellus/proxy/OgcExceptionFormat.hpp>
 #include <tellus/proxy/ProxyFrontEnd.hpp>
 #include <tellus/proxy/Query.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <ctime>
 #include <mutex>
@@ -488,10 +490,41 @@ void ProxyFrontEnd::handle(HttpRequest&& req, Responder respond) {
                             : req.path == "/metrics"         ? Protocol::Metrics
                                                              : Protocol::Other;
   im.metrics.requestStarted(protocol);
-  Responder counted = [metrics = &im.metrics, protocol, respond = std::move(respond)](
-                          HttpResponse&& r) {
+  // The access log's fields, only when it is on (it costs a few copies per request).
+  struct Access {
+    std::chrono::steady_clock::time_point start;
+    std::string remote, method, target;
+  };
+  std::optional<Access> access;
+  if (logger().accessLogEnabled())
+    access = Access{std::chrono::steady_clock::now(), req.remoteAddress, req.method, req.target};
+  Responder counted = [metrics = &im.metrics,
+                       protocol,
+                       access = std::move(access),
+                       respond = std::move(respond)](HttpResponse&& r) {
     const auto bytes = r.file ? static_cast<std::uint64_t>(r.file->size) : r.body.size();
     metrics->requestFinished(protocol, r.status, bytes);
+    if (access) {
+      const double ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - access->start)
+              .count();
+      char msText[32];
+      std::snprintf(msText, sizeof msText, "%.3f", ms);
+      std::string_view cache = "-";
+      for (const auto& [k, v] : r.headers) {
+        if (k == "X-Cache") cache = v;
+      }
+      const std::string status = std::to_string(r.status);
+      const std::string size = std::to_string(bytes);
+      logger().access({{"remote", access->remote},
+                       {"method", access->method},
+                       {"target", access->target},
+                       {"status", status},
+                       {"bytes", size},
+                       {"ms", msText},
+                       {"cache", cache},
+                       {"protocol", toString(protocol)}});
+    }
     respond(std::move(r));
   };
   try {

@@ -1,6 +1,7 @@
 #include <tellus/cache/RequestQueue.hpp>
 #include <tellus/cache/TilePath.hpp>
 #include <tellus/proxy/LocalRasterSource.hpp>
+#include <tellus/proxy/Log.hpp>
 #include <tellus/proxy/TileService.hpp>
 #include <tellus/proxy/TileValidation.hpp>
 
@@ -256,7 +257,10 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
              TileMeta meta) {
     if (auto put = cache.put(fk.dataset, fk.key, bytes, meta); !put) {
       // A full disk must not fail the client: serve what we have, the error is in the log.
-      std::fprintf(stderr, "tellus: cannot cache tile: %s\n", put.error().message.c_str());
+      logger().log(LogLevel::Error,
+                   "cache",
+                   "cannot cache a tile; it is served but not kept",
+                   {{"error", put.error().message}});
     }
     land(
         fk,

@@ -291,3 +291,14 @@ TEST(ConfigExtremes, GiantFilesAreRefused) {
   ASSERT_FALSE(c);
   EXPECT_NE(c.error().message.find("larger than 16 MiB"), std::string::npos);
 }
+
+TEST(ConfigExtremes, LogLevelMustBeKnown) {
+  const auto bad = parse("server: {log_level: loud}\n" + layerWith(""));
+  ASSERT_FALSE(bad);
+  EXPECT_EQ(bad.error().key, "server.log_level");
+  EXPECT_EQ(bad.error().line, 1);
+  const auto ok = parse("server: {log_level: debug, access_log: /tmp/a.log}\n" + layerWith(""));
+  ASSERT_TRUE(ok) << ok.error().toString();
+  EXPECT_EQ(ok->server.logLevel, "debug");
+  EXPECT_EQ(ok->server.accessLog, "/tmp/a.log");
+}

@@ -10,6 +10,7 @@
 #include <tellus/cache/TilePath.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
+#include <tellus/proxy/Log.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
 #include <tellus/proxy/ProxyFrontEnd.hpp>
 #include <tellus/proxy/TileService.hpp>
@@ -586,4 +587,27 @@ TEST(ProxyIntegration, MetricsCountWhatHappened) {
   const auto bytes = m.body.find("\ntellus_cache_bytes ");
   ASSERT_NE(bytes, std::string::npos);
   EXPECT_GT(std::stoll(m.body.substr(bytes + 20)), 0);
+}
+
+TEST(ProxyIntegration, AccessLogHasALinePerRequest) {
+  test::FakeUpstream up(tileReply);
+  Proxy p(up.url("/wms"));
+  const auto file = p.dir.path() / "access.log";
+  std::string err;
+  ASSERT_TRUE(logger().openAccessLog(file.string(), &err)) << err;
+  ASSERT_EQ(p.get("/wwtile?T=sat&L=0&X=0&Y=0").status, 200);
+  ASSERT_EQ(p.get("/wwtile?T=sat&L=0&X=0&Y=0").status, 200);
+  ASSERT_EQ(p.get("/nothing").status, 404);
+  ASSERT_TRUE(logger().openAccessLog("", &err)); // off again for the other tests
+  std::ifstream in(file);
+  std::vector<std::string> got;
+  for (std::string l; std::getline(in, l);)
+    got.push_back(l);
+  ASSERT_EQ(got.size(), 3u);
+  EXPECT_NE(got[0].find("target=\"/wwtile?T=sat&L=0&X=0&Y=0\" status=200"), std::string::npos)
+      << got[0];
+  EXPECT_NE(got[0].find("cache=MISS protocol=worldwind"), std::string::npos) << got[0];
+  EXPECT_NE(got[1].find("cache=HIT"), std::string::npos) << got[1];
+  EXPECT_NE(got[2].find("target=/nothing status=404"), std::string::npos) << got[2];
+  EXPECT_NE(got[2].find("remote=127.0.0.1 method=GET"), std::string::npos) << got[2];
 }

@@ -6,6 +6,7 @@
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/LocalRasterSource.hpp>
+#include <tellus/proxy/Log.hpp>
 #include <tellus/proxy/ProxyFrontEnd.hpp>
 #include <tellus/proxy/Seeder.hpp>
 #include <tellus/proxy/TileService.hpp>
@@ -47,6 +48,7 @@ commands:
              [--include-pinned]       DURATION: e.g. 30d, 12h, 15m, 45s
   serve    the WMS / World Wind tile server
              [--listen HOST:PORT] [--threads N] [--offline]
+             [--log-level error|warn|info|debug] [--access-log FILE|-]
   view     interactive globe                        (not built yet: issue #5)
   render   headless globe rendering to PNG          (not built yet: issue #5)
 
@@ -546,6 +548,20 @@ int cmdServe(const Args& a) {
     server.threads = n;
   }
   if (a.flag("offline")) server.offline = true;
+  if (auto l = a.get("log-level")) server.logLevel = *l;
+  if (auto l = a.get("access-log")) server.accessLog = *l;
+  const auto level = parseLogLevel(server.logLevel);
+  if (!level) {
+    std::fprintf(stderr,
+                 "tellus serve: --log-level must be error, warn, info or debug, got '%s'\n",
+                 server.logLevel.c_str());
+    return kExitUsage;
+  }
+  logger().setLevel(*level);
+  if (std::string err; !logger().openAccessLog(server.accessLog, &err)) {
+    std::fprintf(stderr, "tellus serve: %s\n", err.c_str());
+    return kExitError;
+  }
 
   // Signals are taken by sigwait below: block them before any thread starts.
   sigset_t stopSignals;

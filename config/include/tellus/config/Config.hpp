@@ -54,6 +54,8 @@ struct ServerSettings {
   OfflineResponse offlineResponse = OfflineResponse::Exception;
   bool offline = false; ///< start offline (the --offline flag sets it too)
   int threads = 0;      ///< event-loop threads; 0 = cores - 1 (at least 1)
+  std::string logLevel = "info"; ///< error, warn, info or debug (events on stderr)
+  std::string accessLog;         ///< "" = none, "-" = stdout, else a file appended to
   ServerLimits limits;
 };
 
