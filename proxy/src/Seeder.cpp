@@ -1,5 +1,13 @@
 #include <tellus/proxy/LocalRasterSource.hpp>
 #include <tellus/proxy/Seeder.hpp>
+#include <tellus/proxy/TileService.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <thread>
 
 namespace tellus {
 
@@ -54,6 +62,138 @@ seedFromRaster(TileCache& cache,
     }
   }
   if (progress) progress(report);
+  return report;
+}
+
+} // namespace tellus
+
+// ------------------------------------------------------------------------------ through the service
+
+namespace tellus {
+
+std::expected<SeedReport, std::string> seedThroughService(TileService& tiles,
+                                                          TileCache& cache,
+                                                          const std::string& layerName,
+                                                          const ServiceSeedOptions& options,
+                                                          const SeedProgress& progress) {
+  using Clock = std::chrono::steady_clock;
+  const LayerSpec* layer = tiles.layer(layerName);
+  const TileGrid* grid = tiles.grid(layerName);
+  if (!layer || !grid) return std::unexpected("no layer '" + layerName + "'");
+  if (options.concurrency < 1) return std::unexpected("concurrency must be at least 1");
+  if (!(options.rate >= 0) || !std::isfinite(options.rate))
+    return std::unexpected("rate must be a finite number >= 0");
+  const auto spec = tiles.describe(layerName, options.time);
+  if (!spec) return std::unexpected("layer '" + layerName + "' has no dataset");
+  auto dataset = cache.registerDataset(*spec);
+  if (!dataset) return std::unexpected("cache: " + dataset.error().message);
+  const Sector box = options.range.box.value_or(spec->grid.sector);
+
+  SeedReport report;
+  const auto started = Clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - started).count(); };
+
+  // Work list: every key of the range the index does not hold yet (resumable from the index).
+  std::vector<std::vector<TileKey>> levels;
+  for (std::int32_t level = std::max(0, options.range.fromLevel);
+       level <= std::min(options.range.toLevel, grid->numLevels() - 1);
+       ++level) {
+    auto keys = grid->keysCovering(box, level);
+    if (!keys)
+      return std::unexpected("level " + std::to_string(level) +
+                             " has too many tiles to seed at once: narrow --bbox");
+    report.planned += static_cast<std::int64_t>(keys->size());
+    levels.push_back(std::move(*keys));
+  }
+  if (options.range.dryRun) {
+    report.bytes = report.planned * options.estimateBytesPerTile;
+    if (progress) progress(report, elapsed());
+    return report;
+  }
+
+  std::mutex mutex;
+  std::condition_variable cv;
+  int inFlight = 0;
+  std::deque<std::pair<TileKey, int>> retryQueue; // key, attempts so far
+  std::vector<std::pair<TileKey, std::string>> lastErrors;
+  auto lastProgress = Clock::now();
+
+  const auto interval = options.rate > 0 ? std::chrono::duration<double>(1.0 / options.rate)
+                                         : std::chrono::duration<double>(0);
+  auto nextStart = Clock::now();
+
+  auto start = [&](const TileKey& key, int attempt) {
+    if (options.rate > 0) { // pace starts evenly
+      std::this_thread::sleep_until(nextStart);
+      nextStart = std::max(nextStart, Clock::now()) +
+                  std::chrono::duration_cast<Clock::duration>(interval);
+    }
+    {
+      std::unique_lock lock(mutex);
+      cv.wait(lock, [&] { return inFlight < options.concurrency; });
+      ++inFlight;
+    }
+    tiles.getTile(layerName, options.time, key, [&, key, attempt](TileAnswer&& a) {
+      std::lock_guard lock(mutex);
+      --inFlight;
+      if (a.kind == TileAnswer::Kind::Tile) {
+        ++report.written;
+        report.bytes += a.file ? a.file->size() : static_cast<std::int64_t>(a.bytes.size());
+      } else if (a.kind == TileAnswer::Kind::Absent && a.origin != TileOrigin::Offline) {
+        ++report.absent;
+      } else if (attempt < options.retries) {
+        retryQueue.emplace_back(key, attempt + 1);
+      } else {
+        ++report.failed;
+        if (report.failures.size() < 20) {
+          report.failures.push_back("L" + std::to_string(key.level) + " R" +
+                                    std::to_string(key.row) + " C" + std::to_string(key.col) +
+                                    ": " + a.message);
+        }
+      }
+      cv.notify_all();
+    });
+    if (progress) {
+      std::lock_guard lock(mutex);
+      if (Clock::now() - lastProgress >= std::chrono::milliseconds(200)) {
+        lastProgress = Clock::now();
+        progress(report, elapsed());
+      }
+    }
+  };
+
+  for (const auto& keys : levels) {
+    for (const TileKey& key : keys) {
+      const auto known = cache.peek(*dataset, key);
+      const bool have = known && known->kind != CacheLookup::Kind::Miss &&
+                        !(options.refresh && known->kind == CacheLookup::Kind::Hit && known->stale);
+      if (have) {
+        std::lock_guard lock(mutex);
+        ++report.skipped;
+        continue;
+      }
+      start(key, 0);
+    }
+  }
+  // Retries, after the first pass, with a pause that grows per round.
+  for (int round = 1;; ++round) {
+    std::deque<std::pair<TileKey, int>> batch;
+    {
+      std::unique_lock lock(mutex);
+      cv.wait(lock, [&] { return inFlight == 0; });
+      batch.swap(retryQueue);
+    }
+    if (batch.empty()) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(250) * round);
+    for (const auto& [key, attempt] : batch) {
+      {
+        std::lock_guard lock(mutex);
+        ++report.retried;
+      }
+      start(key, attempt);
+    }
+  }
+  if (progress) progress(report, elapsed());
   return report;
 }
 

@@ -11,6 +11,7 @@
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/Log.hpp>
+#include <tellus/proxy/Seeder.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
 #include <tellus/proxy/ProxyFrontEnd.hpp>
 #include <tellus/proxy/TileService.hpp>
@@ -610,4 +611,86 @@ TEST(ProxyIntegration, AccessLogHasALinePerRequest) {
   EXPECT_NE(got[1].find("cache=HIT"), std::string::npos) << got[1];
   EXPECT_NE(got[2].find("target=/nothing status=404"), std::string::npos) << got[2];
   EXPECT_NE(got[2].find("remote=127.0.0.1 method=GET"), std::string::npos) << got[2];
+}
+
+// ------------------------------------------------------------------ seeding through the service
+
+TEST(SeederIntegration, SeedsARemoteLayerOnceAndResumesFromTheIndex) {
+  test::FakeUpstream up(tileReply);
+  Proxy p(up.url("/wms"));
+  ServiceSeedOptions o;
+  o.range.fromLevel = 0;
+  o.range.toLevel = 1;
+  o.range.box = Sector{-180, -90, -108, -18}; // 2x2 tiles at level 0, 4x4 at level 1
+  o.concurrency = 3;
+  int progressCalls = 0;
+  auto r = seedThroughService(*p.tiles, *p.cache, "sat", o, [&](const SeedReport&, double) {
+    ++progressCalls;
+  });
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_EQ(r->planned, 20);
+  EXPECT_EQ(r->written, 20);
+  EXPECT_EQ(r->failed, 0);
+  EXPECT_GT(r->bytes, 0);
+  EXPECT_GE(progressCalls, 1);
+  EXPECT_EQ(up.requests(), 20u);
+  EXPECT_LE(up.maxConcurrent(), 3);
+  // Again: everything is in the index, nothing goes upstream.
+  auto again = seedThroughService(*p.tiles, *p.cache, "sat", o);
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->skipped, 20);
+  EXPECT_EQ(again->written, 0);
+  EXPECT_EQ(up.requests(), 20u);
+  // A dry run counts and estimates, and asks nobody.
+  o.range.toLevel = 2;
+  o.range.dryRun = true;
+  o.estimateBytesPerTile = 1000;
+  auto dry = seedThroughService(*p.tiles, *p.cache, "sat", o);
+  ASSERT_TRUE(dry);
+  EXPECT_EQ(dry->planned, 20 + 64);
+  EXPECT_EQ(dry->bytes, 84000);
+  EXPECT_EQ(up.requests(), 20u);
+}
+
+TEST(SeederIntegration, AbsentIsNotAFailureAndFailuresAreRetriedThenListed) {
+  std::atomic<int> brokenCalls{0};
+  test::FakeUpstream up([&](const test::FakeRequest& req) {
+    // Level 0 of the 36-degree grid: the tile at column 0 is missing, the one at column 1 broken.
+    if (req.target.find("BBOX=-90,-180,-54,-144") != std::string::npos)
+      return test::FakeReply::withStatus(404, "no tile");
+    if (req.target.find("BBOX=-90,-144,-54,-108") != std::string::npos) {
+      ++brokenCalls;
+      return test::FakeReply::withStatus(500, "broken");
+    }
+    return tileReply(req);
+  });
+  Proxy p(up.url("/wms")); // upstream policy: 1 retry inside each fetch
+  ServiceSeedOptions o;
+  o.range.box = Sector{-180, -90, -72, -54}; // 3 tiles at level 0
+  o.retries = 2;
+  auto r = seedThroughService(*p.tiles, *p.cache, "sat", o);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_EQ(r->planned, 3);
+  EXPECT_EQ(r->written, 1);
+  EXPECT_EQ(r->absent, 1);
+  EXPECT_EQ(r->failed, 1);
+  EXPECT_EQ(r->retried, 2);
+  ASSERT_EQ(r->failures.size(), 1u);
+  EXPECT_NE(r->failures[0].find("L0 R0 C1"), std::string::npos) << r->failures[0];
+  EXPECT_EQ(brokenCalls.load(), 3 * 2); // 3 seeding attempts, each fetch tried twice
+}
+
+TEST(SeederIntegration, RateLimitSpacesTheStarts) {
+  test::FakeUpstream up(tileReply);
+  Proxy p(up.url("/wms"));
+  ServiceSeedOptions o;
+  o.range.fromLevel = o.range.toLevel = 1;
+  o.range.box = Sector{-180, -90, -108, -18}; // 16 tiles
+  o.rate = 50;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto r = seedThroughService(*p.tiles, *p.cache, "sat", o);
+  const auto took = std::chrono::steady_clock::now() - t0;
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_EQ(r->written, 16);
+  EXPECT_GE(took, 290ms); // 16 starts at 50/s: the last one 300 ms after the first
 }

@@ -43,6 +43,7 @@ constexpr const char* kUsage = R"(usage: tellus <command> [options]
 commands:
   seed     fill the cache from the layers' upstreams
              [--layer NAME]... [--levels A-B] [--bbox W,S,E,N] [--dry-run]
+             [--time T] [--concurrency N] [--rate TILES/S] [--retries N] [--refresh]
   cache    inspect and maintain the cache
              stats [--json] | verify | rebuild | prune --older-than DURATION [--layer NAME]
              [--include-pinned]       DURATION: e.g. 30d, 12h, 15m, 45s
@@ -252,6 +253,73 @@ std::optional<Context> setUp(const Args& a, bool seeding = false, bool serving =
   return ctx;
 }
 
+std::pair<std::vector<UpstreamSpec>, std::vector<LayerSpec>> proxySpecs(const Config& c);
+
+/** A progress line: a bar on a terminal (redrawn in place), else a plain line every 5 s. */
+class SeedProgressPrinter {
+public:
+  SeedProgressPrinter(std::string layer, std::int64_t planned)
+      : layer_(std::move(layer)), planned_(planned), tty_(::isatty(STDERR_FILENO) == 1) {}
+  void operator()(const SeedReport& r, double seconds) {
+    const std::int64_t done = r.skipped + r.written + r.absent + r.failed;
+    const std::int64_t fetched = r.written + r.absent + r.failed;
+    const double rate = seconds > 0 ? static_cast<double>(fetched) / seconds : 0.0;
+    const std::int64_t left = std::max<std::int64_t>(0, planned_ - done);
+    const double eta = rate > 0 ? static_cast<double>(left) / rate : 0.0;
+    const double frac = planned_ > 0 ? static_cast<double>(done) / static_cast<double>(planned_) : 1;
+    char line[256];
+    if (tty_) {
+      const int width = 24;
+      std::string bar(static_cast<std::size_t>(width), '.');
+      for (int i = 0; i < static_cast<int>(frac * width) && i < width; ++i)
+        bar[static_cast<std::size_t>(i)] = '#';
+      std::snprintf(line, sizeof line,
+                    "\r%-12s [%s] %lld/%lld %5.1f%%  %.0f tiles/s  %s  ETA %.0fs  failed %lld ",
+                    layer_.c_str(), bar.c_str(), static_cast<long long>(done),
+                    static_cast<long long>(planned_), 100.0 * frac, rate,
+                    humanBytes(r.bytes).c_str(), eta, static_cast<long long>(r.failed));
+      std::fputs(line, stderr);
+      return;
+    }
+    if (seconds - lastLine_ < 5.0 && done < planned_) return;
+    lastLine_ = seconds;
+    std::snprintf(line, sizeof line,
+                  "%s: %lld/%lld tiles (%.1f%%), %.0f tiles/s, %s, ETA %.0f s, %lld failed\n",
+                  layer_.c_str(), static_cast<long long>(done), static_cast<long long>(planned_),
+                  100.0 * frac, rate, humanBytes(r.bytes).c_str(), eta,
+                  static_cast<long long>(r.failed));
+    std::fputs(line, stderr);
+  }
+  ~SeedProgressPrinter() {
+    if (tty_) std::fputs("\n", stderr);
+  }
+
+private:
+  std::string layer_;
+  std::int64_t planned_;
+  bool tty_;
+  double lastLine_ = -10.0;
+};
+
+/** Bytes per tile for a dry run's estimate: exact for bil16, else the mean of what the cache
+ * already holds of this layer, else a typical size for the format. */
+std::int64_t estimateTileBytes(TileCache& cache, const LayerConfig& layer) {
+  const auto& g = layer.dataset.grid;
+  const std::int64_t pixels = std::int64_t{g.tileWidth} * g.tileHeight;
+  if (layer.dataset.mimeType == "application/bil16") return pixels * 2;
+  if (auto stats = cache.stats()) {
+    std::int64_t tiles = 0, bytes = 0;
+    for (const auto& d : *stats) {
+      if (d.dataset.spec.name != layer.name) continue;
+      tiles += d.tiles;
+      bytes += d.bytes;
+    }
+    if (tiles > 0 && bytes > 0) return bytes / tiles;
+  }
+  if (layer.dataset.mimeType == "image/jpeg") return pixels / 12; // about 0.7 bit per pixel
+  return pixels * 2;                                             // PNG/TIFF: a guess
+}
+
 int cmdSeed(const Args& a) {
   SeedOptions so;
   if (auto l = a.get("levels")) {
@@ -274,6 +342,28 @@ int cmdSeed(const Args& a) {
     }
   }
   so.dryRun = a.flag("dry-run");
+  ServiceSeedOptions sso;
+  auto number = [&](const char* key, double lo, double hi, double& out) {
+    const auto v = a.get(key);
+    if (!v) return true;
+    char* end = nullptr;
+    const double x = std::strtod(v->c_str(), &end);
+    if (v->empty() || *end != '\0' || !(x >= lo && x <= hi)) {
+      std::fprintf(stderr, "tellus seed: --%s must be a number in [%g, %g], got '%s'\n", key, lo,
+                   hi, v->c_str());
+      return false;
+    }
+    out = x;
+    return true;
+  };
+  double concurrency = 4, retries = 2;
+  if (!number("concurrency", 1, 256, concurrency) || !number("rate", 0, 1e6, sso.rate) ||
+      !number("retries", 0, 100, retries))
+    return kExitUsage;
+  sso.concurrency = static_cast<int>(concurrency);
+  sso.retries = static_cast<int>(retries);
+  sso.refresh = a.flag("refresh");
+  sso.time = a.get("time").value_or("");
   auto ctx = setUp(a, /*seeding=*/true);
   if (!ctx) return kExitError;
   std::vector<const LayerConfig*> layers;
@@ -290,13 +380,68 @@ int cmdSeed(const Args& a) {
       layers.push_back(&l);
   }
   int rc = kExitOk;
+  // Remote upstreams go through the tile service, as `tellus serve` fetches them.
+  Fetcher fetcher;
+  std::unique_ptr<TileService> service;
   for (const auto* layer : layers) {
     const UpstreamConfig* upstream = ctx->config.upstream(layer->upstream);
-    if (!upstream || upstream->type != UpstreamConfig::Type::Local) {
-      std::fprintf(stderr,
-                   "layer %s: upstream type %s is not seeded yet\n",
-                   layer->name.c_str(),
-                   upstream && upstream->type == UpstreamConfig::Type::Wms ? "wms" : "worldwind");
+    const bool local = upstream && upstream->type == UpstreamConfig::Type::Local;
+    const auto& td = layer->time;
+    const bool hasTime = !td.values.empty() || !td.period.empty();
+    if (!sso.time.empty() && (!hasTime || (td.period.empty() &&
+                                           std::find(td.values.begin(), td.values.end(),
+                                                     sso.time) == td.values.end()))) {
+      std::fprintf(stderr, "tellus seed: %s: --time %s is not one of the layer's times\n",
+                   layer->name.c_str(), sso.time.c_str());
+      return kExitUsage;
+    }
+    if (!local || sso.refresh || !sso.time.empty()) {
+      if (!service) {
+        auto [ups, lays] = proxySpecs(ctx->config);
+        auto created = TileService::create(
+            *ctx->cache, fetcher, std::move(ups), std::move(lays), TileServiceOptions{});
+        if (!created) {
+          std::fprintf(stderr, "tellus seed: %s\n", created.error().c_str());
+          return kExitError;
+        }
+        service = std::move(*created);
+      }
+      ServiceSeedOptions opts = sso;
+      opts.range = so;
+      if (opts.time.empty() && hasTime) opts.time = td.defaultValue; // as a request without TIME
+      opts.estimateBytesPerTile = estimateTileBytes(*ctx->cache, *layer);
+      std::int64_t planned = 0;
+      {
+        ServiceSeedOptions count = opts;
+        count.range.dryRun = true;
+        if (auto c = seedThroughService(*service, *ctx->cache, layer->name, count)) planned = c->planned;
+      }
+      SeedProgressPrinter printer(layer->name, planned);
+      auto report = seedThroughService(
+          *service, *ctx->cache, layer->name, opts, [&](const SeedReport& r, double s) {
+            if (!so.dryRun) printer(r, s);
+          });
+      if (!report) {
+        std::fprintf(stderr, "tellus seed: %s: %s\n", layer->name.c_str(), report.error().c_str());
+        return kExitError;
+      }
+      if (so.dryRun) {
+        std::printf("%-12s levels %d-%d: %lld tiles, about %s (dry run)\n", layer->name.c_str(),
+                    so.fromLevel, std::min(so.toLevel, layer->dataset.grid.numLevels - 1),
+                    static_cast<long long>(report->planned), humanBytes(report->bytes).c_str());
+        continue;
+      }
+      std::printf("%-12s levels %d-%d: %lld tiles planned, %lld already cached, %lld written (%s), "
+                  "%lld absent upstream, %lld retried, %lld failed\n",
+                  layer->name.c_str(), so.fromLevel,
+                  std::min(so.toLevel, layer->dataset.grid.numLevels - 1),
+                  static_cast<long long>(report->planned), static_cast<long long>(report->skipped),
+                  static_cast<long long>(report->written), humanBytes(report->bytes).c_str(),
+                  static_cast<long long>(report->absent), static_cast<long long>(report->retried),
+                  static_cast<long long>(report->failed));
+      for (const auto& f : report->failures)
+        std::fprintf(stderr, "  failed: %s\n", f.c_str());
+      if (report->failed > 0) rc = kExitProblems;
       continue;
     }
     auto id = ctx->cache->registerDataset(layer->dataset);
@@ -652,7 +797,8 @@ int run(int argc, char** argv) {
     std::printf("tellus %s\n", TELLUS_VERSION);
     return kExitOk;
   }
-  const Args a = parseArgs(argc, argv, 2, {"json", "dry-run", "include-pinned", "offline"});
+  const Args a =
+      parseArgs(argc, argv, 2, {"json", "dry-run", "include-pinned", "offline", "refresh"});
   for (const auto& e : a.errors)
     std::fprintf(stderr, "tellus %s: %s\n", argv[1], e.c_str());
   if (!a.errors.empty()) return kExitUsage;

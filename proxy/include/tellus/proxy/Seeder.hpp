@@ -20,6 +20,7 @@
 namespace tellus {
 
 class LocalRasterSource;
+class TileService;
 
 struct SeedOptions {
   std::int32_t fromLevel = 0;
@@ -32,10 +33,35 @@ struct SeedReport {
   std::int64_t planned = 0; ///< tiles in the levels and box
   std::int64_t skipped = 0; ///< already in the index
   std::int64_t written = 0;
+  std::int64_t absent = 0;  ///< the upstream has no tile there (remembered, not a failure)
+  std::int64_t retried = 0; ///< extra attempts for tiles that failed
   std::int64_t failed = 0;
   std::int64_t bytes = 0;            ///< bytes written
   std::vector<std::string> failures; ///< first few failure messages
 };
+
+/** Seeding through the tile service: any upstream (WMS, World Wind, local), with its caps,
+ * single-flight and validation; `tellus serve` may run on the same cache at the same time. */
+struct ServiceSeedOptions {
+  SeedOptions range;
+  std::string time;          ///< a validated TIME value, "" for none
+  int concurrency = 4;       ///< tiles in flight at once (>= 1)
+  double rate = 0;           ///< tiles started per second; 0 = unlimited
+  int retries = 2;           ///< further attempts for a tile that failed (errors, not absent)
+  bool refresh = false;      ///< also fetch again tiles whose expiry has passed
+  std::int64_t estimateBytesPerTile = 0; ///< dry run: bytes per tile for the estimate
+};
+
+/** Progress of a seeding run: the report so far and the seconds since it began. */
+using SeedProgress = std::function<void(const SeedReport&, double seconds)>;
+
+/** Seeds a layer through the service. Fails only for bad options or too large a range; tile
+ * failures are counted and listed in the report. */
+std::expected<SeedReport, std::string> seedThroughService(TileService& tiles,
+                                                          TileCache& cache,
+                                                          const std::string& layer,
+                                                          const ServiceSeedOptions& options,
+                                                          const SeedProgress& progress = {});
 
 /** Seeds one registered dataset from a local raster. Stops early only for a full disk. */
 std::expected<SeedReport, CacheError>
