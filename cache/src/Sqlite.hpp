@@ -81,6 +81,10 @@ public:
       sqlite3_bind_text(s_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
       return *this;
     }
+    Use& bindBlob(int i, const void* data, std::size_t size) {
+      sqlite3_bind_blob64(s_, i, data, static_cast<sqlite3_uint64>(size), SQLITE_TRANSIENT);
+      return *this;
+    }
     Use& bindNull(int i) {
       sqlite3_bind_null(s_, i);
       return *this;
@@ -90,6 +94,11 @@ public:
     std::int64_t i64(int c) const { return sqlite3_column_int64(s_, c); }
     double f64(int c) const { return sqlite3_column_double(s_, c); }
     bool isNull(int c) const { return sqlite3_column_type(s_, c) == SQLITE_NULL; }
+    /** A blob column's bytes (valid until the next step). */
+    std::pair<const std::byte*, std::size_t> blob(int c) const {
+      const auto* p = static_cast<const std::byte*>(sqlite3_column_blob(s_, c));
+      return {p, static_cast<std::size_t>(sqlite3_column_bytes(s_, c))};
+    }
     std::string text(int c) const {
       const auto* p = sqlite3_column_text(s_, c);
       return p ? std::string(reinterpret_cast<const char*>(p),

@@ -1232,6 +1232,29 @@ std::expected<void, CacheError> TileCache::erase(DatasetId id, const TileKey& ke
                        });
 }
 
+std::expected<void, CacheError>
+TileCache::forEachTile(DatasetId id,
+                       std::int32_t fromLevel,
+                       std::int32_t toLevel,
+                       const std::function<bool(const TileKey&, std::int64_t)>& visit) const {
+  auto lease = impl_->acquireReader();
+  if (!lease) return std::unexpected(lease.error());
+  sqlite3* db = lease->conn->db.get();
+  sql::Stmt s(db,
+              "SELECT level, row, col, bytes FROM tiles WHERE dataset = ?1 AND state = 1 "
+              "AND level BETWEEN ?2 AND ?3 ORDER BY level, row, col");
+  if (!s.ok()) return std::unexpected(sql::errorFrom(db, s.prepareRc(), "listing tiles"));
+  sql::Stmt::Use u(s);
+  u.bind(1, id).bind(2, std::int64_t{fromLevel}).bind(3, std::int64_t{toLevel});
+  int rc = 0;
+  while ((rc = u.step()) == SQLITE_ROW) {
+    const TileKey k{static_cast<std::int32_t>(u.i64(0)), u.i64(1), u.i64(2)};
+    if (!visit(k, u.i64(3))) return {};
+  }
+  if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "listing tiles"));
+  return {};
+}
+
 // ---------------------------------------------------------------------------------- maintenance
 
 std::expected<std::int64_t, CacheError> TileCache::totalBytes() const {

@@ -1,6 +1,7 @@
 // tellus: the composition root. Parses the command line, builds the configuration, wires the cache,
 // the proxy and the planet together, and runs one subcommand.
 
+#include <tellus/cache/GeoPackage.hpp>
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/config/Config.hpp>
 #include <tellus/proxy/Fetcher.hpp>
@@ -19,6 +20,7 @@
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <optional>
 #include <pthread.h>
@@ -46,6 +48,7 @@ commands:
              [--time T] [--concurrency N] [--rate TILES/S] [--retries N] [--refresh]
   cache    inspect and maintain the cache
              stats [--json] | verify | rebuild | prune --older-than DURATION [--layer NAME]
+             | export --gpkg FILE --layer NAME [--levels A-B] | import --gpkg FILE --layer NAME
              [--include-pinned]       DURATION: e.g. 30d, 12h, 15m, 45s
   serve    the WMS / World Wind tile server
              [--listen HOST:PORT] [--threads N] [--offline]
@@ -551,7 +554,8 @@ int cmdCacheStats(Context& ctx, bool json) {
 
 int cmdCache(const Args& a) {
   if (a.positional.empty()) {
-    std::fprintf(stderr, "tellus cache: say stats, verify, rebuild or prune\n%s", kUsage);
+    std::fprintf(stderr,
+                 "tellus cache: say stats, verify, rebuild, prune, export or import\n%s", kUsage);
     return kExitUsage;
   }
   const std::string& sub = a.positional[0];
@@ -564,6 +568,12 @@ int cmdCache(const Args& a) {
                    "tellus cache prune: --older-than DURATION is required (e.g. 30d, 12h)\n");
       return kExitUsage;
     }
+  } else if (sub == "export" || sub == "import") {
+    if (!a.get("gpkg") || a.all("layer").size() != 1) {
+      std::fprintf(stderr, "tellus cache %s: --gpkg FILE and one --layer NAME are required\n",
+                   sub.c_str());
+      return kExitUsage;
+    }
   } else if (sub != "stats" && sub != "verify" && sub != "rebuild") {
     std::fprintf(stderr, "tellus cache: unknown subcommand '%s'\n%s", sub.c_str(), kUsage);
     return kExitUsage;
@@ -571,6 +581,42 @@ int cmdCache(const Args& a) {
   auto ctx = setUp(a);
   if (!ctx) return kExitError;
   if (sub == "stats") return cmdCacheStats(*ctx, a.flag("json"));
+  if (sub == "export" || sub == "import") {
+    const std::string name = a.all("layer").front();
+    const auto* layer = ctx->config.layer(name);
+    if (!layer) {
+      std::fprintf(stderr, "tellus cache %s: no layer '%s'\n", sub.c_str(), name.c_str());
+      return kExitUsage;
+    }
+    auto id = ctx->cache->registerDataset(layer->dataset);
+    if (!id) {
+      std::fprintf(stderr, "tellus cache %s: %s\n", sub.c_str(), id.error().message.c_str());
+      return kExitError;
+    }
+    const fs::path file = *a.get("gpkg");
+    std::int32_t from = 0, to = std::numeric_limits<std::int32_t>::max();
+    if (auto l = a.get("levels")) {
+      auto r = parseLevels(*l);
+      if (!r) {
+        std::fprintf(stderr, "tellus cache export: --levels must be A or A-B, got '%s'\n",
+                     l->c_str());
+        return kExitUsage;
+      }
+      from = r->first;
+      to = r->second;
+    }
+    auto r = sub == "export" ? exportGeoPackage(*ctx->cache, *id, file, from, to)
+                             : importGeoPackage(*ctx->cache, *id, file);
+    if (!r) {
+      std::fprintf(stderr, "tellus cache %s: %s\n", sub.c_str(), r.error().message.c_str());
+      return kExitError;
+    }
+    std::printf("%s %s: %lld tiles (%s), levels %d-%d, %s\n",
+                sub == "export" ? "exported" : "imported", name.c_str(),
+                static_cast<long long>(r->tiles), humanBytes(r->bytes).c_str(), r->minLevel,
+                r->maxLevel, file.c_str());
+    return kExitOk;
+  }
   if (sub == "verify") {
     auto r = ctx->cache->verify();
     if (!r) {

@@ -32,6 +32,7 @@
 #include <cstdint>
 #include <expected>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
@@ -184,6 +185,14 @@ public:
   putAbsent(DatasetId id, const TileKey& key, UnixMillis retryAfter);
   /** Removes a tile (row first, then the file). Removing an unknown tile is not an error. */
   std::expected<void, CacheError> erase(DatasetId id, const TileKey& key);
+
+  /** Calls `visit` with every present tile of a dataset in levels [fromLevel, toLevel] (index
+   * order: level, row, column) and its byte count; `visit` returns false to stop. */
+  std::expected<void, CacheError>
+  forEachTile(DatasetId id,
+              std::int32_t fromLevel,
+              std::int32_t toLevel,
+              const std::function<bool(const TileKey&, std::int64_t bytes)>& visit) const;
 
   // --- maintenance ----------------------------------------------------------------------------
   std::expected<std::vector<DatasetStats>, CacheError> stats() const;
