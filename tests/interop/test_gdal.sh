@@ -1,0 +1,69 @@
+#!/usr/bin/env bash
+# Interoperability: GDAL (Debian's gdal-bin) reads tellus serve as a user would point it at it.
+#   - the WMS driver's capabilities parser lists the layers of GetCapabilities;
+#   - the WMS driver's WorldWind mini-driver reads /wwtile tiles, and its pixels are the cached
+#     tile's (rows counted from the south, levels as tellus numbers them).
+# Usage: test_gdal.sh path/to/tellus
+set -euo pipefail
+tellus=$1
+work=$(mktemp -d "${TMPDIR:-/tmp}/tellus-gdal.XXXXXX")
+server=
+cleanup() {
+  [ -n "$server" ] && kill "$server" 2>/dev/null || true
+  rm -rf "$work"
+}
+trap cleanup EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+command -v gdalinfo >/dev/null || fail "gdalinfo (Debian gdal-bin) is needed"
+cache="$work/cache"
+# Only the tile the mini-driver test reads (level 2, row 17, column 10: lat 63..72, lon -90..-81).
+"$tellus" seed --cache "$cache" --layer bluemarble --levels 2 --bbox -89,64,-82,71 >/dev/null || fail "seed"
+"$tellus" serve --cache "$cache" --listen 127.0.0.1:0 --access-log "$work/access.log" >"$work/serve.txt" 2>&1 &
+server=$!
+for _ in $(seq 50); do grep -q "listening on" "$work/serve.txt" && break; sleep 0.1; done
+port=$(grep -o "127.0.0.1:[0-9]*" "$work/serve.txt" | head -n 1 | cut -d: -f2)
+[ -n "$port" ] || fail "serve did not start: $(cat "$work/serve.txt")"
+base="http://127.0.0.1:$port"
+
+# Capabilities, both versions: GDAL lists one subdataset per layer.
+for v in 1.1.1 1.3.0; do
+  gdalinfo "WMS:$base/wms?SERVICE=WMS&VERSION=$v&REQUEST=GetCapabilities" >"$work/caps-$v.txt" 2>&1 \
+    || fail "GDAL could not read the $v capabilities: $(cat "$work/caps-$v.txt")"
+  grep -q "LAYERS=bluemarble" "$work/caps-$v.txt" || fail "$v: no bluemarble subdataset"
+  grep -q "LAYERS=etopo" "$work/caps-$v.txt" || fail "$v: no etopo subdataset"
+done
+
+# The WorldWind mini-driver at level 2 (40 x 20 tiles of 512 px). GDAL appends "L=" right after
+# the layer, so the layer carries the "&" (a quirk of GDAL's mini-driver, not of the protocol).
+cat >"$work/ww.xml" <<XML
+<GDAL_WMS>
+  <Service name="WorldWind">
+    <ServerUrl>$base/wwtile?</ServerUrl>
+    <Layer>bluemarble&amp;</Layer>
+  </Service>
+  <DataWindow>
+    <UpperLeftX>-180.0</UpperLeftX><UpperLeftY>90.0</UpperLeftY>
+    <LowerRightX>180.0</LowerRightX><LowerRightY>-90.0</LowerRightY>
+    <TileLevel>2</TileLevel><TileCountX>10</TileCountX><TileCountY>5</TileCountY>
+    <YOrigin>bottom</YOrigin>
+  </DataWindow>
+  <Projection>EPSG:4326</Projection>
+  <BlockSizeX>512</BlockSizeX><BlockSizeY>512</BlockSizeY>
+  <BandsCount>3</BandsCount>
+</GDAL_WMS>
+XML
+gdalinfo "$work/ww.xml" | grep -q "Size is 20480, 10240" || fail "GDAL sees another raster size"
+# Block (column 10, row 2 from the top) is tellus's level-2 tile row 17, column 10.
+gdal_translate -q -srcwin 5120 1024 512 512 -of GTiff "$work/ww.xml" "$work/block.tif" \
+  || fail "gdal_translate through the WorldWind mini-driver"
+tile=$(ls "$cache"/*/bluemarble-*/2/17/17_10.jpg)
+grep -q 'target="/wwtile?T=bluemarble&L=2&X=10&Y=17" status=200 .* cache=HIT' "$work/access.log" \
+  || fail "GDAL did not ask for L=2 X=10 Y=17, or it was not the cached tile: $(cat "$work/access.log")"
+for p in "100 200" "400 30" "7 500" "511 511"; do
+  # shellcheck disable=SC2086
+  a=$(gdallocationinfo -valonly "$work/block.tif" $p | tr '\n' ' ')
+  # shellcheck disable=SC2086
+  b=$(gdallocationinfo -valonly "$tile" $p | tr '\n' ' ')
+  [ -n "$a" ] && [ "$a" = "$b" ] || fail "pixel $p through GDAL is '$a', in the cached tile '$b'"
+done
+echo "gdal interop: all checks passed"
