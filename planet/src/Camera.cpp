@@ -1,7 +1,6 @@
 #include <tellus/planet/Camera.hpp>
 
 #include <GeographicLib/Math.hpp>
-
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -25,18 +24,22 @@ Plane normalised(const glm::dvec4& row) {
 
 } // namespace
 
-glm::dmat4 reversedZInfinitePerspective(double verticalFovRad, double aspect, double nearM) noexcept {
+glm::dmat4
+reversedZInfinitePerspective(double verticalFovRad, double aspect, double nearM) noexcept {
   const double f = 1.0 / std::tan(verticalFovRad / 2.0);
   glm::dmat4 p(0.0);
   p[0][0] = f / aspect;
   p[1][1] = f;
-  p[2][3] = -1.0; // clip w = -z_eye
+  p[2][3] = -1.0;  // clip w = -z_eye
   p[3][2] = nearM; // clip z = near
   return p;
 }
 
-Camera::Camera(const Geodesy& geodesy, const CameraPose& pose, Viewport viewport,
-               double verticalFovDeg, double nearM)
+Camera::Camera(const Geodesy& geodesy,
+               const CameraPose& pose,
+               Viewport viewport,
+               double verticalFovDeg,
+               double nearM)
     : pose_(pose), viewport_(viewport), vfovDeg_(verticalFovDeg), near_(nearM) {
   if (!(std::abs(pose.latDeg) <= 90.0) || !std::isfinite(pose.lonDeg) ||
       !std::isfinite(pose.altitudeM) || !std::isfinite(pose.headingDeg) ||

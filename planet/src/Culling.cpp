@@ -29,7 +29,8 @@ bool isBackFacing(const Camera& camera, const NodeGeometry& node) noexcept {
   const Sector& s = node.sector();
   const double a = node.equatorialRadiusM();
   const double b = node.polarRadiusM();
-  const double maxAbsLat = std::max(std::abs(s.south), std::abs(s.north)) * std::numbers::pi / 180.0;
+  const double maxAbsLat =
+      std::max(std::abs(s.south), std::abs(s.north)) * std::numbers::pi / 180.0;
   const double sz = std::sin(maxAbsLat), cz = std::cos(maxAbsLat);
   const double minSupport = std::sqrt(a * a * cz * cz + b * b * sz * sz);
   const glm::dvec3& c = camera.position();
@@ -83,8 +84,8 @@ bool HorizonOccluder::segmentHitsOccluder(const glm::dvec3& cameraEcef,
   return glm::dot(x, x) < 1.0;
 }
 
-CullResult cullNode(const Camera& camera, const NodeGeometry& node,
-                    const HorizonOccluder& occluder) noexcept {
+CullResult
+cullNode(const Camera& camera, const NodeGeometry& node, const HorizonOccluder& occluder) noexcept {
   CullResult r;
   if (isBackFacing(camera, node)) return r;
   r.frustum = classify(camera.frustum(), node.bounds());

@@ -5,8 +5,8 @@
 
 namespace tellus::planet {
 
-LodResult evaluateLod(const Camera& camera, const NodeGeometry& node,
-                      const LodParams& params) noexcept {
+LodResult
+evaluateLod(const Camera& camera, const NodeGeometry& node, const LodParams& params) noexcept {
   LodResult r;
   if (params.tileWidthPx < 1 || params.tileHeightPx < 1 || !(params.threshold > 0.0) ||
       !std::isfinite(params.threshold))
@@ -34,8 +34,8 @@ LodResult evaluateLod(const Camera& camera, const NodeGeometry& node,
     std::size_t a, b;
     bool eastWest;
   };
-  constexpr std::array<Edge, 4> edges{{{SW, SE, true}, {NW, NE, true}, {SE, NE, false},
-                                       {SW, NW, false}}};
+  constexpr std::array<Edge, 4> edges{
+      {{SW, SE, true}, {NW, NE, true}, {SE, NE, false}, {SW, NW, false}}};
   for (const Edge& e : edges) {
     const glm::dvec2 d = px[e.b] - px[e.a];
     const double len2 = d.x * d.x + d.y * d.y;

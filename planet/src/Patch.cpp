@@ -56,7 +56,9 @@ bool BoundingSphere::contains(const glm::dvec3& p) const noexcept {
   return glm::length(p - centre) <= radius;
 }
 
-NodeGeometry::NodeGeometry(const Geodesy& geodesy, const Sector& sector, double minHeightM,
+NodeGeometry::NodeGeometry(const Geodesy& geodesy,
+                           const Sector& sector,
+                           double minHeightM,
                            double maxHeightM)
     : sector_(sector), minHeight_(minHeightM), maxHeight_(maxHeightM) {
   validate(sector);
@@ -75,7 +77,8 @@ NodeGeometry::NodeGeometry(const Geodesy& geodesy, const Sector& sector, double 
   distinctCorners_ = 0;
   for (std::size_t i = 0; i < 4; ++i) {
     bool seen = false;
-    for (std::size_t j = 0; j < i; ++j) seen = seen || corners_[j] == corners_[i];
+    for (std::size_t j = 0; j < i; ++j)
+      seen = seen || corners_[j] == corners_[i];
     if (!seen) ++distinctCorners_;
   }
 
@@ -86,7 +89,8 @@ NodeGeometry::NodeGeometry(const Geodesy& geodesy, const Sector& sector, double 
   // The angular distance from the middle grows monotonically towards the corners along each edge
   // of a lat/long rectangle, so the corners bound the normal cone.
   double cone = 0.0;
-  for (const auto& n : cornerNormals_) cone = std::max(cone, angleBetween(centreNormal_, n));
+  for (const auto& n : cornerNormals_)
+    cone = std::max(cone, angleBetween(centreNormal_, n));
   normalCone_ = cone * (1.0 + 1e-12) + 1e-12;
 
   // Bounding sphere: samples at both heights, their box's middle as the centre.
@@ -131,8 +135,8 @@ PatchMesh buildPatchMesh(const Geodesy& geodesy, const Sector& sector, int n) {
     throw std::invalid_argument("planet: patch grid size must be 2^k + 1, 3 <= n <= 1025");
   PatchMesh mesh;
   mesh.n = n;
-  mesh.centre = surfacePoint(geodesy, 0.5 * (sector.south + sector.north),
-                             0.5 * (sector.west + sector.east), 0.0);
+  mesh.centre = surfacePoint(
+      geodesy, 0.5 * (sector.south + sector.north), 0.5 * (sector.west + sector.east), 0.0);
   mesh.vertices.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(n));
   for (int r = 0; r < n; ++r) {
     const double lat = edgeLerp(sector.south, sector.north, r, n);

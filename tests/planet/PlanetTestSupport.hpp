@@ -25,7 +25,8 @@ inline TileGrid globalGrid() {
 inline std::vector<Sector> levelZeroSectors(const TileGrid& grid) {
   std::vector<Sector> out;
   for (std::int64_t r = 0; r < grid.rowCount(0); ++r)
-    for (std::int64_t c = 0; c < grid.colCount(0); ++c) out.push_back(grid.sectorOf({0, r, c}));
+    for (std::int64_t c = 0; c < grid.colCount(0); ++c)
+      out.push_back(grid.sectorOf({0, r, c}));
   return out;
 }
 

@@ -26,7 +26,7 @@ TEST(Camera, NadirOverEquatorFrame) {
   const Camera cam(g, {0.0, 0.0, 1e7, 0.0, 0.0}, {1024, 768});
   expectVecNear(cam.position(), {6378137.0 + 1e7, 0, 0}, 1e-6);
   expectVecNear(cam.forward(), {-1, 0, 0}, 1e-15);
-  expectVecNear(cam.up(), {0, 0, 1}, 1e-15);   // north is up on screen
+  expectVecNear(cam.up(), {0, 0, 1}, 1e-15);    // north is up on screen
   expectVecNear(cam.right(), {0, 1, 0}, 1e-15); // east is right
   // The view matrix takes the camera to the origin and the Earth's centre to -z.
   const glm::dvec4 eye = cam.view() * glm::dvec4(cam.position(), 1.0);
@@ -77,8 +77,10 @@ TEST(Camera, FrustumPlanesAgreeWithProjection) {
   const Geodesy g;
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  for (const CameraPose pose : {CameraPose{0, 0, 1e7, 0, 0}, CameraPose{45, -120, 1000, 30, 70},
-                                CameraPose{90, 0, 5, 0, 90}, CameraPose{-33, 180, 1e9, 200, 10}}) {
+  for (const CameraPose pose : {CameraPose{0, 0, 1e7, 0, 0},
+                                CameraPose{45, -120, 1000, 30, 70},
+                                CameraPose{90, 0, 5, 0, 90},
+                                CameraPose{-33, 180, 1e9, 200, 10}}) {
     const Camera cam(g, pose, {1024, 768}, 60.0, 0.5);
     int inside = 0, outside = 0;
     for (int i = 0; i < 4000; ++i) {
@@ -86,8 +88,8 @@ TEST(Camera, FrustumPlanesAgreeWithProjection) {
       const glm::dvec3 dir = glm::normalize(glm::dvec3(u(rng), u(rng), u(rng)) + cam.forward());
       const glm::dvec3 p = cam.position() + dist * dir;
       const glm::dvec4 clip = cam.toClip(p);
-      const bool projIn = clip.w >= cam.nearM() && std::abs(clip.x) <= clip.w &&
-                          std::abs(clip.y) <= clip.w;
+      const bool projIn =
+          clip.w >= cam.nearM() && std::abs(clip.x) <= clip.w && std::abs(clip.y) <= clip.w;
       // Skip points within 1e-9 (relative) of a boundary.
       const double slack = 1e-9 * clip.w;
       const bool clear = std::abs(clip.w - cam.nearM()) > 1e-9 &&

@@ -72,8 +72,14 @@ struct Sweep {
  * is inside the frustum and the segment from the camera to it misses the occluder's interior, the
  * node must not be culled.
  */
-void crossCheck(const Geodesy& g, const Camera& cam, const Sector& s, double hMin, double hMax,
-                const HorizonOccluder& occ, Sweep& sweep, const std::string& what) {
+void crossCheck(const Geodesy& g,
+                const Camera& cam,
+                const Sector& s,
+                double hMin,
+                double hMax,
+                const HorizonOccluder& occ,
+                Sweep& sweep,
+                const std::string& what) {
   const NodeGeometry node(g, s, hMin, hMax);
   const CullResult r = cullNode(cam, node, occ);
   ++sweep.nodes;
@@ -114,9 +120,9 @@ void sweepCamera(const Geodesy& g, const CameraPose& pose, Sweep& sweep) {
     for (const Sector& s : test::sectorsAround(grid, pose.latDeg, pose.lonDeg, level))
       sectors.push_back(s);
   // Tiles ahead along the view: where a low camera's horizon lies.
-  const Geodetic ahead = g.fromEcef(
-      {cam.position().x + 5e3 * cam.forward().x, cam.position().y + 5e3 * cam.forward().y,
-       cam.position().z + 5e3 * cam.forward().z});
+  const Geodetic ahead = g.fromEcef({cam.position().x + 5e3 * cam.forward().x,
+                                     cam.position().y + 5e3 * cam.forward().y,
+                                     cam.position().z + 5e3 * cam.forward().z});
   for (const Sector& s : test::sectorsAround(grid, ahead.latDeg, ahead.lonDeg, 12))
     sectors.push_back(s);
   const HorizonOccluder flat(g, 0.0), deep(g, -11000.0);
@@ -234,9 +240,8 @@ TEST(CullingExtremes, HorizonSpheresNearTheLimbAgainstSegments) {
           i % 3 == 0 ? 0.05 * u01(rng) : horizon * (0.5 + 1.5 * u01(rng)) + 1e-6 * u01(rng);
       const double azimuth = 2.0 * std::numbers::pi * u01(rng);
       const glm::dvec3 up = glm::normalize(cam);
-      const glm::dvec3 t1 = glm::normalize(glm::cross(up, std::abs(up.z) < 0.9
-                                                              ? glm::dvec3(0, 0, 1)
-                                                              : glm::dvec3(1, 0, 0)));
+      const glm::dvec3 t1 = glm::normalize(
+          glm::cross(up, std::abs(up.z) < 0.9 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0)));
       const glm::dvec3 t2 = glm::cross(up, t1);
       const glm::dvec3 dir = std::cos(angle) * up +
                              std::sin(angle) * (std::cos(azimuth) * t1 + std::sin(azimuth) * t2);

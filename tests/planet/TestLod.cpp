@@ -132,7 +132,8 @@ TEST(LodExtremes, OutputsFiniteOverACameraSweep) {
           const Camera cam(g, {lat, lon, alt, 45.0, tilt}, {640, 480});
           std::vector<Sector> sectors = test::levelZeroSectors(grid);
           for (const int level : {10, 24})
-            for (const Sector& s : test::sectorsAround(grid, lat, lon, level)) sectors.push_back(s);
+            for (const Sector& s : test::sectorsAround(grid, lat, lon, level))
+              sectors.push_back(s);
           for (const Sector& s : sectors) {
             const NodeGeometry node(g, s);
             ASSERT_TRUE(test::finite(node.bounds().centre));

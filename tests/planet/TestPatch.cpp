@@ -27,7 +27,8 @@ TEST(Patch, CornersCentreAndNormals) {
   EXPECT_EQ(node.cornerNormals()[NE], vec(g.surfaceNormal(36, 36)));
   EXPECT_EQ(node.distinctCornerCount(), 4);
   // The corner (0,0) is 18 deg of lat and lon from the middle: angle acos(cos18 cos18).
-  const double expected = std::acos(std::cos(18.0 * std::numbers::pi / 180) * std::cos(18.0 * std::numbers::pi / 180));
+  const double expected =
+      std::acos(std::cos(18.0 * std::numbers::pi / 180) * std::cos(18.0 * std::numbers::pi / 180));
   EXPECT_NEAR(node.normalConeHalfAngleRad(), expected, 1e-9);
 }
 
@@ -68,7 +69,8 @@ TEST(Patch, MeshGridCoordinatesAndSharedEdges) {
   EXPECT_EQ(a.at(16, 16).uvNode, glm::dvec2(1, 1));
   EXPECT_DOUBLE_EQ(a.at(0, 0).uvGlobal.y, (-36.0 + 90.0) / 180.0);
   EXPECT_DOUBLE_EQ(a.at(16, 8).uvGlobal.y, 0.5);
-  for (const auto& v : a.vertices) EXPECT_NEAR(glm::length(v.normal), 1.0, 1e-14);
+  for (const auto& v : a.vertices)
+    EXPECT_NEAR(glm::length(v.normal), 1.0, 1e-14);
   // Positions are relative to the centre: the vertex at the middle is the centre itself.
   EXPECT_LT(glm::length(a.at(8, 8).position), 1e-9);
 }
@@ -93,7 +95,8 @@ TEST(Patch, RejectsInvalidInput) {
   EXPECT_THROW(NodeGeometry(g, {0, 0, 10, 5}, 10.0, -10.0), std::invalid_argument);
   for (const int n : {0, 1, 2, 4, 6, 16, 1026, 2049})
     EXPECT_THROW(buildPatchMesh(g, {0, 0, 10, 5}, n), std::invalid_argument) << n;
-  for (const int n : {3, 5, 9, 33}) EXPECT_NO_THROW(buildPatchMesh(g, {0, 0, 10, 5}, n)) << n;
+  for (const int n : {3, 5, 9, 33})
+    EXPECT_NO_THROW(buildPatchMesh(g, {0, 0, 10, 5}, n)) << n;
 }
 
 namespace {
@@ -157,7 +160,8 @@ TEST(PatchExtremes, Level24CornersDistinctAndFinite) {
     for (const std::int64_t col : {std::int64_t{0}, midCol, lastCol}) {
       const Sector s = grid.sectorOf({level, row, col});
       const NodeGeometry node(g, s);
-      for (const auto& c : node.corners()) ASSERT_TRUE(finite(c));
+      for (const auto& c : node.corners())
+        ASSERT_TRUE(finite(c));
       ASSERT_TRUE(finite(node.centre()));
       const bool pole = row == 0 || row == lastRow;
       EXPECT_EQ(node.distinctCornerCount(), pole ? 3 : 4) << row << "," << col;

@@ -23,16 +23,16 @@
 namespace tellus::planet {
 
 struct CameraPose {
-  double latDeg = 0.0;      ///< [-90, 90]
-  double lonDeg = 0.0;      ///< any finite value (wraps)
-  double altitudeM = 1e7;   ///< above the model's surface; finite
-  double headingDeg = 0.0;  ///< clockwise from north; finite
-  double tiltDeg = 0.0;     ///< 0 = nadir, 90 = horizon; [0, 180]
+  double latDeg = 0.0;     ///< [-90, 90]
+  double lonDeg = 0.0;     ///< any finite value (wraps)
+  double altitudeM = 1e7;  ///< above the model's surface; finite
+  double headingDeg = 0.0; ///< clockwise from north; finite
+  double tiltDeg = 0.0;    ///< 0 = nadir, 90 = horizon; [0, 180]
 };
 
 struct Viewport {
-  int width = 1024;  ///< pixels, > 0
-  int height = 768;  ///< pixels, > 0
+  int width = 1024; ///< pixels, > 0
+  int height = 768; ///< pixels, > 0
 };
 
 /** A plane n.x + d = 0 with unit n; n.x + d >= 0 is the inner (visible) side. */
@@ -53,8 +53,11 @@ struct Frustum {
  * of view or near distance that is out of range or not finite. */
 class Camera {
 public:
-  Camera(const Geodesy& geodesy, const CameraPose& pose, Viewport viewport,
-         double verticalFovDeg = 45.0, double nearM = 0.1);
+  Camera(const Geodesy& geodesy,
+         const CameraPose& pose,
+         Viewport viewport,
+         double verticalFovDeg = 45.0,
+         double nearM = 0.1);
 
   const CameraPose& pose() const noexcept { return pose_; }
   Viewport viewport() const noexcept { return viewport_; }
@@ -89,6 +92,7 @@ private:
 
 /** Reversed-Z, infinite far, depth in [0, 1] (glClipControl ZERO_TO_ONE): clip z = near, clip w =
  * -z_eye, so NDC depth = near / distance. */
-glm::dmat4 reversedZInfinitePerspective(double verticalFovRad, double aspect, double nearM) noexcept;
+glm::dmat4
+reversedZInfinitePerspective(double verticalFovRad, double aspect, double nearM) noexcept;
 
 } // namespace tellus::planet

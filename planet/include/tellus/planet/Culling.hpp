@@ -57,7 +57,7 @@ struct CullResult {
   bool visible = false;
   FrustumResult frustum = FrustumResult::Outside;
 };
-CullResult cullNode(const Camera& camera, const NodeGeometry& node,
-                    const HorizonOccluder& occluder) noexcept;
+CullResult
+cullNode(const Camera& camera, const NodeGeometry& node, const HorizonOccluder& occluder) noexcept;
 
 } // namespace tellus::planet

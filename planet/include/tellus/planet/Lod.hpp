@@ -32,7 +32,7 @@ struct LodResult {
 /** Never produces NaN: a node whose corners cannot all be projected (behind the near plane, or a
  * non-finite clip position) is treated as needing refinement. Invalid params (tile size < 1,
  * threshold not > 0 or not finite) split nothing. */
-LodResult evaluateLod(const Camera& camera, const NodeGeometry& node,
-                      const LodParams& params) noexcept;
+LodResult
+evaluateLod(const Camera& camera, const NodeGeometry& node, const LodParams& params) noexcept;
 
 } // namespace tellus::planet

@@ -41,7 +41,9 @@ class NodeGeometry {
 public:
   /** Throws std::invalid_argument unless -90 <= south < north <= 90, -180 <= west < east <= 180
    * (tiles never cross the antimeridian), all finite, and minHeightM <= maxHeightM. */
-  NodeGeometry(const Geodesy& geodesy, const Sector& sector, double minHeightM = 0.0,
+  NodeGeometry(const Geodesy& geodesy,
+               const Sector& sector,
+               double minHeightM = 0.0,
                double maxHeightM = 0.0);
 
   const Sector& sector() const noexcept { return sector_; }
