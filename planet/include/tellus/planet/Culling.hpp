@@ -1,0 +1,63 @@
+#pragma once
+/**
+ * @file Culling.hpp
+ * @brief The three per-node culling tests (thesis 4.3), all conservative: a node any point of
+ * which the camera can see is never culled.
+ */
+
+#include <tellus/planet/Camera.hpp>
+#include <tellus/planet/Patch.hpp>
+
+namespace tellus::planet {
+
+enum class FrustumResult { Outside, Intersecting, Inside };
+
+/** Sphere against the five planes of the infinite frustum. Inside means the children need no
+ * frustum test. */
+FrustumResult classify(const Frustum& frustum, const BoundingSphere& sphere) noexcept;
+
+/**
+ * @brief Back-face test on the node's normals.
+ *
+ * True (cull) only when the camera is below the tangent plane of every point of the patch: the
+ * patch's normals lie in a cone around the centre normal whose half-angle is the largest corner
+ * normal's angle (NodeGeometry::normalConeHalfAngleRad, the margin for curvature), and for a
+ * point p with normal n on the ellipsoid n.p is at least the smallest support value over the
+ * sector's latitudes; the test requires n.camera < that for every n in the cone. On a convex
+ * surface such a point is hidden by the body itself (so a camera below the ellipsoid sees no
+ * relief-free node). With relief (maxHeight > minHeight) terrain normals are not ellipsoid
+ * normals and a peak can be seen over the limb, so the test then never culls and leaves it to the
+ * horizon test.
+ */
+bool isBackFacing(const Camera& camera, const NodeGeometry& node) noexcept;
+
+/**
+ * @brief Horizon culling against an occluder ellipsoid with semi-axes (a + h, a + h, b + h).
+ *
+ * h (occluderHeightM) must be at or below the lowest terrain anywhere on the planet (0 for the
+ * imagery-only globe, e.g. -11000 with bathymetry), less a margin for the chords of coarse meshes
+ * lying under the ellipsoid. In the occluder's scaled space (the occluder is the unit sphere) the
+ * node's bounding sphere is enlarged to a sphere by the largest scale, and culled only when it lies
+ * strictly inside the camera's shadow cone of the unit sphere and strictly beyond the plane of the
+ * tangent circle. A camera inside the occluder (below it), or inside the node's sphere, culls
+ * nothing.
+ */
+struct HorizonOccluder {
+  double equatorialRadiusM = 0.0;
+  double polarRadiusM = 0.0;
+  HorizonOccluder(const Geodesy& geodesy, double occluderHeightM = 0.0) noexcept;
+  bool isOccluded(const glm::dvec3& cameraEcef, const BoundingSphere& sphere) const noexcept;
+  /** True when the segment from camera to point passes through the occluder's interior (the
+   * brute-force reference the tests compare against). */
+  bool segmentHitsOccluder(const glm::dvec3& cameraEcef, const glm::dvec3& point) const noexcept;
+};
+
+/** All three, the order of the thesis: back-face, frustum, horizon. */
+struct CullResult {
+  bool visible = false;
+  FrustumResult frustum = FrustumResult::Outside;
+};
+CullResult
+cullNode(const Camera& camera, const NodeGeometry& node, const HorizonOccluder& occluder) noexcept;
+
+} // namespace tellus::planet

@@ -1,0 +1,108 @@
+#pragma once
+/**
+ * @file Patch.hpp
+ * @brief Geometry of one quadtree node: a lat/long tile sector on the Geodesy model.
+ *
+ * Everything in double precision, ECEF metres. Corners are SW, SE, NE, NW. At a pole (north = 90
+ * or south = -90) the two corners on that edge are both the pole, so a polar node has three
+ * distinct corners. The vertex grid stores positions relative to the node's centre (the surface
+ * point at the sector's middle latitude and longitude) so that the GL layer can convert them to
+ * float without losing the centimetres.
+ */
+
+#include <tellus/cache/TileGrid.hpp>
+#include <tellus/planet/Geodesy.hpp>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include <array>
+#include <vector>
+
+namespace tellus::planet {
+
+struct BoundingSphere {
+  glm::dvec3 centre{0.0};
+  double radius = 0.0;
+  bool contains(const glm::dvec3& p) const noexcept;
+};
+
+enum Corner { SW = 0, SE = 1, NE = 2, NW = 3 };
+
+/**
+ * @brief Corners, centre, normals and a conservative bounding sphere of a node.
+ *
+ * The sphere contains every point of the patch at every height in [minHeightM, maxHeightM]
+ * (terrain later): it is the smallest sphere around the middle of the sampled points' box that
+ * holds 17 x 17 samples at both heights, grown by a bound on how far any patch point can be from
+ * its nearest sample (the sample cell's half perimeter on the largest radius of curvature).
+ */
+class NodeGeometry {
+public:
+  /** Throws std::invalid_argument unless -90 <= south < north <= 90, -180 <= west < east <= 180
+   * (tiles never cross the antimeridian), all finite, and minHeightM <= maxHeightM. */
+  NodeGeometry(const Geodesy& geodesy,
+               const Sector& sector,
+               double minHeightM = 0.0,
+               double maxHeightM = 0.0);
+
+  const Sector& sector() const noexcept { return sector_; }
+  double minHeightM() const noexcept { return minHeight_; }
+  double maxHeightM() const noexcept { return maxHeight_; }
+  bool touchesNorthPole() const noexcept { return sector_.north == 90.0; }
+  bool touchesSouthPole() const noexcept { return sector_.south == -90.0; }
+
+  /** Surface (height 0) corners, SW, SE, NE, NW; their unit normals. */
+  const std::array<glm::dvec3, 4>& corners() const noexcept { return corners_; }
+  const std::array<glm::dvec3, 4>& cornerNormals() const noexcept { return cornerNormals_; }
+  /** 4, or 3 at one pole (2 for a sector spanning pole to pole). */
+  int distinctCornerCount() const noexcept { return distinctCorners_; }
+  /** Surface point at the middle latitude/longitude, and its normal. */
+  const glm::dvec3& centre() const noexcept { return centre_; }
+  const glm::dvec3& centreNormal() const noexcept { return centreNormal_; }
+  /** Largest angle (radians) between centreNormal() and any normal of the patch (attained at a
+   * corner; slightly rounded up). */
+  double normalConeHalfAngleRad() const noexcept { return normalCone_; }
+  const BoundingSphere& bounds() const noexcept { return bounds_; }
+  /** The model's semi-axes (what the node was built on). */
+  double equatorialRadiusM() const noexcept { return a_; }
+  double polarRadiusM() const noexcept { return b_; }
+
+private:
+  Sector sector_;
+  double minHeight_;
+  double maxHeight_;
+  double a_ = 0.0;
+  double b_ = 0.0;
+  std::array<glm::dvec3, 4> corners_{};
+  std::array<glm::dvec3, 4> cornerNormals_{};
+  int distinctCorners_ = 4;
+  glm::dvec3 centre_{0.0};
+  glm::dvec3 centreNormal_{0.0};
+  double normalCone_ = 0.0;
+  BoundingSphere bounds_;
+};
+
+struct PatchVertex {
+  glm::dvec3 position{0.0}; ///< relative to PatchMesh::centre
+  glm::dvec3 normal{0.0};   ///< unit surface normal
+  glm::dvec2 uvNode{0.0};   ///< 0..1 across the node (u east, v north)
+  glm::dvec2 uvGlobal{0.0}; ///< ((lon + 180) / 360, (lat + 90) / 180)
+};
+
+/** An n x n vertex grid, rows from south to north, columns from west to east. */
+struct PatchMesh {
+  int n = 0;
+  glm::dvec3 centre{0.0}; ///< ECEF; equals NodeGeometry::centre() for the same sector
+  std::vector<PatchVertex> vertices;
+  const PatchVertex& at(int row, int col) const {
+    return vertices[static_cast<std::size_t>(row * n + col)];
+  }
+};
+
+/** Builds the grid at height 0. n must be 2^k + 1 with 1 <= k <= 10 (std::invalid_argument
+ * otherwise, or for a sector NodeGeometry refuses). Edge rows and columns use the sector's edges
+ * exactly, so neighbouring nodes share bit-identical edge vertices; a pole row is all the pole. */
+PatchMesh buildPatchMesh(const Geodesy& geodesy, const Sector& sector, int n);
+
+} // namespace tellus::planet

@@ -1,0 +1,100 @@
+#include <tellus/planet/Camera.hpp>
+
+#include <GeographicLib/Math.hpp>
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace tellus::planet {
+
+namespace {
+
+glm::dvec3 toVec(const Ecef& e) {
+  return {e.x, e.y, e.z};
+}
+
+Plane normalised(const glm::dvec4& row) {
+  const glm::dvec3 n{row.x, row.y, row.z};
+  const double len = glm::length(n);
+  return Plane{n / len, row.w / len};
+}
+
+} // namespace
+
+glm::dmat4
+reversedZInfinitePerspective(double verticalFovRad, double aspect, double nearM) noexcept {
+  const double f = 1.0 / std::tan(verticalFovRad / 2.0);
+  glm::dmat4 p(0.0);
+  p[0][0] = f / aspect;
+  p[1][1] = f;
+  p[2][3] = -1.0;  // clip w = -z_eye
+  p[3][2] = nearM; // clip z = near
+  return p;
+}
+
+Camera::Camera(const Geodesy& geodesy,
+               const CameraPose& pose,
+               Viewport viewport,
+               double verticalFovDeg,
+               double nearM)
+    : pose_(pose), viewport_(viewport), vfovDeg_(verticalFovDeg), near_(nearM) {
+  if (!(std::abs(pose.latDeg) <= 90.0) || !std::isfinite(pose.lonDeg) ||
+      !std::isfinite(pose.altitudeM) || !std::isfinite(pose.headingDeg) ||
+      !(pose.tiltDeg >= 0.0 && pose.tiltDeg <= 180.0))
+    throw std::invalid_argument("Camera: pose out of range or not finite");
+  if (viewport.width <= 0 || viewport.height <= 0)
+    throw std::invalid_argument("Camera: viewport must be at least 1x1 pixels");
+  if (!(verticalFovDeg > 0.0 && verticalFovDeg < 180.0))
+    throw std::invalid_argument("Camera: vertical field of view must be in (0, 180) degrees");
+  if (!(nearM > 0.0 && std::isfinite(nearM)))
+    throw std::invalid_argument("Camera: near distance must be positive and finite");
+
+  position_ = toVec(geodesy.toEcef(pose.latDeg, pose.lonDeg, pose.altitudeM));
+  // Local east/north/up; east from the longitude alone stays defined at the poles.
+  double sphi = 0, cphi = 0, slam = 0, clam = 0, sh = 0, ch = 0, st = 0, ct = 0;
+  GeographicLib::Math::sincosd(pose.latDeg, sphi, cphi);
+  GeographicLib::Math::sincosd(pose.lonDeg, slam, clam);
+  GeographicLib::Math::sincosd(pose.headingDeg, sh, ch);
+  GeographicLib::Math::sincosd(pose.tiltDeg, st, ct);
+  const glm::dvec3 upLocal{cphi * clam, cphi * slam, sphi};
+  const glm::dvec3 east{-slam, clam, 0.0};
+  const glm::dvec3 north = glm::cross(upLocal, east);
+  const glm::dvec3 headingDir = ch * north + sh * east;
+  forward_ = glm::normalize(ct * -upLocal + st * headingDir);
+  up_ = glm::normalize(st * upLocal + ct * headingDir);
+  right_ = glm::normalize(glm::cross(forward_, up_));
+
+  // View matrix built from the orthonormal frame (no lookAt target point far from the origin).
+  view_ = glm::dmat4(1.0);
+  for (int i = 0; i < 3; ++i) {
+    view_[i][0] = right_[i];
+    view_[i][1] = up_[i];
+    view_[i][2] = -forward_[i];
+  }
+  view_[3][0] = -glm::dot(right_, position_);
+  view_[3][1] = -glm::dot(up_, position_);
+  view_[3][2] = glm::dot(forward_, position_);
+
+  const double aspect = static_cast<double>(viewport.width) / static_cast<double>(viewport.height);
+  projection_ =
+      reversedZInfinitePerspective(verticalFovDeg * std::numbers::pi / 180.0, aspect, nearM);
+  viewProjection_ = projection_ * view_;
+
+  // Gribb/Hartmann on rows of the view-projection matrix; with depth in [0, 1] reversed, the near
+  // plane is w - z >= 0 and the far plane (z >= 0) is at infinity, so it is left out.
+  const glm::dmat4 m = glm::transpose(viewProjection_); // m[i] is row i
+  frustum_.planes[Frustum::Left] = normalised(m[3] + m[0]);
+  frustum_.planes[Frustum::Right] = normalised(m[3] - m[0]);
+  frustum_.planes[Frustum::Bottom] = normalised(m[3] + m[1]);
+  frustum_.planes[Frustum::Top] = normalised(m[3] - m[1]);
+  frustum_.planes[Frustum::Near] = normalised(m[3] - m[2]);
+}
+
+glm::dvec4 Camera::toClip(const glm::dvec3& world) const noexcept {
+  return viewProjection_ * glm::dvec4(world, 1.0);
+}
+
+} // namespace tellus::planet

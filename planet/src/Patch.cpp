@@ -1,0 +1,156 @@
+#include <tellus/planet/Patch.hpp>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+
+namespace tellus::planet {
+
+namespace {
+
+constexpr double kDegToRad = std::numbers::pi / 180.0;
+constexpr int kBoundSamples = 17; // per side, for the bounding sphere
+
+glm::dvec3 toVec(const Ecef& e) {
+  return {e.x, e.y, e.z};
+}
+
+/** a + (b - a) * i / (count - 1), with both ends exact so neighbours share edges bit for bit. */
+double edgeLerp(double a, double b, int i, int count) {
+  if (i == 0) return a;
+  if (i == count - 1) return b;
+  return a + (b - a) * (static_cast<double>(i) / static_cast<double>(count - 1));
+}
+
+void validate(const Sector& s) {
+  const bool finite = std::isfinite(s.west) && std::isfinite(s.east) && std::isfinite(s.south) &&
+                      std::isfinite(s.north);
+  if (!finite || !(s.south >= -90.0 && s.south < s.north && s.north <= 90.0) ||
+      !(s.west >= -180.0 && s.west < s.east && s.east <= 180.0))
+    throw std::invalid_argument("planet: sector must satisfy -90 <= south < north <= 90 and "
+                                "-180 <= west < east <= 180");
+}
+
+/** Surface point; a pole is one point whatever the longitude. */
+glm::dvec3 surfacePoint(const Geodesy& g, double lat, double lon, double h) {
+  if (lat == 90.0 || lat == -90.0) lon = 0.0;
+  return toVec(g.toEcef(lat, lon, h));
+}
+
+glm::dvec3 normalAt(const Geodesy& g, double lat, double lon) {
+  if (lat == 90.0 || lat == -90.0) lon = 0.0;
+  return toVec(g.surfaceNormal(lat, lon));
+}
+
+double angleBetween(const glm::dvec3& a, const glm::dvec3& b) {
+  return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));
+}
+
+} // namespace
+
+bool BoundingSphere::contains(const glm::dvec3& p) const noexcept {
+  return glm::length(p - centre) <= radius;
+}
+
+NodeGeometry::NodeGeometry(const Geodesy& geodesy,
+                           const Sector& sector,
+                           double minHeightM,
+                           double maxHeightM)
+    : sector_(sector), minHeight_(minHeightM), maxHeight_(maxHeightM) {
+  validate(sector);
+  if (!(std::isfinite(minHeightM) && std::isfinite(maxHeightM) && minHeightM <= maxHeightM))
+    throw std::invalid_argument("planet: node heights must be finite with min <= max");
+
+  a_ = geodesy.equatorialRadius();
+  b_ = geodesy.polarRadius();
+  const Sector& s = sector_;
+  const std::array<std::array<double, 2>, 4> latLon{
+      {{s.south, s.west}, {s.south, s.east}, {s.north, s.east}, {s.north, s.west}}};
+  for (std::size_t i = 0; i < 4; ++i) {
+    corners_[i] = surfacePoint(geodesy, latLon[i][0], latLon[i][1], 0.0);
+    cornerNormals_[i] = normalAt(geodesy, latLon[i][0], latLon[i][1]);
+  }
+  distinctCorners_ = 0;
+  for (std::size_t i = 0; i < 4; ++i) {
+    bool seen = false;
+    for (std::size_t j = 0; j < i; ++j)
+      seen = seen || corners_[j] == corners_[i];
+    if (!seen) ++distinctCorners_;
+  }
+
+  const double midLat = 0.5 * (s.south + s.north);
+  const double midLon = 0.5 * (s.west + s.east);
+  centre_ = surfacePoint(geodesy, midLat, midLon, 0.0);
+  centreNormal_ = normalAt(geodesy, midLat, midLon);
+  // The angular distance from the middle grows monotonically towards the corners along each edge
+  // of a lat/long rectangle, so the corners bound the normal cone.
+  double cone = 0.0;
+  for (const auto& n : cornerNormals_)
+    cone = std::max(cone, angleBetween(centreNormal_, n));
+  normalCone_ = cone * (1.0 + 1e-12) + 1e-12;
+
+  // Bounding sphere: samples at both heights, their box's middle as the centre.
+  std::vector<glm::dvec3> samples;
+  samples.reserve(2 * kBoundSamples * kBoundSamples);
+  glm::dvec3 lo(std::numeric_limits<double>::infinity());
+  glm::dvec3 hi(-std::numeric_limits<double>::infinity());
+  for (int r = 0; r < kBoundSamples; ++r) {
+    const double lat = edgeLerp(s.south, s.north, r, kBoundSamples);
+    for (int c = 0; c < kBoundSamples; ++c) {
+      const double lon = edgeLerp(s.west, s.east, c, kBoundSamples);
+      for (const double h : {minHeightM, maxHeightM}) {
+        const glm::dvec3 p = surfacePoint(geodesy, lat, lon, h);
+        samples.push_back(p);
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+      }
+    }
+  }
+  bounds_.centre = 0.5 * (lo + hi);
+  double r2 = 0.0;
+  for (const auto& p : samples) {
+    const glm::dvec3 d = p - bounds_.centre;
+    r2 = std::max(r2, glm::dot(d, d));
+  }
+  // Any patch point is within half a sample cell (in latitude and in longitude) of a sample; the
+  // path along a parallel and a meridian there is at most (largest radius of curvature a^2/b +
+  // |height|) times those half-angles, and distance is 1-Lipschitz. Heights in between lie on the
+  // segment between the two sampled heights, where the distance to the centre is convex.
+  const double a = geodesy.equatorialRadius();
+  const double b = geodesy.polarRadius();
+  const double curvature = a * a / b + std::max(std::abs(minHeightM), std::abs(maxHeightM));
+  const double cells = static_cast<double>(kBoundSamples - 1);
+  const double halfCellRad = 0.5 * ((s.north - s.south) + (s.east - s.west)) / cells * kDegToRad;
+  const double margin = curvature * halfCellRad;
+  bounds_.radius = (std::sqrt(r2) + margin) * (1.0 + 1e-12) + 1e-6;
+}
+
+PatchMesh buildPatchMesh(const Geodesy& geodesy, const Sector& sector, int n) {
+  validate(sector);
+  if (n < 3 || n > 1025 || ((n - 1) & (n - 2)) != 0)
+    throw std::invalid_argument("planet: patch grid size must be 2^k + 1, 3 <= n <= 1025");
+  PatchMesh mesh;
+  mesh.n = n;
+  mesh.centre = surfacePoint(
+      geodesy, 0.5 * (sector.south + sector.north), 0.5 * (sector.west + sector.east), 0.0);
+  mesh.vertices.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(n));
+  for (int r = 0; r < n; ++r) {
+    const double lat = edgeLerp(sector.south, sector.north, r, n);
+    const double v = static_cast<double>(r) / static_cast<double>(n - 1);
+    for (int c = 0; c < n; ++c) {
+      const double lon = edgeLerp(sector.west, sector.east, c, n);
+      PatchVertex& vx = mesh.vertices[static_cast<std::size_t>(r * n + c)];
+      vx.position = surfacePoint(geodesy, lat, lon, 0.0) - mesh.centre;
+      vx.normal = normalAt(geodesy, lat, lon);
+      vx.uvNode = {static_cast<double>(c) / static_cast<double>(n - 1), v};
+      vx.uvGlobal = {(lon + 180.0) / 360.0, (lat + 90.0) / 180.0};
+    }
+  }
+  return mesh;
+}
+
+} // namespace tellus::planet
