@@ -72,6 +72,25 @@ Loaded& state() {
   return s;
 }
 
+/**
+ * Encodes and decodes a small JPEG and PNG once, inside the call_once that every user of the module
+ * passes. OpenImageIO 2.4 builds some of its tables (image attribute and tag names) on first use
+ * without a lock that ThreadSanitizer sees; two threads encoding their first JPEGs at once were
+ * reported as a race inside it. Built here, before any other thread can call in, they are only
+ * read afterwards.
+ */
+void warmUp(const TellusImagingTable& t) {
+  std::uint8_t pixels[8 * 8 * 3] = {};
+  for (const char* format : {"jpeg", "png"}) {
+    imaging::BytesSink bytes;
+    if (t.encodeImage(format, 8, 8, 3, pixels, bytes.get()) != TELLUS_IMAGING_OK) continue;
+    TellusImagingDecodeResult shape{};
+    imaging::ErrorSink errors;
+    (void)t.decodeImage(
+        bytes.bytes.data(), bytes.bytes.size(), format, 8, 8, &shape, errors.get());
+  }
+}
+
 void load(Loaded& s) {
   const auto candidates = imagingModuleCandidates();
   std::error_code ec;
@@ -97,6 +116,7 @@ void load(Loaded& s) {
   }
   s.table = *t;
   s.file = file;
+  warmUp(**t);
   s.loaded.store(true, std::memory_order_release);
 }
 
