@@ -115,8 +115,7 @@ std::optional<std::vector<std::byte>> TileFile::readAll() const {
   std::vector<std::byte> out(static_cast<std::size_t>(size_));
   std::size_t done = 0;
   while (done < out.size()) {
-    const ssize_t n =
-        ::pread(fd_, out.data() + done, out.size() - done, static_cast<off_t>(done));
+    const ssize_t n = ::pread(fd_, out.data() + done, out.size() - done, static_cast<off_t>(done));
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) return std::nullopt;
     done += static_cast<std::size_t>(n);

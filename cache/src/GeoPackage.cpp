@@ -20,7 +20,8 @@ namespace {
 constexpr const char* kWgs84Wkt =
     "GEOGCS[\"WGS 84\",DATUM[\"WGS_1984\",SPHEROID[\"WGS 84\",6378137,298.257223563,"
     "AUTHORITY[\"EPSG\",\"7030\"]],AUTHORITY[\"EPSG\",\"6326\"]],PRIMEM[\"Greenwich\",0,"
-    "AUTHORITY[\"EPSG\",\"8901\"]],UNIT[\"degree\",0.0174532925199433,AUTHORITY[\"EPSG\",\"9122\"]],"
+    "AUTHORITY[\"EPSG\",\"8901\"]],UNIT[\"degree\",0.0174532925199433,AUTHORITY[\"EPSG\",\"9122\"]]"
+    ","
     "AXIS[\"Latitude\",NORTH],AXIS[\"Longitude\",EAST],AUTHORITY[\"EPSG\",\"4326\"]]";
 
 CacheError invalid(std::string m) {
@@ -144,15 +145,23 @@ std::expected<GpkgReport, CacheError> exportGeoPackage(TileCache& cache,
         "CREATE TABLE gpkg_tile_matrix (table_name TEXT NOT NULL, zoom_level INTEGER NOT NULL, "
         "matrix_width INTEGER NOT NULL, matrix_height INTEGER NOT NULL, tile_width INTEGER NOT "
         "NULL, tile_height INTEGER NOT NULL, pixel_x_size DOUBLE NOT NULL, pixel_y_size DOUBLE NOT "
-        "NULL, CONSTRAINT pk_ttm PRIMARY KEY (table_name, zoom_level), CONSTRAINT fk_tmm_table_name "
+        "NULL, CONSTRAINT pk_ttm PRIMARY KEY (table_name, zoom_level), CONSTRAINT "
+        "fk_tmm_table_name "
         "FOREIGN KEY (table_name) REFERENCES gpkg_contents(table_name));"
-        "CREATE TABLE \"" + table + "\" (id INTEGER PRIMARY KEY AUTOINCREMENT, zoom_level INTEGER "
+        "CREATE TABLE \"" +
+        table +
+        "\" (id INTEGER PRIMARY KEY AUTOINCREMENT, zoom_level INTEGER "
         "NOT NULL, tile_column INTEGER NOT NULL, tile_row INTEGER NOT NULL, tile_data BLOB NOT "
         "NULL, UNIQUE (zoom_level, tile_column, tile_row));"
         "INSERT INTO gpkg_contents (table_name, data_type, identifier, description, min_x, min_y, "
-        "max_x, max_y, srs_id) VALUES ('" + table + "', 'tiles', '" + table + "', 'exported by "
-        "tellus', " + bounds + ", 4326);"
-        "INSERT INTO gpkg_tile_matrix_set VALUES ('" + table + "', 4326, " + bounds + ");";
+        "max_x, max_y, srs_id) VALUES ('" +
+        table + "', 'tiles', '" + table +
+        "', 'exported by "
+        "tellus', " +
+        bounds +
+        ", 4326);"
+        "INSERT INTO gpkg_tile_matrix_set VALUES ('" +
+        table + "', 4326, " + bounds + ");";
     if (auto r = db.exec(ddl, "creating the GeoPackage"); !r) return r;
     sql::Stmt matrix(db.db.get(),
                      "INSERT INTO gpkg_tile_matrix VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)");
@@ -171,8 +180,8 @@ std::expected<GpkgReport, CacheError> exportGeoPackage(TileCache& cache,
                       "\" (zoom_level, tile_column, tile_row, tile_data) VALUES (?1, ?2, ?3, ?4)")
                          .c_str());
     std::optional<CacheError> failure;
-    auto listed = cache.forEachTile(
-        dataset, fromLevel, toLevel, [&](const TileKey& k, std::int64_t) {
+    auto listed =
+        cache.forEachTile(dataset, fromLevel, toLevel, [&](const TileKey& k, std::int64_t) {
           auto got = cache.get(dataset, k);
           if (!got) {
             failure = got.error();
@@ -209,10 +218,8 @@ std::expected<GpkgReport, CacheError> exportGeoPackage(TileCache& cache,
   return report;
 }
 
-std::expected<GpkgReport, CacheError> importGeoPackage(TileCache& cache,
-                                                       DatasetId dataset,
-                                                       const fs::path& file,
-                                                       std::string table) {
+std::expected<GpkgReport, CacheError>
+importGeoPackage(TileCache& cache, DatasetId dataset, const fs::path& file, std::string table) {
   const auto info = cache.dataset(dataset);
   if (!info) return std::unexpected(invalid("unknown dataset id " + std::to_string(dataset)));
   const DatasetSpec& spec = info->spec;
@@ -239,8 +246,8 @@ std::expected<GpkgReport, CacheError> importGeoPackage(TileCache& cache,
     if (u.step() != SQLITE_ROW)
       return std::unexpected(invalid(where + ": no tile matrix set for '" + table + "'"));
     if (u.i64(0) != 4326)
-      return std::unexpected(invalid(where + ": tiles must be in EPSG:4326, got srs " +
-                                     std::to_string(u.i64(0))));
+      return std::unexpected(
+          invalid(where + ": tiles must be in EPSG:4326, got srs " + std::to_string(u.i64(0))));
     if (!close(u.f64(1), o.minX) || !close(u.f64(2), o.maxY))
       return std::unexpected(invalid(where + ": the matrix set's origin is not the grid's"));
   }
@@ -266,9 +273,8 @@ std::expected<GpkgReport, CacheError> importGeoPackage(TileCache& cache,
     }
   }
   GpkgReport report;
-  sql::Stmt tiles(db,
-                  ("SELECT zoom_level, tile_column, tile_row, tile_data FROM \"" + table + "\"")
-                      .c_str());
+  sql::Stmt tiles(
+      db, ("SELECT zoom_level, tile_column, tile_row, tile_data FROM \"" + table + "\"").c_str());
   if (!tiles.ok()) return std::unexpected(invalid(where + ": cannot read table '" + table + "'"));
   sql::Stmt::Use u(tiles);
   int rc = 0;
@@ -286,8 +292,8 @@ std::expected<GpkgReport, CacheError> importGeoPackage(TileCache& cache,
                            ? "image/jpeg"
                            : "image/png";
     if (meta.contentType != spec.mimeType)
-      return std::unexpected(invalid(where + ": a " + meta.contentType + " tile for a " +
-                                     spec.mimeType + " layer"));
+      return std::unexpected(
+          invalid(where + ": a " + meta.contentType + " tile for a " + spec.mimeType + " layer"));
     if (auto put = cache.put(dataset, key, std::span(data, size), meta); !put)
       return std::unexpected(put.error());
     ++report.tiles;

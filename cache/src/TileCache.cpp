@@ -9,12 +9,10 @@
 #include <algorithm>
 #include <cassert>
 #include <cerrno>
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
 #include <condition_variable>
 #include <cstdio>
 #include <deque>
+#include <fcntl.h>
 #include <functional>
 #include <future>
 #include <limits>
@@ -22,7 +20,9 @@
 #include <mutex>
 #include <set>
 #include <shared_mutex>
+#include <sys/stat.h>
 #include <thread>
+#include <unistd.h>
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
@@ -188,7 +188,7 @@ struct TileCache::Impl {
   bool allRowsChanged = false;
   // Other processes' commits move writeDb's PRAGMA data_version (its own commits do not).
   std::atomic<std::int64_t> nextVersionCheckNs{0};
-  sql::Stmt dataVersionStmt; // on writeDb, under writeMutex
+  sql::Stmt dataVersionStmt;         // on writeDb, under writeMutex
   std::int64_t lastDataVersion = -1; // under writeMutex
 
   void rowChanged(DatasetId id, const TileKey& key) {
@@ -332,10 +332,10 @@ struct TileCache::Impl {
       fs::path dir = options.root / folder;
       const std::int64_t createdAt = u.i64(17);
       loaded.emplace(id,
-                     std::make_shared<const DatasetEntry>(
-                         DatasetEntry{DatasetInfo{id, std::move(spec), std::move(folder), createdAt},
-                                      std::move(*grid),
-                                      std::move(dir)}));
+                     std::make_shared<const DatasetEntry>(DatasetEntry{
+                         DatasetInfo{id, std::move(spec), std::move(folder), createdAt},
+                         std::move(*grid),
+                         std::move(dir)}));
     }
     if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "reading datasets"));
     std::unique_lock lock(datasetsMutex);
@@ -753,11 +753,10 @@ struct TileCache::Impl {
 namespace {
 
 /** Inserts a dataset row (the usage row follows by trigger); returns its id. */
-std::expected<DatasetId, CacheError>
-insertDataset(sqlite3* db,
-              const DatasetSpec& spec,
-              const std::string& folder,
-              UnixMillis createdAt = unixMillisNow()) {
+std::expected<DatasetId, CacheError> insertDataset(sqlite3* db,
+                                                   const DatasetSpec& spec,
+                                                   const std::string& folder,
+                                                   UnixMillis createdAt = unixMillisNow()) {
   sql::Stmt ins(db,
                 "INSERT INTO datasets(server, name, folder, west, south, east, north, "
                 "level_zero_delta, tile_width, tile_height, num_levels, mime_type, extension, "

@@ -133,8 +133,7 @@ checkUpstream(const UpstreamConfig& u, std::size_t i, bool checkFiles) {
   if (u.timeout.count() <= 0) return issue("timeout", "must be longer than 0");
   if (u.retryBackoff.count() < 0) return issue("retry_backoff", "must not be negative");
   if (u.openInterval.count() <= 0) return issue("open_interval", "must be longer than 0");
-  if (u.maxRetryAfterWait.count() < 0)
-    return issue("max_retry_after_wait", "must not be negative");
+  if (u.maxRetryAfterWait.count() < 0) return issue("max_retry_after_wait", "must not be negative");
   if (u.maxConnections < 1 || u.maxConnections > 1024)
     return issue("max_connections", "must be in [1, 1024], got " + str(u.maxConnections));
   if (u.retries < 0 || u.retries > 100)

@@ -18,8 +18,8 @@
 
 namespace tellus {
 
-std::optional<std::chrono::milliseconds> parseRetryAfter(std::string_view value,
-                                                         std::chrono::system_clock::time_point now) {
+std::optional<std::chrono::milliseconds>
+parseRetryAfter(std::string_view value, std::chrono::system_clock::time_point now) {
   if (value.empty()) return std::nullopt;
   if (std::all_of(value.begin(), value.end(), [](char c) { return c >= '0' && c <= '9'; })) {
     if (value.size() > 9) return std::chrono::hours(24 * 365); // absurdly long: capped by callers

@@ -4,16 +4,16 @@
 #include <atomic>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/post.hpp>
+#include <boost/asio/steady_timer.hpp>
 #include <boost/asio/strand.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
-#include <boost/asio/steady_timer.hpp>
 #include <cctype>
 #include <cerrno>
-#include <sys/sendfile.h>
-#include <sys/socket.h>
 #include <mutex>
 #include <optional>
+#include <sys/sendfile.h>
+#include <sys/socket.h>
 #include <thread>
 #include <unordered_map>
 #include <unordered_set>
@@ -314,16 +314,17 @@ private:
    * between two successful writes, not for the whole body). */
   void armWriteTimer(std::chrono::steady_clock::duration after) {
     writeTimer_.expires_after(after);
-    writeTimer_.async_wait([self = shared_from_this(), gen = writeGeneration_](beast::error_code e) {
-      // Cancelled, or it expired just as that write finished (cancel cannot recall a handler
-      // already queued): it must not touch a later request.
-      if (e || !self->writeTimerArmed_ || gen != self->writeGeneration_) return;
-      const auto idle = std::chrono::steady_clock::now() - self->lastProgress_;
-      const auto limit = self->server_->options.requestTimeout;
-      if (idle < limit) return self->armWriteTimer(limit - idle);
-      beast::error_code ignored;
-      self->stream_.socket().cancel(ignored); // fails the pending wait, which closes
-    });
+    writeTimer_.async_wait(
+        [self = shared_from_this(), gen = writeGeneration_](beast::error_code e) {
+          // Cancelled, or it expired just as that write finished (cancel cannot recall a handler
+          // already queued): it must not touch a later request.
+          if (e || !self->writeTimerArmed_ || gen != self->writeGeneration_) return;
+          const auto idle = std::chrono::steady_clock::now() - self->lastProgress_;
+          const auto limit = self->server_->options.requestTimeout;
+          if (idle < limit) return self->armWriteTimer(limit - idle);
+          beast::error_code ignored;
+          self->stream_.socket().cancel(ignored); // fails the pending wait, which closes
+        });
   }
 
   void continueFile() {
@@ -375,7 +376,7 @@ private:
       writeTimer_.cancel();
     }
     file_ = HttpFileBody{}; // an idle keep-alive connection holds no descriptor
-    headText_.clear(); // its capacity (a few hundred bytes) is kept for the next response
+    headText_.clear();      // its capacity (a few hundred bytes) is kept for the next response
     if (!ok || !keepAlive_) return shutdownSend();
     doRead(false);
   }

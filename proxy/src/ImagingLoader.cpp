@@ -86,8 +86,7 @@ void warmUp(const TellusImagingTable& t) {
     if (t.encodeImage(format, 8, 8, 3, pixels, bytes.get()) != TELLUS_IMAGING_OK) continue;
     TellusImagingDecodeResult shape{};
     imaging::ErrorSink errors;
-    (void)t.decodeImage(
-        bytes.bytes.data(), bytes.bytes.size(), format, 8, 8, &shape, errors.get());
+    (void)t.decodeImage(bytes.bytes.data(), bytes.bytes.size(), format, 8, 8, &shape, errors.get());
   }
 }
 

@@ -1,7 +1,7 @@
 #include <tellus/proxy/Log.hpp>
 
-#include <chrono>
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 #include <ctime>
 

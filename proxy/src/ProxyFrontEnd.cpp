@@ -221,17 +221,16 @@ struct ProxyFrontEnd::Impl {
                      const Responder& respond) {
     const LayerSpec* l = tiles.layer(layerName);
     if (!l) return respond(plain(404, "no such layer\n"));
-    tiles.getTile(layerName,
-                  l->timeDefault,
-                  key,
-                  [this, v = Validators(req), l, respond](TileAnswer&& a) {
-      countTile(l, a);
-      if (a.kind == TileAnswer::Kind::Tile) return sendTile(v, std::move(a), *l, respond);
-      auto r = plain(a.kind == TileAnswer::Kind::Absent ? 404 : 502, a.message + "\n");
-      r.setHeader("X-Cache", toString(a.origin));
-      if (a.kind == TileAnswer::Kind::Absent) r.setHeader("Cache-Control", "public, max-age=60");
-      respond(std::move(r));
-    });
+    tiles.getTile(
+        layerName, l->timeDefault, key, [this, v = Validators(req), l, respond](TileAnswer&& a) {
+          countTile(l, a);
+          if (a.kind == TileAnswer::Kind::Tile) return sendTile(v, std::move(a), *l, respond);
+          auto r = plain(a.kind == TileAnswer::Kind::Absent ? 404 : 502, a.message + "\n");
+          r.setHeader("X-Cache", toString(a.origin));
+          if (a.kind == TileAnswer::Kind::Absent)
+            r.setHeader("Cache-Control", "public, max-age=60");
+          respond(std::move(r));
+        });
   }
 
   void worldWind(const HttpRequest& req, const Responder& respond) {
@@ -439,23 +438,24 @@ struct ProxyFrontEnd::Impl {
                        "one tile of the layer's grid"},
           respond);
     }
-    tiles.getTile(l->name,
-                  *time,
-                  *key,
-                  [this, v = Validators(req), l, m = std::move(m), ctx, respond](TileAnswer&& a) {
-      countTile(l, a);
-      if (a.kind == TileAnswer::Kind::Tile) return sendTile(v, std::move(a), *l, respond);
-      if (a.kind == TileAnswer::Kind::Absent) {
-        if (a.origin == TileOrigin::Offline &&
-            options.offlineResponse == FrontEndOptions::OfflineResponse::Exception) {
-          return exception(
-              ctx, OgcException{std::string(ogc::kNoApplicableCode), "", a.message}, respond);
-        }
-        return emptyImage(
-            m, a.message, a.origin, respond); // no tile there: an empty map, not an error
-      }
-      exception(ctx, OgcException{std::string(ogc::kNoApplicableCode), "", a.message}, respond);
-    });
+    tiles.getTile(
+        l->name,
+        *time,
+        *key,
+        [this, v = Validators(req), l, m = std::move(m), ctx, respond](TileAnswer&& a) {
+          countTile(l, a);
+          if (a.kind == TileAnswer::Kind::Tile) return sendTile(v, std::move(a), *l, respond);
+          if (a.kind == TileAnswer::Kind::Absent) {
+            if (a.origin == TileOrigin::Offline &&
+                options.offlineResponse == FrontEndOptions::OfflineResponse::Exception) {
+              return exception(
+                  ctx, OgcException{std::string(ogc::kNoApplicableCode), "", a.message}, respond);
+            }
+            return emptyImage(
+                m, a.message, a.origin, respond); // no tile there: an empty map, not an error
+          }
+          exception(ctx, OgcException{std::string(ogc::kNoApplicableCode), "", a.message}, respond);
+        });
   }
 
   void index(const HttpRequest& req, const Responder& respond) const {
@@ -483,12 +483,12 @@ void ProxyFrontEnd::handle(HttpRequest&& req, Responder respond) {
   auto& im = *impl_;
   const bool wms =
       req.path == "/wms" || req.path == "/wms/" || (req.path == "/" && !req.query.empty());
-  const Protocol protocol = wms                              ? Protocol::Wms
-                            : req.path == "/wwtile"          ? Protocol::WorldWind
+  const Protocol protocol = wms                               ? Protocol::Wms
+                            : req.path == "/wwtile"           ? Protocol::WorldWind
                             : req.path.starts_with("/tiles/") ? Protocol::Static
-                            : req.path == "/"                ? Protocol::Page
-                            : req.path == "/metrics"         ? Protocol::Metrics
-                                                             : Protocol::Other;
+                            : req.path == "/"                 ? Protocol::Page
+                            : req.path == "/metrics"          ? Protocol::Metrics
+                                                              : Protocol::Other;
   im.metrics.requestStarted(protocol);
   // The access log's fields, only when it is on (it costs a few copies per request).
   struct Access {
@@ -505,9 +505,9 @@ void ProxyFrontEnd::handle(HttpRequest&& req, Responder respond) {
     const auto bytes = r.file ? static_cast<std::uint64_t>(r.file->size) : r.body.size();
     metrics->requestFinished(protocol, r.status, bytes);
     if (access) {
-      const double ms =
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - access->start)
-              .count();
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() -
+                                                                  access->start)
+                            .count();
       char msText[32];
       std::snprintf(msText, sizeof msText, "%.3f", ms);
       std::string_view cache = "-";

@@ -67,7 +67,8 @@ seedFromRaster(TileCache& cache,
 
 } // namespace tellus
 
-// ------------------------------------------------------------------------------ through the service
+// ------------------------------------------------------------------------------ through the
+// service
 
 namespace tellus {
 
@@ -125,8 +126,8 @@ std::expected<SeedReport, std::string> seedThroughService(TileService& tiles,
   auto start = [&](const TileKey& key, int attempt) {
     if (options.rate > 0) { // pace starts evenly
       std::this_thread::sleep_until(nextStart);
-      nextStart = std::max(nextStart, Clock::now()) +
-                  std::chrono::duration_cast<Clock::duration>(interval);
+      nextStart =
+          std::max(nextStart, Clock::now()) + std::chrono::duration_cast<Clock::duration>(interval);
     }
     {
       std::unique_lock lock(mutex);

@@ -138,7 +138,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
   std::map<std::string, std::size_t, std::less<>> layerIndex;
   std::vector<UnixMillis> layerSince; // per layer: its dataset's registration time
   std::vector<std::pair<DatasetId, std::string>> defaultDatasets; // per layer: time "" (id, folder)
-  std::vector<TileGrid> grids; // parallel to layers
+  std::vector<TileGrid> grids;                                    // parallel to layers
   std::map<std::string, UpstreamSpec, std::less<>> upstreams;
   std::map<std::string, LocalRasterSource, std::less<>> rasters; // by upstream name
   std::atomic<bool> forcedOffline{false};

@@ -55,10 +55,10 @@ TEST(GeoPackage, ExportFlipsRowsAndImportRestoresTheSameTiles) {
   EXPECT_EQ(scalar(file, "SELECT matrix_width FROM gpkg_tile_matrix WHERE zoom_level = 1"), 20);
   EXPECT_EQ(scalar(file, "SELECT matrix_height FROM gpkg_tile_matrix WHERE zoom_level = 1"), 10);
   // World Wind row 0 is the southernmost; GeoPackage row 0 the northernmost.
-  EXPECT_EQ(scalar(file, "SELECT tile_row FROM bluemarble WHERE zoom_level = 1 AND tile_column = 3"),
-            9);
-  EXPECT_EQ(scalar(file, "SELECT tile_row FROM bluemarble WHERE zoom_level = 0 AND tile_column = 9"),
-            0);
+  EXPECT_EQ(
+      scalar(file, "SELECT tile_row FROM bluemarble WHERE zoom_level = 1 AND tile_column = 3"), 9);
+  EXPECT_EQ(
+      scalar(file, "SELECT tile_row FROM bluemarble WHERE zoom_level = 0 AND tile_column = 9"), 0);
   EXPECT_FALSE(fs::exists(file.string() + ".tmp-" + std::to_string(::getpid())));
 
   auto other = test::openTestCache(dir.path() / "b");

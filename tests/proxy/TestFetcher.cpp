@@ -641,7 +641,8 @@ TEST(Fetcher, RetryAfterIsSecondsOrAnHttpDate) {
   EXPECT_EQ(parseRetryAfter("120", now), std::chrono::milliseconds(120000));
   EXPECT_EQ(parseRetryAfter("0", now), std::chrono::milliseconds(0));
   // 1700000000 is Tue, 14 Nov 2023 22:13:20 GMT.
-  EXPECT_EQ(parseRetryAfter("Tue, 14 Nov 2023 22:14:00 GMT", now), std::chrono::milliseconds(40000));
+  EXPECT_EQ(parseRetryAfter("Tue, 14 Nov 2023 22:14:00 GMT", now),
+            std::chrono::milliseconds(40000));
   EXPECT_EQ(parseRetryAfter("Tue, 14 Nov 2023 22:00:00 GMT", now), std::chrono::milliseconds(0));
   EXPECT_GE(*parseRetryAfter("99999999999999999999", now), std::chrono::hours(24));
   for (const char* bad : {"", "soon", "-5", "1.5", " 12", "12 "})
@@ -688,7 +689,7 @@ TEST(FetcherIntegration, A429WithALongRetryAfterPausesTheUpstream) {
     EXPECT_EQ(again.error().code, FetchErrc::Throttled);
     EXPECT_EQ(again.error().attempts, 0);
   }
-  EXPECT_EQ(server.requests(), 1u); // the paused upstream saw nothing more
+  EXPECT_EQ(server.requests(), 1u);                // the paused upstream saw nothing more
   EXPECT_EQ(f.breaker("u"), BreakerState::Closed); // throttling is not a failure
 }
 

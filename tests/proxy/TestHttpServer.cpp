@@ -324,14 +324,16 @@ struct PatternFile {
     HttpResponse r;
     r.setHeader("Content-Type", "image/jpeg");
     r.setHeader("ETag", "\"e1\"");
-    r.file = HttpFileBody{*fd, promised < 0 ? static_cast<std::int64_t>(bytes.size()) : promised, fd};
+    r.file =
+        HttpFileBody{*fd, promised < 0 ? static_cast<std::int64_t>(bytes.size()) : promised, fd};
     return r;
   }
 };
 
 HttpHandler fileHandler(const PatternFile& f) {
   return [&f](HttpRequest&& req, Responder respond) {
-    if (req.path == "/short") return respond(f.response(static_cast<std::int64_t>(f.bytes.size()) + 100));
+    if (req.path == "/short")
+      return respond(f.response(static_cast<std::int64_t>(f.bytes.size()) + 100));
     if (req.path == "/later") {
       std::thread([&f, respond = std::move(respond)] { respond(f.response()); }).detach();
       return;
@@ -356,7 +358,8 @@ TEST(HttpServer, FileBodiesAreSentWholeOnAKeptAliveConnection) {
     c.send(std::string("GET ") + path + " HTTP/1.1\r\nHost: a\r\n\r\n");
     const std::string r = c.readResponse(5000ms);
     ASSERT_TRUE(r.starts_with("HTTP/1.1 200 OK\r\n")) << r.substr(0, 200);
-    EXPECT_NE(r.find("Content-Length: " + std::to_string(f.bytes.size()) + "\r\n"), std::string::npos);
+    EXPECT_NE(r.find("Content-Length: " + std::to_string(f.bytes.size()) + "\r\n"),
+              std::string::npos);
     EXPECT_NE(r.find("Content-Type: image/jpeg\r\n"), std::string::npos);
     EXPECT_NE(r.find("Server: tellus\r\n"), std::string::npos);
     EXPECT_EQ(r.find("Connection: close"), std::string::npos);

@@ -284,10 +284,9 @@ TEST(ImagingModuleIntegration, OpeningRastersAndServingCachedTilesDoNotLoadIt) {
       };
       const TileAnswer hit = get(TileKey{0, 2, 5});
       // A hit holds the cached file open (for sendfile) rather than its bytes.
-      const auto hitBytes = hit.file ? hit.file->readAll().value_or(std::vector<std::byte>{})
-                                     : hit.bytes;
-      if (hit.kind != TileAnswer::Kind::Tile || hit.origin != TileOrigin::Hit ||
-          hitBytes != cached)
+      const auto hitBytes =
+          hit.file ? hit.file->readAll().value_or(std::vector<std::byte>{}) : hit.bytes;
+      if (hit.kind != TileAnswer::Kind::Tile || hit.origin != TileOrigin::Hit || hitBytes != cached)
         return "the cached tile was not a hit: " + hit.message;
       if (imagingModuleLoaded() || mapped("libtellus_imaging"))
         return "a cache hit loaded the imaging module";

@@ -54,10 +54,12 @@ TEST(Log, LevelsParseAndFilter) {
   const auto got = lines(file);
   ASSERT_EQ(got.size(), 2u);
   EXPECT_TRUE(got[0].starts_with("time=")) << got[0];
-  EXPECT_NE(got[0].find(" level=warn component=fetcher msg=\"upstream slow\" upstream=gibs ms=1234"),
-            std::string::npos)
+  EXPECT_NE(
+      got[0].find(" level=warn component=fetcher msg=\"upstream slow\" upstream=gibs ms=1234"),
+      std::string::npos)
       << got[0];
-  EXPECT_TRUE(got[1].ends_with("level=error component=cache msg=\"disk full\" path=\"/var/cache/a b\""))
+  EXPECT_TRUE(
+      got[1].ends_with("level=error component=cache msg=\"disk full\" path=\"/var/cache/a b\""))
       << got[1];
 }
 

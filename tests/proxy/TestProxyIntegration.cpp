@@ -10,10 +10,10 @@
 #include <tellus/cache/TilePath.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
-#include <tellus/proxy/Log.hpp>
-#include <tellus/proxy/Seeder.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
+#include <tellus/proxy/Log.hpp>
 #include <tellus/proxy/ProxyFrontEnd.hpp>
+#include <tellus/proxy/Seeder.hpp>
 #include <tellus/proxy/TileService.hpp>
 
 #include <gtest/gtest.h>
@@ -561,10 +561,10 @@ TEST(ProxyIntegration, LayerLastUpdateSurvivesRestartsAndMovesWithTheDefinition)
 TEST(ProxyIntegration, MetricsCountWhatHappened) {
   test::FakeUpstream up(tileReply);
   Proxy p(up.url("/wms"));
-  ASSERT_EQ(p.get("/wwtile?T=sat&L=0&X=0&Y=0").status, 200); // miss
-  ASSERT_EQ(p.get("/wwtile?T=sat&L=0&X=0&Y=0").status, 200); // hit
+  ASSERT_EQ(p.get("/wwtile?T=sat&L=0&X=0&Y=0").status, 200);  // miss
+  ASSERT_EQ(p.get("/wwtile?T=sat&L=0&X=0&Y=0").status, 200);  // hit
   ASSERT_EQ(p.get(kWms130).status, 200);                      // hit
-  ASSERT_EQ(p.get("/tiles/sat/0/0/0_0.jpg").status, 200);      // hit
+  ASSERT_EQ(p.get("/tiles/sat/0/0/0_0.jpg").status, 200);     // hit
   ASSERT_EQ(p.get("/wwtile?T=sat&L=0&X=99&Y=0").status, 404); // outside the grid
   ASSERT_EQ(p.get("/nothing-here").status, 404);
   const auto m = p.get("/metrics");
@@ -624,9 +624,8 @@ TEST(SeederIntegration, SeedsARemoteLayerOnceAndResumesFromTheIndex) {
   o.range.box = Sector{-180, -90, -108, -18}; // 2x2 tiles at level 0, 4x4 at level 1
   o.concurrency = 3;
   int progressCalls = 0;
-  auto r = seedThroughService(*p.tiles, *p.cache, "sat", o, [&](const SeedReport&, double) {
-    ++progressCalls;
-  });
+  auto r = seedThroughService(
+      *p.tiles, *p.cache, "sat", o, [&](const SeedReport&, double) { ++progressCalls; });
   ASSERT_TRUE(r) << r.error();
   EXPECT_EQ(r->planned, 20);
   EXPECT_EQ(r->written, 20);

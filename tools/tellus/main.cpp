@@ -24,9 +24,9 @@
 #include <map>
 #include <optional>
 #include <pthread.h>
-#include <sys/resource.h>
 #include <string>
 #include <string_view>
+#include <sys/resource.h>
 #include <unistd.h>
 #include <vector>
 
@@ -269,27 +269,41 @@ public:
     const double rate = seconds > 0 ? static_cast<double>(fetched) / seconds : 0.0;
     const std::int64_t left = std::max<std::int64_t>(0, planned_ - done);
     const double eta = rate > 0 ? static_cast<double>(left) / rate : 0.0;
-    const double frac = planned_ > 0 ? static_cast<double>(done) / static_cast<double>(planned_) : 1;
+    const double frac =
+        planned_ > 0 ? static_cast<double>(done) / static_cast<double>(planned_) : 1;
     char line[256];
     if (tty_) {
       const int width = 24;
       std::string bar(static_cast<std::size_t>(width), '.');
       for (int i = 0; i < static_cast<int>(frac * width) && i < width; ++i)
         bar[static_cast<std::size_t>(i)] = '#';
-      std::snprintf(line, sizeof line,
+      std::snprintf(line,
+                    sizeof line,
                     "\r%-12s [%s] %lld/%lld %5.1f%%  %.0f tiles/s  %s  ETA %.0fs  failed %lld ",
-                    layer_.c_str(), bar.c_str(), static_cast<long long>(done),
-                    static_cast<long long>(planned_), 100.0 * frac, rate,
-                    humanBytes(r.bytes).c_str(), eta, static_cast<long long>(r.failed));
+                    layer_.c_str(),
+                    bar.c_str(),
+                    static_cast<long long>(done),
+                    static_cast<long long>(planned_),
+                    100.0 * frac,
+                    rate,
+                    humanBytes(r.bytes).c_str(),
+                    eta,
+                    static_cast<long long>(r.failed));
       std::fputs(line, stderr);
       return;
     }
     if (seconds - lastLine_ < 5.0 && done < planned_) return;
     lastLine_ = seconds;
-    std::snprintf(line, sizeof line,
+    std::snprintf(line,
+                  sizeof line,
                   "%s: %lld/%lld tiles (%.1f%%), %.0f tiles/s, %s, ETA %.0f s, %lld failed\n",
-                  layer_.c_str(), static_cast<long long>(done), static_cast<long long>(planned_),
-                  100.0 * frac, rate, humanBytes(r.bytes).c_str(), eta,
+                  layer_.c_str(),
+                  static_cast<long long>(done),
+                  static_cast<long long>(planned_),
+                  100.0 * frac,
+                  rate,
+                  humanBytes(r.bytes).c_str(),
+                  eta,
                   static_cast<long long>(r.failed));
     std::fputs(line, stderr);
   }
@@ -320,7 +334,7 @@ std::int64_t estimateTileBytes(TileCache& cache, const LayerConfig& layer) {
     if (tiles > 0 && bytes > 0) return bytes / tiles;
   }
   if (layer.dataset.mimeType == "image/jpeg") return pixels / 12; // about 0.7 bit per pixel
-  return pixels * 2;                                             // PNG/TIFF: a guess
+  return pixels * 2;                                              // PNG/TIFF: a guess
 }
 
 int cmdSeed(const Args& a) {
@@ -352,8 +366,12 @@ int cmdSeed(const Args& a) {
     char* end = nullptr;
     const double x = std::strtod(v->c_str(), &end);
     if (v->empty() || *end != '\0' || !(x >= lo && x <= hi)) {
-      std::fprintf(stderr, "tellus seed: --%s must be a number in [%g, %g], got '%s'\n", key, lo,
-                   hi, v->c_str());
+      std::fprintf(stderr,
+                   "tellus seed: --%s must be a number in [%g, %g], got '%s'\n",
+                   key,
+                   lo,
+                   hi,
+                   v->c_str());
       return false;
     }
     out = x;
@@ -391,11 +409,14 @@ int cmdSeed(const Args& a) {
     const bool local = upstream && upstream->type == UpstreamConfig::Type::Local;
     const auto& td = layer->time;
     const bool hasTime = !td.values.empty() || !td.period.empty();
-    if (!sso.time.empty() && (!hasTime || (td.period.empty() &&
-                                           std::find(td.values.begin(), td.values.end(),
-                                                     sso.time) == td.values.end()))) {
-      std::fprintf(stderr, "tellus seed: %s: --time %s is not one of the layer's times\n",
-                   layer->name.c_str(), sso.time.c_str());
+    if (!sso.time.empty() &&
+        (!hasTime ||
+         (td.period.empty() &&
+          std::find(td.values.begin(), td.values.end(), sso.time) == td.values.end()))) {
+      std::fprintf(stderr,
+                   "tellus seed: %s: --time %s is not one of the layer's times\n",
+                   layer->name.c_str(),
+                   sso.time.c_str());
       return kExitUsage;
     }
     if (!local || sso.refresh || !sso.time.empty()) {
@@ -417,7 +438,8 @@ int cmdSeed(const Args& a) {
       {
         ServiceSeedOptions count = opts;
         count.range.dryRun = true;
-        if (auto c = seedThroughService(*service, *ctx->cache, layer->name, count)) planned = c->planned;
+        if (auto c = seedThroughService(*service, *ctx->cache, layer->name, count))
+          planned = c->planned;
       }
       SeedProgressPrinter printer(layer->name, planned);
       auto report = seedThroughService(
@@ -429,18 +451,25 @@ int cmdSeed(const Args& a) {
         return kExitError;
       }
       if (so.dryRun) {
-        std::printf("%-12s levels %d-%d: %lld tiles, about %s (dry run)\n", layer->name.c_str(),
-                    so.fromLevel, std::min(so.toLevel, layer->dataset.grid.numLevels - 1),
-                    static_cast<long long>(report->planned), humanBytes(report->bytes).c_str());
+        std::printf("%-12s levels %d-%d: %lld tiles, about %s (dry run)\n",
+                    layer->name.c_str(),
+                    so.fromLevel,
+                    std::min(so.toLevel, layer->dataset.grid.numLevels - 1),
+                    static_cast<long long>(report->planned),
+                    humanBytes(report->bytes).c_str());
         continue;
       }
       std::printf("%-12s levels %d-%d: %lld tiles planned, %lld already cached, %lld written (%s), "
                   "%lld absent upstream, %lld retried, %lld failed\n",
-                  layer->name.c_str(), so.fromLevel,
+                  layer->name.c_str(),
+                  so.fromLevel,
                   std::min(so.toLevel, layer->dataset.grid.numLevels - 1),
-                  static_cast<long long>(report->planned), static_cast<long long>(report->skipped),
-                  static_cast<long long>(report->written), humanBytes(report->bytes).c_str(),
-                  static_cast<long long>(report->absent), static_cast<long long>(report->retried),
+                  static_cast<long long>(report->planned),
+                  static_cast<long long>(report->skipped),
+                  static_cast<long long>(report->written),
+                  humanBytes(report->bytes).c_str(),
+                  static_cast<long long>(report->absent),
+                  static_cast<long long>(report->retried),
                   static_cast<long long>(report->failed));
       for (const auto& f : report->failures)
         std::fprintf(stderr, "  failed: %s\n", f.c_str());
@@ -554,8 +583,8 @@ int cmdCacheStats(Context& ctx, bool json) {
 
 int cmdCache(const Args& a) {
   if (a.positional.empty()) {
-    std::fprintf(stderr,
-                 "tellus cache: say stats, verify, rebuild, prune, export or import\n%s", kUsage);
+    std::fprintf(
+        stderr, "tellus cache: say stats, verify, rebuild, prune, export or import\n%s", kUsage);
     return kExitUsage;
   }
   const std::string& sub = a.positional[0];
@@ -570,8 +599,8 @@ int cmdCache(const Args& a) {
     }
   } else if (sub == "export" || sub == "import") {
     if (!a.get("gpkg") || a.all("layer").size() != 1) {
-      std::fprintf(stderr, "tellus cache %s: --gpkg FILE and one --layer NAME are required\n",
-                   sub.c_str());
+      std::fprintf(
+          stderr, "tellus cache %s: --gpkg FILE and one --layer NAME are required\n", sub.c_str());
       return kExitUsage;
     }
   } else if (sub != "stats" && sub != "verify" && sub != "rebuild") {
@@ -598,8 +627,8 @@ int cmdCache(const Args& a) {
     if (auto l = a.get("levels")) {
       auto r = parseLevels(*l);
       if (!r) {
-        std::fprintf(stderr, "tellus cache export: --levels must be A or A-B, got '%s'\n",
-                     l->c_str());
+        std::fprintf(
+            stderr, "tellus cache export: --levels must be A or A-B, got '%s'\n", l->c_str());
         return kExitUsage;
       }
       from = r->first;
@@ -612,9 +641,13 @@ int cmdCache(const Args& a) {
       return kExitError;
     }
     std::printf("%s %s: %lld tiles (%s), levels %d-%d, %s\n",
-                sub == "export" ? "exported" : "imported", name.c_str(),
-                static_cast<long long>(r->tiles), humanBytes(r->bytes).c_str(), r->minLevel,
-                r->maxLevel, file.c_str());
+                sub == "export" ? "exported" : "imported",
+                name.c_str(),
+                static_cast<long long>(r->tiles),
+                humanBytes(r->bytes).c_str(),
+                r->minLevel,
+                r->maxLevel,
+                file.c_str());
     return kExitOk;
   }
   if (sub == "verify") {

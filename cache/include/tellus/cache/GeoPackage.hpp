@@ -6,8 +6,8 @@
  *
  * Zoom level n is the grid's level n: the level-zero matrix is the grid's level-zero tiles (10 x 5
  * for 36-degree tiles), each level halves the pixel size. GeoPackage counts rows from the top
- * (north) where World Wind counts from the bottom: gpkg_row = matrix_height - 1 - row. Only JPEG and
- * PNG tiles can be stored (the tiles of the core GeoPackage standard).
+ * (north) where World Wind counts from the bottom: gpkg_row = matrix_height - 1 - row. Only JPEG
+ * and PNG tiles can be stored (the tiles of the core GeoPackage standard).
  */
 
 #include <tellus/cache/CacheError.hpp>

@@ -61,12 +61,12 @@ struct CacheLookup {
     Hit,    ///< bytes are there
   };
   Kind kind = Kind::Miss;
-  std::vector<std::byte> bytes; ///< Hit from get() only
+  std::vector<std::byte> bytes;         ///< Hit from get() only
   std::shared_ptr<const TileFile> file; ///< Hit from openTile() only
-  TileMeta meta;                ///< Hit only
-  bool stale = false;           ///< Hit: expiresAt has passed (serve, but refresh)
-  std::int64_t size = 0;        ///< Hit: byte count recorded in the index
-  UnixMillis retryAfter = 0;    ///< Absent only
+  TileMeta meta;                        ///< Hit only
+  bool stale = false;                   ///< Hit: expiresAt has passed (serve, but refresh)
+  std::int64_t size = 0;                ///< Hit: byte count recorded in the index
+  UnixMillis retryAfter = 0;            ///< Absent only
 };
 
 /** A registered dataset with its id. */

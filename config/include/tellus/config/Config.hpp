@@ -52,8 +52,8 @@ struct ServerSettings {
   std::string cors = "*";               ///< Access-Control-Allow-Origin; "" = no header
   bool exceptionsHttpStatus = false;    ///< WMS exceptions with 4xx/5xx instead of 200
   OfflineResponse offlineResponse = OfflineResponse::Exception;
-  bool offline = false; ///< start offline (the --offline flag sets it too)
-  int threads = 0;      ///< event-loop threads; 0 = cores - 1 (at least 1)
+  bool offline = false;          ///< start offline (the --offline flag sets it too)
+  int threads = 0;               ///< event-loop threads; 0 = cores - 1 (at least 1)
   std::string logLevel = "info"; ///< error, warn, info or debug (events on stderr)
   std::string accessLog;         ///< "" = none, "-" = stdout, else a file appended to
   ServerLimits limits;
@@ -80,12 +80,12 @@ struct UpstreamConfig {
   std::string wmsVersion = "1.3.0"; ///< Wms: "1.1.1" or "1.3.0"
   std::string crs = "EPSG:4326";    ///< Wms: "EPSG:4326" or "CRS:84"
   std::chrono::milliseconds connectTimeout{5'000};
-  std::chrono::milliseconds timeout{30'000};      ///< a whole request
-  std::chrono::milliseconds retryBackoff{200};    ///< base of exponential backoff with jitter
-  std::chrono::milliseconds openInterval{30'000}; ///< circuit breaker open before one probe
+  std::chrono::milliseconds timeout{30'000};           ///< a whole request
+  std::chrono::milliseconds retryBackoff{200};         ///< base of exponential backoff with jitter
+  std::chrono::milliseconds openInterval{30'000};      ///< circuit breaker open before one probe
   std::chrono::milliseconds maxRetryAfterWait{10'000}; ///< longer Retry-After: pause, fail now
-  int maxConnections = 4;                         ///< concurrent requests to this upstream
-  int retries = 3;                                ///< for 5xx and timeouts
+  int maxConnections = 4;                              ///< concurrent requests to this upstream
+  int retries = 3;                                     ///< for 5xx and timeouts
   int failureThreshold = 5; ///< consecutive failures that open the circuit breaker
   std::vector<std::pair<std::string, std::string>> headers; ///< sent with every request, in order
 };

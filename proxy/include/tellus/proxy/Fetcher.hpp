@@ -81,8 +81,8 @@ using FetchResult = std::expected<FetchResponse, FetchError>;
 
 /** An HTTP Retry-After value (RFC 9110 10.2.3): delay-seconds or an HTTP-date, as the wait from
  * `now` (0 for a date in the past); nullopt when it is neither. */
-std::optional<std::chrono::milliseconds>
-parseRetryAfter(std::string_view value, std::chrono::system_clock::time_point now);
+std::optional<std::chrono::milliseconds> parseRetryAfter(std::string_view value,
+                                                         std::chrono::system_clock::time_point now);
 
 enum class BreakerState { Closed, Open, HalfOpen };
 

@@ -61,7 +61,7 @@ using HttpHandler = std::function<void(HttpRequest&&, Responder)>;
 struct HttpServerOptions {
   std::string host = "127.0.0.1";
   std::uint16_t port = 0; ///< 0: any free port (read it back with port())
-  int threads = 0; ///< event loops; 0: one per core but one (at least one), see start()
+  int threads = 0;        ///< event loops; 0: one per core but one (at least one), see start()
   std::size_t maxConnections = 4096;
   std::size_t maxHeaderBytes = 16384;
   std::chrono::milliseconds requestTimeout{10000};

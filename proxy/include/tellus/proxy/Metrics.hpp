@@ -2,9 +2,9 @@
 /**
  * @file Metrics.hpp
  * @brief Counters of `tellus serve` and their Prometheus text exposition (format 0.0.4) at
- * `/metrics`: requests by protocol and status, bytes, in-flight, tile outcomes per layer (hit, miss,
- * stale, offline, absent, error), upstream requests, errors by kind, latency histograms, breaker
- * state, and the cache's size.
+ * `/metrics`: requests by protocol and status, bytes, in-flight, tile outcomes per layer (hit,
+ * miss, stale, offline, absent, error), upstream requests, errors by kind, latency histograms,
+ * breaker state, and the cache's size.
  *
  * Counting is lock-free (relaxed atomics in fixed arrays): the hit path pays a few increments.
  */

@@ -44,11 +44,11 @@ struct SeedReport {
  * single-flight and validation; `tellus serve` may run on the same cache at the same time. */
 struct ServiceSeedOptions {
   SeedOptions range;
-  std::string time;          ///< a validated TIME value, "" for none
-  int concurrency = 4;       ///< tiles in flight at once (>= 1)
-  double rate = 0;           ///< tiles started per second; 0 = unlimited
-  int retries = 2;           ///< further attempts for a tile that failed (errors, not absent)
-  bool refresh = false;      ///< also fetch again tiles whose expiry has passed
+  std::string time;     ///< a validated TIME value, "" for none
+  int concurrency = 4;  ///< tiles in flight at once (>= 1)
+  double rate = 0;      ///< tiles started per second; 0 = unlimited
+  int retries = 2;      ///< further attempts for a tile that failed (errors, not absent)
+  bool refresh = false; ///< also fetch again tiles whose expiry has passed
   std::int64_t estimateBytesPerTile = 0; ///< dry run: bytes per tile for the estimate
 };
 
