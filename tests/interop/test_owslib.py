@@ -1,0 +1,83 @@
+#!/usr/bin/python3
+"""Interoperability: OWSLib (Debian's python3-owslib) reads tellus serve's capabilities in WMS
+1.1.1 and 1.3.0 and fetches tile-aligned maps through its GetMap, as a Python user would.
+
+Usage: test_owslib.py path/to/tellus
+"""
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+from owslib.wms import WebMapService
+
+
+def fail(message):
+    print("FAIL: " + message, file=sys.stderr)
+    sys.exit(1)
+
+
+def main():
+    tellus = sys.argv[1]
+    work = tempfile.mkdtemp(prefix="tellus-owslib.", dir=os.environ.get("TMPDIR"))
+    cache = os.path.join(work, "cache")
+    # Level 0 tile 2/5 (Africa) of bluemarble and the etopo tile over the Himalaya.
+    subprocess.run([tellus, "seed", "--cache", cache, "--layer", "bluemarble", "--levels", "0",
+                    "--bbox", "1,-17,35,17"], check=True, stdout=subprocess.DEVNULL)
+    log = open(os.path.join(work, "serve.txt"), "w+")
+    server = subprocess.Popen([tellus, "serve", "--cache", cache, "--listen", "127.0.0.1:0"],
+                              stdout=log, stderr=subprocess.STDOUT)
+    try:
+        port = None
+        for _ in range(100):
+            log.seek(0)
+            m = re.search(r"listening on http://127\.0\.0\.1:(\d+)", log.read())
+            if m:
+                port = m.group(1)
+                break
+            time.sleep(0.05)
+        if not port:
+            fail("tellus serve did not start")
+        url = "http://127.0.0.1:%s/wms" % port
+        tile = None
+        for version in ("1.1.1", "1.3.0"):
+            wms = WebMapService(url, version=version, timeout=10)
+            names = set(wms.contents)
+            if not {"bluemarble", "etopo"} <= names:
+                fail("%s: layers %s" % (version, sorted(names)))
+            layer = wms["bluemarble"]
+            # OWSLib normalises both versions' bounding boxes to (minx, miny, maxx, maxy) lon/lat.
+            if tuple(round(v) for v in layer.boundingBoxWGS84) != (-180, -90, 180, 90):
+                fail("%s: bluemarble bounding box %s" % (version, layer.boundingBoxWGS84))
+            if "image/jpeg" not in wms.getOperationByName("GetMap").formatOptions:
+                fail("%s: GetMap formats %s" % (version, wms.getOperationByName("GetMap").formatOptions))
+            # The level-0 tile over Africa: lon 0..36, lat -18..18, given in lon/lat order. OWSLib
+            # swaps the axes itself for 1.3.0 EPSG:4326 (lat/lon): unswapped, the box would not be
+            # tile-aligned and tellus would answer an exception. Both versions must give the cached
+            # tile's bytes.
+            response = wms.getmap(layers=["bluemarble"], styles=[""], srs="EPSG:4326",
+                                  bbox=(0, -18, 36, 18), size=(512, 512), format="image/jpeg")
+            body = response.read()
+            if body[:3] != b"\xff\xd8\xff":
+                fail("%s: GetMap did not return a JPEG: %r" % (version, body[:200]))
+            if tile is None:
+                tile = body
+            elif body != tile:
+                fail("1.1.1 and 1.3.0 GetMap gave different bytes")
+        cached = [os.path.join(root, f) for root, _, files in os.walk(cache) for f in files
+                  if f == "2_5.jpg"]
+        if not cached or open(cached[0], "rb").read() != tile:
+            fail("GetMap did not answer the cached tile's bytes")
+        print("owslib interop: all checks passed")
+    finally:
+        server.terminate()
+        server.wait(10)
+        log.close()
+        shutil.rmtree(work, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()
