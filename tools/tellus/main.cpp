@@ -337,6 +337,26 @@ std::int64_t estimateTileBytes(TileCache& cache, const LayerConfig& layer) {
   return pixels * 2;                                              // PNG/TIFF: a guess
 }
 
+/** The one summary line of a seeded layer (both seeding paths) and its failures; false if any. */
+bool printSeedSummary(const LayerConfig& layer, const SeedOptions& so, const SeedReport& r) {
+  std::printf("%-12s levels %d-%d: %lld tiles planned, %lld already cached, %lld written (%s), "
+              "%lld absent upstream, %lld retried, %lld failed%s\n",
+              layer.name.c_str(),
+              so.fromLevel,
+              std::min(so.toLevel, layer.dataset.grid.numLevels - 1),
+              static_cast<long long>(r.planned),
+              static_cast<long long>(r.skipped),
+              static_cast<long long>(r.written),
+              humanBytes(r.bytes).c_str(),
+              static_cast<long long>(r.absent),
+              static_cast<long long>(r.retried),
+              static_cast<long long>(r.failed),
+              so.dryRun ? " (dry run)" : "");
+  for (const auto& f : r.failures)
+    std::fprintf(stderr, "  failed: %s\n", f.c_str());
+  return r.failed == 0;
+}
+
 int cmdSeed(const Args& a) {
   SeedOptions so;
   if (auto l = a.get("levels")) {
@@ -459,21 +479,7 @@ int cmdSeed(const Args& a) {
                     humanBytes(report->bytes).c_str());
         continue;
       }
-      std::printf("%-12s levels %d-%d: %lld tiles planned, %lld already cached, %lld written (%s), "
-                  "%lld absent upstream, %lld retried, %lld failed\n",
-                  layer->name.c_str(),
-                  so.fromLevel,
-                  std::min(so.toLevel, layer->dataset.grid.numLevels - 1),
-                  static_cast<long long>(report->planned),
-                  static_cast<long long>(report->skipped),
-                  static_cast<long long>(report->written),
-                  humanBytes(report->bytes).c_str(),
-                  static_cast<long long>(report->absent),
-                  static_cast<long long>(report->retried),
-                  static_cast<long long>(report->failed));
-      for (const auto& f : report->failures)
-        std::fprintf(stderr, "  failed: %s\n", f.c_str());
-      if (report->failed > 0) rc = kExitProblems;
+      if (!printSeedSummary(*layer, so, *report)) rc = kExitProblems;
       continue;
     }
     auto id = ctx->cache->registerDataset(layer->dataset);
@@ -493,20 +499,7 @@ int cmdSeed(const Args& a) {
           stderr, "tellus seed: %s: %s\n", layer->name.c_str(), report.error().message.c_str());
       return kExitError;
     }
-    std::printf("%-12s levels %d-%d: %lld tiles planned, %lld already cached, %lld written (%s), "
-                "%lld failed%s\n",
-                layer->name.c_str(),
-                so.fromLevel,
-                std::min(so.toLevel, layer->dataset.grid.numLevels - 1),
-                static_cast<long long>(report->planned),
-                static_cast<long long>(report->skipped),
-                static_cast<long long>(report->written),
-                humanBytes(report->bytes).c_str(),
-                static_cast<long long>(report->failed),
-                so.dryRun ? " (dry run)" : "");
-    for (const auto& f : report->failures)
-      std::fprintf(stderr, "  failed: %s\n", f.c_str());
-    if (report->failed > 0) rc = kExitProblems;
+    if (!printSeedSummary(*layer, so, *report)) rc = kExitProblems;
   }
   return rc;
 }
