@@ -272,6 +272,101 @@ std::int32_t decodeImage(const void* bytes,
   });
 }
 
+std::int32_t decodePixels(const void* bytes,
+                          std::size_t size,
+                          const char* format,
+                          std::int32_t sampleType,
+                          std::int32_t expectedWidth,
+                          std::int32_t expectedHeight,
+                          TellusImagingRasterInfo* info,
+                          const TellusImagingSink* out) noexcept {
+  return guarded(out, [&]() -> std::int32_t {
+    if (!bytes || !format || !info) return fail(out, "nothing to decode");
+    if (sampleType != TELLUS_IMAGING_UINT8 && sampleType != TELLUS_IMAGING_INT16)
+      return fail(out, "decodePixels: sample type must be UINT8 or INT16");
+    const std::string_view f(format);
+    const char* name = f == "jpeg" ? "tile.jpg" : f == "png" ? "tile.png" : "tile.tif";
+    OIIO::Filesystem::IOMemReader memory(bytes, size);
+    auto in = OIIO::ImageInput::create(format);
+    if (!in) return TELLUS_IMAGING_NO_CODEC;
+    in->threads(1);
+    OIIO::ImageSpec spec0;
+    if (!in->set_ioproxy(&memory) || !in->open(name, spec0)) {
+      fail(out, in->has_error() ? in->geterror() : OIIO::geterror());
+      return TELLUS_IMAGING_OPEN_FAILED;
+    }
+    in->threads(1);
+    const OIIO::ImageSpec& spec = in->spec();
+    const int fileChannels = spec.nchannels;
+    *info = TellusImagingRasterInfo{spec.width, spec.height, fileChannels, sampleType, 0, {}};
+    if (spec.width != expectedWidth || spec.height != expectedHeight || fileChannels < 1 ||
+        fileChannels > 16)
+      return TELLUS_IMAGING_SHAPE;
+    const bool hasAlpha = spec.alpha_channel >= 0 || fileChannels == 2 || fileChannels == 4;
+    const int channels = sampleType == TELLUS_IMAGING_INT16 ? 1 : hasAlpha ? 4 : 3;
+    info->channels = channels;
+    const auto w = static_cast<std::size_t>(spec.width);
+    const auto h = static_cast<std::size_t>(spec.height);
+    const std::size_t sampleBytes = sampleType == TELLUS_IMAGING_INT16 ? 2 : 1;
+    void* dst = allocate(out, w * h * static_cast<std::size_t>(channels) * sampleBytes);
+    if (!dst) return TELLUS_IMAGING_FAILED;
+    bool ok = true;
+    if (sampleType == TELLUS_IMAGING_INT16) {
+      // Bit for bit: a 16-bit unsigned PNG's values come out as the same 16 bits.
+      const OIIO::TypeDesc type =
+          spec.format == OIIO::TypeDesc::UINT16 ? OIIO::TypeDesc::UINT16 : OIIO::TypeDesc::INT16;
+      std::vector<unsigned char> row(w * static_cast<std::size_t>(fileChannels) * 2);
+      auto* heights = static_cast<unsigned char*>(dst);
+      for (int y = 0; y < spec.height && ok; ++y) {
+        ok = in->read_scanline(y, 0, type, row.data());
+        for (std::size_t x = 0; ok && x < w; ++x)
+          std::memcpy(heights + (static_cast<std::size_t>(y) * w + x) * 2,
+                      row.data() + x * static_cast<std::size_t>(fileChannels) * 2,
+                      2);
+      }
+    } else if (fileChannels == channels && spec.tile_width == 0) {
+      // The common case (RGB JPEG, RGBA PNG): scanlines straight into the caller's storage.
+      ok = in->read_scanlines(0, 0, 0, spec.height, 0, 0, fileChannels, OIIO::TypeDesc::UINT8, dst);
+    } else {
+      std::vector<unsigned char> all(w * h * static_cast<std::size_t>(fileChannels));
+      ok = in->read_image(0, 0, 0, fileChannels, OIIO::TypeDesc::UINT8, all.data());
+      auto* px = static_cast<unsigned char*>(dst);
+      const auto fc = static_cast<std::size_t>(fileChannels);
+      for (std::size_t i = 0; ok && i < w * h; ++i) {
+        const unsigned char* s = all.data() + i * fc;
+        unsigned char* d = px + i * static_cast<std::size_t>(channels);
+        const bool grey = fc <= 2;
+        d[0] = s[0];
+        d[1] = grey ? s[0] : s[1];
+        d[2] = grey ? s[0] : s[2];
+        if (channels == 4)
+          d[3] = fc == 2 ? s[1] : spec.alpha_channel >= 0 ? s[spec.alpha_channel] : s[3];
+      }
+    }
+    const std::string error = in->geterror();
+    in->close();
+    if (!ok || !error.empty()) {
+      fail(out, error.empty() ? std::string("the pixels do not decode") : error);
+      return TELLUS_IMAGING_READ_FAILED;
+    }
+    return TELLUS_IMAGING_OK;
+  });
+}
+
+std::int32_t encodePng16(std::int32_t width,
+                         std::int32_t height,
+                         const std::uint16_t* samples,
+                         const TellusImagingSink* out) noexcept {
+  return guarded(out, [&]() -> std::int32_t {
+    if (!samples || width <= 0 || height <= 0) return fail(out, "bad image shape");
+    return encode("png",
+                  OIIO::ImageSpec(width, height, 1, OIIO::TypeDesc::UINT16),
+                  samples,
+                  OIIO::TypeDesc::UINT16,
+                  out);
+  });
+}
+
 } // namespace
 
 extern "C" __attribute__((visibility("default"))) const TellusImagingTable* tellus_imaging_table() {
@@ -287,7 +382,9 @@ extern "C" __attribute__((visibility("default"))) const TellusImagingTable* tell
                               &drawBlank,
                               &probeRaster,
                               &readRaster,
-                              &decodeImage};
+                              &decodeImage,
+                              &decodePixels,
+                              &encodePng16};
   }();
   return &table;
 }

@@ -45,6 +45,17 @@ encodeHeights(std::string_view mimeType, int width, int height, const std::int16
       return std::unexpected(out.error());
     return std::move(out.bytes);
   }
+  if (mimeType == "image/png") {
+    std::vector<std::uint16_t> shifted(n);
+    for (std::size_t k = 0; k < n; ++k)
+      shifted[k] = static_cast<std::uint16_t>(static_cast<std::int32_t>(heights[k]) + 32768);
+    auto api = imaging::table();
+    if (!api) return std::unexpected(api.error());
+    imaging::BytesSink out;
+    if ((*api)->encodePng16(width, height, shifted.data(), out.get()) != TELLUS_IMAGING_OK)
+      return std::unexpected(out.error());
+    return std::move(out.bytes);
+  }
   if (mimeType != "application/bil16")
     return std::unexpected("cannot encode heights as " + std::string(mimeType));
   std::vector<std::byte> out(n * 2);
@@ -79,6 +90,93 @@ std::expected<std::vector<std::byte>, std::string> blankImage(std::string_view m
                      height,
                      4,
                      reinterpret_cast<const std::uint8_t*>(px.bytes.data()));
+}
+
+namespace {
+
+/** Collects decoded samples into a vector of T. */
+template <class T> class SamplesSink final : public imaging::Sink {
+public:
+  std::vector<T> samples;
+
+private:
+  void* allocate(std::size_t size) override {
+    samples.resize((size + sizeof(T) - 1) / sizeof(T));
+    return samples.data();
+  }
+};
+
+const char* formatOf(std::string_view mimeType) noexcept {
+  if (mimeType == "image/jpeg") return "jpeg";
+  if (mimeType == "image/png") return "png";
+  if (mimeType == "image/tiff") return "tiff";
+  return nullptr;
+}
+
+std::string decodeError(std::int32_t status,
+                        const TellusImagingRasterInfo& info,
+                        const std::string& text,
+                        int width,
+                        int height) {
+  if (status == TELLUS_IMAGING_SHAPE)
+    return "the tile is " + std::to_string(info.width) + "x" + std::to_string(info.height) +
+           ", not " + std::to_string(width) + "x" + std::to_string(height);
+  if (status == TELLUS_IMAGING_NO_CODEC) return "no decoder for the tile's format";
+  return text.empty() ? std::string("the tile does not decode")
+                      : "the tile does not decode: " + text;
+}
+
+} // namespace
+
+std::expected<DecodedImage, std::string>
+decodeImagery(std::span<const std::byte> bytes, std::string_view mimeType, int width, int height) {
+  const char* format = formatOf(mimeType);
+  if (!format) return std::unexpected("cannot decode " + std::string(mimeType) + " as imagery");
+  auto api = imaging::table();
+  if (!api) return std::unexpected(api.error());
+  SamplesSink<std::uint8_t> out;
+  TellusImagingRasterInfo info{};
+  const auto status = (*api)->decodePixels(
+      bytes.data(), bytes.size(), format, TELLUS_IMAGING_UINT8, width, height, &info, out.get());
+  if (status != TELLUS_IMAGING_OK)
+    return std::unexpected(decodeError(status, info, out.error(), width, height));
+  return DecodedImage{info.width, info.height, info.channels, std::move(out.samples)};
+}
+
+std::expected<std::vector<std::int16_t>, std::string>
+decodeHeights(std::span<const std::byte> bytes, std::string_view mimeType, int width, int height) {
+  if (width <= 0 || height <= 0) return std::unexpected("bad image shape");
+  const auto n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  if (mimeType == "application/bil16") {
+    if (bytes.size() != n * 2)
+      return std::unexpected("the bil16 tile has " + std::to_string(bytes.size()) + " bytes, not " +
+                             std::to_string(n * 2));
+    std::vector<std::int16_t> heights(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      const auto lo = static_cast<std::uint16_t>(bytes[2 * k]);
+      const auto hi = static_cast<std::uint16_t>(bytes[2 * k + 1]);
+      heights[k] = static_cast<std::int16_t>(static_cast<std::uint16_t>(lo | (hi << 8)));
+    }
+    return heights;
+  }
+  const char* format = formatOf(mimeType);
+  if (!format || mimeType == "image/jpeg")
+    return std::unexpected("cannot decode " + std::string(mimeType) + " as heights");
+  auto api = imaging::table();
+  if (!api) return std::unexpected(api.error());
+  SamplesSink<std::int16_t> out;
+  TellusImagingRasterInfo info{};
+  const auto status = (*api)->decodePixels(
+      bytes.data(), bytes.size(), format, TELLUS_IMAGING_INT16, width, height, &info, out.get());
+  if (status != TELLUS_IMAGING_OK)
+    return std::unexpected(decodeError(status, info, out.error(), width, height));
+  if (mimeType == "image/png") { // stored as height + 32768
+    for (auto& h : out.samples)
+      h = static_cast<std::int16_t>(static_cast<std::int32_t>(static_cast<std::uint16_t>(h)) -
+                                    32768);
+  }
+  out.samples.resize(n);
+  return std::move(out.samples);
 }
 
 } // namespace tellus

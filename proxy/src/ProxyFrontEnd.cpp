@@ -1,3 +1,5 @@
+#include "MapComposer.hpp"
+
 #include <tellus/cache/TilePath.hpp>
 #include <tellus/proxy/Capabilities.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
@@ -69,6 +71,7 @@ struct ProxyFrontEnd::Impl {
   std::string updateSequence;
   std::string lastUpdate;
   std::int64_t startedMillis = unixMillisNow();
+  MapComposer composer; // last: its workers stop first
 
   static std::vector<std::string> layerNames(const TileService& t) {
     std::vector<std::string> names;
@@ -107,7 +110,8 @@ struct ProxyFrontEnd::Impl {
   }
 
   Impl(TileService& t, FrontEndOptions o)
-      : tiles(t), options(std::move(o)), metrics(layerNames(t)) {
+      : tiles(t), options(std::move(o)), metrics(layerNames(t)),
+        composer(t, options.composeThreads, options.maxTilesPerMap) {
     const auto now = unixMillisNow();
     updateSequence =
         options.updateSequence.empty() ? std::to_string(now / 1000) : options.updateSequence;
@@ -337,9 +341,19 @@ struct ProxyFrontEnd::Impl {
     m.abstract = "A WMS and NASA World Wind tile cache (tellus).";
     m.onlineResource = baseUrl(req) + "/wms?";
     std::vector<std::string> formats;
-    for (const auto& l : tiles.layers()) {
-      if (std::find(formats.begin(), formats.end(), l.dataset.mimeType) == formats.end())
-        formats.push_back(l.dataset.mimeType);
+    const auto add = [&formats](std::string f) {
+      if (std::find(formats.begin(), formats.end(), f) == formats.end())
+        formats.push_back(std::move(f));
+    };
+    for (const auto& l : tiles.layers()) { // each layer's own format first, then the composed ones
+      add(l.dataset.mimeType);
+      if (l.elevation) {
+        add("application/bil16");
+        add("image/tiff");
+      } else {
+        add("image/jpeg");
+      }
+      add("image/png");
     }
     m.getMapFormats = formats;
     m.updateSequence = updateSequence;
@@ -395,67 +409,126 @@ struct ProxyFrontEnd::Impl {
       return respond(std::move(r));
     }
     auto& m = std::get<GetMapRequest>(*parsed);
-    if (m.layers.size() != 1) {
-      return exception(
-          ctx,
-          OgcException{std::string(ogc::kInvalidParameterValue),
-                       "LAYERS",
-                       "one layer per GetMap: composing several layers is not supported yet"},
-          respond);
+    // Every layer first: known, style, time; imagery and heights do not mix.
+    std::vector<ComposeLayer> layers;
+    for (std::size_t k = 0; k < m.layers.size(); ++k) {
+      const LayerSpec* l = tiles.layer(m.layers[k]);
+      if (!l) {
+        return exception(ctx,
+                         OgcException{std::string(ogc::kLayerNotDefined),
+                                      "LAYERS",
+                                      "no layer '" + m.layers[k] + "'"},
+                         respond);
+      }
+      const std::string& style = m.styles[k];
+      if (!style.empty() && style != "default" && style != l->dataset.style) {
+        return exception(
+            ctx,
+            OgcException{std::string(ogc::kStyleNotDefined), "STYLES", "no style '" + style + "'"},
+            respond);
+      }
+      auto time = resolveTime(*l, m.time);
+      if (!time) return exception(ctx, time.error(), respond);
+      if (!layers.empty() && layers.front().layer->elevation != l->elevation) {
+        return exception(ctx,
+                         OgcException{std::string(ogc::kInvalidParameterValue),
+                                      "LAYERS",
+                                      "elevation and imagery layers cannot be drawn in one map"},
+                         respond);
+      }
+      layers.push_back(
+          ComposeLayer{l, std::move(*time), m.opacities.empty() ? l->opacity : m.opacities[k]});
     }
-    const LayerSpec* l = tiles.layer(m.layers[0]);
-    if (!l) {
-      return exception(ctx,
-                       OgcException{std::string(ogc::kLayerNotDefined),
-                                    "LAYERS",
-                                    "no layer '" + m.layers[0] + "'"},
-                       respond);
-    }
-    const std::string& style = m.styles[0];
-    if (!style.empty() && style != "default" && style != l->dataset.style) {
-      return exception(
-          ctx,
-          OgcException{std::string(ogc::kStyleNotDefined), "STYLES", "no style '" + style + "'"},
-          respond);
-    }
-    if (m.format != l->dataset.mimeType) {
+    const LayerSpec* l = layers.front().layer;
+    if (!composableFormat(*l, m.format)) {
       return exception(ctx,
                        OgcException{std::string(ogc::kInvalidFormat),
                                     "FORMAT",
-                                    "layer '" + l->name + "' is served as " + l->dataset.mimeType},
+                                    l->elevation ? "elevation is served as application/bil16, "
+                                                   "image/tiff or image/png"
+                                                 : "imagery is served as image/jpeg or image/png"},
                        respond);
     }
-    auto time = resolveTime(*l, m.time);
-    if (!time) return exception(ctx, time.error(), respond);
-    const TileGrid* g = tiles.grid(l->name);
-    const auto key = g->keyForBbox(m.bbox, m.width, m.height);
-    if (!key) {
+    // One layer, its own format, exactly one tile: the cached file itself (the fast path).
+    if (layers.size() == 1 && m.format == l->dataset.mimeType &&
+        (m.opacities.empty() || m.opacities.front() >= 1.0)) {
+      const TileGrid* g = tiles.grid(l->name);
+      if (const auto key = g->keyForBbox(m.bbox, m.width, m.height)) {
+        return tiles.getTile(
+            l->name,
+            layers.front().time,
+            *key,
+            [this, v = Validators(req), l, m = std::move(m), ctx, respond](TileAnswer&& a) {
+              countTile(l, a);
+              if (a.kind == TileAnswer::Kind::Tile) return sendTile(v, std::move(a), *l, respond);
+              if (a.kind == TileAnswer::Kind::Absent) {
+                if (a.origin == TileOrigin::Offline &&
+                    options.offlineResponse == FrontEndOptions::OfflineResponse::Exception) {
+                  return exception(ctx,
+                                   OgcException{std::string(ogc::kNoApplicableCode), "", a.message},
+                                   respond);
+                }
+                return emptyImage(
+                    m, a.message, a.origin, respond); // no tile there: an empty map, not an error
+              }
+              exception(
+                  ctx, OgcException{std::string(ogc::kNoApplicableCode), "", a.message}, respond);
+            });
+      }
+    }
+    // Any other box, size, format or several layers: composed from the tiles.
+    if (static_cast<std::int64_t>(m.width) * m.height > options.maxMapPixels) {
       return exception(
           ctx,
           OgcException{std::string(ogc::kInvalidParameterValue),
-                       "BBOX",
-                       "only tile-aligned requests are served: BBOX, WIDTH and HEIGHT must match "
-                       "one tile of the layer's grid"},
+                       "WIDTH",
+                       "the map has more than " + std::to_string(options.maxMapPixels) + " pixels"},
           respond);
     }
-    tiles.getTile(
-        l->name,
-        *time,
-        *key,
-        [this, v = Validators(req), l, m = std::move(m), ctx, respond](TileAnswer&& a) {
-          countTile(l, a);
-          if (a.kind == TileAnswer::Kind::Tile) return sendTile(v, std::move(a), *l, respond);
-          if (a.kind == TileAnswer::Kind::Absent) {
-            if (a.origin == TileOrigin::Offline &&
-                options.offlineResponse == FrontEndOptions::OfflineResponse::Exception) {
-              return exception(
-                  ctx, OgcException{std::string(ogc::kNoApplicableCode), "", a.message}, respond);
-            }
-            return emptyImage(
-                m, a.message, a.origin, respond); // no tile there: an empty map, not an error
+    ComposeRequest cr;
+    cr.layers = std::move(layers);
+    cr.bbox = m.bbox;
+    cr.width = m.width;
+    cr.height = m.height;
+    cr.format = m.format;
+    cr.transparent = m.transparent;
+    cr.bgcolor = m.bgcolor;
+    cr.ifNoneMatch = std::string(req.header("if-none-match"));
+    auto started = composer.compose(
+        std::move(cr),
+        [this](const LayerSpec& layer, const TileAnswer& a) { countTile(&layer, a); },
+        [this, ctx, respond](ComposedMap&& map) {
+          if (map.kind == ComposedMap::Kind::Error) {
+            return exception(
+                ctx, OgcException{std::string(ogc::kNoApplicableCode), "", map.message}, respond);
           }
-          exception(ctx, OgcException{std::string(ogc::kNoApplicableCode), "", a.message}, respond);
+          HttpResponse r;
+          common(r);
+          r.setHeader("ETag", map.etag);
+          r.setHeader("Cache-Control", "public, max-age=" + std::to_string(map.maxAgeSeconds));
+          r.setHeader("X-Cache", toString(map.origin));
+          if (map.kind == ComposedMap::Kind::NotModified) {
+            r.status = 304;
+          } else {
+            r.status = 200;
+            r.setHeader("Content-Type", map.contentType);
+            r.body = std::move(map.bytes);
+          }
+          respond(std::move(r));
         });
+    if (!started) {
+      return exception(
+          ctx,
+          OgcException{std::string(ogc::kInvalidParameterValue), "BBOX", started.error()},
+          respond);
+    }
+  }
+
+  /** The formats a layer's maps are composed in. */
+  static bool composableFormat(const LayerSpec& l, std::string_view format) {
+    if (l.elevation)
+      return format == "application/bil16" || format == "image/tiff" || format == "image/png";
+    return format == "image/jpeg" || format == "image/png";
   }
 
   void index(const HttpRequest& req, const Responder& respond) const {

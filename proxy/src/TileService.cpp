@@ -1,3 +1,5 @@
+#include "WorkerPool.hpp"
+
 #include <tellus/cache/RequestQueue.hpp>
 #include <tellus/cache/TilePath.hpp>
 #include <tellus/proxy/LocalRasterSource.hpp>
@@ -32,52 +34,6 @@ const char* toString(TileOrigin origin) noexcept {
 }
 
 namespace {
-
-/** A fixed set of worker threads for CPU work (rendering local rasters, validating and storing
- * fetched tiles) so that neither the HTTP loop nor the fetcher thread waits for it. */
-class WorkerPool {
-public:
-  explicit WorkerPool(int n) {
-    for (int i = 0; i < std::max(1, n); ++i)
-      threads_.emplace_back([this] { loop(); });
-  }
-  ~WorkerPool() {
-    {
-      std::lock_guard lock(m_);
-      stop_ = true;
-    }
-    cv_.notify_all();
-    for (auto& t : threads_)
-      t.join();
-  }
-  void post(std::function<void()> job) {
-    {
-      std::lock_guard lock(m_);
-      jobs_.push_back(std::move(job));
-    }
-    cv_.notify_one();
-  }
-
-private:
-  void loop() {
-    for (;;) {
-      std::function<void()> job;
-      {
-        std::unique_lock lock(m_);
-        cv_.wait(lock, [this] { return stop_ || !jobs_.empty(); });
-        if (jobs_.empty()) return; // stopping with nothing left to do
-        job = std::move(jobs_.front());
-        jobs_.pop_front();
-      }
-      job();
-    }
-  }
-  std::mutex m_;
-  std::condition_variable cv_;
-  std::deque<std::function<void()>> jobs_;
-  bool stop_ = false;
-  std::vector<std::thread> threads_;
-};
 
 std::string formatNumber(double v) {
   char buf[32];
@@ -580,6 +536,29 @@ void TileService::getTile(std::string_view layer,
                           const TileKey& key,
                           std::function<void(TileAnswer&&)> done) {
   impl_->getTile(layer, time, key, std::move(done));
+}
+
+std::optional<TileAnswer>
+TileService::cachedTile(std::string_view layer, std::string_view time, const TileKey& key) {
+  const auto li = impl_->layerIndex.find(layer);
+  if (li == impl_->layerIndex.end()) return std::nullopt;
+  const TileGrid& g = impl_->grids[li->second];
+  if (key.level < 0 || key.level >= g.numLevels() || !g.isValid(key)) return std::nullopt;
+  auto ds = time.empty() ? impl_->defaultDatasets[li->second]
+                         : impl_->dataset(impl_->layers[li->second], time)
+                               .value_or(std::pair<DatasetId, std::string>{-1, {}});
+  if (ds.first < 0) return std::nullopt;
+  auto found = impl_->cache.openTile(ds.first, key);
+  if (!found || found->kind != CacheLookup::Kind::Hit) return std::nullopt;
+  const bool stale = found->stale;
+  auto a = Impl::tile(stale ? TileOrigin::Stale : TileOrigin::Hit,
+                      {},
+                      std::move(found->meta.contentType),
+                      found->meta.fetchedAt,
+                      ds.second,
+                      key,
+                      std::move(found->file));
+  return a;
 }
 
 void TileService::setOffline(bool offline) noexcept {

@@ -374,6 +374,27 @@ std::expected<WmsRequest, OgcException> parseGetMap(const QueryParams& params,
   }
   req.exceptions = *exceptions;
   req.time = std::string(params.get("time").value_or(""));
+  // OPACITIES (a vendor parameter, as MapServer's and GeoServer's per-layer opacity): one number
+  // from 0 to 1 per layer, replacing the layers' configured opacities.
+  if (const auto op = nonEmpty(params, "opacities")) {
+    for (const std::string& item : splitCommas(*op)) {
+      double v = -1.0;
+      const auto* end = item.data() + item.size();
+      const auto r = std::from_chars(item.data(), end, v);
+      if (r.ec != std::errc() || r.ptr != end || !(v >= 0.0 && v <= 1.0)) {
+        return fail(ogc::kInvalidParameterValue,
+                    "OPACITIES",
+                    "OPACITIES must list one number from 0 to 1 per layer");
+      }
+      req.opacities.push_back(v);
+    }
+    if (req.opacities.size() != req.layers.size()) {
+      return fail(ogc::kInvalidParameterValue,
+                  "OPACITIES",
+                  "OPACITIES has " + std::to_string(req.opacities.size()) + " entries for " +
+                      std::to_string(req.layers.size()) + " layers");
+    }
+  }
   return req;
 }
 

@@ -18,11 +18,14 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <future>
+#include <span>
 #include <sys/wait.h>
 #include <thread>
 #include <unistd.h>
@@ -65,7 +68,9 @@ struct Proxy {
                  UpstreamSpec::Type type = UpstreamSpec::Type::Wms,
                  std::chrono::milliseconds ttl = 0ms,
                  UpstreamPolicy policy = fastPolicy(),
-                 const std::string& upstreamLayer = "upsat") {
+                 const std::string& upstreamLayer = "upsat",
+                 FrontEndOptions frontOptions = {},
+                 std::vector<LayerSpec> extraLayers = {}) {
     cache = test::openTestCache(dir.path());
     fetcher = std::make_unique<Fetcher>();
     UpstreamSpec u;
@@ -84,10 +89,15 @@ struct Proxy {
     l.dataset.mimeType = "image/jpeg";
     l.ttl = ttl;
     l.maxAge = 3600s;
-    auto t = TileService::create(*cache, *fetcher, {u}, {l}, TileServiceOptions{});
+    std::vector<LayerSpec> all{l};
+    for (auto& x : extraLayers) {
+      x.upstream = "up";
+      all.push_back(std::move(x));
+    }
+    auto t = TileService::create(*cache, *fetcher, {u}, std::move(all), TileServiceOptions{});
     EXPECT_TRUE(t) << (t ? "" : t.error());
     tiles = std::move(*t);
-    front = std::make_unique<ProxyFrontEnd>(*tiles, FrontEndOptions{});
+    front = std::make_unique<ProxyFrontEnd>(*tiles, std::move(frontOptions));
     HttpServerOptions so;
     so.threads = 2;
     server = std::make_unique<HttpServer>(so, [this](HttpRequest&& r, Responder respond) {
@@ -350,13 +360,19 @@ TEST(ProxyIntegration, WmsErrorsAreExceptionsOfTheRightVersion) {
   EXPECT_NE(undefined.body.find("code=\"LayerNotDefined\""), std::string::npos) << undefined.body;
   const auto v111 =
       p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.1.1&LAYERS=sat&STYLES=&SRS=EPSG:4326"
-            "&BBOX=-180,-90,-144,-54&WIDTH=256&HEIGHT=256&FORMAT=image/png");
+            "&BBOX=-180,-90,-144,-54&WIDTH=256&HEIGHT=256&FORMAT=image/gif");
   EXPECT_EQ(v111.header("content-type"), "application/vnd.ogc.se_xml");
   EXPECT_NE(v111.body.find("InvalidFormat"), std::string::npos) << v111.body;
-  const auto unaligned =
+  const auto tooManyTiles =
       p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.3.0&LAYERS=sat&STYLES=&CRS=CRS:84"
-            "&BBOX=-170,-90,-134,-54&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg");
-  EXPECT_NE(unaligned.body.find("InvalidParameterValue"), std::string::npos) << unaligned.body;
+            "&BBOX=-36,-36,36,36&WIDTH=4096&HEIGHT=4096&FORMAT=image/jpeg");
+  EXPECT_NE(tooManyTiles.body.find("InvalidParameterValue"), std::string::npos)
+      << tooManyTiles.body;
+  EXPECT_NE(tooManyTiles.body.find("more than 256 tiles"), std::string::npos) << tooManyTiles.body;
+  const auto mixed =
+      p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.3.0&LAYERS=sat&STYLES=&CRS=CRS:84"
+            "&BBOX=-170,-90,-134,-54&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg&OPACITIES=0.5,1");
+  EXPECT_NE(mixed.body.find("locator=\"OPACITIES\""), std::string::npos) << mixed.body;
   const auto inverted =
       p.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.3.0&LAYERS=sat&STYLES=&CRS=CRS:84"
             "&BBOX=-144,-90,-180,-54&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg");
@@ -692,4 +708,226 @@ TEST(SeederIntegration, RateLimitSpacesTheStarts) {
   ASSERT_TRUE(r) << r.error();
   EXPECT_EQ(r->written, 16);
   EXPECT_GE(took, 290ms); // 16 starts at 50/s: the last one 300 ms after the first
+}
+
+// ------------------------------------------------------------------------------ composed GetMap
+
+namespace {
+
+/** The pixels of a PNG or JPEG answer. */
+DecodedImage decodeAnswer(const test::HttpResult& r, int width, int height) {
+  std::span<const std::byte> bytes(reinterpret_cast<const std::byte*>(r.body.data()),
+                                   r.body.size());
+  auto img = decodeImagery(bytes, r.header("content-type"), width, height);
+  EXPECT_TRUE(img) << (img ? "" : img.error()) << " " << r.body.substr(0, 300);
+  return img ? std::move(*img) : DecodedImage{};
+}
+
+std::array<int, 3> rgbAt(const DecodedImage& img, int x, int y) {
+  const auto* p = &img.pixels[static_cast<std::size_t>((y * img.width + x) * img.channels)];
+  return {p[0], p[1], p[2]};
+}
+
+/** The colour of a cached tile of "sat" (its centre pixel), through the World Wind endpoint. */
+std::array<int, 3> tileColour(const Proxy& p, int level, int col, int row) {
+  const auto r = p.get("/wwtile?T=sat&L=" + std::to_string(level) + "&X=" + std::to_string(col) +
+                       "&Y=" + std::to_string(row));
+  EXPECT_EQ(r.status, 200);
+  const auto img = decodeAnswer(r, 256, 256);
+  return img.pixels.empty() ? std::array<int, 3>{-1, -1, -1} : rgbAt(img, 128, 128);
+}
+
+void expectNear(std::array<int, 3> a,
+                std::array<int, 3> b,
+                int tolerance,
+                const std::string& what) {
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(a[static_cast<std::size_t>(c)], b[static_cast<std::size_t>(c)], tolerance)
+        << what << " channel " << c;
+}
+
+std::string getMap(const std::string& layers,
+                   const std::string& bbox,
+                   int w,
+                   int h,
+                   const std::string& format,
+                   const std::string& extra = "") {
+  return "/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.3.0&LAYERS=" + layers +
+         "&STYLES=&CRS=CRS:84&BBOX=" + bbox + "&WIDTH=" + std::to_string(w) +
+         "&HEIGHT=" + std::to_string(h) + "&FORMAT=" + format + extra;
+}
+
+} // namespace
+
+TEST(ComposeIntegration, AnyBoxIsComposedFromTilesFetchedOnce) {
+  test::FakeUpstream up(tileReply);
+  Proxy p(up.url("/wms"));
+  // Level 0 (0.14 degree texels) serves 0.23-degree pixels: 3 x 2 tiles of 36 degrees.
+  const std::string target = getMap("sat", "-170,-80,-100,-30", 300, 200, "image/png");
+  const auto r = p.get(target);
+  ASSERT_EQ(r.status, 200);
+  ASSERT_EQ(r.header("content-type"), "image/png") << r.body.substr(0, 400);
+  EXPECT_EQ(up.requests(), 6u);
+  const auto img = decodeAnswer(r, 300, 200);
+  ASSERT_EQ(img.channels, 3) << "an opaque PNG is 24-bit";
+  // (-160, -70) lies in tile (0, 0, 0); (-120, -40) in tile (0, row 1, col 1).
+  expectNear(rgbAt(img, 43, 160), tileColour(p, 0, 0, 0), 2, "tile 0/0/0");
+  expectNear(rgbAt(img, 214, 40), tileColour(p, 0, 1, 1), 2, "tile 0/1/1");
+  EXPECT_EQ(up.requests(), 6u) << "the World Wind requests were hits";
+  // Again: every tile a hit, the same validator, and 304 for a client that has it.
+  const auto again = p.get(target);
+  EXPECT_EQ(again.header("x-cache"), "HIT");
+  EXPECT_EQ(again.header("etag"), r.header("etag"));
+  EXPECT_EQ(again.body, r.body);
+  EXPECT_EQ(p.get(target, {{"If-None-Match", r.header("etag")}}).status, 304);
+  // JPEG and a transparent PNG of the same box; a box past the pole has transparent rows.
+  const auto jpeg = p.get(getMap("sat", "-170,-80,-100,-30", 300, 200, "image/jpeg"));
+  EXPECT_EQ(jpeg.header("content-type"), "image/jpeg");
+  const auto clear =
+      p.get(getMap("sat", "-170,60,-100,110", 70, 50, "image/png", "&TRANSPARENT=TRUE"));
+  const auto rgba = decodeAnswer(clear, 70, 50);
+  ASSERT_EQ(rgba.channels, 4);
+  EXPECT_EQ(rgba.pixels[3], 0) << "north of the pole: transparent";
+  EXPECT_EQ(rgba.pixels[static_cast<std::size_t>((49 * 70) * 4 + 3)], 255) << "lat 60: opaque";
+}
+
+TEST(ComposeIntegration, AntimeridianBoxJoinsBothSides) {
+  test::FakeUpstream up(tileReply);
+  Proxy p(up.url("/wms"));
+  // 0.1-degree pixels: level 1 (18-degree tiles), columns 19 and 0, rows 4 and 5.
+  const auto r = p.get(getMap("sat", "170,-10,190,10", 200, 200, "image/png"));
+  ASSERT_EQ(r.status, 200);
+  ASSERT_EQ(r.header("content-type"), "image/png") << r.body.substr(0, 400);
+  EXPECT_EQ(up.requests(), 4u);
+  const auto img = decodeAnswer(r, 200, 200);
+  expectNear(rgbAt(img, 50, 50), tileColour(p, 1, 19, 5), 2, "west of 180, north");
+  expectNear(rgbAt(img, 150, 150), tileColour(p, 1, 0, 4), 2, "east of 180, south");
+}
+
+TEST(ComposeIntegration, LayersAreDrawnInOrderWithTheirOpacity) {
+  // The overlay answers an opaque blue PNG; "sat" a JPEG of its own colour.
+  test::FakeUpstream up([](const test::FakeRequest& req) {
+    if (req.target.find("LAYERS=upoverlay") == std::string::npos) return tileReply(req);
+    std::vector<std::uint8_t> px(256 * 256 * 4);
+    for (std::size_t i = 0; i < px.size(); i += 4) {
+      px[i + 2] = 255;
+      px[i + 3] = 255;
+    }
+    const auto png = *encodeImage("image/png", 256, 256, 4, px.data());
+    return test::FakeReply::ok(std::string(reinterpret_cast<const char*>(png.data()), png.size()),
+                               "image/png");
+  });
+  LayerSpec overlay;
+  overlay.name = "overlay";
+  overlay.upstreamLayer = "upoverlay";
+  overlay.dataset.grid = GridSpec{Sector{}, 36.0, 256, 256, 4};
+  overlay.dataset.mimeType = "image/png";
+  overlay.opacity = 0.25;
+  Proxy p(
+      up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, Proxy::fastPolicy(), "upsat", {}, {overlay});
+  const auto base = tileColour(p, 0, 5, 2);
+  const std::string box = "5,-15,30,10"; // inside tile (0, 2, 5)
+  const auto half = decodeAnswer(
+      p.get(getMap("sat,overlay", box, 50, 50, "image/png", "&OPACITIES=1,0.5")), 50, 50);
+  expectNear(rgbAt(half, 25, 25),
+             {(base[0] + 1) / 2, (base[1] + 1) / 2, (base[2] + 255 + 1) / 2},
+             2,
+             "half blue over the base");
+  // Without OPACITIES the configured 0.25 applies.
+  const auto quarter = decodeAnswer(p.get(getMap("sat,overlay", box, 50, 50, "image/png")), 50, 50);
+  expectNear(rgbAt(quarter, 25, 25),
+             {base[0] * 3 / 4, base[1] * 3 / 4, (base[2] * 3 + 255) / 4},
+             2,
+             "a quarter blue over the base");
+  // In the other order the opaque base hides the overlay.
+  const auto hidden = decodeAnswer(p.get(getMap("overlay,sat", box, 50, 50, "image/png")), 50, 50);
+  expectNear(rgbAt(hidden, 25, 25), base, 2, "base on top");
+}
+
+TEST(ComposeIntegration, HolesAreFilledFromCoarserLevelsOrReported) {
+  std::atomic<int> status{200};
+  test::FakeUpstream up([&](const test::FakeRequest& r) {
+    if (status == 200) return tileReply(r);
+    return test::FakeReply::withStatus(status.load(), "nope");
+  });
+  Proxy p(up.url("/wms"));
+  const auto parent = tileColour(p, 0, 5, 2); // cached: level 0, lon 0..36, lat -18..18
+  // Level 1 has no tiles there (404): the map is drawn from level 0, and not kept for long.
+  status = 404;
+  const std::string target = getMap("sat", "2,-16,16,-2", 200, 200, "image/png");
+  const auto filled = p.get(target);
+  ASSERT_EQ(filled.header("content-type"), "image/png") << filled.body.substr(0, 400);
+  EXPECT_EQ(filled.header("cache-control"), "public, max-age=60");
+  expectNear(rgbAt(decodeAnswer(filled, 200, 200), 100, 100), parent, 2, "level 0 fills in");
+  // A failing upstream where level 0 is cached: still a map, from level 0.
+  status = 500;
+  const auto failing = p.get(getMap("sat", "20,2,34,16", 200, 200, "image/png"));
+  EXPECT_EQ(failing.header("content-type"), "image/png") << failing.body.substr(0, 400);
+  // A failing upstream and nothing cached at all: an exception, never a blank map.
+  const auto nothing = p.get(getMap("sat", "-110,2,-96,16", 200, 200, "image/png"));
+  EXPECT_NE(nothing.body.find("NoApplicableCode"), std::string::npos) << nothing.body;
+  // The pixel limit.
+  FrontEndOptions small;
+  small.maxMapPixels = 10000;
+  Proxy limited(up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, Proxy::fastPolicy(), "upsat", small);
+  const auto big = limited.get(getMap("sat", "2,-16,16,-2", 101, 100, "image/png"));
+  EXPECT_NE(big.body.find("InvalidParameterValue"), std::string::npos) << big.body;
+}
+
+TEST(ComposeIntegration, HeightsAreExactWhereTheBoxIsAligned) {
+  // The upstream's heights are ten times the longitude of each texel's centre.
+  test::FakeUpstream up([](const test::FakeRequest& req) {
+    const auto at = req.target.find("BBOX=");
+    double s = 0, w = 0, n = 0, e = 0;
+    std::sscanf(req.target.c_str() + at + 5, "%lf,%lf,%lf,%lf", &s, &w, &n, &e);
+    std::string body(256 * 256 * 2, '\0');
+    for (int y = 0; y < 256; ++y) {
+      for (int x = 0; x < 256; ++x) {
+        const auto h = static_cast<std::uint16_t>(
+            static_cast<std::int16_t>(std::lround((w + (x + 0.5) * (e - w) / 256) * 10)));
+        body[static_cast<std::size_t>((y * 256 + x) * 2)] = static_cast<char>(h & 0xFF);
+        body[static_cast<std::size_t>((y * 256 + x) * 2 + 1)] = static_cast<char>(h >> 8);
+      }
+    }
+    return test::FakeReply::ok(body, "application/bil16");
+  });
+  LayerSpec dem;
+  dem.name = "dem";
+  dem.upstreamLayer = "updem";
+  dem.dataset.grid = GridSpec{Sector{}, 36.0, 256, 256, 4};
+  dem.dataset.mimeType = "application/bil16";
+  dem.elevation = true;
+  Proxy p(up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, Proxy::fastPolicy(), "upsat", {}, {dem});
+  // Level 0 texels are 36/256 degrees; a box of 100 x 60 texels from texel (1290, 700), across
+  // tiles, is aligned with them but with no tile.
+  const double t = 36.0 / 256.0;
+  const double west = -180.0 + 1290 * t, north = 90.0 - 700 * t;
+  char bbox[160];
+  std::snprintf(
+      bbox, sizeof bbox, "%.17g,%.17g,%.17g,%.17g", west, north - 60 * t, west + 100 * t, north);
+  for (const char* format : {"application/bil16", "image/tiff", "image/png"}) {
+    SCOPED_TRACE(format);
+    const auto r = p.get(getMap("dem", bbox, 100, 60, format));
+    ASSERT_EQ(r.header("content-type"), format) << r.body.substr(0, 400);
+    const auto heights =
+        decodeHeights(std::span<const std::byte>(reinterpret_cast<const std::byte*>(r.body.data()),
+                                                 r.body.size()),
+                      format,
+                      100,
+                      60);
+    ASSERT_TRUE(heights) << heights.error();
+    int wrong = 0;
+    for (int j = 0; j < 60; ++j) {
+      for (int i = 0; i < 100; ++i) {
+        const auto expected = std::lround((west + (i + 0.5) * t) * 10);
+        wrong += (*heights)[static_cast<std::size_t>(j * 100 + i)] != expected;
+      }
+    }
+    EXPECT_EQ(wrong, 0);
+  }
+  // Imagery formats are refused for heights, and heights do not mix with imagery.
+  EXPECT_NE(p.get(getMap("dem", bbox, 100, 60, "image/jpeg")).body.find("InvalidFormat"),
+            std::string::npos);
+  EXPECT_NE(p.get(getMap("sat,dem", bbox, 100, 60, "image/png")).body.find("InvalidParameterValue"),
+            std::string::npos);
 }

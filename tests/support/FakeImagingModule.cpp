@@ -4,6 +4,6 @@
 
 extern "C" __attribute__((visibility("default"))) const TellusImagingTable* tellus_imaging_table() {
   static const TellusImagingTable table{
-      999u, sizeof(TellusImagingTable), nullptr, nullptr, nullptr, nullptr, nullptr, nullptr};
+      999u, sizeof(TellusImagingTable), nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr};
   return &table;
 }

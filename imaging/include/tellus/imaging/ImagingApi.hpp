@@ -21,7 +21,7 @@
 #include <cstdint>
 
 /// Bumped whenever the table below changes in any way.
-#define TELLUS_IMAGING_ABI_VERSION 1u
+#define TELLUS_IMAGING_ABI_VERSION 2u
 
 /// The one symbol the module exports.
 #define TELLUS_IMAGING_TABLE_SYMBOL "tellus_imaging_table"
@@ -129,6 +129,34 @@ struct TellusImagingTable {
                               std::int32_t expectedHeight,
                               TellusImagingDecodeResult* result,
                               const TellusImagingSink* errors);
+
+  // ---- version 2: composing maps from tiles (GetMap for any box)
+
+  /**
+   * Decodes a whole "jpeg", "png" or "tiff" image from memory into samples the caller can sample
+   * from, on the calling thread:
+   * - sampleType TELLUS_IMAGING_UINT8: imagery, 3 channels (RGB; grey is copied to all three) or
+   *   4 (RGBA) when the file has alpha; 16-bit files are scaled to 0..255;
+   * - sampleType TELLUS_IMAGING_INT16: heights, the first channel as signed 16-bit values (a
+   *   16-bit unsigned PNG's values are reinterpreted bit for bit; the caller knows its offset).
+   * Checks the size like decodeImage (TELLUS_IMAGING_SHAPE). `info` is filled in (width, height,
+   * channels given out, sampleType) before the one allocate() of width * height * channels
+   * samples.
+   */
+  std::int32_t (*decodePixels)(const void* bytes,
+                               std::size_t size,
+                               const char* format,
+                               std::int32_t sampleType,
+                               std::int32_t expectedWidth,
+                               std::int32_t expectedHeight,
+                               TellusImagingRasterInfo* info,
+                               const TellusImagingSink* out);
+
+  /** Encodes one channel of 16-bit unsigned samples as a 16-bit greyscale PNG. */
+  std::int32_t (*encodePng16)(std::int32_t width,
+                              std::int32_t height,
+                              const std::uint16_t* samples,
+                              const TellusImagingSink* out);
 };
 
 /** The exported entry point (TELLUS_IMAGING_TABLE_SYMBOL). Never NULL. */

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <expected>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -19,7 +20,8 @@ namespace tellus {
 std::expected<std::vector<std::byte>, std::string> encodeImage(
     std::string_view mimeType, int width, int height, int channels, const std::uint8_t* pixels);
 
-/** Encodes 16-bit signed heights as "application/bil16" (little-endian) or "image/tiff" (Int16). */
+/** Encodes 16-bit signed heights as "application/bil16" (little-endian), "image/tiff" (Int16) or
+ * "image/png" (16-bit greyscale holding height + 32768, so -32768 is 0 and sea level 32768). */
 std::expected<std::vector<std::byte>, std::string>
 encodeHeights(std::string_view mimeType, int width, int height, const std::int16_t* heights);
 
@@ -34,5 +36,26 @@ std::expected<std::vector<std::byte>, std::string> blankImage(std::string_view m
                                                               std::optional<std::uint32_t> bgcolor,
                                                               bool transparent,
                                                               std::string_view text = {});
+
+/** Decoded imagery: 8-bit RGB (channels 3) or RGBA (4), row-major, top row first. */
+struct DecodedImage {
+  int width = 0;
+  int height = 0;
+  int channels = 0;
+  std::vector<std::uint8_t> pixels;
+};
+
+/** Decodes an imagery tile ("image/jpeg", "image/png", "image/tiff") that must be width x height.
+ */
+std::expected<DecodedImage, std::string>
+decodeImagery(std::span<const std::byte> bytes, std::string_view mimeType, int width, int height);
+
+/**
+ * Decodes an elevation tile into raw 16-bit signed values, row-major, top row first:
+ * "application/bil16" (little-endian, read here without the imaging module), "image/tiff"
+ * (Int16) or "image/png" (16-bit; the values minus 32768, as encodeHeights writes them).
+ */
+std::expected<std::vector<std::int16_t>, std::string>
+decodeHeights(std::span<const std::byte> bytes, std::string_view mimeType, int width, int height);
 
 } // namespace tellus

@@ -24,6 +24,11 @@ struct FrontEndOptions {
   bool exceptionsHttpStatus = false; ///< WMS exceptions with 4xx/5xx instead of 200
   enum class OfflineResponse { Exception, Blank } offlineResponse = OfflineResponse::Exception;
   WmsLimits limits;
+  /** GetMap for a box that is not one tile is composed from tiles: at most this many pixels
+   * (WIDTH x HEIGHT) and this many tiles per map (all layers), else InvalidParameterValue. */
+  std::int64_t maxMapPixels = 4096LL * 4096LL;
+  std::size_t maxTilesPerMap = 256;
+  int composeThreads = 2; ///< workers that decode, sample and encode composed maps
   std::size_t maxParamBytes = 2048;
   std::size_t maxQueryBytes = 16384;
   std::string updateSequence; ///< capabilities UpdateSequence ("" = derived from the start time)

@@ -20,6 +20,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -51,6 +52,7 @@ struct LayerSpec {
   std::int16_t noData = -32768;
   std::chrono::milliseconds ttl{0}; ///< 0: tiles never expire
   std::chrono::seconds maxAge{86400};
+  double opacity = 1.0;                ///< when composed with other layers in one GetMap (0..1)
   std::vector<std::string> timeValues; ///< empty: no TIME dimension (or a period, see timePeriod)
   std::string timePeriod;
   std::string timeDefault;
@@ -103,6 +105,11 @@ public:
                std::string_view time,
                const TileKey& key,
                std::function<void(TileAnswer&&)> done);
+
+  /** A tile from the cache alone (fresh or expired), never fetched: what fills in a composed
+   * map where a finer tile is missing. std::nullopt when it is not cached. */
+  std::optional<TileAnswer>
+  cachedTile(std::string_view layer, std::string_view time, const TileKey& key);
 
   void setOffline(bool offline) noexcept;
   /** Explicitly offline, or every remote upstream's breaker open. */

@@ -90,6 +90,8 @@ struct GetMapRequest {
   bool transparent = false;
   std::optional<std::uint32_t> bgcolor; ///< 0xRRGGBB; std::nullopt = not given (white)
   std::string time;                     ///< TIME verbatim, empty when absent
+  /** OPACITIES (vendor): one value in [0, 1] per layer; empty when absent (the layers' own). */
+  std::vector<double> opacities;
   enum class Exceptions { Xml, InImage, Blank } exceptions = Exceptions::Xml;
 
   friend bool operator==(const GetMapRequest&, const GetMapRequest&) = default;

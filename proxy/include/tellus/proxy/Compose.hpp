@@ -1,0 +1,100 @@
+#pragma once
+/**
+ * @file Compose.hpp
+ * @brief GetMap for any box and size: which tiles a map needs, and the map sampled from them.
+ *
+ * Pure functions over decoded tiles (no I/O, no threads), so the geometry is tested on its own:
+ *
+ * - **Level**: the coarsest level whose texels are no larger than the map's pixels on either axis
+ *   (the finest not coarser than the request), so the map is never magnified from a coarser level
+ *   while a fine-enough one exists; the deepest level when none is fine enough; never above the
+ *   layer's first level.
+ * - **Sampling**: pixel centres (west + (i + 0.5) * dx, north - (j + 0.5) * dy) are mapped onto the
+ *   level's texel grid (texel centres at half-integers) and sampled bilinearly (weights in 1/256,
+ *   integer arithmetic), so a map aligned with the texel grid gets the tile's values exactly.
+ *   Longitudes wrap around a global layer (a box from 170 to 190 crosses the antimeridian, and
+ *   bilinear filtering joins the last and the first column); latitudes past +-90 and places
+ *   outside the layer's sector are left as they were (the background). At the poles the edge row
+ *   is repeated (clamped), never wrapped.
+ * - **Fallback**: where a tile of the level is missing, the nearest coarser tile that is present
+ *   is sampled instead, per pixel, with the same filter at its own resolution.
+ * - **Heights**: bilinear on raw 16-bit values; where one of the four texels is no-data, the
+ *   valid texel of the largest weight is used (so no-data never blends into a height).
+ */
+
+#include <tellus/cache/TileGrid.hpp>
+#include <tellus/cache/TileKey.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <expected>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace tellus {
+
+/** The level a map of `width` x `height` pixels over `box` is composed from. */
+std::int32_t composeLevel(const TileGrid& grid,
+                          const Sector& box,
+                          std::int32_t width,
+                          std::int32_t height,
+                          std::int32_t firstLevel);
+
+/**
+ * The tiles of `level` that sampling the map touches (with the bilinear filter's one-texel
+ * margin), wrapped across the antimeridian for a global layer, without duplicates, in row-major
+ * order from the north-west. An error (with the count) when more than `maxTiles` are needed.
+ */
+std::expected<std::vector<TileKey>, std::size_t> composeTiles(const TileGrid& grid,
+                                                              const Sector& box,
+                                                              std::int32_t width,
+                                                              std::int32_t height,
+                                                              std::int32_t level,
+                                                              std::size_t maxTiles);
+
+/** A decoded tile to sample from: `channels` samples per texel, row-major, top row first. */
+struct TileSamples {
+  std::int32_t width = 0;
+  std::int32_t height = 0;
+  std::int32_t channels = 0;         ///< imagery 3 (RGB) or 4 (RGBA); heights 1
+  const std::uint8_t* rgb = nullptr; ///< imagery
+  const std::int16_t* heights = nullptr;
+};
+
+/** The decoded tiles at hand: nullptr for a tile that is not there (any level). */
+using TileLookup = std::function<const TileSamples*(const TileKey&)>;
+
+/**
+ * Draws one imagery layer over `canvas` (width * height RGBA, straight alpha): each pixel is the
+ * tile's colour with alpha (tile alpha * opacity) composited "over" what the canvas holds.
+ * Returns how many pixels came from a coarser level than `level` (fallback) and how many had no
+ * tile at all.
+ */
+struct ComposeStats {
+  std::size_t fallbackPixels = 0;
+  std::size_t missingPixels = 0;
+};
+ComposeStats composeImagery(const TileGrid& grid,
+                            const Sector& box,
+                            std::int32_t width,
+                            std::int32_t height,
+                            std::int32_t level,
+                            std::int32_t firstLevel,
+                            const TileLookup& tiles,
+                            double opacity,
+                            std::vector<std::uint8_t>& canvas);
+
+/** Draws one elevation layer into `heights` (width * height): pixels with a value that is not
+ * `noData` replace what is there (later layers win where they have data). */
+ComposeStats composeHeights(const TileGrid& grid,
+                            const Sector& box,
+                            std::int32_t width,
+                            std::int32_t height,
+                            std::int32_t level,
+                            std::int32_t firstLevel,
+                            const TileLookup& tiles,
+                            std::int16_t noData,
+                            std::vector<std::int16_t>& heights);
+
+} // namespace tellus

@@ -1,0 +1,406 @@
+#include <tellus/proxy/Compose.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace tellus {
+
+namespace {
+
+/** One output column's (or row's) two texels at a level: tile slots, offsets inside the tiles and
+ * the weight of the second texel in 1/256. */
+struct AxisSample {
+  std::int32_t slotA = -1; ///< index into Axis::tiles; -1: this pixel is outside the layer
+  std::int32_t slotB = -1;
+  std::int32_t offA = 0;
+  std::int32_t offB = 0;
+  std::int32_t weightB = 0;
+  double exactWeightB = 0.0;
+};
+
+/** An axis of the map at one level. */
+struct Axis {
+  std::vector<AxisSample> samples; ///< per output column / row
+  std::vector<std::int64_t> tiles; ///< distinct tile columns (west to east) / rows (north first)
+};
+
+bool globalInLongitude(const GridSpec& spec) noexcept {
+  return spec.sector.west <= -180.0 && spec.sector.east >= 180.0;
+}
+
+/** Longitude into [-180, 180). */
+double wrapLongitude(double lon) noexcept {
+  double w = std::fmod(lon + 180.0, 360.0);
+  if (w < 0.0) w += 360.0;
+  if (w >= 360.0) w = 0.0;
+  return w - 180.0;
+}
+
+std::int32_t slotOf(std::vector<std::int64_t>& tiles, std::int64_t tile) {
+  for (std::size_t k = 0; k < tiles.size(); ++k) {
+    if (tiles[k] == tile) return static_cast<std::int32_t>(k);
+  }
+  tiles.push_back(tile);
+  return static_cast<std::int32_t>(tiles.size() - 1);
+}
+
+/**
+ * Columns: texel x counted from -180 (texel centres at x + 0.5), wrapped around a global layer,
+ * clamped to the sector's texels otherwise.
+ */
+Axis columns(const TileGrid& grid, const Sector& box, std::int32_t width, std::int32_t level) {
+  const GridSpec& spec = grid.spec();
+  const double res = grid.deltaDeg(level) / spec.tileWidth;
+  const std::int64_t total = grid.colCount(level) * spec.tileWidth;
+  const bool wrap = globalInLongitude(spec);
+  const auto first = static_cast<std::int64_t>(std::floor((spec.sector.west + 180.0) / res));
+  const auto last = std::min<std::int64_t>(
+      total - 1, static_cast<std::int64_t>(std::ceil((spec.sector.east + 180.0) / res)) - 1);
+  const double dx = (box.east - box.west) / width;
+  Axis a;
+  a.samples.resize(static_cast<std::size_t>(width));
+  for (std::int32_t i = 0; i < width; ++i) {
+    double lon = box.west + (i + 0.5) * dx;
+    if (wrap) {
+      lon = wrapLongitude(lon);
+    } else if (lon < spec.sector.west || lon > spec.sector.east) {
+      continue; // outside the layer: slot -1
+    }
+    const double g = (lon + 180.0) / res - 0.5;
+    const double fl = std::floor(g);
+    const double f = g - fl;
+    auto x0 = static_cast<std::int64_t>(fl);
+    auto x1 = x0 + 1;
+    if (wrap) {
+      x0 = (x0 % total + total) % total;
+      x1 = (x1 % total + total) % total;
+    } else {
+      x0 = std::clamp(x0, first, last);
+      x1 = std::clamp(x1, first, last);
+    }
+    AxisSample& s = a.samples[static_cast<std::size_t>(i)];
+    s.slotA = slotOf(a.tiles, x0 / spec.tileWidth);
+    s.slotB = slotOf(a.tiles, x1 / spec.tileWidth);
+    s.offA = static_cast<std::int32_t>(x0 % spec.tileWidth);
+    s.offB = static_cast<std::int32_t>(x1 % spec.tileWidth);
+    s.exactWeightB = f;
+    s.weightB = static_cast<std::int32_t>(std::lround(f * 256.0));
+  }
+  return a;
+}
+
+/** Rows: texel y counted from +90 down (tile rows are counted from the south), clamped at the
+ * poles and at the sector's edges. */
+Axis rows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int32_t level) {
+  const GridSpec& spec = grid.spec();
+  const double res = grid.deltaDeg(level) / spec.tileHeight;
+  const std::int64_t rowCount = grid.rowCount(level);
+  const std::int64_t total = rowCount * spec.tileHeight;
+  const double north = std::min(90.0, spec.sector.north);
+  const double south = std::max(-90.0, spec.sector.south);
+  const auto first = std::max<std::int64_t>(
+      0, static_cast<std::int64_t>(std::floor((90.0 - spec.sector.north) / res)));
+  const auto last = std::min<std::int64_t>(
+      total - 1, static_cast<std::int64_t>(std::ceil((90.0 - spec.sector.south) / res)) - 1);
+  const double dy = (box.north - box.south) / height;
+  Axis a;
+  a.samples.resize(static_cast<std::size_t>(height));
+  for (std::int32_t j = 0; j < height; ++j) {
+    const double lat = box.north - (j + 0.5) * dy;
+    if (lat > north || lat < south) continue; // past a pole or outside the layer
+    const double g = (90.0 - lat) / res - 0.5;
+    const double fl = std::floor(g);
+    const double f = g - fl;
+    const auto y0 = std::clamp(static_cast<std::int64_t>(fl), first, last);
+    const auto y1 = std::clamp(static_cast<std::int64_t>(fl) + 1, first, last);
+    AxisSample& s = a.samples[static_cast<std::size_t>(j)];
+    s.slotA = slotOf(a.tiles, rowCount - 1 - y0 / spec.tileHeight);
+    s.slotB = slotOf(a.tiles, rowCount - 1 - y1 / spec.tileHeight);
+    s.offA = static_cast<std::int32_t>(y0 % spec.tileHeight);
+    s.offB = static_cast<std::int32_t>(y1 % spec.tileHeight);
+    s.exactWeightB = f;
+    s.weightB = static_cast<std::int32_t>(std::lround(f * 256.0));
+  }
+  return a;
+}
+
+/** The tiles of one level laid out by (row slot, column slot). */
+struct LevelTiles {
+  Axis cols;
+  Axis rows;
+  std::vector<const TileSamples*> tiles; ///< rows.tiles.size() x cols.tiles.size()
+
+  const TileSamples* at(std::int32_t rowSlot, std::int32_t colSlot) const noexcept {
+    return tiles[static_cast<std::size_t>(rowSlot) * cols.tiles.size() +
+                 static_cast<std::size_t>(colSlot)];
+  }
+};
+
+LevelTiles levelTiles(const TileGrid& grid,
+                      const Sector& box,
+                      std::int32_t width,
+                      std::int32_t height,
+                      std::int32_t level,
+                      const TileLookup& lookup) {
+  LevelTiles t{columns(grid, box, width, level), rows(grid, box, height, level), {}};
+  t.tiles.reserve(t.rows.tiles.size() * t.cols.tiles.size());
+  for (const auto row : t.rows.tiles) {
+    for (const auto col : t.cols.tiles) {
+      const TileKey key{level, row, col};
+      t.tiles.push_back(grid.isValid(key) ? lookup(key) : nullptr);
+    }
+  }
+  return t;
+}
+
+/** The four texels of a pixel at one level, when all four tiles are there. */
+struct Quad {
+  const TileSamples* t[4];
+  std::size_t index[4]; ///< texel index inside its tile (times channels for the caller)
+  std::int32_t wx, wy;
+  double fx, fy;
+};
+
+bool quadAt(const LevelTiles& t, const AxisSample& c, const AxisSample& r, Quad& q) noexcept {
+  if (c.slotA < 0 || r.slotA < 0) return false;
+  q.t[0] = t.at(r.slotA, c.slotA);
+  q.t[1] = t.at(r.slotA, c.slotB);
+  q.t[2] = t.at(r.slotB, c.slotA);
+  q.t[3] = t.at(r.slotB, c.slotB);
+  if (!q.t[0] || !q.t[1] || !q.t[2] || !q.t[3]) return false;
+  const auto idx = [](const TileSamples* s, std::int32_t x, std::int32_t y) {
+    return static_cast<std::size_t>(y) * static_cast<std::size_t>(s->width) +
+           static_cast<std::size_t>(x);
+  };
+  q.index[0] = idx(q.t[0], c.offA, r.offA);
+  q.index[1] = idx(q.t[1], c.offB, r.offA);
+  q.index[2] = idx(q.t[2], c.offA, r.offB);
+  q.index[3] = idx(q.t[3], c.offB, r.offB);
+  q.wx = c.weightB;
+  q.wy = r.weightB;
+  q.fx = c.exactWeightB;
+  q.fy = r.exactWeightB;
+  return true;
+}
+
+/** Bilinear RGBA of a quad (imagery tiles of 3 or 4 channels). */
+void sampleRgba(const Quad& q, std::uint8_t out[4]) noexcept {
+  const std::int32_t w[4] = {
+      (256 - q.wx) * (256 - q.wy), q.wx * (256 - q.wy), (256 - q.wx) * q.wy, q.wx * q.wy};
+  for (int ch = 0; ch < 4; ++ch) {
+    std::int32_t acc = 0;
+    for (int k = 0; k < 4; ++k) {
+      const TileSamples* s = q.t[k];
+      const std::int32_t v = ch < 3 || s->channels == 4
+                                 ? s->rgb[q.index[k] * static_cast<std::size_t>(s->channels) +
+                                          static_cast<std::size_t>(ch)]
+                                 : 255;
+      acc += v * w[k];
+    }
+    out[ch] = static_cast<std::uint8_t>((acc + 32768) >> 16);
+  }
+}
+
+/** Bilinear height of a quad; the nearest texel where one of the four is no-data. */
+std::int16_t sampleHeight(const Quad& q, std::int16_t noData) noexcept {
+  std::int16_t v[4];
+  bool any = false;
+  for (int k = 0; k < 4; ++k) {
+    v[k] = q.t[k]->heights[q.index[k]];
+    any = any || v[k] == noData;
+  }
+  if (any) { // the valid texel of the largest weight (no-data when none is valid)
+    const double w[4] = {
+        (1 - q.fx) * (1 - q.fy), q.fx * (1 - q.fy), (1 - q.fx) * q.fy, q.fx * q.fy};
+    int best = -1;
+    for (int k = 0; k < 4; ++k) {
+      if (v[k] != noData && (best < 0 || w[k] > w[best])) best = k;
+    }
+    return best < 0 ? noData : v[best];
+  }
+  const double top = v[0] + (v[1] - v[0]) * q.fx;
+  const double bottom = v[2] + (v[3] - v[2]) * q.fx;
+  return static_cast<std::int16_t>(std::lround(top + (bottom - top) * q.fy));
+}
+
+/** Draws straight-alpha `src` (alpha already scaled) over canvas pixel `dst`. */
+void over(const std::uint8_t src[4], std::uint8_t* dst) noexcept {
+  if (src[3] == 255) {
+    dst[0] = src[0];
+    dst[1] = src[1];
+    dst[2] = src[2];
+    dst[3] = 255;
+    return;
+  }
+  if (src[3] == 0) return;
+  const double as = src[3] / 255.0;
+  const double ad = dst[3] / 255.0;
+  const double ao = as + ad * (1.0 - as);
+  for (int ch = 0; ch < 3; ++ch) {
+    const double c = (src[ch] * as + dst[ch] * ad * (1.0 - as)) / ao;
+    dst[ch] = static_cast<std::uint8_t>(std::lround(std::clamp(c, 0.0, 255.0)));
+  }
+  dst[3] = static_cast<std::uint8_t>(std::lround(ao * 255.0));
+}
+
+/**
+ * The coarser levels, built on first need: for pixels whose tiles at the chosen level are
+ * missing, the nearest coarser level whose four texels are there.
+ */
+class Fallback {
+public:
+  Fallback(const TileGrid& grid,
+           const Sector& box,
+           std::int32_t width,
+           std::int32_t height,
+           std::int32_t level,
+           std::int32_t firstLevel,
+           const TileLookup& lookup)
+      : grid_(grid), box_(box), width_(width), height_(height), level_(level), first_(firstLevel),
+        lookup_(lookup) {}
+
+  bool quad(std::int32_t i, std::int32_t j, Quad& q) {
+    for (std::int32_t l = level_ - 1; l >= first_; --l) {
+      const LevelTiles& t = tiles(l);
+      if (quadAt(t,
+                 t.cols.samples[static_cast<std::size_t>(i)],
+                 t.rows.samples[static_cast<std::size_t>(j)],
+                 q))
+        return true;
+    }
+    return false;
+  }
+
+private:
+  const LevelTiles& tiles(std::int32_t l) {
+    const auto k = static_cast<std::size_t>(level_ - 1 - l);
+    if (levels_.size() <= k) levels_.resize(k + 1);
+    if (levels_[k].empty())
+      levels_[k].push_back(levelTiles(grid_, box_, width_, height_, l, lookup_));
+    return levels_[k].front();
+  }
+
+  const TileGrid& grid_;
+  Sector box_;
+  std::int32_t width_, height_, level_, first_;
+  const TileLookup& lookup_;
+  std::vector<std::vector<LevelTiles>> levels_; // index: levels above `level_` minus one
+};
+
+/** Runs `draw(pixel index, quad)` for every pixel inside the layer, falling back to coarser
+ * levels per pixel. */
+template <class Draw>
+ComposeStats forEachPixel(const TileGrid& grid,
+                          const Sector& box,
+                          std::int32_t width,
+                          std::int32_t height,
+                          std::int32_t level,
+                          std::int32_t firstLevel,
+                          const TileLookup& lookup,
+                          Draw&& draw) {
+  ComposeStats stats;
+  const LevelTiles t = levelTiles(grid, box, width, height, level, lookup);
+  Fallback fallback(grid, box, width, height, level, std::max(0, firstLevel), lookup);
+  Quad q{};
+  for (std::int32_t j = 0; j < height; ++j) {
+    const AxisSample& r = t.rows.samples[static_cast<std::size_t>(j)];
+    if (r.slotA < 0) continue;
+    for (std::int32_t i = 0; i < width; ++i) {
+      const AxisSample& c = t.cols.samples[static_cast<std::size_t>(i)];
+      if (c.slotA < 0) continue;
+      const std::size_t pixel = static_cast<std::size_t>(j) * static_cast<std::size_t>(width) +
+                                static_cast<std::size_t>(i);
+      if (quadAt(t, c, r, q)) {
+        draw(pixel, q);
+      } else if (fallback.quad(i, j, q)) {
+        ++stats.fallbackPixels;
+        draw(pixel, q);
+      } else {
+        ++stats.missingPixels;
+      }
+    }
+  }
+  return stats;
+}
+
+} // namespace
+
+std::int32_t composeLevel(const TileGrid& grid,
+                          const Sector& box,
+                          std::int32_t width,
+                          std::int32_t height,
+                          std::int32_t firstLevel) {
+  const GridSpec& spec = grid.spec();
+  const double pixelX = (box.east - box.west) / width;
+  const double pixelY = (box.north - box.south) / height;
+  const std::int32_t first = std::clamp(firstLevel, 0, grid.numLevels() - 1);
+  for (std::int32_t l = first; l < grid.numLevels(); ++l) {
+    const double texelX = grid.deltaDeg(l) / spec.tileWidth;
+    const double texelY = grid.deltaDeg(l) / spec.tileHeight;
+    // A relative tolerance: a map of exactly the level's resolution takes that level.
+    if (texelX <= pixelX * (1.0 + 1e-9) && texelY <= pixelY * (1.0 + 1e-9)) return l;
+  }
+  return grid.numLevels() - 1;
+}
+
+std::expected<std::vector<TileKey>, std::size_t> composeTiles(const TileGrid& grid,
+                                                              const Sector& box,
+                                                              std::int32_t width,
+                                                              std::int32_t height,
+                                                              std::int32_t level,
+                                                              std::size_t maxTiles) {
+  const Axis c = columns(grid, box, width, level);
+  const Axis r = rows(grid, box, height, level);
+  const std::size_t count = c.tiles.size() * r.tiles.size();
+  if (count > maxTiles) return std::unexpected(count);
+  std::vector<TileKey> keys;
+  keys.reserve(count);
+  for (const auto row : r.tiles) {
+    for (const auto col : c.tiles) {
+      const TileKey key{level, row, col};
+      if (grid.isValid(key)) keys.push_back(key);
+    }
+  }
+  return keys;
+}
+
+ComposeStats composeImagery(const TileGrid& grid,
+                            const Sector& box,
+                            std::int32_t width,
+                            std::int32_t height,
+                            std::int32_t level,
+                            std::int32_t firstLevel,
+                            const TileLookup& tiles,
+                            double opacity,
+                            std::vector<std::uint8_t>& canvas) {
+  canvas.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 4);
+  const double o = std::isfinite(opacity) ? std::clamp(opacity, 0.0, 1.0) : 1.0;
+  const auto scale = static_cast<std::int32_t>(std::lround(o * 256.0));
+  return forEachPixel(
+      grid, box, width, height, level, firstLevel, tiles, [&](std::size_t pixel, const Quad& q) {
+        std::uint8_t px[4];
+        sampleRgba(q, px);
+        if (scale < 256) px[3] = static_cast<std::uint8_t>((px[3] * scale + 128) >> 8);
+        over(px, &canvas[pixel * 4]);
+      });
+}
+
+ComposeStats composeHeights(const TileGrid& grid,
+                            const Sector& box,
+                            std::int32_t width,
+                            std::int32_t height,
+                            std::int32_t level,
+                            std::int32_t firstLevel,
+                            const TileLookup& tiles,
+                            std::int16_t noData,
+                            std::vector<std::int16_t>& heights) {
+  heights.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), noData);
+  return forEachPixel(
+      grid, box, width, height, level, firstLevel, tiles, [&](std::size_t pixel, const Quad& q) {
+        const std::int16_t h = sampleHeight(q, noData);
+        if (h != noData) heights[pixel] = h;
+      });
+}
+
+} // namespace tellus

@@ -1,0 +1,326 @@
+#include "MapComposer.hpp"
+
+#include "WorkerPool.hpp"
+
+#include <tellus/cache/TilePath.hpp>
+#include <tellus/proxy/Compose.hpp>
+#include <tellus/proxy/ImageCodec.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+#include <map>
+#include <span>
+
+namespace tellus {
+
+struct MapComposer::Pool {
+  WorkerPool workers;
+  explicit Pool(int n) : workers(n) {}
+};
+
+namespace {
+
+/** How fresh an origin is, for "the least fresh tile" (X-Cache of a composed map). */
+int staleness(TileOrigin o) noexcept {
+  switch (o) {
+  case TileOrigin::Hit:
+    return 0;
+  case TileOrigin::Miss:
+    return 1;
+  case TileOrigin::Stale:
+    return 2;
+  case TileOrigin::Offline:
+    return 3;
+  }
+  return 3;
+}
+
+std::optional<std::vector<std::byte>> bytesOf(const TileAnswer& a) {
+  if (a.file) return a.file->readAll();
+  return a.bytes;
+}
+
+/** A decoded tile and the samples view of it. */
+struct Decoded {
+  TileSamples view;
+  std::vector<std::uint8_t> rgb;
+  std::vector<std::int16_t> heights;
+};
+
+struct KeyLess {
+  bool operator()(const TileKey& a, const TileKey& b) const noexcept {
+    return std::tie(a.level, a.row, a.col) < std::tie(b.level, b.row, b.col);
+  }
+};
+
+} // namespace
+
+struct MapComposer::Job {
+  struct Layer {
+    ComposeLayer spec;
+    const TileGrid* grid = nullptr;
+    std::int32_t level = 0;
+    std::vector<TileKey> keys;
+    std::vector<TileAnswer> answers; // parallel to keys
+  };
+  ComposeRequest request;
+  bool elevation = false;
+  std::vector<Layer> layers;
+  std::atomic<std::size_t> pending{0};
+  std::function<void(const LayerSpec&, const TileAnswer&)> onTile;
+  std::function<void(ComposedMap&&)> done;
+};
+
+MapComposer::MapComposer(TileService& tiles, int threads, std::size_t maxTiles)
+    : tiles_(tiles), maxTiles_(maxTiles), pool_(std::make_unique<Pool>(threads)) {}
+
+MapComposer::~MapComposer() = default;
+
+std::expected<void, std::string>
+MapComposer::compose(ComposeRequest request,
+                     std::function<void(const LayerSpec&, const TileAnswer&)> onTile,
+                     std::function<void(ComposedMap&&)> done) {
+  auto job = std::make_shared<Job>();
+  job->request = std::move(request);
+  job->onTile = std::move(onTile);
+  job->done = std::move(done);
+  const ComposeRequest& r = job->request;
+  std::size_t total = 0;
+  for (const ComposeLayer& cl : r.layers) {
+    Job::Layer l;
+    l.spec = cl;
+    l.grid = tiles_.grid(cl.layer->name);
+    if (!l.grid) return std::unexpected("no layer '" + cl.layer->name + "'");
+    job->elevation = cl.layer->elevation;
+    l.level = composeLevel(*l.grid, r.bbox, r.width, r.height, cl.layer->firstLevel);
+    const std::size_t left = maxTiles_ > total ? maxTiles_ - total : 0;
+    auto keys = composeTiles(*l.grid, r.bbox, r.width, r.height, l.level, left);
+    if (!keys) {
+      return std::unexpected("the map needs more than " + std::to_string(maxTiles_) +
+                             " tiles (level " + std::to_string(l.level) + " of layer '" +
+                             cl.layer->name + "'); ask for a smaller box or fewer pixels");
+    }
+    total += keys->size();
+    l.keys = std::move(*keys);
+    l.answers.resize(l.keys.size());
+    job->layers.push_back(std::move(l));
+  }
+  job->pending = total + 1; // +1: the loop below, so nothing finishes before every fetch starts
+  const auto arrived = [this, job] {
+    if (job->pending.fetch_sub(1) == 1) pool_->workers.post([this, job] { finish(job); });
+  };
+  for (std::size_t li = 0; li < job->layers.size(); ++li) {
+    Job::Layer& l = job->layers[li];
+    for (std::size_t k = 0; k < l.keys.size(); ++k) {
+      tiles_.getTile(
+          l.spec.layer->name, l.spec.time, l.keys[k], [job, li, k, arrived](TileAnswer&& a) {
+            job->layers[li].answers[k] = std::move(a);
+            arrived();
+          });
+    }
+  }
+  arrived();
+  return {};
+}
+
+void MapComposer::finish(const std::shared_ptr<Job>& job) {
+  ComposedMap map;
+  try {
+    const ComposeRequest& r = job->request;
+    // The validators first: a client that has this map gets 304 before anything is decoded.
+    std::string validators = r.format + "|" + std::to_string(r.width) + "x" +
+                             std::to_string(r.height) + "|" + (r.transparent ? "t" : "o") + "|" +
+                             std::to_string(r.bgcolor.value_or(0x1000000));
+    char box[128];
+    std::snprintf(box,
+                  sizeof box,
+                  "|%.17g,%.17g,%.17g,%.17g",
+                  r.bbox.west,
+                  r.bbox.south,
+                  r.bbox.east,
+                  r.bbox.north);
+    validators += box;
+    bool complete = true;
+    bool failed = false;
+    std::string failure;
+    map.origin = TileOrigin::Hit;
+    map.maxAgeSeconds = 86400 * 365;
+    for (const auto& l : job->layers) {
+      validators +=
+          "|" + l.spec.layer->name + "@" + l.spec.time + "#" + std::to_string(l.spec.opacity);
+      map.maxAgeSeconds = std::min<std::int64_t>(map.maxAgeSeconds, l.spec.layer->maxAge.count());
+      for (const TileAnswer& a : l.answers) {
+        if (job->onTile) job->onTile(*l.spec.layer, a);
+        if (staleness(a.origin) > staleness(map.origin)) map.origin = a.origin;
+        if (a.kind == TileAnswer::Kind::Tile) {
+          validators += a.etag;
+        } else {
+          complete = false;
+          if (a.kind == TileAnswer::Kind::Error) {
+            failed = true;
+            failure = a.message;
+          }
+        }
+      }
+    }
+    char etag[24];
+    std::snprintf(etag,
+                  sizeof etag,
+                  "\"%016llx\"",
+                  static_cast<unsigned long long>(stableHash64(validators)));
+    map.etag = etag;
+    if (complete && !r.ifNoneMatch.empty() &&
+        (r.ifNoneMatch == "*" || r.ifNoneMatch.find(map.etag) != std::string::npos)) {
+      map.kind = ComposedMap::Kind::NotModified;
+      return job->done(std::move(map));
+    }
+
+    // Decode what arrived; fill the holes from coarser cached tiles.
+    std::vector<std::uint8_t> canvas;
+    std::vector<std::int16_t> heights;
+    const auto pixels = static_cast<std::size_t>(r.width) * static_cast<std::size_t>(r.height);
+    if (job->elevation) {
+      heights.assign(pixels, job->layers.front().spec.layer->noData);
+    } else {
+      const std::uint32_t c = r.bgcolor.value_or(0xFFFFFF);
+      const std::uint8_t bg[4] = {static_cast<std::uint8_t>(c >> 16),
+                                  static_cast<std::uint8_t>(c >> 8),
+                                  static_cast<std::uint8_t>(c),
+                                  static_cast<std::uint8_t>(r.transparent ? 0 : 255)};
+      canvas.resize(pixels * 4);
+      for (std::size_t p = 0; p < pixels; ++p)
+        std::copy(bg, bg + 4, &canvas[p * 4]);
+    }
+    std::size_t missing = 0;
+    for (const auto& l : job->layers) {
+      const LayerSpec& spec = *l.spec.layer;
+      const GridSpec& g = l.grid->spec();
+      std::map<TileKey, std::shared_ptr<Decoded>, KeyLess> decoded;
+      const auto decode = [&](const TileKey& key, const TileAnswer& a) -> std::shared_ptr<Decoded> {
+        auto bytes = bytesOf(a);
+        if (!bytes) return nullptr;
+        auto d = std::make_shared<Decoded>();
+        if (spec.elevation) {
+          auto h = decodeHeights(*bytes, spec.dataset.mimeType, g.tileWidth, g.tileHeight);
+          if (!h) return nullptr;
+          d->heights = std::move(*h);
+          d->view = TileSamples{g.tileWidth, g.tileHeight, 1, nullptr, d->heights.data()};
+        } else {
+          auto img = decodeImagery(*bytes,
+                                   a.contentType.empty() ? spec.dataset.mimeType : a.contentType,
+                                   g.tileWidth,
+                                   g.tileHeight);
+          if (!img) return nullptr;
+          d->rgb = std::move(img->pixels);
+          d->view = TileSamples{g.tileWidth, g.tileHeight, img->channels, d->rgb.data(), nullptr};
+        }
+        (void)key;
+        return d;
+      };
+      std::vector<TileKey> holes;
+      for (std::size_t k = 0; k < l.keys.size(); ++k) {
+        const TileAnswer& a = l.answers[k];
+        std::shared_ptr<Decoded> d;
+        if (a.kind == TileAnswer::Kind::Tile) d = decode(l.keys[k], a);
+        if (d) {
+          decoded.emplace(l.keys[k], std::move(d));
+        } else {
+          holes.push_back(l.keys[k]);
+        }
+      }
+      // Each hole: the nearest cached ancestor (looked up once per ancestor).
+      std::map<TileKey, bool, KeyLess> looked;
+      for (TileKey key : holes) {
+        while (key.level > spec.firstLevel) {
+          const auto parent = l.grid->parent(key);
+          if (!parent) break;
+          key = *parent;
+          if (auto it = looked.find(key); it != looked.end()) {
+            if (it->second) break;
+            continue;
+          }
+          bool found = false;
+          if (auto a = tiles_.cachedTile(spec.name, l.spec.time, key)) {
+            if (auto d = decode(key, *a)) {
+              decoded.emplace(key, std::move(d));
+              found = true;
+              if (staleness(a->origin) > staleness(map.origin)) map.origin = a->origin;
+              validators += a->etag;
+            }
+          }
+          looked.emplace(key, found);
+          if (found) break;
+        }
+      }
+      const TileLookup lookup = [&decoded](const TileKey& key) -> const TileSamples* {
+        const auto it = decoded.find(key);
+        return it == decoded.end() ? nullptr : &it->second->view;
+      };
+      map.tiles += decoded.size();
+      const ComposeStats stats = spec.elevation ? composeHeights(*l.grid,
+                                                                 r.bbox,
+                                                                 r.width,
+                                                                 r.height,
+                                                                 l.level,
+                                                                 spec.firstLevel,
+                                                                 lookup,
+                                                                 spec.noData,
+                                                                 heights)
+                                                : composeImagery(*l.grid,
+                                                                 r.bbox,
+                                                                 r.width,
+                                                                 r.height,
+                                                                 l.level,
+                                                                 spec.firstLevel,
+                                                                 lookup,
+                                                                 l.spec.opacity,
+                                                                 canvas);
+      map.fallbackPixels += stats.fallbackPixels;
+      missing += stats.missingPixels;
+    }
+    if (failed && missing > 0) {
+      // An upstream failed and nothing cached covers the hole: an error, not a map with a hole
+      // that a client would keep.
+      map.kind = ComposedMap::Kind::Error;
+      map.message = "part of the map is not available: " + failure;
+      return job->done(std::move(map));
+    }
+    if (!complete) {
+      // Filled in from coarser levels (or empty where the upstream has nothing): not for long.
+      map.maxAgeSeconds = std::min<std::int64_t>(map.maxAgeSeconds, 60);
+      std::snprintf(etag,
+                    sizeof etag,
+                    "\"%016llx\"",
+                    static_cast<unsigned long long>(stableHash64(validators)));
+      map.etag = etag;
+    }
+    std::expected<std::vector<std::byte>, std::string> encoded;
+    if (job->elevation) {
+      encoded = encodeHeights(r.format, r.width, r.height, heights.data());
+    } else if (r.format == "image/png" && !r.transparent) {
+      std::vector<std::uint8_t> rgb(pixels * 3);
+      for (std::size_t p = 0; p < pixels; ++p)
+        std::copy(&canvas[p * 4], &canvas[p * 4] + 3, &rgb[p * 3]);
+      encoded = encodeImage(r.format, r.width, r.height, 3, rgb.data());
+    } else {
+      encoded = encodeImage(r.format, r.width, r.height, 4, canvas.data());
+    }
+    if (!encoded) {
+      map.kind = ComposedMap::Kind::Error;
+      map.message = "cannot encode the map: " + encoded.error();
+      return job->done(std::move(map));
+    }
+    map.kind = ComposedMap::Kind::Map;
+    map.bytes = std::move(*encoded);
+    map.contentType = r.format;
+    job->done(std::move(map));
+  } catch (const std::exception& e) {
+    ComposedMap failedMap;
+    failedMap.kind = ComposedMap::Kind::Error;
+    failedMap.message = std::string("cannot compose the map: ") + e.what();
+    job->done(std::move(failedMap));
+  }
+}
+
+} // namespace tellus

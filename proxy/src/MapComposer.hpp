@@ -1,0 +1,74 @@
+#pragma once
+// GetMap for any box: fetches the tiles a map needs through the tile service (cache first,
+// single-flight, upstream on a miss), then decodes, samples (Compose.hpp) and encodes the map on
+// its own worker threads, so the HTTP loops never decode or encode.
+
+#include <tellus/cache/TileGrid.hpp>
+#include <tellus/proxy/TileService.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <expected>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace tellus {
+
+struct ComposeLayer {
+  const LayerSpec* layer = nullptr;
+  std::string time; ///< validated ("" = none)
+  double opacity = 1.0;
+};
+
+struct ComposeRequest {
+  std::vector<ComposeLayer> layers; ///< drawn in order; all imagery or all elevation
+  Sector bbox{};                    ///< lon/lat, west < east, south < north
+  std::int32_t width = 0;
+  std::int32_t height = 0;
+  std::string format; ///< imagery: image/jpeg, image/png; heights: application/bil16,
+                      ///< image/tiff, image/png
+  bool transparent = false;
+  std::optional<std::uint32_t> bgcolor;
+  std::string ifNoneMatch; ///< the client's If-None-Match ("" = none)
+};
+
+struct ComposedMap {
+  enum class Kind { Map, NotModified, Error } kind = Kind::Error;
+  std::vector<std::byte> bytes;
+  std::string contentType;
+  TileOrigin origin = TileOrigin::Hit; ///< the least fresh of the tiles used
+  std::string etag;                    ///< quoted; from the tiles' validators and the request
+  std::int64_t maxAgeSeconds = 0;
+  std::string message; ///< Error: why (safe to show)
+  std::size_t tiles = 0;
+  std::size_t fallbackPixels = 0;
+};
+
+class MapComposer {
+public:
+  MapComposer(TileService& tiles, int threads, std::size_t maxTiles);
+  ~MapComposer();
+
+  /** The tiles of every layer, or an error (for InvalidParameterValue) when they are more than
+   * the limit. Then `onTile` sees each tile answer (for metrics) and `done` the map, once, on a
+   * worker thread or the caller's. */
+  std::expected<void, std::string>
+  compose(ComposeRequest request,
+          std::function<void(const LayerSpec&, const TileAnswer&)> onTile,
+          std::function<void(ComposedMap&&)> done);
+
+  struct Job;
+
+private:
+  void finish(const std::shared_ptr<Job>& job);
+
+  TileService& tiles_;
+  std::size_t maxTiles_;
+  struct Pool;
+  std::unique_ptr<Pool> pool_; // last: destroyed first
+};
+
+} // namespace tellus
