@@ -376,7 +376,9 @@ void readServer(Reader& r, const Map& root, ServerSettings& s) {
                "max_height",
                "request_timeout",
                "keepalive_timeout",
-               "requests_per_second"});
+               "requests_per_second",
+               "max_map_pixels",
+               "max_tiles_per_map"});
   ServerLimits& lim = s.limits;
   if (auto v = l.get("max_connections"))
     lim.maxConnections = int32(r, *v, l.path("max_connections"));
@@ -392,6 +394,11 @@ void readServer(Reader& r, const Map& root, ServerSettings& s) {
     lim.keepaliveTimeout = duration(r, *v, l.path("keepalive_timeout"));
   if (auto v = l.get("requests_per_second"))
     lim.requestsPerSecond = number(r, *v, l.path("requests_per_second"));
+  if (auto v = l.get("max_map_pixels"))
+    lim.maxMapPixels = integer(r, *v, l.path("max_map_pixels"), 1, std::int64_t{1} << 40);
+  if (auto v = l.get("max_tiles_per_map"))
+    lim.maxTilesPerMap =
+        static_cast<std::int32_t>(integer(r, *v, l.path("max_tiles_per_map"), 1, 1 << 20));
 }
 
 void readCache(Reader& r, const Map& root, const fs::path& baseDir, CacheSettings& c) {
@@ -622,7 +629,8 @@ LayerConfig readLayer(Reader& r, const YAML::Node& node, std::string path) {
                "grid",
                "elevation",
                "time",
-               "cache"});
+               "cache",
+               "opacity"});
   if (node.IsNull())
     r.fail(node.Mark(), m.path(), "expected a mapping (name, upstream, ...), got nothing");
   LayerConfig l;
@@ -633,6 +641,11 @@ LayerConfig readLayer(Reader& r, const YAML::Node& node, std::string path) {
   l.upstream = text(r, m.need("upstream"), m.path("upstream"));
   l.upstreamLayer = l.name;
   if (auto v = m.get("upstream_layer")) l.upstreamLayer = text(r, *v, m.path("upstream_layer"));
+  if (auto v = m.get("opacity")) {
+    l.opacity = number(r, *v, m.path("opacity"));
+    if (!(l.opacity >= 0.0 && l.opacity <= 1.0))
+      r.fail(v->Mark(), m.path("opacity"), "an opacity is a number from 0 to 1");
+  }
   if (auto v = m.get("style")) l.dataset.style = text(r, *v, m.path("style"));
   l.dataset.mimeType = text(r, m.need("format"), m.path("format"));
   l.dataset.extension = extensionFor(l.dataset.mimeType);

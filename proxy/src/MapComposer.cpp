@@ -93,7 +93,7 @@ MapComposer::compose(ComposeRequest request,
     l.grid = tiles_.grid(cl.layer->name);
     if (!l.grid) return std::unexpected("no layer '" + cl.layer->name + "'");
     job->elevation = cl.layer->elevation;
-    l.level = composeLevel(*l.grid, r.bbox, r.width, r.height, cl.layer->firstLevel);
+    l.level = composeLevel(*l.grid, r.bbox, r.width, r.height, 0);
     const std::size_t left = maxTiles_ > total ? maxTiles_ - total : 0;
     auto keys = composeTiles(*l.grid, r.bbox, r.width, r.height, l.level, left);
     if (!keys) {
@@ -232,7 +232,7 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
       // Each hole: the nearest cached ancestor (looked up once per ancestor).
       std::map<TileKey, bool, KeyLess> looked;
       for (TileKey key : holes) {
-        while (key.level > spec.firstLevel) {
+        while (key.level > 0) {
           const auto parent = l.grid->parent(key);
           if (!parent) break;
           key = *parent;
@@ -263,7 +263,7 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
                                                                  r.width,
                                                                  r.height,
                                                                  l.level,
-                                                                 spec.firstLevel,
+                                                                 0, // every level of the grid is served (firstLevel is an upstream offset)
                                                                  lookup,
                                                                  spec.noData,
                                                                  heights)
@@ -272,7 +272,7 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
                                                                  r.width,
                                                                  r.height,
                                                                  l.level,
-                                                                 spec.firstLevel,
+                                                                 0, // every level of the grid is served (firstLevel is an upstream offset)
                                                                  lookup,
                                                                  l.spec.opacity,
                                                                  canvas);

@@ -209,6 +209,8 @@ server:
     request_timeout: 500ms
     keepalive_timeout: 0
     requests_per_second: 2.5
+    max_map_pixels: 1000000
+    max_tiles_per_map: 64
 cache:
   root: cache/here
   size_limit: 10GiB
@@ -262,6 +264,7 @@ layers:
     style: rainbow
     format: image/tiff
     kind: imagery
+    opacity: 0.4
     grid: {levels: 1, level_zero_delta: 45, tile_size: 256}
 )",
                        "/srv/conf");
@@ -282,6 +285,8 @@ layers:
   EXPECT_EQ(s.limits.requestTimeout, milliseconds(500));
   EXPECT_EQ(s.limits.keepaliveTimeout, milliseconds(0));
   EXPECT_EQ(s.limits.requestsPerSecond, 2.5);
+  EXPECT_EQ(s.limits.maxMapPixels, 1000000);
+  EXPECT_EQ(s.limits.maxTilesPerMap, 64);
   EXPECT_EQ(c->cache.root, "/srv/conf/cache/here");
   EXPECT_EQ(c->cache.sizeLimitBytes, 10ULL << 30);
 
@@ -327,6 +332,8 @@ layers:
   const LayerConfig& pic = c->layers.at(1);
   EXPECT_EQ(pic.kind, LayerKind::Imagery); // tiff defaults to elevation; kind overrides it
   EXPECT_EQ(pic.dataset.style, "rainbow");
+  EXPECT_EQ(pic.opacity, 0.4);
+  EXPECT_EQ(l.opacity, 1.0);
   EXPECT_EQ(pic.dataset.extension, "tif");
   EXPECT_EQ(pic.dataset.grid.levelZeroDeltaDeg, 45.0);
 }
@@ -517,6 +524,13 @@ TEST(ConfigYaml, BadDurationAndSize) {
   const ConfigError age = errorOf(std::string(kMinimal) + "    cache: {max_age: 1500ms}\n");
   EXPECT_EQ(age.key, "layers[0].cache.max_age");
   EXPECT_NE(age.message.find("whole seconds"), std::string::npos);
+
+  const ConfigError opacity = errorOf(std::string(kMinimal) + "    opacity: 1.5\n");
+  EXPECT_EQ(opacity.key, "layers[0].opacity");
+  EXPECT_NE(opacity.message.find("from 0 to 1"), std::string::npos);
+  EXPECT_EQ(errorOf(std::string(kMinimal) + "    opacity: .nan\n").key, "layers[0].opacity");
+  EXPECT_EQ(errorOf("server: {limits: {max_tiles_per_map: 0}}\n" + std::string(kMinimal)).key,
+            "server.limits.max_tiles_per_map");
 }
 
 TEST(ConfigYaml, MissingRequiredKeys) {

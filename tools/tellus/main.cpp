@@ -28,6 +28,7 @@
 #include <string_view>
 #include <sys/resource.h>
 #include <unistd.h>
+#include <thread>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -723,6 +724,7 @@ std::pair<std::vector<UpstreamSpec>, std::vector<LayerSpec>> proxySpecs(const Co
     s.elevation = l.kind == LayerKind::Elevation;
     s.noData = static_cast<std::int16_t>(std::clamp(l.elevation.noData, -32768.0, 32767.0));
     s.ttl = l.ttl;
+    s.opacity = l.opacity;
     s.maxAge = l.maxAge;
     s.timeValues = l.time.values;
     s.timePeriod = l.time.period;
@@ -805,6 +807,9 @@ int cmdServe(const Args& a) {
                            ? FrontEndOptions::OfflineResponse::Blank
                            : FrontEndOptions::OfflineResponse::Exception;
   fo.limits.maxWidth = server.limits.maxWidth;
+  fo.maxMapPixels = server.limits.maxMapPixels;
+  fo.maxTilesPerMap = static_cast<std::size_t>(server.limits.maxTilesPerMap);
+  fo.composeThreads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   fo.limits.maxHeight = server.limits.maxHeight;
   fo.maxParamBytes = server.limits.maxParamBytes;
   ProxyFrontEnd front(**tiles, fo);

@@ -42,6 +42,8 @@ struct ServerLimits {
   std::chrono::milliseconds requestTimeout{10'000};   ///< to receive a whole request
   std::chrono::milliseconds keepaliveTimeout{60'000}; ///< idle keep-alive; 0 = close after each
   double requestsPerSecond = 0.0;                     ///< per client address; 0 = unlimited
+  std::int64_t maxMapPixels = 4096LL * 4096LL; ///< WIDTH x HEIGHT of a composed GetMap
+  std::int32_t maxTilesPerMap = 256;           ///< tiles one composed GetMap may read (all layers)
 };
 
 /** YAML `server`. */
@@ -140,6 +142,7 @@ struct LayerConfig {
   TimeDimension time;
   std::chrono::milliseconds ttl{0};    ///< after this a tile is stale and revalidated; 0 = never
   std::chrono::seconds maxAge{86'400}; ///< Cache-Control max-age sent to clients
+  double opacity = 1.0; ///< drawn with this opacity when composed over other layers (0..1)
 };
 
 struct Config {
