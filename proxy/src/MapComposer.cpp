@@ -258,24 +258,28 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
         return it == decoded.end() ? nullptr : &it->second->view;
       };
       map.tiles += decoded.size();
-      const ComposeStats stats = spec.elevation ? composeHeights(*l.grid,
-                                                                 r.bbox,
-                                                                 r.width,
-                                                                 r.height,
-                                                                 l.level,
-                                                                 0, // every level of the grid is served (firstLevel is an upstream offset)
-                                                                 lookup,
-                                                                 spec.noData,
-                                                                 heights)
-                                                : composeImagery(*l.grid,
-                                                                 r.bbox,
-                                                                 r.width,
-                                                                 r.height,
-                                                                 l.level,
-                                                                 0, // every level of the grid is served (firstLevel is an upstream offset)
-                                                                 lookup,
-                                                                 l.spec.opacity,
-                                                                 canvas);
+      const ComposeStats stats =
+          spec.elevation
+              ? composeHeights(
+                    *l.grid,
+                    r.bbox,
+                    r.width,
+                    r.height,
+                    l.level,
+                    0, // every level of the grid is served (firstLevel is an upstream offset)
+                    lookup,
+                    spec.noData,
+                    heights)
+              : composeImagery(
+                    *l.grid,
+                    r.bbox,
+                    r.width,
+                    r.height,
+                    l.level,
+                    0, // every level of the grid is served (firstLevel is an upstream offset)
+                    lookup,
+                    l.spec.opacity,
+                    canvas);
       map.fallbackPixels += stats.fallbackPixels;
       missing += stats.missingPixels;
     }

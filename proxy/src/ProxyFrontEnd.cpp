@@ -311,28 +311,7 @@ struct ProxyFrontEnd::Impl {
 
   static std::expected<std::string, OgcException> resolveTime(const LayerSpec& l,
                                                               std::string_view t) {
-    if (l.timeValues.empty() && l.timePeriod.empty())
-      return std::string(); // no TIME dimension: ignored
-    if (t.empty()) {
-      if (!l.timeDefault.empty()) return l.timeDefault;
-      return std::unexpected(OgcException{std::string(ogc::kMissingDimensionValue),
-                                          "TIME",
-                                          "layer '" + l.name + "' needs a TIME value"});
-    }
-    if (std::find(l.timeValues.begin(), l.timeValues.end(), t) != l.timeValues.end())
-      return std::string(t);
-    if (!l.timePeriod
-             .empty()) { // start/end/period: ISO 8601 strings of one shape compare lexically
-      const auto a = l.timePeriod.find('/');
-      const auto b = l.timePeriod.find('/', a == std::string::npos ? a : a + 1);
-      if (a != std::string::npos && b != std::string::npos) {
-        const std::string_view start = std::string_view(l.timePeriod).substr(0, a);
-        const std::string_view end = std::string_view(l.timePeriod).substr(a + 1, b - a - 1);
-        if (t.size() == start.size() && t >= start && t <= end) return std::string(t);
-      }
-    }
-    return std::unexpected(OgcException{
-        std::string(ogc::kInvalidDimensionValue), "TIME", "TIME is not one of the layer's times"});
+    return resolveTimeDimension(l.name, l.timeValues, l.timePeriod, l.timeDefault, t);
   }
 
   CapabilitiesModel capabilitiesModel(const HttpRequest& req) const {

@@ -117,4 +117,33 @@ done
 grep -q "imported bluemarble: 3 tiles" "$work/import.txt" || fail "import said: $(cat "$work/import.txt")"
 cmp "$tile" "$(ls "$work"/cache2/*/bluemarble-*/1/7/7_10.jpg)" || fail "imported tile differs"
 
+# TIME: a daily layer (a period) seeds its default time, a listed time, and refuses the rest.
+data=$(cd "$(dirname "$0")/../../data" && pwd)
+cat >"$work/daily.yaml" <<YAML
+upstreams:
+  - {name: local, type: local, path: $data/bmng_2048x1024.jpg}
+layers:
+  - name: daily
+    upstream: local
+    format: image/jpeg
+    grid: {level_zero_delta: 36, tile_size: 512, levels: 1}
+    time: {period: 2024-01-01/2024-01-31/P1D}
+YAML
+tcache="$work/tcache"
+out=$("$tellus" seed --config "$work/daily.yaml" --cache "$tcache" --layer daily --levels 0 \
+  --bbox -30,-30,30,30) || fail "seed at the default time: $out"
+echo "$out" | grep -q "6 written" || fail "seed at the default time: $out"
+out=$("$tellus" seed --config "$work/daily.yaml" --cache "$tcache" --layer daily --levels 0 \
+  --bbox -30,-30,30,30 --time 2024-01-15) || fail "seed at 2024-01-15: $out"
+echo "$out" | grep -q "6 written" || fail "a second time is a second set of tiles: $out"
+for bad in 2024-02-01 2024-1-5 yesterday; do
+  if err=$("$tellus" seed --config "$work/daily.yaml" --cache "$tcache" --layer daily --levels 0 \
+    --time "$bad" 2>&1); then fail "--time $bad was accepted: $err"; fi
+  echo "$err" | grep -q "TIME is not one of the layer's times" || fail "--time $bad: $err"
+done
+if err=$("$tellus" seed --cache "$tcache" --layer bluemarble --levels 0 --time 2024-01-15 2>&1); then
+  fail "--time for a layer without TIME was accepted"
+fi
+echo "$err" | grep -q "no TIME dimension" || fail "no TIME dimension: $err"
+
 echo "cli: all checks passed"

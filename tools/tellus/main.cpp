@@ -27,8 +27,8 @@
 #include <string>
 #include <string_view>
 #include <sys/resource.h>
-#include <unistd.h>
 #include <thread>
+#include <unistd.h>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -421,6 +421,24 @@ int cmdSeed(const Args& a) {
     for (const auto& l : ctx->config.layers)
       layers.push_back(&l);
   }
+  // TIME: checked against each layer's dimension, as a WMS client's would be.
+  for (const LayerConfig* l : layers) {
+    const auto t = resolveTimeDimension(
+        l->name, l->time.values, l->time.period, l->time.defaultValue, sso.time);
+    if (!t) {
+      std::fprintf(stderr,
+                   "tellus seed: --time for layer '%s': %s\n",
+                   l->name.c_str(),
+                   t.error().message.c_str());
+      return kExitUsage;
+    }
+    if (!sso.time.empty() && t->empty()) {
+      std::fprintf(
+          stderr, "tellus seed: layer '%s' has no TIME dimension; drop --time\n", l->name.c_str());
+      return kExitUsage;
+    }
+  }
+
   int rc = kExitOk;
   // Remote upstreams go through the tile service, as `tellus serve` fetches them.
   Fetcher fetcher;
@@ -428,19 +446,12 @@ int cmdSeed(const Args& a) {
   for (const auto* layer : layers) {
     const UpstreamConfig* upstream = ctx->config.upstream(layer->upstream);
     const bool local = upstream && upstream->type == UpstreamConfig::Type::Local;
-    const auto& td = layer->time;
-    const bool hasTime = !td.values.empty() || !td.period.empty();
-    if (!sso.time.empty() &&
-        (!hasTime ||
-         (td.period.empty() &&
-          std::find(td.values.begin(), td.values.end(), sso.time) == td.values.end()))) {
-      std::fprintf(stderr,
-                   "tellus seed: %s: --time %s is not one of the layer's times\n",
-                   layer->name.c_str(),
-                   sso.time.c_str());
-      return kExitUsage;
-    }
-    if (!local || sso.refresh || !sso.time.empty()) {
+    // A layer with a TIME dimension is seeded at --time, else at its default time.
+    const std::string layerTime =
+        resolveTimeDimension(
+            layer->name, layer->time.values, layer->time.period, layer->time.defaultValue, sso.time)
+            .value_or(sso.time);
+    if (!local || sso.refresh || !layerTime.empty()) {
       if (!service) {
         auto [ups, lays] = proxySpecs(ctx->config);
         auto created = TileService::create(
@@ -452,8 +463,8 @@ int cmdSeed(const Args& a) {
         service = std::move(*created);
       }
       ServiceSeedOptions opts = sso;
+      opts.time = layerTime;
       opts.range = so;
-      if (opts.time.empty() && hasTime) opts.time = td.defaultValue; // as a request without TIME
       opts.estimateBytesPerTile = estimateTileBytes(*ctx->cache, *layer);
       std::int64_t planned = 0;
       {

@@ -152,6 +152,20 @@ WmsErrorContext wmsErrorContext(const QueryParams& params, const WmsLimits& limi
 std::optional<OgcException> checkUpdateSequence(std::string_view requested,
                                                 std::string_view current);
 
+/**
+ * @brief The TIME of a request for a layer with a TIME dimension (`values` listed, or a
+ * `period` "start/end/step" too long to list): the value itself when it is one of them, the
+ * default when the request has none, MissingDimensionValue when there is no default,
+ * InvalidDimensionValue otherwise. Within a period, values of the period's ISO 8601 shape between
+ * start and end are accepted. A layer without a dimension ignores TIME ("").
+ */
+std::expected<std::string, OgcException>
+resolveTimeDimension(std::string_view layer,
+                     const std::vector<std::string>& values,
+                     std::string_view period,
+                     std::string_view defaultValue,
+                     std::string_view requested);
+
 /** A World Wind tile-service request `?T=<dataset>&L=<level>&X=<column>&Y=<row>` (row 0 in the
  * south, column 0 at -180). */
 struct WorldWindTileRequest {
