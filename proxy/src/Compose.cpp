@@ -224,16 +224,23 @@ std::int16_t sampleHeight(const Quad& q, std::int16_t noData) noexcept {
   return static_cast<std::int16_t>(std::lround(top + (bottom - top) * q.fy));
 }
 
-/** Draws straight-alpha `src` (alpha already scaled) over canvas pixel `dst`. */
-void over(const std::uint8_t src[4], std::uint8_t* dst) noexcept {
+/** Draws straight-alpha `src` (alpha already scaled) over canvas pixel `dst` (RGBA, or RGB when
+ * `channels` is 3: an opaque canvas). */
+void over(const std::uint8_t src[4], std::uint8_t* dst, int channels) noexcept {
   if (src[3] == 255) {
     dst[0] = src[0];
     dst[1] = src[1];
     dst[2] = src[2];
-    dst[3] = 255;
+    if (channels == 4) dst[3] = 255;
     return;
   }
   if (src[3] == 0) return;
+  if (channels == 3) {
+    const std::int32_t a = src[3];
+    for (int ch = 0; ch < 3; ++ch)
+      dst[ch] = static_cast<std::uint8_t>((src[ch] * a + dst[ch] * (255 - a) + 127) / 255);
+    return;
+  }
   const double as = src[3] / 255.0;
   const double ad = dst[3] / 255.0;
   const double ao = as + ad * (1.0 - as);
@@ -373,17 +380,62 @@ ComposeStats composeImagery(const TileGrid& grid,
                             std::int32_t firstLevel,
                             const TileLookup& tiles,
                             double opacity,
-                            std::vector<std::uint8_t>& canvas) {
-  canvas.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 4);
+                            std::vector<std::uint8_t>& canvas,
+                            std::int32_t canvasChannels) {
+  const int cc = canvasChannels == 3 ? 3 : 4;
+  canvas.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) *
+                static_cast<std::size_t>(cc));
   const double o = std::isfinite(opacity) ? std::clamp(opacity, 0.0, 1.0) : 1.0;
   const auto scale = static_cast<std::int32_t>(std::lround(o * 256.0));
-  return forEachPixel(
-      grid, box, width, height, level, firstLevel, tiles, [&](std::size_t pixel, const Quad& q) {
-        std::uint8_t px[4];
-        sampleRgba(q, px);
-        if (scale < 256) px[3] = static_cast<std::uint8_t>((px[3] * scale + 128) >> 8);
-        over(px, &canvas[pixel * 4]);
-      });
+  ComposeStats stats;
+  const LevelTiles t = levelTiles(grid, box, width, height, level, tiles);
+  Fallback fallback(grid, box, width, height, level, std::max(0, firstLevel), tiles);
+  Quad q{};
+  for (std::int32_t j = 0; j < height; ++j) {
+    const AxisSample& r = t.rows.samples[static_cast<std::size_t>(j)];
+    if (r.slotA < 0) continue;
+    std::uint8_t* out = &canvas[static_cast<std::size_t>(j) * static_cast<std::size_t>(width) *
+                                static_cast<std::size_t>(cc)];
+    const std::int32_t wy = r.weightB;
+    for (std::int32_t i = 0; i < width; ++i, out += cc) {
+      const AxisSample& c = t.cols.samples[static_cast<std::size_t>(i)];
+      if (c.slotA < 0) continue;
+      // The common case: the four texels in one opaque RGB tile, drawn at full opacity.
+      if (scale == 256 && c.slotA == c.slotB && r.slotA == r.slotB) {
+        const TileSamples* s = t.at(r.slotA, c.slotA);
+        if (s && s->channels == 3) {
+          const auto w = static_cast<std::size_t>(s->width);
+          const std::uint8_t* rowA = s->rgb + static_cast<std::size_t>(r.offA) * w * 3;
+          const std::uint8_t* rowB = s->rgb + static_cast<std::size_t>(r.offB) * w * 3;
+          const std::size_t xa = static_cast<std::size_t>(c.offA) * 3;
+          const std::size_t xb = static_cast<std::size_t>(c.offB) * 3;
+          const std::int32_t wx = c.weightB;
+          for (std::size_t ch = 0; ch < 3; ++ch) {
+            const std::int32_t top = rowA[xa + ch] * (256 - wx) + rowA[xb + ch] * wx;
+            const std::int32_t bottom = rowB[xa + ch] * (256 - wx) + rowB[xb + ch] * wx;
+            out[ch] = static_cast<std::uint8_t>((top * (256 - wy) + bottom * wy + 32768) >> 16);
+          }
+          if (cc == 4) out[3] = 255;
+          continue;
+        }
+      }
+      bool found = quadAt(t, c, r, q);
+      if (!found) {
+        found = fallback.quad(i, j, q);
+        if (found) {
+          ++stats.fallbackPixels;
+        } else {
+          ++stats.missingPixels;
+          continue;
+        }
+      }
+      std::uint8_t px[4];
+      sampleRgba(q, px);
+      if (scale < 256) px[3] = static_cast<std::uint8_t>((px[3] * scale + 128) >> 8);
+      over(px, out, cc);
+    }
+  }
+  return stats;
 }
 
 ComposeStats composeHeights(const TileGrid& grid,

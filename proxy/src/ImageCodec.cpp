@@ -94,10 +94,12 @@ std::expected<std::vector<std::byte>, std::string> blankImage(std::string_view m
 
 namespace {
 
-/** Collects decoded samples into a vector of T. */
+/** Collects decoded samples into a vector of T (the caller's, so its storage can be reused:
+ * resizing to the size it already has neither allocates nor clears). */
 template <class T> class SamplesSink final : public imaging::Sink {
 public:
-  std::vector<T> samples;
+  explicit SamplesSink(std::vector<T>& out) : samples(out) {}
+  std::vector<T>& samples;
 
 private:
   void* allocate(std::size_t size) override {
@@ -128,19 +130,33 @@ std::string decodeError(std::int32_t status,
 
 } // namespace
 
-std::expected<DecodedImage, std::string>
-decodeImagery(std::span<const std::byte> bytes, std::string_view mimeType, int width, int height) {
+std::expected<int, std::string> decodeImageryInto(std::span<const std::byte> bytes,
+                                                  std::string_view mimeType,
+                                                  int width,
+                                                  int height,
+                                                  std::vector<std::uint8_t>& pixels) {
   const char* format = formatOf(mimeType);
   if (!format) return std::unexpected("cannot decode " + std::string(mimeType) + " as imagery");
   auto api = imaging::table();
   if (!api) return std::unexpected(api.error());
-  SamplesSink<std::uint8_t> out;
+  SamplesSink<std::uint8_t> out(pixels);
   TellusImagingRasterInfo info{};
   const auto status = (*api)->decodePixels(
       bytes.data(), bytes.size(), format, TELLUS_IMAGING_UINT8, width, height, &info, out.get());
   if (status != TELLUS_IMAGING_OK)
     return std::unexpected(decodeError(status, info, out.error(), width, height));
-  return DecodedImage{info.width, info.height, info.channels, std::move(out.samples)};
+  return info.channels;
+}
+
+std::expected<DecodedImage, std::string>
+decodeImagery(std::span<const std::byte> bytes, std::string_view mimeType, int width, int height) {
+  DecodedImage img;
+  auto channels = decodeImageryInto(bytes, mimeType, width, height, img.pixels);
+  if (!channels) return std::unexpected(channels.error());
+  img.width = width;
+  img.height = height;
+  img.channels = *channels;
+  return img;
 }
 
 std::expected<std::vector<std::int16_t>, std::string>
@@ -164,7 +180,8 @@ decodeHeights(std::span<const std::byte> bytes, std::string_view mimeType, int w
     return std::unexpected("cannot decode " + std::string(mimeType) + " as heights");
   auto api = imaging::table();
   if (!api) return std::unexpected(api.error());
-  SamplesSink<std::int16_t> out;
+  std::vector<std::int16_t> samples;
+  SamplesSink<std::int16_t> out(samples);
   TellusImagingRasterInfo info{};
   const auto status = (*api)->decodePixels(
       bytes.data(), bytes.size(), format, TELLUS_IMAGING_INT16, width, height, &info, out.get());

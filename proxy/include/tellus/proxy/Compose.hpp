@@ -66,8 +66,9 @@ struct TileSamples {
 using TileLookup = std::function<const TileSamples*(const TileKey&)>;
 
 /**
- * Draws one imagery layer over `canvas` (width * height RGBA, straight alpha): each pixel is the
- * tile's colour with alpha (tile alpha * opacity) composited "over" what the canvas holds.
+ * Draws one imagery layer over `canvas` (width * height RGBA, straight alpha, or RGB when
+ * `canvasChannels` is 3: an opaque canvas): each pixel is the tile's colour with alpha (tile
+ * alpha * opacity) composited "over" what the canvas holds.
  * Returns how many pixels came from a coarser level than `level` (fallback) and how many had no
  * tile at all.
  */
@@ -83,7 +84,8 @@ ComposeStats composeImagery(const TileGrid& grid,
                             std::int32_t firstLevel,
                             const TileLookup& tiles,
                             double opacity,
-                            std::vector<std::uint8_t>& canvas);
+                            std::vector<std::uint8_t>& canvas,
+                            std::int32_t canvasChannels = 4);
 
 /** Draws one elevation layer into `heights` (width * height): pixels with a value that is not
  * `noData` replace what is there (later layers win where they have data). */

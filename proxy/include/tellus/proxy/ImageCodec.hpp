@@ -50,6 +50,13 @@ struct DecodedImage {
 std::expected<DecodedImage, std::string>
 decodeImagery(std::span<const std::byte> bytes, std::string_view mimeType, int width, int height);
 
+/** decodeImagery into the caller's storage (reused when it has the size already); the channels. */
+std::expected<int, std::string> decodeImageryInto(std::span<const std::byte> bytes,
+                                                  std::string_view mimeType,
+                                                  int width,
+                                                  int height,
+                                                  std::vector<std::uint8_t>& pixels);
+
 /**
  * Decodes an elevation tile into raw 16-bit signed values, row-major, top row first:
  * "application/bil16" (little-endian, read here without the imaging module), "image/tiff"
