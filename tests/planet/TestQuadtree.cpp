@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <random>
@@ -283,4 +284,107 @@ TEST(QuadtreeExtremes, TexelToPixelHoldsAtThePole) {
         EXPECT_GT(worst, 0.25) << lat << " " << alt << " " << tilt; // and not absurdly fine
       }
     }
+}
+
+TEST(QuadtreeExtremes, NeighboursAcrossTheAntimeridianAndAtThePoles) {
+  const Geodesy g;
+  Quadtree tree(g, test::globalGrid(), params());
+  // Looking at the antimeridian near the pole and on the equator: deep trees on both sides.
+  for (const CameraPose pose : {CameraPose{0.0, 180.0, 5e4, 0.0, 0.0},
+                                CameraPose{89.5, 179.9, 5e4, 0.0, 40.0},
+                                CameraPose{-90.0, -180.0, 1e4, 0.0, 0.0}})
+    converge(tree, Camera(g, pose, {1024, 768}));
+  expectConsistent(tree);
+  int wrapped = 0, poleNone = 0;
+  const TileGrid grid = test::globalGrid();
+  tree.forEach([&](const Node& n) {
+    const NodeKey& k = n.key();
+    if (k.col + k.span == grid.colCount(k.level)) { // the easternmost column
+      const Node* e = n.neighbour(Direction::East);
+      ASSERT_NE(e, nullptr);
+      EXPECT_EQ(e->sector().west, -180.0);
+      ++wrapped;
+    }
+    if (k.row + 1 == grid.rowCount(k.level)) {
+      EXPECT_EQ(n.neighbour(Direction::North), nullptr);
+      ++poleNone;
+    }
+    if (k.row == 0) {
+      EXPECT_EQ(n.neighbour(Direction::South), nullptr);
+    }
+  });
+  EXPECT_GT(wrapped, 10);
+  EXPECT_GT(poleNone, 10);
+}
+
+TEST(QuadtreeExtremes, OneMetreAndOneBillionMetres) {
+  const Geodesy g;
+  QuadtreeParams p = params();
+  Quadtree tree(g, test::globalGrid(), p);
+  // 1e9 m: the globe is a few pixels; level zero only, nothing created.
+  const FrameStats& far = tree.update(Camera(g, {0.0, 0.0, 1e9, 0.0, 0.0}, {1024, 768}));
+  EXPECT_EQ(far.created, 0u);
+  EXPECT_GT(far.drawn, 0u);
+  // 1 m above the ground at the pole, looking at the horizon: the nodes under the camera reach
+  // the deepest levels and the tree stays consistent; nothing non-finite.
+  for (double lat : {90.0, 0.0}) {
+    const Camera cam(g, {lat, 0.0, 1.0, 0.0, 85.0}, {1024, 768});
+    converge(tree, cam, 400);
+    EXPECT_GE(tree.stats().maxLevel, 22) << lat; // ~1 m tiles underfoot
+    EXPECT_GT(tree.stats().drawn, 0u);
+    expectConsistent(tree);
+  }
+}
+
+TEST(QuadtreeExtremes, NonFiniteCameraIsRejectedAndTheTreeUntouched) {
+  const Geodesy g;
+  Quadtree tree(g, test::globalGrid(), params());
+  const double nan = std::nan("");
+  EXPECT_THROW(Camera(g, {nan, 0.0, 1e6, 0.0, 0.0}, {1024, 768}), std::invalid_argument);
+  EXPECT_THROW(Camera(g, {0.0, 0.0, nan, 0.0, 0.0}, {1024, 768}), std::invalid_argument);
+  EXPECT_THROW(Camera(g, {0.0, 0.0, 1e6, nan, 0.0}, {1024, 768}), std::invalid_argument);
+  EXPECT_EQ(tree.nodeCount(), 50u);
+  EXPECT_EQ(tree.frame(), 0u);
+}
+
+TEST(QuadtreeExtremes, DeepestLevelDoesNotSplitAndPartialDatasets) {
+  const Geodesy g;
+  // A 3-level dataset over Europe: only its tiles exist, no merged rows (not global).
+  GridSpec spec;
+  spec.sector = {-10.0, 30.0, 40.0, 72.0};
+  spec.numLevels = 3;
+  const auto grid = TileGrid::create(spec);
+  ASSERT_TRUE(grid);
+  Quadtree tree(g, *grid, params());
+  const Camera cam(g, {46.5, 8.0, 1000.0, 0.0, 0.0}, {1024, 768});
+  converge(tree, cam);
+  EXPECT_EQ(tree.stats().maxLevel, 2);
+  tree.forEach([&](const Node& n) {
+    EXPECT_EQ(n.key().span, 1);
+    EXPECT_TRUE(grid->isValid(n.key().firstTile()));
+  });
+  expectConsistent(tree);
+}
+
+TEST(QuadtreeSlow, UpdatePassCost) {
+  const Geodesy g;
+  QuadtreeParams p = params();
+  p.lod.threshold = 0.125; // many visible nodes from one camera
+  Quadtree tree(g, test::globalGrid(), p);
+  const Camera cam(g, {30.0, 10.0, 3e5, 0.0, 70.0}, {1920, 1080});
+  converge(tree, cam);
+  const auto t0 = std::chrono::steady_clock::now();
+  const int frames = 50;
+  for (int i = 0; i < frames; ++i)
+    tree.update(cam);
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() /
+      frames;
+  std::printf("update pass: %.3f ms for %zu visible (%zu drawn, %zu visited, %zu nodes)\n",
+              ms,
+              tree.stats().visible,
+              tree.stats().drawn,
+              tree.stats().visited,
+              tree.nodeCount());
+  EXPECT_GT(tree.stats().visible, 1000u);
 }
