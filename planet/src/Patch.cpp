@@ -117,15 +117,23 @@ NodeGeometry::NodeGeometry(const Geodesy& geodesy,
     r2 = std::max(r2, glm::dot(d, d));
   }
   // Any patch point is within half a sample cell (in latitude and in longitude) of a sample; the
-  // path along a parallel and a meridian there is at most (largest radius of curvature a^2/b +
-  // |height|) times those half-angles, and distance is 1-Lipschitz. Heights in between lie on the
-  // segment between the two sampled heights, where the distance to the centre is convex.
+  // path along a meridian and then a parallel there is at most (largest radius of curvature
+  // a^2/b + |height|) times the half-angle in latitude plus the parallel's radius, at most that
+  // times cos(smallest |latitude| of the sector), times the half-angle in longitude; distance is
+  // 1-Lipschitz. The cosine matters for wide polar nodes (36 degrees of longitude a few km from
+  // the pole). Heights in between lie on the segment between the two sampled heights, where the
+  // distance to the centre is convex.
   const double a = geodesy.equatorialRadius();
   const double b = geodesy.polarRadius();
   const double curvature = a * a / b + std::max(std::abs(minHeightM), std::abs(maxHeightM));
   const double cells = static_cast<double>(kBoundSamples - 1);
-  const double halfCellRad = 0.5 * ((s.north - s.south) + (s.east - s.west)) / cells * kDegToRad;
-  const double margin = curvature * halfCellRad;
+  const double minAbsLat =
+      (s.south <= 0.0 && s.north >= 0.0) ? 0.0 : std::min(std::abs(s.south), std::abs(s.north));
+  // cos rounded up a little (and never below 0) so the bound stays conservative.
+  const double parallelScale = std::min(1.0, std::cos(minAbsLat * kDegToRad) + 1e-15);
+  const double halfLatRad = 0.5 * (s.north - s.south) / cells * kDegToRad;
+  const double halfLonRad = 0.5 * (s.east - s.west) / cells * kDegToRad;
+  const double margin = curvature * (halfLatRad + parallelScale * halfLonRad);
   bounds_.radius = (std::sqrt(r2) + margin) * (1.0 + 1e-12) + 1e-6;
 }
 

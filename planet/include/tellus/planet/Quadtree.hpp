@@ -1,0 +1,219 @@
+#pragma once
+/**
+ * @file Quadtree.hpp
+ * @brief One layer's node tree (thesis 4.1, 4.7.2, 4.8.2): lazily created nodes, the per-frame
+ * update pass (traversal, culling, texel-to-pixel LOD, draw list, statistics), neighbour pointers
+ * and the node-count limit. GL-free.
+ *
+ * Nodes and tiles. Away from the poles a node is exactly one tile of the layer's grid. Near the
+ * poles a node may span several columns of its level (NodeKey::span, a power of two): a geodetic
+ * tile there is a sliver whose east-west extent is cos(latitude) times its north-south extent, so
+ * the texel-to-pixel test, which must split for the north-south texels, would also halve an
+ * east-west extent that is already far finer than needed. Children therefore split north-south
+ * only where the row is that thin: a child row spans as many columns as keeps its east-west
+ * ground extent near its north-south extent (the power of two nearest 1/cos(mid latitude), never
+ * narrower than half nor wider than its parent). The LOD test still checks both projected axes
+ * against the node texture's texel counts, so a texel is never larger than the threshold in
+ * pixels along either axis; the texture of a wide node is composed from its `span` tiles
+ * (TextureStreamer asks for all of them). See docs/ARCHITECTURE.md, "The poles".
+ */
+
+#include <tellus/cache/TileGrid.hpp>
+#include <tellus/planet/Camera.hpp>
+#include <tellus/planet/Culling.hpp>
+#include <tellus/planet/Lod.hpp>
+#include <tellus/planet/Patch.hpp>
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace tellus::planet {
+
+/** A node's address: a row of its level and `span` columns from `col` (span 1: one tile). */
+struct NodeKey {
+  std::int32_t level = 0;
+  std::int64_t row = 0;
+  std::int64_t col = 0;
+  std::int64_t span = 1;
+  friend constexpr auto operator<=>(const NodeKey&, const NodeKey&) = default;
+  TileKey firstTile() const noexcept { return {level, row, col}; }
+};
+
+struct NodeKeyHash {
+  std::size_t operator()(const NodeKey& k) const noexcept {
+    return TileKeyHash{}(k.firstTile()) ^ (static_cast<std::size_t>(k.span) * 0x9E3779B9u);
+  }
+};
+
+/** Per-node texture state (thesis table 2, extended). The ITileSource hides whether a tile comes
+ * from the cache or upstream, so a requested tile is CheckingCache until its bytes arrive. */
+enum class TextureState : std::uint8_t {
+  NoTexture,     ///< nothing requested (or a failure waiting for its retry)
+  CheckingCache, ///< requested from the tile source
+  Fetching,      ///< the source reported an upstream fetch (sources that can tell)
+  Decoding,      ///< bytes arrived, decoding on a worker
+  Uploading,     ///< decoded, being uploaded in bands
+  Finished,      ///< resident and drawable
+  Absent,        ///< no tile exists here (never asked for again in this session)
+};
+
+class Quadtree;
+
+/** Children slots, a child's position in its parent. A row that is not split east-west has its
+ * one child in the west slot (SW or NW) and the east slot empty. */
+enum ChildSlot { ChildSW = 0, ChildSE = 1, ChildNW = 2, ChildNE = 3 };
+
+class Node {
+public:
+  Node(const Geodesy& geodesy, const NodeKey& key, const Sector& sector, Node* parent);
+  Node(const Node&) = delete;
+  Node& operator=(const Node&) = delete;
+  ~Node();
+
+  const NodeKey& key() const noexcept { return key_; }
+  std::int32_t level() const noexcept { return key_.level; }
+  const Sector& sector() const noexcept { return geometry_.sector(); }
+  const NodeGeometry& geometry() const noexcept { return geometry_; }
+
+  Node* parent() const noexcept { return parent_; }
+  Node* child(int slot) const noexcept { return children_[static_cast<std::size_t>(slot)].get(); }
+  bool hasChildren() const noexcept { return childCount_ > 0; }
+  int childCount() const noexcept { return childCount_; }
+  /** The deepest existing node of level <= this node's level across that side whose extent
+   * along the shared edge contains this node's whole edge (same level, or coarser where the
+   * same level does not exist). East and west wrap across the antimeridian. Null across the pole
+   * (a top row's north, a bottom row's south: the pole is a point every polar node shares, there
+   * is no edge to stitch) and outside a partial dataset. */
+  Node* neighbour(Direction d) const noexcept { return neighbours_[static_cast<std::size_t>(d)]; }
+
+  /** Frame numbers (Quadtree::frame()) when this node last passed culling, and was last drawn. */
+  std::uint64_t lastVisibleFrame() const noexcept { return lastVisible_; }
+  std::uint64_t lastDrawnFrame() const noexcept { return lastDrawn_; }
+
+  /** Owned by the texture layer (TextureStreamer, the GL layer); the tree only stores it. */
+  TextureState texture = TextureState::NoTexture;
+
+private:
+  friend class Quadtree;
+  NodeKey key_;
+  NodeGeometry geometry_;
+  Node* parent_;
+  std::array<std::unique_ptr<Node>, 4> children_{};
+  std::array<Node*, 4> neighbours_{};
+  int childCount_ = 0;
+  std::uint64_t lastVisible_ = 0;
+  std::uint64_t lastDrawn_ = 0;
+};
+
+struct QuadtreeParams {
+  LodParams lod{};
+  /** Nodes created (splits) per update; past it the node is drawn unsplit this frame. */
+  int maxSplitsPerFrame = 64;
+  /** Node-count limit (thesis 4.7.2); nodes drawn this frame are never removed. */
+  std::size_t maxNodes = 50000;
+  /** The horizon occluder's height (at or below the lowest terrain). */
+  double occluderHeightM = 0.0;
+  /** Merge polar slivers east-west (the pole fix); off gives the plain one-tile-per-node tree. */
+  bool polarMerge = true;
+};
+
+struct FrameStats {
+  std::size_t visited = 0;
+  std::size_t visible = 0; ///< passed all three culling tests
+  std::size_t drawn = 0;
+  std::size_t created = 0; ///< nodes created this frame
+  std::size_t removed = 0; ///< nodes removed by the node-count limit this frame
+  std::size_t culledBackFace = 0;
+  std::size_t culledFrustum = 0;
+  std::size_t culledHorizon = 0;
+  std::size_t splitsDeferred = 0; ///< nodes drawn unsplit because of maxSplitsPerFrame
+  std::size_t nodes = 0;          ///< nodes in the tree after the update
+  std::int32_t maxLevel = 0;      ///< deepest drawn level
+};
+
+/**
+ * @brief One layer's tree. Not thread safe: the main thread owns it. Nodes are owned by the tree;
+ * a Node* stays valid until the node is removed (removeChildren, or the node-count limit in
+ * update()).
+ */
+class Quadtree {
+public:
+  /** The roots are the grid's valid level-zero tiles. */
+  Quadtree(const Geodesy& geodesy, const TileGrid& grid, QuadtreeParams params = {});
+  ~Quadtree();
+  Quadtree(const Quadtree&) = delete;
+  Quadtree& operator=(const Quadtree&) = delete;
+
+  const TileGrid& grid() const noexcept { return grid_; }
+  const QuadtreeParams& params() const noexcept { return params_; }
+  void setParams(const QuadtreeParams& p) noexcept { params_ = p; }
+
+  /** One frame: traverse, cull, LOD, create children (up to the split limit), fill drawList(),
+   * then enforce the node-count limit. No allocation once the tree and the list have grown,
+   * apart from the nodes created. */
+  const FrameStats& update(const Camera& camera);
+
+  std::uint64_t frame() const noexcept { return frame_; }
+  const std::vector<Node*>& drawList() const noexcept { return drawList_; }
+  const FrameStats& stats() const noexcept { return stats_; }
+  std::size_t nodeCount() const noexcept { return nodeCount_; }
+  const std::vector<std::unique_ptr<Node>>& roots() const noexcept { return roots_; }
+
+  /** The keys of a node's children (2 to 4; invalid tiles of a partial dataset left out), in
+   * slot order with the slot of each; empty at the deepest level. */
+  struct ChildKeys {
+    std::array<NodeKey, 4> keys{};
+    std::array<bool, 4> present{};
+  };
+  ChildKeys childKeys(const NodeKey& key) const noexcept;
+  /** The sector a key covers (from the grid's integer edges). */
+  Sector sectorOf(const NodeKey& key) const noexcept;
+
+  /** Creates the children of a leaf (no-op otherwise; false at the deepest level). */
+  bool split(Node& node);
+  /** Removes every descendant of node; every pointer to a removed node is relinked (to the
+   * nearest remaining coarser neighbour) or nulled. */
+  void removeChildren(Node& node);
+  /** The neighbour the tree would link now (what Node::neighbour must equal; for tests). */
+  Node* findNeighbour(const Node& node, Direction d) const noexcept;
+  /** Visits every node, parents before children. */
+  template <class F> void forEach(F&& f) const {
+    for (const auto& r : roots_)
+      if (r) forEachIn(*r, f);
+  }
+
+private:
+  template <class F> static void forEachIn(Node& n, F& f) {
+    f(n);
+    for (auto& c : n.children_)
+      if (c) forEachIn(*c, f);
+  }
+  void visit(Node& node, bool insideFrustum, const Camera& camera);
+  void linkNeighbours(Node& node) noexcept;
+  void relinkAround(const Node& node) noexcept;
+  void relinkBorderingIn(Node& subtree, const Node& around, Direction side) noexcept;
+  bool borders(const Node& q, const Node& p, Direction side) const noexcept;
+  Node* rootContaining(std::int32_t level, std::int64_t row, std::int64_t col) const noexcept;
+  void enforceNodeLimit();
+  std::int64_t
+  spanFor(std::int32_t level, std::int64_t row, std::int64_t parentSpanInChildCols) const noexcept;
+
+  const Geodesy& geodesy_;
+  TileGrid grid_;
+  QuadtreeParams params_;
+  HorizonOccluder occluder_;
+  bool globalLongitudes_ = false;
+  std::int64_t rootCols_ = 0;
+  std::vector<std::unique_ptr<Node>> roots_; // row-major from the south-west, null if invalid
+  std::vector<Node*> drawList_;
+  std::vector<Node*> scratch_;
+  FrameStats stats_;
+  std::uint64_t frame_ = 0;
+  std::size_t nodeCount_ = 0;
+  int splitsThisFrame_ = 0;
+};
+
+} // namespace tellus::planet

@@ -1,0 +1,119 @@
+#pragma once
+/**
+ * @file TextureStreamer.hpp
+ * @brief Stream order (thesis 4.6): which tiles to ask an ITileSource for, each frame.
+ *
+ * Candidates are the drawn nodes whose texture is not resident, and every root until its texture
+ * is (roots go first so the whole globe is drawable). A candidate's score is its clipped projected
+ * area in pixels (ScreenArea.hpp) times (1 + the levels its displayed texture lacks: own 0,
+ * ancestor level difference, global level + 1). A node needs its tiles (one, or `span` tiles of a
+ * merged polar node); a tile takes its best node's score. At most `maxInFlight` requests are out;
+ * in-flight requests are re-scored every frame (reprioritize) and cancelled once no candidate
+ * wants them. A tile the source calls absent is never asked for again in this session; a failed
+ * one waits retryBaseS * 2^(failures - 1) seconds (capped at retryMaxS) before it is asked again,
+ * so an offline or dead upstream costs a few requests per tile, never a busy loop.
+ *
+ * Threads: update(), received() and forget() belong to the main thread; the source's callbacks
+ * only push into a locked inbox that update() drains (they may outlive the streamer safely).
+ */
+
+#include <tellus/cache/TileSource.hpp>
+#include <tellus/planet/Camera.hpp>
+#include <tellus/planet/Quadtree.hpp>
+#include <tellus/planet/TextureLru.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace tellus::planet {
+
+struct StreamParams {
+  std::string layer;
+  std::string time;
+  std::size_t maxInFlight = 8;
+  double retryBaseS = 1.0;
+  double retryMaxS = 120.0;
+};
+
+enum class TileFetch : std::uint8_t {
+  Idle,     ///< not asked for (or cancelled, or forgotten)
+  InFlight, ///< requested
+  Received, ///< bytes handed to the owner through received()
+  Absent,   ///< the source says there is none: never asked again
+  Failed,   ///< waiting for its retry time
+};
+
+struct ReceivedTile {
+  TileKey key;
+  TileResult result;
+};
+
+struct StreamStats {
+  std::size_t requested = 0; ///< totals since construction
+  std::size_t cancelled = 0;
+  std::size_t reprioritized = 0;
+  std::size_t received = 0;
+  std::size_t absent = 0;
+  std::size_t failed = 0;
+  std::size_t inFlight = 0;   ///< now
+  std::size_t candidates = 0; ///< nodes wanting a texture in the last update
+};
+
+class TextureStreamer {
+public:
+  TextureStreamer(ITileSource& source, StreamParams params);
+  ~TextureStreamer();
+  TextureStreamer(const TextureStreamer&) = delete;
+  TextureStreamer& operator=(const TextureStreamer&) = delete;
+
+  /**
+   * One frame, after tree.update(camera): drains finished requests, sets the texture state of
+   * the drawn nodes and roots (Finished when `resident` holds the node's texture; else from its
+   * tiles: Absent when all are absent, CheckingCache while any is in flight, Decoding once all
+   * arrived), scores the candidates, cancels, reprioritizes and requests. nowS is a monotonic
+   * clock in seconds.
+   */
+  void update(Quadtree& tree, const Camera& camera, double nowS, const TextureLru* resident);
+
+  /** Tiles that arrived (Ok) since the last call, for the decoder. */
+  std::vector<ReceivedTile> takeReceived();
+  /** The texture of this node went away (evicted): its tiles may be asked for again. */
+  void forget(const NodeKey& key);
+
+  TileFetch state(const TileKey& key) const noexcept;
+  const StreamStats& stats() const noexcept { return stats_; }
+  /** The score the tile was last given (0 when none); for tests and the statistics line. */
+  double score(const TileKey& key) const noexcept;
+
+private:
+  struct Entry {
+    TileFetch state = TileFetch::Idle;
+    TileRequestId id = 0;
+    std::uint64_t token = 0;
+    std::uint64_t wantedFrame = 0;
+    double score = 0.0;
+    double sentScore = 0.0;
+    int failures = 0;
+    double retryAtS = 0.0;
+  };
+  struct Inbox;
+  void drain(double nowS);
+  void want(const Node& node, double score, double nowS);
+
+  ITileSource& source_;
+  StreamParams params_;
+  std::shared_ptr<Inbox> inbox_;
+  std::unordered_map<TileKey, Entry, TileKeyHash> tiles_;
+  std::unordered_map<std::uint64_t, TileKey> byToken_;
+  std::vector<std::pair<double, TileKey>> scratch_;
+  std::vector<ReceivedTile> received_;
+  std::uint64_t frame_ = 0;
+  std::uint64_t nextToken_ = 1;
+  StreamStats stats_;
+};
+
+} // namespace tellus::planet

@@ -1,0 +1,362 @@
+#include <tellus/planet/Quadtree.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <queue>
+#include <utility>
+
+namespace tellus::planet {
+
+namespace {
+
+constexpr double kDegToRad = std::numbers::pi / 180.0;
+
+/** A key's extent in rows and columns of a finer (or equal) level. */
+struct Extent {
+  std::int64_t r0, r1, c0, c1;
+};
+
+Extent extentAt(const NodeKey& k, std::int32_t level) noexcept {
+  const int shift = level - k.level;
+  return {k.row << shift, (k.row + 1) << shift, k.col << shift, (k.col + k.span) << shift};
+}
+
+Direction opposite(Direction d) noexcept {
+  switch (d) {
+  case Direction::North:
+    return Direction::South;
+  case Direction::South:
+    return Direction::North;
+  case Direction::East:
+    return Direction::West;
+  case Direction::West:
+    return Direction::East;
+  }
+  return Direction::North;
+}
+
+constexpr std::array<Direction, 4> kDirections{
+    Direction::North, Direction::East, Direction::South, Direction::West};
+
+} // namespace
+
+Node::Node(const Geodesy& geodesy, const NodeKey& key, const Sector& sector, Node* parent)
+    : key_(key), geometry_(geodesy, sector), parent_(parent) {}
+
+Node::~Node() = default;
+
+Quadtree::Quadtree(const Geodesy& geodesy, const TileGrid& grid, QuadtreeParams params)
+    : geodesy_(geodesy), grid_(grid), params_(params), occluder_(geodesy, params.occluderHeightM) {
+  const Sector& s = grid_.spec().sector;
+  globalLongitudes_ = s.west == -180.0 && s.east == 180.0;
+  rootCols_ = grid_.colCount(0);
+  const std::int64_t rows = grid_.rowCount(0);
+  roots_.resize(static_cast<std::size_t>(rows * rootCols_));
+  for (std::int64_t r = 0; r < rows; ++r)
+    for (std::int64_t c = 0; c < rootCols_; ++c) {
+      const NodeKey k{0, r, c, 1};
+      if (!grid_.isValid(k.firstTile())) continue;
+      roots_[static_cast<std::size_t>(r * rootCols_ + c)] =
+          std::make_unique<Node>(geodesy_, k, sectorOf(k), nullptr);
+      ++nodeCount_;
+    }
+  for (auto& r : roots_)
+    if (r) linkNeighbours(*r);
+}
+
+Quadtree::~Quadtree() = default;
+
+Sector Quadtree::sectorOf(const NodeKey& key) const noexcept {
+  Sector s = grid_.sectorOf(key.firstTile());
+  if (key.span > 1) s.east = grid_.sectorOf({key.level, key.row, key.col + key.span - 1}).east;
+  return s;
+}
+
+std::int64_t Quadtree::spanFor(std::int32_t level,
+                               std::int64_t row,
+                               std::int64_t parentSpanInChildCols) const noexcept {
+  const std::int64_t lo = parentSpanInChildCols / 2; // the parent's span: a plain quadtree split
+  if (!params_.polarMerge || !globalLongitudes_) return lo;
+  const Sector s = grid_.sectorOf({level, row, 0});
+  // The widest east-west edge is the equatorward one; one column there is cos(lat) times the
+  // north-south extent. The largest power of two not above 1/cos keeps the node's east-west
+  // extent at or below its north-south extent everywhere, so a merged node never splits for its
+  // east-west edge before a square node of its level would.
+  const double equatorward = std::min(std::abs(s.south), std::abs(s.north));
+  const double c = std::cos(equatorward * kDegToRad);
+  double ideal = c > 0.0 ? 1.0 / c : 0x1p62;
+  ideal = std::min(ideal, 0x1p62);
+  int exponent = 0;
+  std::frexp(ideal, &exponent); // ideal = f * 2^exponent, f in [0.5, 1)
+  const std::int64_t want = std::int64_t{1} << std::clamp(exponent - 1, 0, 62);
+  return std::clamp(want, lo, parentSpanInChildCols);
+}
+
+Quadtree::ChildKeys Quadtree::childKeys(const NodeKey& key) const noexcept {
+  ChildKeys out;
+  if (key.level + 1 >= grid_.numLevels()) return out;
+  const std::int32_t L = key.level + 1;
+  const std::int64_t width = key.span * 2; // the parent's columns at the child level
+  for (int half = 0; half < 2; ++half) {   // 0: south row, 1: north row
+    const std::int64_t row = key.row * 2 + half;
+    const std::int64_t span = spanFor(L, row, width);
+    for (std::int64_t i = 0; i * span < width; ++i) {
+      const NodeKey k{L, row, key.col * 2 + i * span, span};
+      bool valid = grid_.isValid(k.firstTile());
+      if (valid && span > 1) valid = grid_.isValid({L, row, k.col + span - 1});
+      const auto slot = static_cast<std::size_t>(half * 2 + i);
+      out.keys[slot] = k;
+      out.present[slot] = valid;
+    }
+  }
+  return out;
+}
+
+Node* Quadtree::rootContaining(std::int32_t level,
+                               std::int64_t row,
+                               std::int64_t col) const noexcept {
+  const std::int64_t r = row >> level, c = col >> level;
+  if (r < 0 || c < 0 || c >= rootCols_ || r >= grid_.rowCount(0)) return nullptr;
+  return roots_[static_cast<std::size_t>(r * rootCols_ + c)].get();
+}
+
+Node* Quadtree::findNeighbour(const Node& node, Direction d) const noexcept {
+  const NodeKey& k = node.key_;
+  const std::int32_t L = k.level;
+  const std::int64_t cols = grid_.colCount(L);
+  std::int64_t row = k.row, c0 = k.col, c1 = k.col + k.span;
+  switch (d) {
+  case Direction::North:
+    if (k.row + 1 >= grid_.rowCount(L)) return nullptr; // across the pole: none
+    row = k.row + 1;
+    break;
+  case Direction::South:
+    if (k.row == 0) return nullptr;
+    row = k.row - 1;
+    break;
+  case Direction::East:
+    c0 = (k.col + k.span) % cols;
+    c1 = c0 + 1;
+    break;
+  case Direction::West:
+    c0 = (k.col - 1 + cols) % cols;
+    c1 = c0 + 1;
+    break;
+  }
+  auto covers = [&](const Node& n) {
+    const Extent e = extentAt(n.key_, L);
+    return e.r0 <= row && row < e.r1 && e.c0 <= c0 && c1 <= e.c1;
+  };
+  Node* n = rootContaining(L, row, c0);
+  if (n == nullptr || !covers(*n)) return nullptr;
+  for (;;) {
+    Node* next = nullptr;
+    for (const auto& ch : n->children_)
+      if (ch && ch->key_.level <= L && covers(*ch)) {
+        next = ch.get();
+        break;
+      }
+    if (next == nullptr) break;
+    n = next;
+  }
+  // Covering the edge from inside an ancestor means the nodes across are narrower than this one
+  // (equatorward of a merged polar row): no single neighbour.
+  const Extent self = extentAt(k, L);
+  const Extent e = extentAt(n->key_, L);
+  if (e.r0 <= self.r0 && self.r1 <= e.r1 && e.c0 <= self.c0 && self.c1 <= e.c1) return nullptr;
+  return n;
+}
+
+void Quadtree::linkNeighbours(Node& node) noexcept {
+  for (Direction d : kDirections)
+    node.neighbours_[static_cast<std::size_t>(d)] = findNeighbour(node, d);
+}
+
+bool Quadtree::borders(const Node& q, const Node& p, Direction side) const noexcept {
+  const std::int32_t M = std::max(q.key_.level, p.key_.level);
+  const Extent a = extentAt(p.key_, M), b = extentAt(q.key_, M);
+  const std::int64_t cols = grid_.colCount(M);
+  const bool colsOverlap = std::max(a.c0, b.c0) < std::min(a.c1, b.c1);
+  const bool rowsOverlap = std::max(a.r0, b.r0) < std::min(a.r1, b.r1);
+  switch (side) {
+  case Direction::North:
+    return b.r0 == a.r1 && colsOverlap;
+  case Direction::South:
+    return b.r1 == a.r0 && colsOverlap;
+  case Direction::East:
+    return b.c0 == a.c1 % cols && rowsOverlap;
+  case Direction::West:
+    return b.c1 % cols == a.c0 && rowsOverlap;
+  }
+  return false;
+}
+
+void Quadtree::relinkBorderingIn(Node& n, const Node& around, Direction side) noexcept {
+  // n intersects the one-cell-wide strip (at the deepest level) just across around's edge?
+  const std::int32_t M = grid_.numLevels() - 1;
+  const Extent a = extentAt(around.key_, M), b = extentAt(n.key_, M);
+  const std::int64_t cols = grid_.colCount(M);
+  bool hit = false;
+  switch (side) {
+  case Direction::North:
+    hit = b.r0 <= a.r1 && a.r1 < b.r1 && std::max(a.c0, b.c0) < std::min(a.c1, b.c1);
+    break;
+  case Direction::South:
+    hit = b.r0 <= a.r0 - 1 && a.r0 - 1 < b.r1 && std::max(a.c0, b.c0) < std::min(a.c1, b.c1);
+    break;
+  case Direction::East: {
+    const std::int64_t c = a.c1 % cols;
+    hit = b.c0 <= c && c < b.c1 && std::max(a.r0, b.r0) < std::min(a.r1, b.r1);
+    break;
+  }
+  case Direction::West: {
+    const std::int64_t c = (a.c0 - 1 + cols) % cols;
+    hit = b.c0 <= c && c < b.c1 && std::max(a.r0, b.r0) < std::min(a.r1, b.r1);
+    break;
+  }
+  }
+  if (!hit) return;
+  if (n.key_.level >= around.key_.level && borders(n, around, side)) {
+    const Direction back = opposite(side);
+    n.neighbours_[static_cast<std::size_t>(back)] = findNeighbour(n, back);
+  }
+  for (auto& ch : n.children_)
+    if (ch) relinkBorderingIn(*ch, around, side);
+}
+
+void Quadtree::relinkAround(const Node& node) noexcept {
+  for (Direction d : kDirections)
+    for (auto& r : roots_)
+      if (r) relinkBorderingIn(*r, node, d);
+}
+
+bool Quadtree::split(Node& node) {
+  if (node.hasChildren()) return true;
+  const ChildKeys ck = childKeys(node.key_);
+  int made = 0;
+  for (std::size_t i = 0; i < 4; ++i) {
+    if (!ck.present[i]) continue;
+    node.children_[i] = std::make_unique<Node>(geodesy_, ck.keys[i], sectorOf(ck.keys[i]), &node);
+    ++made;
+  }
+  if (made == 0) return false;
+  node.childCount_ = made;
+  nodeCount_ += static_cast<std::size_t>(made);
+  stats_.created += static_cast<std::size_t>(made);
+  for (auto& ch : node.children_)
+    if (ch) linkNeighbours(*ch);
+  relinkAround(node);
+  return true;
+}
+
+void Quadtree::removeChildren(Node& node) {
+  if (!node.hasChildren()) return;
+  std::size_t count = 0;
+  auto counter = [&count](Node&) { ++count; };
+  for (auto& ch : node.children_)
+    if (ch) forEachIn(*ch, counter);
+  for (auto& ch : node.children_)
+    ch.reset();
+  node.childCount_ = 0;
+  nodeCount_ -= count;
+  stats_.removed += count;
+  relinkAround(node);
+}
+
+const FrameStats& Quadtree::update(const Camera& camera) {
+  ++frame_;
+  stats_ = FrameStats{};
+  drawList_.clear();
+  splitsThisFrame_ = 0;
+  for (auto& r : roots_)
+    if (r) visit(*r, false, camera);
+  enforceNodeLimit();
+  stats_.drawn = drawList_.size();
+  stats_.nodes = nodeCount_;
+  return stats_;
+}
+
+void Quadtree::visit(Node& node, bool insideFrustum, const Camera& camera) {
+  ++stats_.visited;
+  const NodeGeometry& g = node.geometry_;
+  if (isBackFacing(camera, g)) {
+    ++stats_.culledBackFace;
+    return;
+  }
+  if (!insideFrustum) {
+    const FrustumResult f = classify(camera.frustum(), g.bounds());
+    if (f == FrustumResult::Outside) {
+      ++stats_.culledFrustum;
+      return;
+    }
+    insideFrustum = f == FrustumResult::Inside;
+  }
+  if (occluder_.isOccluded(camera.position(), g.bounds())) {
+    ++stats_.culledHorizon;
+    return;
+  }
+  ++stats_.visible;
+  node.lastVisible_ = frame_;
+  const LodResult lod = evaluateLod(camera, g, params_.lod);
+  bool descend = lod.split && node.key_.level + 1 < grid_.numLevels();
+  if (descend && !node.hasChildren()) {
+    if (splitsThisFrame_ >= params_.maxSplitsPerFrame) {
+      ++stats_.splitsDeferred;
+      descend = false;
+    } else {
+      ++splitsThisFrame_;
+      descend = split(node);
+    }
+  }
+  if (descend) {
+    for (auto& ch : node.children_)
+      if (ch) visit(*ch, insideFrustum, camera);
+    return;
+  }
+  node.lastDrawn_ = frame_;
+  drawList_.push_back(&node);
+  stats_.maxLevel = std::max(stats_.maxLevel, node.key_.level);
+}
+
+void Quadtree::enforceNodeLimit() {
+  if (nodeCount_ <= params_.maxNodes) return;
+  // Candidates (thesis 4.7.2): nodes whose children are all leaves, none drawn this frame; the
+  // one whose children were visible longest ago goes first. Removing children can make the
+  // parent a candidate, so it is pushed back.
+  // Ties (nodes last visible in the same frame) go deepest first, then by key: deterministic,
+  // never by address.
+  struct Entry {
+    std::uint64_t lastUse;
+    Node* node;
+    bool operator>(const Entry& o) const noexcept {
+      if (lastUse != o.lastUse) return lastUse > o.lastUse;
+      if (node->key_.level != o.node->key_.level) return node->key_.level < o.node->key_.level;
+      return node->key_ > o.node->key_;
+    }
+  };
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<>> heap;
+  auto lastUse = [this](const Node& n) -> std::optional<std::uint64_t> {
+    if (!n.hasChildren()) return std::nullopt;
+    std::uint64_t newest = 0;
+    for (const auto& ch : n.children_) {
+      if (!ch) continue;
+      if (ch->hasChildren() || ch->lastDrawn_ == frame_) return std::nullopt;
+      newest = std::max(newest, ch->lastVisible_);
+    }
+    return newest;
+  };
+  auto collect = [&](Node& n) {
+    if (auto t = lastUse(n)) heap.push({*t, &n});
+  };
+  forEach(collect);
+  while (nodeCount_ > params_.maxNodes && !heap.empty()) {
+    Node* n = heap.top().node;
+    heap.pop();
+    removeChildren(*n);
+    if (Node* p = n->parent_)
+      if (auto t = lastUse(*p)) heap.push({*t, p});
+  }
+}
+
+} // namespace tellus::planet

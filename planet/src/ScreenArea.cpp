@@ -1,0 +1,60 @@
+#include <tellus/planet/ScreenArea.hpp>
+
+#include <cmath>
+
+namespace tellus::planet {
+
+namespace {
+
+constexpr int kMaxVerts = 16; // 4 corners + one vertex per clipping plane (5) and margin
+
+struct Poly {
+  std::array<glm::dvec4, kMaxVerts> v{};
+  int n = 0;
+};
+
+/** Sutherland-Hodgman against dist(p) >= 0, with dist linear in clip space. */
+template <class Dist> void clip(const Poly& in, Poly& out, Dist dist) noexcept {
+  out.n = 0;
+  for (int i = 0; i < in.n; ++i) {
+    const glm::dvec4& a = in.v[static_cast<std::size_t>(i)];
+    const glm::dvec4& b = in.v[static_cast<std::size_t>((i + 1) % in.n)];
+    const double da = dist(a), db = dist(b);
+    if (da >= 0.0 && out.n < kMaxVerts) out.v[static_cast<std::size_t>(out.n++)] = a;
+    if ((da >= 0.0) != (db >= 0.0) && out.n < kMaxVerts) {
+      const double t = da / (da - db);
+      out.v[static_cast<std::size_t>(out.n++)] = a + (b - a) * t;
+    }
+  }
+}
+
+} // namespace
+
+double clippedScreenArea(const Camera& camera, const std::array<glm::dvec3, 4>& corners) noexcept {
+  Poly a, b;
+  for (const glm::dvec3& c : corners) {
+    const glm::dvec4 p = camera.toClip(c);
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.w)) return 0.0;
+    a.v[static_cast<std::size_t>(a.n++)] = p;
+  }
+  const double near = camera.nearM();
+  clip(a, b, [near](const glm::dvec4& p) { return p.w - near; });
+  clip(b, a, [](const glm::dvec4& p) { return p.w - p.x; });
+  clip(a, b, [](const glm::dvec4& p) { return p.w + p.x; });
+  clip(b, a, [](const glm::dvec4& p) { return p.w - p.y; });
+  clip(a, b, [](const glm::dvec4& p) { return p.w + p.y; });
+  if (b.n < 3) return 0.0;
+  const double hw = 0.5 * camera.viewport().width, hh = 0.5 * camera.viewport().height;
+  double twice = 0.0;
+  for (int i = 0; i < b.n; ++i) {
+    const glm::dvec4& p = b.v[static_cast<std::size_t>(i)];
+    const glm::dvec4& q = b.v[static_cast<std::size_t>((i + 1) % b.n)];
+    const double px = p.x / p.w * hw, py = p.y / p.w * hh;
+    const double qx = q.x / q.w * hw, qy = q.y / q.w * hh;
+    twice += px * qy - qx * py;
+  }
+  const double area = 0.5 * std::abs(twice);
+  return std::isfinite(area) ? area : 0.0;
+}
+
+} // namespace tellus::planet

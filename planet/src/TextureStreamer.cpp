@@ -1,0 +1,208 @@
+#include <tellus/planet/ScreenArea.hpp>
+#include <tellus/planet/TextureFallback.hpp>
+#include <tellus/planet/TextureStreamer.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+#include <utility>
+
+namespace tellus::planet {
+
+struct TextureStreamer::Inbox {
+  std::mutex mutex;
+  std::vector<std::pair<std::uint64_t, TileResult>> done;
+};
+
+namespace {
+// Roots are scored above anything a node's area can reach (a 1e9-pixel viewport is 1e9).
+constexpr double kRootBoost = 1e15;
+} // namespace
+
+TextureStreamer::TextureStreamer(ITileSource& source, StreamParams params)
+    : source_(source), params_(std::move(params)), inbox_(std::make_shared<Inbox>()) {}
+
+TextureStreamer::~TextureStreamer() {
+  for (auto& [key, e] : tiles_)
+    if (e.state == TileFetch::InFlight) source_.cancel(e.id);
+  // A callback that still runs finds the inbox gone (it holds a weak_ptr): nothing dangles.
+}
+
+TileFetch TextureStreamer::state(const TileKey& key) const noexcept {
+  const auto it = tiles_.find(key);
+  return it == tiles_.end() ? TileFetch::Idle : it->second.state;
+}
+
+double TextureStreamer::score(const TileKey& key) const noexcept {
+  const auto it = tiles_.find(key);
+  return it == tiles_.end() ? 0.0 : it->second.score;
+}
+
+std::vector<ReceivedTile> TextureStreamer::takeReceived() {
+  return std::exchange(received_, {});
+}
+
+void TextureStreamer::forget(const NodeKey& key) {
+  for (std::int64_t i = 0; i < key.span; ++i) {
+    const auto it = tiles_.find({key.level, key.row, key.col + i});
+    if (it != tiles_.end() && it->second.state == TileFetch::Received)
+      it->second.state = TileFetch::Idle;
+  }
+}
+
+void TextureStreamer::drain(double nowS) {
+  std::vector<std::pair<std::uint64_t, TileResult>> done;
+  {
+    std::lock_guard lock(inbox_->mutex);
+    done.swap(inbox_->done);
+  }
+  for (auto& [token, result] : done) {
+    const auto t = byToken_.find(token);
+    if (t == byToken_.end()) continue; // cancelled or superseded
+    const TileKey key = t->second;
+    byToken_.erase(t);
+    Entry& e = tiles_[key];
+    if (e.state != TileFetch::InFlight || e.token != token) continue;
+    --stats_.inFlight;
+    switch (result.status) {
+    case TileStatus::Ok:
+      e.state = TileFetch::Received;
+      e.failures = 0;
+      ++stats_.received;
+      received_.push_back({key, std::move(result)});
+      break;
+    case TileStatus::Absent:
+      e.state = TileFetch::Absent;
+      ++stats_.absent;
+      break;
+    case TileStatus::Failed: {
+      e.state = TileFetch::Failed;
+      ++e.failures;
+      ++stats_.failed;
+      const double wait = params_.retryBaseS * std::ldexp(1.0, std::min(e.failures - 1, 30));
+      e.retryAtS = nowS + std::min(wait, params_.retryMaxS);
+      break;
+    }
+    }
+  }
+}
+
+void TextureStreamer::want(const Node& node, double score, double nowS) {
+  const NodeKey& k = node.key();
+  for (std::int64_t i = 0; i < k.span; ++i) {
+    Entry& e = tiles_[{k.level, k.row, k.col + i}];
+    if (e.wantedFrame != frame_) {
+      e.wantedFrame = frame_;
+      e.score = score;
+    } else {
+      e.score = std::max(e.score, score);
+    }
+    if (e.state == TileFetch::Failed && nowS >= e.retryAtS) e.state = TileFetch::Idle;
+  }
+}
+
+void TextureStreamer::update(Quadtree& tree,
+                             const Camera& camera,
+                             double nowS,
+                             const TextureLru* resident) {
+  ++frame_;
+  drain(nowS);
+  stats_.candidates = 0;
+
+  auto refreshState = [&](Node& n) {
+    if (resident != nullptr && resident->resident(n.key())) {
+      n.texture = TextureState::Finished;
+      return;
+    }
+    if (n.texture == TextureState::Uploading) return; // the owner's step
+    bool allAbsent = true, anyInFlight = false, allReceived = true;
+    for (std::int64_t i = 0; i < n.key().span; ++i) {
+      const TileFetch f = state({n.key().level, n.key().row, n.key().col + i});
+      allAbsent = allAbsent && f == TileFetch::Absent;
+      anyInFlight = anyInFlight || f == TileFetch::InFlight;
+      allReceived = allReceived && (f == TileFetch::Received || f == TileFetch::Absent);
+    }
+    n.texture = allAbsent     ? TextureState::Absent
+                : anyInFlight ? TextureState::CheckingCache
+                : allReceived ? TextureState::Decoding
+                              : TextureState::NoTexture;
+  };
+  auto needs = [](const Node& n) {
+    return n.texture == TextureState::NoTexture || n.texture == TextureState::CheckingCache ||
+           n.texture == TextureState::Fetching;
+  };
+
+  for (const auto& root : tree.roots()) {
+    if (!root) continue;
+    refreshState(*root);
+    if (needs(*root)) {
+      ++stats_.candidates;
+      want(*root, kRootBoost, nowS);
+    }
+  }
+  for (Node* n : tree.drawList()) {
+    if (n->level() == 0) continue; // done above
+    refreshState(*n);
+    if (!needs(*n)) continue;
+    ++stats_.candidates;
+    const TexturePlan plan = planTexture(*n);
+    int shown = n->level();
+    for (int i = 0; i < plan.partCount; ++i) {
+      const TexturePart& p = plan.parts[static_cast<std::size_t>(i)];
+      const int level = p.source == TextureSource::Global ? -1 : p.texture->level();
+      shown = std::min(shown, level);
+    }
+    const double area = clippedScreenArea(camera, n->geometry().corners());
+    want(*n, area * (1.0 + static_cast<double>(n->level() - shown)), nowS);
+  }
+
+  // Cancel what nobody wants any more; re-score what stays; collect what may be asked for.
+  scratch_.clear();
+  for (auto& [key, e] : tiles_) {
+    if (e.state == TileFetch::InFlight) {
+      if (e.wantedFrame != frame_) {
+        if (source_.cancel(e.id)) {
+          byToken_.erase(e.token);
+          e.state = TileFetch::Idle;
+          --stats_.inFlight;
+          ++stats_.cancelled;
+        }
+      } else if (e.score != e.sentScore) {
+        source_.reprioritize(e.id, e.score);
+        e.sentScore = e.score;
+        ++stats_.reprioritized;
+      }
+    } else if (e.state == TileFetch::Idle && e.wantedFrame == frame_) {
+      scratch_.emplace_back(e.score, key);
+    }
+  }
+  if (stats_.inFlight >= params_.maxInFlight || scratch_.empty()) return;
+  const std::size_t room = params_.maxInFlight - stats_.inFlight;
+  const std::size_t n = std::min(room, scratch_.size());
+  auto byScore = [](const auto& a, const auto& b) {
+    return a.first != b.first ? a.first > b.first : a.second < b.second;
+  };
+  std::partial_sort(
+      scratch_.begin(), scratch_.begin() + static_cast<std::ptrdiff_t>(n), scratch_.end(), byScore);
+  for (std::size_t i = 0; i < n; ++i) {
+    const TileKey key = scratch_[i].second;
+    Entry& e = tiles_[key];
+    const std::uint64_t token = nextToken_++;
+    e.state = TileFetch::InFlight;
+    e.token = token;
+    e.sentScore = e.score;
+    byToken_.emplace(token, key);
+    ++stats_.inFlight;
+    ++stats_.requested;
+    std::weak_ptr<Inbox> weak = inbox_;
+    e.id =
+        source_.request({params_.layer, params_.time, key}, e.score, [weak, token](TileResult&& r) {
+          if (auto inbox = weak.lock()) {
+            std::lock_guard lock(inbox->mutex);
+            inbox->done.emplace_back(token, std::move(r));
+          }
+        });
+  }
+}
+
+} // namespace tellus::planet

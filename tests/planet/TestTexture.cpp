@@ -1,0 +1,436 @@
+// Texture fallback, screen area, the GPU memory LRU and the stream scheduler (GL-free).
+#include "PlanetTestSupport.hpp"
+
+#include <tellus/planet/Quadtree.hpp>
+#include <tellus/planet/ScreenArea.hpp>
+#include <tellus/planet/TextureFallback.hpp>
+#include <tellus/planet/TextureLru.hpp>
+#include <tellus/planet/TextureStreamer.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <random>
+#include <set>
+
+using namespace tellus;
+using namespace tellus::planet;
+
+namespace {
+
+QuadtreeParams treeParams() {
+  QuadtreeParams p;
+  p.lod = {512, 512, 1.0};
+  p.maxSplitsPerFrame = 100000;
+  return p;
+}
+
+void converge(Quadtree& tree, const Camera& cam) {
+  for (int i = 0; i < 100; ++i)
+    if (tree.update(cam).created == 0) break;
+}
+
+/** The deepest drawn node (a chain of ancestors above it). */
+Node* deepest(const Quadtree& tree) {
+  Node* best = nullptr;
+  for (Node* n : tree.drawList())
+    if (!best || n->level() > best->level()) best = n;
+  return best;
+}
+
+/** A test double of ITileSource: records requests, reprioritizations and cancels; completes on
+ * demand (or at once, with a fixed status). */
+class FakeSource : public ITileSource {
+public:
+  struct Req {
+    TileRequestId id;
+    TileAddress address;
+    double priority;
+    Callback done;
+    bool open = true;
+  };
+  std::optional<TileStatus> autoComplete; // complete inside request() with this status
+  std::vector<Req> requests;
+  std::vector<TileRequestId> cancels;
+  std::size_t reprioritized = 0;
+
+  std::optional<DatasetSpec> describe(std::string_view, std::string_view) const override {
+    return std::nullopt;
+  }
+  TileRequestId request(const TileAddress& a, double priority, Callback done) override {
+    const TileRequestId id = requests.size() + 1;
+    requests.push_back({id, a, priority, std::move(done)});
+    if (autoComplete) complete(id, *autoComplete);
+    return id;
+  }
+  void reprioritize(TileRequestId, double) override { ++reprioritized; }
+  bool cancel(TileRequestId id) override {
+    Req& r = requests[id - 1];
+    if (!r.open) return false;
+    r.open = false;
+    cancels.push_back(id);
+    return true;
+  }
+  void complete(TileRequestId id, TileStatus status) {
+    Req& r = requests[id - 1];
+    if (!r.open) return;
+    r.open = false;
+    TileResult res;
+    res.status = status;
+    if (status == TileStatus::Ok) res.bytes.resize(16);
+    r.done(std::move(res));
+  }
+  std::size_t open() const {
+    std::size_t n = 0;
+    for (const Req& r : requests)
+      n += r.open ? 1 : 0;
+    return n;
+  }
+};
+
+constexpr std::size_t kTileBytes = 512 * 512 * 4 * 4 / 3; // RGBA8 with mipmaps
+
+} // namespace
+
+// ---- fallback ----
+
+TEST(TextureFallback, AncestorUvMatchesTheThesisExample) {
+  // Thesis figure 16: a node two levels down, second column from the west and the second row
+  // from the north of its grandparent, spans u 0.5..0.75 and v 0.5..0.75 (v north).
+  const UvTransform t = ancestorUv({2, 2, 2, 1}, {0, 0, 0, 1});
+  EXPECT_EQ(t.apply({0.0, 0.0}), glm::dvec2(0.5, 0.5));
+  EXPECT_EQ(t.apply({1.0, 1.0}), glm::dvec2(0.75, 0.75));
+}
+
+TEST(TextureFallback, AncestorUvIsExactManyLevelsUp) {
+  const TileGrid grid = test::globalGrid();
+  std::mt19937_64 rng(3);
+  for (int up : {1, 3, 5, 8, 12, 20, 24})
+    for (int level : {up, up + 1, 24}) {
+      if (level > 24) continue;
+      std::uniform_int_distribution<std::int64_t> row(0, grid.rowCount(level) - 1),
+          col(0, grid.colCount(level) - 1);
+      for (int i = 0; i < 20; ++i) {
+        const NodeKey node{level, row(rng), col(rng), 1};
+        const NodeKey anc{level - up, node.row >> up, node.col >> up, 1};
+        const UvTransform t = ancestorUv(node, anc);
+        // The node's corners, in the ancestor's uv from the sectors' degrees (long double).
+        const Sector ns = grid.sectorOf(node.firstTile()), as = grid.sectorOf(anc.firstTile());
+        const long double w = static_cast<long double>(as.east) - as.west;
+        const long double h = static_cast<long double>(as.north) - as.south;
+        const long double u0 = (static_cast<long double>(ns.west) - as.west) / w;
+        const long double v1 = (static_cast<long double>(ns.north) - as.south) / h;
+        EXPECT_NEAR(static_cast<double>(u0), t.apply({0.0, 0.0}).x, 1e-12) << up << " " << level;
+        EXPECT_NEAR(static_cast<double>(v1), t.apply({1.0, 1.0}).y, 1e-12) << up << " " << level;
+        // Exact in double: the scale is 2^-up and the offset a multiple of it.
+        EXPECT_EQ(t.scale.x, std::ldexp(1.0, -up));
+        EXPECT_EQ(std::fmod(t.offset.x, t.scale.x), 0.0);
+        EXPECT_GE(t.offset.x, 0.0);
+        EXPECT_LE(t.offset.x + t.scale.x, 1.0);
+      }
+    }
+  // A merged polar node inside a merged ancestor.
+  const UvTransform p = ancestorUv({6, 319, 64, 32}, {4, 79, 0, 32});
+  EXPECT_EQ(p.scale, glm::dvec2(32.0 / 128.0, 1.0 / 4.0));
+  EXPECT_EQ(p.offset, glm::dvec2(64.0 / 128.0, 3.0 / 4.0));
+}
+
+TEST(TextureFallback, ThesisOrderChildrenAncestorGlobal) {
+  const Geodesy g;
+  Quadtree tree(g, test::globalGrid(), treeParams());
+  converge(tree, Camera(g, {46.5, 8.0, 50000.0, 0.0, 0.0}, {1024, 768}));
+  Node* leaf = deepest(tree);
+  ASSERT_NE(leaf, nullptr);
+  ASSERT_GE(leaf->level(), 5);
+  Node* node = leaf->parent();
+  // Nothing ready: the global texture, through the node's global uv.
+  TexturePlan plan = planTexture(*leaf);
+  ASSERT_EQ(plan.partCount, 1);
+  EXPECT_EQ(plan.parts[0].source, TextureSource::Global);
+  const Sector& s = leaf->sector();
+  EXPECT_DOUBLE_EQ(plan.parts[0].uv.apply({0.0, 0.0}).x, (s.west + 180.0) / 360.0);
+  EXPECT_DOUBLE_EQ(plan.parts[0].uv.apply({1.0, 1.0}).y, (s.north + 90.0) / 180.0);
+  // An ancestor three levels up is ready: it is used, with the recomputed coordinates.
+  Node* a3 = node->parent()->parent();
+  a3->texture = TextureState::Finished;
+  plan = planTexture(*leaf);
+  EXPECT_EQ(plan.parts[0].source, TextureSource::Ancestor);
+  EXPECT_EQ(plan.parts[0].texture, a3);
+  EXPECT_EQ(plan.parts[0].uv.scale.y, 1.0 / 8.0);
+  // A nearer one wins.
+  node->texture = TextureState::Finished;
+  EXPECT_EQ(planTexture(*leaf).parts[0].texture, node);
+  node->texture = TextureState::Decoding; // not ready
+  // Children first: one ready child gives a mixed plan in parts.
+  Node* c0 = nullptr;
+  for (int i = 0; i < 4; ++i)
+    if (node->child(i)) {
+      c0 = node->child(i);
+      break;
+    }
+  ASSERT_NE(c0, nullptr);
+  c0->texture = TextureState::Finished;
+  plan = planTexture(*node);
+  EXPECT_TRUE(plan.drawnInParts);
+  EXPECT_EQ(plan.partCount, node->childCount());
+  EXPECT_EQ(plan.mixed, node->childCount() > 1);
+  for (int i = 0; i < plan.partCount; ++i) {
+    const TexturePart& p = plan.parts[static_cast<std::size_t>(i)];
+    if (p.region == c0) {
+      EXPECT_EQ(p.source, TextureSource::Own);
+    } else {
+      EXPECT_EQ(p.source, TextureSource::Ancestor);
+      EXPECT_EQ(p.texture, a3);
+      EXPECT_EQ(p.uv.scale.y, 1.0 / 8.0); // the child's area, three levels below a3
+    }
+  }
+  // All children ready: not mixed. Own ready: itself.
+  for (int i = 0; i < 4; ++i)
+    if (node->child(i)) node->child(i)->texture = TextureState::Finished;
+  EXPECT_FALSE(planTexture(*node).mixed);
+  node->texture = TextureState::Finished;
+  plan = planTexture(*node);
+  EXPECT_EQ(plan.partCount, 1);
+  EXPECT_EQ(plan.parts[0].source, TextureSource::Own);
+}
+
+// ---- screen area ----
+
+TEST(ScreenArea, ClippedToTheViewportAndTheNearPlane) {
+  const Geodesy g;
+  const Camera cam(g, {0.0, 0.0, 1e5, 0.0, 0.0}, {1000, 500}, 45.0);
+  // A huge node covering the whole view: the area is the viewport's.
+  const NodeGeometry big(g, {-5.0, -5.0, 5.0, 5.0});
+  EXPECT_NEAR(clippedScreenArea(cam, big.corners()), 1000.0 * 500.0, 1.0);
+  // A node in front of the camera but far off to the side: 0.
+  const NodeGeometry away(g, {30.0, 0.0, 40.0, 10.0});
+  EXPECT_EQ(clippedScreenArea(cam, away.corners()), 0.0);
+  // A small node at the nadir: inside the view, roughly its ground area over a pixel's.
+  const NodeGeometry small(g, {-0.05, -0.05, 0.05, 0.05});
+  const double px = 2.0 * 1e5 * std::tan(22.5 * std::numbers::pi / 180.0) / 500.0; // m per px
+  const double side = 0.1 * std::numbers::pi / 180.0 * 6378137.0;
+  EXPECT_NEAR(clippedScreenArea(cam, small.corners()),
+              side * side / (px * px),
+              0.05 * side * side / (px * px));
+  // Standing on a node looking at the horizon: corners behind the camera, still finite.
+  const Camera ground(g, {0.0, 0.0, 2.0, 0.0, 90.0}, {1000, 500});
+  const double a = clippedScreenArea(ground, big.corners());
+  EXPECT_TRUE(std::isfinite(a));
+  EXPECT_GT(a, 0.0);
+  EXPECT_LE(a, 1000.0 * 500.0 + 1.0);
+}
+
+// ---- GPU memory ----
+
+TEST(TextureLru, EvictsLeastRecentlyUsedButNeverThisFrame) {
+  TextureLru lru(3 * kTileBytes);
+  lru.beginFrame();
+  lru.insert({1, 0, 0, 1}, kTileBytes);
+  lru.insert({1, 0, 1, 1}, kTileBytes);
+  lru.beginFrame();
+  lru.insert({1, 0, 2, 1}, kTileBytes);
+  lru.use({1, 0, 0, 1});
+  lru.beginFrame();
+  lru.insert({1, 0, 3, 1}, kTileBytes); // over: {1,0,1} is the least recently used
+  EXPECT_FALSE(lru.resident({1, 0, 1, 1}));
+  EXPECT_TRUE(lru.resident({1, 0, 0, 1}));
+  EXPECT_EQ(lru.takeEvicted(), std::vector<NodeKey>{(NodeKey{1, 0, 1, 1})});
+  // One frame needing more than the budget: nothing it uses is evicted, and it is reported.
+  lru.beginFrame();
+  for (std::int64_t c = 0; c < 5; ++c)
+    lru.insert({2, 0, c, 1}, kTileBytes);
+  EXPECT_TRUE(lru.overBudget());
+  EXPECT_EQ(lru.frameBytes(), 5 * kTileBytes);
+  for (std::int64_t c = 0; c < 5; ++c)
+    EXPECT_TRUE(lru.resident({2, 0, c, 1}));
+  lru.beginFrame();
+  lru.use({2, 0, 0, 1});
+  lru.insert({2, 0, 9, 1}, kTileBytes);
+  EXPECT_FALSE(lru.overBudget());
+  EXPECT_LE(lru.bytes(), lru.budget());
+}
+
+TEST(TextureLru, BudgetHoldsOverRandomCameraPaths) {
+  const Geodesy g;
+  Quadtree tree(g, test::globalGrid(), treeParams());
+  TextureLru lru(300 * kTileBytes);
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> lat(-90.0, 90.0), lon(-180.0, 180.0), alt(2.0, 7.3),
+      tilt(0.0, 80.0), step(-1.0, 1.0);
+  CameraPose pose{lat(rng), lon(rng), std::pow(10.0, alt(rng)), 0.0, tilt(rng)};
+  int overFrames = 0;
+  for (int frame = 0; frame < 300; ++frame) {
+    if (frame % 60 == 0) pose = {lat(rng), lon(rng), std::pow(10.0, alt(rng)), 0.0, tilt(rng)};
+    pose.latDeg = std::clamp(pose.latDeg + step(rng), -90.0, 90.0);
+    pose.lonDeg += step(rng);
+    pose.altitudeM = std::clamp(pose.altitudeM * (1.0 + 0.1 * step(rng)), 1.0, 2e7);
+    const Camera cam(g, pose, {800, 600});
+    tree.update(cam);
+    lru.beginFrame();
+    std::size_t need = 0;
+    for (const Node* n : tree.drawList()) {
+      const std::size_t bytes = kTileBytes * static_cast<std::size_t>(n->key().span > 1 ? 2 : 1);
+      need += bytes;
+      if (lru.resident(n->key()))
+        lru.use(n->key());
+      else
+        lru.insert(n->key(), bytes);
+    }
+    for (const Node* n : tree.drawList())
+      ASSERT_TRUE(lru.resident(n->key())); // what this frame draws is never evicted
+    if (lru.overBudget()) {
+      ++overFrames;
+      EXPECT_GT(need, lru.budget()); // only when the frame alone needs more
+      EXPECT_EQ(lru.bytes(), lru.frameBytes());
+    } else {
+      EXPECT_LE(lru.bytes(), lru.budget());
+    }
+    lru.takeEvicted();
+  }
+  EXPECT_LT(overFrames, 300);
+}
+
+// ---- streaming ----
+
+TEST(TextureStreamer, RootsFirstThenByScoreWithinTheWindow) {
+  const Geodesy g;
+  Quadtree tree(g, test::globalGrid(), treeParams());
+  FakeSource src;
+  TextureStreamer streamer(src, {"layer", "", 8, 1.0, 120.0});
+  const Camera cam(g, {46.5, 8.0, 3e5, 0.0, 30.0}, {1024, 768});
+  double now = 0.0;
+  for (int frame = 0; frame < 200; ++frame, now += 1.0 / 60.0) {
+    tree.update(cam);
+    streamer.update(tree, cam, now, nullptr);
+    EXPECT_LE(src.open(), 8u); // the window
+    // The source finishes the oldest open request each frame.
+    for (auto& r : src.requests)
+      if (r.open) {
+        src.complete(r.id, TileStatus::Ok);
+        break;
+      }
+  }
+  ASSERT_GT(src.requests.size(), 60u);
+  for (std::size_t i = 0; i < 50; ++i)
+    EXPECT_EQ(src.requests[i].address.key.level, 0) << i; // the whole globe first
+  for (std::size_t i = 50; i < src.requests.size(); ++i)
+    EXPECT_GT(src.requests[i].address.key.level, 0);
+  EXPECT_EQ(src.requests[0].address.layer, "layer");
+  // After the roots, the first requests are the nadir's biggest on screen: their scores do not
+  // grow within a frame's batch, and each is a drawn node's tile.
+  EXPECT_GE(src.requests[50].priority, src.requests[51].priority);
+}
+
+TEST(TextureStreamer, CancelsWhatTheCameraLeftAndReprioritizes) {
+  const Geodesy g;
+  Quadtree tree(g, test::globalGrid(), treeParams());
+  FakeSource src;
+  TextureStreamer streamer(src, {"l", "", 6, 1.0, 120.0});
+  const Camera alps(g, {46.5, 8.0, 2e4, 0.0, 0.0}, {1024, 768});
+  // Roots are fetched first; the source answers those only.
+  for (int i = 0; i < 20; ++i) {
+    tree.update(alps);
+    streamer.update(tree, alps, i * 0.016, nullptr);
+    for (auto& r : src.requests)
+      if (r.open && r.address.key.level == 0) src.complete(r.id, TileStatus::Ok);
+  }
+  for (int i = 0; i < 3; ++i) {
+    tree.update(alps);
+    streamer.update(tree, alps, 1.0 + i * 0.016, nullptr);
+  }
+  ASSERT_EQ(src.open(), 6u);
+  std::set<TileRequestId> alpsOpen;
+  for (auto& r : src.requests)
+    if (r.open) alpsOpen.insert(r.id);
+  // Tilt a little: same tiles, new scores.
+  const Camera tilted(g, {46.5, 8.0, 2e4, 0.0, 20.0}, {1024, 768});
+  tree.update(tilted);
+  streamer.update(tree, tilted, 1.1, nullptr);
+  EXPECT_GT(src.reprioritized, 0u);
+  // Move away: every Alps request is cancelled, the window refills with Andes tiles.
+  const Camera andes(g, {-33.0, -70.0, 2e4, 0.0, 0.0}, {1024, 768});
+  for (int i = 0; i < 3; ++i) {
+    tree.update(andes);
+    streamer.update(tree, andes, 1.2 + i * 0.016, nullptr);
+  }
+  for (TileRequestId id : alpsOpen)
+    EXPECT_TRUE(std::find(src.cancels.begin(), src.cancels.end(), id) != src.cancels.end());
+  EXPECT_EQ(src.open(), 6u);
+  for (auto& r : src.requests)
+    if (r.open) {
+      const Sector s = test::globalGrid().sectorOf(r.address.key);
+      EXPECT_LT(s.south, -20.0);
+      EXPECT_LT(s.west, -50.0);
+    }
+  EXPECT_GE(streamer.stats().cancelled, 6u);
+}
+
+TEST(TextureStreamer, NoRequestStormWhenEverythingFailsOrIsAbsent) {
+  const Geodesy g;
+  for (TileStatus status : {TileStatus::Failed, TileStatus::Absent}) {
+    Quadtree tree(g, test::globalGrid(), treeParams());
+    FakeSource src;
+    src.autoComplete = status;
+    TextureStreamer streamer(src, {"l", "", 16, 1.0, 30.0});
+    const Camera cam(g, {10.0, 20.0, 1e5, 0.0, 0.0}, {1024, 768});
+    // Ten minutes at 60 frames a second, offline.
+    double now = 0.0;
+    for (int frame = 0; frame < 36000; ++frame, now += 1.0 / 60.0) {
+      tree.update(cam);
+      streamer.update(tree, cam, now, nullptr);
+    }
+    std::map<TileKey, int> perTile;
+    for (auto& r : src.requests)
+      ++perTile[r.address.key];
+    int worst = 0;
+    for (auto& [k, n] : perTile)
+      worst = std::max(worst, n);
+    if (status == TileStatus::Absent) {
+      EXPECT_EQ(worst, 1); // absent: asked once in the session
+    } else {
+      // Backoff 1, 2, 4, 8, 16, then every 30 s: ~25 tries per tile in 600 s.
+      EXPECT_LE(worst, 26);
+      EXPECT_GE(worst, 10);
+    }
+    if (status == TileStatus::Absent) {
+      for (const Node* n : tree.drawList()) {
+        EXPECT_EQ(n->texture, TextureState::Absent);
+      }
+    }
+  }
+}
+
+TEST(TextureStreamer, StatesFollowTheTiles) {
+  const Geodesy g;
+  Quadtree tree(g, test::globalGrid(), treeParams());
+  FakeSource src;
+  TextureStreamer streamer(src, {"l", "", 100, 1.0, 120.0});
+  TextureLru lru(1000 * kTileBytes);
+  const Camera cam(g, {0.0, 0.0, 2e7, 0.0, 0.0}, {1024, 768});
+  tree.update(cam);
+  streamer.update(tree, cam, 0.0, &lru);
+  ASSERT_EQ(src.requests.size(), 50u); // the roots
+  const Node& root = *tree.roots()[0];
+  tree.update(cam);
+  streamer.update(tree, cam, 0.1, &lru);
+  EXPECT_EQ(root.texture, TextureState::CheckingCache);
+  src.complete(1, TileStatus::Ok);
+  tree.update(cam);
+  streamer.update(tree, cam, 0.2, &lru);
+  EXPECT_EQ(root.texture, TextureState::Decoding);
+  auto got = streamer.takeReceived();
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].key, root.key().firstTile());
+  lru.insert(root.key(), kTileBytes); // the owner decoded and uploaded it
+  tree.update(cam);
+  streamer.update(tree, cam, 0.3, &lru);
+  EXPECT_EQ(root.texture, TextureState::Finished);
+  // Evicted and forgotten: asked for again.
+  lru.erase(root.key());
+  streamer.forget(root.key());
+  const std::size_t before = src.requests.size();
+  tree.update(cam);
+  streamer.update(tree, cam, 0.4, &lru);
+  EXPECT_EQ(src.requests.size(), before + 1);
+}
