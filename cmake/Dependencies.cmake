@@ -4,6 +4,9 @@ find_package(Threads REQUIRED)
 find_package(SQLite3 REQUIRED)
 find_package(CURL REQUIRED)
 find_package(OpenImageIO CONFIG REQUIRED)
+# libjpeg-turbo (what OpenImageIO reads JPEG with): the imaging module decodes composed maps' JPEG
+# tiles with it directly, only the part of each tile a map samples (crop and skip).
+find_package(JPEG REQUIRED)
 # Debian 12's OpenImageIO config lists /usr/include/opencv4 although OpenImageIO's headers never
 # need it; drop include directories that do not exist rather than pull in all of OpenCV.
 foreach(_oiio_target OpenImageIO::OpenImageIO OpenImageIO::OpenImageIO_Util)

@@ -21,8 +21,20 @@ struct AxisSample {
 
 /** An axis of the map at one level. */
 struct Axis {
-  std::vector<AxisSample> samples; ///< per output column / row
-  std::vector<std::int64_t> tiles; ///< distinct tile columns (west to east) / rows (north first)
+  std::vector<AxisSample> samples;  ///< per output column / row
+  std::vector<std::int64_t> tiles;  ///< distinct tile columns (west to east) / rows (north first)
+  std::vector<std::int32_t> lo, hi; ///< per tile: the first and last texel offset sampled
+
+  /** Counts a texel at `offset` inside tile `slot`. */
+  void use(std::int32_t slot, std::int32_t offset) {
+    const auto k = static_cast<std::size_t>(slot);
+    if (lo.size() <= k) {
+      lo.resize(k + 1, std::numeric_limits<std::int32_t>::max());
+      hi.resize(k + 1, -1);
+    }
+    lo[k] = std::min(lo[k], offset);
+    hi[k] = std::max(hi[k], offset);
+  }
 };
 
 bool globalInLongitude(const GridSpec& spec) noexcept {
@@ -84,6 +96,8 @@ Axis columns(const TileGrid& grid, const Sector& box, std::int32_t width, std::i
     s.slotB = slotOf(a.tiles, x1 / spec.tileWidth);
     s.offA = static_cast<std::int32_t>(x0 % spec.tileWidth);
     s.offB = static_cast<std::int32_t>(x1 % spec.tileWidth);
+    a.use(s.slotA, s.offA);
+    a.use(s.slotB, s.offB);
     s.exactWeightB = f;
     s.weightB = static_cast<std::int32_t>(std::lround(f * 256.0));
   }
@@ -119,6 +133,8 @@ Axis rows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int
     s.slotB = slotOf(a.tiles, rowCount - 1 - y1 / spec.tileHeight);
     s.offA = static_cast<std::int32_t>(y0 % spec.tileHeight);
     s.offB = static_cast<std::int32_t>(y1 % spec.tileHeight);
+    a.use(s.slotA, s.offA);
+    a.use(s.slotB, s.offB);
     s.exactWeightB = f;
     s.weightB = static_cast<std::int32_t>(std::lround(f * 256.0));
   }
@@ -351,22 +367,23 @@ std::int32_t composeLevel(const TileGrid& grid,
   return grid.numLevels() - 1;
 }
 
-std::expected<std::vector<TileKey>, std::size_t> composeTiles(const TileGrid& grid,
-                                                              const Sector& box,
-                                                              std::int32_t width,
-                                                              std::int32_t height,
-                                                              std::int32_t level,
-                                                              std::size_t maxTiles) {
+std::expected<std::vector<ComposeTile>, std::size_t> composeTiles(const TileGrid& grid,
+                                                                  const Sector& box,
+                                                                  std::int32_t width,
+                                                                  std::int32_t height,
+                                                                  std::int32_t level,
+                                                                  std::size_t maxTiles) {
   const Axis c = columns(grid, box, width, level);
   const Axis r = rows(grid, box, height, level);
   const std::size_t count = c.tiles.size() * r.tiles.size();
   if (count > maxTiles) return std::unexpected(count);
-  std::vector<TileKey> keys;
+  std::vector<ComposeTile> keys;
   keys.reserve(count);
-  for (const auto row : r.tiles) {
-    for (const auto col : c.tiles) {
-      const TileKey key{level, row, col};
-      if (grid.isValid(key)) keys.push_back(key);
+  for (std::size_t rs = 0; rs < r.tiles.size(); ++rs) {
+    for (std::size_t cs = 0; cs < c.tiles.size(); ++cs) {
+      const TileKey key{level, r.tiles[rs], c.tiles[cs]};
+      if (grid.isValid(key))
+        keys.push_back(ComposeTile{key, {c.lo[cs], r.lo[rs], c.hi[cs] + 1, r.hi[rs] + 1}});
     }
   }
   return keys;
@@ -390,35 +407,61 @@ ComposeStats composeImagery(const TileGrid& grid,
   ComposeStats stats;
   const LevelTiles t = levelTiles(grid, box, width, height, level, tiles);
   Fallback fallback(grid, box, width, height, level, std::max(0, firstLevel), tiles);
+  // The fast path's columns, compact: the tile column slot when both texels lie in one tile
+  // (else -1), the two texels' byte offsets in an RGB row, the second's weight.
+  struct FastColumn {
+    std::int32_t slot;
+    std::uint32_t xa, xb;
+    std::int32_t wx;
+  };
+  const std::size_t nc = t.cols.tiles.size();
+  std::vector<FastColumn> fast(static_cast<std::size_t>(width));
+  for (std::size_t i = 0; i < fast.size(); ++i) {
+    const AxisSample& c = t.cols.samples[i];
+    fast[i] = FastColumn{c.slotA >= 0 && c.slotA == c.slotB ? c.slotA : -1,
+                         static_cast<std::uint32_t>(std::max(c.offA, 0)) * 3u,
+                         static_cast<std::uint32_t>(std::max(c.offB, 0)) * 3u,
+                         c.weightB};
+  }
+  // Per output row: each tile column's two texel rows, when the fast path applies to that tile.
+  std::vector<const std::uint8_t*> rowA(nc), rowB(nc);
   Quad q{};
   for (std::int32_t j = 0; j < height; ++j) {
     const AxisSample& r = t.rows.samples[static_cast<std::size_t>(j)];
     if (r.slotA < 0) continue;
+    const bool fastRow = scale == 256 && r.slotA == r.slotB;
+    for (std::size_t k = 0; k < nc; ++k) {
+      const TileSamples* s = fastRow ? t.at(r.slotA, static_cast<std::int32_t>(k)) : nullptr;
+      if (s && s->channels == 3) {
+        const auto w = static_cast<std::size_t>(s->width);
+        rowA[k] = s->rgb + static_cast<std::size_t>(r.offA) * w * 3;
+        rowB[k] = s->rgb + static_cast<std::size_t>(r.offB) * w * 3;
+      } else {
+        rowA[k] = rowB[k] = nullptr;
+      }
+    }
     std::uint8_t* out = &canvas[static_cast<std::size_t>(j) * static_cast<std::size_t>(width) *
                                 static_cast<std::size_t>(cc)];
     const std::int32_t wy = r.weightB;
     for (std::int32_t i = 0; i < width; ++i, out += cc) {
-      const AxisSample& c = t.cols.samples[static_cast<std::size_t>(i)];
-      if (c.slotA < 0) continue;
       // The common case: the four texels in one opaque RGB tile, drawn at full opacity.
-      if (scale == 256 && c.slotA == c.slotB && r.slotA == r.slotB) {
-        const TileSamples* s = t.at(r.slotA, c.slotA);
-        if (s && s->channels == 3) {
-          const auto w = static_cast<std::size_t>(s->width);
-          const std::uint8_t* rowA = s->rgb + static_cast<std::size_t>(r.offA) * w * 3;
-          const std::uint8_t* rowB = s->rgb + static_cast<std::size_t>(r.offB) * w * 3;
-          const std::size_t xa = static_cast<std::size_t>(c.offA) * 3;
-          const std::size_t xb = static_cast<std::size_t>(c.offB) * 3;
-          const std::int32_t wx = c.weightB;
-          for (std::size_t ch = 0; ch < 3; ++ch) {
-            const std::int32_t top = rowA[xa + ch] * (256 - wx) + rowA[xb + ch] * wx;
-            const std::int32_t bottom = rowB[xa + ch] * (256 - wx) + rowB[xb + ch] * wx;
+      const FastColumn& f = fast[static_cast<std::size_t>(i)];
+      if (f.slot >= 0) {
+        const std::uint8_t* a = rowA[static_cast<std::size_t>(f.slot)];
+        if (a) {
+          const std::uint8_t* b = rowB[static_cast<std::size_t>(f.slot)];
+          const std::int32_t wx = f.wx;
+          for (std::uint32_t ch = 0; ch < 3; ++ch) {
+            const std::int32_t top = a[f.xa + ch] * (256 - wx) + a[f.xb + ch] * wx;
+            const std::int32_t bottom = b[f.xa + ch] * (256 - wx) + b[f.xb + ch] * wx;
             out[ch] = static_cast<std::uint8_t>((top * (256 - wy) + bottom * wy + 32768) >> 16);
           }
           if (cc == 4) out[3] = 255;
           continue;
         }
       }
+      const AxisSample& c = t.cols.samples[static_cast<std::size_t>(i)];
+      if (c.slotA < 0) continue;
       bool found = quadAt(t, c, r, q);
       if (!found) {
         found = fallback.quad(i, j, q);

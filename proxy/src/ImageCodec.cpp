@@ -134,15 +134,23 @@ std::expected<int, std::string> decodeImageryInto(std::span<const std::byte> byt
                                                   std::string_view mimeType,
                                                   int width,
                                                   int height,
-                                                  std::vector<std::uint8_t>& pixels) {
+                                                  std::vector<std::uint8_t>& pixels,
+                                                  const std::array<std::int32_t, 4>* region) {
   const char* format = formatOf(mimeType);
   if (!format) return std::unexpected("cannot decode " + std::string(mimeType) + " as imagery");
   auto api = imaging::table();
   if (!api) return std::unexpected(api.error());
   SamplesSink<std::uint8_t> out(pixels);
   TellusImagingRasterInfo info{};
-  const auto status = (*api)->decodePixels(
-      bytes.data(), bytes.size(), format, TELLUS_IMAGING_UINT8, width, height, &info, out.get());
+  const auto status = (*api)->decodePixels(bytes.data(),
+                                           bytes.size(),
+                                           format,
+                                           TELLUS_IMAGING_UINT8,
+                                           width,
+                                           height,
+                                           region ? region->data() : nullptr,
+                                           &info,
+                                           out.get());
   if (status != TELLUS_IMAGING_OK)
     return std::unexpected(decodeError(status, info, out.error(), width, height));
   return info.channels;
@@ -183,8 +191,15 @@ decodeHeights(std::span<const std::byte> bytes, std::string_view mimeType, int w
   std::vector<std::int16_t> samples;
   SamplesSink<std::int16_t> out(samples);
   TellusImagingRasterInfo info{};
-  const auto status = (*api)->decodePixels(
-      bytes.data(), bytes.size(), format, TELLUS_IMAGING_INT16, width, height, &info, out.get());
+  const auto status = (*api)->decodePixels(bytes.data(),
+                                           bytes.size(),
+                                           format,
+                                           TELLUS_IMAGING_INT16,
+                                           width,
+                                           height,
+                                           nullptr,
+                                           &info,
+                                           out.get());
   if (status != TELLUS_IMAGING_OK)
     return std::unexpected(decodeError(status, info, out.error(), width, height));
   if (mimeType == "image/png") { // stored as height + 32768

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
+#include <cstring>
 #include <map>
 #include <span>
 
@@ -89,7 +90,7 @@ struct MapComposer::Job {
     ComposeLayer spec;
     const TileGrid* grid = nullptr;
     std::int32_t level = 0;
-    std::vector<TileKey> keys;
+    std::vector<ComposeTile> keys;   // with the part of each tile that is sampled
     std::vector<TileAnswer> answers; // parallel to keys
   };
   ComposeRequest request;
@@ -142,7 +143,7 @@ MapComposer::compose(ComposeRequest request,
     Job::Layer& l = job->layers[li];
     for (std::size_t k = 0; k < l.keys.size(); ++k) {
       tiles_.getTile(
-          l.spec.layer->name, l.spec.time, l.keys[k], [job, li, k, arrived](TileAnswer&& a) {
+          l.spec.layer->name, l.spec.time, l.keys[k].key, [job, li, k, arrived](TileAnswer&& a) {
             job->layers[li].answers[k] = std::move(a);
             arrived();
           });
@@ -219,15 +220,23 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
                                   static_cast<std::uint8_t>(c),
                                   static_cast<std::uint8_t>(r.transparent ? 0 : 255)};
       canvas.resize(pixels * static_cast<std::size_t>(cc));
-      for (std::size_t p = 0; p < pixels; ++p)
+      // The first row pixel by pixel, the others copied from it.
+      const auto rowBytes = static_cast<std::size_t>(r.width) * static_cast<std::size_t>(cc);
+      for (std::size_t p = 0; p < static_cast<std::size_t>(r.width); ++p)
         std::copy(bg, bg + cc, &canvas[p * static_cast<std::size_t>(cc)]);
+      for (std::size_t y = 1; y < static_cast<std::size_t>(r.height); ++y)
+        std::memcpy(&canvas[y * rowBytes], canvas.data(), rowBytes);
     }
     std::size_t missing = 0;
     for (const auto& l : job->layers) {
       const LayerSpec& spec = *l.spec.layer;
       const GridSpec& g = l.grid->spec();
       std::map<TileKey, std::shared_ptr<Decoded>, KeyLess> decoded;
-      const auto decode = [&](const TileKey& key, const TileAnswer& a) -> std::shared_ptr<Decoded> {
+      // Only the part of a tile that is sampled is decoded (JPEG: whole blocks around it).
+      const auto decode =
+          [&](const TileKey& key,
+              const TileAnswer& a,
+              const std::array<std::int32_t, 4>* region) -> std::shared_ptr<Decoded> {
         auto bytes = bytesOf(a);
         if (!bytes) return nullptr;
         auto d = std::make_shared<Decoded>();
@@ -243,7 +252,8 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
                                 a.contentType.empty() ? spec.dataset.mimeType : a.contentType,
                                 g.tileWidth,
                                 g.tileHeight,
-                                d->rgb);
+                                d->rgb,
+                                region);
           if (!channels) return nullptr;
           d->view = TileSamples{g.tileWidth, g.tileHeight, *channels, d->rgb.data(), nullptr};
         }
@@ -254,11 +264,11 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
       for (std::size_t k = 0; k < l.keys.size(); ++k) {
         const TileAnswer& a = l.answers[k];
         std::shared_ptr<Decoded> d;
-        if (a.kind == TileAnswer::Kind::Tile) d = decode(l.keys[k], a);
+        if (a.kind == TileAnswer::Kind::Tile) d = decode(l.keys[k].key, a, &l.keys[k].region);
         if (d) {
-          decoded.emplace(l.keys[k], std::move(d));
+          decoded.emplace(l.keys[k].key, std::move(d));
         } else {
-          holes.push_back(l.keys[k]);
+          holes.push_back(l.keys[k].key);
         }
       }
       // Each hole: the nearest cached ancestor (looked up once per ancestor).
@@ -274,7 +284,7 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
           }
           bool found = false;
           if (auto a = tiles_.cachedTile(spec.name, l.spec.time, key)) {
-            if (auto d = decode(key, *a)) {
+            if (auto d = decode(key, *a, nullptr)) {
               decoded.emplace(key, std::move(d));
               found = true;
               if (staleness(a->origin) > staleness(map.origin)) map.origin = a->origin;

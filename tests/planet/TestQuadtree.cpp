@@ -4,7 +4,6 @@
 
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 #include <map>
 #include <random>
@@ -364,27 +363,4 @@ TEST(QuadtreeExtremes, DeepestLevelDoesNotSplitAndPartialDatasets) {
     EXPECT_TRUE(grid->isValid(n.key().firstTile()));
   });
   expectConsistent(tree);
-}
-
-TEST(QuadtreeSlow, UpdatePassCost) {
-  const Geodesy g;
-  QuadtreeParams p = params();
-  p.lod.threshold = 0.125; // many visible nodes from one camera
-  Quadtree tree(g, test::globalGrid(), p);
-  const Camera cam(g, {30.0, 10.0, 3e5, 0.0, 70.0}, {1920, 1080});
-  converge(tree, cam);
-  const auto t0 = std::chrono::steady_clock::now();
-  const int frames = 50;
-  for (int i = 0; i < frames; ++i)
-    tree.update(cam);
-  const double ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() /
-      frames;
-  std::printf("update pass: %.3f ms for %zu visible (%zu drawn, %zu visited, %zu nodes)\n",
-              ms,
-              tree.stats().visible,
-              tree.stats().drawn,
-              tree.stats().visited,
-              tree.nodeCount());
-  EXPECT_GT(tree.stats().visible, 1000u);
 }

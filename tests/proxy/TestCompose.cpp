@@ -143,8 +143,8 @@ TEST(ComposeExtremes, AntimeridianWrapsAndJoinsSeamlessly) {
   const auto keys = composeTiles(g, box, 4, 4, 0, 100);
   ASSERT_TRUE(keys);
   std::vector<std::int64_t> cols;
-  for (const auto& k : *keys)
-    cols.push_back(k.col);
+  for (const auto& t : *keys)
+    cols.push_back(t.key.col);
   EXPECT_NE(std::find(cols.begin(), cols.end(), 9), cols.end());
   EXPECT_NE(std::find(cols.begin(), cols.end(), 0), cols.end());
   std::vector<std::uint8_t> canvas;
@@ -231,10 +231,35 @@ TEST(Compose, TileLimitAndDeepestLevel) {
   const auto keys = composeTiles(g, tiny, 768, 768, deep, 16);
   ASSERT_TRUE(keys);
   EXPECT_EQ(keys->size(), 4u);
-  for (const auto& k : *keys) {
-    EXPECT_TRUE(g.isValid(k));
-    EXPECT_EQ(k.level, 24);
+  for (const auto& t : *keys) {
+    EXPECT_TRUE(g.isValid(t.key));
+    EXPECT_EQ(t.key.level, 24);
   }
+}
+
+TEST(Compose, RegionsCoverExactlyTheTexelsSampled) {
+  const auto g = grid(512, 4);
+  // 20 x 10 degrees at 0.05 degree pixels: level 1 (0.035 deg texels), within tile (row 5, col 10).
+  const Sector box{1.0, 1.0, 11.0, 6.0};
+  const auto keys = composeTiles(g, box, 200, 100, 1, 16);
+  ASSERT_TRUE(keys);
+  ASSERT_EQ(keys->size(), 1u);
+  const auto& t = keys->front();
+  EXPECT_EQ(t.key.row, 5);
+  EXPECT_EQ(t.key.col, 10);
+  const double texel = 18.0 / 512;
+  // Columns: from the texel left of the first pixel centre to the one right of the last.
+  EXPECT_EQ(t.region[0], static_cast<int>(std::floor((1.0 + 0.025) / texel - 0.5)));
+  EXPECT_EQ(t.region[2], static_cast<int>(std::floor((11.0 - 0.025) / texel - 0.5)) + 2);
+  // Rows from the top of the tile (lat 18): 6 - 0.025 is the first pixel centre.
+  EXPECT_EQ(t.region[1], static_cast<int>(std::floor((18.0 - 6.0 + 0.025) / texel - 0.5)));
+  EXPECT_EQ(t.region[3], static_cast<int>(std::floor((18.0 - 1.0 - 0.025) / texel - 0.5)) + 2);
+  // A box across tiles: each tile's region is clipped to that tile.
+  const auto two = composeTiles(g, Sector{10.0, 1.0, 26.0, 6.0}, 320, 100, 1, 16);
+  ASSERT_TRUE(two);
+  ASSERT_EQ(two->size(), 2u);
+  EXPECT_EQ(two->at(0).region[2], 512);
+  EXPECT_EQ(two->at(1).region[0], 0);
 }
 
 TEST(Compose, MissingTilesFallBackToTheNearestCoarserLevel) {

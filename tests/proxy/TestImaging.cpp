@@ -18,6 +18,8 @@
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -301,4 +303,50 @@ TEST(ImagingModuleIntegration, OpeningRastersAndServingCachedTilesDoNotLoadIt) {
     }
     return failure;
   });
+}
+
+// Composed maps decode only the part of a JPEG tile they sample: those pixels must be exactly the
+// ones a whole decode gives (libjpeg-turbo decodes the blocks around the crop in full), and the
+// pixels outside are not written.
+TEST(ImageCodec, JpegRegionDecodeEqualsTheWholeDecodeInside) {
+  std::vector<std::uint8_t> px(512 * 512 * 3);
+  for (int y = 0; y < 512; ++y)
+    for (int x = 0; x < 512; ++x) {
+      auto* p = &px[static_cast<std::size_t>((y * 512 + x) * 3)];
+      p[0] = static_cast<std::uint8_t>(x * 7 + y);
+      p[1] = static_cast<std::uint8_t>((x ^ y) & 255);
+      p[2] = static_cast<std::uint8_t>(y * 3);
+    }
+  const auto jpeg = *encodeImage("image/jpeg", 512, 512, 3, px.data());
+  const auto whole = decodeImagery(jpeg, "image/jpeg", 512, 512);
+  ASSERT_TRUE(whole) << whole.error();
+  ASSERT_EQ(whole->channels, 3);
+  for (const std::array<std::int32_t, 4> region : {std::array<std::int32_t, 4>{0, 0, 512, 512},
+                                                   {100, 37, 301, 250},
+                                                   {511, 511, 512, 512},
+                                                   {0, 300, 5, 512},
+                                                   {-5, -9, 9000, 20}}) {
+    std::vector<std::uint8_t> part(512 * 512 * 3, 7);
+    const auto ch = decodeImageryInto(jpeg, "image/jpeg", 512, 512, part, &region);
+    ASSERT_TRUE(ch) << ch.error();
+    const int x0 = std::clamp(region[0], 0, 511), x1 = std::clamp(region[2], x0 + 1, 512);
+    const int y0 = std::clamp(region[1], 0, 511), y1 = std::clamp(region[3], y0 + 1, 512);
+    int differ = 0;
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x)
+        for (int c = 0; c < 3; ++c) {
+          const auto k = static_cast<std::size_t>((y * 512 + x) * 3 + c);
+          differ += part[k] != whole->pixels[k];
+        }
+    EXPECT_EQ(differ, 0) << region[0] << "," << region[1] << "," << region[2] << "," << region[3];
+    if (y1 < 512) {
+      EXPECT_EQ(part[static_cast<std::size_t>((511 * 512 + 511) * 3)], 7) << "not decoded";
+    }
+  }
+  // Broken bytes are an error, never a crash (libjpeg's longjmp path).
+  std::vector<std::byte> broken(jpeg.begin(), jpeg.begin() + 200);
+  broken[2] = std::byte{0};
+  std::vector<std::uint8_t> out;
+  EXPECT_FALSE(decodeImageryInto(broken, "image/jpeg", 512, 512, out));
+  EXPECT_FALSE(decodeImageryInto(jpeg, "image/jpeg", 256, 512, out)) << "the size is checked";
 }

@@ -25,6 +25,7 @@
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/cache/TileKey.hpp>
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <expected>
@@ -41,17 +42,24 @@ std::int32_t composeLevel(const TileGrid& grid,
                           std::int32_t height,
                           std::int32_t firstLevel);
 
+/** A tile a map needs, and the part of it that sampling reads: texels [x0, x1) x [y0, y1), rows
+ * from the top (what a decoder may limit itself to). */
+struct ComposeTile {
+  TileKey key;
+  std::array<std::int32_t, 4> region; ///< x0, y0, x1, y1
+};
+
 /**
  * The tiles of `level` that sampling the map touches (with the bilinear filter's one-texel
  * margin), wrapped across the antimeridian for a global layer, without duplicates, in row-major
  * order from the north-west. An error (with the count) when more than `maxTiles` are needed.
  */
-std::expected<std::vector<TileKey>, std::size_t> composeTiles(const TileGrid& grid,
-                                                              const Sector& box,
-                                                              std::int32_t width,
-                                                              std::int32_t height,
-                                                              std::int32_t level,
-                                                              std::size_t maxTiles);
+std::expected<std::vector<ComposeTile>, std::size_t> composeTiles(const TileGrid& grid,
+                                                                  const Sector& box,
+                                                                  std::int32_t width,
+                                                                  std::int32_t height,
+                                                                  std::int32_t level,
+                                                                  std::size_t maxTiles);
 
 /** A decoded tile to sample from: `channels` samples per texel, row-major, top row first. */
 struct TileSamples {

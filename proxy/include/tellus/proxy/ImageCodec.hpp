@@ -4,6 +4,7 @@
  * @brief Encoding pixels into the formats tellus serves (OpenImageIO stays inside proxy/src).
  */
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <expected>
@@ -50,12 +51,19 @@ struct DecodedImage {
 std::expected<DecodedImage, std::string>
 decodeImagery(std::span<const std::byte> bytes, std::string_view mimeType, int width, int height);
 
-/** decodeImagery into the caller's storage (reused when it has the size already); the channels. */
-std::expected<int, std::string> decodeImageryInto(std::span<const std::byte> bytes,
-                                                  std::string_view mimeType,
-                                                  int width,
-                                                  int height,
-                                                  std::vector<std::uint8_t>& pixels);
+/**
+ * decodeImagery into the caller's storage (reused when it has the size already); the channels.
+ * With a `region` (x0, y0, x1, y1 in texels, rows from the top), only those pixels are sure to be
+ * decoded (JPEG decodes the whole blocks around them and skips the rest); the others are left as
+ * the storage had them.
+ */
+std::expected<int, std::string>
+decodeImageryInto(std::span<const std::byte> bytes,
+                  std::string_view mimeType,
+                  int width,
+                  int height,
+                  std::vector<std::uint8_t>& pixels,
+                  const std::array<std::int32_t, 4>* region = nullptr);
 
 /**
  * Decodes an elevation tile into raw 16-bit signed values, row-major, top row first:
