@@ -4,9 +4,11 @@ find_package(Threads REQUIRED)
 find_package(SQLite3 REQUIRED)
 find_package(CURL REQUIRED)
 find_package(OpenImageIO CONFIG REQUIRED)
-# libjpeg-turbo (what OpenImageIO reads JPEG with): the imaging module decodes composed maps' JPEG
-# tiles with it directly, only the part of each tile a map samples (crop and skip).
+# libjpeg-turbo and libpng (what OpenImageIO uses for JPEG and PNG), linked into the proxy itself:
+# they are small, so composing maps and rendering tiles never loads OpenImageIO, and a map decodes
+# only the part of each JPEG tile it samples (crop and skip).
 find_package(JPEG REQUIRED)
+find_package(PNG REQUIRED)
 # Debian 12's OpenImageIO config lists /usr/include/opencv4 although OpenImageIO's headers never
 # need it; drop include directories that do not exist rather than pull in all of OpenCV.
 foreach(_oiio_target OpenImageIO::OpenImageIO OpenImageIO::OpenImageIO_Util)

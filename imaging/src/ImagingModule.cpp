@@ -12,13 +12,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <csetjmp>
-#include <cstdio> // jpeglib.h needs FILE
-#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <filesystem>
-#include <jpeglib.h>
 #include <new>
 #include <string>
 #include <string_view>
@@ -75,66 +71,6 @@ std::int32_t encode(const char* formatName,
   return TELLUS_IMAGING_OK;
 }
 
-// ---- JPEG straight through libjpeg-turbo: a map samples only part of most of its tiles.
-
-struct JpegError {
-  jpeg_error_mgr mgr; // first: libjpeg hands out a pointer to it
-  std::jmp_buf jump;
-  char message[JMSG_LENGTH_MAX];
-};
-
-extern "C" void jpegErrorExit(j_common_ptr c) {
-  auto* e = reinterpret_cast<JpegError*>(c->err);
-  (*c->err->format_message)(c, e->message);
-  std::longjmp(e->jump, 1);
-}
-
-// Warnings (a truncated stream among them) are not errors here: the tiles come from the cache,
-// where only validated tiles are kept.
-extern "C" void jpegIgnore(j_common_ptr, int) {}
-
-/** Encodes 8-bit RGB or grey as a baseline JPEG (quality 90, 4:2:0 for colour) with libjpeg-turbo
- * straight into the caller's storage. No destructors in here: errors come back by longjmp. */
-std::int32_t encodeJpeg(std::int32_t width,
-                        std::int32_t height,
-                        std::int32_t channels,
-                        const std::uint8_t* pixels,
-                        const TellusImagingSink* out) noexcept {
-  jpeg_compress_struct cinfo;
-  JpegError err;
-  unsigned char* buffer = nullptr;
-  unsigned long size = 0;
-  cinfo.err = jpeg_std_error(&err.mgr);
-  err.mgr.error_exit = jpegErrorExit;
-  err.mgr.emit_message = jpegIgnore;
-  err.message[0] = '\0';
-  if (setjmp(err.jump)) {
-    jpeg_destroy_compress(&cinfo);
-    std::free(buffer); // libjpeg's jpeg_mem_dest buffer, malloc()ed by it
-    return fail(out, std::string("cannot encode JPEG: ") + err.message);
-  }
-  jpeg_create_compress(&cinfo);
-  jpeg_mem_dest(&cinfo, &buffer, &size);
-  cinfo.image_width = static_cast<JDIMENSION>(width);
-  cinfo.image_height = static_cast<JDIMENSION>(height);
-  cinfo.input_components = channels;
-  cinfo.in_color_space = channels == 1 ? JCS_GRAYSCALE : JCS_RGB;
-  jpeg_set_defaults(&cinfo);
-  jpeg_set_quality(&cinfo, 90, TRUE);
-  jpeg_start_compress(&cinfo, TRUE);
-  const auto stride = static_cast<std::size_t>(width) * static_cast<std::size_t>(channels);
-  while (cinfo.next_scanline < cinfo.image_height) {
-    JSAMPROW row = const_cast<std::uint8_t*>(pixels) + cinfo.next_scanline * stride;
-    jpeg_write_scanlines(&cinfo, &row, 1);
-  }
-  jpeg_finish_compress(&cinfo);
-  jpeg_destroy_compress(&cinfo);
-  void* dst = allocate(out, size);
-  if (dst) std::memcpy(dst, buffer, size);
-  std::free(buffer);
-  return dst ? TELLUS_IMAGING_OK : TELLUS_IMAGING_FAILED;
-}
-
 std::int32_t encodeImage(const char* format,
                          std::int32_t width,
                          std::int32_t height,
@@ -155,7 +91,9 @@ std::int32_t encodeImage(const char* format,
     }
     if (f != "jpeg") return fail(out, "cannot encode " + std::string(f));
     if (channels == 4) return fail(out, "JPEG has no alpha channel");
-    return encodeJpeg(width, height, channels, pixels, out);
+    OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);
+    spec.attribute("CompressionQuality", 90);
+    return encode("jpg", spec, pixels, OIIO::TypeDesc::UINT8, out);
   });
 }
 
@@ -334,91 +272,14 @@ std::int32_t decodeImage(const void* bytes,
   });
 }
 
-/**
- * Decodes a JPEG as RGB into one allocate() of width * height * 3 bytes; with a region, only the
- * iMCU columns around [x0, x1) (jpeg_crop_scanline) and the rows [y0, y1) (jpeg_skip_scanlines
- * before them, abort after them). Nothing with a destructor lives in this function: libjpeg
- * reports errors by longjmp.
- */
-std::int32_t decodeJpeg(const void* bytes,
-                        std::size_t size,
-                        std::int32_t expectedWidth,
-                        std::int32_t expectedHeight,
-                        const std::int32_t* region,
-                        TellusImagingRasterInfo* info,
-                        const TellusImagingSink* out) noexcept {
-  jpeg_decompress_struct cinfo;
-  JpegError err;
-  cinfo.err = jpeg_std_error(&err.mgr);
-  err.mgr.error_exit = jpegErrorExit;
-  err.mgr.emit_message = jpegIgnore;
-  err.message[0] = '\0';
-  if (setjmp(err.jump)) {
-    jpeg_destroy_decompress(&cinfo);
-    fail(out, err.message);
-    return TELLUS_IMAGING_READ_FAILED;
-  }
-  jpeg_create_decompress(&cinfo);
-  jpeg_mem_src(&cinfo, static_cast<const unsigned char*>(bytes), static_cast<unsigned long>(size));
-  jpeg_read_header(&cinfo, TRUE);
-  const auto w = static_cast<std::int32_t>(cinfo.image_width);
-  const auto h = static_cast<std::int32_t>(cinfo.image_height);
-  *info = TellusImagingRasterInfo{w, h, 3, TELLUS_IMAGING_UINT8, 0, {}};
-  if (w != expectedWidth || h != expectedHeight ||
-      (cinfo.num_components != 1 && cinfo.num_components != 3)) {
-    info->channels = cinfo.num_components;
-    jpeg_destroy_decompress(&cinfo);
-    return TELLUS_IMAGING_SHAPE;
-  }
-  cinfo.out_color_space = JCS_RGB;
-  auto* dst = static_cast<unsigned char*>(
-      allocate(out, static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 3));
-  if (!dst) {
-    jpeg_destroy_decompress(&cinfo);
-    return TELLUS_IMAGING_FAILED;
-  }
-  jpeg_start_decompress(&cinfo);
-  JDIMENSION x0 = 0, cropWidth = static_cast<JDIMENSION>(w);
-  JDIMENSION y0 = 0, y1 = static_cast<JDIMENSION>(h);
-  if (region) {
-    const auto clampTo = [](std::int32_t v, std::int32_t hi) {
-      return static_cast<JDIMENSION>(std::clamp(v, 0, hi));
-    };
-    x0 = clampTo(region[0], w - 1);
-    cropWidth =
-        std::max<JDIMENSION>(1, clampTo(region[2], w) - std::min(x0, clampTo(region[2], w)));
-    y0 = clampTo(region[1], h - 1);
-    y1 = std::max(y0 + 1, clampTo(region[3], h));
-    if (cropWidth < static_cast<JDIMENSION>(w)) jpeg_crop_scanline(&cinfo, &x0, &cropWidth);
-    if (y0 > 0) jpeg_skip_scanlines(&cinfo, y0);
-  }
-  while (cinfo.output_scanline < y1) {
-    JSAMPROW row =
-        dst +
-        (static_cast<std::size_t>(cinfo.output_scanline) * static_cast<std::size_t>(w) + x0) * 3;
-    jpeg_read_scanlines(&cinfo, &row, 1);
-  }
-  if (cinfo.output_scanline < cinfo.output_height) {
-    jpeg_abort_decompress(&cinfo);
-  } else {
-    jpeg_finish_decompress(&cinfo);
-  }
-  jpeg_destroy_decompress(&cinfo);
-  return TELLUS_IMAGING_OK;
-}
-
 std::int32_t decodePixels(const void* bytes,
                           std::size_t size,
                           const char* format,
                           std::int32_t sampleType,
                           std::int32_t expectedWidth,
                           std::int32_t expectedHeight,
-                          const std::int32_t* region,
                           TellusImagingRasterInfo* info,
                           const TellusImagingSink* out) noexcept {
-  if (bytes && format && info && sampleType == TELLUS_IMAGING_UINT8 &&
-      std::string_view(format) == "jpeg")
-    return decodeJpeg(bytes, size, expectedWidth, expectedHeight, region, info, out);
   return guarded(out, [&]() -> std::int32_t {
     if (!bytes || !format || !info) return fail(out, "nothing to decode");
     if (sampleType != TELLUS_IMAGING_UINT8 && sampleType != TELLUS_IMAGING_INT16)

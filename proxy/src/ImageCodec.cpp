@@ -1,3 +1,4 @@
+#include "Codecs.hpp"
 #include "ImagingLoader.hpp"
 
 #include <tellus/proxy/ImageCodec.hpp>
@@ -6,8 +7,8 @@
 
 namespace tellus {
 
-// JPEG, PNG and TIFF go through the imaging module (OpenImageIO), loaded on the first call; BIL16
-// is written here and never loads it.
+// JPEG and 8-bit PNG are made and read here (libjpeg-turbo, libpng: Codecs.cpp); TIFF and 16-bit
+// PNG go through the imaging module (OpenImageIO), loaded on the first call; BIL16 is written here.
 
 std::expected<std::vector<std::byte>, std::string> encodeImage(
     std::string_view mimeType, int width, int height, int channels, const std::uint8_t* pixels) {
@@ -24,13 +25,8 @@ std::expected<std::vector<std::byte>, std::string> encodeImage(
       std::memcpy(&rgb[i * 3], &pixels[i * 4], 3);
     return encodeImage(mimeType, width, height, 3, rgb.data());
   }
-  auto api = imaging::table();
-  if (!api) return std::unexpected(api.error());
-  imaging::BytesSink out;
-  if ((*api)->encodeImage(png ? "png" : "jpeg", width, height, channels, pixels, out.get()) !=
-      TELLUS_IMAGING_OK)
-    return std::unexpected(out.error());
-  return std::move(out.bytes);
+  return png ? codecs::encodePng(width, height, channels, pixels)
+             : codecs::encodeJpeg(width, height, channels, pixels);
 }
 
 std::expected<std::vector<std::byte>, std::string>
@@ -136,21 +132,16 @@ std::expected<int, std::string> decodeImageryInto(std::span<const std::byte> byt
                                                   int height,
                                                   std::vector<std::uint8_t>& pixels,
                                                   const std::array<std::int32_t, 4>* region) {
+  if (mimeType == "image/jpeg") return codecs::decodeJpegInto(bytes, width, height, pixels, region);
+  if (mimeType == "image/png") return codecs::decodePngInto(bytes, width, height, pixels);
   const char* format = formatOf(mimeType);
   if (!format) return std::unexpected("cannot decode " + std::string(mimeType) + " as imagery");
   auto api = imaging::table();
   if (!api) return std::unexpected(api.error());
   SamplesSink<std::uint8_t> out(pixels);
   TellusImagingRasterInfo info{};
-  const auto status = (*api)->decodePixels(bytes.data(),
-                                           bytes.size(),
-                                           format,
-                                           TELLUS_IMAGING_UINT8,
-                                           width,
-                                           height,
-                                           region ? region->data() : nullptr,
-                                           &info,
-                                           out.get());
+  const auto status = (*api)->decodePixels(
+      bytes.data(), bytes.size(), format, TELLUS_IMAGING_UINT8, width, height, &info, out.get());
   if (status != TELLUS_IMAGING_OK)
     return std::unexpected(decodeError(status, info, out.error(), width, height));
   return info.channels;
@@ -191,15 +182,8 @@ decodeHeights(std::span<const std::byte> bytes, std::string_view mimeType, int w
   std::vector<std::int16_t> samples;
   SamplesSink<std::int16_t> out(samples);
   TellusImagingRasterInfo info{};
-  const auto status = (*api)->decodePixels(bytes.data(),
-                                           bytes.size(),
-                                           format,
-                                           TELLUS_IMAGING_INT16,
-                                           width,
-                                           height,
-                                           nullptr,
-                                           &info,
-                                           out.get());
+  const auto status = (*api)->decodePixels(
+      bytes.data(), bytes.size(), format, TELLUS_IMAGING_INT16, width, height, &info, out.get());
   if (status != TELLUS_IMAGING_OK)
     return std::unexpected(decodeError(status, info, out.error(), width, height));
   if (mimeType == "image/png") { // stored as height + 32768

@@ -208,10 +208,18 @@ TEST(ImagingModuleIntegration, AMissingModuleIsAClearErrorWhereItIsNeeded) {
     ::setenv("TELLUS_IMAGING_MODULE", "/nonexistent/libtellus_imaging.so", 1);
     const std::string expected =
         "cannot load the imaging module /nonexistent/libtellus_imaging.so: ";
+    // JPEG and 8-bit PNG are the proxy's own (libjpeg-turbo, libpng): no module needed.
     const std::uint8_t px[3] = {1, 2, 3};
     auto jpeg = encodeImage("image/jpeg", 1, 1, 3, px);
-    if (jpeg || jpeg.error().find(expected) != 0)
-      return "encodeImage: " + (jpeg ? std::string("succeeded") : jpeg.error());
+    if (!jpeg) return "encodeImage JPEG without the module: " + jpeg.error();
+    if (!encodeImage("image/png", 1, 1, 3, px)) return "encodeImage PNG without the module";
+    std::vector<std::uint8_t> back;
+    if (!decodeImageryInto(*jpeg, "image/jpeg", 1, 1, back)) return "decode JPEG";
+    // TIFF needs it.
+    const std::int16_t h1[1] = {7};
+    auto tiff = encodeHeights("image/tiff", 1, 1, h1);
+    if (tiff || tiff.error().find(expected) != 0)
+      return "encodeHeights TIFF: " + (tiff ? std::string("succeeded") : tiff.error());
     auto blank = blankImage("image/png", 4, 4, std::nullopt, false);
     if (blank || blank.error().find(expected) != 0) return "blankImage";
     // BIL16 needs no module.

@@ -141,9 +141,7 @@ struct TellusImagingTable {
    *   16-bit unsigned PNG's values are reinterpreted bit for bit; the caller knows its offset).
    * Checks the size like decodeImage (TELLUS_IMAGING_SHAPE). `info` is filled in (width, height,
    * channels given out, sampleType) before the one allocate() of width * height * channels
-   * samples. `region` (NULL for all): x0, y0, x1, y1, the texels the caller will read (rows from
-   * the top); a JPEG is then decoded only in the blocks around them (libjpeg-turbo's crop and
-   * skip), the rest of the storage is not written.
+   * samples.
    */
   std::int32_t (*decodePixels)(const void* bytes,
                                std::size_t size,
@@ -151,7 +149,6 @@ struct TellusImagingTable {
                                std::int32_t sampleType,
                                std::int32_t expectedWidth,
                                std::int32_t expectedHeight,
-                               const std::int32_t* region,
                                TellusImagingRasterInfo* info,
                                const TellusImagingSink* out);
 

@@ -1,0 +1,40 @@
+#pragma once
+// JPEG (libjpeg-turbo) and 8-bit PNG (libpng) in the proxy itself, for the images it makes and
+// reads most: tiles rendered from local rasters, composed maps and the tiles they are made of.
+// OpenImageIO (the imaging module) is left with TIFF, 16-bit PNG, rasters and text.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <expected>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace tellus::codecs {
+
+/** RGB (grey is expanded) into `pixels` (width * height * 3); with a `region` (x0, y0, x1, y1,
+ * rows from the top) only the blocks around it are decoded and the rest is left as it was.
+ * Returns 3. Warnings of a damaged stream are ignored (cached tiles were validated). */
+std::expected<int, std::string> decodeJpegInto(std::span<const std::byte> bytes,
+                                               int width,
+                                               int height,
+                                               std::vector<std::uint8_t>& pixels,
+                                               const std::array<std::int32_t, 4>* region);
+
+/** Baseline JPEG, quality 90, from grey (1) or RGB (3) pixels. */
+std::expected<std::vector<std::byte>, std::string>
+encodeJpeg(int width, int height, int channels, const std::uint8_t* pixels);
+
+/** 8-bit RGB, or RGBA when the PNG has alpha (palettes and 16-bit samples are converted);
+ * returns the channels. */
+std::expected<int, std::string> decodePngInto(std::span<const std::byte> bytes,
+                                              int width,
+                                              int height,
+                                              std::vector<std::uint8_t>& pixels);
+
+/** 8-bit grey (1), RGB (3) or RGBA (4) PNG. */
+std::expected<std::vector<std::byte>, std::string>
+encodePng(int width, int height, int channels, const std::uint8_t* pixels);
+
+} // namespace tellus::codecs
