@@ -7,6 +7,7 @@ Usage: test_owslib.py path/to/tellus
 import os
 import re
 import shutil
+import struct
 import subprocess
 import sys
 import tempfile
@@ -43,6 +44,7 @@ def main():
             fail("tellus serve did not start")
         url = "http://127.0.0.1:%s/wms" % port
         tile = None
+        composed = None
         for version in ("1.1.1", "1.3.0"):
             wms = WebMapService(url, version=version, timeout=10)
             names = set(wms.contents)
@@ -55,9 +57,8 @@ def main():
             if "image/jpeg" not in wms.getOperationByName("GetMap").formatOptions:
                 fail("%s: GetMap formats %s" % (version, wms.getOperationByName("GetMap").formatOptions))
             # The level-0 tile over Africa: lon 0..36, lat -18..18, given in lon/lat order. OWSLib
-            # swaps the axes itself for 1.3.0 EPSG:4326 (lat/lon): unswapped, the box would not be
-            # tile-aligned and tellus would answer an exception. Both versions must give the cached
-            # tile's bytes.
+            # swaps the axes itself for 1.3.0 EPSG:4326 (lat/lon): unswapped, the box would be
+            # another box (composed, not the tile). Both versions must give the cached tile's bytes.
             response = wms.getmap(layers=["bluemarble"], styles=[""], srs="EPSG:4326",
                                   bbox=(0, -18, 36, 18), size=(512, 512), format="image/jpeg")
             body = response.read()
@@ -67,6 +68,20 @@ def main():
                 tile = body
             elif body != tile:
                 fail("1.1.1 and 1.3.0 GetMap gave different bytes")
+            # A box that is no tile, composed from the cached tile: a 400x320 PNG, and the same
+            # bytes through both versions (the axis order of each is honoured).
+            response = wms.getmap(layers=["bluemarble"], styles=[""], srs="EPSG:4326",
+                                  bbox=(5, -10, 30, 10), size=(400, 320), format="image/png")
+            body = response.read()
+            if body[:8] != b"\x89PNG\r\n\x1a\n":
+                fail("%s: composed GetMap did not return a PNG: %r" % (version, body[:300]))
+            width, height = struct.unpack(">II", body[16:24])
+            if (width, height) != (400, 320):
+                fail("%s: composed map is %dx%d" % (version, width, height))
+            if composed is None:
+                composed = body
+            elif body != composed:
+                fail("1.1.1 and 1.3.0 composed maps differ")
         cached = [os.path.join(root, f) for root, _, files in os.walk(cache) for f in files
                   if f == "2_5.jpg"]
         if not cached or open(cached[0], "rb").read() != tile:
