@@ -94,8 +94,14 @@ export async function launchChromium(nodeModules) {
   const require = createRequire(join(nodeModules, 'package.json'));
   const {chromium} = require('playwright-core');
   const executablePath = process.env.CHROMIUM || '/usr/bin/chromium';
+  // Chromium's own temporary files (its singleton socket among them) go into a directory of ours
+  // that is removed at exit: a failing test exits at once and the killed browser would leave them
+  // in $TMPDIR. Under /tmp, as a socket path must be shorter than 108 bytes.
+  const tmp = mkdtempSync('/tmp/tellus-chromium.');
+  process.on('exit', () => rmSync(tmp, {recursive: true, force: true}));
   return chromium.launch({
     executablePath,
+    env: {...process.env, TMPDIR: tmp},
     headless: true,
     chromiumSandbox: false,
     args: ['--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist',
