@@ -5,7 +5,7 @@ import {spawn, spawnSync} from 'node:child_process';
 import {mkdtempSync, readFileSync, rmSync} from 'node:fs';
 import {createRequire} from 'node:module';
 import {tmpdir} from 'node:os';
-import {join} from 'node:path';
+import {join, resolve as absolute} from 'node:path';
 
 export function fail(message) {
   console.error(`FAIL: ${message}`);
@@ -16,7 +16,7 @@ export function fail(message) {
 export function parseArgs() {
   const [tellus, nodeModules] = process.argv.slice(2);
   if (!tellus || !nodeModules) fail('usage: node <test>.mjs path/to/tellus path/to/node_modules');
-  return {tellus, nodeModules};
+  return {tellus: absolute(tellus), nodeModules: absolute(nodeModules)};
 }
 
 /** A work directory under $TMPDIR, removed at exit unless KEEP_WORK is set. */

@@ -1,7 +1,8 @@
 // The page at / of `tellus serve` in headless Chromium (issue #4):
 //   - it loads with no console error, no uncaught exception, no failed request, and nothing from
 //     outside the server (every request not to the server is blocked and fails the test);
-//   - it lists the layers of layers.json (bluemarble to draw, etopo as elevation);
+//   - it lists the layers of layers.json (bluemarble to draw, etopo as elevation), and the
+//     plain-text index it links to is at /index.txt;
 //   - the map's level-0 tiles arrive from the static path /tiles/bluemarble/0/<row>/<row>_<col>.jpg
 //     with status 200, in the page's network events and in the server's access log (cache=HIT);
 //   - the map shows the right places: land where there is land and ocean where there is ocean,
@@ -101,6 +102,13 @@ try {
       fail(`${p.name} (${p.lonLat}) at pixel ${pixels[i]} has colour ${colours[i]}, which is not ` +
            `${p.want === isLand ? 'land' : 'ocean'}: are rows or columns misplaced?`);
   });
+
+  // The endpoints in plain text, linked from the page's header.
+  const index = await context.request.get(`${base}/index.txt`);
+  const text = await index.text();
+  if (index.status() !== 200 || !text.includes(`WMS:        ${base}/wms?`) ||
+      !text.includes(`Map page:   ${base}/`))
+    fail(`/index.txt: ${index.status()} ${text}`);
 
   if (seen.outside.length) fail(`the page asked for things outside the server: ${seen.outside}`);
   if (seen.failed.length) fail(`failed requests: ${seen.failed.join('; ')}`);
