@@ -7,6 +7,7 @@
 #include <tellus/proxy/OgcExceptionFormat.hpp>
 #include <tellus/proxy/ProxyFrontEnd.hpp>
 #include <tellus/proxy/Query.hpp>
+#include <tellus/proxy/WebPage.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -510,12 +511,25 @@ struct ProxyFrontEnd::Impl {
     return format == "image/jpeg" || format == "image/png";
   }
 
+  /** The page (WebPage.hpp): `/` and its files, `/layers.json`, and the plain-text index at
+   * `/index.txt` (also `/` when the page is not built in). */
   void index(const HttpRequest& req, const Responder& respond) const {
+    if (req.path == "/layers.json") {
+      auto r = layersJsonResponse(req, options.title, tiles.layers());
+      common(r);
+      return respond(std::move(r));
+    }
+    if (auto r = webAssetResponse(req)) {
+      common(*r);
+      return respond(std::move(*r));
+    }
     const std::string base = baseUrl(req);
     std::string t = options.title + "\n\n";
     t += "WMS:        " + base + "/wms?SERVICE=WMS&REQUEST=GetCapabilities\n";
     t += "World Wind: " + base + "/wwtile?T=<layer>&L=<level>&X=<column>&Y=<row>\n";
-    t += "Static:     " + base + "/tiles/<layer>/<level>/<row>/<row>_<column>.<ext>\n\nlayers:\n";
+    t += "Static:     " + base + "/tiles/<layer>/<level>/<row>/<row>_<column>.<ext>\n";
+    if (webPageEmbedded()) t += "Map page:   " + base + "/  (layers: " + base + "/layers.json)\n";
+    t += "\nlayers:\n";
     for (const auto& l : tiles.layers()) {
       t += "  " + l.name + "  " + l.dataset.mimeType + "  " +
            std::to_string(l.dataset.grid.levelZeroDeltaDeg) + " deg level 0, " +
@@ -538,7 +552,7 @@ void ProxyFrontEnd::handle(HttpRequest&& req, Responder respond) {
   const Protocol protocol = wms                               ? Protocol::Wms
                             : req.path == "/wwtile"           ? Protocol::WorldWind
                             : req.path.starts_with("/tiles/") ? Protocol::Static
-                            : req.path == "/"                 ? Protocol::Page
+                            : isWebPagePath(req.path)         ? Protocol::Page
                             : req.path == "/metrics"          ? Protocol::Metrics
                                                               : Protocol::Other;
   im.metrics.requestStarted(protocol);

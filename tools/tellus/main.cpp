@@ -11,6 +11,7 @@
 #include <tellus/proxy/ProxyFrontEnd.hpp>
 #include <tellus/proxy/Seeder.hpp>
 #include <tellus/proxy/TileService.hpp>
+#include <tellus/proxy/WebPage.hpp>
 
 #include <algorithm>
 #include <charconv>
@@ -846,6 +847,7 @@ int cmdServe(const Args& a) {
               base.c_str(),
               ctx->config.cache.root.c_str(),
               server.offline ? ", offline" : "");
+  if (webPageEmbedded()) std::printf("  map page      %s/\n", base.c_str());
   std::printf("  capabilities  %s/wms?SERVICE=WMS&REQUEST=GetCapabilities\n", base.c_str());
   std::printf("  metrics       %s/metrics  (Prometheus)\n", base.c_str());
   for (const auto& l : (*tiles)->layers()) {
