@@ -59,6 +59,7 @@
 #   SEED_CONCURRENCY=4            parallel requests of every seeder and of the ceiling runs
 #   UPSTREAM_PROCS=4              mapserv FastCGI processes
 #   CEILING_DURATION=10s          each MapServer-alone run (after a 2 s warm-up)
+#   SEED_ROUNDS=3                 seeding rounds (order reversed every other round; medians)
 #   LOAD_CONNECTIONS=1000 LOAD_DURATION=10s   the memory-under-load runs (LOAD_CONNECTIONS=0 skips)
 #   MAPPROXY_VERSION=7.0.0 GUNICORN_VERSION=27.0.1 MAPPROXY_WORKERS=4 MAPPROXY_THREADS=4
 #   MAPCACHE_PROCS=4 MAPCACHE_THREADS=25   Apache (mpm_event) processes and threads per process
@@ -96,6 +97,7 @@ SEED="${SEED:-42}"
 SEED_CONCURRENCY="${SEED_CONCURRENCY:-4}"
 UPSTREAM_PROCS="${UPSTREAM_PROCS:-4}"
 CEILING_DURATION="${CEILING_DURATION:-10s}"
+SEED_ROUNDS="${SEED_ROUNDS:-3}"
 LOAD_CONNECTIONS="${LOAD_CONNECTIONS:-1000}"
 LOAD_DURATION="${LOAD_DURATION:-10s}"
 MAPPROXY_VERSION="${MAPPROXY_VERSION:-7.0.0}"
@@ -392,57 +394,75 @@ seeds="$work/seed.tsv"
 : >"$seeds"
 now() { date +%s.%N; }
 elapsed() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.3f", b - a }'; }
-# name seconds tiles_written upstream_requests
-seed_row() { echo -e "$1\t$2\t$3\t$4" >>"$seeds"; }
-ceiling() { # NAME LIST TILES_PER_REQUEST
-  local name=$1 list=$2 per=$3 res="$work/ceiling-$1.txt"
-  URLS="$list" SEED="$SEED" wrk -t"$WRK_THREADS" -c"$SEED_CONCURRENCY" -d2s --timeout 60s -s "$repo/bench/proxy/urls.lua" \
-    "http://127.0.0.1:$up_port" >"$work/ceiling-$name-warm.log" 2>&1 || die "wrk failed: $(cat "$work/ceiling-$name-warm.log")"
-  local r0 r1
+# name round seconds tiles upstream_requests errors
+seed_row() { echo -e "$1\t$2\t$3\t$4\t$5\t${6:-0}" >>"$seeds"; }
+ceiling() { # NAME ROUND LIST TILES_PER_REQUEST: wrk on MapServer alone
+  local name=$1 round=$2 list=$3 per=$4 res="$work/ceiling-$1-$2.txt" r0 r1
+  if [[ $round == 1 ]]; then # start the mapserv processes and fill the page cache first
+    URLS="$list" SEED="$SEED" wrk -t"$WRK_THREADS" -c"$SEED_CONCURRENCY" -d2s --timeout 60s -s "$repo/bench/proxy/urls.lua" \
+      "http://127.0.0.1:$up_port" >"$work/ceiling-$name-warm.log" 2>&1 || die "wrk failed: $(cat "$work/ceiling-$name-warm.log")"
+  fi
   r0=$(upstream_requests)
   URLS="$list" SEED="$SEED" RESULT="$res" wrk -t"$WRK_THREADS" -c"$SEED_CONCURRENCY" -d"$CEILING_DURATION" --timeout 60s \
-    -s "$repo/bench/proxy/urls.lua" "http://127.0.0.1:$up_port" >"$work/ceiling-$name.log" 2>&1 ||
-    die "wrk failed: $(cat "$work/ceiling-$name.log")"
+    -s "$repo/bench/proxy/urls.lua" "http://127.0.0.1:$up_port" >"$work/ceiling-$name-$round.log" 2>&1 ||
+    die "wrk failed: $(cat "$work/ceiling-$name-$round.log")"
   r1=$(upstream_requests)
-  python3 - "$res" "$per" "$name" "$((r1 - r0))" >>"$seeds" <<'EOF'
+  python3 - "$res" "$per" "$name" "$round" "$((r1 - r0))" >>"$seeds" <<'EOF2'
 import sys
-kv = dict(x.split("=") for x in open(sys.argv[1]).read().split()[1:])
-secs = int(kv["duration_us"]) / 1e6
+res, per, name, rnd, reqs = sys.argv[1:6]
+kv = dict(x.split("=") for x in open(res).read().split()[1:])
 errors = sum(int(kv[k]) for k in ("connect", "read", "write", "status", "timeout"))
-print(f"{sys.argv[3]}\t{secs:.3f}\t{int(kv['requests']) * int(sys.argv[2])}\t{sys.argv[4]}\t{errors}")
-EOF
+print(f"{name}\t{rnd}\t{int(kv['duration_us']) / 1e6:.3f}\t{int(kv['requests']) * int(per)}\t{reqs}\t{errors}")
+EOF2
 }
-say "seeding 1/5: MapServer alone, one 512 px GetMap per tile (wrk -c$SEED_CONCURRENCY -d$CEILING_DURATION)"
-ceiling up512 "$work/urls-up512.txt" 1
-say "seeding 2/5: MapServer alone, one 2048 px GetMap per 4x4 metatile (wrk -c$SEED_CONCURRENCY -d$CEILING_DURATION)"
-ceiling up2048 "$work/urls-up2048.txt" 16
-
-say "seeding 3/5: tellus seed --concurrency $SEED_CONCURRENCY"
-r0=$(upstream_requests)
-t0=$(now)
-"$tellus" seed --config "$work/tellus/tellus.yaml" --cache "$work/tellus/cache" --layer world --levels "$LEVELS" \
-  --bbox "$REGION" --concurrency "$SEED_CONCURRENCY" >"$work/seed-tellus.log" 2>&1 || die "tellus seed failed: $(tail -5 "$work/seed-tellus.log")"
-t1=$(now)
-written="$(grep -o '[0-9]* written' "$work/seed-tellus.log" | tail -1 | cut -d' ' -f1)"
-seed_row tellus "$(elapsed "$t0" "$t1")" "${written:-0}" "$(($(upstream_requests) - r0))"
-grep -E 'levels .* planned' "$work/seed-tellus.log" | sed 's/^/   /'
-
-say "seeding 4/5: mapproxy-seed -c $SEED_CONCURRENCY"
-r0=$(upstream_requests)
-t0=$(now)
-(cd "$work/mapproxy" && "$venv/bin/mapproxy-seed" -f mapproxy.yaml -s seed.yaml --seed ALL -c "$SEED_CONCURRENCY") \
-  >"$work/seed-mapproxy.log" 2>&1 || die "mapproxy-seed failed: $(tail -5 "$work/seed-mapproxy.log")"
-t1=$(now)
-seed_row MapProxy "$(elapsed "$t0" "$t1")" "$(find "$work/mapproxy/cache" -name '*.jpeg' | wc -l)" "$(($(upstream_requests) - r0))"
-
-say "seeding 5/5: mapcache_seed -n $SEED_CONCURRENCY"
-r0=$(upstream_requests)
-t0=$(now)
-"${run_as[@]}" mapcache_seed -c "$work/mapcache/mapcache.xml" -t world -g ww4326 -z "${LEVEL_LO},${LEVEL_HI}" \
-  -e "$REGION" -n "$SEED_CONCURRENCY" >"$work/seed-mapcache.log" 2>&1 || die "mapcache_seed failed: $(tail -c 600 "$work/seed-mapcache.log")"
-t1=$(now)
-seed_row MapCache "$(elapsed "$t0" "$t1")" "$(find "$work/mapcache/cache" -name '*.jpg' | wc -l)" "$(($(upstream_requests) - r0))"
-tail -c 300 "$work/seed-mapcache.log" | tr '\r' '\n' | grep seeded | tail -1 | sed 's/^ */   /'
+seeder() { # NAME ROUND: one seeder into an empty cache, timed
+  local name=$1 round=$2 r0 t0 t1 tiles log="$work/seed-$1-$2.log"
+  case $name in
+    tellus) rm -rf "$work/tellus/cache" ;;
+    MapProxy) rm -rf "$work/mapproxy/cache" && mkdir -p "$work/mapproxy/cache" ;;
+    MapCache) find "$work/mapcache/cache" "$work/mapcache/locks" -mindepth 1 -delete ;;
+  esac
+  sync
+  r0=$(upstream_requests)
+  t0=$(now)
+  case $name in
+    tellus)
+      "$tellus" seed --config "$work/tellus/tellus.yaml" --cache "$work/tellus/cache" --layer world --levels "$LEVELS" \
+        --bbox "$REGION" --concurrency "$SEED_CONCURRENCY" >"$log" 2>&1 || die "tellus seed failed: $(tail -5 "$log")"
+      ;;
+    MapProxy)
+      (cd "$work/mapproxy" && "$venv/bin/mapproxy-seed" -f mapproxy.yaml -s seed.yaml --seed ALL -c "$SEED_CONCURRENCY") \
+        >"$log" 2>&1 || die "mapproxy-seed failed: $(tail -5 "$log")"
+      ;;
+    MapCache)
+      "${run_as[@]}" mapcache_seed -c "$work/mapcache/mapcache.xml" -t world -g ww4326 -z "${LEVEL_LO},${LEVEL_HI}" \
+        -e "$REGION" -n "$SEED_CONCURRENCY" >"$log" 2>&1 || die "mapcache_seed failed: $(tail -c 600 "$log")"
+      ;;
+  esac
+  t1=$(now)
+  case $name in
+    tellus) tiles="$(grep -o '[0-9]* written' "$log" | tail -1 | cut -d' ' -f1)" ;;
+    MapProxy) tiles="$(find "$work/mapproxy/cache" -name '*.jpeg' | wc -l)" ;;
+    MapCache) tiles="$(find "$work/mapcache/cache" -name '*.jpg' | wc -l)" ;;
+  esac
+  seed_row "$name" "$round" "$(elapsed "$t0" "$t1")" "${tiles:-0}" "$(($(upstream_requests) - r0))"
+}
+seed_order="up512 up2048 tellus MapProxy MapCache"
+for round in $(seq 1 "$SEED_ROUNDS"); do
+  order="$seed_order"
+  ((round % 2)) || order="$(echo "$seed_order" | tr ' ' '\n' | tac | tr '\n' ' ' | sed 's/ $//')"
+  say "seeding round $round/$SEED_ROUNDS: $order (every seeder into an empty cache, $SEED_CONCURRENCY parallel requests)"
+  for s in $order; do
+    case $s in
+      up512) ceiling up512 "$round" "$work/urls-up512.txt" 1 ;;
+      up2048) ceiling up2048 "$round" "$work/urls-up2048.txt" 16 ;;
+      *) seeder "$s" "$round" ;;
+    esac
+    echo "   $(tail -n 1 "$seeds" | awk -F'\t' '{ printf "%s: %s s, %s tiles, %s upstream requests", $1, $3, $4, $5 }')"
+  done
+done
+grep -E 'levels .* planned' "$work/seed-tellus-$SEED_ROUNDS.log" | sed 's/^/   tellus: /'
+tail -c 300 "$work/seed-MapCache-$SEED_ROUNDS.log" | tr '\r' '\n' | grep seeded | tail -1 | sed 's/^ */   mapcache_seed: /'
 
 # ------------------------------------------------------------------------------ 2. servers
 "$tellus" serve --config "$work/tellus/tellus.yaml" --cache "$work/tellus/cache" --listen 127.0.0.1:0 \
@@ -506,7 +526,8 @@ if [[ "$arb_answer" != "200 image/"* ]]; then
   say "tellus answers an arbitrary box with $arb_answer, not an image: row 'tellus: not supported'" \
     "($(tr -d '\n' <"$work/arb.bin" | grep -o '<ServiceException[^<]*' | sed 's/<ServiceException[^>]*>//' | head -c 120))"
 fi
-series="tw ts tm ct cm pt pm"
+# per round the servers alternate within each kind of request (tellus, MapCache, MapProxy, ...)
+series="tw ct pt ts tm cm pm"
 arb_series="ca pa"
 [[ $tellus_arbitrary == 0 ]] || arb_series="ta ca pa"
 for s in $series $arb_series; do
@@ -567,13 +588,26 @@ one_run() { # SERIES ROUND DURATION CONNECTIONS -> a line of runs.tsv
   load="$(load1)"
   URLS="$work/urls-$s.txt" SEED="$SEED" RESULT="$res" \
     "${timer[@]}" wrk -t"$WRK_THREADS" -c"$conns" -d"$dur" --timeout 30s --latency -s "$repo/bench/proxy/urls.lua" \
-    "http://127.0.0.1:$(port_of "$s")" >"$log" 2>&1 || die "wrk failed: $(cat "$log")"
+    "http://127.0.0.1:$(port_of "$s")" >"$log" 2>&1 || { servers_alive; die "wrk failed: $(cat "$log")"; }
   # shellcheck disable=SC2046
   t1=$(cpu_ticks $(pids_of "$s"))
   m1="$(machine_ticks)"
   [[ -s "$res" ]] || die "wrk wrote no result: $(cat "$log")"
   [[ -s "$tf" ]] && wrk_cpu="$(awk '{ print $1 + $2 }' "$tf")"
   echo -e "$s\t$round\t$load\t$((t1 - t0))\t$wrk_cpu\t$((${m1% *} - ${m0% *}))\t$((${m1#* } - ${m0#* }))\t$conns\t$(sed 's/^RESULT //' "$res")"
+}
+servers_alive() { # dies with the exit status and the log of a server that is gone
+  local rc
+  if ! kill -0 "$tellus_pid" 2>/dev/null; then
+    rc=0
+    wait "$tellus_pid" || rc=$?
+    die "tellus serve exited with status $rc: $(tail -n 20 "$work/tellus/serve.log")"
+  fi
+  if ! kill -0 "$mapproxy_pid" 2>/dev/null; then
+    die "gunicorn (MapProxy) exited: $(tail -n 20 "$work/mapproxy/gunicorn.log")"
+  fi
+  [[ -n "$(apache_pids "$work/mapcache/apache/httpd.conf")" ]] ||
+    die "the MapCache Apache exited: $(tail -n 20 "$work/mapcache/apache/error.log")"
 }
 conns_of() { case $1 in ?a) echo "$ARB_CONNECTIONS" ;; *) echo "$CONNECTIONS" ;; esac; }
 
@@ -591,6 +625,7 @@ if [[ "$LOAD_WAIT_S" -gt 0 ]]; then
 fi
 
 all_series="$series $arb_series"
+servers_alive
 up_before_load=$(upstream_requests)
 say "load before the runs: $(cut -d' ' -f1-3 /proc/loadavg)"
 if [[ "$WARMUP" != 0 ]]; then
@@ -700,26 +735,31 @@ ratio_row("cached tile, WMS 1.1.1 tile-aligned", "tm", "cm", "pm", 1.05, 6)
 ratio_row("arbitrary box WMS 1.3.0 1024x768 JPEG", "ta", "ca", "pa", 1.7, 6)
 
 print()
-print(f"== Seeding region {region} levels {levels} ({region_tiles} tiles) from the upstream, "
-      f"{seed_conc} parallel requests each")
-print(f"{'seeder':<44}{'seconds':>8}{'tiles':>7}{'tiles/s':>9}{'upstream req':>13}{'vs 512 px ceiling':>19}")
 srows = [l.rstrip("\n").split("\t") for l in open(seeds)]
-ceil512 = None
 names = {"up512": "MapServer alone, 512 px GetMap per tile",
          "up2048": "MapServer alone, 2048 px per 4x4 metatile",
          "tellus": "tellus seed", "MapProxy": "mapproxy-seed (4x4 metatiles)",
          "MapCache": "mapcache_seed (4x4 metatiles)"}
-rates = {}
+by = {}
 for f in srows:
-    name, secs, tiles, reqs = f[0], float(f[1]), int(f[2]), f[3]
+    name, secs, tiles, reqs, errs = f[0], float(f[2]), int(f[3]), int(f[4]), int(f[5])
     # the ceiling runs: tiles answered per second; the seeders: the region's tiles per second
     rate = tiles / secs if name.startswith("up") else region_tiles / secs
-    rates[name] = rate
-    if name == "up512":
-        ceil512 = rate
-    extra = f"  errors {f[4]}" if len(f) > 4 and f[4] != "0" else ""
-    print(f"{names.get(name, name):<44}{secs:>8.2f}{tiles:>7}{rate:>9.0f}{reqs:>13}"
-          f"{rate / ceil512:>18.2f}x{extra}")
+    by.setdefault(name, []).append((rate, secs, tiles, reqs, errs))
+rates = {n: statistics.median(r[0] for r in v) for n, v in by.items()}
+ceil512 = rates.get("up512")
+print(f"== Seeding region {region} levels {levels} ({region_tiles} tiles) from the upstream, "
+      f"{seed_conc} parallel requests each; median of {max(len(v) for v in by.values())} rounds")
+print(f"{'seeder':<44}{'tiles/s':>9}{'(min-max)':>13}{'seconds':>8}{'tiles':>7}{'upstream req':>13}{'vs 512 px ceiling':>19}")
+for name in names:
+    if name not in by:
+        continue
+    v = by[name]
+    lo, hi = min(r[0] for r in v), max(r[0] for r in v)
+    errs = sum(r[4] for r in v)
+    print(f"{names[name]:<44}{rates[name]:>9.0f}{f'({lo:.0f}-{hi:.0f})':>13}{statistics.median(r[1] for r in v):>8.2f}"
+          f"{v[-1][2]:>7}{statistics.median(r[3] for r in v):>13.0f}{rates[name] / ceil512:>18.2f}x"
+          + (f"  errors {errs}" if errs else ""))
 if "tellus" in rates and "MapProxy" in rates:
     print(f"tellus seed vs mapproxy-seed: {rates['tellus'] / rates['MapProxy']:.2f}x (goal >= 1: "
           f"{'met' if rates['tellus'] >= rates['MapProxy'] else 'MISSED'}); vs mapcache_seed "
