@@ -32,8 +32,10 @@
 #  3. Resident memory, idle: VmRSS (and PSS, which counts pages shared between processes once)
 #     summed over every process of each server (Apache's parent and children, gunicorn's master and
 #     workers).
-#  4. Load runs, wrk -c CONNECTIONS (ARB_CONNECTIONS for the arbitrary-box series), all series one
-#     after the other per round, the order reversed every other round, ROUNDS rounds; medians.
+#  4. Load runs: first the cached-tile series (wrk -c CONNECTIONS), then the arbitrary-box series
+#     (wrk -c ARB_CONNECTIONS); for each kind a warm-up, then ROUNDS rounds in which the servers
+#     alternate (tellus, MapCache, MapProxy, ...), the order reversed every other round; medians.
+#     Memory is read again after each kind.
 #     URLs come from one list of random tiles of the seeded set (fixed SEED) written in each
 #     server's URL style, and one list of random boxes inside REGION (bench/proxy/urls.lua picks
 #     one per request):
@@ -54,7 +56,8 @@
 #   TELLUS=build/tools/tellus/tellus  (copied into the work folder first, with the imaging module)
 #   PEERS_DIR=build/peers-bench   the venv (kept between runs) and each run's work folder
 #   DURATION=10s CONNECTIONS=64 ARB_CONNECTIONS=16 WRK_THREADS=2 ROUNDS=3 WARMUP=2s (0: none)
-#   REGION=-36,-18,72,54 (W,S,E,N; aligned to the 36-degree level-zero tiles) LEVELS=0-4
+#   REGION=-36,-18,72,54 (W,S,E,N; aligned to the 36-degree level-zero tiles)
+#   LEVELS=0-4                    0-3 at least: the arbitrary boxes are composed from levels 0-3
 #   URL_COUNT=10000 ARB_COUNT=2000 SEED=42
 #   SEED_CONCURRENCY=4            parallel requests of every seeder and of the ceiling runs
 #   UPSTREAM_PROCS=4              mapserv FastCGI processes
@@ -309,6 +312,10 @@ for name, fmt in series.items():
 # arbitrary boxes, as shared/peers/wms_arbitrary.lua draws them but inside the region
 rng = random.Random(int(seed) + 1)
 max_span = min(80.0, E - W, (N - S) / 0.75)
+# 1024 px over 10-80 degrees: 0.0098-0.078 degrees per pixel, which the peers compose from levels
+# 0 (0.0703) to 3 (0.0088); a level that is not seeded would be fetched from upstream
+if lo != 0 or hi < 3:
+    sys.exit(f"run.sh: LEVELS={levels}: the arbitrary boxes need levels 0-3 seeded (LEVELS=0-3 or more)")
 boxes = []
 for _ in range(int(arb_count)):
     span = rng.uniform(min(10.0, max_span), max_span)
@@ -628,23 +635,34 @@ all_series="$series $arb_series"
 servers_alive
 up_before_load=$(upstream_requests)
 say "load before the runs: $(cut -d' ' -f1-3 /proc/loadavg)"
-if [[ "$WARMUP" != 0 ]]; then
-  say "warm-up: $WARMUP per series"
-  for s in $all_series; do one_run "$s" 0 "$WARMUP" "$(conns_of "$s")" >/dev/null; done
-fi
 runs="$work/runs.tsv"
 : >"$runs"
-for round in $(seq 1 "$ROUNDS"); do
-  if ((round % 2)); then order="$all_series"; else order="$(echo "$all_series" | tr ' ' '\n' | tac | tr '\n' ' ' | sed 's/ $//')"; fi
-  say "round $round/$ROUNDS: $order (wrk -t$WRK_THREADS -c$CONNECTIONS, arbitrary boxes -c$ARB_CONNECTIONS, -d$DURATION)"
-  for s in $order; do
-    line="$(one_run "$s" "$round" "$DURATION" "$(conns_of "$s")")"
-    echo "$line" >>"$runs"
-    echo "   $s ${label[$s]}: $(echo "$line" | cut -f9- | tr '\t' ' ' | grep -oE '(req_s|p99_us|status|timeout|connect|read)=[0-9.]+' | tr '\n' ' ')"
+rounds() { # WHAT SERIES...: a warm-up of each series, then ROUNDS rounds, the order reversed every other
+  local what=$1 round order s line
+  shift
+  if [[ "$WARMUP" != 0 ]]; then
+    say "$what: warm-up, $WARMUP per series"
+    for s in "$@"; do one_run "$s" 0 "$WARMUP" "$(conns_of "$s")" >/dev/null; done
+  fi
+  for round in $(seq 1 "$ROUNDS"); do
+    if ((round % 2)); then order="$*"; else order="$(printf '%s\n' "$@" | tac | tr '\n' ' ' | sed 's/ $//')"; fi
+    say "$what, round $round/$ROUNDS: $order (wrk -t$WRK_THREADS -c$(conns_of "$1") -d$DURATION)"
+    for s in $order; do
+      line="$(one_run "$s" "$round" "$DURATION" "$(conns_of "$s")")"
+      echo "$line" >>"$runs"
+      echo "   $s ${label[$s]}: $(echo "$line" | cut -f9- | tr '\t' ' ' | grep -oE '(req_s|p99_us|status|timeout|connect|read)=[0-9.]+' | tr '\n' ' ')"
+    done
   done
-done
+}
+# The cached tiles first, then the arbitrary boxes: composing them grows the peers' memory, which
+# stays (the rows "after the cached-tile runs" and "after the arbitrary-box runs").
+# shellcheck disable=SC2086
+rounds "cached tiles" $series
+for x in "tellus tw" "MapCache ct" "MapProxy pt"; do mem_row "after the cached-tile runs" $x; done
+# shellcheck disable=SC2086
+rounds "arbitrary boxes" $arb_series
+for x in "tellus tw" "MapCache ct" "MapProxy pt"; do mem_row "after the arbitrary-box runs" $x; done
 up_during_load=$(($(upstream_requests) - up_before_load))
-for x in "tellus tw" "MapCache ct" "MapProxy pt"; do mem_row "after the load runs" $x; done
 
 # ------------------------------------------------------------------------------ 5. memory under load
 if [[ "$LOAD_CONNECTIONS" -gt 0 ]]; then
@@ -729,8 +747,8 @@ def ratio_row(name, t, c, p, gc, gp):
     rc, rp = rps[t] / rps[c], rps[t] / rps[p]
     v = lambda r, g: "met" if r >= g else "MISSED"
     print(f"{name:<38}{rc:>7.2f}x MapCache (goal >= {gc}x: {v(rc, gc)}){rp:>8.2f}x MapProxy (goal >= {gp}x: {v(rp, gp)})")
-ratio_row("cached tile, tellus /wwtile vs TMS", "tw", "ct", "pt", 1.05, 6)
-ratio_row("cached tile, tellus /tiles/ vs TMS", "ts", "ct", "pt", 1.05, 6)
+ratio_row("cached tile, tellus /wwtile vs z/x/y", "tw", "ct", "pt", 1.05, 6)
+ratio_row("cached tile, tellus /tiles/ vs z/x/y", "ts", "ct", "pt", 1.05, 6)
 ratio_row("cached tile, WMS 1.1.1 tile-aligned", "tm", "cm", "pm", 1.05, 6)
 ratio_row("arbitrary box WMS 1.3.0 1024x768 JPEG", "ta", "ca", "pa", 1.7, 6)
 
@@ -775,8 +793,9 @@ for l in open(mem):
     extra = ""
     if len(f) > 5 and f[5]:
         kv = dict(x.split("=") for x in f[5].split())
-        errs = sum(int(kv[k]) for k in ("status", "connect", "read", "write", "timeout"))
-        extra = f"  {float(kv['req_s']):.0f} req/s, {errs} non-2xx/errors"
+        errs = {k: int(kv[k]) for k in ("status", "connect", "read", "write", "timeout")}
+        err = "none" if not any(errs.values()) else " ".join(f"{k} {v}" for k, v in errs.items() if v)
+        extra = f"  {float(kv['req_s']):.0f} req/s, non-2xx / errors: {err}"
     print(f"{f[0]:<36}{f[1]:<10}{int(f[2]) / 1024:>8.1f}{int(f[3]) / 1024:>8.1f}{f[4]:>6}{extra}")
 peak = {f[1]: int(f[2]) for f in (l.rstrip("\n").split("\t") for l in open(mem)) if f[0].startswith("peak")}
 if "tellus" in peak:
