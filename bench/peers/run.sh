@@ -69,8 +69,8 @@
 #   RASTER=data/bmng_2048x1024.jpg  the upstream's imagery (georeferenced: world file or GeoTIFF)
 #   INSTALL=1                     install missing Debian packages (apt-get) and the venv (pip);
 #                                 0: stop and print the commands instead
-#   LOAD_WAIT_S=0 MAX_LOAD=0.8    before the load runs, wait up to LOAD_WAIT_S s for a 1-minute
-#                                 load below MAX_LOAD
+#   LOAD_WAIT_S=0 MAX_LOAD=0.8    before the seeding (the first measurement), wait up to
+#                                 LOAD_WAIT_S s for a 1-minute load below MAX_LOAD
 #   OUT_DIR=build/bench           peers-runs.tsv, peers-summary.txt
 #   KEEP=0                        1: keep the work folder (configs, logs, caches, URL lists)
 #
@@ -372,6 +372,8 @@ fill "$here/httpd-upstream.conf" "$work/upstream/apache/httpd.conf" "WORK=$work"
 start_apache "$work/upstream/apache/httpd.conf" "$up_port"
 up_log="$work/upstream/apache/access.log"
 upstream_requests() { if [[ -f "$up_log" ]]; then wc -l <"$up_log"; else echo 0; fi; }
+# answers other than 200 the upstream gave (mod_fcgid's 503 when no mapserv process is free, ...)
+upstream_failures() { if [[ -f "$up_log" ]]; then awk '$1 != 200' "$up_log" | wc -l; else echo 0; fi; }
 check_image() { # NAME URL: 200, image/*, a body; prints the Content-Type
   local out
   out="$(curl -s -o "$work/check.bin" -w '%{http_code} %{content_type} %{size_download}' "$2")" ||
@@ -397,6 +399,19 @@ fill "$here/httpd-mapcache.conf" "$work/mapcache/apache/httpd.conf" "WORK=$work"
 (cd "$work/mapproxy" && "$venv/bin/mapproxy-util" create -t wsgi-app -f mapproxy.yaml app.py >/dev/null)
 
 # ------------------------------------------------------------------------------ 1. seeding
+# Wait for the machine to calm down before the measurements start (the load after that is ours).
+if [[ "$LOAD_WAIT_S" -gt 0 ]]; then
+  waited=0
+  while awk -v l="$(load1)" -v m="$MAX_LOAD" 'BEGIN { exit !(l >= m) }'; do
+    if [[ $waited -ge $LOAD_WAIT_S ]]; then
+      warn "load $(load1) still >= $MAX_LOAD after ${waited}s: measuring anyway"
+      break
+    fi
+    say "waiting for a 1-minute load below $MAX_LOAD (now $(load1))"
+    sleep 30
+    waited=$((waited + 30))
+  done
+fi
 time_bin="$(command -v time 2>/dev/null | grep / || true)"
 [[ -z "$time_bin" && -x /usr/bin/time ]] && time_bin=/usr/bin/time
 seeds="$work/seed.tsv"
@@ -433,6 +448,7 @@ seeder() { # NAME ROUND: one seeder into an empty cache, timed
   esac
   sync
   r0=$(upstream_requests)
+  f0=$(upstream_failures)
   t0=$(now)
   case $name in
     tellus)
@@ -454,7 +470,8 @@ seeder() { # NAME ROUND: one seeder into an empty cache, timed
     MapProxy) tiles="$(find "$work/mapproxy/cache" -name '*.jpeg' | wc -l)" ;;
     MapCache) tiles="$(find "$work/mapcache/cache" -name '*.jpg' | wc -l)" ;;
   esac
-  seed_row "$name" "$round" "$(elapsed "$t0" "$t1")" "${tiles:-0}" "$(($(upstream_requests) - r0))"
+  seed_row "$name" "$round" "$(elapsed "$t0" "$t1")" "${tiles:-0}" "$(($(upstream_requests) - r0))" \
+    "$(($(upstream_failures) - f0))"
 }
 seed_order="up512 up2048 tellus MapProxy MapCache"
 for round in $(seq 1 "$SEED_ROUNDS"); do
@@ -467,7 +484,7 @@ for round in $(seq 1 "$SEED_ROUNDS"); do
       up2048) ceiling up2048 "$round" "$work/urls-up2048.txt" 16 ;;
       *) seeder "$s" "$round" ;;
     esac
-    echo "   $(tail -n 1 "$seeds" | awk -F'\t' '{ printf "%s: %s s, %s tiles, %s upstream requests", $1, $3, $4, $5 }')"
+    echo "   $(tail -n 1 "$seeds" | awk -F'\t' '{ printf "%s: %s s, %s tiles, %s upstream requests, %s failed", $1, $3, $4, $5, $6 }')"
   done
 done
 grep -E 'levels .* planned' "$work/seed-tellus-$SEED_ROUNDS.log" | sed 's/^/   tellus: /'
@@ -620,18 +637,6 @@ servers_alive() { # dies with the exit status and the log of a server that is go
 }
 conns_of() { case $1 in ?a) echo "$ARB_CONNECTIONS" ;; *) echo "$CONNECTIONS" ;; esac; }
 
-if [[ "$LOAD_WAIT_S" -gt 0 ]]; then
-  waited=0
-  while awk -v l="$(load1)" -v m="$MAX_LOAD" 'BEGIN { exit !(l >= m) }'; do
-    if [[ $waited -ge $LOAD_WAIT_S ]]; then
-      warn "load $(load1) still >= $MAX_LOAD after ${waited}s: measuring anyway"
-      break
-    fi
-    say "waiting for a 1-minute load below $MAX_LOAD (now $(load1))"
-    sleep 30
-    waited=$((waited + 30))
-  done
-fi
 
 all_series="$series $arb_series"
 servers_alive
@@ -779,7 +784,7 @@ for name in names:
     errs = sum(r[4] for r in v)
     print(f"{names[name]:<44}{rates[name]:>9.0f}{f'({lo:.0f}-{hi:.0f})':>13}{statistics.median(r[1] for r in v):>8.2f}"
           f"{v[-1][2]:>7}{statistics.median(r[3] for r in v):>13.0f}{rates[name] / ceil512:>18.2f}x"
-          + (f"  errors {errs}" if errs else ""))
+          + (f"  upstream failures / wrk errors: {errs}" if errs else ""))
 if "tellus" in rates and "MapProxy" in rates:
     print(f"tellus seed vs mapproxy-seed: {rates['tellus'] / rates['MapProxy']:.2f}x (goal >= 1: "
           f"{'met' if rates['tellus'] >= rates['MapProxy'] else 'MISSED'}); vs mapcache_seed "
