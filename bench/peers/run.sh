@@ -2,9 +2,9 @@
 # tellus against MapProxy and MapCache in front of the same upstream, side by side in one run (what
 # `make bench-peers` runs; issue #4's performance goals).
 #
-#   bench/peers/run.sh                                   # the measured run, about 10 minutes
-#   DURATION=2s ROUNDS=1 WARMUP=0 LEVELS=0-3 CEILING_DURATION=3s LOAD_DURATION=3s \
-#     bench/peers/run.sh                                 # a smoke run, about 1-2 minutes
+#   bench/peers/run.sh                                   # the measured run, about 8-9 minutes
+#   SEED_ROUNDS=1 ROUNDS=1 DURATION=2s WARMUP=0 LEVELS=0-3 CEILING_DURATION=3s LOAD_DURATION=3s \
+#     bench/peers/run.sh                                 # a smoke run, about 1-1.5 minutes
 #
 # What it sets up, every server on 127.0.0.1 only, on ports it picks (0 where the program allows):
 #
@@ -23,8 +23,9 @@
 #  1. Seeding REGION levels LEVELS from the upstream into empty caches: MapServer alone first (the
 #     ceiling: wrk making one 512 px GetMap per tile of the region, and one 2048 px GetMap per 4x4
 #     metatile, at SEED_CONCURRENCY), then `tellus seed`, `mapproxy-seed` and `mapcache_seed` with
-#     SEED_CONCURRENCY. The rate is the region's tiles over the command's wall time (start-up
-#     included); the upstream's access log gives the requests each one made.
+#     SEED_CONCURRENCY, each into an empty cache; SEED_ROUNDS rounds, the order reversed every
+#     other round, medians. The rate is the region's tiles over the command's wall time (start-up
+#     included); the upstream's access log gives the requests each one made and their failures.
 #  2. The servers start on those caches; the first 20 URLs of every series must answer 200 with an
 #     image/* Content-Type and a body. tellus's arbitrary-box answer is checked once first: a
 #     tellus that does not compose arbitrary boxes yet answers an exception, and the row then says
@@ -74,11 +75,12 @@
 #   OUT_DIR=build/bench           peers-runs.tsv, peers-summary.txt
 #   KEEP=0                        1: keep the work folder (configs, logs, caches, URL lists)
 #
-# Needs (installed on demand, none of it is in tools/debian-packages.txt' CI set except the first
-# line): cgi-mapserver mapserver-bin gdal-bin wrk curl python3 iproute2 / apache2-bin
-# libapache2-mod-mapcache libapache2-mod-fcgid mapcache-tools python3-venv; PyPI MapProxy and
-# gunicorn in the venv. Nothing touches the system's Apache: each Apache runs from its own config
-# in the work folder and is stopped on exit, with everything else started here.
+# Needs cgi-mapserver mapserver-bin gdal-bin wrk (in tools/debian-packages.txt), curl python3
+# iproute2 (base system) and, installed on the first run because CI does not need them,
+# apache2-bin libapache2-mod-mapcache libapache2-mod-fcgid mapcache-tools python3-venv (apt-get)
+# and MapProxy and gunicorn (pip, in the venv). Nothing touches the system's Apache: each Apache
+# runs from its own config in the work folder and is stopped on exit, with everything else
+# started here.
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
