@@ -79,6 +79,13 @@ bench: build
 bench-proxy: build
 	bench/proxy/run.sh
 
+# tellus against MapProxy and MapCache in front of one local MapServer (bench/peers/README.md).
+# Installs its own extras on the first run (apache2-bin, mod_mapcache, mod_fcgid, mapcache-tools;
+# MapProxy and gunicorn in a venv under build/peers-bench); not part of `make test`.
+.PHONY: bench-peers
+bench-peers: build
+	bench/peers/run.sh
+
 format:
 	git ls-files '*.cpp' '*.hpp' | xargs clang-format -i
 
