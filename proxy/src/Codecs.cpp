@@ -221,4 +221,28 @@ encodePng(int width, int height, int channels, const std::uint8_t* pixels) {
   return out;
 }
 
+std::expected<std::vector<std::byte>, std::string>
+encodePngPalette(int width,
+                 int height,
+                 const std::vector<std::array<std::uint8_t, 4>>& palette,
+                 const std::uint8_t* indices) {
+  if (width <= 0 || height <= 0 || palette.empty() || palette.size() > 256 || !indices)
+    return std::unexpected("bad image shape for a paletted PNG");
+  png_image image;
+  std::memset(&image, 0, sizeof image);
+  image.version = PNG_IMAGE_VERSION;
+  image.width = static_cast<png_uint_32>(width);
+  image.height = static_cast<png_uint_32>(height);
+  image.format = PNG_FORMAT_RGBA_COLORMAP;
+  image.colormap_entries = static_cast<png_uint_32>(palette.size());
+  png_alloc_size_t size = 0;
+  if (!png_image_write_to_memory(&image, nullptr, &size, 0, indices, 0, palette.data()))
+    return std::unexpected(std::string("cannot encode PNG: ") + image.message);
+  std::vector<std::byte> out(size);
+  if (!png_image_write_to_memory(&image, out.data(), &size, 0, indices, 0, palette.data()))
+    return std::unexpected(std::string("cannot encode PNG: ") + image.message);
+  out.resize(size);
+  return out;
+}
+
 } // namespace tellus::codecs

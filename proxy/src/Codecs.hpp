@@ -37,4 +37,11 @@ std::expected<int, std::string> decodePngInto(std::span<const std::byte> bytes,
 std::expected<std::vector<std::byte>, std::string>
 encodePng(int width, int height, int channels, const std::uint8_t* pixels);
 
+/** A paletted PNG (8-bit indices, up to 256 RGBA entries; tRNS when an entry is not opaque). */
+std::expected<std::vector<std::byte>, std::string>
+encodePngPalette(int width,
+                 int height,
+                 const std::vector<std::array<std::uint8_t, 4>>& palette,
+                 const std::uint8_t* indices);
+
 } // namespace tellus::codecs

@@ -1,5 +1,7 @@
 #include "MapComposer.hpp"
 
+#include "Codecs.hpp"
+#include "Quantize.hpp"
 #include "WorkerPool.hpp"
 
 #include <tellus/cache/TilePath.hpp>
@@ -207,7 +209,12 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
 
     // Decode what arrived; fill the holes from coarser cached tiles.
     // JPEG and PNG without TRANSPARENT are opaque: an RGB canvas, encoded as it is.
-    const int cc = !job->elevation && (r.format == "image/jpeg" || !r.transparent) ? 3 : 4;
+    // Opaque output (JPEG, 24-bit PNG, PNG without TRANSPARENT) composes on an RGB canvas.
+    const bool png8 = r.format == "image/png; mode=8bit";
+    const int cc =
+        r.format == "image/png; mode=32bit" || (r.transparent && (r.format == "image/png" || png8))
+            ? 4
+            : 3;
     std::vector<std::uint8_t>& canvas = buffers.canvas;
     std::vector<std::int16_t> heights;
     const auto pixels = static_cast<std::size_t>(r.width) * static_cast<std::size_t>(r.height);
@@ -346,7 +353,16 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
     if (job->elevation) {
       encoded = encodeHeights(r.format, r.width, r.height, heights.data());
     } else {
-      encoded = encodeImage(r.format, r.width, r.height, cc, canvas.data());
+      if (png8) {
+        const PalettedImage p = quantize(canvas.data(), cc, pixels);
+        encoded = codecs::encodePngPalette(r.width, r.height, p.palette, p.indices.data());
+      } else {
+        encoded = encodeImage(r.format == "image/jpeg" ? "image/jpeg" : "image/png",
+                              r.width,
+                              r.height,
+                              cc,
+                              canvas.data());
+      }
     }
     if (!encoded) {
       map.kind = ComposedMap::Kind::Error;
@@ -356,7 +372,7 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
     if (canvas.capacity() > (16u << 20)) canvas = {}; // a huge map's canvas is not kept
     map.kind = ComposedMap::Kind::Map;
     map.bytes = std::move(*encoded);
-    map.contentType = r.format;
+    map.contentType = r.format.starts_with("image/png") ? "image/png" : r.format;
     job->done(std::move(map));
   } catch (const std::exception& e) {
     ComposedMap failedMap;

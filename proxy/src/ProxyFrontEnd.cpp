@@ -10,6 +10,7 @@
 #include <tellus/proxy/WebPage.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <ctime>
@@ -332,6 +333,7 @@ struct ProxyFrontEnd::Impl {
         add("image/tiff");
       } else {
         add("image/jpeg");
+        add("image/png; mode=8bit");
       }
       add("image/png");
     }
@@ -420,13 +422,15 @@ struct ProxyFrontEnd::Impl {
           ComposeLayer{l, std::move(*time), m.opacities.empty() ? l->opacity : m.opacities[k]});
     }
     const LayerSpec* l = layers.front().layer;
-    if (!composableFormat(*l, m.format)) {
+    const std::string format = normalizedFormat(m.format);
+    if (!composableFormat(*l, format) || (l->elevation && format != m.format)) {
       return exception(ctx,
                        OgcException{std::string(ogc::kInvalidFormat),
                                     "FORMAT",
                                     l->elevation ? "elevation is served as application/bil16, "
                                                    "image/tiff or image/png"
-                                                 : "imagery is served as image/jpeg or image/png"},
+                                                 : "imagery is served as image/jpeg or image/png "
+                                                   "(also mode=8bit, 24bit, 32bit)"},
                        respond);
     }
     // One layer, its own format, exactly one tile: the cached file itself (the fast path).
@@ -470,7 +474,7 @@ struct ProxyFrontEnd::Impl {
     cr.bbox = m.bbox;
     cr.width = m.width;
     cr.height = m.height;
-    cr.format = m.format;
+    cr.format = format;
     cr.transparent = m.transparent;
     cr.bgcolor = m.bgcolor;
     cr.ifNoneMatch = std::string(req.header("if-none-match"));
@@ -508,7 +512,20 @@ struct ProxyFrontEnd::Impl {
   static bool composableFormat(const LayerSpec& l, std::string_view format) {
     if (l.elevation)
       return format == "application/bil16" || format == "image/tiff" || format == "image/png";
-    return format == "image/jpeg" || format == "image/png";
+    return format == "image/jpeg" || format.starts_with("image/png");
+  }
+
+  /** PNG's bit depths as MapServer and MapProxy spell them ("image/png; mode=8bit", also
+   * GeoServer's "image/png8"), in one spelling; any other FORMAT unchanged. */
+  static std::string normalizedFormat(std::string_view format) {
+    std::string f;
+    for (const char c : format) {
+      if (c != ' ') f.push_back(static_cast<char>(std::tolower(static_cast<unsigned char>(c))));
+    }
+    if (f == "image/png8" || f == "image/png;mode=8bit") return "image/png; mode=8bit";
+    if (f == "image/png;mode=24bit") return "image/png; mode=24bit";
+    if (f == "image/png;mode=32bit") return "image/png; mode=32bit";
+    return std::string(format);
   }
 
   /** The page (WebPage.hpp): `/` and its files, `/layers.json`, and the plain-text index at

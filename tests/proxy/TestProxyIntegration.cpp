@@ -780,6 +780,15 @@ TEST(ComposeIntegration, AnyBoxIsComposedFromTilesFetchedOnce) {
   EXPECT_EQ(again.header("etag"), r.header("etag"));
   EXPECT_EQ(again.body, r.body);
   EXPECT_EQ(p.get(target, {{"If-None-Match", r.header("etag")}}).status, 304);
+  // An 8-bit PNG (MapServer's and MapProxy's spelling, and GeoServer's): a palette image.
+  for (const char* f : {"image/png;%20mode=8bit", "image/png8"}) {
+    const auto p8 = p.get(getMap("sat", "-170,-80,-100,-30", 300, 200, f));
+    ASSERT_EQ(p8.header("content-type"), "image/png") << p8.body.substr(0, 400);
+    ASSERT_GT(p8.body.size(), 26u);
+    EXPECT_EQ(static_cast<int>(p8.body[25]), 3) << "IHDR colour type 3: palette";
+    const auto img8 = decodeAnswer(p8, 300, 200);
+    expectNear(rgbAt(img8, 43, 160), tileColour(p, 0, 0, 0), 8, "8-bit tile 0/0/0");
+  }
   // JPEG and a transparent PNG of the same box; a box past the pole has transparent rows.
   const auto jpeg = p.get(getMap("sat", "-170,-80,-100,-30", 300, 200, "image/jpeg"));
   EXPECT_EQ(jpeg.header("content-type"), "image/jpeg");
