@@ -238,7 +238,7 @@ double worstTexelPixels(const Camera& cam, const Geodesy& g, const Node& n, cons
   return worst;
 }
 
-TEST(QuadtreeExtremes, PoleTopDownCostsAtMostOneAndAHalfTheEquator) {
+TEST(QuadtreeExtremes, PoleTopDownCostsAtMostTwoAndAHalfTheEquator) {
   const Geodesy g;
   for (double alt : {1e6, 1e5, 1e4}) {
     const std::size_t equator = drawnTopDown(g, 0.0, alt, true);
