@@ -7,6 +7,7 @@
 #include <arpa/inet.h>
 #include <atomic>
 #include <chrono>
+#include <csignal>
 #include <cstring>
 #include <fcntl.h>
 #include <fstream>
@@ -420,4 +421,35 @@ TEST(HttpServer, AClientThatDoesNotReadAFileBodyIsCutOff) {
       std::this_thread::sleep_for(20ms);
     EXPECT_LE(server.connections(), 1u) << "the stuck connection is still open";
   }
+}
+
+// A client that resets its connection in the middle of a file body: sendfile(2) gets EPIPE, which
+// must close that connection only. (Before, SIGPIPE ended the process: tellus serve died under
+// wrk -c1000 in the peer benchmark.) The test runs with SIGPIPE at its default, as a fresh process
+// has it.
+TEST(HttpServer, AClientResettingMidBodyDoesNotKillTheServer) {
+  std::signal(SIGPIPE, SIG_DFL);
+  const PatternFile f(16 * 1024 * 1024); // far more than the socket buffers hold
+  HttpServer server(quickOptions(), fileHandler(f));
+  ASSERT_TRUE(server.start());
+  for (int i = 0; i < 5; ++i) {
+    const int s = ::socket(AF_INET, SOCK_STREAM, 0);
+    ASSERT_GE(s, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(server.port());
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(::connect(s, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    const std::string req = "GET /now HTTP/1.1\r\nHost: a\r\n\r\n";
+    ASSERT_EQ(::send(s, req.data(), req.size(), MSG_NOSIGNAL), static_cast<ssize_t>(req.size()));
+    char buf[4096];
+    ASSERT_GT(::recv(s, buf, sizeof buf, 0), 0); // the body has started
+    const linger reset{1, 0};                    // close with RST, not FIN
+    ::setsockopt(s, SOL_SOCKET, SO_LINGER, &reset, sizeof reset);
+    ::close(s);
+    std::this_thread::sleep_for(50ms);
+  }
+  RawClient c(server.port());
+  c.send("GET /now HTTP/1.1\r\nHost: a\r\n\r\n");
+  EXPECT_TRUE(bodyOf(c.readResponse(5000ms)) == f.bytes) << "the server still answers";
 }
