@@ -22,6 +22,7 @@ struct JpegError {
   jpeg_error_mgr mgr; // first: libjpeg hands out a pointer to it
   std::jmp_buf jump;
   char message[JMSG_LENGTH_MAX];
+  bool warned; // a warning (corrupt data, premature end) was emitted
 };
 
 extern "C" void jpegErrorExit(j_common_ptr c) {
@@ -30,11 +31,16 @@ extern "C" void jpegErrorExit(j_common_ptr c) {
   std::longjmp(e->jump, 1);
 }
 
-// Warnings (a truncated stream among them) are not errors here: maps are composed from cached
-// tiles, and only validated tiles are cached.
-extern "C" void jpegIgnore(j_common_ptr, int) {}
+// Warnings (a truncated stream among them) are remembered: composing ignores them (maps are made
+// of cached tiles, and only validated tiles are cached), validation fails on them.
+extern "C" void jpegWarning(j_common_ptr c, int level) {
+  if (level >= 0) return; // trace messages
+  auto* e = reinterpret_cast<JpegError*>(c->err);
+  if (!e->warned) (*c->err->format_message)(c, e->message);
+  e->warned = true;
+}
 
-enum class Status { Ok, Shape, Failed };
+enum class Status { Ok, Shape, Failed, Warned };
 
 /** The libjpeg part of decodeJpegInto: `dst` has room for width * height * 3 bytes. */
 Status decodeJpegRaw(const unsigned char* bytes,
@@ -43,13 +49,16 @@ Status decodeJpegRaw(const unsigned char* bytes,
                      int height,
                      const std::array<std::int32_t, 4>* region,
                      unsigned char* dst,
-                     char* message) {
+                     char* message,
+                     int* actualWidth,
+                     int* actualHeight) {
   jpeg_decompress_struct cinfo;
   JpegError err;
   cinfo.err = jpeg_std_error(&err.mgr);
   err.mgr.error_exit = jpegErrorExit;
-  err.mgr.emit_message = jpegIgnore;
+  err.mgr.emit_message = jpegWarning;
   err.message[0] = '\0';
+  err.warned = false;
   if (setjmp(err.jump)) {
     jpeg_destroy_decompress(&cinfo);
     std::memcpy(message, err.message, sizeof err.message);
@@ -58,6 +67,8 @@ Status decodeJpegRaw(const unsigned char* bytes,
   jpeg_create_decompress(&cinfo);
   jpeg_mem_src(&cinfo, bytes, size);
   jpeg_read_header(&cinfo, TRUE);
+  *actualWidth = static_cast<int>(cinfo.image_width);
+  *actualHeight = static_cast<int>(cinfo.image_height);
   if (static_cast<int>(cinfo.image_width) != width ||
       static_cast<int>(cinfo.image_height) != height ||
       (cinfo.num_components != 1 && cinfo.num_components != 3)) {
@@ -91,6 +102,10 @@ Status decodeJpegRaw(const unsigned char* bytes,
     jpeg_finish_decompress(&cinfo);
   }
   jpeg_destroy_decompress(&cinfo);
+  if (err.warned) {
+    std::memcpy(message, err.message, sizeof err.message);
+    return Status::Warned;
+  }
   return Status::Ok;
 }
 
@@ -106,8 +121,9 @@ bool encodeJpegRaw(int width,
   JpegError err;
   cinfo.err = jpeg_std_error(&err.mgr);
   err.mgr.error_exit = jpegErrorExit;
-  err.mgr.emit_message = jpegIgnore;
+  err.mgr.emit_message = jpegWarning;
   err.message[0] = '\0';
+  err.warned = false;
   if (setjmp(err.jump)) {
     jpeg_destroy_compress(&cinfo);
     std::memcpy(message, err.message, sizeof err.message);
@@ -142,14 +158,18 @@ std::expected<int, std::string> decodeJpegInto(std::span<const std::byte> bytes,
   if (width <= 0 || height <= 0) return std::unexpected("bad image shape");
   pixels.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3);
   char message[JMSG_LENGTH_MAX] = {};
+  int w = 0, h = 0;
   switch (decodeJpegRaw(reinterpret_cast<const unsigned char*>(bytes.data()),
                         static_cast<unsigned long>(bytes.size()),
                         width,
                         height,
                         region,
                         pixels.data(),
-                        message)) {
+                        message,
+                        &w,
+                        &h)) {
   case Status::Ok:
+  case Status::Warned:
     return 3;
   case Status::Shape:
     return std::unexpected("the JPEG is not " + std::to_string(width) + "x" +
@@ -158,6 +178,59 @@ std::expected<int, std::string> decodeJpegInto(std::span<const std::byte> bytes,
     break;
   }
   return std::unexpected(std::string("the JPEG does not decode: ") + message);
+}
+
+std::expected<void, std::string> checkJpeg(std::span<const std::byte> bytes,
+                                           int width,
+                                           int height,
+                                           std::vector<std::uint8_t>& scratch) {
+  if (width <= 0 || height <= 0) return std::unexpected("bad image shape");
+  scratch.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3);
+  char message[JMSG_LENGTH_MAX] = {};
+  int w = 0, h = 0;
+  switch (decodeJpegRaw(reinterpret_cast<const unsigned char*>(bytes.data()),
+                        static_cast<unsigned long>(bytes.size()),
+                        width,
+                        height,
+                        nullptr,
+                        scratch.data(),
+                        message,
+                        &w,
+                        &h)) {
+  case Status::Ok:
+    return {};
+  case Status::Shape:
+    if (w != width || h != height)
+      return std::unexpected("JPEG is " + std::to_string(w) + "x" + std::to_string(h) +
+                             ", expected " + std::to_string(width) + "x" + std::to_string(height));
+    return std::unexpected("JPEG has an unusable channel count");
+  case Status::Failed:
+  case Status::Warned:
+    break;
+  }
+  return std::unexpected(std::string("JPEG does not decode: ") + message);
+}
+
+std::expected<void, std::string> checkPng(std::span<const std::byte> bytes,
+                                          int width,
+                                          int height,
+                                          std::vector<std::uint8_t>& scratch) {
+  png_image image;
+  std::memset(&image, 0, sizeof image);
+  image.version = PNG_IMAGE_VERSION;
+  if (!png_image_begin_read_from_memory(&image, bytes.data(), bytes.size()))
+    return std::unexpected(std::string("PNG does not decode: ") + image.message);
+  if (static_cast<int>(image.width) != width || static_cast<int>(image.height) != height) {
+    const auto w = image.width, h = image.height;
+    png_image_free(&image);
+    return std::unexpected("PNG is " + std::to_string(w) + "x" + std::to_string(h) + ", expected " +
+                           std::to_string(width) + "x" + std::to_string(height));
+  }
+  image.format = PNG_FORMAT_RGBA;
+  scratch.resize(PNG_IMAGE_SIZE(image));
+  if (!png_image_finish_read(&image, nullptr, scratch.data(), 0, nullptr))
+    return std::unexpected(std::string("PNG does not decode: ") + image.message);
+  return {};
 }
 
 std::expected<std::vector<std::byte>, std::string>

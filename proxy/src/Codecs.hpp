@@ -22,6 +22,19 @@ std::expected<int, std::string> decodeJpegInto(std::span<const std::byte> bytes,
                                                std::vector<std::uint8_t>& pixels,
                                                const std::array<std::int32_t, 4>* region);
 
+/** Validation of a fetched tile: the whole JPEG decodes without even a warning (a truncated or
+ * corrupt stream) at width x height. `scratch` is storage the call may reuse. */
+std::expected<void, std::string> checkJpeg(std::span<const std::byte> bytes,
+                                           int width,
+                                           int height,
+                                           std::vector<std::uint8_t>& scratch);
+
+/** The same for a PNG (any bit depth, palette or alpha). */
+std::expected<void, std::string> checkPng(std::span<const std::byte> bytes,
+                                          int width,
+                                          int height,
+                                          std::vector<std::uint8_t>& scratch);
+
 /** Baseline JPEG, quality 90, from grey (1) or RGB (3) pixels. */
 std::expected<std::vector<std::byte>, std::string>
 encodeJpeg(int width, int height, int channels, const std::uint8_t* pixels);

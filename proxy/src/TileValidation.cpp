@@ -1,3 +1,4 @@
+#include "Codecs.hpp"
 #include "ImagingLoader.hpp"
 
 #include <tellus/proxy/TileValidation.hpp>
@@ -327,10 +328,18 @@ std::string sizeText(int w, int h) {
   return std::to_string(w) + "x" + std::to_string(h);
 }
 
-/** Decodes a whole JPEG, PNG or TIFF from memory (in the imaging module, loaded on the first
- * call) and checks its size. */
+/** Decodes a whole JPEG or PNG (the proxy's own libjpeg-turbo and libpng: no OpenImageIO) or TIFF
+ * (in the imaging module, loaded on the first call) and checks its size. */
 std::expected<void, std::string>
 decodeImage(std::span<const std::byte> bytes, ImageKind kind, int width, int height) {
+  if (kind == ImageKind::Jpeg || kind == ImageKind::Png) {
+    thread_local std::vector<std::uint8_t> scratch; // a worker validates many tiles of one size
+    auto checked = kind == ImageKind::Jpeg ? codecs::checkJpeg(bytes, width, height, scratch)
+                                           : codecs::checkPng(bytes, width, height, scratch);
+    if (scratch.capacity() > (8u << 20)) scratch = {};
+    if (!checked) return std::unexpected(sanitise(checked.error()));
+    return {};
+  }
   auto api = imaging::table();
   if (!api)
     return std::unexpected(std::string("cannot decode ") + toString(kind) + ": " + api.error());

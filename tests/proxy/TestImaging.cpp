@@ -231,13 +231,18 @@ TEST(ImagingModuleIntegration, AMissingModuleIsAClearErrorWhereItIsNeeded) {
     auto tile = src->renderTile(Sector{0, 0, 36, 36}, 8, 8, "image/jpeg");
     if (tile || tile.error().find(expected) == std::string::npos)
       return "renderTile: " + (tile ? std::string("succeeded") : tile.error());
+    // Validating a fetched JPEG is the proxy's own work; a TIFF needs the module.
     FetchResponse r;
     r.status = 200;
     r.contentType = "image/jpeg";
     r.body = readAll(kBlueMarble);
-    auto v = validateTile(r, "image/jpeg", 2048, 1024);
+    if (auto v = validateTile(r, "image/jpeg", 2048, 1024); !v)
+      return "validateTile JPEG without the module: " + v.error();
+    r.contentType = "image/tiff";
+    r.body = readAll(kEtopo);
+    auto v = validateTile(r, "image/tiff", 1080, 540);
     if (v || v.error().find(expected) == std::string::npos)
-      return "validateTile: " + (v ? std::string("succeeded") : v.error());
+      return "validateTile TIFF: " + (v ? std::string("succeeded") : v.error());
     auto loaded = loadImagingModule();
     if (loaded || loaded.error().find(expected) != 0) return "loadImagingModule";
     if (imagingModuleLoaded()) return "loaded after all";
