@@ -5,6 +5,9 @@
 #
 #   bench/proxy/compose_cpu.sh [path/to/tellus] [seconds]
 #
+# CONFIG=file.yaml serves with that configuration (for example another server.limits.
+# decoded_tile_cache); BOX_LEVELS=0-2 seeds those levels.
+#
 # Seeds the bundled Blue Marble (levels 0-2) into a scratch cache, serves it, runs wrk with one
 # connection for the given time (default 20 s) and prints requests, CPU seconds, CPU ms per map
 # and the server's RSS. Needs wrk (Debian package).
@@ -16,8 +19,10 @@ work="$(mktemp -d "${TMPDIR:-/tmp}/tellus-compose.XXXXXX")"
 server=
 cleanup() { [ -n "$server" ] && kill "$server" 2>/dev/null; rm -rf "$work"; }
 trap cleanup EXIT
-"$tellus" seed --cache "$work/cache" --layer bluemarble --levels 0-2 >/dev/null
-"$tellus" serve --cache "$work/cache" --listen 127.0.0.1:0 >"$work/serve.txt" 2>&1 &
+config=()
+[ -n "${CONFIG:-}" ] && config=(--config "$CONFIG")
+"$tellus" seed "${config[@]}" --cache "$work/cache" --layer bluemarble --levels "${BOX_LEVELS:-0-2}" >/dev/null
+"$tellus" serve "${config[@]}" --cache "$work/cache" --listen 127.0.0.1:0 >"$work/serve.txt" 2>&1 &
 server=$!
 for _ in $(seq 50); do grep -q "listening on" "$work/serve.txt" && break; sleep 0.1; done
 port=$(grep -o "127.0.0.1:[0-9]*" "$work/serve.txt" | head -n 1 | cut -d: -f2)

@@ -378,7 +378,8 @@ void readServer(Reader& r, const Map& root, ServerSettings& s) {
                "keepalive_timeout",
                "requests_per_second",
                "max_map_pixels",
-               "max_tiles_per_map"});
+               "max_tiles_per_map",
+               "decoded_tile_cache"});
   ServerLimits& lim = s.limits;
   if (auto v = l.get("max_connections"))
     lim.maxConnections = int32(r, *v, l.path("max_connections"));
@@ -396,6 +397,8 @@ void readServer(Reader& r, const Map& root, ServerSettings& s) {
     lim.requestsPerSecond = number(r, *v, l.path("requests_per_second"));
   if (auto v = l.get("max_map_pixels"))
     lim.maxMapPixels = integer(r, *v, l.path("max_map_pixels"), 1, std::int64_t{1} << 40);
+  if (auto v = l.get("decoded_tile_cache"))
+    lim.decodedTileCache = size(r, *v, l.path("decoded_tile_cache"));
   if (auto v = l.get("max_tiles_per_map"))
     lim.maxTilesPerMap =
         static_cast<std::int32_t>(integer(r, *v, l.path("max_tiles_per_map"), 1, 1 << 20));

@@ -12,8 +12,13 @@
 #include <atomic>
 #include <cstdio>
 #include <cstring>
+#include <list>
 #include <map>
+#include <mutex>
 #include <span>
+#include <deque>
+#include <unordered_map>
+#include <unordered_set>
 
 namespace tellus {
 
@@ -87,6 +92,67 @@ struct KeyLess {
 
 } // namespace
 
+/** Decoded tiles by their ETag, least recently used first out, within a byte budget. */
+class MapComposer::DecodedCache {
+public:
+  explicit DecodedCache(std::size_t budget) : budget_(budget) {}
+
+  std::shared_ptr<const Decoded> get(const std::string& key) {
+    std::lock_guard lock(mutex_);
+    const auto it = index_.find(key);
+    if (it == index_.end()) return nullptr;
+    lru_.splice(lru_.begin(), lru_, it->second);
+    return it->second->value;
+  }
+
+  /** Whether `key` was asked for before (and missed); remembers it when not. The memory of keys
+   * is bounded (the oldest half is forgotten when it is full). */
+  bool seenBefore(const std::string& key) {
+    std::lock_guard lock(mutex_);
+    if (seen_.contains(key)) return true;
+    if (seenOrder_.size() >= kSeenKeys) {
+      for (std::size_t k = 0; k < kSeenKeys / 2; ++k) {
+        seen_.erase(seenOrder_.front());
+        seenOrder_.pop_front();
+      }
+    }
+    seen_.insert(key);
+    seenOrder_.push_back(key);
+    return false;
+  }
+
+  void put(const std::string& key, std::shared_ptr<const Decoded> value, std::size_t bytes) {
+    if (bytes > budget_) return;
+    std::vector<std::shared_ptr<const Decoded>> evicted; // released outside the lock
+    std::lock_guard lock(mutex_);
+    if (index_.contains(key)) return;
+    lru_.push_front(Entry{key, std::move(value), bytes});
+    index_.emplace(key, lru_.begin());
+    bytes_ += bytes;
+    while (bytes_ > budget_ && !lru_.empty()) {
+      bytes_ -= lru_.back().bytes;
+      index_.erase(lru_.back().key);
+      evicted.push_back(std::move(lru_.back().value));
+      lru_.pop_back();
+    }
+  }
+
+private:
+  struct Entry {
+    std::string key;
+    std::shared_ptr<const Decoded> value;
+    std::size_t bytes;
+  };
+  std::mutex mutex_;
+  std::list<Entry> lru_;
+  std::unordered_map<std::string, std::list<Entry>::iterator> index_;
+  std::size_t bytes_ = 0;
+  std::size_t budget_;
+  static constexpr std::size_t kSeenKeys = 8192;
+  std::unordered_set<std::string> seen_;
+  std::deque<std::string> seenOrder_;
+};
+
 struct MapComposer::Job {
   struct Layer {
     ComposeLayer spec;
@@ -103,8 +169,14 @@ struct MapComposer::Job {
   std::function<void(ComposedMap&&)> done;
 };
 
-MapComposer::MapComposer(TileService& tiles, int threads, std::size_t maxTiles)
-    : tiles_(tiles), maxTiles_(maxTiles), pool_(std::make_unique<Pool>(threads)) {}
+MapComposer::MapComposer(TileService& tiles,
+                         int threads,
+                         std::size_t maxTiles,
+                         std::size_t decodedCacheBytes)
+    : tiles_(tiles), maxTiles_(maxTiles),
+      decodedCache_(decodedCacheBytes > 0 ? std::make_unique<DecodedCache>(decodedCacheBytes)
+                                          : nullptr),
+      pool_(std::make_unique<Pool>(threads)) {}
 
 MapComposer::~MapComposer() = default;
 
@@ -238,14 +310,25 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
     for (const auto& l : job->layers) {
       const LayerSpec& spec = *l.spec.layer;
       const GridSpec& g = l.grid->spec();
-      std::map<TileKey, std::shared_ptr<Decoded>, KeyLess> decoded;
+      std::map<TileKey, std::shared_ptr<const Decoded>, KeyLess> decoded;
       // Only the part of a tile that is sampled is decoded (JPEG: whole blocks around it).
       const auto decode =
           [&](const TileKey& key,
               const TileAnswer& a,
-              const std::array<std::int32_t, 4>* region) -> std::shared_ptr<Decoded> {
+              const std::array<std::int32_t, 4>* region) -> std::shared_ptr<const Decoded> {
+        // Decoded tiles are kept (whole) in an LRU by their ETag, which names their bytes.
+        const std::string cacheKey = spec.name + '\n' + l.spec.time + '\n' + a.etag;
+        bool keep = false;
+        if (decodedCache_ && !a.etag.empty()) {
+          if (auto hit = decodedCache_->get(cacheKey)) return hit;
+          // Admitted on its second use: a tile that one map needs once is decoded only in the
+          // part it samples; one that maps keep asking for is decoded whole and kept.
+          keep = decodedCache_->seenBefore(cacheKey);
+          if (keep) region = nullptr;
+        }
         auto bytes = bytesOf(a);
         if (!bytes) return nullptr;
+        ++map.decodedTiles;
         auto d = std::make_shared<Decoded>();
         if (spec.elevation) {
           auto h = decodeHeights(*bytes, spec.dataset.mimeType, g.tileWidth, g.tileHeight);
@@ -265,12 +348,13 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
           d->view = TileSamples{g.tileWidth, g.tileHeight, *channels, d->rgb.data(), nullptr};
         }
         (void)key;
+        if (keep) decodedCache_->put(cacheKey, d, d->rgb.size() + d->heights.size() * 2);
         return d;
       };
       std::vector<TileKey> holes;
       for (std::size_t k = 0; k < l.keys.size(); ++k) {
         const TileAnswer& a = l.answers[k];
-        std::shared_ptr<Decoded> d;
+        std::shared_ptr<const Decoded> d;
         if (a.kind == TileAnswer::Kind::Tile) d = decode(l.keys[k].key, a, &l.keys[k].region);
         if (d) {
           decoded.emplace(l.keys[k].key, std::move(d));

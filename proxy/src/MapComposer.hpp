@@ -42,14 +42,17 @@ struct ComposedMap {
   TileOrigin origin = TileOrigin::Hit; ///< the least fresh of the tiles used
   std::string etag;                    ///< quoted; from the tiles' validators and the request
   std::int64_t maxAgeSeconds = 0;
-  std::string message; ///< Error: why (safe to show)
-  std::size_t tiles = 0;
+  std::string message;          ///< Error: why (safe to show)
+  std::size_t tiles = 0;        ///< tiles sampled (all layers, fallbacks included)
+  std::size_t decodedTiles = 0; ///< of those, decoded for this map (the rest came decoded)
   std::size_t fallbackPixels = 0;
 };
 
 class MapComposer {
 public:
-  MapComposer(TileService& tiles, int threads, std::size_t maxTiles);
+  /** `decodedCacheBytes`: decoded tiles kept between maps (0: none; then only the part of each
+   * JPEG tile a map samples is decoded). */
+  MapComposer(TileService& tiles, int threads, std::size_t maxTiles, std::size_t decodedCacheBytes);
   ~MapComposer();
 
   /** The tiles of every layer, or an error (for InvalidParameterValue) when they are more than
@@ -67,6 +70,8 @@ private:
 
   TileService& tiles_;
   std::size_t maxTiles_;
+  class DecodedCache;
+  std::unique_ptr<DecodedCache> decodedCache_;
   struct Pool;
   std::unique_ptr<Pool> pool_; // last: destroyed first
 };

@@ -113,7 +113,7 @@ struct ProxyFrontEnd::Impl {
 
   Impl(TileService& t, FrontEndOptions o)
       : tiles(t), options(std::move(o)), metrics(layerNames(t)),
-        composer(t, options.composeThreads, options.maxTilesPerMap) {
+        composer(t, options.composeThreads, options.maxTilesPerMap, options.decodedTileCacheBytes) {
     const auto now = unixMillisNow();
     updateSequence =
         options.updateSequence.empty() ? std::to_string(now / 1000) : options.updateSequence;

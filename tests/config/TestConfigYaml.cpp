@@ -211,6 +211,7 @@ server:
     requests_per_second: 2.5
     max_map_pixels: 1000000
     max_tiles_per_map: 64
+    decoded_tile_cache: 8MiB
 cache:
   root: cache/here
   size_limit: 10GiB
@@ -287,6 +288,7 @@ layers:
   EXPECT_EQ(s.limits.requestsPerSecond, 2.5);
   EXPECT_EQ(s.limits.maxMapPixels, 1000000);
   EXPECT_EQ(s.limits.maxTilesPerMap, 64);
+  EXPECT_EQ(s.limits.decodedTileCache, 8ULL << 20);
   EXPECT_EQ(c->cache.root, "/srv/conf/cache/here");
   EXPECT_EQ(c->cache.sizeLimitBytes, 10ULL << 30);
 

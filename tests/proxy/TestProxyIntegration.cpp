@@ -1,6 +1,7 @@
 // tellus serve's pieces wired as the executable wires them (cache, fetcher, tile service, front
 // end, HTTP server on a loopback port), against a scriptable fake upstream and a real MapServer.
 
+#include "../../proxy/src/MapComposer.hpp"
 #include "../support/CacheFixtures.hpp"
 #include "../support/FakeUpstream.hpp"
 #include "../support/HttpClient.hpp"
@@ -939,4 +940,47 @@ TEST(ComposeIntegration, HeightsAreExactWhereTheBoxIsAligned) {
             std::string::npos);
   EXPECT_NE(p.get(getMap("sat,dem", bbox, 100, 60, "image/png")).body.find("InvalidParameterValue"),
             std::string::npos);
+}
+
+TEST(ComposeIntegration, DecodedTilesAreReusedAndGiveTheSameMap) {
+  test::FakeUpstream up(tileReply);
+  Proxy p(up.url("/wms"));
+  const LayerSpec* sat = p.tiles->layer("sat");
+  ASSERT_NE(sat, nullptr);
+  const auto compose = [&](MapComposer& c, const Sector& box) {
+    ComposeRequest r;
+    r.layers = {ComposeLayer{sat, "", 1.0}};
+    r.bbox = box;
+    r.width = 300;
+    r.height = 200;
+    r.format = "image/jpeg";
+    std::promise<ComposedMap> done;
+    EXPECT_TRUE(c.compose(r, nullptr, [&](ComposedMap&& m) { done.set_value(std::move(m)); }));
+    return done.get_future().get();
+  };
+  MapComposer cached(*p.tiles, 2, 256, 8u << 20);
+  MapComposer uncached(*p.tiles, 2, 256, 0);
+  const Sector box{-170, -80, -100, -30};
+  const auto first = compose(cached, box);
+  ASSERT_EQ(first.kind, ComposedMap::Kind::Map) << first.message;
+  EXPECT_EQ(first.decodedTiles, 6u);
+  // Tiles are kept from their second use on (the first decodes only the part it samples).
+  const auto second = compose(cached, box);
+  EXPECT_EQ(second.decodedTiles, 6u);
+  EXPECT_EQ(second.bytes, first.bytes);
+  const auto third = compose(cached, box);
+  EXPECT_EQ(third.decodedTiles, 0u) << "every tile came decoded from the cache";
+  EXPECT_EQ(third.bytes, first.bytes);
+  // A neighbouring box shares tiles: only the new ones are decoded.
+  const auto shifted = compose(cached, Sector{-150, -80, -80, -30});
+  EXPECT_LT(shifted.decodedTiles, 6u);
+  // Whole tiles cached, or the sampled parts decoded each time: the same map.
+  const auto partial = compose(uncached, box);
+  EXPECT_EQ(partial.decodedTiles, 6u);
+  EXPECT_EQ(partial.bytes, first.bytes);
+  // A budget smaller than one tile keeps nothing.
+  MapComposer tiny(*p.tiles, 1, 256, 1000);
+  compose(tiny, box);
+  compose(tiny, box);
+  EXPECT_EQ(compose(tiny, box).decodedTiles, 6u);
 }

@@ -29,6 +29,9 @@ struct FrontEndOptions {
   std::int64_t maxMapPixels = 4096LL * 4096LL;
   std::size_t maxTilesPerMap = 256;
   int composeThreads = 2; ///< workers that decode, sample and encode composed maps
+  /** Decoded tiles kept between composed maps (whole tiles, by ETag, least recently used out);
+   * 0: none, and only the sampled part of each JPEG tile is decoded. */
+  std::size_t decodedTileCacheBytes = 0;
   std::size_t maxParamBytes = 2048;
   std::size_t maxQueryBytes = 16384;
   std::string updateSequence; ///< capabilities UpdateSequence ("" = derived from the start time)
