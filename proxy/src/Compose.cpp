@@ -423,39 +423,48 @@ ComposeStats composeImagery(const TileGrid& grid,
                          static_cast<std::uint32_t>(std::max(c.offB, 0)) * 3u,
                          c.weightB};
   }
-  // Per output row: each tile column's two texel rows, when the fast path applies to that tile.
-  std::vector<const std::uint8_t*> rowA(nc), rowB(nc);
+  // Per output row, the fast path's vertical half first: for each tile column whose four texels
+  // lie in one opaque RGB tile, the two texel rows blended with the row's weight over the texels
+  // the row samples (a plain loop over bytes, which the compiler vectorises); then per pixel only
+  // the horizontal half. Integer sums without intermediate rounding: the same values as blending
+  // horizontally first.
+  const std::size_t tileRowSamples = static_cast<std::size_t>(grid.spec().tileWidth) * 3;
+  std::vector<std::uint16_t> blended(nc * tileRowSamples);
+  std::vector<const std::uint16_t*> rowBlend(nc);
   Quad q{};
   for (std::int32_t j = 0; j < height; ++j) {
     const AxisSample& r = t.rows.samples[static_cast<std::size_t>(j)];
     if (r.slotA < 0) continue;
     const bool fastRow = scale == 256 && r.slotA == r.slotB;
+    const auto wy = static_cast<std::uint32_t>(r.weightB);
     for (std::size_t k = 0; k < nc; ++k) {
       const TileSamples* s = fastRow ? t.at(r.slotA, static_cast<std::int32_t>(k)) : nullptr;
-      if (s && s->channels == 3) {
-        const auto w = static_cast<std::size_t>(s->width);
-        rowA[k] = s->rgb + static_cast<std::size_t>(r.offA) * w * 3;
-        rowB[k] = s->rgb + static_cast<std::size_t>(r.offB) * w * 3;
-      } else {
-        rowA[k] = rowB[k] = nullptr;
+      if (!s || s->channels != 3 || t.cols.hi[k] < 0) {
+        rowBlend[k] = nullptr;
+        continue;
       }
+      const auto w = static_cast<std::size_t>(s->width);
+      const std::uint8_t* a = s->rgb + static_cast<std::size_t>(r.offA) * w * 3;
+      const std::uint8_t* b = s->rgb + static_cast<std::size_t>(r.offB) * w * 3;
+      std::uint16_t* out = &blended[k * tileRowSamples];
+      const std::size_t from = static_cast<std::size_t>(t.cols.lo[k]) * 3;
+      const std::size_t to = static_cast<std::size_t>(t.cols.hi[k] + 1) * 3;
+      for (std::size_t x = from; x < to; ++x)
+        out[x] = static_cast<std::uint16_t>(a[x] * (256u - wy) + b[x] * wy);
+      rowBlend[k] = out;
     }
     std::uint8_t* out = &canvas[static_cast<std::size_t>(j) * static_cast<std::size_t>(width) *
                                 static_cast<std::size_t>(cc)];
-    const std::int32_t wy = r.weightB;
     for (std::int32_t i = 0; i < width; ++i, out += cc) {
       // The common case: the four texels in one opaque RGB tile, drawn at full opacity.
       const FastColumn& f = fast[static_cast<std::size_t>(i)];
       if (f.slot >= 0) {
-        const std::uint8_t* a = rowA[static_cast<std::size_t>(f.slot)];
-        if (a) {
-          const std::uint8_t* b = rowB[static_cast<std::size_t>(f.slot)];
-          const std::int32_t wx = f.wx;
-          for (std::uint32_t ch = 0; ch < 3; ++ch) {
-            const std::int32_t top = a[f.xa + ch] * (256 - wx) + a[f.xb + ch] * wx;
-            const std::int32_t bottom = b[f.xa + ch] * (256 - wx) + b[f.xb + ch] * wx;
-            out[ch] = static_cast<std::uint8_t>((top * (256 - wy) + bottom * wy + 32768) >> 16);
-          }
+        const std::uint16_t* v = rowBlend[static_cast<std::size_t>(f.slot)];
+        if (v) {
+          const auto wx = static_cast<std::uint32_t>(f.wx);
+          for (std::uint32_t ch = 0; ch < 3; ++ch)
+            out[ch] = static_cast<std::uint8_t>(
+                (v[f.xa + ch] * (256u - wx) + v[f.xb + ch] * wx + 32768u) >> 16);
           if (cc == 4) out[3] = 255;
           continue;
         }
