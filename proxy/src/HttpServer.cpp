@@ -126,8 +126,8 @@ using LoopExecutor = net::io_context::executor_type;
 class Session : public std::enable_shared_from_this<Session> {
 public:
   Session(tcp::socket&& socket, std::shared_ptr<HttpServer::Impl> server)
-      : stream_(std::move(socket)), writeTimer_(stream_.get_executor()),
-        server_(std::move(server)) {
+      : server_(std::move(server)), stream_(std::move(socket)),
+        writeTimer_(stream_.get_executor()) {
     server_->connections.fetch_add(1);
     // Once per connection, not per request.
     beast::error_code ec;
@@ -387,6 +387,12 @@ private:
     stream_.socket().shutdown(tcp::socket::shutdown_send, ec);
   }
 
+  // First, so destroyed last: a session can outlive the HttpServer object (a composed map's worker
+  // or a fetch callback may hold the responder when the server is destroyed), and the server's
+  // Impl owns the event loops that the socket and the timer below belong to. Released before
+  // them, the last reference would destroy the loops first (ASan: heap-use-after-free in
+  // ~io_object_impl).
+  std::shared_ptr<HttpServer::Impl> server_;
   beast::tcp_stream stream_;
   net::steady_timer writeTimer_; // bounds a file body's write
   std::string remoteAddress_;
@@ -403,7 +409,6 @@ private:
   std::optional<http::request_parser<http::string_body>> parser_;
   std::optional<http::response<http::span_body<const char>>> res_;
   HttpResponse out_;
-  std::shared_ptr<HttpServer::Impl> server_;
   bool keepAlive_ = true;
   bool head_ = false;
   unsigned version_ = 11;

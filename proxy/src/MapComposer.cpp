@@ -12,11 +12,11 @@
 #include <atomic>
 #include <cstdio>
 #include <cstring>
+#include <deque>
 #include <list>
 #include <map>
 #include <mutex>
 #include <span>
-#include <deque>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -176,9 +176,19 @@ MapComposer::MapComposer(TileService& tiles,
     : tiles_(tiles), maxTiles_(maxTiles),
       decodedCache_(decodedCacheBytes > 0 ? std::make_unique<DecodedCache>(decodedCacheBytes)
                                           : nullptr),
-      pool_(std::make_unique<Pool>(threads)) {}
+      gate_(std::make_shared<Gate>()), pool_(std::make_unique<Pool>(threads)) {
+  gate_->pool = &pool_->workers;
+}
 
-MapComposer::~MapComposer() = default;
+MapComposer::~MapComposer() {
+  // Tile answers may still arrive (from the tile service's threads) after this: they find no
+  // pool and drop their job. Jobs already queued run now, while everything they use lives.
+  {
+    std::lock_guard lock(gate_->mutex);
+    gate_->pool = nullptr;
+  }
+  pool_.reset();
+}
 
 std::expected<void, std::string>
 MapComposer::compose(ComposeRequest request,
@@ -210,8 +220,10 @@ MapComposer::compose(ComposeRequest request,
     job->layers.push_back(std::move(l));
   }
   job->pending = total + 1; // +1: the loop below, so nothing finishes before every fetch starts
-  const auto arrived = [this, job] {
-    if (job->pending.fetch_sub(1) == 1) pool_->workers.post([this, job] { finish(job); });
+  const auto arrived = [this, gate = gate_, job] {
+    if (job->pending.fetch_sub(1) != 1) return;
+    std::lock_guard lock(gate->mutex);
+    if (gate->pool) gate->pool->post([this, job] { finish(job); });
   };
   for (std::size_t li = 0; li < job->layers.size(); ++li) {
     Job::Layer& l = job->layers[li];

@@ -11,6 +11,7 @@
 #include <expected>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -73,6 +74,12 @@ private:
   class DecodedCache;
   std::unique_ptr<DecodedCache> decodedCache_;
   struct Pool;
+  /** Where the last tile answer of a map posts its job; null once the composer is going away. */
+  struct Gate {
+    std::mutex mutex;
+    class WorkerPool* pool = nullptr;
+  };
+  std::shared_ptr<Gate> gate_;
   std::unique_ptr<Pool> pool_; // last: destroyed first
 };
 

@@ -108,6 +108,7 @@ struct Proxy {
   }
   ~Proxy() {
     server->stop(); // no more requests
+    front.reset();  // the composer's queued maps finish while the tile service lives
     tiles.reset();  // then the service (its workers finish)
     fetcher.reset();
   }
