@@ -3,7 +3,15 @@
 #include <tellus/imaging/ImagingApi.hpp>
 
 extern "C" __attribute__((visibility("default"))) const TellusImagingTable* tellus_imaging_table() {
-  static const TellusImagingTable table{
-      999u, sizeof(TellusImagingTable), nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr};
+  static const TellusImagingTable table{999u,
+                                        sizeof(TellusImagingTable),
+                                        nullptr,
+                                        nullptr,
+                                        nullptr,
+                                        nullptr,
+                                        nullptr,
+                                        nullptr,
+                                        nullptr,
+                                        nullptr};
   return &table;
 }
