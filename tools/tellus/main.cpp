@@ -462,8 +462,12 @@ int cmdSeed(const Args& a) {
         // served alone, bench/RESULTS.md).
         for (auto& u : ups)
           u.policy.maxConnections = std::min(u.policy.maxConnections, sso.concurrency);
+        // Storing a fetched tile waits for fsync: as many workers as requests in flight, so
+        // that the disk's waits overlap instead of queueing behind two workers.
+        TileServiceOptions serviceOptions;
+        serviceOptions.renderThreads = std::max(serviceOptions.renderThreads, sso.concurrency);
         auto created = TileService::create(
-            *ctx->cache, fetcher, std::move(ups), std::move(lays), TileServiceOptions{});
+            *ctx->cache, fetcher, std::move(ups), std::move(lays), serviceOptions);
         if (!created) {
           std::fprintf(stderr, "tellus seed: %s\n", created.error().c_str());
           return kExitError;
