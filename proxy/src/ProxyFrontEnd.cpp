@@ -224,19 +224,24 @@ struct ProxyFrontEnd::Impl {
   void serveTilePath(const HttpRequest& req,
                      const std::string& layerName,
                      const TileKey& key,
-                     const Responder& respond) {
+                     const Responder& respond,
+                     const std::string* time = nullptr) {
     const LayerSpec* l = tiles.layer(layerName);
     if (!l) return respond(plain(404, "no such layer\n"));
-    tiles.getTile(
-        layerName, l->timeDefault, key, [this, v = Validators(req), l, respond](TileAnswer&& a) {
-          countTile(l, a);
-          if (a.kind == TileAnswer::Kind::Tile) return sendTile(v, std::move(a), *l, respond);
-          auto r = plain(a.kind == TileAnswer::Kind::Absent ? 404 : 502, a.message + "\n");
-          r.setHeader("X-Cache", toString(a.origin));
-          if (a.kind == TileAnswer::Kind::Absent)
-            r.setHeader("Cache-Control", "public, max-age=60");
-          respond(std::move(r));
-        });
+    tiles.getTile(layerName,
+                  time ? *time : l->timeDefault,
+                  key,
+                  [this, v = Validators(req), l, respond](TileAnswer&& a) {
+                    countTile(l, a);
+                    if (a.kind == TileAnswer::Kind::Tile)
+                      return sendTile(v, std::move(a), *l, respond);
+                    auto r =
+                        plain(a.kind == TileAnswer::Kind::Absent ? 404 : 502, a.message + "\n");
+                    r.setHeader("X-Cache", toString(a.origin));
+                    if (a.kind == TileAnswer::Kind::Absent)
+                      r.setHeader("Cache-Control", "public, max-age=60");
+                    respond(std::move(r));
+                  });
   }
 
   void worldWind(const HttpRequest& req, const Responder& respond) {
@@ -256,7 +261,23 @@ struct ProxyFrontEnd::Impl {
     const LayerSpec* l = tiles.layer(parsed->layer);
     if (!l || parsed->extension != l->dataset.extension)
       return respond(plain(404, "no such layer\n"));
-    serveTilePath(req, parsed->layer, parsed->key, respond);
+    // `?time=T` picks another time of a layer with a TIME dimension (the remote tile source of
+    // the planet renderer uses it); validated as a WMS TIME is.
+    std::string time;
+    const std::string* timeOrDefault = nullptr; // the hot path (no query) allocates nothing
+    if (!req.query.empty()) {
+      auto params = parseQuery(req.query, options.maxParamBytes, options.maxQueryBytes);
+      if (!params) return respond(plain(400, "bad query: " + params.error() + "\n"));
+      if (const auto t = params->get("time")) {
+        auto resolved = resolveTime(*l, *t);
+        if (!resolved)
+          return respond(
+              plain(400, resolved.error().code + ": " + resolved.error().message + "\n"));
+        time = std::move(*resolved);
+        timeOrDefault = &time;
+      }
+    }
+    serveTilePath(req, parsed->layer, parsed->key, respond, timeOrDefault);
   }
 
   // ----------------------------------------------------------------------------- WMS

@@ -14,6 +14,7 @@
 #include <tellus/proxy/ImageCodec.hpp>
 #include <tellus/proxy/Log.hpp>
 #include <tellus/proxy/ProxyFrontEnd.hpp>
+#include <tellus/proxy/RemoteTileSource.hpp>
 #include <tellus/proxy/Seeder.hpp>
 #include <tellus/proxy/TileService.hpp>
 
@@ -22,10 +23,13 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <future>
+#include <map>
+#include <mutex>
 #include <span>
 #include <sys/wait.h>
 #include <thread>
@@ -411,6 +415,191 @@ TEST(ProxyIntegration, AProxyChainOfTwoTellus) {
   EXPECT_EQ(direct.header("x-cache"), "HIT");
   EXPECT_EQ(viaEdge.body, direct.body);
   EXPECT_EQ(up.requests(), 1u);
+}
+
+// ------------------------------------------------------------------------------------------------
+// The planet's remote tile source (RemoteTileSource) against a real `tellus serve` front end.
+
+namespace {
+
+/** Collects a tile source's answers on its worker threads. */
+struct Answers {
+  std::mutex m;
+  std::condition_variable cv;
+  std::vector<std::pair<int, TileResult>> got; // (tag, result) in completion order
+
+  ITileSource::Callback callback(int tag) {
+    return [this, tag](TileResult&& r) {
+      std::lock_guard lock(m);
+      got.emplace_back(tag, std::move(r));
+      cv.notify_all();
+    };
+  }
+  bool waitFor(std::size_t n, std::chrono::milliseconds timeout = 10s) {
+    std::unique_lock lock(m);
+    return cv.wait_for(lock, timeout, [&] { return got.size() >= n; });
+  }
+};
+
+LayerSpec timeLayer() {
+  LayerSpec l;
+  l.name = "daily";
+  l.upstreamLayer = "updaily";
+  l.dataset.grid = GridSpec{Sector{}, 36.0, 256, 256, 2};
+  l.dataset.mimeType = "image/jpeg";
+  l.timeValues = {"2024-01-01", "2024-01-02"};
+  l.timeDefault = "2024-01-02";
+  return l;
+}
+
+} // namespace
+
+TEST(RemoteTileSource, LayersAndTilesComeFromTheServer) {
+  test::FakeUpstream up([](const test::FakeRequest& r) {
+    // Level 1, row 7, column 9 (lon -18..0, lat 36..54) does not exist upstream.
+    if (r.target.find("BBOX=36,-18,54,0") != std::string::npos)
+      return test::FakeReply::withStatus(404, "none");
+    return tileReply(r);
+  });
+  Proxy p(up.url("/wms"),
+          UpstreamSpec::Type::Wms,
+          0ms,
+          Proxy::fastPolicy(),
+          "upsat",
+          {},
+          {timeLayer()});
+  auto src = RemoteTileSource::connect(p.url("/"));
+  ASSERT_TRUE(src) << src.error();
+  auto& s = **src;
+  ASSERT_EQ(s.layers().size(), 2u);
+  const auto d = s.describe("sat", "");
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->grid, (GridSpec{Sector{}, 36.0, 256, 256, 4}));
+  EXPECT_EQ(d->mimeType, "image/jpeg");
+  EXPECT_EQ(d->extension, "jpg");
+  EXPECT_FALSE(s.describe("nope"));
+  EXPECT_EQ(s.describe("daily", "2024-01-01")->time, "2024-01-01");
+
+  Answers a;
+  s.request({"sat", "", TileKey{1, 3, 7}}, 1.0, a.callback(0));
+  s.request({"sat", "", TileKey{1, 7, 9}}, 1.0, a.callback(1));  // 404 upstream
+  s.request({"sat", "", TileKey{0, 5, 0}}, 1.0, a.callback(2));  // outside the grid
+  s.request({"nope", "", TileKey{0, 0, 0}}, 1.0, a.callback(3)); // no such layer
+  s.request({"daily", "2024-01-01", TileKey{0, 1, 2}}, 1.0, a.callback(4));
+  s.request({"daily", "1999-01-01", TileKey{0, 1, 2}}, 1.0, a.callback(5)); // not a listed time
+  ASSERT_TRUE(a.waitFor(6));
+  std::map<int, TileResult> by;
+  for (auto& [tag, r] : a.got)
+    by.emplace(tag, std::move(r));
+  ASSERT_EQ(by[0].status, TileStatus::Ok) << by[0].message;
+  const auto direct = p.get("/tiles/sat/1/3/3_7.jpg");
+  EXPECT_EQ(direct.header("x-cache"), "HIT");
+  EXPECT_EQ(std::string(reinterpret_cast<const char*>(by[0].bytes.data()), by[0].bytes.size()),
+            direct.body);
+  EXPECT_EQ(by[0].contentType, "image/jpeg");
+  EXPECT_EQ(by[1].status, TileStatus::Absent) << by[1].message;
+  EXPECT_EQ(by[2].status, TileStatus::Absent) << by[2].message;
+  EXPECT_EQ(by[3].status, TileStatus::Failed);
+  EXPECT_NE(by[3].message.find("nope"), std::string::npos);
+  ASSERT_EQ(by[4].status, TileStatus::Ok) << by[4].message;
+  EXPECT_EQ(by[5].status, TileStatus::Failed);
+  EXPECT_NE(by[5].message.find("InvalidDimensionValue"), std::string::npos) << by[5].message;
+  // The time went upstream, and the default time is another tile.
+  std::size_t withTime = 0;
+  for (const auto& r : up.received())
+    withTime += r.target.find("TIME=2024-01-01") != std::string::npos;
+  EXPECT_EQ(withTime, 1u);
+  EXPECT_EQ(p.get("/tiles/daily/0/1/1_2.jpg?time=2024-01-01").header("x-cache"), "HIT");
+  EXPECT_EQ(p.get("/tiles/daily/0/1/1_2.jpg").header("x-cache"), "MISS");
+}
+
+TEST(RemoteTileSource, QueuedRequestsRunByPriorityAndCanBeCancelled) {
+  std::atomic<bool> slow{true};
+  test::FakeUpstream up([&](const test::FakeRequest& r) {
+    auto reply = tileReply(r);
+    if (slow) reply.delayBeforeHeaders = 300ms;
+    return reply;
+  });
+  Proxy p(up.url("/wms"));
+  RemoteSourceOptions o;
+  o.maxInFlight = 1;
+  auto src = RemoteTileSource::connect(p.url(""), o);
+  ASSERT_TRUE(src) << src.error();
+  auto& s = **src;
+  Answers a;
+  s.request({"sat", "", TileKey{2, 0, 0}}, 0.0, a.callback(0)); // on the wire at once
+  const auto low = s.request({"sat", "", TileKey{2, 0, 1}}, 1.0, a.callback(1));
+  const auto high = s.request({"sat", "", TileKey{2, 0, 2}}, 3.0, a.callback(2));
+  const auto mid = s.request({"sat", "", TileKey{2, 0, 3}}, 2.0, a.callback(3));
+  const auto gone = s.request({"sat", "", TileKey{2, 0, 4}}, 5.0, a.callback(4));
+  EXPECT_EQ(s.queued(), 4u);
+  EXPECT_TRUE(s.cancel(gone));
+  EXPECT_FALSE(s.cancel(gone));
+  s.reprioritize(low, 2.5);          // now between high and mid
+  std::this_thread::sleep_for(50ms); // the first request has reached the upstream (and waits)
+  slow = false;
+  ASSERT_TRUE(a.waitFor(4));
+  std::vector<int> order;
+  for (const auto& [tag, r] : a.got) {
+    EXPECT_EQ(r.status, TileStatus::Ok) << r.message;
+    order.push_back(tag);
+  }
+  EXPECT_EQ(order, (std::vector<int>{0, 2, 1, 3}));
+  (void)high;
+  (void)mid;
+  std::this_thread::sleep_for(50ms);
+  EXPECT_EQ(a.got.size(), 4u); // the cancelled one never answers
+  EXPECT_EQ(up.requests(), 4u);
+}
+
+TEST(RemoteTileSource, AnUnreachableServerIsAClearErrorAndALostOneFailsTiles) {
+  std::uint16_t port = 0;
+  {
+    test::FakeUpstream closed;
+    port = closed.port();
+  }
+  RemoteSourceOptions o;
+  o.connectTimeout = 500ms;
+  o.retries = 0;
+  auto none = RemoteTileSource::connect("http://127.0.0.1:" + std::to_string(port), o);
+  ASSERT_FALSE(none);
+  EXPECT_NE(none.error().find("/layers.json"), std::string::npos) << none.error();
+  EXPECT_FALSE(RemoteTileSource::connect("ftp://127.0.0.1:1"));
+
+  test::FakeUpstream up(tileReply);
+  auto p = std::make_unique<Proxy>(up.url("/wms"));
+  auto src = RemoteTileSource::connect(p->url("/"), o);
+  ASSERT_TRUE(src) << src.error();
+  p.reset(); // the server goes away
+  Answers a;
+  (*src)->request({"sat", "", TileKey{0, 0, 0}}, 1.0, a.callback(0));
+  ASSERT_TRUE(a.waitFor(1));
+  EXPECT_EQ(a.got[0].second.status, TileStatus::Failed);
+  EXPECT_FALSE(a.got[0].second.message.empty());
+}
+
+TEST(RemoteTileSource, LayersJsonErrorsNameWhatIsWrong) {
+  EXPECT_FALSE(parseLayersJson("", "s"));
+  EXPECT_FALSE(parseLayersJson("[]", "s"));
+  EXPECT_FALSE(parseLayersJson("{\"layers\":[{\"name\":\"a\"}]}", "s"));
+  const auto bad = parseLayersJson("{\"layers\":[1,]}", "s");
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().find("offset"), std::string::npos);
+  const std::string ok =
+      R"({"title":"t","layers":[{"name":"a\u00e9","title":"x","format":"image/png",)"
+      R"("extension":"png","elevation":false,"levelZeroDelta":45,"tileWidth":256,)"
+      R"("tileHeight":128,"levels":3,"firstLevel":0,)"
+      R"("sector":{"west":-180,"south":-90,"east":180,"north":90}}]})";
+  const auto l = parseLayersJson(ok, "host:1");
+  ASSERT_TRUE(l) << l.error();
+  ASSERT_EQ(l->size(), 1u);
+  EXPECT_EQ((*l)[0].name, "a\xc3\xa9");
+  EXPECT_EQ((*l)[0].dataset.server, "host:1");
+  EXPECT_EQ((*l)[0].dataset.grid, (GridSpec{Sector{-180, -90, 180, 90}, 45.0, 256, 128, 3}));
+  // A grid the tile math refuses is refused here too.
+  std::string badDelta = ok;
+  badDelta.replace(badDelta.find("45"), 2, "7");
+  EXPECT_FALSE(parseLayersJson(badDelta, "s"));
 }
 
 // ------------------------------------------------------------------------------------------------
