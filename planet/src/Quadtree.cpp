@@ -94,13 +94,49 @@ std::int64_t Quadtree::spanFor(std::int32_t level,
 }
 
 Quadtree::ChildKeys Quadtree::childKeys(const NodeKey& key) const noexcept {
+  return childKeysFor(key, nullptr);
+}
+
+bool Quadtree::fitsEastWest(const NodeKey& key, const Camera& camera) const noexcept {
+  // Each half of each east-west edge within half the limit: the wide node's texels are twice as
+  // wide as its halves', so this is the test the two halves would pass, at their granularity
+  // (perspective across a wide node enlarges the near texels more than the whole edge shows).
+  const Sector s = sectorOf(key);
+  const double limit = 0.5 * static_cast<double>(params_.lod.tileWidthPx) * params_.lod.threshold;
+  const double halfW = 0.5 * static_cast<double>(camera.viewport().width);
+  const double halfH = 0.5 * static_cast<double>(camera.viewport().height);
+  const double lons[3] = {s.west, 0.5 * (s.west + s.east), s.east};
+  for (const double lat : {s.south, s.north}) {
+    if (lat == 90.0 || lat == -90.0) continue; // the pole: an edge of length 0
+    glm::dvec2 px[3]{};
+    for (std::size_t i = 0; i < 3; ++i) {
+      const Ecef e = geodesy_.toEcef(lat, lons[i], 0.0);
+      const glm::dvec4 c = camera.toClip({e.x, e.y, e.z});
+      if (!(c.w >= camera.nearM())) return false;
+      px[i] = {c.x / c.w * halfW, c.y / c.w * halfH};
+    }
+    for (std::size_t i = 0; i < 2; ++i) {
+      const glm::dvec2 d = px[i + 1] - px[i];
+      if (!(d.x * d.x + d.y * d.y <= limit * limit)) return false; // NaN: does not fit
+    }
+  }
+  return true;
+}
+
+Quadtree::ChildKeys Quadtree::childKeysFor(const NodeKey& key,
+                                           const Camera* camera) const noexcept {
   ChildKeys out;
   if (key.level + 1 >= grid_.numLevels()) return out;
   const std::int32_t L = key.level + 1;
   const std::int64_t width = key.span * 2; // the parent's columns at the child level
   for (int half = 0; half < 2; ++half) {   // 0: south row, 1: north row
     const std::int64_t row = key.row * 2 + half;
-    const std::int64_t span = spanFor(L, row, width);
+    std::int64_t span = spanFor(L, row, width);
+    // A merged row may be as wide as the parent when the camera sees its east-west edges within
+    // the texel limit (it would otherwise be two nodes no wider than tall).
+    if (camera != nullptr && params_.adaptivePolarSpans && span > 1 && span < width &&
+        fitsEastWest({L, row, key.col * 2, width}, *camera))
+      span = width;
     for (std::int64_t i = 0; i * span < width; ++i) {
       const NodeKey k{L, row, key.col * 2 + i * span, span};
       bool valid = grid_.isValid(k.firstTile());
@@ -233,7 +269,7 @@ void Quadtree::relinkAround(const Node& node) noexcept {
 
 bool Quadtree::split(Node& node) {
   if (node.hasChildren()) return true;
-  const ChildKeys ck = childKeys(node.key_);
+  const ChildKeys ck = childKeysFor(node.key_, splitCamera_);
   int made = 0;
   for (std::size_t i = 0; i < 4; ++i) {
     if (!ck.present[i]) continue;
@@ -269,8 +305,10 @@ const FrameStats& Quadtree::update(const Camera& camera) {
   stats_ = FrameStats{};
   drawList_.clear();
   splitsThisFrame_ = 0;
+  splitCamera_ = &camera;
   for (auto& r : roots_)
     if (r) visit(*r, false, camera);
+  splitCamera_ = nullptr;
   enforceNodeLimit();
   stats_.drawn = drawList_.size();
   stats_.nodes = nodeCount_;
@@ -285,7 +323,7 @@ void Quadtree::visit(Node& node, bool insideFrustum, const Camera& camera) {
     return;
   }
   if (!insideFrustum) {
-    const FrustumResult f = classify(camera.frustum(), g.bounds());
+    const FrustumResult f = classifyNode(camera, g);
     if (f == FrustumResult::Outside) {
       ++stats_.culledFrustum;
       return;

@@ -12,10 +12,11 @@
  * east-west extent that is already far finer than needed. Children therefore split north-south
  * only where the row is that thin: a child row spans as many columns as keeps its east-west
  * ground extent near its north-south extent (the power of two nearest 1/cos(mid latitude), never
- * narrower than half nor wider than its parent). The LOD test still checks both projected axes
- * against the node texture's texel counts, so a texel is never larger than the threshold in
- * pixels along either axis; the texture of a wide node is composed from its `span` tiles
- * (TextureStreamer asks for all of them). See docs/ARCHITECTURE.md, "The poles".
+ * narrower than half nor wider than its parent; QuadtreeParams::adaptivePolarSpans widens a merged
+ * row to its parent's width when the camera at split time allows it). The LOD test still checks
+ * both projected axes against the node texture's texel counts, so a texel is never larger than the
+ * threshold in pixels along either axis; the texture of a wide node is composed from its `span`
+ * tiles (TextureStreamer asks for all of them). See docs/ARCHITECTURE.md, "The poles".
  */
 
 #include <tellus/cache/TileGrid.hpp>
@@ -118,6 +119,12 @@ struct QuadtreeParams {
   double occluderHeightM = 0.0;
   /** Merge polar slivers east-west (the pole fix); off gives the plain one-tile-per-node tree. */
   bool polarMerge = true;
+  /** With polarMerge, where a child row is merged at all (two or more columns: above ~60 degrees
+   * of latitude), a split during update() makes the row as wide as the parent when that wider
+   * node's east-west edges project within tileWidthPx x threshold pixels from the camera then:
+   * the static rule keeps nodes no wider than tall, so a ring of the pole view may hold twice the
+   * nodes the texel-to-pixel test needs. Splits outside update() (split()) use the static rule. */
+  bool adaptivePolarSpans = true;
 };
 
 struct FrameStats {
@@ -172,7 +179,8 @@ public:
   /** The sector a key covers (from the grid's integer edges). */
   Sector sectorOf(const NodeKey& key) const noexcept;
 
-  /** Creates the children of a leaf (no-op otherwise; false at the deepest level). */
+  /** Creates the children of a leaf (no-op otherwise; false at the deepest level), with the keys
+   * of childKeys() (the static layout). */
   bool split(Node& node);
   /** Removes every descendant of node; every pointer to a removed node is relinked (to the
    * nearest remaining coarser neighbour) or nulled. */
@@ -200,6 +208,8 @@ private:
   void enforceNodeLimit();
   std::int64_t
   spanFor(std::int32_t level, std::int64_t row, std::int64_t parentSpanInChildCols) const noexcept;
+  ChildKeys childKeysFor(const NodeKey& key, const Camera* camera) const noexcept;
+  bool fitsEastWest(const NodeKey& key, const Camera& camera) const noexcept;
 
   const Geodesy& geodesy_;
   TileGrid grid_;
@@ -214,6 +224,7 @@ private:
   std::uint64_t frame_ = 0;
   std::size_t nodeCount_ = 0;
   int splitsThisFrame_ = 0;
+  const Camera* splitCamera_ = nullptr; ///< during update(): the camera adaptive spans look from
 };
 
 } // namespace tellus::planet
