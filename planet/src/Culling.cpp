@@ -79,8 +79,13 @@ FrustumResult classifyNode(const Camera& camera, const NodeGeometry& node) noexc
   if (sphere != FrustumResult::Intersecting) return sphere;
   const FrustumResult box = classify(camera.frustum(), node.box());
   if (box != FrustumResult::Intersecting) return box;
-  return projectsOutsideViewport(camera, node.box()) ? FrustumResult::Outside
-                                                     : FrustumResult::Intersecting;
+  if (projectsOutsideViewport(camera, node.box())) return FrustumResult::Outside;
+  // The two half boxes together contain the patch too: outside when each half is.
+  for (const OrientedBox& half : node.halfBoxes())
+    if (classify(camera.frustum(), half) != FrustumResult::Outside &&
+        !projectsOutsideViewport(camera, half))
+      return FrustumResult::Intersecting;
+  return FrustumResult::Outside;
 }
 
 bool isBackFacing(const Camera& camera, const NodeGeometry& node) noexcept {

@@ -149,27 +149,39 @@ NodeGeometry::NodeGeometry(const Geodesy& geodesy,
   const double margin = (cellLatRad * cellLatRad * kLat + cellLonRad * cellLonRad * kLon) / 8.0;
   bounds_.radius = (std::sqrt(r2) + margin) * (1.0 + 1e-12) + 1e-6;
 
-  // The box: the samples' extent along east, north and up at the middle longitude/latitude (an
-  // orthonormal frame built from the angles, defined at the poles too), grown by the same margin
-  // (a projection on a unit axis is 1-Lipschitz).
+  // The boxes: the samples' extent along east, north and up at a middle longitude and the middle
+  // latitude (an orthonormal frame built from the angles, defined at the poles too), grown by the
+  // same margin (a projection on a unit axis is 1-Lipschitz). The whole node's, and one per half
+  // of the columns (each patch point lies in a cell of one half, within the margin of the hull of
+  // that cell's samples): for a wide polar wedge, whose arc a single box fits loosely.
   const double sLat = std::sin(midLat * kDegToRad), cLat = std::cos(midLat * kDegToRad);
-  const double sLon = std::sin(midLon * kDegToRad), cLon = std::cos(midLon * kDegToRad);
-  const std::array<glm::dvec3, 3> axes{glm::dvec3(-sLon, cLon, 0.0),
-                                       glm::dvec3(-sLat * cLon, -sLat * sLon, cLat),
-                                       glm::dvec3(cLat * cLon, cLat * sLon, sLat)};
-  glm::dvec3 minA(std::numeric_limits<double>::infinity());
-  glm::dvec3 maxA(-std::numeric_limits<double>::infinity());
-  for (const auto& p : samples) {
-    const glm::dvec3 d = p - centre_;
-    const glm::dvec3 t(glm::dot(d, axes[0]), glm::dot(d, axes[1]), glm::dot(d, axes[2]));
-    minA = glm::min(minA, t);
-    maxA = glm::max(maxA, t);
-  }
-  box_.axes = axes;
-  const glm::dvec3 mid = 0.5 * (minA + maxA);
-  box_.centre = centre_ + mid.x * axes[0] + mid.y * axes[1] + mid.z * axes[2];
-  const glm::dvec3 half = 0.5 * (maxA - minA) + glm::dvec3(margin);
-  box_.halfExtents = half * (1.0 + 1e-12) + glm::dvec3(1e-6);
+  auto makeBox = [&](double lonDeg, int firstCol, int lastCol) {
+    const double sLon = std::sin(lonDeg * kDegToRad), cLon = std::cos(lonDeg * kDegToRad);
+    const std::array<glm::dvec3, 3> axes{glm::dvec3(-sLon, cLon, 0.0),
+                                         glm::dvec3(-sLat * cLon, -sLat * sLon, cLat),
+                                         glm::dvec3(cLat * cLon, cLat * sLon, sLat)};
+    glm::dvec3 minA(std::numeric_limits<double>::infinity());
+    glm::dvec3 maxA(-std::numeric_limits<double>::infinity());
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      const int col = static_cast<int>(i / 2) % kBoundSamples; // (row, col, height) order
+      if (col < firstCol || col > lastCol) continue;
+      const glm::dvec3 d = samples[i] - centre_;
+      const glm::dvec3 t(glm::dot(d, axes[0]), glm::dot(d, axes[1]), glm::dot(d, axes[2]));
+      minA = glm::min(minA, t);
+      maxA = glm::max(maxA, t);
+    }
+    OrientedBox box;
+    box.axes = axes;
+    const glm::dvec3 mid = 0.5 * (minA + maxA);
+    box.centre = centre_ + mid.x * axes[0] + mid.y * axes[1] + mid.z * axes[2];
+    const glm::dvec3 half = 0.5 * (maxA - minA) + glm::dvec3(margin);
+    box.halfExtents = half * (1.0 + 1e-12) + glm::dvec3(1e-6);
+    return box;
+  };
+  constexpr int middleCol = kBoundSamples / 2;
+  box_ = makeBox(midLon, 0, kBoundSamples - 1);
+  halfBoxes_[0] = makeBox(0.5 * (s.west + midLon), 0, middleCol);
+  halfBoxes_[1] = makeBox(0.5 * (midLon + s.east), middleCol, kBoundSamples - 1);
 }
 
 PatchMesh buildPatchMesh(const Geodesy& geodesy, const Sector& sector, int n) {

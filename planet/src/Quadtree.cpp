@@ -123,8 +123,44 @@ bool Quadtree::fitsEastWest(const NodeKey& key, const Camera& camera) const noex
   return true;
 }
 
-Quadtree::ChildKeys Quadtree::childKeysFor(const NodeKey& key,
-                                           const Camera* camera) const noexcept {
+bool Quadtree::visibleNow(const NodeKey& key, const Camera& camera) const {
+  if (!grid_.isValid(key.firstTile()) ||
+      !grid_.isValid({key.level, key.row, key.col + key.span - 1}))
+    return false;
+  return cullNode(camera, NodeGeometry(geodesy_, sectorOf(key)), occluder_).visible;
+}
+
+bool Quadtree::widerPaysOff(const NodeKey& wide, std::int64_t span, const Camera& camera) const {
+  // The wide node is too wide to draw from here: the LOD test will split it (its whole east-west
+  // edge is over the limit). Worth it when what it splits into, one level down with the same
+  // choice made there, costs fewer visible nodes than the row's static nodes now: near the pole
+  // a ring's static nodes can be twice as many as the texel test needs, and the ring one level
+  // down, closer to the pole, may fit wide (the least-node cover of the pole view does this).
+  if (wide.level + 1 >= grid_.numLevels()) return false;
+  const LodResult lod = evaluateLod(camera, NodeGeometry(geodesy_, sectorOf(wide)), params_.lod);
+  if (!lod.split || lod.cornerBehindCamera) return false;
+  int statics = 0;
+  for (std::int64_t c = wide.col; c < wide.col + wide.span; c += span)
+    statics += visibleNow({wide.level, wide.row, c, span}, camera) ? 1 : 0;
+  if (statics < 2) return false;
+  const std::int32_t L = wide.level + 1;
+  const std::int64_t width = wide.span * 2;
+  int below = 0;
+  for (int half = 0; half < 2 && below < statics; ++half) {
+    const std::int64_t row = wide.row * 2 + half;
+    const std::int64_t s = spanFor(L, row, width);
+    const NodeKey whole{L, row, wide.col * 2, width};
+    if (s < width && !fitsEastWest(whole, camera)) {
+      for (std::int64_t c = whole.col; c < whole.col + width; c += s)
+        below += visibleNow({L, row, c, s}, camera) ? 1 : 0;
+    } else {
+      below += visibleNow(whole, camera) ? 1 : 0;
+    }
+  }
+  return below < statics;
+}
+
+Quadtree::ChildKeys Quadtree::childKeysFor(const NodeKey& key, const Camera* camera) const {
   ChildKeys out;
   if (key.level + 1 >= grid_.numLevels()) return out;
   const std::int32_t L = key.level + 1;
@@ -135,7 +171,8 @@ Quadtree::ChildKeys Quadtree::childKeysFor(const NodeKey& key,
     // A merged row may be as wide as the parent when the camera sees its east-west edges within
     // the texel limit (it would otherwise be two nodes no wider than tall).
     if (camera != nullptr && params_.adaptivePolarSpans && span > 1 && span < width &&
-        fitsEastWest({L, row, key.col * 2, width}, *camera))
+        (fitsEastWest({L, row, key.col * 2, width}, *camera) ||
+         widerPaysOff({L, row, key.col * 2, width}, span, *camera)))
       span = width;
     for (std::int64_t i = 0; i * span < width; ++i) {
       const NodeKey k{L, row, key.col * 2 + i * span, span};

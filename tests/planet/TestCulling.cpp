@@ -103,6 +103,7 @@ void crossCheck(const Geodesy& g,
     EXPECT_NE(classify(cam.frustum(), node.bounds()), FrustumResult::Outside) << what;
     EXPECT_NE(classify(cam.frustum(), node.box()), FrustumResult::Outside) << what;
     EXPECT_FALSE(projectsOutsideViewport(cam, node.box())) << what;
+    EXPECT_NE(classifyNode(cam, node), FrustumResult::Outside) << what;
     EXPECT_FALSE(occ.isOccluded(cam.position(), node.bounds())) << what;
     EXPECT_TRUE(r.visible) << what << " sector " << s.west << "," << s.south << "," << s.east << ","
                            << s.north << " heights " << hMin << ".." << hMax;

@@ -27,8 +27,9 @@ FrustumResult classify(const Frustum& frustum, const OrientedBox& box) noexcept;
 bool projectsOutsideViewport(const Camera& camera, const OrientedBox& box) noexcept;
 
 /** The frustum test of a node: its sphere, then, when the sphere only intersects, its box
- * against the planes, then the projected box against the viewport. Outside or Inside when any
- * of them says so (all contain the patch). */
+ * against the planes, then the projected box against the viewport, then its two half boxes
+ * (planes and viewport). Outside or Inside when any of them says so (all contain the patch;
+ * Outside for the halves when both are). */
 FrustumResult classifyNode(const Camera& camera, const NodeGeometry& node) noexcept;
 
 /**

@@ -79,6 +79,10 @@ public:
    * on the distance from any patch point to its nearest sample: it contains the patch at every
    * height in [min, max] like bounds(), and is the frustum test's second, tighter chance. */
   const OrientedBox& box() const noexcept { return box_; }
+  /** Boxes around the west and the east half of the same samples (each in its own frame at its
+   * half's middle longitude), each grown the same way: together they contain the patch, and
+   * fit a wide polar wedge's arc much better than box(). */
+  const std::array<OrientedBox, 2>& halfBoxes() const noexcept { return halfBoxes_; }
   /** The model's semi-axes (what the node was built on). */
   double equatorialRadiusM() const noexcept { return a_; }
   double polarRadiusM() const noexcept { return b_; }
@@ -97,6 +101,7 @@ private:
   double normalCone_ = 0.0;
   BoundingSphere bounds_;
   OrientedBox box_;
+  std::array<OrientedBox, 2> halfBoxes_{};
 };
 
 struct PatchVertex {

@@ -11,12 +11,13 @@
  * the texel-to-pixel test, which must split for the north-south texels, would also halve an
  * east-west extent that is already far finer than needed. Children therefore split north-south
  * only where the row is that thin: a child row spans as many columns as keeps its east-west
- * ground extent near its north-south extent (the power of two nearest 1/cos(mid latitude), never
- * narrower than half nor wider than its parent; QuadtreeParams::adaptivePolarSpans widens a merged
- * row to its parent's width when the camera at split time allows it). The LOD test still checks
- * both projected axes against the node texture's texel counts, so a texel is never larger than the
- * threshold in pixels along either axis; the texture of a wide node is composed from its `span`
- * tiles (TextureStreamer asks for all of them). See docs/ARCHITECTURE.md, "The poles".
+ * ground extent at most its north-south extent (the largest power of two not above
+ * 1/cos(equatorward latitude), never narrower than half nor wider than its parent;
+ * QuadtreeParams::adaptivePolarSpans widens a merged row to its parent's width when the camera at
+ * split time allows it). The LOD test still checks both projected axes against the node texture's
+ * texel counts, so a texel is never larger than the threshold in pixels along either axis; the
+ * texture of a wide node is composed from its `span` tiles (TextureStreamer asks for all of them).
+ * See docs/ARCHITECTURE.md, "The poles".
  */
 
 #include <tellus/cache/TileGrid.hpp>
@@ -208,8 +209,10 @@ private:
   void enforceNodeLimit();
   std::int64_t
   spanFor(std::int32_t level, std::int64_t row, std::int64_t parentSpanInChildCols) const noexcept;
-  ChildKeys childKeysFor(const NodeKey& key, const Camera* camera) const noexcept;
+  ChildKeys childKeysFor(const NodeKey& key, const Camera* camera) const;
   bool fitsEastWest(const NodeKey& key, const Camera& camera) const noexcept;
+  bool visibleNow(const NodeKey& key, const Camera& camera) const;
+  bool widerPaysOff(const NodeKey& wide, std::int64_t span, const Camera& camera) const;
 
   const Geodesy& geodesy_;
   TileGrid grid_;
