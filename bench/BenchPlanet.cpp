@@ -381,7 +381,9 @@ BENCHMARK(BM_PathFastPan)->Unit(benchmark::kMillisecond)->Iterations(1);
  * same (the steady state: nothing created, everything traversed and tested). */
 void BM_UpdatePass(benchmark::State& state) {
   const Geodesy g;
-  Quadtree tree(g, worldWindGrid(), params(0.125));
+  QuadtreeParams p = params(0.125);
+  p.tightFrustumCulling = state.range(0) != 0; // 0: the bounding sphere alone
+  Quadtree tree(g, worldWindGrid(), p);
   const Camera cam(g, {30.0, 10.0, 3e5, 0.0, 70.0}, {1920, 1080});
   converge(tree, cam);
   for (auto _ : state)
@@ -390,7 +392,7 @@ void BM_UpdatePass(benchmark::State& state) {
   state.counters["drawn"] = static_cast<double>(tree.stats().drawn);
   state.counters["visited"] = static_cast<double>(tree.stats().visited);
 }
-BENCHMARK(BM_UpdatePass)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_UpdatePass)->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond);
 
 /** The same view with the streamer's pass after the tree's (all textures resident: the steady
  * state of the whole CPU update; the time is tree.update + streamer.update on the thread's CPU

@@ -360,7 +360,8 @@ void Quadtree::visit(Node& node, bool insideFrustum, const Camera& camera) {
     return;
   }
   if (!insideFrustum) {
-    const FrustumResult f = classifyNode(camera, g);
+    const FrustumResult f = params_.tightFrustumCulling ? classifyNode(camera, g)
+                                                        : classify(camera.frustum(), g.bounds());
     if (f == FrustumResult::Outside) {
       ++stats_.culledFrustum;
       return;

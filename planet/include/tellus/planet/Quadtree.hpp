@@ -126,6 +126,10 @@ struct QuadtreeParams {
    * the static rule keeps nodes no wider than tall, so a ring of the pole view may hold twice the
    * nodes the texel-to-pixel test needs. Splits outside update() (split()) use the static rule. */
   bool adaptivePolarSpans = true;
+  /** The frustum test: classifyNode (sphere, box, projected box, half boxes) when true; the
+   * bounding sphere alone when false (for comparisons: it keeps nodes off the view's edges and
+   * corners, and most of a pole view's ring just outside it). */
+  bool tightFrustumCulling = true;
 };
 
 struct FrameStats {
