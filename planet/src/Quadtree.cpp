@@ -375,7 +375,15 @@ void Quadtree::visit(Node& node, bool insideFrustum, const Camera& camera) {
   ++stats_.visible;
   node.lastVisible_ = frame_;
   const LodResult lod = evaluateLod(camera, g, params_.lod);
-  bool descend = lod.split && node.key_.level + 1 < grid_.numLevels();
+  bool refine = lod.split;
+  // A row widened for another camera (wider than the static rule) keeps the test it was made
+  // with, each half of each east-west edge within half the limit: the whole-edge test alone
+  // would let perspective enlarge its near texels further than a static node's.
+  if (!refine && node.parent_ != nullptr &&
+      node.key_.span > spanFor(node.key_.level, node.key_.row, node.parent_->key_.span * 2) &&
+      !fitsEastWest(node.key_, camera))
+    refine = true;
+  bool descend = refine && node.key_.level + 1 < grid_.numLevels();
   if (descend && !node.hasChildren()) {
     if (splitsThisFrame_ >= params_.maxSplitsPerFrame) {
       ++stats_.splitsDeferred;

@@ -357,6 +357,50 @@ TEST(QuadtreeExtremes, TexelToPixelHoldsAtThePole) {
     }
 }
 
+// Widened polar rows are made for the camera of the moment; after a path over the pole (zooming
+// in and out, tilting, turning) the nodes made for earlier cameras must keep the guarantee: no
+// texel larger than the budget (1.02 px top down, 1.45 tilted), or than a fresh static tree
+// (adaptivePolarSpans off) shows for the same camera where that is already over it. The corner-
+// plane test itself lets texels reach 3.5 px tilted 60 degrees over a level-2 polar wedge from
+// 240 km (the camera above the wedge's interior, its corners far away; static tree alike), and
+// 1.04 px top down over one from 1,750 km: limits of the thesis's test, not of the merged rows.
+TEST(QuadtreeExtremes, TexelToPixelHoldsAfterAPathOverThePole) {
+  const Geodesy g;
+  Quadtree tree(g, test::globalGrid(), params());
+  QuadtreeParams staticRows = params();
+  staticRows.adaptivePolarSpans = false;
+  std::mt19937_64 rng(90);
+  std::uniform_real_distribution<double> lat(86.0, 90.0), lon(-180.0, 180.0), heading(0.0, 360.0);
+  std::uniform_real_distribution<double> logAlt(3.0, 6.3);
+  int drawnChecked = 0, overBudgetStatic = 0;
+  for (int step = 0; step < 16; ++step) {
+    const double alt = std::pow(10.0, logAlt(rng));
+    const double tilt = (step % 3 == 0 || alt > 1e6) ? 0.0 : 60.0;
+    const double sign = step % 4 == 3 ? -1.0 : 1.0; // now and then the south pole
+    const double la = sign * lat(rng), lo = lon(rng), hd = heading(rng);
+    const Camera cam(g, {la, lo, alt, hd, tilt}, {1024, 768}, 45.0);
+    converge(tree, cam);
+    double worst = 0.0;
+    for (const Node* n : tree.drawList()) {
+      worst = std::max(worst, worstTexelPixels(cam, g, *n, tree.params().lod));
+      ++drawnChecked;
+    }
+    Quadtree fresh(g, test::globalGrid(), staticRows);
+    converge(fresh, cam);
+    double worstStatic = 0.0;
+    for (const Node* n : fresh.drawList())
+      worstStatic = std::max(worstStatic, worstTexelPixels(cam, g, *n, fresh.params().lod));
+    const double budget = tilt == 0.0 ? 1.02 : 1.45;
+    overBudgetStatic += worstStatic > budget ? 1 : 0;
+    EXPECT_LE(worst, std::max(budget, worstStatic * (1.0 + 1e-9)))
+        << step << ": lat " << la << " alt " << alt << " tilt " << tilt << " (static "
+        << worstStatic << ")";
+  }
+  EXPECT_GT(drawnChecked, 200);
+  EXPECT_LE(overBudgetStatic, 3); // the known cases above, not a general failure
+  expectConsistent(tree);
+}
+
 TEST(QuadtreeExtremes, NeighboursAcrossTheAntimeridianAndAtThePoles) {
   const Geodesy g;
   Quadtree tree(g, test::globalGrid(), params());
