@@ -121,10 +121,13 @@ struct QuadtreeParams {
   /** Merge polar slivers east-west (the pole fix); off gives the plain one-tile-per-node tree. */
   bool polarMerge = true;
   /** With polarMerge, where a child row is merged at all (two or more columns: above ~60 degrees
-   * of latitude), a split during update() makes the row as wide as the parent when that wider
-   * node's east-west edges project within tileWidthPx x threshold pixels from the camera then:
-   * the static rule keeps nodes no wider than tall, so a ring of the pole view may hold twice the
-   * nodes the texel-to-pixel test needs. Splits outside update() (split()) use the static rule. */
+   * of latitude), a split during update() makes the row as wide as the parent when each half of
+   * that wider node's east-west edges projects within half of tileWidthPx x threshold pixels
+   * from the camera then, or when the wider node will be split anyway and its children would be
+   * fewer visible nodes than the row's static ones (a one-level lookahead): the static rule keeps
+   * nodes no wider than tall, so a ring of the pole view may hold twice the nodes the texel test
+   * needs. A widened node is refined while drawn once its half edges no longer fit. Splits
+   * outside update() (split()) use the static rule. */
   bool adaptivePolarSpans = true;
   /** The frustum test: classifyNode (sphere, box, projected box, half boxes) when true; the
    * bounding sphere alone when false (for comparisons: it keeps nodes off the view's edges and
