@@ -3,7 +3,9 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace tellus::planet {
@@ -16,6 +18,74 @@ FrustumResult classify(const Frustum& frustum, const BoundingSphere& sphere) noe
     if (d < sphere.radius) intersects = true;
   }
   return intersects ? FrustumResult::Intersecting : FrustumResult::Inside;
+}
+
+FrustumResult classify(const Frustum& frustum, const OrientedBox& box) noexcept {
+  bool intersects = false;
+  for (const Plane& p : frustum.planes) {
+    const double d = p.signedDistance(box.centre);
+    const double r = std::abs(glm::dot(p.n, box.axes[0])) * box.halfExtents.x +
+                     std::abs(glm::dot(p.n, box.axes[1])) * box.halfExtents.y +
+                     std::abs(glm::dot(p.n, box.axes[2])) * box.halfExtents.z;
+    if (d < -r) return FrustumResult::Outside;
+    if (d < r) intersects = true;
+  }
+  return intersects ? FrustumResult::Intersecting : FrustumResult::Inside;
+}
+
+bool projectsOutsideViewport(const Camera& camera, const OrientedBox& box) noexcept {
+  const double halfW = 0.5 * static_cast<double>(camera.viewport().width);
+  const double halfH = 0.5 * static_cast<double>(camera.viewport().height);
+  std::array<glm::dvec2, 8> px{};
+  for (std::size_t i = 0; i < 8; ++i) {
+    const glm::dvec3 p = box.centre + ((i & 1u) ? 1.0 : -1.0) * box.halfExtents.x * box.axes[0] +
+                         ((i & 2u) ? 1.0 : -1.0) * box.halfExtents.y * box.axes[1] +
+                         ((i & 4u) ? 1.0 : -1.0) * box.halfExtents.z * box.axes[2];
+    const glm::dvec4 c = camera.toClip(p);
+    if (!(c.w > camera.nearM()) || !std::isfinite(c.x) || !std::isfinite(c.y)) return false;
+    px[i] = {c.x / c.w * halfW, c.y / c.w * halfH};
+  }
+  const std::array<glm::dvec2, 4> view{
+      {{-halfW, -halfH}, {halfW, -halfH}, {halfW, halfH}, {-halfW, halfH}}};
+  auto separates = [&](const glm::dvec2& axis) {
+    double bMin = std::numeric_limits<double>::infinity(), bMax = -bMin;
+    for (const glm::dvec2& p : px) {
+      const double t = glm::dot(p, axis);
+      bMin = std::min(bMin, t);
+      bMax = std::max(bMax, t);
+    }
+    double vMin = std::numeric_limits<double>::infinity(), vMax = -vMin;
+    for (const glm::dvec2& p : view) {
+      const double t = glm::dot(p, axis);
+      vMin = std::min(vMin, t);
+      vMax = std::max(vMax, t);
+    }
+    return bMax < vMin || vMax < bMin;
+  };
+  if (separates({1.0, 0.0}) || separates({0.0, 1.0})) return true;
+  // The twelve edges: corners differing in one bit.
+  for (std::size_t i = 0; i < 8; ++i)
+    for (std::size_t bit = 1; bit < 8; bit <<= 1) {
+      if (i & bit) continue;
+      const glm::dvec2 e = px[i | bit] - px[i];
+      if (e.x == 0.0 && e.y == 0.0) continue;
+      if (separates({-e.y, e.x})) return true;
+    }
+  return false;
+}
+
+FrustumResult classifyNode(const Camera& camera, const NodeGeometry& node) noexcept {
+  const FrustumResult sphere = classify(camera.frustum(), node.bounds());
+  if (sphere != FrustumResult::Intersecting) return sphere;
+  const FrustumResult box = classify(camera.frustum(), node.box());
+  if (box != FrustumResult::Intersecting) return box;
+  if (projectsOutsideViewport(camera, node.box())) return FrustumResult::Outside;
+  // The two half boxes together contain the patch too: outside when each half is.
+  for (const OrientedBox& half : node.halfBoxes())
+    if (classify(camera.frustum(), half) != FrustumResult::Outside &&
+        !projectsOutsideViewport(camera, half))
+      return FrustumResult::Intersecting;
+  return FrustumResult::Outside;
 }
 
 bool isBackFacing(const Camera& camera, const NodeGeometry& node) noexcept {
@@ -88,7 +158,7 @@ CullResult
 cullNode(const Camera& camera, const NodeGeometry& node, const HorizonOccluder& occluder) noexcept {
   CullResult r;
   if (isBackFacing(camera, node)) return r;
-  r.frustum = classify(camera.frustum(), node.bounds());
+  r.frustum = classifyNode(camera, node);
   if (r.frustum == FrustumResult::Outside) return r;
   if (occluder.isOccluded(camera.position(), node.bounds())) return r;
   r.visible = true;

@@ -56,6 +56,14 @@ bool BoundingSphere::contains(const glm::dvec3& p) const noexcept {
   return glm::length(p - centre) <= radius;
 }
 
+bool OrientedBox::contains(const glm::dvec3& p) const noexcept {
+  const glm::dvec3 d = p - centre;
+  for (std::size_t i = 0; i < 3; ++i)
+    if (!(std::abs(glm::dot(d, axes[i])) <= halfExtents[static_cast<glm::length_t>(i)]))
+      return false;
+  return true;
+}
+
 NodeGeometry::NodeGeometry(const Geodesy& geodesy,
                            const Sector& sector,
                            double minHeightM,
@@ -116,25 +124,64 @@ NodeGeometry::NodeGeometry(const Geodesy& geodesy,
     const glm::dvec3 d = p - bounds_.centre;
     r2 = std::max(r2, glm::dot(d, d));
   }
-  // Any patch point is within half a sample cell (in latitude and in longitude) of a sample; the
-  // path along a meridian and then a parallel there is at most (largest radius of curvature
-  // a^2/b + |height|) times the half-angle in latitude plus the parallel's radius, at most that
-  // times cos(smallest |latitude| of the sector), times the half-angle in longitude; distance is
-  // 1-Lipschitz. The cosine matters for wide polar nodes (36 degrees of longitude a few km from
-  // the pole). Heights in between lie on the segment between the two sampled heights, where the
-  // distance to the centre is convex.
+  // Between samples: on a cell of the 17 x 17 grid, the patch p(lat, lon) (at a fixed height)
+  // is within e = (dLat^2 max|p_lat,lat| + dLon^2 max|p_lon,lon|) / 8 of the bilinear
+  // interpolant of the cell's four samples (the tensor-product linear interpolation error; the
+  // interpolant is a convex combination of the samples). |p_lon,lon| is the parallel's radius,
+  // (N + h) cos(lat) <= (a^2/b + |h|) cos(smallest |latitude|); |p_lat,lat| is at most
+  // sqrt(M^2 + M'^2) + |h| <= 1.01 a^2/b + |h| (M the meridional radius of curvature, at most
+  // a^2/b, M' below 1 % of it on WGS84). A convex volume holding the samples then holds every
+  // patch point once grown by e; heights in between lie on the segment between the two sampled
+  // heights. The cosine matters for wide polar nodes (36 degrees of longitude a few km from the
+  // pole); e is metres where the old half-cell bound was kilometres (263 km at level zero).
   const double a = geodesy.equatorialRadius();
   const double b = geodesy.polarRadius();
-  const double curvature = a * a / b + std::max(std::abs(minHeightM), std::abs(maxHeightM));
+  const double maxAbsH = std::max(std::abs(minHeightM), std::abs(maxHeightM));
   const double cells = static_cast<double>(kBoundSamples - 1);
   const double minAbsLat =
       (s.south <= 0.0 && s.north >= 0.0) ? 0.0 : std::min(std::abs(s.south), std::abs(s.north));
   // cos rounded up a little (and never below 0) so the bound stays conservative.
   const double parallelScale = std::min(1.0, std::cos(minAbsLat * kDegToRad) + 1e-15);
-  const double halfLatRad = 0.5 * (s.north - s.south) / cells * kDegToRad;
-  const double halfLonRad = 0.5 * (s.east - s.west) / cells * kDegToRad;
-  const double margin = curvature * (halfLatRad + parallelScale * halfLonRad);
+  const double cellLatRad = (s.north - s.south) / cells * kDegToRad;
+  const double cellLonRad = (s.east - s.west) / cells * kDegToRad;
+  const double kLat = 1.01 * a * a / b + maxAbsH;
+  const double kLon = (a * a / b + maxAbsH) * parallelScale;
+  const double margin = (cellLatRad * cellLatRad * kLat + cellLonRad * cellLonRad * kLon) / 8.0;
   bounds_.radius = (std::sqrt(r2) + margin) * (1.0 + 1e-12) + 1e-6;
+
+  // The boxes: the samples' extent along east, north and up at a middle longitude and the middle
+  // latitude (an orthonormal frame built from the angles, defined at the poles too), grown by the
+  // same margin (a projection on a unit axis is 1-Lipschitz). The whole node's, and one per half
+  // of the columns (each patch point lies in a cell of one half, within the margin of the hull of
+  // that cell's samples): for a wide polar wedge, whose arc a single box fits loosely.
+  const double sLat = std::sin(midLat * kDegToRad), cLat = std::cos(midLat * kDegToRad);
+  auto makeBox = [&](double lonDeg, int firstCol, int lastCol) {
+    const double sLon = std::sin(lonDeg * kDegToRad), cLon = std::cos(lonDeg * kDegToRad);
+    const std::array<glm::dvec3, 3> axes{glm::dvec3(-sLon, cLon, 0.0),
+                                         glm::dvec3(-sLat * cLon, -sLat * sLon, cLat),
+                                         glm::dvec3(cLat * cLon, cLat * sLon, sLat)};
+    glm::dvec3 minA(std::numeric_limits<double>::infinity());
+    glm::dvec3 maxA(-std::numeric_limits<double>::infinity());
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      const int col = static_cast<int>(i / 2) % kBoundSamples; // (row, col, height) order
+      if (col < firstCol || col > lastCol) continue;
+      const glm::dvec3 d = samples[i] - centre_;
+      const glm::dvec3 t(glm::dot(d, axes[0]), glm::dot(d, axes[1]), glm::dot(d, axes[2]));
+      minA = glm::min(minA, t);
+      maxA = glm::max(maxA, t);
+    }
+    OrientedBox box;
+    box.axes = axes;
+    const glm::dvec3 mid = 0.5 * (minA + maxA);
+    box.centre = centre_ + mid.x * axes[0] + mid.y * axes[1] + mid.z * axes[2];
+    const glm::dvec3 half = 0.5 * (maxA - minA) + glm::dvec3(margin);
+    box.halfExtents = half * (1.0 + 1e-12) + glm::dvec3(1e-6);
+    return box;
+  };
+  constexpr int middleCol = kBoundSamples / 2;
+  box_ = makeBox(midLon, 0, kBoundSamples - 1);
+  halfBoxes_[0] = makeBox(0.5 * (s.west + midLon), 0, middleCol);
+  halfBoxes_[1] = makeBox(0.5 * (midLon + s.east), middleCol, kBoundSamples - 1);
 }
 
 PatchMesh buildPatchMesh(const Geodesy& geodesy, const Sector& sector, int n) {

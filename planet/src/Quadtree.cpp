@@ -94,13 +94,86 @@ std::int64_t Quadtree::spanFor(std::int32_t level,
 }
 
 Quadtree::ChildKeys Quadtree::childKeys(const NodeKey& key) const noexcept {
+  return childKeysFor(key, nullptr);
+}
+
+bool Quadtree::fitsEastWest(const NodeKey& key, const Camera& camera) const noexcept {
+  // Each half of each east-west edge within half the limit: the wide node's texels are twice as
+  // wide as its halves', so this is the test the two halves would pass, at their granularity
+  // (perspective across a wide node enlarges the near texels more than the whole edge shows).
+  const Sector s = sectorOf(key);
+  const double limit = 0.5 * static_cast<double>(params_.lod.tileWidthPx) * params_.lod.threshold;
+  const double halfW = 0.5 * static_cast<double>(camera.viewport().width);
+  const double halfH = 0.5 * static_cast<double>(camera.viewport().height);
+  const double lons[3] = {s.west, 0.5 * (s.west + s.east), s.east};
+  for (const double lat : {s.south, s.north}) {
+    if (lat == 90.0 || lat == -90.0) continue; // the pole: an edge of length 0
+    glm::dvec2 px[3]{};
+    for (std::size_t i = 0; i < 3; ++i) {
+      const Ecef e = geodesy_.toEcef(lat, lons[i], 0.0);
+      const glm::dvec4 c = camera.toClip({e.x, e.y, e.z});
+      if (!(c.w >= camera.nearM())) return false;
+      px[i] = {c.x / c.w * halfW, c.y / c.w * halfH};
+    }
+    for (std::size_t i = 0; i < 2; ++i) {
+      const glm::dvec2 d = px[i + 1] - px[i];
+      if (!(d.x * d.x + d.y * d.y <= limit * limit)) return false; // NaN: does not fit
+    }
+  }
+  return true;
+}
+
+bool Quadtree::visibleNow(const NodeKey& key, const Camera& camera) const {
+  if (!grid_.isValid(key.firstTile()) ||
+      !grid_.isValid({key.level, key.row, key.col + key.span - 1}))
+    return false;
+  return cullNode(camera, NodeGeometry(geodesy_, sectorOf(key)), occluder_).visible;
+}
+
+bool Quadtree::widerPaysOff(const NodeKey& wide, std::int64_t span, const Camera& camera) const {
+  // The wide node is too wide to draw from here: the LOD test will split it (its whole east-west
+  // edge is over the limit). Worth it when what it splits into, one level down with the same
+  // choice made there, costs fewer visible nodes than the row's static nodes now: near the pole
+  // a ring's static nodes can be twice as many as the texel test needs, and the ring one level
+  // down, closer to the pole, may fit wide (the least-node cover of the pole view does this).
+  if (wide.level + 1 >= grid_.numLevels()) return false;
+  const LodResult lod = evaluateLod(camera, NodeGeometry(geodesy_, sectorOf(wide)), params_.lod);
+  if (!lod.split || lod.cornerBehindCamera) return false;
+  int statics = 0;
+  for (std::int64_t c = wide.col; c < wide.col + wide.span; c += span)
+    statics += visibleNow({wide.level, wide.row, c, span}, camera) ? 1 : 0;
+  if (statics < 2) return false;
+  const std::int32_t L = wide.level + 1;
+  const std::int64_t width = wide.span * 2;
+  int below = 0;
+  for (int half = 0; half < 2 && below < statics; ++half) {
+    const std::int64_t row = wide.row * 2 + half;
+    const std::int64_t s = spanFor(L, row, width);
+    const NodeKey whole{L, row, wide.col * 2, width};
+    if (s < width && !fitsEastWest(whole, camera)) {
+      for (std::int64_t c = whole.col; c < whole.col + width; c += s)
+        below += visibleNow({L, row, c, s}, camera) ? 1 : 0;
+    } else {
+      below += visibleNow(whole, camera) ? 1 : 0;
+    }
+  }
+  return below < statics;
+}
+
+Quadtree::ChildKeys Quadtree::childKeysFor(const NodeKey& key, const Camera* camera) const {
   ChildKeys out;
   if (key.level + 1 >= grid_.numLevels()) return out;
   const std::int32_t L = key.level + 1;
   const std::int64_t width = key.span * 2; // the parent's columns at the child level
   for (int half = 0; half < 2; ++half) {   // 0: south row, 1: north row
     const std::int64_t row = key.row * 2 + half;
-    const std::int64_t span = spanFor(L, row, width);
+    std::int64_t span = spanFor(L, row, width);
+    // A merged row may be as wide as the parent when the camera sees its east-west edges within
+    // the texel limit (it would otherwise be two nodes no wider than tall).
+    if (camera != nullptr && params_.adaptivePolarSpans && span > 1 && span < width &&
+        (fitsEastWest({L, row, key.col * 2, width}, *camera) ||
+         widerPaysOff({L, row, key.col * 2, width}, span, *camera)))
+      span = width;
     for (std::int64_t i = 0; i * span < width; ++i) {
       const NodeKey k{L, row, key.col * 2 + i * span, span};
       bool valid = grid_.isValid(k.firstTile());
@@ -233,7 +306,7 @@ void Quadtree::relinkAround(const Node& node) noexcept {
 
 bool Quadtree::split(Node& node) {
   if (node.hasChildren()) return true;
-  const ChildKeys ck = childKeys(node.key_);
+  const ChildKeys ck = childKeysFor(node.key_, splitCamera_);
   int made = 0;
   for (std::size_t i = 0; i < 4; ++i) {
     if (!ck.present[i]) continue;
@@ -269,8 +342,10 @@ const FrameStats& Quadtree::update(const Camera& camera) {
   stats_ = FrameStats{};
   drawList_.clear();
   splitsThisFrame_ = 0;
+  splitCamera_ = &camera;
   for (auto& r : roots_)
     if (r) visit(*r, false, camera);
+  splitCamera_ = nullptr;
   enforceNodeLimit();
   stats_.drawn = drawList_.size();
   stats_.nodes = nodeCount_;
@@ -285,7 +360,8 @@ void Quadtree::visit(Node& node, bool insideFrustum, const Camera& camera) {
     return;
   }
   if (!insideFrustum) {
-    const FrustumResult f = classify(camera.frustum(), g.bounds());
+    const FrustumResult f = params_.tightFrustumCulling ? classifyNode(camera, g)
+                                                        : classify(camera.frustum(), g.bounds());
     if (f == FrustumResult::Outside) {
       ++stats_.culledFrustum;
       return;
@@ -299,7 +375,15 @@ void Quadtree::visit(Node& node, bool insideFrustum, const Camera& camera) {
   ++stats_.visible;
   node.lastVisible_ = frame_;
   const LodResult lod = evaluateLod(camera, g, params_.lod);
-  bool descend = lod.split && node.key_.level + 1 < grid_.numLevels();
+  bool refine = lod.split;
+  // A row widened for another camera (wider than the static rule) keeps the test it was made
+  // with, each half of each east-west edge within half the limit: the whole-edge test alone
+  // would let perspective enlarge its near texels further than a static node's.
+  if (!refine && node.parent_ != nullptr &&
+      node.key_.span > spanFor(node.key_.level, node.key_.row, node.parent_->key_.span * 2) &&
+      !fitsEastWest(node.key_, camera))
+    refine = true;
+  bool descend = refine && node.key_.level + 1 < grid_.numLevels();
   if (descend && !node.hasChildren()) {
     if (splitsThisFrame_ >= params_.maxSplitsPerFrame) {
       ++stats_.splitsDeferred;

@@ -101,6 +101,9 @@ void crossCheck(const Geodesy& g,
     // Each test on its own, then all three.
     EXPECT_FALSE(isBackFacing(cam, node)) << what;
     EXPECT_NE(classify(cam.frustum(), node.bounds()), FrustumResult::Outside) << what;
+    EXPECT_NE(classify(cam.frustum(), node.box()), FrustumResult::Outside) << what;
+    EXPECT_FALSE(projectsOutsideViewport(cam, node.box())) << what;
+    EXPECT_NE(classifyNode(cam, node), FrustumResult::Outside) << what;
     EXPECT_FALSE(occ.isOccluded(cam.position(), node.bounds())) << what;
     EXPECT_TRUE(r.visible) << what << " sector " << s.west << "," << s.south << "," << s.east << ","
                            << s.north << " heights " << hMin << ".." << hMax;
@@ -176,22 +179,35 @@ TEST(CullingExtremes, NeverCullsAVisibleNodeBelowSeaLevelAndFarOut) {
 TEST(CullingExtremes, CameraInsideANodesBoundingSphere) {
   const Geodesy g;
   const TileGrid grid = test::globalGrid();
+  int visible = 0;
   for (const double lat : {0.0, 46.5, 90.0, -90.0})
     for (const double lon : {0.0, 180.0, -180.0}) {
+      // Level 16: ~61 m tiles; the camera 0-10 m above the tile's middle is inside its sphere.
+      const auto key = grid.keyAt(lat, lon, 16);
+      ASSERT_TRUE(key.has_value());
+      const Sector s = grid.sectorOf(*key);
+      const NodeGeometry node(g, s);
+      const PatchMesh mesh = buildPatchMesh(g, s, 33);
       for (const double alt : {0.0, 1.0, 10.0}) {
-        for (const double tilt : {0.0, 90.0}) {
-          const Camera cam(g, {lat, lon, alt, 0.0, tilt}, {1024, 768});
-          // Level 16: ~61 m tiles, so the camera up to 10 m above the tile is inside its sphere.
-          const auto key = grid.keyAt(lat, lon, 16);
-          ASSERT_TRUE(key.has_value());
-          const NodeGeometry node(g, grid.sectorOf(*key));
+        for (const double tilt : {0.0, 45.0, 90.0}) {
+          const Camera cam(
+              g, {0.5 * (s.south + s.north), 0.5 * (s.west + s.east), alt, 0.0, tilt}, {1024, 768});
           ASSERT_TRUE(node.bounds().contains(cam.position())) << lat << "," << lon << " " << alt;
           const CullResult r = cullNode(cam, node, HorizonOccluder(g));
-          EXPECT_TRUE(r.visible) << lat << "," << lon << " alt " << alt << " tilt " << tilt;
-          EXPECT_EQ(r.frustum, FrustumResult::Intersecting);
+          // The reference: a vertex of the tile in the frustum (looking straight down from the
+          // ground, everything is behind the near plane; the tight box may then cull).
+          bool seen = false;
+          for (const auto& v : mesh.vertices)
+            seen = seen || test::inFrustum(cam, mesh.centre + v.position);
+          if (seen) {
+            ++visible;
+            EXPECT_TRUE(r.visible) << lat << "," << lon << " alt " << alt << " tilt " << tilt;
+            EXPECT_EQ(r.frustum, FrustumResult::Intersecting);
+          }
         }
       }
     }
+  EXPECT_GE(visible, 4 * 3 * 6); // at least alt 1 and 10 at every tilt, everywhere
 }
 
 TEST(CullingExtremes, FarOutOnlyTheNearHemisphereSurvives) {

@@ -112,6 +112,13 @@ void checkContainment(const Geodesy& g, const Sector& s, double hMin, double hMa
     for (const double h : {hMin, 0.5 * (hMin + hMax), hMax}) {
       const glm::dvec3 p = m.centre + v.position + h * v.normal;
       const double d = glm::length(p - b.centre);
+      // The west half box holds the western half of the patch, the east one the rest.
+      const std::size_t side = v.uvNode.x <= 0.5 ? 0 : 1;
+      ASSERT_TRUE(node.halfBoxes()[side].contains(p))
+          << "half box " << side << ", sector " << s.west << "," << s.south << "," << s.east << ","
+          << s.north << " h " << h;
+      ASSERT_TRUE(node.box().contains(p)) << "box, sector " << s.west << "," << s.south << ","
+                                          << s.east << "," << s.north << " h " << h;
       farthest = std::max(farthest, d);
       ASSERT_LE(d, b.radius) << "sector " << s.west << "," << s.south << "," << s.east << ","
                              << s.north << " h " << h;

@@ -16,6 +16,22 @@ enum class FrustumResult { Outside, Intersecting, Inside };
  * frustum test. */
 FrustumResult classify(const Frustum& frustum, const BoundingSphere& sphere) noexcept;
 
+/** The box against the five planes (its support along each plane normal). */
+FrustumResult classify(const Frustum& frustum, const OrientedBox& box) noexcept;
+
+/** True when the box lies wholly in front of the near plane and its projection misses the
+ * viewport: the separating-axis test in screen space over the viewport's axes and the normals of
+ * the box's twelve projected edges (the projected box's outline is made of them), exact for the
+ * projected box. Catches what plane tests cannot: a node off a corner of the view, outside no
+ * single plane. False (not provably outside) when a box corner is at or behind the near plane. */
+bool projectsOutsideViewport(const Camera& camera, const OrientedBox& box) noexcept;
+
+/** The frustum test of a node: its sphere, then, when the sphere only intersects, its box
+ * against the planes, then the projected box against the viewport, then its two half boxes
+ * (planes and viewport). Outside or Inside when any of them says so (all contain the patch;
+ * Outside for the halves when both are). */
+FrustumResult classifyNode(const Camera& camera, const NodeGeometry& node) noexcept;
+
 /**
  * @brief Back-face test on the node's normals.
  *

@@ -27,15 +27,26 @@ struct BoundingSphere {
   bool contains(const glm::dvec3& p) const noexcept;
 };
 
+/** A box with orthonormal axes (east, north, up at the node's centre for NodeGeometry::box()):
+ * the points x with |(x - centre).axes[i]| <= halfExtents[i]. Much tighter than the sphere for a
+ * flat, wide patch, and for the polar wedges whose spheres are inflated by their arcs. */
+struct OrientedBox {
+  glm::dvec3 centre{0.0};
+  std::array<glm::dvec3, 3> axes{};
+  glm::dvec3 halfExtents{0.0};
+  bool contains(const glm::dvec3& p) const noexcept;
+};
+
 enum Corner { SW = 0, SE = 1, NE = 2, NW = 3 };
 
 /**
- * @brief Corners, centre, normals and a conservative bounding sphere of a node.
+ * @brief Corners, centre, normals and a conservative bounding sphere and box of a node.
  *
- * The sphere contains every point of the patch at every height in [minHeightM, maxHeightM]
- * (terrain later): it is the smallest sphere around the middle of the sampled points' box that
- * holds 17 x 17 samples at both heights, grown by a bound on how far any patch point can be from
- * its nearest sample (the sample cell's half perimeter on the largest radius of curvature).
+ * Both contain every point of the patch at every height in [minHeightM, maxHeightM] (terrain
+ * later): the sphere is the smallest sphere around the middle of the sampled points' box that
+ * holds 17 x 17 samples at both heights, the box those samples' extent in the node's east/north/up
+ * frame, each grown by a bound on how far the patch strays from the bilinear interpolant of a
+ * sample cell (cell size squared times the surface's second derivatives, over 8).
  */
 class NodeGeometry {
 public:
@@ -64,6 +75,14 @@ public:
    * corner; slightly rounded up). */
   double normalConeHalfAngleRad() const noexcept { return normalCone_; }
   const BoundingSphere& bounds() const noexcept { return bounds_; }
+  /** A box around the same samples in the node's east/north/up frame, grown by the same bound
+   * on the distance from any patch point to its nearest sample: it contains the patch at every
+   * height in [min, max] like bounds(), and is the frustum test's second, tighter chance. */
+  const OrientedBox& box() const noexcept { return box_; }
+  /** Boxes around the west and the east half of the same samples (each in its own frame at its
+   * half's middle longitude), each grown the same way: together they contain the patch, and
+   * fit a wide polar wedge's arc much better than box(). */
+  const std::array<OrientedBox, 2>& halfBoxes() const noexcept { return halfBoxes_; }
   /** The model's semi-axes (what the node was built on). */
   double equatorialRadiusM() const noexcept { return a_; }
   double polarRadiusM() const noexcept { return b_; }
@@ -81,6 +100,8 @@ private:
   glm::dvec3 centreNormal_{0.0};
   double normalCone_ = 0.0;
   BoundingSphere bounds_;
+  OrientedBox box_;
+  std::array<OrientedBox, 2> halfBoxes_{};
 };
 
 struct PatchVertex {

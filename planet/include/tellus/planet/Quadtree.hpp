@@ -11,11 +11,13 @@
  * the texel-to-pixel test, which must split for the north-south texels, would also halve an
  * east-west extent that is already far finer than needed. Children therefore split north-south
  * only where the row is that thin: a child row spans as many columns as keeps its east-west
- * ground extent near its north-south extent (the power of two nearest 1/cos(mid latitude), never
- * narrower than half nor wider than its parent). The LOD test still checks both projected axes
- * against the node texture's texel counts, so a texel is never larger than the threshold in
- * pixels along either axis; the texture of a wide node is composed from its `span` tiles
- * (TextureStreamer asks for all of them). See docs/ARCHITECTURE.md, "The poles".
+ * ground extent at most its north-south extent (the largest power of two not above
+ * 1/cos(equatorward latitude), never narrower than half nor wider than its parent;
+ * QuadtreeParams::adaptivePolarSpans widens a merged row to its parent's width when the camera at
+ * split time allows it). The LOD test still checks both projected axes against the node texture's
+ * texel counts, so a texel is never larger than the threshold in pixels along either axis; the
+ * texture of a wide node is composed from its `span` tiles (TextureStreamer asks for all of them).
+ * See docs/ARCHITECTURE.md, "The poles".
  */
 
 #include <tellus/cache/TileGrid.hpp>
@@ -118,6 +120,19 @@ struct QuadtreeParams {
   double occluderHeightM = 0.0;
   /** Merge polar slivers east-west (the pole fix); off gives the plain one-tile-per-node tree. */
   bool polarMerge = true;
+  /** With polarMerge, where a child row is merged at all (two or more columns: above ~60 degrees
+   * of latitude), a split during update() makes the row as wide as the parent when each half of
+   * that wider node's east-west edges projects within half of tileWidthPx x threshold pixels
+   * from the camera then, or when the wider node will be split anyway and its children would be
+   * fewer visible nodes than the row's static ones (a one-level lookahead): the static rule keeps
+   * nodes no wider than tall, so a ring of the pole view may hold twice the nodes the texel test
+   * needs. A widened node is refined while drawn once its half edges no longer fit. Splits
+   * outside update() (split()) use the static rule. */
+  bool adaptivePolarSpans = true;
+  /** The frustum test: classifyNode (sphere, box, projected box, half boxes) when true; the
+   * bounding sphere alone when false (for comparisons: it keeps nodes off the view's edges and
+   * corners, and most of a pole view's ring just outside it). */
+  bool tightFrustumCulling = true;
 };
 
 struct FrameStats {
@@ -172,7 +187,8 @@ public:
   /** The sector a key covers (from the grid's integer edges). */
   Sector sectorOf(const NodeKey& key) const noexcept;
 
-  /** Creates the children of a leaf (no-op otherwise; false at the deepest level). */
+  /** Creates the children of a leaf (no-op otherwise; false at the deepest level), with the keys
+   * of childKeys() (the static layout). */
   bool split(Node& node);
   /** Removes every descendant of node; every pointer to a removed node is relinked (to the
    * nearest remaining coarser neighbour) or nulled. */
@@ -200,6 +216,10 @@ private:
   void enforceNodeLimit();
   std::int64_t
   spanFor(std::int32_t level, std::int64_t row, std::int64_t parentSpanInChildCols) const noexcept;
+  ChildKeys childKeysFor(const NodeKey& key, const Camera* camera) const;
+  bool fitsEastWest(const NodeKey& key, const Camera& camera) const noexcept;
+  bool visibleNow(const NodeKey& key, const Camera& camera) const;
+  bool widerPaysOff(const NodeKey& wide, std::int64_t span, const Camera& camera) const;
 
   const Geodesy& geodesy_;
   TileGrid grid_;
@@ -214,6 +234,7 @@ private:
   std::uint64_t frame_ = 0;
   std::size_t nodeCount_ = 0;
   int splitsThisFrame_ = 0;
+  const Camera* splitCamera_ = nullptr; ///< during update(): the camera adaptive spans look from
 };
 
 } // namespace tellus::planet
