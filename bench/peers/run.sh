@@ -461,8 +461,11 @@ seeder() { # NAME ROUND: one seeder into an empty cache, timed
     tellus | tellus1)
       meta=()
       [[ $name == tellus1 ]] && meta=(--meta-tiles 1)
-      "$tellus" seed --config "$work/tellus/tellus.yaml" --cache "$work/tellus/cache" --layer world --levels "$LEVELS" \
-        --bbox "$REGION" --concurrency "$SEED_CONCURRENCY" "${meta[@]}" >"$log" 2>&1 || die "tellus seed failed: $(tail -5 "$log")"
+      timer=()
+      [[ -n "$time_bin" ]] && timer=("$time_bin" -f '%U %S' -o "$work/seed-$name-$round.cpu")
+      "${timer[@]}" "$tellus" seed --config "$work/tellus/tellus.yaml" --cache "$work/tellus/cache" --layer world \
+        --levels "$LEVELS" --bbox "$REGION" --concurrency "$SEED_CONCURRENCY" "${meta[@]}" >"$log" 2>&1 ||
+        die "tellus seed failed: $(tail -5 "$log")"
       ;;
     MapProxy)
       (cd "$work/mapproxy" && "$venv/bin/mapproxy-seed" -f mapproxy.yaml -s seed.yaml --seed ALL -c "$SEED_CONCURRENCY") \
@@ -493,7 +496,9 @@ for round in $(seq 1 "$SEED_ROUNDS"); do
       up2048) ceiling up2048 "$round" "$work/urls-up2048.txt" 16 ;;
       *) seeder "$s" "$round" ;;
     esac
-    echo "   $(tail -n 1 "$seeds" | awk -F'\t' '{ printf "%s: %s s, %s tiles, %s upstream requests, %s failed", $1, $3, $4, $5, $6 }')"
+    cpu=""
+    [[ -s "$work/seed-$s-$round.cpu" ]] && cpu=", CPU $(awk '{ printf "%.2f s user+sys", $1 + $2 }' "$work/seed-$s-$round.cpu")"
+    echo "   $(tail -n 1 "$seeds" | awk -F'\t' '{ printf "%s: %s s, %s tiles, %s upstream requests, %s failed", $1, $3, $4, $5, $6 }')$cpu"
   done
 done
 grep -E 'levels .* planned' "$work/seed-tellus-$SEED_ROUNDS.log" | sed 's/^/   tellus: /'
