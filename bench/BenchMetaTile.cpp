@@ -23,8 +23,8 @@ namespace {
 constexpr int kCols = 4, kRows = 2, kTile = 512;
 
 struct Fixture {
-  std::vector<std::uint8_t> pixels; // 2048 x 1024 RGB
-  std::vector<std::byte> meta;      // the metatile as one JPEG
+  std::vector<std::uint8_t> pixels;          // 2048 x 1024 RGB
+  std::vector<std::byte> meta;               // the metatile as one JPEG
   std::vector<std::vector<std::byte>> tiles; // each 512 px tile as its own JPEG
 };
 
@@ -34,8 +34,8 @@ const Fixture& fixture() {
     std::ifstream in(TELLUS_BENCH_DATA_DIR "/bmng_2048x1024.jpg", std::ios::binary);
     const std::string raw((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     const auto* b = reinterpret_cast<const std::byte*>(raw.data());
-    auto decoded = decodeImagery(std::vector<std::byte>(b, b + raw.size()), "image/jpeg",
-                                 kCols * kTile, kRows * kTile);
+    auto decoded = decodeImagery(
+        std::vector<std::byte>(b, b + raw.size()), "image/jpeg", kCols * kTile, kRows * kTile);
     if (!decoded) throw std::runtime_error("cannot read the Blue Marble: " + decoded.error());
     x.pixels = std::move(decoded->pixels);
     x.meta = *codecs::encodeJpeg(kCols * kTile, kRows * kTile, 3, x.pixels.data());
@@ -45,7 +45,8 @@ const Fixture& fixture() {
         for (int y = 0; y < kTile; ++y)
           std::memcpy(&tile[static_cast<std::size_t>(y) * kTile * 3],
                       &x.pixels[(static_cast<std::size_t>(r * kTile + y) * kCols * kTile +
-                                 static_cast<std::size_t>(c * kTile)) * 3],
+                                 static_cast<std::size_t>(c * kTile)) *
+                                3],
                       static_cast<std::size_t>(kTile) * 3);
         x.tiles.push_back(*codecs::encodeJpeg(kTile, kTile, 3, tile.data()));
       }
@@ -62,17 +63,26 @@ void BM_PerTileValidate(benchmark::State& state) {
     for (const auto& t : f.tiles)
       benchmark::DoNotOptimize(codecs::checkJpeg(t, kTile, kTile, scratch).has_value());
   state.SetItemsProcessed(state.iterations() * kCols * kRows);
+  std::size_t bytes = 0;
+  for (const auto& t : f.tiles)
+    bytes += t.size();
+  state.counters["bytes/tile"] = static_cast<double>(bytes) / (kCols * kRows);
 }
 BENCHMARK(BM_PerTileValidate)->Unit(benchmark::kMillisecond);
 
 /** The metatile path: coefficients read once (the validation), 8 tiles written. */
 void BM_MetaTileSplitDct(benchmark::State& state) {
   const auto& f = fixture();
+  std::size_t bytes = 0;
   for (auto _ : state) {
     auto tiles = codecs::splitJpegDct(f.meta, kCols, kRows, kTile, kTile);
     benchmark::DoNotOptimize(tiles->data());
+    bytes = 0;
+    for (const auto& t : *tiles)
+      bytes += t.size();
   }
   state.SetItemsProcessed(state.iterations() * kCols * kRows);
+  state.counters["bytes/tile"] = static_cast<double>(bytes) / (kCols * kRows);
 }
 BENCHMARK(BM_MetaTileSplitDct)->Unit(benchmark::kMillisecond);
 
@@ -103,7 +113,8 @@ void BM_MetaTileDecodeEncode(benchmark::State& state) {
         for (int y = 0; y < kTile; ++y)
           std::memcpy(&tile[static_cast<std::size_t>(y) * kTile * 3],
                       &pixels[(static_cast<std::size_t>(r * kTile + y) * kCols * kTile +
-                               static_cast<std::size_t>(c * kTile)) * 3],
+                               static_cast<std::size_t>(c * kTile)) *
+                              3],
                       static_cast<std::size_t>(kTile) * 3);
         benchmark::DoNotOptimize(codecs::encodeJpeg(kTile, kTile, 3, tile.data())->data());
       }

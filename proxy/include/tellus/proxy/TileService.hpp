@@ -111,12 +111,13 @@ public:
                std::function<void(TileAnswer&&)> done);
 
   /**
-   * Several tiles of one level (`keys`, all valid, at most 64 x 64 tiles apart), each answered
+   * Several tiles (normally of one metatile: one level, close together), each answered
    * through `done(key, answer)` exactly once, possibly on another thread, possibly before return.
    * Tiles that are cached (fresh) or known absent are answered from the cache; tiles already in
    * flight (a `getTile` or another `getTiles`) wait for that flight; the rest are fetched with ONE
    * GetMap of their bounding block when the layer's upstream is WMS with metaTiles > 1 and the
-   * format is JPEG or PNG imagery (else one request per tile, as getTile). The answer is
+   * format is JPEG or PNG imagery (else, and for keys of several levels or a block over 8192
+   * pixels, one request per tile, as getTile). The answer is
    * validated once, whole, and split (a JPEG in the DCT domain when its iMCUs allow); a failing
    * or invalid answer stores nothing and fails every tile it was fetched for. While it is in
    * flight, getTile for any of its tiles joins it instead of fetching.
