@@ -5,6 +5,7 @@
 #   bench/peers/run.sh                                   # the measured run, about 8-9 minutes
 #   SEED_ROUNDS=1 ROUNDS=1 DURATION=2s WARMUP=0 LEVELS=0-3 CEILING_DURATION=3s LOAD_DURATION=3s \
 #     bench/peers/run.sh                                 # a smoke run, about 1-1.5 minutes
+#   ONLY=seed bench/peers/run.sh                         # step 1 alone (seeding), about 3 minutes
 #
 # What it sets up, every server on 127.0.0.1 only, on ports it picks (0 where the program allows):
 #
@@ -22,7 +23,8 @@
 #
 #  1. Seeding REGION levels LEVELS from the upstream into empty caches: MapServer alone first (the
 #     ceiling: wrk making one 512 px GetMap per tile of the region, and one 2048 px GetMap per 4x4
-#     metatile, at SEED_CONCURRENCY), then `tellus seed`, `mapproxy-seed` and `mapcache_seed` with
+#     metatile, at SEED_CONCURRENCY), then `tellus seed` twice (one GetMap per tile:
+#     --meta-tiles 1; and its default, 4x4 metatiles), `mapproxy-seed` and `mapcache_seed` with
 #     SEED_CONCURRENCY, each into an empty cache; SEED_ROUNDS rounds, the order reversed every
 #     other round, medians. The rate is the region's tiles over the command's wall time (start-up
 #     included); the upstream's access log gives the requests each one made and their failures.
@@ -73,6 +75,7 @@
 #   LOAD_WAIT_S=0 MAX_LOAD=0.8    before the seeding (the first measurement), wait up to
 #                                 LOAD_WAIT_S s for a 1-minute load below MAX_LOAD
 #   OUT_DIR=build/bench           peers-runs.tsv, peers-summary.txt
+#   ONLY=                         seed: step 1 alone (the seeders and the ceilings), then the summary
 #   KEEP=0                        1: keep the work folder (configs, logs, caches, URL lists)
 #
 # Needs cgi-mapserver mapserver-bin gdal-bin wrk (in tools/debian-packages.txt), curl python3
@@ -117,6 +120,8 @@ LOAD_WAIT_S="${LOAD_WAIT_S:-0}"
 MAX_LOAD="${MAX_LOAD:-0.8}"
 OUT_DIR="${OUT_DIR:-$repo/build/bench}"
 KEEP="${KEEP:-0}"
+ONLY="${ONLY:-}"
+[[ -z "$ONLY" || "$ONLY" == seed ]] || { echo "run.sh: ONLY=$ONLY: only ONLY=seed is known" >&2; exit 1; }
 
 say() { echo "== $*"; }
 warn() { echo "run.sh: warning: $*" >&2; }
@@ -444,7 +449,7 @@ EOF2
 seeder() { # NAME ROUND: one seeder into an empty cache, timed
   local name=$1 round=$2 r0 t0 t1 tiles log="$work/seed-$1-$2.log"
   case $name in
-    tellus) rm -rf "$work/tellus/cache" ;;
+    tellus | tellus1) rm -rf "$work/tellus/cache" ;;
     MapProxy) rm -rf "$work/mapproxy/cache" && mkdir -p "$work/mapproxy/cache" ;;
     MapCache) find "$work/mapcache/cache" "$work/mapcache/locks" -mindepth 1 -delete ;;
   esac
@@ -453,9 +458,14 @@ seeder() { # NAME ROUND: one seeder into an empty cache, timed
   f0=$(upstream_failures)
   t0=$(now)
   case $name in
-    tellus)
-      "$tellus" seed --config "$work/tellus/tellus.yaml" --cache "$work/tellus/cache" --layer world --levels "$LEVELS" \
-        --bbox "$REGION" --concurrency "$SEED_CONCURRENCY" >"$log" 2>&1 || die "tellus seed failed: $(tail -5 "$log")"
+    tellus | tellus1)
+      meta=()
+      [[ $name == tellus1 ]] && meta=(--meta-tiles 1)
+      timer=()
+      [[ -n "$time_bin" ]] && timer=("$time_bin" -f '%U %S' -o "$work/seed-$name-$round.cpu")
+      "${timer[@]}" "$tellus" seed --config "$work/tellus/tellus.yaml" --cache "$work/tellus/cache" --layer world \
+        --levels "$LEVELS" --bbox "$REGION" --concurrency "$SEED_CONCURRENCY" "${meta[@]}" >"$log" 2>&1 ||
+        die "tellus seed failed: $(tail -5 "$log")"
       ;;
     MapProxy)
       (cd "$work/mapproxy" && "$venv/bin/mapproxy-seed" -f mapproxy.yaml -s seed.yaml --seed ALL -c "$SEED_CONCURRENCY") \
@@ -468,14 +478,14 @@ seeder() { # NAME ROUND: one seeder into an empty cache, timed
   esac
   t1=$(now)
   case $name in
-    tellus) tiles="$(grep -o '[0-9]* written' "$log" | tail -1 | cut -d' ' -f1)" ;;
+    tellus | tellus1) tiles="$(grep -o '[0-9]* written' "$log" | tail -1 | cut -d' ' -f1)" ;;
     MapProxy) tiles="$(find "$work/mapproxy/cache" -name '*.jpeg' | wc -l)" ;;
     MapCache) tiles="$(find "$work/mapcache/cache" -name '*.jpg' | wc -l)" ;;
   esac
   seed_row "$name" "$round" "$(elapsed "$t0" "$t1")" "${tiles:-0}" "$(($(upstream_requests) - r0))" \
     "$(($(upstream_failures) - f0))"
 }
-seed_order="up512 up2048 tellus MapProxy MapCache"
+seed_order="up512 up2048 tellus1 tellus MapProxy MapCache"
 for round in $(seq 1 "$SEED_ROUNDS"); do
   order="$seed_order"
   ((round % 2)) || order="$(echo "$seed_order" | tr ' ' '\n' | tac | tr '\n' ' ' | sed 's/ $//')"
@@ -486,12 +496,20 @@ for round in $(seq 1 "$SEED_ROUNDS"); do
       up2048) ceiling up2048 "$round" "$work/urls-up2048.txt" 16 ;;
       *) seeder "$s" "$round" ;;
     esac
-    echo "   $(tail -n 1 "$seeds" | awk -F'\t' '{ printf "%s: %s s, %s tiles, %s upstream requests, %s failed", $1, $3, $4, $5, $6 }')"
+    cpu=""
+    [[ -s "$work/seed-$s-$round.cpu" ]] && cpu=", CPU $(awk '{ printf "%.2f s user+sys", $1 + $2 }' "$work/seed-$s-$round.cpu")"
+    echo "   $(tail -n 1 "$seeds" | awk -F'\t' '{ printf "%s: %s s, %s tiles, %s upstream requests, %s failed", $1, $3, $4, $5, $6 }')$cpu"
   done
 done
 grep -E 'levels .* planned' "$work/seed-tellus-$SEED_ROUNDS.log" | sed 's/^/   tellus: /'
 tail -c 300 "$work/seed-MapCache-$SEED_ROUNDS.log" | tr '\r' '\n' | grep seeded | tail -1 | sed 's/^ */   mapcache_seed: /'
 
+tellus_arbitrary=1 up_during_load=0 arb_answer="" all_series=""
+runs="$work/runs.tsv"
+mem="$work/mem.tsv"
+: >"$runs"
+: >"$mem"
+if [[ "$ONLY" != seed ]]; then
 # ------------------------------------------------------------------------------ 2. servers
 "$tellus" serve --config "$work/tellus/tellus.yaml" --cache "$work/tellus/cache" --listen 127.0.0.1:0 \
   >"$work/tellus/serve.log" 2>&1 &
@@ -698,6 +716,8 @@ if [[ "$LOAD_CONNECTIONS" -gt 0 ]]; then
   done
 fi
 
+fi # ONLY != seed
+
 # ------------------------------------------------------------------------------ summary
 mkdir -p "$OUT_DIR"
 cp "$runs" "$OUT_DIR/peers-runs.tsv"
@@ -722,50 +742,52 @@ for line in open(runs):
 med = lambda s, k: statistics.median(float(r[k]) for r in rows[s])
 rps = {s: med(s, "req_s") for s in rows}
 
-print()
-print(f"== Load runs: median of {len(next(iter(rows.values())))} rounds per series, wrk -d{duration}")
-print(f"{'series':<29}{'conns':>6}{'req/s':>9}{'(min-max)':>17}{'p50 ms':>8}{'p99 ms':>9}{'bytes/resp':>11}"
-      f"{'CPU us/req':>11}{'srv CPU%':>9}{'other%':>7}  non-2xx / errors")
-for s in label:
-    if s not in rows:
-        continue
-    rs = rows[s]
-    lo, hi = min(float(r["req_s"]) for r in rs), max(float(r["req_s"]) for r in rs)
-    cpu = statistics.median(r["cpu_s"] / max(1, int(r["requests"])) * 1e6 for r in rs)
-    srv = statistics.median(r["cpu_s"] / (int(r["duration_us"]) / 1e6) * 100 for r in rs)
-    other = statistics.median(r["other"] for r in rs)
-    size = statistics.median(int(r["bytes"]) / max(1, int(r["requests"])) for r in rs)
-    errs = {k: sum(int(r[k]) for r in rs) for k in ("status", "connect", "read", "write", "timeout")}
-    err = "none" if not any(errs.values()) else " ".join(f"{k} {v}" for k, v in errs.items() if v)
-    print(f"{label[s]:<29}{rs[0]['conns']:>6}{rps[s]:>9.0f}{f'({lo:.0f}-{hi:.0f})':>17}{med(s, 'p50_us') / 1000:>8.2f}"
-          f"{med(s, 'p99_us') / 1000:>9.2f}{size:>11.0f}{cpu:>11.1f}{srv:>9.0f}{other:>7.0f}  {err}")
-print(f"upstream requests during the load runs: {up_load}"
-      + (" (every answer came from the caches)" if up_load == "0" else " (SOME ANSWERS WERE NOT CACHED: compare with care)"))
-disturbed = [f"{s}{r['round']}" for s in rows for r in rows[s] if r["other"] > 10]
-if disturbed:
-    print(f"WARNING: other tasks took more than 10% of the CPUs during {len(disturbed)} runs "
-          f"({' '.join(disturbed)}): compare those with care")
+if rows:
+    print()
+    print(f"== Load runs: median of {len(next(iter(rows.values())))} rounds per series, wrk -d{duration}")
+    print(f"{'series':<29}{'conns':>6}{'req/s':>9}{'(min-max)':>17}{'p50 ms':>8}{'p99 ms':>9}{'bytes/resp':>11}"
+          f"{'CPU us/req':>11}{'srv CPU%':>9}{'other%':>7}  non-2xx / errors")
+    for s in label:
+        if s not in rows:
+            continue
+        rs = rows[s]
+        lo, hi = min(float(r["req_s"]) for r in rs), max(float(r["req_s"]) for r in rs)
+        cpu = statistics.median(r["cpu_s"] / max(1, int(r["requests"])) * 1e6 for r in rs)
+        srv = statistics.median(r["cpu_s"] / (int(r["duration_us"]) / 1e6) * 100 for r in rs)
+        other = statistics.median(r["other"] for r in rs)
+        size = statistics.median(int(r["bytes"]) / max(1, int(r["requests"])) for r in rs)
+        errs = {k: sum(int(r[k]) for r in rs) for k in ("status", "connect", "read", "write", "timeout")}
+        err = "none" if not any(errs.values()) else " ".join(f"{k} {v}" for k, v in errs.items() if v)
+        print(f"{label[s]:<29}{rs[0]['conns']:>6}{rps[s]:>9.0f}{f'({lo:.0f}-{hi:.0f})':>17}{med(s, 'p50_us') / 1000:>8.2f}"
+              f"{med(s, 'p99_us') / 1000:>9.2f}{size:>11.0f}{cpu:>11.1f}{srv:>9.0f}{other:>7.0f}  {err}")
+    print(f"upstream requests during the load runs: {up_load}"
+          + (" (every answer came from the caches)" if up_load == "0" else " (SOME ANSWERS WERE NOT CACHED: compare with care)"))
+    disturbed = [f"{s}{r['round']}" for s in rows for r in rows[s] if r["other"] > 10]
+    if disturbed:
+        print(f"WARNING: other tasks took more than 10% of the CPUs during {len(disturbed)} runs "
+              f"({' '.join(disturbed)}): compare those with care")
 
-print()
-print("== Ratios (tellus / peer, req/s medians of this run) and issue #4's goals")
-def ratio_row(name, t, c, p, gc, gp):
-    if t not in rps:
-        print(f"{name:<38} tellus: not supported ({arb_answer}); MapCache {rps.get(c, 0):.0f} req/s, "
-              f"MapProxy {rps.get(p, 0):.0f} req/s")
-        return
-    rc, rp = rps[t] / rps[c], rps[t] / rps[p]
-    v = lambda r, g: "met" if r >= g else "MISSED"
-    print(f"{name:<38}{rc:>7.2f}x MapCache (goal >= {gc}x: {v(rc, gc)}){rp:>8.2f}x MapProxy (goal >= {gp}x: {v(rp, gp)})")
-ratio_row("cached tile, tellus /wwtile vs z/x/y", "tw", "ct", "pt", 1.05, 6)
-ratio_row("cached tile, tellus /tiles/ vs z/x/y", "ts", "ct", "pt", 1.05, 6)
-ratio_row("cached tile, WMS 1.1.1 tile-aligned", "tm", "cm", "pm", 1.05, 6)
-ratio_row("arbitrary box WMS 1.3.0 1024x768 JPEG", "ta", "ca", "pa", 1.7, 6)
+    print()
+    print("== Ratios (tellus / peer, req/s medians of this run) and issue #4's goals")
+    def ratio_row(name, t, c, p, gc, gp):
+        if t not in rps:
+            print(f"{name:<38} tellus: not supported ({arb_answer}); MapCache {rps.get(c, 0):.0f} req/s, "
+                  f"MapProxy {rps.get(p, 0):.0f} req/s")
+            return
+        rc, rp = rps[t] / rps[c], rps[t] / rps[p]
+        v = lambda r, g: "met" if r >= g else "MISSED"
+        print(f"{name:<38}{rc:>7.2f}x MapCache (goal >= {gc}x: {v(rc, gc)}){rp:>8.2f}x MapProxy (goal >= {gp}x: {v(rp, gp)})")
+    ratio_row("cached tile, tellus /wwtile vs z/x/y", "tw", "ct", "pt", 1.05, 6)
+    ratio_row("cached tile, tellus /tiles/ vs z/x/y", "ts", "ct", "pt", 1.05, 6)
+    ratio_row("cached tile, WMS 1.1.1 tile-aligned", "tm", "cm", "pm", 1.05, 6)
+    ratio_row("arbitrary box WMS 1.3.0 1024x768 JPEG", "ta", "ca", "pa", 1.7, 6)
 
 print()
 srows = [l.rstrip("\n").split("\t") for l in open(seeds)]
 names = {"up512": "MapServer alone, 512 px GetMap per tile",
          "up2048": "MapServer alone, 2048 px per 4x4 metatile",
-         "tellus": "tellus seed", "MapProxy": "mapproxy-seed (4x4 metatiles)",
+         "tellus1": "tellus seed --meta-tiles 1 (per tile)",
+         "tellus": "tellus seed (4x4 metatiles)", "MapProxy": "mapproxy-seed (4x4 metatiles)",
          "MapCache": "mapcache_seed (4x4 metatiles)"}
 by = {}
 for f in srows:
@@ -790,10 +812,15 @@ for name in names:
 if "tellus" in rates and "MapProxy" in rates:
     print(f"tellus seed vs mapproxy-seed: {rates['tellus'] / rates['MapProxy']:.2f}x (goal >= 1: "
           f"{'met' if rates['tellus'] >= rates['MapProxy'] else 'MISSED'}); vs mapcache_seed "
-          f"{rates['tellus'] / rates['MapCache']:.2f}x; vs MapServer alone (512 px per tile) {rates['tellus'] / ceil512:.2f}x")
+          f"{rates['tellus'] / rates['MapCache']:.2f}x; vs MapServer alone (512 px per tile) {rates['tellus'] / ceil512:.2f}x"
+          + (f", (2048 px per metatile) {rates['tellus'] / rates['up2048']:.2f}x" if "up2048" in rates else ""))
+if "tellus" in rates and "tellus1" in rates:
+    print(f"tellus seed with 4x4 metatiles vs one GetMap per tile: {rates['tellus'] / rates['tellus1']:.2f}x")
 print("tiles: what the ceiling runs got answered / what each seeder wrote (metatiles reach past the region);"
       " tiles/s of a seeder: the region's tiles over its wall time, start-up included")
 
+if not rows:  # ONLY=seed
+    sys.exit(0)
 print()
 print("== Resident memory, summed over every process of each server (MiB)")
 print(f"{'when':<36}{'server':<10}{'VmRSS':>8}{'PSS':>8}{'procs':>6}  load run")

@@ -433,7 +433,8 @@ readUpstream(Reader& r, const YAML::Node& node, std::string path, const fs::path
                "failure_threshold",
                "open_interval",
                "max_retry_after_wait",
-               "headers"});
+               "headers",
+               "meta_tiles"});
   if (node.IsNull())
     r.fail(node.Mark(), m.path(), "expected a mapping (name, type, ...), got nothing");
   UpstreamConfig u;
@@ -470,6 +471,7 @@ readUpstream(Reader& r, const YAML::Node& node, std::string path, const fs::path
       notFor(key, "wms and worldwind");
     notFor("version", "wms");
     notFor("crs", "wms");
+    notFor("meta_tiles", "wms");
     u.path = resolvePath(text(r, m.need("path"), m.path("path")), dataDir);
     return u;
   }
@@ -477,6 +479,7 @@ readUpstream(Reader& r, const YAML::Node& node, std::string path, const fs::path
   if (u.type == UpstreamConfig::Type::WorldWind) {
     notFor("version", "wms");
     notFor("crs", "wms");
+    notFor("meta_tiles", "wms");
   }
   u.url = text(r, m.need("url"), m.path("url"));
   if (auto v = m.get("version"))
@@ -494,6 +497,7 @@ readUpstream(Reader& r, const YAML::Node& node, std::string path, const fs::path
     u.maxRetryAfterWait = duration(r, *v, m.path("max_retry_after_wait"));
   if (auto v = m.get("max_connections")) u.maxConnections = int32(r, *v, m.path("max_connections"));
   if (auto v = m.get("retries")) u.retries = int32(r, *v, m.path("retries"));
+  if (auto v = m.get("meta_tiles")) u.metaTiles = int32(r, *v, m.path("meta_tiles"));
   if (auto v = m.get("failure_threshold"))
     u.failureThreshold = int32(r, *v, m.path("failure_threshold"));
   if (auto v = m.get("headers")) {

@@ -136,6 +136,8 @@ checkUpstream(const UpstreamConfig& u, std::size_t i, bool checkFiles) {
   if (u.maxRetryAfterWait.count() < 0) return issue("max_retry_after_wait", "must not be negative");
   if (u.maxConnections < 1 || u.maxConnections > 1024)
     return issue("max_connections", "must be in [1, 1024], got " + str(u.maxConnections));
+  if (u.metaTiles < 1 || u.metaTiles > 16)
+    return issue("meta_tiles", "must be in [1, 16], got " + str(u.metaTiles));
   if (u.retries < 0 || u.retries > 100)
     return issue("retries", "must be in [0, 100], got " + str(u.retries));
   if (u.failureThreshold < 1 || u.failureThreshold > 1'000'000)

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <condition_variable>
 #include <deque>
+#include <map>
+#include <memory>
 #include <mutex>
 #include <thread>
 
@@ -123,37 +125,58 @@ std::expected<SeedReport, std::string> seedThroughService(TileService& tiles,
                                          : std::chrono::duration<double>(0);
   auto nextStart = Clock::now();
 
-  auto start = [&](const TileKey& key, int attempt) {
-    if (options.rate > 0) { // pace starts evenly
+  // One answer for one tile (under `mutex`).
+  auto count = [&](const TileKey& key, int attempt, const TileAnswer& a) {
+    if (a.kind == TileAnswer::Kind::Tile) {
+      ++report.written;
+      report.bytes += a.file ? a.file->size() : static_cast<std::int64_t>(a.bytes.size());
+    } else if (a.kind == TileAnswer::Kind::Absent && a.origin != TileOrigin::Offline) {
+      ++report.absent;
+    } else if (attempt < options.retries) {
+      retryQueue.emplace_back(key, attempt + 1);
+    } else {
+      ++report.failed;
+      if (report.failures.size() < 20) {
+        report.failures.push_back("L" + std::to_string(key.level) + " R" + std::to_string(key.row) +
+                                  " C" + std::to_string(key.col) + ": " + a.message);
+      }
+    }
+  };
+
+  // One unit of work: a tile, or the missing tiles of one metatile (one upstream request); the
+  // window (`concurrency`) counts units. Retries go tile by tile: an upstream that cannot answer
+  // a metatile (too large an image, a timeout) still gets its tiles asked one at a time.
+  auto start = [&](std::vector<TileKey> keys, int attempt) {
+    if (options.rate > 0) { // pace starts evenly, in tiles per second
       std::this_thread::sleep_until(nextStart);
-      nextStart =
-          std::max(nextStart, Clock::now()) + std::chrono::duration_cast<Clock::duration>(interval);
+      nextStart = std::max(nextStart, Clock::now()) +
+                  std::chrono::duration_cast<Clock::duration>(interval * keys.size());
     }
     {
       std::unique_lock lock(mutex);
       cv.wait(lock, [&] { return inFlight < options.concurrency; });
       ++inFlight;
     }
-    tiles.getTile(layerName, options.time, key, [&, key, attempt](TileAnswer&& a) {
-      std::lock_guard lock(mutex);
-      --inFlight;
-      if (a.kind == TileAnswer::Kind::Tile) {
-        ++report.written;
-        report.bytes += a.file ? a.file->size() : static_cast<std::int64_t>(a.bytes.size());
-      } else if (a.kind == TileAnswer::Kind::Absent && a.origin != TileOrigin::Offline) {
-        ++report.absent;
-      } else if (attempt < options.retries) {
-        retryQueue.emplace_back(key, attempt + 1);
-      } else {
-        ++report.failed;
-        if (report.failures.size() < 20) {
-          report.failures.push_back("L" + std::to_string(key.level) + " R" +
-                                    std::to_string(key.row) + " C" + std::to_string(key.col) +
-                                    ": " + a.message);
-        }
-      }
-      cv.notify_all();
-    });
+    if (keys.size() == 1) {
+      const TileKey key = keys.front();
+      tiles.getTile(layerName, options.time, key, [&, key, attempt](TileAnswer&& a) {
+        std::lock_guard lock(mutex);
+        count(key, attempt, a);
+        --inFlight;
+        cv.notify_all();
+      });
+    } else {
+      auto remaining = std::make_shared<std::size_t>(keys.size()); // guarded by `mutex`
+      tiles.getTiles(
+          layerName, options.time, keys, [&, remaining, attempt](const TileKey& k, TileAnswer&& a) {
+            std::lock_guard lock(mutex);
+            count(k, attempt, a);
+            if (--*remaining == 0) {
+              --inFlight;
+              cv.notify_all();
+            }
+          });
+    }
     if (progress) {
       std::lock_guard lock(mutex);
       if (Clock::now() - lastProgress >= std::chrono::milliseconds(200)) {
@@ -163,7 +186,11 @@ std::expected<SeedReport, std::string> seedThroughService(TileService& tiles,
     }
   };
 
+  // Metatile order: each level's missing tiles grouped by the n x n block they belong to, blocks
+  // from the south-west, one request per block (n = 1: tile by tile, row-major).
+  const std::int32_t n = std::max<std::int32_t>(1, tiles.metaTileSize(layerName));
   for (const auto& keys : levels) {
+    std::map<std::pair<std::int64_t, std::int64_t>, std::vector<TileKey>> blocks;
     for (const TileKey& key : keys) {
       const auto known = cache.peek(*dataset, key);
       const bool have = known && known->kind != CacheLookup::Kind::Miss &&
@@ -173,8 +200,14 @@ std::expected<SeedReport, std::string> seedThroughService(TileService& tiles,
         ++report.skipped;
         continue;
       }
-      start(key, 0);
+      if (n == 1) {
+        start({key}, 0);
+      } else {
+        blocks[{key.row - key.row % n, key.col - key.col % n}].push_back(key);
+      }
     }
+    for (auto& [origin, missing] : blocks)
+      start(std::move(missing), 0);
   }
   // Retries, after the first pass, with a pause that grows per round.
   for (int round = 1;; ++round) {
@@ -191,7 +224,7 @@ std::expected<SeedReport, std::string> seedThroughService(TileService& tiles,
         std::lock_guard lock(mutex);
         ++report.retried;
       }
-      start(key, attempt);
+      start({key}, attempt);
     }
   }
   if (progress) progress(report, elapsed());

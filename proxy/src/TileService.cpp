@@ -1,3 +1,4 @@
+#include "MetaTile.hpp"
 #include "WorkerPool.hpp"
 
 #include <tellus/cache/RequestQueue.hpp>
@@ -99,6 +100,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
   std::map<std::string, LocalRasterSource, std::less<>> rasters; // by upstream name
   std::atomic<bool> forcedOffline{false};
   std::atomic<std::uint64_t> fetches{0};
+  std::atomic<std::uint64_t> metaFetches{0};
 
   // (layer, time) -> dataset id, registered on first use.
   std::mutex datasetsMutex;
@@ -403,6 +405,164 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     }
   }
 
+  // ------------------------------------------------------------------ metatiles (getTiles)
+
+  using TilesDone = std::function<void(const TileKey&, TileAnswer&&)>;
+
+  /** Whether tiles of this layer can be fetched as one GetMap of a block and split. */
+  static bool metaCapable(const LayerSpec& l, const UpstreamSpec& u) {
+    return u.type == UpstreamSpec::Type::Wms && u.metaTiles > 1 && !l.elevation &&
+           (l.dataset.mimeType == "image/jpeg" || l.dataset.mimeType == "image/png");
+  }
+
+  void getTiles(std::string_view layerName,
+                std::string_view time,
+                std::span<const TileKey> keys,
+                TilesDone doneFn) {
+    if (keys.empty()) return;
+    const auto done = std::make_shared<TilesDone>(std::move(doneFn));
+    auto waiter = [done](const TileKey& k) {
+      return [done, k](TileAnswer&& a) { (*done)(k, std::move(a)); };
+    };
+    auto oneByOne = [&](std::span<const TileKey> ks) {
+      for (const TileKey& k : ks)
+        getTile(layerName, time, k, waiter(k));
+    };
+    const auto li = layerIndex.find(layerName);
+    if (li == layerIndex.end()) return oneByOne(keys); // each answers "no layer"
+    const LayerSpec& l = layers[li->second];
+    const TileGrid& g = grids[li->second];
+    const UpstreamSpec& u = upstreams.at(l.upstream);
+    const bool oneLevel = std::all_of(
+        keys.begin(), keys.end(), [&](const TileKey& k) { return k.level == keys[0].level; });
+    if (keys.size() < 2 || !metaCapable(l, u) || !oneLevel || forcedOffline.load() ||
+        !remoteReachable(u))
+      return oneByOne(keys);
+    std::pair<DatasetId, std::string> ds = defaultDatasets[li->second];
+    if (!time.empty()) {
+      auto found = dataset(l, time);
+      if (!found) return oneByOne(keys); // each reports the error
+      ds = std::move(*found);
+    }
+    const auto& [id, folder] = ds;
+    const UnixMillis now = unixMillisNow();
+    std::vector<TileKey> owned;
+    for (const TileKey& k : keys) {
+      if (k.level < 0 || k.level >= g.numLevels() || !g.isValid(k)) {
+        getTile(layerName, time, k, waiter(k)); // answers "outside the layer's coverage"
+        continue;
+      }
+      const auto known = cache.peek(id, k);
+      const bool fromCache = !known || (known->kind == CacheLookup::Kind::Hit && !known->stale) ||
+                             (known->kind == CacheLookup::Kind::Absent && known->retryAfter > now);
+      if (fromCache) { // a hit, a remembered absence, or an index error: getTile answers
+        getTile(layerName, time, k, waiter(k));
+        continue;
+      }
+      // Missing or expired: ours to fetch unless a flight for it is already out (it answers).
+      if (join(FlightKey{id, k}, waiter(k))) owned.push_back(k);
+    }
+    if (owned.empty()) return;
+    const TileBlock block = boundingBlock(owned);
+    const auto& spec = g.spec();
+    const bool tooBig = static_cast<std::int64_t>(block.cols) * spec.tileWidth > 8192 ||
+                        static_cast<std::int64_t>(block.rows) * spec.tileHeight > 8192;
+    if (owned.size() == 1 || tooBig) {
+      for (const TileKey& k : owned)
+        fetchRemote(FlightKey{id, k}, l, u, g, folder, std::string(time), std::nullopt);
+      return;
+    }
+    FetchRequest req;
+    req.upstream = u.name;
+    req.url = wmsUrl(u,
+                     l,
+                     blockSector(g, block),
+                     block.cols * spec.tileWidth,
+                     block.rows * spec.tileHeight,
+                     time);
+    fetches.fetch_add(1);
+    metaFetches.fetch_add(1);
+    fetcher.fetch(std::move(req),
+                  [weak = weak_from_this(), owned = std::move(owned), block, &l, &g, id, folder](
+                      FetchResult&& r) mutable {
+                    const auto self = weak.lock();
+                    if (!self) return;
+                    self->workers->post([im = self.get(),
+                                         owned = std::move(owned),
+                                         block,
+                                         &l,
+                                         &g,
+                                         id,
+                                         folder,
+                                         r = std::move(r)]() mutable {
+                      im->onBlockFetched(owned, block, l, g, id, folder, std::move(r));
+                    });
+                  });
+  }
+
+  /** A metatile's answer (worker thread): validated and split once; its tiles are stored (each
+   * on a worker, so that their fsyncs overlap) or, when anything is wrong, none is. */
+  void onBlockFetched(const std::vector<TileKey>& owned,
+                      const TileBlock& block,
+                      const LayerSpec& l,
+                      const TileGrid& g,
+                      DatasetId id,
+                      const std::string& folder,
+                      FetchResult&& r) {
+    auto landAll = [&](const TileAnswer& a) {
+      for (const TileKey& k : owned) {
+        TileAnswer copy = a;
+        land(FlightKey{id, k}, std::move(copy));
+      }
+    };
+    if (!r) {
+      const auto code = r.error().code;
+      if (code == FetchErrc::Connect || code == FetchErrc::CircuitOpen) {
+        landAll(
+            absent(TileOrigin::Offline, "the upstream is unreachable and the tile is not cached"));
+      } else {
+        landAll(error(std::string("the upstream failed (") + toString(code) + ")"));
+      }
+      return;
+    }
+    FetchResponse& resp = *r;
+    if (resp.status == 404) {
+      for (const TileKey& k : owned)
+        (void)cache.putAbsent(id, k, unixMillisNow() + options.absentRetry.count());
+      landAll(absent(TileOrigin::Miss, "the upstream has no tile here"));
+      return;
+    }
+    if (resp.status != 200) {
+      landAll(error("the upstream answered HTTP " + std::to_string(resp.status)));
+      return;
+    }
+    auto kind = validateImageResponse(resp, l.dataset.mimeType);
+    if (!kind) {
+      landAll(error("the upstream did not send a tile: " + kind.error()));
+      return;
+    }
+    auto split = splitMetaTile(
+        resp.body, *kind, block.cols, block.rows, g.spec().tileWidth, g.spec().tileHeight);
+    if (!split) {
+      landAll(error("the upstream did not send a tile: " + split.error()));
+      return;
+    }
+    resp.body = {}; // the metatile's bytes are no longer needed
+    TileMeta m = freshMeta(l);
+    // The metatile's ETag names another resource than any tile's GetMap: not kept. Its
+    // Last-Modified is true of every tile in it.
+    m.lastModified = resp.lastModified;
+    for (const TileKey& k : owned) {
+      workers->post([this,
+                     fk = FlightKey{id, k},
+                     folder,
+                     m,
+                     bytes = std::move(split->tiles[block.imageIndex(k)])]() mutable {
+        store(fk, folder, std::move(bytes), std::move(m));
+      });
+    }
+  }
+
   // ITileSource dispatch: start queued requests while fewer than kMaxInFlight run.
   void pump() {
     for (;;) {
@@ -538,6 +698,25 @@ void TileService::getTile(std::string_view layer,
   impl_->getTile(layer, time, key, std::move(done));
 }
 
+void TileService::getTiles(std::string_view layer,
+                           std::string_view time,
+                           std::span<const TileKey> keys,
+                           std::function<void(const TileKey&, TileAnswer&&)> done) {
+  impl_->getTiles(layer, time, keys, std::move(done));
+}
+
+std::int32_t TileService::metaTileSize(std::string_view layer) const noexcept {
+  const LayerSpec* l = this->layer(layer);
+  if (!l) return 1;
+  const auto u = impl_->upstreams.find(l->upstream);
+  if (u == impl_->upstreams.end() || !Impl::metaCapable(*l, u->second)) return 1;
+  return u->second.metaTiles;
+}
+
+std::uint64_t TileService::metaTileFetches() const noexcept {
+  return impl_->metaFetches.load();
+}
+
 std::optional<TileAnswer>
 TileService::cachedTile(std::string_view layer, std::string_view time, const TileKey& key) {
   const auto li = impl_->layerIndex.find(layer);
@@ -614,24 +793,38 @@ std::string TileService::upstreamUrl(const UpstreamSpec& u,
                                      const Sector& s,
                                      const TileKey& key,
                                      std::string_view time) {
+  if (u.type == UpstreamSpec::Type::WorldWind) {
+    std::string url = u.url;
+    if (url.find('?') == std::string::npos) {
+      url += '?';
+    } else if (url.back() != '?' && url.back() != '&') {
+      url += '&';
+    }
+    url += "T=" + urlEncode(l.upstreamLayer) + "&L=" + std::to_string(key.level + l.firstLevel) +
+           "&X=" + std::to_string(key.col) + "&Y=" + std::to_string(key.row);
+    return url;
+  }
+  return wmsUrl(u, l, s, l.dataset.grid.tileWidth, l.dataset.grid.tileHeight, time);
+}
+
+std::string TileService::wmsUrl(const UpstreamSpec& u,
+                                const LayerSpec& l,
+                                const Sector& s,
+                                std::int32_t width,
+                                std::int32_t height,
+                                std::string_view time) {
   std::string url = u.url;
   if (url.find('?') == std::string::npos) {
     url += '?';
   } else if (url.back() != '?' && url.back() != '&') {
     url += '&';
   }
-  if (u.type == UpstreamSpec::Type::WorldWind) {
-    url += "T=" + urlEncode(l.upstreamLayer) + "&L=" + std::to_string(key.level + l.firstLevel) +
-           "&X=" + std::to_string(key.col) + "&Y=" + std::to_string(key.row);
-    return url;
-  }
   const bool v111 = u.wmsVersion == "1.1.1";
   const bool latLon = !v111 && u.crs == "EPSG:4326"; // WMS 1.3.0 EPSG:4326 is lat/lon
-  const auto& g = l.dataset.grid;
   url += "SERVICE=WMS&REQUEST=GetMap&VERSION=" + u.wmsVersion;
   url += "&LAYERS=" + urlEncode(l.upstreamLayer) + "&STYLES=" + urlEncode(l.dataset.style);
   url += "&FORMAT=" + urlEncode(l.dataset.mimeType);
-  url += "&WIDTH=" + std::to_string(g.tileWidth) + "&HEIGHT=" + std::to_string(g.tileHeight);
+  url += "&WIDTH=" + std::to_string(width) + "&HEIGHT=" + std::to_string(height);
   url += v111 ? "&SRS=EPSG:4326" : "&CRS=" + urlEncode(u.crs);
   url += "&BBOX=";
   url += latLon ? formatNumber(s.south) + "," + formatNumber(s.west) + "," + formatNumber(s.north) +

@@ -430,17 +430,12 @@ std::string serviceExceptionText(std::span<const std::byte> body) {
   return {};
 }
 
-std::expected<void, std::string> validateTile(const FetchResponse& response,
-                                              std::string_view expectedMime,
-                                              int expectedWidth,
-                                              int expectedHeight) {
+std::expected<ImageKind, std::string> validateImageResponse(const FetchResponse& response,
+                                                            std::string_view expectedMime) {
   if (response.status != 200)
     return std::unexpected("upstream status " + std::to_string(response.status) + ", not 200");
   const std::span<const std::byte> body(response.body);
   if (body.empty()) return std::unexpected(std::string("empty body"));
-  if (expectedWidth <= 0 || expectedHeight <= 0 || expectedWidth > 16384 || expectedHeight > 16384)
-    return std::unexpected("expected size " + sizeText(expectedWidth, expectedHeight) +
-                           " out of range");
 
   const ImageKind kind = sniff(body);
   if (kind == ImageKind::Xml || kind == ImageKind::Html) {
@@ -456,14 +451,7 @@ std::expected<void, std::string> validateTile(const FetchResponse& response,
   if (isBilType(want)) {
     if (!isBilType(got) && got != "application/octet-stream")
       return std::unexpected("content type " + gotShown + ", expected " + want);
-    const auto expectedBytes =
-        static_cast<std::size_t>(expectedWidth) * static_cast<std::size_t>(expectedHeight) * 2;
-    if (body.size() != expectedBytes) {
-      return std::unexpected("bil16 tile has " + std::to_string(body.size()) + " bytes, expected " +
-                             std::to_string(expectedBytes) + " (" +
-                             sizeText(expectedWidth, expectedHeight) + ")");
-    }
-    return {};
+    return kind;
   }
 
   if (!got.starts_with("image/"))
@@ -475,11 +463,35 @@ std::expected<void, std::string> validateTile(const FetchResponse& response,
     return std::unexpected(std::string("body is ") + toString(kind) + ", content type says " +
                            want);
   }
-  if (kind == ImageKind::Jpeg || kind == ImageKind::Png || kind == ImageKind::Tiff) {
-    if (kind == ImageKind::Jpeg && !jpegComplete(body))
-      return std::unexpected(std::string("JPEG is truncated (no end-of-image marker)"));
-    return decodeImage(body, kind, expectedWidth, expectedHeight);
+  if (kind == ImageKind::Jpeg && !jpegComplete(body))
+    return std::unexpected(std::string("JPEG is truncated (no end-of-image marker)"));
+  return kind;
+}
+
+std::expected<void, std::string> validateTile(const FetchResponse& response,
+                                              std::string_view expectedMime,
+                                              int expectedWidth,
+                                              int expectedHeight) {
+  if (response.status == 200 && !response.body.empty() &&
+      (expectedWidth <= 0 || expectedHeight <= 0 || expectedWidth > 16384 ||
+       expectedHeight > 16384))
+    return std::unexpected("expected size " + sizeText(expectedWidth, expectedHeight) +
+                           " out of range");
+  auto kind = validateImageResponse(response, expectedMime);
+  if (!kind) return std::unexpected(kind.error());
+  const std::span<const std::byte> body(response.body);
+  if (isBilType(canonicalImageType(mediaType(expectedMime)))) {
+    const auto expectedBytes =
+        static_cast<std::size_t>(expectedWidth) * static_cast<std::size_t>(expectedHeight) * 2;
+    if (body.size() != expectedBytes) {
+      return std::unexpected("bil16 tile has " + std::to_string(body.size()) + " bytes, expected " +
+                             std::to_string(expectedBytes) + " (" +
+                             sizeText(expectedWidth, expectedHeight) + ")");
+    }
+    return {};
   }
+  if (*kind == ImageKind::Jpeg || *kind == ImageKind::Png || *kind == ImageKind::Tiff)
+    return decodeImage(body, *kind, expectedWidth, expectedHeight);
   return {}; // GIF, WebP: the magic and the content type agree; not decoded here
 }
 

@@ -91,6 +91,13 @@ set +e
 "$tellus" seed --levels 3-1 >/dev/null 2>&1; rc=$?
 set -e
 [ $rc -eq 2 ] || fail "bad --levels should be a usage error, got $rc"
+for bad in 0 17 2.5; do
+  set +e
+  "$tellus" seed --meta-tiles "$bad" --dry-run >"$work/meta.txt" 2>&1; rc=$?
+  set -e
+  [ $rc -eq 2 ] || fail "--meta-tiles $bad should be a usage error, got $rc"
+  grep -q -- "--meta-tiles" "$work/meta.txt" || fail "--meta-tiles $bad: $(cat "$work/meta.txt")"
+done
 # GeoPackage: export levels 0-1 of bluemarble, read by GDAL where the cached tile says; import back.
 # Europe only (lon 0..36, lat 36..54): 1 tile at level 0 and 2 at level 1.
 "$tellus" seed --cache "$work/gcache" --layer bluemarble --levels 0-1 --bbox 1,37,35,53 >/dev/null \

@@ -147,6 +147,8 @@ TEST(ConfigExtremes, UpstreamCountsOutOfRange) {
   check("max_retry_after_wait", "-1s");
   check("version", "1.0.0");
   check("crs", "EPSG:3857");
+  check("meta_tiles", "0");
+  check("meta_tiles", "17");
 }
 
 TEST(ConfigExtremes, TimePeriodsWithTooManyValuesStayPeriods) {

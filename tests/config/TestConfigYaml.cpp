@@ -171,6 +171,7 @@ TEST(ConfigYaml, DefaultsAreApplied) {
   EXPECT_EQ(u.maxConnections, 4);
   EXPECT_EQ(u.retries, 3);
   EXPECT_EQ(u.failureThreshold, 5);
+  EXPECT_EQ(u.metaTiles, 4);
   EXPECT_TRUE(u.headers.empty());
 
   const LayerConfig& l = c->layers.at(0);
@@ -233,6 +234,7 @@ upstreams:
     url: http://127.0.0.1:9/wms
     version: 1.1.1
     crs: CRS:84
+    meta_tiles: 1
 layers:
   - name: heights.v2
     title: Heights
@@ -309,6 +311,7 @@ layers:
   const UpstreamConfig& w = c->upstreams.at(1);
   EXPECT_EQ(w.wmsVersion, "1.1.1");
   EXPECT_EQ(w.crs, "CRS:84");
+  EXPECT_EQ(w.metaTiles, 1);
 
   const LayerConfig& l = c->layers.at(0);
   EXPECT_EQ(l.name, "heights.v2");
@@ -733,6 +736,11 @@ TEST(ConfigYaml, KeysThatDoNotApply) {
 )");
   EXPECT_EQ(url.line, 5);
   EXPECT_EQ(url.key, "upstreams[0].url");
+  const ConfigError meta = errorOf(R"(upstreams:
+  - {name: ww, type: worldwind, url: "http://example.org/", meta_tiles: 4}
+)");
+  EXPECT_EQ(meta.key, "upstreams[0].meta_tiles");
+  EXPECT_EQ(meta.message, "'meta_tiles' applies to wms upstreams only");
   const ConfigError version = errorOf(R"(upstreams:
   - {name: ww, type: worldwind, url: "http://example.org/", version: 1.3.0}
 )");

@@ -737,6 +737,82 @@ TEST(ProxyIntegration, RealMapServerUpstream) {
   EXPECT_EQ(mapserver.requests(), 4u);
 }
 
+TEST(SeederIntegration, RealMapServerMetaTilesGiveTheTilesOfPerTileFetching) {
+  if (!fs::exists(kMapserv)) GTEST_SKIP() << "Debian's cgi-mapserver is not installed";
+  test::TempDir dir("mapserv-meta");
+  std::ifstream in(fs::path(TELLUS_TEST_SOURCE_DIR) / "data" / "mapserver" / "tellus-test.map.in");
+  std::string mapText((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (auto at = mapText.find("@DATA@"); at != std::string::npos; at = mapText.find("@DATA@"))
+    mapText.replace(at, 6, TELLUS_TEST_DATA_DIR);
+  const fs::path map = dir.path() / "tellus-test.map";
+  std::ofstream(map) << mapText;
+  const fs::path conf = dir.path() / "mapserver.conf";
+  std::ofstream(conf)
+      << "CONFIG\n  ENV\n    MS_MAP_PATTERN \"tellus-test\\.map$\"\n    MS_MAPFILE \""
+      << map.string() << "\"\n  END\nEND\n";
+  test::FakeUpstream mapserver(
+      [&](const test::FakeRequest& r) { return runMapserv(r, conf, map); });
+  // The same layer seeded twice from MapServer: per tile, and in 4x4 metatiles.
+  struct Seeded {
+    test::TempDir dir{"mapserv-meta-cache"};
+    std::unique_ptr<TileCache> cache;
+    std::unique_ptr<Fetcher> fetcher = std::make_unique<Fetcher>();
+    std::unique_ptr<TileService> tiles;
+  };
+  auto seeded = [&](int metaTiles) {
+    auto s = std::make_unique<Seeded>();
+    s->cache = test::openTestCache(s->dir.path());
+    UpstreamSpec u;
+    u.name = "mapserver";
+    u.type = UpstreamSpec::Type::Wms;
+    u.url = mapserver.url("/cgi-bin/mapserv");
+    u.policy = Proxy::fastPolicy();
+    u.policy.timeout = 20s;
+    u.metaTiles = metaTiles;
+    LayerSpec imagery;
+    imagery.name = "bmng";
+    imagery.upstream = "mapserver";
+    imagery.dataset.grid = GridSpec{Sector{}, 36.0, 512, 512, 3};
+    imagery.dataset.mimeType = "image/jpeg";
+    auto t = TileService::create(*s->cache, *s->fetcher, {u}, {imagery}, TileServiceOptions{});
+    EXPECT_TRUE(t) << (t ? "" : t.error());
+    s->tiles = std::move(*t);
+    ServiceSeedOptions o;
+    o.range.box = Sector{36, -18, 180, 90}; // level 0: to the antimeridian and the pole, 12 tiles
+    auto r = seedThroughService(*s->tiles, *s->cache, "bmng", o);
+    EXPECT_TRUE(r) << (r ? "" : r.error());
+    if (r) {
+      EXPECT_EQ(r->written, 12);
+      EXPECT_EQ(r->failed, 0) << (r->failures.empty() ? "" : r->failures[0]);
+    }
+    return s;
+  };
+  const auto perTile = seeded(1);
+  EXPECT_EQ(mapserver.requests(), 12u);
+  const auto meta = seeded(4);
+  EXPECT_EQ(mapserver.requests(), 12u + 4u); // 2x2, 2x2, 2x1 and 2x1 tiles
+  EXPECT_EQ(meta->tiles->metaTileFetches(), 4u);
+  const auto ds = [](Seeded& s) { return *s.cache->registerDataset(*s.tiles->describe("bmng")); };
+  for (std::int64_t row = 2; row <= 4; ++row) {
+    for (std::int64_t col = 6; col <= 9; ++col) {
+      SCOPED_TRACE(::testing::Message() << "R" << row << " C" << col);
+      const auto a = meta->cache->get(ds(*meta), TileKey{0, row, col});
+      const auto b = perTile->cache->get(ds(*perTile), TileKey{0, row, col});
+      ASSERT_TRUE(a && b && a->kind == CacheLookup::Kind::Hit && b->kind == CacheLookup::Kind::Hit);
+      // A valid 512x512 JPEG (the DCT split keeps MapServer's own encoding: 4:2:0, quality 85).
+      const auto pa = decodeImagery(a->bytes, "image/jpeg", 512, 512);
+      const auto pb = decodeImagery(b->bytes, "image/jpeg", 512, 512);
+      ASSERT_TRUE(pa && pb);
+      ASSERT_EQ(pa->pixels.size(), pb->pixels.size());
+      double sum = 0;
+      for (std::size_t i = 0; i < pa->pixels.size(); ++i)
+        sum += std::abs(static_cast<int>(pa->pixels[i]) - static_cast<int>(pb->pixels[i]));
+      // The same place drawn by MapServer in a larger image: within JPEG's tolerance.
+      EXPECT_LT(sum / static_cast<double>(pa->pixels.size()), 2.0);
+    }
+  }
+}
+
 TEST(ProxyIntegration, LayerLastUpdateSurvivesRestartsAndMovesWithTheDefinition) {
   test::TempDir dir("lastupdate");
   auto cache = test::openTestCache(dir.path());

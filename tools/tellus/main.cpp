@@ -48,6 +48,8 @@ commands:
   seed     fill the cache from the layers' upstreams
              [--layer NAME]... [--levels A-B] [--bbox W,S,E,N] [--dry-run]
              [--time T] [--concurrency N] [--rate TILES/S] [--retries N] [--refresh]
+             [--meta-tiles N]         N x N tiles per WMS GetMap (default: the upstream's
+                                      meta_tiles, 4; 1 = one GetMap per tile)
   cache    inspect and maintain the cache
              stats [--json] | verify | rebuild | prune --older-than DURATION [--layer NAME]
              | export --gpkg FILE --layer NAME [--levels A-B] | import --gpkg FILE --layer NAME
@@ -399,10 +401,14 @@ int cmdSeed(const Args& a) {
     out = x;
     return true;
   };
-  double concurrency = 4, retries = 2;
+  double concurrency = 4, retries = 2, metaTiles = 0;
   if (!number("concurrency", 1, 256, concurrency) || !number("rate", 0, 1e6, sso.rate) ||
-      !number("retries", 0, 100, retries))
+      !number("retries", 0, 100, retries) || !number("meta-tiles", 1, 16, metaTiles))
     return kExitUsage;
+  if (metaTiles != std::floor(metaTiles)) {
+    std::fprintf(stderr, "tellus seed: --meta-tiles must be a whole number\n");
+    return kExitUsage;
+  }
   sso.concurrency = static_cast<int>(concurrency);
   sso.retries = static_cast<int>(retries);
   sso.refresh = a.flag("refresh");
@@ -460,8 +466,10 @@ int cmdSeed(const Args& a) {
         // and stored the upstream is already answering the next ones (with the window equal to
         // the requests, each slot waited for validation and fsync: 0.72x of what MapServer
         // served alone, bench/RESULTS.md).
-        for (auto& u : ups)
+        for (auto& u : ups) {
           u.policy.maxConnections = std::min(u.policy.maxConnections, sso.concurrency);
+          if (metaTiles >= 1) u.metaTiles = static_cast<int>(metaTiles);
+        }
         // Storing a fetched tile waits for fsync: as many workers as requests in flight, so
         // that the disk's waits overlap instead of queueing behind two workers.
         TileServiceOptions serviceOptions;
@@ -724,6 +732,7 @@ std::pair<std::vector<UpstreamSpec>, std::vector<LayerSpec>> proxySpecs(const Co
     s.url = u.url;
     s.wmsVersion = u.wmsVersion;
     s.crs = u.crs;
+    s.metaTiles = u.metaTiles;
     s.policy.maxConnections = u.maxConnections;
     s.policy.connectTimeout = u.connectTimeout;
     s.policy.timeout = u.timeout;

@@ -89,6 +89,8 @@ struct UpstreamConfig {
   std::chrono::milliseconds maxRetryAfterWait{10'000}; ///< longer Retry-After: pause, fail now
   int maxConnections = 4;                              ///< concurrent requests to this upstream
   int retries = 3;                                     ///< for 5xx and timeouts
+  /// Wms: `tellus seed` asks for up to metaTiles x metaTiles tiles with one GetMap (1 = per tile)
+  int metaTiles = 4;
   int failureThreshold = 5; ///< consecutive failures that open the circuit breaker
   std::vector<std::pair<std::string, std::string>> headers; ///< sent with every request, in order
 };

@@ -21,6 +21,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -36,6 +37,9 @@ struct UpstreamSpec {
   std::string url;            ///< Wms / WorldWind: base URL (may hold a query)
   std::string wmsVersion = "1.3.0";
   std::string crs = "EPSG:4326"; ///< EPSG:4326 or CRS:84
+  /// Wms: seeding asks for up to metaTiles x metaTiles tiles of a level with one GetMap (getTiles);
+  /// 1 = one GetMap per tile. The configuration's default is 4 (docs/CONFIG.md).
+  int metaTiles = 1;
   UpstreamPolicy policy;
 };
 
@@ -106,6 +110,23 @@ public:
                const TileKey& key,
                std::function<void(TileAnswer&&)> done);
 
+  /**
+   * Several tiles (normally of one metatile: one level, close together), each answered
+   * through `done(key, answer)` exactly once, possibly on another thread, possibly before return.
+   * Tiles that are cached (fresh) or known absent are answered from the cache; tiles already in
+   * flight (a `getTile` or another `getTiles`) wait for that flight; the rest are fetched with ONE
+   * GetMap of their bounding block when the layer's upstream is WMS with metaTiles > 1 and the
+   * format is JPEG or PNG imagery (else, and for keys of several levels or a block over 8192
+   * pixels, one request per tile, as getTile). The answer is
+   * validated once, whole, and split (a JPEG in the DCT domain when its iMCUs allow); a failing
+   * or invalid answer stores nothing and fails every tile it was fetched for. While it is in
+   * flight, getTile for any of its tiles joins it instead of fetching.
+   */
+  void getTiles(std::string_view layer,
+                std::string_view time,
+                std::span<const TileKey> keys,
+                std::function<void(const TileKey&, TileAnswer&&)> done);
+
   /** A tile from the cache alone (fresh or expired), never fetched: what fills in a composed
    * map where a finer tile is missing. std::nullopt when it is not cached. */
   std::optional<TileAnswer>
@@ -136,6 +157,19 @@ public:
                                  const Sector& sector,
                                  const TileKey& key,
                                  std::string_view time);
+  /** A WMS GetMap of `sector` at width x height pixels (a metatile; upstreamUrl for one tile). */
+  static std::string wmsUrl(const UpstreamSpec& upstream,
+                            const LayerSpec& layer,
+                            const Sector& sector,
+                            std::int32_t width,
+                            std::int32_t height,
+                            std::string_view time);
+
+  /** n when getTiles fetches this layer's tiles in blocks of up to n x n (its upstream is WMS
+   * with metaTiles = n > 1, imagery in JPEG or PNG), else 1. */
+  std::int32_t metaTileSize(std::string_view layer) const noexcept;
+  /** Upstream requests that fetched a metatile (a block of more than one tile), for tests. */
+  std::uint64_t metaTileFetches() const noexcept;
 
   struct Impl;
 

@@ -40,6 +40,12 @@ std::expected<void, std::string> validateTile(const FetchResponse& response,
                                               int expectedWidth,
                                               int expectedHeight);
 
+/** validateTile without the decoding and the size: status, body, markup, content type, magic
+ * bytes, a JPEG's end-of-image marker. What the bytes are, for a caller that decodes them itself
+ * (a metatile is decoded once when it is split). */
+std::expected<ImageKind, std::string> validateImageResponse(const FetchResponse& response,
+                                                            std::string_view expectedMime);
+
 /** The readable text of an OGC ServiceException (or OWS ExceptionText) in an XML body, sanitised
  * as validateTile does; empty when there is none. */
 std::string serviceExceptionText(std::span<const std::byte> body);
