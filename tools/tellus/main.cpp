@@ -4,6 +4,8 @@
 #include <tellus/cache/GeoPackage.hpp>
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/config/Config.hpp>
+#include <tellus/planet/Geodesy.hpp>
+#include <tellus/planet_gl/Renderer.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/LocalRasterSource.hpp>
@@ -15,6 +17,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -55,8 +58,11 @@ commands:
   serve    the WMS / World Wind tile server
              [--listen HOST:PORT] [--threads N] [--offline]
              [--log-level error|warn|info|debug] [--access-log FILE|-]
+  render   headless globe rendering to PNG (an X display or xvfb-run)
+             --camera LAT,LON,ALT[,HEADING,TILT] --out FILE.png [--size WxH]
+             [--wait-complete[=SECONDS]] [--background R,G,B] [--stats FILE.json]
+             [--layer NAME] [--threshold T] [--offline]
   view     interactive globe                        (not built yet: issue #5)
-  render   headless globe rendering to PNG          (not built yet: issue #5)
 
 options for every command:
   --cache DIR   cache root (default: $TELLUS_CACHE, $XDG_CACHE_HOME/tellus or ~/.cache/tellus)
@@ -890,6 +896,246 @@ int cmdServe(const Args& a) {
   return kExitOk;
 }
 
+/** Comma-separated finite numbers (count within [minCount, maxCount]). */
+std::optional<std::vector<double>>
+parseNumbers(const std::string& s, std::size_t minCount, std::size_t maxCount) {
+  std::vector<double> v;
+  std::size_t pos = 0;
+  while (pos <= s.size()) {
+    const auto comma = std::min(s.find(',', pos), s.size());
+    const std::string part = s.substr(pos, comma - pos);
+    double d = 0.0;
+    auto [ptr, ec] = std::from_chars(part.data(), part.data() + part.size(), d);
+    if (part.empty() || ec != std::errc{} || ptr != part.data() + part.size() || !std::isfinite(d))
+      return std::nullopt;
+    v.push_back(d);
+    pos = comma + 1;
+  }
+  if (v.size() < minCount || v.size() > maxCount) return std::nullopt;
+  return v;
+}
+
+std::string renderStatsJson(const planet::RenderStats& s, double seconds, bool complete) {
+  char buf[2048];
+  std::snprintf(
+      buf,
+      sizeof buf,
+      "{\n  \"complete\": %s,\n  \"seconds\": %.3f,\n  \"frames\": %llu,\n"
+      "  \"nodes_visible\": %zu,\n  \"nodes_drawn\": %zu,\n  \"nodes_created\": %zu,\n"
+      "  \"nodes_created_total\": %zu,\n  \"nodes_in_tree\": %zu,\n  \"max_level\": %d,\n"
+      "  \"tiles_requested\": %zu,\n  \"tiles_received\": %zu,\n  \"tiles_absent\": %zu,\n"
+      "  \"tiles_failed\": %zu,\n  \"tiles_in_flight\": %zu,\n  \"textures_decoded\": %zu,\n"
+      "  \"decode_errors\": %zu,\n  \"textures_uploaded\": %zu,\n  \"bytes_received\": %zu,\n"
+      "  \"bytes_uploaded\": %zu,\n  \"textures_resident\": %zu,\n  \"texture_bytes\": %zu,\n"
+      "  \"textures_reused\": %zu,\n  \"textures_evicted\": %zu,\n"
+      "  \"update_ms\": %.3f,\n  \"frame_ms\": %.3f,\n  \"reversed_z\": %s,\n  \"gl\": ",
+      complete ? "true" : "false",
+      seconds,
+      static_cast<unsigned long long>(s.frames),
+      s.nodesVisible,
+      s.nodesDrawn,
+      s.nodesCreated,
+      s.nodesCreatedTotal,
+      s.nodesInTree,
+      s.maxLevel,
+      s.tilesRequested,
+      s.tilesReceived,
+      s.tilesAbsent,
+      s.tilesFailed,
+      s.tilesInFlight,
+      s.texturesDecoded,
+      s.decodeErrors,
+      s.texturesUploaded,
+      s.bytesReceived,
+      s.bytesUploaded,
+      s.texturesResident,
+      s.textureBytes,
+      s.texturesReused,
+      s.texturesEvicted,
+      s.updateMs,
+      s.frameMs,
+      s.reversedZ ? "true" : "false");
+  return buf + jsonString(s.glVersion) + "\n}\n";
+}
+
+int cmdRender(const Args& a) {
+  auto usage = [](const char* what, const std::string& got) {
+    std::fprintf(stderr, "tellus render: %s, got '%s'\n", what, got.c_str());
+    return kExitUsage;
+  };
+  for (const auto& [k, v] : a.options) {
+    static const std::vector<std::string> known = {"config",
+                                                   "cache",
+                                                   "data",
+                                                   "camera",
+                                                   "size",
+                                                   "out",
+                                                   "wait-complete",
+                                                   "background",
+                                                   "stats",
+                                                   "layer",
+                                                   "threshold",
+                                                   "offline"};
+    if (std::find(known.begin(), known.end(), k) == known.end())
+      return usage("unknown option (see tellus --help)", "--" + k);
+  }
+  if (!a.positional.empty()) return usage("unexpected argument", a.positional.front());
+  const auto cameraArg = a.get("camera");
+  if (!cameraArg) return usage("--camera LAT,LON,ALT[,HEADING,TILT] is required", "");
+  const auto cam = parseNumbers(*cameraArg, 3, 5);
+  if (!cam)
+    return usage("--camera must be LAT,LON,ALT[,HEADING,TILT] (finite numbers)", *cameraArg);
+  planet::CameraPose pose;
+  pose.latDeg = (*cam)[0];
+  pose.lonDeg = (*cam)[1];
+  pose.altitudeM = (*cam)[2];
+  if (cam->size() > 3) pose.headingDeg = (*cam)[3];
+  if (cam->size() > 4) pose.tiltDeg = (*cam)[4];
+  if (pose.latDeg < -90.0 || pose.latDeg > 90.0)
+    return usage("--camera latitude must be in [-90, 90]", *cameraArg);
+  if (pose.altitudeM < -11000.0 || pose.altitudeM > 1e10)
+    return usage("--camera altitude must be in [-11000, 1e10] metres", *cameraArg);
+  if (pose.tiltDeg < 0.0 || pose.tiltDeg > 180.0)
+    return usage("--camera tilt must be in [0, 180] degrees", *cameraArg);
+  const auto out = a.get("out");
+  if (!out || out->empty()) return usage("--out FILE.png is required", "");
+  planet::RendererOptions ro;
+  if (auto size = a.get("size")) {
+    const auto x = size->find('x');
+    int w = 0, h = 0;
+    bool ok = x != std::string::npos;
+    if (ok) {
+      auto r1 = std::from_chars(size->data(), size->data() + x, w);
+      auto r2 = std::from_chars(size->data() + x + 1, size->data() + size->size(), h);
+      ok = r1.ec == std::errc{} && r1.ptr == size->data() + x && r2.ec == std::errc{} &&
+           r2.ptr == size->data() + size->size() && w >= 1 && h >= 1 && w <= 16384 && h <= 16384;
+    }
+    if (!ok) return usage("--size must be WxH with 1 to 16384 pixels each", *size);
+    ro.width = w;
+    ro.height = h;
+  }
+  double waitSeconds = 0.0;
+  const bool waitComplete = a.flag("wait-complete");
+  if (waitComplete) {
+    waitSeconds = 60.0;
+    if (const auto w = a.get("wait-complete"); w && !w->empty()) {
+      const auto v = parseNumbers(*w, 1, 1);
+      if (!v || (*v)[0] <= 0.0 || (*v)[0] > 86400.0)
+        return usage("--wait-complete=SECONDS must be in (0, 86400]", *w);
+      waitSeconds = (*v)[0];
+    }
+  }
+  if (auto b = a.get("background")) {
+    const auto v = parseNumbers(*b, 3, 3);
+    if (!v || std::any_of(v->begin(), v->end(), [](double c) { return c < 0.0 || c > 255.0; }))
+      return usage("--background must be R,G,B with each in 0-255", *b);
+    for (std::size_t i = 0; i < 3; ++i)
+      ro.background[i] = (*v)[i] / 255.0;
+  }
+  if (auto t = a.get("threshold")) {
+    const auto v = parseNumbers(*t, 1, 1);
+    if (!v || (*v)[0] < 0.05 || (*v)[0] > 64.0)
+      return usage("--threshold must be a number in [0.05, 64]", *t);
+    ro.lodThreshold = (*v)[0];
+  }
+  const Geodesy geodesy;
+  try {
+    (void)planet::Camera(geodesy, pose, {ro.width, ro.height}, ro.verticalFovDeg);
+  } catch (const std::invalid_argument& e) {
+    return usage(e.what(), *cameraArg);
+  }
+
+  auto ctx = setUp(a);
+  if (!ctx) return kExitError;
+  if (auto l = a.get("layer")) {
+    const auto* layer = ctx->config.layer(*l);
+    if (layer == nullptr) return usage("--layer names no layer of the configuration", *l);
+    if (layer->kind != LayerKind::Imagery) return usage("--layer must be an imagery layer", *l);
+    ro.layer = *l;
+  } else {
+    for (const auto& candidate : ctx->config.layers)
+      if (candidate.kind == LayerKind::Imagery) {
+        ro.layer = candidate.name;
+        break;
+      }
+    if (ro.layer.empty()) {
+      std::fprintf(stderr, "tellus render: the configuration has no imagery layer\n");
+      return kExitError;
+    }
+  }
+  // The always-resident global texture: the bundled Blue Marble.
+  if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg"; fs::exists(global))
+    ro.globalImage = global;
+
+  Fetcher fetcher;
+  auto [upstreams, layers] = proxySpecs(ctx->config);
+  TileServiceOptions tso;
+  tso.offline = a.flag("offline") || ctx->config.server.offline;
+  auto tiles =
+      TileService::create(*ctx->cache, fetcher, std::move(upstreams), std::move(layers), tso);
+  if (!tiles) {
+    std::fprintf(stderr, "tellus render: %s\n", tiles.error().c_str());
+    return kExitError;
+  }
+  auto renderer = planet::Renderer::create(**tiles, geodesy, ro);
+  if (!renderer) {
+    std::fprintf(stderr, "tellus render: %s\n", renderer.error().c_str());
+    return kExitError;
+  }
+  planet::Renderer& r = **renderer;
+  // Without --wait-complete: what is ready within two seconds (the level-zero textures come first).
+  const auto start = std::chrono::steady_clock::now();
+  const double limit = waitComplete ? waitSeconds : 2.0;
+  double elapsed = 0.0;
+  for (;;) {
+    r.frame(pose);
+    elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (r.complete() || elapsed > limit) break;
+    if (!r.busy()) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  const bool complete = r.complete();
+  if (auto statsFile = a.get("stats")) {
+    std::FILE* f = std::fopen(statsFile->c_str(), "w");
+    const std::string json = renderStatsJson(r.stats(), elapsed, complete);
+    if (f == nullptr || std::fputs(json.c_str(), f) < 0 || std::fclose(f) != 0) {
+      std::fprintf(stderr, "tellus render: cannot write %s\n", statsFile->c_str());
+      return kExitError;
+    }
+  }
+  if (waitComplete && !complete) {
+    const auto& s = r.stats();
+    std::fprintf(
+        stderr,
+        "tellus render: the view was not complete after %g s (%zu nodes drawn, %zu tiles in "
+        "flight, %zu failed, %zu decoding, %zu uploading); no image written\n",
+        waitSeconds,
+        s.nodesDrawn,
+        s.tilesInFlight,
+        s.tilesFailed,
+        s.decodesPending,
+        s.uploadsPending);
+    return kExitError;
+  }
+  std::string err;
+  if (!planet::writePngRgb(*out, r.width(), r.height(), r.readPixels(), &err)) {
+    std::fprintf(stderr, "tellus render: %s\n", err.c_str());
+    return kExitError;
+  }
+  const auto& s = r.stats();
+  std::printf("tellus render: %s %dx%d, %s after %.2f s and %llu frames (%zu nodes drawn, level "
+              "%d, %zu tiles)\n",
+              out->c_str(),
+              r.width(),
+              r.height(),
+              complete ? "complete" : "partial",
+              elapsed,
+              static_cast<unsigned long long>(s.frames),
+              s.nodesDrawn,
+              s.maxLevel,
+              s.tilesReceived);
+  return kExitOk;
+}
+
 int run(int argc, char** argv) {
   if (argc < 2 || std::string_view(argv[1]) == "help" || std::string_view(argv[1]) == "--help") {
     std::fputs(kUsage, argc < 2 ? stderr : stdout);
@@ -900,15 +1146,16 @@ int run(int argc, char** argv) {
     std::printf("tellus %s\n", TELLUS_VERSION);
     return kExitOk;
   }
-  const Args a =
-      parseArgs(argc, argv, 2, {"json", "dry-run", "include-pinned", "offline", "refresh"});
+  const Args a = parseArgs(
+      argc, argv, 2, {"json", "dry-run", "include-pinned", "offline", "refresh", "wait-complete"});
   for (const auto& e : a.errors)
     std::fprintf(stderr, "tellus %s: %s\n", argv[1], e.c_str());
   if (!a.errors.empty()) return kExitUsage;
   if (cmd == "seed") return cmdSeed(a);
   if (cmd == "cache") return cmdCache(a);
   if (cmd == "serve") return cmdServe(a);
-  if (cmd == "view" || cmd == "render") {
+  if (cmd == "render") return cmdRender(a);
+  if (cmd == "view") {
     std::fprintf(stderr, "tellus %s: not built yet (issue #5: the planet renderer)\n", argv[1]);
     return kExitUsage;
   }
