@@ -451,3 +451,43 @@ TEST(RenderGl, UnknownLayerIsRefused) {
   ASSERT_FALSE(made.has_value());
   EXPECT_NE(made.error().find("nope"), std::string::npos);
 }
+
+// Small budgets change the path, not the result: a texture budget far below what a flight needs
+// (textures are evicted, recycled from the pool and fetched again) and uploads of 64 KiB a frame
+// (a 512 x 512 texture takes ~22 frames) end in the same complete image as generous budgets.
+TEST(RenderGl, SmallBudgetsEvictReuseAndStillGiveTheSameCompleteImage) {
+  const Geodesy geodesy;
+  BlueMarbleService bm;
+  ASSERT_TRUE(bm.service);
+  const CameraPose target{-33.9, 18.4, 3.0e5, 0.0, 0.0};
+  std::vector<std::uint8_t> reference;
+  {
+    OPEN_RENDERER(r, *bm.service, geodesy, options("bluemarble", 256, 192));
+    const Rendered out = renderComplete(r, target);
+    ASSERT_TRUE(out.complete);
+    reference = out.pixels;
+  }
+  auto o = options("bluemarble", 256, 192);
+  const std::size_t textureBytes = 512 * 512 * 4 * 4 / 3 + 16; // one texture with its mips
+  o.textureBudgetBytes = (50 + 8) * textureBytes;              // the 50 roots stay, 8 more
+  o.uploadBytesPerFrame = 64 * 1024;
+  OPEN_RENDERER(r, *bm.service, geodesy, o);
+  // A flight over several places first, so the LRU has to let textures go.
+  for (const CameraPose& p : {CameraPose{0.0, 0.0, 3.0e6, 0.0, 0.0},
+                              CameraPose{40.0, 100.0, 2.0e6, 0.0, 30.0},
+                              CameraPose{-60.0, -60.0, 1.0e6, 0.0, 0.0},
+                              CameraPose{70.0, 170.0, 5.0e5, 0.0, 45.0}})
+    ASSERT_TRUE(renderComplete(r, p).complete);
+  const Rendered out = renderComplete(r, target);
+  ASSERT_TRUE(out.complete);
+  std::printf("uploaded %zu, evicted %zu, reused %zu, resident %zu (%zu bytes)\n",
+              out.stats.texturesUploaded,
+              out.stats.texturesEvicted,
+              out.stats.texturesReused,
+              out.stats.texturesResident,
+              out.stats.textureBytes);
+  EXPECT_GT(out.stats.texturesEvicted, 0u);
+  EXPECT_GT(out.stats.texturesReused, 0u);
+  EXPECT_LE(out.stats.textureBytes, o.textureBudgetBytes);
+  EXPECT_TRUE(out.pixels == reference) << "the same view differs after evictions";
+}

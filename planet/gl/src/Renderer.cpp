@@ -622,6 +622,10 @@ void Renderer::frame(const CameraPose& pose) {
 
   // What this frame draws, and the LRU told so before anything new is inserted.
   m.parts.clear();
+  // The roots stay resident like the global texture: the streamer wants them until they are, so
+  // evicting one would only fetch it again (a loop when the budget is small).
+  for (const auto& root : m.tree->roots())
+    if (root) m.lru.use(root->key());
   bool complete = fs.splitsDeferred == 0;
   for (Node* n : m.tree->drawList()) {
     const bool done = n->texture == TextureState::Finished || n->texture == TextureState::Absent ||
