@@ -960,7 +960,10 @@ std::string renderStatsJson(const planet::RenderStats& s, double seconds, bool c
 
 int cmdRender(const Args& a) {
   auto usage = [](const char* what, const std::string& got) {
-    std::fprintf(stderr, "tellus render: %s, got '%s'\n", what, got.c_str());
+    if (got.empty())
+      std::fprintf(stderr, "tellus render: %s (tellus --help)\n", what);
+    else
+      std::fprintf(stderr, "tellus render: %s, got '%s'\n", what, got.c_str());
     return kExitUsage;
   };
   for (const auto& [k, v] : a.options) {
