@@ -38,6 +38,26 @@ cmp -s "$work/a.png" "$work/b.png" || fail "two complete renders differ"
   --background 255,0,255 --out "$work/pole.png" --wait-complete >/dev/null || fail "pole view"
 [ "$(png_size "$work/pole.png")" = "160x120" ] || fail "pole PNG size"
 
+# A flight: keyframes interpolated into numbered PNGs, every one complete.
+cat >"$work/path.json" <<'JSON'
+{"keyframes": [ {"time": 0, "lat": 20, "lon": 170, "alt": 2e7},
+                {"time": 1, "lat": 46, "lon": -170, "alt": 1e6, "heading": 20, "tilt": 40} ]}
+JSON
+out=$("$tellus" render --cache "$cache" --path "$work/path.json" --frames "$work/frames" --fps 2 \
+      --size 96x64 --wait-complete --stats "$work/path-stats.json")
+echo "$out" | grep -q "3 frames" || fail "path: $out"
+for n in 0 1 2; do
+  [ "$(png_size "$work/frames/frame_0000$n.png")" = "96x64" ] || fail "frame $n"
+done
+cmp -s "$work/frames/frame_00000.png" "$work/frames/frame_00002.png" && fail "frames 0 and 2 are the same"
+python3 -c "import json,sys; s=json.load(open(sys.argv[1])); assert s['complete'] and s['longest_frame_ms'] >= s['median_frame_ms'] > 0, s" "$work/path-stats.json"
+echo '[{"time": 0, "lat": 0, "lon": 0, "alt": 1e6}, {"time": 0, "lat": 1, "lon": 0, "alt": 1e6}]' >"$work/bad.json"
+set +e
+"$tellus" render --cache "$cache" --path "$work/bad.json" --frames "$work/bad" 2>"$work/err.txt"
+rc=$?
+set -e
+[ $rc -eq 2 ] && grep -q "times must increase" "$work/err.txt" || fail "bad path: $rc $(cat "$work/err.txt")"
+
 # Usage errors: exit 2 and a message naming the problem; no image written.
 usage() {
   local want=$1

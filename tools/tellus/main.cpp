@@ -16,6 +16,7 @@
 #include <tellus/proxy/WebPage.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -23,6 +24,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <expected>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -62,6 +64,8 @@ commands:
              --camera LAT,LON,ALT[,HEADING,TILT] --out FILE.png [--size WxH]
              [--wait-complete[=SECONDS]] [--background R,G,B] [--stats FILE.json]
              [--layer NAME] [--threshold T] [--offline]
+             or a flight: --path PATH.json --frames DIR [--fps N] instead of --camera/--out
+             (PATH.json: [{"time":0,"lat":..,"lon":..,"alt":..,"heading":..,"tilt":..}, ...])
   view     interactive globe                        (not built yet: issue #5)
 
 options for every command:
@@ -958,6 +962,131 @@ std::string renderStatsJson(const planet::RenderStats& s, double seconds, bool c
   return buf + jsonString(s.glVersion) + "\n}\n";
 }
 
+/** A keyframe of `tellus render --path`: time in seconds and a camera pose. */
+struct Keyframe {
+  double time = 0.0;
+  planet::CameraPose pose;
+};
+
+/**
+ * Reads PATH.json: an array of objects (or {"keyframes": [...]}) with numbers time, lat, lon, alt
+ * and optionally heading and tilt, times increasing. A small reader for just that shape: strings
+ * are keys, numbers are values; anything else is an error naming the byte offset.
+ */
+std::expected<std::vector<Keyframe>, std::string> readPath(const fs::path& file) {
+  std::FILE* f = std::fopen(file.c_str(), "rb");
+  if (f == nullptr) return std::unexpected("cannot open " + file.string());
+  std::string text;
+  char buf[4096];
+  for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, f)) > 0;)
+    text.append(buf, n);
+  std::fclose(f);
+  std::size_t i = 0;
+  auto fail = [&](const std::string& what) {
+    return std::unexpected(file.string() + ": " + what + " at byte " + std::to_string(i));
+  };
+  auto ws = [&] {
+    while (i < text.size() && std::isspace(static_cast<unsigned char>(text[i])))
+      ++i;
+  };
+  auto eat = [&](char c) {
+    ws();
+    if (i < text.size() && text[i] == c) {
+      ++i;
+      return true;
+    }
+    return false;
+  };
+  auto string = [&](std::string* out) {
+    ws();
+    if (i >= text.size() || text[i] != '"') return false;
+    const auto end = text.find('"', i + 1);
+    if (end == std::string::npos) return false;
+    *out = text.substr(i + 1, end - i - 1);
+    i = end + 1;
+    return true;
+  };
+  auto number = [&](double* out) {
+    ws();
+    auto [ptr, ec] = std::from_chars(text.data() + i, text.data() + text.size(), *out);
+    if (ec != std::errc{} || !std::isfinite(*out)) return false;
+    i = static_cast<std::size_t>(ptr - text.data());
+    return true;
+  };
+  bool wrapped = false;
+  if (eat('{')) {
+    std::string key;
+    if (!string(&key) || key != "keyframes" || !eat(':')) return fail("expected \"keyframes\":");
+    wrapped = true;
+  }
+  if (!eat('[')) return fail("expected an array of keyframes");
+  std::vector<Keyframe> keys;
+  while (!eat(']')) {
+    if (!keys.empty() && !eat(',')) return fail("expected , or ]");
+    if (!eat('{')) return fail("expected a keyframe object");
+    Keyframe k;
+    bool seen[6] = {};
+    while (!eat('}')) {
+      if ((seen[0] || seen[1] || seen[2] || seen[3] || seen[4] || seen[5]) && !eat(','))
+        return fail("expected , or }");
+      std::string key;
+      double v = 0.0;
+      if (!string(&key) || !eat(':') || !number(&v)) return fail("expected \"name\": number");
+      static const char* names[6] = {"time", "lat", "lon", "alt", "heading", "tilt"};
+      const auto at = std::find(std::begin(names), std::end(names), key);
+      if (at == std::end(names)) return fail("unknown key '" + key + "'");
+      const auto idx = static_cast<std::size_t>(at - std::begin(names));
+      seen[idx] = true;
+      double* fields[6] = {&k.time,
+                           &k.pose.latDeg,
+                           &k.pose.lonDeg,
+                           &k.pose.altitudeM,
+                           &k.pose.headingDeg,
+                           &k.pose.tiltDeg};
+      *fields[idx] = v;
+    }
+    if (!seen[0] || !seen[1] || !seen[2] || !seen[3])
+      return fail("a keyframe needs time, lat, lon and alt");
+    if (k.pose.latDeg < -90.0 || k.pose.latDeg > 90.0 || k.pose.altitudeM < -11000.0 ||
+        k.pose.altitudeM > 1e10 || k.pose.tiltDeg < 0.0 || k.pose.tiltDeg > 180.0)
+      return fail("keyframe out of range (lat [-90, 90], alt [-11000, 1e10], tilt [0, 180])");
+    if (!keys.empty() && !(k.time > keys.back().time)) return fail("times must increase");
+    keys.push_back(k);
+  }
+  if (wrapped && !eat('}')) return fail("expected }");
+  ws();
+  if (i != text.size()) return fail("trailing text");
+  if (keys.empty()) return fail("no keyframes");
+  return keys;
+}
+
+/** The pose at time t: linear in latitude and tilt, the short way round in longitude and heading,
+ * geometric in altitude (a descent slows down as it nears the ground) when both are positive. */
+planet::CameraPose poseAt(const std::vector<Keyframe>& keys, double t) {
+  if (t <= keys.front().time) return keys.front().pose;
+  if (t >= keys.back().time) return keys.back().pose;
+  std::size_t k = 0;
+  while (keys[k + 1].time < t)
+    ++k;
+  const auto& a = keys[k].pose;
+  const auto& b = keys[k + 1].pose;
+  const double u = (t - keys[k].time) / (keys[k + 1].time - keys[k].time);
+  auto lerp = [u](double x, double y) { return x + (y - x) * u; };
+  auto angle = [u](double x, double y) {
+    const double d = std::remainder(y - x, 360.0);
+    return x + d * u;
+  };
+  planet::CameraPose p;
+  p.latDeg = std::clamp(lerp(a.latDeg, b.latDeg), -90.0, 90.0);
+  p.lonDeg = angle(a.lonDeg, b.lonDeg);
+  p.altitudeM = a.altitudeM > 0.0 && b.altitudeM > 0.0
+                    ? std::exp(lerp(std::log(a.altitudeM), std::log(b.altitudeM)))
+                    : lerp(a.altitudeM, b.altitudeM);
+  p.headingDeg = angle(a.headingDeg, b.headingDeg);
+  p.tiltDeg = lerp(a.tiltDeg, b.tiltDeg);
+  return p;
+}
+
 int cmdRender(const Args& a) {
   auto usage = [](const char* what, const std::string& got) {
     if (got.empty())
@@ -978,30 +1107,53 @@ int cmdRender(const Args& a) {
                                                    "stats",
                                                    "layer",
                                                    "threshold",
-                                                   "offline"};
+                                                   "offline",
+                                                   "path",
+                                                   "frames",
+                                                   "fps"};
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
   }
   if (!a.positional.empty()) return usage("unexpected argument", a.positional.front());
-  const auto cameraArg = a.get("camera");
-  if (!cameraArg) return usage("--camera LAT,LON,ALT[,HEADING,TILT] is required", "");
-  const auto cam = parseNumbers(*cameraArg, 3, 5);
-  if (!cam)
-    return usage("--camera must be LAT,LON,ALT[,HEADING,TILT] (finite numbers)", *cameraArg);
+  // One view (--camera, --out) or a flight (--path, --frames).
+  std::vector<Keyframe> keys;
   planet::CameraPose pose;
-  pose.latDeg = (*cam)[0];
-  pose.lonDeg = (*cam)[1];
-  pose.altitudeM = (*cam)[2];
-  if (cam->size() > 3) pose.headingDeg = (*cam)[3];
-  if (cam->size() > 4) pose.tiltDeg = (*cam)[4];
-  if (pose.latDeg < -90.0 || pose.latDeg > 90.0)
-    return usage("--camera latitude must be in [-90, 90]", *cameraArg);
-  if (pose.altitudeM < -11000.0 || pose.altitudeM > 1e10)
-    return usage("--camera altitude must be in [-11000, 1e10] metres", *cameraArg);
-  if (pose.tiltDeg < 0.0 || pose.tiltDeg > 180.0)
-    return usage("--camera tilt must be in [0, 180] degrees", *cameraArg);
+  const auto cameraArg = a.get("camera");
+  const auto pathArg = a.get("path");
+  const auto framesArg = a.get("frames");
   const auto out = a.get("out");
-  if (!out || out->empty()) return usage("--out FILE.png is required", "");
+  if (pathArg || framesArg) {
+    if (!pathArg || !framesArg || pathArg->empty() || framesArg->empty())
+      return usage("--path PATH.json and --frames DIR go together", "");
+    if (cameraArg || out) return usage("--path/--frames replace --camera and --out", "");
+    auto read = readPath(*pathArg);
+    if (!read) return usage(read.error().c_str(), *pathArg);
+    keys = std::move(*read);
+    pose = keys.front().pose;
+  } else {
+    if (!cameraArg) return usage("--camera LAT,LON,ALT[,HEADING,TILT] is required", "");
+    const auto cam = parseNumbers(*cameraArg, 3, 5);
+    if (!cam)
+      return usage("--camera must be LAT,LON,ALT[,HEADING,TILT] (finite numbers)", *cameraArg);
+    pose.latDeg = (*cam)[0];
+    pose.lonDeg = (*cam)[1];
+    pose.altitudeM = (*cam)[2];
+    if (cam->size() > 3) pose.headingDeg = (*cam)[3];
+    if (cam->size() > 4) pose.tiltDeg = (*cam)[4];
+    if (pose.latDeg < -90.0 || pose.latDeg > 90.0)
+      return usage("--camera latitude must be in [-90, 90]", *cameraArg);
+    if (pose.altitudeM < -11000.0 || pose.altitudeM > 1e10)
+      return usage("--camera altitude must be in [-11000, 1e10] metres", *cameraArg);
+    if (pose.tiltDeg < 0.0 || pose.tiltDeg > 180.0)
+      return usage("--camera tilt must be in [0, 180] degrees", *cameraArg);
+    if (!out || out->empty()) return usage("--out FILE.png is required", "");
+  }
+  double fps = 25.0;
+  if (auto f = a.get("fps")) {
+    const auto v = parseNumbers(*f, 1, 1);
+    if (!v || (*v)[0] <= 0.0 || (*v)[0] > 1000.0) return usage("--fps must be in (0, 1000]", *f);
+    fps = (*v)[0];
+  }
   planet::RendererOptions ro;
   if (auto size = a.get("size")) {
     const auto x = size->find('x');
@@ -1045,7 +1197,7 @@ int cmdRender(const Args& a) {
   try {
     (void)planet::Camera(geodesy, pose, {ro.width, ro.height}, ro.verticalFovDeg);
   } catch (const std::invalid_argument& e) {
-    return usage(e.what(), *cameraArg);
+    return usage(e.what(), cameraArg.value_or(pathArg.value_or("")));
   }
 
   auto ctx = setUp(a);
@@ -1086,31 +1238,51 @@ int cmdRender(const Args& a) {
     return kExitError;
   }
   planet::Renderer& r = **renderer;
-  // Without --wait-complete: what is ready within two seconds (the level-zero textures come first).
-  const auto start = std::chrono::steady_clock::now();
-  const double limit = waitComplete ? waitSeconds : 2.0;
-  double elapsed = 0.0;
-  for (;;) {
-    r.frame(pose);
-    elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (r.complete() || elapsed > limit) break;
-    if (!r.busy()) std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-  const bool complete = r.complete();
-  if (auto statsFile = a.get("stats")) {
+  std::vector<double> frameMs;
+  auto writeStats = [&](double elapsed, bool complete) {
+    const auto statsFile = a.get("stats");
+    if (!statsFile) return true;
+    std::vector<double> sorted = frameMs;
+    std::sort(sorted.begin(), sorted.end());
+    const double median = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
+    const double longest = sorted.empty() ? 0.0 : sorted.back();
+    std::string json = renderStatsJson(r.stats(), elapsed, complete);
+    char extra[160];
+    std::snprintf(extra,
+                  sizeof extra,
+                  ",\n  \"median_frame_ms\": %.3f,\n  \"longest_frame_ms\": %.3f\n}\n",
+                  median,
+                  longest);
+    json.resize(json.size() - 3); // "\n}\n"
+    json += extra;
     std::FILE* f = std::fopen(statsFile->c_str(), "w");
-    const std::string json = renderStatsJson(r.stats(), elapsed, complete);
     if (f == nullptr || std::fputs(json.c_str(), f) < 0 || std::fclose(f) != 0) {
       std::fprintf(stderr, "tellus render: cannot write %s\n", statsFile->c_str());
-      return kExitError;
+      return false;
     }
-  }
-  if (waitComplete && !complete) {
+    return true;
+  };
+  // One image: frames until complete (--wait-complete, up to SECONDS) or for at most 2 s.
+  const auto start = std::chrono::steady_clock::now();
+  auto renderOne = [&](const planet::CameraPose& p, double limit, bool once) {
+    const auto begin = std::chrono::steady_clock::now();
+    for (;;) {
+      r.frame(p);
+      frameMs.push_back(r.stats().frameMs);
+      const double t =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+      if (once || r.complete() || t > limit) break;
+      if (!r.busy()) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    return r.complete();
+  };
+  auto notComplete = [&](const char* what) {
     const auto& s = r.stats();
     std::fprintf(
         stderr,
-        "tellus render: the view was not complete after %g s (%zu nodes drawn, %zu tiles in "
-        "flight, %zu failed, %zu decoding, %zu uploading); no image written\n",
+        "tellus render: %s was not complete after %g s (%zu nodes drawn, %zu tiles in flight, %zu "
+        "failed, %zu decoding, %zu uploading); no image written\n",
+        what,
         waitSeconds,
         s.nodesDrawn,
         s.tilesInFlight,
@@ -1118,7 +1290,53 @@ int cmdRender(const Args& a) {
         s.decodesPending,
         s.uploadsPending);
     return kExitError;
+  };
+  auto secondsSince = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+
+  if (!keys.empty()) {
+    // A flight: numbered PNGs at --fps. With --wait-complete every frame is complete (offline
+    // show production); without, each image is one renderer frame (what a live viewer saw).
+    std::error_code ec;
+    fs::create_directories(*framesArg, ec);
+    if (ec) {
+      std::fprintf(stderr, "tellus render: %s: %s\n", framesArg->c_str(), ec.message().c_str());
+      return kExitError;
+    }
+    const double duration = keys.back().time - keys.front().time;
+    const auto count = static_cast<long long>(std::floor(duration * fps + 1e-9)) + 1;
+    bool allComplete = true;
+    for (long long n = 0; n < count; ++n) {
+      const planet::CameraPose p = poseAt(keys, keys.front().time + static_cast<double>(n) / fps);
+      const bool complete = renderOne(p, waitSeconds, !waitComplete);
+      allComplete = allComplete && complete;
+      if (waitComplete && !complete) {
+        writeStats(secondsSince(), false);
+        return notComplete(("frame " + std::to_string(n)).c_str());
+      }
+      char name[32];
+      std::snprintf(name, sizeof name, "frame_%05lld.png", n);
+      std::string err;
+      if (!planet::writePngRgb(
+              fs::path(*framesArg) / name, r.width(), r.height(), r.readPixels(), &err)) {
+        std::fprintf(stderr, "tellus render: %s\n", err.c_str());
+        return kExitError;
+      }
+    }
+    if (!writeStats(secondsSince(), allComplete)) return kExitError;
+    std::printf("tellus render: %lld frames in %s after %.2f s (%s)\n",
+                count,
+                framesArg->c_str(),
+                secondsSince(),
+                allComplete ? "every frame complete" : "frames as streamed");
+    return kExitOk;
   }
+
+  const bool complete = renderOne(pose, waitComplete ? waitSeconds : 2.0, false);
+  const double elapsed = secondsSince();
+  if (!writeStats(elapsed, complete)) return kExitError;
+  if (waitComplete && !complete) return notComplete("the view");
   std::string err;
   if (!planet::writePngRgb(*out, r.width(), r.height(), r.readPixels(), &err)) {
     std::fprintf(stderr, "tellus render: %s\n", err.c_str());
