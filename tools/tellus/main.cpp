@@ -6,6 +6,7 @@
 #include <tellus/config/Config.hpp>
 #include <tellus/planet/Geodesy.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
+#include <tellus/planet_gl/Viewer.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/LocalRasterSource.hpp>
@@ -66,7 +67,9 @@ commands:
              [--layer NAME] [--threshold T] [--offline]
              or a flight: --path PATH.json --frames DIR [--fps N] instead of --camera/--out
              (PATH.json: [{"time":0,"lat":..,"lon":..,"alt":..,"heading":..,"tilt":..}, ...])
-  view     interactive globe                        (not built yet: issue #5)
+  view     the interactive globe (a GLFW window)
+             [--camera LAT,LON,ALT[,HEADING,TILT]] [--size WxH] [--layer NAME] [--threshold T]
+             [--offline]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc
 
 options for every command:
   --cache DIR   cache root (default: $TELLUS_CACHE, $XDG_CACHE_HOME/tellus or ~/.cache/tellus)
@@ -962,6 +965,19 @@ std::string renderStatsJson(const planet::RenderStats& s, double seconds, bool c
   return buf + jsonString(s.glVersion) + "\n}\n";
 }
 
+/** WxH with 1 to 16384 pixels each. */
+std::optional<std::pair<int, int>> parseSize(const std::string& size) {
+  const auto x = size.find('x');
+  if (x == std::string::npos) return std::nullopt;
+  int w = 0, h = 0;
+  auto r1 = std::from_chars(size.data(), size.data() + x, w);
+  auto r2 = std::from_chars(size.data() + x + 1, size.data() + size.size(), h);
+  if (r1.ec != std::errc{} || r1.ptr != size.data() + x || r2.ec != std::errc{} ||
+      r2.ptr != size.data() + size.size() || w < 1 || h < 1 || w > 16384 || h > 16384)
+    return std::nullopt;
+  return std::pair{w, h};
+}
+
 /** A keyframe of `tellus render --path`: time in seconds and a camera pose. */
 struct Keyframe {
   double time = 0.0;
@@ -1357,6 +1373,92 @@ int cmdRender(const Args& a) {
   return kExitOk;
 }
 
+int cmdView(const Args& a) {
+  auto usage = [](const char* what, const std::string& got) {
+    std::fprintf(stderr, "tellus view: %s, got '%s'\n", what, got.c_str());
+    return kExitUsage;
+  };
+  static const std::vector<std::string> known = {
+      "config", "cache", "data", "camera", "size", "layer", "threshold", "offline", "exit-after"};
+  for (const auto& [k, v] : a.options)
+    if (std::find(known.begin(), known.end(), k) == known.end())
+      return usage("unknown option (see tellus --help)", "--" + k);
+  planet::CameraPose pose{20.0, 10.0, 2.0e7, 0.0, 0.0};
+  if (auto c = a.get("camera")) {
+    const auto cam = parseNumbers(*c, 3, 5);
+    if (!cam || (*cam)[0] < -90.0 || (*cam)[0] > 90.0 || (*cam)[2] < -11000.0 || (*cam)[2] > 1e10 ||
+        (cam->size() > 4 && ((*cam)[4] < 0.0 || (*cam)[4] > 180.0)))
+      return usage("--camera must be LAT,LON,ALT[,HEADING,TILT] within range", *c);
+    pose = {(*cam)[0],
+            (*cam)[1],
+            (*cam)[2],
+            cam->size() > 3 ? (*cam)[3] : 0.0,
+            cam->size() > 4 ? (*cam)[4] : 0.0};
+  }
+  planet::RendererOptions ro;
+  ro.width = 1280;
+  ro.height = 800;
+  ro.visibleWindow = true;
+  ro.windowTitle = "tellus";
+  if (auto size = a.get("size")) {
+    const auto wh = parseSize(*size);
+    if (!wh) return usage("--size must be WxH with 1 to 16384 pixels each", *size);
+    ro.width = wh->first;
+    ro.height = wh->second;
+  }
+  if (auto t = a.get("threshold")) {
+    const auto v = parseNumbers(*t, 1, 1);
+    if (!v || (*v)[0] < 0.05 || (*v)[0] > 64.0)
+      return usage("--threshold must be a number in [0.05, 64]", *t);
+    ro.lodThreshold = (*v)[0];
+  }
+  planet::ViewerOptions vo;
+  if (auto e = a.get("exit-after")) {
+    const auto v = parseNumbers(*e, 1, 1);
+    if (!v || (*v)[0] < 1) return usage("--exit-after must be a frame count", *e);
+    vo.maxFrames = static_cast<std::uint64_t>((*v)[0]);
+  }
+  auto ctx = setUp(a);
+  if (!ctx) return kExitError;
+  if (auto l = a.get("layer")) {
+    const auto* layer = ctx->config.layer(*l);
+    if (layer == nullptr || layer->kind != LayerKind::Imagery)
+      return usage("--layer must name an imagery layer of the configuration", *l);
+    ro.layer = *l;
+  } else {
+    for (const auto& candidate : ctx->config.layers)
+      if (candidate.kind == LayerKind::Imagery) {
+        ro.layer = candidate.name;
+        break;
+      }
+  }
+  if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg"; fs::exists(global))
+    ro.globalImage = global;
+  Fetcher fetcher;
+  auto [upstreams, layers] = proxySpecs(ctx->config);
+  TileServiceOptions tso;
+  tso.offline = a.flag("offline") || ctx->config.server.offline;
+  auto tiles =
+      TileService::create(*ctx->cache, fetcher, std::move(upstreams), std::move(layers), tso);
+  if (!tiles) {
+    std::fprintf(stderr, "tellus view: %s\n", tiles.error().c_str());
+    return kExitError;
+  }
+  const Geodesy geodesy;
+  auto renderer = planet::Renderer::create(**tiles, geodesy, ro);
+  if (!renderer) {
+    std::fprintf(stderr, "tellus view: %s\n", renderer.error().c_str());
+    return kExitError;
+  }
+  vo.start = pose;
+  std::printf("tellus view: drag to move, wheel to zoom, W/S tilt, A/D heading, R reset, "
+              "P screenshot, Esc quits\n");
+  std::fflush(stdout);
+  const auto frames = planet::runViewer(**renderer, vo);
+  std::printf("tellus view: %llu frames\n", static_cast<unsigned long long>(frames));
+  return kExitOk;
+}
+
 int run(int argc, char** argv) {
   if (argc < 2 || std::string_view(argv[1]) == "help" || std::string_view(argv[1]) == "--help") {
     std::fputs(kUsage, argc < 2 ? stderr : stdout);
@@ -1376,10 +1478,7 @@ int run(int argc, char** argv) {
   if (cmd == "cache") return cmdCache(a);
   if (cmd == "serve") return cmdServe(a);
   if (cmd == "render") return cmdRender(a);
-  if (cmd == "view") {
-    std::fprintf(stderr, "tellus %s: not built yet (issue #5: the planet renderer)\n", argv[1]);
-    return kExitUsage;
-  }
+  if (cmd == "view") return cmdView(a);
   std::fprintf(stderr, "tellus: unknown command '%s'\n%s", argv[1], kUsage);
   return kExitUsage;
 }
