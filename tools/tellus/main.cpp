@@ -935,7 +935,8 @@ std::string renderStatsJson(const planet::RenderStats& s, double seconds, bool c
       "  \"decode_errors\": %zu,\n  \"textures_uploaded\": %zu,\n  \"bytes_received\": %zu,\n"
       "  \"bytes_uploaded\": %zu,\n  \"textures_resident\": %zu,\n  \"texture_bytes\": %zu,\n"
       "  \"textures_reused\": %zu,\n  \"textures_evicted\": %zu,\n"
-      "  \"update_ms\": %.3f,\n  \"frame_ms\": %.3f,\n  \"reversed_z\": %s,\n  \"gl\": ",
+      "  \"update_ms\": %.3f,\n  \"longest_update_ms\": %.3f,\n  \"frame_ms\": %.3f,\n  "
+      "\"reversed_z\": %s,\n  \"gl\": ",
       complete ? "true" : "false",
       seconds,
       static_cast<unsigned long long>(s.frames),
@@ -960,6 +961,7 @@ std::string renderStatsJson(const planet::RenderStats& s, double seconds, bool c
       s.texturesReused,
       s.texturesEvicted,
       s.updateMs,
+      s.longestUpdateMs,
       s.frameMs,
       s.reversedZ ? "true" : "false");
   return buf + jsonString(s.glVersion) + "\n}\n";

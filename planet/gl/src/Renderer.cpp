@@ -595,6 +595,7 @@ void Renderer::frame(const CameraPose& pose) {
   const double nowS = std::chrono::duration<double>(t0 - m.start).count();
   m.streamer->update(*m.tree, cam, nowS, &m.lru);
   m.stats.updateMs = msSince(t0);
+  m.stats.longestUpdateMs = std::max(m.stats.longestUpdateMs, m.stats.updateMs);
 
   for (ReceivedTile& r : m.streamer->takeReceived()) {
     m.stats.bytesReceived += r.result.bytes.size();

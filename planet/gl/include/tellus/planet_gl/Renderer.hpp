@@ -74,10 +74,11 @@ struct RenderStats {
   std::size_t poolTextures = 0; ///< free textures kept for reuse
   std::size_t texturesReused = 0;
   std::size_t texturesEvicted = 0;
-  double updateMs = 0.0;  ///< last frame: quadtree + streamer CPU time
-  double frameMs = 0.0;   ///< last frame: everything, GL finished
-  std::string glVersion;  ///< GL_VERSION and GL_RENDERER
-  bool reversedZ = false; ///< glClipControl available (4.5 or ARB_clip_control)
+  double updateMs = 0.0;        ///< last frame: quadtree + streamer CPU time
+  double longestUpdateMs = 0.0; ///< the longest update since creation
+  double frameMs = 0.0;         ///< last frame: everything, GL finished
+  std::string glVersion;        ///< GL_VERSION and GL_RENDERER
+  bool reversedZ = false;       ///< glClipControl available (4.5 or ARB_clip_control)
 };
 
 class Renderer {
