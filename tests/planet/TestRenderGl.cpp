@@ -321,6 +321,53 @@ TEST(RenderGl, GlobeFrom20000kmIsADiscOfTheExpectedRadiusWithTheBundledColours) 
   }
 }
 
+// Near the poles nodes span several tiles (NodeKey::span): their textures are composed from those
+// tiles side by side. Seen from above the pole, the colours still match the bundled image.
+TEST(RenderGl, MergedPolarTexturesMatchTheBundledImage) {
+  const Geodesy geodesy;
+  BlueMarbleService bm;
+  ASSERT_TRUE(bm.service);
+  const auto image = readImageFile(kBlueMarble);
+  ASSERT_TRUE(image.has_value()) << image.error();
+  auto o = options("bluemarble", 640, 480);
+  OPEN_RENDERER(r, *bm.service, geodesy, o);
+  for (const CameraPose& pose :
+       {CameraPose{90.0, 0.0, 3.0e6, 0.0, 0.0}, CameraPose{-90.0, 0.0, 3.0e6, 0.0, 0.0}}) {
+    SCOPED_TRACE("latitude " + std::to_string(pose.latDeg));
+    const Rendered out = renderComplete(r, pose);
+    ASSERT_TRUE(out.complete);
+    save(pose.latDeg > 0 ? "north-pole-3000km" : "south-pole-3000km", r, out.pixels);
+    EXPECT_GT(out.stats.mergedNodesDrawn, 0u);
+    EXPECT_GT(out.stats.maxLevel, 0);
+    const Camera cam = r.camera(pose);
+    int checked = 0, bad = 0;
+    const double sign = pose.latDeg > 0 ? 1.0 : -1.0;
+    for (double lat = 62.0; lat <= 86.0; lat += 2.0)
+      for (double lon = -180.0; lon < 180.0; lon += 10.0) {
+        const Sample s = sampleImage(*image, sign * lat, lon + 5.0, 3);
+        if (s.spread > 24.0) continue;
+        const Ecef e = geodesy.toEcef(sign * lat, lon + 5.0, 0.0);
+        double x = 0, y = 0;
+        if (!project(cam, {e.x, e.y, e.z}, &x, &y) || x < 1 || y < 1 || x >= o.width - 1 ||
+            y >= o.height - 1)
+          continue;
+        const Rgb c =
+            pixelAt(out.pixels, o.width, static_cast<int>(std::floor(x)), static_cast<int>(y));
+        ++checked;
+        const double diff = std::max(
+            {std::abs(c.r - s.mean.r), std::abs(c.g - s.mean.g), std::abs(c.b - s.mean.b)});
+        if (diff > 20.0) {
+          ++bad;
+          ADD_FAILURE() << "lat " << sign * lat << " lon " << lon + 5.0 << ": rendered " << c.r
+                        << "," << c.g << "," << c.b << " image " << s.mean.r << "," << s.mean.g
+                        << "," << s.mean.b;
+        }
+      }
+    EXPECT_GE(checked, 30);
+    EXPECT_EQ(bad, 0);
+  }
+}
+
 TEST(RenderGl, WaitCompleteTwiceGivesTheIdenticalImage) {
   const Geodesy geodesy;
   BlueMarbleService bm;

@@ -628,7 +628,9 @@ void Renderer::frame(const CameraPose& pose) {
   for (const auto& root : m.tree->roots())
     if (root) m.lru.use(root->key());
   bool complete = fs.splitsDeferred == 0;
+  m.stats.mergedNodesDrawn = 0;
   for (Node* n : m.tree->drawList()) {
+    if (n->key().span > 1) ++m.stats.mergedNodesDrawn;
     const bool done = n->texture == TextureState::Finished || n->texture == TextureState::Absent ||
                       m.undecodable.contains(n->key());
     complete = complete && done;

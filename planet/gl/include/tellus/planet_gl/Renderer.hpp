@@ -53,7 +53,8 @@ struct RenderStats {
   std::uint64_t frames = 0;
   std::size_t nodesVisible = 0; ///< last frame: passed culling
   std::size_t nodesDrawn = 0;
-  std::size_t nodesCreated = 0; ///< last frame
+  std::size_t mergedNodesDrawn = 0; ///< last frame: polar nodes spanning several tiles
+  std::size_t nodesCreated = 0;     ///< last frame
   std::size_t nodesCreatedTotal = 0;
   std::size_t nodesInTree = 0;
   std::int32_t maxLevel = 0;
