@@ -33,6 +33,17 @@ PY
   --wait-complete=30 >/dev/null
 cmp -s "$work/a.png" "$work/b.png" || fail "two complete renders differ"
 
+# The OpenGL 3.3 core fallback (Mesa told to offer no more): the same image; and without
+# glClipControl the same projection still draws (reversed Z in [-1, 1] depth, less precise).
+MESA_GL_VERSION_OVERRIDE=3.3 "$tellus" render --cache "$cache" --camera 0,0,2e7 --size 320x240 \
+  --out "$work/gl33.png" --wait-complete --stats "$work/gl33.json" >/dev/null || fail "GL 3.3"
+grep -q '"gl": "3.3' "$work/gl33.json" || fail "not a 3.3 context: $(grep '"gl"' "$work/gl33.json")"
+cmp -s "$work/a.png" "$work/gl33.png" || fail "the 3.3 context drew another image"
+MESA_GL_VERSION_OVERRIDE=3.3 MESA_EXTENSION_OVERRIDE=-GL_ARB_clip_control "$tellus" render \
+  --cache "$cache" --camera 0,0,2e7 --size 320x240 --out "$work/noclip.png" --wait-complete \
+  --stats "$work/noclip.json" >/dev/null 2>&1 || fail "GL 3.3 without clip control"
+grep -q '"reversed_z": false' "$work/noclip.json" || fail "clip control still used"
+
 # A tilted view near the pole with a background colour and a layer named.
 "$tellus" render --cache "$cache" --camera 89.9999,0,3e5,0,60 --size 160x120 --layer bluemarble \
   --background 255,0,255 --out "$work/pole.png" --wait-complete >/dev/null || fail "pole view"
