@@ -488,6 +488,48 @@ TEST(RenderGl, TexelToPixelRatioIsKeptNearTheThreshold) {
   }
 }
 
+// No jitter at 1 m: the camera 1 m above the ground moves east in 2 mm steps; the ramp texture's
+// texel coordinate under the screen's centre must move by the same amount each step (matrices are
+// built in double relative to the camera; ECEF in float would snap to ~0.5 m). The place is a third
+// of the way into a tile at every level, so the centre stays far from a tile edge.
+TEST(RenderGl, NoJitterOneMetreAboveTheGround) {
+  const Geodesy geodesy;
+  RampSource ramp(GridSpec{Sector{}, 36.0, 256, 256, 24});
+  auto o = options("ramp", 160, 120);
+  OPEN_RENDERER(r, ramp, geodesy, o);
+  const double lat = -6.0, lon0 = 12.0, alt = 1.0;
+  const double metre = 180.0 / (M_PI * geodesy.equatorialRadius() * std::cos(lat * M_PI / 180.0));
+  std::vector<double> centre;
+  int level = 0;
+  for (int k = 0; k < 6; ++k) {
+    const CameraPose pose{lat, lon0 + k * 0.002 * metre, alt, 0.0, 0.0};
+    const Rendered out = renderComplete(r, pose);
+    ASSERT_TRUE(out.complete);
+    level = out.stats.maxLevel;
+    double sum = 0.0;
+    for (int y = o.height / 2 - 8; y < o.height / 2 + 8; ++y)
+      for (int x = o.width / 2 - 8; x < o.width / 2 + 8; ++x)
+        sum += pixelAt(out.pixels, o.width, x, y).r;
+    centre.push_back(sum / 256.0);
+  }
+  std::printf("level %d, red under the centre:", level);
+  for (double c : centre)
+    std::printf(" %.2f", c);
+  std::printf("\n");
+  EXPECT_GE(level, 20);
+  std::vector<double> steps;
+  for (std::size_t k = 1; k < centre.size(); ++k)
+    steps.push_back(centre[k] - centre[k - 1]);
+  double mean = 0.0;
+  for (double d : steps)
+    mean += d / static_cast<double>(steps.size());
+  // 2 mm is about half a texel at this level: the image must move.
+  EXPECT_GT(std::abs(mean), 0.3) << "2 mm steps do not move the image";
+  for (double d : steps)
+    EXPECT_TRUE(d > 0.5 * mean && d < 1.5 * mean)
+        << "uneven step " << d << " (mean " << mean << "): the image jitters";
+}
+
 // A renderer asked for a layer the source does not know refuses to start, with the name.
 TEST(RenderGl, UnknownLayerIsRefused) {
   const Geodesy geodesy;
