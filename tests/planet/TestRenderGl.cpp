@@ -526,7 +526,7 @@ TEST(RenderGl, NoJitterOneMetreAboveTheGround) {
   // 2 mm is about half a texel at this level: the image must move.
   EXPECT_GT(std::abs(mean), 0.3) << "2 mm steps do not move the image";
   for (double d : steps)
-    EXPECT_TRUE(d > 0.5 * mean && d < 1.5 * mean)
+    EXPECT_TRUE(d / mean > 0.5 && d / mean < 1.5)
         << "uneven step " << d << " (mean " << mean << "): the image jitters";
 }
 
