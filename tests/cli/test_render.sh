@@ -44,6 +44,18 @@ MESA_GL_VERSION_OVERRIDE=3.3 MESA_EXTENSION_OVERRIDE=-GL_ARB_clip_control "$tell
   --stats "$work/noclip.json" >/dev/null 2>&1 || fail "GL 3.3 without clip control"
 grep -q '"reversed_z": false' "$work/noclip.json" || fail "clip control still used"
 
+# Offline on an empty cache: every tile is absent, the view is complete at once with the global
+# texture (the bundled image), and nothing is asked for twice.
+"$tellus" render --offline --cache "$work/empty" --camera 0,0,2e7 --size 320x240 \
+  --out "$work/offline.png" --wait-complete --stats "$work/offline.json" >/dev/null || fail "offline"
+python3 - "$work/offline.json" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert s["complete"] and s["tiles_received"] == 0, s
+assert s["tiles_absent"] == s["tiles_requested"] == 50, s
+PY
+cmp -s "$work/a.png" "$work/offline.png" && fail "the offline image (global texture) equals the tiled one?"
+
 # A tilted view near the pole with a background colour and a layer named.
 "$tellus" render --cache "$cache" --camera 89.9999,0,3e5,0,60 --size 160x120 --layer bluemarble \
   --background 255,0,255 --out "$work/pole.png" --wait-complete >/dev/null || fail "pole view"

@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
-#include <thread>
 
 namespace tellus::planet {
 
@@ -43,6 +42,9 @@ std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options) {
   auto lastTitle = std::chrono::steady_clock::now();
   auto lastFrame = lastTitle;
   std::uint64_t framesAtTitle = 0;
+  CameraPose drawn = pose;
+  int drawnW = 0, drawnH = 0;
+  auto drawnAt = lastTitle;
   constexpr double kEarthRadius = 6371000.0;
   while (!renderer.windowShouldClose() && (options.maxFrames == 0 || frames < options.maxFrames)) {
     const auto now = std::chrono::steady_clock::now();
@@ -94,10 +96,27 @@ std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options) {
     if (glfwGetKey(window, GLFW_KEY_ESCAPE) == GLFW_PRESS)
       glfwSetWindowShouldClose(window, GLFW_TRUE);
 
+    // Idle (nothing moved, nothing streaming): wait for input instead of drawing the same frame
+    // again, but draw twice a second so that retries and deferred splits still happen. An
+    // offline viewer left alone costs almost no CPU.
+    const bool moved = pose.latDeg != drawn.latDeg || pose.lonDeg != drawn.lonDeg ||
+                       pose.altitudeM != drawn.altitudeM || pose.headingDeg != drawn.headingDeg ||
+                       pose.tiltDeg != drawn.tiltDeg || fw != drawnW || fh != drawnH;
+    const double sinceDrawn =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - drawnAt).count();
+    const bool shot = glfwGetKey(window, GLFW_KEY_P) == GLFW_PRESS;
+    if (frames > 0 && !moved && !renderer.busy() && sinceDrawn < 0.5 &&
+        !(shot && !screenshotHeld)) {
+      glfwWaitEventsTimeout(0.5 - sinceDrawn);
+      continue;
+    }
     renderer.frame(pose);
     ++frames;
+    drawn = pose;
+    drawnW = fw;
+    drawnH = fh;
+    drawnAt = std::chrono::steady_clock::now();
 
-    const bool shot = glfwGetKey(window, GLFW_KEY_P) == GLFW_PRESS;
     if (shot && !screenshotHeld) {
       const auto file =
           options.screenshotDir / ("tellus-" + std::to_string(++screenshots) + ".png");
@@ -131,8 +150,6 @@ std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options) {
       lastTitle = now;
       framesAtTitle = frames;
     }
-    // Nothing to stream and nothing moving: do not spin (an offline viewer stays cool).
-    if (!renderer.busy() && !dragging) std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   glfwSetScrollCallback(window, nullptr);
   glfwSetWindowUserPointer(window, nullptr);
