@@ -435,6 +435,47 @@ TEST(RenderGl, PolesAndAntimeridianHaveNoHoles) {
   }
 }
 
+// Where nodes of different levels meet, a coarse node's edge is a chord below its finer
+// neighbour's: without skirts the background shows through. Deep trees (24 levels), low and tilted
+// views, many level changes on screen; the poles' merged rows meet unmerged ones too.
+TEST(RenderGl, NoCracksWhereLevelsMeet) {
+  const Geodesy geodesy;
+  RampSource ramp(GridSpec{Sector{}, 36.0, 256, 256, 24});
+  auto o = options("ramp", 320, 240);
+  o.background = {1.0, 0.0, 1.0};
+  OPEN_RENDERER(r, ramp, geodesy, o);
+  const std::vector<CameraPose> poses = {
+      {10.3, 20.7, 2.0e5, 30.0, 75.0},
+      {45.0, 7.0, 3.0e4, 200.0, 80.0},
+      {-33.0, 151.0, 2.0e3, 90.0, 85.0},
+      {88.0, 10.0, 2.0e5, 0.0, 70.0},
+      {-89.5, 100.0, 5.0e4, 180.0, 80.0},
+      {0.0, 179.99, 1.0e6, 90.0, 60.0},
+      {60.0, 0.0, 5.0e6, 0.0, 30.0},
+  };
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    const CameraPose& p = poses[i];
+    SCOPED_TRACE("pose " + std::to_string(i));
+    const Rendered out = renderComplete(r, p);
+    EXPECT_TRUE(out.complete);
+    save("cracks-" + std::to_string(i), r, out.pixels);
+    const Camera cam = r.camera(p);
+    int holes = 0;
+    for (int y = 0; y < o.height; ++y)
+      for (int x = 0; x < o.width; ++x) {
+        if (!rayHitsEarth(cam, geodesy, x, y, 0.002)) continue;
+        const Rgb c = pixelAt(out.pixels, o.width, x, y);
+        holes += c.r == 255 && c.g == 0 && c.b == 255;
+      }
+    std::printf("pose %zu: level %d, %zu nodes, %d background pixels inside\n",
+                i,
+                out.stats.maxLevel,
+                out.stats.nodesDrawn,
+                holes);
+    EXPECT_EQ(holes, 0) << "cracks between nodes";
+  }
+}
+
 // Tiles whose texels carry their own column and row: the rendered image's change of texel
 // coordinate per pixel is the texel-to-pixel ratio the LOD kept. At threshold T a texel is at most
 // T pixels (and a coarser level would have broken that, so not much smaller than T / 2).

@@ -251,6 +251,22 @@ std::string Renderer::Impl::initGl() {
       const auto e = d + 1;
       idx.insert(idx.end(), {a, b, e, a, e, d});
     }
+  // Skirts: each edge's vertices again, lowered (meshFor appends them after the grid: south, north,
+  // west, east, n each), joined to the edge by a strip. Where a coarse node's edge (a chord) meets
+  // a finer neighbour's, or a merged polar row meets a row of narrower nodes, the skirt fills the
+  // crack that would otherwise show the background.
+  const auto gridVertices = static_cast<std::uint32_t>(n * n);
+  const auto edgeVertex = [n](int side, int i) {
+    const int r = side == 0 ? 0 : side == 1 ? n - 1 : i;
+    const int c = side == 2 ? 0 : side == 3 ? n - 1 : i;
+    return static_cast<std::uint32_t>(r * n + c);
+  };
+  for (int side = 0; side < 4; ++side)
+    for (int i = 0; i + 1 < n; ++i) {
+      const std::uint32_t a = edgeVertex(side, i), b = edgeVertex(side, i + 1);
+      const std::uint32_t sa = gridVertices + static_cast<std::uint32_t>(side * n + i), sb = sa + 1;
+      idx.insert(idx.end(), {a, b, sb, a, sb, sa});
+    }
   indexCount = static_cast<GLsizei>(idx.size());
   glGenBuffers(1, &ebo);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
@@ -371,14 +387,29 @@ const GpuMesh& Renderer::Impl::meshFor(const Node& node) {
   const PatchMesh mesh = buildPatchMesh(geodesy, node.sector(), opt.meshSize);
   m.centre = mesh.centre;
   std::vector<float> v;
-  v.reserve(mesh.vertices.size() * 5);
-  for (const auto& p : mesh.vertices) {
-    v.push_back(static_cast<float>(p.position.x));
-    v.push_back(static_cast<float>(p.position.y));
-    v.push_back(static_cast<float>(p.position.z));
+  const int n = opt.meshSize;
+  v.reserve((mesh.vertices.size() + 4 * static_cast<std::size_t>(n)) * 5);
+  auto push = [&v](const PatchVertex& p, double down) {
+    const glm::dvec3 q = p.position - p.normal * down;
+    v.push_back(static_cast<float>(q.x));
+    v.push_back(static_cast<float>(q.y));
+    v.push_back(static_cast<float>(q.z));
     v.push_back(static_cast<float>(p.uvNode.x));
     v.push_back(static_cast<float>(p.uvNode.y));
-  }
+  };
+  for (const auto& p : mesh.vertices)
+    push(p, 0.0);
+  // Skirt depth: how far the chord of a whole tile-sized cell lies below the surface (R * a^2 / 8
+  // for the tile's angular size a), which covers neighbours up to N - 1 times coarser per cell.
+  const Sector& sec = node.sector();
+  const double angle = std::max(sec.north - sec.south, sec.east - sec.west) * M_PI / 180.0;
+  const double depth = geodesy.equatorialRadius() * angle * angle / 8.0 + 1.0;
+  for (int side = 0; side < 4; ++side)
+    for (int i = 0; i < n; ++i) {
+      const int r = side == 0 ? 0 : side == 1 ? n - 1 : i;
+      const int c = side == 2 ? 0 : side == 3 ? n - 1 : i;
+      push(mesh.at(r, c), depth);
+    }
   glGenVertexArrays(1, &m.vao);
   glBindVertexArray(m.vao);
   glGenBuffers(1, &m.vbo);
