@@ -131,6 +131,7 @@ struct Renderer::Impl {
   GLuint globalTexture = 0;
   int texWidth = 0, texHeight = 0;
   GLsizei texLevels = 1;
+  float anisotropy = 1.0f; ///< what the GL allows of opt.anisotropy
 
   std::unique_ptr<Quadtree> tree;
   std::unique_ptr<TextureStreamer> streamer;
@@ -209,6 +210,13 @@ std::string Renderer::Impl::initGl() {
   const int version = epoxy_gl_version();
   textureStorage = version >= 42 || epoxy_has_gl_extension("GL_ARB_texture_storage");
   stats.reversedZ = version >= 45 || epoxy_has_gl_extension("GL_ARB_clip_control");
+  if (opt.anisotropy > 1.0 &&
+      (version >= 46 || epoxy_has_gl_extension("GL_EXT_texture_filter_anisotropic") ||
+       epoxy_has_gl_extension("GL_ARB_texture_filter_anisotropic"))) {
+    GLfloat most = 1.0f;
+    glGetFloatv(GL_MAX_TEXTURE_MAX_ANISOTROPY_EXT, &most);
+    anisotropy = std::min(static_cast<float>(opt.anisotropy), most);
+  }
   stats.glVersion = std::string(reinterpret_cast<const char*>(glGetString(GL_VERSION))) + " / " +
                     reinterpret_cast<const char*>(glGetString(GL_RENDERER));
 
@@ -357,6 +365,7 @@ GLuint Renderer::Impl::newNodeTexture() {
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  if (anisotropy > 1.0f) glTexParameterf(GL_TEXTURE_2D, GL_TEXTURE_MAX_ANISOTROPY_EXT, anisotropy);
   return id;
 }
 
