@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # End to end through the tellus executable, as a user runs it: seed, stats, verify, damage, rebuild,
-# prune, and the commands that are not built yet.
+# prune (render and view: test_render.sh and test_view.sh, under xvfb-run).
 set -euo pipefail
 tellus=$1
 work=$(mktemp -d "${TMPDIR:-/tmp}/tellus-cli.XXXXXX")

@@ -4,6 +4,9 @@
 #include <tellus/cache/GeoPackage.hpp>
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/config/Config.hpp>
+#include <tellus/planet/Geodesy.hpp>
+#include <tellus/planet_gl/Renderer.hpp>
+#include <tellus/planet_gl/Viewer.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/LocalRasterSource.hpp>
@@ -14,12 +17,15 @@
 #include <tellus/proxy/WebPage.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <expected>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -57,8 +63,15 @@ commands:
   serve    the WMS / World Wind tile server
              [--listen HOST:PORT] [--threads N] [--offline]
              [--log-level error|warn|info|debug] [--access-log FILE|-]
-  view     interactive globe                        (not built yet: issue #5)
-  render   headless globe rendering to PNG          (not built yet: issue #5)
+  render   headless globe rendering to PNG (an X display or xvfb-run)
+             --camera LAT,LON,ALT[,HEADING,TILT] --out FILE.png [--size WxH]
+             [--wait-complete[=SECONDS]] [--background R,G,B] [--stats FILE.json]
+             [--layer NAME] [--threshold T] [--offline]
+             or a flight: --path PATH.json --frames DIR [--fps N] instead of --camera/--out
+             (PATH.json: [{"time":0,"lat":..,"lon":..,"alt":..,"heading":..,"tilt":..}, ...])
+  view     the interactive globe (a GLFW window)
+             [--camera LAT,LON,ALT[,HEADING,TILT]] [--size WxH] [--layer NAME] [--threshold T]
+             [--offline]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc
 
 options for every command:
   --cache DIR   cache root (default: $TELLUS_CACHE, $XDG_CACHE_HOME/tellus or ~/.cache/tellus)
@@ -899,6 +912,564 @@ int cmdServe(const Args& a) {
   return kExitOk;
 }
 
+/** Comma-separated finite numbers (count within [minCount, maxCount]). */
+std::optional<std::vector<double>>
+parseNumbers(const std::string& s, std::size_t minCount, std::size_t maxCount) {
+  std::vector<double> v;
+  std::size_t pos = 0;
+  while (pos <= s.size()) {
+    const auto comma = std::min(s.find(',', pos), s.size());
+    const std::string part = s.substr(pos, comma - pos);
+    double d = 0.0;
+    auto [ptr, ec] = std::from_chars(part.data(), part.data() + part.size(), d);
+    if (part.empty() || ec != std::errc{} || ptr != part.data() + part.size() || !std::isfinite(d))
+      return std::nullopt;
+    v.push_back(d);
+    pos = comma + 1;
+  }
+  if (v.size() < minCount || v.size() > maxCount) return std::nullopt;
+  return v;
+}
+
+std::string renderStatsJson(const planet::RenderStats& s, double seconds, bool complete) {
+  char buf[2048];
+  std::snprintf(
+      buf,
+      sizeof buf,
+      "{\n  \"complete\": %s,\n  \"seconds\": %.3f,\n  \"frames\": %llu,\n"
+      "  \"nodes_visible\": %zu,\n  \"nodes_drawn\": %zu,\n  \"nodes_created\": %zu,\n"
+      "  \"nodes_created_total\": %zu,\n  \"nodes_in_tree\": %zu,\n  \"max_level\": %d,\n"
+      "  \"tiles_requested\": %zu,\n  \"tiles_received\": %zu,\n  \"tiles_absent\": %zu,\n"
+      "  \"tiles_failed\": %zu,\n  \"tiles_in_flight\": %zu,\n  \"textures_decoded\": %zu,\n"
+      "  \"decode_errors\": %zu,\n  \"textures_uploaded\": %zu,\n  \"bytes_received\": %zu,\n"
+      "  \"bytes_uploaded\": %zu,\n  \"textures_resident\": %zu,\n  \"texture_bytes\": %zu,\n"
+      "  \"textures_reused\": %zu,\n  \"textures_evicted\": %zu,\n"
+      "  \"update_ms\": %.3f,\n  \"longest_update_ms\": %.3f,\n  \"frame_ms\": %.3f,\n  "
+      "\"reversed_z\": %s,\n  \"gl\": ",
+      complete ? "true" : "false",
+      seconds,
+      static_cast<unsigned long long>(s.frames),
+      s.nodesVisible,
+      s.nodesDrawn,
+      s.nodesCreated,
+      s.nodesCreatedTotal,
+      s.nodesInTree,
+      s.maxLevel,
+      s.tilesRequested,
+      s.tilesReceived,
+      s.tilesAbsent,
+      s.tilesFailed,
+      s.tilesInFlight,
+      s.texturesDecoded,
+      s.decodeErrors,
+      s.texturesUploaded,
+      s.bytesReceived,
+      s.bytesUploaded,
+      s.texturesResident,
+      s.textureBytes,
+      s.texturesReused,
+      s.texturesEvicted,
+      s.updateMs,
+      s.longestUpdateMs,
+      s.frameMs,
+      s.reversedZ ? "true" : "false");
+  return buf + jsonString(s.glVersion) + "\n}\n";
+}
+
+/** WxH with 1 to 16384 pixels each. */
+std::optional<std::pair<int, int>> parseSize(const std::string& size) {
+  const auto x = size.find('x');
+  if (x == std::string::npos) return std::nullopt;
+  int w = 0, h = 0;
+  auto r1 = std::from_chars(size.data(), size.data() + x, w);
+  auto r2 = std::from_chars(size.data() + x + 1, size.data() + size.size(), h);
+  if (r1.ec != std::errc{} || r1.ptr != size.data() + x || r2.ec != std::errc{} ||
+      r2.ptr != size.data() + size.size() || w < 1 || h < 1 || w > 16384 || h > 16384)
+    return std::nullopt;
+  return std::pair{w, h};
+}
+
+/** A keyframe of `tellus render --path`: time in seconds and a camera pose. */
+struct Keyframe {
+  double time = 0.0;
+  planet::CameraPose pose;
+};
+
+/**
+ * Reads PATH.json: an array of objects (or {"keyframes": [...]}) with numbers time, lat, lon, alt
+ * and optionally heading and tilt, times increasing. A small reader for just that shape: strings
+ * are keys, numbers are values; anything else is an error naming the byte offset.
+ */
+std::expected<std::vector<Keyframe>, std::string> readPath(const fs::path& file) {
+  std::FILE* f = std::fopen(file.c_str(), "rb");
+  if (f == nullptr) return std::unexpected("cannot open " + file.string());
+  std::string text;
+  char buf[4096];
+  for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, f)) > 0;)
+    text.append(buf, n);
+  std::fclose(f);
+  std::size_t i = 0;
+  auto fail = [&](const std::string& what) {
+    return std::unexpected(file.string() + ": " + what + " at byte " + std::to_string(i));
+  };
+  auto ws = [&] {
+    while (i < text.size() && std::isspace(static_cast<unsigned char>(text[i])))
+      ++i;
+  };
+  auto eat = [&](char c) {
+    ws();
+    if (i < text.size() && text[i] == c) {
+      ++i;
+      return true;
+    }
+    return false;
+  };
+  auto string = [&](std::string* out) {
+    ws();
+    if (i >= text.size() || text[i] != '"') return false;
+    const auto end = text.find('"', i + 1);
+    if (end == std::string::npos) return false;
+    *out = text.substr(i + 1, end - i - 1);
+    i = end + 1;
+    return true;
+  };
+  auto number = [&](double* out) {
+    ws();
+    auto [ptr, ec] = std::from_chars(text.data() + i, text.data() + text.size(), *out);
+    if (ec != std::errc{} || !std::isfinite(*out)) return false;
+    i = static_cast<std::size_t>(ptr - text.data());
+    return true;
+  };
+  bool wrapped = false;
+  if (eat('{')) {
+    std::string key;
+    if (!string(&key) || key != "keyframes" || !eat(':')) return fail("expected \"keyframes\":");
+    wrapped = true;
+  }
+  if (!eat('[')) return fail("expected an array of keyframes");
+  std::vector<Keyframe> keys;
+  while (!eat(']')) {
+    if (!keys.empty() && !eat(',')) return fail("expected , or ]");
+    if (!eat('{')) return fail("expected a keyframe object");
+    Keyframe k;
+    bool seen[6] = {};
+    while (!eat('}')) {
+      if ((seen[0] || seen[1] || seen[2] || seen[3] || seen[4] || seen[5]) && !eat(','))
+        return fail("expected , or }");
+      std::string key;
+      double v = 0.0;
+      if (!string(&key) || !eat(':') || !number(&v)) return fail("expected \"name\": number");
+      static const char* names[6] = {"time", "lat", "lon", "alt", "heading", "tilt"};
+      const auto at = std::find(std::begin(names), std::end(names), key);
+      if (at == std::end(names)) return fail("unknown key '" + key + "'");
+      const auto idx = static_cast<std::size_t>(at - std::begin(names));
+      seen[idx] = true;
+      double* fields[6] = {&k.time,
+                           &k.pose.latDeg,
+                           &k.pose.lonDeg,
+                           &k.pose.altitudeM,
+                           &k.pose.headingDeg,
+                           &k.pose.tiltDeg};
+      *fields[idx] = v;
+    }
+    if (!seen[0] || !seen[1] || !seen[2] || !seen[3])
+      return fail("a keyframe needs time, lat, lon and alt");
+    if (k.pose.latDeg < -90.0 || k.pose.latDeg > 90.0 || k.pose.altitudeM < -11000.0 ||
+        k.pose.altitudeM > 1e10 || k.pose.tiltDeg < 0.0 || k.pose.tiltDeg > 180.0)
+      return fail("keyframe out of range (lat [-90, 90], alt [-11000, 1e10], tilt [0, 180])");
+    if (!keys.empty() && !(k.time > keys.back().time)) return fail("times must increase");
+    keys.push_back(k);
+  }
+  if (wrapped && !eat('}')) return fail("expected }");
+  ws();
+  if (i != text.size()) return fail("trailing text");
+  if (keys.empty()) return fail("no keyframes");
+  return keys;
+}
+
+/** The pose at time t: linear in latitude and tilt, the short way round in longitude and heading,
+ * geometric in altitude (a descent slows down as it nears the ground) when both are positive. */
+planet::CameraPose poseAt(const std::vector<Keyframe>& keys, double t) {
+  if (t <= keys.front().time) return keys.front().pose;
+  if (t >= keys.back().time) return keys.back().pose;
+  std::size_t k = 0;
+  while (keys[k + 1].time < t)
+    ++k;
+  const auto& a = keys[k].pose;
+  const auto& b = keys[k + 1].pose;
+  const double u = (t - keys[k].time) / (keys[k + 1].time - keys[k].time);
+  auto lerp = [u](double x, double y) { return x + (y - x) * u; };
+  auto angle = [u](double x, double y) {
+    const double d = std::remainder(y - x, 360.0);
+    return x + d * u;
+  };
+  planet::CameraPose p;
+  p.latDeg = std::clamp(lerp(a.latDeg, b.latDeg), -90.0, 90.0);
+  p.lonDeg = angle(a.lonDeg, b.lonDeg);
+  p.altitudeM = a.altitudeM > 0.0 && b.altitudeM > 0.0
+                    ? std::exp(lerp(std::log(a.altitudeM), std::log(b.altitudeM)))
+                    : lerp(a.altitudeM, b.altitudeM);
+  p.headingDeg = angle(a.headingDeg, b.headingDeg);
+  p.tiltDeg = lerp(a.tiltDeg, b.tiltDeg);
+  return p;
+}
+
+int cmdRender(const Args& a) {
+  auto usage = [](const char* what, const std::string& got) {
+    if (got.empty())
+      std::fprintf(stderr, "tellus render: %s (tellus --help)\n", what);
+    else
+      std::fprintf(stderr, "tellus render: %s, got '%s'\n", what, got.c_str());
+    return kExitUsage;
+  };
+  for (const auto& [k, v] : a.options) {
+    static const std::vector<std::string> known = {"config",
+                                                   "cache",
+                                                   "data",
+                                                   "camera",
+                                                   "size",
+                                                   "out",
+                                                   "wait-complete",
+                                                   "background",
+                                                   "stats",
+                                                   "layer",
+                                                   "threshold",
+                                                   "offline",
+                                                   "path",
+                                                   "frames",
+                                                   "fps"};
+    if (std::find(known.begin(), known.end(), k) == known.end())
+      return usage("unknown option (see tellus --help)", "--" + k);
+  }
+  if (!a.positional.empty()) return usage("unexpected argument", a.positional.front());
+  // One view (--camera, --out) or a flight (--path, --frames).
+  std::vector<Keyframe> keys;
+  planet::CameraPose pose;
+  const auto cameraArg = a.get("camera");
+  const auto pathArg = a.get("path");
+  const auto framesArg = a.get("frames");
+  const auto out = a.get("out");
+  if (pathArg || framesArg) {
+    if (!pathArg || !framesArg || pathArg->empty() || framesArg->empty())
+      return usage("--path PATH.json and --frames DIR go together", "");
+    if (cameraArg || out) return usage("--path/--frames replace --camera and --out", "");
+    auto read = readPath(*pathArg);
+    if (!read) return usage(read.error().c_str(), *pathArg);
+    keys = std::move(*read);
+    pose = keys.front().pose;
+  } else {
+    if (!cameraArg) return usage("--camera LAT,LON,ALT[,HEADING,TILT] is required", "");
+    const auto cam = parseNumbers(*cameraArg, 3, 5);
+    if (!cam)
+      return usage("--camera must be LAT,LON,ALT[,HEADING,TILT] (finite numbers)", *cameraArg);
+    pose.latDeg = (*cam)[0];
+    pose.lonDeg = (*cam)[1];
+    pose.altitudeM = (*cam)[2];
+    if (cam->size() > 3) pose.headingDeg = (*cam)[3];
+    if (cam->size() > 4) pose.tiltDeg = (*cam)[4];
+    if (pose.latDeg < -90.0 || pose.latDeg > 90.0)
+      return usage("--camera latitude must be in [-90, 90]", *cameraArg);
+    if (pose.altitudeM < -11000.0 || pose.altitudeM > 1e10)
+      return usage("--camera altitude must be in [-11000, 1e10] metres", *cameraArg);
+    if (pose.tiltDeg < 0.0 || pose.tiltDeg > 180.0)
+      return usage("--camera tilt must be in [0, 180] degrees", *cameraArg);
+    if (!out || out->empty()) return usage("--out FILE.png is required", "");
+  }
+  double fps = 25.0;
+  if (auto f = a.get("fps")) {
+    const auto v = parseNumbers(*f, 1, 1);
+    if (!v || (*v)[0] <= 0.0 || (*v)[0] > 1000.0) return usage("--fps must be in (0, 1000]", *f);
+    fps = (*v)[0];
+  }
+  planet::RendererOptions ro;
+  if (auto size = a.get("size")) {
+    const auto x = size->find('x');
+    int w = 0, h = 0;
+    bool ok = x != std::string::npos;
+    if (ok) {
+      auto r1 = std::from_chars(size->data(), size->data() + x, w);
+      auto r2 = std::from_chars(size->data() + x + 1, size->data() + size->size(), h);
+      ok = r1.ec == std::errc{} && r1.ptr == size->data() + x && r2.ec == std::errc{} &&
+           r2.ptr == size->data() + size->size() && w >= 1 && h >= 1 && w <= 16384 && h <= 16384;
+    }
+    if (!ok) return usage("--size must be WxH with 1 to 16384 pixels each", *size);
+    ro.width = w;
+    ro.height = h;
+  }
+  double waitSeconds = 0.0;
+  const bool waitComplete = a.flag("wait-complete");
+  if (waitComplete) {
+    waitSeconds = 60.0;
+    if (const auto w = a.get("wait-complete"); w && !w->empty()) {
+      const auto v = parseNumbers(*w, 1, 1);
+      if (!v || (*v)[0] <= 0.0 || (*v)[0] > 86400.0)
+        return usage("--wait-complete=SECONDS must be in (0, 86400]", *w);
+      waitSeconds = (*v)[0];
+    }
+  }
+  if (auto b = a.get("background")) {
+    const auto v = parseNumbers(*b, 3, 3);
+    if (!v || std::any_of(v->begin(), v->end(), [](double c) { return c < 0.0 || c > 255.0; }))
+      return usage("--background must be R,G,B with each in 0-255", *b);
+    for (std::size_t i = 0; i < 3; ++i)
+      ro.background[i] = (*v)[i] / 255.0;
+  }
+  if (auto t = a.get("threshold")) {
+    const auto v = parseNumbers(*t, 1, 1);
+    if (!v || (*v)[0] < 0.05 || (*v)[0] > 64.0)
+      return usage("--threshold must be a number in [0.05, 64]", *t);
+    ro.lodThreshold = (*v)[0];
+  }
+  const Geodesy geodesy;
+  try {
+    (void)planet::Camera(geodesy, pose, {ro.width, ro.height}, ro.verticalFovDeg);
+  } catch (const std::invalid_argument& e) {
+    return usage(e.what(), cameraArg.value_or(pathArg.value_or("")));
+  }
+
+  auto ctx = setUp(a);
+  if (!ctx) return kExitError;
+  if (auto l = a.get("layer")) {
+    const auto* layer = ctx->config.layer(*l);
+    if (layer == nullptr) return usage("--layer names no layer of the configuration", *l);
+    if (layer->kind != LayerKind::Imagery) return usage("--layer must be an imagery layer", *l);
+    ro.layer = *l;
+  } else {
+    for (const auto& candidate : ctx->config.layers)
+      if (candidate.kind == LayerKind::Imagery) {
+        ro.layer = candidate.name;
+        break;
+      }
+    if (ro.layer.empty()) {
+      std::fprintf(stderr, "tellus render: the configuration has no imagery layer\n");
+      return kExitError;
+    }
+  }
+  // The always-resident global texture: the bundled Blue Marble.
+  if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg"; fs::exists(global))
+    ro.globalImage = global;
+
+  Fetcher fetcher;
+  auto [upstreams, layers] = proxySpecs(ctx->config);
+  TileServiceOptions tso;
+  tso.offline = a.flag("offline") || ctx->config.server.offline;
+  auto tiles =
+      TileService::create(*ctx->cache, fetcher, std::move(upstreams), std::move(layers), tso);
+  if (!tiles) {
+    std::fprintf(stderr, "tellus render: %s\n", tiles.error().c_str());
+    return kExitError;
+  }
+  auto renderer = planet::Renderer::create(**tiles, geodesy, ro);
+  if (!renderer) {
+    std::fprintf(stderr, "tellus render: %s\n", renderer.error().c_str());
+    return kExitError;
+  }
+  planet::Renderer& r = **renderer;
+  std::vector<double> frameMs;
+  auto writeStats = [&](double elapsed, bool complete) {
+    const auto statsFile = a.get("stats");
+    if (!statsFile) return true;
+    std::vector<double> sorted = frameMs;
+    std::sort(sorted.begin(), sorted.end());
+    const double median = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
+    const double longest = sorted.empty() ? 0.0 : sorted.back();
+    std::string json = renderStatsJson(r.stats(), elapsed, complete);
+    char extra[160];
+    std::snprintf(extra,
+                  sizeof extra,
+                  ",\n  \"median_frame_ms\": %.3f,\n  \"longest_frame_ms\": %.3f\n}\n",
+                  median,
+                  longest);
+    json.resize(json.size() - 3); // "\n}\n"
+    json += extra;
+    std::FILE* f = std::fopen(statsFile->c_str(), "w");
+    if (f == nullptr || std::fputs(json.c_str(), f) < 0 || std::fclose(f) != 0) {
+      std::fprintf(stderr, "tellus render: cannot write %s\n", statsFile->c_str());
+      return false;
+    }
+    return true;
+  };
+  // One image: frames until complete (--wait-complete, up to SECONDS) or for at most 2 s.
+  const auto start = std::chrono::steady_clock::now();
+  auto renderOne = [&](const planet::CameraPose& p, double limit, bool once) {
+    const auto begin = std::chrono::steady_clock::now();
+    for (;;) {
+      r.frame(p);
+      frameMs.push_back(r.stats().frameMs);
+      const double t =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+      if (once || r.complete() || t > limit) break;
+      if (!r.busy()) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    return r.complete();
+  };
+  auto notComplete = [&](const char* what) {
+    const auto& s = r.stats();
+    std::fprintf(
+        stderr,
+        "tellus render: %s was not complete after %g s (%zu nodes drawn, %zu tiles in flight, %zu "
+        "failed, %zu decoding, %zu uploading); no image written\n",
+        what,
+        waitSeconds,
+        s.nodesDrawn,
+        s.tilesInFlight,
+        s.tilesFailed,
+        s.decodesPending,
+        s.uploadsPending);
+    return kExitError;
+  };
+  auto secondsSince = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+
+  if (!keys.empty()) {
+    // A flight: numbered PNGs at --fps. With --wait-complete every frame is complete (offline
+    // show production); without, each image is one renderer frame (what a live viewer saw).
+    std::error_code ec;
+    fs::create_directories(*framesArg, ec);
+    if (ec) {
+      std::fprintf(stderr, "tellus render: %s: %s\n", framesArg->c_str(), ec.message().c_str());
+      return kExitError;
+    }
+    const double duration = keys.back().time - keys.front().time;
+    const auto count = static_cast<long long>(std::floor(duration * fps + 1e-9)) + 1;
+    bool allComplete = true;
+    for (long long n = 0; n < count; ++n) {
+      const planet::CameraPose p = poseAt(keys, keys.front().time + static_cast<double>(n) / fps);
+      const bool complete = renderOne(p, waitSeconds, !waitComplete);
+      allComplete = allComplete && complete;
+      if (waitComplete && !complete) {
+        writeStats(secondsSince(), false);
+        return notComplete(("frame " + std::to_string(n)).c_str());
+      }
+      char name[32];
+      std::snprintf(name, sizeof name, "frame_%05lld.png", n);
+      std::string err;
+      if (!planet::writePngRgb(
+              fs::path(*framesArg) / name, r.width(), r.height(), r.readPixels(), &err)) {
+        std::fprintf(stderr, "tellus render: %s\n", err.c_str());
+        return kExitError;
+      }
+    }
+    if (!writeStats(secondsSince(), allComplete)) return kExitError;
+    std::printf("tellus render: %lld frames in %s after %.2f s (%s)\n",
+                count,
+                framesArg->c_str(),
+                secondsSince(),
+                allComplete ? "every frame complete" : "frames as streamed");
+    return kExitOk;
+  }
+
+  const bool complete = renderOne(pose, waitComplete ? waitSeconds : 2.0, false);
+  const double elapsed = secondsSince();
+  if (!writeStats(elapsed, complete)) return kExitError;
+  if (waitComplete && !complete) return notComplete("the view");
+  std::string err;
+  if (!planet::writePngRgb(*out, r.width(), r.height(), r.readPixels(), &err)) {
+    std::fprintf(stderr, "tellus render: %s\n", err.c_str());
+    return kExitError;
+  }
+  const auto& s = r.stats();
+  std::printf("tellus render: %s %dx%d, %s after %.2f s and %llu frames (%zu nodes drawn, level "
+              "%d, %zu tiles)\n",
+              out->c_str(),
+              r.width(),
+              r.height(),
+              complete ? "complete" : "partial",
+              elapsed,
+              static_cast<unsigned long long>(s.frames),
+              s.nodesDrawn,
+              s.maxLevel,
+              s.tilesReceived);
+  return kExitOk;
+}
+
+int cmdView(const Args& a) {
+  auto usage = [](const char* what, const std::string& got) {
+    std::fprintf(stderr, "tellus view: %s, got '%s'\n", what, got.c_str());
+    return kExitUsage;
+  };
+  static const std::vector<std::string> known = {
+      "config", "cache", "data", "camera", "size", "layer", "threshold", "offline", "exit-after"};
+  for (const auto& [k, v] : a.options)
+    if (std::find(known.begin(), known.end(), k) == known.end())
+      return usage("unknown option (see tellus --help)", "--" + k);
+  planet::CameraPose pose{20.0, 10.0, 2.0e7, 0.0, 0.0};
+  if (auto c = a.get("camera")) {
+    const auto cam = parseNumbers(*c, 3, 5);
+    if (!cam || (*cam)[0] < -90.0 || (*cam)[0] > 90.0 || (*cam)[2] < -11000.0 || (*cam)[2] > 1e10 ||
+        (cam->size() > 4 && ((*cam)[4] < 0.0 || (*cam)[4] > 180.0)))
+      return usage("--camera must be LAT,LON,ALT[,HEADING,TILT] within range", *c);
+    pose = {(*cam)[0],
+            (*cam)[1],
+            (*cam)[2],
+            cam->size() > 3 ? (*cam)[3] : 0.0,
+            cam->size() > 4 ? (*cam)[4] : 0.0};
+  }
+  planet::RendererOptions ro;
+  ro.width = 1280;
+  ro.height = 800;
+  ro.visibleWindow = true;
+  ro.windowTitle = "tellus";
+  if (auto size = a.get("size")) {
+    const auto wh = parseSize(*size);
+    if (!wh) return usage("--size must be WxH with 1 to 16384 pixels each", *size);
+    ro.width = wh->first;
+    ro.height = wh->second;
+  }
+  if (auto t = a.get("threshold")) {
+    const auto v = parseNumbers(*t, 1, 1);
+    if (!v || (*v)[0] < 0.05 || (*v)[0] > 64.0)
+      return usage("--threshold must be a number in [0.05, 64]", *t);
+    ro.lodThreshold = (*v)[0];
+  }
+  planet::ViewerOptions vo;
+  if (auto e = a.get("exit-after")) {
+    const auto v = parseNumbers(*e, 1, 1);
+    if (!v || (*v)[0] < 1) return usage("--exit-after must be a frame count", *e);
+    vo.maxFrames = static_cast<std::uint64_t>((*v)[0]);
+  }
+  auto ctx = setUp(a);
+  if (!ctx) return kExitError;
+  if (auto l = a.get("layer")) {
+    const auto* layer = ctx->config.layer(*l);
+    if (layer == nullptr || layer->kind != LayerKind::Imagery)
+      return usage("--layer must name an imagery layer of the configuration", *l);
+    ro.layer = *l;
+  } else {
+    for (const auto& candidate : ctx->config.layers)
+      if (candidate.kind == LayerKind::Imagery) {
+        ro.layer = candidate.name;
+        break;
+      }
+  }
+  if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg"; fs::exists(global))
+    ro.globalImage = global;
+  Fetcher fetcher;
+  auto [upstreams, layers] = proxySpecs(ctx->config);
+  TileServiceOptions tso;
+  tso.offline = a.flag("offline") || ctx->config.server.offline;
+  auto tiles =
+      TileService::create(*ctx->cache, fetcher, std::move(upstreams), std::move(layers), tso);
+  if (!tiles) {
+    std::fprintf(stderr, "tellus view: %s\n", tiles.error().c_str());
+    return kExitError;
+  }
+  const Geodesy geodesy;
+  auto renderer = planet::Renderer::create(**tiles, geodesy, ro);
+  if (!renderer) {
+    std::fprintf(stderr, "tellus view: %s\n", renderer.error().c_str());
+    return kExitError;
+  }
+  vo.start = pose;
+  std::printf("tellus view: drag to move, wheel to zoom, W/S tilt, A/D heading, R reset, "
+              "P screenshot, Esc quits\n");
+  std::fflush(stdout);
+  const auto frames = planet::runViewer(**renderer, vo);
+  std::printf("tellus view: %llu frames\n", static_cast<unsigned long long>(frames));
+  return kExitOk;
+}
+
 int run(int argc, char** argv) {
   if (argc < 2 || std::string_view(argv[1]) == "help" || std::string_view(argv[1]) == "--help") {
     std::fputs(kUsage, argc < 2 ? stderr : stdout);
@@ -909,18 +1480,16 @@ int run(int argc, char** argv) {
     std::printf("tellus %s\n", TELLUS_VERSION);
     return kExitOk;
   }
-  const Args a =
-      parseArgs(argc, argv, 2, {"json", "dry-run", "include-pinned", "offline", "refresh"});
+  const Args a = parseArgs(
+      argc, argv, 2, {"json", "dry-run", "include-pinned", "offline", "refresh", "wait-complete"});
   for (const auto& e : a.errors)
     std::fprintf(stderr, "tellus %s: %s\n", argv[1], e.c_str());
   if (!a.errors.empty()) return kExitUsage;
   if (cmd == "seed") return cmdSeed(a);
   if (cmd == "cache") return cmdCache(a);
   if (cmd == "serve") return cmdServe(a);
-  if (cmd == "view" || cmd == "render") {
-    std::fprintf(stderr, "tellus %s: not built yet (issue #5: the planet renderer)\n", argv[1]);
-    return kExitUsage;
-  }
+  if (cmd == "render") return cmdRender(a);
+  if (cmd == "view") return cmdView(a);
   std::fprintf(stderr, "tellus: unknown command '%s'\n%s", argv[1], kUsage);
   return kExitUsage;
 }

@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# tellus render --stats for a few views (cold cache, then warm) and a descent flight, on the embedded
+# default. Mesa llvmpipe under Xvfb renders on the CPU: frame times are CPU figures.
+# Usage: bench/render.sh [path/to/tellus]   (default build/tools/tellus/tellus)
+set -euo pipefail
+tellus=${1:-build/tools/tellus/tellus}
+work=$(mktemp -d "${TMPDIR:-/tmp}/tellus-render-bench.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+row() {
+  python3 - "$1" "$2" "$3" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[3]))
+print("| %s | %s | %.2f | %d | %d / %d | %d | %d | %.1f | %.3f | %.1f | %.1f |" % (
+    sys.argv[1], sys.argv[2], s["seconds"], s["frames"], s["nodes_drawn"], s["nodes_visible"],
+    s["max_level"], s["tiles_received"], s["bytes_uploaded"] / 2**20, s["longest_update_ms"],
+    s["median_frame_ms"], s["longest_frame_ms"]))
+PY
+}
+echo "| view | cache | s to complete | frames | drawn / visible nodes | level | tiles | MiB uploaded | longest update ms | median frame ms | longest frame ms |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|"
+for v in "0,0,2e7" "45.5,7.5,2e6,30,40" "90,0,1e6" "0,180,1e6"; do
+  for c in cold warm; do
+    xvfb-run -a -s '-screen 0 1280x1024x24' "$tellus" render --cache "$work/cache-$v" --camera "$v" \
+      --size 1024x768 --out "$work/v.png" --wait-complete --stats "$work/s.json" >/dev/null
+    row "$v" "$c" "$work/s.json"
+  done
+done
+cat >"$work/path.json" <<'JSON'
+[{"time": 0, "lat": 30, "lon": -20, "alt": 2e7},
+ {"time": 4, "lat": 46, "lon": 8, "alt": 2e4, "heading": 30, "tilt": 60}]
+JSON
+for c in cold warm; do
+  xvfb-run -a -s '-screen 0 1280x1024x24' "$tellus" render --cache "$work/cache-path" \
+    --path "$work/path.json" --frames "$work/frames" --fps 25 --size 1024x768 \
+    --stats "$work/s.json" >/dev/null
+  row "descent 20,000 km to 20 km, 101 frames as streamed" "$c" "$work/s.json"
+done

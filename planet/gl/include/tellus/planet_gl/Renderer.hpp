@@ -1,0 +1,147 @@
+#pragma once
+/**
+ * @file Renderer.hpp
+ * @brief The planet renderer's GL layer: an OpenGL context (GLFW, hidden window for headless use),
+ * an offscreen framebuffer with a 32-bit float reversed-Z depth buffer, node meshes drawn with
+ * camera-relative matrices, and texture streaming (decoding on worker threads, banded uploads under
+ * a per-frame byte budget, a reusable texture pool, the LRU). No GL type appears here: GL, GLFW,
+ * libepoxy, libjpeg and libpng are private to tellus::planet_gl.
+ *
+ * One Renderer drives one layer. Both a window loop (`tellus view`) and the headless loop
+ * (`tellus render`) call frame(pose) once per frame; readPixels() reads the last frame back.
+ * Threads: every method belongs to the thread that created the Renderer (it owns the GL context).
+ */
+
+#include <tellus/cache/TileSource.hpp>
+#include <tellus/planet/Camera.hpp>
+#include <tellus/planet/Geodesy.hpp>
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <expected>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace tellus::planet {
+
+struct RendererOptions {
+  int width = 1024; ///< framebuffer size in pixels
+  int height = 768;
+  std::string layer; ///< the imagery layer asked of the tile source
+  std::string time;
+  /** An equirectangular JPEG/PNG of the whole globe (north up, -180 at the left), the always
+   * resident global texture. Empty or unreadable: a flat dark blue. */
+  std::filesystem::path globalImage;
+  std::array<double, 3> background{0.0, 0.0, 0.0}; ///< RGB in [0, 1]
+  double lodThreshold = 1.0;                       ///< texel-to-pixel threshold (> 0)
+  /** Anisotropic filtering of node textures (sharper tilted views; 1 = off; capped by the GL).
+   * Off by default: on llvmpipe 8x cost 1.5-2x the frame time of a tilted view. */
+  double anisotropy = 1.0;
+  int meshSize = 33; ///< N of the N x N node grid (2^k + 1)
+  double verticalFovDeg = 45.0;
+  std::size_t textureBudgetBytes = std::size_t{768} << 20; ///< the LRU's budget
+  std::size_t uploadBytesPerFrame = std::size_t{8} << 20;  ///< banded uploads per frame
+  std::size_t maxInFlight = 16;                            ///< tile requests out at once
+  int maxSplitsPerFrame = 64;
+  int decodeThreads = 2;
+  bool visibleWindow = false; ///< a window the user sees (`tellus view`); else hidden
+  std::string windowTitle = "tellus";
+};
+
+/** What the renderer did: the last frame's figures and totals since creation. */
+struct RenderStats {
+  std::uint64_t frames = 0;
+  std::size_t nodesVisible = 0; ///< last frame: passed culling
+  std::size_t nodesDrawn = 0;
+  std::size_t mergedNodesDrawn = 0; ///< last frame: polar nodes spanning several tiles
+  std::size_t nodesCreated = 0;     ///< last frame
+  std::size_t nodesCreatedTotal = 0;
+  std::size_t nodesInTree = 0;
+  std::int32_t maxLevel = 0;
+  std::size_t tilesRequested = 0; ///< totals
+  std::size_t tilesReceived = 0;
+  std::size_t tilesAbsent = 0;
+  std::size_t tilesFailed = 0;
+  std::size_t tilesInFlight = 0; ///< now
+  std::size_t texturesDecoded = 0;
+  std::size_t decodeErrors = 0;
+  std::size_t texturesUploaded = 0;
+  std::size_t bytesReceived = 0;
+  std::size_t bytesUploaded = 0;
+  std::size_t decodesPending = 0; ///< now
+  std::size_t uploadsPending = 0;
+  std::size_t texturesResident = 0;
+  std::size_t textureBytes = 0; ///< resident node textures (LRU)
+  std::size_t poolTextures = 0; ///< free textures kept for reuse
+  std::size_t texturesReused = 0;
+  std::size_t texturesEvicted = 0;
+  double updateMs = 0.0;        ///< last frame: quadtree + streamer CPU time
+  double longestUpdateMs = 0.0; ///< the longest update since creation
+  double frameMs = 0.0;         ///< last frame: everything, GL finished
+  std::string glVersion;        ///< GL_VERSION and GL_RENDERER
+  bool reversedZ = false;       ///< glClipControl available (4.5 or ARB_clip_control)
+};
+
+class Renderer {
+public:
+  /** Opens the GL context (4.5 core, else 3.3 core) and loads the global texture. The source and
+   * the geodesy must outlive the renderer. Fails with a message (no display, no GL 3.3, unknown
+   * layer). */
+  static std::expected<std::unique_ptr<Renderer>, std::string>
+  create(ITileSource& source, const Geodesy& geodesy, RendererOptions options);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  /** The camera a pose gives at this renderer's size and field of view (throws
+   * std::invalid_argument for a pose the Camera refuses). */
+  Camera camera(const CameraPose& pose) const;
+  /** One frame: quadtree and streamer update, decoded textures to upload, uploads within the
+   * budget, draw into the framebuffer (and the window when visible). */
+  void frame(const CameraPose& pose);
+  /** The last frame shows what its LOD asks for: every drawn node has its own texture or its
+   * tiles are absent (or undecodable), no split was deferred, and nothing is in flight, decoding
+   * or uploading. A frame drawn when this holds is deterministic. */
+  bool complete() const noexcept;
+  /** Something is being fetched, decoded or uploaded (a loop may sleep when not). */
+  bool busy() const noexcept;
+  /** The framebuffer as RGBA8, rows from the top. */
+  std::vector<std::uint8_t> readPixels() const;
+  const RenderStats& stats() const noexcept;
+  int width() const noexcept;
+  int height() const noexcept;
+
+  /** The visible window (visibleWindow): whether the user closed it, and its native handle
+   * (GLFWwindow*) for the view loop's input. Null when hidden. */
+  bool windowShouldClose() const noexcept;
+  void* nativeWindow() const noexcept;
+  /** Resizes the framebuffer (window resize). */
+  void resize(int width, int height);
+
+private:
+  struct Impl;
+  explicit Renderer(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+/** Writes RGBA8 (rows from the top) as an 8-bit RGB PNG (alpha dropped). False with a message. */
+bool writePngRgb(const std::filesystem::path& file,
+                 int width,
+                 int height,
+                 const std::vector<std::uint8_t>& rgba,
+                 std::string* error);
+
+/** Reads a JPEG or PNG file as RGBA8 (rows from the top). For tests and tools. */
+struct RgbaImage {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint8_t> pixels;
+};
+std::expected<RgbaImage, std::string> readImageFile(const std::filesystem::path& file);
+/** Encodes RGBA8 as a PNG in memory (for test tile sources). */
+std::vector<std::byte> encodePngRgba(int width, int height, const std::vector<std::uint8_t>& rgba);
+
+} // namespace tellus::planet

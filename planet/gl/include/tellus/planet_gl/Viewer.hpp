@@ -1,0 +1,31 @@
+#pragma once
+/**
+ * @file Viewer.hpp
+ * @brief `tellus view`: the interactive loop around a Renderer made with visibleWindow. GLFW stays
+ * private to tellus::planet_gl.
+ *
+ * Controls: left-drag moves the camera over the ground (the point under the cursor follows it,
+ * roughly), the wheel zooms with a speed proportional to the altitude, W/S tilt, A/D turn the
+ * heading, R resets to the start pose, P writes a screenshot PNG, Esc or closing the window quits.
+ * The statistics line (fps, nodes drawn, tiles in flight, texture MB, camera) is the window title,
+ * refreshed twice a second.
+ */
+
+#include <tellus/planet_gl/Renderer.hpp>
+
+#include <cstdint>
+#include <filesystem>
+
+namespace tellus::planet {
+
+struct ViewerOptions {
+  CameraPose start;
+  std::filesystem::path screenshotDir = "."; ///< tellus-<n>.png
+  /** Stop after this many frames (0: until closed); for tests. */
+  std::uint64_t maxFrames = 0;
+};
+
+/** Runs until the window closes (or maxFrames). Returns the number of frames drawn. */
+std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options);
+
+} // namespace tellus::planet

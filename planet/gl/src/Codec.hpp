@@ -1,0 +1,16 @@
+#pragma once
+// JPEG (libjpeg-turbo) and PNG (libpng) decoding into RGBA8 for node textures, and PNG writing.
+
+#include <tellus/planet_gl/Renderer.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+
+namespace tellus::planet::codec {
+
+/** Decodes JPEG or PNG bytes (by their magic) into RGBA8 rows from the top. */
+std::expected<RgbaImage, std::string> decode(std::span<const std::byte> bytes);
+
+} // namespace tellus::planet::codec

@@ -1,0 +1,785 @@
+// The GL layer of the planet renderer: see Renderer.hpp and docs/ARCHITECTURE.md ("The planet
+// renderer"). Every GL call here runs on the thread that created the Renderer.
+
+#include "Shaders.hpp"
+#include "TextureDecoder.hpp"
+
+#include <tellus/planet/Patch.hpp>
+#include <tellus/planet/Quadtree.hpp>
+#include <tellus/planet/TextureFallback.hpp>
+#include <tellus/planet/TextureLru.hpp>
+#include <tellus/planet/TextureStreamer.hpp>
+#include <tellus/planet_gl/Renderer.hpp>
+
+#include <epoxy/gl.h>
+// epoxy first: GLFW must not include a GL header of its own.
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <mutex>
+#include <stdexcept>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
+
+namespace tellus::planet {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
+
+// GLFW is process-global: initialised by the first renderer, terminated by the last.
+std::mutex glfwMutex;
+int glfwUsers = 0;
+std::string glfwLastError;
+
+extern "C" void onGlfwError(int code, const char* text) {
+  glfwLastError = std::to_string(code) + ": " + (text ? text : "?");
+}
+
+bool acquireGlfw(std::string* error) {
+  std::lock_guard lock(glfwMutex);
+  if (glfwUsers == 0) {
+    glfwSetErrorCallback(onGlfwError);
+    if (glfwInit() != GLFW_TRUE) {
+      *error =
+          "cannot open a display for OpenGL (is DISPLAY set? run under xvfb-run): " + glfwLastError;
+      return false;
+    }
+  }
+  ++glfwUsers;
+  return true;
+}
+
+void releaseGlfw() {
+  std::lock_guard lock(glfwMutex);
+  if (--glfwUsers == 0) glfwTerminate();
+}
+
+GLuint compileShader(GLenum type, const std::string& source, std::string* error) {
+  const GLuint s = glCreateShader(type);
+  const char* text = source.c_str();
+  glShaderSource(s, 1, &text, nullptr);
+  glCompileShader(s);
+  GLint ok = GL_FALSE;
+  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    char log[2048] = {};
+    glGetShaderInfoLog(s, sizeof log, nullptr, log);
+    *error = std::string("shader: ") + log;
+    glDeleteShader(s);
+    return 0;
+  }
+  return s;
+}
+
+struct GpuMesh {
+  GLuint vao = 0;
+  GLuint vbo = 0;
+  glm::dvec3 centre{0.0};
+  std::uint64_t lastUsed = 0;
+};
+
+struct Upload {
+  DecodedTexture texture;
+  GLuint id = 0;
+  std::size_t level = 0;
+  int row = 0;
+};
+
+struct StoredTile {
+  std::vector<std::byte> bytes;
+  std::uint64_t frame = 0;
+};
+
+struct DrawPart {
+  const Node* region;
+  GLuint texture;
+  UvTransform uv;
+};
+
+} // namespace
+
+struct Renderer::Impl {
+  Impl(ITileSource& s, const Geodesy& g, RendererOptions o, TileGrid gr)
+      : source(s), geodesy(g), opt(std::move(o)), grid(gr), lru(opt.textureBudgetBytes),
+        decoder(opt.decodeThreads) {}
+  ~Impl();
+
+  ITileSource& source;
+  const Geodesy& geodesy;
+  RendererOptions opt;
+  TileGrid grid;
+  bool glfwHeld = false;
+  GLFWwindow* window = nullptr;
+  bool gl45 = false;
+  bool textureStorage = false;
+  GLuint fbo = 0, colorRb = 0, depthRb = 0;
+  GLuint program = 0;
+  GLint uMvp = -1, uUv = -1, uTexture = -1;
+  GLuint ebo = 0;
+  GLsizei indexCount = 0;
+  GLuint globalTexture = 0;
+  int texWidth = 0, texHeight = 0;
+  GLsizei texLevels = 1;
+  float anisotropy = 1.0f; ///< what the GL allows of opt.anisotropy
+
+  std::unique_ptr<Quadtree> tree;
+  std::unique_ptr<TextureStreamer> streamer;
+  TextureLru lru;
+  TextureDecoder decoder;
+  std::unordered_map<NodeKey, GpuMesh, NodeKeyHash> meshes;
+  std::unordered_map<NodeKey, GLuint, NodeKeyHash> textures;
+  std::vector<GLuint> pool;
+  std::unordered_map<TileKey, StoredTile, TileKeyHash> received;
+  std::unordered_set<NodeKey, NodeKeyHash> decoding;
+  std::unordered_set<NodeKey, NodeKeyHash> uploading;
+  std::unordered_set<NodeKey, NodeKeyHash> undecodable;
+  std::deque<Upload> uploads;
+  std::vector<DrawPart> parts;
+  RenderStats stats;
+  bool lastComplete = false;
+  Clock::time_point start = Clock::now();
+
+  std::string initGl();
+  void makeFramebuffer();
+  void freeFramebuffer();
+  GLuint newNodeTexture();
+  GLuint acquireTexture();
+  void releaseTexture(GLuint id);
+  const GpuMesh& meshFor(const Node& node);
+  void launchDecode(Node& node);
+  void stepUploads();
+  void evict();
+  void draw(const Camera& camera);
+};
+
+Renderer::Impl::~Impl() {
+  if (window != nullptr) {
+    glfwMakeContextCurrent(window);
+    for (auto& [k, m] : meshes) {
+      glDeleteVertexArrays(1, &m.vao);
+      glDeleteBuffers(1, &m.vbo);
+    }
+    for (auto& [k, t] : textures)
+      glDeleteTextures(1, &t);
+    for (auto& u : uploads)
+      glDeleteTextures(1, &u.id);
+    if (!pool.empty()) glDeleteTextures(static_cast<GLsizei>(pool.size()), pool.data());
+    glDeleteTextures(1, &globalTexture);
+    glDeleteBuffers(1, &ebo);
+    glDeleteProgram(program);
+    freeFramebuffer();
+    glfwDestroyWindow(window);
+  }
+  if (glfwHeld) releaseGlfw();
+}
+
+std::string Renderer::Impl::initGl() {
+  std::string error;
+  if (!acquireGlfw(&error)) return error;
+  glfwHeld = true;
+  // 4.5 core first (glClipControl is core there), then 3.3 core.
+  const int versions[2][2] = {{4, 5}, {3, 3}};
+  for (const auto& v : versions) {
+    glfwDefaultWindowHints();
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, v[0]);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, v[1]);
+    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+    glfwWindowHint(GLFW_VISIBLE, opt.visibleWindow ? GLFW_TRUE : GLFW_FALSE);
+    const int ww = opt.visibleWindow ? opt.width : 16, wh = opt.visibleWindow ? opt.height : 16;
+    window = glfwCreateWindow(ww, wh, opt.windowTitle.c_str(), nullptr, nullptr);
+    if (window != nullptr) {
+      gl45 = v[0] == 4;
+      break;
+    }
+  }
+  if (window == nullptr) return "cannot create an OpenGL 4.5 or 3.3 core context: " + glfwLastError;
+  glfwMakeContextCurrent(window);
+  glfwSwapInterval(opt.visibleWindow ? 1 : 0);
+  const int version = epoxy_gl_version();
+  textureStorage = version >= 42 || epoxy_has_gl_extension("GL_ARB_texture_storage");
+  stats.reversedZ = version >= 45 || epoxy_has_gl_extension("GL_ARB_clip_control");
+  if (opt.anisotropy > 1.0 &&
+      (version >= 46 || epoxy_has_gl_extension("GL_EXT_texture_filter_anisotropic") ||
+       epoxy_has_gl_extension("GL_ARB_texture_filter_anisotropic"))) {
+    GLfloat most = 1.0f;
+    glGetFloatv(GL_MAX_TEXTURE_MAX_ANISOTROPY_EXT, &most);
+    anisotropy = std::min(static_cast<float>(opt.anisotropy), most);
+  }
+  stats.glVersion = std::string(reinterpret_cast<const char*>(glGetString(GL_VERSION))) + " / " +
+                    reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+
+  // Shaders (embedded at build time from shaders/).
+  const std::string header = gl45 ? "#version 450 core\n" : "#version 330 core\n";
+  const GLuint vs = compileShader(GL_VERTEX_SHADER, header + kShader_planet_vert, &error);
+  if (vs == 0) return error;
+  const GLuint fs = compileShader(GL_FRAGMENT_SHADER, header + kShader_planet_frag, &error);
+  if (fs == 0) {
+    glDeleteShader(vs);
+    return error;
+  }
+  program = glCreateProgram();
+  glAttachShader(program, vs);
+  glAttachShader(program, fs);
+  glLinkProgram(program);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLint linked = GL_FALSE;
+  glGetProgramiv(program, GL_LINK_STATUS, &linked);
+  if (linked != GL_TRUE) {
+    char log[2048] = {};
+    glGetProgramInfoLog(program, sizeof log, nullptr, log);
+    return std::string("shader link: ") + log;
+  }
+  uMvp = glGetUniformLocation(program, "uMvp");
+  uUv = glGetUniformLocation(program, "uUv");
+  uTexture = glGetUniformLocation(program, "uTexture");
+
+  // One index buffer for every node: the N x N grid as triangles, counter-clockwise seen from
+  // outside (rows go north, columns east).
+  const int n = opt.meshSize;
+  std::vector<std::uint32_t> idx;
+  idx.reserve(static_cast<std::size_t>((n - 1) * (n - 1) * 6));
+  for (int r = 0; r + 1 < n; ++r)
+    for (int c = 0; c + 1 < n; ++c) {
+      const auto a = static_cast<std::uint32_t>(r * n + c);
+      const auto b = a + 1;
+      const auto d = a + static_cast<std::uint32_t>(n);
+      const auto e = d + 1;
+      idx.insert(idx.end(), {a, b, e, a, e, d});
+    }
+  // Skirts: each edge's vertices again, lowered (meshFor appends them after the grid: south, north,
+  // west, east, n each), joined to the edge by a strip. Where a coarse node's edge (a chord) meets
+  // a finer neighbour's, or a merged polar row meets a row of narrower nodes, the skirt fills the
+  // crack that would otherwise show the background.
+  const auto gridVertices = static_cast<std::uint32_t>(n * n);
+  const auto edgeVertex = [n](int side, int i) {
+    const int r = side == 0 ? 0 : side == 1 ? n - 1 : i;
+    const int c = side == 2 ? 0 : side == 3 ? n - 1 : i;
+    return static_cast<std::uint32_t>(r * n + c);
+  };
+  for (int side = 0; side < 4; ++side)
+    for (int i = 0; i + 1 < n; ++i) {
+      const std::uint32_t a = edgeVertex(side, i), b = edgeVertex(side, i + 1);
+      const std::uint32_t sa = gridVertices + static_cast<std::uint32_t>(side * n + i), sb = sa + 1;
+      idx.insert(idx.end(), {a, b, sb, a, sb, sa});
+    }
+  indexCount = static_cast<GLsizei>(idx.size());
+  glGenBuffers(1, &ebo);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(idx.size() * sizeof(std::uint32_t)),
+               idx.data(),
+               GL_STATIC_DRAW);
+
+  makeFramebuffer();
+
+  // The global texture: always resident, the last fallback.
+  MipLevel base;
+  if (!opt.globalImage.empty()) {
+    if (auto img = readImageFile(opt.globalImage)) {
+      base.width = img->width;
+      base.height = img->height;
+      base.rgba.resize(img->pixels.size());
+      const auto stride = static_cast<std::size_t>(img->width) * 4;
+      for (int y = 0; y < img->height; ++y)
+        std::copy_n(img->pixels.data() + static_cast<std::size_t>(y) * stride,
+                    stride,
+                    base.rgba.data() + static_cast<std::size_t>(img->height - 1 - y) * stride);
+    }
+  }
+  if (base.rgba.empty()) {
+    base.width = base.height = 1;
+    base.rgba = {10, 20, 60, 255};
+  }
+  const auto levels = buildMips(std::move(base));
+  glGenTextures(1, &globalTexture);
+  glBindTexture(GL_TEXTURE_2D, globalTexture);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  for (std::size_t l = 0; l < levels.size(); ++l)
+    glTexImage2D(GL_TEXTURE_2D,
+                 static_cast<GLint>(l),
+                 GL_RGBA8,
+                 levels[l].width,
+                 levels[l].height,
+                 0,
+                 GL_RGBA,
+                 GL_UNSIGNED_BYTE,
+                 levels[l].rgba.data());
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, static_cast<GLint>(levels.size() - 1));
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  if (glGetError() != GL_NO_ERROR) return "OpenGL error while setting up";
+  return {};
+}
+
+void Renderer::Impl::makeFramebuffer() {
+  glGenFramebuffers(1, &fbo);
+  glGenRenderbuffers(1, &colorRb);
+  glGenRenderbuffers(1, &depthRb);
+  glBindRenderbuffer(GL_RENDERBUFFER, colorRb);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, opt.width, opt.height);
+  // 32-bit float depth with reversed Z: 1 m to 1e9 m in one frustum.
+  glBindRenderbuffer(GL_RENDERBUFFER, depthRb);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, opt.width, opt.height);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, colorRb);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depthRb);
+}
+
+void Renderer::Impl::freeFramebuffer() {
+  glDeleteFramebuffers(1, &fbo);
+  glDeleteRenderbuffers(1, &colorRb);
+  glDeleteRenderbuffers(1, &depthRb);
+  fbo = colorRb = depthRb = 0;
+}
+
+GLuint Renderer::Impl::newNodeTexture() {
+  GLuint id = 0;
+  glGenTextures(1, &id);
+  glBindTexture(GL_TEXTURE_2D, id);
+  if (textureStorage) {
+    glTexStorage2D(GL_TEXTURE_2D, texLevels, GL_RGBA8, texWidth, texHeight);
+  } else {
+    for (GLint l = 0, w = texWidth, h = texHeight; l < texLevels; ++l) {
+      glTexImage2D(GL_TEXTURE_2D, l, GL_RGBA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+      w = std::max(1, w / 2);
+      h = std::max(1, h / 2);
+    }
+  }
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, texLevels - 1);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  if (anisotropy > 1.0f) glTexParameterf(GL_TEXTURE_2D, GL_TEXTURE_MAX_ANISOTROPY_EXT, anisotropy);
+  return id;
+}
+
+// Every node texture has the grid's tile size, so any freed one fits the next node.
+GLuint Renderer::Impl::acquireTexture() {
+  if (!pool.empty()) {
+    const GLuint id = pool.back();
+    pool.pop_back();
+    ++stats.texturesReused;
+    return id;
+  }
+  return newNodeTexture();
+}
+
+void Renderer::Impl::releaseTexture(GLuint id) {
+  constexpr std::size_t kMaxPool = 64;
+  if (pool.size() < kMaxPool)
+    pool.push_back(id);
+  else
+    glDeleteTextures(1, &id);
+}
+
+const GpuMesh& Renderer::Impl::meshFor(const Node& node) {
+  auto [it, inserted] = meshes.try_emplace(node.key());
+  GpuMesh& m = it->second;
+  m.lastUsed = stats.frames;
+  if (!inserted) return m;
+  const PatchMesh mesh = buildPatchMesh(geodesy, node.sector(), opt.meshSize);
+  m.centre = mesh.centre;
+  std::vector<float> v;
+  const int n = opt.meshSize;
+  v.reserve((mesh.vertices.size() + 4 * static_cast<std::size_t>(n)) * 5);
+  auto push = [&v](const PatchVertex& p, double down) {
+    const glm::dvec3 q = p.position - p.normal * down;
+    v.push_back(static_cast<float>(q.x));
+    v.push_back(static_cast<float>(q.y));
+    v.push_back(static_cast<float>(q.z));
+    v.push_back(static_cast<float>(p.uvNode.x));
+    v.push_back(static_cast<float>(p.uvNode.y));
+  };
+  for (const auto& p : mesh.vertices)
+    push(p, 0.0);
+  // Skirt depth: how far the chord of a whole tile-sized cell lies below the surface (R * a^2 / 8
+  // for the tile's angular size a), which covers neighbours up to N - 1 times coarser per cell.
+  const Sector& sec = node.sector();
+  const double angle = std::max(sec.north - sec.south, sec.east - sec.west) * M_PI / 180.0;
+  const double depth = geodesy.equatorialRadius() * angle * angle / 8.0 + 1.0;
+  for (int side = 0; side < 4; ++side)
+    for (int i = 0; i < n; ++i) {
+      const int r = side == 0 ? 0 : side == 1 ? n - 1 : i;
+      const int c = side == 2 ? 0 : side == 3 ? n - 1 : i;
+      push(mesh.at(r, c), depth);
+    }
+  glGenVertexArrays(1, &m.vao);
+  glBindVertexArray(m.vao);
+  glGenBuffers(1, &m.vbo);
+  glBindBuffer(GL_ARRAY_BUFFER, m.vbo);
+  glBufferData(
+      GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(v.size() * sizeof(float)), v.data(), GL_STATIC_DRAW);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 5 * sizeof(float), nullptr);
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(1,
+                        2,
+                        GL_FLOAT,
+                        GL_FALSE,
+                        5 * sizeof(float),
+                        reinterpret_cast<const void*>(3 * sizeof(float)));
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
+  glBindVertexArray(0);
+  return m;
+}
+
+// A node whose tiles all arrived (TextureState::Decoding): its bytes go to a decoder worker.
+void Renderer::Impl::launchDecode(Node& node) {
+  const NodeKey& k = node.key();
+  if (uploading.contains(k)) {
+    node.texture = TextureState::Uploading;
+    return;
+  }
+  if (node.texture != TextureState::Decoding || decoding.contains(k) || undecodable.contains(k))
+    return;
+  if (lru.resident(k)) return;
+  bool missing = false;
+  for (std::int64_t i = 0; i < k.span; ++i) {
+    const TileKey t{k.level, k.row, k.col + i};
+    if (streamer->state(t) != TileFetch::Absent && !received.contains(t)) {
+      // Its bytes went into an earlier texture that was since evicted: ask again.
+      streamer->forget({k.level, k.row, k.col + i, 1});
+      missing = true;
+    }
+  }
+  if (missing) return;
+  DecodeJob job;
+  job.key = k;
+  job.width = texWidth;
+  job.height = texHeight;
+  for (std::int64_t i = 0; i < k.span; ++i) {
+    const auto it = received.find({k.level, k.row, k.col + i});
+    if (it == received.end()) {
+      job.tiles.emplace_back(std::nullopt);
+    } else {
+      job.tiles.emplace_back(std::move(it->second.bytes));
+      received.erase(it);
+    }
+  }
+  decoding.insert(k);
+  decoder.submit(std::move(job));
+}
+
+// Row bands of one mip level at a time, within the frame's byte budget. The texture is not in the
+// LRU (its node is Uploading, never Finished) until every level is there, so no frame samples a
+// half-uploaded level.
+void Renderer::Impl::stepUploads() {
+  std::size_t budget = opt.uploadBytesPerFrame;
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  while (!uploads.empty() && budget > 0) {
+    Upload& u = uploads.front();
+    const MipLevel& level = u.texture.levels[u.level];
+    const auto rowBytes = static_cast<std::size_t>(level.width) * 4;
+    const int rows = std::clamp(static_cast<int>(budget / rowBytes), 1, level.height - u.row);
+    glBindTexture(GL_TEXTURE_2D, u.id);
+    glTexSubImage2D(GL_TEXTURE_2D,
+                    static_cast<GLint>(u.level),
+                    0,
+                    u.row,
+                    level.width,
+                    rows,
+                    GL_RGBA,
+                    GL_UNSIGNED_BYTE,
+                    level.rgba.data() + static_cast<std::size_t>(u.row) * rowBytes);
+    const std::size_t sent = static_cast<std::size_t>(rows) * rowBytes;
+    stats.bytesUploaded += sent;
+    budget -= std::min(budget, sent);
+    u.row += rows;
+    if (u.row < level.height) continue;
+    u.row = 0;
+    if (++u.level < u.texture.levels.size()) continue;
+    // Complete: drawable from the next frame on.
+    const NodeKey key = u.texture.key;
+    if (auto old = textures.find(key); old != textures.end()) releaseTexture(old->second);
+    textures[key] = u.id;
+    lru.insert(key, u.texture.bytes);
+    uploading.erase(key);
+    ++stats.texturesUploaded;
+    uploads.pop_front();
+  }
+}
+
+// Textures the LRU let go: back to the pool, their tiles may be fetched again, and any node still
+// marked Finished for them falls back from now on.
+void Renderer::Impl::evict() {
+  const auto evicted = lru.takeEvicted();
+  if (evicted.empty()) return;
+  std::unordered_set<NodeKey, NodeKeyHash> gone;
+  for (const NodeKey& k : evicted) {
+    if (auto it = textures.find(k); it != textures.end()) {
+      releaseTexture(it->second);
+      textures.erase(it);
+    }
+    streamer->forget(k);
+    gone.insert(k);
+    ++stats.texturesEvicted;
+  }
+  tree->forEach([&](Node& n) {
+    if (n.texture == TextureState::Finished && gone.contains(n.key()))
+      n.texture = TextureState::NoTexture;
+  });
+}
+
+void Renderer::Impl::draw(const Camera& camera) {
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  glViewport(0, 0, opt.width, opt.height);
+  if (stats.reversedZ) glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+  glClearColor(static_cast<float>(opt.background[0]),
+               static_cast<float>(opt.background[1]),
+               static_cast<float>(opt.background[2]),
+               1.0f);
+  glClearDepth(0.0);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_GREATER);
+  glDisable(GL_CULL_FACE);
+  glUseProgram(program);
+  glUniform1i(uTexture, 0);
+  glActiveTexture(GL_TEXTURE0);
+  const glm::dmat4 viewProjection = camera.projection() * camera.view();
+  for (const DrawPart& p : parts) {
+    const GpuMesh& m = meshFor(*p.region);
+    // The node's model-view-projection in double, relative to the camera, narrowed to float only
+    // here: vertex positions are metres from the node's centre, so nothing large reaches floats.
+    const glm::dmat4 mvp = viewProjection * glm::translate(glm::dmat4(1.0), m.centre);
+    const glm::mat4 f(mvp);
+    glUniformMatrix4fv(uMvp, 1, GL_FALSE, &f[0][0]);
+    glUniform4f(uUv,
+                static_cast<float>(p.uv.scale.x),
+                static_cast<float>(p.uv.scale.y),
+                static_cast<float>(p.uv.offset.x),
+                static_cast<float>(p.uv.offset.y));
+    glBindTexture(GL_TEXTURE_2D, p.texture);
+    glBindVertexArray(m.vao);
+    glDrawElements(GL_TRIANGLES, indexCount, GL_UNSIGNED_INT, nullptr);
+  }
+  glBindVertexArray(0);
+  if (window != nullptr && opt.visibleWindow) {
+    int fw = 0, fh = 0;
+    glfwGetFramebufferSize(window, &fw, &fh);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+    glBlitFramebuffer(0, 0, opt.width, opt.height, 0, 0, fw, fh, GL_COLOR_BUFFER_BIT, GL_LINEAR);
+    glfwSwapBuffers(window);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  }
+}
+
+Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Renderer::~Renderer() = default;
+
+std::expected<std::unique_ptr<Renderer>, std::string>
+Renderer::create(ITileSource& source, const Geodesy& geodesy, RendererOptions options) {
+  if (options.width <= 0 || options.height <= 0 || options.width > 16384 || options.height > 16384)
+    return std::unexpected(std::string("the image size must be 1 to 16384 pixels each way"));
+  if (!(options.lodThreshold > 0.0) || !std::isfinite(options.lodThreshold))
+    return std::unexpected(std::string("the LOD threshold must be a positive number"));
+  const int n = options.meshSize;
+  if (n < 3 || n > 1025 || ((n - 1) & (n - 2)) != 0)
+    return std::unexpected(std::string("the mesh size must be 2^k + 1 (3 to 1025)"));
+  const auto spec = source.describe(options.layer, options.time);
+  if (!spec) return std::unexpected("unknown layer '" + options.layer + "'");
+  auto grid = TileGrid::create(spec->grid);
+  if (!grid) return std::unexpected("layer '" + options.layer + "': " + grid.error());
+  auto impl = std::make_unique<Impl>(source, geodesy, std::move(options), *grid);
+  impl->texWidth = grid->spec().tileWidth;
+  impl->texHeight = grid->spec().tileHeight;
+  impl->texLevels =
+      static_cast<GLsizei>(std::floor(std::log2(std::max(impl->texWidth, impl->texHeight))) + 1);
+  if (auto err = impl->initGl(); !err.empty()) return std::unexpected(err);
+  QuadtreeParams qp;
+  qp.lod.tileWidthPx = impl->texWidth;
+  qp.lod.tileHeightPx = impl->texHeight;
+  qp.lod.threshold = impl->opt.lodThreshold;
+  qp.maxSplitsPerFrame = impl->opt.maxSplitsPerFrame;
+  impl->tree = std::make_unique<Quadtree>(geodesy, *grid, qp);
+  StreamParams sp;
+  sp.layer = impl->opt.layer;
+  sp.time = impl->opt.time;
+  sp.maxInFlight = impl->opt.maxInFlight;
+  impl->streamer = std::make_unique<TextureStreamer>(source, sp);
+  return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
+}
+
+Camera Renderer::camera(const CameraPose& pose) const {
+  return Camera(
+      impl_->geodesy, pose, {impl_->opt.width, impl_->opt.height}, impl_->opt.verticalFovDeg);
+}
+
+void Renderer::frame(const CameraPose& pose) {
+  Impl& m = *impl_;
+  const auto t0 = Clock::now();
+  const Camera cam = camera(pose);
+  if (m.window != nullptr) glfwMakeContextCurrent(m.window);
+  ++m.stats.frames;
+
+  // CPU update: the tree and the stream order.
+  const FrameStats& fs = m.tree->update(cam);
+  m.lru.beginFrame();
+  const double nowS = std::chrono::duration<double>(t0 - m.start).count();
+  m.streamer->update(*m.tree, cam, nowS, &m.lru);
+  m.stats.updateMs = msSince(t0);
+  m.stats.longestUpdateMs = std::max(m.stats.longestUpdateMs, m.stats.updateMs);
+
+  for (ReceivedTile& r : m.streamer->takeReceived()) {
+    m.stats.bytesReceived += r.result.bytes.size();
+    m.received[r.key] = {std::move(r.result.bytes), m.stats.frames};
+  }
+  for (const auto& root : m.tree->roots())
+    if (root) m.launchDecode(*root);
+  for (Node* n : m.tree->drawList())
+    m.launchDecode(*n);
+  for (DecodedTexture& d : m.decoder.takeDone()) {
+    m.decoding.erase(d.key);
+    if (!d.ok) {
+      ++m.stats.decodeErrors;
+      m.undecodable.insert(d.key);
+      continue;
+    }
+    ++m.stats.texturesDecoded;
+    if (m.lru.resident(d.key)) continue;
+    Upload u;
+    u.id = m.acquireTexture();
+    u.texture = std::move(d);
+    m.uploading.insert(u.texture.key);
+    m.uploads.push_back(std::move(u));
+  }
+
+  // What this frame draws, and the LRU told so before anything new is inserted.
+  m.parts.clear();
+  // The roots stay resident like the global texture: the streamer wants them until they are, so
+  // evicting one would only fetch it again (a loop when the budget is small).
+  for (const auto& root : m.tree->roots())
+    if (root) m.lru.use(root->key());
+  bool complete = fs.splitsDeferred == 0;
+  m.stats.mergedNodesDrawn = 0;
+  for (Node* n : m.tree->drawList()) {
+    if (n->key().span > 1) ++m.stats.mergedNodesDrawn;
+    const bool done = n->texture == TextureState::Finished || n->texture == TextureState::Absent ||
+                      m.undecodable.contains(n->key());
+    complete = complete && done;
+    const TexturePlan plan = planTexture(*n);
+    for (int i = 0; i < plan.partCount; ++i) {
+      const TexturePart& p = plan.parts[static_cast<std::size_t>(i)];
+      DrawPart d{p.region, m.globalTexture, p.uv};
+      if (p.source != TextureSource::Global && p.texture != nullptr) {
+        if (auto it = m.textures.find(p.texture->key()); it != m.textures.end()) {
+          d.texture = it->second;
+          m.lru.use(p.texture->key());
+        } else {
+          d.uv = globalUv(p.region->sector());
+        }
+      }
+      m.parts.push_back(d);
+    }
+  }
+  m.stepUploads();
+  m.evict();
+  m.draw(cam);
+
+  // Tiles that arrived for nodes gone from view are dropped after a while (asked again if needed).
+  if (m.stats.frames % 64 == 0) {
+    std::erase_if(m.received, [&](const auto& e) {
+      if (m.stats.frames - e.second.frame < 600) return false;
+      m.streamer->forget({e.first.level, e.first.row, e.first.col, 1});
+      return true;
+    });
+    std::erase_if(m.meshes, [&](auto& e) {
+      if (m.stats.frames - e.second.lastUsed < 120) return false;
+      glDeleteVertexArrays(1, &e.second.vao);
+      glDeleteBuffers(1, &e.second.vbo);
+      return true;
+    });
+  }
+  if (m.window != nullptr && m.opt.visibleWindow) glfwPollEvents();
+  glFinish();
+
+  const StreamStats& ss = m.streamer->stats();
+  m.lastComplete = complete && ss.inFlight == 0 && m.decoding.empty() && m.uploads.empty() &&
+                   m.decoder.pending() == 0;
+  RenderStats& s = m.stats;
+  s.nodesVisible = fs.visible;
+  s.nodesDrawn = fs.drawn;
+  s.nodesCreated = fs.created;
+  s.nodesCreatedTotal += fs.created;
+  s.nodesInTree = fs.nodes;
+  s.maxLevel = fs.maxLevel;
+  s.tilesRequested = ss.requested;
+  s.tilesReceived = ss.received;
+  s.tilesAbsent = ss.absent;
+  s.tilesFailed = ss.failed;
+  s.tilesInFlight = ss.inFlight;
+  s.decodesPending = m.decoder.pending();
+  s.uploadsPending = m.uploads.size();
+  s.texturesResident = m.lru.count();
+  s.textureBytes = m.lru.bytes();
+  s.poolTextures = m.pool.size();
+  s.frameMs = msSince(t0);
+}
+
+bool Renderer::complete() const noexcept {
+  return impl_->lastComplete;
+}
+
+bool Renderer::busy() const noexcept {
+  const Impl& m = *impl_;
+  return m.streamer->stats().inFlight > 0 || !m.decoding.empty() || !m.uploads.empty() ||
+         m.decoder.pending() > 0;
+}
+
+std::vector<std::uint8_t> Renderer::readPixels() const {
+  const Impl& m = *impl_;
+  if (m.window != nullptr) glfwMakeContextCurrent(m.window);
+  const auto w = static_cast<std::size_t>(m.opt.width), h = static_cast<std::size_t>(m.opt.height);
+  std::vector<std::uint8_t> bottomUp(w * h * 4), out(w * h * 4);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, m.fbo);
+  glPixelStorei(GL_PACK_ALIGNMENT, 4);
+  glReadPixels(0, 0, m.opt.width, m.opt.height, GL_RGBA, GL_UNSIGNED_BYTE, bottomUp.data());
+  for (std::size_t y = 0; y < h; ++y)
+    std::copy_n(bottomUp.data() + (h - 1 - y) * w * 4, w * 4, out.data() + y * w * 4);
+  return out;
+}
+
+const RenderStats& Renderer::stats() const noexcept {
+  return impl_->stats;
+}
+int Renderer::width() const noexcept {
+  return impl_->opt.width;
+}
+int Renderer::height() const noexcept {
+  return impl_->opt.height;
+}
+bool Renderer::windowShouldClose() const noexcept {
+  return impl_->window != nullptr && glfwWindowShouldClose(impl_->window) == GLFW_TRUE;
+}
+void* Renderer::nativeWindow() const noexcept {
+  return impl_->opt.visibleWindow ? impl_->window : nullptr;
+}
+
+void Renderer::resize(int width, int height) {
+  Impl& m = *impl_;
+  if (width <= 0 || height <= 0 || (width == m.opt.width && height == m.opt.height)) return;
+  glfwMakeContextCurrent(m.window);
+  m.freeFramebuffer();
+  m.opt.width = width;
+  m.opt.height = height;
+  m.makeFramebuffer();
+}
+
+} // namespace tellus::planet

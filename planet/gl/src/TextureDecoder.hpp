@@ -1,0 +1,70 @@
+#pragma once
+// Decoding node textures on worker threads: the tiles of a node (one, or `span` tiles of a merged
+// polar node, composed side by side and down-sampled east-west) become one RGBA8 image of the
+// grid's tile size, rows from the south (GL's first row), with every mip level built on the CPU.
+
+#include <tellus/planet/Quadtree.hpp>
+
+#include <condition_variable>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace tellus::planet {
+
+struct MipLevel {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint8_t> rgba; ///< rows from the south
+};
+
+struct DecodeJob {
+  NodeKey key;
+  int width = 0; ///< the texture's size (the grid's tile size)
+  int height = 0;
+  /** One entry per tile west to east; nullopt for an absent tile (left dark). */
+  std::vector<std::optional<std::vector<std::byte>>> tiles;
+};
+
+struct DecodedTexture {
+  NodeKey key;
+  bool ok = false;
+  std::string error;
+  std::vector<MipLevel> levels; ///< level 0 first, down to 1 x 1
+  std::size_t bytes = 0;        ///< all levels
+};
+
+/** Composes, resamples and builds the mip chain (pure; what the workers run). */
+DecodedTexture decodeTexture(const DecodeJob& job);
+/** The mip chain of an RGBA8 image whose rows are from the south (box filter). */
+std::vector<MipLevel> buildMips(MipLevel base);
+
+class TextureDecoder {
+public:
+  explicit TextureDecoder(int threads);
+  ~TextureDecoder();
+  TextureDecoder(const TextureDecoder&) = delete;
+  TextureDecoder& operator=(const TextureDecoder&) = delete;
+
+  void submit(DecodeJob job);
+  /** Finished textures since the last call (main thread). */
+  std::vector<DecodedTexture> takeDone();
+  /** Jobs queued or running. */
+  std::size_t pending() const;
+
+private:
+  void run(std::stop_token stop);
+  mutable std::mutex mutex_;
+  std::condition_variable_any wake_;
+  std::deque<DecodeJob> queue_;
+  std::vector<DecodedTexture> done_;
+  std::size_t running_ = 0;
+  std::vector<std::jthread> workers_;
+};
+
+} // namespace tellus::planet

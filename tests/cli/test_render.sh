@@ -1,0 +1,130 @@
+#!/usr/bin/env bash
+# `tellus render` end to end, as a user runs it (label gl: needs an X display, run under xvfb-run):
+# a complete image of the embedded default, the same bytes twice, the statistics file, usage
+# errors (exit 2), an incomplete view given up on (exit 1) and no display (exit 1, said so).
+set -euo pipefail
+tellus=$1
+work=$(mktemp -d "${TMPDIR:-/tmp}/tellus-render.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+cache="$work/cache"
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+# PNG size from the IHDR chunk (bytes 16-23).
+png_size() { python3 -c "import struct,sys; d=open(sys.argv[1],'rb').read(24); assert d[:8]==b'\x89PNG\r\n\x1a\n'; print('%dx%d' % struct.unpack('>II', d[16:24]))" "$1"; }
+
+out=$("$tellus" render --cache "$cache" --camera 0,0,2e7 --size 320x240 --out "$work/a.png" \
+      --wait-complete --stats "$work/a.json")
+echo "$out" | grep -q "complete after" || fail "render: $out"
+[ "$(png_size "$work/a.png")" = "320x240" ] || fail "PNG size $(png_size "$work/a.png")"
+python3 - "$work/a.json" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert s["complete"] is True, s
+assert s["nodes_drawn"] > 0 and s["nodes_visible"] >= s["nodes_drawn"], s
+assert s["tiles_requested"] >= s["tiles_received"] > 0, s
+assert s["textures_uploaded"] > 0 and s["bytes_uploaded"] > 0, s
+assert s["tiles_in_flight"] == 0 and s["max_level"] == 0, s
+for k in ("update_ms", "frame_ms"):
+    assert s[k] >= 0, s
+PY
+
+# Deterministic: the same view again (now from the cache) gives the same bytes.
+"$tellus" render --cache "$cache" --camera 0,0,2e7 --size 320x240 --out "$work/b.png" \
+  --wait-complete=30 >/dev/null
+cmp -s "$work/a.png" "$work/b.png" || fail "two complete renders differ"
+
+# The OpenGL 3.3 core fallback (Mesa told to offer no more): the same image; and without
+# glClipControl the same projection still draws (reversed Z in [-1, 1] depth, less precise).
+MESA_GL_VERSION_OVERRIDE=3.3 "$tellus" render --cache "$cache" --camera 0,0,2e7 --size 320x240 \
+  --out "$work/gl33.png" --wait-complete --stats "$work/gl33.json" >/dev/null || fail "GL 3.3"
+grep -q '"gl": "3.3' "$work/gl33.json" || fail "not a 3.3 context: $(grep '"gl"' "$work/gl33.json")"
+cmp -s "$work/a.png" "$work/gl33.png" || fail "the 3.3 context drew another image"
+MESA_GL_VERSION_OVERRIDE=3.3 MESA_EXTENSION_OVERRIDE=-GL_ARB_clip_control "$tellus" render \
+  --cache "$cache" --camera 0,0,2e7 --size 320x240 --out "$work/noclip.png" --wait-complete \
+  --stats "$work/noclip.json" >/dev/null 2>&1 || fail "GL 3.3 without clip control"
+grep -q '"reversed_z": false' "$work/noclip.json" || fail "clip control still used"
+
+# Offline on an empty cache: every tile is absent, the view is complete at once with the global
+# texture (the bundled image), and nothing is asked for twice.
+"$tellus" render --offline --cache "$work/empty" --camera 0,0,2e7 --size 320x240 \
+  --out "$work/offline.png" --wait-complete --stats "$work/offline.json" >/dev/null || fail "offline"
+python3 - "$work/offline.json" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert s["complete"] and s["tiles_received"] == 0, s
+assert s["tiles_absent"] == s["tiles_requested"] == 50, s
+PY
+cmp -s "$work/a.png" "$work/offline.png" && fail "the offline image (global texture) equals the tiled one?"
+
+# A tilted view near the pole with a background colour and a layer named.
+"$tellus" render --cache "$cache" --camera 89.9999,0,3e5,0,60 --size 160x120 --layer bluemarble \
+  --background 255,0,255 --out "$work/pole.png" --wait-complete >/dev/null || fail "pole view"
+[ "$(png_size "$work/pole.png")" = "160x120" ] || fail "pole PNG size"
+
+# A flight: keyframes interpolated into numbered PNGs, every one complete.
+cat >"$work/path.json" <<'JSON'
+{"keyframes": [ {"time": 0, "lat": 20, "lon": 170, "alt": 2e7},
+                {"time": 1, "lat": 46, "lon": -170, "alt": 1e6, "heading": 20, "tilt": 40} ]}
+JSON
+out=$("$tellus" render --cache "$cache" --path "$work/path.json" --frames "$work/frames" --fps 2 \
+      --size 96x64 --wait-complete --stats "$work/path-stats.json")
+echo "$out" | grep -q "3 frames" || fail "path: $out"
+for n in 0 1 2; do
+  [ "$(png_size "$work/frames/frame_0000$n.png")" = "96x64" ] || fail "frame $n"
+done
+cmp -s "$work/frames/frame_00000.png" "$work/frames/frame_00002.png" && fail "frames 0 and 2 are the same"
+python3 -c "import json,sys; s=json.load(open(sys.argv[1])); assert s['complete'] and s['longest_frame_ms'] >= s['median_frame_ms'] > 0, s" "$work/path-stats.json"
+echo '[{"time": 0, "lat": 0, "lon": 0, "alt": 1e6}, {"time": 0, "lat": 1, "lon": 0, "alt": 1e6}]' >"$work/bad.json"
+set +e
+"$tellus" render --cache "$cache" --path "$work/bad.json" --frames "$work/bad" 2>"$work/err.txt"
+rc=$?
+set -e
+[ $rc -eq 2 ] && grep -q "times must increase" "$work/err.txt" || fail "bad path: $rc $(cat "$work/err.txt")"
+
+# Usage errors: exit 2 and a message naming the problem; no image written.
+usage() {
+  local want=$1
+  shift
+  set +e
+  "$tellus" render --cache "$cache" "$@" --out "$work/bad.png" 2>"$work/err.txt" >/dev/null
+  local rc=$?
+  set -e
+  [ $rc -eq 2 ] || fail "exit $rc (want 2) for: $* ($(cat "$work/err.txt"))"
+  grep -q -- "$want" "$work/err.txt" || fail "message for $*: $(cat "$work/err.txt")"
+  [ ! -e "$work/bad.png" ] || fail "an image was written for: $*"
+}
+usage "--camera" --size 10x10
+usage "latitude" --camera 91,0,1e6
+usage "LAT,LON,ALT" --camera nan,0,1e6
+usage "LAT,LON,ALT" --camera 0,0,inf
+usage "LAT,LON,ALT" --camera 0,0
+usage "LAT,LON,ALT" --camera 0,0,1e6,0,0,0
+usage "altitude" --camera 0,0,1e11
+usage "tilt" --camera 0,0,1e6,0,200
+usage "--size" --camera 0,0,1e6 --size 0x10
+usage "--size" --camera 0,0,1e6 --size 100
+usage "--background" --camera 0,0,1e6 --background 300,0,0
+usage "--wait-complete" --camera 0,0,1e6 --wait-complete=abc
+usage "--layer" --camera 0,0,1e6 --layer nosuchlayer
+usage "imagery" --camera 0,0,1e6 --layer etopo
+usage "unknown option" --camera 0,0,1e6 --frobnicate 1
+
+# Given up on: a view that cannot be complete in a millisecond is an error, not a partial image.
+set +e
+"$tellus" render --cache "$work/cold" --camera 45,7,1e5 --size 320x240 --out "$work/late.png" \
+  --wait-complete=0.001 2>"$work/err.txt" >/dev/null
+rc=$?
+set -e
+[ $rc -eq 1 ] || fail "an incomplete view should exit 1, got $rc"
+grep -q "not complete after" "$work/err.txt" || fail "incomplete message: $(cat "$work/err.txt")"
+[ ! -e "$work/late.png" ] || fail "an incomplete image was written"
+
+# No display: said so, exit 1.
+set +e
+env -u DISPLAY -u WAYLAND_DISPLAY "$tellus" render --cache "$cache" --camera 0,0,2e7 \
+  --out "$work/nodisplay.png" 2>"$work/err.txt" >/dev/null
+rc=$?
+set -e
+[ $rc -eq 1 ] || fail "no display should exit 1, got $rc"
+grep -q "display" "$work/err.txt" || fail "no-display message: $(cat "$work/err.txt")"
+echo "render CLI: ok"

@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# `tellus view` driven as a user does (label gl: run under xvfb-run; needs xdotool): the window
+# opens, P writes a screenshot, a drag and the wheel change the view, Esc quits with exit 0.
+set -euo pipefail
+tellus=$1
+command -v xdotool >/dev/null || { echo "xdotool missing (tools/debian-packages.txt)" >&2; exit 1; }
+work=$(mktemp -d "${TMPDIR:-/tmp}/tellus-view.XXXXXX")
+pid=
+cleanup() { [ -n "$pid" ] && kill "$pid" 2>/dev/null; [ -n "${TELLUS_TEST_KEEP:-}" ] || rm -rf "$work"; }
+trap cleanup EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+cd "$work"
+"$tellus" view --cache "$work/cache" --size 320x200 --camera 0,0,2e7 >"$work/out.txt" 2>&1 &
+pid=$!
+win=$(timeout 30 xdotool search --sync --name '^tellus') || fail "no window: $(cat "$work/out.txt")"
+win=$(echo "$win" | head -1)
+xdotool windowfocus --sync "$win" || true
+hold() { xdotool keydown "$1"; sleep 0.3; xdotool keyup "$1"; }
+shot() { # waits for the n-th screenshot
+  hold p
+  for _ in $(seq 100); do [ -s "$work/tellus-$1.png" ] && return 0; sleep 0.1; done
+  fail "screenshot $1 not written: $(cat "$work/out.txt")"
+}
+sleep 3 # the level-zero textures stream in
+shot 1
+# Drag from the middle to the right: the globe turns.
+xdotool mousemove --window "$win" 160 100 mousedown 1
+for x in 180 200 220 240; do sleep 0.1; xdotool mousemove --window "$win" $x 100; done
+sleep 0.2
+xdotool mouseup 1
+sleep 1
+shot 2
+cmp -s tellus-1.png tellus-2.png && fail "dragging changed nothing"
+# The wheel zooms in.
+for _ in 1 2 3 4 5; do xdotool click --window "$win" 4; sleep 0.1; done
+sleep 2
+shot 3
+cmp -s tellus-2.png tellus-3.png && fail "the wheel changed nothing"
+hold Escape
+for _ in $(seq 100); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+kill -0 "$pid" 2>/dev/null && fail "Esc did not quit"
+wait "$pid" || fail "tellus view exited with $?"
+pid=
+grep -q "frames" "$work/out.txt" || fail "output: $(cat "$work/out.txt")"
+echo "view CLI: ok"

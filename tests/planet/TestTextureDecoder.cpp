@@ -1,0 +1,143 @@
+// The GL layer's CPU side, without a display (label unit, so the sanitizer runs cover it): decoding
+// and composing node textures (merged polar nodes), the mip chain, and the worker pool.
+
+#include "../../planet/gl/src/TextureDecoder.hpp"
+
+#include <tellus/planet_gl/Renderer.hpp>
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <set>
+#include <thread>
+
+using namespace tellus;
+using namespace tellus::planet;
+
+namespace {
+
+/** A w x h PNG: the top half one colour, the bottom half another. */
+std::vector<std::byte>
+twoTone(int w, int h, std::array<std::uint8_t, 3> top, std::array<std::uint8_t, 3> bottom) {
+  std::vector<std::uint8_t> px(static_cast<std::size_t>(w * h * 4));
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const auto& c = y < h / 2 ? top : bottom;
+      auto* p = &px[static_cast<std::size_t>((y * w + x) * 4)];
+      p[0] = c[0];
+      p[1] = c[1];
+      p[2] = c[2];
+      p[3] = 255;
+    }
+  return encodePngRgba(w, h, px);
+}
+
+std::array<int, 3> at(const MipLevel& l, int x, int y) {
+  const auto* p = &l.rgba[static_cast<std::size_t>((y * l.width + x) * 4)];
+  return {p[0], p[1], p[2]};
+}
+
+} // namespace
+
+TEST(TextureDecoder, OneTileBecomesRowsFromTheSouthWithEveryMipLevel) {
+  DecodeJob job;
+  job.key = {1, 2, 3, 1};
+  job.width = 16;
+  job.height = 8;
+  job.tiles.emplace_back(twoTone(16, 8, {200, 0, 0}, {0, 0, 100}));
+  const DecodedTexture t = decodeTexture(job);
+  ASSERT_TRUE(t.ok) << t.error;
+  EXPECT_EQ(t.key, job.key);
+  ASSERT_EQ(t.levels.size(), 5u); // 16x8, 8x4, 4x2, 2x1, 1x1
+  EXPECT_EQ(t.levels.back().width, 1);
+  EXPECT_EQ(t.levels.back().height, 1);
+  // Row 0 is the south: the image's bottom (blue) half.
+  EXPECT_EQ(at(t.levels[0], 5, 0), (std::array<int, 3>{0, 0, 100}));
+  EXPECT_EQ(at(t.levels[0], 5, 7), (std::array<int, 3>{200, 0, 0}));
+  // The 1 x 1 level is the mean.
+  EXPECT_EQ(at(t.levels.back(), 0, 0), (std::array<int, 3>{100, 0, 50}));
+  std::size_t bytes = 0;
+  for (const auto& l : t.levels)
+    bytes += l.rgba.size();
+  EXPECT_EQ(t.bytes, bytes);
+}
+
+TEST(TextureDecoder, MergedNodeTilesAreComposedSideBySideAndDownSampledEastWest) {
+  DecodeJob job;
+  job.key = {3, 39, 8, 4};
+  job.width = 16;
+  job.height = 16;
+  const std::array<std::array<std::uint8_t, 3>, 4> colours = {
+      {{255, 0, 0}, {0, 255, 0}, {0, 0, 255}, {255, 255, 255}}};
+  for (const auto& c : colours)
+    job.tiles.emplace_back(twoTone(16, 16, c, c));
+  job.tiles[2].reset(); // an absent tile stays dark
+  const DecodedTexture t = decodeTexture(job);
+  ASSERT_TRUE(t.ok) << t.error;
+  for (int i = 0; i < 4; ++i)
+    for (int x = i * 4; x < i * 4 + 4; ++x)
+      for (int y : {0, 7, 15}) {
+        const std::array<int, 3> want =
+            i == 2 ? std::array<int, 3>{0, 0, 0}
+                   : std::array<int, 3>{colours[static_cast<std::size_t>(i)][0],
+                                        colours[static_cast<std::size_t>(i)][1],
+                                        colours[static_cast<std::size_t>(i)][2]};
+        EXPECT_EQ(at(t.levels[0], x, y), want) << "tile " << i << " x " << x << " y " << y;
+      }
+}
+
+TEST(TextureDecoder, BytesThatAreNoImageFailWithAMessage) {
+  DecodeJob job;
+  job.key = {0, 0, 0, 1};
+  job.width = 8;
+  job.height = 8;
+  job.tiles.emplace_back(std::vector<std::byte>(100, std::byte{0x42}));
+  const DecodedTexture t = decodeTexture(job);
+  EXPECT_FALSE(t.ok);
+  EXPECT_NE(t.error.find("neither JPEG nor PNG"), std::string::npos) << t.error;
+  auto truncated = twoTone(8, 8, {1, 2, 3}, {4, 5, 6});
+  truncated.resize(truncated.size() / 2);
+  job.tiles[0] = truncated;
+  EXPECT_FALSE(decodeTexture(job).ok);
+}
+
+TEST(TextureDecoder, WorkersDecodeEveryJobOnce) {
+  TextureDecoder decoder(3);
+  const auto png = twoTone(32, 32, {10, 20, 30}, {40, 50, 60});
+  std::set<std::int64_t> want;
+  for (std::int64_t c = 0; c < 40; ++c) {
+    DecodeJob job;
+    job.key = {5, 7, c, 1};
+    job.width = 32;
+    job.height = 32;
+    job.tiles.emplace_back(png);
+    decoder.submit(std::move(job));
+    want.insert(c);
+  }
+  std::set<std::int64_t> got;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (got.size() < want.size() && std::chrono::steady_clock::now() < deadline) {
+    for (auto& t : decoder.takeDone()) {
+      EXPECT_TRUE(t.ok);
+      EXPECT_TRUE(got.insert(t.key.col).second) << "decoded twice: " << t.key.col;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  EXPECT_EQ(got, want);
+  EXPECT_EQ(decoder.pending(), 0u);
+}
+
+TEST(TextureDecoder, DestroyedWithJobsQueuedJoinsItsWorkers) {
+  const auto png = twoTone(256, 256, {1, 2, 3}, {4, 5, 6});
+  auto decoder = std::make_unique<TextureDecoder>(2);
+  for (std::int64_t c = 0; c < 50; ++c) {
+    DecodeJob job;
+    job.key = {8, 1, c, 1};
+    job.width = 256;
+    job.height = 256;
+    job.tiles.emplace_back(png);
+    decoder->submit(std::move(job));
+  }
+  decoder.reset(); // must neither hang nor touch freed memory (ASan/TSan runs)
+  SUCCEED();
+}
