@@ -19,12 +19,18 @@ build: setup build/build.ninja
 	@ln -sf build/compile_commands.json compile_commands.json
 
 # The main job on the embedded default (bundled Blue Marble + ETOPO 20'): fill the cache (levels
-# 0-1, resumable), show it, and serve it on LISTEN until Ctrl-C.
+# 0-1, resumable), show it, and serve it on LISTEN until Ctrl-C. With a display, the globe opens in
+# `tellus view` on the same cache while the server runs; closing the window stops both.
 LISTEN ?= 127.0.0.1:8080
 run: build
 	$(TELLUS) seed --cache $(CACHE) --levels 0-1
 	$(TELLUS) cache stats --cache $(CACHE)
-	$(TELLUS) serve --cache $(CACHE) --listen $(LISTEN)
+	@if [ -n "$$DISPLAY" ]; then \
+	  $(TELLUS) serve --cache $(CACHE) --listen $(LISTEN) & server=$$!; \
+	  $(TELLUS) view --cache $(CACHE); rc=$$?; kill $$server; wait $$server; exit $$rc; \
+	else \
+	  $(TELLUS) serve --cache $(CACHE) --listen $(LISTEN); \
+	fi
 
 # Every test: Release (GL tests under xvfb-run), then the ASan+UBSan and TSan configurations, then
 # a short fuzzing run of the request parsers.

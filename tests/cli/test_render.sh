@@ -33,6 +33,27 @@ PY
   --wait-complete=30 >/dev/null
 cmp -s "$work/a.png" "$work/b.png" || fail "two complete renders differ"
 
+# Tiles over HTTP from a remote `tellus serve` (--server): the same cache behind a server on any
+# free port gives the same complete image, byte for byte; a dead server is a clear error.
+"$tellus" serve --cache "$cache" --listen 127.0.0.1:0 --threads 1 >"$work/serve.txt" 2>&1 &
+server=$!
+for _ in $(seq 50); do grep -q "listening on" "$work/serve.txt" && break; sleep 0.1; done
+port=$(grep -o "127.0.0.1:[0-9]*" "$work/serve.txt" | head -n 1 | cut -d: -f2)
+[ -n "$port" ] || fail "serve did not say where it listens: $(cat "$work/serve.txt")"
+"$tellus" render --server "http://127.0.0.1:$port" --camera 0,0,2e7 --size 320x240 \
+  --out "$work/remote.png" --wait-complete --stats "$work/remote.json" >/dev/null || fail "--server"
+kill "$server"; wait "$server" || true
+cmp -s "$work/a.png" "$work/remote.png" || fail "the image through --server differs"
+grep -q '"tiles_received": 50' "$work/remote.json" || fail "remote: $(cat "$work/remote.json")"
+set +e
+"$tellus" render --server "http://127.0.0.1:$port" --camera 0,0,2e7 --out "$work/dead.png" \
+  >"$work/dead.txt" 2>&1
+rc=$?
+set -e
+[ "$rc" = 1 ] || fail "a dead --server exited $rc"
+grep -q "layers.json" "$work/dead.txt" || fail "no message naming the server: $(cat "$work/dead.txt")"
+[ ! -e "$work/dead.png" ] || fail "an image was written without a server"
+
 # The OpenGL 3.3 core fallback (Mesa told to offer no more): the same image; and without
 # glClipControl the same projection still draws (reversed Z in [-1, 1] depth, less precise).
 MESA_GL_VERSION_OVERRIDE=3.3 "$tellus" render --cache "$cache" --camera 0,0,2e7 --size 320x240 \
@@ -108,6 +129,7 @@ usage "--wait-complete" --camera 0,0,1e6 --wait-complete=abc
 usage "--layer" --camera 0,0,1e6 --layer nosuchlayer
 usage "imagery" --camera 0,0,1e6 --layer etopo
 usage "unknown option" --camera 0,0,1e6 --frobnicate 1
+usage "exclude each other" --camera 0,0,1e6 --offline --server http://127.0.0.1:1
 
 # Given up on: a view that cannot be complete in a millisecond is an error, not a partial image.
 set +e

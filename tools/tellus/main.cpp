@@ -12,6 +12,7 @@
 #include <tellus/proxy/LocalRasterSource.hpp>
 #include <tellus/proxy/Log.hpp>
 #include <tellus/proxy/ProxyFrontEnd.hpp>
+#include <tellus/proxy/RemoteTileSource.hpp>
 #include <tellus/proxy/Seeder.hpp>
 #include <tellus/proxy/TileService.hpp>
 #include <tellus/proxy/WebPage.hpp>
@@ -66,12 +67,12 @@ commands:
   render   headless globe rendering to PNG (an X display or xvfb-run)
              --camera LAT,LON,ALT[,HEADING,TILT] --out FILE.png [--size WxH]
              [--wait-complete[=SECONDS]] [--background R,G,B] [--stats FILE.json]
-             [--layer NAME] [--threshold T] [--offline]
+             [--layer NAME] [--threshold T] [--offline | --server URL]
              or a flight: --path PATH.json --frames DIR [--fps N] instead of --camera/--out
              (PATH.json: [{"time":0,"lat":..,"lon":..,"alt":..,"heading":..,"tilt":..}, ...])
   view     the interactive globe (a GLFW window)
              [--camera LAT,LON,ALT[,HEADING,TILT]] [--size WxH] [--layer NAME] [--threshold T]
-             [--offline]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc
+             [--offline | --server URL]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc
 
 options for every command:
   --cache DIR   cache root (default: $TELLUS_CACHE, $XDG_CACHE_HOME/tellus or ~/.cache/tellus)
@@ -1114,6 +1115,82 @@ planet::CameraPose poseAt(const std::vector<Keyframe>& keys, double t) {
   return p;
 }
 
+/** Where `render` and `view` get their tiles: the in-process tile service over the cache (the
+ * default, fetching misses upstream as `serve` does), or a remote `tellus serve` (--server URL,
+ * through its /layers.json and /tiles/). Also picks the layer: --layer, else the first imagery
+ * layer. Returns an exit code on failure (usage errors 2, the rest 1) after saying why. */
+struct PlanetTiles {
+  std::optional<Context> ctx;
+  std::unique_ptr<Fetcher> fetcher;
+  std::unique_ptr<TileService> service;
+  std::unique_ptr<RemoteTileSource> remote;
+  ITileSource* source = nullptr;
+};
+
+std::expected<PlanetTiles, int>
+openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
+  auto usage = [cmd](const char* what, const std::string& got) {
+    std::fprintf(stderr, "tellus %s: %s, got '%s'\n", cmd, what, got.c_str());
+    return kExitUsage;
+  };
+  PlanetTiles t;
+  const auto layerArg = a.get("layer");
+  if (const auto server = a.get("server")) {
+    if (a.flag("offline"))
+      return std::unexpected(usage("--server and --offline exclude each other", *server));
+    auto remote = RemoteTileSource::connect(*server);
+    if (!remote) {
+      std::fprintf(stderr, "tellus %s: %s\n", cmd, remote.error().c_str());
+      return std::unexpected(kExitError);
+    }
+    for (const RemoteLayer& l : (*remote)->layers())
+      if (!l.elevation && (layerArg ? l.name == *layerArg : ro.layer.empty())) ro.layer = l.name;
+    if (ro.layer.empty()) {
+      if (layerArg)
+        return std::unexpected(
+            usage("--layer must name an imagery layer of the server", *layerArg));
+      std::fprintf(stderr, "tellus %s: %s has no imagery layer\n", cmd, server->c_str());
+      return std::unexpected(kExitError);
+    }
+    t.remote = std::move(*remote);
+    t.source = t.remote.get();
+    return t;
+  }
+  t.ctx = setUp(a);
+  if (!t.ctx) return std::unexpected(kExitError);
+  const Config& config = t.ctx->config;
+  if (layerArg) {
+    const auto* layer = config.layer(*layerArg);
+    if (layer == nullptr || layer->kind != LayerKind::Imagery)
+      return std::unexpected(
+          usage("--layer must name an imagery layer of the configuration", *layerArg));
+    ro.layer = *layerArg;
+  } else {
+    for (const auto& candidate : config.layers)
+      if (candidate.kind == LayerKind::Imagery) {
+        ro.layer = candidate.name;
+        break;
+      }
+    if (ro.layer.empty()) {
+      std::fprintf(stderr, "tellus %s: the configuration has no imagery layer\n", cmd);
+      return std::unexpected(kExitError);
+    }
+  }
+  t.fetcher = std::make_unique<Fetcher>();
+  auto [upstreams, layers] = proxySpecs(config);
+  TileServiceOptions tso;
+  tso.offline = a.flag("offline") || config.server.offline;
+  auto tiles =
+      TileService::create(*t.ctx->cache, *t.fetcher, std::move(upstreams), std::move(layers), tso);
+  if (!tiles) {
+    std::fprintf(stderr, "tellus %s: %s\n", cmd, tiles.error().c_str());
+    return std::unexpected(kExitError);
+  }
+  t.service = std::move(*tiles);
+  t.source = t.service.get();
+  return t;
+}
+
 int cmdRender(const Args& a) {
   auto usage = [](const char* what, const std::string& got) {
     if (got.empty())
@@ -1135,6 +1212,7 @@ int cmdRender(const Args& a) {
                                                    "layer",
                                                    "threshold",
                                                    "offline",
+                                                   "server",
                                                    "path",
                                                    "frames",
                                                    "fps"};
@@ -1227,39 +1305,12 @@ int cmdRender(const Args& a) {
     return usage(e.what(), cameraArg.value_or(pathArg.value_or("")));
   }
 
-  auto ctx = setUp(a);
-  if (!ctx) return kExitError;
-  if (auto l = a.get("layer")) {
-    const auto* layer = ctx->config.layer(*l);
-    if (layer == nullptr) return usage("--layer names no layer of the configuration", *l);
-    if (layer->kind != LayerKind::Imagery) return usage("--layer must be an imagery layer", *l);
-    ro.layer = *l;
-  } else {
-    for (const auto& candidate : ctx->config.layers)
-      if (candidate.kind == LayerKind::Imagery) {
-        ro.layer = candidate.name;
-        break;
-      }
-    if (ro.layer.empty()) {
-      std::fprintf(stderr, "tellus render: the configuration has no imagery layer\n");
-      return kExitError;
-    }
-  }
+  auto tiles = openPlanetTiles(a, "render", ro);
+  if (!tiles) return tiles.error();
   // The always-resident global texture: the bundled Blue Marble.
   if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg"; fs::exists(global))
     ro.globalImage = global;
-
-  Fetcher fetcher;
-  auto [upstreams, layers] = proxySpecs(ctx->config);
-  TileServiceOptions tso;
-  tso.offline = a.flag("offline") || ctx->config.server.offline;
-  auto tiles =
-      TileService::create(*ctx->cache, fetcher, std::move(upstreams), std::move(layers), tso);
-  if (!tiles) {
-    std::fprintf(stderr, "tellus render: %s\n", tiles.error().c_str());
-    return kExitError;
-  }
-  auto renderer = planet::Renderer::create(**tiles, geodesy, ro);
+  auto renderer = planet::Renderer::create(*tiles->source, geodesy, ro);
   if (!renderer) {
     std::fprintf(stderr, "tellus render: %s\n", renderer.error().c_str());
     return kExitError;
@@ -1389,8 +1440,16 @@ int cmdView(const Args& a) {
     std::fprintf(stderr, "tellus view: %s, got '%s'\n", what, got.c_str());
     return kExitUsage;
   };
-  static const std::vector<std::string> known = {
-      "config", "cache", "data", "camera", "size", "layer", "threshold", "offline", "exit-after"};
+  static const std::vector<std::string> known = {"config",
+                                                 "cache",
+                                                 "data",
+                                                 "camera",
+                                                 "size",
+                                                 "layer",
+                                                 "threshold",
+                                                 "offline",
+                                                 "server",
+                                                 "exit-after"};
   for (const auto& [k, v] : a.options)
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
@@ -1429,34 +1488,12 @@ int cmdView(const Args& a) {
     if (!v || (*v)[0] < 1) return usage("--exit-after must be a frame count", *e);
     vo.maxFrames = static_cast<std::uint64_t>((*v)[0]);
   }
-  auto ctx = setUp(a);
-  if (!ctx) return kExitError;
-  if (auto l = a.get("layer")) {
-    const auto* layer = ctx->config.layer(*l);
-    if (layer == nullptr || layer->kind != LayerKind::Imagery)
-      return usage("--layer must name an imagery layer of the configuration", *l);
-    ro.layer = *l;
-  } else {
-    for (const auto& candidate : ctx->config.layers)
-      if (candidate.kind == LayerKind::Imagery) {
-        ro.layer = candidate.name;
-        break;
-      }
-  }
+  auto tiles = openPlanetTiles(a, "view", ro);
+  if (!tiles) return tiles.error();
   if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg"; fs::exists(global))
     ro.globalImage = global;
-  Fetcher fetcher;
-  auto [upstreams, layers] = proxySpecs(ctx->config);
-  TileServiceOptions tso;
-  tso.offline = a.flag("offline") || ctx->config.server.offline;
-  auto tiles =
-      TileService::create(*ctx->cache, fetcher, std::move(upstreams), std::move(layers), tso);
-  if (!tiles) {
-    std::fprintf(stderr, "tellus view: %s\n", tiles.error().c_str());
-    return kExitError;
-  }
   const Geodesy geodesy;
-  auto renderer = planet::Renderer::create(**tiles, geodesy, ro);
+  auto renderer = planet::Renderer::create(*tiles->source, geodesy, ro);
   if (!renderer) {
     std::fprintf(stderr, "tellus view: %s\n", renderer.error().c_str());
     return kExitError;
