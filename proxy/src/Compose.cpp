@@ -347,7 +347,174 @@ ComposeStats forEachPixel(const TileGrid& grid,
   return stats;
 }
 
+/** Bilinear value of a quad of one-plane tiles. */
+std::uint8_t sampleOne(const Quad& q) noexcept {
+  const std::int32_t w[4] = {
+      (256 - q.wx) * (256 - q.wy), q.wx * (256 - q.wy), (256 - q.wx) * q.wy, q.wx * q.wy};
+  std::int32_t acc = 0;
+  for (int k = 0; k < 4; ++k)
+    acc += q.t[k]->rgb[q.index[k]] * w[k];
+  return static_cast<std::uint8_t>((acc + 32768) >> 16);
+}
+
+/**
+ * composeImagery for one plane (tiles and canvas of one channel, opaque). Per output row, the
+ * vertical half of the filter once per tile column into one row of the texels the map samples
+ * (the tile columns side by side), then the horizontal half per pixel as two loads from that row:
+ * no test per pixel while every tile of the row is there. The same integer arithmetic as the RGB
+ * path's (weights in 1/256, one rounding), so the same values.
+ */
+ComposeStats composePlane(const TileGrid& grid,
+                          const Sector& box,
+                          std::int32_t width,
+                          std::int32_t height,
+                          std::int32_t level,
+                          std::int32_t firstLevel,
+                          const TileLookup& tiles,
+                          std::uint8_t* canvas) {
+  ComposeStats stats;
+  const LevelTiles t = levelTiles(grid, box, width, height, level, tiles);
+  Fallback fallback(grid, box, width, height, level, std::max(0, firstLevel), tiles);
+  const std::size_t nc = t.cols.tiles.size();
+  // Each tile column's sampled texels [lo, hi] at base[k] in the blended row.
+  std::vector<std::uint32_t> base(nc, 0);
+  std::uint32_t span = 0;
+  for (std::size_t k = 0; k < nc; ++k) {
+    base[k] = span;
+    if (t.cols.hi[k] >= t.cols.lo[k])
+      span += static_cast<std::uint32_t>(t.cols.hi[k] - t.cols.lo[k] + 1);
+  }
+  const auto w = static_cast<std::size_t>(width);
+  std::vector<std::uint32_t> xa(w, 0), xb(w, 0), wa(w, 0), wb(w, 0);
+  // Runs of columns inside the layer [begin, end).
+  std::vector<std::pair<std::int32_t, std::int32_t>> runs;
+  for (std::int32_t i = 0; i < width; ++i) {
+    const AxisSample& c = t.cols.samples[static_cast<std::size_t>(i)];
+    if (c.slotA < 0) continue;
+    const auto ka = static_cast<std::size_t>(c.slotA), kb = static_cast<std::size_t>(c.slotB);
+    const auto ui = static_cast<std::size_t>(i);
+    xa[ui] = base[ka] + static_cast<std::uint32_t>(c.offA - t.cols.lo[ka]);
+    xb[ui] = base[kb] + static_cast<std::uint32_t>(c.offB - t.cols.lo[kb]);
+    wb[ui] = static_cast<std::uint32_t>(c.weightB);
+    wa[ui] = 256u - wb[ui];
+    if (!runs.empty() && runs.back().second == i) {
+      runs.back().second = i + 1;
+    } else {
+      runs.emplace_back(i, i + 1);
+    }
+  }
+  std::vector<std::uint16_t> blended(std::max<std::uint32_t>(span, 1));
+  std::vector<char> present(nc);
+  Quad q{};
+  for (std::int32_t j = 0; j < height; ++j) {
+    const AxisSample& r = t.rows.samples[static_cast<std::size_t>(j)];
+    if (r.slotA < 0) continue;
+    const auto wy = static_cast<std::uint32_t>(r.weightB);
+    bool all = true;
+    for (std::size_t k = 0; k < nc; ++k) {
+      const TileSamples* sa = t.at(r.slotA, static_cast<std::int32_t>(k));
+      const TileSamples* sb = t.at(r.slotB, static_cast<std::int32_t>(k));
+      present[k] = sa && sb && t.cols.hi[k] >= 0;
+      if (!present[k]) {
+        all = all && t.cols.hi[k] < 0;
+        continue;
+      }
+      const std::uint8_t* a =
+          sa->rgb + static_cast<std::size_t>(r.offA) * static_cast<std::size_t>(sa->width);
+      const std::uint8_t* b =
+          sb->rgb + static_cast<std::size_t>(r.offB) * static_cast<std::size_t>(sb->width);
+      std::uint16_t* out = blended.data() + base[k];
+      const auto lo = static_cast<std::size_t>(t.cols.lo[k]);
+      const std::size_t n = static_cast<std::size_t>(t.cols.hi[k]) + 1 - lo;
+      a += lo;
+      b += lo;
+      for (std::size_t x = 0; x < n; ++x)
+        out[x] = static_cast<std::uint16_t>(a[x] * (256u - wy) + b[x] * wy);
+    }
+    std::uint8_t* out = canvas + static_cast<std::size_t>(j) * w;
+    const std::uint16_t* v = blended.data();
+    if (all) {
+      for (const auto& [begin, end] : runs) {
+        for (auto i = static_cast<std::size_t>(begin); i < static_cast<std::size_t>(end); ++i)
+          out[i] = static_cast<std::uint8_t>((v[xa[i]] * wa[i] + v[xb[i]] * wb[i] + 32768u) >> 16);
+      }
+      continue;
+    }
+    for (std::int32_t i = 0; i < width; ++i) {
+      const AxisSample& c = t.cols.samples[static_cast<std::size_t>(i)];
+      if (c.slotA < 0) continue;
+      const auto ui = static_cast<std::size_t>(i);
+      if (present[static_cast<std::size_t>(c.slotA)] &&
+          present[static_cast<std::size_t>(c.slotB)]) {
+        out[ui] =
+            static_cast<std::uint8_t>((v[xa[ui]] * wa[ui] + v[xb[ui]] * wb[ui] + 32768u) >> 16);
+      } else if (fallback.quad(i, j, q)) { // a tile of the four is missing at this level
+        ++stats.fallbackPixels;
+        out[ui] = sampleOne(q);
+      } else {
+        ++stats.missingPixels;
+      }
+    }
+  }
+  return stats;
+}
+
 } // namespace
+
+std::optional<ChromaLayout>
+chromaLayout(const TileGrid& grid, const Sector& box, std::int32_t width, std::int32_t height) {
+  GridSpec spec = grid.spec();
+  if (spec.tileWidth % 2 != 0 || spec.tileHeight % 2 != 0 || width <= 0 || height <= 0)
+    return std::nullopt;
+  spec.tileWidth /= 2;
+  spec.tileHeight /= 2;
+  auto half = TileGrid::create(spec);
+  if (!half) return std::nullopt;
+  const std::int32_t cw = (width + 1) / 2, ch = (height + 1) / 2;
+  const double dx = (box.east - box.west) / width;
+  const double dy = (box.north - box.south) / height;
+  Sector b = box;
+  // The odd pixel's chroma reaches half a chroma sample past the box (what JPEG's edge
+  // replication would give it is as good; this keeps the sample spacing exact).
+  if (cw * 2 != width) b.east = box.west + dx * (2 * cw);
+  if (ch * 2 != height) b.south = box.north - dy * (2 * ch);
+  return ChromaLayout{*half, b, cw, ch};
+}
+
+std::expected<std::vector<ComposeTile>, std::size_t> composeTilesYcc(const TileGrid& grid,
+                                                                     const Sector& box,
+                                                                     std::int32_t width,
+                                                                     std::int32_t height,
+                                                                     std::int32_t level,
+                                                                     std::size_t maxTiles) {
+  auto keys = composeTiles(grid, box, width, height, level, maxTiles);
+  if (!keys) return keys;
+  const auto chroma = chromaLayout(grid, box, width, height);
+  if (!chroma) return keys;
+  const auto more = composeTiles(chroma->grid,
+                                 chroma->box,
+                                 chroma->width,
+                                 chroma->height,
+                                 level,
+                                 std::numeric_limits<std::size_t>::max());
+  if (!more) return keys;
+  for (const ComposeTile& c : *more) {
+    const std::array<std::int32_t, 4> region{
+        c.region[0] * 2, c.region[1] * 2, c.region[2] * 2, c.region[3] * 2};
+    auto it = std::find_if(keys->begin(), keys->end(), [&](const ComposeTile& k) {
+      return k.key.level == c.key.level && k.key.row == c.key.row && k.key.col == c.key.col;
+    });
+    if (it == keys->end()) {
+      keys->push_back(ComposeTile{c.key, region});
+    } else {
+      it->region = {std::min(it->region[0], region[0]),
+                    std::min(it->region[1], region[1]),
+                    std::max(it->region[2], region[2]),
+                    std::max(it->region[3], region[3])};
+    }
+  }
+  return keys;
+}
 
 std::int32_t composeLevel(const TileGrid& grid,
                           const Sector& box,
@@ -399,6 +566,10 @@ ComposeStats composeImagery(const TileGrid& grid,
                             double opacity,
                             std::vector<std::uint8_t>& canvas,
                             std::int32_t canvasChannels) {
+  if (canvasChannels == 1) {
+    canvas.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+    return composePlane(grid, box, width, height, level, firstLevel, tiles, canvas.data());
+  }
   const int cc = canvasChannels == 3 ? 3 : 4;
   canvas.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) *
                 static_cast<std::size_t>(cc));
