@@ -26,7 +26,7 @@
 #include <filesystem>
 #include <fstream>
 #include <future>
-#include <jpeglib.h>
+#include <jpeglib.h> // after <cstdio>: a 4:4:4 JPEG tile for the composer's fallback test
 #include <span>
 #include <sys/wait.h>
 #include <thread>
