@@ -4,6 +4,7 @@
 // seeder encodes them (quality 90, 4:2:0).
 
 #include "../../proxy/src/JpegRaw.hpp"
+#include "../support/JpegSampling.hpp"
 
 #include <tellus/proxy/Compose.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
@@ -11,14 +12,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <csetjmp>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
-#include <jpeglib.h>
 #include <map>
 #include <random>
 #include <tuple>
@@ -100,35 +99,6 @@ decode(const std::vector<std::byte>& jpeg, const std::array<std::int32_t, 4>* re
   std::string message;
   return codecs::decodeJpegYcc(
       jpeg, kTile, kTile, region, p.y.data(), p.cb.data(), p.cr.data(), message);
-}
-
-/** A JPEG with the given sampling factors of the luma (chroma 1 x 1), written with libjpeg. */
-std::vector<std::byte> jpegWithSampling(const std::vector<std::uint8_t>& rgb, int h, int v) {
-  jpeg_compress_struct c;
-  jpeg_error_mgr e;
-  c.err = jpeg_std_error(&e);
-  jpeg_create_compress(&c);
-  unsigned char* buffer = nullptr;
-  unsigned long size = 0;
-  jpeg_mem_dest(&c, &buffer, &size);
-  c.image_width = kTile;
-  c.image_height = kTile;
-  c.input_components = 3;
-  c.in_color_space = JCS_RGB;
-  jpeg_set_defaults(&c);
-  c.comp_info[0].h_samp_factor = h;
-  c.comp_info[0].v_samp_factor = v;
-  jpeg_start_compress(&c, TRUE);
-  while (c.next_scanline < c.image_height) {
-    auto* row = const_cast<JSAMPROW>(&rgb[c.next_scanline * kTile * 3]);
-    jpeg_write_scanlines(&c, &row, 1);
-  }
-  jpeg_finish_compress(&c);
-  jpeg_destroy_compress(&c);
-  std::vector<std::byte> out(size);
-  std::memcpy(out.data(), buffer, size);
-  std::free(buffer);
-  return out;
 }
 
 /** A map composed as the composer does on the RGB path: decoded JPEG (RGB). */
@@ -269,9 +239,12 @@ TEST(JpegRaw, RegionDecodesMatchTheWholeDecode) {
 TEST(JpegRaw, OtherSamplingsAndShapesAreLeftToTheRgbPath) {
   const auto rgb = tileRgb(tiles().g, TileKey{1, 5, 10});
   Planes p;
-  EXPECT_EQ(decode(jpegWithSampling(rgb, 1, 1), nullptr, p), codecs::YccDecode::NotYcc420); // 4:4:4
-  EXPECT_EQ(decode(jpegWithSampling(rgb, 2, 1), nullptr, p), codecs::YccDecode::NotYcc420); // 4:2:2
-  EXPECT_EQ(decode(jpegWithSampling(rgb, 2, 2), nullptr, p), codecs::YccDecode::Ok);
+  EXPECT_EQ(decode(test::jpegWithSampling(rgb, kTile, kTile, 1, 1), nullptr, p),
+            codecs::YccDecode::NotYcc420); // 4:4:4
+  EXPECT_EQ(decode(test::jpegWithSampling(rgb, kTile, kTile, 2, 1), nullptr, p),
+            codecs::YccDecode::NotYcc420); // 4:2:2
+  EXPECT_EQ(decode(test::jpegWithSampling(rgb, kTile, kTile, 2, 2), nullptr, p),
+            codecs::YccDecode::Ok);
   std::vector<std::uint8_t> grey(static_cast<std::size_t>(kTile * kTile), 128);
   EXPECT_EQ(decode(*encodeImage("image/jpeg", kTile, kTile, 1, grey.data()), nullptr, p),
             codecs::YccDecode::NotYcc420);

@@ -5,6 +5,7 @@
 #include "../support/CacheFixtures.hpp"
 #include "../support/FakeUpstream.hpp"
 #include "../support/HttpClient.hpp"
+#include "../support/JpegSampling.hpp"
 #include "../support/TempDir.hpp"
 
 #include <tellus/cache/TileCache.hpp>
@@ -26,7 +27,6 @@
 #include <filesystem>
 #include <fstream>
 #include <future>
-#include <jpeglib.h> // after <cstdio>: a 4:4:4 JPEG tile for the composer's fallback test
 #include <span>
 #include <sys/wait.h>
 #include <thread>
@@ -888,7 +888,7 @@ TEST(ComposeIntegration, HolesAreFilledFromCoarserLevelsOrReported) {
 
 namespace {
 
-/** jpegFor's tile, with 4:4:4 sampling (no chroma subsampling), written with libjpeg. */
+/** jpegFor's tile, with 4:4:4 sampling (no chroma subsampling). */
 std::string jpeg444For(const std::string& target, int size = 256) {
   const auto h = stableHash64(target);
   std::vector<std::uint8_t> px(static_cast<std::size_t>(size * size * 3));
@@ -897,31 +897,8 @@ std::string jpeg444For(const std::string& target, int size = 256) {
     px[i + 1] = static_cast<std::uint8_t>(h >> 8);
     px[i + 2] = static_cast<std::uint8_t>(h >> 16);
   }
-  jpeg_compress_struct c;
-  jpeg_error_mgr e;
-  c.err = jpeg_std_error(&e);
-  jpeg_create_compress(&c);
-  unsigned char* buffer = nullptr;
-  unsigned long bytes = 0;
-  jpeg_mem_dest(&c, &buffer, &bytes);
-  c.image_width = static_cast<JDIMENSION>(size);
-  c.image_height = static_cast<JDIMENSION>(size);
-  c.input_components = 3;
-  c.in_color_space = JCS_RGB;
-  jpeg_set_defaults(&c);
-  c.comp_info[0].h_samp_factor = 1;
-  c.comp_info[0].v_samp_factor = 1;
-  jpeg_start_compress(&c, TRUE);
-  while (c.next_scanline < c.image_height) {
-    JSAMPROW row =
-        &px[static_cast<std::size_t>(c.next_scanline) * static_cast<std::size_t>(size) * 3];
-    jpeg_write_scanlines(&c, &row, 1);
-  }
-  jpeg_finish_compress(&c);
-  jpeg_destroy_compress(&c);
-  std::string out(reinterpret_cast<const char*>(buffer), bytes);
-  std::free(buffer);
-  return out;
+  const auto bytes = test::jpegWithSampling(px, size, size, 1, 1);
+  return std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size());
 }
 
 } // namespace
