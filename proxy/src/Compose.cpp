@@ -467,27 +467,56 @@ void Horizontal::run(const std::uint16_t* v, const std::uint32_t* pairs, std::ui
     scalar(v, out, s.begin, s.end);
 }
 
-/** The vertical half of the filter over one texel row of a tile column (vectorised; an AVX2
- * clone where the CPU has it). */
+/** The vertical half of the filter over one texel row of a tile column, and the texel pairs of
+ * the horizontal half (pairs[x] = v[x] | v[x + 1] << 16): plain loops that the compiler
+ * vectorises, inlined once more into AVX2 functions used where the CPU has it (dispatched at run
+ * time like the horizontal pass; not with target_clones, whose ifunc resolvers run before
+ * ThreadSanitizer's runtime is up). */
+[[gnu::always_inline]] inline void blendRowsLoop(const std::uint8_t* a,
+                                                 const std::uint8_t* b,
+                                                 std::uint32_t wy,
+                                                 std::uint16_t* out,
+                                                 std::size_t n) noexcept {
+  for (std::size_t x = 0; x < n; ++x)
+    out[x] = static_cast<std::uint16_t>(a[x] * (256u - wy) + b[x] * wy);
+}
+
+[[gnu::always_inline]] inline void
+makePairsLoop(const std::uint16_t* v, std::uint32_t* pairs, std::size_t n) noexcept {
+  for (std::size_t x = 0; x < n; ++x)
+    pairs[x] = v[x] | static_cast<std::uint32_t>(v[x + 1]) << 16;
+}
+
 #ifdef TELLUS_COMPOSE_AVX2
-__attribute__((target_clones("avx2", "default")))
+__attribute__((target("avx2"))) void blendRowsAvx2(const std::uint8_t* a,
+                                                   const std::uint8_t* b,
+                                                   std::uint32_t wy,
+                                                   std::uint16_t* out,
+                                                   std::size_t n) noexcept {
+  blendRowsLoop(a, b, wy, out, n);
+}
+__attribute__((target("avx2"))) void
+makePairsAvx2(const std::uint16_t* v, std::uint32_t* pairs, std::size_t n) noexcept {
+  makePairsLoop(v, pairs, n);
+}
 #endif
+
 void blendRows(const std::uint8_t* a,
                const std::uint8_t* b,
                std::uint32_t wy,
                std::uint16_t* out,
                std::size_t n) noexcept {
-  for (std::size_t x = 0; x < n; ++x)
-    out[x] = static_cast<std::uint16_t>(a[x] * (256u - wy) + b[x] * wy);
+#ifdef TELLUS_COMPOSE_AVX2
+  if (kHasAvx2) return blendRowsAvx2(a, b, wy, out, n);
+#endif
+  blendRowsLoop(a, b, wy, out, n);
 }
 
-/** pairs[x] = v[x] | v[x + 1] << 16 for x < n. */
-#ifdef TELLUS_COMPOSE_AVX2
-__attribute__((target_clones("avx2", "default")))
-#endif
 void makePairs(const std::uint16_t* v, std::uint32_t* pairs, std::size_t n) noexcept {
-  for (std::size_t x = 0; x < n; ++x)
-    pairs[x] = v[x] | static_cast<std::uint32_t>(v[x + 1]) << 16;
+#ifdef TELLUS_COMPOSE_AVX2
+  if (kHasAvx2) return makePairsAvx2(v, pairs, n);
+#endif
+  makePairsLoop(v, pairs, n);
 }
 
 /**
