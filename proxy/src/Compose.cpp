@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 
@@ -388,7 +389,8 @@ struct Horizontal {
 };
 
 #ifdef TELLUS_COMPOSE_AVX2
-const bool kHasAvx2 = __builtin_cpu_supports("avx2");
+// TELLUS_COMPOSE_NO_AVX2=1 takes the plain code on any CPU (the tests run both).
+const bool kHasAvx2 = __builtin_cpu_supports("avx2") && !std::getenv("TELLUS_COMPOSE_NO_AVX2");
 
 __attribute__((target("avx2"))) void horizontalAvx2(const Horizontal& h,
                                                     const std::uint16_t* v,
