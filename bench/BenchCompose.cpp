@@ -2,6 +2,8 @@
 // benchmark size): the sampling alone, and decode + sample + encode as tellus serve does it.
 // Side by side in one run; ratios are what to compare. Run with bench/run.sh.
 
+#include "JpegRaw.hpp"
+
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/proxy/Compose.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
@@ -10,6 +12,7 @@
 
 #include <array>
 #include <map>
+#include <memory>
 #include <tuple>
 
 using namespace tellus;
@@ -94,6 +97,112 @@ void BM_DecodeSampleEncodeJpeg(benchmark::State& state) {
   state.counters["jpeg_bytes"] = static_cast<double>(bytes);
 }
 BENCHMARK(BM_DecodeSampleEncodeJpeg)->Unit(benchmark::kMillisecond);
+
+/** The tiles of kBox as JPEG (quality 90, 4:2:0, as seeded) with the regions of the YCbCr path. */
+struct YccFixture {
+  TileGrid g = grid();
+  int level = composeLevel(g, kBox, 1024, 768, 0);
+  std::vector<ComposeTile> keys = *composeTilesYcc(g, kBox, 1024, 768, level, 256);
+  ChromaLayout chroma = *chromaLayout(g, kBox, 1024, 768);
+  std::map<std::tuple<std::int64_t, std::int64_t>, std::vector<std::byte>> jpegs;
+  struct Planes {
+    std::vector<std::uint8_t> px = std::vector<std::uint8_t>(512 * 512 * 3 / 2);
+    TileSamples view[3];
+  };
+  std::map<std::tuple<std::int64_t, std::int64_t>, Planes> planes;
+  std::vector<std::uint8_t> out[3];
+  YccFixture() {
+    for (const auto& t : keys) {
+      const auto px = tilePixels(t.key);
+      jpegs[{t.key.row, t.key.col}] = *encodeImage("image/jpeg", 512, 512, 3, px.data());
+      auto& p = planes[{t.key.row, t.key.col}];
+      p.view[0] = TileSamples{512, 512, 1, p.px.data(), nullptr};
+      p.view[1] = TileSamples{256, 256, 1, p.px.data() + 512 * 512, nullptr};
+      p.view[2] = TileSamples{256, 256, 1, p.px.data() + 512 * 512 + 256 * 256, nullptr};
+    }
+  }
+  void decode() {
+    for (const auto& t : keys) {
+      auto& p = planes[{t.key.row, t.key.col}];
+      std::string message;
+      codecs::decodeJpegYcc(jpegs[{t.key.row, t.key.col}],
+                            512,
+                            512,
+                            &t.region,
+                            p.px.data(),
+                            p.px.data() + 512 * 512,
+                            p.px.data() + 512 * 512 + 256 * 256,
+                            message);
+    }
+  }
+  void sample() {
+    for (int plane = 0; plane < 3; ++plane) {
+      const TileLookup lookup = [&](const TileKey& k) -> const TileSamples* {
+        const auto it = planes.find({k.row, k.col});
+        return k.level == level && it != planes.end() ? &it->second.view[plane] : nullptr;
+      };
+      if (plane == 0) {
+        composeImagery(g, kBox, 1024, 768, level, 0, lookup, 1.0, out[0], 1);
+      } else {
+        composeImagery(chroma.grid,
+                       chroma.box,
+                       chroma.width,
+                       chroma.height,
+                       level,
+                       0,
+                       lookup,
+                       1.0,
+                       out[plane],
+                       1);
+      }
+    }
+  }
+  std::size_t encode() {
+    const auto jpeg = codecs::encodeJpegYcc(1024, 768, out[0].data(), out[1].data(), out[2].data());
+    benchmark::DoNotOptimize(jpeg->data());
+    return jpeg->size();
+  }
+};
+
+void BM_YccDecodeOnly(benchmark::State& state) {
+  YccFixture f;
+  for (auto _ : state)
+    f.decode();
+  state.counters["tiles"] = static_cast<double>(f.keys.size());
+}
+BENCHMARK(BM_YccDecodeOnly)->Unit(benchmark::kMillisecond);
+
+void BM_YccSampleOnly(benchmark::State& state) {
+  YccFixture f;
+  f.decode();
+  for (auto _ : state) {
+    f.sample();
+    benchmark::DoNotOptimize(f.out[0].data());
+  }
+}
+BENCHMARK(BM_YccSampleOnly)->Unit(benchmark::kMillisecond);
+
+void BM_YccEncodeOnly(benchmark::State& state) {
+  YccFixture f;
+  f.decode();
+  f.sample();
+  for (auto _ : state)
+    benchmark::DoNotOptimize(f.encode());
+}
+BENCHMARK(BM_YccEncodeOnly)->Unit(benchmark::kMillisecond);
+
+void BM_YccDecodeSampleEncodeJpeg(benchmark::State& state) {
+  YccFixture f;
+  std::size_t bytes = 0;
+  for (auto _ : state) {
+    f.decode();
+    f.sample();
+    bytes = f.encode();
+  }
+  state.counters["tiles"] = static_cast<double>(f.keys.size());
+  state.counters["jpeg_bytes"] = static_cast<double>(bytes);
+}
+BENCHMARK(BM_YccDecodeSampleEncodeJpeg)->Unit(benchmark::kMillisecond);
 
 } // namespace
 

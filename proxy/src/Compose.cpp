@@ -2,7 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
 #include <limits>
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define TELLUS_COMPOSE_AVX2 1
+#endif
 
 namespace tellus {
 
@@ -347,7 +354,360 @@ ComposeStats forEachPixel(const TileGrid& grid,
   return stats;
 }
 
+/** Bilinear value of a quad of one-plane tiles. */
+std::uint8_t sampleOne(const Quad& q) noexcept {
+  const std::int32_t w[4] = {
+      (256 - q.wx) * (256 - q.wy), q.wx * (256 - q.wy), (256 - q.wx) * q.wy, q.wx * q.wy};
+  std::int32_t acc = 0;
+  for (int k = 0; k < 4; ++k)
+    acc += q.t[k]->rgb[q.index[k]] * w[k];
+  return static_cast<std::uint8_t>((acc + 32768) >> 16);
+}
+
+/**
+ * The horizontal half of the planar filter, precomputed per output column: out[i] = (v[xa] * wa +
+ * v[xb] * wb + 32768) >> 16 over the vertically blended row v. Columns are grouped in segments of
+ * a run of columns inside the layer; a segment of 8 columns whose texel pairs are neighbours
+ * (xb = xa + 1, or wb = 0) within 16 texels of `base` is done with AVX2 (when the CPU has it) from
+ * `pairs` (pairs[x] = v[x] | v[x + 1] << 16): two loads of 8 pairs and two in-register
+ * permutations instead of 16 loads at computed addresses. The same integer arithmetic either way.
+ */
+struct Horizontal {
+  struct Segment {
+    std::uint32_t begin, end; ///< output columns
+    std::uint32_t base;       ///< for a SIMD segment (end - begin = 8): the first texel pair
+    bool simd;
+  };
+  std::vector<std::uint32_t> xa, xb, wa, wb, rel; ///< rel: xa - base in SIMD segments
+  std::vector<Segment> segments;
+
+  void scalar(const std::uint16_t* v, std::uint8_t* out, std::size_t b, std::size_t e) const {
+    for (std::size_t i = b; i < e; ++i)
+      out[i] = static_cast<std::uint8_t>((v[xa[i]] * wa[i] + v[xb[i]] * wb[i] + 32768u) >> 16);
+  }
+  void run(const std::uint16_t* v, const std::uint32_t* pairs, std::uint8_t* out) const;
+};
+
+#ifdef TELLUS_COMPOSE_AVX2
+// TELLUS_COMPOSE_NO_AVX2=1 takes the plain code on any CPU (the tests run both).
+const bool kHasAvx2 = __builtin_cpu_supports("avx2") && !std::getenv("TELLUS_COMPOSE_NO_AVX2");
+
+__attribute__((target("avx2"))) void horizontalAvx2(const Horizontal& h,
+                                                    const std::uint16_t* v,
+                                                    const std::uint32_t* pairs,
+                                                    std::uint8_t* out) {
+  const __m256i low = _mm256_set1_epi32(0xFFFF);
+  const __m256i half = _mm256_set1_epi32(32768);
+  const __m256i seven = _mm256_set1_epi32(7);
+  // The low byte of each 32-bit lane to the first four bytes of each 128-bit half.
+  const __m256i bytes = _mm256_setr_epi8(0,
+                                         4,
+                                         8,
+                                         12,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         0,
+                                         4,
+                                         8,
+                                         12,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         -1,
+                                         -1);
+  for (const Horizontal::Segment& s : h.segments) {
+    if (!s.simd) {
+      h.scalar(v, out, s.begin, s.end);
+      continue;
+    }
+    const __m256i rel =
+        _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h.rel.data() + s.begin));
+    const __m256i first = _mm256_permutevar8x32_epi32(
+        _mm256_loadu_si256(reinterpret_cast<const __m256i*>(pairs + s.base)), rel);
+    const __m256i second = _mm256_permutevar8x32_epi32(
+        _mm256_loadu_si256(reinterpret_cast<const __m256i*>(pairs + s.base + 8)), rel);
+    const __m256i p = _mm256_blendv_epi8(first, second, _mm256_cmpgt_epi32(rel, seven));
+    const __m256i a = _mm256_and_si256(p, low);
+    const __m256i b = _mm256_srli_epi32(p, 16);
+    __m256i r = _mm256_add_epi32(
+        _mm256_mullo_epi32(
+            a, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h.wa.data() + s.begin))),
+        _mm256_mullo_epi32(
+            b, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h.wb.data() + s.begin))));
+    r = _mm256_shuffle_epi8(_mm256_srli_epi32(_mm256_add_epi32(r, half), 16), bytes);
+    const auto lo = static_cast<std::uint32_t>(_mm256_cvtsi256_si32(r));
+    const auto hi = static_cast<std::uint32_t>(_mm256_extract_epi32(r, 4));
+    std::memcpy(out + s.begin, &lo, 4);
+    std::memcpy(out + s.begin + 4, &hi, 4);
+  }
+}
+#endif
+
+void Horizontal::run(const std::uint16_t* v, const std::uint32_t* pairs, std::uint8_t* out) const {
+#ifdef TELLUS_COMPOSE_AVX2
+  if (kHasAvx2) return horizontalAvx2(*this, v, pairs, out);
+#endif
+  (void)pairs;
+  for (const Segment& s : segments)
+    scalar(v, out, s.begin, s.end);
+}
+
+/** The vertical half of the filter over one texel row of a tile column, and the texel pairs of
+ * the horizontal half (pairs[x] = v[x] | v[x + 1] << 16): plain loops that the compiler
+ * vectorises, inlined once more into AVX2 functions used where the CPU has it (dispatched at run
+ * time like the horizontal pass; not with target_clones, whose ifunc resolvers run before
+ * ThreadSanitizer's runtime is up). */
+[[gnu::always_inline]] inline void blendRowsLoop(const std::uint8_t* a,
+                                                 const std::uint8_t* b,
+                                                 std::uint32_t wy,
+                                                 std::uint16_t* out,
+                                                 std::size_t n) noexcept {
+  for (std::size_t x = 0; x < n; ++x)
+    out[x] = static_cast<std::uint16_t>(a[x] * (256u - wy) + b[x] * wy);
+}
+
+[[gnu::always_inline]] inline void
+makePairsLoop(const std::uint16_t* v, std::uint32_t* pairs, std::size_t n) noexcept {
+  for (std::size_t x = 0; x < n; ++x)
+    pairs[x] = v[x] | static_cast<std::uint32_t>(v[x + 1]) << 16;
+}
+
+#ifdef TELLUS_COMPOSE_AVX2
+__attribute__((target("avx2"))) void blendRowsAvx2(const std::uint8_t* a,
+                                                   const std::uint8_t* b,
+                                                   std::uint32_t wy,
+                                                   std::uint16_t* out,
+                                                   std::size_t n) noexcept {
+  blendRowsLoop(a, b, wy, out, n);
+}
+__attribute__((target("avx2"))) void
+makePairsAvx2(const std::uint16_t* v, std::uint32_t* pairs, std::size_t n) noexcept {
+  makePairsLoop(v, pairs, n);
+}
+#endif
+
+void blendRows(const std::uint8_t* a,
+               const std::uint8_t* b,
+               std::uint32_t wy,
+               std::uint16_t* out,
+               std::size_t n) noexcept {
+#ifdef TELLUS_COMPOSE_AVX2
+  if (kHasAvx2) return blendRowsAvx2(a, b, wy, out, n);
+#endif
+  blendRowsLoop(a, b, wy, out, n);
+}
+
+void makePairs(const std::uint16_t* v, std::uint32_t* pairs, std::size_t n) noexcept {
+#ifdef TELLUS_COMPOSE_AVX2
+  if (kHasAvx2) return makePairsAvx2(v, pairs, n);
+#endif
+  makePairsLoop(v, pairs, n);
+}
+
+/**
+ * composeImagery for one plane (tiles and canvas of one channel, opaque). Per output row, the
+ * vertical half of the filter once per tile column into one row of the texels the map samples
+ * (the tile columns side by side), then the horizontal half per pixel as two loads from that row:
+ * no test per pixel while every tile of the row is there. The same integer arithmetic as the RGB
+ * path's (weights in 1/256, one rounding), so the same values.
+ */
+ComposeStats composePlane(const TileGrid& grid,
+                          const Sector& box,
+                          std::int32_t width,
+                          std::int32_t height,
+                          std::int32_t level,
+                          std::int32_t firstLevel,
+                          const TileLookup& tiles,
+                          std::uint8_t* canvas) {
+  ComposeStats stats;
+  const LevelTiles t = levelTiles(grid, box, width, height, level, tiles);
+  Fallback fallback(grid, box, width, height, level, std::max(0, firstLevel), tiles);
+  const std::size_t nc = t.cols.tiles.size();
+  // Each tile column's sampled texels [lo, hi] at base[k] in the blended row.
+  std::vector<std::uint32_t> base(nc, 0);
+  std::uint32_t span = 0;
+  for (std::size_t k = 0; k < nc; ++k) {
+    base[k] = span;
+    if (t.cols.hi[k] >= t.cols.lo[k])
+      span += static_cast<std::uint32_t>(t.cols.hi[k] - t.cols.lo[k] + 1);
+  }
+  const auto w = static_cast<std::size_t>(width);
+  Horizontal hz;
+  hz.xa.assign(w, 0);
+  hz.xb.assign(w, 0);
+  hz.wa.assign(w, 0);
+  hz.wb.assign(w, 0);
+  hz.rel.assign(w, 0);
+  std::vector<std::uint32_t>&xa = hz.xa, &xb = hz.xb, &wa = hz.wa, &wb = hz.wb;
+  // Runs of columns inside the layer [begin, end).
+  std::vector<std::pair<std::int32_t, std::int32_t>> runs;
+  for (std::int32_t i = 0; i < width; ++i) {
+    const AxisSample& c = t.cols.samples[static_cast<std::size_t>(i)];
+    if (c.slotA < 0) continue;
+    const auto ka = static_cast<std::size_t>(c.slotA), kb = static_cast<std::size_t>(c.slotB);
+    const auto ui = static_cast<std::size_t>(i);
+    xa[ui] = base[ka] + static_cast<std::uint32_t>(c.offA - t.cols.lo[ka]);
+    xb[ui] = base[kb] + static_cast<std::uint32_t>(c.offB - t.cols.lo[kb]);
+    wb[ui] = static_cast<std::uint32_t>(c.weightB);
+    if (xb[ui] == xa[ui]) wb[ui] = 0; // one texel (clamped at an edge): the same value
+    wa[ui] = 256u - wb[ui];
+    if (!runs.empty() && runs.back().second == i) {
+      runs.back().second = i + 1;
+    } else {
+      runs.emplace_back(i, i + 1);
+    }
+  }
+  for (const auto& [begin, end] : runs) {
+    auto i = static_cast<std::uint32_t>(begin);
+    const auto e = static_cast<std::uint32_t>(end);
+    for (; i + 8 <= e; i += 8) {
+      std::uint32_t lo = xa[i], hi = xa[i];
+      bool neighbours = true;
+      for (std::uint32_t k = i; k < i + 8; ++k) {
+        lo = std::min(lo, xa[k]);
+        hi = std::max(hi, xa[k]);
+        neighbours = neighbours && (xb[k] == xa[k] + 1 || wb[k] == 0);
+      }
+      const bool simd = neighbours && hi - lo < 16;
+      if (simd) {
+        for (std::uint32_t k = i; k < i + 8; ++k)
+          hz.rel[k] = xa[k] - lo;
+      }
+      if (!simd && !hz.segments.empty() && !hz.segments.back().simd &&
+          hz.segments.back().end == i) {
+        hz.segments.back().end = i + 8;
+      } else {
+        hz.segments.push_back({i, i + 8, lo, simd});
+      }
+    }
+    if (i < e) hz.segments.push_back({i, e, 0, false});
+  }
+  // + 1: v[x + 1] of the last pair; + 16: the SIMD loads of 8 pairs from a base up to span - 1.
+  std::vector<std::uint16_t> blended(span + 1);
+  std::vector<std::uint32_t> pairs(span + 16);
+  std::vector<char> present(nc);
+  Quad q{};
+  for (std::int32_t j = 0; j < height; ++j) {
+    const AxisSample& r = t.rows.samples[static_cast<std::size_t>(j)];
+    if (r.slotA < 0) continue;
+    const auto wy = static_cast<std::uint32_t>(r.weightB);
+    bool all = true;
+    for (std::size_t k = 0; k < nc; ++k) {
+      const TileSamples* sa = t.at(r.slotA, static_cast<std::int32_t>(k));
+      const TileSamples* sb = t.at(r.slotB, static_cast<std::int32_t>(k));
+      present[k] = sa && sb && t.cols.hi[k] >= 0;
+      if (!present[k]) {
+        all = all && t.cols.hi[k] < 0;
+        continue;
+      }
+      const std::uint8_t* a =
+          sa->rgb + static_cast<std::size_t>(r.offA) * static_cast<std::size_t>(sa->width);
+      const std::uint8_t* b =
+          sb->rgb + static_cast<std::size_t>(r.offB) * static_cast<std::size_t>(sb->width);
+      std::uint16_t* out = blended.data() + base[k];
+      const auto lo = static_cast<std::size_t>(t.cols.lo[k]);
+      const std::size_t n = static_cast<std::size_t>(t.cols.hi[k]) + 1 - lo;
+      blendRows(a + lo, b + lo, wy, out, n);
+    }
+    std::uint8_t* out = canvas + static_cast<std::size_t>(j) * w;
+    const std::uint16_t* v = blended.data();
+    if (all) {
+      makePairs(v, pairs.data(), span);
+      hz.run(v, pairs.data(), out);
+      continue;
+    }
+    for (std::int32_t i = 0; i < width; ++i) {
+      const AxisSample& c = t.cols.samples[static_cast<std::size_t>(i)];
+      if (c.slotA < 0) continue;
+      const auto ui = static_cast<std::size_t>(i);
+      if (present[static_cast<std::size_t>(c.slotA)] &&
+          present[static_cast<std::size_t>(c.slotB)]) {
+        out[ui] =
+            static_cast<std::uint8_t>((v[xa[ui]] * wa[ui] + v[xb[ui]] * wb[ui] + 32768u) >> 16);
+      } else if (fallback.quad(i, j, q)) { // a tile of the four is missing at this level
+        ++stats.fallbackPixels;
+        out[ui] = sampleOne(q);
+      } else {
+        ++stats.missingPixels;
+      }
+    }
+  }
+  return stats;
+}
+
 } // namespace
+
+std::optional<ChromaLayout>
+chromaLayout(const TileGrid& grid, const Sector& box, std::int32_t width, std::int32_t height) {
+  GridSpec spec = grid.spec();
+  if (spec.tileWidth % 2 != 0 || spec.tileHeight % 2 != 0 || width <= 0 || height <= 0)
+    return std::nullopt;
+  spec.tileWidth /= 2;
+  spec.tileHeight /= 2;
+  auto half = TileGrid::create(spec);
+  if (!half) return std::nullopt;
+  const std::int32_t cw = (width + 1) / 2, ch = (height + 1) / 2;
+  const double dx = (box.east - box.west) / width;
+  const double dy = (box.north - box.south) / height;
+  Sector b = box;
+  // The odd pixel's chroma reaches half a chroma sample past the box (what JPEG's edge
+  // replication would give it is as good; this keeps the sample spacing exact).
+  if (cw * 2 != width) b.east = box.west + dx * (2 * cw);
+  if (ch * 2 != height) b.south = box.north - dy * (2 * ch);
+  return ChromaLayout{*half, b, cw, ch};
+}
+
+std::expected<std::vector<ComposeTile>, std::size_t> composeTilesYcc(const TileGrid& grid,
+                                                                     const Sector& box,
+                                                                     std::int32_t width,
+                                                                     std::int32_t height,
+                                                                     std::int32_t level,
+                                                                     std::size_t maxTiles) {
+  auto keys = composeTiles(grid, box, width, height, level, maxTiles);
+  if (!keys) return keys;
+  const auto chroma = chromaLayout(grid, box, width, height);
+  if (!chroma) return keys;
+  const auto more = composeTiles(chroma->grid,
+                                 chroma->box,
+                                 chroma->width,
+                                 chroma->height,
+                                 level,
+                                 std::numeric_limits<std::size_t>::max());
+  if (!more) return keys;
+  for (const ComposeTile& c : *more) {
+    const std::array<std::int32_t, 4> region{
+        c.region[0] * 2, c.region[1] * 2, c.region[2] * 2, c.region[3] * 2};
+    auto it = std::find_if(keys->begin(), keys->end(), [&](const ComposeTile& k) {
+      return k.key.level == c.key.level && k.key.row == c.key.row && k.key.col == c.key.col;
+    });
+    if (it == keys->end()) {
+      keys->push_back(ComposeTile{c.key, region});
+    } else {
+      it->region = {std::min(it->region[0], region[0]),
+                    std::min(it->region[1], region[1]),
+                    std::max(it->region[2], region[2]),
+                    std::max(it->region[3], region[3])};
+    }
+  }
+  return keys;
+}
 
 std::int32_t composeLevel(const TileGrid& grid,
                           const Sector& box,
@@ -399,6 +759,10 @@ ComposeStats composeImagery(const TileGrid& grid,
                             double opacity,
                             std::vector<std::uint8_t>& canvas,
                             std::int32_t canvasChannels) {
+  if (canvasChannels == 1) {
+    canvas.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+    return composePlane(grid, box, width, height, level, firstLevel, tiles, canvas.data());
+  }
   const int cc = canvasChannels == 3 ? 3 : 4;
   canvas.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) *
                 static_cast<std::size_t>(cc));

@@ -1,6 +1,7 @@
 #include "MapComposer.hpp"
 
 #include "Codecs.hpp"
+#include "JpegRaw.hpp"
 #include "Quantize.hpp"
 #include "WorkerPool.hpp"
 
@@ -11,6 +12,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <deque>
 #include <list>
@@ -58,6 +60,7 @@ std::optional<std::vector<std::byte>> bytesOf(const TileAnswer& a) {
 struct Buffers {
   std::vector<std::vector<std::uint8_t>> spare;
   std::vector<std::uint8_t> canvas;
+  std::vector<std::uint8_t> cb, cr; // the chroma planes of a map composed as YCbCr
   std::vector<std::uint8_t> take() {
     if (spare.empty()) return {};
     auto b = std::move(spare.back());
@@ -72,10 +75,11 @@ struct Buffers {
 };
 thread_local Buffers buffers;
 
-/** A decoded tile and the samples view of it; its pixel storage goes back to the thread's
- * buffers. */
+/** A decoded tile and the samples view of it (or of its Y, Cb and Cr planes, stored one after the
+ * other in `rgb`); its pixel storage goes back to the thread's buffers. */
 struct Decoded {
   TileSamples view{};
+  std::array<TileSamples, 3> planes{};
   std::vector<std::uint8_t> rgb;
   std::vector<std::int16_t> heights;
   Decoded() = default;
@@ -163,6 +167,9 @@ struct MapComposer::Job {
   };
   ComposeRequest request;
   bool elevation = false;
+  /// Composed as Y, Cb and Cr planes when every tile turns out to be a 4:2:0 JPEG: a JPEG map of
+  /// one opaque imagery layer (else, or when a tile is not, the RGB path).
+  bool ycc = false;
   std::vector<Layer> layers;
   std::atomic<std::size_t> pending{0};
   std::function<void(const LayerSpec&, const TileAnswer&)> onTile;
@@ -178,6 +185,8 @@ MapComposer::MapComposer(TileService& tiles,
                                           : nullptr),
       gate_(std::make_shared<Gate>()), pool_(std::make_unique<Pool>(threads)) {
   gate_->pool = &pool_->workers;
+  if (const char* e = std::getenv("TELLUS_COMPOSE_YCC"); e && std::string_view(e) == "0")
+    yccDisabled_ = true;
 }
 
 MapComposer::~MapComposer() {
@@ -199,6 +208,9 @@ MapComposer::compose(ComposeRequest request,
   job->onTile = std::move(onTile);
   job->done = std::move(done);
   const ComposeRequest& r = job->request;
+  job->ycc = r.format == "image/jpeg" && r.layers.size() == 1 &&
+             !r.layers.front().layer->elevation && r.layers.front().opacity >= 1.0 - 1.0 / 512 &&
+             !yccDisabled_;
   std::size_t total = 0;
   for (const ComposeLayer& cl : r.layers) {
     Job::Layer l;
@@ -208,7 +220,8 @@ MapComposer::compose(ComposeRequest request,
     job->elevation = cl.layer->elevation;
     l.level = composeLevel(*l.grid, r.bbox, r.width, r.height, 0);
     const std::size_t left = maxTiles_ > total ? maxTiles_ - total : 0;
-    auto keys = composeTiles(*l.grid, r.bbox, r.width, r.height, l.level, left);
+    auto keys = job->ycc ? composeTilesYcc(*l.grid, r.bbox, r.width, r.height, l.level, left)
+                         : composeTiles(*l.grid, r.bbox, r.width, r.height, l.level, left);
     if (!keys) {
       return std::unexpected("the map needs more than " + std::to_string(maxTiles_) +
                              " tiles (level " + std::to_string(l.level) + " of layer '" +
@@ -292,8 +305,8 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
     }
 
     // Decode what arrived; fill the holes from coarser cached tiles.
-    // JPEG and PNG without TRANSPARENT are opaque: an RGB canvas, encoded as it is.
-    // Opaque output (JPEG, 24-bit PNG, PNG without TRANSPARENT) composes on an RGB canvas.
+    // Opaque output (JPEG, 24-bit PNG, PNG without TRANSPARENT) composes on an RGB canvas; a JPEG
+    // map of one opaque layer of 4:2:0 JPEG tiles on Y, Cb and Cr planes (see JpegRaw.hpp).
     const bool png8 = r.format == "image/png; mode=8bit";
     const int cc =
         r.format == "image/png; mode=32bit" || (r.transparent && (r.format == "image/png" || png8))
@@ -302,132 +315,225 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
     std::vector<std::uint8_t>& canvas = buffers.canvas;
     std::vector<std::int16_t> heights;
     const auto pixels = static_cast<std::size_t>(r.width) * static_cast<std::size_t>(r.height);
-    if (job->elevation) {
-      heights.assign(pixels, job->layers.front().spec.layer->noData);
-    } else {
-      const std::uint32_t c = r.bgcolor.value_or(0xFFFFFF);
-      const std::uint8_t bg[4] = {static_cast<std::uint8_t>(c >> 16),
-                                  static_cast<std::uint8_t>(c >> 8),
-                                  static_cast<std::uint8_t>(c),
-                                  static_cast<std::uint8_t>(r.transparent ? 0 : 255)};
-      canvas.resize(pixels * static_cast<std::size_t>(cc));
-      // The first row pixel by pixel, the others copied from it.
-      const auto rowBytes = static_cast<std::size_t>(r.width) * static_cast<std::size_t>(cc);
-      for (std::size_t p = 0; p < static_cast<std::size_t>(r.width); ++p)
-        std::copy(bg, bg + cc, &canvas[p * static_cast<std::size_t>(cc)]);
-      for (std::size_t y = 1; y < static_cast<std::size_t>(r.height); ++y)
-        std::memcpy(&canvas[y * rowBytes], canvas.data(), rowBytes);
-    }
+    const std::uint32_t bgColour = r.bgcolor.value_or(0xFFFFFF);
+    const std::uint8_t bg[4] = {static_cast<std::uint8_t>(bgColour >> 16),
+                                static_cast<std::uint8_t>(bgColour >> 8),
+                                static_cast<std::uint8_t>(bgColour),
+                                static_cast<std::uint8_t>(r.transparent ? 0 : 255)};
+    std::optional<ChromaLayout> chroma;
+    if (job->ycc) chroma = chromaLayout(*job->layers.front().grid, r.bbox, r.width, r.height);
+    const auto fill = [&](bool ycc) {
+      if (job->elevation) {
+        heights.assign(pixels, job->layers.front().spec.layer->noData);
+      } else if (ycc) {
+        const auto ycbcr = codecs::rgbToYcc(bg[0], bg[1], bg[2]);
+        const auto chromaPixels =
+            static_cast<std::size_t>(chroma->width) * static_cast<std::size_t>(chroma->height);
+        canvas.assign(pixels, ycbcr[0]);
+        buffers.cb.assign(chromaPixels, ycbcr[1]);
+        buffers.cr.assign(chromaPixels, ycbcr[2]);
+      } else {
+        canvas.resize(pixels * static_cast<std::size_t>(cc));
+        // The first row pixel by pixel, the others copied from it.
+        const auto rowBytes = static_cast<std::size_t>(r.width) * static_cast<std::size_t>(cc);
+        for (std::size_t p = 0; p < static_cast<std::size_t>(r.width); ++p)
+          std::copy(bg, bg + cc, &canvas[p * static_cast<std::size_t>(cc)]);
+        for (std::size_t y = 1; y < static_cast<std::size_t>(r.height); ++y)
+          std::memcpy(&canvas[y * rowBytes], canvas.data(), rowBytes);
+      }
+    };
     std::size_t missing = 0;
-    for (const auto& l : job->layers) {
-      const LayerSpec& spec = *l.spec.layer;
-      const GridSpec& g = l.grid->spec();
-      std::map<TileKey, std::shared_ptr<const Decoded>, KeyLess> decoded;
-      // Only the part of a tile that is sampled is decoded (JPEG: whole blocks around it).
-      const auto decode =
-          [&](const TileKey& key,
-              const TileAnswer& a,
-              const std::array<std::int32_t, 4>* region) -> std::shared_ptr<const Decoded> {
-        // Decoded tiles are kept (whole) in an LRU by their ETag, which names their bytes.
-        const std::string cacheKey = spec.name + '\n' + l.spec.time + '\n' + a.etag;
-        bool keep = false;
-        if (decodedCache_ && !a.etag.empty()) {
-          if (auto hit = decodedCache_->get(cacheKey)) return hit;
-          // Admitted on its second use: a tile that one map needs once is decoded only in the
-          // part it samples; one that maps keep asking for is decoded whole and kept.
-          keep = decodedCache_->seenBefore(cacheKey);
-          if (keep) region = nullptr;
-        }
-        auto bytes = bytesOf(a);
-        if (!bytes) return nullptr;
-        ++map.decodedTiles;
-        auto d = std::make_shared<Decoded>();
-        if (spec.elevation) {
-          auto h = decodeHeights(*bytes, spec.dataset.mimeType, g.tileWidth, g.tileHeight);
-          if (!h) return nullptr;
-          d->heights = std::move(*h);
-          d->view = TileSamples{g.tileWidth, g.tileHeight, 1, nullptr, d->heights.data()};
-        } else {
-          d->rgb = buffers.take();
-          const auto channels =
-              decodeImageryInto(*bytes,
-                                a.contentType.empty() ? spec.dataset.mimeType : a.contentType,
-                                g.tileWidth,
-                                g.tileHeight,
-                                d->rgb,
-                                region);
-          if (!channels) return nullptr;
-          d->view = TileSamples{g.tileWidth, g.tileHeight, *channels, d->rgb.data(), nullptr};
-        }
-        (void)key;
-        if (keep) decodedCache_->put(cacheKey, d, d->rgb.size() + d->heights.size() * 2);
-        return d;
-      };
-      std::vector<TileKey> holes;
-      for (std::size_t k = 0; k < l.keys.size(); ++k) {
-        const TileAnswer& a = l.answers[k];
-        std::shared_ptr<const Decoded> d;
-        if (a.kind == TileAnswer::Kind::Tile) d = decode(l.keys[k].key, a, &l.keys[k].region);
-        if (d) {
-          decoded.emplace(l.keys[k].key, std::move(d));
-        } else {
-          holes.push_back(l.keys[k].key);
-        }
-      }
-      // Each hole: the nearest cached ancestor (looked up once per ancestor).
-      std::map<TileKey, bool, KeyLess> looked;
-      for (TileKey key : holes) {
-        while (key.level > 0) {
-          const auto parent = l.grid->parent(key);
-          if (!parent) break;
-          key = *parent;
-          if (auto it = looked.find(key); it != looked.end()) {
-            if (it->second) break;
-            continue;
+    // Composes every layer; false (having composed nothing) when `ycc` and a tile is not a 4:2:0
+    // JPEG, so that the map is made on the RGB path instead.
+    const auto composeLayers = [&](bool ycc) -> bool {
+      for (const auto& l : job->layers) {
+        const LayerSpec& spec = *l.spec.layer;
+        const GridSpec& g = l.grid->spec();
+        std::map<TileKey, std::shared_ptr<const Decoded>, KeyLess> decoded;
+        bool notYcc = false;
+        // Only the part of a tile that is sampled is decoded (JPEG: whole blocks around it).
+        const auto decode =
+            [&](const TileKey& key,
+                const TileAnswer& a,
+                const std::array<std::int32_t, 4>* region) -> std::shared_ptr<const Decoded> {
+          // Decoded tiles are kept (whole) in an LRU by their ETag, which names their bytes.
+          const std::string cacheKey =
+              spec.name + '\n' + l.spec.time + '\n' + a.etag + (ycc ? "\nycc" : "");
+          bool keep = false;
+          if (decodedCache_ && !a.etag.empty()) {
+            if (auto hit = decodedCache_->get(cacheKey)) return hit;
+            // Admitted on its second use: a tile that one map needs once is decoded only in the
+            // part it samples; one that maps keep asking for is decoded whole and kept.
+            keep = decodedCache_->seenBefore(cacheKey);
+            if (keep) region = nullptr;
           }
-          bool found = false;
-          if (auto a = tiles_.cachedTile(spec.name, l.spec.time, key)) {
-            if (auto d = decode(key, *a, nullptr)) {
-              decoded.emplace(key, std::move(d));
-              found = true;
-              if (staleness(a->origin) > staleness(map.origin)) map.origin = a->origin;
-              validators += a->etag;
+          const std::string_view type =
+              a.contentType.empty() ? std::string_view(spec.dataset.mimeType) : a.contentType;
+          if (ycc && type != "image/jpeg") {
+            notYcc = true;
+            return nullptr;
+          }
+          auto bytes = bytesOf(a);
+          if (!bytes) return nullptr;
+          ++map.decodedTiles;
+          auto d = std::make_shared<Decoded>();
+          if (spec.elevation) {
+            auto h = decodeHeights(*bytes, spec.dataset.mimeType, g.tileWidth, g.tileHeight);
+            if (!h) return nullptr;
+            d->heights = std::move(*h);
+            d->view = TileSamples{g.tileWidth, g.tileHeight, 1, nullptr, d->heights.data()};
+          } else if (ycc) {
+            const auto w = static_cast<std::size_t>(g.tileWidth);
+            const auto h = static_cast<std::size_t>(g.tileHeight);
+            d->rgb = buffers.take();
+            d->rgb.resize(w * h + 2 * (w / 2) * (h / 2));
+            std::uint8_t* y = d->rgb.data();
+            std::uint8_t* cb = y + w * h;
+            std::uint8_t* cr = cb + (w / 2) * (h / 2);
+            std::string message;
+            switch (codecs::decodeJpegYcc(
+                *bytes, g.tileWidth, g.tileHeight, region, y, cb, cr, message)) {
+            case codecs::YccDecode::Ok:
+              break;
+            case codecs::YccDecode::NotYcc420:
+              notYcc = true;
+              return nullptr;
+            case codecs::YccDecode::Failed:
+              return nullptr;
             }
+            d->planes = {TileSamples{g.tileWidth, g.tileHeight, 1, y, nullptr},
+                         TileSamples{g.tileWidth / 2, g.tileHeight / 2, 1, cb, nullptr},
+                         TileSamples{g.tileWidth / 2, g.tileHeight / 2, 1, cr, nullptr}};
+          } else {
+            d->rgb = buffers.take();
+            const auto channels =
+                decodeImageryInto(*bytes, type, g.tileWidth, g.tileHeight, d->rgb, region);
+            if (!channels) return nullptr;
+            d->view = TileSamples{g.tileWidth, g.tileHeight, *channels, d->rgb.data(), nullptr};
           }
-          looked.emplace(key, found);
-          if (found) break;
+          (void)key;
+          if (keep) decodedCache_->put(cacheKey, d, d->rgb.size() + d->heights.size() * 2);
+          return d;
+        };
+        std::vector<TileKey> holes;
+        for (std::size_t k = 0; k < l.keys.size() && !notYcc; ++k) {
+          const TileAnswer& a = l.answers[k];
+          std::shared_ptr<const Decoded> d;
+          if (a.kind == TileAnswer::Kind::Tile) d = decode(l.keys[k].key, a, &l.keys[k].region);
+          if (d) {
+            decoded.emplace(l.keys[k].key, std::move(d));
+          } else {
+            holes.push_back(l.keys[k].key);
+          }
         }
+        if (notYcc) return false;
+        // Each hole: the nearest cached ancestor (looked up once per ancestor).
+        std::map<TileKey, bool, KeyLess> looked;
+        for (TileKey key : holes) {
+          while (key.level > 0) {
+            const auto parent = l.grid->parent(key);
+            if (!parent) break;
+            key = *parent;
+            if (auto it = looked.find(key); it != looked.end()) {
+              if (it->second) break;
+              continue;
+            }
+            bool found = false;
+            if (auto a = tiles_.cachedTile(spec.name, l.spec.time, key)) {
+              if (auto d = decode(key, *a, nullptr)) {
+                decoded.emplace(key, std::move(d));
+                found = true;
+                if (staleness(a->origin) > staleness(map.origin)) map.origin = a->origin;
+                validators += a->etag;
+              }
+            }
+            if (notYcc) return false;
+            looked.emplace(key, found);
+            if (found) break;
+          }
+        }
+        map.tiles += decoded.size();
+        if (ycc) {
+          // The three planes, each from the tiles' plane of the same index.
+          ComposeStats stats;
+          for (int plane = 0; plane < 3; ++plane) {
+            const TileLookup lookup = [&decoded, plane](const TileKey& key) -> const TileSamples* {
+              const auto it = decoded.find(key);
+              return it == decoded.end() ? nullptr
+                                         : &it->second->planes[static_cast<std::size_t>(plane)];
+            };
+            std::vector<std::uint8_t>& target = plane == 0   ? canvas
+                                                : plane == 1 ? buffers.cb
+                                                             : buffers.cr;
+            const ComposeStats s =
+                plane == 0
+                    ? composeImagery(
+                          *l.grid, r.bbox, r.width, r.height, l.level, 0, lookup, 1.0, target, 1)
+                    : composeImagery(chroma->grid,
+                                     chroma->box,
+                                     chroma->width,
+                                     chroma->height,
+                                     l.level,
+                                     0,
+                                     lookup,
+                                     1.0,
+                                     target,
+                                     1);
+            if (plane == 0) stats = s; // the map's pixels are the luma's
+          }
+          map.fallbackPixels += stats.fallbackPixels;
+          missing += stats.missingPixels;
+          continue;
+        }
+        const TileLookup lookup = [&decoded](const TileKey& key) -> const TileSamples* {
+          const auto it = decoded.find(key);
+          return it == decoded.end() ? nullptr : &it->second->view;
+        };
+        const ComposeStats stats =
+            spec.elevation
+                ? composeHeights(
+                      *l.grid,
+                      r.bbox,
+                      r.width,
+                      r.height,
+                      l.level,
+                      0, // every level of the grid is served (firstLevel is an upstream offset)
+                      lookup,
+                      spec.noData,
+                      heights)
+                : composeImagery(
+                      *l.grid,
+                      r.bbox,
+                      r.width,
+                      r.height,
+                      l.level,
+                      0, // every level of the grid is served (firstLevel is an upstream offset)
+                      lookup,
+                      l.spec.opacity,
+                      canvas,
+                      cc);
+        map.fallbackPixels += stats.fallbackPixels;
+        missing += stats.missingPixels;
       }
-      const TileLookup lookup = [&decoded](const TileKey& key) -> const TileSamples* {
-        const auto it = decoded.find(key);
-        return it == decoded.end() ? nullptr : &it->second->view;
-      };
-      map.tiles += decoded.size();
-      const ComposeStats stats =
-          spec.elevation
-              ? composeHeights(
-                    *l.grid,
-                    r.bbox,
-                    r.width,
-                    r.height,
-                    l.level,
-                    0, // every level of the grid is served (firstLevel is an upstream offset)
-                    lookup,
-                    spec.noData,
-                    heights)
-              : composeImagery(
-                    *l.grid,
-                    r.bbox,
-                    r.width,
-                    r.height,
-                    l.level,
-                    0, // every level of the grid is served (firstLevel is an upstream offset)
-                    lookup,
-                    l.spec.opacity,
-                    canvas,
-                    cc);
-      map.fallbackPixels += stats.fallbackPixels;
-      missing += stats.missingPixels;
+      return true;
+    };
+    bool ycc = job->ycc && chroma.has_value();
+    {
+      // What a retry on the RGB path starts again from.
+      const std::string validatorsBefore = validators;
+      const TileOrigin originBefore = map.origin;
+      fill(ycc);
+      if (!composeLayers(ycc)) {
+        ycc = false;
+        validators = validatorsBefore;
+        map.origin = originBefore;
+        map.decodedTiles = 0;
+        map.tiles = 0;
+        map.fallbackPixels = 0;
+        missing = 0;
+        fill(false);
+        composeLayers(false);
+      }
     }
     if (failed && missing > 0) {
       // An upstream failed and nothing cached covers the hole: an error, not a map with a hole
@@ -449,7 +555,10 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
     if (job->elevation) {
       encoded = encodeHeights(r.format, r.width, r.height, heights.data());
     } else {
-      if (png8) {
+      if (ycc) {
+        encoded = codecs::encodeJpegYcc(
+            r.width, r.height, canvas.data(), buffers.cb.data(), buffers.cr.data());
+      } else if (png8) {
         const PalettedImage p = quantize(canvas.data(), cc, pixels);
         encoded = codecs::encodePngPalette(r.width, r.height, p.palette, p.indices.data());
       } else {
@@ -466,6 +575,7 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
       return job->done(std::move(map));
     }
     if (canvas.capacity() > (16u << 20)) canvas = {}; // a huge map's canvas is not kept
+    if (buffers.cb.capacity() > (4u << 20)) buffers.cb = buffers.cr = {};
     map.kind = ComposedMap::Kind::Map;
     map.bytes = std::move(*encoded);
     map.contentType = r.format.starts_with("image/png") ? "image/png" : r.format;

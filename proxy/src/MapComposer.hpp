@@ -71,6 +71,7 @@ private:
 
   TileService& tiles_;
   std::size_t maxTiles_;
+  bool yccDisabled_ = false; ///< TELLUS_COMPOSE_YCC=0: JPEG maps on the RGB path (for comparisons)
   class DecodedCache;
   std::unique_ptr<DecodedCache> decodedCache_;
   struct Pool;

@@ -10,6 +10,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <random>
 #include <tuple>
 
 using namespace tellus;
@@ -381,4 +382,60 @@ TEST(ComposeExtremes, RegionalLayerLeavesTheOutsideAlone) {
   const auto keys = composeTiles(g, Sector{-180, -90, 180, 90}, 40, 20, 0, 100);
   ASSERT_TRUE(keys);
   EXPECT_EQ(keys->size(), 6u) << "two columns (-36..0, 0..36), three rows (-54..-18 .. 18..54)";
+}
+
+TEST(ComposeExtremes, OnePlaneGivesTheRgbPathsValuesExactly) {
+  // A plane (the YCbCr path's Y, Cb or Cr) is sampled with the same integer arithmetic as RGB,
+  // through the vectorised horizontal pass where it can: the R channel of the RGB path, exactly,
+  // over random boxes and sizes, across the antimeridian, past the poles, magnified (deepest
+  // level) and with missing tiles filled from the coarser level.
+  const TileGrid g = grid(64, 3);
+  Synthetic s{g, {}, {}, {}};
+  s.addLevel(0);
+  s.addLevel(1);
+  s.addLevel(2);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  // Every tenth level-2 tile missing.
+  std::vector<TileKey> gone;
+  for (const auto& [k, t] : s.tiles)
+    if (std::get<0>(k) == 2 && u(rng) < 0.1) gone.push_back({2, std::get<1>(k), std::get<2>(k)});
+  for (const auto& k : gone)
+    s.tiles.erase({k.level, k.row, k.col});
+  // The planes: R of each tile.
+  std::map<std::tuple<int, std::int64_t, std::int64_t>, std::vector<std::uint8_t>> planes;
+  std::map<std::tuple<int, std::int64_t, std::int64_t>, TileSamples> views;
+  for (const auto& [k, t] : s.tiles) {
+    auto& p = planes[k];
+    p.resize(64 * 64);
+    for (std::size_t i = 0; i < p.size(); ++i)
+      p[i] = t->rgb[i * 3];
+    views[k] = TileSamples{64, 64, 1, p.data(), nullptr};
+  }
+  const TileLookup plane = [&](const TileKey& k) -> const TileSamples* {
+    const auto it = views.find({k.level, k.row, k.col});
+    return it == views.end() ? nullptr : &it->second;
+  };
+  for (int c = 0; c < 60; ++c) {
+    const double span = c < 50 ? 2 + u(rng) * 100 : 0.5 + u(rng); // the last ten magnified
+    const double west = -180 + u(rng) * 400;
+    const double hs = span * (0.25 + u(rng));
+    const double south = -100 + u(rng) * (200 - hs);
+    const int width = 8 + static_cast<int>(u(rng) * 700);
+    const int height = 8 + static_cast<int>(u(rng) * 300);
+    const Sector box{west, south, west + span, south + hs};
+    SCOPED_TRACE(::testing::Message() << west << "," << south << " " << span << " x " << hs << " "
+                                      << width << "x" << height);
+    const int level = composeLevel(g, box, width, height, 0);
+    std::vector<std::uint8_t> rgb(static_cast<std::size_t>(width * height * 3), 7);
+    std::vector<std::uint8_t> one(static_cast<std::size_t>(width * height), 7);
+    const ComposeStats a = composeImagery(g, box, width, height, level, 0, s.lookup(), 1.0, rgb, 3);
+    const ComposeStats b = composeImagery(g, box, width, height, level, 0, plane, 1.0, one, 1);
+    EXPECT_EQ(a.fallbackPixels, b.fallbackPixels);
+    EXPECT_EQ(a.missingPixels, b.missingPixels);
+    int bad = 0;
+    for (std::size_t p = 0; p < one.size(); ++p)
+      bad += one[p] != rgb[p * 3];
+    EXPECT_EQ(bad, 0);
+  }
 }

@@ -5,6 +5,7 @@
 #include "../support/CacheFixtures.hpp"
 #include "../support/FakeUpstream.hpp"
 #include "../support/HttpClient.hpp"
+#include "../support/JpegSampling.hpp"
 #include "../support/TempDir.hpp"
 
 #include <tellus/cache/TileCache.hpp>
@@ -1148,6 +1149,55 @@ TEST(ComposeIntegration, HolesAreFilledFromCoarserLevelsOrReported) {
   Proxy limited(up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, Proxy::fastPolicy(), "upsat", small);
   const auto big = limited.get(getMap("sat", "2,-16,16,-2", 101, 100, "image/png"));
   EXPECT_NE(big.body.find("InvalidParameterValue"), std::string::npos) << big.body;
+}
+
+namespace {
+
+/** jpegFor's tile, with 4:4:4 sampling (no chroma subsampling). */
+std::string jpeg444For(const std::string& target, int size = 256) {
+  const auto h = stableHash64(target);
+  std::vector<std::uint8_t> px(static_cast<std::size_t>(size * size * 3));
+  for (std::size_t i = 0; i < px.size(); i += 3) {
+    px[i] = static_cast<std::uint8_t>(h);
+    px[i + 1] = static_cast<std::uint8_t>(h >> 8);
+    px[i + 2] = static_cast<std::uint8_t>(h >> 16);
+  }
+  const auto bytes = test::jpegWithSampling(px, size, size, 1, 1);
+  return std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+}
+
+} // namespace
+
+TEST(ComposeIntegration, JpegMapsFromTilesOfAnySubsampling) {
+  // JPEG maps of 4:2:0 JPEG tiles are composed on Y, Cb and Cr planes; a tile of another
+  // subsampling sends the map to the RGB path. Either way the map shows each tile's colour, and
+  // the background (BGCOLOR) past the pole.
+  for (const int every : {0, 1, 3}) { // 4:4:4 tiles: none, all, every third
+    SCOPED_TRACE(every);
+    test::FakeUpstream up([every](const test::FakeRequest& req) {
+      const bool full = every > 0 && stableHash64(req.target) % static_cast<unsigned>(every) == 0;
+      auto r =
+          test::FakeReply::ok(full ? jpeg444For(req.target) : jpegFor(req.target), "image/jpeg");
+      r.headers.emplace_back("ETag", "\"v1\"");
+      return r;
+    });
+    Proxy p(up.url("/wms"));
+    // Level 0, 3 x 2 tiles; an odd size.
+    const auto r = p.get(getMap("sat", "-170,-80,-100,-30", 301, 201, "image/jpeg"));
+    ASSERT_EQ(r.header("content-type"), "image/jpeg") << r.body.substr(0, 400);
+    const auto img = decodeAnswer(r, 301, 201);
+    ASSERT_FALSE(img.pixels.empty());
+    // (-160, -70) lies in tile (0, 0, 0); (-120, -40) in tile (0, row 1, col 1).
+    expectNear(rgbAt(img, 43, 160), tileColour(p, 0, 0, 0), 4, "tile 0/0/0");
+    expectNear(rgbAt(img, 214, 40), tileColour(p, 0, 1, 1), 4, "tile 0/1/1");
+    // Past the north pole: BGCOLOR (navy), converted to YCbCr on the planar path.
+    const auto pole =
+        p.get(getMap("sat", "-170,60,-100,110", 71, 51, "image/jpeg", "&BGCOLOR=0x000080"));
+    ASSERT_EQ(pole.header("content-type"), "image/jpeg") << pole.body.substr(0, 400);
+    const auto navy = decodeAnswer(pole, 71, 51);
+    expectNear(rgbAt(navy, 35, 2), {0, 0, 128}, 4, "north of the pole");
+    expectNear(rgbAt(navy, 35, 48), tileColour(p, 0, 1, 4), 4, "lat 62");
+  }
 }
 
 TEST(ComposeIntegration, HeightsAreExactWhereTheBoxIsAligned) {

@@ -30,6 +30,7 @@
 #include <cstdint>
 #include <expected>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -61,6 +62,34 @@ std::expected<std::vector<ComposeTile>, std::size_t> composeTiles(const TileGrid
                                                                   std::int32_t level,
                                                                   std::size_t maxTiles);
 
+/**
+ * The chroma planes of a 4:2:0 map (JPEG's centred siting): a chroma sample of the map covers 2 x 2
+ * pixels, (width + 1) / 2 x (height + 1) / 2 of them over `box` widened by the odd pixel, and a
+ * chroma texel of a tile covers 2 x 2 texels, so the tiles' chroma planes form `grid`: the same
+ * levels and tiles at half the tile size. No value when the tile size is odd.
+ */
+struct ChromaLayout {
+  TileGrid grid;
+  Sector box;
+  std::int32_t width = 0;
+  std::int32_t height = 0;
+};
+std::optional<ChromaLayout>
+chromaLayout(const TileGrid& grid, const Sector& box, std::int32_t width, std::int32_t height);
+
+/**
+ * composeTiles for a map composed as Y, Cb and Cr planes: the tiles and regions the luma needs
+ * and those the chroma planes need (regions in luma texels), so a chroma sample at the map's edge
+ * that reaches one texel into a tile the luma does not touch finds it. The limit applies to the
+ * luma's tiles (the chroma adds at most a row and a column).
+ */
+std::expected<std::vector<ComposeTile>, std::size_t> composeTilesYcc(const TileGrid& grid,
+                                                                     const Sector& box,
+                                                                     std::int32_t width,
+                                                                     std::int32_t height,
+                                                                     std::int32_t level,
+                                                                     std::size_t maxTiles);
+
 /** A decoded tile to sample from: `channels` samples per texel, row-major, top row first. */
 struct TileSamples {
   std::int32_t width = 0;
@@ -76,7 +105,9 @@ using TileLookup = std::function<const TileSamples*(const TileKey&)>;
 /**
  * Draws one imagery layer over `canvas` (width * height RGBA, straight alpha, or RGB when
  * `canvasChannels` is 3: an opaque canvas): each pixel is the tile's colour with alpha (tile
- * alpha * opacity) composited "over" what the canvas holds.
+ * alpha * opacity) composited "over" what the canvas holds. With `canvasChannels` 1 the tiles are
+ * one plane each (channels 1, opaque: a Y, Cb or Cr plane) and the canvas one plane of the map;
+ * the opacity is then ignored (drawn at 1).
  * Returns how many pixels came from a coarser level than `level` (fallback) and how many had no
  * tile at all.
  */
