@@ -404,6 +404,32 @@ void readServer(Reader& r, const Map& root, ServerSettings& s) {
         static_cast<std::int32_t>(integer(r, *v, l.path("max_tiles_per_map"), 1, 1 << 20));
 }
 
+void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
+  const auto [node, where] = root.child("renderer");
+  const Map m(r,
+              node,
+              root.path("renderer"),
+              where,
+              {"lod_threshold",
+               "mesh_size",
+               "fov",
+               "texture_budget",
+               "upload_per_frame",
+               "max_in_flight",
+               "max_splits_per_frame",
+               "decode_threads"});
+  if (auto v = m.get("lod_threshold")) g.lodThreshold = number(r, *v, m.path("lod_threshold"));
+  if (auto v = m.get("mesh_size")) g.meshSize = int32(r, *v, m.path("mesh_size"));
+  if (auto v = m.get("fov")) g.fovDeg = number(r, *v, m.path("fov"));
+  if (auto v = m.get("texture_budget")) g.textureBudget = size(r, *v, m.path("texture_budget"));
+  if (auto v = m.get("upload_per_frame"))
+    g.uploadPerFrame = size(r, *v, m.path("upload_per_frame"));
+  if (auto v = m.get("max_in_flight")) g.maxInFlight = int32(r, *v, m.path("max_in_flight"));
+  if (auto v = m.get("max_splits_per_frame"))
+    g.maxSplitsPerFrame = int32(r, *v, m.path("max_splits_per_frame"));
+  if (auto v = m.get("decode_threads")) g.decodeThreads = int32(r, *v, m.path("decode_threads"));
+}
+
 void readCache(Reader& r, const Map& root, const fs::path& baseDir, CacheSettings& c) {
   const auto [node, where] = root.child("cache");
   const Map m(r, node, root.path("cache"), where, {"root", "size_limit"});
@@ -724,10 +750,12 @@ Config build(Reader& r, const YAML::Node& doc, const fs::path& baseDir, const Pa
            "",
            "the top level must be a mapping (server, cache, data_dir, upstreams, layers), got " +
                describe(doc));
-  const Map root(r, doc, "", doc.Mark(), {"server", "cache", "data_dir", "upstreams", "layers"});
+  const Map root(
+      r, doc, "", doc.Mark(), {"server", "cache", "renderer", "data_dir", "upstreams", "layers"});
   Config c;
   readServer(r, root, c.server);
   readCache(r, root, baseDir, c.cache);
+  readRenderer(r, root, c.renderer);
 
   fs::path dataDir = baseDir;
   if (auto v = root.get("data_dir")) dataDir = resolvePath(text(r, *v, "data_dir"), baseDir);

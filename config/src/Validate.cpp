@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <set>
 #include <system_error>
@@ -17,6 +18,12 @@ namespace {
 
 std::string str(std::int64_t v) {
   return std::to_string(v);
+}
+
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
 }
 
 bool hasControl(std::string_view s) noexcept {
@@ -268,8 +275,32 @@ checkLayer(const Config& c, const UpstreamIndex& upstreams, const LayerConfig& l
 
 } // namespace
 
+std::optional<ValidationIssue> checkRenderer(const RendererSettings& g) {
+  const auto issue = [](std::string key, std::string message) {
+    return ValidationIssue{"renderer." + key, "renderer", std::move(message)};
+  };
+  if (!(g.lodThreshold >= 0.05 && g.lodThreshold <= 64.0))
+    return issue("lod_threshold", "must be in [0.05, 64], got " + num(g.lodThreshold));
+  const int n = g.meshSize - 1;
+  if (g.meshSize < 3 || g.meshSize > 257 || (n & (n - 1)) != 0)
+    return issue("mesh_size", "must be 2^k + 1 in [3, 257], got " + str(g.meshSize));
+  if (!(g.fovDeg > 1.0 && g.fovDeg < 170.0))
+    return issue("fov", "must be in (1, 170) degrees, got " + num(g.fovDeg));
+  if (g.textureBudget < (std::uint64_t{1} << 20))
+    return issue("texture_budget", "must be at least 1MiB");
+  if (g.uploadPerFrame < 4096) return issue("upload_per_frame", "must be at least 4KiB");
+  if (g.maxInFlight < 1 || g.maxInFlight > 1024)
+    return issue("max_in_flight", "must be in [1, 1024], got " + str(g.maxInFlight));
+  if (g.maxSplitsPerFrame < 1 || g.maxSplitsPerFrame > 100000)
+    return issue("max_splits_per_frame", "must be in [1, 100000], got " + str(g.maxSplitsPerFrame));
+  if (g.decodeThreads < 1 || g.decodeThreads > 64)
+    return issue("decode_threads", "must be in [1, 64], got " + str(g.decodeThreads));
+  return std::nullopt;
+}
+
 std::optional<ValidationIssue> findIssue(const Config& c, bool checkFiles) {
   if (auto s = checkServer(c.server)) return s;
+  if (auto g = checkRenderer(c.renderer)) return g;
   if (c.cache.root.empty()) return ValidationIssue{"cache.root", "cache", "is empty"};
   UpstreamIndex upstreams;
   for (std::size_t i = 0; i < c.upstreams.size(); ++i) {

@@ -54,6 +54,23 @@ set -e
 grep -q "layers.json" "$work/dead.txt" || fail "no message naming the server: $(cat "$work/dead.txt")"
 [ ! -e "$work/dead.png" ] || fail "an image was written without a server"
 
+# The configuration's renderer section (docs/CONFIG.md): lod_threshold 8 draws coarser levels than
+# the default 1; --threshold on the command line wins over it.
+src=$(cd "$(dirname "$0")/../.." && pwd)
+sed "s|^data_dir: .*|data_dir: $src/data|" "$src/config/examples/default.yaml" >"$work/coarse.yaml"
+printf 'renderer:\n  lod_threshold: 8\n  texture_budget: 64MiB\n' >>"$work/coarse.yaml"
+level_of() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['max_level'])" "$1"; }
+"$tellus" render --cache "$cache" --camera 46,8,2e6 --size 1024x768 --out "$work/fine.png" \
+  --wait-complete --stats "$work/fine.json" >/dev/null || fail "render at 2,000 km"
+"$tellus" render --config "$work/coarse.yaml" --cache "$cache" --camera 46,8,2e6 --size 1024x768 \
+  --out "$work/coarse.png" --wait-complete --stats "$work/coarse.json" >/dev/null || fail "coarse"
+"$tellus" render --config "$work/coarse.yaml" --threshold 1 --cache "$cache" --camera 46,8,2e6 \
+  --size 1024x768 --out "$work/over.png" --wait-complete --stats "$work/over.json" >/dev/null ||
+  fail "--threshold over the config"
+[ "$(level_of "$work/fine.json")" -gt "$(level_of "$work/coarse.json")" ] ||
+  fail "lod_threshold 8 did not draw coarser: $(level_of "$work/fine.json") vs $(level_of "$work/coarse.json")"
+cmp -s "$work/fine.png" "$work/over.png" || fail "--threshold 1 did not override the config's 8"
+
 # The OpenGL 3.3 core fallback (Mesa told to offer no more): the same image; and without
 # glClipControl the same projection still draws (reversed Z in [-1, 1] depth, less precise).
 MESA_GL_VERSION_OVERRIDE=3.3 "$tellus" render --cache "$cache" --camera 0,0,2e7 --size 320x240 \

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <optional>
@@ -135,6 +136,34 @@ TEST(Config, ValidationNamesTheLayerAndTheField) {
   badTimeout.upstreams[0].timeout = std::chrono::milliseconds(0);
   ASSERT_FALSE(validate(badTimeout));
   EXPECT_NE(validate(badTimeout).error().find("timeout"), std::string::npos);
+}
+
+TEST(Config, RendererSettingsAreValidated) {
+  const Config c = embeddedDefault(kData, "/tmp/cache");
+  EXPECT_TRUE(validate(c));
+  EXPECT_EQ(c.renderer.meshSize, 33);
+  const auto fails = [&](auto change, const char* key) {
+    Config bad = c;
+    change(bad.renderer);
+    const auto v = validate(bad);
+    ASSERT_FALSE(v) << key;
+    EXPECT_NE(v.error().find(std::string("renderer: ") + key), std::string::npos) << v.error();
+  };
+  fails([](RendererSettings& g) { g.lodThreshold = 0.0; }, "lod_threshold");
+  fails([](RendererSettings& g) { g.lodThreshold = std::nan(""); }, "lod_threshold");
+  fails([](RendererSettings& g) { g.lodThreshold = INFINITY; }, "lod_threshold");
+  fails([](RendererSettings& g) { g.meshSize = 32; }, "mesh_size");
+  fails([](RendererSettings& g) { g.meshSize = 513; }, "mesh_size");
+  fails([](RendererSettings& g) { g.fovDeg = 180.0; }, "fov");
+  fails([](RendererSettings& g) { g.textureBudget = 1000; }, "texture_budget");
+  fails([](RendererSettings& g) { g.uploadPerFrame = 0; }, "upload_per_frame");
+  fails([](RendererSettings& g) { g.maxInFlight = 0; }, "max_in_flight");
+  fails([](RendererSettings& g) { g.maxSplitsPerFrame = 0; }, "max_splits_per_frame");
+  fails([](RendererSettings& g) { g.decodeThreads = 0; }, "decode_threads");
+  Config ok = c;
+  ok.renderer.meshSize = 3;
+  ok.renderer.lodThreshold = 64.0;
+  EXPECT_TRUE(validate(ok));
 }
 
 TEST(Config, DefaultCacheRootFollowsTheEnvironment) {

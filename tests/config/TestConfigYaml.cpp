@@ -216,6 +216,15 @@ server:
 cache:
   root: cache/here
   size_limit: 10GiB
+renderer:
+  lod_threshold: 1.5
+  mesh_size: 17
+  fov: 60
+  texture_budget: 256MiB
+  upload_per_frame: 2MiB
+  max_in_flight: 4
+  max_splits_per_frame: 8
+  decode_threads: 3
 upstreams:
   - name: ww
     type: worldwind
@@ -293,6 +302,14 @@ layers:
   EXPECT_EQ(s.limits.decodedTileCache, 8ULL << 20);
   EXPECT_EQ(c->cache.root, "/srv/conf/cache/here");
   EXPECT_EQ(c->cache.sizeLimitBytes, 10ULL << 30);
+  EXPECT_EQ(c->renderer.lodThreshold, 1.5);
+  EXPECT_EQ(c->renderer.meshSize, 17);
+  EXPECT_EQ(c->renderer.fovDeg, 60.0);
+  EXPECT_EQ(c->renderer.textureBudget, 256ULL << 20);
+  EXPECT_EQ(c->renderer.uploadPerFrame, 2ULL << 20);
+  EXPECT_EQ(c->renderer.maxInFlight, 4);
+  EXPECT_EQ(c->renderer.maxSplitsPerFrame, 8);
+  EXPECT_EQ(c->renderer.decodeThreads, 3);
 
   const UpstreamConfig& ww = c->upstreams.at(0);
   EXPECT_EQ(ww.type, UpstreamConfig::Type::WorldWind);

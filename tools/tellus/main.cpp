@@ -1127,6 +1127,18 @@ struct PlanetTiles {
   ITileSource* source = nullptr;
 };
 
+/** The configuration's `renderer` settings; what the command line gave (--threshold) wins. */
+void applyRendererSettings(const RendererSettings& g, const Args& a, planet::RendererOptions& ro) {
+  if (!a.get("threshold")) ro.lodThreshold = g.lodThreshold;
+  ro.meshSize = g.meshSize;
+  ro.verticalFovDeg = g.fovDeg;
+  ro.textureBudgetBytes = static_cast<std::size_t>(g.textureBudget);
+  ro.uploadBytesPerFrame = static_cast<std::size_t>(g.uploadPerFrame);
+  ro.maxInFlight = static_cast<std::size_t>(g.maxInFlight);
+  ro.maxSplitsPerFrame = g.maxSplitsPerFrame;
+  ro.decodeThreads = g.decodeThreads;
+}
+
 std::expected<PlanetTiles, int>
 openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
   auto usage = [cmd](const char* what, const std::string& got) {
@@ -1138,6 +1150,14 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
   if (const auto server = a.get("server")) {
     if (a.flag("offline"))
       return std::unexpected(usage("--server and --offline exclude each other", *server));
+    if (const auto file = a.get("config")) { // only its renderer settings matter here
+      auto loaded = loadConfig(*file);
+      if (!loaded) {
+        std::fprintf(stderr, "tellus: configuration: %s\n", loaded.error().toString().c_str());
+        return std::unexpected(kExitError);
+      }
+      applyRendererSettings(loaded->renderer, a, ro);
+    }
     auto remote = RemoteTileSource::connect(*server);
     if (!remote) {
       std::fprintf(stderr, "tellus %s: %s\n", cmd, remote.error().c_str());
@@ -1159,6 +1179,7 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
   t.ctx = setUp(a);
   if (!t.ctx) return std::unexpected(kExitError);
   const Config& config = t.ctx->config;
+  applyRendererSettings(config.renderer, a, ro);
   if (layerArg) {
     const auto* layer = config.layer(*layerArg);
     if (layer == nullptr || layer->kind != LayerKind::Imagery)

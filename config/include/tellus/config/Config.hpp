@@ -62,6 +62,19 @@ struct ServerSettings {
   ServerLimits limits;
 };
 
+/** YAML `renderer`: the planet renderer of `tellus view` and `tellus render` (the command line's
+ * --threshold overrides lod_threshold). */
+struct RendererSettings {
+  double lodThreshold = 1.0;                  ///< texel-to-pixel threshold, 0.05 - 64
+  int meshSize = 33;                          ///< vertices along a node's edge, 2^n + 1 in [3, 257]
+  double fovDeg = 45.0;                       ///< vertical field of view, (1, 170)
+  std::uint64_t textureBudget = 768ULL << 20; ///< GPU bytes of node textures (the LRU's budget)
+  std::uint64_t uploadPerFrame = 8ULL << 20;  ///< texture bytes uploaded a frame (banded)
+  int maxInFlight = 16;                       ///< tile requests out at once
+  int maxSplitsPerFrame = 64;                 ///< nodes created a frame
+  int decodeThreads = 2;                      ///< texture decoding workers
+};
+
 /** YAML `cache`. */
 struct CacheSettings {
   std::filesystem::path root;       ///< cache root (index.sqlite + the tile tree)
@@ -152,6 +165,7 @@ struct Config {
   std::filesystem::path sourceFile; ///< the YAML it came from ("<embedded default.yaml>" for that)
   ServerSettings server;
   CacheSettings cache;
+  RendererSettings renderer;
   std::vector<UpstreamConfig> upstreams;
   std::vector<LayerConfig> layers;
 
