@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # `tellus view` driven as a user does (label gl: run under xvfb-run; needs xdotool): the window
-# opens, P writes a screenshot, a drag and the wheel change the view, Esc quits with exit 0.
+# opens, P writes a screenshot, a drag and the wheel change the view, a double-click flies to the
+# point under the cursor, Esc quits with exit 0.
 set -euo pipefail
 tellus=$1
 command -v xdotool >/dev/null || { echo "xdotool missing (tools/debian-packages.txt)" >&2; exit 1; }
@@ -37,6 +38,18 @@ for _ in 1 2 3 4 5; do xdotool click --window "$win" 4; sleep 0.1; done
 sleep 2
 shot 3
 cmp -s tellus-2.png tellus-3.png && fail "the wheel changed nothing"
+# A double-click right of the centre flies there: east of where the camera was, three times closer.
+title_num() { xdotool getwindowname "$win" | python3 -c "import re,sys; t=sys.stdin.read(); m=re.search(r'(-?[0-9.]+), (-?[0-9.]+)  ([0-9]+) m', t); print(m.group(int(sys.argv[1])) if m else 'none')" "$1"; }
+sleep 1
+lon0=$(title_num 2); alt0=$(title_num 3)
+[ "$lon0" != none ] || fail "no camera in the title: $(xdotool getwindowname "$win")"
+xdotool mousemove --window "$win" 250 100 click --repeat 2 --delay 80 1
+for _ in $(seq 50); do grep -q "fly to" "$work/out.txt" && break; sleep 0.1; done
+grep -q "fly to" "$work/out.txt" || fail "a double-click did not fly: $(cat "$work/out.txt")"
+sleep 3
+lon1=$(title_num 2); alt1=$(title_num 3)
+python3 -c "import sys; l0,l1,a0,a1=map(float,sys.argv[1:]); sys.exit(0 if l1>l0 and a1<a0/2 else 1)" \
+  "$lon0" "$lon1" "$alt0" "$alt1" || fail "fly-to: lon $lon0 -> $lon1, altitude $alt0 -> $alt1"
 hold Escape
 for _ in $(seq 100); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
 kill -0 "$pid" 2>/dev/null && fail "Esc did not quit"

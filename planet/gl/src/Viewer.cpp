@@ -2,12 +2,15 @@
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
+#include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
+#include <utility>
 
 namespace tellus::planet {
 
@@ -15,15 +18,86 @@ namespace {
 
 struct InputState {
   double scroll = 0.0;
+  /** Left-button presses since the last frame, seen by the callback (polling the button's state
+   * once a frame misses a click that begins and ends between two frames). */
+  int presses = 0;
+  std::chrono::steady_clock::time_point lastPress{};
+  double pressX = 0.0, pressY = 0.0;
+  bool doubleClick = false;
+  double doubleX = 0.0, doubleY = 0.0;
 };
 
 extern "C" void onScroll(GLFWwindow* w, double, double dy) {
   if (auto* s = static_cast<InputState*>(glfwGetWindowUserPointer(w))) s->scroll += dy;
 }
 
+extern "C" void onMouseButton(GLFWwindow* w, int button, int action, int) {
+  auto* s = static_cast<InputState*>(glfwGetWindowUserPointer(w));
+  if (s == nullptr || button != GLFW_MOUSE_BUTTON_LEFT || action != GLFW_PRESS) return;
+  double x = 0.0, y = 0.0;
+  glfwGetCursorPos(w, &x, &y);
+  const auto now = std::chrono::steady_clock::now();
+  if (std::chrono::duration<double>(now - s->lastPress).count() < 0.4 &&
+      std::hypot(x - s->pressX, y - s->pressY) < 6.0) {
+    s->doubleClick = true;
+    s->doubleX = x;
+    s->doubleY = y;
+    s->lastPress = {};
+  } else {
+    s->lastPress = now;
+  }
+  s->pressX = x;
+  s->pressY = y;
+}
+
 double wrapLon(double lon) {
   return std::remainder(lon, 360.0);
 }
+
+/** The geodetic point under a window pixel: the eye ray through the pixel's centre meets the
+ * WGS84 ellipsoid (scaled to a unit sphere); nullopt when it misses the Earth. */
+std::optional<std::pair<double, double>>
+pick(const Camera& cam, double px, double py, int width, int height) {
+  constexpr double a = 6378137.0, b = 6356752.314245179;
+  const double t = std::tan(cam.verticalFovDeg() * M_PI / 360.0);
+  const double nx = (2.0 * (px + 0.5) / width - 1.0) * t * width / height;
+  const double ny = (1.0 - 2.0 * (py + 0.5) / height) * t;
+  const glm::dvec3 dir = glm::normalize(cam.forward() + cam.right() * nx + cam.up() * ny);
+  const glm::dvec3 scale{1.0 / a, 1.0 / a, 1.0 / b};
+  const glm::dvec3 o = cam.position() * scale, d = dir * scale;
+  const double qa = glm::dot(d, d), qb = 2.0 * glm::dot(o, d), qc = glm::dot(o, o) - 1.0;
+  const double disc = qb * qb - 4.0 * qa * qc;
+  if (disc < 0.0) return std::nullopt;
+  const double hit = (-qb - std::sqrt(disc)) / (2.0 * qa);
+  if (!(hit > 0.0)) return std::nullopt;
+  const glm::dvec3 p = cam.position() + dir * hit; // scale * (position + hit dir) = o + hit d
+  const double e2 = 1.0 - (b * b) / (a * a);
+  const double lat = std::atan2(p.z, (1.0 - e2) * std::hypot(p.x, p.y)) * 180.0 / M_PI;
+  const double lon = std::atan2(p.y, p.x) * 180.0 / M_PI;
+  if (!std::isfinite(lat) || !std::isfinite(lon)) return std::nullopt;
+  return std::pair{lat, lon};
+}
+
+/** A flight from one pose to another: latitude, tilt and heading linearly (the heading and the
+ * longitude the short way round), the altitude geometrically, eased in and out. */
+struct Flight {
+  CameraPose from, to;
+  double seconds = 0.0, elapsed = 0.0;
+  bool active = false;
+  CameraPose at(double dt) {
+    elapsed = std::min(seconds, elapsed + dt);
+    const double u = elapsed / seconds;
+    const double s = u * u * (3.0 - 2.0 * u);
+    CameraPose p;
+    p.latDeg = from.latDeg + (to.latDeg - from.latDeg) * s;
+    p.lonDeg = wrapLon(from.lonDeg + std::remainder(to.lonDeg - from.lonDeg, 360.0) * s);
+    p.altitudeM = from.altitudeM * std::pow(to.altitudeM / from.altitudeM, s);
+    p.headingDeg = from.headingDeg + std::remainder(to.headingDeg - from.headingDeg, 360.0) * s;
+    p.tiltDeg = from.tiltDeg + (to.tiltDeg - from.tiltDeg) * s;
+    if (elapsed >= seconds) active = false;
+    return p;
+  }
+};
 
 } // namespace
 
@@ -33,9 +107,11 @@ std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options) {
   InputState input;
   glfwSetWindowUserPointer(window, &input);
   glfwSetScrollCallback(window, onScroll);
+  glfwSetMouseButtonCallback(window, onMouseButton);
   CameraPose pose = options.start;
   double lastX = 0.0, lastY = 0.0;
   bool dragging = false;
+  Flight flight;
   bool screenshotHeld = false;
   int screenshots = 0;
   std::uint64_t frames = 0;
@@ -58,8 +134,32 @@ std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options) {
     // of view; heading-aware).
     double x = 0.0, y = 0.0;
     glfwGetCursorPos(window, &x, &y);
-    if (glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS) {
+    const bool pressed = glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
+    // Double-click: fly to the point under the cursor, three times closer.
+    if (input.doubleClick) {
+      input.doubleClick = false;
+      int ww = 0, wh = 0;
+      glfwGetWindowSize(window, &ww, &wh);
+      // Window coordinates to framebuffer pixels (they differ on high-DPI screens).
+      const double sx = ww > 0 ? static_cast<double>(renderer.width()) / ww : 1.0;
+      const double sy = wh > 0 ? static_cast<double>(renderer.height()) / wh : 1.0;
+      if (const auto target = pick(renderer.camera(pose),
+                                   input.doubleX * sx,
+                                   input.doubleY * sy,
+                                   renderer.width(),
+                                   renderer.height())) {
+        flight = Flight{pose, pose, 1.5, 0.0, true};
+        flight.to.latDeg = target->first;
+        flight.to.lonDeg = target->second;
+        flight.to.altitudeM = std::max(10.0, pose.altitudeM / 3.0);
+        std::printf(
+            "fly to %.5f, %.5f, %.0f m\n", target->first, target->second, flight.to.altitudeM);
+        std::fflush(stdout);
+      }
+    }
+    if (pressed) {
       if (dragging) {
+        if (x != lastX || y != lastY) flight.active = false; // the user takes over
         const double metresPerPixel = std::max(1.0, pose.altitudeM) * 2.0 *
                                       std::tan(45.0 * M_PI / 360.0) /
                                       std::max(1, renderer.height());
@@ -92,7 +192,11 @@ std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options) {
     if (glfwGetKey(window, GLFW_KEY_A) == GLFW_PRESS) pose.headingDeg -= turn;
     if (glfwGetKey(window, GLFW_KEY_D) == GLFW_PRESS) pose.headingDeg += turn;
     pose.headingDeg = std::remainder(pose.headingDeg, 360.0);
-    if (glfwGetKey(window, GLFW_KEY_R) == GLFW_PRESS) pose = options.start;
+    if (glfwGetKey(window, GLFW_KEY_R) == GLFW_PRESS) {
+      pose = options.start;
+      flight.active = false;
+    }
+    if (flight.active) pose = flight.at(dt);
     if (glfwGetKey(window, GLFW_KEY_ESCAPE) == GLFW_PRESS)
       glfwSetWindowShouldClose(window, GLFW_TRUE);
 
@@ -152,6 +256,7 @@ std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options) {
     }
   }
   glfwSetScrollCallback(window, nullptr);
+  glfwSetMouseButtonCallback(window, nullptr);
   glfwSetWindowUserPointer(window, nullptr);
   return frames;
 }

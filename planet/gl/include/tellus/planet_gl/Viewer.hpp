@@ -5,8 +5,9 @@
  * private to tellus::planet_gl.
  *
  * Controls: left-drag moves the camera over the ground (the point under the cursor follows it,
- * roughly), the wheel zooms with a speed proportional to the altitude, W/S tilt, A/D turn the
- * heading, R resets to the start pose, P writes a screenshot PNG, Esc or closing the window quits.
+ * roughly), a double-click flies to the point under the cursor (three times closer, 1.5 s, eased;
+ * a drag or R interrupts), the wheel zooms with a speed proportional to the altitude, W/S tilt,
+ * A/D turn the heading, R resets to the start pose, P writes a screenshot PNG, Esc or closing the window quits.
  * The statistics line (fps, nodes drawn, tiles in flight, texture MB, camera) is the window title,
  * refreshed twice a second.
  */
