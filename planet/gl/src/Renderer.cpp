@@ -2,6 +2,7 @@
 // renderer"). Every GL call here runs on the thread that created the Renderer.
 
 #include "Shaders.hpp"
+#include "TextOverlay.hpp"
 #include "TextureDecoder.hpp"
 
 #include <tellus/planet/Patch.hpp>
@@ -149,6 +150,11 @@ struct Renderer::Impl {
   RenderStats stats;
   bool lastComplete = false;
   Clock::time_point start = Clock::now();
+  // The window's statistics line (setOverlayText): a texture + framebuffer blitted over the
+  // globe in the window only (never into the image readPixels returns).
+  std::string overlayText, overlayUploaded;
+  GLuint overlayTexture = 0, overlayFbo = 0;
+  int overlayW = 0, overlayH = 0;
 
   std::string initGl();
   void makeFramebuffer();
@@ -176,6 +182,8 @@ Renderer::Impl::~Impl() {
       glDeleteTextures(1, &u.id);
     if (!pool.empty()) glDeleteTextures(static_cast<GLsizei>(pool.size()), pool.data());
     glDeleteTextures(1, &globalTexture);
+    if (overlayFbo != 0) glDeleteFramebuffers(1, &overlayFbo);
+    if (overlayTexture != 0) glDeleteTextures(1, &overlayTexture);
     glDeleteBuffers(1, &ebo);
     glDeleteProgram(program);
     freeFramebuffer();
@@ -576,12 +584,45 @@ void Renderer::Impl::draw(const Camera& camera) {
     glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo);
     glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
     glBlitFramebuffer(0, 0, opt.width, opt.height, 0, 0, fw, fh, GL_COLOR_BUFFER_BIT, GL_LINEAR);
+    if (!overlayText.empty()) {
+      if (overlayText != overlayUploaded) {
+        const int scale = fh >= 900 ? 2 : 1;
+        const TextImage t = rasterizeText(overlayText, scale);
+        if (overlayTexture == 0) {
+          glGenTextures(1, &overlayTexture);
+          glGenFramebuffers(1, &overlayFbo);
+        }
+        glBindTexture(GL_TEXTURE_2D, overlayTexture);
+        glTexImage2D(GL_TEXTURE_2D,
+                     0,
+                     GL_RGBA8,
+                     t.width,
+                     t.height,
+                     0,
+                     GL_RGBA,
+                     GL_UNSIGNED_BYTE,
+                     t.rgba.data());
+        glBindFramebuffer(GL_READ_FRAMEBUFFER, overlayFbo);
+        glFramebufferTexture2D(
+            GL_READ_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, overlayTexture, 0);
+        overlayW = t.width;
+        overlayH = t.height;
+        overlayUploaded = overlayText;
+      }
+      glBindFramebuffer(GL_READ_FRAMEBUFFER, overlayFbo);
+      const int w = std::min(overlayW, fw), h = std::min(overlayH, fh);
+      glBlitFramebuffer(0, 0, w, h, 0, fh - h, w, fh, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    }
     glfwSwapBuffers(window);
     glBindFramebuffer(GL_FRAMEBUFFER, fbo);
   }
 }
 
 Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+void Renderer::setOverlayText(std::string text) {
+  impl_->overlayText = std::move(text);
+}
 Renderer::~Renderer() = default;
 
 std::expected<std::unique_ptr<Renderer>, std::string>

@@ -251,6 +251,7 @@ std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options) {
                     pose.headingDeg,
                     pose.tiltDeg);
       glfwSetWindowTitle(window, title);
+      renderer.setOverlayText(title + 7); // the same line on screen, without "tellus  "
       lastTitle = now;
       framesAtTitle = frames;
     }

@@ -118,6 +118,9 @@ public:
    * (GLFWwindow*) for the view loop's input. Null when hidden. */
   bool windowShouldClose() const noexcept;
   void* nativeWindow() const noexcept;
+  /** A line drawn at the top left of the visible window over the globe (the statistics line of
+   * `tellus view`); never part of readPixels(). Empty: none. */
+  void setOverlayText(std::string text);
   /** Resizes the framebuffer (window resize). */
   void resize(int width, int height);
 
