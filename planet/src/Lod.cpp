@@ -2,24 +2,33 @@
 
 #include <algorithm>
 #include <array>
+
+#include <glm/geometric.hpp>
 #include <cmath>
 
 namespace tellus::planet {
 
 namespace {
 
+/** The rows of the view-projection matrix's linear part that give clip x, y and w. */
+struct ClipRows {
+  glm::dvec3 x, y, w;
+  explicit ClipRows(const glm::dmat4& m) noexcept
+      : x(m[0][0], m[1][0], m[2][0]), y(m[0][1], m[1][1], m[2][1]), w(m[0][3], m[1][3], m[2][3]) {}
+};
+
 /** Squared pixel length of the projection of displacement v at the point whose clip coordinates
  * are c: the derivative of (x / w, y / w) scaled to pixels. */
-double projectedLength2(const glm::dmat4& vp,
+double projectedLength2(const ClipRows& rows,
                         const glm::dvec4& c,
                         const glm::dvec3& v,
                         double halfW,
                         double halfH) noexcept {
-  const glm::dvec4 dc = vp * glm::dvec4(v, 0.0);
+  const double dx = glm::dot(rows.x, v), dy = glm::dot(rows.y, v), dw = glm::dot(rows.w, v);
   const double inv = 1.0 / (c.w * c.w);
-  const double dx = halfW * (dc.x * c.w - c.x * dc.w) * inv;
-  const double dy = halfH * (dc.y * c.w - c.y * dc.w) * inv;
-  return dx * dx + dy * dy;
+  const double px = halfW * (dx * c.w - c.x * dw) * inv;
+  const double py = halfH * (dy * c.w - c.y * dw) * inv;
+  return px * px + py * py;
 }
 
 /** A longitude moved into [west, east] by the shorter way round. */
@@ -82,7 +91,7 @@ evaluateLod(const Camera& camera, const NodeGeometry& node, const LodParams& par
   const double texLon = (s.east - s.west) / static_cast<double>(params.tileWidthPx);
   const double texLat = (s.north - s.south) / static_cast<double>(params.tileHeightPx);
   const double t2 = params.threshold * params.threshold;
-  const glm::dmat4& vp = camera.viewProjection();
+  const ClipRows vp(camera.viewProjection());
   double worst = 0.0;
   auto sample = [&](const SurfaceFrame& f, const glm::dvec4& c) {
     const double e = projectedLength2(vp, c, f.perDegLon * texLon, halfW, halfH);
