@@ -1,9 +1,9 @@
 #include <tellus/planet/Lod.hpp>
 
+#include <glm/geometric.hpp>
+
 #include <algorithm>
 #include <array>
-
-#include <glm/geometric.hpp>
 #include <cmath>
 
 namespace tellus::planet {
