@@ -399,6 +399,39 @@ TEST(QuadtreeExtremes, TexelToPixelHoldsTiltedEverywhere) {
   EXPECT_GT(worstCorners, 1.3); // the checker sees what the corner test misses
 }
 
+// Near the poles a merged row's children are as wide as itself (north-south splits only). Where
+// the local texel test finds only east-west texels over the limit, such children would have the
+// same east-west texels at the sample: the tree refined them down to level 24 (17,044 nodes drawn
+// tilted 30 degrees at 84 N from 20 km, 77,980 at 89.9 N from 240 km) before the row was made to
+// split east-west. Now the views converge to the levels their texels ask for.
+TEST(QuadtreeExtremes, EastWestTexelsAloneSplitAMergedRowEastWest) {
+  const Geodesy g;
+  for (const CameraPose pose : {CameraPose{84.0, 10.0, 2e4, 30.0, 30.0},
+                                CameraPose{89.9, 10.0, 2.4e5, 30.0, 30.0},
+                                CameraPose{89.9, 10.0, 2e4, 30.0, 60.0},
+                                CameraPose{90.0, 10.0, 1e3, 30.0, 30.0}}) {
+    Quadtree tree(g, test::globalGrid(), params());
+    const Camera cam(g, pose, {1024, 768}, 45.0);
+    const FrameStats& s = converge(tree, cam);
+    EXPECT_EQ(s.created, 0u) << pose.latDeg << " " << pose.altitudeM;
+    EXPECT_LE(s.maxLevel, 16) << pose.latDeg << " " << pose.altitudeM;
+    EXPECT_LE(s.drawn, 60u) << pose.latDeg << " " << pose.altitudeM;
+    expectConsistent(tree);
+  }
+  // A tree whose wide children were made for another camera: they are made again, narrower.
+  Quadtree tree(g, test::globalGrid(), params());
+  converge(tree, Camera(g, {89.9, 10.0, 2e4, 30.0, 0.0}, {1024, 768}, 45.0));
+  const Camera tilted(g, {89.9, 10.0, 2e4, 30.0, 60.0}, {1024, 768}, 45.0);
+  const FrameStats& s = converge(tree, tilted);
+  EXPECT_EQ(s.created, 0u);
+  EXPECT_LE(s.maxLevel, 16);
+  double worst = 0.0;
+  for (const Node* n : tree.drawList())
+    worst = std::max(worst, worstTexelPixels(tilted, g, *n, tree.params().lod));
+  EXPECT_LE(worst, 1.03);
+  expectConsistent(tree);
+}
+
 // Widened polar rows are made for the camera of the moment; after a path over the pole (zooming
 // in and out, tilting, turning) the nodes made for earlier cameras must keep the guarantee: no
 // texel larger than the threshold (3 % for the sampling, as in TexelToPixelHoldsTiltedEverywhere),
