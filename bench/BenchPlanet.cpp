@@ -242,9 +242,10 @@ void runPath(benchmark::State& state,
              int frames,
              Viewport vp = {1024, 768}) {
   const Geodesy g;
-  const QuadtreeParams p = [] {
+  // Arg 1: the local texels (LodParams::perspectiveAware, the default); 0: the corner test alone.
+  const QuadtreeParams p = [&] {
     QuadtreeParams q;
-    q.lod = {512, 512, 1.0};
+    q.lod = {512, 512, 1.0, state.range(0) != 0};
     q.maxSplitsPerFrame = 64;
     q.maxNodes = 50000;
     return q;
@@ -370,19 +371,20 @@ void BM_PathFastPan(benchmark::State& state) {
       kFrames);
 }
 
-BENCHMARK(BM_PathOrbit20000Km)->Unit(benchmark::kMillisecond)->Iterations(1);
-BENCHMARK(BM_PathDescentAlps)->Unit(benchmark::kMillisecond)->Iterations(1);
-BENCHMARK(BM_PathDescentAlps1080p)->Unit(benchmark::kMillisecond)->Iterations(1);
-BENCHMARK(BM_PathDescentAlpsTilted)->Unit(benchmark::kMillisecond)->Iterations(1);
-BENCHMARK(BM_PathPolePass)->Unit(benchmark::kMillisecond)->Iterations(1);
-BENCHMARK(BM_PathFastPan)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_PathOrbit20000Km)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_PathDescentAlps)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_PathDescentAlps1080p)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_PathDescentAlpsTilted)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_PathPolePass)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_PathFastPan)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 /** A tilted view from 300 km with a low threshold: a few thousand visible nodes, every frame the
  * same (the steady state: nothing created, everything traversed and tested). */
 void BM_UpdatePass(benchmark::State& state) {
   const Geodesy g;
   QuadtreeParams p = params(0.125);
-  p.tightFrustumCulling = state.range(0) != 0; // 0: the bounding sphere alone
+  p.tightFrustumCulling = state.range(0) != 0;  // 0: the bounding sphere alone
+  p.lod.perspectiveAware = state.range(1) != 0; // 0: the corner test alone
   Quadtree tree(g, worldWindGrid(), p);
   const Camera cam(g, {30.0, 10.0, 3e5, 0.0, 70.0}, {1920, 1080});
   converge(tree, cam);
@@ -392,7 +394,7 @@ void BM_UpdatePass(benchmark::State& state) {
   state.counters["drawn"] = static_cast<double>(tree.stats().drawn);
   state.counters["visited"] = static_cast<double>(tree.stats().visited);
 }
-BENCHMARK(BM_UpdatePass)->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_UpdatePass)->Args({1, 1})->Args({1, 0})->Args({0, 1})->Unit(benchmark::kMicrosecond);
 
 /** The same view with the streamer's pass after the tree's (all textures resident: the steady
  * state of the whole CPU update; the time is tree.update + streamer.update on the thread's CPU
@@ -400,6 +402,7 @@ BENCHMARK(BM_UpdatePass)->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond);
 void BM_UpdatePassWithStreamer(benchmark::State& state) {
   const Geodesy g;
   QuadtreeParams p = params(0.125);
+  p.lod.perspectiveAware = state.range(0) != 0;
   Renderer r(g, p);
   const Camera cam(g, {30.0, 10.0, 3e5, 0.0, 70.0}, {1920, 1080});
   for (int i = 0; i < 400; ++i) {
@@ -412,17 +415,23 @@ void BM_UpdatePassWithStreamer(benchmark::State& state) {
   state.counters["drawn"] = static_cast<double>(r.tree.stats().drawn);
   state.counters["candidates"] = static_cast<double>(r.streamer.stats().candidates);
 }
-BENCHMARK(BM_UpdatePassWithStreamer)->Unit(benchmark::kMicrosecond)->UseManualTime();
+BENCHMARK(BM_UpdatePassWithStreamer)
+    ->Arg(1)
+    ->Arg(0)
+    ->Unit(benchmark::kMicrosecond)
+    ->UseManualTime();
 
 /** Drawn nodes of a top-down view at an altitude (arg, km) over the pole, and the equator's. */
 void BM_PoleVersusEquatorNodes(benchmark::State& state) {
   const Geodesy g;
   const double altitude = static_cast<double>(state.range(0)) * 1000.0;
   std::size_t pole = 0, equator = 0;
+  QuadtreeParams q = params(1.0);
+  q.lod.perspectiveAware = state.range(1) != 0;
   for (auto _ : state) {
-    Quadtree p(g, worldWindGrid(), params(1.0));
+    Quadtree p(g, worldWindGrid(), q);
     converge(p, Camera(g, {90.0, 0.0, altitude, 0.0, 0.0}, {1024, 768}));
-    Quadtree e(g, worldWindGrid(), params(1.0));
+    Quadtree e(g, worldWindGrid(), q);
     converge(e, Camera(g, {0.0, 10.0, altitude, 0.0, 0.0}, {1024, 768}));
     pole = p.stats().drawn;
     equator = e.stats().drawn;
@@ -432,10 +441,7 @@ void BM_PoleVersusEquatorNodes(benchmark::State& state) {
   state.counters["ratio"] = equator ? static_cast<double>(pole) / static_cast<double>(equator) : 0;
 }
 BENCHMARK(BM_PoleVersusEquatorNodes)
-    ->Arg(20)
-    ->Arg(200)
-    ->Arg(2000)
-    ->Arg(20000)
+    ->ArgsProduct({{20, 200, 1000, 2000, 6000, 20000}, {1, 0}})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1);
 

@@ -91,6 +91,30 @@ Camera::Camera(const Geodesy& geodesy,
   frustum_.planes[Frustum::Bottom] = normalised(m[3] + m[1]);
   frustum_.planes[Frustum::Top] = normalised(m[3] - m[1]);
   frustum_.planes[Frustum::Near] = normalised(m[3] - m[2]);
+
+  // Rays through the viewport's border against the model's ellipsoid (the unit sphere once x and
+  // y are scaled by 1/a and z by 1/b); the geodetic latitude of a surface point from its normal
+  // (x / a^2, y / a^2, z / b^2).
+  const double a = geodesy.equatorialRadius(), b = geodesy.polarRadius();
+  const double ty = std::tan(0.5 * verticalFovDeg * std::numbers::pi / 180.0), tx = ty * aspect;
+  constexpr std::array<std::array<double, 2>, 9> ndc{
+      {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}, {0, -1}, {1, 0}, {0, 1}, {-1, 0}, {0, 0}}};
+  const glm::dvec3 scale(1.0 / a, 1.0 / a, 1.0 / b);
+  for (std::size_t i = 0; i < ndc.size(); ++i) {
+    const glm::dvec3 dir = forward_ + ndc[i][0] * tx * right_ + ndc[i][1] * ty * up_;
+    const glm::dvec3 o = position_ * scale, d = dir * scale;
+    const double A = glm::dot(d, d), B = glm::dot(o, d), C = glm::dot(o, o) - 1.0;
+    const double disc = B * B - A * C;
+    if (!(disc >= 0.0) || !(C > 0.0)) continue; // misses the model, or the eye is inside it
+    const double t = (-B - std::sqrt(disc)) / A;
+    if (!(t > 0.0)) continue;
+    const glm::dvec3 p = position_ + t * dir;
+    GroundPoint& gp = ground_[i];
+    gp.hit = true;
+    gp.latDeg =
+        std::atan2(p.z / (b * b), std::hypot(p.x, p.y) / (a * a)) * 180.0 / std::numbers::pi;
+    gp.lonDeg = std::atan2(p.y, p.x) * 180.0 / std::numbers::pi;
+  }
 }
 
 glm::dvec4 Camera::toClip(const glm::dvec3& world) const noexcept {

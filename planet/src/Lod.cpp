@@ -1,9 +1,46 @@
 #include <tellus/planet/Lod.hpp>
 
+#include <glm/geometric.hpp>
+
+#include <algorithm>
 #include <array>
 #include <cmath>
 
 namespace tellus::planet {
+
+namespace {
+
+/** The rows of the view-projection matrix's linear part that give clip x, y and w. */
+struct ClipRows {
+  glm::dvec3 x, y, w;
+  explicit ClipRows(const glm::dmat4& m) noexcept
+      : x(m[0][0], m[1][0], m[2][0]), y(m[0][1], m[1][1], m[2][1]), w(m[0][3], m[1][3], m[2][3]) {}
+};
+
+/** Squared pixel length of the projection of displacement v at the point whose clip coordinates
+ * are c: the derivative of (x / w, y / w) scaled to pixels. */
+double projectedLength2(const ClipRows& rows,
+                        const glm::dvec4& c,
+                        const glm::dvec3& v,
+                        double halfW,
+                        double halfH) noexcept {
+  const double dx = glm::dot(rows.x, v), dy = glm::dot(rows.y, v), dw = glm::dot(rows.w, v);
+  const double inv = 1.0 / (c.w * c.w);
+  const double px = halfW * (dx * c.w - c.x * dw) * inv;
+  const double py = halfH * (dy * c.w - c.y * dw) * inv;
+  return px * px + py * py;
+}
+
+/** A longitude moved into [west, east] by the shorter way round. */
+double clampLongitude(double lon, double west, double east) noexcept {
+  lon = std::remainder(lon, 360.0); // [-180, 180]
+  if (lon >= west && lon <= east) return lon;
+  const double toWest = std::remainder(west - lon, 360.0),
+               toEast = std::remainder(lon - east, 360.0);
+  return std::abs(toWest) <= std::abs(toEast) ? west : east;
+}
+
+} // namespace
 
 LodResult
 evaluateLod(const Camera& camera, const NodeGeometry& node, const LodParams& params) noexcept {
@@ -14,16 +51,18 @@ evaluateLod(const Camera& camera, const NodeGeometry& node, const LodParams& par
   const double halfW = 0.5 * static_cast<double>(camera.viewport().width);
   const double halfH = 0.5 * static_cast<double>(camera.viewport().height);
   std::array<glm::dvec2, 4> px{};
+  std::array<glm::dvec4, 4> clip{};
   for (std::size_t i = 0; i < 4; ++i) {
-    const glm::dvec4 clip = camera.toClip(node.corners()[i]);
+    clip[i] = camera.toClip(node.corners()[i]);
+    const glm::dvec4& c = clip[i];
     // w is the distance in front of the eye; at or in front of the near plane means projectable.
-    if (!(clip.w >= camera.nearM()) || !std::isfinite(clip.x) || !std::isfinite(clip.y)) {
+    if (!(c.w >= camera.nearM()) || !std::isfinite(c.x) || !std::isfinite(c.y)) {
       r.cornerBehindCamera = true;
       r.split = true;
       r.worstRatioSquared = 0.0;
       return r;
     }
-    px[i] = {clip.x / clip.w * halfW, clip.y / clip.w * halfH};
+    px[i] = {c.x / c.w * halfW, c.y / c.w * halfH};
   }
   const double limitW = static_cast<double>(params.tileWidthPx) * params.threshold;
   const double limitH = static_cast<double>(params.tileHeightPx) * params.threshold;
@@ -43,6 +82,58 @@ evaluateLod(const Camera& camera, const NodeGeometry& node, const LodParams& par
     if (ratio > r.worstRatioSquared) r.worstRatioSquared = ratio;
     if (len2 > (e.eastWest ? limitW2 : limitH2)) r.split = true;
   }
+  if (r.split || !params.perspectiveAware) return r;
+
+  // The local texel at the sample points: one texel's step east and north along the surface
+  // (metres per degree times degrees per texel), projected through the derivative of the
+  // perspective division.
+  const Sector& s = node.sector();
+  const double texLon = (s.east - s.west) / static_cast<double>(params.tileWidthPx);
+  const double texLat = (s.north - s.south) / static_cast<double>(params.tileHeightPx);
+  const double t2 = params.threshold * params.threshold;
+  const ClipRows vp(camera.viewProjection());
+  double worst = 0.0;
+  auto sample = [&](const SurfaceFrame& f, const glm::dvec4& c) {
+    const double e = projectedLength2(vp, c, f.perDegLon * texLon, halfW, halfH);
+    const double n = projectedLength2(vp, c, f.perDegLat * texLat, halfW, halfH);
+    if (!(e <= t2)) r.eastWestOver = true; // NaN (not projectable) too: refine
+    if (!(n <= t2)) r.northSouthOver = true;
+    const double m = std::max(e, n) / t2;
+    if (std::isnan(m))
+      worst = 1e300;
+    else if (m > worst)
+      worst = m;
+  };
+  for (std::size_t i = 0; i < 4; ++i)
+    sample(node.cornerFrames()[i], clip[i]);
+  const double a = node.equatorialRadiusM(), b = node.polarRadiusM();
+  auto inViewport = [](const glm::dvec4& c) {
+    return std::abs(c.x) <= c.w && std::abs(c.y) <= c.w; // ndc within [-1, 1]
+  };
+  // The node's point below the camera: where a camera above a large node's interior sees its
+  // largest texels (its corners may all be far away). Off screen it does not count (a tilted
+  // view's nadir is out of sight; the viewport's ground points stand for what is in sight).
+  const CameraPose& pose = camera.pose();
+  const double nearLat = std::clamp(pose.latDeg, s.south, s.north);
+  const double nearLon = clampLongitude(pose.lonDeg, s.west, s.east);
+  const bool interior =
+      (nearLat != s.south && nearLat != s.north) || (nearLon != s.west && nearLon != s.east);
+  if (interior) { // else it is a corner, sampled above
+    const SurfaceFrame f = surfaceFrame(a, b, nearLat, nearLon);
+    const glm::dvec4 c = camera.toClip(f.position);
+    if (c.w >= camera.nearM() && inViewport(c)) sample(f, c);
+  }
+  // The ground seen through the viewport's border: the nearest visible points of a tilted view.
+  for (const Camera::GroundPoint& gp : camera.viewportGround()) {
+    if (!gp.hit || gp.latDeg < s.south || gp.latDeg > s.north || gp.lonDeg < s.west ||
+        gp.lonDeg > s.east)
+      continue;
+    const SurfaceFrame f = surfaceFrame(a, b, gp.latDeg, gp.lonDeg);
+    const glm::dvec4 c = camera.toClip(f.position);
+    if (c.w >= camera.nearM()) sample(f, c);
+  }
+  r.worstTexelRatioSquared = worst;
+  if (!(worst <= 1.0)) r.split = true;
   return r;
 }
 

@@ -52,6 +52,22 @@ double angleBetween(const glm::dvec3& a, const glm::dvec3& b) {
 
 } // namespace
 
+SurfaceFrame surfaceFrame(double a, double b, double latDeg, double lonDeg) noexcept {
+  const double phi = latDeg * kDegToRad, lam = lonDeg * kDegToRad;
+  const double sp = std::sin(phi), cp = latDeg == 90.0 || latDeg == -90.0 ? 0.0 : std::cos(phi);
+  const double sl = std::sin(lam), cl = std::cos(lam);
+  // N: prime vertical radius of curvature, M: meridional; both a on a sphere.
+  const double w2 = a * a * cp * cp + b * b * sp * sp;
+  const double w = std::sqrt(w2);
+  const double N = a * a / w;
+  const double M = a * a * b * b / (w2 * w);
+  SurfaceFrame f;
+  f.position = {N * cp * cl, N * cp * sl, b * b / (a * a) * N * sp};
+  f.perDegLat = M * kDegToRad * glm::dvec3(-sp * cl, -sp * sl, cp);
+  f.perDegLon = N * cp * kDegToRad * glm::dvec3(-sl, cl, 0.0);
+  return f;
+}
+
 bool BoundingSphere::contains(const glm::dvec3& p) const noexcept {
   return glm::length(p - centre) <= radius;
 }
@@ -81,6 +97,9 @@ NodeGeometry::NodeGeometry(const Geodesy& geodesy,
   for (std::size_t i = 0; i < 4; ++i) {
     corners_[i] = surfacePoint(geodesy, latLon[i][0], latLon[i][1], 0.0);
     cornerNormals_[i] = normalAt(geodesy, latLon[i][0], latLon[i][1]);
+    cornerFrames_[i] =
+        surfaceFrame(geodesy.equatorialRadius(), geodesy.polarRadius(), latLon[i][0], latLon[i][1]);
+    cornerFrames_[i].position = corners_[i]; // GeographicLib's, bit-identical to the corners
   }
   distinctCorners_ = 0;
   for (std::size_t i = 0; i < 4; ++i) {

@@ -160,7 +160,8 @@ bool Quadtree::widerPaysOff(const NodeKey& wide, std::int64_t span, const Camera
   return below < statics;
 }
 
-Quadtree::ChildKeys Quadtree::childKeysFor(const NodeKey& key, const Camera* camera) const {
+Quadtree::ChildKeys
+Quadtree::childKeysFor(const NodeKey& key, const Camera* camera, bool narrow) const {
   ChildKeys out;
   if (key.level + 1 >= grid_.numLevels()) return out;
   const std::int32_t L = key.level + 1;
@@ -168,9 +169,12 @@ Quadtree::ChildKeys Quadtree::childKeysFor(const NodeKey& key, const Camera* cam
   for (int half = 0; half < 2; ++half) {   // 0: south row, 1: north row
     const std::int64_t row = key.row * 2 + half;
     std::int64_t span = spanFor(L, row, width);
+    // The LOD test found east-west texels over the limit: children as wide as the parent would
+    // have the same ones (a split that never helps); a plain quadtree split halves them.
+    if (narrow) span = width / 2;
     // A merged row may be as wide as the parent when the camera sees its east-west edges within
     // the texel limit (it would otherwise be two nodes no wider than tall).
-    if (camera != nullptr && params_.adaptivePolarSpans && span > 1 && span < width &&
+    if (!narrow && camera != nullptr && params_.adaptivePolarSpans && span > 1 && span < width &&
         (fitsEastWest({L, row, key.col * 2, width}, *camera) ||
          widerPaysOff({L, row, key.col * 2, width}, span, *camera)))
       span = width;
@@ -305,8 +309,18 @@ void Quadtree::relinkAround(const Node& node) noexcept {
 }
 
 bool Quadtree::split(Node& node) {
+  return splitWith(node, false);
+}
+
+bool Quadtree::childrenAsWide(const Node& node) const noexcept {
+  for (const auto& ch : node.children_)
+    if (ch && ch->key_.span == node.key_.span * 2) return true;
+  return false;
+}
+
+bool Quadtree::splitWith(Node& node, bool narrow) {
   if (node.hasChildren()) return true;
-  const ChildKeys ck = childKeysFor(node.key_, splitCamera_);
+  const ChildKeys ck = childKeysFor(node.key_, splitCamera_, narrow);
   int made = 0;
   for (std::size_t i = 0; i < 4; ++i) {
     if (!ck.present[i]) continue;
@@ -384,13 +398,28 @@ void Quadtree::visit(Node& node, bool insideFrustum, const Camera& camera) {
       !fitsEastWest(node.key_, camera))
     refine = true;
   bool descend = refine && node.key_.level + 1 < grid_.numLevels();
+  // East-west texels over the limit while the north-south ones fit: children as wide as the node
+  // would keep the same east-west texels (its equatorward edge is theirs), so a merged row then
+  // splits east-west; children made as wide as the node earlier (for another camera) are made
+  // again, narrower. Where both are over, the layout of spanFor() (the row's shape) stands: a
+  // north-south split halves the children's height, and a child row that becomes wider than
+  // tall is narrowed by spanFor() itself.
+  const bool narrow = lod.eastWestOver && !lod.northSouthOver && node.key_.span > 1;
+  if (descend && narrow && node.hasChildren() && childrenAsWide(node)) {
+    if (splitsThisFrame_ >= params_.maxSplitsPerFrame) {
+      ++stats_.splitsDeferred;
+      descend = false;
+    } else {
+      removeChildren(node);
+    }
+  }
   if (descend && !node.hasChildren()) {
     if (splitsThisFrame_ >= params_.maxSplitsPerFrame) {
       ++stats_.splitsDeferred;
       descend = false;
     } else {
       ++splitsThisFrame_;
-      descend = split(node);
+      descend = splitWith(node, narrow);
     }
   }
   if (descend) {

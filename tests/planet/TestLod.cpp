@@ -42,10 +42,21 @@ TEST(Lod, ThresholdIsTheKnob) {
   const double ratio = evaluateLod(cam, node, {512, 512, 1.0}).worstRatioSquared;
   ASSERT_GT(ratio, 0.0);
   const double edgeOverTile = std::sqrt(ratio); // the longest edge in tile sizes
-  EXPECT_TRUE(evaluateLod(cam, node, {512, 512, edgeOverTile * 0.99}).split);
-  EXPECT_FALSE(evaluateLod(cam, node, {512, 512, edgeOverTile * 1.01}).split);
-  // Doubling the threshold quarters the squared ratio.
+  // The corner test alone (perspectiveAware off) splits exactly at the longest edge.
+  EXPECT_TRUE(evaluateLod(cam, node, {512, 512, edgeOverTile * 0.99, false}).split);
+  EXPECT_FALSE(evaluateLod(cam, node, {512, 512, edgeOverTile * 1.01, false}).split);
+  // The local texels (the default): the camera is above this tile's interior, where a texel is
+  // larger than the corners show, so it splits at a higher threshold, and exactly at its largest
+  // sampled texel.
+  const LodResult local = evaluateLod(cam, node, {512, 512, edgeOverTile * 1.01});
+  EXPECT_TRUE(local.split);
+  const double texel = std::sqrt(local.worstTexelRatioSquared) * edgeOverTile * 1.01; // pixels
+  EXPECT_GT(texel, edgeOverTile * 1.01);
+  EXPECT_TRUE(evaluateLod(cam, node, {512, 512, texel * 0.99}).split);
+  EXPECT_FALSE(evaluateLod(cam, node, {512, 512, texel * 1.01}).split);
+  // Doubling the threshold quarters the squared ratios.
   EXPECT_NEAR(evaluateLod(cam, node, {512, 512, 2.0}).worstRatioSquared, ratio / 4.0, 1e-12);
+  EXPECT_NEAR(evaluateLod(cam, node, {512, 512, 2.0 * texel}).worstTexelRatioSquared, 0.25, 1e-9);
   // Invalid parameters split nothing.
   EXPECT_FALSE(evaluateLod(cam, node, {0, 512, 1.0}).split);
   EXPECT_FALSE(evaluateLod(cam, node, {512, 512, 0.0}).split);

@@ -80,6 +80,19 @@ public:
   /** Clip coordinates of a world point (w = distance in front of the eye along forward()). */
   glm::dvec4 toClip(const glm::dvec3& world) const noexcept;
 
+  /** The surface point (height 0 on the model) seen through a point of the viewport's border or
+   * its centre, where the ray meets the model. The texel-to-pixel test samples the ones inside a
+   * node: the nearest visible ground of a tilted view lies on the viewport's bottom edge, inside a
+   * large node whose corners are all far away. */
+  struct GroundPoint {
+    bool hit = false;
+    double latDeg = 0.0;
+    double lonDeg = 0.0;
+  };
+  /** Corners (bottom-left, bottom-right, top-right, top-left), the midpoints of the bottom, right,
+   * top and left edges, and the centre. */
+  const std::array<GroundPoint, 9>& viewportGround() const noexcept { return ground_; }
+
 private:
   CameraPose pose_;
   Viewport viewport_;
@@ -88,6 +101,7 @@ private:
   glm::dvec3 position_{0.0}, forward_{0.0}, up_{0.0}, right_{0.0};
   glm::dmat4 view_{1.0}, projection_{1.0}, viewProjection_{1.0};
   Frustum frustum_;
+  std::array<GroundPoint, 9> ground_{};
 };
 
 /** Reversed-Z, infinite far, depth in [0, 1] (glClipControl ZERO_TO_ONE): clip z = near, clip w =

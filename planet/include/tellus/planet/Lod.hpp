@@ -5,6 +5,19 @@
  * approximation, are projected; the node splits when a projected edge is longer than the tile's
  * size in texels times the threshold (squared lengths, no square root).
  *
+ * The corner test alone measures the average texel along an edge: perspective enlarges the near
+ * texels of a tilted view (1.6 px at 60 degrees), and a camera above the interior of a large node
+ * whose corners are all far away sees texels far larger than the corners show (3.5 px tilted over
+ * a level-2 polar wedge from 240 km). With LodParams::perspectiveAware (the default) the node also
+ * splits when the local size of one texel, east-west or north-south, projects longer than the
+ * threshold at any of its sample points: the four corners, the node's point nearest below the
+ * camera (its latitude and longitude clamped into the sector) when it is in the viewport, and the
+ * points of the ground seen through the viewport's corners, edge midpoints and centre that lie in
+ * the node (Camera::viewportGround: the nearest visible ground of a tilted view). The local size is
+ * the projection's derivative (exact, not a plane approximation) applied to one texel's step along
+ * the surface. The nearest visible point of a node lies at one of these up to the surface's
+ * curvature, so the largest texel of a drawn node stays within a few percent of the threshold.
+ *
  * threshold is the user's speed/accuracy knob: 1.0 keeps a texel never larger than a pixel, 2.0
  * allows two pixels per texel (fewer nodes), 0.5 asks for supersampling.
  */
@@ -18,6 +31,10 @@ struct LodParams {
   int tileWidthPx = 512;  ///< texels across a tile (east-west edges compare to this)
   int tileHeightPx = 512; ///< texels along a tile (north-south edges compare to this)
   double threshold = 1.0; ///< > 0
+  /** Also split when a texel's local projected size exceeds the threshold at the corners, the
+   * point below the camera or the viewport's ground points in the node (see the file comment);
+   * false: the thesis's corner-edge test alone (for comparison). */
+  bool perspectiveAware = true;
 };
 
 struct LodResult {
@@ -27,6 +44,15 @@ struct LodResult {
   /** Largest (projected edge length / (tile size * threshold))^2 over the edges; 0 when a corner
    * is behind the camera. Above 1 means split. */
   double worstRatioSquared = 0.0;
+  /** With perspectiveAware: the largest (local projected texel size / threshold)^2 over the
+   * sample points; computed only when the edges alone do not split (0 otherwise). Above 1 means
+   * split. */
+  double worstTexelRatioSquared = 0.0;
+  /** Which axis of the local texel test is over the limit (set only when that test ran). East-
+   * west alone: a merged polar row must split east-west, since children as wide as itself would
+   * keep the same east-west texels where the sample lies. */
+  bool eastWestOver = false;
+  bool northSouthOver = false;
 };
 
 /** Never produces NaN: a node whose corners cannot all be projected (behind the near plane, or a

@@ -39,6 +39,16 @@ struct OrientedBox {
 
 enum Corner { SW = 0, SE = 1, NE = 2, NW = 3 };
 
+/** A surface point (height 0) of the ellipsoid with semi-axes a, b (a sphere when a == b) and its
+ * partial derivatives: ECEF metres per degree of latitude and of longitude. Closed form (no
+ * GeographicLib): for the texel-to-pixel test, which needs the local size of a texel. */
+struct SurfaceFrame {
+  glm::dvec3 position{0.0};
+  glm::dvec3 perDegLat{0.0};
+  glm::dvec3 perDegLon{0.0};
+};
+SurfaceFrame surfaceFrame(double a, double b, double latDeg, double lonDeg) noexcept;
+
 /**
  * @brief Corners, centre, normals and a conservative bounding sphere and box of a node.
  *
@@ -66,6 +76,9 @@ public:
   /** Surface (height 0) corners, SW, SE, NE, NW; their unit normals. */
   const std::array<glm::dvec3, 4>& corners() const noexcept { return corners_; }
   const std::array<glm::dvec3, 4>& cornerNormals() const noexcept { return cornerNormals_; }
+  /** surfaceFrame() at the corners: ECEF metres per degree of latitude and longitude there (at a
+   * pole corner the longitude derivative is zero). */
+  const std::array<SurfaceFrame, 4>& cornerFrames() const noexcept { return cornerFrames_; }
   /** 4, or 3 at one pole (2 for a sector spanning pole to pole). */
   int distinctCornerCount() const noexcept { return distinctCorners_; }
   /** Surface point at the middle latitude/longitude, and its normal. */
@@ -95,6 +108,7 @@ private:
   double b_ = 0.0;
   std::array<glm::dvec3, 4> corners_{};
   std::array<glm::dvec3, 4> cornerNormals_{};
+  std::array<SurfaceFrame, 4> cornerFrames_{};
   int distinctCorners_ = 4;
   glm::dvec3 centre_{0.0};
   glm::dvec3 centreNormal_{0.0};

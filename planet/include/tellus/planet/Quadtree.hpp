@@ -216,7 +216,9 @@ private:
   void enforceNodeLimit();
   std::int64_t
   spanFor(std::int32_t level, std::int64_t row, std::int64_t parentSpanInChildCols) const noexcept;
-  ChildKeys childKeysFor(const NodeKey& key, const Camera* camera) const;
+  ChildKeys childKeysFor(const NodeKey& key, const Camera* camera, bool narrow = false) const;
+  bool splitWith(Node& node, bool narrow);
+  bool childrenAsWide(const Node& node) const noexcept;
   bool fitsEastWest(const NodeKey& key, const Camera& camera) const noexcept;
   bool visibleNow(const NodeKey& key, const Camera& camera) const;
   bool widerPaysOff(const NodeKey& wide, std::int64_t span, const Camera& camera) const;
