@@ -43,8 +43,8 @@ std::vector<ReceivedTile> TextureStreamer::takeReceived() {
 }
 
 void TextureStreamer::forget(const NodeKey& key) {
-  for (std::int64_t i = 0; i < key.span; ++i) {
-    const auto it = tiles_.find({key.level, key.row, key.col + i});
+  for (std::int64_t i = 0; i < textureTileCount(key); ++i) {
+    const auto it = tiles_.find(textureTile(key, i));
     if (it != tiles_.end() && it->second.state == TileFetch::Received)
       it->second.state = TileFetch::Idle;
   }
@@ -89,8 +89,8 @@ void TextureStreamer::drain(double nowS) {
 
 void TextureStreamer::want(const Node& node, double score, double nowS) {
   const NodeKey& k = node.key();
-  for (std::int64_t i = 0; i < k.span; ++i) {
-    Entry& e = tiles_[{k.level, k.row, k.col + i}];
+  for (std::int64_t i = 0; i < textureTileCount(k); ++i) {
+    Entry& e = tiles_[textureTile(k, i)];
     if (e.wantedFrame != frame_) {
       e.wantedFrame = frame_;
       e.score = score;
@@ -116,8 +116,8 @@ void TextureStreamer::update(Quadtree& tree,
     }
     if (n.texture == TextureState::Uploading) return; // the owner's step
     bool allAbsent = true, anyInFlight = false, allReceived = true;
-    for (std::int64_t i = 0; i < n.key().span; ++i) {
-      const TileFetch f = state({n.key().level, n.key().row, n.key().col + i});
+    for (std::int64_t i = 0; i < textureTileCount(n.key()); ++i) {
+      const TileFetch f = state(textureTile(n.key(), i));
       allAbsent = allAbsent && f == TileFetch::Absent;
       anyInFlight = anyInFlight || f == TileFetch::InFlight;
       allReceived = allReceived && (f == TileFetch::Received || f == TileFetch::Absent);

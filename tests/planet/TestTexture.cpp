@@ -434,3 +434,39 @@ TEST(TextureStreamer, StatesFollowTheTiles) {
   streamer.update(tree, cam, 0.4, &lru);
   EXPECT_EQ(src.requests.size(), before + 1);
 }
+
+TEST(TextureStreamer, AVeryWidePolarNodeAsksForAtMostSixteenTiles) {
+  // The segments: every column for narrow nodes, the middle of 16 equal segments for wide ones.
+  const NodeKey narrow{3, 39, 8, 4};
+  ASSERT_EQ(textureTileCount(narrow), 4);
+  for (std::int64_t i = 0; i < 4; ++i)
+    EXPECT_EQ(textureTile(narrow, i), (TileKey{3, 39, 8 + i}));
+  const NodeKey wide{24, (5LL << 24) - 1, 3LL << 24, 1LL << 24};
+  EXPECT_EQ(textureTileCount(wide), kMaxTextureTiles);
+  for (std::int64_t i = 0; i < kMaxTextureTiles; ++i) {
+    const TileKey t = textureTile(wide, i);
+    EXPECT_EQ(t.col, wide.col + i * (wide.span / 16) + wide.span / 32);
+    EXPECT_LT(t.col, wide.col + wide.span);
+  }
+
+  // Near the pole at low altitude over a 25-level grid, merged rows get far wider than 16
+  // columns; the streamer asks for at most 16 tiles for each, never for all of their columns.
+  const Geodesy g;
+  Quadtree tree(g, test::globalGrid(), treeParams());
+  FakeSource src;
+  src.autoComplete = TileStatus::Ok;
+  TextureStreamer streamer(src, {"l", "", 1000000, 1.0, 120.0});
+  TextureLru lru(std::size_t{1} << 40);
+  const Camera cam(g, {89.99, 0.0, 300.0, 0.0, 0.0}, {1024, 768});
+  converge(tree, cam);
+  streamer.update(tree, cam, 0.0, &lru);
+  std::int64_t widest = 0;
+  std::size_t wanted = 0;
+  for (const Node* n : tree.drawList()) {
+    widest = std::max(widest, n->key().span);
+    wanted += static_cast<std::size_t>(textureTileCount(n->key()));
+  }
+  EXPECT_GT(widest, kMaxTextureTiles) << "the view should draw a merged row wider than 16";
+  EXPECT_LE(src.requests.size(), wanted + 50); // the drawn nodes' tiles and the roots
+  EXPECT_LT(src.requests.size(), 5000u);
+}

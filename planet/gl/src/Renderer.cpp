@@ -458,11 +458,11 @@ void Renderer::Impl::launchDecode(Node& node) {
     return;
   if (lru.resident(k)) return;
   bool missing = false;
-  for (std::int64_t i = 0; i < k.span; ++i) {
-    const TileKey t{k.level, k.row, k.col + i};
+  for (std::int64_t i = 0; i < textureTileCount(k); ++i) {
+    const TileKey t = textureTile(k, i);
     if (streamer->state(t) != TileFetch::Absent && !received.contains(t)) {
       // Its bytes went into an earlier texture that was since evicted: ask again.
-      streamer->forget({k.level, k.row, k.col + i, 1});
+      streamer->forget({t.level, t.row, t.col, 1});
       missing = true;
     }
   }
@@ -471,8 +471,8 @@ void Renderer::Impl::launchDecode(Node& node) {
   job.key = k;
   job.width = texWidth;
   job.height = texHeight;
-  for (std::int64_t i = 0; i < k.span; ++i) {
-    const auto it = received.find({k.level, k.row, k.col + i});
+  for (std::int64_t i = 0; i < textureTileCount(k); ++i) {
+    const auto it = received.find(textureTile(k, i));
     if (it == received.end()) {
       job.tiles.emplace_back(std::nullopt);
     } else {

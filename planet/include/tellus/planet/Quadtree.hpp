@@ -16,7 +16,7 @@
  * QuadtreeParams::adaptivePolarSpans widens a merged row to its parent's width when the camera at
  * split time allows it). The LOD test still checks both projected axes against the node texture's
  * texel counts, so a texel is never larger than the threshold in pixels along either axis; the
- * texture of a wide node is composed from its `span` tiles (TextureStreamer asks for all of them).
+ * texture of a wide node is composed from its `span` tiles (at most kMaxTextureTiles of them, see below).
  * See docs/ARCHITECTURE.md, "The poles".
  */
 
@@ -43,6 +43,27 @@ struct NodeKey {
   friend constexpr auto operator<=>(const NodeKey&, const NodeKey&) = default;
   TileKey firstTile() const noexcept { return {level, row, col}; }
 };
+
+/**
+ * The most tiles a node's texture is made of. Near the poles a merged row can span up to 2^level
+ * columns (the top row of level 24 of a 36-degree grid spans 2^24 of them); asking for all of them
+ * would send millions of requests for one node. Such a texture is made of kMaxTextureTiles tiles
+ * instead: the middle tile of each of kMaxTextureTiles equal segments of the node, each stretched
+ * over its segment (east-west sample and hold). Rows that wide lie within a few tile heights of the
+ * pole, where a tile column is a sliver far narrower east-west than a texel of the node's texture,
+ * so nothing the texture could show is lost. Narrower nodes use every one of their tiles.
+ */
+inline constexpr std::int64_t kMaxTextureTiles = 16;
+
+/** How many tiles a node's texture is composed from: min(span, kMaxTextureTiles). */
+constexpr std::int64_t textureTileCount(const NodeKey& k) noexcept {
+  return k.span < kMaxTextureTiles ? k.span : kMaxTextureTiles;
+}
+/** The i-th of them, west to east (spans are powers of two, so the segments are exact). */
+constexpr TileKey textureTile(const NodeKey& k, std::int64_t i) noexcept {
+  const std::int64_t segment = k.span / textureTileCount(k);
+  return {k.level, k.row, k.col + i * segment + segment / 2};
+}
 
 struct NodeKeyHash {
   std::size_t operator()(const NodeKey& k) const noexcept {

@@ -6,8 +6,8 @@
  * Candidates are the drawn nodes whose texture is not resident, and every root until its texture
  * is (roots go first so the whole globe is drawable). A candidate's score is its clipped projected
  * area in pixels (ScreenArea.hpp) times (1 + the levels its displayed texture lacks: own 0,
- * ancestor level difference, global level + 1). A node needs its tiles (one, or `span` tiles of a
- * merged polar node); a tile takes its best node's score. At most `maxInFlight` requests are out;
+ * ancestor level difference, global level + 1). A node needs its tiles (one, or the
+ * textureTileCount(key) <= 16 tiles of a merged polar node, Quadtree.hpp); a tile takes its best node's score. At most `maxInFlight` requests are out;
  * in-flight requests are re-scored every frame (reprioritize) and cancelled once no candidate
  * wants them. A tile the source calls absent is never asked for again in this session; a failed
  * one waits retryBaseS * 2^(failures - 1) seconds (capped at retryMaxS) before it is asked again,
