@@ -16,8 +16,8 @@
  * QuadtreeParams::adaptivePolarSpans widens a merged row to its parent's width when the camera at
  * split time allows it). The LOD test still checks both projected axes against the node texture's
  * texel counts, so a texel is never larger than the threshold in pixels along either axis; the
- * texture of a wide node is composed from its `span` tiles (at most kMaxTextureTiles of them, see below).
- * See docs/ARCHITECTURE.md, "The poles".
+ * texture of a wide node is composed from its `span` tiles (at most kMaxTextureTiles of them, see
+ * below). See docs/ARCHITECTURE.md, "The poles".
  */
 
 #include <tellus/cache/TileGrid.hpp>

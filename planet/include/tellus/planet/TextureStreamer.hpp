@@ -7,11 +7,12 @@
  * is (roots go first so the whole globe is drawable). A candidate's score is its clipped projected
  * area in pixels (ScreenArea.hpp) times (1 + the levels its displayed texture lacks: own 0,
  * ancestor level difference, global level + 1). A node needs its tiles (one, or the
- * textureTileCount(key) <= 16 tiles of a merged polar node, Quadtree.hpp); a tile takes its best node's score. At most `maxInFlight` requests are out;
- * in-flight requests are re-scored every frame (reprioritize) and cancelled once no candidate
- * wants them. A tile the source calls absent is never asked for again in this session; a failed
- * one waits retryBaseS * 2^(failures - 1) seconds (capped at retryMaxS) before it is asked again,
- * so an offline or dead upstream costs a few requests per tile, never a busy loop.
+ * textureTileCount(key) <= 16 tiles of a merged polar node, Quadtree.hpp); a tile takes its best
+ * node's score. At most `maxInFlight` requests are out; in-flight requests are re-scored every
+ * frame (reprioritize) and cancelled once no candidate wants them. A tile the source calls absent
+ * is never asked for again in this session; a failed one waits retryBaseS * 2^(failures - 1)
+ * seconds (capped at retryMaxS) before it is asked again, so an offline or dead upstream costs a
+ * few requests per tile, never a busy loop.
  *
  * Threads: update(), received() and forget() belong to the main thread; the source's callbacks
  * only push into a locked inbox that update() drains (they may outlive the streamer safely).

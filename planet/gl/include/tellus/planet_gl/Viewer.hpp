@@ -7,10 +7,10 @@
  * Controls: left-drag moves the camera over the ground (the point under the cursor follows it,
  * roughly), a double-click flies to the point under the cursor (three times closer, 1.5 s, eased;
  * a drag or R interrupts), the wheel zooms with a speed proportional to the altitude, W/S tilt,
- * A/D turn the heading, R resets to the start pose, P writes a screenshot PNG, Esc or closing the window quits.
- * The statistics line (fps, nodes drawn, tiles in flight, texture MB, camera) is drawn at the top
- * left of the window (its own 5 x 7 font, TextOverlay.cpp) and is the window title, refreshed twice
- * a second.
+ * A/D turn the heading, R resets to the start pose, P writes a screenshot PNG, Esc or closing the
+ * window quits. The statistics line (fps, nodes drawn, tiles in flight, texture MB, camera) is
+ * drawn at the top left of the window (its own 5 x 7 font, TextOverlay.cpp) and is the window
+ * title, refreshed twice a second.
  */
 
 #include <tellus/planet_gl/Renderer.hpp>
