@@ -400,38 +400,10 @@ __attribute__((target("avx2"))) void horizontalAvx2(const Horizontal& h,
   const __m256i half = _mm256_set1_epi32(32768);
   const __m256i seven = _mm256_set1_epi32(7);
   // The low byte of each 32-bit lane to the first four bytes of each 128-bit half.
-  const __m256i bytes = _mm256_setr_epi8(0,
-                                         4,
-                                         8,
-                                         12,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         0,
-                                         4,
-                                         8,
-                                         12,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         -1,
-                                         -1);
+  // clang-format off
+  const __m256i bytes = _mm256_setr_epi8(0, 4, 8, 12, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
+                                         0, 4, 8, 12, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
+  // clang-format on
   for (const Horizontal::Segment& s : h.segments) {
     if (!s.simd) {
       h.scalar(v, out, s.begin, s.end);
