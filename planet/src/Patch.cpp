@@ -19,13 +19,6 @@ glm::dvec3 toVec(const Ecef& e) {
   return {e.x, e.y, e.z};
 }
 
-/** a + (b - a) * i / (count - 1), with both ends exact so neighbours share edges bit for bit. */
-double edgeLerp(double a, double b, int i, int count) {
-  if (i == 0) return a;
-  if (i == count - 1) return b;
-  return a + (b - a) * (static_cast<double>(i) / static_cast<double>(count - 1));
-}
-
 void validate(const Sector& s) {
   const bool finite = std::isfinite(s.west) && std::isfinite(s.east) && std::isfinite(s.south) &&
                       std::isfinite(s.north);
@@ -51,6 +44,12 @@ double angleBetween(const glm::dvec3& a, const glm::dvec3& b) {
 }
 
 } // namespace
+
+double edgeLerp(double a, double b, int i, int count) noexcept {
+  if (i == 0) return a;
+  if (i == count - 1) return b;
+  return a + (b - a) * (static_cast<double>(i) / static_cast<double>(count - 1));
+}
 
 SurfaceFrame surfaceFrame(double a, double b, double latDeg, double lonDeg) noexcept {
   const double phi = latDeg * kDegToRad, lam = lonDeg * kDegToRad;

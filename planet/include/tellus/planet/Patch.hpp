@@ -135,6 +135,10 @@ struct PatchMesh {
   }
 };
 
+/** a + (b - a) * i / (count - 1), with both ends exact so that neighbours share edges bit for bit:
+ * the one formula for every grid line of a node (meshes, terrain, edge fixing). */
+double edgeLerp(double a, double b, int i, int count) noexcept;
+
 /** Builds the grid at height 0. n must be 2^k + 1 with 1 <= k <= 10 (std::invalid_argument
  * otherwise, or for a sector NodeGeometry refuses). Edge rows and columns use the sector's edges
  * exactly, so neighbouring nodes share bit-identical edge vertices; a pole row is all the pole. */

@@ -1,0 +1,484 @@
+#include <tellus/planet/Terrain.hpp>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+
+namespace tellus::planet {
+
+namespace {
+
+constexpr std::size_t kHistoryLimit = 4096;
+
+glm::dvec3 toVec(const Ecef& e) {
+  return {e.x, e.y, e.z};
+}
+
+Sector grown(const Sector& s, double byLat, double byLon) {
+  return {s.west - byLon, s.south - byLat, s.east + byLon, s.north + byLat};
+}
+
+bool intersects(const Sector& a, const Sector& b) {
+  // Closed intervals: a tile that only touches a node's edge still changes its edge heights.
+  return a.west <= b.east && b.west <= a.east && a.south <= b.north && b.south <= a.north;
+}
+
+/** Wrapped copies of a sector (growing a tile past +-180 reaches the other side). */
+bool intersectsWrapped(const Sector& changed, const Sector& s) {
+  if (intersects(changed, s)) return true;
+  if (changed.west < -180.0 &&
+      intersects({changed.west + 360.0, changed.south, 180.0, changed.north}, s))
+    return true;
+  if (changed.east > 180.0 &&
+      intersects({-180.0, changed.south, changed.east - 360.0, changed.north}, s))
+    return true;
+  return false;
+}
+
+} // namespace
+
+std::expected<HeightTile, std::string> heightTileFromSamples(const TileKey& key,
+                                                             int width,
+                                                             int height,
+                                                             std::span<const double> raw,
+                                                             const HeightEncoding& encoding) {
+  if (width <= 0 || height <= 0 ||
+      raw.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
+    return std::unexpected("the elevation tile has " + std::to_string(raw.size()) +
+                           " samples, not " + std::to_string(width) + " x " +
+                           std::to_string(height));
+  HeightTile t;
+  t.key = key;
+  t.width = width;
+  t.height = height;
+  t.metres.resize(raw.size());
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  for (std::size_t i = 0; i < raw.size(); ++i) {
+    double m = raw[i];
+    if (encoding.noData && m == *encoding.noData)
+      m = 0.0;
+    else
+      m = m * encoding.scale + encoding.offset;
+    if (!std::isfinite(m))
+      return std::unexpected(std::string("the elevation tile has a non-finite sample"));
+    const auto f = static_cast<float>(m);
+    t.metres[i] = f;
+    lo = std::min(lo, f);
+    hi = std::max(hi, f);
+  }
+  t.minM = lo;
+  t.maxM = hi;
+  return t;
+}
+
+std::expected<HeightTile, std::string> decodeBil16(const TileKey& key,
+                                                   int width,
+                                                   int height,
+                                                   std::span<const std::byte> bytes,
+                                                   const HeightEncoding& encoding) {
+  const std::size_t count =
+      static_cast<std::size_t>(std::max(width, 0)) * static_cast<std::size_t>(std::max(height, 0));
+  if (bytes.size() != count * 2)
+    return std::unexpected("the bil16 tile has " + std::to_string(bytes.size()) + " bytes, not " +
+                           std::to_string(count * 2));
+  std::vector<double> raw(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const auto lo = static_cast<std::uint16_t>(bytes[2 * i]);
+    const auto hi = static_cast<std::uint16_t>(bytes[2 * i + 1]);
+    raw[i] =
+        static_cast<double>(static_cast<std::int16_t>(static_cast<std::uint16_t>(lo | (hi << 8))));
+  }
+  return heightTileFromSamples(key, width, height, raw, encoding);
+}
+
+HeightField::HeightField(const TileGrid& grid) : grid_(grid) {
+  const Sector& s = grid_.spec().sector;
+  globalLongitudes_ = s.west == -180.0 && s.east == 180.0;
+  perLevel_.assign(static_cast<std::size_t>(grid_.numLevels()), 0);
+}
+
+bool HeightField::insert(HeightTile tile) {
+  if (!grid_.isValid(tile.key) || tile.width != grid_.spec().tileWidth ||
+      tile.height != grid_.spec().tileHeight ||
+      tile.metres.size() !=
+          static_cast<std::size_t>(tile.width) * static_cast<std::size_t>(tile.height))
+    return false;
+  const TileKey key = tile.key;
+  lowest_ = std::min(lowest_, static_cast<double>(tile.minM));
+  const auto [it, inserted] = tiles_.insert_or_assign(key, std::move(tile));
+  (void)it;
+  if (inserted) {
+    ++perLevel_[static_cast<std::size_t>(key.level)];
+    deepest_ = std::max(deepest_, key.level);
+  }
+  ++generation_;
+  const double d = grid_.deltaDeg(key.level);
+  const Sector s = grid_.sectorOf(key);
+  history_.push_back(
+      {generation_, grown(s, d / grid_.spec().tileHeight, d / grid_.spec().tileWidth)});
+  if (history_.size() > kHistoryLimit) {
+    const std::size_t drop = history_.size() / 2;
+    historyFloor_ = history_[drop - 1].generation;
+    history_.erase(history_.begin(), history_.begin() + static_cast<std::ptrdiff_t>(drop));
+  }
+  return true;
+}
+
+bool HeightField::changedSince(std::uint64_t g, const Sector& sector) const noexcept {
+  if (g >= generation_) return false;
+  if (g < historyFloor_) return true;
+  for (auto it = history_.rbegin(); it != history_.rend() && it->generation > g; ++it)
+    if (intersectsWrapped(it->sector, sector)) return true;
+  return false;
+}
+
+int HeightField::levelForSpacing(double spacingDeg) const noexcept {
+  const int last = grid_.numLevels() - 1;
+  for (int l = 0; l < last; ++l) {
+    const double sampleDeg =
+        grid_.deltaDeg(l) / std::min(grid_.spec().tileWidth, grid_.spec().tileHeight);
+    if (sampleDeg <= spacingDeg) return l;
+  }
+  return last;
+}
+
+int HeightField::levelAt(double latDeg, double lonDeg) const noexcept {
+  if (!std::isfinite(latDeg) || !std::isfinite(lonDeg)) return -1;
+  latDeg = std::clamp(latDeg, -90.0, 90.0);
+  if (latDeg == 90.0 || latDeg == -90.0) lonDeg = 0.0;
+  lonDeg = std::remainder(lonDeg, 360.0); // [-180, 180]
+  if (globalLongitudes_ && lonDeg == 180.0) lonDeg = -180.0;
+  if (lonDeg == 0.0) lonDeg = 0.0; // -0.0
+  for (int l = deepest_; l >= 0; --l) {
+    if (perLevel_[static_cast<std::size_t>(l)] == 0) continue;
+    const auto key = grid_.keyAt(latDeg, lonDeg, l);
+    if (key && tiles_.contains(*key)) return l;
+  }
+  return -1;
+}
+
+double HeightField::heightAt(double latDeg, double lonDeg) const noexcept {
+  if (!std::isfinite(latDeg) || !std::isfinite(lonDeg))
+    return std::numeric_limits<double>::quiet_NaN();
+  latDeg = std::clamp(latDeg, -90.0, 90.0);
+  if (latDeg == 90.0 || latDeg == -90.0) lonDeg = 0.0;
+  lonDeg = std::remainder(lonDeg, 360.0);
+  if (globalLongitudes_ && lonDeg == 180.0) lonDeg = -180.0;
+  if (lonDeg == 0.0) lonDeg = 0.0;
+  for (int l = deepest_; l >= 0; --l) {
+    if (perLevel_[static_cast<std::size_t>(l)] == 0) continue;
+    const auto key = grid_.keyAt(latDeg, lonDeg, l);
+    if (!key) continue;
+    if (const auto it = tiles_.find(*key); it != tiles_.end())
+      return sample(it->second, latDeg, lonDeg);
+  }
+  return 0.0;
+}
+
+// Bilinear over the level's mosaic: texel centres at half-texel offsets; a tap outside the tile
+// reads the neighbour tile of the same level when it is held (wrapping east-west on a global grid)
+// and is clamped into the tile otherwise. Depends only on the point and the tiles held.
+double HeightField::sample(const HeightTile& t, double latDeg, double lonDeg) const noexcept {
+  const Sector s = grid_.sectorOf(t.key);
+  const int w = t.width, h = t.height;
+  const double fx = (lonDeg - s.west) / (s.east - s.west) * w - 0.5;
+  const double fy = (s.north - latDeg) / (s.north - s.south) * h - 0.5;
+  const double x0 = std::floor(fx), y0 = std::floor(fy);
+  const double tx = fx - x0, ty = fy - y0;
+  const std::int64_t rows = grid_.rowCount(t.key.level), cols = grid_.colCount(t.key.level);
+  auto tap = [&](std::int64_t ix, std::int64_t iy) -> double {
+    if (ix >= 0 && ix < w && iy >= 0 && iy < h)
+      return t.metres[static_cast<std::size_t>(iy * w + ix)];
+    const std::int64_t dc = ix < 0 ? -1 : ix >= w ? 1 : 0;
+    const std::int64_t dr = iy < 0 ? 1 : iy >= h ? -1 : 0; // image rows go south, tile rows north
+    std::int64_t col = t.key.col + dc;
+    const std::int64_t row = t.key.row + dr;
+    if (globalLongitudes_) col = (col % cols + cols) % cols;
+    const HeightTile* other = nullptr;
+    if (row >= 0 && row < rows && col >= 0 && col < cols) {
+      const TileKey k{t.key.level, row, col};
+      if (grid_.isValid(k))
+        if (const auto it = tiles_.find(k); it != tiles_.end()) other = &it->second;
+    }
+    if (other == nullptr) {
+      const std::int64_t cx = std::clamp<std::int64_t>(ix, 0, w - 1),
+                         cy = std::clamp<std::int64_t>(iy, 0, h - 1);
+      return t.metres[static_cast<std::size_t>(cy * w + cx)];
+    }
+    const std::int64_t ox = ix - dc * w, oy = iy + dr * h;
+    return other->metres[static_cast<std::size_t>(oy * w + ox)];
+  };
+  const auto ix = static_cast<std::int64_t>(x0), iy = static_cast<std::int64_t>(y0);
+  const double top = tap(ix, iy) * (1.0 - tx) + tap(ix + 1, iy) * tx;
+  const double bottom = tap(ix, iy + 1) * (1.0 - tx) + tap(ix + 1, iy + 1) * tx;
+  return top * (1.0 - ty) + bottom * ty;
+}
+
+std::pair<double, double> HeightField::rangeOver(const Sector& sector) const {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  bool uncovered = true;
+  for (int l = 0; l <= deepest_; ++l) {
+    if (perLevel_[static_cast<std::size_t>(l)] == 0) continue;
+    const double d = grid_.deltaDeg(l);
+    const Sector g = grown(sector, d / grid_.spec().tileHeight, d / grid_.spec().tileWidth);
+    Sector clipped{std::max(g.west, -180.0),
+                   std::max(g.south, -90.0),
+                   std::min(g.east, 180.0),
+                   std::min(g.north, 90.0)};
+    const auto keys = grid_.keysCovering(clipped, l, 256);
+    if (!keys)
+      return {std::min(lowest_, 0.0), std::max(0.0, [&] {
+                double m = 0.0;
+                for (const auto& [k, t] : tiles_)
+                  m = std::max(m, static_cast<double>(t.maxM));
+                return m;
+              }())};
+    bool all = !keys->empty();
+    for (const TileKey& k : *keys) {
+      const auto it = tiles_.find(k);
+      if (it == tiles_.end()) {
+        all = false;
+        continue;
+      }
+      lo = std::min(lo, static_cast<double>(it->second.minM));
+      hi = std::max(hi, static_cast<double>(it->second.maxM));
+    }
+    if (l == 0 && all) uncovered = false;
+  }
+  if (uncovered) {
+    lo = std::min(lo, 0.0);
+    hi = std::max(hi, 0.0);
+  }
+  return {lo, hi};
+}
+
+namespace {
+
+/** The point of a grid line: latitude/longitude for (row, col) of an n-grid over s. */
+struct GridPoint {
+  double lat;
+  double lon;
+};
+
+/** The point at parameter p of side d of sector s: p is a longitude along north/south sides, a
+ * latitude along east/west ones. */
+GridPoint onSide(const Sector& s, Direction d, double p) {
+  switch (d) {
+  case Direction::North:
+    return {s.north, p};
+  case Direction::South:
+    return {s.south, p};
+  case Direction::East:
+    return {p, s.east};
+  case Direction::West:
+    return {p, s.west};
+  }
+  return {0.0, 0.0};
+}
+
+} // namespace
+
+TerrainMesh buildTerrainMesh(const Geodesy& geodesy,
+                             const Sector& sector,
+                             int n,
+                             const HeightFunction& height,
+                             const std::array<EdgeAdapt, 4>& edges) {
+  if (n < 3 || n > 1025 || ((n - 1) & (n - 2)) != 0)
+    throw std::invalid_argument("planet: patch grid size must be 2^k + 1, 3 <= n <= 1025");
+  const Sector& s = sector;
+  if (!(std::isfinite(s.west) && std::isfinite(s.east) && std::isfinite(s.south) &&
+        std::isfinite(s.north)) ||
+      !(s.south >= -90.0 && s.south < s.north && s.north <= 90.0) ||
+      !(s.west >= -180.0 && s.west < s.east && s.east <= 180.0))
+    throw std::invalid_argument("planet: sector must satisfy -90 <= south < north <= 90 and "
+                                "-180 <= west < east <= 180");
+  auto position = [&](double lat, double lon) {
+    if (lat == 90.0 || lat == -90.0) lon = 0.0; // a pole is one point
+    return toVec(geodesy.toEcef(lat, lon, height(lat, lon)));
+  };
+
+  TerrainMesh mesh;
+  mesh.n = n;
+  // Positions on an (n + 2)^2 ring: the grid plus one step outside for the normals.
+  const int m = n + 2;
+  const double dLat = (s.north - s.south) / (n - 1), dLon = (s.east - s.west) / (n - 1);
+  std::vector<glm::dvec3> ring(static_cast<std::size_t>(m) * static_cast<std::size_t>(m));
+  std::vector<double> lats(static_cast<std::size_t>(m)), lons(static_cast<std::size_t>(m));
+  for (int i = 0; i < m; ++i) {
+    lats[static_cast<std::size_t>(i)] = i == 0       ? std::max(-90.0, s.south - dLat)
+                                        : i == m - 1 ? std::min(90.0, s.north + dLat)
+                                                     : edgeLerp(s.south, s.north, i - 1, n);
+    lons[static_cast<std::size_t>(i)] = i == 0       ? s.west - dLon
+                                        : i == m - 1 ? s.east + dLon
+                                                     : edgeLerp(s.west, s.east, i - 1, n);
+  }
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int r = 0; r < m; ++r)
+    for (int c = 0; c < m; ++c) {
+      const double lat = lats[static_cast<std::size_t>(r)], lon = lons[static_cast<std::size_t>(c)];
+      const double hgt = height(lat, lat == 90.0 || lat == -90.0 ? 0.0 : lon);
+      if (r > 0 && r < m - 1 && c > 0 && c < m - 1) {
+        lo = std::min(lo, hgt);
+        hi = std::max(hi, hgt);
+      }
+      ring[static_cast<std::size_t>(r * m + c)] =
+          toVec(geodesy.toEcef(lat, lat == 90.0 || lat == -90.0 ? 0.0 : lon, hgt));
+    }
+  mesh.minHeightM = lo;
+  mesh.maxHeightM = hi;
+
+  mesh.vertices.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(n));
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c) {
+      TerrainVertex& v = mesh.vertices[static_cast<std::size_t>(r * n + c)];
+      const auto at = [&](int rr, int cc) { return ring[static_cast<std::size_t>(rr * m + cc)]; };
+      v.position = at(r + 1, c + 1);
+      const glm::dvec3 east = at(r + 1, c + 2) - at(r + 1, c);
+      const glm::dvec3 north = at(r + 2, c + 1) - at(r, c + 1);
+      glm::dvec3 nrm = glm::cross(east, north);
+      const double len = glm::length(nrm);
+      if (!(len > 0.0) || !std::isfinite(len)) { // the pole row: east-west differences vanish
+        const double lat = lats[static_cast<std::size_t>(r + 1)],
+                     lon = lons[static_cast<std::size_t>(c + 1)];
+        nrm = toVec(geodesy.surfaceNormal(lat, lat == 90.0 || lat == -90.0 ? 0.0 : lon));
+      } else {
+        nrm /= len;
+      }
+      v.normal = glm::vec3(nrm);
+      v.uvNode = {static_cast<double>(c) / (n - 1), static_cast<double>(r) / (n - 1)};
+    }
+
+  // Triangles per quadrant: cells, then (below) the zero-area fans of its outer edges.
+  const int half = (n - 1) / 2;
+  std::array<std::vector<std::uint32_t>, 4> quad;
+  auto vid = [n](int r, int c) { return static_cast<std::uint32_t>(r * n + c); };
+  for (int r = 0; r + 1 < n; ++r)
+    for (int c = 0; c + 1 < n; ++c) {
+      auto& q = quad[static_cast<std::size_t>((r >= half ? 2 : 0) + (c >= half ? 1 : 0))];
+      const std::uint32_t a = vid(r, c), b = vid(r, c + 1), d = vid(r + 1, c),
+                          e = vid(r + 1, c + 1);
+      q.insert(q.end(), {a, b, e, a, e, d});
+    }
+
+  // Edge fixing: each adapted side's vertices onto the coarse neighbour's chords, then fans.
+  for (int side = 0; side < 4; ++side) {
+    const EdgeAdapt& ad = edges[static_cast<std::size_t>(side)];
+    if (!ad.active) continue;
+    const auto d = static_cast<Direction>(side);
+    const bool alongLon = d == Direction::North || d == Direction::South;
+    const Sector& c = ad.coarse;
+    const double ca = alongLon ? c.west : c.south, cb = alongLon ? c.east : c.north;
+    const double ma = alongLon ? s.west : s.south, mb = alongLon ? s.east : s.north;
+    if (!(ca <= ma && mb <= cb)) continue;
+    // The coarse edge is R = 2^m times ours and we are its q-th part: fine vertex i sits at
+    // u = q (n - 1) + i fine steps from its start, coarse vertex j at j R. Integers, so which
+    // fine vertices are coarse vertices never depends on rounding.
+    const double ratio = (cb - ca) / (mb - ma);
+    const auto bigR = static_cast<std::int64_t>(std::llround(ratio));
+    if (bigR < 2 || (bigR & (bigR - 1)) != 0 ||
+        std::abs(ratio - static_cast<double>(bigR)) > 1e-9 * ratio)
+      continue; // not a coarser quadtree neighbour along this side
+    const auto q = static_cast<std::int64_t>(std::llround((ma - ca) / (mb - ma)));
+    if (q < 0 || q >= bigR) continue;
+    auto fineIndex = [&](int i) {
+      switch (d) {
+      case Direction::North:
+        return vid(n - 1, i);
+      case Direction::South:
+        return vid(0, i);
+      case Direction::East:
+        return vid(i, n - 1);
+      case Direction::West:
+        return vid(i, 0);
+      }
+      return vid(0, 0);
+    };
+    auto quadrantOf = [&](int i) {
+      const int upper = i < half ? 0 : 1;
+      switch (d) {
+      case Direction::North:
+        return 2 + upper;
+      case Direction::South:
+        return upper;
+      case Direction::East:
+        return 2 * upper + 1;
+      case Direction::West:
+        return 2 * upper;
+      }
+      return 0;
+    };
+    // The coarse vertices: the neighbour's own grid points along the shared line, computed with
+    // the neighbour's parameters, so they are the very points it draws.
+    std::vector<glm::dvec3> cpos(static_cast<std::size_t>(n));
+    for (int j = 0; j < n; ++j) {
+      const GridPoint g = onSide(s, d, edgeLerp(ca, cb, j, n));
+      cpos[static_cast<std::size_t>(j)] = position(g.lat, g.lon);
+    }
+    const std::int64_t u0 = q * (n - 1);
+    for (int i = 0; i < n; ++i) {
+      const std::int64_t u = u0 + i;
+      const std::int64_t j = u / bigR, r = u % bigR;
+      TerrainVertex& v = mesh.vertices[fineIndex(i)];
+      if (r == 0) {
+        v.position = cpos[static_cast<std::size_t>(j)];
+      } else {
+        const double t = static_cast<double>(r) / static_cast<double>(bigR);
+        const glm::dvec3& a = cpos[static_cast<std::size_t>(j)];
+        v.position = a + (cpos[static_cast<std::size_t>(j + 1)] - a) * t;
+      }
+    }
+    // Fans (thesis figure 21): for each coarse segment j our edge touches, the triangles from its
+    // first vertex over the fine vertices inside it and its last vertex. Each has zero area; their
+    // outer edge is the coarse node's edge, shared exactly, so no pixel falls between.
+    std::vector<std::uint32_t> extra(static_cast<std::size_t>(n), UINT32_MAX);
+    auto coarseIndex = [&](std::int64_t j, int nearFine) {
+      const std::int64_t u = j * bigR - u0;
+      if (u >= 0 && u < n) return fineIndex(static_cast<int>(u));
+      auto& slot = extra[static_cast<std::size_t>(j)];
+      if (slot == UINT32_MAX) { // beyond this node's edge: an extra vertex
+        TerrainVertex v = mesh.vertices[fineIndex(nearFine)];
+        v.position = cpos[static_cast<std::size_t>(j)];
+        slot = static_cast<std::uint32_t>(mesh.vertices.size());
+        mesh.vertices.push_back(v);
+      }
+      return slot;
+    };
+    const std::int64_t jFirst = u0 / bigR, jLast = (u0 + n - 2) / bigR;
+    for (std::int64_t j = jFirst; j <= jLast; ++j) {
+      std::vector<std::uint32_t> chain;
+      int firstInner = -1;
+      for (int i = 0; i < n; ++i) {
+        const std::int64_t u = u0 + i;
+        if (u > j * bigR && u < (j + 1) * bigR) {
+          if (firstInner < 0) firstInner = i;
+          chain.push_back(fineIndex(i));
+        }
+      }
+      if (firstInner < 0) continue; // R == 1 cannot happen; nothing strictly inside
+      const int lastInner = firstInner + static_cast<int>(chain.size()) - 1;
+      const std::uint32_t apex = coarseIndex(j, firstInner);
+      chain.push_back(coarseIndex(j + 1, lastInner));
+      auto& quadrant = quad[static_cast<std::size_t>(quadrantOf(firstInner))];
+      for (std::size_t a = 0; a + 1 < chain.size(); ++a) {
+        quadrant.insert(quadrant.end(), {apex, chain[a], chain[a + 1]});
+        ++mesh.zeroAreaTriangles;
+      }
+    }
+  }
+
+  for (int qd = 0; qd < 4; ++qd) {
+    mesh.quadrantStart[static_cast<std::size_t>(qd)] =
+        static_cast<std::uint32_t>(mesh.indices.size());
+    mesh.indices.insert(mesh.indices.end(),
+                        quad[static_cast<std::size_t>(qd)].begin(),
+                        quad[static_cast<std::size_t>(qd)].end());
+  }
+  mesh.quadrantStart[4] = static_cast<std::uint32_t>(mesh.indices.size());
+  return mesh;
+}
+
+} // namespace tellus::planet

@@ -1,0 +1,314 @@
+// Heights on the quadtree (issue #6): the height function over held elevation tiles, and node
+// meshes whose edges meet exactly (same level) or lie on the coarser neighbour's chords (levels
+// apart), with the zero-area triangles that close the T-junctions.
+#include "PlanetTestSupport.hpp"
+
+#include <tellus/planet/Terrain.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <map>
+
+namespace tellus::planet {
+namespace {
+
+TileGrid elevationGrid(int tileSize = 8, int levels = 6) {
+  GridSpec spec;
+  spec.levelZeroDeltaDeg = 20.0;
+  spec.tileWidth = spec.tileHeight = tileSize;
+  spec.numLevels = levels;
+  return *TileGrid::create(spec);
+}
+
+/** A tile whose samples are a known function of their cell centres' lat/lon. */
+template <class F> HeightTile tileOf(const TileGrid& g, const TileKey& k, F f) {
+  const Sector s = g.sectorOf(k);
+  const int w = g.spec().tileWidth, h = g.spec().tileHeight;
+  std::vector<double> raw;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const double lat = s.north - (y + 0.5) * (s.north - s.south) / h;
+      const double lon = s.west + (x + 0.5) * (s.east - s.west) / w;
+      raw.push_back(f(lat, lon));
+    }
+  return *heightTileFromSamples(k, w, h, raw, {});
+}
+
+std::vector<TileKey> keys(const TileGrid& g, const Sector& s, int level) {
+  auto k = g.keysCovering(s, level);
+  return k ? *k : std::vector<TileKey>{};
+}
+
+double planar(double lat, double lon) {
+  return 100.0 + 3.0 * lat + 2.0 * lon;
+}
+
+TEST(HeightField, EmptyIsSeaLevelAndBadInputIsNan) {
+  HeightField f(elevationGrid());
+  EXPECT_EQ(f.heightAt(10, 20), 0.0);
+  EXPECT_EQ(f.levelAt(10, 20), -1);
+  EXPECT_TRUE(std::isnan(f.heightAt(std::nan(""), 0)));
+  EXPECT_TRUE(std::isnan(f.heightAt(0, std::numeric_limits<double>::infinity())));
+}
+
+TEST(HeightField, BilinearIsExactForAPlaneAcrossHeldNeighbours) {
+  const TileGrid g = elevationGrid();
+  HeightField f(g);
+  // All level-1 tiles around (5, 5): a plane is reproduced exactly by bilinear sampling, also
+  // across tile borders (taps read the neighbour tile).
+  for (const TileKey& k : keys(g, {-20, -20, 20, 20}, 1))
+    ASSERT_TRUE(f.insert(tileOf(g, k, planar)));
+  for (double lat : {-7.3, 0.0, 0.3, 9.99, 10.0, 10.01})
+    for (double lon : {-9.9, 0.0, 0.2, 10.0, 10.04})
+      EXPECT_NEAR(f.heightAt(lat, lon), planar(lat, lon), 1e-3) << lat << "," << lon;
+  EXPECT_EQ(f.levelAt(1, 1), 1);
+}
+
+TEST(HeightField, DeepestHeldLevelWinsAndAncestorsFillIn) {
+  const TileGrid g = elevationGrid();
+  HeightField f(g);
+  for (const TileKey& k : keys(g, {-180, -90, 180, 90}, 0))
+    f.insert(tileOf(g, k, [](double, double) { return 10.0; }));
+  const TileKey deep = *g.keyAt(45.1, 7.1, 3);
+  f.insert(tileOf(g, deep, [](double, double) { return 500.0; }));
+  EXPECT_EQ(f.heightAt(45.1, 7.1), 500.0);
+  EXPECT_EQ(f.levelAt(45.1, 7.1), 3);
+  EXPECT_EQ(f.heightAt(-30, 100), 10.0); // level 0 elsewhere
+  EXPECT_EQ(f.levelAt(-30, 100), 0);
+}
+
+TEST(HeightFieldExtremes, PolesAntimeridianAndNegativeZero) {
+  const TileGrid g = elevationGrid();
+  HeightField f(g);
+  for (const TileKey& k : keys(g, {-180, -90, 180, 90}, 0))
+    f.insert(tileOf(g, k, [](double lat, double lon) { return lat * 7.0 + lon; }));
+  // A pole is one point whatever the longitude.
+  const double north = f.heightAt(90, 0);
+  for (double lon : {-180.0, -179.0, -0.0, 33.0, 180.0, 540.0})
+    EXPECT_EQ(f.heightAt(90, lon), north) << lon;
+  EXPECT_EQ(f.heightAt(95, 3), north); // clamped
+  EXPECT_EQ(f.heightAt(-90, 10), f.heightAt(-90, -170));
+  // -180 and 180 are one meridian; -0.0 is 0; wraps.
+  for (double lat : {-89.9, -45.0, 0.0, 12.5, 89.99})
+    EXPECT_EQ(f.heightAt(lat, 180.0), f.heightAt(lat, -180.0)) << lat;
+  EXPECT_EQ(f.heightAt(-0.0, -0.0), f.heightAt(0.0, 0.0));
+  EXPECT_EQ(f.heightAt(10, 370), f.heightAt(10, 10));
+  // Continuous across the antimeridian: the taps wrap to the other side's tile.
+  EXPECT_NEAR(f.heightAt(10, 179.999), f.heightAt(10, -179.999), 1.0);
+}
+
+TEST(HeightField, ChangedSinceCoversTheTileAndItsBilinearReach) {
+  const TileGrid g = elevationGrid();
+  HeightField f(g);
+  const std::uint64_t g0 = f.generation();
+  f.insert(tileOf(g, {1, 4, 9}, planar)); // -50..-40 N, -90..-80 E
+  const Sector s = g.sectorOf({1, 4, 9});
+  EXPECT_TRUE(f.changedSince(g0, s));
+  EXPECT_TRUE(f.changedSince(g0, {s.east + 0.5, s.south, s.east + 5, s.north})); // one sample away
+  EXPECT_FALSE(f.changedSince(g0, {s.east + 5, s.south, s.east + 9, s.north}));
+  EXPECT_FALSE(f.changedSince(f.generation(), s));
+  const auto [lo, hi] = f.rangeOver(s);
+  for (double lat = s.south; lat <= s.north; lat += 0.5)
+    for (double lon = s.west; lon <= s.east; lon += 0.5) {
+      EXPECT_LE(lo, f.heightAt(lat, lon));
+      EXPECT_GE(hi, f.heightAt(lat, lon));
+    }
+}
+
+TEST(HeightField, LevelForSpacing) {
+  HeightField f(elevationGrid(150, 5)); // 20 / 150 = 0.133 deg at level 0
+  EXPECT_EQ(f.levelForSpacing(1.0), 0);
+  EXPECT_EQ(f.levelForSpacing(0.1), 1);  // 0.0667 <= 0.1
+  EXPECT_EQ(f.levelForSpacing(1e-9), 4); // deepest
+}
+
+TEST(HeightField, Bil16DecodesLittleEndianWithScaleOffsetAndNoData) {
+  const std::vector<std::byte> bytes{std::byte{0x10},
+                                     std::byte{0x27}, // 10000
+                                     std::byte{0x00},
+                                     std::byte{0x80}, // -32768: no data
+                                     std::byte{0xFF},
+                                     std::byte{0xFF}, // -1
+                                     std::byte{0x00},
+                                     std::byte{0x00}};
+  HeightEncoding enc;
+  enc.scale = 0.5;
+  enc.offset = 1.0;
+  enc.noData = -32768;
+  const auto t = decodeBil16({0, 0, 0}, 2, 2, bytes, enc);
+  ASSERT_TRUE(t.has_value());
+  EXPECT_EQ(t->metres, (std::vector<float>{5001.0f, 0.0f, 0.5f, 1.0f}));
+  EXPECT_EQ(t->minM, 0.0f);
+  EXPECT_EQ(t->maxM, 5001.0f);
+  EXPECT_FALSE(decodeBil16({0, 0, 0}, 2, 2, std::span(bytes).first(6), enc).has_value());
+}
+
+// --- meshes ---
+
+const Geodesy& wgs84() {
+  static const Geodesy g;
+  return g;
+}
+
+double bumpy(double lat, double lon) {
+  return 3000.0 * std::sin(lat * 0.7) * std::cos(lon * 1.3) + 40.0 * lat;
+}
+
+TEST(TerrainMesh, DisplacesAlongTheNormalAndKeepsHeightRange) {
+  const Sector s{5.625, 45.0, 7.03125, 46.40625};
+  const auto mesh = buildTerrainMesh(wgs84(), s, 17, bumpy, {});
+  ASSERT_EQ(mesh.vertices.size(), 17u * 17u);
+  EXPECT_EQ(mesh.zeroAreaTriangles, 0u);
+  EXPECT_EQ(mesh.indices.size(), 16u * 16u * 6u);
+  EXPECT_EQ(mesh.quadrantStart[4], mesh.indices.size());
+  for (int r = 0; r < 17; r += 4)
+    for (int c = 0; c < 17; c += 4) {
+      const double lat = edgeLerp(s.south, s.north, r, 17), lon = edgeLerp(s.west, s.east, c, 17);
+      const Ecef e = wgs84().toEcef(lat, lon, bumpy(lat, lon));
+      const auto& v = mesh.vertices[static_cast<std::size_t>(r * 17 + c)];
+      EXPECT_EQ(v.position, glm::dvec3(e.x, e.y, e.z));
+      const Ecef up = wgs84().surfaceNormal(lat, lon);
+      EXPECT_GT(glm::dot(glm::dvec3(v.normal), glm::dvec3(up.x, up.y, up.z)), 0.8);
+      EXPECT_NEAR(glm::length(glm::dvec3(v.normal)), 1.0, 1e-6);
+    }
+  EXPECT_LE(mesh.minHeightM, mesh.maxHeightM);
+}
+
+TEST(TerrainMesh, SameLevelNeighboursShareEdgeVerticesBitForBit) {
+  const TileGrid g = test::globalGrid();
+  for (const TileKey k : {TileKey{5, 20, 40}, TileKey{3, 0, 79}, TileKey{4, 79, 0}}) {
+    const Sector a = g.sectorOf(k);
+    for (const Direction d : {Direction::East, Direction::North}) {
+      const auto nk = g.neighbour(k, d);
+      if (!nk) continue;
+      const Sector b = g.sectorOf(*nk);
+      const auto ma = buildTerrainMesh(wgs84(), a, 9, bumpy, {});
+      const auto mb = buildTerrainMesh(wgs84(), b, 9, bumpy, {});
+      for (int i = 0; i < 9; ++i) {
+        const auto& va = d == Direction::East ? ma.vertices[static_cast<std::size_t>(i * 9 + 8)]
+                                              : ma.vertices[static_cast<std::size_t>(8 * 9 + i)];
+        const auto& vb = d == Direction::East ? mb.vertices[static_cast<std::size_t>(i * 9)]
+                                              : mb.vertices[static_cast<std::size_t>(i)];
+        EXPECT_EQ(va.position, vb.position) << k.level << "/" << k.row << "/" << k.col << " side "
+                                            << static_cast<int>(d) << " i " << i;
+      }
+    }
+  }
+}
+
+/** Distance from p to the polyline through pts. */
+double toPolyline(const glm::dvec3& p, const std::vector<glm::dvec3>& pts) {
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i + 1 < pts.size(); ++i) {
+    const glm::dvec3 ab = pts[i + 1] - pts[i];
+    const double t = std::clamp(glm::dot(p - pts[i], ab) / glm::dot(ab, ab), 0.0, 1.0);
+    best = std::min(best, glm::length(p - (pts[i] + ab * t)));
+  }
+  return best;
+}
+
+class EdgeFixing : public ::testing::TestWithParam<int> {}; // levels apart
+
+TEST_P(EdgeFixing, FinerEdgeLiesOnTheCoarseChordsAndZeroAreaTrianglesCloseIt) {
+  const int apart = GetParam();
+  const TileGrid g = test::globalGrid();
+  const int n = 9;
+  // A coarse node, and a finer node east of it touching its east edge (the finer node's west
+  // side adapts), also one at the coarse edge's north end.
+  const TileKey coarseKey{6, 140, 300};
+  const Sector coarse = g.sectorOf(coarseKey);
+  const auto coarseMesh = buildTerrainMesh(wgs84(), coarse, n, bumpy, {});
+  std::vector<glm::dvec3> coarseEdge;
+  for (int i = 0; i < n; ++i)
+    coarseEdge.push_back(coarseMesh.vertices[static_cast<std::size_t>(i * n + n - 1)].position);
+  const std::int64_t f = std::int64_t{1} << apart;
+  for (const std::int64_t sub : {std::int64_t{0}, f / 2, f - 1}) {
+    const TileKey fineKey{6 + apart, 140 * f + sub, 301 * f};
+    const Sector fine = g.sectorOf(fineKey);
+    std::array<EdgeAdapt, 4> edges{};
+    edges[static_cast<std::size_t>(Direction::West)] = {true, coarse};
+    const auto fixed = buildTerrainMesh(wgs84(), fine, n, bumpy, edges);
+    const auto plain = buildTerrainMesh(wgs84(), fine, n, bumpy, {});
+    double before = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const auto& v = fixed.vertices[static_cast<std::size_t>(i * n)];
+      EXPECT_LT(toPolyline(v.position, coarseEdge), 1e-6)
+          << "apart " << apart << " sub " << sub << " i " << i;
+      before = std::max(
+          before, toPolyline(plain.vertices[static_cast<std::size_t>(i * n)].position, coarseEdge));
+    }
+    EXPECT_GT(before, 1e-3); // without the fix the edges would not meet
+    // Every coarse vertex inside the fine edge is a fine vertex, bit for bit.
+    for (const auto& cv : coarseEdge)
+      for (int i = 0; i < n; ++i)
+        if (glm::length(cv - fixed.vertices[static_cast<std::size_t>(i * n)].position) < 1e-6) {
+          EXPECT_EQ(cv, fixed.vertices[static_cast<std::size_t>(i * n)].position);
+        }
+    // The fans: zero area (collinear), and their outer edges are coarse edge segments.
+    EXPECT_GT(fixed.zeroAreaTriangles, 0u);
+    std::size_t fans = 0;
+    for (std::size_t q = 0; q < 4; ++q) {
+      // The fan triangles follow the grid cells in each quadrant range.
+      const std::size_t cells =
+          static_cast<std::size_t>((n - 1) / 2) * static_cast<std::size_t>((n - 1) / 2) * 6;
+      for (std::size_t i = fixed.quadrantStart[q] + cells; i < fixed.quadrantStart[q + 1]; i += 3) {
+        const glm::dvec3 a = fixed.vertices[fixed.indices[i]].position;
+        const glm::dvec3 b = fixed.vertices[fixed.indices[i + 1]].position;
+        const glm::dvec3 c = fixed.vertices[fixed.indices[i + 2]].position;
+        EXPECT_LT(glm::length(glm::cross(b - a, c - a)), 1e-3 * glm::length(b - a) + 1e-6);
+        EXPECT_LT(toPolyline(a, coarseEdge), 1e-6);
+        ++fans;
+      }
+    }
+    EXPECT_EQ(fans, fixed.zeroAreaTriangles);
+    // Each fan's apex and last vertex are coarse vertices: the segment from one to the other
+    // covers the fine chain completely.
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(LevelsApart, EdgeFixing, ::testing::Values(1, 2, 3, 5, 7));
+
+TEST(TerrainMeshExtremes, PoleRowIsOnePointAndAntimeridianEdgesMeet) {
+  const TileGrid g = test::globalGrid();
+  const auto top = buildTerrainMesh(wgs84(), g.sectorOf({3, 39, 5}), 9, bumpy, {});
+  for (int c = 1; c < 9; ++c)
+    EXPECT_EQ(top.vertices[static_cast<std::size_t>(8 * 9 + c)].position,
+              top.vertices[8 * 9].position);
+  for (const auto& v : top.vertices) {
+    EXPECT_TRUE(std::isfinite(v.position.x) && std::isfinite(v.position.y) &&
+                std::isfinite(v.position.z));
+    EXPECT_TRUE(std::isfinite(v.normal.x) && std::isfinite(v.normal.y) &&
+                std::isfinite(v.normal.z));
+  }
+  // West edge at -180 and east edge at 180 of the same row: the same points.
+  HeightField f(elevationGrid());
+  for (const TileKey& k : keys(f.grid(), {-180, -90, 180, 90}, 0))
+    f.insert(tileOf(f.grid(), k, [](double lat, double lon) { return lat * 5 + lon; }));
+  const auto h = [&](double lat, double lon) { return f.heightAt(lat, lon); };
+  const auto west = buildTerrainMesh(wgs84(), g.sectorOf({4, 50, 0}), 9, h, {});
+  const auto east = buildTerrainMesh(wgs84(), g.sectorOf({4, 50, 159}), 9, h, {});
+  for (int r = 0; r < 9; ++r) {
+    const auto& a = west.vertices[static_cast<std::size_t>(r * 9)].position;
+    const auto& b = east.vertices[static_cast<std::size_t>(r * 9 + 8)].position;
+    EXPECT_EQ(a.x, b.x);
+    EXPECT_EQ(a.z, b.z);
+    EXPECT_EQ(std::abs(a.y), std::abs(b.y)); // +-0
+    EXPECT_LT(std::abs(a.y), 1e-6);
+  }
+}
+
+TEST(TerrainMeshExtremes, DeepestLevelCornersDistinct) {
+  const TileGrid g = test::globalGrid();
+  const TileKey k = *g.keyAt(27.98, 86.92, 24); // Everest, level 24: tiles about 0.2 m
+  const auto mesh =
+      buildTerrainMesh(wgs84(), g.sectorOf(k), 9, [](double, double) { return 8848.0; }, {});
+  const auto& v = mesh.vertices;
+  EXPECT_GT(glm::length(v[0].position - v[8].position), 0.05);
+  EXPECT_GT(glm::length(v[0].position - v[72].position), 0.05);
+  EXPECT_GT(glm::length(v[1].position - v[0].position), 0.005);
+}
+
+} // namespace
+} // namespace tellus::planet
