@@ -417,7 +417,8 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
                "upload_per_frame",
                "max_in_flight",
                "max_splits_per_frame",
-               "decode_threads"});
+               "decode_threads",
+               "terrain"});
   if (auto v = m.get("lod_threshold")) g.lodThreshold = number(r, *v, m.path("lod_threshold"));
   if (auto v = m.get("mesh_size")) g.meshSize = int32(r, *v, m.path("mesh_size"));
   if (auto v = m.get("fov")) g.fovDeg = number(r, *v, m.path("fov"));
@@ -428,6 +429,25 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
   if (auto v = m.get("max_splits_per_frame"))
     g.maxSplitsPerFrame = int32(r, *v, m.path("max_splits_per_frame"));
   if (auto v = m.get("decode_threads")) g.decodeThreads = int32(r, *v, m.path("decode_threads"));
+  const auto [tnode, twhere] = m.child("terrain");
+  const Map t(r,
+              tnode,
+              m.path("terrain"),
+              twhere,
+              {"enabled", "layer", "exaggeration", "clearance", "sun"});
+  TerrainSettings& ts = g.terrain;
+  if (auto v = t.get("enabled")) ts.enabled = boolean(r, *v, t.path("enabled"));
+  if (auto v = t.get("layer")) ts.layer = text(r, *v, t.path("layer"));
+  if (auto v = t.get("exaggeration")) ts.exaggeration = number(r, *v, t.path("exaggeration"));
+  if (auto v = t.get("clearance")) ts.clearanceM = number(r, *v, t.path("clearance"));
+  if (auto v = t.get("sun")) {
+    const std::string sp = t.path("sun");
+    const auto items = list(r, *v, sp);
+    if (items.size() != 2)
+      r.fail(v->Mark(), sp, "expected 2 numbers [lat, lon], got " + std::to_string(items.size()));
+    ts.sun = std::array<double, 2>{number(r, items[0], indexPath(sp, 0)),
+                                   number(r, items[1], indexPath(sp, 1))};
+  }
 }
 
 void readCache(Reader& r, const Map& root, const fs::path& baseDir, CacheSettings& c) {

@@ -295,6 +295,13 @@ std::optional<ValidationIssue> checkRenderer(const RendererSettings& g) {
     return issue("max_splits_per_frame", "must be in [1, 100000], got " + str(g.maxSplitsPerFrame));
   if (g.decodeThreads < 1 || g.decodeThreads > 64)
     return issue("decode_threads", "must be in [1, 64], got " + str(g.decodeThreads));
+  const TerrainSettings& t = g.terrain;
+  if (!(t.exaggeration > 0.0 && t.exaggeration <= 100.0))
+    return issue("terrain.exaggeration", "must be in (0, 100], got " + num(t.exaggeration));
+  if (!(t.clearanceM >= 0.0 && t.clearanceM <= 1e6))
+    return issue("terrain.clearance", "must be in [0, 1e6] metres, got " + num(t.clearanceM));
+  if (t.sun && !((*t.sun)[0] >= -90.0 && (*t.sun)[0] <= 90.0 && std::isfinite((*t.sun)[1])))
+    return issue("terrain.sun", "must be [lat, lon] with lat in [-90, 90]");
   return std::nullopt;
 }
 
@@ -319,6 +326,12 @@ std::optional<ValidationIssue> findIssue(const Config& c, bool checkFiles) {
       return ValidationIssue{"layers[" + std::to_string(i) + "].name",
                              "layer '" + l.name + "'",
                              "the name is used twice"};
+  }
+  if (const std::string& t = c.renderer.terrain.layer; !t.empty()) {
+    const auto* l = c.layer(t);
+    if (l == nullptr || l->kind != LayerKind::Elevation)
+      return ValidationIssue{
+          "renderer.terrain.layer", "renderer", "'" + t + "' is not an elevation layer"};
   }
   return std::nullopt;
 }

@@ -41,8 +41,40 @@ constexpr std::array<Direction, 4> kDirections{
 
 } // namespace
 
-Node::Node(const Geodesy& geodesy, const NodeKey& key, const Sector& sector, Node* parent)
-    : key_(key), geometry_(geodesy, sector), parent_(parent) {}
+Node::Node(const Geodesy& geodesy,
+           const NodeKey& key,
+           const Sector& sector,
+           Node* parent,
+           double minHeightM,
+           double maxHeightM)
+    : key_(key), geometry_(geodesy, sector, minHeightM, maxHeightM), parent_(parent) {}
+
+std::unique_ptr<Node> Quadtree::makeNode(const NodeKey& key, Node* parent) {
+  const Sector s = sectorOf(key);
+  if (!heightRange_) return std::make_unique<Node>(geodesy_, key, s, parent);
+  const auto [lo, hi] = heightRange_(s);
+  return std::make_unique<Node>(geodesy_, key, s, parent, lo, hi);
+}
+
+void Quadtree::setTerrain(HeightRange range, double occluderHeightM) {
+  heightRange_ = std::move(range);
+  params_.occluderHeightM = occluderHeightM;
+  occluder_ = HorizonOccluder(geodesy_, occluderHeightM);
+}
+
+std::size_t Quadtree::refreshHeights(const std::function<bool(const Sector&)>& changed) {
+  if (!heightRange_) return 0;
+  std::size_t count = 0;
+  forEach([&](Node& n) {
+    const Sector& s = n.sector();
+    if (!changed(s)) return;
+    const auto [lo, hi] = heightRange_(s);
+    if (lo == n.geometry_.minHeightM() && hi == n.geometry_.maxHeightM()) return;
+    n.geometry_ = NodeGeometry(geodesy_, s, lo, hi);
+    ++count;
+  });
+  return count;
+}
 
 Node::~Node() = default;
 
@@ -58,7 +90,7 @@ Quadtree::Quadtree(const Geodesy& geodesy, const TileGrid& grid, QuadtreeParams 
       const NodeKey k{0, r, c, 1};
       if (!grid_.isValid(k.firstTile())) continue;
       roots_[static_cast<std::size_t>(r * rootCols_ + c)] =
-          std::make_unique<Node>(geodesy_, k, sectorOf(k), nullptr);
+          makeNode(k, nullptr);
       ++nodeCount_;
     }
   for (auto& r : roots_)
@@ -324,7 +356,7 @@ bool Quadtree::splitWith(Node& node, bool narrow) {
   int made = 0;
   for (std::size_t i = 0; i < 4; ++i) {
     if (!ck.present[i]) continue;
-    node.children_[i] = std::make_unique<Node>(geodesy_, ck.keys[i], sectorOf(ck.keys[i]), &node);
+    node.children_[i] = makeNode(ck.keys[i], &node);
     ++made;
   }
   if (made == 0) return false;

@@ -974,7 +974,24 @@ std::string renderStatsJson(const planet::RenderStats& s, double seconds, bool c
       s.longestUpdateMs,
       s.frameMs,
       s.reversedZ ? "true" : "false");
-  return buf + jsonString(s.glVersion) + "\n}\n";
+  char terrain[768];
+  std::snprintf(terrain,
+                sizeof terrain,
+                ",\n  \"height_tiles_requested\": %zu,\n  \"height_tiles_received\": %zu,\n"
+                "  \"height_tiles_absent\": %zu,\n  \"height_tiles_failed\": %zu,\n"
+                "  \"meshes_built\": %zu,\n  \"meshes_built_last\": %zu,\n  \"mesh_ms\": %.3f,\n"
+                "  \"edges_fixed\": %zu,\n  \"zero_area_triangles\": %zu,\n  \"camera_lifted\": %s",
+                s.heightTilesRequested,
+                s.heightTilesReceived,
+                s.heightTilesAbsent,
+                s.heightTilesFailed,
+                s.meshesBuilt,
+                s.meshesBuiltLast,
+                s.meshMs,
+                s.edgesFixed,
+                s.zeroAreaTriangles,
+                s.cameraLifted ? "true" : "false");
+  return buf + jsonString(s.glVersion) + terrain + "\n}\n";
 }
 
 /** WxH with 1 to 16384 pixels each. */
@@ -1137,6 +1154,26 @@ void applyRendererSettings(const RendererSettings& g, const Args& a, planet::Ren
   ro.maxInFlight = static_cast<std::size_t>(g.maxInFlight);
   ro.maxSplitsPerFrame = g.maxSplitsPerFrame;
   ro.decodeThreads = g.decodeThreads;
+  ro.verticalExaggeration = g.terrain.exaggeration;
+  ro.terrainClearanceM = g.terrain.clearanceM;
+  ro.sunLatLon = g.terrain.sun;
+}
+
+/** --exaggeration X and --sun LAT,LON over the configuration's renderer.terrain. */
+std::optional<std::string> applyTerrainArgs(const Args& a, planet::RendererOptions& ro) {
+  if (auto e = a.get("exaggeration")) {
+    const auto v = parseNumbers(*e, 1, 1);
+    if (!v || !((*v)[0] > 0.0 && (*v)[0] <= 100.0))
+      return "--exaggeration must be a number in (0, 100], got '" + *e + "'";
+    ro.verticalExaggeration = (*v)[0];
+  }
+  if (auto e = a.get("sun")) {
+    const auto v = parseNumbers(*e, 2, 2);
+    if (!v || (*v)[0] < -90.0 || (*v)[0] > 90.0)
+      return "--sun must be LAT,LON of the subsolar point, got '" + *e + "'";
+    ro.sunLatLon = std::array<double, 2>{(*v)[0], (*v)[1]};
+  }
+  return std::nullopt;
 }
 
 std::expected<PlanetTiles, int>
@@ -1150,6 +1187,7 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
   if (const auto server = a.get("server")) {
     if (a.flag("offline"))
       return std::unexpected(usage("--server and --offline exclude each other", *server));
+    bool terrain = !a.flag("no-terrain");
     if (const auto file = a.get("config")) { // only its renderer settings matter here
       auto loaded = loadConfig(*file);
       if (!loaded) {
@@ -1157,6 +1195,11 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
         return std::unexpected(kExitError);
       }
       applyRendererSettings(loaded->renderer, a, ro);
+      terrain = terrain && loaded->renderer.terrain.enabled;
+    }
+    if (auto bad = applyTerrainArgs(a, ro)) {
+      std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());
+      return std::unexpected(kExitUsage);
     }
     auto remote = RemoteTileSource::connect(*server);
     if (!remote) {
@@ -1172,6 +1215,12 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
       std::fprintf(stderr, "tellus %s: %s has no imagery layer\n", cmd, server->c_str());
       return std::unexpected(kExitError);
     }
+    if (terrain)
+      for (const RemoteLayer& l : (*remote)->layers())
+        if (l.elevation) {
+          ro.elevationLayer = l.name;
+          break;
+        }
     t.remote = std::move(*remote);
     t.source = t.remote.get();
     return t;
@@ -1180,6 +1229,18 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
   if (!t.ctx) return std::unexpected(kExitError);
   const Config& config = t.ctx->config;
   applyRendererSettings(config.renderer, a, ro);
+  if (auto bad = applyTerrainArgs(a, ro)) {
+    std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());
+    return std::unexpected(kExitUsage);
+  }
+  if (config.renderer.terrain.enabled && !a.flag("no-terrain"))
+    for (const auto& l : config.layers)
+      if (l.kind == LayerKind::Elevation &&
+          (config.renderer.terrain.layer.empty() || l.name == config.renderer.terrain.layer)) {
+        ro.elevationLayer = l.name;
+        ro.elevationEncoding = {l.elevation.scale, l.elevation.offset, l.elevation.noData};
+        break;
+      }
   if (layerArg) {
     const auto* layer = config.layer(*layerArg);
     if (layer == nullptr || layer->kind != LayerKind::Imagery)
@@ -1236,7 +1297,10 @@ int cmdRender(const Args& a) {
                                                    "server",
                                                    "path",
                                                    "frames",
-                                                   "fps"};
+                                                   "fps",
+                                                   "no-terrain",
+                                                   "exaggeration",
+                                                   "sun"};
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
   }
@@ -1470,7 +1534,10 @@ int cmdView(const Args& a) {
                                                  "threshold",
                                                  "offline",
                                                  "server",
-                                                 "exit-after"};
+                                                 "exit-after",
+                                                 "no-terrain",
+                                                 "exaggeration",
+                                                 "sun"};
   for (const auto& [k, v] : a.options)
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
@@ -1539,7 +1606,7 @@ int run(int argc, char** argv) {
     return kExitOk;
   }
   const Args a = parseArgs(
-      argc, argv, 2, {"json", "dry-run", "include-pinned", "offline", "refresh", "wait-complete"});
+      argc, argv, 2, {"json", "dry-run", "include-pinned", "offline", "refresh", "wait-complete", "no-terrain"});
   for (const auto& e : a.errors)
     std::fprintf(stderr, "tellus %s: %s\n", argv[1], e.c_str());
   if (!a.errors.empty()) return kExitUsage;

@@ -1,12 +1,15 @@
 // The GL layer of the planet renderer: see Renderer.hpp and docs/ARCHITECTURE.md ("The planet
 // renderer"). Every GL call here runs on the thread that created the Renderer.
 
+#include "HeightDecode.hpp"
 #include "Shaders.hpp"
 #include "TextOverlay.hpp"
 #include "TextureDecoder.hpp"
 
+#include <tellus/planet/HeightStreamer.hpp>
 #include <tellus/planet/Patch.hpp>
 #include <tellus/planet/Quadtree.hpp>
+#include <tellus/planet/Terrain.hpp>
 #include <tellus/planet/TextureFallback.hpp>
 #include <tellus/planet/TextureLru.hpp>
 #include <tellus/planet/TextureStreamer.hpp>
@@ -86,9 +89,22 @@ GLuint compileShader(GLenum type, const std::string& source, std::string* error)
 struct GpuMesh {
   GLuint vao = 0;
   GLuint vbo = 0;
-  glm::dvec3 centre{0.0};
+  GLuint ebo = 0;
+  std::array<std::uint32_t, 5> quadrantStart{};
+  std::size_t zeroAreaTriangles = 0;
+  std::array<EdgeAdapt, 4> edges{};
+  std::uint64_t heightGeneration = 0;
   std::uint64_t lastUsed = 0;
+  bool fixed = false; ///< some side adapted
 };
+
+/** A double as two floats (high + low): the GPU subtracts the eye's pair, so positions reach the
+ * shader relative to the camera without a float ever holding an Earth-sized coordinate, and two
+ * nodes that hold the same point draw it at the same place bit for bit (no per-node matrix). */
+void splitDouble(double v, float& hi, float& lo) {
+  hi = static_cast<float>(v);
+  lo = static_cast<float>(v - static_cast<double>(hi));
+}
 
 struct Upload {
   DecodedTexture texture;
@@ -102,11 +118,41 @@ struct StoredTile {
   std::uint64_t frame = 0;
 };
 
+/** What one draw call draws: a range of a drawn node's triangles (all of it, or the quarter or
+ * half under one child whose texture it shows) with a texture through a uv transform of the
+ * node's own texture coordinates. */
 struct DrawPart {
-  const Node* region;
+  const Node* node;
   GLuint texture;
   UvTransform uv;
+  int firstQuadrant = 0; ///< quadrant ranges [first, last) of GpuMesh::quadrantStart
+  int lastQuadrant = 4;
 };
+
+/** The part of `node` under `region` (the node itself or one of its children): which quadrant
+ * ranges, and the uv transform for the node's coordinates given the one for region's. */
+DrawPart partFor(const Node& node, const Node& region, GLuint texture, const UvTransform& regionUv) {
+  DrawPart d{&node, texture, regionUv, 0, 4};
+  if (&region == &node) return d;
+  const Sector& s = node.sector();
+  const Sector& c = region.sector();
+  const double w = s.east - s.west, h = s.north - s.south;
+  const glm::dvec2 k{w / (c.east - c.west), h / (c.north - c.south)};
+  const glm::dvec2 o{(c.west - s.west) / w, (c.south - s.south) / h};
+  // uvRegion = (uvNode - o) * k, then the region's transform.
+  d.uv.scale = k * regionUv.scale;
+  d.uv.offset = regionUv.offset - o * k * regionUv.scale;
+  const bool south = c.south == s.south;
+  const bool fullWidth = c.west == s.west && c.east == s.east;
+  if (fullWidth) {
+    d.firstQuadrant = south ? 0 : 2;
+    d.lastQuadrant = d.firstQuadrant + 2;
+  } else {
+    d.firstQuadrant = (south ? 0 : 2) + (c.west == s.west ? 0 : 1);
+    d.lastQuadrant = d.firstQuadrant + 1;
+  }
+  return d;
+}
 
 } // namespace
 
@@ -126,15 +172,16 @@ struct Renderer::Impl {
   bool textureStorage = false;
   GLuint fbo = 0, colorRb = 0, depthRb = 0;
   GLuint program = 0;
-  GLint uMvp = -1, uUv = -1, uTexture = -1;
-  GLuint ebo = 0;
-  GLsizei indexCount = 0;
+  GLint uViewProj = -1, uEyeHigh = -1, uEyeLow = -1, uUv = -1, uTexture = -1, uSun = -1;
   GLuint globalTexture = 0;
   int texWidth = 0, texHeight = 0;
   GLsizei texLevels = 1;
   float anisotropy = 1.0f; ///< what the GL allows of opt.anisotropy
 
   std::unique_ptr<Quadtree> tree;
+  std::unique_ptr<HeightField> field;       // null without an elevation layer
+  std::unique_ptr<HeightStreamer> heights;
+  std::vector<TileKey> heightWish;
   std::unique_ptr<TextureStreamer> streamer;
   TextureLru lru;
   TextureDecoder decoder;
@@ -163,6 +210,12 @@ struct Renderer::Impl {
   GLuint acquireTexture();
   void releaseTexture(GLuint id);
   const GpuMesh& meshFor(const Node& node);
+  double heightAt(double lat, double lon) const {
+    return field ? field->heightAt(lat, lon) * opt.verticalExaggeration : 0.0;
+  }
+  std::array<EdgeAdapt, 4> edgesOf(const Node& node) const;
+  void updateTerrain(double nowS);
+  bool heightsComplete(const Node& node) const;
   void launchDecode(Node& node);
   void stepUploads();
   void evict();
@@ -175,6 +228,7 @@ Renderer::Impl::~Impl() {
     for (auto& [k, m] : meshes) {
       glDeleteVertexArrays(1, &m.vao);
       glDeleteBuffers(1, &m.vbo);
+      glDeleteBuffers(1, &m.ebo);
     }
     for (auto& [k, t] : textures)
       glDeleteTextures(1, &t);
@@ -184,7 +238,6 @@ Renderer::Impl::~Impl() {
     glDeleteTextures(1, &globalTexture);
     if (overlayFbo != 0) glDeleteFramebuffers(1, &overlayFbo);
     if (overlayTexture != 0) glDeleteTextures(1, &overlayTexture);
-    glDeleteBuffers(1, &ebo);
     glDeleteProgram(program);
     freeFramebuffer();
     glfwDestroyWindow(window);
@@ -250,46 +303,12 @@ std::string Renderer::Impl::initGl() {
     glGetProgramInfoLog(program, sizeof log, nullptr, log);
     return std::string("shader link: ") + log;
   }
-  uMvp = glGetUniformLocation(program, "uMvp");
+  uViewProj = glGetUniformLocation(program, "uViewProj");
+  uEyeHigh = glGetUniformLocation(program, "uEyeHigh");
+  uEyeLow = glGetUniformLocation(program, "uEyeLow");
   uUv = glGetUniformLocation(program, "uUv");
   uTexture = glGetUniformLocation(program, "uTexture");
-
-  // One index buffer for every node: the N x N grid as triangles, counter-clockwise seen from
-  // outside (rows go north, columns east).
-  const int n = opt.meshSize;
-  std::vector<std::uint32_t> idx;
-  idx.reserve(static_cast<std::size_t>((n - 1) * (n - 1) * 6));
-  for (int r = 0; r + 1 < n; ++r)
-    for (int c = 0; c + 1 < n; ++c) {
-      const auto a = static_cast<std::uint32_t>(r * n + c);
-      const auto b = a + 1;
-      const auto d = a + static_cast<std::uint32_t>(n);
-      const auto e = d + 1;
-      idx.insert(idx.end(), {a, b, e, a, e, d});
-    }
-  // Skirts: each edge's vertices again, lowered (meshFor appends them after the grid: south, north,
-  // west, east, n each), joined to the edge by a strip. Where a coarse node's edge (a chord) meets
-  // a finer neighbour's, or a merged polar row meets a row of narrower nodes, the skirt fills the
-  // crack that would otherwise show the background.
-  const auto gridVertices = static_cast<std::uint32_t>(n * n);
-  const auto edgeVertex = [n](int side, int i) {
-    const int r = side == 0 ? 0 : side == 1 ? n - 1 : i;
-    const int c = side == 2 ? 0 : side == 3 ? n - 1 : i;
-    return static_cast<std::uint32_t>(r * n + c);
-  };
-  for (int side = 0; side < 4; ++side)
-    for (int i = 0; i + 1 < n; ++i) {
-      const std::uint32_t a = edgeVertex(side, i), b = edgeVertex(side, i + 1);
-      const std::uint32_t sa = gridVertices + static_cast<std::uint32_t>(side * n + i), sb = sa + 1;
-      idx.insert(idx.end(), {a, b, sb, a, sb, sa});
-    }
-  indexCount = static_cast<GLsizei>(idx.size());
-  glGenBuffers(1, &ebo);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
-               static_cast<GLsizeiptr>(idx.size() * sizeof(std::uint32_t)),
-               idx.data(),
-               GL_STATIC_DRAW);
+  uSun = glGetUniformLocation(program, "uSun");
 
   makeFramebuffer();
 
@@ -396,55 +415,126 @@ void Renderer::Impl::releaseTexture(GLuint id) {
     glDeleteTextures(1, &id);
 }
 
+// The drawn node across each side whose edge is coarser than ours along it: that side adapts
+// (the finer side moves onto the coarser one's chords). Along east/west sides a node's extent is
+// its latitude span, along north/south sides its longitude span (merged polar rows are wider).
+std::array<EdgeAdapt, 4> Renderer::Impl::edgesOf(const Node& node) const {
+  std::array<EdgeAdapt, 4> e{};
+  const Sector& s = node.sector();
+  for (int d = 0; d < 4; ++d) {
+    const Node* nb = node.neighbour(static_cast<Direction>(d));
+    if (nb == nullptr || nb->lastDrawnFrame() != tree->frame()) continue;
+    const Sector& o = nb->sector();
+    const bool alongLon = d == static_cast<int>(Direction::North) || d == static_cast<int>(Direction::South);
+    const double mine = alongLon ? s.east - s.west : s.north - s.south;
+    const double theirs = alongLon ? o.east - o.west : o.north - o.south;
+    if (theirs > mine) e[static_cast<std::size_t>(d)] = {true, o};
+  }
+  return e;
+}
+
 const GpuMesh& Renderer::Impl::meshFor(const Node& node) {
   auto [it, inserted] = meshes.try_emplace(node.key());
   GpuMesh& m = it->second;
   m.lastUsed = stats.frames;
-  if (!inserted) return m;
-  const PatchMesh mesh = buildPatchMesh(geodesy, node.sector(), opt.meshSize);
-  m.centre = mesh.centre;
+  const std::array<EdgeAdapt, 4> edges = edgesOf(node);
+  const bool stale = field && field->changedSince(m.heightGeneration, node.sector());
+  if (!inserted && edges == m.edges && !stale) return m;
+  const auto t0 = Clock::now();
+  const TerrainMesh mesh = buildTerrainMesh(
+      geodesy, node.sector(), opt.meshSize, [this](double lat, double lon) { return heightAt(lat, lon); }, edges);
+  m.edges = edges;
+  m.heightGeneration = field ? field->generation() : 0;
+  m.quadrantStart = mesh.quadrantStart;
+  m.zeroAreaTriangles = mesh.zeroAreaTriangles;
+  m.fixed = std::any_of(edges.begin(), edges.end(), [](const EdgeAdapt& a) { return a.active; });
   std::vector<float> v;
-  const int n = opt.meshSize;
-  v.reserve((mesh.vertices.size() + 4 * static_cast<std::size_t>(n)) * 5);
-  auto push = [&v](const PatchVertex& p, double down) {
-    const glm::dvec3 q = p.position - p.normal * down;
-    v.push_back(static_cast<float>(q.x));
-    v.push_back(static_cast<float>(q.y));
-    v.push_back(static_cast<float>(q.z));
-    v.push_back(static_cast<float>(p.uvNode.x));
-    v.push_back(static_cast<float>(p.uvNode.y));
-  };
-  for (const auto& p : mesh.vertices)
-    push(p, 0.0);
-  // Skirt depth: how far the chord of a whole tile-sized cell lies below the surface (R * a^2 / 8
-  // for the tile's angular size a), which covers neighbours up to N - 1 times coarser per cell.
-  const Sector& sec = node.sector();
-  const double angle = std::max(sec.north - sec.south, sec.east - sec.west) * M_PI / 180.0;
-  const double depth = geodesy.equatorialRadius() * angle * angle / 8.0 + 1.0;
-  for (int side = 0; side < 4; ++side)
-    for (int i = 0; i < n; ++i) {
-      const int r = side == 0 ? 0 : side == 1 ? n - 1 : i;
-      const int c = side == 2 ? 0 : side == 3 ? n - 1 : i;
-      push(mesh.at(r, c), depth);
-    }
-  glGenVertexArrays(1, &m.vao);
+  v.reserve(mesh.vertices.size() * 11);
+  for (const TerrainVertex& p : mesh.vertices) {
+    float hi[3], lo[3];
+    for (int i = 0; i < 3; ++i)
+      splitDouble(p.position[i], hi[i], lo[i]);
+    v.insert(v.end(), {hi[0], hi[1], hi[2], lo[0], lo[1], lo[2], p.normal.x, p.normal.y, p.normal.z,
+                       static_cast<float>(p.uvNode.x), static_cast<float>(p.uvNode.y)});
+  }
+  if (m.vao == 0) {
+    glGenVertexArrays(1, &m.vao);
+    glGenBuffers(1, &m.vbo);
+    glGenBuffers(1, &m.ebo);
+  }
   glBindVertexArray(m.vao);
-  glGenBuffers(1, &m.vbo);
   glBindBuffer(GL_ARRAY_BUFFER, m.vbo);
   glBufferData(
       GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(v.size() * sizeof(float)), v.data(), GL_STATIC_DRAW);
+  constexpr GLsizei stride = 11 * sizeof(float);
+  const auto at = [](std::size_t floats) { return reinterpret_cast<const void*>(floats * sizeof(float)); };
   glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 5 * sizeof(float), nullptr);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, at(0));
   glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1,
-                        2,
-                        GL_FLOAT,
-                        GL_FALSE,
-                        5 * sizeof(float),
-                        reinterpret_cast<const void*>(3 * sizeof(float)));
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride, at(3));
+  glEnableVertexAttribArray(2);
+  glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, stride, at(6));
+  glEnableVertexAttribArray(3);
+  glVertexAttribPointer(3, 2, GL_FLOAT, GL_FALSE, stride, at(9));
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.ebo);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(mesh.indices.size() * sizeof(std::uint32_t)),
+               mesh.indices.data(),
+               GL_STATIC_DRAW);
   glBindVertexArray(0);
+  ++stats.meshesBuilt;
+  ++stats.meshesBuiltLast;
+  stats.meshMs += msSince(t0);
   return m;
+}
+
+// Heights for the drawn nodes: each needs the elevation level whose samples are as fine as its
+// grid (one heightmap serves several node levels, thesis 4.5.1), coarse levels first. A few
+// arrivals per frame go into the field, and the meshes they change are rebuilt in the same frame
+// (meshFor), so every frame's meshes come from one state of the heights.
+void Renderer::Impl::updateTerrain(double nowS) {
+  if (!field) return;
+  heightWish.clear();
+  const int n = opt.meshSize;
+  for (const Node* node : tree->drawList()) {
+    const Sector& s = node->sector();
+    const int level = field->levelForSpacing((s.north - s.south) / (n - 1));
+    for (int l = 0; l <= level; l = l == level ? level + 1 : std::min(level, l + 3)) {
+      const auto keys = field->grid().keysCovering(s, l, 16);
+      if (keys) heightWish.insert(heightWish.end(), keys->begin(), keys->end());
+    }
+  }
+  std::stable_sort(heightWish.begin(), heightWish.end(), [](const TileKey& a, const TileKey& b) { return a.level < b.level; });
+  heightWish.erase(std::unique(heightWish.begin(), heightWish.end()), heightWish.end());
+  {
+    std::unordered_set<TileKey, TileKeyHash> seen;
+    std::erase_if(heightWish, [&](const TileKey& k) { return !seen.insert(k).second; });
+  }
+  heights->want(heightWish, *field, nowS);
+  const std::uint64_t before = field->generation();
+  if (heights->deliver(*field, 2) > 0) {
+    tree->refreshHeights([&](const Sector& sec) { return field->changedSince(before, sec); });
+    tree->setTerrain(
+        [this](const Sector& sec) {
+          const auto [lo, hi] = field->rangeOver(sec);
+          return std::pair{lo * opt.verticalExaggeration, hi * opt.verticalExaggeration};
+        },
+        std::min(0.0, field->lowest() * opt.verticalExaggeration) - 1000.0);
+  }
+  const HeightStreamStats& hs = heights->stats();
+  stats.heightTilesRequested = hs.requested;
+  stats.heightTilesReceived = hs.received;
+  stats.heightTilesAbsent = hs.absent;
+  stats.heightTilesFailed = hs.failed + hs.decodeErrors;
+}
+
+bool Renderer::Impl::heightsComplete(const Node& node) const {
+  if (!field) return true;
+  const Sector& s = node.sector();
+  const int level = field->levelForSpacing((s.north - s.south) / (opt.meshSize - 1));
+  const auto keys = field->grid().keysCovering(s, level, 16);
+  if (!keys) return true;
+  return std::all_of(keys->begin(), keys->end(), [&](const TileKey& k) { return heights->settled(k, *field); });
 }
 
 // A node whose tiles all arrived (TextureState::Decoding): its bytes go to a decoder worker.
@@ -560,14 +650,34 @@ void Renderer::Impl::draw(const Camera& camera) {
   glUseProgram(program);
   glUniform1i(uTexture, 0);
   glActiveTexture(GL_TEXTURE0);
-  const glm::dmat4 viewProjection = camera.projection() * camera.view();
+  // One view-projection for every node, rotation only (the eye at the origin), narrowed to float
+  // here; positions arrive as high/low float pairs and the shader subtracts the eye's pair.
+  glm::dmat4 view = camera.view();
+  view[3] = glm::dvec4(0.0, 0.0, 0.0, 1.0);
+  const glm::mat4 viewProj(camera.projection() * view);
+  glUniformMatrix4fv(uViewProj, 1, GL_FALSE, &viewProj[0][0]);
+  float eh[3], el[3];
+  for (int i = 0; i < 3; ++i)
+    splitDouble(camera.position()[i], eh[i], el[i]);
+  glUniform3f(uEyeHigh, eh[0], eh[1], eh[2]);
+  glUniform3f(uEyeLow, el[0], el[1], el[2]);
+  if (opt.sunLatLon) {
+    const Ecef sun = geodesy.surfaceNormal((*opt.sunLatLon)[0], (*opt.sunLatLon)[1]);
+    glUniform4f(uSun, static_cast<float>(sun.x), static_cast<float>(sun.y), static_cast<float>(sun.z), 1.0f);
+  } else {
+    glUniform4f(uSun, 0.0f, 0.0f, 0.0f, 0.0f);
+  }
+  // Meshes first (a node's mesh depends on which neighbours are drawn, known only now).
+  stats.edgesFixed = 0;
+  stats.zeroAreaTriangles = 0;
+  for (const Node* n : tree->drawList()) {
+    const GpuMesh& m = meshFor(*n);
+    for (const EdgeAdapt& e : m.edges)
+      stats.edgesFixed += e.active ? 1 : 0;
+    stats.zeroAreaTriangles += m.zeroAreaTriangles;
+  }
   for (const DrawPart& p : parts) {
-    const GpuMesh& m = meshFor(*p.region);
-    // The node's model-view-projection in double, relative to the camera, narrowed to float only
-    // here: vertex positions are metres from the node's centre, so nothing large reaches floats.
-    const glm::dmat4 mvp = viewProjection * glm::translate(glm::dmat4(1.0), m.centre);
-    const glm::mat4 f(mvp);
-    glUniformMatrix4fv(uMvp, 1, GL_FALSE, &f[0][0]);
+    const GpuMesh& m = meshFor(*p.node);
     glUniform4f(uUv,
                 static_cast<float>(p.uv.scale.x),
                 static_cast<float>(p.uv.scale.y),
@@ -575,7 +685,12 @@ void Renderer::Impl::draw(const Camera& camera) {
                 static_cast<float>(p.uv.offset.y));
     glBindTexture(GL_TEXTURE_2D, p.texture);
     glBindVertexArray(m.vao);
-    glDrawElements(GL_TRIANGLES, indexCount, GL_UNSIGNED_INT, nullptr);
+    const std::uint32_t first = m.quadrantStart[static_cast<std::size_t>(p.firstQuadrant)];
+    const std::uint32_t last = m.quadrantStart[static_cast<std::size_t>(p.lastQuadrant)];
+    glDrawElements(GL_TRIANGLES,
+                   static_cast<GLsizei>(last - first),
+                   GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(static_cast<std::uintptr_t>(first) * sizeof(std::uint32_t)));
   }
   glBindVertexArray(0);
   if (window != nullptr && opt.visibleWindow) {
@@ -655,7 +770,40 @@ Renderer::create(ITileSource& source, const Geodesy& geodesy, RendererOptions op
   sp.time = impl->opt.time;
   sp.maxInFlight = impl->opt.maxInFlight;
   impl->streamer = std::make_unique<TextureStreamer>(source, sp);
+  if (!impl->opt.elevationLayer.empty()) {
+    if (!(impl->opt.verticalExaggeration > 0.0) || !std::isfinite(impl->opt.verticalExaggeration))
+      return std::unexpected(std::string("the vertical exaggeration must be a positive number"));
+    const auto espec = source.describe(impl->opt.elevationLayer, impl->opt.elevationTime);
+    if (!espec) return std::unexpected("unknown elevation layer '" + impl->opt.elevationLayer + "'");
+    auto egrid = TileGrid::create(espec->grid);
+    if (!egrid) return std::unexpected("layer '" + impl->opt.elevationLayer + "': " + egrid.error());
+    impl->field = std::make_unique<HeightField>(*egrid);
+    HeightStreamParams hp;
+    hp.layer = impl->opt.elevationLayer;
+    hp.time = impl->opt.elevationTime;
+    hp.encoding = impl->opt.elevationEncoding;
+    impl->heights = std::make_unique<HeightStreamer>(source, *egrid, hp, decodeHeights);
+    Impl* raw = impl.get();
+    impl->tree->setTerrain(
+        [raw](const Sector& sec) {
+          const auto [lo, hi] = raw->field->rangeOver(sec);
+          return std::pair{lo * raw->opt.verticalExaggeration, hi * raw->opt.verticalExaggeration};
+        },
+        -1000.0);
+  }
   return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
+}
+
+CameraPose Renderer::clampToTerrain(const CameraPose& pose) const {
+  CameraPose p = pose;
+  if (!impl_->field || !std::isfinite(pose.latDeg) || !std::isfinite(pose.lonDeg)) return p;
+  const double floor = impl_->heightAt(pose.latDeg, pose.lonDeg) + impl_->opt.terrainClearanceM;
+  if (p.altitudeM < floor) p.altitudeM = floor;
+  return p;
+}
+
+double Renderer::terrainHeight(double latDeg, double lonDeg) const {
+  return impl_->heightAt(latDeg, lonDeg);
 }
 
 Camera Renderer::camera(const CameraPose& pose) const {
@@ -666,7 +814,11 @@ Camera Renderer::camera(const CameraPose& pose) const {
 void Renderer::frame(const CameraPose& pose) {
   Impl& m = *impl_;
   const auto t0 = Clock::now();
-  const Camera cam = camera(pose);
+  const CameraPose safe = clampToTerrain(pose);
+  m.stats.cameraLifted = safe.altitudeM != pose.altitudeM;
+  const Camera cam = camera(safe);
+  m.stats.meshesBuiltLast = 0;
+  m.stats.meshMs = 0.0;
   if (m.window != nullptr) glfwMakeContextCurrent(m.window);
   ++m.stats.frames;
 
@@ -675,6 +827,7 @@ void Renderer::frame(const CameraPose& pose) {
   m.lru.beginFrame();
   const double nowS = std::chrono::duration<double>(t0 - m.start).count();
   m.streamer->update(*m.tree, cam, nowS, &m.lru);
+  m.updateTerrain(nowS);
   m.stats.updateMs = msSince(t0);
   m.stats.longestUpdateMs = std::max(m.stats.longestUpdateMs, m.stats.updateMs);
 
@@ -715,19 +868,21 @@ void Renderer::frame(const CameraPose& pose) {
     const bool done = n->texture == TextureState::Finished || n->texture == TextureState::Absent ||
                       m.undecodable.contains(n->key());
     complete = complete && done;
+    complete = complete && m.heightsComplete(*n);
     const TexturePlan plan = planTexture(*n);
     for (int i = 0; i < plan.partCount; ++i) {
       const TexturePart& p = plan.parts[static_cast<std::size_t>(i)];
-      DrawPart d{p.region, m.globalTexture, p.uv};
+      GLuint texture = m.globalTexture;
+      UvTransform uv = p.uv;
       if (p.source != TextureSource::Global && p.texture != nullptr) {
         if (auto it = m.textures.find(p.texture->key()); it != m.textures.end()) {
-          d.texture = it->second;
+          texture = it->second;
           m.lru.use(p.texture->key());
         } else {
-          d.uv = globalUv(p.region->sector());
+          uv = globalUv(p.region->sector());
         }
       }
-      m.parts.push_back(d);
+      m.parts.push_back(partFor(*n, *p.region, texture, uv));
     }
   }
   m.stepUploads();
@@ -745,6 +900,7 @@ void Renderer::frame(const CameraPose& pose) {
       if (m.stats.frames - e.second.lastUsed < 120) return false;
       glDeleteVertexArrays(1, &e.second.vao);
       glDeleteBuffers(1, &e.second.vbo);
+      glDeleteBuffers(1, &e.second.ebo);
       return true;
     });
   }
@@ -753,7 +909,7 @@ void Renderer::frame(const CameraPose& pose) {
 
   const StreamStats& ss = m.streamer->stats();
   m.lastComplete = complete && ss.inFlight == 0 && m.decoding.empty() && m.uploads.empty() &&
-                   m.decoder.pending() == 0;
+                   m.decoder.pending() == 0 && !(m.heights && m.heights->busy());
   RenderStats& s = m.stats;
   s.nodesVisible = fs.visible;
   s.nodesDrawn = fs.drawn;
@@ -781,7 +937,7 @@ bool Renderer::complete() const noexcept {
 bool Renderer::busy() const noexcept {
   const Impl& m = *impl_;
   return m.streamer->stats().inFlight > 0 || !m.decoding.empty() || !m.uploads.empty() ||
-         m.decoder.pending() > 0;
+         m.decoder.pending() > 0 || (m.heights && m.heights->busy());
 }
 
 std::vector<std::uint8_t> Renderer::readPixels() const {

@@ -13,6 +13,7 @@
 
 #include <tellus/cache/Dataset.hpp>
 
+#include <array>
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
@@ -64,6 +65,16 @@ struct ServerSettings {
 
 /** YAML `renderer`: the planet renderer of `tellus view` and `tellus render` (the command line's
  * --threshold overrides lod_threshold). */
+/** YAML `renderer.terrain` (issue #6): heights from an elevation layer under the imagery. */
+struct TerrainSettings {
+  bool enabled = true;       ///< false: the bare ellipsoid
+  std::string layer;         ///< elevation layer; "" = the first one configured
+  double exaggeration = 1.0; ///< heights are multiplied by this, (0, 100]
+  double clearanceM = 2.0;   ///< the camera stays this far above the terrain, [0, 1e6]
+  std::optional<std::array<double, 2>>
+      sun; ///< [lat, lon] of the subsolar point: lighting; none = unlit
+};
+
 struct RendererSettings {
   double lodThreshold = 1.0;                  ///< texel-to-pixel threshold, 0.05 - 64
   int meshSize = 33;                          ///< vertices along a node's edge, 2^n + 1 in [3, 257]
@@ -73,6 +84,7 @@ struct RendererSettings {
   int maxInFlight = 16;                       ///< tile requests out at once
   int maxSplitsPerFrame = 64;                 ///< nodes created a frame
   int decodeThreads = 2;                      ///< texture decoding workers
+  TerrainSettings terrain;                    ///< YAML `renderer.terrain`
 };
 
 /** YAML `cache`. */

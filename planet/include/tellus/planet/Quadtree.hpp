@@ -29,7 +29,9 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace tellus::planet {
@@ -91,7 +93,12 @@ enum ChildSlot { ChildSW = 0, ChildSE = 1, ChildNW = 2, ChildNE = 3 };
 
 class Node {
 public:
-  Node(const Geodesy& geodesy, const NodeKey& key, const Sector& sector, Node* parent);
+  Node(const Geodesy& geodesy,
+       const NodeKey& key,
+       const Sector& sector,
+       Node* parent,
+       double minHeightM = 0.0,
+       double maxHeightM = 0.0);
   Node(const Node&) = delete;
   Node& operator=(const Node&) = delete;
   ~Node();
@@ -216,6 +223,14 @@ public:
   void removeChildren(Node& node);
   /** The neighbour the tree would link now (what Node::neighbour must equal; for tests). */
   Node* findNeighbour(const Node& node, Direction d) const noexcept;
+  /** Terrain (issue #6): the height range of a sector (metres, exaggerated; what the node's
+   * bounds, frustum and horizon tests must contain) used for every node created from now on, and
+   * the horizon occluder's height (at or below the lowest terrain). Null: heights 0. */
+  using HeightRange = std::function<std::pair<double, double>(const Sector&)>;
+  void setTerrain(HeightRange range, double occluderHeightM);
+  /** Recomputes the bounds of the nodes for which changed(sector) holds (new height data);
+   * returns how many nodes' bounds changed. */
+  std::size_t refreshHeights(const std::function<bool(const Sector&)>& changed);
   /** Visits every node, parents before children. */
   template <class F> void forEach(F&& f) const {
     for (const auto& r : roots_)
@@ -244,7 +259,9 @@ private:
   bool visibleNow(const NodeKey& key, const Camera& camera) const;
   bool widerPaysOff(const NodeKey& wide, std::int64_t span, const Camera& camera) const;
 
+  std::unique_ptr<Node> makeNode(const NodeKey& key, Node* parent);
   const Geodesy& geodesy_;
+  HeightRange heightRange_;
   TileGrid grid_;
   QuadtreeParams params_;
   HorizonOccluder occluder_;

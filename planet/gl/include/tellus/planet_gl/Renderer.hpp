@@ -15,6 +15,7 @@
 #include <tellus/cache/TileSource.hpp>
 #include <tellus/planet/Camera.hpp>
 #include <tellus/planet/Geodesy.hpp>
+#include <tellus/planet/Terrain.hpp>
 
 #include <array>
 #include <cstddef>
@@ -22,6 +23,7 @@
 #include <expected>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -47,6 +49,16 @@ struct RendererOptions {
   std::size_t maxInFlight = 16;                            ///< tile requests out at once
   int maxSplitsPerFrame = 64;
   int decodeThreads = 2;
+  /** Terrain (issue #6): the elevation layer asked of the tile source ("" = none: the bare
+   * ellipsoid), its time, and how its raw samples become metres. */
+  std::string elevationLayer;
+  std::string elevationTime;
+  HeightEncoding elevationEncoding{};
+  double verticalExaggeration = 1.0; ///< heights are multiplied by this (> 0)
+  double terrainClearanceM = 2.0;    ///< the camera is kept this far above the terrain
+  /** Diffuse lighting from the terrain's normals with the sun overhead at this latitude and
+   * longitude (degrees); nullopt: unlit (the imagery's own colours). */
+  std::optional<std::array<double, 2>> sunLatLon;
   bool visibleWindow = false; ///< a window the user sees (`tellus view`); else hidden
   std::string windowTitle = "tellus";
 };
@@ -78,6 +90,16 @@ struct RenderStats {
   std::size_t poolTextures = 0; ///< free textures kept for reuse
   std::size_t texturesReused = 0;
   std::size_t texturesEvicted = 0;
+  std::size_t heightTilesRequested = 0; ///< totals
+  std::size_t heightTilesReceived = 0;
+  std::size_t heightTilesAbsent = 0;
+  std::size_t heightTilesFailed = 0;
+  std::size_t meshesBuilt = 0;       ///< total
+  std::size_t meshesBuiltLast = 0;   ///< last frame
+  double meshMs = 0.0;               ///< last frame: building meshes (heights, edge fixing)
+  std::size_t edgesFixed = 0;        ///< last frame: drawn node sides moved onto a coarser edge
+  std::size_t zeroAreaTriangles = 0; ///< last frame: in the drawn meshes
+  bool cameraLifted = false;         ///< last frame: the pose was below terrain + clearance
   double updateMs = 0.0;        ///< last frame: quadtree + streamer CPU time
   double longestUpdateMs = 0.0; ///< the longest update since creation
   double frameMs = 0.0;         ///< last frame: everything, GL finished
@@ -99,6 +121,12 @@ public:
   /** The camera a pose gives at this renderer's size and field of view (throws
    * std::invalid_argument for a pose the Camera refuses). */
   Camera camera(const CameraPose& pose) const;
+  /** The pose with its altitude raised to the terrain under it (the deepest height data loaded)
+   * plus the clearance, when lower (thesis 4.5.3); frame() draws every pose through this. */
+  CameraPose clampToTerrain(const CameraPose& pose) const;
+  /** Terrain height in metres (exaggerated) at a point from the deepest height data loaded; 0
+   * without an elevation layer. */
+  double terrainHeight(double latDeg, double lonDeg) const;
   /** One frame: quadtree and streamer update, decoded textures to upload, uploads within the
    * budget, draw into the framebuffer (and the window when visible). */
   void frame(const CameraPose& pose);
