@@ -89,8 +89,7 @@ Quadtree::Quadtree(const Geodesy& geodesy, const TileGrid& grid, QuadtreeParams 
     for (std::int64_t c = 0; c < rootCols_; ++c) {
       const NodeKey k{0, r, c, 1};
       if (!grid_.isValid(k.firstTile())) continue;
-      roots_[static_cast<std::size_t>(r * rootCols_ + c)] =
-          makeNode(k, nullptr);
+      roots_[static_cast<std::size_t>(r * rootCols_ + c)] = makeNode(k, nullptr);
       ++nodeCount_;
     }
   for (auto& r : roots_)

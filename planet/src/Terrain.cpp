@@ -218,38 +218,63 @@ double HeightField::sample(const HeightTile& t, double latDeg, double lonDeg) co
   return top * (1.0 - ty) + bottom * ty;
 }
 
+// heightAt reads, at each point, the deepest level holding a tile there (its bilinear taps
+// reaching one sample into the neighbours). Below the deepest level whose tiles cover the whole
+// sector nothing is read, so the range comes from that level and the deeper ones only: tight for
+// deep nodes, where the coarse tiles' mountain ranges would make every node as tall as a continent.
 std::pair<double, double> HeightField::rangeOver(const Sector& sector) const {
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  bool uncovered = true;
-  for (int l = 0; l <= deepest_; ++l) {
+  int fullLevel = -1;
+  struct Level {
+    double lo, hi;
+    bool any;
+  };
+  std::vector<Level> levels(static_cast<std::size_t>(deepest_ + 1), {lo, hi, false});
+  for (int l = deepest_; l >= 0; --l) {
     if (perLevel_[static_cast<std::size_t>(l)] == 0) continue;
     const double d = grid_.deltaDeg(l);
     const Sector g = grown(sector, d / grid_.spec().tileHeight, d / grid_.spec().tileWidth);
-    Sector clipped{std::max(g.west, -180.0),
-                   std::max(g.south, -90.0),
-                   std::min(g.east, 180.0),
-                   std::min(g.north, 90.0)};
+    const Sector clipped{std::max(g.west, -180.0),
+                         std::max(g.south, -90.0),
+                         std::min(g.east, 180.0),
+                         std::min(g.north, 90.0)};
     const auto keys = grid_.keysCovering(clipped, l, 256);
-    if (!keys)
-      return {std::min(lowest_, 0.0), std::max(0.0, [&] {
-                double m = 0.0;
-                for (const auto& [k, t] : tiles_)
-                  m = std::max(m, static_cast<double>(t.maxM));
-                return m;
-              }())};
+    Level& lv = levels[static_cast<std::size_t>(l)];
+    if (!keys) { // too many tiles to look at: every tile of the level
+      for (const auto& [k, t] : tiles_)
+        if (k.level == l) {
+          lv.lo = std::min(lv.lo, static_cast<double>(t.minM));
+          lv.hi = std::max(lv.hi, static_cast<double>(t.maxM));
+          lv.any = true;
+        }
+      continue;
+    }
     bool all = !keys->empty();
     for (const TileKey& k : *keys) {
       const auto it = tiles_.find(k);
       if (it == tiles_.end()) {
-        all = false;
+        // A tile of the sector itself missing (touching counts: a point on the sector's edge may
+        // belong to it; a neighbour only the taps reach does not) means this level does not
+        // cover the sector.
+        if (intersects(grid_.sectorOf(k), sector)) all = false;
         continue;
       }
-      lo = std::min(lo, static_cast<double>(it->second.minM));
-      hi = std::max(hi, static_cast<double>(it->second.maxM));
+      lv.lo = std::min(lv.lo, static_cast<double>(it->second.minM));
+      lv.hi = std::max(lv.hi, static_cast<double>(it->second.maxM));
+      lv.any = true;
     }
-    if (l == 0 && all) uncovered = false;
+    if (all) {
+      fullLevel = l;
+      break;
+    }
   }
-  if (uncovered) {
+  for (int l = std::max(fullLevel, 0); l <= deepest_; ++l) {
+    const Level& lv = levels[static_cast<std::size_t>(l)];
+    if (!lv.any) continue;
+    lo = std::min(lo, lv.lo);
+    hi = std::max(hi, lv.hi);
+  }
+  if (fullLevel < 0) { // some point may have no tile at all: height 0 there
     lo = std::min(lo, 0.0);
     hi = std::max(hi, 0.0);
   }
@@ -414,9 +439,13 @@ TerrainMesh buildTerrainMesh(const Geodesy& geodesy,
     // The coarse vertices: the neighbour's own grid points along the shared line, computed with
     // the neighbour's parameters, so they are the very points it draws.
     std::vector<glm::dvec3> cpos(static_cast<std::size_t>(n));
-    for (int j = 0; j < n; ++j) {
-      const GridPoint g = onSide(s, d, edgeLerp(ca, cb, j, n));
-      cpos[static_cast<std::size_t>(j)] = position(g.lat, g.lon);
+    if (ad.coarseVertices.size() == static_cast<std::size_t>(n)) {
+      cpos = ad.coarseVertices;
+    } else {
+      for (int j = 0; j < n; ++j) {
+        const GridPoint g = onSide(s, d, edgeLerp(ca, cb, j, n));
+        cpos[static_cast<std::size_t>(j)] = position(g.lat, g.lon);
+      }
     }
     const std::int64_t u0 = q * (n - 1);
     for (int i = 0; i < n; ++i) {

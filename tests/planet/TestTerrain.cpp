@@ -228,7 +228,7 @@ TEST_P(EdgeFixing, FinerEdgeLiesOnTheCoarseChordsAndZeroAreaTrianglesCloseIt) {
     const TileKey fineKey{6 + apart, 140 * f + sub, 301 * f};
     const Sector fine = g.sectorOf(fineKey);
     std::array<EdgeAdapt, 4> edges{};
-    edges[static_cast<std::size_t>(Direction::West)] = {true, coarse};
+    edges[static_cast<std::size_t>(Direction::West)] = {true, coarse, {}};
     const auto fixed = buildTerrainMesh(wgs84(), fine, n, bumpy, edges);
     const auto plain = buildTerrainMesh(wgs84(), fine, n, bumpy, {});
     double before = 0.0;

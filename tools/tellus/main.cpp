@@ -1606,7 +1606,10 @@ int run(int argc, char** argv) {
     return kExitOk;
   }
   const Args a = parseArgs(
-      argc, argv, 2, {"json", "dry-run", "include-pinned", "offline", "refresh", "wait-complete", "no-terrain"});
+      argc,
+      argv,
+      2,
+      {"json", "dry-run", "include-pinned", "offline", "refresh", "wait-complete", "no-terrain"});
   for (const auto& e : a.errors)
     std::fprintf(stderr, "tellus %s: %s\n", argv[1], e.c_str());
   if (!a.errors.empty()) return kExitUsage;

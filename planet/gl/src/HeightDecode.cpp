@@ -2,10 +2,9 @@
 
 #include <tellus/planet/HeightStreamer.hpp>
 
-#include <png.h>
-
 #include <csetjmp>
 #include <cstring>
+#include <png.h>
 #include <vector>
 
 namespace tellus::planet {

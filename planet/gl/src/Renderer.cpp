@@ -96,6 +96,8 @@ struct GpuMesh {
   std::uint64_t heightGeneration = 0;
   std::uint64_t lastUsed = 0;
   bool fixed = false; ///< some side adapted
+  /** The n vertices along each side (Direction order) as drawn: what finer neighbours adapt to. */
+  std::array<std::vector<glm::dvec3>, 4> sideVertices;
 };
 
 /** A double as two floats (high + low): the GPU subtracts the eye's pair, so positions reach the
@@ -131,7 +133,8 @@ struct DrawPart {
 
 /** The part of `node` under `region` (the node itself or one of its children): which quadrant
  * ranges, and the uv transform for the node's coordinates given the one for region's. */
-DrawPart partFor(const Node& node, const Node& region, GLuint texture, const UvTransform& regionUv) {
+DrawPart
+partFor(const Node& node, const Node& region, GLuint texture, const UvTransform& regionUv) {
   DrawPart d{&node, texture, regionUv, 0, 4};
   if (&region == &node) return d;
   const Sector& s = node.sector();
@@ -179,9 +182,10 @@ struct Renderer::Impl {
   float anisotropy = 1.0f; ///< what the GL allows of opt.anisotropy
 
   std::unique_ptr<Quadtree> tree;
-  std::unique_ptr<HeightField> field;       // null without an elevation layer
+  std::unique_ptr<HeightField> field; // null without an elevation layer
   std::unique_ptr<HeightStreamer> heights;
   std::vector<TileKey> heightWish;
+  std::vector<const Node*> byLevel;
   std::unique_ptr<TextureStreamer> streamer;
   TextureLru lru;
   TextureDecoder decoder;
@@ -214,7 +218,10 @@ struct Renderer::Impl {
     return field ? field->heightAt(lat, lon) * opt.verticalExaggeration : 0.0;
   }
   std::array<EdgeAdapt, 4> edgesOf(const Node& node) const;
+  double surfaceHeightAt(double lat, double lon) const;
+  CameraPose drawnPose{};
   void updateTerrain(double nowS);
+  void deliverHeights();
   bool heightsComplete(const Node& node) const;
   void launchDecode(Node& node);
   void stepUploads();
@@ -417,18 +424,49 @@ void Renderer::Impl::releaseTexture(GLuint id) {
 
 // The drawn node across each side whose edge is coarser than ours along it: that side adapts
 // (the finer side moves onto the coarser one's chords). Along east/west sides a node's extent is
-// its latitude span, along north/south sides its longitude span (merged polar rows are wider).
+// its latitude span, along north/south sides its longitude span. The neighbour pointer gives the
+// deepest node of our level or coarser whose edge contains ours; when it is not drawn, the drawn
+// node across is found among its descendants whose edge still contains ours: near the poles a
+// finer node of a merged row can be wider than we are, i.e. coarser along the shared edge.
 std::array<EdgeAdapt, 4> Renderer::Impl::edgesOf(const Node& node) const {
   std::array<EdgeAdapt, 4> e{};
+  if (!opt.fixEdges) return e;
   const Sector& s = node.sector();
+  const std::uint64_t frame = tree->frame();
   for (int d = 0; d < 4; ++d) {
-    const Node* nb = node.neighbour(static_cast<Direction>(d));
-    if (nb == nullptr || nb->lastDrawnFrame() != tree->frame()) continue;
+    const auto dir = static_cast<Direction>(d);
+    const bool alongLon = dir == Direction::North || dir == Direction::South;
+    const Node* nb = node.neighbour(dir);
+    while (nb != nullptr && nb->lastDrawnFrame() != frame) {
+      const Node* next = nullptr;
+      const Sector& p = nb->sector();
+      for (int slot = 0; slot < 4 && next == nullptr; ++slot) {
+        const Node* c = nb->child(slot);
+        if (c == nullptr) continue;
+        const Sector& cs = c->sector();
+        const bool facing = dir == Direction::North   ? cs.south == p.south
+                            : dir == Direction::South ? cs.north == p.north
+                            : dir == Direction::East  ? cs.west == p.west
+                                                      : cs.east == p.east;
+        const bool contains = alongLon ? cs.west <= s.west && s.east <= cs.east
+                                       : cs.south <= s.south && s.north <= cs.north;
+        if (facing && contains) next = c;
+      }
+      nb = next;
+    }
+    if (nb == nullptr) continue;
     const Sector& o = nb->sector();
-    const bool alongLon = d == static_cast<int>(Direction::North) || d == static_cast<int>(Direction::South);
     const double mine = alongLon ? s.east - s.west : s.north - s.south;
     const double theirs = alongLon ? o.east - o.west : o.north - o.south;
-    if (theirs > mine) e[static_cast<std::size_t>(d)] = {true, o};
+    if (!(theirs > mine)) continue;
+    EdgeAdapt& a = e[static_cast<std::size_t>(d)];
+    a.active = true;
+    a.coarse = o;
+    // Its side facing us, as it draws it (meshes are built coarse first, see frame()).
+    const auto opposite = static_cast<std::size_t>((d + 2) % 4);
+    if (const auto it = meshes.find(nb->key());
+        it != meshes.end() && it->second.lastUsed == stats.frames)
+      a.coarseVertices = it->second.sideVertices[opposite];
   }
   return e;
 }
@@ -438,24 +476,59 @@ const GpuMesh& Renderer::Impl::meshFor(const Node& node) {
   GpuMesh& m = it->second;
   m.lastUsed = stats.frames;
   const std::array<EdgeAdapt, 4> edges = edgesOf(node);
-  const bool stale = field && field->changedSince(m.heightGeneration, node.sector());
+  // Stale when heights changed under the node, or under a coarser neighbour its edges follow
+  // (whose chord ends may lie beyond this node's edge).
+  bool stale = field && field->changedSince(m.heightGeneration, node.sector());
+  for (const EdgeAdapt& e : edges)
+    stale = stale || (field && e.active && field->changedSince(m.heightGeneration, e.coarse));
   if (!inserted && edges == m.edges && !stale) return m;
   const auto t0 = Clock::now();
   const TerrainMesh mesh = buildTerrainMesh(
-      geodesy, node.sector(), opt.meshSize, [this](double lat, double lon) { return heightAt(lat, lon); }, edges);
+      geodesy,
+      node.sector(),
+      opt.meshSize,
+      [this](double lat, double lon) { return heightAt(lat, lon); },
+      edges);
   m.edges = edges;
   m.heightGeneration = field ? field->generation() : 0;
   m.quadrantStart = mesh.quadrantStart;
   m.zeroAreaTriangles = mesh.zeroAreaTriangles;
   m.fixed = std::any_of(edges.begin(), edges.end(), [](const EdgeAdapt& a) { return a.active; });
+  {
+    const int n = opt.meshSize;
+    for (int d = 0; d < 4; ++d) {
+      auto& side = m.sideVertices[static_cast<std::size_t>(d)];
+      side.resize(static_cast<std::size_t>(n));
+      for (int i = 0; i < n; ++i) {
+        const int r = d == static_cast<int>(Direction::North)   ? n - 1
+                      : d == static_cast<int>(Direction::South) ? 0
+                                                                : i;
+        const int c = d == static_cast<int>(Direction::East)   ? n - 1
+                      : d == static_cast<int>(Direction::West) ? 0
+                                                               : i;
+        side[static_cast<std::size_t>(i)] =
+            mesh.vertices[static_cast<std::size_t>(r * n + c)].position;
+      }
+    }
+  }
   std::vector<float> v;
   v.reserve(mesh.vertices.size() * 11);
   for (const TerrainVertex& p : mesh.vertices) {
     float hi[3], lo[3];
     for (int i = 0; i < 3; ++i)
       splitDouble(p.position[i], hi[i], lo[i]);
-    v.insert(v.end(), {hi[0], hi[1], hi[2], lo[0], lo[1], lo[2], p.normal.x, p.normal.y, p.normal.z,
-                       static_cast<float>(p.uvNode.x), static_cast<float>(p.uvNode.y)});
+    v.insert(v.end(),
+             {hi[0],
+              hi[1],
+              hi[2],
+              lo[0],
+              lo[1],
+              lo[2],
+              p.normal.x,
+              p.normal.y,
+              p.normal.z,
+              static_cast<float>(p.uvNode.x),
+              static_cast<float>(p.uvNode.y)});
   }
   if (m.vao == 0) {
     glGenVertexArrays(1, &m.vao);
@@ -467,7 +540,9 @@ const GpuMesh& Renderer::Impl::meshFor(const Node& node) {
   glBufferData(
       GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(v.size() * sizeof(float)), v.data(), GL_STATIC_DRAW);
   constexpr GLsizei stride = 11 * sizeof(float);
-  const auto at = [](std::size_t floats) { return reinterpret_cast<const void*>(floats * sizeof(float)); };
+  const auto at = [](std::size_t floats) {
+    return reinterpret_cast<const void*>(floats * sizeof(float));
+  };
   glEnableVertexAttribArray(0);
   glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, at(0));
   glEnableVertexAttribArray(1);
@@ -504,15 +579,28 @@ void Renderer::Impl::updateTerrain(double nowS) {
       if (keys) heightWish.insert(heightWish.end(), keys->begin(), keys->end());
     }
   }
-  std::stable_sort(heightWish.begin(), heightWish.end(), [](const TileKey& a, const TileKey& b) { return a.level < b.level; });
+  std::stable_sort(heightWish.begin(), heightWish.end(), [](const TileKey& a, const TileKey& b) {
+    return a.level < b.level;
+  });
   heightWish.erase(std::unique(heightWish.begin(), heightWish.end()), heightWish.end());
   {
     std::unordered_set<TileKey, TileKeyHash> seen;
     std::erase_if(heightWish, [&](const TileKey& k) { return !seen.insert(k).second; });
   }
   heights->want(heightWish, *field, nowS);
+  const HeightStreamStats& hs = heights->stats();
+  stats.heightTilesRequested = hs.requested;
+  stats.heightTilesReceived = hs.received;
+  stats.heightTilesAbsent = hs.absent;
+  stats.heightTilesFailed = hs.failed + hs.decodeErrors;
+}
+
+// A few decoded height tiles into the field, at the start of a frame: the camera is kept above the
+// surface they make, and the meshes they change are rebuilt before this frame draws.
+void Renderer::Impl::deliverHeights() {
+  if (!field) return;
   const std::uint64_t before = field->generation();
-  if (heights->deliver(*field, 2) > 0) {
+  if (heights->deliver(*field, 8) > 0) {
     tree->refreshHeights([&](const Sector& sec) { return field->changedSince(before, sec); });
     tree->setTerrain(
         [this](const Sector& sec) {
@@ -521,11 +609,6 @@ void Renderer::Impl::updateTerrain(double nowS) {
         },
         std::min(0.0, field->lowest() * opt.verticalExaggeration) - 1000.0);
   }
-  const HeightStreamStats& hs = heights->stats();
-  stats.heightTilesRequested = hs.requested;
-  stats.heightTilesReceived = hs.received;
-  stats.heightTilesAbsent = hs.absent;
-  stats.heightTilesFailed = hs.failed + hs.decodeErrors;
 }
 
 bool Renderer::Impl::heightsComplete(const Node& node) const {
@@ -534,7 +617,8 @@ bool Renderer::Impl::heightsComplete(const Node& node) const {
   const int level = field->levelForSpacing((s.north - s.south) / (opt.meshSize - 1));
   const auto keys = field->grid().keysCovering(s, level, 16);
   if (!keys) return true;
-  return std::all_of(keys->begin(), keys->end(), [&](const TileKey& k) { return heights->settled(k, *field); });
+  return std::all_of(
+      keys->begin(), keys->end(), [&](const TileKey& k) { return heights->settled(k, *field); });
 }
 
 // A node whose tiles all arrived (TextureState::Decoding): its bytes go to a decoder worker.
@@ -663,18 +747,13 @@ void Renderer::Impl::draw(const Camera& camera) {
   glUniform3f(uEyeLow, el[0], el[1], el[2]);
   if (opt.sunLatLon) {
     const Ecef sun = geodesy.surfaceNormal((*opt.sunLatLon)[0], (*opt.sunLatLon)[1]);
-    glUniform4f(uSun, static_cast<float>(sun.x), static_cast<float>(sun.y), static_cast<float>(sun.z), 1.0f);
+    glUniform4f(uSun,
+                static_cast<float>(sun.x),
+                static_cast<float>(sun.y),
+                static_cast<float>(sun.z),
+                1.0f);
   } else {
     glUniform4f(uSun, 0.0f, 0.0f, 0.0f, 0.0f);
-  }
-  // Meshes first (a node's mesh depends on which neighbours are drawn, known only now).
-  stats.edgesFixed = 0;
-  stats.zeroAreaTriangles = 0;
-  for (const Node* n : tree->drawList()) {
-    const GpuMesh& m = meshFor(*n);
-    for (const EdgeAdapt& e : m.edges)
-      stats.edgesFixed += e.active ? 1 : 0;
-    stats.zeroAreaTriangles += m.zeroAreaTriangles;
   }
   for (const DrawPart& p : parts) {
     const GpuMesh& m = meshFor(*p.node);
@@ -687,10 +766,11 @@ void Renderer::Impl::draw(const Camera& camera) {
     glBindVertexArray(m.vao);
     const std::uint32_t first = m.quadrantStart[static_cast<std::size_t>(p.firstQuadrant)];
     const std::uint32_t last = m.quadrantStart[static_cast<std::size_t>(p.lastQuadrant)];
-    glDrawElements(GL_TRIANGLES,
-                   static_cast<GLsizei>(last - first),
-                   GL_UNSIGNED_INT,
-                   reinterpret_cast<const void*>(static_cast<std::uintptr_t>(first) * sizeof(std::uint32_t)));
+    glDrawElements(
+        GL_TRIANGLES,
+        static_cast<GLsizei>(last - first),
+        GL_UNSIGNED_INT,
+        reinterpret_cast<const void*>(static_cast<std::uintptr_t>(first) * sizeof(std::uint32_t)));
   }
   glBindVertexArray(0);
   if (window != nullptr && opt.visibleWindow) {
@@ -774,9 +854,11 @@ Renderer::create(ITileSource& source, const Geodesy& geodesy, RendererOptions op
     if (!(impl->opt.verticalExaggeration > 0.0) || !std::isfinite(impl->opt.verticalExaggeration))
       return std::unexpected(std::string("the vertical exaggeration must be a positive number"));
     const auto espec = source.describe(impl->opt.elevationLayer, impl->opt.elevationTime);
-    if (!espec) return std::unexpected("unknown elevation layer '" + impl->opt.elevationLayer + "'");
+    if (!espec)
+      return std::unexpected("unknown elevation layer '" + impl->opt.elevationLayer + "'");
     auto egrid = TileGrid::create(espec->grid);
-    if (!egrid) return std::unexpected("layer '" + impl->opt.elevationLayer + "': " + egrid.error());
+    if (!egrid)
+      return std::unexpected("layer '" + impl->opt.elevationLayer + "': " + egrid.error());
     impl->field = std::make_unique<HeightField>(*egrid);
     HeightStreamParams hp;
     hp.layer = impl->opt.elevationLayer;
@@ -794,10 +876,60 @@ Renderer::create(ITileSource& source, const Geodesy& geodesy, RendererOptions op
   return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
 }
 
+// The height of the surface as drawn, conservatively: the data's height at the point, and the
+// heights of the grid cell's corners of the drawn node over it (a coarse node's flat cell can lie
+// above the data's valley), including the coarse chord's ends where that side is edge-fixed.
+double Renderer::Impl::surfaceHeightAt(double lat, double lon) const {
+  double h = heightAt(lat, lon);
+  if (!tree || !std::isfinite(h)) return h;
+  lon = std::remainder(lon, 360.0);
+  const int n = opt.meshSize;
+  for (const Node* node : tree->drawList()) {
+    const Sector& s = node->sector();
+    if (lat < s.south || lat > s.north || lon < s.west || lon > s.east) continue;
+    const int r = std::clamp(
+        static_cast<int>(std::floor((lat - s.south) / (s.north - s.south) * (n - 1))), 0, n - 2);
+    const int c = std::clamp(
+        static_cast<int>(std::floor((lon - s.west) / (s.east - s.west) * (n - 1))), 0, n - 2);
+    for (int dr = 0; dr < 2; ++dr)
+      for (int dc = 0; dc < 2; ++dc)
+        h = std::max(
+            h,
+            heightAt(edgeLerp(s.south, s.north, r + dr, n), edgeLerp(s.west, s.east, c + dc, n)));
+    if (const auto it = meshes.find(node->key()); it != meshes.end())
+      for (int d = 0; d < 4; ++d) {
+        const EdgeAdapt& e = it->second.edges[static_cast<std::size_t>(d)];
+        if (!e.active) continue;
+        const bool alongLon =
+            d == static_cast<int>(Direction::North) || d == static_cast<int>(Direction::South);
+        const double a = alongLon ? e.coarse.west : e.coarse.south,
+                     b = alongLon ? e.coarse.east : e.coarse.north;
+        const double p = alongLon ? lon : lat;
+        const int j =
+            std::clamp(static_cast<int>(std::floor((p - a) / (b - a) * (n - 1))), 0, n - 2);
+        for (int k = 0; k < 2; ++k) {
+          const double q = edgeLerp(a, b, j + k, n);
+          const double fixedCoord = d == static_cast<int>(Direction::North)   ? s.north
+                                    : d == static_cast<int>(Direction::South) ? s.south
+                                    : d == static_cast<int>(Direction::East)  ? s.east
+                                                                              : s.west;
+          h = std::max(h, alongLon ? heightAt(fixedCoord, q) : heightAt(q, fixedCoord));
+        }
+      }
+    break;
+  }
+  return h;
+}
+
+CameraPose Renderer::drawnPose() const {
+  return impl_->drawnPose;
+}
+
 CameraPose Renderer::clampToTerrain(const CameraPose& pose) const {
   CameraPose p = pose;
   if (!impl_->field || !std::isfinite(pose.latDeg) || !std::isfinite(pose.lonDeg)) return p;
-  const double floor = impl_->heightAt(pose.latDeg, pose.lonDeg) + impl_->opt.terrainClearanceM;
+  const double floor =
+      impl_->surfaceHeightAt(pose.latDeg, pose.lonDeg) + impl_->opt.terrainClearanceM;
   if (p.altitudeM < floor) p.altitudeM = floor;
   return p;
 }
@@ -814,9 +946,11 @@ Camera Renderer::camera(const CameraPose& pose) const {
 void Renderer::frame(const CameraPose& pose) {
   Impl& m = *impl_;
   const auto t0 = Clock::now();
-  const CameraPose safe = clampToTerrain(pose);
+  m.deliverHeights();
+  CameraPose safe = clampToTerrain(pose);
   m.stats.cameraLifted = safe.altitudeM != pose.altitudeM;
-  const Camera cam = camera(safe);
+  m.drawnPose = safe;
+  Camera cam = camera(safe);
   m.stats.meshesBuiltLast = 0;
   m.stats.meshMs = 0.0;
   if (m.window != nullptr) glfwMakeContextCurrent(m.window);
@@ -887,6 +1021,32 @@ void Renderer::frame(const CameraPose& pose) {
   }
   m.stepUploads();
   m.evict();
+  // Meshes before drawing (a node's mesh depends on which neighbours are drawn, known only now);
+  // then the camera once more above the surface they make (the tree may have split under it).
+  m.stats.edgesFixed = 0;
+  m.stats.zeroAreaTriangles = 0;
+  // Coarse first (thesis 4.5.2: edges are fixed in ascending level order), so a finer node adapts
+  // to its coarser neighbour's edge as that neighbour draws it.
+  m.byLevel.assign(m.tree->drawList().begin(), m.tree->drawList().end());
+  std::stable_sort(m.byLevel.begin(), m.byLevel.end(), [](const Node* a, const Node* b) {
+    return a->level() < b->level();
+  });
+  for (const Node* n : m.byLevel)
+    m.meshFor(*n);
+  // A second pass for the rare neighbour that is coarser along an edge at a deeper level (merged
+  // polar rows): its mesh was not yet final when the first pass reached the finer node.
+  for (const Node* n : m.byLevel) {
+    const GpuMesh& g = m.meshFor(*n);
+    for (const EdgeAdapt& e : g.edges)
+      m.stats.edgesFixed += e.active ? 1 : 0;
+    m.stats.zeroAreaTriangles += g.zeroAreaTriangles;
+  }
+  if (const CameraPose again = clampToTerrain(safe); again.altitudeM != safe.altitudeM) {
+    safe = again;
+    cam = camera(safe);
+    m.stats.cameraLifted = true;
+    m.drawnPose = safe;
+  }
   m.draw(cam);
 
   // Tiles that arrived for nodes gone from view are dropped after a while (asked again if needed).

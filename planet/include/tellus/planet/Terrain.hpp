@@ -129,6 +129,10 @@ private:
 struct EdgeAdapt {
   bool active = false;
   Sector coarse{}; ///< the coarser node's sector
+  /** The coarser node's n vertices along the shared side as it draws them (its own edge fixing
+   * included: a corner of it may lie on an even coarser node's chord), west to east or south to
+   * north. Empty: computed from the height function at its grid points. */
+  std::vector<glm::dvec3> coarseVertices;
   friend bool operator==(const EdgeAdapt&, const EdgeAdapt&) = default;
 };
 

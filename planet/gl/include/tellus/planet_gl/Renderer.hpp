@@ -56,6 +56,9 @@ struct RendererOptions {
   HeightEncoding elevationEncoding{};
   double verticalExaggeration = 1.0; ///< heights are multiplied by this (> 0)
   double terrainClearanceM = 2.0;    ///< the camera is kept this far above the terrain
+  /** Edge fixing (finer edges onto coarser chords, zero-area triangles). Off only to measure what
+   * it costs and what it prevents (benchmarks, the test that shows the cracks it closes). */
+  bool fixEdges = true;
   /** Diffuse lighting from the terrain's normals with the sun overhead at this latitude and
    * longitude (degrees); nullopt: unlit (the imagery's own colours). */
   std::optional<std::array<double, 2>> sunLatLon;
@@ -100,11 +103,11 @@ struct RenderStats {
   std::size_t edgesFixed = 0;        ///< last frame: drawn node sides moved onto a coarser edge
   std::size_t zeroAreaTriangles = 0; ///< last frame: in the drawn meshes
   bool cameraLifted = false;         ///< last frame: the pose was below terrain + clearance
-  double updateMs = 0.0;        ///< last frame: quadtree + streamer CPU time
-  double longestUpdateMs = 0.0; ///< the longest update since creation
-  double frameMs = 0.0;         ///< last frame: everything, GL finished
-  std::string glVersion;        ///< GL_VERSION and GL_RENDERER
-  bool reversedZ = false;       ///< glClipControl available (4.5 or ARB_clip_control)
+  double updateMs = 0.0;             ///< last frame: quadtree + streamer CPU time
+  double longestUpdateMs = 0.0;      ///< the longest update since creation
+  double frameMs = 0.0;              ///< last frame: everything, GL finished
+  std::string glVersion;             ///< GL_VERSION and GL_RENDERER
+  bool reversedZ = false;            ///< glClipControl available (4.5 or ARB_clip_control)
 };
 
 class Renderer {
@@ -124,8 +127,10 @@ public:
   /** The pose with its altitude raised to the terrain under it (the deepest height data loaded)
    * plus the clearance, when lower (thesis 4.5.3); frame() draws every pose through this. */
   CameraPose clampToTerrain(const CameraPose& pose) const;
-  /** Terrain height in metres (exaggerated) at a point from the deepest height data loaded; 0
-   * without an elevation layer. */
+  /** The pose the last frame was drawn from (after clampToTerrain). */
+  CameraPose drawnPose() const;
+  /** Terrain height in metres (exaggerated) at a point from the deepest height data loaded
+   * (bilinear); 0 without an elevation layer. */
   double terrainHeight(double latDeg, double lonDeg) const;
   /** One frame: quadtree and streamer update, decoded textures to upload, uploads within the
    * budget, draw into the framebuffer (and the window when visible). */
