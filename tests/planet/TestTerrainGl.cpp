@@ -23,6 +23,7 @@
 #include <deque>
 #include <filesystem>
 #include <mutex>
+#include <ostream>
 #include <thread>
 
 using namespace tellus;
@@ -222,6 +223,10 @@ struct View {
   CameraPose pose;
   double aboveTerrainM; ///< > 0: the altitude is terrain + this
 };
+
+void PrintTo(const View& v, std::ostream* os) {
+  *os << v.name;
+}
 
 const View kViews[] = {
     {"himalaya", {27.9, 86.9, 30000.0, 0.0, 75.0}, 0.0},

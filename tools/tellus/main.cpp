@@ -18,6 +18,7 @@
 #include <tellus/proxy/WebPage.hpp>
 
 #include <algorithm>
+#include <future>
 #include <cctype>
 #include <charconv>
 #include <chrono>
@@ -73,6 +74,9 @@ commands:
   view     the interactive globe (a GLFW window)
              [--camera LAT,LON,ALT[,HEADING,TILT]] [--size WxH] [--layer NAME] [--threshold T]
              [--offline | --server URL]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc
+             render and view: [--no-terrain] [--exaggeration X] [--sun LAT,LON]
+  height   the terrain height in metres at a point, from the elevation layer's deepest level
+             --lat A --lon B [--elevation LAYER] [--offline | --server URL]
 
 options for every command:
   --cache DIR   cache root (default: $TELLUS_CACHE, $XDG_CACHE_HOME/tellus or ~/.cache/tellus)
@@ -1520,6 +1524,103 @@ int cmdRender(const Args& a) {
   return kExitOk;
 }
 
+/** One tile, waited for (the tile source answers on its own threads). */
+TileResult fetchTile(ITileSource& source, const TileAddress& address, std::chrono::seconds limit) {
+  auto done = std::make_shared<std::promise<TileResult>>();
+  auto answer = done->get_future();
+  source.request(address, 1.0, [done](TileResult&& r) { done->set_value(std::move(r)); });
+  if (answer.wait_for(limit) != std::future_status::ready) {
+    TileResult late;
+    late.status = TileStatus::Failed;
+    late.message = "no answer within " + std::to_string(limit.count()) + " s";
+    return late;
+  }
+  return answer.get();
+}
+
+// `tellus height --lat A --lon B`: the terrain height there from the deepest level of the elevation
+// layer that has a tile at the point (with the neighbours its bilinear taps reach), the same
+// height function the renderer draws (planet::HeightField).
+int cmdHeight(const Args& a) {
+  auto usage = [](const char* what, const std::string& got) {
+    std::fprintf(stderr, "tellus height: %s, got '%s'\n", what, got.c_str());
+    return kExitUsage;
+  };
+  static const std::vector<std::string> known = {
+      "config", "cache", "data", "lat", "lon", "offline", "server", "elevation"};
+  for (const auto& [k, v] : a.options)
+    if (std::find(known.begin(), known.end(), k) == known.end())
+      return usage("unknown option (see tellus --help)", "--" + k);
+  const auto latArg = a.get("lat"), lonArg = a.get("lon");
+  if (!latArg || !lonArg) return usage("--lat and --lon are required", "");
+  const auto lat = parseNumbers(*latArg, 1, 1), lon = parseNumbers(*lonArg, 1, 1);
+  if (!lat || !((*lat)[0] >= -90.0 && (*lat)[0] <= 90.0))
+    return usage("--lat must be a latitude in [-90, 90]", *latArg);
+  if (!lon || !std::isfinite((*lon)[0])) return usage("--lon must be a longitude", *lonArg);
+  planet::RendererOptions ro;
+  auto tiles = openPlanetTiles(a, "height", ro);
+  if (!tiles) return tiles.error();
+  if (const auto layer = a.get("elevation")) ro.elevationLayer = *layer;
+  if (ro.elevationLayer.empty()) {
+    std::fprintf(stderr, "tellus height: no elevation layer (renderer.terrain)\n");
+    return kExitError;
+  }
+  const auto spec = tiles->source->describe(ro.elevationLayer, "");
+  if (!spec) return usage("--elevation must name an elevation layer", ro.elevationLayer);
+  const auto grid = TileGrid::create(spec->grid);
+  if (!grid) {
+    std::fprintf(stderr, "tellus height: %s\n", grid.error().c_str());
+    return kExitError;
+  }
+  planet::HeightField field(*grid);
+  const double la = (*lat)[0], lo = std::remainder((*lon)[0], 360.0);
+  int level = grid->numLevels() - 1;
+  std::string lastError;
+  for (; level >= 0; --level) {
+    const auto centre = grid->keyAt(la, lo == 180.0 ? -180.0 : lo, level);
+    if (!centre) continue;
+    // The tile at the point, then the neighbours within one sample of it (bilinear taps).
+    const Sector s = grid->sectorOf(*centre);
+    const double dx = (s.east - s.west) / grid->spec().tileWidth;
+    const double dy = (s.north - s.south) / grid->spec().tileHeight;
+    std::vector<TileKey> keys{*centre};
+    for (const double y : {la - dy, la, la + dy})
+      for (const double x : {lo - dx, lo, lo + dx}) {
+        const auto k = grid->keyAt(std::clamp(y, -90.0, 90.0), std::remainder(x, 360.0), level);
+        if (k && std::find(keys.begin(), keys.end(), *k) == keys.end()) keys.push_back(*k);
+      }
+    bool haveCentre = false;
+    for (const TileKey& k : keys) {
+      const TileResult r = fetchTile(*tiles->source, {ro.elevationLayer, "", k}, std::chrono::seconds(60));
+      if (r.status != TileStatus::Ok) {
+        if (r.status == TileStatus::Failed) lastError = r.message;
+        continue;
+      }
+      auto t = planet::decodeHeightTile(
+          k, grid->spec().tileWidth, grid->spec().tileHeight, r.bytes, r.contentType, ro.elevationEncoding);
+      if (!t) {
+        lastError = t.error();
+        continue;
+      }
+      field.insert(std::move(*t));
+      haveCentre = haveCentre || k == *centre;
+    }
+    if (haveCentre) break;
+  }
+  if (level < 0) {
+    std::fprintf(stderr,
+                 "tellus height: no elevation tile at %.6f, %.6f%s%s\n",
+                 la,
+                 lo,
+                 lastError.empty() ? "" : ": ",
+                 lastError.c_str());
+    return kExitError;
+  }
+  std::printf("%.2f\n", field.heightAt(la, lo));
+  std::fprintf(stderr, "tellus height: layer %s, level %d\n", ro.elevationLayer.c_str(), level);
+  return kExitOk;
+}
+
 int cmdView(const Args& a) {
   auto usage = [](const char* what, const std::string& got) {
     std::fprintf(stderr, "tellus view: %s, got '%s'\n", what, got.c_str());
@@ -1618,6 +1719,7 @@ int run(int argc, char** argv) {
   if (cmd == "serve") return cmdServe(a);
   if (cmd == "render") return cmdRender(a);
   if (cmd == "view") return cmdView(a);
+  if (cmd == "height") return cmdHeight(a);
   std::fprintf(stderr, "tellus: unknown command '%s'\n%s", argv[1], kUsage);
   return kExitUsage;
 }

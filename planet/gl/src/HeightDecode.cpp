@@ -1,6 +1,7 @@
 #include "HeightDecode.hpp"
 
 #include <tellus/planet/HeightStreamer.hpp>
+#include <tellus/planet_gl/Renderer.hpp>
 
 #include <csetjmp>
 #include <cstring>
@@ -85,6 +86,15 @@ std::expected<HeightTile, std::string> decodeHeights(const TileKey& key,
     return heightTileFromSamples(key, width, height, *raw, encoding);
   }
   return decodeHeightsBil16Only(key, width, height, bytes, contentType, encoding);
+}
+
+std::expected<HeightTile, std::string> decodeHeightTile(const TileKey& key,
+                                                        int width,
+                                                        int height,
+                                                        std::span<const std::byte> bytes,
+                                                        std::string_view contentType,
+                                                        const HeightEncoding& encoding) {
+  return decodeHeights(key, width, height, bytes, contentType, encoding);
 }
 
 } // namespace tellus::planet

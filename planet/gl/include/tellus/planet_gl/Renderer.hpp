@@ -24,7 +24,9 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace tellus::planet {
@@ -162,6 +164,15 @@ private:
   explicit Renderer(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
+
+/** An elevation tile's bytes (BIL16, or an 8/16-bit greyscale PNG) as metres: what the renderer's
+ * height streaming does on its workers, for tools (`tellus height`). Thread safe. */
+std::expected<HeightTile, std::string> decodeHeightTile(const TileKey& key,
+                                                        int width,
+                                                        int height,
+                                                        std::span<const std::byte> bytes,
+                                                        std::string_view contentType,
+                                                        const HeightEncoding& encoding);
 
 /** Writes RGBA8 (rows from the top) as an 8-bit RGB PNG (alpha dropped). False with a message. */
 bool writePngRgb(const std::filesystem::path& file,

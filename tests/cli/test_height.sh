@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# `tellus height` end to end (issue #6): the terrain height at points of the bundled ETOPO 20'
+# compared with the source raster read by GDAL (gdallocationinfo) at its own pixel centres, where
+# the source's bilinear value is the pixel itself; the tiles are the source resampled by the tile
+# service, so the tolerance is a tenth of the local relief (the 3 x 3 source neighbourhood) + 2 m.
+# Also: -180/180 and the poles answer, bad input exits 2, --no-terrain style misuse is refused.
+set -euo pipefail
+tellus=$1
+data=$(cd "$(dirname "${BASH_SOURCE[0]}")/../../data" && pwd)
+work=$(mktemp -d "${TMPDIR:-/tmp}/tellus-height.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+cache="$work/cache"
+fail() { echo "FAIL: $*" >&2; exit 1; }
+src="$data/etopo20_int16.tif"
+
+# Source pixel (i, j) of the 1080 x 540 raster: centre lon = -180 + (i + 0.5) / 3, lat = 90 - (j + 0.5) / 3.
+check() { # i j what
+  local i=$1 j=$2 what=$3
+  local lon lat
+  lon=$(python3 -c "print(-180 + ($i + 0.5) / 3)")
+  lat=$(python3 -c "print(90 - ($j + 0.5) / 3)")
+  local got
+  got=$("$tellus" height --cache "$cache" --lat "$lat" --lon "$lon" 2>"$work/err") ||
+    fail "$what: exit $? ($(cat "$work/err"))"
+  local values=()
+  for dj in -1 0 1; do
+    for di in -1 0 1; do
+      values+=("$(gdallocationinfo -valonly "$src" $((i + di)) $((j + dj)))")
+    done
+  done
+  python3 - "$what" "$got" "${values[@]}" <<'PY'
+import sys
+what, got = sys.argv[1], float(sys.argv[2])
+v = [float(x) for x in sys.argv[3:]]
+centre = v[4]
+tol = 0.1 * (max(v) - min(v)) + 2.0
+print(f"{what}: tellus {got:.1f} m, source {centre:.0f} m (tolerance {tol:.0f} m)")
+assert abs(got - centre) <= tol, f"{what}: {got} against {centre} (tolerance {tol})"
+PY
+}
+check 800 186 "Himalaya (27.83 N, 86.83 E)"
+check 301 327 "Andes (19.17 S, 79.83 W)"
+check 540 100 "Europe (56.5 N, 0.17 E)"
+check 700 300 "Indian Ocean (10.17 S, 53.5 E)"
+check 1078 270 "next to the antimeridian (0.17 S, 179.5 E)"
+check 1 200 "next to the antimeridian (23.17 N, 179.5 W)"
+
+# Closed edges and poles answer; -180 and 180 are the same meridian.
+a=$("$tellus" height --cache "$cache" --lat 10 --lon 180 2>/dev/null)
+b=$("$tellus" height --cache "$cache" --lat 10 --lon -180 2>/dev/null)
+[ "$a" = "$b" ] || fail "lon 180 gives $a, -180 gives $b"
+"$tellus" height --cache "$cache" --lat 90 --lon 0 >/dev/null 2>&1 || fail "the north pole"
+"$tellus" height --cache "$cache" --lat -90 --lon 45 >/dev/null 2>&1 || fail "the south pole"
+s1=$("$tellus" height --cache "$cache" --lat -90 --lon 45 2>/dev/null)
+s2=$("$tellus" height --cache "$cache" --lat -90 --lon -120 2>/dev/null)
+[ "$s1" = "$s2" ] || fail "the south pole is one point: $s1 against $s2"
+
+# Bad input: exit 2 with a message.
+for args in "--lat 91 --lon 0" "--lat nan --lon 0" "--lat 0" "--lat 0 --lon inf" "--lat 0 --lon 0 --bogus 1"; do
+  set +e
+  # shellcheck disable=SC2086
+  "$tellus" height --cache "$cache" $args >/dev/null 2>"$work/err"
+  rc=$?
+  set -e
+  [ $rc -eq 2 ] || fail "height $args: exit $rc, expected 2"
+  [ -s "$work/err" ] || fail "height $args: no message"
+done
+echo "test_height: ok"
