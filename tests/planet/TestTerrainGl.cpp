@@ -324,6 +324,37 @@ TEST(TerrainGl, LevelsMeetAndEdgesAreFixed) {
   EXPECT_GT(o.fixedEdges, 0u);
 }
 
+// Thesis 4.5.3: whatever the pose asks (below the sea floor, inside a mountain, a jump of hundreds
+// of kilometres a frame at ground level), the camera drawn is above the terrain plus the clearance.
+TEST(TerrainGl, CameraNeverBelowTheTerrainAtAnySpeed) {
+  if (!haveDisplay()) GTEST_SKIP() << "no DISPLAY: run the gl label under xvfb-run";
+  TerrainWorld world;
+  const Geodesy wgs;
+  RendererOptions o;
+  o.layer = "imagery";
+  o.elevationLayer = "heights";
+  o.width = 64;
+  o.height = 48;
+  o.terrainClearanceM = 5.0;
+  auto made = Renderer::create(world, wgs, o);
+  ASSERT_TRUE(made.has_value()) << made.error();
+  Renderer& r = **made;
+  // Let the heights around the path arrive first.
+  for (int i = 0; i < 200 && (r.busy() || i < 20); ++i)
+    r.frame({27.9, 86.9, 20000.0, 0.0, 60.0});
+  int lifted = 0;
+  for (int i = 0; i < 120; ++i) {
+    CameraPose p{
+        27.9 + 0.05 * i, 86.9 + 0.9 * i, i % 3 == 0 ? -9000.0 : 10.0 * i - 400.0, 0.0, 80.0};
+    r.frame(p);
+    const CameraPose drawn = r.drawnPose();
+    const double ground = r.terrainHeight(drawn.latDeg, drawn.lonDeg);
+    EXPECT_GE(drawn.altitudeM, ground + 5.0 - 1e-6) << "frame " << i;
+    lifted += r.stats().cameraLifted ? 1 : 0;
+  }
+  EXPECT_GT(lifted, 40); // the poses asked for were mostly underground
+}
+
 // The control: without edge fixing the same kind of view shows cracks, so the tests above can fail.
 TEST(TerrainGl, WithoutEdgeFixingCracksShow) {
   if (!haveDisplay()) GTEST_SKIP() << "no DISPLAY: run the gl label under xvfb-run";

@@ -5,10 +5,12 @@
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/config/Config.hpp>
 #include <tellus/planet/Geodesy.hpp>
+#include <tellus/planet/Terrain.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
 #include <tellus/planet_gl/Viewer.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
+#include <tellus/proxy/ImageCodec.hpp>
 #include <tellus/proxy/LocalRasterSource.hpp>
 #include <tellus/proxy/Log.hpp>
 #include <tellus/proxy/ProxyFrontEnd.hpp>
@@ -18,7 +20,6 @@
 #include <tellus/proxy/WebPage.hpp>
 
 #include <algorithm>
-#include <future>
 #include <cctype>
 #include <charconv>
 #include <chrono>
@@ -29,6 +30,7 @@
 #include <exception>
 #include <expected>
 #include <filesystem>
+#include <future>
 #include <limits>
 #include <map>
 #include <optional>
@@ -75,6 +77,7 @@ commands:
              [--camera LAT,LON,ALT[,HEADING,TILT]] [--size WxH] [--layer NAME] [--threshold T]
              [--offline | --server URL]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc
              render and view: [--no-terrain] [--exaggeration X] [--sun LAT,LON]
+             render: [--edge-fixing on|off] (off shows the cracks it closes; for comparisons)
   height   the terrain height in metres at a point, from the elevation layer's deepest level
              --lat A --lon B [--elevation LAYER] [--offline | --server URL]
 
@@ -984,6 +987,7 @@ std::string renderStatsJson(const planet::RenderStats& s, double seconds, bool c
                 ",\n  \"height_tiles_requested\": %zu,\n  \"height_tiles_received\": %zu,\n"
                 "  \"height_tiles_absent\": %zu,\n  \"height_tiles_failed\": %zu,\n"
                 "  \"meshes_built\": %zu,\n  \"meshes_built_last\": %zu,\n  \"mesh_ms\": %.3f,\n"
+                "  \"mesh_ms_total\": %.3f,\n"
                 "  \"edges_fixed\": %zu,\n  \"zero_area_triangles\": %zu,\n  \"camera_lifted\": %s",
                 s.heightTilesRequested,
                 s.heightTilesReceived,
@@ -992,6 +996,7 @@ std::string renderStatsJson(const planet::RenderStats& s, double seconds, bool c
                 s.meshesBuilt,
                 s.meshesBuiltLast,
                 s.meshMs,
+                s.meshMsTotal,
                 s.edgesFixed,
                 s.zeroAreaTriangles,
                 s.cameraLifted ? "true" : "false");
@@ -1171,6 +1176,10 @@ std::optional<std::string> applyTerrainArgs(const Args& a, planet::RendererOptio
       return "--exaggeration must be a number in (0, 100], got '" + *e + "'";
     ro.verticalExaggeration = (*v)[0];
   }
+  if (auto e = a.get("edge-fixing")) {
+    if (*e != "on" && *e != "off") return "--edge-fixing must be on or off, got '" + *e + "'";
+    ro.fixEdges = *e == "on";
+  }
   if (auto e = a.get("sun")) {
     const auto v = parseNumbers(*e, 2, 2);
     if (!v || (*v)[0] < -90.0 || (*v)[0] > 90.0)
@@ -1243,6 +1252,20 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
           (config.renderer.terrain.layer.empty() || l.name == config.renderer.terrain.layer)) {
         ro.elevationLayer = l.name;
         ro.elevationEncoding = {l.elevation.scale, l.elevation.offset, l.elevation.noData};
+        // The proxy's decoder: BIL16, 16-bit PNG and Int16 TIFF (the imaging module), the same
+        // reading of the tiles as the maps `serve` composes from them.
+        ro.heightDecoder = [](const TileKey& key,
+                              int w,
+                              int h,
+                              std::span<const std::byte> bytes,
+                              std::string_view type,
+                              const planet::HeightEncoding& enc)
+            -> std::expected<planet::HeightTile, std::string> {
+          auto raw = decodeHeights(bytes, type, w, h);
+          if (!raw) return std::unexpected(raw.error());
+          std::vector<double> samples(raw->begin(), raw->end());
+          return planet::heightTileFromSamples(key, w, h, samples, enc);
+        };
         break;
       }
   if (layerArg) {
@@ -1286,25 +1309,11 @@ int cmdRender(const Args& a) {
     return kExitUsage;
   };
   for (const auto& [k, v] : a.options) {
-    static const std::vector<std::string> known = {"config",
-                                                   "cache",
-                                                   "data",
-                                                   "camera",
-                                                   "size",
-                                                   "out",
-                                                   "wait-complete",
-                                                   "background",
-                                                   "stats",
-                                                   "layer",
-                                                   "threshold",
-                                                   "offline",
-                                                   "server",
-                                                   "path",
-                                                   "frames",
-                                                   "fps",
-                                                   "no-terrain",
-                                                   "exaggeration",
-                                                   "sun"};
+    static const std::vector<std::string> known = {
+        "config",    "cache",         "data",         "camera", "size",
+        "out",       "wait-complete", "background",   "stats",  "layer",
+        "threshold", "offline",       "server",       "path",   "frames",
+        "fps",       "no-terrain",    "exaggeration", "sun",    "edge-fixing"};
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
   }
@@ -1591,13 +1600,17 @@ int cmdHeight(const Args& a) {
       }
     bool haveCentre = false;
     for (const TileKey& k : keys) {
-      const TileResult r = fetchTile(*tiles->source, {ro.elevationLayer, "", k}, std::chrono::seconds(60));
+      const TileResult r =
+          fetchTile(*tiles->source, {ro.elevationLayer, "", k}, std::chrono::seconds(60));
       if (r.status != TileStatus::Ok) {
         if (r.status == TileStatus::Failed) lastError = r.message;
         continue;
       }
-      auto t = planet::decodeHeightTile(
-          k, grid->spec().tileWidth, grid->spec().tileHeight, r.bytes, r.contentType, ro.elevationEncoding);
+      const int tw = grid->spec().tileWidth, th = grid->spec().tileHeight;
+      auto t =
+          ro.heightDecoder
+              ? ro.heightDecoder(k, tw, th, r.bytes, r.contentType, ro.elevationEncoding)
+              : planet::decodeHeightTile(k, tw, th, r.bytes, r.contentType, ro.elevationEncoding);
       if (!t) {
         lastError = t.error();
         continue;

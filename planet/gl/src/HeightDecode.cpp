@@ -26,7 +26,7 @@ extern "C" void readBytes(png_structp png, png_bytep out, png_size_t count) {
 
 extern "C" void quietWarning(png_structp, png_const_charp) {}
 
-/** A 16-bit (or 8-bit) greyscale PNG's samples, row 0 at the top, as raw numbers. */
+/** A 16-bit (height + 32768) or 8-bit greyscale PNG's samples, row 0 at the top, as raw numbers. */
 std::expected<std::vector<double>, std::string>
 readGreyPng(std::span<const std::byte> bytes, int width, int height) {
   if (bytes.size() < 8 || png_sig_cmp(reinterpret_cast<png_const_bytep>(bytes.data()), 0, 8) != 0)
@@ -62,7 +62,9 @@ readGreyPng(std::span<const std::byte> bytes, int width, int height) {
       for (int x = 0; x < w; ++x) {
         const auto i = static_cast<std::size_t>(x) * bytesPerSample;
         // PNG stores 16-bit samples big-endian.
-        out.push_back(depth == 16 ? static_cast<double>((row[i] << 8) | row[i + 1])
+        // PNG stores 16-bit samples big-endian; tellus stores heights in 16-bit PNGs as
+        // height + 32768 (the proxy's encodeHeights/decodeHeights), so that is undone here.
+        out.push_back(depth == 16 ? static_cast<double>((row[i] << 8) | row[i + 1]) - 32768.0
                                   : static_cast<double>(row[i]));
       }
     }

@@ -559,7 +559,9 @@ const GpuMesh& Renderer::Impl::meshFor(const Node& node) {
   glBindVertexArray(0);
   ++stats.meshesBuilt;
   ++stats.meshesBuiltLast;
-  stats.meshMs += msSince(t0);
+  const double ms = msSince(t0);
+  stats.meshMs += ms;
+  stats.meshMsTotal += ms;
   return m;
 }
 
@@ -864,7 +866,11 @@ Renderer::create(ITileSource& source, const Geodesy& geodesy, RendererOptions op
     hp.layer = impl->opt.elevationLayer;
     hp.time = impl->opt.elevationTime;
     hp.encoding = impl->opt.elevationEncoding;
-    impl->heights = std::make_unique<HeightStreamer>(source, *egrid, hp, decodeHeights);
+    impl->heights = std::make_unique<HeightStreamer>(
+        source,
+        *egrid,
+        hp,
+        impl->opt.heightDecoder ? impl->opt.heightDecoder : HeightDecoder(decodeHeights));
     Impl* raw = impl.get();
     impl->tree->setTerrain(
         [raw](const Sector& sec) {

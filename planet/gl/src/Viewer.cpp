@@ -179,9 +179,11 @@ std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options) {
     }
     lastX = x;
     lastY = y;
-    // Wheel: each notch 15 % of the altitude.
+    // Wheel: each notch 15 % of the height above the terrain under the camera.
     if (input.scroll != 0.0) {
-      pose.altitudeM = std::clamp(pose.altitudeM * std::pow(0.85, input.scroll), 1.0, 1e9);
+      const double ground = renderer.terrainHeight(pose.latDeg, pose.lonDeg);
+      const double above = std::max(1.0, pose.altitudeM - ground);
+      pose.altitudeM = ground + std::clamp(above * std::pow(0.85, input.scroll), 1.0, 1e9);
       input.scroll = 0.0;
     }
     const double turn = 60.0 * dt;
@@ -216,6 +218,7 @@ std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options) {
     }
     renderer.frame(pose);
     ++frames;
+    pose = renderer.drawnPose(); // raised above the terrain when it went below (thesis 4.5.3)
     drawn = pose;
     drawnW = fw;
     drawnH = fh;

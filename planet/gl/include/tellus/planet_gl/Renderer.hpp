@@ -15,6 +15,7 @@
 #include <tellus/cache/TileSource.hpp>
 #include <tellus/planet/Camera.hpp>
 #include <tellus/planet/Geodesy.hpp>
+#include <tellus/planet/HeightStreamer.hpp>
 #include <tellus/planet/Terrain.hpp>
 
 #include <array>
@@ -56,6 +57,10 @@ struct RendererOptions {
   std::string elevationLayer;
   std::string elevationTime;
   HeightEncoding elevationEncoding{};
+  /** Decodes the elevation layer's tiles (on the tile source's threads); empty: the built-in
+   * decodeHeightTile (BIL16, 16-bit PNG). `tellus` passes the proxy's decoder, which also reads
+   * Int16 TIFF through the imaging module. */
+  HeightDecoder heightDecoder;
   double verticalExaggeration = 1.0; ///< heights are multiplied by this (> 0)
   double terrainClearanceM = 2.0;    ///< the camera is kept this far above the terrain
   /** Edge fixing (finer edges onto coarser chords, zero-area triangles). Off only to measure what
@@ -102,6 +107,7 @@ struct RenderStats {
   std::size_t meshesBuilt = 0;       ///< total
   std::size_t meshesBuiltLast = 0;   ///< last frame
   double meshMs = 0.0;               ///< last frame: building meshes (heights, edge fixing)
+  double meshMsTotal = 0.0;          ///< since creation
   std::size_t edgesFixed = 0;        ///< last frame: drawn node sides moved onto a coarser edge
   std::size_t zeroAreaTriangles = 0; ///< last frame: in the drawn meshes
   bool cameraLifted = false;         ///< last frame: the pose was below terrain + clearance
