@@ -464,8 +464,7 @@ std::array<EdgeAdapt, 4> Renderer::Impl::edgesOf(const Node& node) const {
     a.coarse = o;
     // Its side facing us, as it draws it (meshes are built coarse first, see frame()).
     const auto opposite = static_cast<std::size_t>((d + 2) % 4);
-    if (const auto it = meshes.find(nb->key());
-        it != meshes.end() && it->second.lastUsed == stats.frames)
+    if (const auto it = meshes.find(nb->key()); it != meshes.end())
       a.coarseVertices = it->second.sideVertices[opposite];
   }
   return e;
