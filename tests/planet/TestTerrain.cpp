@@ -3,10 +3,12 @@
 // apart), with the zero-area triangles that close the T-junctions.
 #include "PlanetTestSupport.hpp"
 
+#include <tellus/planet/HeightStreamer.hpp>
 #include <tellus/planet/Terrain.hpp>
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -308,6 +310,134 @@ TEST(TerrainMeshExtremes, DeepestLevelCornersDistinct) {
   EXPECT_GT(glm::length(v[0].position - v[8].position), 0.05);
   EXPECT_GT(glm::length(v[0].position - v[72].position), 0.05);
   EXPECT_GT(glm::length(v[1].position - v[0].position), 0.005);
+}
+
+} // namespace
+} // namespace tellus::planet
+
+// --- height streaming ---
+
+namespace tellus::planet {
+namespace {
+
+/** Queues requests; the test answers them (on its own thread of control) in any order. */
+class ManualSource final : public ITileSource {
+public:
+  explicit ManualSource(GridSpec g) : grid(g) {}
+  std::optional<DatasetSpec> describe(std::string_view, std::string_view) const override {
+    DatasetSpec d;
+    d.grid = grid;
+    d.mimeType = "application/bil16";
+    return d;
+  }
+  TileRequestId request(const TileAddress& a, double priority, Callback done) override {
+    queued.push_back({++next, a.key, priority, std::move(done)});
+    return next;
+  }
+  void reprioritize(TileRequestId, double) override {}
+  bool cancel(TileRequestId id) override {
+    const auto it =
+        std::find_if(queued.begin(), queued.end(), [&](const Req& r) { return r.id == id; });
+    if (it == queued.end()) return false;
+    queued.erase(it);
+    ++cancelled;
+    return true;
+  }
+  void answer(const TileKey& k, TileStatus status, std::size_t bytes = 0) {
+    const auto it =
+        std::find_if(queued.begin(), queued.end(), [&](const Req& r) { return r.key == k; });
+    ASSERT_NE(it, queued.end());
+    TileResult r;
+    r.status = status;
+    r.contentType = "application/bil16";
+    r.bytes.assign(bytes, std::byte{0});
+    auto done = std::move(it->done);
+    queued.erase(it);
+    done(std::move(r));
+  }
+  struct Req {
+    TileRequestId id;
+    TileKey key;
+    double priority;
+    Callback done;
+  };
+  GridSpec grid;
+  std::vector<Req> queued;
+  int cancelled = 0;
+  TileRequestId next = 0;
+};
+
+TEST(HeightStreamer, RequestsInOrderWithinTheWindowCancelsAndRetries) {
+  GridSpec spec;
+  spec.levelZeroDeltaDeg = 20.0;
+  spec.tileWidth = spec.tileHeight = 4;
+  spec.numLevels = 4;
+  const TileGrid grid = *TileGrid::create(spec);
+  ManualSource src(spec);
+  HeightStreamParams p;
+  p.layer = "h";
+  p.maxInFlight = 3;
+  p.retryAfterS = 5.0;
+  HeightStreamer hs(src, grid, p);
+  HeightField field(grid);
+  const std::vector<TileKey> wish{{0, 4, 9}, {1, 9, 18}, {2, 18, 36}, {3, 36, 72}, {0, 4, 10}};
+  hs.want(wish, field, 0.0);
+  ASSERT_EQ(src.queued.size(), 3u); // the window
+  EXPECT_EQ(src.queued[0].key, wish[0]);
+  EXPECT_GT(src.queued[0].priority, src.queued[1].priority); // most important first
+  EXPECT_GT(src.queued[1].priority, src.queued[2].priority);
+  // One tile arrives, one is absent, one fails.
+  src.answer(wish[0], TileStatus::Ok, 4 * 4 * 2);
+  src.answer(wish[1], TileStatus::Absent);
+  src.answer(wish[2], TileStatus::Failed);
+  hs.want(wish, field, 1.0);
+  EXPECT_EQ(hs.stats().received, 1u);
+  EXPECT_EQ(hs.stats().absent, 1u);
+  EXPECT_EQ(hs.stats().failed, 1u);
+  // The window refills with what is left: not the absent one, not the failed one before its retry.
+  ASSERT_EQ(src.queued.size(), 2u);
+  EXPECT_EQ(src.queued[0].key, wish[3]);
+  EXPECT_EQ(src.queued[1].key, wish[4]);
+  EXPECT_TRUE(hs.settled(wish[1], field));
+  EXPECT_TRUE(hs.settled(wish[2], field)); // failed: settled until its retry
+  // Delivery into the field, at most as many as asked.
+  EXPECT_FALSE(field.contains(wish[0]));
+  EXPECT_EQ(hs.deliver(field, 0), 0u);
+  EXPECT_EQ(hs.deliver(field, 5), 1u);
+  EXPECT_TRUE(field.contains(wish[0]));
+  // No longer wished: queued requests are cancelled.
+  hs.want(std::vector<TileKey>{wish[3]}, field, 2.0);
+  EXPECT_EQ(src.cancelled, 1);
+  ASSERT_EQ(src.queued.size(), 1u);
+  // After retryAfterS the failed tile is asked again; the absent one never.
+  src.answer(wish[3], TileStatus::Ok, 4 * 4 * 2);
+  hs.want(wish, field, 7.0);
+  bool retried = false, absentAgain = false;
+  for (const auto& r : src.queued) {
+    retried = retried || r.key == wish[2];
+    absentAgain = absentAgain || r.key == wish[1];
+  }
+  EXPECT_TRUE(retried);
+  EXPECT_FALSE(absentAgain);
+}
+
+TEST(HeightStreamer, UndecodableBytesAreCountedAndNotAskedAgain) {
+  GridSpec spec;
+  spec.levelZeroDeltaDeg = 20.0;
+  spec.tileWidth = spec.tileHeight = 4;
+  spec.numLevels = 2;
+  const TileGrid grid = *TileGrid::create(spec);
+  ManualSource src(spec);
+  HeightStreamer hs(src, grid, HeightStreamParams{"h", "", 4, {}, 5.0});
+  HeightField field(grid);
+  const std::vector<TileKey> wish{{0, 1, 1}};
+  hs.want(wish, field, 0.0);
+  src.answer(wish[0], TileStatus::Ok, 7); // not 4 x 4 x 2 bytes
+  hs.want(wish, field, 10.0);
+  EXPECT_EQ(hs.stats().decodeErrors, 1u);
+  EXPECT_TRUE(src.queued.empty());
+  EXPECT_TRUE(hs.settled(wish[0], field));
+  EXPECT_FALSE(hs.busy());
 }
 
 } // namespace
