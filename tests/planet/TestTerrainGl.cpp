@@ -9,6 +9,7 @@
 
 #include <tellus/planet/Camera.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
+#include <tellus/proxy/ImageCodec.hpp>
 
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
@@ -369,3 +370,31 @@ TEST(TerrainGl, WithoutEdgeFixingCracksShow) {
 }
 
 } // namespace
+
+// The renderer's own elevation decoding (16-bit PNG, BIL16) reads tiles as the proxy writes them.
+TEST(HeightDecode, Png16AndBil16GiveTheProxysHeights) {
+  const int w = 5, h = 3;
+  std::vector<std::int16_t> heights(static_cast<std::size_t>(w * h));
+  for (int i = 0; i < w * h; ++i)
+    heights[static_cast<std::size_t>(i)] = static_cast<std::int16_t>(i * 1000 - 10000);
+  HeightEncoding enc;
+  enc.scale = 0.5;
+  enc.offset = 10.0;
+  for (const char* type : {"image/png", "application/bil16"}) {
+    const auto bytes = encodeHeights(type, w, h, heights.data());
+    ASSERT_TRUE(bytes.has_value()) << type << ": " << bytes.error();
+    const auto tile = decodeHeightTile({2, 1, 1}, w, h, *bytes, type, enc);
+    ASSERT_TRUE(tile.has_value()) << type << ": " << tile.error();
+    for (int i = 0; i < w * h; ++i)
+      EXPECT_EQ(tile->metres[static_cast<std::size_t>(i)],
+                heights[static_cast<std::size_t>(i)] * 0.5f + 10.0f)
+          << type << " sample " << i;
+  }
+  // Wrong sizes and garbage are errors, not crashes.
+  const auto png = encodeHeights("image/png", w, h, heights.data());
+  EXPECT_FALSE(decodeHeightTile({2, 1, 1}, w + 1, h, *png, "image/png", enc).has_value());
+  std::vector<std::byte> junk(png->begin(),
+                              png->begin() + static_cast<std::ptrdiff_t>(png->size() / 2));
+  EXPECT_FALSE(decodeHeightTile({2, 1, 1}, w, h, junk, "image/png", enc).has_value());
+  EXPECT_FALSE(decodeHeightTile({2, 1, 1}, w, h, junk, "image/tiff", enc).has_value());
+}
