@@ -943,6 +943,10 @@ double Renderer::terrainHeight(double latDeg, double lonDeg) const {
   return impl_->heightAt(latDeg, lonDeg);
 }
 
+const Geodesy& Renderer::geodesy() const noexcept {
+  return impl_->geodesy;
+}
+
 Camera Renderer::camera(const CameraPose& pose) const {
   return Camera(
       impl_->geodesy, pose, {impl_->opt.width, impl_->opt.height}, impl_->opt.verticalFovDeg);
