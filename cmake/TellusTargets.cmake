@@ -74,7 +74,8 @@ endfunction()
 
 # tellus_add_test(<name> SOURCES ... LIBS ...): one GoogleTest executable per module. ctest labels
 # come from the test suite's name, so one executable can hold several kinds of test:
-#   suite name ends in Extremes    -> label "extremes"
+#   suite name ends in ExtremesGl  -> labels "gl;extremes" (rendered extremes, under xvfb-run)
+#   suite name ends in Extremes    -> labels "unit;extremes"
 #   suite name ends in Integration -> label "integration"
 #   suite name ends in Slow        -> labels "slow;integration"
 #   suite name ends in Gl          -> label "gl" (run under xvfb-run by `make test`)
@@ -88,11 +89,15 @@ function(tellus_add_test name)
     TELLUS_TEST_SOURCE_DIR="${CMAKE_SOURCE_DIR}/tests"
     TELLUS_TEST_TMP_DIR="${CMAKE_BINARY_DIR}/test-tmp")
   tellus_apply_options(${name})
-  set(kinds Extremes Integration Slow Gl)
-  set(labels extremes integration "slow\\;integration" gl)
+  set(kinds ExtremesGl Extremes Integration Slow Gl)
+  set(labels "gl\\;extremes" "unit\\;extremes" integration "slow\\;integration" gl)
   set(exclude "")
   foreach(kind label IN ZIP_LISTS kinds labels)
-    gtest_discover_tests(${name} TEST_FILTER "*${kind}.*" PROPERTIES LABELS "${label}" TIMEOUT 300
+    set(filter "*${kind}.*")
+    if(kind STREQUAL "Gl")
+      set(filter "*Gl.*-*ExtremesGl.*") # those have their own entry above
+    endif()
+    gtest_discover_tests(${name} TEST_FILTER "${filter}" PROPERTIES LABELS "${label}" TIMEOUT 300
                          DISCOVERY_TIMEOUT 60)
     string(APPEND exclude ":*${kind}.*")
   endforeach()
