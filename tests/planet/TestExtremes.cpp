@@ -210,28 +210,51 @@ TEST(CameraExtremes, NegativeZeroIsZero) {
                         n2.corners()[static_cast<std::size_t>(c)]));
 }
 
-// 1 m and 0.1 m above the ellipsoid (no terrain yet): the ground below the eye lies in front of
-// the near plane, at the depth the reversed-Z projection gives it (near / distance, in (0, 1]),
-// and the frame is finite looking down and tilted.
+// 1 m and 0.1 m above the ellipsoid (no terrain yet), with the near plane the renderer uses
+// (nearDistanceFor): every ground point the view shows (the ground through the viewport's corners,
+// edge midpoints and centre) lies beyond the near plane, at a reversed-Z depth (near / w) inside
+// (0, 1), and the frame is finite looking down and tilted. With a fixed 0.1 m near plane the ground
+// 0.1 m below the eye was on it (the LOD saw "corners behind the camera" and split to level 30)
+// and, tilted, in front of it (clipped: a hole at the bottom of the view).
 TEST(CameraExtremes, OneMetreAndATenthOfAMetreAboveTheEllipsoid) {
   const Geodesy g;
-  for (const double alt : {1.0, 0.1})
-    for (const double tilt : {0.0, 45.0, 89.0}) {
-      SCOPED_TRACE("altitude " + std::to_string(alt) + " tilt " + std::to_string(tilt));
-      const Camera cam(g, {-33.9, 18.4, alt, 30.0, tilt}, {256, 256});
-      expectSaneCamera(cam);
-      const auto& centre = cam.viewportGround()[8];
-      ASSERT_TRUE(centre.hit);
-      const glm::dvec3 ground = vec(g.toEcef(centre.latDeg, centre.lonDeg, 0.0));
-      const glm::dvec4 clip = cam.toClip(ground);
-      const double distance = glm::length(ground - cam.position());
-      // Flat ground within the curvature's share (at 89 degrees the ground curves away).
-      EXPECT_NEAR(distance, alt / std::cos(tilt * kDeg), (tilt > 80.0 ? 1e-3 : 1e-6) * distance);
-      EXPECT_GT(clip.w, 0.0);
-      const double depth = clip.z / clip.w;
-      EXPECT_GT(depth, 0.0);
-      EXPECT_LT(depth, 1.0) << "the ground under the eye is clipped by the near plane";
-    }
+  for (const double alt : {1.0, 0.1, 0.01})
+    for (const double tilt : {0.0, 30.0, 45.0, 89.0})
+      for (const double lat : {-33.9, 89.9999}) {
+        SCOPED_TRACE("altitude " + std::to_string(alt) + " tilt " + std::to_string(tilt) +
+                     " latitude " + std::to_string(lat));
+        const double near = nearDistanceFor(alt);
+        EXPECT_GT(near, 0.0);
+        EXPECT_LE(near, 0.1);
+        const Camera cam(g, {lat, 18.4, alt, 30.0, tilt}, {256, 256}, 45.0, near);
+        expectSaneCamera(cam);
+        const auto& centre = cam.viewportGround()[8];
+        ASSERT_TRUE(centre.hit);
+        const glm::dvec3 below = vec(g.toEcef(centre.latDeg, centre.lonDeg, 0.0));
+        const double distance = glm::length(below - cam.position());
+        // Flat ground within the curvature's share (at 89 degrees the ground curves away).
+        EXPECT_NEAR(distance, alt / std::cos(tilt * kDeg), (tilt > 80.0 ? 1e-3 : 1e-6) * distance);
+        int hits = 0;
+        for (const auto& gp : cam.viewportGround()) {
+          if (!gp.hit) continue;
+          ++hits;
+          const glm::dvec4 clip = cam.toClip(vec(g.toEcef(gp.latDeg, gp.lonDeg, 0.0)));
+          EXPECT_GT(clip.w, 1.5 * cam.nearM()) << "ground at the near plane";
+          const double depth = clip.z / clip.w;
+          EXPECT_GT(depth, 0.0);
+          EXPECT_LT(depth, 1.0) << "ground clipped by the near plane";
+        }
+        EXPECT_GE(hits, tilt < 60.0 ? 9 : 3);
+      }
+  // Far from the ground the near plane stays at 0.1 m; under the ellipsoid too (nothing below).
+  EXPECT_EQ(nearDistanceFor(1e6), 0.1);
+  EXPECT_EQ(nearDistanceFor(0.25), 0.1);
+  EXPECT_NEAR(nearDistanceFor(0.1), 0.05 / std::sqrt(1.0 + 2.0 * std::pow(std::tan(22.5 * kDeg), 2)),
+              1e-15);
+  EXPECT_EQ(nearDistanceFor(-500.0), 0.1);
+  EXPECT_EQ(nearDistanceFor(0.0), 0.1);
+  EXPECT_EQ(nearDistanceFor(std::nan("")), 0.1);
+  EXPECT_EQ(nearDistanceFor(1e-9), 1e-3); // the floor: below 2 mm the ground is clipped again
 }
 
 // 1e9 m out: the Earth's angular radius is asin(a / (a + h)); the limb point projects that far

@@ -948,8 +948,14 @@ const Geodesy& Renderer::geodesy() const noexcept {
 }
 
 Camera Renderer::camera(const CameraPose& pose) const {
-  return Camera(
-      impl_->geodesy, pose, {impl_->opt.width, impl_->opt.height}, impl_->opt.verticalFovDeg);
+  const RendererOptions& o = impl_->opt;
+  // A low camera needs a nearer near plane than 0.1 m (docs/ACCURACY.md, numerical stability).
+  const double aspect = static_cast<double>(o.width) / static_cast<double>(o.height);
+  return Camera(impl_->geodesy,
+                pose,
+                {o.width, o.height},
+                o.verticalFovDeg,
+                nearDistanceFor(pose.altitudeM, o.verticalFovDeg, aspect));
 }
 
 void Renderer::frame(const CameraPose& pose) {
