@@ -315,7 +315,9 @@ TEST(RenderExtremesGl, OneMetreAndATenthOfAMetreAboveTheEllipsoidHaveNoHoles) {
   for (const double alt : {1.0, 0.1})
     for (const CameraPose& base : {CameraPose{-6.0, 12.0, 0.0, 0.0, 0.0},
                                    CameraPose{45.3, -179.9999, 0.0, 60.0, 60.0},
-                                   CameraPose{89.9999, 10.0, 0.0, 0.0, 30.0}}) {
+                                   CameraPose{89.9999, 10.0, 0.0, 0.0, 30.0},
+                                   CameraPose{90.0, 0.0, 0.0, 0.0, 0.0},
+                                   CameraPose{-90.0, 135.0, 0.0, 250.0, 45.0}}) {
       CameraPose p = base;
       p.altitudeM = alt;
       SCOPED_TRACE(describe(p));
