@@ -72,9 +72,8 @@ double Geoid::statedMaxErrorM() const noexcept {
   return impl_->grid.MaxError();
 }
 
-double VerticalDatum::ellipsoidHeightM(double latDeg,
-                                       double lonDeg,
-                                       double mslHeightM) const noexcept {
+double
+VerticalDatum::ellipsoidHeightM(double latDeg, double lonDeg, double mslHeightM) const noexcept {
   if (geoid_) return geoid_->ellipsoidHeightM(latDeg, lonDeg, mslHeightM);
   if (!(std::abs(latDeg) <= 90.0) || !std::isfinite(lonDeg))
     return std::numeric_limits<double>::quiet_NaN();

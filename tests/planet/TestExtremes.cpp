@@ -94,8 +94,8 @@ TEST(EarthModelExtremes, SphereMisplacesImageryByUpToAbout21Km) {
   }
   // Longitude plays no part (both are surfaces of revolution about the same axis).
   for (const double lon : {-180.0, -97.3, 33.0, 179.9999}) {
-    const double d = glm::length(vec(wgs84.toEcef(worstLat, lon, 0.0)) -
-                                 vec(sphere.toEcef(worstLat, lon, 0.0)));
+    const double d =
+        glm::length(vec(wgs84.toEcef(worstLat, lon, 0.0)) - vec(sphere.toEcef(worstLat, lon, 0.0)));
     EXPECT_NEAR(d, worst, 1e-6) << lon;
   }
   const double equator =
@@ -135,8 +135,7 @@ TEST(CameraExtremes, ExactPolesLookingDownAndTilted) {
                          std::to_string(tilt));
             const Camera cam(g, {lat, lon, alt, heading, tilt}, {256, 256});
             expectSaneCamera(cam);
-            const Geodetic at =
-                g.fromEcef({cam.position().x, cam.position().y, cam.position().z});
+            const Geodetic at = g.fromEcef({cam.position().x, cam.position().y, cam.position().z});
             EXPECT_NEAR(at.latDeg, lat, 1e-9);
             EXPECT_NEAR(at.heightM, alt, 1e-8 + alt * 1e-12);
             const Ecef n = g.surfaceNormal(lat, lon);
@@ -249,7 +248,8 @@ TEST(CameraExtremes, OneMetreAndATenthOfAMetreAboveTheEllipsoid) {
   // Far from the ground the near plane stays at 0.1 m; under the ellipsoid too (nothing below).
   EXPECT_EQ(nearDistanceFor(1e6), 0.1);
   EXPECT_EQ(nearDistanceFor(0.25), 0.1);
-  EXPECT_NEAR(nearDistanceFor(0.1), 0.05 / std::sqrt(1.0 + 2.0 * std::pow(std::tan(22.5 * kDeg), 2)),
+  EXPECT_NEAR(nearDistanceFor(0.1),
+              0.05 / std::sqrt(1.0 + 2.0 * std::pow(std::tan(22.5 * kDeg), 2)),
               1e-15);
   EXPECT_EQ(nearDistanceFor(-500.0), 0.1);
   EXPECT_EQ(nearDistanceFor(0.0), 0.1);

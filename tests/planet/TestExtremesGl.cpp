@@ -242,9 +242,12 @@ TEST(RenderExtremesGl, ExactPolesLookingDownAndTiltedHaveNoHoles) {
   auto o = options("bluemarble", 160, 120);
   OPEN_RENDERER(r, *bm.service, geodesy, o);
   const std::vector<CameraPose> poses = {
-      {90.0, 0.0, 1.0e6, 0.0, 0.0},       {-90.0, 0.0, 1.0e6, 0.0, 0.0},
-      {90.0, 0.0, 1.0e5, 0.0, 60.0},      {-90.0, 120.0, 1.0e5, 200.0, 60.0},
-      {90.0, -180.0, 1.0e4, 90.0, 80.0},  {-90.0, 180.0, 1.0, 0.0, 0.0},
+      {90.0, 0.0, 1.0e6, 0.0, 0.0},
+      {-90.0, 0.0, 1.0e6, 0.0, 0.0},
+      {90.0, 0.0, 1.0e5, 0.0, 60.0},
+      {-90.0, 120.0, 1.0e5, 200.0, 60.0},
+      {90.0, -180.0, 1.0e4, 90.0, 80.0},
+      {-90.0, 180.0, 1.0, 0.0, 0.0},
       {90.0, 33.0, 1.0, 300.0, 70.0},
   };
   for (const CameraPose& p : poses) {
@@ -289,9 +292,12 @@ TEST(RenderExtremesGl, AntimeridianFromBothSidesAndAcrossAndNegativeZero) {
   same({-65.0, 180.0, 5.0e6, 0.0, 0.0}, {-65.0, -180.0, 5.0e6, 0.0, 0.0});
   same({0.0, 0.0, 3.0e6, 0.0, 0.0}, {-0.0, -0.0, 3.0e6, -0.0, -0.0});
   const std::vector<CameraPose> poses = {
-      {0.0, 179.9999, 1.0e5, 90.0, 60.0},   {0.0, -179.9999, 1.0e5, 270.0, 60.0},
-      {30.0, 179.9999, 1.0, 90.0, 80.0},    {-30.0, -179.9999, 1.0, 270.0, 80.0},
-      {0.0, 180.0, 2.0e7, 0.0, 0.0},        {89.9999, 179.9999, 1.0e3, 90.0, 45.0},
+      {0.0, 179.9999, 1.0e5, 90.0, 60.0},
+      {0.0, -179.9999, 1.0e5, 270.0, 60.0},
+      {30.0, 179.9999, 1.0, 90.0, 80.0},
+      {-30.0, -179.9999, 1.0, 270.0, 80.0},
+      {0.0, 180.0, 2.0e7, 0.0, 0.0},
+      {89.9999, 179.9999, 1.0e3, 90.0, 45.0},
   };
   for (const CameraPose& p : poses) {
     SCOPED_TRACE(describe(p));
@@ -430,12 +436,11 @@ TEST(RenderExtremesGl, OneMillimetreStepAtOneMetreMovesTheImageByTheExpectedSubP
     int used = 0;
     for (int y = size / 4; y < 3 * size / 4; ++y)
       for (int x = size / 4; x < 3 * size / 4; ++x) {
-        const double g = alongX ? (channel(a.pixels, size, x + 1, y, c) -
-                                   channel(a.pixels, size, x - 1, y, c)) /
-                                      2.0
-                                : (channel(a.pixels, size, x, y + 1, c) -
-                                   channel(a.pixels, size, x, y - 1, c)) /
-                                      2.0;
+        const double g =
+            alongX ? (channel(a.pixels, size, x + 1, y, c) - channel(a.pixels, size, x - 1, y, c)) /
+                         2.0
+                   : (channel(a.pixels, size, x, y + 1, c) - channel(a.pixels, size, x, y - 1, c)) /
+                         2.0;
         const double d = channel(b.pixels, size, x, y, c) - channel(a.pixels, size, x, y, c);
         const bool sameLevel = channel(a.pixels, size, x, y, 2) == channel(b.pixels, size, x, y, 2);
         if (std::abs(g) > 8.0 || std::abs(d) > 8.0 || !sameLevel) continue; // a tile edge

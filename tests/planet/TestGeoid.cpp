@@ -29,10 +29,18 @@ struct Node {
   double lat, lon, n; // egm96_15.gtx at a node the 30' grid keeps
 };
 constexpr Node kNodes[] = {
-    {0.0, 0.0, 17.161579},     {90.0, 0.0, 13.606245},     {-90.0, 0.0, -29.533850},
-    {0.0, 180.0, 21.153330},   {45.0, 179.5, -6.672834},   {-30.5, -179.5, 46.137234},
-    {27.5, 86.5, -39.129246},  {51.5, -0.5, 46.403801},    {-4.5, 147.5, 78.590485},
-    {-8.5, 147.5, 84.625221},  {4.5, 79.0, -106.974716},   {38.5, -77.0, -33.956772},
+    {0.0, 0.0, 17.161579},
+    {90.0, 0.0, 13.606245},
+    {-90.0, 0.0, -29.533850},
+    {0.0, 180.0, 21.153330},
+    {45.0, 179.5, -6.672834},
+    {-30.5, -179.5, 46.137234},
+    {27.5, 86.5, -39.129246},
+    {51.5, -0.5, 46.403801},
+    {-4.5, 147.5, 78.590485},
+    {-8.5, 147.5, 84.625221},
+    {4.5, 79.0, -106.974716},
+    {38.5, -77.0, -33.956772},
 };
 
 } // namespace
@@ -65,8 +73,8 @@ TEST(Geoid, BetweenNodesStaysWithinTheConversionsStatedError) {
 
 // Bilinear is continuous across the grid's cell edges (steps of a 1e-7 degree move stay below
 // 0.1 mm); GeographicLib's cubic fit is made cell by cell and is not: it steps at cell edges
-// (printed: up to 1.06 m on these lines, 8.5 cm at 45.2 N, 10 E). That is why Bilinear is the default: terrain heights moved by
-// the geoid must not step at every 30' line.
+// (printed: up to 1.06 m on these lines, 8.5 cm at 45.2 N, 10 E). That is why Bilinear is the
+// default: terrain heights moved by the geoid must not step at every 30' line.
 TEST(Geoid, BilinearIsContinuousAcrossCellEdgesCubicIsNot) {
   const Geoid bilinear = openGrid();
   const Geoid cubic = openGrid(Geoid::Interpolation::Cubic);
@@ -74,19 +82,21 @@ TEST(Geoid, BilinearIsContinuousAcrossCellEdgesCubicIsNot) {
   double worstBilinear = 0.0, worstCubic = 0.0;
   for (double lat = -89.75; lat < 90.0; lat += 1.37)
     for (double lon = -180.0; lon <= 180.0; lon += 0.5) { // every meridian cell edge on the line
-      worstBilinear = std::max(worstBilinear,
-                               std::abs(bilinear.undulationM(lat, lon - eps) -
-                                        bilinear.undulationM(lat, lon + eps)));
-      worstCubic = std::max(
-          worstCubic, std::abs(cubic.undulationM(lat, lon - eps) - cubic.undulationM(lat, lon + eps)));
+      worstBilinear = std::max(
+          worstBilinear,
+          std::abs(bilinear.undulationM(lat, lon - eps) - bilinear.undulationM(lat, lon + eps)));
+      worstCubic =
+          std::max(worstCubic,
+                   std::abs(cubic.undulationM(lat, lon - eps) - cubic.undulationM(lat, lon + eps)));
     }
   for (double lon = -179.9; lon < 180.0; lon += 1.37)
     for (double lat = -89.5; lat <= 89.5; lat += 0.5) { // every parallel cell edge
-      worstBilinear = std::max(worstBilinear,
-                               std::abs(bilinear.undulationM(lat - eps, lon) -
-                                        bilinear.undulationM(lat + eps, lon)));
-      worstCubic = std::max(
-          worstCubic, std::abs(cubic.undulationM(lat - eps, lon) - cubic.undulationM(lat + eps, lon)));
+      worstBilinear = std::max(
+          worstBilinear,
+          std::abs(bilinear.undulationM(lat - eps, lon) - bilinear.undulationM(lat + eps, lon)));
+      worstCubic =
+          std::max(worstCubic,
+                   std::abs(cubic.undulationM(lat - eps, lon) - cubic.undulationM(lat + eps, lon)));
     }
   std::printf("largest step across a cell edge: bilinear %.6f m, cubic %.3f m\n",
               worstBilinear,
@@ -106,8 +116,8 @@ TEST(Geoid, ExtremesAreNewGuineaAndSouthOfIndia) {
       if (n > hi) hi = n, hiLat = lat, hiLon = lon;
       if (n < lo) lo = n, loLat = lat, loLon = lon;
     }
-  std::printf("max %.3f m at %.2f, %.2f; min %.3f m at %.2f, %.2f\n", hi, hiLat, hiLon, lo, loLat,
-              loLon);
+  std::printf(
+      "max %.3f m at %.2f, %.2f; min %.3f m at %.2f, %.2f\n", hi, hiLat, hiLon, lo, loLat, loLon);
   EXPECT_NEAR(hi, 85.0, 1.0);
   EXPECT_TRUE(hiLat > -10 && hiLat < 0 && hiLon > 140 && hiLon < 155) << hiLat << ", " << hiLon;
   EXPECT_NEAR(lo, -107.0, 1.0);

@@ -111,7 +111,8 @@ private:
  * plane: clipped (holes) and taken by the LOD for corners behind the eye (split to the deepest
  * level). Reversed-Z float depth keeps its relative precision whatever the near distance.
  * Altitudes at or below 0 (inside the model: no ground below) and NaN give 0.1 m. */
-double nearDistanceFor(double altitudeM, double verticalFovDeg = 45.0, double aspect = 1.0) noexcept;
+double
+nearDistanceFor(double altitudeM, double verticalFovDeg = 45.0, double aspect = 1.0) noexcept;
 
 /** Reversed-Z, infinite far, depth in [0, 1] (glClipControl ZERO_TO_ONE): clip z = near, clip w =
  * -z_eye, so NDC depth = near / distance. */

@@ -1,8 +1,8 @@
 #pragma once
 /**
  * @file Geoid.hpp
- * @brief The EGM96 geoid: how far mean sea level lies above the WGS84 ellipsoid, and the switch that
- * moves heights of a mean-sea-level dataset onto the ellipsoid (GeographicLib stays private).
+ * @brief The EGM96 geoid: how far mean sea level lies above the WGS84 ellipsoid, and the switch
+ * that moves heights of a mean-sea-level dataset onto the ellipsoid (GeographicLib stays private).
  *
  * Heights in ETOPO, SRTM and most DEMs are orthometric (H, above the geoid, "mean sea level"); the
  * renderer places points on the ellipsoid (h). With the geoid undulation N (metres, -107 to +85
@@ -39,7 +39,8 @@ public:
   Geoid& operator=(Geoid&&) noexcept;
 
   /** Geoid undulation N in metres (the geoid's height above the WGS84 ellipsoid). Latitude in
-   * [-90, 90], longitude any finite value (wraps); anything else (NaN, inf, |lat| > 90) gives NaN. */
+   * [-90, 90], longitude any finite value (wraps); anything else (NaN, inf, |lat| > 90) gives NaN.
+   */
   double undulationM(double latDeg, double lonDeg) const noexcept;
   /** h = H + N: a height above mean sea level as a height above the ellipsoid (NaN as above). */
   double ellipsoidHeightM(double latDeg, double lonDeg, double mslHeightM) const noexcept;
