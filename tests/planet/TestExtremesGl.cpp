@@ -462,3 +462,41 @@ TEST(RenderExtremesGl, OneMillimetreStepAtOneMetreMovesTheImageByTheExpectedSubP
   EXPECT_NEAR(east, expected, 0.25 * expected) << "the image did not move by the step";
   EXPECT_NEAR(north, 0.0, 0.05) << "an east step moved the image north-south";
 }
+
+// The sphere (renderer.earth: sphere) at the same extremes: no holes at the exact poles, across the
+// antimeridian, 1 m above it over the deepest tiles, and its 1e9 m disc has the sphere's radius.
+TEST(RenderExtremesGl, SphereModelHasNoHolesAtTheExtremes) {
+  const Geodesy sphere(EarthModel::Sphere);
+  BlueMarbleService bm;
+  ASSERT_TRUE(bm.service);
+  RampSource ramp(deepGrid());
+  for (int source = 0; source < 2; ++source) {
+    auto o = options(source == 0 ? "bluemarble" : "ramp", 128, 128);
+    ITileSource& s =
+        source == 0 ? static_cast<ITileSource&>(*bm.service) : static_cast<ITileSource&>(ramp);
+    OPEN_RENDERER(r, s, sphere, o);
+    const std::vector<CameraPose> poses =
+        source == 0 ? std::vector<CameraPose>{{90.0, 0.0, 1.0e6, 0.0, 0.0},
+                                              {-90.0, 45.0, 1.0e5, 120.0, 60.0},
+                                              {0.0, 179.9999, 1.0e5, 90.0, 60.0},
+                                              {0.0, 0.0, 1.0e9, 0.0, 0.0}}
+                    : std::vector<CameraPose>{{-6.0, 12.0, 1.0, 0.0, 0.0},
+                                              {89.9999, -180.0, 0.1, 0.0, 30.0}};
+    for (const CameraPose& p : poses) {
+      SCOPED_TRACE(describe(p));
+      const Rendered out = renderComplete(r, p, 120.0);
+      EXPECT_TRUE(out.complete);
+      save("sphere-" + describe(p), r, out.pixels);
+      const Holes h = findHoles(r, sphere, p, out);
+      EXPECT_GT(h.inside, 0);
+      EXPECT_EQ(h.holes, 0) << "magenta pixels inside the sphere's outline";
+      expectFiniteStats(out.stats);
+      if (p.altitudeM == 1.0e9) {
+        const double focal = 64.0 / std::tan(22.5 * kDeg);
+        const double r0 = sphere.equatorialRadius();
+        const double predicted = focal * std::tan(std::asin(r0 / (r0 + p.altitudeM)));
+        EXPECT_NEAR(std::sqrt(h.drawn / std::numbers::pi), predicted, 1.0);
+      }
+    }
+  }
+}
