@@ -12,6 +12,8 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <thread>
+#include <vector>
 
 using namespace tellus;
 
@@ -159,6 +161,29 @@ TEST(Geoid, MissingOrBrokenFilesAreRefusedWithTheirName) {
   const auto b = Geoid::open(broken);
   ASSERT_FALSE(b.has_value());
   EXPECT_NE(b.error().find("broken.pgm"), std::string::npos) << b.error();
+}
+
+// The grid is read whole at open(): concurrent calls need no lock and agree with one thread's
+// (run under TSan by make test-sanitizers).
+TEST(Geoid, ConcurrentCallsAgreeWithOneThread) {
+  for (auto interp : {Geoid::Interpolation::Bilinear, Geoid::Interpolation::Cubic}) {
+    const Geoid g = openGrid(interp);
+    std::vector<double> expected;
+    for (int i = 0; i < 2000; ++i)
+      expected.push_back(g.undulationM(-89.0 + i * 0.089, -180.0 + i * 0.179));
+    std::vector<std::thread> threads;
+    std::vector<int> mismatches(4, 0);
+    for (std::size_t t = 0; t < 4; ++t)
+      threads.emplace_back([&, t] {
+        for (int i = 0; i < 2000; ++i)
+          mismatches[t] += g.undulationM(-89.0 + i * 0.089, -180.0 + i * 0.179) !=
+                           expected[static_cast<std::size_t>(i)];
+      });
+    for (auto& th : threads)
+      th.join();
+    for (int m : mismatches)
+      EXPECT_EQ(m, 0);
+  }
 }
 
 // Poles, the antimeridian, -0.0 and non-finite input.
