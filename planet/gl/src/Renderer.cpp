@@ -949,13 +949,19 @@ const Geodesy& Renderer::geodesy() const noexcept {
 
 Camera Renderer::camera(const CameraPose& pose) const {
   const RendererOptions& o = impl_->opt;
-  // A low camera needs a nearer near plane than 0.1 m (docs/ACCURACY.md, numerical stability).
+  // A low camera needs a nearer near plane than 0.1 m; its height above the ground below it
+  // (the terrain when heights are loaded) decides (docs/ACCURACY.md, numerical stability).
+  double above = pose.altitudeM;
+  if (std::isfinite(pose.latDeg) && std::isfinite(pose.lonDeg)) {
+    const double ground = impl_->heightAt(pose.latDeg, pose.lonDeg);
+    if (std::isfinite(ground)) above -= ground;
+  }
   const double aspect = static_cast<double>(o.width) / static_cast<double>(o.height);
   return Camera(impl_->geodesy,
                 pose,
                 {o.width, o.height},
                 o.verticalFovDeg,
-                nearDistanceFor(pose.altitudeM, o.verticalFovDeg, aspect));
+                nearDistanceFor(above, o.verticalFovDeg, aspect));
 }
 
 void Renderer::frame(const CameraPose& pose) {
