@@ -9,6 +9,7 @@
 #include <tellus/planet/Camera.hpp>
 #include <tellus/planet/Geodesy.hpp>
 #include <tellus/planet/Patch.hpp>
+#include <tellus/planet/Terrain.hpp>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -329,6 +330,29 @@ TEST(PatchExtremes, DeepestLevelTheGridAllowsHasDistinctCornersAndFiniteMeshes) 
           EXPECT_LT(glm::length(node.corners()[SE] - east.corners()[SW]), 1e-9);
         }
 
+        // The renderer's mesh (buildTerrainMesh, bare ellipsoid): finite, unit normals, and the
+        // high/low float pairs the GL layer sends rebuild each position within 1e-7 m and keep
+        // adjacent vertices apart.
+        {
+          const TerrainMesh tm = buildTerrainMesh(
+              g, s, 33, [](double, double) { return 0.0; }, std::array<EdgeAdapt, 4>{});
+          ASSERT_EQ(tm.vertices.size(), std::size_t{33 * 33});
+          glm::dvec3 previous(0.0);
+          for (std::size_t i = 0; i < tm.vertices.size(); ++i) {
+            const TerrainVertex& v = tm.vertices[i];
+            ASSERT_TRUE(finite(v.position));
+            ASSERT_NEAR(glm::length(glm::dvec3(v.normal)), 1.0, 1e-6);
+            const glm::vec3 hi(v.position);
+            const glm::vec3 lo(v.position - glm::dvec3(hi));
+            const glm::dvec3 back = glm::dvec3(hi) + glm::dvec3(lo);
+            ASSERT_LT(glm::length(back - v.position), 1e-7);
+            const bool poleRow = (row == 0 && i < 33) || (row == rows - 1 && i >= 33 * 32);
+            if (i % 33 != 0 && !poleRow) {
+              ASSERT_GT(glm::length(back - previous), 0.0) << "adjacent vertices collapse";
+            }
+            previous = back;
+          }
+        }
         for (const int n : {3, 33}) {
           const PatchMesh mesh = buildPatchMesh(g, s, n);
           ASSERT_TRUE(finite(mesh.centre));
