@@ -620,7 +620,7 @@ TEST(RenderExtremesGl, OneMetreAndATenthOfAMetreAboveTerrainHaveNoHoles) {
 
 // Found with terrain (issue #6, the renderer as merged): 1 m and 0.1 m above the plateau the LOD
 // stops at levels 12-13 (over the bare ellipsoid at 1 m: 22-23), as if the camera were 1,000 m
-// up: the texel-to-pixel test measures the nodes' corners on the ellipsoid, not on the terrain.
+// up (likely, not verified: the texel-to-pixel test measures the nodes' corners on the ellipsoid).
 // At 89.9999 N, 0.1 m above the plateau, 16,304 of 16,384 pixels are holes. Disabled until the
 // terrain's owner fixes them (docs/ACCURACY.md); --gtest_also_run_disabled_tests runs it.
 TEST(RenderExtremesGl, DISABLED_TerrainLodAndThePoleOverAPlateau) {
