@@ -74,7 +74,8 @@ endfunction()
 
 # tellus_add_test(<name> SOURCES ... LIBS ...): one GoogleTest executable per module. ctest labels
 # come from the test suite's name, so one executable can hold several kinds of test:
-#   suite name ends in Extremes    -> label "extremes"
+#   suite name ends in ExtremesGl  -> labels "gl;extremes" (rendered extremes, under xvfb-run)
+#   suite name ends in Extremes    -> labels "unit;extremes"
 #   suite name ends in Integration -> label "integration"
 #   suite name ends in Slow        -> labels "slow;integration"
 #   suite name ends in Gl          -> label "gl" (run under xvfb-run by `make test`)
@@ -88,15 +89,30 @@ function(tellus_add_test name)
     TELLUS_TEST_SOURCE_DIR="${CMAKE_SOURCE_DIR}/tests"
     TELLUS_TEST_TMP_DIR="${CMAKE_BINARY_DIR}/test-tmp")
   tellus_apply_options(${name})
-  set(kinds Extremes Integration Slow Gl)
-  set(labels extremes integration "slow\\;integration" gl)
+  # Several labels per test cannot go through gtest_discover_tests(PROPERTIES LABELS "a;b"): the
+  # list is split into separate arguments on its way into the generated script (LABELS a, then a
+  # property named b). So each kind's discovered tests are named in a variable (TEST_LIST) and a
+  # small script included after the discovery sets their LABELS as a list.
+  set(kinds ExtremesGl Extremes Integration Slow Gl Unit)
+  set(labels "gl,extremes" "unit,extremes" integration "slow,integration" gl unit)
   set(exclude "")
   foreach(kind label IN ZIP_LISTS kinds labels)
-    gtest_discover_tests(${name} TEST_FILTER "*${kind}.*" PROPERTIES LABELS "${label}" TIMEOUT 300
-                         DISCOVERY_TIMEOUT 60)
+    if(kind STREQUAL "Unit")
+      string(SUBSTRING "${exclude}" 1 -1 exclude)
+      set(filter "-${exclude}")
+    elseif(kind STREQUAL "Gl")
+      set(filter "*Gl.*-*ExtremesGl.*") # those have their own entry above
+    else()
+      set(filter "*${kind}.*")
+    endif()
     string(APPEND exclude ":*${kind}.*")
+    set(list_var ${name}_${kind}_TESTS)
+    gtest_discover_tests(${name} TEST_FILTER "${filter}" TEST_LIST ${list_var}
+                         PROPERTIES TIMEOUT 300 DISCOVERY_TIMEOUT 60)
+    string(REPLACE "," ";" label_list "${label}")
+    set(label_script ${CMAKE_CURRENT_BINARY_DIR}/${name}_${kind}_labels.cmake)
+    file(WRITE ${label_script}
+         "if(${list_var})\n  set_tests_properties(\${${list_var}} PROPERTIES LABELS \"${label_list}\")\nendif()\n")
+    set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES ${label_script})
   endforeach()
-  string(SUBSTRING "${exclude}" 1 -1 exclude)
-  gtest_discover_tests(${name} TEST_FILTER "-${exclude}" PROPERTIES LABELS unit TIMEOUT 300
-                       DISCOVERY_TIMEOUT 60)
 endfunction()

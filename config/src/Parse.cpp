@@ -418,7 +418,9 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
                "max_in_flight",
                "max_splits_per_frame",
                "decode_threads",
-               "terrain"});
+               "terrain",
+               "earth",
+               "geoid"});
   if (auto v = m.get("lod_threshold")) g.lodThreshold = number(r, *v, m.path("lod_threshold"));
   if (auto v = m.get("mesh_size")) g.meshSize = int32(r, *v, m.path("mesh_size"));
   if (auto v = m.get("fov")) g.fovDeg = number(r, *v, m.path("fov"));
@@ -448,6 +450,10 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
     ts.sun = std::array<double, 2>{number(r, items[0], indexPath(sp, 0)),
                                    number(r, items[1], indexPath(sp, 1))};
   }
+  if (auto v = m.get("earth"))
+    g.earth = choice(r, *v, m.path("earth"), {"wgs84", "sphere"}) == 0 ? EarthShape::Wgs84
+                                                                       : EarthShape::Sphere;
+  if (auto v = m.get("geoid")) g.geoid = boolean(r, *v, m.path("geoid"));
 }
 
 void readCache(Reader& r, const Map& root, const fs::path& baseDir, CacheSettings& c) {

@@ -4,6 +4,7 @@
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -23,6 +24,16 @@ Plane normalised(const glm::dvec4& row) {
 }
 
 } // namespace
+
+double nearDistanceFor(double altitudeM, double verticalFovDeg, double aspect) noexcept {
+  constexpr double kNear = 0.1, kFloor = 1e-3;
+  if (!(altitudeM > 0.0)) return kNear;
+  const double t = std::tan(verticalFovDeg * std::numbers::pi / 360.0);
+  // The longest ray direction with w = 1 (the view's corner): |d| = sqrt(1 + t^2 (1 + aspect^2)).
+  double steepest = std::sqrt(1.0 + t * t * (1.0 + aspect * aspect));
+  if (!std::isfinite(steepest) || steepest < 1.0) steepest = 1.0;
+  return std::clamp(0.5 * altitudeM / steepest, kFloor, kNear);
+}
 
 glm::dmat4
 reversedZInfinitePerspective(double verticalFovRad, double aspect, double nearM) noexcept {

@@ -71,6 +71,20 @@ level_of() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['ma
   fail "lod_threshold 8 did not draw coarser: $(level_of "$work/fine.json") vs $(level_of "$work/coarse.json")"
 cmp -s "$work/fine.png" "$work/over.png" || fail "--threshold 1 did not override the config's 8"
 
+# The Earth model (renderer.earth, --earth): the sphere draws another image than WGS84; the
+# configuration's sphere and --earth sphere draw the same one; --earth wgs84 wins over the config.
+"$tellus" render --cache "$cache" --camera 0,0,2e7 --size 320x240 --out "$work/sphere.png" \
+  --wait-complete --earth sphere >/dev/null || fail "--earth sphere"
+cmp -s "$work/a.png" "$work/sphere.png" && fail "--earth sphere drew the WGS84 image"
+sed "s|^data_dir: .*|data_dir: $src/data|" "$src/config/examples/default.yaml" >"$work/sphere.yaml"
+printf 'renderer:\n  earth: sphere\n' >>"$work/sphere.yaml"
+"$tellus" render --config "$work/sphere.yaml" --cache "$cache" --camera 0,0,2e7 --size 320x240 \
+  --out "$work/sphere-config.png" --wait-complete >/dev/null || fail "renderer.earth: sphere"
+cmp -s "$work/sphere.png" "$work/sphere-config.png" || fail "renderer.earth: sphere differs"
+"$tellus" render --config "$work/sphere.yaml" --earth wgs84 --cache "$cache" --camera 0,0,2e7 \
+  --size 320x240 --out "$work/wgs84-over.png" --wait-complete >/dev/null || fail "--earth wgs84"
+cmp -s "$work/a.png" "$work/wgs84-over.png" || fail "--earth wgs84 did not override the config"
+
 # The OpenGL 3.3 core fallback (Mesa told to offer no more): the same image; and without
 # glClipControl the same projection still draws (reversed Z in [-1, 1] depth, less precise).
 MESA_GL_VERSION_OVERRIDE=3.3 "$tellus" render --cache "$cache" --camera 0,0,2e7 --size 320x240 \
@@ -146,6 +160,7 @@ usage "--wait-complete" --camera 0,0,1e6 --wait-complete=abc
 usage "--layer" --camera 0,0,1e6 --layer nosuchlayer
 usage "imagery" --camera 0,0,1e6 --layer etopo
 usage "unknown option" --camera 0,0,1e6 --frobnicate 1
+usage "--earth must be wgs84 or sphere" --camera 0,0,1e6 --earth flat
 usage "exclude each other" --camera 0,0,1e6 --offline --server http://127.0.0.1:1
 
 # Given up on: a view that cannot be complete in a millisecond is an error, not a partial image.

@@ -56,4 +56,15 @@ kill -0 "$pid" 2>/dev/null && fail "Esc did not quit"
 wait "$pid" || fail "tellus view exited with $?"
 pid=
 grep -q "frames" "$work/out.txt" || fail "output: $(cat "$work/out.txt")"
+
+# --earth: an unknown model is a usage error (exit 2); the sphere opens and draws.
+set +e
+"$tellus" view --cache "$work/cache" --earth flat >"$work/earth.txt" 2>&1
+rc=$?
+set -e
+[ $rc -eq 2 ] && grep -q "wgs84 or sphere" "$work/earth.txt" ||
+  fail "--earth flat: exit $rc, $(cat "$work/earth.txt")"
+"$tellus" view --cache "$work/cache" --size 160x100 --earth sphere --exit-after 3 \
+  >"$work/sphere.txt" 2>&1 || fail "--earth sphere: $(cat "$work/sphere.txt")"
+grep -q "3 frames" "$work/sphere.txt" || fail "--earth sphere: $(cat "$work/sphere.txt")"
 echo "view CLI: ok"

@@ -160,7 +160,13 @@ TEST(Config, RendererSettingsAreValidated) {
   fails([](RendererSettings& g) { g.maxInFlight = 0; }, "max_in_flight");
   fails([](RendererSettings& g) { g.maxSplitsPerFrame = 0; }, "max_splits_per_frame");
   fails([](RendererSettings& g) { g.decodeThreads = 0; }, "decode_threads");
+  fails([](RendererSettings& g) { g.earth = static_cast<EarthShape>(7); }, "earth");
+  EXPECT_EQ(c.renderer.earth, EarthShape::Wgs84);
+  EXPECT_TRUE(c.renderer.geoid);
   Config ok = c;
+  ok.renderer.earth = EarthShape::Sphere;
+  ok.renderer.geoid = false;
+  EXPECT_TRUE(validate(ok));
   ok.renderer.meshSize = 3;
   ok.renderer.lodThreshold = 64.0;
   EXPECT_TRUE(validate(ok));

@@ -150,6 +150,8 @@ TEST(ConfigYaml, DefaultsAreApplied) {
   EXPECT_FALSE(c->server.exceptionsHttpStatus);
   EXPECT_EQ(c->server.offlineResponse, OfflineResponse::Exception);
   EXPECT_FALSE(c->server.offline);
+  EXPECT_EQ(c->renderer.earth, EarthShape::Wgs84);
+  EXPECT_TRUE(c->renderer.geoid);
   EXPECT_EQ(c->server.limits.maxConnections, 4096);
   EXPECT_EQ(c->server.limits.maxHeaderBytes, 16384U);
   EXPECT_EQ(c->server.limits.maxParamBytes, 2048U);
@@ -225,6 +227,8 @@ renderer:
   max_in_flight: 4
   max_splits_per_frame: 8
   decode_threads: 3
+  earth: sphere
+  geoid: false
 upstreams:
   - name: ww
     type: worldwind
@@ -310,6 +314,8 @@ layers:
   EXPECT_EQ(c->renderer.maxInFlight, 4);
   EXPECT_EQ(c->renderer.maxSplitsPerFrame, 8);
   EXPECT_EQ(c->renderer.decodeThreads, 3);
+  EXPECT_EQ(c->renderer.earth, EarthShape::Sphere);
+  EXPECT_FALSE(c->renderer.geoid);
 
   const UpstreamConfig& ww = c->upstreams.at(0);
   EXPECT_EQ(ww.type, UpstreamConfig::Type::WorldWind);
@@ -520,6 +526,15 @@ layers:
   EXPECT_EQ(type.key, "upstreams[0].type");
   EXPECT_EQ(type.line, 3);
   EXPECT_EQ(type.message, "'wmts' is not one of local, wms, worldwind");
+
+  const ConfigError earth = errorOf("renderer:\n  earth: flat\n" + std::string(kMinimal));
+  EXPECT_EQ(earth.key, "renderer.earth");
+  EXPECT_EQ(earth.line, 2);
+  EXPECT_EQ(earth.message, "'flat' is not one of wgs84, sphere");
+
+  const ConfigError geoid = errorOf("renderer: {geoid: egm96}\n" + std::string(kMinimal));
+  EXPECT_EQ(geoid.key, "renderer.geoid");
+  EXPECT_EQ(geoid.message, "expected true or false, got 'egm96'");
 }
 
 TEST(ConfigYaml, BadDurationAndSize) {

@@ -70,12 +70,12 @@ commands:
   render   headless globe rendering to PNG (an X display or xvfb-run)
              --camera LAT,LON,ALT[,HEADING,TILT] --out FILE.png [--size WxH]
              [--wait-complete[=SECONDS]] [--background R,G,B] [--stats FILE.json]
-             [--layer NAME] [--threshold T] [--offline | --server URL]
+             [--layer NAME] [--threshold T] [--earth wgs84|sphere] [--offline | --server URL]
              or a flight: --path PATH.json --frames DIR [--fps N] instead of --camera/--out
              (PATH.json: [{"time":0,"lat":..,"lon":..,"alt":..,"heading":..,"tilt":..}, ...])
   view     the interactive globe (a GLFW window)
              [--camera LAT,LON,ALT[,HEADING,TILT]] [--size WxH] [--layer NAME] [--threshold T]
-             [--offline | --server URL]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc
+             [--earth wgs84|sphere] [--offline | --server URL]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc
              render and view: [--no-terrain] [--exaggeration X] [--sun LAT,LON]
              render: [--edge-fixing on|off] (off shows the cracks it closes; for comparisons)
   height   the terrain height in metres at a point, from the elevation layer's deepest level
@@ -1151,10 +1151,25 @@ struct PlanetTiles {
   std::unique_ptr<TileService> service;
   std::unique_ptr<RemoteTileSource> remote;
   ITileSource* source = nullptr;
+  EarthModel earth = EarthModel::Wgs84; ///< the configuration's renderer.earth
 };
 
-/** The configuration's `renderer` settings; what the command line gave (--threshold) wins. */
-void applyRendererSettings(const RendererSettings& g, const Args& a, planet::RendererOptions& ro) {
+/** `--earth wgs84|sphere` of render and view; nullopt when absent, an error text when bad. */
+std::expected<std::optional<EarthModel>, std::string> earthArg(const Args& a) {
+  const auto e = a.get("earth");
+  if (!e) return std::nullopt;
+  if (*e == "wgs84") return EarthModel::Wgs84;
+  if (*e == "sphere") return EarthModel::Sphere;
+  return std::unexpected(*e);
+}
+
+/** The configuration's `renderer` settings; what the command line gave (--threshold, --earth)
+ * wins (the caller applies --earth). */
+void applyRendererSettings(const RendererSettings& g,
+                           const Args& a,
+                           planet::RendererOptions& ro,
+                           EarthModel& earth) {
+  earth = g.earth == EarthShape::Sphere ? EarthModel::Sphere : EarthModel::Wgs84;
   if (!a.get("threshold")) ro.lodThreshold = g.lodThreshold;
   ro.meshSize = g.meshSize;
   ro.verticalFovDeg = g.fovDeg;
@@ -1207,7 +1222,7 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
         std::fprintf(stderr, "tellus: configuration: %s\n", loaded.error().toString().c_str());
         return std::unexpected(kExitError);
       }
-      applyRendererSettings(loaded->renderer, a, ro);
+      applyRendererSettings(loaded->renderer, a, ro, t.earth);
       terrain = terrain && loaded->renderer.terrain.enabled;
     }
     if (auto bad = applyTerrainArgs(a, ro)) {
@@ -1241,7 +1256,7 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
   t.ctx = setUp(a);
   if (!t.ctx) return std::unexpected(kExitError);
   const Config& config = t.ctx->config;
-  applyRendererSettings(config.renderer, a, ro);
+  applyRendererSettings(config.renderer, a, ro, t.earth);
   if (auto bad = applyTerrainArgs(a, ro)) {
     std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());
     return std::unexpected(kExitUsage);
@@ -1310,10 +1325,10 @@ int cmdRender(const Args& a) {
   };
   for (const auto& [k, v] : a.options) {
     static const std::vector<std::string> known = {
-        "config",    "cache",         "data",         "camera", "size",
-        "out",       "wait-complete", "background",   "stats",  "layer",
-        "threshold", "offline",       "server",       "path",   "frames",
-        "fps",       "no-terrain",    "exaggeration", "sun",    "edge-fixing"};
+        "config",        "cache",       "data",   "camera", "size",       "out",
+        "wait-complete", "background",  "stats",  "layer",  "threshold",  "offline",
+        "server",        "path",        "frames", "fps",    "no-terrain", "exaggeration",
+        "sun",           "edge-fixing", "earth"};
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
   }
@@ -1396,15 +1411,20 @@ int cmdRender(const Args& a) {
       return usage("--threshold must be a number in [0.05, 64]", *t);
     ro.lodThreshold = (*v)[0];
   }
-  const Geodesy geodesy;
+  const auto earth = earthArg(a);
+  if (!earth) return usage("--earth must be wgs84 or sphere", earth.error());
   try {
-    (void)planet::Camera(geodesy, pose, {ro.width, ro.height}, ro.verticalFovDeg);
+    (void)planet::Camera(Geodesy(earth->value_or(EarthModel::Wgs84)),
+                         pose,
+                         {ro.width, ro.height},
+                         ro.verticalFovDeg);
   } catch (const std::invalid_argument& e) {
     return usage(e.what(), cameraArg.value_or(pathArg.value_or("")));
   }
 
   auto tiles = openPlanetTiles(a, "render", ro);
   if (!tiles) return tiles.error();
+  const Geodesy geodesy(earth->value_or(tiles->earth));
   // The always-resident global texture: the bundled Blue Marble.
   if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg"; fs::exists(global))
     ro.globalImage = global;
@@ -1651,7 +1671,8 @@ int cmdView(const Args& a) {
                                                  "exit-after",
                                                  "no-terrain",
                                                  "exaggeration",
-                                                 "sun"};
+                                                 "sun",
+                                                 "earth"};
   for (const auto& [k, v] : a.options)
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
@@ -1690,11 +1711,13 @@ int cmdView(const Args& a) {
     if (!v || (*v)[0] < 1) return usage("--exit-after must be a frame count", *e);
     vo.maxFrames = static_cast<std::uint64_t>((*v)[0]);
   }
+  const auto earth = earthArg(a);
+  if (!earth) return usage("--earth must be wgs84 or sphere", earth.error());
   auto tiles = openPlanetTiles(a, "view", ro);
   if (!tiles) return tiles.error();
   if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg"; fs::exists(global))
     ro.globalImage = global;
-  const Geodesy geodesy;
+  const Geodesy geodesy(earth->value_or(tiles->earth));
   auto renderer = planet::Renderer::create(*tiles->source, geodesy, ro);
   if (!renderer) {
     std::fprintf(stderr, "tellus view: %s\n", renderer.error().c_str());

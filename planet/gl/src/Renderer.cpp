@@ -943,9 +943,25 @@ double Renderer::terrainHeight(double latDeg, double lonDeg) const {
   return impl_->heightAt(latDeg, lonDeg);
 }
 
+const Geodesy& Renderer::geodesy() const noexcept {
+  return impl_->geodesy;
+}
+
 Camera Renderer::camera(const CameraPose& pose) const {
-  return Camera(
-      impl_->geodesy, pose, {impl_->opt.width, impl_->opt.height}, impl_->opt.verticalFovDeg);
+  const RendererOptions& o = impl_->opt;
+  // A low camera needs a nearer near plane than 0.1 m; its height above the ground below it
+  // (the terrain when heights are loaded) decides (docs/ACCURACY.md, numerical stability).
+  double above = pose.altitudeM;
+  if (std::isfinite(pose.latDeg) && std::isfinite(pose.lonDeg)) {
+    const double ground = impl_->heightAt(pose.latDeg, pose.lonDeg);
+    if (std::isfinite(ground)) above -= ground;
+  }
+  const double aspect = static_cast<double>(o.width) / static_cast<double>(o.height);
+  return Camera(impl_->geodesy,
+                pose,
+                {o.width, o.height},
+                o.verticalFovDeg,
+                nearDistanceFor(above, o.verticalFovDeg, aspect));
 }
 
 void Renderer::frame(const CameraPose& pose) {

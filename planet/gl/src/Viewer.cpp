@@ -55,10 +55,10 @@ double wrapLon(double lon) {
 }
 
 /** The geodetic point under a window pixel: the eye ray through the pixel's centre meets the
- * WGS84 ellipsoid (scaled to a unit sphere); nullopt when it misses the Earth. */
+ * renderer's Earth model (WGS84 or the sphere, scaled to a unit sphere); nullopt when it misses. */
 std::optional<std::pair<double, double>>
-pick(const Camera& cam, double px, double py, int width, int height) {
-  constexpr double a = 6378137.0, b = 6356752.314245179;
+pick(const Geodesy& g, const Camera& cam, double px, double py, int width, int height) {
+  const double a = g.equatorialRadius(), b = g.polarRadius();
   const double t = std::tan(cam.verticalFovDeg() * M_PI / 360.0);
   const double nx = (2.0 * (px + 0.5) / width - 1.0) * t * width / height;
   const double ny = (1.0 - 2.0 * (py + 0.5) / height) * t;
@@ -143,7 +143,8 @@ std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options) {
       // Window coordinates to framebuffer pixels (they differ on high-DPI screens).
       const double sx = ww > 0 ? static_cast<double>(renderer.width()) / ww : 1.0;
       const double sy = wh > 0 ? static_cast<double>(renderer.height()) / wh : 1.0;
-      if (const auto target = pick(renderer.camera(pose),
+      if (const auto target = pick(renderer.geodesy(),
+                                   renderer.camera(pose),
                                    input.doubleX * sx,
                                    input.doubleY * sy,
                                    renderer.width(),

@@ -63,6 +63,12 @@ struct ServerSettings {
   ServerLimits limits;
 };
 
+/** YAML `renderer.earth`: the figure of the Earth the renderer places imagery on. */
+enum class EarthShape {
+  Wgs84,  ///< the WGS84 ellipsoid (tile latitudes are geodetic), the default
+  Sphere, ///< a sphere of the mean radius: cheaper, misplaces imagery by up to ~21 km
+};
+
 /** YAML `renderer`: the planet renderer of `tellus view` and `tellus render` (the command line's
  * --threshold overrides lod_threshold). */
 /** YAML `renderer.terrain` (issue #6): heights from an elevation layer under the imagery. */
@@ -85,6 +91,10 @@ struct RendererSettings {
   int maxSplitsPerFrame = 64;                 ///< nodes created a frame
   int decodeThreads = 2;                      ///< texture decoding workers
   TerrainSettings terrain;                    ///< YAML `renderer.terrain`
+  EarthShape earth = EarthShape::Wgs84;       ///< wgs84 | sphere
+  /** Heights of mean-sea-level datasets moved onto the ellipsoid with the EGM96 geoid (h = H + N,
+   * the bundled data/egm96-30.pgm); false: taken as ellipsoid heights. Used by terrain. */
+  bool geoid = true;
 };
 
 /** YAML `cache`. */

@@ -104,6 +104,16 @@ private:
   std::array<GroundPoint, 9> ground_{};
 };
 
+/** The near plane distance for a camera at this altitude above the ground: 0.1 m, but less for a
+ * low camera (never under 1 mm): half the smallest eye distance (w) at which any ray of the view
+ * can meet flat ground that far below, whatever the tilt (altitude / sqrt(1 + tan^2(fov / 2) (1 +
+ * aspect^2)), halved). Otherwise the ground under a camera 0.1 m up is at or in front of the near
+ * plane: clipped (holes) and taken by the LOD for corners behind the eye (split to the deepest
+ * level). Reversed-Z float depth keeps its relative precision whatever the near distance.
+ * Altitudes at or below 0 (inside the model: no ground below) and NaN give 0.1 m. */
+double
+nearDistanceFor(double altitudeM, double verticalFovDeg = 45.0, double aspect = 1.0) noexcept;
+
 /** Reversed-Z, infinite far, depth in [0, 1] (glClipControl ZERO_TO_ONE): clip z = near, clip w =
  * -z_eye, so NDC depth = near / distance. */
 glm::dmat4

@@ -140,6 +140,8 @@ public:
   /** Terrain height in metres (exaggerated) at a point from the deepest height data loaded
    * (bilinear); 0 without an elevation layer. */
   double terrainHeight(double latDeg, double lonDeg) const;
+  /** The Earth model the renderer draws on (the one given to create()). */
+  const Geodesy& geodesy() const noexcept;
   /** One frame: quadtree and streamer update, decoded textures to upload, uploads within the
    * budget, draw into the framebuffer (and the window when visible). */
   void frame(const CameraPose& pose);
