@@ -1,22 +1,33 @@
-// Node meshes, relative to the eye on the GPU: every vertex is its ECEF position (metres, double
-// on the CPU) split into a high and a low float; the eye's position is split the same way, and
-// (high - eyeHigh) + (lowDiff) gives the eye-relative position with about 1e-8 of a metre's error
-// near the eye, without a per-node matrix. Two nodes holding the same point (a shared edge, a
-// zero-area triangle's coarse vertex) therefore put it at bit-identical clip coordinates, so edges
-// are watertight. The #version line is prepended by the renderer (450 core or 330 core).
+// Node meshes, relative to the eye. Every vertex is its ECEF position (metres, double on the CPU);
+// the eye's position is subtracted on the GPU before anything is narrowed to float, with one
+// view-projection for every node (the rotation only, the eye at the origin). Two nodes holding the
+// same point (a shared edge, a zero-area triangle's coarse vertex) therefore put it at
+// bit-identical clip coordinates, which makes edges watertight.
+//
+// TELLUS_FP64 (OpenGL 4.x): the position is a dvec3 and the subtraction is one double operation.
+// Otherwise (OpenGL 3.3) it arrives as two floats, high = float(x) and low = float(x - high), and
+// (high - eyeHigh) + (low - eyeLow) is computed in float; that relies on the compiler keeping the
+// order of the operations (`precise` where GLSL has it), which Mesa's llvmpipe did not: positions
+// then snap to 0.5 m at the Earth's radius (docs/ACCURACY.md). The renderer prepends #version and
+// the #define.
 #if __VERSION__ >= 400
 #define PRECISE precise
 #else
 #define PRECISE
 #endif
+#ifdef TELLUS_FP64
+layout(location = 0) in dvec3 aPosition;
+uniform dvec3 uEye;
+#else
 layout(location = 0) in vec3 aHigh;
 layout(location = 1) in vec3 aLow;
+uniform vec3 uEyeHigh;
+uniform vec3 uEyeLow;
+#endif
 layout(location = 2) in vec3 aNormal;
 layout(location = 3) in vec2 aUvNode;
 
 uniform mat4 uViewProj; // projection * view rotation (the eye at the origin)
-uniform vec3 uEyeHigh;
-uniform vec3 uEyeLow;
 // uvTexture = uvNode * uUv.xy + uUv.zw (own texture, a child's or an ancestor's part, or global)
 uniform vec4 uUv;
 
@@ -26,8 +37,12 @@ out vec3 vNormal;
 void main() {
   vUv = aUvNode * uUv.xy + uUv.zw;
   vNormal = aNormal;
+#ifdef TELLUS_FP64
+  vec3 p = vec3(aPosition - uEye);
+#else
   PRECISE vec3 highDiff = aHigh - uEyeHigh;
   PRECISE vec3 lowDiff = aLow - uEyeLow;
   PRECISE vec3 p = highDiff + lowDiff;
+#endif
   gl_Position = uViewProj * vec4(p, 1.0);
 }

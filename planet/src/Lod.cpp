@@ -52,8 +52,19 @@ evaluateLod(const Camera& camera, const NodeGeometry& node, const LodParams& par
   const double halfH = 0.5 * static_cast<double>(camera.viewport().height);
   std::array<glm::dvec2, 4> px{};
   std::array<glm::dvec4, 4> clip{};
+  // Terrain: the points are measured at the height of the node's relief nearest the camera's
+  // (its altitude clamped to the node's height range), not on the ellipsoid: 1 m above a 1,000 m
+  // plateau the texels are as large as 1 m above the sea, not 1,000 m (issue #6/#8).
+  const double a0 = node.equatorialRadiusM(), b0 = node.polarRadiusM();
+  const double liftM = std::clamp(camera.pose().altitudeM, node.minHeightM(), node.maxHeightM());
+  auto lift = [&](const glm::dvec3& p) {
+    if (liftM == 0.0) return p;
+    const glm::dvec3 n =
+        glm::normalize(glm::dvec3(p.x / (a0 * a0), p.y / (a0 * a0), p.z / (b0 * b0)));
+    return p + n * liftM;
+  };
   for (std::size_t i = 0; i < 4; ++i) {
-    clip[i] = camera.toClip(node.corners()[i]);
+    clip[i] = camera.toClip(lift(node.corners()[i]));
     const glm::dvec4& c = clip[i];
     // w is the distance in front of the eye; at or in front of the near plane means projectable.
     if (!(c.w >= camera.nearM()) || !std::isfinite(c.x) || !std::isfinite(c.y)) {
@@ -104,8 +115,12 @@ evaluateLod(const Camera& camera, const NodeGeometry& node, const LodParams& par
     else if (m > worst)
       worst = m;
   };
+  auto lifted = [&](SurfaceFrame f) {
+    f.position = lift(f.position);
+    return f;
+  };
   for (std::size_t i = 0; i < 4; ++i)
-    sample(node.cornerFrames()[i], clip[i]);
+    sample(lifted(node.cornerFrames()[i]), clip[i]);
   const double a = node.equatorialRadiusM(), b = node.polarRadiusM();
   auto inViewport = [](const glm::dvec4& c) {
     return std::abs(c.x) <= c.w && std::abs(c.y) <= c.w; // ndc within [-1, 1]
@@ -119,7 +134,7 @@ evaluateLod(const Camera& camera, const NodeGeometry& node, const LodParams& par
   const bool interior =
       (nearLat != s.south && nearLat != s.north) || (nearLon != s.west && nearLon != s.east);
   if (interior) { // else it is a corner, sampled above
-    const SurfaceFrame f = surfaceFrame(a, b, nearLat, nearLon);
+    const SurfaceFrame f = lifted(surfaceFrame(a, b, nearLat, nearLon));
     const glm::dvec4 c = camera.toClip(f.position);
     if (c.w >= camera.nearM() && inViewport(c)) sample(f, c);
   }
@@ -128,7 +143,7 @@ evaluateLod(const Camera& camera, const NodeGeometry& node, const LodParams& par
     if (!gp.hit || gp.latDeg < s.south || gp.latDeg > s.north || gp.lonDeg < s.west ||
         gp.lonDeg > s.east)
       continue;
-    const SurfaceFrame f = surfaceFrame(a, b, gp.latDeg, gp.lonDeg);
+    const SurfaceFrame f = lifted(surfaceFrame(a, b, gp.latDeg, gp.lonDeg));
     const glm::dvec4 c = camera.toClip(f.position);
     if (c.w >= camera.nearM()) sample(f, c);
   }

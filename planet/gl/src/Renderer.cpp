@@ -24,6 +24,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <deque>
 #include <mutex>
 #include <stdexcept>
@@ -175,7 +176,8 @@ struct Renderer::Impl {
   bool textureStorage = false;
   GLuint fbo = 0, colorRb = 0, depthRb = 0;
   GLuint program = 0;
-  GLint uViewProj = -1, uEyeHigh = -1, uEyeLow = -1, uUv = -1, uTexture = -1, uSun = -1;
+  GLint uViewProj = -1, uEye = -1, uEyeHigh = -1, uEyeLow = -1, uUv = -1, uTexture = -1, uSun = -1;
+  bool fp64 = false; ///< vertex positions as doubles (GL 4.x), else high/low float pairs
   GLuint globalTexture = 0;
   int texWidth = 0, texHeight = 0;
   GLsizei texLevels = 1;
@@ -290,7 +292,11 @@ std::string Renderer::Impl::initGl() {
 
   // Shaders (embedded at build time from shaders/).
   const std::string header = gl45 ? "#version 450 core\n" : "#version 330 core\n";
-  const GLuint vs = compileShader(GL_VERTEX_SHADER, header + kShader_planet_vert, &error);
+  // Double vertex positions where the GL has them (4.0+: ARB_gpu_shader_fp64; 64-bit vertex
+  // attributes are core from 4.1), else the two-float path.
+  fp64 = gl45 && opt.fp64Vertices;
+  const std::string defines = fp64 ? "#define TELLUS_FP64 1\n" : "";
+  const GLuint vs = compileShader(GL_VERTEX_SHADER, header + defines + kShader_planet_vert, &error);
   if (vs == 0) return error;
   const GLuint fs = compileShader(GL_FRAGMENT_SHADER, header + kShader_planet_frag, &error);
   if (fs == 0) {
@@ -311,6 +317,7 @@ std::string Renderer::Impl::initGl() {
     return std::string("shader link: ") + log;
   }
   uViewProj = glGetUniformLocation(program, "uViewProj");
+  uEye = glGetUniformLocation(program, "uEye");
   uEyeHigh = glGetUniformLocation(program, "uEyeHigh");
   uEyeLow = glGetUniformLocation(program, "uEyeLow");
   uUv = glGetUniformLocation(program, "uUv");
@@ -512,17 +519,25 @@ const GpuMesh& Renderer::Impl::meshFor(const Node& node) {
   }
   std::vector<float> v;
   v.reserve(mesh.vertices.size() * 11);
+  // 44 bytes a vertex either way: the position as three doubles (fp64) or as high and low floats,
+  // then the normal and the node uv as floats.
   for (const TerrainVertex& p : mesh.vertices) {
-    float hi[3], lo[3];
-    for (int i = 0; i < 3; ++i)
-      splitDouble(p.position[i], hi[i], lo[i]);
+    float pos[6];
+    if (fp64) {
+      std::memcpy(pos, &p.position[0], sizeof(double));
+      std::memcpy(pos + 2, &p.position[1], sizeof(double));
+      std::memcpy(pos + 4, &p.position[2], sizeof(double));
+    } else {
+      for (int i = 0; i < 3; ++i)
+        splitDouble(p.position[i], pos[i], pos[3 + i]);
+    }
     v.insert(v.end(),
-             {hi[0],
-              hi[1],
-              hi[2],
-              lo[0],
-              lo[1],
-              lo[2],
+             {pos[0],
+              pos[1],
+              pos[2],
+              pos[3],
+              pos[4],
+              pos[5],
               p.normal.x,
               p.normal.y,
               p.normal.z,
@@ -543,9 +558,14 @@ const GpuMesh& Renderer::Impl::meshFor(const Node& node) {
     return reinterpret_cast<const void*>(floats * sizeof(float));
   };
   glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, at(0));
-  glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride, at(3));
+  if (fp64) {
+    glVertexAttribLPointer(0, 3, GL_DOUBLE, stride, at(0));
+    glDisableVertexAttribArray(1);
+  } else {
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, at(0));
+    glEnableVertexAttribArray(1);
+    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride, at(3));
+  }
   glEnableVertexAttribArray(2);
   glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, stride, at(6));
   glEnableVertexAttribArray(3);
@@ -741,11 +761,15 @@ void Renderer::Impl::draw(const Camera& camera) {
   view[3] = glm::dvec4(0.0, 0.0, 0.0, 1.0);
   const glm::mat4 viewProj(camera.projection() * view);
   glUniformMatrix4fv(uViewProj, 1, GL_FALSE, &viewProj[0][0]);
-  float eh[3], el[3];
-  for (int i = 0; i < 3; ++i)
-    splitDouble(camera.position()[i], eh[i], el[i]);
-  glUniform3f(uEyeHigh, eh[0], eh[1], eh[2]);
-  glUniform3f(uEyeLow, el[0], el[1], el[2]);
+  if (fp64) {
+    glUniform3d(uEye, camera.position().x, camera.position().y, camera.position().z);
+  } else {
+    float eh[3], el[3];
+    for (int i = 0; i < 3; ++i)
+      splitDouble(camera.position()[i], eh[i], el[i]);
+    glUniform3f(uEyeHigh, eh[0], eh[1], eh[2]);
+    glUniform3f(uEyeLow, el[0], el[1], el[2]);
+  }
   if (opt.sunLatLon) {
     const Ecef sun = geodesy.surfaceNormal((*opt.sunLatLon)[0], (*opt.sunLatLon)[1]);
     glUniform4f(uSun,
