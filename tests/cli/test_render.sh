@@ -26,6 +26,16 @@ assert s["textures_uploaded"] > 0 and s["bytes_uploaded"] > 0, s
 assert s["tiles_in_flight"] == 0 and s["max_level"] == 0, s
 for k in ("update_ms", "frame_ms"):
     assert s[k] >= 0, s
+# Frame times: one per frame, in order, and the percentiles and the longest frame taken from them.
+times = s["frame_times_ms"]
+assert len(times) == s["frames"] and min(times) >= 0, s
+ordered = sorted(times)
+assert s["median_frame_ms"] <= s["p95_frame_ms"] <= s["p99_frame_ms"] <= s["longest_frame_ms"], s
+assert abs(s["longest_frame_ms"] - ordered[-1]) < 0.002, s
+worst = s["longest_frame"]
+assert abs(times[worst["index"]] - ordered[-1]) < 0.002, s
+phases = sum(worst[k] for k in ("update_ms", "intake_ms", "upload_ms", "mesh_ms", "draw_ms", "finish_ms"))
+assert 0 <= phases <= s["longest_frame_ms"] + 0.01, s
 PY
 
 # Deterministic: the same view again (now from the cache) gives the same bytes.

@@ -1003,6 +1003,59 @@ std::string renderStatsJson(const planet::RenderStats& s, double seconds, bool c
   return buf + jsonString(s.glVersion) + terrain + "\n}\n";
 }
 
+/** The frame times of a render (",\n" and the keys that close the statistics object): median,
+ * 95th and 99th percentile (nearest rank), longest, where the longest frame's time went, and every
+ * frame's time in order. */
+std::string frameTimesJson(const std::vector<planet::FramePhases>& frames) {
+  std::vector<double> sorted;
+  sorted.reserve(frames.size());
+  for (const auto& f : frames)
+    sorted.push_back(f.total);
+  std::sort(sorted.begin(), sorted.end());
+  auto rank = [&](double q) {
+    if (sorted.empty()) return 0.0;
+    const auto i = static_cast<std::size_t>(std::ceil(q * static_cast<double>(sorted.size())));
+    return sorted[std::clamp<std::size_t>(i, 1, sorted.size()) - 1];
+  };
+  planet::FramePhases worst;
+  std::size_t worstIndex = 0;
+  for (std::size_t i = 0; i < frames.size(); ++i)
+    if (frames[i].total > worst.total) {
+      worst = frames[i];
+      worstIndex = i;
+    }
+  char buf[1024];
+  std::snprintf(buf,
+                sizeof buf,
+                ",\n  \"median_frame_ms\": %.3f,\n  \"p95_frame_ms\": %.3f,\n  \"p99_frame_ms\": "
+                "%.3f,\n  \"longest_frame_ms\": %.3f,\n  \"longest_frame\": {\"index\": %zu, "
+                "\"update_ms\": %.3f, \"intake_ms\": %.3f, \"upload_ms\": %.3f, "
+                "\"upload_bytes\": %zu, \"mesh_ms\": %.3f, \"meshes_created\": %zu, "
+                "\"draw_ms\": %.3f, \"finish_ms\": %.3f}\n}\n",
+                sorted.empty() ? 0.0 : sorted[sorted.size() / 2],
+                rank(0.95),
+                rank(0.99),
+                sorted.empty() ? 0.0 : sorted.back(),
+                worstIndex,
+                worst.update,
+                worst.intake,
+                worst.upload,
+                worst.uploadBytes,
+                worst.mesh,
+                worst.meshesCreated,
+                worst.draw,
+                worst.finish);
+  std::string out = buf;
+  out.resize(out.size() - 3); // "\n}\n"
+  out += ",\n  \"frame_times_ms\": [";
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    char v[32];
+    std::snprintf(v, sizeof v, "%s%.3f", i == 0 ? "" : ", ", frames[i].total);
+    out += v;
+  }
+  return out + "]\n}\n";
+}
+
 /** WxH with 1 to 16384 pixels each. */
 std::optional<std::pair<int, int>> parseSize(const std::string& size) {
   const auto x = size.find('x');
@@ -1414,23 +1467,13 @@ int cmdRender(const Args& a) {
     return kExitError;
   }
   planet::Renderer& r = **renderer;
-  std::vector<double> frameMs;
+  std::vector<planet::FramePhases> frames;
   auto writeStats = [&](double elapsed, bool complete) {
     const auto statsFile = a.get("stats");
     if (!statsFile) return true;
-    std::vector<double> sorted = frameMs;
-    std::sort(sorted.begin(), sorted.end());
-    const double median = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
-    const double longest = sorted.empty() ? 0.0 : sorted.back();
     std::string json = renderStatsJson(r.stats(), elapsed, complete);
-    char extra[160];
-    std::snprintf(extra,
-                  sizeof extra,
-                  ",\n  \"median_frame_ms\": %.3f,\n  \"longest_frame_ms\": %.3f\n}\n",
-                  median,
-                  longest);
     json.resize(json.size() - 3); // "\n}\n"
-    json += extra;
+    json += frameTimesJson(frames);
     std::FILE* f = std::fopen(statsFile->c_str(), "w");
     if (f == nullptr || std::fputs(json.c_str(), f) < 0 || std::fclose(f) != 0) {
       std::fprintf(stderr, "tellus render: cannot write %s\n", statsFile->c_str());
@@ -1444,7 +1487,7 @@ int cmdRender(const Args& a) {
     const auto begin = std::chrono::steady_clock::now();
     for (;;) {
       r.frame(p);
-      frameMs.push_back(r.stats().frameMs);
+      frames.push_back(r.stats().phases);
       const double t =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
       if (once || r.complete() || t > limit) break;

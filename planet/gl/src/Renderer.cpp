@@ -969,6 +969,15 @@ void Renderer::frame(const CameraPose& pose) {
   m.updateTerrain(nowS);
   m.stats.updateMs = msSince(t0);
   m.stats.longestUpdateMs = std::max(m.stats.longestUpdateMs, m.stats.updateMs);
+  FramePhases ph;
+  ph.update = m.stats.updateMs;
+  auto tPhase = Clock::now();
+  auto lap = [&tPhase] {
+    const auto now = Clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - tPhase).count();
+    tPhase = now;
+    return ms;
+  };
 
   for (ReceivedTile& r : m.streamer->takeReceived()) {
     m.stats.bytesReceived += r.result.bytes.size();
@@ -993,6 +1002,7 @@ void Renderer::frame(const CameraPose& pose) {
     m.uploading.insert(u.texture.key);
     m.uploads.push_back(std::move(u));
   }
+  ph.intake = lap();
 
   // What this frame draws, and the LRU told so before anything new is inserted.
   m.parts.clear();
@@ -1024,8 +1034,14 @@ void Renderer::frame(const CameraPose& pose) {
       m.parts.push_back(partFor(*n, *p.region, texture, uv));
     }
   }
+  (void)lap();
+  const std::size_t uploadedBefore = m.stats.bytesUploaded;
   m.stepUploads();
+  ph.upload = lap();
+  ph.uploadBytes = m.stats.bytesUploaded - uploadedBefore;
   m.evict();
+  (void)lap();
+  const std::size_t meshesBefore = m.stats.meshesBuilt;
   // Meshes before drawing (a node's mesh depends on which neighbours are drawn, known only now);
   // then the camera once more above the surface they make (the tree may have split under it).
   m.stats.edgesFixed = 0;
@@ -1052,7 +1068,10 @@ void Renderer::frame(const CameraPose& pose) {
     m.stats.cameraLifted = true;
     m.drawnPose = safe;
   }
+  ph.meshesCreated = m.stats.meshesBuilt - meshesBefore;
+  ph.mesh = lap();
   m.draw(cam);
+  ph.draw = lap();
 
   // Tiles that arrived for nodes gone from view are dropped after a while (asked again if needed).
   if (m.stats.frames % 64 == 0) {
@@ -1070,7 +1089,9 @@ void Renderer::frame(const CameraPose& pose) {
     });
   }
   if (m.window != nullptr && m.opt.visibleWindow) glfwPollEvents();
+  (void)lap();
   glFinish();
+  ph.finish = lap();
 
   const StreamStats& ss = m.streamer->stats();
   m.lastComplete = complete && ss.inFlight == 0 && m.decoding.empty() && m.uploads.empty() &&
@@ -1093,6 +1114,8 @@ void Renderer::frame(const CameraPose& pose) {
   s.textureBytes = m.lru.bytes();
   s.poolTextures = m.pool.size();
   s.frameMs = msSince(t0);
+  ph.total = s.frameMs;
+  s.phases = ph;
 }
 
 bool Renderer::complete() const noexcept {

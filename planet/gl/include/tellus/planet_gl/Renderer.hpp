@@ -73,6 +73,21 @@ struct RendererOptions {
   std::string windowTitle = "tellus";
 };
 
+/** Where one frame's time went on the main thread (wall clock, ms). GL calls only queue work;
+ * `finish` is the GL executing the frame (on llvmpipe: rasterising on the CPU). */
+struct FramePhases {
+  double update = 0.0; ///< quadtree + streamer
+  /** Received tiles kept, decodes launched, decoded textures taken and given a GL texture. */
+  double intake = 0.0;
+  double upload = 0.0; ///< glTexSubImage2D bands
+  std::size_t uploadBytes = 0;
+  double mesh = 0.0; ///< node meshes built and sent (VBOs)
+  std::size_t meshesCreated = 0;
+  double draw = 0.0;   ///< draw calls issued
+  double finish = 0.0; ///< glFinish
+  double total = 0.0;  ///< the whole frame (= frameMs)
+};
+
 /** What the renderer did: the last frame's figures and totals since creation. */
 struct RenderStats {
   std::uint64_t frames = 0;
@@ -114,6 +129,7 @@ struct RenderStats {
   double updateMs = 0.0;             ///< last frame: quadtree + streamer CPU time
   double longestUpdateMs = 0.0;      ///< the longest update since creation
   double frameMs = 0.0;              ///< last frame: everything, GL finished
+  FramePhases phases;                ///< last frame, phase by phase
   std::string glVersion;             ///< GL_VERSION and GL_RENDERER
   bool reversedZ = false;            ///< glClipControl available (4.5 or ARB_clip_control)
 };
