@@ -71,7 +71,8 @@ commands:
              --camera LAT,LON,ALT[,HEADING,TILT] --out FILE.png [--size WxH]
              [--wait-complete[=SECONDS]] [--background R,G,B] [--stats FILE.json]
              [--layer NAME] [--threshold T] [--offline | --server URL]
-             or a flight: --path PATH.json --frames DIR [--fps N] instead of --camera/--out
+             or a flight: --path PATH.json --frames DIR [--fps N] [--repeat N] instead of
+             --camera/--out
              (PATH.json: [{"time":0,"lat":..,"lon":..,"alt":..,"heading":..,"tilt":..}, ...])
   view     the interactive globe (a GLFW window)
              [--camera LAT,LON,ALT[,HEADING,TILT]] [--size WxH] [--layer NAME] [--threshold T]
@@ -1366,7 +1367,7 @@ int cmdRender(const Args& a) {
         "config",    "cache",         "data",         "camera", "size",
         "out",       "wait-complete", "background",   "stats",  "layer",
         "threshold", "offline",       "server",       "path",   "frames",
-        "fps",       "no-terrain",    "exaggeration", "sun",    "edge-fixing"};
+        "fps",       "no-terrain",    "exaggeration", "sun",    "edge-fixing", "repeat"};
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
   }
@@ -1409,6 +1410,13 @@ int cmdRender(const Args& a) {
     const auto v = parseNumbers(*f, 1, 1);
     if (!v || (*v)[0] <= 0.0 || (*v)[0] > 1000.0) return usage("--fps must be in (0, 1000]", *f);
     fps = (*v)[0];
+  }
+  int repeat = 1;
+  if (auto rp = a.get("repeat")) {
+    const auto v = parseNumbers(*rp, 1, 1);
+    if (keys.empty() || !v || (*v)[0] < 1.0 || (*v)[0] > 100.0 || (*v)[0] != std::floor((*v)[0]))
+      return usage("--repeat must be a whole number of flights in [1, 100] with --path", *rp);
+    repeat = static_cast<int>((*v)[0]);
   }
   planet::RendererOptions ro;
   if (auto size = a.get("size")) {
@@ -1526,16 +1534,19 @@ int cmdRender(const Args& a) {
     const double duration = keys.back().time - keys.front().time;
     const auto count = static_cast<long long>(std::floor(duration * fps + 1e-9)) + 1;
     bool allComplete = true;
-    for (long long n = 0; n < count; ++n) {
-      const planet::CameraPose p = poseAt(keys, keys.front().time + static_cast<double>(n) / fps);
+    // --repeat: the flight again in the same renderer (what stays resident is not streamed again:
+    // the later passes' frame times are the views' cost without streaming).
+    for (long long n = 0; n < count * repeat; ++n) {
+      const planet::CameraPose p =
+          poseAt(keys, keys.front().time + static_cast<double>(n % count) / fps);
       const bool complete = renderOne(p, waitSeconds, !waitComplete);
       allComplete = allComplete && complete;
       if (waitComplete && !complete) {
         writeStats(secondsSince(), false);
-        return notComplete(("frame " + std::to_string(n)).c_str());
+        return notComplete(("frame " + std::to_string(n % count)).c_str());
       }
       char name[32];
-      std::snprintf(name, sizeof name, "frame_%05lld.png", n);
+      std::snprintf(name, sizeof name, "frame_%05lld.png", n % count);
       std::string err;
       if (!planet::writePngRgb(
               fs::path(*framesArg) / name, r.width(), r.height(), r.readPixels(), &err)) {
