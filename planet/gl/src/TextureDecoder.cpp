@@ -3,6 +3,9 @@
 #include "Codec.hpp"
 
 #include <algorithm>
+#include <cerrno>
+#include <sys/resource.h>
+#include <unistd.h>
 #include <utility>
 
 namespace tellus::planet {
@@ -96,7 +99,7 @@ DecodedTexture decodeTexture(const DecodeJob& job) {
   return out;
 }
 
-TextureDecoder::TextureDecoder(int threads) {
+TextureDecoder::TextureDecoder(int threads, int nice) : nice_(nice) {
   for (int i = 0; i < std::max(1, threads); ++i)
     workers_.emplace_back([this](std::stop_token st) { run(st); });
 }
@@ -127,6 +130,13 @@ std::size_t TextureDecoder::pending() const {
 }
 
 void TextureDecoder::run(std::stop_token stop) {
+  if (nice_ != 0) {
+    // Linux: PRIO_PROCESS with a thread id sets that thread alone.
+    const auto self = static_cast<id_t>(gettid());
+    errno = 0;
+    const int now = getpriority(PRIO_PROCESS, self);
+    if (errno == 0) (void)setpriority(PRIO_PROCESS, self, std::clamp(now + nice_, -20, 19));
+  }
   for (;;) {
     DecodeJob job;
     {

@@ -46,7 +46,9 @@ std::vector<MipLevel> buildMips(MipLevel base);
 
 class TextureDecoder {
 public:
-  explicit TextureDecoder(int threads);
+  /** `threads` workers whose nice value is the process's plus `nice` (Linux sets it per thread;
+   * a value it refuses is ignored). */
+  explicit TextureDecoder(int threads, int nice = 0);
   ~TextureDecoder();
   TextureDecoder(const TextureDecoder&) = delete;
   TextureDecoder& operator=(const TextureDecoder&) = delete;
@@ -64,6 +66,7 @@ private:
   std::deque<DecodeJob> queue_;
   std::vector<DecodedTexture> done_;
   std::size_t running_ = 0;
+  int nice_ = 0;
   std::vector<std::jthread> workers_;
 };
 

@@ -49,7 +49,10 @@ struct RendererOptions {
   double verticalFovDeg = 45.0;
   std::size_t textureBudgetBytes = std::size_t{768} << 20; ///< the LRU's budget
   std::size_t uploadBytesPerFrame = std::size_t{8} << 20;  ///< banded uploads per frame
-  std::size_t maxInFlight = 16;                            ///< tile requests out at once
+  /** Upload time a frame may spend, as a share of the recent median frame time without uploads
+   * (at least 0.5 ms and one band a frame); 0: bytes alone limit uploads. */
+  double uploadShareOfFrame = 0.25;
+  std::size_t maxInFlight = 16; ///< tile requests out at once
   int maxSplitsPerFrame = 64;
   int decodeThreads = 2;
   /** Terrain (issue #6): the elevation layer asked of the tile source ("" = none: the bare
@@ -69,6 +72,10 @@ struct RendererOptions {
   /** Diffuse lighting from the terrain's normals with the sun overhead at this latitude and
    * longitude (degrees); nullopt: unlit (the imagery's own colours). */
   std::optional<std::array<double, 2>> sunLatLon;
+  /** Added to the decoding threads' nice value: decoding in the background gives the CPU up to
+   * the frame (on llvmpipe drawing is CPU work too, and competing decoders made frames 2-5x
+   * longer). 0: the process's priority. */
+  int decodeNice = 10;
   bool visibleWindow = false; ///< a window the user sees (`tellus view`); else hidden
   std::string windowTitle = "tellus";
 };
