@@ -1343,6 +1343,9 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
   auto [upstreams, layers] = proxySpecs(config);
   TileServiceOptions tso;
   tso.offline = a.flag("offline") || config.server.offline;
+  // Tiles rendered from local rasters (a cold cache) are background work here: at the decoders'
+  // priority, below the thread that draws (on llvmpipe they competed with rasterising).
+  tso.workerNice = ro.decodeNice;
   auto tiles =
       TileService::create(*t.ctx->cache, *t.fetcher, std::move(upstreams), std::move(layers), tso);
   if (!tiles) {
