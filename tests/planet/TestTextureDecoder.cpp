@@ -123,6 +123,8 @@ TEST(TextureDecoder, WorkersDecodeEveryJobOnce) {
     decoder.submit(std::move(job));
     want.insert(c);
   }
+  // Pending until taken back, whether or not a worker has finished it.
+  EXPECT_EQ(decoder.pending(), 40u);
   std::set<std::int64_t> got;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   while (got.size() < want.size() && std::chrono::steady_clock::now() < deadline) {

@@ -112,21 +112,37 @@ TextureDecoder::~TextureDecoder() {
 }
 
 void TextureDecoder::submit(DecodeJob job) {
+  ++submitted_;
+  outbox_.push_back(std::move(job));
+  flush();
+}
+
+void TextureDecoder::flush() {
+  if (outbox_.empty()) return;
   {
-    std::lock_guard lock(mutex_);
-    queue_.push_back(std::move(job));
+    std::unique_lock lock(mutex_, std::try_to_lock);
+    if (!lock.owns_lock()) return;
+    for (DecodeJob& j : outbox_)
+      queue_.push_back(std::move(j));
   }
-  wake_.notify_one();
+  outbox_.clear();
+  wake_.notify_all();
 }
 
 std::vector<DecodedTexture> TextureDecoder::takeDone() {
-  std::lock_guard lock(mutex_);
-  return std::exchange(done_, {});
+  flush();
+  std::vector<DecodedTexture> out;
+  {
+    std::unique_lock lock(mutex_, std::try_to_lock);
+    if (!lock.owns_lock()) return out;
+    out = std::exchange(done_, {});
+  }
+  taken_ += out.size();
+  return out;
 }
 
 std::size_t TextureDecoder::pending() const {
-  std::lock_guard lock(mutex_);
-  return queue_.size() + running_ + done_.size();
+  return submitted_ - taken_;
 }
 
 void TextureDecoder::run(std::stop_token stop) {
@@ -144,12 +160,10 @@ void TextureDecoder::run(std::stop_token stop) {
       if (!wake_.wait(lock, stop, [&] { return !queue_.empty(); })) return;
       job = std::move(queue_.front());
       queue_.pop_front();
-      ++running_;
     }
     DecodedTexture t = decodeTexture(job);
     std::lock_guard lock(mutex_);
     done_.push_back(std::move(t));
-    --running_;
   }
 }
 
