@@ -4,8 +4,8 @@
  * @brief The planet renderer's GL layer: an OpenGL context (GLFW, hidden window for headless use),
  * an offscreen framebuffer with a 32-bit float reversed-Z depth buffer, node meshes drawn with
  * camera-relative matrices, and texture streaming (decoding on worker threads, banded uploads under
- * a per-frame byte budget, a reusable texture pool, the LRU). No GL type appears here: GL, GLFW,
- * libepoxy, libjpeg and libpng are private to tellus::planet_gl.
+ * a per-frame byte and time budget, a reusable texture pool, the LRU). No GL type appears here: GL,
+ * GLFW, libepoxy, libjpeg and libpng are private to tellus::planet_gl.
  *
  * One Renderer drives one layer. Both a window loop (`tellus view`) and the headless loop
  * (`tellus render`) call frame(pose) once per frame; readPixels() reads the last frame back.
