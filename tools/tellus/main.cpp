@@ -1367,10 +1367,10 @@ int cmdRender(const Args& a) {
   };
   for (const auto& [k, v] : a.options) {
     static const std::vector<std::string> known = {
-        "config",    "cache",         "data",         "camera", "size",
-        "out",       "wait-complete", "background",   "stats",  "layer",
-        "threshold", "offline",       "server",       "path",   "frames",
-        "fps",       "no-terrain",    "exaggeration", "sun",    "edge-fixing", "repeat"};
+        "config",        "cache",       "data",   "camera", "size",       "out",
+        "wait-complete", "background",  "stats",  "layer",  "threshold",  "offline",
+        "server",        "path",        "frames", "fps",    "no-terrain", "exaggeration",
+        "sun",           "edge-fixing", "repeat"};
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
   }
