@@ -647,7 +647,7 @@ TileService::create(TileCache& cache,
     impl->defaultDatasets.push_back(*ds);
   }
   impl->forcedOffline = options.offline;
-  impl->workers = std::make_unique<WorkerPool>(options.renderThreads);
+  impl->workers = std::make_unique<WorkerPool>(options.renderThreads, options.workerNice);
   return std::unique_ptr<TileService>(new TileService(std::move(impl)));
 }
 

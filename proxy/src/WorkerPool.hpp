@@ -3,20 +3,34 @@
 // fetched tiles, composing maps) so that neither the HTTP loops nor the fetcher thread wait for it.
 
 #include <algorithm>
+#include <cerrno>
 #include <condition_variable>
 #include <deque>
 #include <functional>
 #include <mutex>
+#include <sys/resource.h>
 #include <thread>
+#include <unistd.h>
 #include <vector>
 
 namespace tellus {
 
 class WorkerPool {
 public:
-  explicit WorkerPool(int n) {
+  /** `n` threads whose nice value is the process's plus `nice` (0: the same; Linux sets it per
+   * thread, a value it refuses is ignored). `tellus render` and `view` run the tile service's
+   * workers at a lower priority than the thread that draws. */
+  explicit WorkerPool(int n, int nice = 0) {
     for (int i = 0; i < std::max(1, n); ++i)
-      threads_.emplace_back([this] { loop(); });
+      threads_.emplace_back([this, nice] {
+        if (nice != 0) {
+          const auto self = static_cast<id_t>(gettid());
+          errno = 0;
+          const int now = getpriority(PRIO_PROCESS, self);
+          if (errno == 0) (void)setpriority(PRIO_PROCESS, self, std::clamp(now + nice, -20, 19));
+        }
+        loop();
+      });
   }
   ~WorkerPool() {
     {

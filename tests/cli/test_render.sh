@@ -26,6 +26,16 @@ assert s["textures_uploaded"] > 0 and s["bytes_uploaded"] > 0, s
 assert s["tiles_in_flight"] == 0 and s["max_level"] == 0, s
 for k in ("update_ms", "frame_ms"):
     assert s[k] >= 0, s
+# Frame times: one per frame, in order, and the percentiles and the longest frame taken from them.
+times = s["frame_times_ms"]
+assert len(times) == s["frames"] and min(times) >= 0, s
+ordered = sorted(times)
+assert s["median_frame_ms"] <= s["p95_frame_ms"] <= s["p99_frame_ms"] <= s["longest_frame_ms"], s
+assert abs(s["longest_frame_ms"] - ordered[-1]) < 0.002, s
+worst = s["longest_frame"]
+assert abs(times[worst["index"]] - ordered[-1]) < 0.002, s
+phases = sum(worst[k] for k in ("update_ms", "intake_ms", "upload_ms", "mesh_ms", "draw_ms", "finish_ms"))
+assert 0 <= phases <= s["longest_frame_ms"] + 0.01, s
 PY
 
 # Deterministic: the same view again (now from the cache) gives the same bytes.
@@ -126,6 +136,20 @@ for n in 0 1 2; do
 done
 cmp -s "$work/frames/frame_00000.png" "$work/frames/frame_00002.png" && fail "frames 0 and 2 are the same"
 python3 -c "import json,sys; s=json.load(open(sys.argv[1])); assert s['complete'] and s['longest_frame_ms'] >= s['median_frame_ms'] > 0, s" "$work/path-stats.json"
+# --repeat 2: the same flight twice in one renderer; the same three images (each frame complete),
+# and the statistics count both passes.
+out=$("$tellus" render --cache "$cache" --path "$work/path.json" --frames "$work/frames2" --fps 2 \
+      --size 96x64 --wait-complete --repeat 2 --stats "$work/repeat-stats.json")
+echo "$out" | grep -q "3 frames" || fail "repeat: $out"
+for n in 0 1 2; do
+  cmp -s "$work/frames/frame_0000$n.png" "$work/frames2/frame_0000$n.png" || fail "repeat: frame $n differs"
+done
+python3 -c "import json,sys; s=json.load(open(sys.argv[1])); assert s['complete'] and s['frames'] >= 6 and len(s['frame_times_ms']) == s['frames'], s" "$work/repeat-stats.json"
+set +e
+"$tellus" render --cache "$cache" --camera 0,0,2e7 --out "$work/bad.png" --repeat 2 2>"$work/err.txt"
+rc=$?
+set -e
+[ $rc -eq 2 ] && grep -q "repeat" "$work/err.txt" && [ ! -e "$work/bad.png" ] || fail "--repeat without --path: $rc"
 echo '[{"time": 0, "lat": 0, "lon": 0, "alt": 1e6}, {"time": 0, "lat": 1, "lon": 0, "alt": 1e6}]' >"$work/bad.json"
 set +e
 "$tellus" render --cache "$cache" --path "$work/bad.json" --frames "$work/bad" 2>"$work/err.txt"

@@ -1,5 +1,6 @@
 // The GL layer's CPU side, without a display (label unit, so the sanitizer runs cover it): decoding
-// and composing node textures (merged polar nodes), the mip chain, and the worker pool.
+// and composing node textures (merged polar nodes), the mip chain, and the worker pool (its nice
+// value too).
 
 #include "../../planet/gl/src/TextureDecoder.hpp"
 
@@ -7,9 +8,17 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <filesystem>
+#include <fstream>
 #include <set>
+#include <sstream>
+#include <string>
+#include <sys/resource.h>
 #include <thread>
+#include <unistd.h>
 
 using namespace tellus;
 using namespace tellus::planet;
@@ -114,6 +123,8 @@ TEST(TextureDecoder, WorkersDecodeEveryJobOnce) {
     decoder.submit(std::move(job));
     want.insert(c);
   }
+  // Pending until taken back, whether or not a worker has finished it.
+  EXPECT_EQ(decoder.pending(), 40u);
   std::set<std::int64_t> got;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   while (got.size() < want.size() && std::chrono::steady_clock::now() < deadline) {
@@ -140,4 +151,54 @@ TEST(TextureDecoder, DestroyedWithJobsQueuedJoinsItsWorkers) {
   }
   decoder.reset(); // must neither hang nor touch freed memory (ASan/TSan runs)
   SUCCEED();
+}
+
+namespace {
+
+/** The nice values of this process's threads (Linux: /proc/self/task/TID/stat, field 19). */
+std::vector<int> threadNiceValues() {
+  std::vector<int> out;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::ifstream in(task.path() / "stat");
+    std::string line;
+    std::getline(in, line);
+    const auto close = line.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream fields(line.substr(close + 1));
+    std::string field;
+    for (int i = 0; i <= 16 && fields >> field; ++i) {
+      if (i == 16) out.push_back(std::stoi(field));
+    }
+  }
+  return out;
+}
+
+} // namespace
+
+TEST(TextureDecoder, WorkersRunAtTheNiceValueAskedFor) {
+  errno = 0;
+  const int base = getpriority(PRIO_PROCESS, static_cast<id_t>(gettid()));
+  ASSERT_EQ(errno, 0);
+  if (base > 14) GTEST_SKIP() << "the test runs at nice " << base;
+  const auto before = threadNiceValues();
+  const auto count = [](const std::vector<int>& v, int n) {
+    return std::count(v.begin(), v.end(), n);
+  };
+  TextureDecoder decoder(1, 5);
+  DecodeJob job;
+  job.key = {1, 0, 0, 1};
+  job.width = 8;
+  job.height = 8;
+  job.tiles.emplace_back(twoTone(8, 8, {1, 2, 3}, {4, 5, 6}));
+  decoder.submit(std::move(job));
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  std::size_t done = 0;
+  while (done == 0 && std::chrono::steady_clock::now() < deadline) {
+    done += decoder.takeDone().size();
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ASSERT_EQ(done, 1u);
+  // The worker has run a job, so it has set its own nice value; the calling thread kept its own.
+  EXPECT_EQ(count(threadNiceValues(), base + 5), count(before, base + 5) + 1);
+  EXPECT_EQ(getpriority(PRIO_PROCESS, static_cast<id_t>(gettid())), base);
 }

@@ -71,7 +71,8 @@ commands:
              --camera LAT,LON,ALT[,HEADING,TILT] --out FILE.png [--size WxH]
              [--wait-complete[=SECONDS]] [--background R,G,B] [--stats FILE.json]
              [--layer NAME] [--threshold T] [--earth wgs84|sphere] [--offline | --server URL]
-             or a flight: --path PATH.json --frames DIR [--fps N] instead of --camera/--out
+             or a flight: --path PATH.json --frames DIR [--fps N] [--repeat N] instead of
+             --camera/--out
              (PATH.json: [{"time":0,"lat":..,"lon":..,"alt":..,"heading":..,"tilt":..}, ...])
   view     the interactive globe (a GLFW window)
              [--camera LAT,LON,ALT[,HEADING,TILT]] [--size WxH] [--layer NAME] [--threshold T]
@@ -1003,6 +1004,59 @@ std::string renderStatsJson(const planet::RenderStats& s, double seconds, bool c
   return buf + jsonString(s.glVersion) + terrain + "\n}\n";
 }
 
+/** The frame times of a render (",\n" and the keys that close the statistics object): median,
+ * 95th and 99th percentile (nearest rank), longest, where the longest frame's time went, and every
+ * frame's time in order. */
+std::string frameTimesJson(const std::vector<planet::FramePhases>& frames) {
+  std::vector<double> sorted;
+  sorted.reserve(frames.size());
+  for (const auto& f : frames)
+    sorted.push_back(f.total);
+  std::sort(sorted.begin(), sorted.end());
+  auto rank = [&](double q) {
+    if (sorted.empty()) return 0.0;
+    const auto i = static_cast<std::size_t>(std::ceil(q * static_cast<double>(sorted.size())));
+    return sorted[std::clamp<std::size_t>(i, 1, sorted.size()) - 1];
+  };
+  planet::FramePhases worst;
+  std::size_t worstIndex = 0;
+  for (std::size_t i = 0; i < frames.size(); ++i)
+    if (frames[i].total > worst.total) {
+      worst = frames[i];
+      worstIndex = i;
+    }
+  char buf[1024];
+  std::snprintf(buf,
+                sizeof buf,
+                ",\n  \"median_frame_ms\": %.3f,\n  \"p95_frame_ms\": %.3f,\n  \"p99_frame_ms\": "
+                "%.3f,\n  \"longest_frame_ms\": %.3f,\n  \"longest_frame\": {\"index\": %zu, "
+                "\"update_ms\": %.3f, \"intake_ms\": %.3f, \"upload_ms\": %.3f, "
+                "\"upload_bytes\": %zu, \"mesh_ms\": %.3f, \"meshes_created\": %zu, "
+                "\"draw_ms\": %.3f, \"finish_ms\": %.3f}\n}\n",
+                sorted.empty() ? 0.0 : sorted[sorted.size() / 2],
+                rank(0.95),
+                rank(0.99),
+                sorted.empty() ? 0.0 : sorted.back(),
+                worstIndex,
+                worst.update,
+                worst.intake,
+                worst.upload,
+                worst.uploadBytes,
+                worst.mesh,
+                worst.meshesCreated,
+                worst.draw,
+                worst.finish);
+  std::string out = buf;
+  out.resize(out.size() - 3); // "\n}\n"
+  out += ",\n  \"frame_times_ms\": [";
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    char v[32];
+    std::snprintf(v, sizeof v, "%s%.3f", i == 0 ? "" : ", ", frames[i].total);
+    out += v;
+  }
+  return out + "]\n}\n";
+}
+
 /** WxH with 1 to 16384 pixels each. */
 std::optional<std::pair<int, int>> parseSize(const std::string& size) {
   const auto x = size.find('x');
@@ -1304,6 +1358,9 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
   auto [upstreams, layers] = proxySpecs(config);
   TileServiceOptions tso;
   tso.offline = a.flag("offline") || config.server.offline;
+  // Tiles rendered from local rasters (a cold cache) are background work here: at the decoders'
+  // priority, below the thread that draws (on llvmpipe they competed with rasterising).
+  tso.workerNice = ro.decodeNice;
   auto tiles =
       TileService::create(*t.ctx->cache, *t.fetcher, std::move(upstreams), std::move(layers), tso);
   if (!tiles) {
@@ -1328,7 +1385,7 @@ int cmdRender(const Args& a) {
         "config",        "cache",       "data",   "camera", "size",       "out",
         "wait-complete", "background",  "stats",  "layer",  "threshold",  "offline",
         "server",        "path",        "frames", "fps",    "no-terrain", "exaggeration",
-        "sun",           "edge-fixing", "earth"};
+        "sun",           "edge-fixing", "earth",  "repeat"};
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
   }
@@ -1371,6 +1428,13 @@ int cmdRender(const Args& a) {
     const auto v = parseNumbers(*f, 1, 1);
     if (!v || (*v)[0] <= 0.0 || (*v)[0] > 1000.0) return usage("--fps must be in (0, 1000]", *f);
     fps = (*v)[0];
+  }
+  int repeat = 1;
+  if (auto rp = a.get("repeat")) {
+    const auto v = parseNumbers(*rp, 1, 1);
+    if (keys.empty() || !v || (*v)[0] < 1.0 || (*v)[0] > 100.0 || (*v)[0] != std::floor((*v)[0]))
+      return usage("--repeat must be a whole number of flights in [1, 100] with --path", *rp);
+    repeat = static_cast<int>((*v)[0]);
   }
   planet::RendererOptions ro;
   if (auto size = a.get("size")) {
@@ -1422,6 +1486,10 @@ int cmdRender(const Args& a) {
     return usage(e.what(), cameraArg.value_or(pathArg.value_or("")));
   }
 
+  // Background work below the frame's priority only where frames are watched (a flight as
+  // streamed): with --wait-complete, or a single view, the frames only serve to finish the image,
+  // and on llvmpipe (drawing on the CPU) lower-priority decoders made completion 2-5x slower.
+  if (waitComplete || keys.empty()) ro.decodeNice = 0;
   auto tiles = openPlanetTiles(a, "render", ro);
   if (!tiles) return tiles.error();
   const Geodesy geodesy(earth->value_or(tiles->earth));
@@ -1434,23 +1502,13 @@ int cmdRender(const Args& a) {
     return kExitError;
   }
   planet::Renderer& r = **renderer;
-  std::vector<double> frameMs;
+  std::vector<planet::FramePhases> frames;
   auto writeStats = [&](double elapsed, bool complete) {
     const auto statsFile = a.get("stats");
     if (!statsFile) return true;
-    std::vector<double> sorted = frameMs;
-    std::sort(sorted.begin(), sorted.end());
-    const double median = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
-    const double longest = sorted.empty() ? 0.0 : sorted.back();
     std::string json = renderStatsJson(r.stats(), elapsed, complete);
-    char extra[160];
-    std::snprintf(extra,
-                  sizeof extra,
-                  ",\n  \"median_frame_ms\": %.3f,\n  \"longest_frame_ms\": %.3f\n}\n",
-                  median,
-                  longest);
     json.resize(json.size() - 3); // "\n}\n"
-    json += extra;
+    json += frameTimesJson(frames);
     std::FILE* f = std::fopen(statsFile->c_str(), "w");
     if (f == nullptr || std::fputs(json.c_str(), f) < 0 || std::fclose(f) != 0) {
       std::fprintf(stderr, "tellus render: cannot write %s\n", statsFile->c_str());
@@ -1464,11 +1522,14 @@ int cmdRender(const Args& a) {
     const auto begin = std::chrono::steady_clock::now();
     for (;;) {
       r.frame(p);
-      frameMs.push_back(r.stats().frameMs);
+      frames.push_back(r.stats().phases);
       const double t =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
       if (once || r.complete() || t > limit) break;
-      if (!r.busy()) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      // Nothing to upload: the next frame can only wait for tiles and decoders; drawing it at
+      // once would take the CPU from them (on llvmpipe drawing is CPU work).
+      if (!r.busy() || r.stats().uploadsPending == 0)
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
     return r.complete();
   };
@@ -1503,16 +1564,19 @@ int cmdRender(const Args& a) {
     const double duration = keys.back().time - keys.front().time;
     const auto count = static_cast<long long>(std::floor(duration * fps + 1e-9)) + 1;
     bool allComplete = true;
-    for (long long n = 0; n < count; ++n) {
-      const planet::CameraPose p = poseAt(keys, keys.front().time + static_cast<double>(n) / fps);
+    // --repeat: the flight again in the same renderer (what stays resident is not streamed again:
+    // the later passes' frame times are the views' cost without streaming).
+    for (long long n = 0; n < count * repeat; ++n) {
+      const planet::CameraPose p =
+          poseAt(keys, keys.front().time + static_cast<double>(n % count) / fps);
       const bool complete = renderOne(p, waitSeconds, !waitComplete);
       allComplete = allComplete && complete;
       if (waitComplete && !complete) {
         writeStats(secondsSince(), false);
-        return notComplete(("frame " + std::to_string(n)).c_str());
+        return notComplete(("frame " + std::to_string(n % count)).c_str());
       }
       char name[32];
-      std::snprintf(name, sizeof name, "frame_%05lld.png", n);
+      std::snprintf(name, sizeof name, "frame_%05lld.png", n % count);
       std::string err;
       if (!planet::writePngRgb(
               fs::path(*framesArg) / name, r.width(), r.height(), r.readPixels(), &err)) {

@@ -5,6 +5,7 @@
 #include "Shaders.hpp"
 #include "TextOverlay.hpp"
 #include "TextureDecoder.hpp"
+#include "UploadPacer.hpp"
 
 #include <tellus/planet/HeightStreamer.hpp>
 #include <tellus/planet/Patch.hpp>
@@ -23,6 +24,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <climits>
 #include <cmath>
 #include <cstring>
 #include <deque>
@@ -163,7 +165,9 @@ partFor(const Node& node, const Node& region, GLuint texture, const UvTransform&
 struct Renderer::Impl {
   Impl(ITileSource& s, const Geodesy& g, RendererOptions o, TileGrid gr)
       : source(s), geodesy(g), opt(std::move(o)), grid(gr), lru(opt.textureBudgetBytes),
-        decoder(opt.decodeThreads) {}
+        decoder(opt.decodeThreads, opt.decodeNice),
+        pacer(UploadPacing{.bytesPerFrame = opt.uploadBytesPerFrame,
+                           .shareOfFrame = opt.uploadShareOfFrame}) {}
   ~Impl();
 
   ITileSource& source;
@@ -191,6 +195,7 @@ struct Renderer::Impl {
   std::unique_ptr<TextureStreamer> streamer;
   TextureLru lru;
   TextureDecoder decoder;
+  UploadPacer pacer;
   std::unordered_map<NodeKey, GpuMesh, NodeKeyHash> meshes;
   std::unordered_map<NodeKey, GLuint, NodeKeyHash> textures;
   std::vector<GLuint> pool;
@@ -228,7 +233,8 @@ struct Renderer::Impl {
   void launchDecode(Node& node);
   void stepUploads();
   void evict();
-  void draw(const Camera& camera);
+  void draw(const Camera& camera, bool present = true);
+  void warmUp();
 };
 
 Renderer::Impl::~Impl() {
@@ -679,17 +685,24 @@ void Renderer::Impl::launchDecode(Node& node) {
   decoder.submit(std::move(job));
 }
 
-// Row bands of one mip level at a time, within the frame's byte budget. The texture is not in the
-// LRU (its node is Uploading, never Finished) until every level is there, so no frame samples a
-// half-uploaded level.
+// Row bands of one mip level at a time, within the frame's byte and time caps (UploadPacer). A
+// texture is taken from the pool or made when its first band goes, so that making many textures
+// is spread over frames like their bytes. The texture is not in the LRU (its node is Uploading,
+// never Finished) until every level is there, so no frame samples a half-uploaded level.
 void Renderer::Impl::stepUploads() {
-  std::size_t budget = opt.uploadBytesPerFrame;
+  const auto begin = Clock::now();
+  std::size_t sentThisFrame = 0;
   glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-  while (!uploads.empty() && budget > 0) {
+  while (!uploads.empty() && pacer.mayContinue(sentThisFrame, msSince(begin))) {
     Upload& u = uploads.front();
+    if (u.id == 0) u.id = acquireTexture();
     const MipLevel& level = u.texture.levels[u.level];
     const auto rowBytes = static_cast<std::size_t>(level.width) * 4;
-    const int rows = std::clamp(static_cast<int>(budget / rowBytes), 1, level.height - u.row);
+    const auto band = pacer.bandBytes(sentThisFrame);
+    const int rows = std::clamp(
+        static_cast<int>(std::min<std::size_t>(band / rowBytes, static_cast<std::size_t>(INT_MAX))),
+        1,
+        level.height - u.row);
     glBindTexture(GL_TEXTURE_2D, u.id);
     glTexSubImage2D(GL_TEXTURE_2D,
                     static_cast<GLint>(u.level),
@@ -702,7 +715,7 @@ void Renderer::Impl::stepUploads() {
                     level.rgba.data() + static_cast<std::size_t>(u.row) * rowBytes);
     const std::size_t sent = static_cast<std::size_t>(rows) * rowBytes;
     stats.bytesUploaded += sent;
-    budget -= std::min(budget, sent);
+    sentThisFrame += sent;
     u.row += rows;
     if (u.row < level.height) continue;
     u.row = 0;
@@ -739,7 +752,7 @@ void Renderer::Impl::evict() {
   });
 }
 
-void Renderer::Impl::draw(const Camera& camera) {
+void Renderer::Impl::draw(const Camera& camera, bool present) {
   glBindFramebuffer(GL_FRAMEBUFFER, fbo);
   glViewport(0, 0, opt.width, opt.height);
   if (stats.reversedZ) glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
@@ -798,7 +811,7 @@ void Renderer::Impl::draw(const Camera& camera) {
         reinterpret_cast<const void*>(static_cast<std::uintptr_t>(first) * sizeof(std::uint32_t)));
   }
   glBindVertexArray(0);
-  if (window != nullptr && opt.visibleWindow) {
+  if (present && window != nullptr && opt.visibleWindow) {
     int fw = 0, fh = 0;
     glfwGetFramebufferSize(window, &fw, &fh);
     glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo);
@@ -836,6 +849,39 @@ void Renderer::Impl::draw(const Camera& camera) {
     glfwSwapBuffers(window);
     glBindFramebuffer(GL_FRAMEBUFFER, fbo);
   }
+}
+
+// One untimed frame before the first real one, so that no frame pays for first use: the driver
+// compiles the program's variants for both kinds of texture (llvmpipe does so at the first draw,
+// 0.3-0.6 s without Mesa's shader cache), and every GL entry point the frame loop calls is resolved
+// (libepoxy looks each one up on its first call; with the tile service dlopen()ing its imaging
+// module on a worker at the same time, such a lookup waited 0.3-0.9 s for the loader's lock).
+// Draws into the framebuffer, which the first frame clears; leaves nothing behind.
+void Renderer::Impl::warmUp() {
+  const Node* root = nullptr;
+  for (const auto& r : tree->roots())
+    if (r && root == nullptr) root = r.get();
+  if (root == nullptr) return;
+  const RenderStats before = stats; // the warm-up counts no mesh, upload or texture
+  const GLuint texture = newNodeTexture();
+  const std::uint8_t texel[4] = {0, 0, 0, 255};
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  glTexSubImage2D(GL_TEXTURE_2D, texLevels - 1, 0, 0, 1, 1, GL_RGBA, GL_UNSIGNED_BYTE, texel);
+  parts.clear();
+  parts.push_back({root, globalTexture, globalUv(root->sector())});
+  parts.push_back({root, texture, UvTransform{}});
+  const Camera cam(geodesy, CameraPose{}, {opt.width, opt.height}, opt.verticalFovDeg);
+  draw(cam, false);
+  glFinish();
+  parts.clear();
+  if (auto it = meshes.find(root->key()); it != meshes.end()) {
+    glDeleteVertexArrays(1, &it->second.vao);
+    glDeleteBuffers(1, &it->second.vbo);
+    glDeleteBuffers(1, &it->second.ebo);
+    meshes.erase(it);
+  }
+  glDeleteTextures(1, &texture);
+  stats = before;
 }
 
 Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -902,6 +948,7 @@ Renderer::create(ITileSource& source, const Geodesy& geodesy, RendererOptions op
         },
         -1000.0);
   }
+  impl->warmUp();
   return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
 }
 
@@ -1009,6 +1056,15 @@ void Renderer::frame(const CameraPose& pose) {
   m.updateTerrain(nowS);
   m.stats.updateMs = msSince(t0);
   m.stats.longestUpdateMs = std::max(m.stats.longestUpdateMs, m.stats.updateMs);
+  FramePhases ph;
+  ph.update = m.stats.updateMs;
+  auto tPhase = Clock::now();
+  auto lap = [&tPhase] {
+    const auto now = Clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - tPhase).count();
+    tPhase = now;
+    return ms;
+  };
 
   for (ReceivedTile& r : m.streamer->takeReceived()) {
     m.stats.bytesReceived += r.result.bytes.size();
@@ -1027,12 +1083,12 @@ void Renderer::frame(const CameraPose& pose) {
     }
     ++m.stats.texturesDecoded;
     if (m.lru.resident(d.key)) continue;
-    Upload u;
-    u.id = m.acquireTexture();
+    Upload u; // its texture is taken when its upload starts (stepUploads)
     u.texture = std::move(d);
     m.uploading.insert(u.texture.key);
     m.uploads.push_back(std::move(u));
   }
+  ph.intake = lap();
 
   // What this frame draws, and the LRU told so before anything new is inserted.
   m.parts.clear();
@@ -1064,8 +1120,14 @@ void Renderer::frame(const CameraPose& pose) {
       m.parts.push_back(partFor(*n, *p.region, texture, uv));
     }
   }
+  (void)lap();
+  const std::size_t uploadedBefore = m.stats.bytesUploaded;
   m.stepUploads();
+  ph.upload = lap();
+  ph.uploadBytes = m.stats.bytesUploaded - uploadedBefore;
   m.evict();
+  (void)lap();
+  const std::size_t meshesBefore = m.stats.meshesBuilt;
   // Meshes before drawing (a node's mesh depends on which neighbours are drawn, known only now);
   // then the camera once more above the surface they make (the tree may have split under it).
   m.stats.edgesFixed = 0;
@@ -1092,7 +1154,10 @@ void Renderer::frame(const CameraPose& pose) {
     m.stats.cameraLifted = true;
     m.drawnPose = safe;
   }
+  ph.meshesCreated = m.stats.meshesBuilt - meshesBefore;
+  ph.mesh = lap();
   m.draw(cam);
+  ph.draw = lap();
 
   // Tiles that arrived for nodes gone from view are dropped after a while (asked again if needed).
   if (m.stats.frames % 64 == 0) {
@@ -1110,7 +1175,9 @@ void Renderer::frame(const CameraPose& pose) {
     });
   }
   if (m.window != nullptr && m.opt.visibleWindow) glfwPollEvents();
+  (void)lap();
   glFinish();
+  ph.finish = lap();
 
   const StreamStats& ss = m.streamer->stats();
   m.lastComplete = complete && ss.inFlight == 0 && m.decoding.empty() && m.uploads.empty() &&
@@ -1133,6 +1200,9 @@ void Renderer::frame(const CameraPose& pose) {
   s.textureBytes = m.lru.bytes();
   s.poolTextures = m.pool.size();
   s.frameMs = msSince(t0);
+  ph.total = s.frameMs;
+  s.phases = ph;
+  m.pacer.recordFrame(ph.total, ph.upload);
 }
 
 bool Renderer::complete() const noexcept {

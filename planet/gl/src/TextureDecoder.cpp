@@ -3,6 +3,9 @@
 #include "Codec.hpp"
 
 #include <algorithm>
+#include <cerrno>
+#include <sys/resource.h>
+#include <unistd.h>
 #include <utility>
 
 namespace tellus::planet {
@@ -96,7 +99,7 @@ DecodedTexture decodeTexture(const DecodeJob& job) {
   return out;
 }
 
-TextureDecoder::TextureDecoder(int threads) {
+TextureDecoder::TextureDecoder(int threads, int nice) : nice_(nice) {
   for (int i = 0; i < std::max(1, threads); ++i)
     workers_.emplace_back([this](std::stop_token st) { run(st); });
 }
@@ -109,24 +112,47 @@ TextureDecoder::~TextureDecoder() {
 }
 
 void TextureDecoder::submit(DecodeJob job) {
+  ++submitted_;
+  outbox_.push_back(std::move(job));
+  flush();
+}
+
+void TextureDecoder::flush() {
+  if (outbox_.empty()) return;
   {
-    std::lock_guard lock(mutex_);
-    queue_.push_back(std::move(job));
+    std::unique_lock lock(mutex_, std::try_to_lock);
+    if (!lock.owns_lock()) return;
+    for (DecodeJob& j : outbox_)
+      queue_.push_back(std::move(j));
   }
-  wake_.notify_one();
+  outbox_.clear();
+  wake_.notify_all();
 }
 
 std::vector<DecodedTexture> TextureDecoder::takeDone() {
-  std::lock_guard lock(mutex_);
-  return std::exchange(done_, {});
+  flush();
+  std::vector<DecodedTexture> out;
+  {
+    std::unique_lock lock(mutex_, std::try_to_lock);
+    if (!lock.owns_lock()) return out;
+    out = std::exchange(done_, {});
+  }
+  taken_ += out.size();
+  return out;
 }
 
 std::size_t TextureDecoder::pending() const {
-  std::lock_guard lock(mutex_);
-  return queue_.size() + running_ + done_.size();
+  return submitted_ - taken_;
 }
 
 void TextureDecoder::run(std::stop_token stop) {
+  if (nice_ != 0) {
+    // Linux: PRIO_PROCESS with a thread id sets that thread alone.
+    const auto self = static_cast<id_t>(gettid());
+    errno = 0;
+    const int now = getpriority(PRIO_PROCESS, self);
+    if (errno == 0) (void)setpriority(PRIO_PROCESS, self, std::clamp(now + nice_, -20, 19));
+  }
   for (;;) {
     DecodeJob job;
     {
@@ -134,12 +160,10 @@ void TextureDecoder::run(std::stop_token stop) {
       if (!wake_.wait(lock, stop, [&] { return !queue_.empty(); })) return;
       job = std::move(queue_.front());
       queue_.pop_front();
-      ++running_;
     }
     DecodedTexture t = decodeTexture(job);
     std::lock_guard lock(mutex_);
     done_.push_back(std::move(t));
-    --running_;
   }
 }
 

@@ -46,24 +46,33 @@ std::vector<MipLevel> buildMips(MipLevel base);
 
 class TextureDecoder {
 public:
-  explicit TextureDecoder(int threads);
+  /** `threads` workers whose nice value is the process's plus `nice` (Linux sets it per thread;
+   * a value it refuses is ignored). */
+  explicit TextureDecoder(int threads, int nice = 0);
   ~TextureDecoder();
   TextureDecoder(const TextureDecoder&) = delete;
   TextureDecoder& operator=(const TextureDecoder&) = delete;
 
+  /** Queues a job (main thread). Never waits for a worker: the workers run at a lower priority
+   * and may be preempted holding the lock, so the main thread only ever tries it (jobs wait in an
+   * outbox until it gets it, at the latest at the next takeDone). */
   void submit(DecodeJob job);
-  /** Finished textures since the last call (main thread). */
+  /** Finished textures since the last call (main thread); empty when a worker holds the lock. */
   std::vector<DecodedTexture> takeDone();
-  /** Jobs queued or running. */
+  /** Jobs submitted and not yet taken back (main thread). */
   std::size_t pending() const;
 
 private:
   void run(std::stop_token stop);
+  void flush();                   ///< the outbox into the queue, when the lock is free
+  std::vector<DecodeJob> outbox_; ///< main thread only
+  std::size_t submitted_ = 0;     ///< main thread only
+  std::size_t taken_ = 0;         ///< main thread only
   mutable std::mutex mutex_;
   std::condition_variable_any wake_;
   std::deque<DecodeJob> queue_;
   std::vector<DecodedTexture> done_;
-  std::size_t running_ = 0;
+  int nice_ = 0;
   std::vector<std::jthread> workers_;
 };
 

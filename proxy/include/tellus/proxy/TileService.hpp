@@ -81,6 +81,9 @@ struct TileServiceOptions {
   bool offline = false;                           ///< never contact upstreams
   std::chrono::milliseconds absentRetry{3600000}; ///< how long "no tile here" is believed
   int renderThreads = 2;                          ///< workers for local rasters
+  /** Added to the workers' nice value (the planet renderer's commands: tiles made in the
+   * background give the CPU up to the frame being drawn). */
+  int workerNice = 0;
 };
 
 class TileService final : public ITileSource {

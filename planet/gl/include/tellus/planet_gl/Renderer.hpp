@@ -4,8 +4,8 @@
  * @brief The planet renderer's GL layer: an OpenGL context (GLFW, hidden window for headless use),
  * an offscreen framebuffer with a 32-bit float reversed-Z depth buffer, node meshes drawn with
  * camera-relative matrices, and texture streaming (decoding on worker threads, banded uploads under
- * a per-frame byte budget, a reusable texture pool, the LRU). No GL type appears here: GL, GLFW,
- * libepoxy, libjpeg and libpng are private to tellus::planet_gl.
+ * a per-frame byte and time budget, a reusable texture pool, the LRU). No GL type appears here: GL,
+ * GLFW, libepoxy, libjpeg and libpng are private to tellus::planet_gl.
  *
  * One Renderer drives one layer. Both a window loop (`tellus view`) and the headless loop
  * (`tellus render`) call frame(pose) once per frame; readPixels() reads the last frame back.
@@ -49,7 +49,10 @@ struct RendererOptions {
   double verticalFovDeg = 45.0;
   std::size_t textureBudgetBytes = std::size_t{768} << 20; ///< the LRU's budget
   std::size_t uploadBytesPerFrame = std::size_t{8} << 20;  ///< banded uploads per frame
-  std::size_t maxInFlight = 16;                            ///< tile requests out at once
+  /** Upload time a frame may spend, as a share of the recent median frame time without uploads
+   * (at least 0.5 ms and one band a frame); 0: bytes alone limit uploads. */
+  double uploadShareOfFrame = 0.25;
+  std::size_t maxInFlight = 16; ///< tile requests out at once
   int maxSplitsPerFrame = 64;
   int decodeThreads = 2;
   /** Terrain (issue #6): the elevation layer asked of the tile source ("" = none: the bare
@@ -74,8 +77,27 @@ struct RendererOptions {
   /** Diffuse lighting from the terrain's normals with the sun overhead at this latitude and
    * longitude (degrees); nullopt: unlit (the imagery's own colours). */
   std::optional<std::array<double, 2>> sunLatLon;
+  /** Added to the decoding threads' nice value: decoding in the background gives the CPU up to
+   * the frame (on llvmpipe drawing is CPU work too, and competing decoders made frames 2-5x
+   * longer). 0: the process's priority. */
+  int decodeNice = 10;
   bool visibleWindow = false; ///< a window the user sees (`tellus view`); else hidden
   std::string windowTitle = "tellus";
+};
+
+/** Where one frame's time went on the main thread (wall clock, ms). GL calls only queue work;
+ * `finish` is the GL executing the frame (on llvmpipe: rasterising on the CPU). */
+struct FramePhases {
+  double update = 0.0; ///< quadtree + streamer
+  /** Received tiles kept, decodes launched, decoded textures taken and given a GL texture. */
+  double intake = 0.0;
+  double upload = 0.0; ///< glTexSubImage2D bands
+  std::size_t uploadBytes = 0;
+  double mesh = 0.0; ///< node meshes built and sent (VBOs)
+  std::size_t meshesCreated = 0;
+  double draw = 0.0;   ///< draw calls issued
+  double finish = 0.0; ///< glFinish
+  double total = 0.0;  ///< the whole frame (= frameMs)
 };
 
 /** What the renderer did: the last frame's figures and totals since creation. */
@@ -119,6 +141,7 @@ struct RenderStats {
   double updateMs = 0.0;             ///< last frame: quadtree + streamer CPU time
   double longestUpdateMs = 0.0;      ///< the longest update since creation
   double frameMs = 0.0;              ///< last frame: everything, GL finished
+  FramePhases phases;                ///< last frame, phase by phase
   std::string glVersion;             ///< GL_VERSION and GL_RENDERER
   bool reversedZ = false;            ///< glClipControl available (4.5 or ARB_clip_control)
 };
