@@ -7,6 +7,7 @@
 
 #include "../support/CacheFixtures.hpp"
 #include "../support/TempDir.hpp"
+#include "GlTestSupport.hpp"
 
 #include <tellus/planet/Camera.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
@@ -26,122 +27,24 @@
 
 using namespace tellus;
 using namespace tellus::planet;
+using namespace tellus::planet::gltest;
 
 namespace {
 
-const std::filesystem::path kBlueMarble =
-    std::filesystem::path(TELLUS_TEST_DATA_DIR) / "bmng_2048x1024.jpg";
+/** The shared options with a magenta background: a hole shows. */
+RendererOptions extremesOptions(const std::string& layer, int w, int h) {
+  RendererOptions o = options(layer, w, h);
+  o.background = {1.0, 0.0, 1.0};
+  return o;
+}
+
 const std::filesystem::path kOutDir =
     std::filesystem::path(TELLUS_TEST_TMP_DIR) / "render-extremes-gl";
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-bool haveDisplay() {
-  const char* d = std::getenv("DISPLAY");
-  return d != nullptr && *d != '\0';
-}
-
-/** Tiles whose texels say where they are: red = column in the tile, green = row, blue = level *
- * 8. Every level of the grid exists (down to the deepest the cache allows). */
-class RampSource final : public ITileSource {
-public:
-  explicit RampSource(GridSpec grid) : grid_(grid) {}
-  std::optional<DatasetSpec> describe(std::string_view, std::string_view) const override {
-    DatasetSpec d;
-    d.name = "ramp";
-    d.grid = grid_;
-    d.mimeType = "image/png";
-    return d;
-  }
-  TileRequestId request(const TileAddress& a, double, Callback done) override {
-    TileResult r;
-    r.status = TileStatus::Ok;
-    r.contentType = "image/png";
-    r.bytes = tile(a.key.level);
-    done(std::move(r));
-    return ++next_;
-  }
-  void reprioritize(TileRequestId, double) override {}
-  bool cancel(TileRequestId) override { return false; }
-
-private:
-  std::vector<std::byte> tile(int level) {
-    auto& t = tiles_[level];
-    if (t.empty()) {
-      const int w = grid_.tileWidth, h = grid_.tileHeight;
-      std::vector<std::uint8_t> px(static_cast<std::size_t>(w * h * 4));
-      for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-          auto* p = &px[static_cast<std::size_t>((y * w + x) * 4)];
-          p[0] = static_cast<std::uint8_t>(x);
-          p[1] = static_cast<std::uint8_t>(y);
-          p[2] = static_cast<std::uint8_t>(std::min(248, level * 8));
-          p[3] = 255;
-        }
-      t = encodePngRgba(w, h, px);
-    }
-    return t;
-  }
-  GridSpec grid_;
-  std::map<int, std::vector<std::byte>> tiles_;
-  TileRequestId next_ = 0;
-};
-
 /** A ramp grid down to the deepest level the cache allows (30: 3.7 mm tiles). */
 GridSpec deepGrid() {
   return GridSpec{Sector{}, 36.0, 256, 256, kMaxLevel + 1};
-}
-
-/** The embedded default's bluemarble layer through the proxy's tile service over a cache. */
-struct BlueMarbleService {
-  test::TempDir dir{"render-extremes-gl"};
-  std::unique_ptr<TileCache> cache = test::openTestCache(dir.path());
-  Fetcher fetcher;
-  std::unique_ptr<TileService> service;
-  BlueMarbleService() {
-    UpstreamSpec bm;
-    bm.name = "local";
-    bm.type = UpstreamSpec::Type::Local;
-    bm.path = kBlueMarble;
-    LayerSpec imagery;
-    imagery.name = "bluemarble";
-    imagery.upstream = "local";
-    imagery.dataset.grid = GridSpec{Sector{}, 36.0, 512, 512, 3};
-    imagery.dataset.mimeType = "image/jpeg";
-    auto s = TileService::create(*cache, fetcher, {bm}, {imagery}, TileServiceOptions{});
-    if (s) service = std::move(*s);
-  }
-};
-
-struct Rendered {
-  std::vector<std::uint8_t> pixels;
-  RenderStats stats;
-  bool complete = false;
-};
-
-RendererOptions options(const std::string& layer, int w, int h) {
-  RendererOptions o;
-  o.layer = layer;
-  o.width = w;
-  o.height = h;
-  o.globalImage = kBlueMarble;
-  o.background = {1.0, 0.0, 1.0}; // magenta: a hole shows
-  return o;
-}
-
-Rendered renderComplete(Renderer& r, const CameraPose& pose, double limitS = 60.0) {
-  const auto start = std::chrono::steady_clock::now();
-  Rendered out;
-  for (;;) {
-    r.frame(pose);
-    if (r.complete()) break;
-    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > limitS)
-      break;
-    if (!r.busy()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
-  out.complete = r.complete();
-  out.pixels = r.readPixels();
-  out.stats = r.stats();
-  return out;
 }
 
 void save(const std::string& name, const Renderer& r, const std::vector<std::uint8_t>& px) {
@@ -149,12 +52,6 @@ void save(const std::string& name, const Renderer& r, const std::vector<std::uin
   std::string err;
   writePngRgb(kOutDir / (name + ".png"), r.width(), r.height(), px, &err);
 }
-
-#define OPEN_RENDERER(var, source, geodesy, opts)                                                  \
-  if (!haveDisplay()) GTEST_SKIP() << "no DISPLAY: run the gl label under xvfb-run";               \
-  auto var##Made = Renderer::create(source, geodesy, opts);                                        \
-  ASSERT_TRUE(var##Made.has_value()) << var##Made.error();                                         \
-  Renderer& var = **var##Made
 
 bool magenta(const std::vector<std::uint8_t>& px, int w, int x, int y) {
   const auto* p = &px[static_cast<std::size_t>((y * w + x) * 4)];
@@ -237,9 +134,9 @@ double meanAbsDiff(const std::vector<std::uint8_t>& a, const std::vector<std::ui
 // it look the same (no flip of the frame or of the textures at the pole).
 TEST(RenderExtremesGl, ExactPolesLookingDownAndTiltedHaveNoHoles) {
   const Geodesy geodesy;
-  BlueMarbleService bm;
+  BlueMarbleService bm{"render-extremes-gl"};
   ASSERT_TRUE(bm.service);
-  auto o = options("bluemarble", 160, 120);
+  auto o = extremesOptions("bluemarble", 160, 120);
   OPEN_RENDERER(r, *bm.service, geodesy, o);
   const std::vector<CameraPose> poses = {
       {90.0, 0.0, 1.0e6, 0.0, 0.0},
@@ -278,9 +175,9 @@ TEST(RenderExtremesGl, ExactPolesLookingDownAndTiltedHaveNoHoles) {
 // east and -179.9999 looking west (across the line), low and tilted: no holes.
 TEST(RenderExtremesGl, AntimeridianFromBothSidesAndAcrossAndNegativeZero) {
   const Geodesy geodesy;
-  BlueMarbleService bm;
+  BlueMarbleService bm{"render-extremes-gl"};
   ASSERT_TRUE(bm.service);
-  auto o = options("bluemarble", 160, 120);
+  auto o = extremesOptions("bluemarble", 160, 120);
   OPEN_RENDERER(r, *bm.service, geodesy, o);
   const auto same = [&](const CameraPose& a, const CameraPose& b) {
     const Rendered ra = renderComplete(r, a);
@@ -317,8 +214,8 @@ namespace {
  * every pixel drawn. */
 void expectNoHolesInLowViews(double alt) {
   const Geodesy geodesy;
-  RampSource ramp(deepGrid());
-  auto o = options("ramp", 128, 128);
+  RampSource ramp(deepGrid(), 8, 248);
+  auto o = extremesOptions("ramp", 128, 128);
   OPEN_RENDERER(r, ramp, geodesy, o);
   {
     for (const CameraPose& base : {CameraPose{-6.0, 12.0, 0.0, 0.0, 0.0},
@@ -377,12 +274,12 @@ TEST(RenderExtremesGl, ATenthOfAMetreAboveTheEllipsoidHasNoHoles) {
 // 2-degree view ~47 px (measured as half the drawn width of the middle row and column).
 TEST(RenderExtremesGl, BillionMetresOutTheEarthIsADiscOfThePredictedRadius) {
   const Geodesy geodesy;
-  BlueMarbleService bm;
+  BlueMarbleService bm{"render-extremes-gl"};
   ASSERT_TRUE(bm.service);
   const CameraPose pose{0.0, 0.0, 1.0e9, 0.0, 0.0};
   for (const double fov : {45.0, 2.0}) {
     SCOPED_TRACE("field of view " + std::to_string(fov));
-    auto o = options("bluemarble", 256, 256);
+    auto o = extremesOptions("bluemarble", 256, 256);
     o.verticalFovDeg = fov;
     OPEN_RENDERER(r, *bm.service, geodesy, o);
     const Rendered out = renderComplete(r, pose);
@@ -443,9 +340,9 @@ TEST(RenderExtremesGl, BillionMetresOutTheEarthIsADiscOfThePredictedRadius) {
 // owner finds it (docs/ACCURACY.md); --gtest_also_run_disabled_tests runs it.
 TEST(RenderExtremesGl, OneMillimetreStepAtOneMetreMovesTheImageByTheExpectedSubPixelAmount) {
   const Geodesy geodesy;
-  RampSource ramp(deepGrid());
+  RampSource ramp(deepGrid(), 8, 248);
   const int size = 256;
-  auto o = options("ramp", size, size);
+  auto o = extremesOptions("ramp", size, size);
   OPEN_RENDERER(r, ramp, geodesy, o);
   const double lat = -6.0, lon0 = 12.0, alt = 1.0;
   const double metreLon = 1.0 / (geodesy.equatorialRadius() * std::cos(lat * kDeg) * kDeg);
@@ -493,11 +390,11 @@ TEST(RenderExtremesGl, OneMillimetreStepAtOneMetreMovesTheImageByTheExpectedSubP
 // (0.1 m was in it and passed before terrain's merge; see DISABLED_ATenthOfAMetre... above.)
 TEST(RenderExtremesGl, SphereModelHasNoHolesAtTheExtremes) {
   const Geodesy sphere(EarthModel::Sphere);
-  BlueMarbleService bm;
+  BlueMarbleService bm{"render-extremes-gl"};
   ASSERT_TRUE(bm.service);
-  RampSource ramp(deepGrid());
+  RampSource ramp(deepGrid(), 8, 248);
   for (int source = 0; source < 2; ++source) {
-    auto o = options(source == 0 ? "bluemarble" : "ramp", 128, 128);
+    auto o = extremesOptions(source == 0 ? "bluemarble" : "ramp", 128, 128);
     ITileSource& s =
         source == 0 ? static_cast<ITileSource&>(*bm.service) : static_cast<ITileSource&>(ramp);
     OPEN_RENDERER(r, s, sphere, o);
@@ -577,7 +474,7 @@ namespace {
 void expectNoHolesAboveThePlateau(const std::vector<CameraPose>& poses, bool checkLevel) {
   const Geodesy geodesy;
   RampOnPlateauSource source(1000);
-  auto o = options("ramp", 128, 128);
+  auto o = extremesOptions("ramp", 128, 128);
   o.elevationLayer = "heights";
   o.terrainClearanceM = 0.05; // let the camera down to 0.1 m above the terrain
   OPEN_RENDERER(r, source, geodesy, o);

@@ -4,6 +4,7 @@
 
 #include "../support/CacheFixtures.hpp"
 #include "../support/TempDir.hpp"
+#include "GlTestSupport.hpp"
 
 #include <tellus/planet/Camera.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
@@ -22,153 +23,17 @@
 
 using namespace tellus;
 using namespace tellus::planet;
+using namespace tellus::planet::gltest;
 
 namespace {
 
-const std::filesystem::path kBlueMarble =
-    std::filesystem::path(TELLUS_TEST_DATA_DIR) / "bmng_2048x1024.jpg";
 const std::filesystem::path kOutDir = std::filesystem::path(TELLUS_TEST_TMP_DIR) / "render-gl";
-
-bool haveDisplay() {
-  const char* d = std::getenv("DISPLAY");
-  return d != nullptr && *d != '\0';
-}
-
-/** Every tile absent: the renderer draws the global texture only. */
-class AbsentSource final : public ITileSource {
-public:
-  explicit AbsentSource(GridSpec grid) : grid_(grid) {}
-  std::optional<DatasetSpec> describe(std::string_view, std::string_view) const override {
-    DatasetSpec d;
-    d.name = "absent";
-    d.grid = grid_;
-    d.mimeType = "image/png";
-    return d;
-  }
-  TileRequestId request(const TileAddress&, double, Callback done) override {
-    TileResult r;
-    r.status = TileStatus::Absent;
-    done(std::move(r));
-    return ++next_;
-  }
-  void reprioritize(TileRequestId, double) override {}
-  bool cancel(TileRequestId) override { return false; }
-
-private:
-  GridSpec grid_;
-  TileRequestId next_ = 0;
-};
-
-/** Tiles whose texels say where they are: red = column in the tile, green = row, blue = level
- * * 10. Any level exists (the texel-to-pixel test). */
-class RampSource final : public ITileSource {
-public:
-  explicit RampSource(GridSpec grid) : grid_(grid) {}
-  std::optional<DatasetSpec> describe(std::string_view, std::string_view) const override {
-    DatasetSpec d;
-    d.name = "ramp";
-    d.grid = grid_;
-    d.mimeType = "image/png";
-    return d;
-  }
-  TileRequestId request(const TileAddress& a, double, Callback done) override {
-    TileResult r;
-    r.status = TileStatus::Ok;
-    r.contentType = "image/png";
-    r.bytes = tile(a.key.level);
-    done(std::move(r));
-    return ++next_;
-  }
-  void reprioritize(TileRequestId, double) override {}
-  bool cancel(TileRequestId) override { return false; }
-
-private:
-  std::vector<std::byte> tile(int level) {
-    auto& t = tiles_[level];
-    if (t.empty()) {
-      const int w = grid_.tileWidth, h = grid_.tileHeight;
-      std::vector<std::uint8_t> px(static_cast<std::size_t>(w * h * 4));
-      for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-          auto* p = &px[static_cast<std::size_t>((y * w + x) * 4)];
-          p[0] = static_cast<std::uint8_t>(x);
-          p[1] = static_cast<std::uint8_t>(y);
-          p[2] = static_cast<std::uint8_t>(std::min(250, level * 10));
-          p[3] = 255;
-        }
-      t = encodePngRgba(w, h, px);
-    }
-    return t;
-  }
-  GridSpec grid_;
-  std::map<int, std::vector<std::byte>> tiles_;
-  TileRequestId next_ = 0;
-};
-
-/** The embedded default's bluemarble layer through the proxy's tile service over a cache. */
-struct BlueMarbleService {
-  test::TempDir dir{"render-gl"};
-  std::unique_ptr<TileCache> cache = test::openTestCache(dir.path());
-  Fetcher fetcher;
-  std::unique_ptr<TileService> service;
-  BlueMarbleService() {
-    UpstreamSpec bm;
-    bm.name = "local";
-    bm.type = UpstreamSpec::Type::Local;
-    bm.path = kBlueMarble;
-    LayerSpec imagery;
-    imagery.name = "bluemarble";
-    imagery.upstream = "local";
-    imagery.dataset.grid = GridSpec{Sector{}, 36.0, 512, 512, 3};
-    imagery.dataset.mimeType = "image/jpeg";
-    auto s = TileService::create(*cache, fetcher, {bm}, {imagery}, TileServiceOptions{});
-    if (s) service = std::move(*s);
-  }
-};
-
-struct Rendered {
-  std::vector<std::uint8_t> pixels;
-  RenderStats stats;
-  bool complete = false;
-};
-
-RendererOptions options(const std::string& layer, int w, int h) {
-  RendererOptions o;
-  o.layer = layer;
-  o.width = w;
-  o.height = h;
-  o.globalImage = kBlueMarble;
-  return o;
-}
-
-/** Frames until complete (or the limit); the pixels of the last frame. */
-Rendered renderComplete(Renderer& r, const CameraPose& pose, double limitS = 60.0) {
-  const auto start = std::chrono::steady_clock::now();
-  Rendered out;
-  for (;;) {
-    r.frame(pose);
-    if (r.complete()) break;
-    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > limitS)
-      break;
-    if (!r.busy()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
-  out.complete = r.complete();
-  out.pixels = r.readPixels();
-  out.stats = r.stats();
-  return out;
-}
 
 void save(const std::string& name, const Renderer& r, const std::vector<std::uint8_t>& px) {
   std::filesystem::create_directories(kOutDir);
   std::string err;
   writePngRgb(kOutDir / (name + ".png"), r.width(), r.height(), px, &err);
 }
-
-#define OPEN_RENDERER(var, source, geodesy, opts)                                                  \
-  if (!haveDisplay()) GTEST_SKIP() << "no DISPLAY: run the gl label under xvfb-run";               \
-  auto var##Made = Renderer::create(source, geodesy, opts);                                        \
-  ASSERT_TRUE(var##Made.has_value()) << var##Made.error();                                         \
-  Renderer& var = **var##Made
 
 struct Rgb {
   double r, g, b;

@@ -6,6 +6,7 @@
 // the cracks the test is there to catch.
 
 #include "../support/CacheFixtures.hpp"
+#include "GlTestSupport.hpp"
 
 #include <tellus/planet/Camera.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
@@ -32,10 +33,7 @@ using namespace tellus::planet;
 
 namespace {
 
-bool haveDisplay() {
-  const char* d = std::getenv("DISPLAY");
-  return d != nullptr && *d != '\0';
-}
+using tellus::planet::gltest::haveDisplay;
 
 /** Rugged relief at every scale: -6000 to +6000 m. */
 double relief(double lat, double lon) {

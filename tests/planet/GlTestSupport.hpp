@@ -1,0 +1,170 @@
+#pragma once
+// Shared by the rendered planet tests (label gl): the display check, tile sources that need no
+// network (absent everywhere; texels that say where they are), the embedded default's Blue Marble
+// through the proxy's tile service, and rendering until complete.
+
+#include "../support/CacheFixtures.hpp"
+#include "../support/TempDir.hpp"
+
+#include <tellus/planet/Camera.hpp>
+#include <tellus/planet_gl/Renderer.hpp>
+#include <tellus/proxy/Fetcher.hpp>
+#include <tellus/proxy/TileService.hpp>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace tellus::planet::gltest {
+
+inline const std::filesystem::path kBlueMarble =
+    std::filesystem::path(TELLUS_TEST_DATA_DIR) / "bmng_2048x1024.jpg";
+
+inline bool haveDisplay() {
+  const char* d = std::getenv("DISPLAY");
+  return d != nullptr && *d != '\0';
+}
+
+/** Every tile absent: the renderer draws the global texture only. */
+class AbsentSource final : public ITileSource {
+public:
+  explicit AbsentSource(GridSpec grid) : grid_(grid) {}
+  std::optional<DatasetSpec> describe(std::string_view, std::string_view) const override {
+    DatasetSpec d;
+    d.name = "absent";
+    d.grid = grid_;
+    d.mimeType = "image/png";
+    return d;
+  }
+  TileRequestId request(const TileAddress&, double, Callback done) override {
+    TileResult r;
+    r.status = TileStatus::Absent;
+    done(std::move(r));
+    return ++next_;
+  }
+  void reprioritize(TileRequestId, double) override {}
+  bool cancel(TileRequestId) override { return false; }
+
+private:
+  GridSpec grid_;
+  TileRequestId next_ = 0;
+};
+
+/** Tiles whose texels say where they are: red = column in the tile, green = row, blue = level
+ * times bluePerLevel (at most blueMax). Any level of the grid exists. */
+class RampSource final : public ITileSource {
+public:
+  explicit RampSource(GridSpec grid, int bluePerLevel = 10, int blueMax = 250)
+      : grid_(grid), bluePerLevel_(bluePerLevel), blueMax_(blueMax) {}
+  std::optional<DatasetSpec> describe(std::string_view, std::string_view) const override {
+    DatasetSpec d;
+    d.name = "ramp";
+    d.grid = grid_;
+    d.mimeType = "image/png";
+    return d;
+  }
+  TileRequestId request(const TileAddress& a, double, Callback done) override {
+    TileResult r;
+    r.status = TileStatus::Ok;
+    r.contentType = "image/png";
+    r.bytes = tile(a.key.level);
+    done(std::move(r));
+    return ++next_;
+  }
+  void reprioritize(TileRequestId, double) override {}
+  bool cancel(TileRequestId) override { return false; }
+
+private:
+  std::vector<std::byte> tile(int level) {
+    auto& t = tiles_[level];
+    if (t.empty()) {
+      const int w = grid_.tileWidth, h = grid_.tileHeight;
+      std::vector<std::uint8_t> px(static_cast<std::size_t>(w * h * 4));
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          auto* p = &px[static_cast<std::size_t>((y * w + x) * 4)];
+          p[0] = static_cast<std::uint8_t>(x);
+          p[1] = static_cast<std::uint8_t>(y);
+          p[2] = static_cast<std::uint8_t>(std::min(blueMax_, level * bluePerLevel_));
+          p[3] = 255;
+        }
+      t = encodePngRgba(w, h, px);
+    }
+    return t;
+  }
+  GridSpec grid_;
+  int bluePerLevel_;
+  int blueMax_;
+  std::map<int, std::vector<std::byte>> tiles_;
+  TileRequestId next_ = 0;
+};
+
+/** The embedded default's bluemarble layer through the proxy's tile service over a cache. */
+struct BlueMarbleService {
+  explicit BlueMarbleService(const char* dirName = "render-gl") : dir(dirName) {
+    UpstreamSpec bm;
+    bm.name = "local";
+    bm.type = UpstreamSpec::Type::Local;
+    bm.path = kBlueMarble;
+    LayerSpec imagery;
+    imagery.name = "bluemarble";
+    imagery.upstream = "local";
+    imagery.dataset.grid = GridSpec{Sector{}, 36.0, 512, 512, 3};
+    imagery.dataset.mimeType = "image/jpeg";
+    auto s = TileService::create(*cache, fetcher, {bm}, {imagery}, TileServiceOptions{});
+    if (s) service = std::move(*s);
+  }
+  test::TempDir dir;
+  std::unique_ptr<TileCache> cache = test::openTestCache(dir.path());
+  Fetcher fetcher;
+  std::unique_ptr<TileService> service;
+};
+
+struct Rendered {
+  std::vector<std::uint8_t> pixels;
+  RenderStats stats;
+  bool complete = false;
+};
+
+inline RendererOptions options(const std::string& layer, int w, int h) {
+  RendererOptions o;
+  o.layer = layer;
+  o.width = w;
+  o.height = h;
+  o.globalImage = kBlueMarble;
+  return o;
+}
+
+/** Frames until complete (or the limit); the pixels of the last frame. */
+inline Rendered renderComplete(Renderer& r, const CameraPose& pose, double limitS = 60.0) {
+  const auto start = std::chrono::steady_clock::now();
+  Rendered out;
+  for (;;) {
+    r.frame(pose);
+    if (r.complete()) break;
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > limitS)
+      break;
+    if (!r.busy()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  out.complete = r.complete();
+  out.pixels = r.readPixels();
+  out.stats = r.stats();
+  return out;
+}
+
+} // namespace tellus::planet::gltest
+
+#define OPEN_RENDERER(var, source, geodesy, opts)                                                  \
+  if (!tellus::planet::gltest::haveDisplay())                                                      \
+    GTEST_SKIP() << "no DISPLAY: run the gl label under xvfb-run";                                 \
+  auto var##Made = Renderer::create(source, geodesy, opts);                                        \
+  ASSERT_TRUE(var##Made.has_value()) << var##Made.error();                                         \
+  Renderer& var = **var##Made
