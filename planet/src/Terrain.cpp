@@ -146,8 +146,10 @@ int HeightField::levelForSpacing(double spacingDeg) const noexcept {
   return last;
 }
 
-int HeightField::levelAt(double latDeg, double lonDeg) const noexcept {
-  if (!std::isfinite(latDeg) || !std::isfinite(lonDeg)) return -1;
+// The one reading of a point both queries share: latitude clamped, a pole one point, longitude
+// wrapped with -180 and 180 one meridian and -0.0 as 0; then the deepest level holding a tile
+// there.
+const HeightTile* HeightField::deepestAt(double& latDeg, double& lonDeg) const noexcept {
   latDeg = std::clamp(latDeg, -90.0, 90.0);
   if (latDeg == 90.0 || latDeg == -90.0) lonDeg = 0.0;
   lonDeg = std::remainder(lonDeg, 360.0); // [-180, 180]
@@ -156,27 +158,23 @@ int HeightField::levelAt(double latDeg, double lonDeg) const noexcept {
   for (int l = deepest_; l >= 0; --l) {
     if (perLevel_[static_cast<std::size_t>(l)] == 0) continue;
     const auto key = grid_.keyAt(latDeg, lonDeg, l);
-    if (key && tiles_.contains(*key)) return l;
+    if (!key) continue;
+    if (const auto it = tiles_.find(*key); it != tiles_.end()) return &it->second;
   }
-  return -1;
+  return nullptr;
+}
+
+int HeightField::levelAt(double latDeg, double lonDeg) const noexcept {
+  if (!std::isfinite(latDeg) || !std::isfinite(lonDeg)) return -1;
+  const HeightTile* t = deepestAt(latDeg, lonDeg);
+  return t != nullptr ? t->key.level : -1;
 }
 
 double HeightField::heightAt(double latDeg, double lonDeg) const noexcept {
   if (!std::isfinite(latDeg) || !std::isfinite(lonDeg))
     return std::numeric_limits<double>::quiet_NaN();
-  latDeg = std::clamp(latDeg, -90.0, 90.0);
-  if (latDeg == 90.0 || latDeg == -90.0) lonDeg = 0.0;
-  lonDeg = std::remainder(lonDeg, 360.0);
-  if (globalLongitudes_ && lonDeg == 180.0) lonDeg = -180.0;
-  if (lonDeg == 0.0) lonDeg = 0.0;
-  for (int l = deepest_; l >= 0; --l) {
-    if (perLevel_[static_cast<std::size_t>(l)] == 0) continue;
-    const auto key = grid_.keyAt(latDeg, lonDeg, l);
-    if (!key) continue;
-    if (const auto it = tiles_.find(*key); it != tiles_.end())
-      return sample(it->second, latDeg, lonDeg);
-  }
-  return 0.0;
+  const HeightTile* t = deepestAt(latDeg, lonDeg);
+  return t != nullptr ? sample(*t, latDeg, lonDeg) : 0.0;
 }
 
 // Bilinear over the level's mosaic: texel centres at half-texel offsets; a tap outside the tile

@@ -110,6 +110,7 @@ public:
 
 private:
   double sample(const HeightTile& tile, double latDeg, double lonDeg) const noexcept;
+  const HeightTile* deepestAt(double& latDeg, double& lonDeg) const noexcept;
   TileGrid grid_;
   bool globalLongitudes_ = false;
   std::unordered_map<TileKey, HeightTile, TileKeyHash> tiles_;
