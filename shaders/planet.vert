@@ -32,10 +32,15 @@ uniform mat4 uViewProj; // projection * view rotation (the eye at the origin)
 uniform vec4 uUv;
 
 out vec2 vUv;
+out vec2 vUvNode; // the node's own coordinates (overlays have transforms of their own)
 out vec3 vNormal;
+// Later passes (overlays past the texture units) draw the same mesh with depth test EQUAL-or-
+// nearer: the position must come out bit for bit the same in every pass.
+invariant gl_Position;
 
 void main() {
   vUv = aUvNode * uUv.xy + uUv.zw;
+  vUvNode = aUvNode;
   vNormal = aNormal;
 #ifdef TELLUS_FP64
   vec3 p = vec3(aPosition - uEye);

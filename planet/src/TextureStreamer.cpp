@@ -143,6 +143,21 @@ void TextureStreamer::update(Quadtree& tree,
   for (Node* n : tree.drawList()) {
     if (n->level() == 0) continue; // done above
     refreshState(*n);
+    if (n->texture == TextureState::Absent) {
+      // Nothing here (past a regional dataset's edge, below a partial dataset's deepest level):
+      // the node shows its nearest ancestor that has a texture, which the tree may have split
+      // past without ever asking for it. Ask for the nearest one not known to be absent.
+      for (Node* a = n->parent(); a != nullptr && a->level() > 0; a = a->parent()) {
+        refreshState(*a);
+        if (a->texture == TextureState::Absent) continue;
+        if (needs(*a)) {
+          ++stats_.candidates;
+          want(*a, clippedScreenArea(camera, n->geometry().corners()), nowS);
+        }
+        break;
+      }
+      continue;
+    }
     if (!needs(*n)) continue;
     ++stats_.candidates;
     const TexturePlan plan = planTexture(*n);

@@ -46,8 +46,9 @@ double relief(double lat, double lon) {
   return h;
 }
 
-/** Two layers, answered on a worker thread after a short delay: "imagery" (grey tiles with a
- * level-coloured border, any level) and "heights" (BIL16 of relief()). */
+/** Layers answered on a worker thread after a short delay: "imagery" (grey tiles with a
+ * level-coloured border, any level), "heights" (BIL16 of relief()), and two overlays on the
+ * imagery's grid: "clouds" (white, alpha from 0 to 200 in stripes) and "sst" (opaque blue). */
 class TerrainWorld final : public ITileSource {
 public:
   TerrainWorld() : worker_([this] { run(); }) {}
@@ -64,7 +65,7 @@ public:
   std::optional<DatasetSpec> describe(std::string_view layer, std::string_view) const override {
     DatasetSpec d;
     d.name = std::string(layer);
-    if (layer == "imagery") {
+    if (layer == "imagery" || layer == "clouds" || layer == "sst") {
       d.grid = kImagery;
       d.mimeType = "image/png";
     } else if (layer == "heights") {
@@ -136,6 +137,14 @@ private:
             p[1] = 128;
             p[2] = static_cast<std::uint8_t>(border ? 40 : 110);
             p[3] = 255;
+            if (job.address.layer == "clouds") {
+              p[0] = p[1] = p[2] = 255;
+              p[3] = static_cast<std::uint8_t>((x / 8) % 3 * 100);
+            } else if (job.address.layer == "sst") {
+              p[0] = 20;
+              p[1] = 40;
+              p[2] = 220;
+            }
           }
         r.bytes = encodePngRgba(w, h, px);
       }
@@ -243,6 +252,7 @@ struct Outcome {
   std::size_t zeroArea = 0;
   std::size_t fixedEdges = 0;
   bool complete = false;
+  int passes = 0;
 };
 
 void savePng(const Renderer& r, const std::vector<std::uint8_t>& px, const std::string& name) {
@@ -255,7 +265,9 @@ void savePng(const Renderer& r, const std::vector<std::uint8_t>& px, const std::
               &err);
 }
 
-Outcome renderView(TerrainWorld& world, const View& v, bool fixEdges) {
+/** overlays: "clouds" and "sst" (half opacity) blended over the imagery, one pass each (the
+ * second pass draws the same meshes again with depth equal). */
+Outcome renderView(TerrainWorld& world, const View& v, bool fixEdges, bool overlays = false) {
   Outcome out;
   const Geodesy wgs;
   RendererOptions o;
@@ -266,11 +278,16 @@ Outcome renderView(TerrainWorld& world, const View& v, bool fixEdges) {
   o.background = {1.0, 0.0, 1.0};
   o.fixEdges = fixEdges;
   o.maxSplitsPerFrame = 16; // several levels meet while the tree grows
+  if (overlays) {
+    o.overlays = {{"clouds", "", 1.0, true, -1}, {"sst", "", 0.5, true, -1}};
+    o.overlaysPerPass = 1;
+  }
   auto made = Renderer::create(world, wgs, o);
   EXPECT_TRUE(made.has_value()) << made.error();
   if (!made) return out;
   Renderer& r = **made;
-  const std::string tag = std::string(fixEdges ? "fixed-" : "unfixed-") + v.name;
+  const std::string tag =
+      std::string(fixEdges ? "fixed-" : "unfixed-") + (overlays ? "layers-" : "") + v.name;
   CameraPose pose = v.pose;
   const auto start = std::chrono::steady_clock::now();
   for (int frame = 0;; ++frame) {
@@ -293,6 +310,7 @@ Outcome renderView(TerrainWorld& world, const View& v, bool fixEdges) {
   out.holes = holes(r, r.camera(r.drawnPose()), px, 7000.0);
   out.zeroArea = r.stats().zeroAreaTriangles;
   out.fixedEdges = r.stats().edgesFixed;
+  out.passes = r.stats().passes;
   savePng(r, px, tag);
   return out;
 }
@@ -314,6 +332,30 @@ INSTANTIATE_TEST_SUITE_P(Views, TerrainViewGl, ::testing::ValuesIn(kViews), [](c
   std::replace(n.begin(), n.end(), '-', '_');
   return n;
 });
+
+// The same, with two overlay layers blended over the imagery (issue #6: "also with two layers
+// blended"), each in a pass of its own: later passes must land exactly on the first's depth.
+class TerrainLayersViewGl : public ::testing::TestWithParam<View> {};
+
+TEST_P(TerrainLayersViewGl, NoHolesWithTwoLayersBlended) {
+  if (!haveDisplay()) GTEST_SKIP() << "no DISPLAY: run the gl label under xvfb-run";
+  TerrainWorld world;
+  const Outcome o = renderView(world, GetParam(), true, true);
+  EXPECT_TRUE(o.complete);
+  EXPECT_EQ(o.passes, 2); // the base and clouds, then sst
+  EXPECT_EQ(o.holes, 0)
+      << "background pixels inside the globe (build/test-tmp/terrain-fixed-layers-*.png)";
+  EXPECT_EQ(o.holesWhileLoading, 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Views,
+                         TerrainLayersViewGl,
+                         ::testing::Values(kViews[0], kViews[2], kViews[5], kViews[6]),
+                         [](const auto& p) {
+                           std::string n = p.param.name;
+                           std::replace(n.begin(), n.end(), '-', '_');
+                           return n;
+                         });
 
 TEST(TerrainGl, LevelsMeetAndEdgesAreFixed) {
   if (!haveDisplay()) GTEST_SKIP() << "no DISPLAY: run the gl label under xvfb-run";

@@ -112,7 +112,7 @@ void splitDouble(double v, float& hi, float& lo) {
 }
 
 struct Upload {
-  DecodedTexture texture;
+  DecodedTexture texture; ///< its tag names the layer (LayerTextures::tag)
   GLuint id = 0;
   std::size_t level = 0;
   int row = 0;
@@ -132,6 +132,83 @@ struct DrawPart {
   UvTransform uv;
   int firstQuadrant = 0; ///< quadrant ranges [first, last) of GpuMesh::quadrantStart
   int lastQuadrant = 4;
+  std::uint32_t overlayBegin = 0; ///< its overlays: Impl::bindings[overlayBegin, overlayEnd)
+  std::uint32_t overlayEnd = 0;
+};
+
+/** One overlay's texture on a drawn part: the texture, the transform of the node's coordinates
+ * into it, and the layer's opacity. */
+struct OverlayBinding {
+  GLuint texture;
+  UvTransform uv;
+  float opacity;
+};
+
+/** uvNode -> uvTexture, given uvRegion -> uvTexture, for a region that is the node or a child. */
+UvTransform regionToNodeUv(const Node& node, const Node& region, const UvTransform& regionUv) {
+  if (&region == &node) return regionUv;
+  const Sector& s = node.sector();
+  const Sector& c = region.sector();
+  const double w = s.east - s.west, h = s.north - s.south;
+  const glm::dvec2 k{w / (c.east - c.west), h / (c.north - c.south)};
+  const glm::dvec2 o{(c.west - s.west) / w, (c.south - s.south) / h};
+  // uvRegion = (uvNode - o) * k, then the region's transform.
+  UvTransform t;
+  t.scale = k * regionUv.scale;
+  t.offset = regionUv.offset - o * k * regionUv.scale;
+  return t;
+}
+
+/** One layer at one time: its own tree (LOD and stream order in its grid, the same camera as the
+ * base), its tiles, decodes, uploads and resident textures (issue #7). The base layer's tree is
+ * also the geometry every layer is drawn on. */
+struct LayerTextures {
+  int tag = 0; ///< unique for the renderer's life (decode jobs and uploads carry it)
+  std::string layer;
+  std::string time;
+  bool overlay = false;
+  TileGrid grid;
+  int texWidth = 0, texHeight = 0;
+  GLsizei texLevels = 1;
+  std::unique_ptr<Quadtree> tree;
+  std::unique_ptr<TextureStreamer> streamer;
+  TextureLru lru;
+  std::unordered_map<NodeKey, GLuint, NodeKeyHash> textures;
+  std::vector<GLuint> pool; ///< free textures of this layer's size
+  std::unordered_map<TileKey, StoredTile, TileKeyHash> received;
+  std::unordered_set<NodeKey, NodeKeyHash> decoding;
+  std::unordered_set<NodeKey, NodeKeyHash> uploading;
+  std::unordered_set<NodeKey, NodeKeyHash> undecodable;
+  bool updated = false; ///< its tree was updated this frame
+
+  LayerTextures(TileGrid g, std::size_t budget) : grid(g), lru(budget) {}
+  /** Nothing in flight, decoding or uploading. */
+  bool idle() const {
+    return streamer->stats().inFlight == 0 && decoding.empty() && uploading.empty();
+  }
+  /** The node shows what it will show: its own texture, or none exists (absent, undecodable)
+   * and its nearest ancestor that is not absent shows its own. */
+  bool done(const Node& n) const {
+    const auto own = [&](const Node& x) {
+      return x.texture == TextureState::Finished || undecodable.contains(x.key());
+    };
+    if (own(n)) return true;
+    if (n.texture != TextureState::Absent) return false;
+    for (const Node* a = n.parent(); a != nullptr; a = a->parent())
+      if (a->texture != TextureState::Absent) return own(*a);
+    return true;
+  }
+};
+
+/** A layer as the user sees it: its settings, its textures at the current time, and those of a
+ * time it is switching to (swapped in whole once ready). */
+struct LayerSlot {
+  LayerOptions opt;
+  std::unique_ptr<LayerTextures> current;
+  std::unique_ptr<LayerTextures> pending;
+  std::size_t swaps = 0;
+  std::size_t retiredRequested = 0; ///< tiles of times no longer drawn
+  std::size_t retiredReceived = 0;
 };
 
 /** The part of `node` under `region` (the node itself or one of its children): which quadrant
@@ -142,12 +219,7 @@ partFor(const Node& node, const Node& region, GLuint texture, const UvTransform&
   if (&region == &node) return d;
   const Sector& s = node.sector();
   const Sector& c = region.sector();
-  const double w = s.east - s.west, h = s.north - s.south;
-  const glm::dvec2 k{w / (c.east - c.west), h / (c.north - c.south)};
-  const glm::dvec2 o{(c.west - s.west) / w, (c.south - s.south) / h};
-  // uvRegion = (uvNode - o) * k, then the region's transform.
-  d.uv.scale = k * regionUv.scale;
-  d.uv.offset = regionUv.offset - o * k * regionUv.scale;
+  d.uv = regionToNodeUv(node, region, regionUv);
   const bool south = c.south == s.south;
   const bool fullWidth = c.west == s.west && c.east == s.east;
   if (fullWidth) {
@@ -164,8 +236,7 @@ partFor(const Node& node, const Node& region, GLuint texture, const UvTransform&
 
 struct Renderer::Impl {
   Impl(ITileSource& s, const Geodesy& g, RendererOptions o, TileGrid gr)
-      : source(s), geodesy(g), opt(std::move(o)), grid(gr), lru(opt.textureBudgetBytes),
-        decoder(opt.decodeThreads, opt.decodeNice),
+      : source(s), geodesy(g), opt(std::move(o)), grid(gr), decoder(opt.decodeThreads, opt.decodeNice),
         pacer(UploadPacing{.bytesPerFrame = opt.uploadBytesPerFrame,
                            .shareOfFrame = opt.uploadShareOfFrame}) {}
   ~Impl();
@@ -181,30 +252,33 @@ struct Renderer::Impl {
   GLuint fbo = 0, colorRb = 0, depthRb = 0;
   GLuint program = 0;
   GLint uViewProj = -1, uEye = -1, uEyeHigh = -1, uEyeLow = -1, uUv = -1, uTexture = -1, uSun = -1;
+  GLint uBase = -1, uOverlayCount = -1, uOverlayUv = -1, uOverlayOpacity = -1;
+  int overlaysPerPass = 1; ///< overlay textures one pass blends (texture units 1..)
   bool fp64 = false; ///< vertex positions as doubles (GL 4.x), else high/low float pairs
   GLuint globalTexture = 0;
-  int texWidth = 0, texHeight = 0;
-  GLsizei texLevels = 1;
   float anisotropy = 1.0f; ///< what the GL allows of opt.anisotropy
 
-  std::unique_ptr<Quadtree> tree;
+  std::vector<LayerSlot> layers; ///< [0] the base imagery, then the overlays in drawing order
+  int nextTag = 1;
+  /** The base layer's tree: what is drawn, and the geometry of every layer. */
+  Quadtree& geo() const { return *layers.front().current->tree; }
+  LayerTextures* byTag(int tag) const {
+    for (const LayerSlot& l : layers) {
+      if (l.current && l.current->tag == tag) return l.current.get();
+      if (l.pending && l.pending->tag == tag) return l.pending.get();
+    }
+    return nullptr;
+  }
   std::unique_ptr<HeightField> field; // null without an elevation layer
   std::unique_ptr<HeightStreamer> heights;
   std::vector<TileKey> heightWish;
   std::vector<const Node*> byLevel;
-  std::unique_ptr<TextureStreamer> streamer;
-  TextureLru lru;
   TextureDecoder decoder;
   UploadPacer pacer;
   std::unordered_map<NodeKey, GpuMesh, NodeKeyHash> meshes;
-  std::unordered_map<NodeKey, GLuint, NodeKeyHash> textures;
-  std::vector<GLuint> pool;
-  std::unordered_map<TileKey, StoredTile, TileKeyHash> received;
-  std::unordered_set<NodeKey, NodeKeyHash> decoding;
-  std::unordered_set<NodeKey, NodeKeyHash> uploading;
-  std::unordered_set<NodeKey, NodeKeyHash> undecodable;
   std::deque<Upload> uploads;
   std::vector<DrawPart> parts;
+  std::vector<OverlayBinding> bindings;
   RenderStats stats;
   bool lastComplete = false;
   Clock::time_point start = Clock::now();
@@ -217,9 +291,13 @@ struct Renderer::Impl {
   std::string initGl();
   void makeFramebuffer();
   void freeFramebuffer();
-  GLuint newNodeTexture();
-  GLuint acquireTexture();
-  void releaseTexture(GLuint id);
+  std::expected<std::unique_ptr<LayerTextures>, std::string>
+  makeLayer(const std::string& name, const std::string& time, bool overlay, int maxLevel);
+  void applyTerrain(Quadtree& t) const;
+  void freeLayer(LayerTextures& l);
+  GLuint newNodeTexture(const LayerTextures& l);
+  GLuint acquireTexture(LayerTextures& l);
+  void releaseTexture(LayerTextures& l, GLuint id);
   const GpuMesh& meshFor(const Node& node);
   double heightAt(double lat, double lon) const {
     return field ? field->heightAt(lat, lon) * opt.verticalExaggeration : 0.0;
@@ -230,9 +308,12 @@ struct Renderer::Impl {
   void updateTerrain(double nowS);
   void deliverHeights();
   bool heightsComplete(const Node& node) const;
-  void launchDecode(Node& node);
+  void launchDecode(LayerTextures& l, Node& node);
   void stepUploads();
-  void evict();
+  void evict(LayerTextures& l);
+  void bindOverlays(const Node& region, DrawPart& part);
+  bool ready(const LayerTextures& l) const;
+  void swapReadyLayers();
   void draw(const Camera& camera, bool present = true);
   void warmUp();
 };
@@ -245,11 +326,12 @@ Renderer::Impl::~Impl() {
       glDeleteBuffers(1, &m.vbo);
       glDeleteBuffers(1, &m.ebo);
     }
-    for (auto& [k, t] : textures)
-      glDeleteTextures(1, &t);
+    for (LayerSlot& l : layers) {
+      if (l.current) freeLayer(*l.current);
+      if (l.pending) freeLayer(*l.pending);
+    }
     for (auto& u : uploads)
       glDeleteTextures(1, &u.id);
-    if (!pool.empty()) glDeleteTextures(static_cast<GLsizei>(pool.size()), pool.data());
     glDeleteTextures(1, &globalTexture);
     if (overlayFbo != 0) glDeleteFramebuffers(1, &overlayFbo);
     if (overlayTexture != 0) glDeleteTextures(1, &overlayTexture);
@@ -302,9 +384,20 @@ std::string Renderer::Impl::initGl() {
   // attributes are core from 4.1), else the two-float path.
   fp64 = gl45 && opt.fp64Vertices;
   const std::string defines = fp64 ? "#define TELLUS_FP64 1\n" : "";
+  // Overlay layers blended in one pass: one texture unit each after the base's (unit 0).
+  GLint units = 16;
+  glGetIntegerv(GL_MAX_TEXTURE_IMAGE_UNITS, &units);
+  overlaysPerPass = std::clamp(units - 1, 1, 8);
+  if (opt.overlaysPerPass > 0) overlaysPerPass = std::min(overlaysPerPass, opt.overlaysPerPass);
+  stats.overlaysPerPass = overlaysPerPass;
+  std::string fragDefines = "#define TELLUS_OVERLAYS " + std::to_string(overlaysPerPass) +
+                            "\n#define TELLUS_OVERLAY_STEPS";
+  for (int i = 0; i < overlaysPerPass; ++i)
+    fragDefines += " TELLUS_OVERLAY(" + std::to_string(i) + ")";
+  fragDefines += "\n";
   const GLuint vs = compileShader(GL_VERTEX_SHADER, header + defines + kShader_planet_vert, &error);
   if (vs == 0) return error;
-  const GLuint fs = compileShader(GL_FRAGMENT_SHADER, header + kShader_planet_frag, &error);
+  const GLuint fs = compileShader(GL_FRAGMENT_SHADER, header + fragDefines + kShader_planet_frag, &error);
   if (fs == 0) {
     glDeleteShader(vs);
     return error;
@@ -329,6 +422,15 @@ std::string Renderer::Impl::initGl() {
   uUv = glGetUniformLocation(program, "uUv");
   uTexture = glGetUniformLocation(program, "uTexture");
   uSun = glGetUniformLocation(program, "uSun");
+  uBase = glGetUniformLocation(program, "uBase");
+  uOverlayCount = glGetUniformLocation(program, "uOverlayCount");
+  uOverlayUv = glGetUniformLocation(program, "uOverlayUv");
+  uOverlayOpacity = glGetUniformLocation(program, "uOverlayOpacity");
+  glUseProgram(program);
+  for (int i = 0; i < overlaysPerPass; ++i)
+    glUniform1i(glGetUniformLocation(program, ("uOverlay[" + std::to_string(i) + "]").c_str()),
+                1 + i);
+  glUseProgram(0);
 
   makeFramebuffer();
 
@@ -394,7 +496,71 @@ void Renderer::Impl::freeFramebuffer() {
   fbo = colorRb = depthRb = 0;
 }
 
-GLuint Renderer::Impl::newNodeTexture() {
+// The GL objects of a layer (its textures and pool); the caller forgets the layer.
+void Renderer::Impl::freeLayer(LayerTextures& l) {
+  for (auto& [k, t] : l.textures)
+    glDeleteTextures(1, &t);
+  l.textures.clear();
+  if (!l.pool.empty()) glDeleteTextures(static_cast<GLsizei>(l.pool.size()), l.pool.data());
+  l.pool.clear();
+}
+
+// Heights (node bounds, the horizon occluder) for a tree, from the field.
+void Renderer::Impl::applyTerrain(Quadtree& t) const {
+  if (!field) return;
+  const Impl* self = this;
+  t.setTerrain(
+      [self](const Sector& sec) {
+        const auto [lo, hi] = self->field->rangeOver(sec);
+        return std::pair{lo * self->opt.verticalExaggeration, hi * self->opt.verticalExaggeration};
+      },
+      std::min(0.0, field->lowest() * opt.verticalExaggeration) - 1000.0);
+}
+
+// A layer at a time: its grid (an overlay's must match the base's level-zero tile size), its tree
+// with the base's LOD settings and its own tile size, its streamer, and its share of the texture
+// budget.
+std::expected<std::unique_ptr<LayerTextures>, std::string> Renderer::Impl::makeLayer(
+    const std::string& name, const std::string& time, bool overlay, int maxLevel) {
+  const auto spec = source.describe(name, time);
+  if (!spec) return std::unexpected("unknown layer '" + name + "'");
+  GridSpec gs = spec->grid;
+  if (maxLevel >= 0) gs.numLevels = std::min(gs.numLevels, maxLevel + 1);
+  auto g = TileGrid::create(gs);
+  if (!g) return std::unexpected("layer '" + name + "': " + g.error());
+  if (overlay && gs.levelZeroDeltaDeg != grid.spec().levelZeroDeltaDeg)
+    return std::unexpected("overlay '" + name + "' has " + std::to_string(gs.levelZeroDeltaDeg) +
+                           "-degree level-zero tiles, the base layer " +
+                           std::to_string(grid.spec().levelZeroDeltaDeg) +
+                           ": an overlay must share the base layer's grid");
+  const std::size_t share = opt.textureBudgetBytes / (1 + opt.overlays.size());
+  auto l = std::make_unique<LayerTextures>(*g, std::max<std::size_t>(share, 1));
+  l->tag = nextTag++;
+  l->layer = name;
+  l->time = time;
+  l->overlay = overlay;
+  l->texWidth = gs.tileWidth;
+  l->texHeight = gs.tileHeight;
+  l->texLevels =
+      static_cast<GLsizei>(std::floor(std::log2(std::max(l->texWidth, l->texHeight))) + 1);
+  QuadtreeParams qp;
+  qp.lod.tileWidthPx = l->texWidth;
+  qp.lod.tileHeightPx = l->texHeight;
+  qp.lod.threshold = opt.lodThreshold;
+  qp.maxSplitsPerFrame = opt.maxSplitsPerFrame;
+  l->tree = std::make_unique<Quadtree>(geodesy, *g, qp);
+  applyTerrain(*l->tree);
+  StreamParams sp;
+  sp.layer = name;
+  sp.time = time;
+  sp.maxInFlight = opt.maxInFlight;
+  l->streamer = std::make_unique<TextureStreamer>(source, sp);
+  return l;
+}
+
+GLuint Renderer::Impl::newNodeTexture(const LayerTextures& lt) {
+  const int texWidth = lt.texWidth, texHeight = lt.texHeight;
+  const GLsizei texLevels = lt.texLevels;
   GLuint id = 0;
   glGenTextures(1, &id);
   glBindTexture(GL_TEXTURE_2D, id);
@@ -416,21 +582,21 @@ GLuint Renderer::Impl::newNodeTexture() {
   return id;
 }
 
-// Every node texture has the grid's tile size, so any freed one fits the next node.
-GLuint Renderer::Impl::acquireTexture() {
-  if (!pool.empty()) {
-    const GLuint id = pool.back();
-    pool.pop_back();
+// Every node texture of a layer has its grid's tile size, so any freed one fits the next node.
+GLuint Renderer::Impl::acquireTexture(LayerTextures& l) {
+  if (!l.pool.empty()) {
+    const GLuint id = l.pool.back();
+    l.pool.pop_back();
     ++stats.texturesReused;
     return id;
   }
-  return newNodeTexture();
+  return newNodeTexture(l);
 }
 
-void Renderer::Impl::releaseTexture(GLuint id) {
+void Renderer::Impl::releaseTexture(LayerTextures& l, GLuint id) {
   constexpr std::size_t kMaxPool = 64;
-  if (pool.size() < kMaxPool)
-    pool.push_back(id);
+  if (l.pool.size() < kMaxPool)
+    l.pool.push_back(id);
   else
     glDeleteTextures(1, &id);
 }
@@ -445,7 +611,7 @@ std::array<EdgeAdapt, 4> Renderer::Impl::edgesOf(const Node& node) const {
   std::array<EdgeAdapt, 4> e{};
   if (!opt.fixEdges) return e;
   const Sector& s = node.sector();
-  const std::uint64_t frame = tree->frame();
+  const std::uint64_t frame = geo().frame();
   for (int d = 0; d < 4; ++d) {
     const auto dir = static_cast<Direction>(d);
     const bool alongLon = dir == Direction::North || dir == Direction::South;
@@ -598,7 +764,7 @@ void Renderer::Impl::updateTerrain(double nowS) {
   if (!field) return;
   heightWish.clear();
   const int n = opt.meshSize;
-  for (const Node* node : tree->drawList()) {
+  for (const Node* node : geo().drawList()) {
     const Sector& s = node->sector();
     const int level = field->levelForSpacing((s.north - s.south) / (n - 1));
     for (int l = 0; l <= level; l = l == level ? level + 1 : std::min(level, l + 3)) {
@@ -628,13 +794,14 @@ void Renderer::Impl::deliverHeights() {
   if (!field) return;
   const std::uint64_t before = field->generation();
   if (heights->deliver(*field, 8) > 0) {
-    tree->refreshHeights([&](const Sector& sec) { return field->changedSince(before, sec); });
-    tree->setTerrain(
-        [this](const Sector& sec) {
-          const auto [lo, hi] = field->rangeOver(sec);
-          return std::pair{lo * opt.verticalExaggeration, hi * opt.verticalExaggeration};
-        },
-        std::min(0.0, field->lowest() * opt.verticalExaggeration) - 1000.0);
+    // Every layer's tree: their LOD and culling must agree with the geometry drawn.
+    for (LayerSlot& l : layers)
+      for (LayerTextures* t : {l.current.get(), l.pending.get()}) {
+        if (t == nullptr) continue;
+        t->tree->refreshHeights(
+            [&](const Sector& sec) { return field->changedSince(before, sec); });
+        applyTerrain(*t->tree);
+      }
   }
 }
 
@@ -649,15 +816,19 @@ bool Renderer::Impl::heightsComplete(const Node& node) const {
 }
 
 // A node whose tiles all arrived (TextureState::Decoding): its bytes go to a decoder worker.
-void Renderer::Impl::launchDecode(Node& node) {
+void Renderer::Impl::launchDecode(LayerTextures& l, Node& node) {
+  auto& uploading = l.uploading;
+  auto& decoding = l.decoding;
+  auto& received = l.received;
+  auto& streamer = l.streamer;
   const NodeKey& k = node.key();
   if (uploading.contains(k)) {
     node.texture = TextureState::Uploading;
     return;
   }
-  if (node.texture != TextureState::Decoding || decoding.contains(k) || undecodable.contains(k))
+  if (node.texture != TextureState::Decoding || decoding.contains(k) || l.undecodable.contains(k))
     return;
-  if (lru.resident(k)) return;
+  if (l.lru.resident(k)) return;
   bool missing = false;
   for (std::int64_t i = 0; i < textureTileCount(k); ++i) {
     const TileKey t = textureTile(k, i);
@@ -670,8 +841,10 @@ void Renderer::Impl::launchDecode(Node& node) {
   if (missing) return;
   DecodeJob job;
   job.key = k;
-  job.width = texWidth;
-  job.height = texHeight;
+  job.width = l.texWidth;
+  job.height = l.texHeight;
+  job.transparent = l.overlay;
+  job.tag = l.tag;
   for (std::int64_t i = 0; i < textureTileCount(k); ++i) {
     const auto it = received.find(textureTile(k, i));
     if (it == received.end()) {
@@ -695,7 +868,13 @@ void Renderer::Impl::stepUploads() {
   glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
   while (!uploads.empty() && pacer.mayContinue(sentThisFrame, msSince(begin))) {
     Upload& u = uploads.front();
-    if (u.id == 0) u.id = acquireTexture();
+    LayerTextures* l = byTag(u.texture.tag);
+    if (l == nullptr) { // its layer was swapped out or dropped meanwhile
+      if (u.id != 0) glDeleteTextures(1, &u.id);
+      uploads.pop_front();
+      continue;
+    }
+    if (u.id == 0) u.id = acquireTexture(*l);
     const MipLevel& level = u.texture.levels[u.level];
     const auto rowBytes = static_cast<std::size_t>(level.width) * 4;
     const auto band = pacer.bandBytes(sentThisFrame);
@@ -722,10 +901,11 @@ void Renderer::Impl::stepUploads() {
     if (++u.level < u.texture.levels.size()) continue;
     // Complete: drawable from the next frame on.
     const NodeKey key = u.texture.key;
-    if (auto old = textures.find(key); old != textures.end()) releaseTexture(old->second);
-    textures[key] = u.id;
-    lru.insert(key, u.texture.bytes);
-    uploading.erase(key);
+    if (auto old = l->textures.find(key); old != l->textures.end())
+      releaseTexture(*l, old->second);
+    l->textures[key] = u.id;
+    l->lru.insert(key, u.texture.bytes);
+    l->uploading.erase(key);
     ++stats.texturesUploaded;
     uploads.pop_front();
   }
@@ -733,20 +913,20 @@ void Renderer::Impl::stepUploads() {
 
 // Textures the LRU let go: back to the pool, their tiles may be fetched again, and any node still
 // marked Finished for them falls back from now on.
-void Renderer::Impl::evict() {
-  const auto evicted = lru.takeEvicted();
+void Renderer::Impl::evict(LayerTextures& l) {
+  const auto evicted = l.lru.takeEvicted();
   if (evicted.empty()) return;
   std::unordered_set<NodeKey, NodeKeyHash> gone;
   for (const NodeKey& k : evicted) {
-    if (auto it = textures.find(k); it != textures.end()) {
-      releaseTexture(it->second);
-      textures.erase(it);
+    if (auto it = l.textures.find(k); it != l.textures.end()) {
+      releaseTexture(l, it->second);
+      l.textures.erase(it);
     }
-    streamer->forget(k);
+    l.streamer->forget(k);
     gone.insert(k);
     ++stats.texturesEvicted;
   }
-  tree->forEach([&](Node& n) {
+  l.tree->forEach([&](Node& n) {
     if (n.texture == TextureState::Finished && gone.contains(n.key()))
       n.texture = TextureState::NoTexture;
   });
@@ -793,22 +973,66 @@ void Renderer::Impl::draw(const Camera& camera, bool present) {
   } else {
     glUniform4f(uSun, 0.0f, 0.0f, 0.0f, 0.0f);
   }
-  for (const DrawPart& p : parts) {
-    const GpuMesh& m = meshFor(*p.node);
-    glUniform4f(uUv,
-                static_cast<float>(p.uv.scale.x),
-                static_cast<float>(p.uv.scale.y),
-                static_cast<float>(p.uv.offset.x),
-                static_cast<float>(p.uv.offset.y));
-    glBindTexture(GL_TEXTURE_2D, p.texture);
-    glBindVertexArray(m.vao);
-    const std::uint32_t first = m.quadrantStart[static_cast<std::size_t>(p.firstQuadrant)];
-    const std::uint32_t last = m.quadrantStart[static_cast<std::size_t>(p.lastQuadrant)];
-    glDrawElements(
-        GL_TRIANGLES,
-        static_cast<GLsizei>(last - first),
-        GL_UNSIGNED_INT,
-        reinterpret_cast<const void*>(static_cast<std::uintptr_t>(first) * sizeof(std::uint32_t)));
+  // Pass 0: the base texture and the first overlaysPerPass overlays of each part. Pass j > 0: the
+  // parts with more overlays, drawn again with the next ones, blended over (same mesh, depth equal
+  // passes, nothing written to depth).
+  const auto k = static_cast<std::uint32_t>(overlaysPerPass);
+  std::uint32_t most = 0;
+  for (const DrawPart& p : parts)
+    most = std::max(most, p.overlayEnd - p.overlayBegin);
+  const std::uint32_t passes = std::max<std::uint32_t>(1, (most + k - 1) / k);
+  stats.passes = static_cast<int>(passes);
+  std::array<GLfloat, 32> uvs{};
+  std::array<GLfloat, 8> opacities{};
+  for (std::uint32_t pass = 0; pass < passes; ++pass) {
+    glUniform1f(uBase, pass == 0 ? 1.0f : 0.0f);
+    if (pass == 1) {
+      glEnable(GL_BLEND);
+      glBlendFuncSeparate(GL_ONE, GL_ONE_MINUS_SRC_ALPHA, GL_ZERO, GL_ONE);
+      glDepthFunc(GL_GEQUAL);
+      glDepthMask(GL_FALSE);
+    }
+    for (const DrawPart& p : parts) {
+      const std::uint32_t from = std::min(p.overlayEnd, p.overlayBegin + pass * k);
+      const std::uint32_t count = std::min(k, p.overlayEnd - from);
+      if (pass > 0 && count == 0) continue;
+      const GpuMesh& m = meshFor(*p.node);
+      glUniform4f(uUv,
+                  static_cast<float>(p.uv.scale.x),
+                  static_cast<float>(p.uv.scale.y),
+                  static_cast<float>(p.uv.offset.x),
+                  static_cast<float>(p.uv.offset.y));
+      for (std::uint32_t i = 0; i < count; ++i) {
+        const OverlayBinding& b = bindings[from + i];
+        glActiveTexture(GL_TEXTURE1 + i);
+        glBindTexture(GL_TEXTURE_2D, b.texture);
+        uvs[4 * i + 0] = static_cast<GLfloat>(b.uv.scale.x);
+        uvs[4 * i + 1] = static_cast<GLfloat>(b.uv.scale.y);
+        uvs[4 * i + 2] = static_cast<GLfloat>(b.uv.offset.x);
+        uvs[4 * i + 3] = static_cast<GLfloat>(b.uv.offset.y);
+        opacities[i] = b.opacity;
+      }
+      glUniform1i(uOverlayCount, static_cast<GLint>(count));
+      if (count > 0) {
+        glUniform4fv(uOverlayUv, static_cast<GLsizei>(count), uvs.data());
+        glUniform1fv(uOverlayOpacity, static_cast<GLsizei>(count), opacities.data());
+      }
+      glActiveTexture(GL_TEXTURE0);
+      glBindTexture(GL_TEXTURE_2D, p.texture);
+      glBindVertexArray(m.vao);
+      const std::uint32_t first = m.quadrantStart[static_cast<std::size_t>(p.firstQuadrant)];
+      const std::uint32_t last = m.quadrantStart[static_cast<std::size_t>(p.lastQuadrant)];
+      glDrawElements(GL_TRIANGLES,
+                     static_cast<GLsizei>(last - first),
+                     GL_UNSIGNED_INT,
+                     reinterpret_cast<const void*>(static_cast<std::uintptr_t>(first) *
+                                                   sizeof(std::uint32_t)));
+    }
+  }
+  if (passes > 1) {
+    glDisable(GL_BLEND);
+    glDepthFunc(GL_GREATER);
+    glDepthMask(GL_TRUE);
   }
   glBindVertexArray(0);
   if (present && window != nullptr && opt.visibleWindow) {
@@ -859,21 +1083,30 @@ void Renderer::Impl::draw(const Camera& camera, bool present) {
 // Draws into the framebuffer, which the first frame clears; leaves nothing behind.
 void Renderer::Impl::warmUp() {
   const Node* root = nullptr;
-  for (const auto& r : tree->roots())
+  for (const auto& r : geo().roots())
     if (r && root == nullptr) root = r.get();
   if (root == nullptr) return;
   const RenderStats before = stats; // the warm-up counts no mesh, upload or texture
-  const GLuint texture = newNodeTexture();
+  const LayerTextures& base = *layers.front().current;
+  const GLuint texture = newNodeTexture(base);
   const std::uint8_t texel[4] = {0, 0, 0, 255};
   glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-  glTexSubImage2D(GL_TEXTURE_2D, texLevels - 1, 0, 0, 1, 1, GL_RGBA, GL_UNSIGNED_BYTE, texel);
+  glTexSubImage2D(GL_TEXTURE_2D, base.texLevels - 1, 0, 0, 1, 1, GL_RGBA, GL_UNSIGNED_BYTE, texel);
   parts.clear();
+  bindings.clear();
   parts.push_back({root, globalTexture, globalUv(root->sector())});
   parts.push_back({root, texture, UvTransform{}});
+  if (layers.size() > 1) { // the program with overlays, and a second pass
+    const auto n = static_cast<std::uint32_t>(overlaysPerPass + 1);
+    for (std::uint32_t i = 0; i < n; ++i)
+      bindings.push_back({texture, UvTransform{}, 0.0f});
+    parts.back().overlayEnd = n;
+  }
   const Camera cam(geodesy, CameraPose{}, {opt.width, opt.height}, opt.verticalFovDeg);
   draw(cam, false);
   glFinish();
   parts.clear();
+  bindings.clear();
   if (auto it = meshes.find(root->key()); it != meshes.end()) {
     glDeleteVertexArrays(1, &it->second.vao);
     glDeleteBuffers(1, &it->second.vbo);
@@ -904,23 +1137,28 @@ Renderer::create(ITileSource& source, const Geodesy& geodesy, RendererOptions op
   if (!spec) return std::unexpected("unknown layer '" + options.layer + "'");
   auto grid = TileGrid::create(spec->grid);
   if (!grid) return std::unexpected("layer '" + options.layer + "': " + grid.error());
+  for (const LayerOptions& l : options.overlays)
+    if (!(l.opacity >= 0.0 && l.opacity <= 1.0))
+      return std::unexpected("overlay '" + l.layer + "': the opacity must be in [0, 1]");
   auto impl = std::make_unique<Impl>(source, geodesy, std::move(options), *grid);
-  impl->texWidth = grid->spec().tileWidth;
-  impl->texHeight = grid->spec().tileHeight;
-  impl->texLevels =
-      static_cast<GLsizei>(std::floor(std::log2(std::max(impl->texWidth, impl->texHeight))) + 1);
   if (auto err = impl->initGl(); !err.empty()) return std::unexpected(err);
-  QuadtreeParams qp;
-  qp.lod.tileWidthPx = impl->texWidth;
-  qp.lod.tileHeightPx = impl->texHeight;
-  qp.lod.threshold = impl->opt.lodThreshold;
-  qp.maxSplitsPerFrame = impl->opt.maxSplitsPerFrame;
-  impl->tree = std::make_unique<Quadtree>(geodesy, *grid, qp);
-  StreamParams sp;
-  sp.layer = impl->opt.layer;
-  sp.time = impl->opt.time;
-  sp.maxInFlight = impl->opt.maxInFlight;
-  impl->streamer = std::make_unique<TextureStreamer>(source, sp);
+  {
+    LayerSlot base;
+    base.opt.layer = impl->opt.layer;
+    base.opt.time = impl->opt.time;
+    auto made = impl->makeLayer(base.opt.layer, base.opt.time, false, -1);
+    if (!made) return std::unexpected(made.error());
+    base.current = std::move(*made);
+    impl->layers.push_back(std::move(base));
+    for (const LayerOptions& o : impl->opt.overlays) {
+      LayerSlot slot;
+      slot.opt = o;
+      auto l = impl->makeLayer(o.layer, o.time, true, o.maxLevel);
+      if (!l) return std::unexpected(l.error());
+      slot.current = std::move(*l);
+      impl->layers.push_back(std::move(slot));
+    }
+  }
   if (!impl->opt.elevationLayer.empty()) {
     if (!(impl->opt.verticalExaggeration > 0.0) || !std::isfinite(impl->opt.verticalExaggeration))
       return std::unexpected(std::string("the vertical exaggeration must be a positive number"));
@@ -940,13 +1178,8 @@ Renderer::create(ITileSource& source, const Geodesy& geodesy, RendererOptions op
         *egrid,
         hp,
         impl->opt.heightDecoder ? impl->opt.heightDecoder : HeightDecoder(decodeHeights));
-    Impl* raw = impl.get();
-    impl->tree->setTerrain(
-        [raw](const Sector& sec) {
-          const auto [lo, hi] = raw->field->rangeOver(sec);
-          return std::pair{lo * raw->opt.verticalExaggeration, hi * raw->opt.verticalExaggeration};
-        },
-        -1000.0);
+    for (LayerSlot& l : impl->layers)
+      impl->applyTerrain(*l.current->tree);
   }
   impl->warmUp();
   return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
@@ -957,10 +1190,10 @@ Renderer::create(ITileSource& source, const Geodesy& geodesy, RendererOptions op
 // above the data's valley), including the coarse chord's ends where that side is edge-fixed.
 double Renderer::Impl::surfaceHeightAt(double lat, double lon) const {
   double h = heightAt(lat, lon);
-  if (!tree || !std::isfinite(h)) return h;
+  if (layers.empty() || !std::isfinite(h)) return h;
   lon = std::remainder(lon, 360.0);
   const int n = opt.meshSize;
-  for (const Node* node : tree->drawList()) {
+  for (const Node* node : geo().drawList()) {
     const Sector& s = node->sector();
     if (lat < s.south || lat > s.north || lon < s.west || lon > s.east) continue;
     const int r = std::clamp(
@@ -1048,11 +1281,24 @@ void Renderer::frame(const CameraPose& pose) {
   if (m.window != nullptr) glfwMakeContextCurrent(m.window);
   ++m.stats.frames;
 
-  // CPU update: the tree and the stream order.
-  const FrameStats& fs = m.tree->update(cam);
-  m.lru.beginFrame();
+  // CPU update: the trees and the stream order. The base layer's tree is always updated (it is
+  // what is drawn); an overlay's only while visible. A layer switching to another time streams
+  // the new time's tiles only (the old time's stop being asked for).
   const double nowS = std::chrono::duration<double>(t0 - m.start).count();
-  m.streamer->update(*m.tree, cam, nowS, &m.lru);
+  const FrameStats& fs = m.geo().update(cam);
+  for (std::size_t i = 0; i < m.layers.size(); ++i) {
+    LayerSlot& slot = m.layers[i];
+    const bool shown = i == 0 || slot.opt.visible;
+    for (LayerTextures* l : {slot.current.get(), slot.pending.get()}) {
+      if (l == nullptr) continue;
+      const bool isPending = l == slot.pending.get();
+      l->updated = shown && (isPending || !slot.pending);
+      if (!l->updated && !(i == 0 && !isPending)) continue;
+      if (l != m.layers.front().current.get()) l->tree->update(cam);
+      l->lru.beginFrame();
+      if (l->updated) l->streamer->update(*l->tree, cam, nowS, &l->lru);
+    }
+  }
   m.updateTerrain(nowS);
   m.stats.updateMs = msSince(t0);
   m.stats.longestUpdateMs = std::max(m.stats.longestUpdateMs, m.stats.updateMs);
@@ -1066,43 +1312,70 @@ void Renderer::frame(const CameraPose& pose) {
     return ms;
   };
 
-  for (ReceivedTile& r : m.streamer->takeReceived()) {
-    m.stats.bytesReceived += r.result.bytes.size();
-    m.received[r.key] = {std::move(r.result.bytes), m.stats.frames};
-  }
-  for (const auto& root : m.tree->roots())
-    if (root) m.launchDecode(*root);
-  for (Node* n : m.tree->drawList())
-    m.launchDecode(*n);
+  for (LayerSlot& slot : m.layers)
+    for (LayerTextures* l : {slot.current.get(), slot.pending.get()}) {
+      if (l == nullptr) continue;
+      for (ReceivedTile& r : l->streamer->takeReceived()) {
+        m.stats.bytesReceived += r.result.bytes.size();
+        l->received[r.key] = {std::move(r.result.bytes), m.stats.frames};
+      }
+      if (!l->updated) continue;
+      for (const auto& root : l->tree->roots())
+        if (root) m.launchDecode(*l, *root);
+      for (Node* n : l->tree->drawList()) {
+        m.launchDecode(*l, *n);
+        // An absent node shows the nearest ancestor that is not (the streamer asks for it).
+        if (n->texture == TextureState::Absent)
+          for (Node* a = n->parent(); a != nullptr; a = a->parent())
+            if (a->texture != TextureState::Absent) {
+              m.launchDecode(*l, *a);
+              break;
+            }
+      }
+    }
   for (DecodedTexture& d : m.decoder.takeDone()) {
-    m.decoding.erase(d.key);
+    LayerTextures* l = m.byTag(d.tag);
+    if (l == nullptr) continue; // its layer was swapped out meanwhile
+    l->decoding.erase(d.key);
     if (!d.ok) {
       ++m.stats.decodeErrors;
-      m.undecodable.insert(d.key);
+      l->undecodable.insert(d.key);
       continue;
     }
     ++m.stats.texturesDecoded;
-    if (m.lru.resident(d.key)) continue;
+    if (l->lru.resident(d.key)) continue;
     Upload u; // its texture is taken when its upload starts (stepUploads)
     u.texture = std::move(d);
-    m.uploading.insert(u.texture.key);
+    l->uploading.insert(u.texture.key);
     m.uploads.push_back(std::move(u));
   }
   ph.intake = lap();
 
   // What this frame draws, and the LRU told so before anything new is inserted.
   m.parts.clear();
+  m.bindings.clear();
+  LayerTextures& base = *m.layers.front().current;
   // The roots stay resident like the global texture: the streamer wants them until they are, so
   // evicting one would only fetch it again (a loop when the budget is small).
-  for (const auto& root : m.tree->roots())
-    if (root) m.lru.use(root->key());
+  for (const LayerSlot& slot : m.layers)
+    for (LayerTextures* l : {slot.current.get(), slot.pending.get()})
+      if (l != nullptr)
+        for (const auto& root : l->tree->roots())
+          if (root) l->lru.use(root->key());
   bool complete = fs.splitsDeferred == 0;
+  // Each visible overlay shows what its own LOD asks for, and no layer is switching time.
+  for (std::size_t i = 0; i < m.layers.size(); ++i) {
+    const LayerSlot& slot = m.layers[i];
+    complete = complete && !slot.pending;
+    if (i == 0 || !slot.opt.visible) continue;
+    const LayerTextures& l = *slot.current;
+    for (const Node* n : l.tree->drawList())
+      complete = complete && l.done(*n);
+  }
   m.stats.mergedNodesDrawn = 0;
-  for (Node* n : m.tree->drawList()) {
+  for (Node* n : m.geo().drawList()) {
     if (n->key().span > 1) ++m.stats.mergedNodesDrawn;
-    const bool done = n->texture == TextureState::Finished || n->texture == TextureState::Absent ||
-                      m.undecodable.contains(n->key());
-    complete = complete && done;
+    complete = complete && base.done(*n);
     complete = complete && m.heightsComplete(*n);
     const TexturePlan plan = planTexture(*n);
     for (int i = 0; i < plan.partCount; ++i) {
@@ -1110,14 +1383,15 @@ void Renderer::frame(const CameraPose& pose) {
       GLuint texture = m.globalTexture;
       UvTransform uv = p.uv;
       if (p.source != TextureSource::Global && p.texture != nullptr) {
-        if (auto it = m.textures.find(p.texture->key()); it != m.textures.end()) {
+        if (auto it = base.textures.find(p.texture->key()); it != base.textures.end()) {
           texture = it->second;
-          m.lru.use(p.texture->key());
+          base.lru.use(p.texture->key());
         } else {
           uv = globalUv(p.region->sector());
         }
       }
       m.parts.push_back(partFor(*n, *p.region, texture, uv));
+      m.bindOverlays(*p.region, m.parts.back());
     }
   }
   (void)lap();
@@ -1125,7 +1399,9 @@ void Renderer::frame(const CameraPose& pose) {
   m.stepUploads();
   ph.upload = lap();
   ph.uploadBytes = m.stats.bytesUploaded - uploadedBefore;
-  m.evict();
+  for (LayerSlot& slot : m.layers)
+    for (LayerTextures* l : {slot.current.get(), slot.pending.get()})
+      if (l != nullptr) m.evict(*l);
   (void)lap();
   const std::size_t meshesBefore = m.stats.meshesBuilt;
   // Meshes before drawing (a node's mesh depends on which neighbours are drawn, known only now);
@@ -1134,7 +1410,7 @@ void Renderer::frame(const CameraPose& pose) {
   m.stats.zeroAreaTriangles = 0;
   // Coarse first (thesis 4.5.2: edges are fixed in ascending level order), so a finer node adapts
   // to its coarser neighbour's edge as that neighbour draws it.
-  m.byLevel.assign(m.tree->drawList().begin(), m.tree->drawList().end());
+  m.byLevel.assign(m.geo().drawList().begin(), m.geo().drawList().end());
   std::stable_sort(m.byLevel.begin(), m.byLevel.end(), [](const Node* a, const Node* b) {
     return a->level() < b->level();
   });
@@ -1161,11 +1437,14 @@ void Renderer::frame(const CameraPose& pose) {
 
   // Tiles that arrived for nodes gone from view are dropped after a while (asked again if needed).
   if (m.stats.frames % 64 == 0) {
-    std::erase_if(m.received, [&](const auto& e) {
-      if (m.stats.frames - e.second.frame < 600) return false;
-      m.streamer->forget({e.first.level, e.first.row, e.first.col, 1});
-      return true;
-    });
+    for (LayerSlot& slot : m.layers)
+      for (LayerTextures* l : {slot.current.get(), slot.pending.get()})
+        if (l != nullptr)
+          std::erase_if(l->received, [&](const auto& e) {
+            if (m.stats.frames - e.second.frame < 600) return false;
+            l->streamer->forget({e.first.level, e.first.row, e.first.col, 1});
+            return true;
+          });
     std::erase_if(m.meshes, [&](auto& e) {
       if (m.stats.frames - e.second.lastUsed < 120) return false;
       glDeleteVertexArrays(1, &e.second.vao);
@@ -1179,9 +1458,46 @@ void Renderer::frame(const CameraPose& pose) {
   glFinish();
   ph.finish = lap();
 
-  const StreamStats& ss = m.streamer->stats();
-  m.lastComplete = complete && ss.inFlight == 0 && m.decoding.empty() && m.uploads.empty() &&
-                   m.decoder.pending() == 0 && !(m.heights && m.heights->busy());
+  // A layer whose new time is ready swaps to it, all at once, for the next frame.
+  m.swapReadyLayers();
+  StreamStats ss;
+  bool idle = true;
+  m.stats.layers.resize(m.layers.size());
+  m.stats.texturesResident = 0;
+  m.stats.textureBytes = 0;
+  m.stats.poolTextures = 0;
+  for (std::size_t i = 0; i < m.layers.size(); ++i) {
+    const LayerSlot& slot = m.layers[i];
+    RenderStats::Layer& ls = m.stats.layers[i];
+    ls.name = slot.opt.layer;
+    ls.time = slot.current->time;
+    ls.pendingTime = slot.pending ? slot.pending->time : std::string();
+    ls.opacity = slot.opt.opacity;
+    ls.visible = slot.opt.visible;
+    ls.swaps = slot.swaps;
+    ls.tilesRequested = slot.retiredRequested;
+    ls.tilesReceived = slot.retiredReceived;
+    ls.texturesResident = slot.current->lru.count();
+    for (const LayerTextures* l : {slot.current.get(), slot.pending.get()}) {
+      if (l == nullptr) continue;
+      const StreamStats& st = l->streamer->stats();
+      ls.tilesRequested += st.requested;
+      ls.tilesReceived += st.received;
+      ss.requested += st.requested;
+      ss.received += st.received;
+      ss.absent += st.absent;
+      ss.failed += st.failed;
+      ss.inFlight += st.inFlight;
+      idle = idle && l->idle();
+      m.stats.texturesResident += l->lru.count();
+      m.stats.textureBytes += l->lru.bytes();
+      m.stats.poolTextures += l->pool.size();
+    }
+    ss.requested += slot.retiredRequested;
+    ss.received += slot.retiredReceived;
+  }
+  m.lastComplete = complete && idle && m.uploads.empty() && m.decoder.pending() == 0 &&
+                   !(m.heights && m.heights->busy());
   RenderStats& s = m.stats;
   s.nodesVisible = fs.visible;
   s.nodesDrawn = fs.drawn;
@@ -1196,13 +1512,101 @@ void Renderer::frame(const CameraPose& pose) {
   s.tilesInFlight = ss.inFlight;
   s.decodesPending = m.decoder.pending();
   s.uploadsPending = m.uploads.size();
-  s.texturesResident = m.lru.count();
-  s.textureBytes = m.lru.bytes();
-  s.poolTextures = m.pool.size();
   s.frameMs = msSince(t0);
   ph.total = s.frameMs;
   s.phases = ph;
   m.pacer.recordFrame(ph.total, ph.upload);
+}
+
+// The overlays over one drawn part (the node, or the child region whose texture it shows): each
+// visible overlay's texture of the region, else of its nearest ancestor that has one (the
+// ancestor's area through an exact uv transform). An overlay with nothing there yet is skipped:
+// what lies under it shows.
+void Renderer::Impl::bindOverlays(const Node& region, DrawPart& part) {
+  part.overlayBegin = static_cast<std::uint32_t>(bindings.size());
+  for (std::size_t i = 1; i < layers.size(); ++i) {
+    const LayerSlot& slot = layers[i];
+    if (!slot.opt.visible || !(slot.opt.opacity > 0.0)) continue;
+    LayerTextures& l = *slot.current;
+    for (const Node* a = &region; a != nullptr; a = a->parent()) {
+      if (a->level() >= l.grid.numLevels()) continue;
+      const auto it = l.textures.find(a->key());
+      if (it == l.textures.end()) continue;
+      l.lru.use(a->key());
+      bindings.push_back({it->second,
+                          regionToNodeUv(*part.node, region, ancestorUv(region.key(), a->key())),
+                          static_cast<float>(slot.opt.opacity)});
+      break;
+    }
+  }
+  part.overlayEnd = static_cast<std::uint32_t>(bindings.size());
+}
+
+// A layer's new time is ready when every node its LOD draws (and every root) has its texture, or
+// has none to get (absent, undecodable, or its fetch failed and waits for a retry: a dead
+// upstream must not hold the old time forever).
+bool Renderer::Impl::ready(const LayerTextures& l) const {
+  if (!l.updated || l.tree->drawList().empty()) return false;
+  const auto settled = [&](const Node& n) {
+    if (l.done(n)) return true;
+    if (l.uploading.contains(n.key()) || l.decoding.contains(n.key())) return false;
+    for (std::int64_t i = 0; i < textureTileCount(n.key()); ++i)
+      if (l.streamer->state(textureTile(n.key(), i)) == TileFetch::Failed) return true;
+    return false;
+  };
+  for (const auto& root : l.tree->roots())
+    if (root && !settled(*root)) return false;
+  for (const Node* n : l.tree->drawList())
+    if (!settled(*n)) return false;
+  return true;
+}
+
+void Renderer::Impl::swapReadyLayers() {
+  for (LayerSlot& slot : layers) {
+    if (!slot.pending || !ready(*slot.pending)) continue;
+    slot.retiredRequested += slot.current->streamer->stats().requested;
+    slot.retiredReceived += slot.current->streamer->stats().received;
+    freeLayer(*slot.current);
+    slot.current = std::move(slot.pending);
+    ++slot.swaps;
+  }
+}
+
+std::size_t Renderer::layerCount() const noexcept {
+  return impl_->layers.size();
+}
+
+void Renderer::setLayerOpacity(std::size_t layer, double opacity) {
+  if (layer == 0 || layer >= impl_->layers.size())
+    throw std::invalid_argument("only an overlay (layer 1 and up) has an opacity");
+  if (!(opacity >= 0.0 && opacity <= 1.0))
+    throw std::invalid_argument("the opacity must be in [0, 1]");
+  impl_->layers[layer].opt.opacity = opacity;
+}
+
+void Renderer::setLayerVisible(std::size_t layer, bool visible) {
+  if (layer == 0 || layer >= impl_->layers.size())
+    throw std::invalid_argument("only an overlay (layer 1 and up) can be hidden");
+  impl_->layers[layer].opt.visible = visible;
+}
+
+void Renderer::setLayerTime(std::size_t layer, std::string time) {
+  Impl& m = *impl_;
+  if (layer >= m.layers.size()) throw std::invalid_argument("no such layer");
+  LayerSlot& slot = m.layers[layer];
+  if (slot.pending && slot.pending->time == time) return;
+  if (m.window != nullptr) glfwMakeContextCurrent(m.window);
+  if (slot.pending) { // replaced, or cancelled by going back to the current time
+    slot.retiredRequested += slot.pending->streamer->stats().requested;
+    slot.retiredReceived += slot.pending->streamer->stats().received;
+    m.freeLayer(*slot.pending);
+    slot.pending.reset();
+  }
+  slot.opt.time = time;
+  if (time == slot.current->time) return;
+  auto l = m.makeLayer(slot.opt.layer, time, layer > 0, slot.opt.maxLevel);
+  if (!l) throw std::invalid_argument(l.error());
+  slot.pending = std::move(*l);
 }
 
 bool Renderer::complete() const noexcept {
@@ -1211,8 +1615,10 @@ bool Renderer::complete() const noexcept {
 
 bool Renderer::busy() const noexcept {
   const Impl& m = *impl_;
-  return m.streamer->stats().inFlight > 0 || !m.decoding.empty() || !m.uploads.empty() ||
-         m.decoder.pending() > 0 || (m.heights && m.heights->busy());
+  for (const LayerSlot& slot : m.layers)
+    for (const LayerTextures* l : {slot.current.get(), slot.pending.get()})
+      if (l != nullptr && !l->idle()) return true;
+  return !m.uploads.empty() || m.decoder.pending() > 0 || (m.heights && m.heights->busy());
 }
 
 std::vector<std::uint8_t> Renderer::readPixels() const {

@@ -45,14 +45,16 @@ std::vector<MipLevel> buildMips(MipLevel base) {
 DecodedTexture decodeTexture(const DecodeJob& job) {
   DecodedTexture out;
   out.key = job.key;
+  out.tag = job.tag;
   const int w = job.width, h = job.height;
   const auto span = static_cast<int>(std::max<std::size_t>(1, job.tiles.size()));
   MipLevel base;
   base.width = w;
   base.height = h;
   base.rgba.assign(static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4, 0);
-  for (std::size_t i = 3; i < base.rgba.size(); i += 4)
-    base.rgba[i] = 255;
+  if (!job.transparent)
+    for (std::size_t i = 3; i < base.rgba.size(); i += 4)
+      base.rgba[i] = 255;
   bool any = false;
   for (int t = 0; t < span; ++t) {
     const auto& bytes = job.tiles[static_cast<std::size_t>(t)];
@@ -91,6 +93,13 @@ DecodedTexture decodeTexture(const DecodeJob& job) {
   if (!any) {
     if (out.error.empty()) out.error = "no tile";
     return out;
+  }
+  // Premultiplied alpha (see DecodedTexture); opaque texels are left as they are.
+  for (std::size_t i = 0; i < base.rgba.size(); i += 4) {
+    const unsigned a = base.rgba[i + 3];
+    if (a == 255) continue;
+    for (std::size_t c = 0; c < 3; ++c)
+      base.rgba[i + c] = static_cast<std::uint8_t>((base.rgba[i + c] * a + 127) / 255);
   }
   out.levels = buildMips(std::move(base));
   for (const auto& l : out.levels)

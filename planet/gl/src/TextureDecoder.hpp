@@ -27,12 +27,18 @@ struct DecodeJob {
   NodeKey key;
   int width = 0; ///< the texture's size (the grid's tile size)
   int height = 0;
-  /** One entry per tile west to east; nullopt for an absent tile (left dark). */
+  /** One entry per tile west to east; nullopt for an absent tile (left dark, or transparent). */
   std::vector<std::optional<std::vector<std::byte>>> tiles;
+  /** Absent tiles (and texels no tile covers) transparent rather than dark: overlay layers. */
+  bool transparent = false;
+  int tag = 0; ///< the caller's, returned in DecodedTexture (which layer the texture is for)
 };
 
+/** Colours are premultiplied by alpha (an opaque texture is unchanged), so that filtering and mip
+ * levels never bleed the colour of transparent texels into their neighbours. */
 struct DecodedTexture {
   NodeKey key;
+  int tag = 0;
   bool ok = false;
   std::string error;
   std::vector<MipLevel> levels; ///< level 0 first, down to 1 x 1

@@ -32,11 +32,29 @@
 
 namespace tellus::planet {
 
+/** An imagery layer drawn over the base imagery (issue #7): sea-surface temperature, night lights,
+ * clouds. Its tiles must share the base layer's level-zero tile size (a key is the same sector in
+ * both); their pixel size may differ. Transparent texels (PNG alpha) and absent tiles show what
+ * lies under the layer. */
+struct LayerOptions {
+  std::string layer;    ///< of the tile source
+  std::string time;     ///< "" = the layer's default time
+  double opacity = 1.0; ///< [0, 1], times the texels' own alpha
+  bool visible = true;
+  int maxLevel = -1; ///< the deepest level fetched and drawn (-1: the layer's own deepest)
+};
+
 struct RendererOptions {
   int width = 1024; ///< framebuffer size in pixels
   int height = 768;
-  std::string layer; ///< the imagery layer asked of the tile source
+  std::string layer; ///< the base imagery layer asked of the tile source (opaque)
   std::string time;
+  /** Imagery layers over the base, drawn in this order (the last on top). */
+  std::vector<LayerOptions> overlays;
+  /** Overlay textures blended in one pass with the base (0: as many as the GL's texture units
+   * allow, at most 8). Past it the node is drawn again (depth equal, blended) with the next ones;
+   * 1 draws each overlay in a pass of its own (tests compare both paths). */
+  int overlaysPerPass = 0;
   /** An equirectangular JPEG/PNG of the whole globe (north up, -180 at the left), the always
    * resident global texture. Empty or unreadable: a flat dark blue. */
   std::filesystem::path globalImage;
@@ -123,7 +141,7 @@ struct RenderStats {
   std::size_t decodesPending = 0; ///< now
   std::size_t uploadsPending = 0;
   std::size_t texturesResident = 0;
-  std::size_t textureBytes = 0; ///< resident node textures (LRU)
+  std::size_t textureBytes = 0; ///< resident node textures (LRU), every layer
   std::size_t poolTextures = 0; ///< free textures kept for reuse
   std::size_t texturesReused = 0;
   std::size_t texturesEvicted = 0;
@@ -142,7 +160,23 @@ struct RenderStats {
   double longestUpdateMs = 0.0;      ///< the longest update since creation
   double frameMs = 0.0;              ///< last frame: everything, GL finished
   FramePhases phases;                ///< last frame, phase by phase
-  std::string glVersion;             ///< GL_VERSION and GL_RENDERER
+  /** Per layer (the base first, then the overlays): its time, a time it is switching to, tiles and
+   * textures. */
+  struct Layer {
+    std::string name;
+    std::string time;
+    std::string pendingTime; ///< "" = none: the layer swaps to it once its tiles are ready
+    double opacity = 1.0;
+    bool visible = true;
+    std::size_t tilesRequested = 0; ///< totals, of every time
+    std::size_t tilesReceived = 0;
+    std::size_t texturesResident = 0; ///< now
+    std::size_t swaps = 0;            ///< time changes completed
+  };
+  std::vector<Layer> layers;
+  int overlaysPerPass = 0; ///< overlay textures blended in one pass
+  int passes = 0;          ///< last frame: draw passes (1 + those the overlays needed)
+  std::string glVersion;   ///< GL_VERSION and GL_RENDERER
   bool reversedZ = false;            ///< glClipControl available (4.5 or ARB_clip_control)
 };
 
@@ -192,6 +226,16 @@ public:
   /** A line drawn at the top left of the visible window over the globe (the statistics line of
    * `tellus view`); never part of readPixels(). Empty: none. */
   void setOverlayText(std::string text);
+  /** Layers: 0 is the base imagery, 1.. the overlays in drawing order. Out-of-range indices and
+   * values are refused with std::invalid_argument. */
+  std::size_t layerCount() const noexcept;
+  void setLayerOpacity(std::size_t layer, double opacity); ///< overlays only; [0, 1]
+  void setLayerVisible(std::size_t layer, bool visible);   ///< overlays only
+  /** Switches a layer to another time. The new time's tiles for the visible nodes are fetched
+   * first (the old time's requests stop), and the layer swaps to them all at once when every
+   * visible node has its texture of the new time (or none exists), never tile by tile. Setting
+   * the time again before that replaces the pending time; the current time cancels it. */
+  void setLayerTime(std::size_t layer, std::string time);
   /** Resizes the framebuffer (window resize). */
   void resize(int width, int height);
 

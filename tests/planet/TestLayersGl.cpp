@@ -1,0 +1,370 @@
+// Layers over the base imagery (issue #7, label gl): blending by pixels in one pass and in several,
+// opacity and visibility, a layer's maximum level, time changes that swap a layer all at once, and
+// regional datasets inside one layer (the smallest covering dataset wins).
+
+#include "GlTestSupport.hpp"
+
+#include <tellus/cache/TileGrid.hpp>
+#include <tellus/planet/Camera.hpp>
+#include <tellus/planet/RegionalSource.hpp>
+#include <tellus/planet_gl/Renderer.hpp>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <map>
+#include <mutex>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+using namespace tellus;
+using namespace tellus::planet;
+using tellus::planet::gltest::haveDisplay;
+
+namespace {
+
+using Rgba = std::array<std::uint8_t, 4>;
+
+std::vector<std::byte> solidPng(int w, int h, Rgba c) {
+  std::vector<std::uint8_t> px(static_cast<std::size_t>(w * h * 4));
+  for (std::size_t i = 0; i < px.size(); i += 4)
+    std::copy(c.begin(), c.end(), px.begin() + static_cast<std::ptrdiff_t>(i));
+  return encodePngRgba(w, h, px);
+}
+
+/** Layers of one colour each (a colour per layer and time), on a 36-degree grid of 32-px tiles.
+ * Requests of times listed in `held` wait until release(); the others are answered at once.
+ * Records the deepest level asked of each layer. */
+class ColourWorld final : public ITileSource {
+public:
+  std::map<std::string, GridSpec> grids;
+  std::map<std::pair<std::string, std::string>, Rgba> colours; ///< (layer, time) -> colour
+  std::set<std::string> held;
+
+  std::optional<DatasetSpec> describe(std::string_view layer, std::string_view time) const override {
+    const auto it = grids.find(std::string(layer));
+    if (it == grids.end()) return std::nullopt;
+    DatasetSpec d;
+    d.name = it->first;
+    d.grid = it->second;
+    d.time = std::string(time);
+    d.mimeType = "image/png";
+    return d;
+  }
+  TileRequestId request(const TileAddress& a, double, Callback done) override {
+    std::unique_lock lock(mutex_);
+    deepest_[a.layer] = std::max(deepest_[a.layer], a.key.level);
+    const TileRequestId id = ++next_;
+    if (held.contains(a.time)) {
+      waiting_.push_back({id, a, std::move(done)});
+      return id;
+    }
+    lock.unlock();
+    done(answer(a));
+    return id;
+  }
+  void reprioritize(TileRequestId, double) override {}
+  bool cancel(TileRequestId id) override {
+    std::lock_guard lock(mutex_);
+    const auto it = std::find_if(
+        waiting_.begin(), waiting_.end(), [&](const Waiting& w) { return w.id == id; });
+    if (it == waiting_.end()) return false;
+    waiting_.erase(it);
+    return true;
+  }
+  /** Answers up to n held requests (all when n < 0); how many it answered. */
+  int release(int n = -1) {
+    std::vector<Waiting> go;
+    {
+      std::lock_guard lock(mutex_);
+      while (!waiting_.empty() && (n < 0 || static_cast<int>(go.size()) < n)) {
+        go.push_back(std::move(waiting_.front()));
+        waiting_.pop_front();
+      }
+    }
+    for (Waiting& w : go)
+      w.done(answer(w.address));
+    return static_cast<int>(go.size());
+  }
+  std::size_t waiting() const {
+    std::lock_guard lock(mutex_);
+    return waiting_.size();
+  }
+  int deepest(const std::string& layer) const {
+    std::lock_guard lock(mutex_);
+    const auto it = deepest_.find(layer);
+    return it == deepest_.end() ? -1 : it->second;
+  }
+
+private:
+  struct Waiting {
+    TileRequestId id;
+    TileAddress address;
+    Callback done;
+  };
+  TileResult answer(const TileAddress& a) const {
+    TileResult r;
+    const auto c = colours.find({a.layer, a.time});
+    if (c == colours.end()) {
+      r.status = TileStatus::Absent;
+      return r;
+    }
+    const GridSpec& g = grids.at(a.layer);
+    r.status = TileStatus::Ok;
+    r.contentType = "image/png";
+    r.bytes = solidPng(g.tileWidth, g.tileHeight, c->second);
+    return r;
+  }
+  mutable std::mutex mutex_;
+  std::deque<Waiting> waiting_;
+  std::map<std::string, int> deepest_;
+  TileRequestId next_ = 0;
+};
+
+constexpr GridSpec kGrid{Sector{}, 36.0, 32, 32, 6};
+constexpr Rgba kBase{200, 40, 40, 255};
+constexpr Rgba kBlue{20, 60, 220, 255};
+constexpr Rgba kGreenHalf{0, 255, 0, 128}; ///< a texel that is itself half transparent
+
+void fill(ColourWorld& w) {
+  w.grids["base"] = kGrid;
+  w.grids["blue"] = kGrid;
+  w.grids["green"] = kGrid;
+  w.grids["empty"] = kGrid; // every tile absent: must show what lies under it
+  w.colours[{"base", ""}] = kBase;
+  w.colours[{"blue", ""}] = kBlue;
+  w.colours[{"green", ""}] = kGreenHalf;
+}
+
+RendererOptions opts(std::vector<LayerOptions> overlays, int perPass = 0) {
+  RendererOptions o;
+  o.layer = "base";
+  o.width = 96;
+  o.height = 96;
+  o.overlays = std::move(overlays);
+  o.overlaysPerPass = perPass;
+  return o;
+}
+
+const CameraPose kView{10.0, 20.0, 8.0e6, 0.0, 0.0}; // the globe fills the middle of the image
+
+Rgba centre(const Renderer& r, const std::vector<std::uint8_t>& px) {
+  const auto i = static_cast<std::size_t>(((r.height() / 2) * r.width() + r.width() / 2) * 4);
+  return {px[i], px[i + 1], px[i + 2], px[i + 3]};
+}
+
+/** Over the middle 20 x 20 pixels (inside the globe): the largest difference from `want`. */
+int worstOff(const Renderer& r, const std::vector<std::uint8_t>& px, const std::array<double, 3>& want) {
+  int worst = 0;
+  for (int y = r.height() / 2 - 10; y < r.height() / 2 + 10; ++y)
+    for (int x = r.width() / 2 - 10; x < r.width() / 2 + 10; ++x)
+      for (std::size_t c = 0; c < 3; ++c) {
+        const double v = px[static_cast<std::size_t>((y * r.width() + x) * 4) + c];
+        worst = std::max(worst, static_cast<int>(std::lround(std::abs(v - want[c]))));
+      }
+  return worst;
+}
+
+std::array<double, 3> over(const std::array<double, 3>& under, Rgba top, double opacity) {
+  const double a = top[3] / 255.0 * opacity;
+  std::array<double, 3> out{};
+  for (std::size_t c = 0; c < 3; ++c)
+    out[c] = under[c] * (1.0 - a) + top[c] * a;
+  return out;
+}
+
+const std::array<double, 3> kBaseRgb{kBase[0], kBase[1], kBase[2]};
+
+TEST(LayersGl, HalfOverlayOverAKnownColourGivesTheMix) {
+  ColourWorld w;
+  fill(w);
+  const Geodesy wgs;
+  OPEN_RENDERER(r, w, wgs, opts({{"blue", "", 0.5, true, -1}}));
+  const auto done = gltest::renderComplete(r, kView);
+  ASSERT_TRUE(done.complete);
+  const auto want = over(kBaseRgb, kBlue, 0.5); // (110, 50, 130)
+  EXPECT_LE(worstOff(r, done.pixels, want), 2)
+      << "centre " << int(centre(r, done.pixels)[0]) << "," << int(centre(r, done.pixels)[1])
+      << "," << int(centre(r, done.pixels)[2]);
+  EXPECT_EQ(done.stats.passes, 1);
+  ASSERT_EQ(done.stats.layers.size(), 2u);
+  EXPECT_EQ(done.stats.layers[1].name, "blue");
+  EXPECT_GT(done.stats.layers[1].tilesReceived, 0u);
+}
+
+// Three overlays (one with its own alpha, one absent everywhere) in one pass and in one pass
+// each: the same colours, and the texel's alpha times the layer's opacity.
+TEST(LayersGl, OnePassAndSeveralPassesGiveTheSameImage) {
+  ColourWorld w;
+  fill(w);
+  const Geodesy wgs;
+  const std::vector<LayerOptions> layers = {{"blue", "", 0.5, true, -1},
+                                            {"empty", "", 1.0, true, -1},
+                                            {"green", "", 0.8, true, -1}};
+  std::vector<std::uint8_t> one, several;
+  {
+    OPEN_RENDERER(r, w, wgs, opts(layers));
+    const auto done = gltest::renderComplete(r, kView);
+    ASSERT_TRUE(done.complete);
+    ASSERT_GE(done.stats.overlaysPerPass, 3);
+    EXPECT_EQ(done.stats.passes, 1);
+    one = done.pixels;
+    const auto want = over(over(kBaseRgb, kBlue, 0.5), kGreenHalf, 0.8);
+    EXPECT_LE(worstOff(r, one, want), 2);
+  }
+  {
+    OPEN_RENDERER(r, w, wgs, opts(layers, 1));
+    const auto done = gltest::renderComplete(r, kView);
+    ASSERT_TRUE(done.complete);
+    EXPECT_EQ(done.stats.overlaysPerPass, 1);
+    EXPECT_EQ(done.stats.passes, 2); // "empty" has no texture anywhere: nothing to draw
+    several = done.pixels;
+  }
+  ASSERT_EQ(one.size(), several.size());
+  int worst = 0;
+  for (std::size_t i = 0; i < one.size(); ++i)
+    worst = std::max(worst, std::abs(int(one[i]) - int(several[i])));
+  EXPECT_LE(worst, 1) << "one pass and three passes differ";
+}
+
+TEST(LayersGl, OpacityVisibilityAndMaximumLevelChangeAtRunTime) {
+  ColourWorld w;
+  fill(w);
+  const Geodesy wgs;
+  // Close enough that the base goes deeper than level 1.
+  const CameraPose low{10.0, 20.0, 3.0e5, 0.0, 0.0};
+  OPEN_RENDERER(r, w, wgs, opts({{"blue", "", 1.0, true, 1}}));
+  auto done = gltest::renderComplete(r, low);
+  ASSERT_TRUE(done.complete);
+  EXPECT_GT(done.stats.maxLevel, 1);
+  EXPECT_LE(w.deepest("blue"), 1); // never asked past its maximum level
+  EXPECT_LE(worstOff(r, done.pixels, {20, 60, 220}), 2); // drawn from its level-1 tiles
+  r.setLayerOpacity(1, 0.25);
+  done = gltest::renderComplete(r, low);
+  EXPECT_LE(worstOff(r, done.pixels, over(kBaseRgb, kBlue, 0.25)), 2);
+  r.setLayerVisible(1, false);
+  done = gltest::renderComplete(r, low);
+  EXPECT_LE(worstOff(r, done.pixels, kBaseRgb), 2);
+  EXPECT_THROW(r.setLayerOpacity(1, 1.5), std::invalid_argument);
+  EXPECT_THROW(r.setLayerOpacity(0, 0.5), std::invalid_argument);
+  EXPECT_THROW(r.setLayerVisible(2, true), std::invalid_argument);
+}
+
+// A time change: the new time's tiles are fetched while the old time is still drawn, and the layer
+// swaps all at once (never tile by tile) when they are all there.
+TEST(LayersGl, TimeChangeSwapsTheLayerAllAtOnce) {
+  ColourWorld w;
+  fill(w);
+  w.colours[{"blue", "2020-01-01"}] = kBlue;
+  w.colours[{"blue", "2020-01-02"}] = Rgba{250, 250, 20, 255};
+  w.held = {"2020-01-02"};
+  const Geodesy wgs;
+  OPEN_RENDERER(r, w, wgs, opts({{"blue", "2020-01-01", 1.0, true, -1}}));
+  auto done = gltest::renderComplete(r, kView);
+  ASSERT_TRUE(done.complete);
+  EXPECT_LE(worstOff(r, done.pixels, {20, 60, 220}), 2);
+  r.setLayerTime(1, "2020-01-02");
+  // Answer the new time's tiles a few at a time: until the last one, every frame shows the old
+  // time everywhere.
+  int frames = 0;
+  for (; frames < 400; ++frames) {
+    r.frame(kView);
+    const auto px = r.readPixels();
+    if (r.stats().layers[1].pendingTime.empty()) break; // swapped
+    EXPECT_EQ(r.stats().layers[1].time, "2020-01-01");
+    ASSERT_LE(worstOff(r, px, {20, 60, 220}), 2) << "a tile of the new time showed before the swap";
+    EXPECT_FALSE(r.complete());
+    w.release(1);
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  EXPECT_GT(frames, 5) << "the new time's tiles came in over several frames";
+  EXPECT_EQ(r.stats().layers[1].swaps, 1u);
+  EXPECT_EQ(r.stats().layers[1].time, "2020-01-02");
+  done = gltest::renderComplete(r, kView);
+  EXPECT_LE(worstOff(r, done.pixels, {250, 250, 20}), 2);
+  // Going back and forth before a swap: setting the current time again cancels the pending one.
+  r.setLayerTime(1, "2020-01-01");
+  r.frame(kView);
+  EXPECT_EQ(r.stats().layers[1].pendingTime, "2020-01-01");
+  r.setLayerTime(1, "2020-01-02");
+  r.frame(kView);
+  EXPECT_TRUE(r.stats().layers[1].pendingTime.empty());
+  EXPECT_EQ(r.stats().layers[1].swaps, 1u);
+}
+
+// The base layer changes time the same way (a daily imagery set as the base).
+TEST(LayersGl, TheBaseLayerSwapsTimeAllAtOnceToo) {
+  ColourWorld w;
+  fill(w);
+  w.colours[{"base", "d1"}] = kBase;
+  w.colours[{"base", "d2"}] = Rgba{30, 200, 30, 255};
+  w.held = {"d2"};
+  const Geodesy wgs;
+  RendererOptions o = opts({});
+  o.time = "d1";
+  OPEN_RENDERER(r, w, wgs, o);
+  ASSERT_TRUE(gltest::renderComplete(r, kView).complete);
+  r.setLayerTime(0, "d2");
+  for (int i = 0; i < 400; ++i) {
+    r.frame(kView);
+    if (r.stats().layers[0].pendingTime.empty()) break; // swapped
+    ASSERT_LE(worstOff(r, r.readPixels(), kBaseRgb), 2) << "a tile of d2 showed before the swap";
+    w.release(1);
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  const auto done = gltest::renderComplete(r, kView);
+  ASSERT_TRUE(done.complete);
+  EXPECT_LE(worstOff(r, done.pixels, {30, 200, 30}), 2);
+  EXPECT_EQ(done.stats.layers[0].swaps, 1u);
+}
+
+// Regional datasets in one layer: a global dataset (levels 0-2) and a detailed regional one
+// (levels 0-5) over a box; deep over the box the regional colour shows, elsewhere the global one
+// (deeper levels there are absent and fall back to the global dataset's level 2).
+TEST(LayersGl, TheSmallestCoveringDatasetWins) {
+  ColourWorld w;
+  w.grids["global"] = GridSpec{Sector{}, 36.0, 32, 32, 3};
+  w.grids["region"] = GridSpec{Sector{9.0, 0.0, 27.0, 18.0}, 36.0, 32, 32, 6};
+  w.colours[{"global", ""}] = kBase;
+  w.colours[{"region", ""}] = kBlue;
+  auto regional = RegionalTileSource::create(w, {{"imagery", {"global", "region"}}});
+  ASSERT_TRUE(regional.has_value()) << regional.error();
+  const Geodesy wgs;
+  RendererOptions o = opts({});
+  o.layer = "imagery";
+  OPEN_RENDERER(r, **regional, wgs, o);
+  // Inside the box, close: regional tiles.
+  auto done = gltest::renderComplete(r, {9.0, 18.0, 4.0e5, 0.0, 0.0});
+  ASSERT_TRUE(done.complete);
+  EXPECT_GT(done.stats.maxLevel, 2);
+  EXPECT_LE(worstOff(r, done.pixels, {20, 60, 220}), 2);
+  // Outside it, as close: the global dataset's colour.
+  done = gltest::renderComplete(r, {-30.0, -60.0, 4.0e5, 0.0, 0.0});
+  ASSERT_TRUE(done.complete);
+  EXPECT_LE(worstOff(r, done.pixels, kBaseRgb), 2);
+  EXPECT_EQ(w.deepest("global"), 2);
+  EXPECT_GT(w.deepest("region"), 2);
+}
+
+TEST(LayersGl, AnOverlayOnAnotherGridIsRefusedWithAReason) {
+  ColourWorld w;
+  fill(w);
+  w.grids["coarse"] = GridSpec{Sector{}, 20.0, 32, 32, 3};
+  const Geodesy wgs;
+  if (!haveDisplay()) GTEST_SKIP() << "no DISPLAY";
+  auto made = Renderer::create(w, wgs, opts({{"coarse", "", 1.0, true, -1}}));
+  ASSERT_FALSE(made.has_value());
+  EXPECT_NE(made.error().find("grid"), std::string::npos) << made.error();
+  made = Renderer::create(w, wgs, opts({{"nope", "", 1.0, true, -1}}));
+  ASSERT_FALSE(made.has_value());
+  made = Renderer::create(w, wgs, opts({{"blue", "", 2.0, true, -1}}));
+  ASSERT_FALSE(made.has_value());
+}
+
+} // namespace
