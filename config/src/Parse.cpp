@@ -420,7 +420,8 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
                "decode_threads",
                "terrain",
                "earth",
-               "geoid"});
+               "geoid",
+               "layers"});
   if (auto v = m.get("lod_threshold")) g.lodThreshold = number(r, *v, m.path("lod_threshold"));
   if (auto v = m.get("mesh_size")) g.meshSize = int32(r, *v, m.path("mesh_size"));
   if (auto v = m.get("fov")) g.fovDeg = number(r, *v, m.path("fov"));
@@ -436,7 +437,7 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
               tnode,
               m.path("terrain"),
               twhere,
-              {"enabled", "layer", "exaggeration", "clearance", "sun"});
+              {"enabled", "layer", "exaggeration", "clearance", "sun", "regional"});
   TerrainSettings& ts = g.terrain;
   if (auto v = t.get("enabled")) ts.enabled = boolean(r, *v, t.path("enabled"));
   if (auto v = t.get("layer")) ts.layer = text(r, *v, t.path("layer"));
@@ -449,6 +450,40 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
       r.fail(v->Mark(), sp, "expected 2 numbers [lat, lon], got " + std::to_string(items.size()));
     ts.sun = std::array<double, 2>{number(r, items[0], indexPath(sp, 0)),
                                    number(r, items[1], indexPath(sp, 1))};
+  }
+  if (auto v = t.get("regional")) {
+    const std::string rp = t.path("regional");
+    const auto items = list(r, *v, rp);
+    for (std::size_t i = 0; i < items.size(); ++i)
+      ts.regional.push_back(text(r, items[i], indexPath(rp, i)));
+  }
+  if (auto v = m.get("layers")) {
+    const std::string lp = m.path("layers");
+    const auto items = list(r, *v, lp);
+    for (std::size_t i = 0; i < items.size(); ++i) {
+      const std::string ip = indexPath(lp, i);
+      const Map e(r,
+                  items[i],
+                  ip,
+                  items[i].Mark(),
+                  {"layer", "regional", "opacity", "visible", "max_level", "time"});
+      RenderLayerSettings l;
+      if (auto x = e.get("layer"))
+        l.layer = text(r, *x, e.path("layer"));
+      else
+        r.fail(items[i].Mark(), ip, "needs 'layer' (an imagery layer's name)");
+      if (auto x = e.get("regional")) {
+        const std::string rp = e.path("regional");
+        const auto names = list(r, *x, rp);
+        for (std::size_t j = 0; j < names.size(); ++j)
+          l.regional.push_back(text(r, names[j], indexPath(rp, j)));
+      }
+      if (auto x = e.get("opacity")) l.opacity = number(r, *x, e.path("opacity"));
+      if (auto x = e.get("visible")) l.visible = boolean(r, *x, e.path("visible"));
+      if (auto x = e.get("max_level")) l.maxLevel = int32(r, *x, e.path("max_level"));
+      if (auto x = e.get("time")) l.time = text(r, *x, e.path("time"));
+      g.layers.push_back(std::move(l));
+    }
   }
   if (auto v = m.get("earth"))
     g.earth = choice(r, *v, m.path("earth"), {"wgs84", "sphere"}) == 0 ? EarthShape::Wgs84

@@ -335,6 +335,86 @@ std::optional<ValidationIssue> findIssue(const Config& c, bool checkFiles) {
       return ValidationIssue{
           "renderer.terrain.layer", "renderer", "'" + t + "' is not an elevation layer"};
   }
+  // Regional datasets share their layer's grid (a key is the same sector in each).
+  const auto sameGrid = [](const LayerConfig& a, const LayerConfig& b) {
+    const GridSpec &x = a.dataset.grid, &y = b.dataset.grid;
+    return x.levelZeroDeltaDeg == y.levelZeroDeltaDeg && x.tileWidth == y.tileWidth &&
+           x.tileHeight == y.tileHeight;
+  };
+  const auto checkRegional = [&](const std::vector<std::string>& names,
+                                 const LayerConfig* main,
+                                 LayerKind kind,
+                                 const std::string& at) -> std::optional<ValidationIssue> {
+    for (std::size_t j = 0; j < names.size(); ++j) {
+      const std::string p = at + ".regional[" + std::to_string(j) + "]";
+      const auto* l = c.layer(names[j]);
+      if (l == nullptr || l->kind != kind)
+        return ValidationIssue{p,
+                               "renderer",
+                               "'" + names[j] + "' is not " +
+                                   (kind == LayerKind::Imagery ? "an imagery" : "an elevation") +
+                                   " layer"};
+      if (main != nullptr && !sameGrid(*main, *l))
+        return ValidationIssue{p,
+                               "renderer",
+                               "'" + names[j] +
+                                   "' has another grid (level_zero_delta, tile_size) "
+                                   "than '" +
+                                   main->name + "'"};
+    }
+    return std::nullopt;
+  };
+  {
+    const LayerConfig* elevation = nullptr;
+    for (const auto& l : c.layers)
+      if (l.kind == LayerKind::Elevation &&
+          (c.renderer.terrain.layer.empty() || l.name == c.renderer.terrain.layer)) {
+        elevation = &l;
+        break;
+      }
+    if (auto e = checkRegional(
+            c.renderer.terrain.regional, elevation, LayerKind::Elevation, "renderer.terrain"))
+      return e;
+  }
+  const LayerConfig* base = nullptr;
+  for (std::size_t i = 0; i < c.renderer.layers.size(); ++i) {
+    const RenderLayerSettings& rl = c.renderer.layers[i];
+    const std::string at = "renderer.layers[" + std::to_string(i) + "]";
+    const auto* l = c.layer(rl.layer);
+    if (l == nullptr || l->kind != LayerKind::Imagery)
+      return ValidationIssue{
+          at + ".layer", "renderer", "'" + rl.layer + "' is not an imagery layer"};
+    if (i == 0) {
+      base = l;
+      if ((rl.opacity && *rl.opacity != 1.0) || !rl.visible)
+        return ValidationIssue{at,
+                               "renderer",
+                               "the first entry is the opaque base: opacity and visible apply to "
+                               "the overlays after it"};
+    } else if (l->dataset.grid.levelZeroDeltaDeg != base->dataset.grid.levelZeroDeltaDeg) {
+      return ValidationIssue{at + ".layer",
+                             "renderer",
+                             "'" + rl.layer + "' has another level_zero_delta than the base '" +
+                                 base->name + "': an overlay must share the base's grid"};
+    }
+    if (rl.opacity && !(*rl.opacity >= 0.0 && *rl.opacity <= 1.0))
+      return ValidationIssue{
+          at + ".opacity", "renderer", "must be in [0, 1], got " + num(*rl.opacity)};
+    if (rl.maxLevel < -1 || rl.maxLevel > 40)
+      return ValidationIssue{
+          at + ".max_level", "renderer", "must be in [0, 40], got " + str(rl.maxLevel)};
+    if (!rl.time.empty()) {
+      if (!l->time.enabled())
+        return ValidationIssue{
+            at + ".time", "renderer", "'" + rl.layer + "' has no TIME dimension"};
+      if (!l->time.values.empty() &&
+          std::find(l->time.values.begin(), l->time.values.end(), rl.time) == l->time.values.end())
+        return ValidationIssue{at + ".time",
+                               "renderer",
+                               "'" + rl.time + "' is not a TIME value of '" + rl.layer + "'"};
+    }
+    if (auto e = checkRegional(rl.regional, l, LayerKind::Imagery, at)) return e;
+  }
   return std::nullopt;
 }
 

@@ -914,3 +914,95 @@ TEST(ConfigYaml, LoadConfigReportsUnreadableFiles) {
   ASSERT_FALSE(directory);
   EXPECT_NE(directory.error().message.find("directory"), std::string::npos);
 }
+
+// ---- renderer.layers (issue #7) -----------------------------------------------------------------
+
+namespace {
+
+constexpr std::string_view kLayered = R"(upstreams:
+  - name: up
+    type: wms
+    url: http://example.org/wms
+layers:
+  - name: bm
+    upstream: up
+    format: image/jpeg
+    grid: {levels: 3}
+  - name: alps
+    upstream: up
+    format: image/jpeg
+    grid: {levels: 8, sector: [4.5, 43.2, 16.2, 48.6]}
+  - name: sst
+    upstream: up
+    format: image/png
+    opacity: 0.7
+    grid: {levels: 2}
+    time: {values: [2020-01-01, 2020-02-01]}
+  - name: ww
+    upstream: up
+    format: image/png
+    grid: {levels: 2, level_zero_delta: 20, tile_size: 150}
+  - name: dem
+    upstream: up
+    format: application/bil16
+    grid: {levels: 4, level_zero_delta: 20, tile_size: 150}
+  - name: dem-alps
+    upstream: up
+    format: application/bil16
+    grid: {levels: 9, level_zero_delta: 20, tile_size: 150, sector: [4, 43, 17, 49]}
+renderer:
+  terrain:
+    layer: dem
+    regional: [dem-alps]
+  layers:
+    - layer: bm
+      regional: [alps]
+    - layer: sst
+      time: 2020-02-01
+      max_level: 1
+    - layer: sst
+      opacity: 0.25
+      visible: false
+)";
+
+} // namespace
+
+TEST(ConfigYaml, RendererLayersAreRead) {
+  const auto c = parse(kLayered);
+  ASSERT_TRUE(c) << c.error().toString();
+  const auto& l = c->renderer.layers;
+  ASSERT_EQ(l.size(), 3u);
+  EXPECT_EQ(l[0].layer, "bm");
+  EXPECT_EQ(l[0].regional, std::vector<std::string>{"alps"});
+  EXPECT_FALSE(l[0].opacity.has_value());
+  EXPECT_EQ(l[1].layer, "sst");
+  EXPECT_EQ(l[1].time, "2020-02-01");
+  EXPECT_EQ(l[1].maxLevel, 1);
+  EXPECT_TRUE(l[1].visible);
+  EXPECT_EQ(l[2].opacity, 0.25);
+  EXPECT_FALSE(l[2].visible);
+  EXPECT_EQ(l[2].maxLevel, -1);
+  EXPECT_EQ(c->renderer.terrain.regional, std::vector<std::string>{"dem-alps"});
+}
+
+TEST(ConfigYaml, RendererLayersAreValidated) {
+  const auto bad = [](std::string_view from, std::string_view to) {
+    return errorOf(swap(kLayered, from, to)).message;
+  };
+  EXPECT_NE(bad("    - layer: bm\n", "    - layer: bm\n      opacity: 0.5\n").find("opaque base"),
+            std::string::npos);
+  EXPECT_NE(bad("    - layer: sst\n      time", "    - layer: ww\n      time").find("grid"),
+            std::string::npos);
+  EXPECT_NE(bad("regional: [alps]", "regional: [ww]").find("another grid"), std::string::npos);
+  EXPECT_NE(bad("regional: [alps]", "regional: [dem]").find("not an imagery layer"),
+            std::string::npos);
+  EXPECT_NE(bad("regional: [dem-alps]", "regional: [alps]").find("not an elevation layer"),
+            std::string::npos);
+  EXPECT_NE(bad("time: 2020-02-01", "time: 2020-03-01").find("not a TIME value"),
+            std::string::npos);
+  EXPECT_NE(bad("opacity: 0.25", "opacity: 1.5").find("[0, 1]"), std::string::npos);
+  EXPECT_NE(bad("    - layer: bm\n", "    - layer: dem\n").find("not an imagery layer"),
+            std::string::npos);
+  EXPECT_NE(bad("      max_level: 1", "      max_level: -3").find("[0, 40]"), std::string::npos);
+  EXPECT_NE(bad("      max_level: 1", "      depth: 1").find("depth"), std::string::npos);
+}

@@ -47,7 +47,8 @@ public:
   std::map<std::pair<std::string, std::string>, Rgba> colours; ///< (layer, time) -> colour
   std::set<std::string> held;
 
-  std::optional<DatasetSpec> describe(std::string_view layer, std::string_view time) const override {
+  std::optional<DatasetSpec> describe(std::string_view layer,
+                                      std::string_view time) const override {
     const auto it = grids.find(std::string(layer));
     if (it == grids.end()) return std::nullopt;
     DatasetSpec d;
@@ -160,7 +161,9 @@ Rgba centre(const Renderer& r, const std::vector<std::uint8_t>& px) {
 }
 
 /** Over the middle 20 x 20 pixels (inside the globe): the largest difference from `want`. */
-int worstOff(const Renderer& r, const std::vector<std::uint8_t>& px, const std::array<double, 3>& want) {
+int worstOff(const Renderer& r,
+             const std::vector<std::uint8_t>& px,
+             const std::array<double, 3>& want) {
   int worst = 0;
   for (int y = r.height() / 2 - 10; y < r.height() / 2 + 10; ++y)
     for (int x = r.width() / 2 - 10; x < r.width() / 2 + 10; ++x)
@@ -190,8 +193,8 @@ TEST(LayersGl, HalfOverlayOverAKnownColourGivesTheMix) {
   ASSERT_TRUE(done.complete);
   const auto want = over(kBaseRgb, kBlue, 0.5); // (110, 50, 130)
   EXPECT_LE(worstOff(r, done.pixels, want), 2)
-      << "centre " << int(centre(r, done.pixels)[0]) << "," << int(centre(r, done.pixels)[1])
-      << "," << int(centre(r, done.pixels)[2]);
+      << "centre " << int(centre(r, done.pixels)[0]) << "," << int(centre(r, done.pixels)[1]) << ","
+      << int(centre(r, done.pixels)[2]);
   EXPECT_EQ(done.stats.passes, 1);
   ASSERT_EQ(done.stats.layers.size(), 2u);
   EXPECT_EQ(done.stats.layers[1].name, "blue");
@@ -204,9 +207,8 @@ TEST(LayersGl, OnePassAndSeveralPassesGiveTheSameImage) {
   ColourWorld w;
   fill(w);
   const Geodesy wgs;
-  const std::vector<LayerOptions> layers = {{"blue", "", 0.5, true, -1},
-                                            {"empty", "", 1.0, true, -1},
-                                            {"green", "", 0.8, true, -1}};
+  const std::vector<LayerOptions> layers = {
+      {"blue", "", 0.5, true, -1}, {"empty", "", 1.0, true, -1}, {"green", "", 0.8, true, -1}};
   std::vector<std::uint8_t> one, several;
   {
     OPEN_RENDERER(r, w, wgs, opts(layers));
@@ -243,7 +245,7 @@ TEST(LayersGl, OpacityVisibilityAndMaximumLevelChangeAtRunTime) {
   auto done = gltest::renderComplete(r, low);
   ASSERT_TRUE(done.complete);
   EXPECT_GT(done.stats.maxLevel, 1);
-  EXPECT_LE(w.deepest("blue"), 1); // never asked past its maximum level
+  EXPECT_LE(w.deepest("blue"), 1);                       // never asked past its maximum level
   EXPECT_LE(worstOff(r, done.pixels, {20, 60, 220}), 2); // drawn from its level-1 tiles
   r.setLayerOpacity(1, 0.25);
   done = gltest::renderComplete(r, low);

@@ -5,6 +5,7 @@
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/config/Config.hpp>
 #include <tellus/planet/Geodesy.hpp>
+#include <tellus/planet/RegionalSource.hpp>
 #include <tellus/planet/Terrain.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
 #include <tellus/planet_gl/Viewer.hpp>
@@ -73,11 +74,14 @@ commands:
              [--layer NAME] [--threshold T] [--earth wgs84|sphere] [--offline | --server URL]
              or a flight: --path PATH.json --frames DIR [--fps N] [--repeat N] instead of
              --camera/--out
-             (PATH.json: [{"time":0,"lat":..,"lon":..,"alt":..,"heading":..,"tilt":..}, ...])
+             (PATH.json: [{"time":0,"lat":..,"lon":..,"alt":..,"heading":..,"tilt":..,
+              "times":{"LAYER":"TIME"}}, ...]: a layer's time from that keyframe on)
   view     the interactive globe (a GLFW window)
              [--camera LAT,LON,ALT[,HEADING,TILT]] [--size WxH] [--layer NAME] [--threshold T]
              [--earth wgs84|sphere] [--offline | --server URL]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc
              render and view: [--no-terrain] [--exaggeration X] [--sun LAT,LON]
+             [--overlay NAME[,OPACITY]]... (imagery over the base; also renderer.layers);
+             view: 0-9 select a layer (1-9 also show/hide it), - = opacity, [ ] its time
              render: [--edge-fixing on|off] (off shows the cracks it closes; for comparisons)
   height   the terrain height in metres at a point, from the elevation layer's deepest level
              --lat A --lon B [--elevation LAYER] [--offline | --server URL]
@@ -1001,7 +1005,29 @@ std::string renderStatsJson(const planet::RenderStats& s, double seconds, bool c
                 s.edgesFixed,
                 s.zeroAreaTriangles,
                 s.cameraLifted ? "true" : "false");
-  return buf + jsonString(s.glVersion) + terrain + "\n}\n";
+  // The layers (issue #7): the base, then the overlays in drawing order.
+  std::string layers = ",\n  \"passes\": " + std::to_string(s.passes) +
+                       ",\n  \"overlays_per_pass\": " + std::to_string(s.overlaysPerPass) +
+                       ",\n  \"layers\": [";
+  for (std::size_t i = 0; i < s.layers.size(); ++i) {
+    const auto& l = s.layers[i];
+    char row[512];
+    std::snprintf(row,
+                  sizeof row,
+                  ", \"opacity\": %.3f, \"visible\": %s, \"tiles_requested\": %zu, "
+                  "\"tiles_received\": %zu, \"textures_resident\": %zu, \"swaps\": %zu}",
+                  l.opacity,
+                  l.visible ? "true" : "false",
+                  l.tilesRequested,
+                  l.tilesReceived,
+                  l.texturesResident,
+                  l.swaps);
+    layers += std::string(i == 0 ? "\n    " : ",\n    ") + "{\"name\": " + jsonString(l.name) +
+              ", \"time\": " + jsonString(l.time) +
+              ", \"pending_time\": " + jsonString(l.pendingTime) + row;
+  }
+  layers += "\n  ]";
+  return buf + jsonString(s.glVersion) + terrain + layers + "\n}\n";
 }
 
 /** The frame times of a render (",\n" and the keys that close the statistics object): median,
@@ -1074,12 +1100,16 @@ std::optional<std::pair<int, int>> parseSize(const std::string& size) {
 struct Keyframe {
   double time = 0.0;
   planet::CameraPose pose;
+  /** "times": {"layer": "TIME", ...}: from this keyframe on, the layer shows that time (it swaps
+   * once the new time's tiles are all there; with --wait-complete every frame waits for it). */
+  std::map<std::string, std::string> times;
 };
 
 /**
  * Reads PATH.json: an array of objects (or {"keyframes": [...]}) with numbers time, lat, lon, alt
- * and optionally heading and tilt, times increasing. A small reader for just that shape: strings
- * are keys, numbers are values; anything else is an error naming the byte offset.
+ * and optionally heading and tilt, times increasing, and optionally "times": {"layer": "TIME"}. A
+ * small reader for just that shape: strings are keys, numbers are values; anything else is an error
+ * naming the byte offset.
  */
 std::expected<std::vector<Keyframe>, std::string> readPath(const fs::path& file) {
   std::FILE* f = std::fopen(file.c_str(), "rb");
@@ -1134,12 +1164,27 @@ std::expected<std::vector<Keyframe>, std::string> readPath(const fs::path& file)
     if (!eat('{')) return fail("expected a keyframe object");
     Keyframe k;
     bool seen[6] = {};
+    bool timesSeen = false;
     while (!eat('}')) {
-      if ((seen[0] || seen[1] || seen[2] || seen[3] || seen[4] || seen[5]) && !eat(','))
+      if ((seen[0] || seen[1] || seen[2] || seen[3] || seen[4] || seen[5] || timesSeen) &&
+          !eat(','))
         return fail("expected , or }");
       std::string key;
       double v = 0.0;
-      if (!string(&key) || !eat(':') || !number(&v)) return fail("expected \"name\": number");
+      if (!string(&key) || !eat(':')) return fail("expected \"name\":");
+      if (key == "times") {
+        if (!eat('{')) return fail("expected {\"layer\": \"TIME\", ...}");
+        while (!eat('}')) {
+          if (!k.times.empty() && !eat(',')) return fail("expected , or }");
+          std::string layer, value;
+          if (!string(&layer) || !eat(':') || !string(&value))
+            return fail("expected \"layer\": \"TIME\"");
+          k.times[layer] = value;
+        }
+        timesSeen = true;
+        continue;
+      }
+      if (!number(&v)) return fail("expected \"name\": number");
       static const char* names[6] = {"time", "lat", "lon", "alt", "heading", "tilt"};
       const auto at = std::find(std::begin(names), std::end(names), key);
       if (at == std::end(names)) return fail("unknown key '" + key + "'");
@@ -1204,9 +1249,95 @@ struct PlanetTiles {
   std::unique_ptr<Fetcher> fetcher;
   std::unique_ptr<TileService> service;
   std::unique_ptr<RemoteTileSource> remote;
+  std::unique_ptr<planet::RegionalTileSource> regional; ///< over service or remote, when used
   ITileSource* source = nullptr;
   EarthModel earth = EarthModel::Wgs84; ///< the configuration's renderer.earth
+  /** Per renderer layer (base, overlays): the TIME values `view` steps through ([ and ]). */
+  std::vector<std::vector<std::string>> layerTimes;
 };
+
+/** The layers drawn over the base chosen before (issue #7): renderer.layers[1..] of the
+ * configuration, then each --overlay NAME[,OPACITY]; the base's time from renderer.layers[0] when
+ * it is the base. Regional datasets (renderer.layers[].regional, renderer.terrain.regional) make
+ * each such layer one combined layer through a RegionalTileSource over the source. False after
+ * saying why. */
+bool applyRenderLayers(const RendererSettings& g,
+                       const Config* config,
+                       const Args& a,
+                       planet::RendererOptions& ro,
+                       PlanetTiles& t,
+                       const char* cmd) {
+  std::vector<planet::CombinedLayer> combined;
+  const auto combine = [&](const std::string& name, const std::vector<std::string>& regional) {
+    if (regional.empty()) return;
+    std::vector<std::string> datasets{name};
+    datasets.insert(datasets.end(), regional.begin(), regional.end());
+    for (const auto& c : combined)
+      if (c.name == name && c.datasets == datasets) return;
+    combined.push_back({name, std::move(datasets)});
+  };
+  const bool baseFromConfig = !g.layers.empty() && g.layers.front().layer == ro.layer;
+  if (baseFromConfig) {
+    ro.time = g.layers.front().time;
+    combine(ro.layer, g.layers.front().regional);
+  }
+  for (std::size_t i = 1; i < g.layers.size(); ++i) {
+    const RenderLayerSettings& l = g.layers[i];
+    planet::LayerOptions o;
+    o.layer = l.layer;
+    o.time = l.time;
+    const LayerConfig* lc = config != nullptr ? config->layer(l.layer) : nullptr;
+    o.opacity = l.opacity.value_or(lc != nullptr ? lc->opacity : 1.0);
+    o.visible = l.visible;
+    o.maxLevel = l.maxLevel;
+    ro.overlays.push_back(o);
+    combine(l.layer, l.regional);
+  }
+  for (const std::string& v : a.all("overlay")) {
+    planet::LayerOptions o;
+    const auto comma = v.find(',');
+    o.layer = v.substr(0, comma);
+    const LayerConfig* lc = config != nullptr ? config->layer(o.layer) : nullptr;
+    o.opacity = lc != nullptr ? lc->opacity : 1.0;
+    if (comma != std::string::npos) {
+      const auto op = parseNumbers(v.substr(comma + 1), 1, 1);
+      if (!op || !((*op)[0] >= 0.0 && (*op)[0] <= 1.0)) {
+        std::fprintf(stderr,
+                     "tellus %s: --overlay must be NAME[,OPACITY] with OPACITY in [0, 1], got "
+                     "'%s'\n",
+                     cmd,
+                     v.c_str());
+        return false;
+      }
+      o.opacity = (*op)[0];
+    }
+    if (o.layer.empty() ||
+        (config != nullptr && (lc == nullptr || lc->kind != LayerKind::Imagery))) {
+      std::fprintf(
+          stderr, "tellus %s: --overlay must name an imagery layer, got '%s'\n", cmd, v.c_str());
+      return false;
+    }
+    ro.overlays.push_back(o);
+  }
+  if (!ro.elevationLayer.empty()) combine(ro.elevationLayer, g.terrain.regional);
+  if (!combined.empty()) {
+    auto r = planet::RegionalTileSource::create(*t.source, std::move(combined));
+    if (!r) {
+      std::fprintf(stderr, "tellus %s: %s\n", cmd, r.error().c_str());
+      return false;
+    }
+    t.regional = std::move(*r);
+    t.source = t.regional.get();
+  }
+  const auto timesOf = [&](const std::string& name) {
+    const LayerConfig* lc = config != nullptr ? config->layer(name) : nullptr;
+    return lc != nullptr ? lc->time.values : std::vector<std::string>{};
+  };
+  t.layerTimes.push_back(timesOf(ro.layer));
+  for (const auto& o : ro.overlays)
+    t.layerTimes.push_back(timesOf(o.layer));
+  return true;
+}
 
 /** `--earth wgs84|sphere` of render and view; nullopt when absent, an error text when bad. */
 std::expected<std::optional<EarthModel>, std::string> earthArg(const Args& a) {
@@ -1270,6 +1401,7 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
     if (a.flag("offline"))
       return std::unexpected(usage("--server and --offline exclude each other", *server));
     bool terrain = !a.flag("no-terrain");
+    RendererSettings settings;
     if (const auto file = a.get("config")) { // only its renderer settings matter here
       auto loaded = loadConfig(*file);
       if (!loaded) {
@@ -1278,7 +1410,9 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
       }
       applyRendererSettings(loaded->renderer, a, ro, t.earth);
       terrain = terrain && loaded->renderer.terrain.enabled;
+      settings = loaded->renderer;
     }
+    if (!layerArg && !settings.layers.empty()) ro.layer = settings.layers.front().layer;
     if (auto bad = applyTerrainArgs(a, ro)) {
       std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());
       return std::unexpected(kExitUsage);
@@ -1305,6 +1439,7 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
         }
     t.remote = std::move(*remote);
     t.source = t.remote.get();
+    if (!applyRenderLayers(settings, nullptr, a, ro, t, cmd)) return std::unexpected(kExitUsage);
     return t;
   }
   t.ctx = setUp(a);
@@ -1343,6 +1478,8 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
       return std::unexpected(
           usage("--layer must name an imagery layer of the configuration", *layerArg));
     ro.layer = *layerArg;
+  } else if (!config.renderer.layers.empty()) {
+    ro.layer = config.renderer.layers.front().layer;
   } else {
     for (const auto& candidate : config.layers)
       if (candidate.kind == LayerKind::Imagery) {
@@ -1369,6 +1506,8 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
   }
   t.service = std::move(*tiles);
   t.source = t.service.get();
+  if (!applyRenderLayers(config.renderer, &config, a, ro, t, cmd))
+    return std::unexpected(kExitUsage);
   return t;
 }
 
@@ -1385,7 +1524,7 @@ int cmdRender(const Args& a) {
         "config",        "cache",       "data",   "camera", "size",       "out",
         "wait-complete", "background",  "stats",  "layer",  "threshold",  "offline",
         "server",        "path",        "frames", "fps",    "no-terrain", "exaggeration",
-        "sun",           "edge-fixing", "earth",  "repeat"};
+        "sun",           "edge-fixing", "earth",  "repeat", "overlay"};
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
   }
@@ -1563,12 +1702,32 @@ int cmdRender(const Args& a) {
     }
     const double duration = keys.back().time - keys.front().time;
     const auto count = static_cast<long long>(std::floor(duration * fps + 1e-9)) + 1;
+    // Layer times of the keyframes: which renderer layers (0 the base, then the overlays) a name
+    // means; every name must be drawn.
+    std::vector<std::string> drawnNames{ro.layer};
+    for (const auto& o : ro.overlays)
+      drawnNames.push_back(o.layer);
+    for (const Keyframe& k : keys)
+      for (const auto& [name, value] : k.times)
+        if (std::find(drawnNames.begin(), drawnNames.end(), name) == drawnNames.end())
+          return usage("a keyframe's \"times\" names a layer that is not drawn", name);
+    auto applyTimes = [&](double t) {
+      std::map<std::string, std::string> now;
+      for (const Keyframe& k : keys)
+        if (k.time <= t + 1e-9)
+          for (const auto& [name, value] : k.times)
+            now[name] = value;
+      for (const auto& [name, value] : now)
+        for (std::size_t i = 0; i < drawnNames.size(); ++i)
+          if (drawnNames[i] == name) r.setLayerTime(i, value);
+    };
     bool allComplete = true;
     // --repeat: the flight again in the same renderer (what stays resident is not streamed again:
     // the later passes' frame times are the views' cost without streaming).
     for (long long n = 0; n < count * repeat; ++n) {
-      const planet::CameraPose p =
-          poseAt(keys, keys.front().time + static_cast<double>(n % count) / fps);
+      const double at = keys.front().time + static_cast<double>(n % count) / fps;
+      const planet::CameraPose p = poseAt(keys, at);
+      applyTimes(at);
       const bool complete = renderOne(p, waitSeconds, !waitComplete);
       allComplete = allComplete && complete;
       if (waitComplete && !complete) {
@@ -1736,7 +1895,8 @@ int cmdView(const Args& a) {
                                                  "no-terrain",
                                                  "exaggeration",
                                                  "sun",
-                                                 "earth"};
+                                                 "earth",
+                                                 "overlay"};
   for (const auto& [k, v] : a.options)
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
@@ -1788,8 +1948,11 @@ int cmdView(const Args& a) {
     return kExitError;
   }
   vo.start = pose;
+  vo.layerTimes = tiles->layerTimes;
   std::printf("tellus view: drag to move, wheel to zoom, W/S tilt, A/D heading, R reset, "
-              "P screenshot, Esc quits\n");
+              "P screenshot, Esc quits%s\n",
+              ro.overlays.empty() ? ""
+                                  : "; layers: 0-9 select (1-9 show/hide), - = opacity, [ ] time");
   std::fflush(stdout);
   const auto frames = planet::runViewer(**renderer, vo);
   std::printf("tellus view: %llu frames\n", static_cast<unsigned long long>(frames));

@@ -236,7 +236,8 @@ partFor(const Node& node, const Node& region, GLuint texture, const UvTransform&
 
 struct Renderer::Impl {
   Impl(ITileSource& s, const Geodesy& g, RendererOptions o, TileGrid gr)
-      : source(s), geodesy(g), opt(std::move(o)), grid(gr), decoder(opt.decodeThreads, opt.decodeNice),
+      : source(s), geodesy(g), opt(std::move(o)), grid(gr),
+        decoder(opt.decodeThreads, opt.decodeNice),
         pacer(UploadPacing{.bytesPerFrame = opt.uploadBytesPerFrame,
                            .shareOfFrame = opt.uploadShareOfFrame}) {}
   ~Impl();
@@ -254,7 +255,7 @@ struct Renderer::Impl {
   GLint uViewProj = -1, uEye = -1, uEyeHigh = -1, uEyeLow = -1, uUv = -1, uTexture = -1, uSun = -1;
   GLint uBase = -1, uOverlayCount = -1, uOverlayUv = -1, uOverlayOpacity = -1;
   int overlaysPerPass = 1; ///< overlay textures one pass blends (texture units 1..)
-  bool fp64 = false; ///< vertex positions as doubles (GL 4.x), else high/low float pairs
+  bool fp64 = false;       ///< vertex positions as doubles (GL 4.x), else high/low float pairs
   GLuint globalTexture = 0;
   float anisotropy = 1.0f; ///< what the GL allows of opt.anisotropy
 
@@ -397,7 +398,8 @@ std::string Renderer::Impl::initGl() {
   fragDefines += "\n";
   const GLuint vs = compileShader(GL_VERTEX_SHADER, header + defines + kShader_planet_vert, &error);
   if (vs == 0) return error;
-  const GLuint fs = compileShader(GL_FRAGMENT_SHADER, header + fragDefines + kShader_planet_frag, &error);
+  const GLuint fs =
+      compileShader(GL_FRAGMENT_SHADER, header + fragDefines + kShader_planet_frag, &error);
   if (fs == 0) {
     glDeleteShader(vs);
     return error;
@@ -901,8 +903,7 @@ void Renderer::Impl::stepUploads() {
     if (++u.level < u.texture.levels.size()) continue;
     // Complete: drawable from the next frame on.
     const NodeKey key = u.texture.key;
-    if (auto old = l->textures.find(key); old != l->textures.end())
-      releaseTexture(*l, old->second);
+    if (auto old = l->textures.find(key); old != l->textures.end()) releaseTexture(*l, old->second);
     l->textures[key] = u.id;
     l->lru.insert(key, u.texture.bytes);
     l->uploading.erase(key);

@@ -11,6 +11,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace tellus::planet {
 
@@ -25,7 +26,13 @@ struct InputState {
   double pressX = 0.0, pressY = 0.0;
   bool doubleClick = false;
   double doubleX = 0.0, doubleY = 0.0;
+  std::vector<int> keys; ///< keys pressed since the last frame (layer controls)
 };
+
+extern "C" void onKey(GLFWwindow* w, int key, int, int action, int) {
+  if (action != GLFW_PRESS) return;
+  if (auto* s = static_cast<InputState*>(glfwGetWindowUserPointer(w))) s->keys.push_back(key);
+}
 
 extern "C" void onScroll(GLFWwindow* w, double, double dy) {
   if (auto* s = static_cast<InputState*>(glfwGetWindowUserPointer(w))) s->scroll += dy;
@@ -108,7 +115,16 @@ std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options) {
   glfwSetWindowUserPointer(window, &input);
   glfwSetScrollCallback(window, onScroll);
   glfwSetMouseButtonCallback(window, onMouseButton);
+  glfwSetKeyCallback(window, onKey);
   CameraPose pose = options.start;
+  std::size_t selected = renderer.layerCount() > 1 ? 1 : 0; // the layer [ ] - = act on
+  std::vector<std::size_t> timeIndex(renderer.layerCount(), 0);
+  for (std::size_t i = 0; i < renderer.layerCount() && i < options.layerTimes.size(); ++i) {
+    const auto& times = options.layerTimes[i];
+    const auto& now = renderer.stats().layers.size() > i ? renderer.stats().layers[i].time : "";
+    const auto it = std::find(times.begin(), times.end(), now);
+    timeIndex[i] = it == times.end() ? 0 : static_cast<std::size_t>(it - times.begin());
+  }
   double lastX = 0.0, lastY = 0.0;
   bool dragging = false;
   Flight flight;
@@ -200,6 +216,47 @@ std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options) {
       flight.active = false;
     }
     if (flight.active) pose = flight.at(dt);
+    // Layers: 0-9 select a layer (a digit of an overlay also shows or hides it), - and = lower and
+    // raise the selected overlay's opacity, [ and ] step its time through the configured values.
+    bool layersChanged = false;
+    for (const int key : input.keys) {
+      const std::size_t n = renderer.layerCount();
+      if (renderer.stats().layers.size() != n) continue; // before the first frame
+      if (key >= GLFW_KEY_0 && key <= GLFW_KEY_9) {
+        const auto k = static_cast<std::size_t>(key - GLFW_KEY_0);
+        if (k >= n) continue;
+        selected = k;
+        if (k > 0) renderer.setLayerVisible(k, !renderer.stats().layers[k].visible);
+      } else if ((key == GLFW_KEY_MINUS || key == GLFW_KEY_EQUAL) && selected > 0) {
+        const double o = renderer.stats().layers[selected].opacity;
+        renderer.setLayerOpacity(selected,
+                                 std::clamp(o + (key == GLFW_KEY_EQUAL ? 0.1 : -0.1), 0.0, 1.0));
+      } else if (key == GLFW_KEY_LEFT_BRACKET || key == GLFW_KEY_RIGHT_BRACKET) {
+        if (selected >= options.layerTimes.size() || options.layerTimes[selected].empty()) continue;
+        const auto& times = options.layerTimes[selected];
+        std::size_t& t = timeIndex[selected];
+        t = key == GLFW_KEY_RIGHT_BRACKET ? (t + 1) % times.size()
+                                          : (t + times.size() - 1) % times.size();
+        renderer.setLayerTime(selected, times[t]);
+      } else {
+        continue;
+      }
+      layersChanged = true;
+    }
+    input.keys.clear();
+    if (layersChanged) {
+      renderer.frame(pose); // the stats below show the change
+      const auto& l = renderer.stats().layers[selected];
+      std::printf("layer %zu %s: %s, opacity %.1f, time %s%s%s\n",
+                  selected,
+                  l.name.c_str(),
+                  l.visible ? "shown" : "hidden",
+                  l.opacity,
+                  l.time.empty() ? "(default)" : l.time.c_str(),
+                  l.pendingTime.empty() ? "" : " -> ",
+                  l.pendingTime.c_str());
+      std::fflush(stdout);
+    }
     if (glfwGetKey(window, GLFW_KEY_ESCAPE) == GLFW_PRESS)
       glfwSetWindowShouldClose(window, GLFW_TRUE);
 
@@ -262,6 +319,7 @@ std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options) {
   }
   glfwSetScrollCallback(window, nullptr);
   glfwSetMouseButtonCallback(window, nullptr);
+  glfwSetKeyCallback(window, nullptr);
   glfwSetWindowUserPointer(window, nullptr);
   return frames;
 }

@@ -79,6 +79,23 @@ struct TerrainSettings {
   double clearanceM = 2.0;   ///< the camera stays this far above the terrain, [0, 1e6]
   std::optional<std::array<double, 2>>
       sun; ///< [lat, lon] of the subsolar point: lighting; none = unlit
+  /** Elevation layers used where they cover a node whole, the smallest winning (a detailed
+   * regional DEM inside the global one); same grid as `layer`. */
+  std::vector<std::string> regional;
+};
+
+/** One entry of YAML `renderer.layers` (issue #7): an imagery layer drawn by the renderer. The
+ * first entry is the opaque base; the others are drawn over it in order. */
+struct RenderLayerSettings {
+  std::string layer; ///< a configured imagery layer
+  /** Imagery layers drawn as part of this one where they cover a node whole: the smallest
+   * covering dataset wins (a detailed regional dataset inside a global one; thesis 4.6.3). They
+   * must share the layer's level-zero tile size and tile size. */
+  std::vector<std::string> regional;
+  std::optional<double> opacity; ///< overlays: [0, 1]; default the layer's own `opacity`
+  bool visible = true;           ///< overlays: drawn at start
+  int maxLevel = -1;             ///< the deepest level fetched and drawn; -1: the layer's own
+  std::string time;              ///< a value of the layer's TIME dimension; "" = its default
 };
 
 struct RendererSettings {
@@ -91,7 +108,10 @@ struct RendererSettings {
   int maxSplitsPerFrame = 64;                 ///< nodes created a frame
   int decodeThreads = 2;                      ///< texture decoding workers
   TerrainSettings terrain;                    ///< YAML `renderer.terrain`
-  EarthShape earth = EarthShape::Wgs84;       ///< wgs84 | sphere
+  /** YAML `renderer.layers`: the base then the overlays; empty = the first imagery layer alone
+   * (or the command line's --layer and --overlay). */
+  std::vector<RenderLayerSettings> layers;
+  EarthShape earth = EarthShape::Wgs84; ///< wgs84 | sphere
   /** Heights of mean-sea-level datasets moved onto the ellipsoid with the EGM96 geoid (h = H + N,
    * the bundled data/egm96-30.pgm); false: taken as ellipsoid heights. Used by terrain. */
   bool geoid = true;

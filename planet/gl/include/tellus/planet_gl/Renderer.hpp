@@ -177,7 +177,7 @@ struct RenderStats {
   int overlaysPerPass = 0; ///< overlay textures blended in one pass
   int passes = 0;          ///< last frame: draw passes (1 + those the overlays needed)
   std::string glVersion;   ///< GL_VERSION and GL_RENDERER
-  bool reversedZ = false;            ///< glClipControl available (4.5 or ARB_clip_control)
+  bool reversedZ = false;  ///< glClipControl available (4.5 or ARB_clip_control)
 };
 
 class Renderer {

@@ -8,15 +8,20 @@
  * roughly), a double-click flies to the point under the cursor (three times closer, 1.5 s, eased;
  * a drag or R interrupts), the wheel zooms with a speed proportional to the altitude, W/S tilt,
  * A/D turn the heading, R resets to the start pose, P writes a screenshot PNG, Esc or closing the
- * window quits. The statistics line (fps, nodes drawn, tiles in flight, texture MB, camera) is
- * drawn at the top left of the window (its own 5 x 7 font, TextOverlay.cpp) and is the window
- * title, refreshed twice a second.
+ * window quits. Layers (issue #7): a digit selects a layer (0 the base, 1-9 the overlays; an
+ * overlay's digit also shows or hides it), - and = lower and raise the selected overlay's opacity
+ * by 0.1, [ and ] step the selected layer's time through its configured values (the layer swaps
+ * when the new time's tiles are all there). The statistics line (fps, nodes drawn, tiles in flight,
+ * texture MB, camera) is drawn at the top left of the window (its own 5 x 7 font, TextOverlay.cpp)
+ * and is the window title, refreshed twice a second.
  */
 
 #include <tellus/planet_gl/Renderer.hpp>
 
 #include <cstdint>
 #include <filesystem>
+#include <string>
+#include <vector>
 
 namespace tellus::planet {
 
@@ -25,6 +30,8 @@ struct ViewerOptions {
   std::filesystem::path screenshotDir = "."; ///< tellus-<n>.png
   /** Stop after this many frames (0: until closed); for tests. */
   std::uint64_t maxFrames = 0;
+  /** Per layer (0 the base, then the overlays): the times [ and ] step through; empty: none. */
+  std::vector<std::vector<std::string>> layerTimes;
 };
 
 /** Runs until the window closes (or maxFrames). Returns the number of frames drawn. */
