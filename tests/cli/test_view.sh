@@ -67,4 +67,20 @@ set -e
 "$tellus" view --cache "$work/cache" --size 160x100 --earth sphere --exit-after 3 \
   >"$work/sphere.txt" 2>&1 || fail "--earth sphere: $(cat "$work/sphere.txt")"
 grep -q "3 frames" "$work/sphere.txt" || fail "--earth sphere: $(cat "$work/sphere.txt")"
+# Layer keys (issue #7): with an overlay, 1 hides it and shows it again, - lowers its opacity.
+"$tellus" view --cache "$work/cache" --size 160x100 --camera 0,0,2e7 --overlay bluemarble,0.5 \
+  >"$work/layers.txt" 2>&1 &
+pid=$!
+win=$(timeout 30 xdotool search --sync --name '^tellus') || fail "no window: $(cat "$work/layers.txt")"
+win=$(echo "$win" | head -1)
+xdotool windowfocus --sync "$win" || true
+sleep 2
+for k in 1 1 minus; do xdotool key --window "$win" "$k"; sleep 0.5; done
+hold Escape
+for _ in $(seq 100); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+wait "$pid" || fail "tellus view with an overlay exited with $?: $(cat "$work/layers.txt")"
+pid=
+grep -q "layer 1 bluemarble: hidden, opacity 0.5" "$work/layers.txt" &&
+  grep -q "layer 1 bluemarble: shown, opacity 0.4" "$work/layers.txt" ||
+  fail "layer keys: $(cat "$work/layers.txt")"
 echo "view CLI: ok"
