@@ -85,6 +85,37 @@ sed '/^renderer:/,$d' "$work/layers.yaml" >"$work/plain.yaml"
 read -r r g b < <(pixel "$work/red.png" 80 60)
 near "$r" "$g" "$b" 255 0 0 2 || fail "--overlay band,1 should be opaque red: $r $g $b"
 
+# Regional heights (renderer.terrain.regional): a flat 1234 m DEM over 0-18 E, 36-54 N inside the
+# bundled ETOPO; `tellus height` reads the regional one inside it and ETOPO outside.
+gdal_create -q -of GTiff -ot Int16 -outsize 180 180 -bands 1 -burn 1234 -a_srs EPSG:4326 \
+  -a_ullr 0 54 18 36 -co TFW=YES "$work/dem.tif" || fail "gdal_create"
+cat >"$work/heights.yaml" <<YAML
+data_dir: $data
+cache: {root: $work/hcache}
+upstreams:
+  - {name: local, type: local, path: bmng_2048x1024.jpg}
+  - {name: etopo, type: local, path: etopo20_int16.tif}
+  - {name: dem, type: local, path: $work/dem.tif}
+layers:
+  - {name: bluemarble, upstream: local, format: image/jpeg, grid: {levels: 3}}
+  - name: etopo
+    upstream: etopo
+    format: application/bil16
+    grid: {level_zero_delta: 20, tile_size: 150, levels: 3}
+  - name: dem
+    upstream: dem
+    format: application/bil16
+    grid: {level_zero_delta: 20, tile_size: 150, levels: 6, sector: [0, 36, 18, 54]}
+renderer:
+  terrain: {layer: etopo, regional: [dem]}
+YAML
+[ "$("$tellus" height --config "$work/heights.yaml" --lat 45 --lon 9 2>/dev/null)" = 1234.00 ] ||
+  fail "regional height: $("$tellus" height --config "$work/heights.yaml" --lat 45 --lon 9 2>&1)"
+outside=$("$tellus" height --config "$work/heights.yaml" --lat 45 --lon 30 2>/dev/null)
+etopo=$(sed '/^renderer:/,$d' "$work/heights.yaml" >"$work/etopo.yaml" &&
+  "$tellus" height --config "$work/etopo.yaml" --lat 45 --lon 30 2>/dev/null)
+[ "$outside" = "$etopo" ] || fail "outside the regional DEM: $outside, ETOPO alone: $etopo"
+
 # A flight whose keyframes switch the overlay's time (a layer with a TIME dimension): every frame
 # is complete, and the layer ends at the last time named.
 sed 's|    grid: {level_zero_delta: 36, tile_size: 512, levels: 2}|&\n    time: {values: [2020-01-01, 2020-02-01]}|' \
