@@ -421,7 +421,8 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
                "terrain",
                "earth",
                "geoid",
-               "layers"});
+               "layers",
+               "overlays_per_pass"});
   if (auto v = m.get("lod_threshold")) g.lodThreshold = number(r, *v, m.path("lod_threshold"));
   if (auto v = m.get("mesh_size")) g.meshSize = int32(r, *v, m.path("mesh_size"));
   if (auto v = m.get("fov")) g.fovDeg = number(r, *v, m.path("fov"));
@@ -489,6 +490,8 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
     g.earth = choice(r, *v, m.path("earth"), {"wgs84", "sphere"}) == 0 ? EarthShape::Wgs84
                                                                        : EarthShape::Sphere;
   if (auto v = m.get("geoid")) g.geoid = boolean(r, *v, m.path("geoid"));
+  if (auto v = m.get("overlays_per_pass"))
+    g.overlaysPerPass = int32(r, *v, m.path("overlays_per_pass"));
 }
 
 void readCache(Reader& r, const Map& root, const fs::path& baseDir, CacheSettings& c) {

@@ -302,6 +302,9 @@ std::optional<ValidationIssue> checkRenderer(const RendererSettings& g) {
     return issue("terrain.clearance", "must be in [0, 1e6] metres, got " + num(t.clearanceM));
   if (t.sun && !((*t.sun)[0] >= -90.0 && (*t.sun)[0] <= 90.0 && std::isfinite((*t.sun)[1])))
     return issue("terrain.sun", "must be [lat, lon] with lat in [-90, 90]");
+  if (g.overlaysPerPass < 0 || g.overlaysPerPass > 8)
+    return issue("overlays_per_pass",
+                 "must be in [0, 8] (0: as the GPU allows), got " + str(g.overlaysPerPass));
   if (g.earth != EarthShape::Wgs84 && g.earth != EarthShape::Sphere)
     return issue("earth", "must be wgs84 or sphere");
   return std::nullopt;

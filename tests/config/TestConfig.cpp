@@ -161,6 +161,8 @@ TEST(Config, RendererSettingsAreValidated) {
   fails([](RendererSettings& g) { g.maxSplitsPerFrame = 0; }, "max_splits_per_frame");
   fails([](RendererSettings& g) { g.decodeThreads = 0; }, "decode_threads");
   fails([](RendererSettings& g) { g.earth = static_cast<EarthShape>(7); }, "earth");
+  fails([](RendererSettings& g) { g.overlaysPerPass = 9; }, "overlays_per_pass");
+  fails([](RendererSettings& g) { g.overlaysPerPass = -1; }, "overlays_per_pass");
   EXPECT_EQ(c.renderer.earth, EarthShape::Wgs84);
   EXPECT_TRUE(c.renderer.geoid);
   Config ok = c;

@@ -229,6 +229,7 @@ renderer:
   decode_threads: 3
   earth: sphere
   geoid: false
+  overlays_per_pass: 2
 upstreams:
   - name: ww
     type: worldwind
@@ -316,6 +317,7 @@ layers:
   EXPECT_EQ(c->renderer.decodeThreads, 3);
   EXPECT_EQ(c->renderer.earth, EarthShape::Sphere);
   EXPECT_FALSE(c->renderer.geoid);
+  EXPECT_EQ(c->renderer.overlaysPerPass, 2);
 
   const UpstreamConfig& ww = c->upstreams.at(0);
   EXPECT_EQ(ww.type, UpstreamConfig::Type::WorldWind);

@@ -1363,6 +1363,7 @@ void applyRendererSettings(const RendererSettings& g,
   ro.maxInFlight = static_cast<std::size_t>(g.maxInFlight);
   ro.maxSplitsPerFrame = g.maxSplitsPerFrame;
   ro.decodeThreads = g.decodeThreads;
+  ro.overlaysPerPass = g.overlaysPerPass;
   ro.verticalExaggeration = g.terrain.exaggeration;
   ro.terrainClearanceM = g.terrain.clearanceM;
   ro.sunLatLon = g.terrain.sun;

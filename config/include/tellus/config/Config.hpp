@@ -111,6 +111,9 @@ struct RendererSettings {
   /** YAML `renderer.layers`: the base then the overlays; empty = the first imagery layer alone
    * (or the command line's --layer and --overlay). */
   std::vector<RenderLayerSettings> layers;
+  /** Overlay textures blended in one pass (0: as many as the GPU allows, up to 8); lower values
+   * force extra passes, for comparisons (bench/layers.sh). */
+  int overlaysPerPass = 0;
   EarthShape earth = EarthShape::Wgs84; ///< wgs84 | sphere
   /** Heights of mean-sea-level datasets moved onto the ellipsoid with the EGM96 geoid (h = H + N,
    * the bundled data/egm96-30.pgm); false: taken as ellipsoid heights. Used by terrain. */
