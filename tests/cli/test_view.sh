@@ -67,7 +67,8 @@ set -e
 "$tellus" view --cache "$work/cache" --size 160x100 --earth sphere --exit-after 3 \
   >"$work/sphere.txt" 2>&1 || fail "--earth sphere: $(cat "$work/sphere.txt")"
 grep -q "3 frames" "$work/sphere.txt" || fail "--earth sphere: $(cat "$work/sphere.txt")"
-# Layer keys (issue #7): with an overlay, 1 hides it and shows it again, - lowers its opacity.
+# Layer keys (issue #7): with an overlay, 1 hides it and shows it again, - lowers its opacity,
+# ; lowers its deepest level.
 "$tellus" view --cache "$work/cache" --size 160x100 --camera 0,0,2e7 --overlay bluemarble,0.5 \
   >"$work/layers.txt" 2>&1 &
 pid=$!
@@ -75,12 +76,13 @@ win=$(timeout 30 xdotool search --sync --name '^tellus') || fail "no window: $(c
 win=$(echo "$win" | head -1)
 xdotool windowfocus --sync "$win" || true
 sleep 2
-for k in 1 1 minus; do xdotool key --window "$win" "$k"; sleep 0.5; done
+for k in 1 1 minus semicolon; do xdotool key --window "$win" "$k"; sleep 0.5; done
 hold Escape
 for _ in $(seq 100); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
 wait "$pid" || fail "tellus view with an overlay exited with $?: $(cat "$work/layers.txt")"
 pid=
-grep -q "layer 1 bluemarble: hidden, opacity 0.5" "$work/layers.txt" &&
-  grep -q "layer 1 bluemarble: shown, opacity 0.4" "$work/layers.txt" ||
+grep -q "layer 1 bluemarble: hidden, opacity 0.5, levels 3" "$work/layers.txt" &&
+  grep -q "layer 1 bluemarble: shown, opacity 0.4" "$work/layers.txt" &&
+  grep -q "layer 1 bluemarble: shown, opacity 0.4, levels [23] (max 1)" "$work/layers.txt" ||
   fail "layer keys: $(cat "$work/layers.txt")"
 echo "view CLI: ok"

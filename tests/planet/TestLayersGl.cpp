@@ -258,6 +258,32 @@ TEST(LayersGl, OpacityVisibilityAndMaximumLevelChangeAtRunTime) {
   EXPECT_THROW(r.setLayerVisible(2, true), std::invalid_argument);
 }
 
+TEST(LayersGl, OrderAndMaximumLevelChangeAtRunTime) {
+  ColourWorld w;
+  fill(w);
+  const Geodesy wgs;
+  const CameraPose low{10.0, 20.0, 3.0e5, 0.0, 0.0};
+  OPEN_RENDERER(r, w, wgs, opts({{"green", "", 1.0, true, -1}, {"blue", "", 1.0, true, -1}}));
+  auto done = gltest::renderComplete(r, low);
+  ASSERT_TRUE(done.complete);
+  EXPECT_LE(worstOff(r, done.pixels, {20, 60, 220}), 2); // opaque blue on top
+  r.moveLayer(2, 1);                                     // blue below green now
+  done = gltest::renderComplete(r, low);
+  EXPECT_EQ(done.stats.layers[2].name, "green");
+  EXPECT_LE(worstOff(r, done.pixels, over({20, 60, 220}, kGreenHalf, 1.0)), 2);
+  // The deepest level of a layer: swapped in once its coarser textures are there.
+  EXPECT_EQ(done.stats.layers[1].levels, kGrid.numLevels);
+  r.setLayerMaxLevel(1, 0);
+  done = gltest::renderComplete(r, low);
+  ASSERT_TRUE(done.complete);
+  EXPECT_EQ(done.stats.layers[1].levels, 1);
+  EXPECT_EQ(done.stats.layers[1].maxLevel, 0);
+  EXPECT_EQ(done.stats.layers[1].swaps, 1u);
+  EXPECT_LE(worstOff(r, done.pixels, over({20, 60, 220}, kGreenHalf, 1.0)), 2);
+  EXPECT_THROW(r.moveLayer(0, 1), std::invalid_argument);
+  EXPECT_THROW(r.setLayerMaxLevel(1, -2), std::invalid_argument);
+}
+
 // A time change: the new time's tiles are fetched while the old time is still drawn, and the layer
 // swaps all at once (never tile by tile) when they are all there.
 TEST(LayersGl, TimeChangeSwapsTheLayerAllAtOnce) {

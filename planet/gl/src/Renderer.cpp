@@ -314,6 +314,13 @@ struct Renderer::Impl {
   void evict(LayerTextures& l);
   void bindOverlays(const Node& region, DrawPart& part);
   bool ready(const LayerTextures& l) const;
+  /** The levels a slot's layer has under its maximum level (what a fresh LayerTextures gets). */
+  std::int32_t levelsFor(const LayerSlot& slot) const {
+    const auto spec = source.describe(slot.opt.layer, slot.current->time);
+    if (!spec) return slot.current->grid.numLevels();
+    return slot.opt.maxLevel >= 0 ? std::min(spec->grid.numLevels, slot.opt.maxLevel + 1)
+                                  : spec->grid.numLevels;
+  }
   void swapReadyLayers();
   void draw(const Camera& camera, bool present = true);
   void warmUp();
@@ -1475,6 +1482,8 @@ void Renderer::frame(const CameraPose& pose) {
     ls.pendingTime = slot.pending ? slot.pending->time : std::string();
     ls.opacity = slot.opt.opacity;
     ls.visible = slot.opt.visible;
+    ls.maxLevel = slot.opt.maxLevel;
+    ls.levels = slot.current->grid.numLevels();
     ls.swaps = slot.swaps;
     ls.tilesRequested = slot.retiredRequested;
     ls.tilesReceived = slot.retiredReceived;
@@ -1591,6 +1600,45 @@ void Renderer::setLayerVisible(std::size_t layer, bool visible) {
   impl_->layers[layer].opt.visible = visible;
 }
 
+void Renderer::setLayerMaxLevel(std::size_t layer, int maxLevel) {
+  Impl& m = *impl_;
+  if (layer >= m.layers.size()) throw std::invalid_argument("no such layer");
+  if (maxLevel < -1 || maxLevel > 40)
+    throw std::invalid_argument("the maximum level must be -1 (none) or 0 to 40");
+  LayerSlot& slot = m.layers[layer];
+  if (slot.opt.maxLevel == maxLevel) return;
+  slot.opt.maxLevel = maxLevel;
+  const std::string time = slot.pending ? slot.pending->time : slot.current->time;
+  if (m.window != nullptr) glfwMakeContextCurrent(m.window);
+  if (slot.pending) {
+    slot.retiredRequested += slot.pending->streamer->stats().requested;
+    slot.retiredReceived += slot.pending->streamer->stats().received;
+    m.freeLayer(*slot.pending);
+    slot.pending.reset();
+  }
+  auto l = m.makeLayer(slot.opt.layer, time, layer > 0, maxLevel);
+  if (!l) throw std::invalid_argument(l.error());
+  if ((*l)->grid.numLevels() == slot.current->grid.numLevels() && time == slot.current->time) {
+    m.freeLayer(**l); // the same levels (the limit lies past the layer's own): nothing to swap
+    return;
+  }
+  slot.pending = std::move(*l);
+}
+
+void Renderer::moveLayer(std::size_t from, std::size_t to) {
+  Impl& m = *impl_;
+  if (from == 0 || to == 0 || from >= m.layers.size() || to >= m.layers.size())
+    throw std::invalid_argument("only overlays (layers 1 and up) move");
+  if (from < to)
+    std::rotate(m.layers.begin() + static_cast<std::ptrdiff_t>(from),
+                m.layers.begin() + static_cast<std::ptrdiff_t>(from) + 1,
+                m.layers.begin() + static_cast<std::ptrdiff_t>(to) + 1);
+  else if (from > to)
+    std::rotate(m.layers.begin() + static_cast<std::ptrdiff_t>(to),
+                m.layers.begin() + static_cast<std::ptrdiff_t>(from),
+                m.layers.begin() + static_cast<std::ptrdiff_t>(from) + 1);
+}
+
 void Renderer::setLayerTime(std::size_t layer, std::string time) {
   Impl& m = *impl_;
   if (layer >= m.layers.size()) throw std::invalid_argument("no such layer");
@@ -1604,7 +1652,7 @@ void Renderer::setLayerTime(std::size_t layer, std::string time) {
     slot.pending.reset();
   }
   slot.opt.time = time;
-  if (time == slot.current->time) return;
+  if (time == slot.current->time && slot.current->grid.numLevels() == m.levelsFor(slot)) return;
   auto l = m.makeLayer(slot.opt.layer, time, layer > 0, slot.opt.maxLevel);
   if (!l) throw std::invalid_argument(l.error());
   slot.pending = std::move(*l);

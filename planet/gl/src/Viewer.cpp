@@ -117,10 +117,11 @@ std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options) {
   glfwSetMouseButtonCallback(window, onMouseButton);
   glfwSetKeyCallback(window, onKey);
   CameraPose pose = options.start;
+  auto layerTimes = options.layerTimes; // follows the layers when they are reordered
   std::size_t selected = renderer.layerCount() > 1 ? 1 : 0; // the layer [ ] - = act on
   std::vector<std::size_t> timeIndex(renderer.layerCount(), 0);
-  for (std::size_t i = 0; i < renderer.layerCount() && i < options.layerTimes.size(); ++i) {
-    const auto& times = options.layerTimes[i];
+  for (std::size_t i = 0; i < renderer.layerCount() && i < layerTimes.size(); ++i) {
+    const auto& times = layerTimes[i];
     const auto& now = renderer.stats().layers.size() > i ? renderer.stats().layers[i].time : "";
     const auto it = std::find(times.begin(), times.end(), now);
     timeIndex[i] = it == times.end() ? 0 : static_cast<std::size_t>(it - times.begin());
@@ -231,9 +232,23 @@ std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options) {
         const double o = renderer.stats().layers[selected].opacity;
         renderer.setLayerOpacity(selected,
                                  std::clamp(o + (key == GLFW_KEY_EQUAL ? 0.1 : -0.1), 0.0, 1.0));
+      } else if ((key == GLFW_KEY_COMMA || key == GLFW_KEY_PERIOD) && selected > 0) {
+        const std::size_t to = key == GLFW_KEY_COMMA ? std::max<std::size_t>(1, selected - 1)
+                                                     : std::min(n - 1, selected + 1);
+        if (to == selected) continue;
+        renderer.moveLayer(selected, to);
+        if (selected < layerTimes.size() && to < layerTimes.size()) {
+          std::swap(layerTimes[selected], layerTimes[to]);
+          std::swap(timeIndex[selected], timeIndex[to]);
+        }
+        selected = to;
+      } else if (key == GLFW_KEY_SEMICOLON || key == GLFW_KEY_APOSTROPHE) {
+        const int levels = renderer.stats().layers[selected].levels;
+        const int deepest = key == GLFW_KEY_SEMICOLON ? std::max(0, levels - 2) : levels;
+        renderer.setLayerMaxLevel(selected, deepest);
       } else if (key == GLFW_KEY_LEFT_BRACKET || key == GLFW_KEY_RIGHT_BRACKET) {
-        if (selected >= options.layerTimes.size() || options.layerTimes[selected].empty()) continue;
-        const auto& times = options.layerTimes[selected];
+        if (selected >= layerTimes.size() || layerTimes[selected].empty()) continue;
+        const auto& times = layerTimes[selected];
         std::size_t& t = timeIndex[selected];
         t = key == GLFW_KEY_RIGHT_BRACKET ? (t + 1) % times.size()
                                           : (t + times.size() - 1) % times.size();
@@ -247,11 +262,13 @@ std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options) {
     if (layersChanged) {
       renderer.frame(pose); // the stats below show the change
       const auto& l = renderer.stats().layers[selected];
-      std::printf("layer %zu %s: %s, opacity %.1f, time %s%s%s\n",
+      std::printf("layer %zu %s: %s, opacity %.1f, levels %d%s, time %s%s%s\n",
                   selected,
                   l.name.c_str(),
                   l.visible ? "shown" : "hidden",
                   l.opacity,
+                  l.levels,
+                  l.maxLevel >= 0 ? (" (max " + std::to_string(l.maxLevel) + ")").c_str() : "",
                   l.time.empty() ? "(default)" : l.time.c_str(),
                   l.pendingTime.empty() ? "" : " -> ",
                   l.pendingTime.c_str());

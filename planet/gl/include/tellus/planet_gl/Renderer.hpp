@@ -168,6 +168,8 @@ struct RenderStats {
     std::string pendingTime; ///< "" = none: the layer swaps to it once its tiles are ready
     double opacity = 1.0;
     bool visible = true;
+    int maxLevel = -1;              ///< as set (-1: the layer's own deepest)
+    int levels = 0;                 ///< levels drawn now (its own, or up to maxLevel)
     std::size_t tilesRequested = 0; ///< totals, of every time
     std::size_t tilesReceived = 0;
     std::size_t texturesResident = 0; ///< now
@@ -236,6 +238,11 @@ public:
    * visible node has its texture of the new time (or none exists), never tile by tile. Setting
    * the time again before that replaces the pending time; the current time cancels it. */
   void setLayerTime(std::size_t layer, std::string time);
+  /** The deepest level of a layer fetched and drawn (-1: the layer's own deepest). Swapped in like
+   * a time change: the textures the new limit needs first, then all at once. */
+  void setLayerMaxLevel(std::size_t layer, int maxLevel);
+  /** Moves an overlay to another place in the drawing order (both indices 1..). */
+  void moveLayer(std::size_t from, std::size_t to);
   /** Resizes the framebuffer (window resize). */
   void resize(int width, int height);
 

@@ -10,10 +10,11 @@
  * A/D turn the heading, R resets to the start pose, P writes a screenshot PNG, Esc or closing the
  * window quits. Layers (issue #7): a digit selects a layer (0 the base, 1-9 the overlays; an
  * overlay's digit also shows or hides it), - and = lower and raise the selected overlay's opacity
- * by 0.1, [ and ] step the selected layer's time through its configured values (the layer swaps
- * when the new time's tiles are all there). The statistics line (fps, nodes drawn, tiles in flight,
- * texture MB, camera) is drawn at the top left of the window (its own 5 x 7 font, TextOverlay.cpp)
- * and is the window title, refreshed twice a second.
+ * by 0.1, , and . move it down and up the drawing order, ; and ' lower and raise the deepest
+ * level drawn of the selected layer, [ and ] step the selected layer's time through its configured
+ * values (the layer swaps when the new time's tiles are all there). The statistics line (fps, nodes
+ * drawn, tiles in flight, texture MB, camera) is drawn at the top left of the window (its own 5 x 7
+ * font, TextOverlay.cpp) and is the window title, refreshed twice a second.
  */
 
 #include <tellus/planet_gl/Renderer.hpp>
