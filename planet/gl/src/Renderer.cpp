@@ -1293,7 +1293,8 @@ void Renderer::frame(const CameraPose& pose) {
   // what is drawn); an overlay's only while visible. A layer switching to another time streams
   // the new time's tiles only (the old time's stop being asked for).
   const double nowS = std::chrono::duration<double>(t0 - m.start).count();
-  const FrameStats& fs = m.geo().update(cam);
+  // A copy: the tree it comes from may be swapped out at the end of this frame (a time change).
+  const FrameStats fs = m.geo().update(cam);
   for (std::size_t i = 0; i < m.layers.size(); ++i) {
     LayerSlot& slot = m.layers[i];
     const bool shown = i == 0 || slot.opt.visible;
