@@ -95,6 +95,32 @@ std::expected<HeightTile, std::string> decodeBil16(const TileKey& key,
   return heightTileFromSamples(key, width, height, raw, encoding);
 }
 
+void applyVerticalDatum(HeightTile& tile, const Sector& sector, const VerticalDatum& datum) {
+  if (!datum.usesGeoid() || tile.width <= 0 || tile.height <= 0) return;
+  const double dLat = (sector.north - sector.south) / tile.height;
+  const double dLon = (sector.east - sector.west) / tile.width;
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  std::vector<double> n(static_cast<std::size_t>(tile.width));
+  for (int r = 0; r < tile.height; ++r) {
+    const double lat = sector.north - (r + 0.5) * dLat;
+    // A row of samples is a parallel: N at the geoid grid's meridians it crosses, linear between
+    // (exactly the bilinear interpolation; 40x fewer lookups for a 150-sample row in one cell).
+    datum.geoid()->undulationsAlongParallel(lat, sector.west + 0.5 * dLon, dLon, n);
+    for (int c = 0; c < tile.width; ++c) {
+      float& m = tile.metres[static_cast<std::size_t>(r) * static_cast<std::size_t>(tile.width) +
+                             static_cast<std::size_t>(c)];
+      const double h = static_cast<double>(m) + n[static_cast<std::size_t>(c)];
+      // Sample centres lie inside [-90, 90] x finite longitudes, where the geoid is finite; a
+      // non-finite result (a broken grid) keeps the height the tile gave.
+      if (std::isfinite(h)) m = static_cast<float>(h);
+      lo = std::min(lo, m);
+      hi = std::max(hi, m);
+    }
+  }
+  tile.minM = lo;
+  tile.maxM = hi;
+}
+
 HeightField::HeightField(const TileGrid& grid) : grid_(grid) {
   const Sector& s = grid_.spec().sector;
   globalLongitudes_ = s.west == -180.0 && s.east == 180.0;
