@@ -7,6 +7,7 @@
 #include <tellus/planet/HeightStreamer.hpp>
 #include <tellus/planet/Terrain.hpp>
 
+#include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -548,6 +549,56 @@ TEST(GeoidTerrain, TheStreamerMovesTilesOntoTheEllipsoidOnTheWorkerThread) {
     if (on) {
       EXPECT_GT(field.heightAt(lat, lon), 40.0);
     }
+  }
+}
+
+TEST(TerrainMesh, NonFiniteHeightsNeverReachAVertex) {
+  // A height function that answers NaN, +inf or -inf in places (the height field never does for
+  // finite input; a broken decoder or a division by zero in a caller's function could): those
+  // points sit on the ellipsoid, and no position, normal, texture coordinate or height range of
+  // the mesh is NaN or inf (debug builds assert the same inside buildTerrainMesh and
+  // buildPatchMesh). Also at a pole row and with a side fixed onto a coarser neighbour.
+  const Geodesy wgs;
+  const double inf = std::numeric_limits<double>::infinity();
+  const HeightFunction broken = [inf](double lat, double lon) {
+    const int k = static_cast<int>(std::floor(lat * 7.0 + lon * 3.0)) % 4;
+    return k == 0 ? std::nan("") : k == 1 ? inf : k == 2 ? -inf : 1000.0;
+  };
+  std::array<EdgeAdapt, 4> fixedNorth{};
+  fixedNorth[0] = {true, {0.0, 18.0, 36.0, 36.0}, {}};
+  struct Case {
+    Sector sector;
+    std::array<EdgeAdapt, 4> edges;
+  };
+  for (const Case& c : {Case{{0.0, 0.0, 18.0, 18.0}, {}},
+                        Case{{0.0, 0.0, 18.0, 18.0}, fixedNorth},
+                        Case{{-180.0, 72.0, -144.0, 90.0}, {}}}) {
+    const TerrainMesh m = buildTerrainMesh(wgs, c.sector, 17, broken, c.edges);
+    ASSERT_FALSE(m.vertices.empty());
+    for (const TerrainVertex& v : m.vertices) {
+      ASSERT_TRUE(std::isfinite(v.position.x) && std::isfinite(v.position.y) &&
+                  std::isfinite(v.position.z));
+      ASSERT_TRUE(std::isfinite(v.normal.x) && std::isfinite(v.normal.y) &&
+                  std::isfinite(v.normal.z));
+      ASSERT_NEAR(glm::length(glm::dvec3(v.normal)), 1.0, 1e-3);
+      ASSERT_TRUE(v.uvNode.x >= 0.0 && v.uvNode.x <= 1.0 && v.uvNode.y >= 0.0 && v.uvNode.y <= 1.0);
+    }
+    EXPECT_TRUE(std::isfinite(m.minHeightM));
+    EXPECT_TRUE(std::isfinite(m.maxHeightM));
+    EXPECT_EQ(m.minHeightM, 0.0); // the non-finite points: on the ellipsoid
+    EXPECT_EQ(m.maxHeightM, 1000.0);
+    // A grid vertex whose height was not finite lies on the ellipsoid.
+    const int n = m.n;
+    for (int r = 0; r < n; ++r)
+      for (int col = 0; col < n; ++col) {
+        const double lat = edgeLerp(c.sector.south, c.sector.north, r, n);
+        const double lon = edgeLerp(c.sector.west, c.sector.east, col, n);
+        if (c.edges[0].active && r == n - 1) continue; // moved onto the neighbour's chords
+        if (std::isfinite(broken(lat, lat == 90.0 ? 0.0 : lon))) continue;
+        const Ecef e = wgs.toEcef(lat, lat == 90.0 ? 0.0 : lon, 0.0);
+        const glm::dvec3 p = m.vertices[static_cast<std::size_t>(r * n + col)].position;
+        EXPECT_NEAR(glm::length(p - glm::dvec3(e.x, e.y, e.z)), 0.0, 1e-6) << lat << ", " << lon;
+      }
   }
 }
 
