@@ -79,9 +79,9 @@ std::expected<HeightTile, std::string> decodeBil16(const TileKey& key,
  * min/max follow. A pure function of the tile, its sector and the geoid, done once per tile where
  * raw values become metres (HeightStreamer's worker callback, `tellus height`), so heights stay a
  * pure function of the tiles held and neighbours still agree bit for bit (they evaluate the same
- * samples). Between samples the height field's bilinear interpolation interpolates N too: N varies
- * over hundreds of kilometres, a sample spacing is at most 0.13 degrees (level 0 of the 20-degree,
- * 150-pixel grid), so that costs millimetres. With the datum off nothing changes.
+ * samples). Between samples the height field's bilinear interpolation interpolates N too: exact
+ * inside a 30' geoid cell, centimetres off at its lines for deep levels, decimetres for level 0
+ * (samples 0.13 degrees apart; docs/ACCURACY.md). With the datum off nothing changes.
  */
 void applyVerticalDatum(HeightTile& tile, const Sector& sector, const VerticalDatum& datum);
 
