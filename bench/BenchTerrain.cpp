@@ -1,13 +1,17 @@
 // Terrain CPU costs (issue #6): one elevation tile decoded into metres (BIL16, 150 x 150, World
 // Wind's size), a node mesh built from the height function with no side fixed and with all four
-// sides fixed (the edge fixing's own cost per mesh), and the height function alone.
+// sides fixed (the edge fixing's own cost per mesh), the height function alone, and the geoid
+// applied to one tile (issue #8: h = H + N at each of its 22,500 samples, on the decoding worker).
 // Run: build/bench/tellus_bench_terrain (bench/RESULTS.md, "Terrain").
+#include <tellus/planet/Geoid.hpp>
 #include <tellus/planet/Terrain.hpp>
 
 #include <benchmark/benchmark.h>
 
 #include <cmath>
 #include <cstdint>
+#include <memory>
+#include <stdexcept>
 #include <vector>
 
 using namespace tellus;
@@ -47,6 +51,25 @@ void BM_DecodeBil16Tile150(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_DecodeBil16Tile150);
+
+/** The geoid applied to a decoded 150 x 150 tile (level 3 over the Alps): what renderer.geoid adds
+ * to the decoding worker's work per elevation tile. */
+void BM_ApplyGeoidTile150(benchmark::State& state) {
+  auto geoid = Geoid::open(std::string(TELLUS_BENCH_DATA_DIR) + "/" + kGeoidFileName);
+  if (!geoid) throw std::runtime_error(geoid.error());
+  const VerticalDatum datum(std::make_shared<const Geoid>(std::move(*geoid)));
+  const auto bytes = bil16Tile(150, 150);
+  HeightEncoding enc;
+  enc.noData = -32768;
+  const HeightTile tile = *decodeBil16({3, 21, 74}, 150, 150, bytes, enc);
+  const Sector sector{5.0, 45.0, 7.5, 47.5};
+  for (auto _ : state) {
+    HeightTile t = tile;
+    applyVerticalDatum(t, sector, datum);
+    benchmark::DoNotOptimize(t.metres.data());
+  }
+}
+BENCHMARK(BM_ApplyGeoidTile150);
 
 /** A field of 150-px tiles at level 3 around the Alps, the heights a level-6 node reads. */
 const HeightField& alps() {

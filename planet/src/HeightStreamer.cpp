@@ -90,9 +90,11 @@ void HeightStreamer::want(std::span<const TileKey> keys, const HeightField& fiel
     const int w = grid_.spec().tileWidth, h = grid_.spec().tileHeight;
     HeightDecoder decode = decode_;
     const HeightEncoding enc = params_.encoding;
+    const VerticalDatum datum = params_.datum;
+    const Sector sector = grid_.sectorOf(key);
     inFlight_[key] = source_.request({params_.layer, params_.time, key},
                                      priority,
-                                     [weak, key, w, h, decode, enc](TileResult&& r) {
+                                     [weak, key, w, h, decode, enc, datum, sector](TileResult&& r) {
                                        auto inbox = weak.lock();
                                        if (!inbox) return;
                                        if (r.status == TileStatus::Absent) {
@@ -108,6 +110,9 @@ void HeightStreamer::want(std::span<const TileKey> keys, const HeightField& fiel
                                        // Raw samples become metres here, once, on the source's
                                        // worker thread.
                                        auto tile = decode(key, w, h, r.bytes, r.contentType, enc);
+                                       // Mean sea level onto the ellipsoid (h = H + N), once per
+                                       // tile, here too.
+                                       if (tile) applyVerticalDatum(*tile, sector, datum);
                                        std::lock_guard lock(inbox->mutex);
                                        inbox->done.emplace_back(key, std::move(tile));
                                      });

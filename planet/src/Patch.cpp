@@ -3,6 +3,7 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -221,6 +222,14 @@ PatchMesh buildPatchMesh(const Geodesy& geodesy, const Sector& sector, int n) {
       vx.normal = normalAt(geodesy, lat, lon);
       vx.uvNode = {static_cast<double>(c) / static_cast<double>(n - 1), v};
       vx.uvGlobal = {(lon + 180.0) / 360.0, (lat + 90.0) / 180.0};
+      // No NaN or inf in what reaches the GPU (issue #8; debug builds).
+      assert(std::isfinite(vx.position.x) && std::isfinite(vx.position.y) &&
+             std::isfinite(vx.position.z));
+      assert(std::isfinite(vx.normal.x) && std::isfinite(vx.normal.y) &&
+             std::isfinite(vx.normal.z));
+      assert(vx.uvNode.x >= 0.0 && vx.uvNode.x <= 1.0 && vx.uvNode.y >= 0.0 && vx.uvNode.y <= 1.0);
+      assert(vx.uvGlobal.x >= 0.0 && vx.uvGlobal.x <= 1.0 && vx.uvGlobal.y >= 0.0 &&
+             vx.uvGlobal.y <= 1.0);
     }
   }
   return mesh;

@@ -3,6 +3,7 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -93,6 +94,32 @@ std::expected<HeightTile, std::string> decodeBil16(const TileKey& key,
         static_cast<double>(static_cast<std::int16_t>(static_cast<std::uint16_t>(lo | (hi << 8))));
   }
   return heightTileFromSamples(key, width, height, raw, encoding);
+}
+
+void applyVerticalDatum(HeightTile& tile, const Sector& sector, const VerticalDatum& datum) {
+  if (!datum.usesGeoid() || tile.width <= 0 || tile.height <= 0) return;
+  const double dLat = (sector.north - sector.south) / tile.height;
+  const double dLon = (sector.east - sector.west) / tile.width;
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  std::vector<double> n(static_cast<std::size_t>(tile.width));
+  for (int r = 0; r < tile.height; ++r) {
+    const double lat = sector.north - (r + 0.5) * dLat;
+    // A row of samples is a parallel: N at the geoid grid's meridians it crosses, linear between
+    // (exactly the bilinear interpolation; 40x fewer lookups for a 150-sample row in one cell).
+    datum.geoid()->undulationsAlongParallel(lat, sector.west + 0.5 * dLon, dLon, n);
+    for (int c = 0; c < tile.width; ++c) {
+      float& m = tile.metres[static_cast<std::size_t>(r) * static_cast<std::size_t>(tile.width) +
+                             static_cast<std::size_t>(c)];
+      const double h = static_cast<double>(m) + n[static_cast<std::size_t>(c)];
+      // Sample centres lie inside [-90, 90] x finite longitudes, where the geoid is finite; a
+      // non-finite result (a broken grid) keeps the height the tile gave.
+      if (std::isfinite(h)) m = static_cast<float>(h);
+      lo = std::min(lo, m);
+      hi = std::max(hi, m);
+    }
+  }
+  tile.minM = lo;
+  tile.maxM = hi;
 }
 
 HeightField::HeightField(const TileGrid& grid) : grid_(grid) {
@@ -319,9 +346,16 @@ TerrainMesh buildTerrainMesh(const Geodesy& geodesy,
       !(s.west >= -180.0 && s.west < s.east && s.east <= 180.0))
     throw std::invalid_argument("planet: sector must satisfy -90 <= south < north <= 90 and "
                                 "-180 <= west < east <= 180");
+  // A height that is not a finite number (a broken height function; the field itself never gives
+  // one for finite input) is the ellipsoid's: NaN or inf never reaches a vertex, a normal or the
+  // node's height range (issue #8; asserted below in debug builds).
+  auto heightOf = [&](double lat, double lon) {
+    const double h = height(lat, lon);
+    return std::isfinite(h) ? h : 0.0;
+  };
   auto position = [&](double lat, double lon) {
     if (lat == 90.0 || lat == -90.0) lon = 0.0; // a pole is one point
-    return toVec(geodesy.toEcef(lat, lon, height(lat, lon)));
+    return toVec(geodesy.toEcef(lat, lon, heightOf(lat, lon)));
   };
 
   TerrainMesh mesh;
@@ -343,7 +377,7 @@ TerrainMesh buildTerrainMesh(const Geodesy& geodesy,
   for (int r = 0; r < m; ++r)
     for (int c = 0; c < m; ++c) {
       const double lat = lats[static_cast<std::size_t>(r)], lon = lons[static_cast<std::size_t>(c)];
-      const double hgt = height(lat, lat == 90.0 || lat == -90.0 ? 0.0 : lon);
+      const double hgt = heightOf(lat, lat == 90.0 || lat == -90.0 ? 0.0 : lon);
       if (r > 0 && r < m - 1 && c > 0 && c < m - 1) {
         lo = std::min(lo, hgt);
         hi = std::max(hi, hgt);
@@ -505,6 +539,16 @@ TerrainMesh buildTerrainMesh(const Geodesy& geodesy,
                         quad[static_cast<std::size_t>(qd)].end());
   }
   mesh.quadrantStart[4] = static_cast<std::uint32_t>(mesh.indices.size());
+#ifndef NDEBUG
+  for (const TerrainVertex& v : mesh.vertices) {
+    assert(std::isfinite(v.position.x) && std::isfinite(v.position.y) &&
+           std::isfinite(v.position.z));
+    assert(std::isfinite(v.normal.x) && std::isfinite(v.normal.y) && std::isfinite(v.normal.z));
+    assert(std::abs(glm::length(glm::dvec3(v.normal)) - 1.0) < 1e-3);
+    assert(v.uvNode.x >= 0.0 && v.uvNode.x <= 1.0 && v.uvNode.y >= 0.0 && v.uvNode.y <= 1.0);
+  }
+  assert(std::isfinite(mesh.minHeightM) && std::isfinite(mesh.maxHeightM));
+#endif
   return mesh;
 }
 

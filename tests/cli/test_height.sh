@@ -3,7 +3,8 @@
 # compared with the source raster read by GDAL (gdallocationinfo) at its own pixel centres, where
 # the source's bilinear value is the pixel itself; the tiles are the source resampled by the tile
 # service, so the tolerance is a tenth of the local relief (the 3 x 3 source neighbourhood) + 2 m.
-# Also: -180/180 and the poles answer, bad input exits 2, --no-terrain style misuse is refused.
+# Also: -180/180 and the poles answer, bad input exits 2, --no-terrain style misuse is refused;
+# the datum: --datum ellipsoid prints h = H + N (EGM96).
 set -euo pipefail
 tellus=$1
 data=$(cd "$(dirname "${BASH_SOURCE[0]}")/../../data" && pwd)
@@ -55,8 +56,30 @@ s1=$("$tellus" height --cache "$cache" --lat -90 --lon 45 2>/dev/null)
 s2=$("$tellus" height --cache "$cache" --lat -90 --lon -120 2>/dev/null)
 [ "$s1" = "$s2" ] || fail "the south pole is one point: $s1 against $s2"
 
+# The datum (issue #8): H above mean sea level by default, h = H + N with --datum ellipsoid, N from
+# the bundled EGM96 grid at its own nodes (egm96_15.gtx: 4.5 N 79 E -106.975 m, south of India;
+# 8.5 S 147.5 E +84.625 m, New Guinea), within what the tile's samples interpolate (N bilinear
+# between sample centres 0.033 degrees apart, across the grid node's kink: 0.25 m).
+for p in "4.5 79 -106.975" "-8.5 147.5 84.625"; do
+  read -r lat lon n <<<"$p"
+  H=$("$tellus" height --cache "$cache" --lat "$lat" --lon "$lon" 2>/dev/null)
+  h=$("$tellus" height --cache "$cache" --lat "$lat" --lon "$lon" --datum ellipsoid 2>"$work/err")
+  grep -q "above the WGS84 ellipsoid" "$work/err" || fail "height --datum ellipsoid says no datum"
+  python3 - "$lat" "$lon" "$H" "$h" "$n" <<'PY'
+import sys
+lat, lon, H, h, n = sys.argv[1], sys.argv[2], *map(float, sys.argv[3:])
+print(f"{lat}, {lon}: H {H:.2f} m, h {h:.2f} m, h - H {h - H:.3f} m (EGM96 {n} m)")
+assert abs((h - H) - n) <= 0.25, f"h - H = {h - H} against N = {n}"
+PY
+done
+H=$("$tellus" height --cache "$cache" --lat 4.5 --lon 79 --geoid off 2>/dev/null)
+[ "$H" = "$("$tellus" height --cache "$cache" --lat 4.5 --lon 79 2>/dev/null)" ] ||
+  fail "--geoid off changes H"
+
 # Bad input: exit 2 with a message.
-for args in "--lat 91 --lon 0" "--lat nan --lon 0" "--lat 0" "--lat 0 --lon inf" "--lat 0 --lon 0 --bogus 1"; do
+for args in "--lat 91 --lon 0" "--lat nan --lon 0" "--lat 0" "--lat 0 --lon inf" "--lat 0 --lon 0 --bogus 1" \
+  "--lat 0 --lon 0 --datum geoid" "--lat 0 --lon 0 --geoid maybe" \
+  "--lat 0 --lon 0 --geoid off --datum ellipsoid"; do
   set +e
   # shellcheck disable=SC2086
   "$tellus" height --cache "$cache" $args >/dev/null 2>"$work/err"

@@ -95,6 +95,31 @@ cmp -s "$work/sphere.png" "$work/sphere-config.png" || fail "renderer.earth: sph
   --size 320x240 --out "$work/wgs84-over.png" --wait-complete >/dev/null || fail "--earth wgs84"
 cmp -s "$work/a.png" "$work/wgs84-over.png" || fail "--earth wgs84 did not override the config"
 
+# The geoid (renderer.geoid, --geoid): 20 km over the Alps (N about +50 m) the terrain moved onto
+# the ellipsoid draws another image than without; the configuration's geoid: false draws the
+# --geoid off one; --geoid on wins over the config. Bad values exit 2.
+for g in on off; do
+  "$tellus" render --cache "$cache" --camera 46,8,2e4,0,40 --size 160x120 --out "$work/geoid-$g.png" \
+    --wait-complete --geoid "$g" >/dev/null || fail "--geoid $g"
+done
+cmp -s "$work/geoid-on.png" "$work/geoid-off.png" && fail "--geoid off drew the same image as on"
+sed "s|^data_dir: .*|data_dir: $src/data|" "$src/config/examples/default.yaml" >"$work/nogeoid.yaml"
+printf 'renderer:\n  geoid: false\n' >>"$work/nogeoid.yaml"
+"$tellus" render --config "$work/nogeoid.yaml" --cache "$cache" --camera 46,8,2e4,0,40 --size 160x120 \
+  --out "$work/geoid-config.png" --wait-complete >/dev/null || fail "renderer.geoid: false"
+cmp -s "$work/geoid-off.png" "$work/geoid-config.png" || fail "renderer.geoid: false differs from --geoid off"
+"$tellus" render --config "$work/nogeoid.yaml" --cache "$cache" --camera 46,8,2e4,0,40 --size 160x120 \
+  --out "$work/geoid-over.png" --wait-complete --geoid on >/dev/null || fail "--geoid on over the config"
+cmp -s "$work/geoid-on.png" "$work/geoid-over.png" || fail "--geoid on did not override the config"
+set +e
+"$tellus" render --cache "$cache" --camera 0,0,2e7 --out "$work/x.png" --geoid maybe 2>/dev/null
+[ $? -eq 2 ] || fail "--geoid maybe: not a usage error"
+"$tellus" render --cache "$cache" --camera 0,0,2e7 --out "$work/x.png" --mesh-size 31 2>/dev/null
+[ $? -eq 2 ] || fail "--mesh-size 31: not a usage error"
+"$tellus" render --cache "$cache" --camera 0,0,2e7 --out "$work/x.png" --vertices half 2>/dev/null
+[ $? -eq 2 ] || fail "--vertices half: not a usage error"
+set -e
+
 # The OpenGL 3.3 core fallback (Mesa told to offer no more): the same image; and without
 # glClipControl the same projection still draws (reversed Z in [-1, 1] depth, less precise).
 MESA_GL_VERSION_OVERRIDE=3.3 "$tellus" render --cache "$cache" --camera 0,0,2e7 --size 320x240 \

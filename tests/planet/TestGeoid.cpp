@@ -147,6 +147,41 @@ TEST(Geoid, VerticalDatumSwitchesTheGeoidOnAndOff) {
   EXPECT_EQ(copy.ellipsoidHeightM(10.0, 20.0, 0.0), on.ellipsoidHeightM(10.0, 20.0, 0.0));
 }
 
+TEST(Geoid, AlongAParallelAgreesWithPointByPoint) {
+  // What applyVerticalDatum uses per row of a height tile: lookups at the grid's meridians only,
+  // linear between them (bilinear is linear in longitude inside a cell). Rows inside one cell,
+  // across many cells, across the antimeridian, at the poles, with negative steps; cubic falls
+  // back to one lookup per sample.
+  for (const auto interpolation : {Geoid::Interpolation::Bilinear, Geoid::Interpolation::Cubic}) {
+    const Geoid g = openGrid(interpolation);
+    struct Row {
+      double lat, lon0, dLon;
+      int count;
+    };
+    for (const Row r : {Row{45.9, 7.51, 0.001, 150},
+                        Row{-8.5, 140.0 + 20.0 / 300.0, 20.0 / 150.0, 150},
+                        Row{10.0, 179.0, 0.01, 300},
+                        Row{-33.3, -179.99, 0.37, 40},
+                        Row{90.0, -180.0, 1.0, 360},
+                        Row{-90.0, 0.5, 2.5, 100},
+                        Row{4.5, 80.0, -0.05, 200},
+                        Row{0.0, 0.0, 0.5, 10}}) {
+      std::vector<double> out(static_cast<std::size_t>(r.count));
+      g.undulationsAlongParallel(r.lat, r.lon0, r.dLon, out);
+      for (int i = 0; i < r.count; ++i) {
+        const double lon = r.lon0 + i * r.dLon;
+        ASSERT_NEAR(out[static_cast<std::size_t>(i)], g.undulationM(r.lat, lon), 1e-9)
+            << r.lat << ", " << lon;
+      }
+    }
+    std::vector<double> bad(3);
+    g.undulationsAlongParallel(std::nan(""), 0.0, 1.0, bad);
+    EXPECT_TRUE(std::isnan(bad[0]) && std::isnan(bad[2]));
+    g.undulationsAlongParallel(91.0, 0.0, 1.0, bad);
+    EXPECT_TRUE(std::isnan(bad[1]));
+  }
+}
+
 TEST(Geoid, MissingOrBrokenFilesAreRefusedWithTheirName) {
   const auto missing = Geoid::open("/nonexistent/egm96-30.pgm");
   ASSERT_FALSE(missing.has_value());

@@ -3,15 +3,19 @@
 // apart), with the zero-area triangles that close the T-junctions.
 #include "PlanetTestSupport.hpp"
 
+#include <tellus/planet/Geoid.hpp>
 #include <tellus/planet/HeightStreamer.hpp>
 #include <tellus/planet/Terrain.hpp>
 
+#include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <map>
+#include <memory>
 
 namespace tellus::planet {
 namespace {
@@ -438,6 +442,164 @@ TEST(HeightStreamer, UndecodableBytesAreCountedAndNotAskedAgain) {
   EXPECT_TRUE(src.queued.empty());
   EXPECT_TRUE(hs.settled(wish[0], field));
   EXPECT_FALSE(hs.busy());
+}
+
+// --- The geoid applied to terrain heights (issue #8): h = H + N, once per tile. ---
+
+std::shared_ptr<const Geoid> bundledGeoid() {
+  auto g = Geoid::open(std::filesystem::path(TELLUS_TEST_DATA_DIR) / kGeoidFileName);
+  if (!g) throw std::runtime_error(g.error());
+  return std::make_shared<const Geoid>(std::move(*g));
+}
+
+TEST(GeoidTerrain, EachSampleGetsGeographicLibsUndulationAtItsCentre) {
+  const auto geoid = bundledGeoid();
+  const VerticalDatum datum(geoid);
+  const TileGrid grid = elevationGrid(150, 6);
+  // Level 0 over New Guinea (N up to +85 m) and a tile south of India (N down to -107 m).
+  for (const TileKey k : {TileKey{0, 4, 16}, TileKey{0, 4, 12}}) {
+    HeightTile t = tileOf(grid, k, [](double lat, double lon) { return 100.0 + lat - lon; });
+    const HeightTile msl = t;
+    const Sector s = grid.sectorOf(k);
+    applyVerticalDatum(t, s, datum);
+    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+    for (int y = 0; y < t.height; ++y)
+      for (int x = 0; x < t.width; ++x) {
+        const double lat = s.north - (y + 0.5) * (s.north - s.south) / t.height;
+        const double lon = s.west + (x + 0.5) * (s.east - s.west) / t.width;
+        const std::size_t i = static_cast<std::size_t>(y * t.width + x);
+        // H + N with N from GeographicLib's Geoid (behind tellus::Geoid), to the float's
+        // resolution (N is evaluated along the row, Geoid::undulationsAlongParallel).
+        ASSERT_NEAR(
+            t.metres[i], static_cast<double>(msl.metres[i]) + geoid->undulationM(lat, lon), 1e-4)
+            << lat << ", " << lon;
+        lo = std::min(lo, t.metres[i]);
+        hi = std::max(hi, t.metres[i]);
+      }
+    EXPECT_EQ(t.minM, lo);
+    EXPECT_EQ(t.maxM, hi);
+  }
+  // Off: nothing changes, bit for bit.
+  HeightTile t = tileOf(grid, {0, 4, 16}, [](double lat, double) { return lat; });
+  const HeightTile before = t;
+  applyVerticalDatum(t, grid.sectorOf(t.key), VerticalDatum{});
+  EXPECT_EQ(t.metres, before.metres);
+  EXPECT_EQ(t.minM, before.minM);
+  EXPECT_EQ(t.maxM, before.maxM);
+}
+
+TEST(GeoidTerrain, SeaLevelOnTheEllipsoidMatchesEgm96AtNgasTestPoints) {
+  // NGA's EGM96 test values (the README of the WW15MGH grid: spherical harmonics to degree 360),
+  // read through the height field as the renderer reads terrain: a sea-level tile (H = 0) of a
+  // level whose samples are 0.008 degrees apart, moved onto the ellipsoid. The bundled 30' grid's
+  // bilinear interpolation is within 0.15 m RMS of EGM96 (3.9 m at worst, in the Andes): these
+  // open-ocean and plain points are within 0.25 m; against GeographicLib's value at the same
+  // point (tellus::Geoid) the field is within 1 cm (N interpolated between sample centres).
+  struct Point {
+    double lat, lon, n;
+  };
+  constexpr Point kNga[] = {
+      {38.6281550, 269.7791550, -31.628},
+      {-14.6212170, 305.0211140, -2.969},
+      {46.8743190, 102.4487290, -43.575},
+      {-23.6174460, 133.8747120, 15.871},
+      {38.6254730, 359.9995000, 50.066},
+      {-0.4667440, 0.0023000, 17.329},
+  };
+  const auto geoid = bundledGeoid();
+  const TileGrid grid = elevationGrid(150, 6);
+  for (const Point& p : kNga) {
+    const double lon = std::remainder(p.lon, 360.0);
+    HeightField field(grid);
+    const TileKey centre = *grid.keyAt(p.lat, lon, 4);
+    for (std::int64_t dr = -1; dr <= 1; ++dr)
+      for (std::int64_t dc = -1; dc <= 1; ++dc) {
+        const TileKey k{4, centre.row + dr, centre.col + dc};
+        HeightTile t = tileOf(grid, k, [](double, double) { return 0.0; });
+        applyVerticalDatum(t, grid.sectorOf(k), VerticalDatum(geoid));
+        ASSERT_TRUE(field.insert(std::move(t)));
+      }
+    const double h = field.heightAt(p.lat, lon);
+    EXPECT_NEAR(h, geoid->undulationM(p.lat, lon), 0.01) << p.lat << ", " << lon;
+    EXPECT_NEAR(h, p.n, 0.25) << p.lat << ", " << lon;
+  }
+}
+
+TEST(GeoidTerrain, TheStreamerMovesTilesOntoTheEllipsoidOnTheWorkerThread) {
+  GridSpec spec;
+  spec.levelZeroDeltaDeg = 20.0;
+  spec.tileWidth = spec.tileHeight = 4;
+  spec.numLevels = 2;
+  const TileGrid grid = *TileGrid::create(spec);
+  const auto geoid = bundledGeoid();
+  for (const bool on : {false, true}) {
+    ManualSource src(spec);
+    HeightStreamParams p{"h", "", 4, {}, 5.0};
+    if (on) p.datum = VerticalDatum(geoid);
+    HeightStreamer hs(src, grid, p);
+    HeightField field(grid);
+    const TileKey key{0, 4, 16}; // New Guinea, N about +60 to +85 m
+    hs.want(std::vector<TileKey>{key}, field, 0.0);
+    src.answer(key, TileStatus::Ok, 4 * 4 * 2); // all zeros: sea level
+    hs.want(std::vector<TileKey>{key}, field, 1.0);
+    ASSERT_EQ(hs.deliver(field, 4), 1u);
+    const Sector s = grid.sectorOf(key);
+    const double lat = s.north - 2.5 * (s.north - s.south) / 4, lon = s.west + 1.5 * 5.0;
+    EXPECT_NEAR(field.heightAt(lat, lon), on ? geoid->undulationM(lat, lon) : 0.0, 1e-5);
+    if (on) {
+      EXPECT_GT(field.heightAt(lat, lon), 40.0);
+    }
+  }
+}
+
+TEST(TerrainMesh, NonFiniteHeightsNeverReachAVertex) {
+  // A height function that answers NaN, +inf or -inf in places (the height field never does for
+  // finite input; a broken decoder or a division by zero in a caller's function could): those
+  // points sit on the ellipsoid, and no position, normal, texture coordinate or height range of
+  // the mesh is NaN or inf (debug builds assert the same inside buildTerrainMesh and
+  // buildPatchMesh). Also at a pole row and with a side fixed onto a coarser neighbour.
+  const Geodesy wgs;
+  const double inf = std::numeric_limits<double>::infinity();
+  const HeightFunction broken = [inf](double lat, double lon) {
+    const int k = static_cast<int>(std::floor(lat * 7.0 + lon * 3.0)) % 4;
+    return k == 0 ? std::nan("") : k == 1 ? inf : k == 2 ? -inf : 1000.0;
+  };
+  std::array<EdgeAdapt, 4> fixedNorth{};
+  fixedNorth[0] = {true, {0.0, 18.0, 36.0, 36.0}, {}};
+  struct Case {
+    Sector sector;
+    std::array<EdgeAdapt, 4> edges;
+  };
+  for (const Case& c : {Case{{0.0, 0.0, 18.0, 18.0}, {}},
+                        Case{{0.0, 0.0, 18.0, 18.0}, fixedNorth},
+                        Case{{-180.0, 72.0, -144.0, 90.0}, {}}}) {
+    const TerrainMesh m = buildTerrainMesh(wgs, c.sector, 17, broken, c.edges);
+    ASSERT_FALSE(m.vertices.empty());
+    for (const TerrainVertex& v : m.vertices) {
+      ASSERT_TRUE(std::isfinite(v.position.x) && std::isfinite(v.position.y) &&
+                  std::isfinite(v.position.z));
+      ASSERT_TRUE(std::isfinite(v.normal.x) && std::isfinite(v.normal.y) &&
+                  std::isfinite(v.normal.z));
+      ASSERT_NEAR(glm::length(glm::dvec3(v.normal)), 1.0, 1e-3);
+      ASSERT_TRUE(v.uvNode.x >= 0.0 && v.uvNode.x <= 1.0 && v.uvNode.y >= 0.0 && v.uvNode.y <= 1.0);
+    }
+    EXPECT_TRUE(std::isfinite(m.minHeightM));
+    EXPECT_TRUE(std::isfinite(m.maxHeightM));
+    EXPECT_EQ(m.minHeightM, 0.0); // the non-finite points: on the ellipsoid
+    EXPECT_EQ(m.maxHeightM, 1000.0);
+    // A grid vertex whose height was not finite lies on the ellipsoid.
+    const int n = m.n;
+    for (int r = 0; r < n; ++r)
+      for (int col = 0; col < n; ++col) {
+        const double lat = edgeLerp(c.sector.south, c.sector.north, r, n);
+        const double lon = edgeLerp(c.sector.west, c.sector.east, col, n);
+        if (c.edges[0].active && r == n - 1) continue; // moved onto the neighbour's chords
+        if (std::isfinite(broken(lat, lat == 90.0 ? 0.0 : lon))) continue;
+        const Ecef e = wgs.toEcef(lat, lat == 90.0 ? 0.0 : lon, 0.0);
+        const glm::dvec3 p = m.vertices[static_cast<std::size_t>(r * n + col)].position;
+        EXPECT_NEAR(glm::length(p - glm::dvec3(e.x, e.y, e.z)), 0.0, 1e-6) << lat << ", " << lon;
+      }
+  }
 }
 
 } // namespace

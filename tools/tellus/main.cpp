@@ -6,6 +6,7 @@
 #include <tellus/config/Config.hpp>
 #include <tellus/planet/Geodesy.hpp>
 #include <tellus/planet/RegionalSource.hpp>
+#include <tellus/planet/Geoid.hpp>
 #include <tellus/planet/Terrain.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
 #include <tellus/planet_gl/Viewer.hpp>
@@ -81,10 +82,16 @@ commands:
              [--earth wgs84|sphere] [--offline | --server URL]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc
              render and view: [--no-terrain] [--exaggeration X] [--sun LAT,LON]
              [--overlay NAME[,OPACITY]]... (imagery over the base; also renderer.layers);
-             view: 0-9 select a layer (1-9 also show/hide it), - = opacity, [ ] its time
+             view: 0-9 select a layer (1-9 also show/hide it), - = opacity, , . order,
+             ; ' deepest level, [ ] its time
              render: [--edge-fixing on|off] (off shows the cracks it closes; for comparisons)
+             render, view and height: [--geoid on|off] (renderer.geoid: mean-sea-level heights
+             onto the ellipsoid, h = H + N)
+             render, for the speed/accuracy sweep (bench/trade.sh): [--mesh-size N]
+             [--upload-per-frame BYTES] [--vertices double|float]
   height   the terrain height in metres at a point, from the elevation layer's deepest level
-             --lat A --lon B [--elevation LAYER] [--offline | --server URL]
+             --lat A --lon B [--elevation LAYER] [--datum msl|ellipsoid] [--offline | --server URL]
+             (prints H above mean sea level, or h = H + N with --datum ellipsoid; both on stderr)
 
 options for every command:
   --cache DIR   cache root (default: $TELLUS_CACHE, $XDG_CACHE_HOME/tellus or ~/.cache/tellus)
@@ -1032,8 +1039,10 @@ std::string renderStatsJson(const planet::RenderStats& s, double seconds, bool c
 
 /** The frame times of a render (",\n" and the keys that close the statistics object): median,
  * 95th and 99th percentile (nearest rank), longest, where the longest frame's time went, and every
- * frame's time in order. */
-std::string frameTimesJson(const std::vector<planet::FramePhases>& frames) {
+ * frame's time, update (quadtree + streamer) time and process CPU time (every thread: on llvmpipe
+ * the rasteriser's too; less disturbed by other processes than the wall clock) in order. */
+std::string frameTimesJson(const std::vector<planet::FramePhases>& frames,
+                           const std::vector<double>& cpuMs) {
   std::vector<double> sorted;
   sorted.reserve(frames.size());
   for (const auto& f : frames)
@@ -1078,6 +1087,18 @@ std::string frameTimesJson(const std::vector<planet::FramePhases>& frames) {
   for (std::size_t i = 0; i < frames.size(); ++i) {
     char v[32];
     std::snprintf(v, sizeof v, "%s%.3f", i == 0 ? "" : ", ", frames[i].total);
+    out += v;
+  }
+  out += "],\n  \"update_times_ms\": [";
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    char v[32];
+    std::snprintf(v, sizeof v, "%s%.3f", i == 0 ? "" : ", ", frames[i].update);
+    out += v;
+  }
+  out += "],\n  \"frame_cpu_ms\": [";
+  for (std::size_t i = 0; i < cpuMs.size(); ++i) {
+    char v[32];
+    std::snprintf(v, sizeof v, "%s%.3f", i == 0 ? "" : ", ", cpuMs[i]);
     out += v;
   }
   return out + "]\n}\n";
@@ -1381,12 +1402,47 @@ std::optional<std::string> applyTerrainArgs(const Args& a, planet::RendererOptio
     if (*e != "on" && *e != "off") return "--edge-fixing must be on or off, got '" + *e + "'";
     ro.fixEdges = *e == "on";
   }
+  if (auto e = a.get("geoid"); e && *e != "on" && *e != "off")
+    return "--geoid must be on or off, got '" + *e + "'";
+  if (auto e = a.get("mesh-size")) {
+    const auto v = parseNumbers(*e, 1, 1);
+    const double d = v ? (*v)[0] : 0.0;
+    const int n = d >= 3.0 && d <= 257.0 ? static_cast<int>(d) : 0; // no cast out of range
+    if (!v || n == 0 || static_cast<double>(n) != d || ((n - 1) & (n - 2)) != 0)
+      return "--mesh-size must be 2^k + 1 in [3, 257], got '" + *e + "'";
+    ro.meshSize = n;
+  }
+  if (auto e = a.get("upload-per-frame")) {
+    const auto v = parseNumbers(*e, 1, 1);
+    if (!v || !((*v)[0] >= 4096.0 && (*v)[0] <= 1e10))
+      return "--upload-per-frame must be bytes in [4096, 1e10], got '" + *e + "'";
+    ro.uploadBytesPerFrame = static_cast<std::size_t>((*v)[0]);
+  }
+  if (auto e = a.get("vertices")) {
+    if (*e != "double" && *e != "float")
+      return "--vertices must be double or float, got '" + *e + "'";
+    ro.fp64Vertices = *e == "double";
+  }
   if (auto e = a.get("sun")) {
     const auto v = parseNumbers(*e, 2, 2);
     if (!v || (*v)[0] < -90.0 || (*v)[0] > 90.0)
       return "--sun must be LAT,LON of the subsolar point, got '" + *e + "'";
     ro.sunLatLon = std::array<double, 2>{(*v)[0], (*v)[1]};
   }
+  return std::nullopt;
+}
+
+/** `renderer.geoid` (the configuration's, or --geoid on|off): the elevation layer's mean-sea-level
+ * heights onto the ellipsoid with the bundled EGM96 grid of the data directory. An error text when
+ * the grid cannot be read. */
+std::optional<std::string> applyGeoid(const Args& a, bool configured, planet::RendererOptions& ro) {
+  bool on = configured;
+  if (auto g = a.get("geoid")) on = *g == "on"; // checked by applyTerrainArgs
+  ro.verticalDatum = {};
+  if (!on || (ro.elevationLayer.empty() && !a.get("elevation"))) return std::nullopt;
+  auto geoid = Geoid::open(dataDir(a) / kGeoidFileName);
+  if (!geoid) return geoid.error() + " (renderer.geoid: false or --geoid off draws without it)";
+  ro.verticalDatum = VerticalDatum(std::make_shared<const Geoid>(std::move(*geoid)));
   return std::nullopt;
 }
 
@@ -1403,6 +1459,7 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
       return std::unexpected(usage("--server and --offline exclude each other", *server));
     bool terrain = !a.flag("no-terrain");
     RendererSettings settings;
+    bool geoid = RendererSettings{}.geoid;
     if (const auto file = a.get("config")) { // only its renderer settings matter here
       auto loaded = loadConfig(*file);
       if (!loaded) {
@@ -1412,6 +1469,7 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
       applyRendererSettings(loaded->renderer, a, ro, t.earth);
       terrain = terrain && loaded->renderer.terrain.enabled;
       settings = loaded->renderer;
+      geoid = loaded->renderer.geoid;
     }
     if (!layerArg && !settings.layers.empty()) ro.layer = settings.layers.front().layer;
     if (auto bad = applyTerrainArgs(a, ro)) {
@@ -1438,6 +1496,10 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
           ro.elevationLayer = l.name;
           break;
         }
+    if (auto bad = applyGeoid(a, geoid, ro)) {
+      std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());
+      return std::unexpected(kExitError);
+    }
     t.remote = std::move(*remote);
     t.source = t.remote.get();
     if (!applyRenderLayers(settings, nullptr, a, ro, t, cmd)) return std::unexpected(kExitUsage);
@@ -1473,6 +1535,10 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
         };
         break;
       }
+  if (auto bad = applyGeoid(a, config.renderer.geoid, ro)) {
+    std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());
+    return std::unexpected(kExitError);
+  }
   if (layerArg) {
     const auto* layer = config.layer(*layerArg);
     if (layer == nullptr || layer->kind != LayerKind::Imagery)
@@ -1522,10 +1588,12 @@ int cmdRender(const Args& a) {
   };
   for (const auto& [k, v] : a.options) {
     static const std::vector<std::string> known = {
-        "config",        "cache",       "data",   "camera", "size",       "out",
-        "wait-complete", "background",  "stats",  "layer",  "threshold",  "offline",
-        "server",        "path",        "frames", "fps",    "no-terrain", "exaggeration",
-        "sun",           "edge-fixing", "earth",  "repeat", "overlay"};
+        "config",    "cache",         "data",         "camera",    "size",
+        "out",       "wait-complete", "background",   "stats",     "layer",
+        "threshold", "offline",       "server",       "path",      "frames",
+        "fps",       "no-terrain",    "exaggeration", "sun",       "edge-fixing",
+        "earth",     "repeat",        "geoid",        "mesh-size", "upload-per-frame",
+        "vertices",  "overlay"};
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
   }
@@ -1643,12 +1711,21 @@ int cmdRender(const Args& a) {
   }
   planet::Renderer& r = **renderer;
   std::vector<planet::FramePhases> frames;
+  std::vector<double> frameCpuMs;
+  auto processCpuMs = [] {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    auto ms = [](const timeval& t) {
+      return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_usec) * 1e-3;
+    };
+    return ms(u.ru_utime) + ms(u.ru_stime);
+  };
   auto writeStats = [&](double elapsed, bool complete) {
     const auto statsFile = a.get("stats");
     if (!statsFile) return true;
     std::string json = renderStatsJson(r.stats(), elapsed, complete);
     json.resize(json.size() - 3); // "\n}\n"
-    json += frameTimesJson(frames);
+    json += frameTimesJson(frames, frameCpuMs);
     std::FILE* f = std::fopen(statsFile->c_str(), "w");
     if (f == nullptr || std::fputs(json.c_str(), f) < 0 || std::fclose(f) != 0) {
       std::fprintf(stderr, "tellus render: cannot write %s\n", statsFile->c_str());
@@ -1661,7 +1738,9 @@ int cmdRender(const Args& a) {
   auto renderOne = [&](const planet::CameraPose& p, double limit, bool once) {
     const auto begin = std::chrono::steady_clock::now();
     for (;;) {
+      const double cpu0 = processCpuMs();
       r.frame(p);
+      frameCpuMs.push_back(processCpuMs() - cpu0);
       frames.push_back(r.stats().phases);
       const double t =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
@@ -1800,7 +1879,7 @@ int cmdHeight(const Args& a) {
     return kExitUsage;
   };
   static const std::vector<std::string> known = {
-      "config", "cache", "data", "lat", "lon", "offline", "server", "elevation"};
+      "config", "cache", "data", "lat", "lon", "offline", "server", "elevation", "geoid", "datum"};
   for (const auto& [k, v] : a.options)
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
@@ -1810,6 +1889,9 @@ int cmdHeight(const Args& a) {
   if (!lat || !((*lat)[0] >= -90.0 && (*lat)[0] <= 90.0))
     return usage("--lat must be a latitude in [-90, 90]", *latArg);
   if (!lon || !std::isfinite((*lon)[0])) return usage("--lon must be a longitude", *lonArg);
+  const auto datumArg = a.get("datum");
+  if (datumArg && *datumArg != "msl" && *datumArg != "ellipsoid")
+    return usage("--datum must be msl or ellipsoid", *datumArg);
   planet::RendererOptions ro;
   auto tiles = openPlanetTiles(a, "height", ro);
   if (!tiles) return tiles.error();
@@ -1825,7 +1907,10 @@ int cmdHeight(const Args& a) {
     std::fprintf(stderr, "tellus height: %s\n", grid.error().c_str());
     return kExitError;
   }
+  // Two readings of the same tiles: as the layer gives them (H, above mean sea level) and as the
+  // renderer draws them (h = H + N when renderer.geoid is on, applyVerticalDatum per tile).
   planet::HeightField field(*grid);
+  planet::HeightField drawn(*grid);
   const double la = (*lat)[0], lo = std::remainder((*lon)[0], 360.0);
   int level = grid->numLevels() - 1;
   std::string lastError;
@@ -1859,7 +1944,10 @@ int cmdHeight(const Args& a) {
         lastError = t.error();
         continue;
       }
+      planet::HeightTile onEllipsoid = *t;
+      planet::applyVerticalDatum(onEllipsoid, grid->sectorOf(k), ro.verticalDatum);
       field.insert(std::move(*t));
+      drawn.insert(std::move(onEllipsoid));
       haveCentre = haveCentre || k == *centre;
     }
     if (haveCentre) break;
@@ -1873,8 +1961,31 @@ int cmdHeight(const Args& a) {
                  lastError.c_str());
     return kExitError;
   }
-  std::printf("%.2f\n", field.heightAt(la, lo));
-  std::fprintf(stderr, "tellus height: layer %s, level %d\n", ro.elevationLayer.c_str(), level);
+  const double H = field.heightAt(la, lo), h = drawn.heightAt(la, lo);
+  const bool ellipsoid = datumArg && *datumArg == "ellipsoid";
+  if (ellipsoid && !ro.verticalDatum.usesGeoid()) {
+    std::fprintf(stderr, "tellus height: --datum ellipsoid needs the geoid (--geoid on)\n");
+    return kExitUsage;
+  }
+  std::printf("%.2f\n", ellipsoid ? h : H);
+  if (ro.verticalDatum.usesGeoid())
+    std::fprintf(stderr,
+                 "tellus height: layer %s, level %d: H %.2f m above mean sea level, h = H + N "
+                 "%.2f m above the WGS84 ellipsoid (N %.2f m, EGM96; the renderer draws h); "
+                 "printed: %s\n",
+                 ro.elevationLayer.c_str(),
+                 level,
+                 H,
+                 h,
+                 h - H,
+                 ellipsoid ? "h" : "H");
+  else
+    std::fprintf(stderr,
+                 "tellus height: layer %s, level %d: H %.2f m above mean sea level, drawn as a "
+                 "height above the ellipsoid (the geoid off); printed: H\n",
+                 ro.elevationLayer.c_str(),
+                 level,
+                 H);
   return kExitOk;
 }
 
@@ -1897,6 +2008,7 @@ int cmdView(const Args& a) {
                                                  "exaggeration",
                                                  "sun",
                                                  "earth",
+                                                 "geoid",
                                                  "overlay"};
   for (const auto& [k, v] : a.options)
     if (std::find(known.begin(), known.end(), k) == known.end())

@@ -1181,6 +1181,7 @@ Renderer::create(ITileSource& source, const Geodesy& geodesy, RendererOptions op
     hp.layer = impl->opt.elevationLayer;
     hp.time = impl->opt.elevationTime;
     hp.encoding = impl->opt.elevationEncoding;
+    hp.datum = impl->opt.verticalDatum;
     impl->heights = std::make_unique<HeightStreamer>(
         source,
         *egrid,

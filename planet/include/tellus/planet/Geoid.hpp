@@ -13,6 +13,7 @@
 #include <expected>
 #include <filesystem>
 #include <memory>
+#include <span>
 #include <string>
 
 namespace tellus {
@@ -42,6 +43,14 @@ public:
    * [-90, 90], longitude any finite value (wraps); anything else (NaN, inf, |lat| > 90) gives NaN.
    */
   double undulationM(double latDeg, double lonDeg) const noexcept;
+  /** N along a parallel: out[i] = undulationM(latDeg, lon0Deg + i * dLonDeg) up to rounding
+   * (1e-9 m). With bilinear interpolation N is linear in longitude between two of the grid's
+   * meridians, so only the meridians the row crosses are looked up (a 150-sample row inside one 30'
+   * cell: two lookups instead of 150); cubic: one lookup per sample. NaN as above. */
+  void undulationsAlongParallel(double latDeg,
+                                double lon0Deg,
+                                double dLonDeg,
+                                std::span<double> out) const noexcept;
   /** h = H + N: a height above mean sea level as a height above the ellipsoid (NaN as above). */
   double ellipsoidHeightM(double latDeg, double lonDeg, double mslHeightM) const noexcept;
   /** H = h - N: the inverse. */
@@ -72,6 +81,8 @@ public:
   explicit VerticalDatum(std::shared_ptr<const Geoid> geoid) : geoid_(std::move(geoid)) {}
 
   bool usesGeoid() const noexcept { return geoid_ != nullptr; }
+  /** The geoid, or null when off. */
+  const Geoid* geoid() const noexcept { return geoid_.get(); }
   /** The height above the ellipsoid of a height above mean sea level at lat/lon (NaN in, NaN out;
    * with the geoid off it is the height itself). */
   double ellipsoidHeightM(double latDeg, double lonDeg, double mslHeightM) const noexcept;

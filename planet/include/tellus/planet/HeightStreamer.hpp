@@ -48,6 +48,9 @@ struct HeightStreamParams {
   std::size_t maxInFlight = 8;
   HeightEncoding encoding{};
   double retryAfterS = 5.0; ///< a failed tile is asked again after this long
+  /** Applied to every decoded tile on the worker thread (applyVerticalDatum): mean-sea-level
+   * heights onto the ellipsoid with the geoid (`renderer.geoid`); off by default (h = H). */
+  VerticalDatum datum{};
 };
 
 struct HeightStreamStats {

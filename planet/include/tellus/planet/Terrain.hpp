@@ -19,6 +19,7 @@
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/cache/TileKey.hpp>
 #include <tellus/planet/Geodesy.hpp>
+#include <tellus/planet/Geoid.hpp>
 #include <tellus/planet/Patch.hpp>
 
 #include <glm/vec2.hpp>
@@ -71,6 +72,18 @@ std::expected<HeightTile, std::string> decodeBil16(const TileKey& key,
                                                    int height,
                                                    std::span<const std::byte> bytes,
                                                    const HeightEncoding& encoding);
+
+/**
+ * Moves a tile of mean-sea-level heights (H) onto the ellipsoid: each sample gets the geoid
+ * undulation at its own centre (pixel-is-area over `sector`, the tile's sector), h = H + N, and
+ * min/max follow. A pure function of the tile, its sector and the geoid, done once per tile where
+ * raw values become metres (HeightStreamer's worker callback, `tellus height`), so heights stay a
+ * pure function of the tiles held and neighbours still agree bit for bit (they evaluate the same
+ * samples). Between samples the height field's bilinear interpolation interpolates N too: exact
+ * inside a 30' geoid cell, centimetres off at its lines for deep levels, decimetres for level 0
+ * (samples 0.13 degrees apart; docs/ACCURACY.md). With the datum off nothing changes.
+ */
+void applyVerticalDatum(HeightTile& tile, const Sector& sector, const VerticalDatum& datum);
 
 /**
  * @brief The elevation tiles held, on their own grid (an elevation layer's grid need not be the

@@ -82,6 +82,10 @@ struct RendererOptions {
    * decodeHeightTile (BIL16, 16-bit PNG). `tellus` passes the proxy's decoder, which also reads
    * Int16 TIFF through the imaging module. */
   HeightDecoder heightDecoder;
+  /** The elevation layer's heights are above mean sea level and moved onto the ellipsoid with
+   * this (h = H + N, once per tile on the worker that decodes it; `renderer.geoid`); default off:
+   * heights taken as ellipsoid heights. The exaggeration multiplies h. */
+  VerticalDatum verticalDatum;
   double verticalExaggeration = 1.0; ///< heights are multiplied by this (> 0)
   double terrainClearanceM = 2.0;    ///< the camera is kept this far above the terrain
   /** Edge fixing (finer edges onto coarser chords, zero-area triangles). Off only to measure what
