@@ -178,12 +178,16 @@ bool spliceRegion(const unsigned char* p,
       if (len != 4) return false;
       interval = be16(p + at + 4);
     } else if (m == 0xDA) {
+      if (len < 3 || p[at + 4] != 3) return false; // not one interleaved scan
       data = at + 2 + len;
       break;
     }
     at += 2 + len;
   }
-  if (!sof || !data || interval == 0 || p[sof + 9] != 3) return false;
+  // Three components at 4:2:0 (16 x 16 MCUs): the segments' geometry below.
+  if (!sof || !data || interval == 0 || be16(p + sof + 2) < 17 || p[sof + 9] != 3 ||
+      p[sof + 11] != 0x22 || p[sof + 14] != 0x11 || p[sof + 17] != 0x11)
+    return false;
   if (static_cast<int>(be16(p + sof + 5)) != height || static_cast<int>(be16(p + sof + 7)) != width)
     return false;
   const std::uint32_t mcuCols = static_cast<std::uint32_t>(width) / 16;
