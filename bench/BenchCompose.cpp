@@ -98,7 +98,8 @@ void BM_DecodeSampleEncodeJpeg(benchmark::State& state) {
 }
 BENCHMARK(BM_DecodeSampleEncodeJpeg)->Unit(benchmark::kMillisecond);
 
-/** The tiles of kBox as JPEG (quality 90, 4:2:0, as seeded) with the regions of the YCbCr path. */
+/** The tiles of kBox as JPEG (quality 90, 4:2:0; `restart`: with restart markers, as tellus seeds
+ * them, else as an upstream's may be) with the regions of the YCbCr path. */
 struct YccFixture {
   TileGrid g = grid();
   int level = composeLevel(g, kBox, 1024, 768, 0);
@@ -111,10 +112,10 @@ struct YccFixture {
   };
   std::map<std::tuple<std::int64_t, std::int64_t>, Planes> planes;
   std::vector<std::uint8_t> out[3];
-  YccFixture() {
+  explicit YccFixture(bool restart = false) {
     for (const auto& t : keys) {
       const auto px = tilePixels(t.key);
-      jpegs[{t.key.row, t.key.col}] = *encodeImage("image/jpeg", 512, 512, 3, px.data());
+      jpegs[{t.key.row, t.key.col}] = *encodeImage("image/jpeg", 512, 512, 3, px.data(), restart);
       auto& p = planes[{t.key.row, t.key.col}];
       p.view[0] = TileSamples{512, 512, 1, p.px.data(), nullptr};
       p.view[1] = TileSamples{256, 256, 1, p.px.data() + 512 * 512, nullptr};
@@ -171,6 +172,15 @@ void BM_YccDecodeOnly(benchmark::State& state) {
   state.counters["tiles"] = static_cast<double>(f.keys.size());
 }
 BENCHMARK(BM_YccDecodeOnly)->Unit(benchmark::kMillisecond);
+
+/** The same tiles with restart markers: the regions decoded from the segments around them. */
+void BM_YccDecodeOnlySegments(benchmark::State& state) {
+  YccFixture f(true);
+  for (auto _ : state)
+    f.decode();
+  state.counters["tiles"] = static_cast<double>(f.keys.size());
+}
+BENCHMARK(BM_YccDecodeOnlySegments)->Unit(benchmark::kMillisecond);
 
 void BM_YccSampleOnly(benchmark::State& state) {
   YccFixture f;

@@ -114,6 +114,7 @@ bool encodeJpegRaw(int width,
                    int height,
                    int channels,
                    const std::uint8_t* pixels,
+                   int restartInterval,
                    unsigned char** buffer,
                    unsigned long* size,
                    char* message) {
@@ -137,6 +138,7 @@ bool encodeJpegRaw(int width,
   cinfo.in_color_space = channels == 1 ? JCS_GRAYSCALE : JCS_RGB;
   jpeg_set_defaults(&cinfo);
   jpeg_set_quality(&cinfo, 90, TRUE);
+  cinfo.restart_interval = static_cast<unsigned int>(std::max(restartInterval, 0));
   jpeg_start_compress(&cinfo, TRUE);
   const auto stride = static_cast<std::size_t>(width) * static_cast<std::size_t>(channels);
   while (cinfo.next_scanline < cinfo.image_height) {
@@ -234,13 +236,14 @@ std::expected<void, std::string> checkPng(std::span<const std::byte> bytes,
 }
 
 std::expected<std::vector<std::byte>, std::string>
-encodeJpeg(int width, int height, int channels, const std::uint8_t* pixels) {
+encodeJpeg(int width, int height, int channels, const std::uint8_t* pixels, int restartInterval) {
   if (width <= 0 || height <= 0 || (channels != 1 && channels != 3) || !pixels)
     return std::unexpected("bad image shape for JPEG");
   unsigned char* buffer = nullptr;
   unsigned long size = 0;
   char message[JMSG_LENGTH_MAX] = {};
-  const bool ok = encodeJpegRaw(width, height, channels, pixels, &buffer, &size, message);
+  const bool ok =
+      encodeJpegRaw(width, height, channels, pixels, restartInterval, &buffer, &size, message);
   std::vector<std::byte> out;
   if (ok) {
     const auto* b = reinterpret_cast<const std::byte*>(buffer);

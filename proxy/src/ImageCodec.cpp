@@ -10,8 +10,12 @@ namespace tellus {
 // JPEG and 8-bit PNG are made and read here (libjpeg-turbo, libpng: Codecs.cpp); TIFF and 16-bit
 // PNG go through the imaging module (OpenImageIO), loaded on the first call; BIL16 is written here.
 
-std::expected<std::vector<std::byte>, std::string> encodeImage(
-    std::string_view mimeType, int width, int height, int channels, const std::uint8_t* pixels) {
+std::expected<std::vector<std::byte>, std::string> encodeImage(std::string_view mimeType,
+                                                               int width,
+                                                               int height,
+                                                               int channels,
+                                                               const std::uint8_t* pixels,
+                                                               bool tile) {
   if (width <= 0 || height <= 0 || (channels != 1 && channels != 3 && channels != 4)) {
     return std::unexpected("bad image shape");
   }
@@ -23,10 +27,11 @@ std::expected<std::vector<std::byte>, std::string> encodeImage(
     std::vector<std::uint8_t> rgb(n * 3);
     for (std::size_t i = 0; i < n; ++i)
       std::memcpy(&rgb[i * 3], &pixels[i * 4], 3);
-    return encodeImage(mimeType, width, height, 3, rgb.data());
+    return encodeImage(mimeType, width, height, 3, rgb.data(), tile);
   }
   return png ? codecs::encodePng(width, height, channels, pixels)
-             : codecs::encodeJpeg(width, height, channels, pixels);
+             : codecs::encodeJpeg(
+                   width, height, channels, pixels, tile ? codecs::kTileRestartInterval : 0);
 }
 
 std::expected<std::vector<std::byte>, std::string>

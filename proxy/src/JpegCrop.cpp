@@ -4,6 +4,8 @@
 
 #include "JpegCrop.hpp"
 
+#include "Codecs.hpp"
+
 #include <csetjmp>
 #include <cstdio> // jpeglib.h needs FILE
 #include <cstdlib>
@@ -151,7 +153,7 @@ Result splitRaw(const unsigned char* data,
       dst.image_height = static_cast<JDIMENSION>(tileHeight);
       dst.arith_code = FALSE;
       dst.optimize_coding = optimize ? TRUE : FALSE;
-      dst.restart_interval = 0;
+      dst.restart_interval = kTileRestartInterval; // the composer's region decodes use them
       jvirt_barray_ptr dstArrays[MAX_COMPONENTS];
       JDIMENSION blocksW[MAX_COMPONENTS];
       JDIMENSION blocksH[MAX_COMPONENTS];

@@ -54,6 +54,7 @@ bool is420(const jpeg_decompress_struct& c) noexcept {
          c.comp_info[2].h_samp_factor == 1 && c.comp_info[2].v_samp_factor == 1;
 }
 
+/** `strideY` and `strideC`: the samples from one row of the luma or a chroma plane to the next. */
 YccDecode decodeRaw(const unsigned char* bytes,
                     unsigned long size,
                     int width,
@@ -62,6 +63,8 @@ YccDecode decodeRaw(const unsigned char* bytes,
                     std::uint8_t* y,
                     std::uint8_t* cb,
                     std::uint8_t* cr,
+                    std::size_t strideY,
+                    std::size_t strideC,
                     char* message) {
   jpeg_decompress_struct cinfo;
   RawError err;
@@ -106,17 +109,15 @@ YccDecode decodeRaw(const unsigned char* bytes,
   }
   cinfo.raw_data_out = TRUE;
   cinfo.global_state = kStateRawOk;
-  const auto w = static_cast<std::size_t>(width);
-  const std::size_t cw = w / 2;
   JSAMPROW rowsY[16], rowsCb[8], rowsCr[8];
   JSAMPARRAY planes[3] = {rowsY, rowsCb, rowsCr};
   while (cinfo.output_scanline < y1) {
     const std::size_t s = cinfo.output_scanline;
     for (std::size_t i = 0; i < 16; ++i)
-      rowsY[i] = y + (s + i) * w + x0;
+      rowsY[i] = y + (s + i) * strideY + x0;
     for (std::size_t i = 0; i < 8; ++i) {
-      rowsCb[i] = cb + (s / 2 + i) * cw + x0 / 2;
-      rowsCr[i] = cr + (s / 2 + i) * cw + x0 / 2;
+      rowsCb[i] = cb + (s / 2 + i) * strideC + x0 / 2;
+      rowsCr[i] = cr + (s / 2 + i) * strideC + x0 / 2;
     }
     if (jpeg_read_raw_data(&cinfo, planes, 16) != 16) break;
   }
@@ -127,6 +128,140 @@ YccDecode decodeRaw(const unsigned char* bytes,
   }
   jpeg_destroy_decompress(&cinfo);
   return YccDecode::Ok;
+}
+
+std::uint32_t be16(const unsigned char* p) noexcept {
+  return static_cast<std::uint32_t>(p[0]) << 8 | p[1];
+}
+
+/** What spliceRegion made: a JPEG of the segments around the region, and where its samples go. */
+struct Spliced {
+  std::vector<unsigned char> bytes;
+  int width = 0, height = 0; ///< of the spliced image
+  int x = 0, y = 0;          ///< its top-left texel in the tile
+};
+
+/**
+ * The fast path for a tile with restart markers: a baseline JPEG whose restart interval divides its
+ * rows of 16 x 16 MCUs is a grid of independent segments (the DC predictions start again at each
+ * marker), so the segments around a region, copied into a JPEG of their own (the same tables, the
+ * size in the SOF changed, the markers renumbered), decode to exactly the tile's blocks there,
+ * without entropy-decoding the rows above the region and the columns beside it (which a decoder of
+ * the whole stream must). False (and the caller decodes the tile as it is) for any other stream:
+ * no restart interval, one that does not divide the rows, several scans, markers it does not
+ * expect, a region that needs every segment anyway.
+ */
+bool spliceRegion(const unsigned char* p,
+                  std::size_t n,
+                  int width,
+                  int height,
+                  const std::array<std::int32_t, 4>& region,
+                  Spliced& out) {
+  if (n < 4 || p[0] != 0xFF || p[1] != 0xD8) return false;
+  std::size_t at = 2, sof = 0, data = 0;
+  std::uint32_t interval = 0;
+  while (at + 4 <= n) { // the segments up to the (first) scan
+    if (p[at] != 0xFF) return false;
+    const unsigned char m = p[at + 1];
+    if (m == 0xFF) { // fill byte
+      ++at;
+      continue;
+    }
+    const std::size_t len = be16(p + at + 2);
+    if (len < 2 || at + 2 + len > n) return false;
+    if (m == 0xC0 || m == 0xC1) {
+      if (len < 8) return false;
+      sof = at;
+    } else if ((m >= 0xC2 && m <= 0xCF && m != 0xC4 && m != 0xC8 && m != 0xCC)) {
+      return false; // progressive, lossless, arithmetic: not this path
+    } else if (m == 0xDD) {
+      if (len != 4) return false;
+      interval = be16(p + at + 4);
+    } else if (m == 0xDA) {
+      if (len < 3 || p[at + 4] != 3) return false; // not one interleaved scan
+      data = at + 2 + len;
+      break;
+    }
+    at += 2 + len;
+  }
+  // Three components at 4:2:0 (16 x 16 MCUs): the segments' geometry below.
+  if (!sof || !data || interval == 0 || be16(p + sof + 2) < 17 || p[sof + 9] != 3 ||
+      p[sof + 11] != 0x22 || p[sof + 14] != 0x11 || p[sof + 17] != 0x11)
+    return false;
+  if (static_cast<int>(be16(p + sof + 5)) != height || static_cast<int>(be16(p + sof + 7)) != width)
+    return false;
+  const std::uint32_t mcuCols = static_cast<std::uint32_t>(width) / 16;
+  const std::uint32_t mcuRows = static_cast<std::uint32_t>(height) / 16;
+  if (mcuCols % interval != 0) return false;
+  const std::uint32_t segCols = mcuCols / interval;
+  const auto segPx = static_cast<int>(interval) * 16;
+  const int left = std::clamp(region[0], 0, width - 1);
+  const int top = std::clamp(region[1], 0, height - 1);
+  const auto x0 = static_cast<std::uint32_t>(left / segPx);
+  const auto x1 =
+      static_cast<std::uint32_t>((std::clamp(region[2], left + 1, width) + segPx - 1) / segPx);
+  const auto y0 = static_cast<std::uint32_t>(top / 16);
+  const auto y1 = static_cast<std::uint32_t>((std::clamp(region[3], top + 1, height) + 15) / 16);
+  if (x0 >= x1 || y0 >= y1 || x1 > segCols || y1 > mcuRows) return false;
+  if (x0 == 0 && x1 == segCols && y0 == 0) return false; // whole rows from the top: no gain
+  // The segments' starts, up to the last row the region needs (the markers found on the way).
+  const std::size_t needed = static_cast<std::size_t>(y1) * segCols;
+  thread_local std::vector<std::uint32_t> starts;
+  starts.clear();
+  starts.push_back(static_cast<std::uint32_t>(data));
+  std::size_t endOfLast = 0;
+  for (std::size_t i = data; i + 1 < n;) {
+    const void* ff = std::memchr(p + i, 0xFF, n - 1 - i);
+    if (!ff) return false;
+    i = static_cast<std::size_t>(static_cast<const unsigned char*>(ff) - p);
+    const unsigned char m = p[i + 1];
+    if (m == 0x00) {
+      i += 2;
+      continue;
+    }
+    if (m >= 0xD0 && m <= 0xD7) {
+      if (static_cast<std::size_t>(m) != 0xD0 + (starts.size() - 1) % 8)
+        return false; // markers out of order
+      if (starts.size() == needed) {
+        endOfLast = i;
+        break;
+      }
+      starts.push_back(static_cast<std::uint32_t>(i + 2));
+      i += 2;
+      continue;
+    }
+    if (m == 0xD9 && starts.size() == needed) endOfLast = i;
+    break; // EOI (or anything else) ends the search
+  }
+  if (starts.size() != needed || endOfLast == 0) return false;
+  const auto segEnd = [&](std::size_t s) -> std::size_t {
+    return s + 1 < needed ? starts[s + 1] - 2 : endOfLast;
+  };
+  out.bytes.clear();
+  out.bytes.insert(out.bytes.end(), p, p + data);
+  out.width = static_cast<int>((x1 - x0) * interval * 16);
+  out.height = static_cast<int>((y1 - y0) * 16);
+  out.x = static_cast<int>(x0 * interval * 16);
+  out.y = static_cast<int>(y0 * 16);
+  out.bytes[sof + 5] = static_cast<unsigned char>(out.height >> 8);
+  out.bytes[sof + 6] = static_cast<unsigned char>(out.height);
+  out.bytes[sof + 7] = static_cast<unsigned char>(out.width >> 8);
+  out.bytes[sof + 8] = static_cast<unsigned char>(out.width);
+  std::uint32_t k = 0;
+  for (std::uint32_t r = y0; r < y1; ++r) {
+    for (std::uint32_t c = x0; c < x1; ++c) {
+      if (k > 0) {
+        out.bytes.push_back(0xFF);
+        out.bytes.push_back(static_cast<unsigned char>(0xD0 + (k - 1) % 8));
+      }
+      const std::size_t s = static_cast<std::size_t>(r) * segCols + c;
+      out.bytes.insert(out.bytes.end(), p + starts[s], p + segEnd(s));
+      ++k;
+    }
+  }
+  out.bytes.push_back(0xFF);
+  out.bytes.push_back(0xD9);
+  return true;
 }
 
 /** A destination that grows a std::vector (no copy of the finished stream). */
@@ -249,7 +384,35 @@ YccDecode decodeJpegYcc(std::span<const std::byte> bytes,
                         std::string& message) {
   if (width <= 0 || height <= 0 || width % 16 != 0 || height % 16 != 0) return YccDecode::NotYcc420;
   char text[JMSG_LENGTH_MAX] = {};
-  const YccDecode status = decodeRaw(reinterpret_cast<const unsigned char*>(bytes.data()),
+  const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
+  const auto w = static_cast<std::size_t>(width);
+  thread_local Spliced spliced;
+  if (region && spliceRegion(data, bytes.size(), width, height, *region, spliced)) {
+    // The region in the spliced image's texels, its samples written where the tile's go.
+    const std::array<std::int32_t, 4> inside{(*region)[0] - spliced.x,
+                                             (*region)[1] - spliced.y,
+                                             (*region)[2] - spliced.x,
+                                             (*region)[3] - spliced.y};
+    const auto sx = static_cast<std::size_t>(spliced.x);
+    const auto sy = static_cast<std::size_t>(spliced.y);
+    const YccDecode status = decodeRaw(spliced.bytes.data(),
+                                       static_cast<unsigned long>(spliced.bytes.size()),
+                                       spliced.width,
+                                       spliced.height,
+                                       &inside,
+                                       y + sy * w + sx,
+                                       cb + sy / 2 * (w / 2) + sx / 2,
+                                       cr + sy / 2 * (w / 2) + sx / 2,
+                                       w,
+                                       w / 2,
+                                       text);
+    if (status != YccDecode::Failed) {
+      if (spliced.bytes.capacity() > (1u << 20)) spliced.bytes = {};
+      return status;
+    }
+    // A stream this path misread: the whole stream's decoder says what is wrong with it.
+  }
+  const YccDecode status = decodeRaw(data,
                                      static_cast<unsigned long>(bytes.size()),
                                      width,
                                      height,
@@ -257,9 +420,25 @@ YccDecode decodeJpegYcc(std::span<const std::byte> bytes,
                                      y,
                                      cb,
                                      cr,
+                                     w,
+                                     w / 2,
                                      text);
   if (status == YccDecode::Failed) message = std::string("the JPEG does not decode: ") + text;
   return status;
+}
+
+bool decodesFromSegments(std::span<const std::byte> bytes,
+                         int width,
+                         int height,
+                         const std::array<std::int32_t, 4>& region) {
+  if (width <= 0 || height <= 0 || width % 16 != 0 || height % 16 != 0) return false;
+  Spliced spliced;
+  return spliceRegion(reinterpret_cast<const unsigned char*>(bytes.data()),
+                      bytes.size(),
+                      width,
+                      height,
+                      region,
+                      spliced);
 }
 
 std::expected<std::vector<std::byte>, std::string> encodeJpegYcc(

@@ -39,6 +39,17 @@ YccDecode decodeJpegYcc(std::span<const std::byte> bytes,
                         std::string& message);
 
 /**
+ * Whether decodeJpegYcc decodes `region` of this JPEG from the restart segments around it alone
+ * (a tile written with restart markers every few MCUs, codecs::kTileRestartInterval, and a region
+ * that does not need every segment from the top); else the whole stream is entropy-decoded down to
+ * the region's last row. For tests and benchmarks.
+ */
+bool decodesFromSegments(std::span<const std::byte> bytes,
+                         int width,
+                         int height,
+                         const std::array<std::int32_t, 4>& region);
+
+/**
  * Baseline JPEG, quality 90, 4:2:0 (what encodeJpeg writes from RGB) from planes: `y` width *
  * height, `cb` and `cr` ((width + 1) / 2) * ((height + 1) / 2), rows from the top, dense. The
  * edges are extended by repetition to whole blocks.

@@ -327,7 +327,7 @@ LocalRasterSource::renderTile(const Sector& box,
               }
             }
           }
-          return encodeImage(mimeType, width, height, outChannels, rgba.data());
+          return encodeImage(mimeType, width, height, outChannels, rgba.data(), true);
         }
       },
       (*p)->samples);

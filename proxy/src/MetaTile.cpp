@@ -86,7 +86,8 @@ std::expected<SplitTiles, std::string> splitDecoded(std::span<const std::byte> b
         std::memcpy(tile.data() + y * rowBytes, from + y * stride, rowBytes);
       std::expected<std::vector<std::byte>, std::string> encoded;
       if (kind == ImageKind::Jpeg) {
-        encoded = codecs::encodeJpeg(tileWidth, tileHeight, 3, tile.data());
+        encoded =
+            codecs::encodeJpeg(tileWidth, tileHeight, 3, tile.data(), codecs::kTileRestartInterval);
       } else {
         bool opaque = true;
         for (std::size_t i = 3; i < tile.size() && opaque; i += 4)

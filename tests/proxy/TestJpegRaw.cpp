@@ -1,8 +1,9 @@
 // The composer's YCbCr path (proxy/src/JpegRaw.hpp and Compose's planes): region decodes against
 // whole decodes, the chroma planes' geometry, and JPEG maps made on Y, Cb and Cr planes against
 // the same maps made on the RGB path, on tiles cut from the bundled Blue Marble and encoded as the
-// seeder encodes them (quality 90, 4:2:0).
+// seeder encodes them (quality 90, 4:2:0, restart markers), and as an upstream may (no markers).
 
+#include "../../proxy/src/JpegCrop.hpp"
 #include "../../proxy/src/JpegRaw.hpp"
 #include "../support/JpegSampling.hpp"
 
@@ -69,23 +70,44 @@ std::vector<std::uint8_t> tileRgb(const TileGrid& g, const TileKey& k) {
   return px;
 }
 
-/** The JPEG tiles of a grid, made on first use. */
+/** The JPEG tiles of a grid, made on first use: as tellus writes its tiles (`restart`: with
+ * restart markers, decoded from the segments around a region) or without markers. */
 struct JpegTiles {
+  bool restart = true;
   TileGrid g = grid();
   std::map<std::tuple<int, std::int64_t, std::int64_t>, std::vector<std::byte>> jpegs;
   const std::vector<std::byte>& at(const TileKey& k) {
     auto& j = jpegs[{k.level, k.row, k.col}];
     if (j.empty()) {
       const auto px = tileRgb(g, k);
-      j = *encodeImage("image/jpeg", kTile, kTile, 3, px.data());
+      j = *encodeImage("image/jpeg", kTile, kTile, 3, px.data(), restart);
     }
     return j;
   }
 };
 
+/** The tiles of the current test: tellus's (restart markers) unless a test switches. */
+JpegTiles* current = nullptr;
 JpegTiles& tiles() {
-  static JpegTiles t;
-  return t;
+  static JpegTiles withMarkers;
+  return current ? *current : withMarkers;
+}
+JpegTiles& plainTiles() {
+  static JpegTiles plain = [] {
+    JpegTiles t;
+    t.restart = false;
+    return t;
+  }();
+  return plain;
+}
+/** Runs `f` on tellus's tiles and on tiles without restart markers. */
+template <typename F> void forBothTileKinds(F&& f) {
+  for (JpegTiles* t : {&tiles(), &plainTiles()}) {
+    SCOPED_TRACE(t->restart ? "tiles with restart markers" : "tiles without restart markers");
+    current = t;
+    f();
+  }
+  current = nullptr;
 }
 
 struct Planes {
@@ -191,49 +213,146 @@ std::pair<double, int> compare(const DecodedImage& a, const DecodedImage& b) {
 } // namespace
 
 TEST(JpegRaw, RegionDecodesMatchTheWholeDecode) {
-  const auto& jpeg = tiles().at(TileKey{2, 12, 21}); // Europe, level 2
-  Planes whole;
-  ASSERT_EQ(decode(jpeg, nullptr, whole), codecs::YccDecode::Ok);
-  const std::array<std::int32_t, 4> regions[] = {
-      {0, 0, 512, 512},
-      {0, 0, 1, 1},
-      {511, 511, 512, 512},
-      {17, 33, 18, 34},
-      {200, 0, 512, 512},
-      {0, 300, 512, 512},
-      {100, 100, 300, 300},
-      {0, 0, 100, 512},
-      {15, 15, 17, 17},
-      {496, 0, 512, 16},
-  };
-  for (const auto& r : regions) {
-    Planes part(0x55);
-    ASSERT_EQ(decode(jpeg, &r, part), codecs::YccDecode::Ok);
-    int bad = 0;
-    for (int y = r[1]; y < r[3]; ++y)
-      for (int x = r[0]; x < r[2]; ++x) {
-        const auto k = static_cast<std::size_t>(y * kTile + x);
-        const auto kc = static_cast<std::size_t>((y / 2) * (kTile / 2) + x / 2);
-        bad += part.y[k] != whole.y[k];
-        bad += part.cb[kc] != whole.cb[kc];
-        bad += part.cr[kc] != whole.cr[kc];
+  forBothTileKinds([] {
+    const auto& jpeg = tiles().at(TileKey{2, 12, 21}); // Europe, level 2
+    Planes whole;
+    ASSERT_EQ(decode(jpeg, nullptr, whole), codecs::YccDecode::Ok);
+    const std::array<std::int32_t, 4> regions[] = {
+        {0, 0, 512, 512},
+        {0, 0, 1, 1},
+        {511, 511, 512, 512},
+        {17, 33, 18, 34},
+        {200, 0, 512, 512},
+        {0, 300, 512, 512},
+        {100, 100, 300, 300},
+        {0, 0, 100, 512},
+        {15, 15, 17, 17},
+        {496, 0, 512, 16},
+        {63, 63, 65, 65},     // across segment corners
+        {448, 496, 512, 512}, // the last segment
+        {0, 496, 512, 512},   // the last row, all of it
+        {130, 7, 131, 500},   // one column
+        {-5, -5, 600, 3},     // clamped to the tile
+    };
+    for (const auto& r : regions) {
+      Planes part(0x55);
+      ASSERT_EQ(decode(jpeg, &r, part), codecs::YccDecode::Ok);
+      int bad = 0;
+      for (int y = std::max(r[1], 0); y < std::min(r[3], kTile); ++y)
+        for (int x = std::max(r[0], 0); x < std::min(r[2], kTile); ++x) {
+          const auto k = static_cast<std::size_t>(y * kTile + x);
+          const auto kc = static_cast<std::size_t>((y / 2) * (kTile / 2) + x / 2);
+          bad += part.y[k] != whole.y[k];
+          bad += part.cb[kc] != whole.cb[kc];
+          bad += part.cr[kc] != whole.cr[kc];
+        }
+      EXPECT_EQ(bad, 0) << r[0] << "," << r[1] << " - " << r[2] << "," << r[3];
+      // Below the region's last block row nothing is decoded.
+      const int below = (r[3] + 15) / 16 * 16;
+      if (below < kTile) {
+        EXPECT_EQ(part.y[static_cast<std::size_t>(below * kTile)], 0x55);
       }
-    EXPECT_EQ(bad, 0) << r[0] << "," << r[1] << " - " << r[2] << "," << r[3];
-    // Below the region's last block row nothing is decoded.
-    const int below = (r[3] + 15) / 16 * 16;
-    if (below < kTile) {
-      EXPECT_EQ(part.y[static_cast<std::size_t>(below * kTile)], 0x55);
+      // Tiles with restart markers: decoded from the segments around the region unless it needs
+      // every segment from the top; without markers, never.
+      const bool fromTop = r[1] < 16 && r[0] < 64 && r[2] > kTile - 64;
+      EXPECT_EQ(codecs::decodesFromSegments(jpeg, kTile, kTile, r), tiles().restart && !fromTop)
+          << r[0] << "," << r[1] << " - " << r[2] << "," << r[3];
+    }
+    // The planes are the RGB decode's colours (JFIF) at the chroma's resolution.
+    std::vector<std::uint8_t> rgb;
+    ASSERT_TRUE(decodeImageryInto(jpeg, "image/jpeg", kTile, kTile, rgb, nullptr));
+    double err = 0;
+    for (std::size_t k = 0; k < whole.y.size(); ++k) {
+      const auto y = codecs::rgbToYcc(rgb[k * 3], rgb[k * 3 + 1], rgb[k * 3 + 2])[0];
+      err += std::abs(int{y} - int{whole.y[k]});
+    }
+    EXPECT_LT(err / static_cast<double>(whole.y.size()), 1.0);
+  });
+}
+
+TEST(JpegRaw, SegmentDecodesOfRandomRegionsMatchTheWholeDecode) {
+  // Random regions of tiles with restart markers: exactly the whole decode's samples (the same
+  // blocks), with the 64 x 16 segments' edges anywhere in the region.
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> at(0, kTile - 1);
+  const TileKey keys[] = {{2, 12, 21}, {1, 6, 12}, {0, 2, 3}, {2, 0, 5}};
+  for (const TileKey& key : keys) {
+    const auto& jpeg = tiles().at(key);
+    Planes whole;
+    ASSERT_EQ(decode(jpeg, nullptr, whole), codecs::YccDecode::Ok);
+    for (int k = 0; k < 40; ++k) {
+      int x0 = at(rng), x1 = at(rng), y0 = at(rng), y1 = at(rng);
+      if (x0 > x1) std::swap(x0, x1);
+      if (y0 > y1) std::swap(y0, y1);
+      const std::array<std::int32_t, 4> r{x0, y0, x1 + 1, y1 + 1};
+      Planes part(0x55);
+      ASSERT_EQ(decode(jpeg, &r, part), codecs::YccDecode::Ok);
+      int bad = 0;
+      for (int y = r[1]; y < r[3]; ++y)
+        for (int x = r[0]; x < r[2]; ++x) {
+          const auto i = static_cast<std::size_t>(y * kTile + x);
+          const auto ic = static_cast<std::size_t>((y / 2) * (kTile / 2) + x / 2);
+          bad += part.y[i] != whole.y[i];
+          bad += part.cb[ic] != whole.cb[ic];
+          bad += part.cr[ic] != whole.cr[ic];
+        }
+      EXPECT_EQ(bad, 0) << r[0] << "," << r[1] << " - " << r[2] << "," << r[3];
     }
   }
-  // The planes are the RGB decode's colours (JFIF) at the chroma's resolution.
-  std::vector<std::uint8_t> rgb;
-  ASSERT_TRUE(decodeImageryInto(jpeg, "image/jpeg", kTile, kTile, rgb, nullptr));
-  double err = 0;
-  for (std::size_t k = 0; k < whole.y.size(); ++k) {
-    const auto y = codecs::rgbToYcc(rgb[k * 3], rgb[k * 3 + 1], rgb[k * 3 + 2])[0];
-    err += std::abs(int{y} - int{whole.y[k]});
+}
+
+TEST(JpegRaw, TilesCutFromAMetatileAreDecodedFromSegments) {
+  // The seeder's metatile split writes its tiles with restart markers too.
+  const auto left = tileRgb(tiles().g, TileKey{2, 12, 20});
+  const auto right = tileRgb(tiles().g, TileKey{2, 12, 21});
+  std::vector<std::uint8_t> meta(static_cast<std::size_t>(2 * kTile * kTile * 3));
+  for (std::size_t y = 0; y < kTile; ++y) {
+    const std::size_t row = kTile * 3;
+    std::memcpy(&meta[y * 2 * row], &left[y * row], row);
+    std::memcpy(&meta[y * 2 * row + row], &right[y * row], row);
   }
-  EXPECT_LT(err / static_cast<double>(whole.y.size()), 1.0);
+  const auto jpeg = *encodeImage("image/jpeg", 2 * kTile, kTile, 3, meta.data());
+  const auto cut = codecs::splitJpegDct(jpeg, 2, 1, kTile, kTile, false);
+  ASSERT_TRUE(cut.has_value());
+  ASSERT_EQ(cut->size(), 2u);
+  const std::array<std::int32_t, 4> r{300, 200, 420, 260};
+  for (const auto& tile : *cut) {
+    EXPECT_TRUE(codecs::decodesFromSegments(tile, kTile, kTile, r));
+    Planes whole, part(0x55);
+    ASSERT_EQ(decode(tile, nullptr, whole), codecs::YccDecode::Ok);
+    ASSERT_EQ(decode(tile, &r, part), codecs::YccDecode::Ok);
+    int bad = 0;
+    for (int y = r[1]; y < r[3]; ++y)
+      for (int x = r[0]; x < r[2]; ++x)
+        bad += part.y[static_cast<std::size_t>(y * kTile + x)] !=
+               whole.y[static_cast<std::size_t>(y * kTile + x)];
+    EXPECT_EQ(bad, 0);
+  }
+}
+
+TEST(JpegRaw, DamagedTilesWithRestartMarkersAreDecodedAsAWhole) {
+  // A stream whose markers are not all there (truncated) or not in order is decoded as a whole
+  // (the damaged part grey, as on the RGB path), never spliced from the wrong segments.
+  const auto& jpeg = tiles().at(TileKey{2, 12, 21});
+  const std::array<std::int32_t, 4> lower{100, 400, 300, 500};
+  ASSERT_TRUE(codecs::decodesFromSegments(jpeg, kTile, kTile, lower));
+  const std::vector<std::byte> truncated(
+      jpeg.begin(), jpeg.begin() + static_cast<std::ptrdiff_t>(jpeg.size() / 2));
+  EXPECT_FALSE(codecs::decodesFromSegments(truncated, kTile, kTile, lower));
+  Planes p;
+  EXPECT_EQ(decode(truncated, &lower, p), codecs::YccDecode::Ok);
+  // Two restart markers swapped: out of order.
+  std::vector<std::byte> swapped = jpeg;
+  std::vector<std::size_t> markers;
+  for (std::size_t i = 0; i + 1 < swapped.size(); ++i)
+    if (swapped[i] == std::byte{0xFF} && (std::to_integer<int>(swapped[i + 1]) & 0xF8) == 0xD0)
+      markers.push_back(i + 1);
+  ASSERT_GE(markers.size(), 100u); // 8 x 32 segments of a 512-pixel tile
+  std::swap(swapped[markers[10]], swapped[markers[11]]);
+  EXPECT_FALSE(codecs::decodesFromSegments(swapped, kTile, kTile, lower));
+  EXPECT_EQ(decode(swapped, &lower, p), codecs::YccDecode::Ok);
+  // Not the tile's size.
+  EXPECT_FALSE(codecs::decodesFromSegments(jpeg, 256, 256, lower));
 }
 
 TEST(JpegRaw, OtherSamplingsAndShapesAreLeftToTheRgbPath) {
@@ -323,25 +442,27 @@ TEST(JpegRaw, YccMapsMatchTheRgbPath) {
     const double s = -90 + u(rng) * (180 - hs);
     cases.push_back({{w, s, w + span, s + hs}, 1024, 768});
   }
-  for (const Case& c : cases) {
-    SCOPED_TRACE(::testing::Message() << c.box.west << "," << c.box.south << "," << c.box.east
-                                      << "," << c.box.north << " " << c.width << "x" << c.height);
-    const DecodedImage rgb = rgbMap(c.box, c.width, c.height);
-    const DecodedImage ycc = yccMap(c.box, c.width, c.height);
-    ASSERT_EQ(ycc.width, c.width);
-    ASSERT_EQ(ycc.height, c.height);
-    const auto [psnr, worst] = compare(rgb, ycc);
-    // Both are quality 90 JPEGs of the same map; they differ by rounding in different places
-    // and by the second JPEG quantisation noise.
-    EXPECT_GT(psnr, 44.0) << "worst " << worst;
-    // Past a pole: the background, white.
-    if (c.box.north > 90) {
-      const auto* p = &ycc.pixels[static_cast<std::size_t>((2 * c.width + c.width / 2) * 3)];
-      EXPECT_GE(p[0], 250);
-      EXPECT_GE(p[1], 250);
-      EXPECT_GE(p[2], 250);
+  forBothTileKinds([&] {
+    for (const Case& c : cases) {
+      SCOPED_TRACE(::testing::Message() << c.box.west << "," << c.box.south << "," << c.box.east
+                                        << "," << c.box.north << " " << c.width << "x" << c.height);
+      const DecodedImage rgb = rgbMap(c.box, c.width, c.height);
+      const DecodedImage ycc = yccMap(c.box, c.width, c.height);
+      ASSERT_EQ(ycc.width, c.width);
+      ASSERT_EQ(ycc.height, c.height);
+      const auto [psnr, worst] = compare(rgb, ycc);
+      // Both are quality 90 JPEGs of the same map; they differ by rounding in different places
+      // and by the second JPEG quantisation noise.
+      EXPECT_GT(psnr, 44.0) << "worst " << worst;
+      // Past a pole: the background, white.
+      if (c.box.north > 90) {
+        const auto* p = &ycc.pixels[static_cast<std::size_t>((2 * c.width + c.width / 2) * 3)];
+        EXPECT_GE(p[0], 250);
+        EXPECT_GE(p[1], 250);
+        EXPECT_GE(p[2], 250);
+      }
     }
-  }
+  });
 }
 
 TEST(JpegRaw, ChromaTilesAreFetchedWhereTheLumaDoesNotReach) {
