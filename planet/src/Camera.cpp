@@ -86,7 +86,7 @@ Camera::Camera(const Geodesy& geodesy,
   std::array<glm::dvec3, 9> dirs{};
   for (std::size_t i = 0; i < ndc.size(); ++i)
     dirs[i] = forward_ + ndc[i][0] * tx * right_ + ndc[i][1] * ty * up_;
-  castGroundRays(geodesy, dirs);
+  castGroundRays(geodesy, dirs, ground_);
 }
 
 Camera::Camera(const Geodesy& geodesy,
@@ -123,7 +123,17 @@ Camera::Camera(const Geodesy& geodesy,
   }
   dirs[8] = forward_;
   ground_ = {};
-  castGroundRays(geodesy, dirs);
+  castGroundRays(geodesy, dirs, ground_);
+  std::array<glm::dvec3, kDomeRays> rays{};
+  for (std::size_t i = 0; i < kDomeRays; ++i) {
+    const double phi = 22.5 * static_cast<double>(i % 16);
+    const double theta = 0.5 * fisheye.fovDeg * static_cast<double>(i / 16 + 1) / 6.0;
+    double sp = 0.0, cp = 1.0, sa = 0.0, ca = 1.0;
+    GeographicLib::Math::sincosd(phi, sp, cp);
+    GeographicLib::Math::sincosd(theta, sa, ca);
+    rays[i] = ca * forward_ + sa * (cp * right_ + sp * up_);
+  }
+  castGroundRays(geodesy, rays, domeGround_);
 }
 
 Camera::Camera(const Camera& from,
@@ -170,7 +180,9 @@ void Camera::buildMatrices() {
   frustum_.planes[Frustum::Near] = normalised(m[3] - m[2]);
 }
 
-void Camera::castGroundRays(const Geodesy& geodesy, const std::array<glm::dvec3, 9>& directions) {
+void Camera::castGroundRays(const Geodesy& geodesy,
+                            std::span<const glm::dvec3> directions,
+                            std::span<GroundPoint> out) {
   // Rays against the model's ellipsoid (the unit sphere once x and y are scaled by 1/a and z by
   // 1/b); the geodetic latitude of a surface point from its normal (x / a^2, y / a^2, z / b^2).
   const double a = geodesy.equatorialRadius(), b = geodesy.polarRadius();
@@ -184,7 +196,7 @@ void Camera::castGroundRays(const Geodesy& geodesy, const std::array<glm::dvec3,
     const double t = (-B - std::sqrt(disc)) / A;
     if (!(t > 0.0)) continue;
     const glm::dvec3 p = position_ + t * dir;
-    GroundPoint& gp = ground_[i];
+    GroundPoint& gp = out[i];
     gp.hit = true;
     gp.latDeg =
         std::atan2(p.z / (b * b), std::hypot(p.x, p.y) / (a * a)) * 180.0 / std::numbers::pi;

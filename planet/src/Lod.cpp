@@ -116,6 +116,18 @@ LodResult evaluateLodFisheye(const Camera& camera,
   for (std::size_t i = 0; i < 4; ++i)
     sample(lifted(node.cornerFrames()[i]));
   const double a = node.equatorialRadiusM(), b = node.polarRadiusM();
+  // The fisheye map is not a projective one: a node's largest texel can lie inside an edge (a
+  // grazing view near the horizon, the stretch around the axis). The edges' midpoints and the
+  // centre too.
+  {
+    const double mLat = 0.5 * (s.south + s.north), mLon = 0.5 * (s.west + s.east);
+    const std::array<std::array<double, 2>, 5> mids{
+        {{s.south, mLon}, {s.north, mLon}, {mLat, s.west}, {mLat, s.east}, {mLat, mLon}}};
+    for (const auto& m : mids) {
+      const SurfaceFrame f = lifted(surfaceFrame(a, b, m[0], m[1]));
+      if (glm::length(f.position - camera.position()) >= camera.nearM()) sample(f);
+    }
+  }
   auto inCone = [&](const glm::dvec3& p) {
     const glm::dvec3 d = glm::normalize(p - camera.position());
     return std::acos(std::clamp(glm::dot(d, camera.forward()), -1.0, 1.0)) <=
@@ -131,7 +143,7 @@ LodResult evaluateLodFisheye(const Camera& camera,
     if (glm::length(f.position - camera.position()) >= camera.nearM() && inCone(f.position))
       sample(f);
   }
-  for (const Camera::GroundPoint& gp : camera.viewportGround()) {
+  for (const Camera::GroundPoint& gp : camera.domeGround()) {
     if (!gp.hit || gp.latDeg < s.south || gp.latDeg > s.north || gp.lonDeg < s.west ||
         gp.lonDeg > s.east)
       continue;

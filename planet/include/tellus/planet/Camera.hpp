@@ -20,6 +20,7 @@
 #include <glm/vec4.hpp>
 
 #include <array>
+#include <span>
 
 namespace tellus::planet {
 
@@ -135,6 +136,11 @@ public:
   /** Corners (bottom-left, bottom-right, top-right, top-left), the midpoints of the bottom, right,
    * top and left edges, and the centre. */
   const std::array<GroundPoint, 9>& viewportGround() const noexcept { return ground_; }
+  /** Fisheye: the ground seen along 16 directions around the axis at 6 angles from it (a sixth of
+   * the half-FOV to the rim): the fisheye's largest texels lie where distance and the stretch
+   * around the axis (theta / sin(theta)) combine, which a node's corners alone miss. */
+  static constexpr std::size_t kDomeRays = 96;
+  const std::array<GroundPoint, kDomeRays>& domeGround() const noexcept { return domeGround_; }
 
 private:
   CameraPose pose_;
@@ -145,11 +151,14 @@ private:
   glm::dmat4 view_{1.0}, projection_{1.0}, viewProjection_{1.0};
   Frustum frustum_;
   std::array<GroundPoint, 9> ground_{};
+  std::array<GroundPoint, kDomeRays> domeGround_{};
   bool fisheye_ = false;
   double halfAngle_ = 0.0, pixelsPerRadian_ = 0.0;
 
   void buildMatrices();
-  void castGroundRays(const Geodesy& geodesy, const std::array<glm::dvec3, 9>& directions);
+  void castGroundRays(const Geodesy& geodesy,
+                      std::span<const glm::dvec3> directions,
+                      std::span<GroundPoint> out);
 };
 
 /** The near plane distance for a camera at this altitude above the ground: 0.1 m, but less for a
