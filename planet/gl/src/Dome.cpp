@@ -54,7 +54,7 @@ const std::array<CubeFace, 6>& cubeFaces() noexcept {
 FaceRect faceRegion(const CubeFace& face, int faceSize, double halfAngleRad) noexcept {
   // Sampled on a grid of the face's pixels (every step-th, and the last): the region's bounding
   // box in whole steps, grown by a step and a few pixels for the bilinear taps at its border.
-  const int step = std::max(1, faceSize / 64);
+  const int step = std::max(1, faceSize / 256);
   const double cosLimit = std::cos(std::min(halfAngleRad, 3.14159));
   int x0 = faceSize, y0 = faceSize, x1 = -1, y1 = -1;
   for (int j = 0; j < faceSize + step; j += step)
@@ -69,7 +69,7 @@ FaceRect faceRegion(const CubeFace& face, int faceSize, double halfAngleRad) noe
       y1 = std::max(y1, cj);
     }
   if (x1 < 0) return {};
-  const int grow = step + 2;
+  const int grow = step + 1;
   return {std::max(0, x0 - grow),
           std::max(0, y0 - grow),
           std::min(faceSize, x1 + grow + 1),
@@ -102,6 +102,7 @@ std::expected<std::unique_ptr<Dome>, std::string> Dome::create(int faceSize,
   d->uCube_ = glGetUniformLocation(d->program_, "uCube");
   d->uHalfAngle_ = glGetUniformLocation(d->program_, "uHalfAngle");
   d->uCircle_ = glGetUniformLocation(d->program_, "uCircle");
+  d->uViewport_ = glGetUniformLocation(d->program_, "uViewport");
   glGenVertexArrays(1, &d->vao_);
 
   // Filtering across face borders reads the neighbouring face (core since 3.2).
@@ -161,9 +162,14 @@ void Dome::render(
   const glm::dvec3 right = fisheye.right(), up = fisheye.up(), back = -fisheye.forward();
   auto toWorld = [&](const glm::dvec3& v) { return v.x * right + v.y * up + v.z * back; };
   facesDrawn_ = 0;
+  if (alpha != regionsFor_) { // once per field of view (a few hundred thousand directions)
+    for (std::size_t i = 0; i < 6; ++i)
+      regions_[i] = faceRegion(cubeFaces()[i], size_, alpha);
+    regionsFor_ = alpha;
+  }
   for (std::size_t i = 0; i < 6; ++i) {
     const CubeFace& f = cubeFaces()[i];
-    const FaceRect r = faceRegion(f, size_, alpha);
+    const FaceRect& r = regions_[i];
     if (r.x1 <= r.x0 || r.y1 <= r.y0) continue;
     const Camera face(fisheye, toWorld(f.forward), toWorld(f.up), {size_, size_}, 90.0);
     glEnable(GL_SCISSOR_TEST);
@@ -172,9 +178,12 @@ void Dome::render(
     glDisable(GL_SCISSOR_TEST);
     ++facesDrawn_;
   }
-  // The warp: every pixel of the target, the circle from the cube, black around it.
+  // The warp: black everywhere, then the circle from the cube (a polygon just around it; the
+  // shader leaves what lies outside the circle black).
   glBindFramebuffer(GL_FRAMEBUFFER, target);
   glViewport(0, 0, width, height);
+  glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
+  glClear(GL_COLOR_BUFFER_BIT);
   glDisable(GL_DEPTH_TEST);
   glUseProgram(program_);
   glActiveTexture(GL_TEXTURE0);
@@ -186,8 +195,9 @@ void Dome::render(
               static_cast<float>(0.5 * width),
               static_cast<float>(0.5 * height),
               static_cast<float>(0.5 * diameter));
+  glUniform2f(uViewport_, static_cast<float>(width), static_cast<float>(height));
   glBindVertexArray(vao_);
-  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glDrawArrays(GL_TRIANGLE_FAN, 0, 256 + 2);
   glBindVertexArray(0);
   glBindTexture(GL_TEXTURE_CUBE_MAP, 0);
   glEnable(GL_DEPTH_TEST);

@@ -42,6 +42,12 @@ struct DrawTarget {
   }
 };
 
+/** The part of a face (pixels [x0, x1) x [y0, y1), bottom-up) whose directions lie within
+ * halfAngleRad of -Z, plus a margin of a few pixels for bilinear taps; empty (x0 == x1) when the
+ * cone does not reach the face. */
+struct FaceRect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+};
 class Dome {
 public:
   /** faceSize: the cube faces' size in pixels; glslHeader: the "#version ..." line. */
@@ -64,8 +70,10 @@ private:
   int size_ = 0;
   GLuint cube_ = 0, depth_ = 0, program_ = 0, vao_ = 0;
   std::array<GLuint, 6> fbos_{};
-  GLint uCube_ = -1, uHalfAngle_ = -1, uCircle_ = -1;
+  GLint uCube_ = -1, uHalfAngle_ = -1, uCircle_ = -1, uViewport_ = -1;
   int facesDrawn_ = 0;
+  double regionsFor_ = -1.0; ///< the half-angle the face regions were computed for
+  std::array<FaceRect, 6> regions_{};
 };
 
 /** The cube faces in GL's cube-map order (+X, -X, +Y, -Y, +Z, -Z), as forward and up directions
@@ -76,12 +84,6 @@ struct CubeFace {
 };
 const std::array<CubeFace, 6>& cubeFaces() noexcept;
 
-/** The part of a face (pixels [x0, x1) x [y0, y1), bottom-up) whose directions lie within
- * halfAngleRad of -Z, plus a margin of a few pixels for bilinear taps; empty (x0 == x1) when the
- * cone does not reach the face. */
-struct FaceRect {
-  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-};
 FaceRect faceRegion(const CubeFace& face, int faceSize, double halfAngleRad) noexcept;
 
 } // namespace tellus::planet
