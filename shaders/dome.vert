@@ -1,17 +1,15 @@
-// The dome's warp pass: a polygon of kSegments sides around the image's circle (a triangle fan,
-// no vertex buffer: gl_VertexID; vertex 0 is the centre), drawn over the black the pass cleared
-// to, so that only pixels in the circle run the warp. The renderer prepends #version.
-uniform vec3 uCircle;  // centre x, y and radius in window pixels
-uniform vec2 uViewport; // width, height in pixels
-const int kSegments = 256;
+// The dome's warp pass: a polar mesh over the image's circle (rings of equal angle from the axis,
+// segments around it), each vertex carrying its direction in the cube's frame (computed in double
+// on the CPU: theta = radius x half-FOV), so a fragment only interpolates a direction and samples
+// the cube. The renderer prepends #version.
+layout(location = 0) in vec2 aPolar;     // the point in units of the circle's radius
+layout(location = 1) in vec3 aDirection; // its direction, cube frame (x right, y up, axis -z)
+uniform vec3 uCircle;                    // centre x, y and radius in window pixels
+uniform vec2 uViewport;                  // width, height in pixels
+out vec3 vDirection;
 
 void main() {
-  vec2 p = uCircle.xy;
-  if (gl_VertexID > 0) {
-    // The polygon around the circle: its edges' midpoints lie on a circle one pixel larger.
-    float a = 6.28318530718 * float(gl_VertexID - 1) / float(kSegments);
-    float r = (uCircle.z + 1.0) / cos(3.14159265359 / float(kSegments));
-    p += r * vec2(cos(a), sin(a));
-  }
+  vDirection = aDirection;
+  vec2 p = uCircle.xy + aPolar * uCircle.z;
   gl_Position = vec4(p / uViewport * 2.0 - 1.0, 0.0, 1.0);
 }

@@ -6,6 +6,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <vector>
 
 namespace tellus::planet {
 
@@ -100,10 +103,11 @@ std::expected<std::unique_ptr<Dome>, std::string> Dome::create(int faceSize,
   glGetProgramiv(d->program_, GL_LINK_STATUS, &linked);
   if (linked != GL_TRUE) return std::unexpected(std::string("dome shader link failed"));
   d->uCube_ = glGetUniformLocation(d->program_, "uCube");
-  d->uHalfAngle_ = glGetUniformLocation(d->program_, "uHalfAngle");
   d->uCircle_ = glGetUniformLocation(d->program_, "uCircle");
   d->uViewport_ = glGetUniformLocation(d->program_, "uViewport");
   glGenVertexArrays(1, &d->vao_);
+  glGenBuffers(1, &d->meshVbo_);
+  glGenBuffers(1, &d->meshEbo_);
 
   // Filtering across face borders reads the neighbouring face (core since 3.2).
   glEnable(GL_TEXTURE_CUBE_MAP_SEAMLESS);
@@ -153,7 +157,64 @@ Dome::~Dome() {
   glDeleteRenderbuffers(1, &depth_);
   glDeleteTextures(1, &cube_);
   glDeleteVertexArrays(1, &vao_);
+  glDeleteBuffers(1, &meshVbo_);
+  glDeleteBuffers(1, &meshEbo_);
   glDeleteProgram(program_);
+}
+
+void Dome::buildMesh(double halfAngleRad, double radiusPx) {
+  // Rings of equal angle (64 up to the rim, one more a pixel and a half beyond it so the circle's
+  // edge pixels are covered), 256 segments around; at the centre a fan. Directions in double,
+  // then float. Interpolating a direction linearly across a cell of 1.4 x 1.4 degrees moves a
+  // pixel by about 0.05 px at the rim of a 4k dome.
+  constexpr int kRings = 64, kSegments = 256;
+  const double outer = 1.0 + 1.5 / std::max(1.0, radiusPx);
+  std::vector<float> v;
+  std::vector<std::uint32_t> idx;
+  auto vertex = [&](double r, double phi) {
+    const double theta = r * halfAngleRad;
+    v.insert(v.end(),
+             {static_cast<float>(r * std::cos(phi)),
+              static_cast<float>(r * std::sin(phi)),
+              static_cast<float>(std::sin(theta) * std::cos(phi)),
+              static_cast<float>(std::sin(theta) * std::sin(phi)),
+              static_cast<float>(-std::cos(theta))});
+  };
+  vertex(0.0, 0.0);
+  for (int k = 1; k <= kRings + 1; ++k) {
+    const double r = k <= kRings ? static_cast<double>(k) / kRings : outer;
+    for (int j = 0; j < kSegments; ++j)
+      vertex(r, 2.0 * std::numbers::pi * j / kSegments);
+  }
+  auto at = [](int ring, int seg) {
+    return static_cast<std::uint32_t>(1 + (ring - 1) * kSegments + (seg % kSegments));
+  };
+  for (int j = 0; j < kSegments; ++j)
+    idx.insert(idx.end(), {0u, at(1, j), at(1, j + 1)});
+  for (int k = 1; k <= kRings; ++k)
+    for (int j = 0; j < kSegments; ++j)
+      idx.insert(idx.end(),
+                 {at(k, j), at(k + 1, j), at(k + 1, j + 1), at(k, j), at(k + 1, j + 1), at(k, j + 1)});
+  glBindVertexArray(vao_);
+  glBindBuffer(GL_ARRAY_BUFFER, meshVbo_);
+  glBufferData(GL_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(v.size() * sizeof(float)),
+               v.data(),
+               GL_STATIC_DRAW);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, meshEbo_);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(idx.size() * sizeof(std::uint32_t)),
+               idx.data(),
+               GL_STATIC_DRAW);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 5 * sizeof(float), nullptr);
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(
+      1, 3, GL_FLOAT, GL_FALSE, 5 * sizeof(float), reinterpret_cast<const void*>(2 * sizeof(float)));
+  glBindVertexArray(0);
+  meshIndices_ = static_cast<GLsizei>(idx.size());
+  meshFor_ = halfAngleRad;
+  meshRadius_ = radiusPx;
 }
 
 void Dome::render(
@@ -189,15 +250,15 @@ void Dome::render(
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_CUBE_MAP, cube_);
   glUniform1i(uCube_, 0);
-  glUniform1f(uHalfAngle_, static_cast<float>(alpha));
   const double diameter = std::min(width, height);
+  if (alpha != meshFor_ || 0.5 * diameter != meshRadius_) buildMesh(alpha, 0.5 * diameter);
   glUniform3f(uCircle_,
               static_cast<float>(0.5 * width),
               static_cast<float>(0.5 * height),
               static_cast<float>(0.5 * diameter));
   glUniform2f(uViewport_, static_cast<float>(width), static_cast<float>(height));
   glBindVertexArray(vao_);
-  glDrawArrays(GL_TRIANGLE_FAN, 0, 256 + 2);
+  glDrawElements(GL_TRIANGLES, meshIndices_, GL_UNSIGNED_INT, nullptr);
   glBindVertexArray(0);
   glBindTexture(GL_TEXTURE_CUBE_MAP, 0);
   glEnable(GL_DEPTH_TEST);

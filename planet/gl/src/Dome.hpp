@@ -70,7 +70,12 @@ private:
   int size_ = 0;
   GLuint cube_ = 0, depth_ = 0, program_ = 0, vao_ = 0;
   std::array<GLuint, 6> fbos_{};
-  GLint uCube_ = -1, uHalfAngle_ = -1, uCircle_ = -1, uViewport_ = -1;
+  GLint uCube_ = -1, uCircle_ = -1, uViewport_ = -1;
+  GLuint meshVbo_ = 0, meshEbo_ = 0;
+  GLsizei meshIndices_ = 0;
+  double meshFor_ = -1.0;    ///< (half-angle, circle radius in pixels) the warp mesh was made for
+  double meshRadius_ = -1.0;
+  void buildMesh(double halfAngleRad, double radiusPx);
   int facesDrawn_ = 0;
   double regionsFor_ = -1.0; ///< the half-angle the face regions were computed for
   std::array<FaceRect, 6> regions_{};
