@@ -165,9 +165,9 @@ void Camera::buildMatrices() {
   view_[3][1] = -glm::dot(up_, position_);
   view_[3][2] = glm::dot(forward_, position_);
 
-  const double aspect = static_cast<double>(viewport_.width) / static_cast<double>(viewport_.height);
-  projection_ =
-      reversedZInfinitePerspective(vfovDeg_ * std::numbers::pi / 180.0, aspect, near_);
+  const double aspect =
+      static_cast<double>(viewport_.width) / static_cast<double>(viewport_.height);
+  projection_ = reversedZInfinitePerspective(vfovDeg_ * std::numbers::pi / 180.0, aspect, near_);
   viewProjection_ = projection_ * view_;
 
   // Gribb/Hartmann on rows of the view-projection matrix; with depth in [0, 1] reversed, the near

@@ -25,8 +25,7 @@ double deg(double r) {
 /** The direction at theta from the camera's axis, phi from its right towards its up. */
 glm::dvec3 direction(const Camera& c, double thetaDeg, double phiDeg) {
   const double t = thetaDeg * kPi / 180.0, p = phiDeg * kPi / 180.0;
-  return std::cos(t) * c.forward() +
-         std::sin(t) * (std::cos(p) * c.right() + std::sin(p) * c.up());
+  return std::cos(t) * c.forward() + std::sin(t) * (std::cos(p) * c.right() + std::sin(p) * c.up());
 }
 
 } // namespace

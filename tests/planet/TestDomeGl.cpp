@@ -77,7 +77,8 @@ struct Pixel {
   int r, g, b;
 };
 Pixel at(const std::vector<std::uint8_t>& px, int n, int x, int y) {
-  const auto i = (static_cast<std::size_t>(y) * static_cast<std::size_t>(n) + static_cast<std::size_t>(x)) * 4;
+  const auto i =
+      (static_cast<std::size_t>(y) * static_cast<std::size_t>(n) + static_cast<std::size_t>(x)) * 4;
   return {px[i], px[i + 1], px[i + 2]};
 }
 bool near(const Pixel& p, const std::array<std::uint8_t, 3>& c, int tol) {
@@ -137,7 +138,8 @@ TEST(DomeGl, CircleCornersAndTheLimbWhereTheAltitudePutsIt) {
         const int y = static_cast<int>(std::floor(0.5 * n + s * std::sin(phi)));
         const Pixel p = at(px, n, x, y);
         // Closer to the sky than to the ground: past the limb.
-        const int toSky = std::abs(p.r - kSky[0]) + std::abs(p.g - kSky[1]) + std::abs(p.b - kSky[2]);
+        const int toSky =
+            std::abs(p.r - kSky[0]) + std::abs(p.g - kSky[1]) + std::abs(p.b - kSky[2]);
         const int toGround =
             std::abs(p.r - kSolid[0]) + std::abs(p.g - kSolid[1]) + std::abs(p.b - kSolid[2]);
         if (toSky < toGround) {

@@ -5,8 +5,8 @@
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/config/Config.hpp>
 #include <tellus/planet/Geodesy.hpp>
-#include <tellus/planet/RegionalSource.hpp>
 #include <tellus/planet/Geoid.hpp>
+#include <tellus/planet/RegionalSource.hpp>
 #include <tellus/planet/Terrain.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
 #include <tellus/planet_gl/Viewer.hpp>
@@ -1419,9 +1419,8 @@ void applyRendererSettings(const RendererSettings& g,
   ro.terrainClearanceM = g.terrain.clearanceM;
   ro.sunLatLon = g.terrain.sun;
   if (const auto d = domeArgs(a); d && (d->on || g.dome.enabled)) {
-    ro.dome = planet::DomeOptions{d->fovDeg.value_or(g.dome.fovDeg),
-                                  d->tiltDeg.value_or(g.dome.tiltDeg),
-                                  g.dome.faceScale};
+    ro.dome = planet::DomeOptions{
+        d->fovDeg.value_or(g.dome.fovDeg), d->tiltDeg.value_or(g.dome.tiltDeg), g.dome.faceScale};
     // A domemaster is square: without --size, the smaller side of the default.
     if (!a.get("size")) ro.width = ro.height = std::min(ro.width, ro.height);
   }
@@ -1630,7 +1629,7 @@ int cmdRender(const Args& a) {
         "threshold", "offline",       "server",       "path",      "frames",
         "fps",       "no-terrain",    "exaggeration", "sun",       "edge-fixing",
         "earth",     "repeat",        "geoid",        "mesh-size", "upload-per-frame",
-        "vertices",  "overlay", "dome", "dome-tilt"};
+        "vertices",  "overlay",       "dome",         "dome-tilt"};
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
   }
@@ -2135,18 +2134,17 @@ int run(int argc, char** argv) {
     std::printf("tellus %s\n", TELLUS_VERSION);
     return kExitOk;
   }
-  const Args a = parseArgs(
-      argc,
-      argv,
-      2,
-      {"json",
-       "dry-run",
-       "include-pinned",
-       "offline",
-       "refresh",
-       "wait-complete",
-       "no-terrain",
-       "dome"});
+  const Args a = parseArgs(argc,
+                           argv,
+                           2,
+                           {"json",
+                            "dry-run",
+                            "include-pinned",
+                            "offline",
+                            "refresh",
+                            "wait-complete",
+                            "no-terrain",
+                            "dome"});
   for (const auto& e : a.errors)
     std::fprintf(stderr, "tellus %s: %s\n", argv[1], e.c_str());
   if (!a.errors.empty()) return kExitUsage;

@@ -193,14 +193,13 @@ void Dome::buildMesh(double halfAngleRad, double radiusPx) {
     idx.insert(idx.end(), {0u, at(1, j), at(1, j + 1)});
   for (int k = 1; k <= kRings; ++k)
     for (int j = 0; j < kSegments; ++j)
-      idx.insert(idx.end(),
-                 {at(k, j), at(k + 1, j), at(k + 1, j + 1), at(k, j), at(k + 1, j + 1), at(k, j + 1)});
+      idx.insert(
+          idx.end(),
+          {at(k, j), at(k + 1, j), at(k + 1, j + 1), at(k, j), at(k + 1, j + 1), at(k, j + 1)});
   glBindVertexArray(vao_);
   glBindBuffer(GL_ARRAY_BUFFER, meshVbo_);
-  glBufferData(GL_ARRAY_BUFFER,
-               static_cast<GLsizeiptr>(v.size() * sizeof(float)),
-               v.data(),
-               GL_STATIC_DRAW);
+  glBufferData(
+      GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(v.size() * sizeof(float)), v.data(), GL_STATIC_DRAW);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, meshEbo_);
   glBufferData(GL_ELEMENT_ARRAY_BUFFER,
                static_cast<GLsizeiptr>(idx.size() * sizeof(std::uint32_t)),
@@ -209,8 +208,12 @@ void Dome::buildMesh(double halfAngleRad, double radiusPx) {
   glEnableVertexAttribArray(0);
   glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 5 * sizeof(float), nullptr);
   glEnableVertexAttribArray(1);
-  glVertexAttribPointer(
-      1, 3, GL_FLOAT, GL_FALSE, 5 * sizeof(float), reinterpret_cast<const void*>(2 * sizeof(float)));
+  glVertexAttribPointer(1,
+                        3,
+                        GL_FLOAT,
+                        GL_FALSE,
+                        5 * sizeof(float),
+                        reinterpret_cast<const void*>(2 * sizeof(float)));
   glBindVertexArray(0);
   meshIndices_ = static_cast<GLsizei>(idx.size());
   meshFor_ = halfAngleRad;

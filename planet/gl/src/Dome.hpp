@@ -37,8 +37,8 @@ struct DrawTarget {
   const Frustum* frustum = nullptr;
   bool scene = true;
   bool draws(const Node& node) const noexcept {
-    return scene &&
-           (frustum == nullptr || classify(*frustum, node.geometry().bounds()) != FrustumResult::Outside);
+    return scene && (frustum == nullptr ||
+                     classify(*frustum, node.geometry().bounds()) != FrustumResult::Outside);
   }
 };
 
@@ -60,7 +60,8 @@ public:
   using DrawFace = std::function<void(const Camera& face, const DrawTarget& target)>;
   /** Draws the faces the fisheye camera's cone reaches through drawFace, then warps them into
    * target (width x height: the circle of diameter min(width, height), centred; black around). */
-  void render(const Camera& fisheye, const DrawFace& drawFace, GLuint target, int width, int height);
+  void
+  render(const Camera& fisheye, const DrawFace& drawFace, GLuint target, int width, int height);
   int faceSize() const noexcept { return size_; }
   /** Faces drawn by the last render(). */
   int facesDrawn() const noexcept { return facesDrawn_; }
@@ -73,7 +74,7 @@ private:
   GLint uCube_ = -1, uCircle_ = -1, uViewport_ = -1;
   GLuint meshVbo_ = 0, meshEbo_ = 0;
   GLsizei meshIndices_ = 0;
-  double meshFor_ = -1.0;    ///< (half-angle, circle radius in pixels) the warp mesh was made for
+  double meshFor_ = -1.0; ///< (half-angle, circle radius in pixels) the warp mesh was made for
   double meshRadius_ = -1.0;
   void buildMesh(double halfAngleRad, double radiusPx);
   int facesDrawn_ = 0;

@@ -100,10 +100,10 @@ struct RenderLayerSettings {
 
 /** YAML `renderer.dome` (issue #7): the angular fisheye domemaster of `--dome`. */
 struct DomeSettings {
-  bool enabled = false;     ///< true: render and view draw the dome without --dome
-  double fovDeg = 180.0;    ///< (0, 220]
-  double tiltDeg = 0.0;     ///< the dome's axis turned up from the view direction, [-180, 180]
-  double faceScale = 0.64;  ///< cube face size / image size, [0.1, 4]
+  bool enabled = false;    ///< true: render and view draw the dome without --dome
+  double fovDeg = 180.0;   ///< (0, 220]
+  double tiltDeg = 0.0;    ///< the dome's axis turned up from the view direction, [-180, 180]
+  double faceScale = 0.64; ///< cube face size / image size, [0.1, 4]
 };
 
 struct RendererSettings {

@@ -32,10 +32,10 @@ bool projectsOutsideViewport(const Camera& camera, const OrientedBox& box) noexc
  * axis, Inside when every one is within it; a sphere around the eye intersects. */
 FrustumResult classifyCone(const Camera& camera, const BoundingSphere& sphere) noexcept;
 
-/** The frustum test of a node (a fisheye camera: classifyCone on its sphere): its sphere, then, when the sphere only intersects, its box
- * against the planes, then the projected box against the viewport, then its two half boxes
- * (planes and viewport). Outside or Inside when any of them says so (all contain the patch;
- * Outside for the halves when both are). */
+/** The frustum test of a node (a fisheye camera: classifyCone on its sphere): its sphere, then,
+ * when the sphere only intersects, its box against the planes, then the projected box against the
+ * viewport, then its two half boxes (planes and viewport). Outside or Inside when any of them says
+ * so (all contain the patch; Outside for the halves when both are). */
 FrustumResult classifyNode(const Camera& camera, const NodeGeometry& node) noexcept;
 
 /**
