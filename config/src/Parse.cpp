@@ -419,6 +419,7 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
                "max_splits_per_frame",
                "decode_threads",
                "terrain",
+               "dome",
                "earth",
                "geoid",
                "layers",
@@ -486,6 +487,12 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
       g.layers.push_back(std::move(l));
     }
   }
+  const auto [dnode, dwhere] = m.child("dome");
+  const Map d(r, dnode, m.path("dome"), dwhere, {"enabled", "fov", "tilt", "face_scale"});
+  if (auto v = d.get("enabled")) g.dome.enabled = boolean(r, *v, d.path("enabled"));
+  if (auto v = d.get("fov")) g.dome.fovDeg = number(r, *v, d.path("fov"));
+  if (auto v = d.get("tilt")) g.dome.tiltDeg = number(r, *v, d.path("tilt"));
+  if (auto v = d.get("face_scale")) g.dome.faceScale = number(r, *v, d.path("face_scale"));
   if (auto v = m.get("earth"))
     g.earth = choice(r, *v, m.path("earth"), {"wgs84", "sphere"}) == 0 ? EarthShape::Wgs84
                                                                        : EarthShape::Sphere;

@@ -295,6 +295,12 @@ std::optional<ValidationIssue> checkRenderer(const RendererSettings& g) {
     return issue("max_splits_per_frame", "must be in [1, 100000], got " + str(g.maxSplitsPerFrame));
   if (g.decodeThreads < 1 || g.decodeThreads > 64)
     return issue("decode_threads", "must be in [1, 64], got " + str(g.decodeThreads));
+  if (!(g.dome.fovDeg > 0.0 && g.dome.fovDeg <= 220.0))
+    return issue("dome.fov", "must be in (0, 220] degrees, got " + num(g.dome.fovDeg));
+  if (!(g.dome.tiltDeg >= -180.0 && g.dome.tiltDeg <= 180.0))
+    return issue("dome.tilt", "must be in [-180, 180] degrees, got " + num(g.dome.tiltDeg));
+  if (!(g.dome.faceScale >= 0.1 && g.dome.faceScale <= 4.0))
+    return issue("dome.face_scale", "must be in [0.1, 4], got " + num(g.dome.faceScale));
   const TerrainSettings& t = g.terrain;
   if (!(t.exaggeration > 0.0 && t.exaggeration <= 100.0))
     return issue("terrain.exaggeration", "must be in (0, 100], got " + num(t.exaggeration));

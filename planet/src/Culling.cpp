@@ -74,7 +74,20 @@ bool projectsOutsideViewport(const Camera& camera, const OrientedBox& box) noexc
   return false;
 }
 
+FrustumResult classifyCone(const Camera& camera, const BoundingSphere& sphere) noexcept {
+  const glm::dvec3 d = sphere.centre - camera.position();
+  const double dist = glm::length(d);
+  if (!(dist > sphere.radius)) return FrustumResult::Intersecting; // the eye is inside it
+  const double rho = std::asin(std::min(1.0, sphere.radius / dist));
+  const double theta = std::acos(std::clamp(glm::dot(d / dist, camera.forward()), -1.0, 1.0));
+  const double alpha = camera.fisheyeHalfAngleRad();
+  if (theta - rho > alpha) return FrustumResult::Outside;
+  if (theta + rho <= alpha) return FrustumResult::Inside;
+  return FrustumResult::Intersecting;
+}
+
 FrustumResult classifyNode(const Camera& camera, const NodeGeometry& node) noexcept {
+  if (camera.isFisheye()) return classifyCone(camera, node.bounds());
   const FrustumResult sphere = classify(camera.frustum(), node.bounds());
   if (sphere != FrustumResult::Intersecting) return sphere;
   const FrustumResult box = classify(camera.frustum(), node.box());

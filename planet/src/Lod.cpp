@@ -40,6 +40,121 @@ double clampLongitude(double lon, double west, double east) noexcept {
   return std::abs(toWest) <= std::abs(toEast) ? west : east;
 }
 
+/** Squared fisheye pixel length of a small displacement v at world point p: the angular step
+ * seen from the eye, radial part (along increasing theta) at pixelsPerRadian, the part around the
+ * axis stretched by theta / sin(theta), theta capped at the rim (no pixels lie beyond it). */
+double fisheyeLength2(const Camera& camera, const glm::dvec3& p, const glm::dvec3& v) noexcept {
+  const glm::dvec3 d = p - camera.position();
+  const double dist = glm::length(d);
+  const glm::dvec3 dh = d / dist;
+  const glm::dvec3 w = (v - glm::dot(v, dh) * dh) / dist; // radians, tangent to the unit sphere
+  const double k = camera.pixelsPerRadian();
+  const glm::dvec3& axis = camera.forward();
+  const double c = std::clamp(glm::dot(dh, axis), -1.0, 1.0);
+  const glm::dvec3 towardAxis = axis - c * dh; // |.| = sin(theta)
+  const double sinT = glm::length(towardAxis);
+  if (!(sinT > 1e-9)) return k * k * glm::dot(w, w);
+  const double radial = -glm::dot(w, towardAxis) / sinT; // along increasing theta
+  const double around2 = std::max(0.0, glm::dot(w, w) - radial * radial);
+  const double theta = std::min(std::atan2(sinT, c), camera.fisheyeHalfAngleRad());
+  const double stretch = theta / std::sin(theta);
+  return k * k * (radial * radial + stretch * stretch * around2);
+}
+
+} // namespace
+
+namespace {
+
+/** evaluateLod for a fisheye camera: the same corner edges and local texels, measured in the
+ * fisheye's pixels (Camera::projectPx and fisheyeLength2) instead of the perspective's. */
+template <class Lift>
+LodResult evaluateLodFisheye(const Camera& camera,
+                             const NodeGeometry& node,
+                             const LodParams& params,
+                             const Lift& lift) noexcept {
+  LodResult r;
+  std::array<glm::dvec2, 4> px{};
+  for (std::size_t i = 0; i < 4; ++i)
+    if (!camera.projectPx(lift(node.corners()[i]), px[i])) {
+      r.cornerBehindCamera = true;
+      r.split = true;
+      return r;
+    }
+  const double limitW = static_cast<double>(params.tileWidthPx) * params.threshold;
+  const double limitH = static_cast<double>(params.tileHeightPx) * params.threshold;
+  struct Edge {
+    std::size_t a, b;
+    bool eastWest;
+  };
+  constexpr std::array<Edge, 4> edges{
+      {{SW, SE, true}, {NW, NE, true}, {SE, NE, false}, {SW, NW, false}}};
+  for (const Edge& e : edges) {
+    const glm::dvec2 d = px[e.b] - px[e.a];
+    const double lim = e.eastWest ? limitW : limitH;
+    const double ratio = (d.x * d.x + d.y * d.y) / (lim * lim);
+    r.worstRatioSquared = std::max(r.worstRatioSquared, ratio);
+    if (!(ratio <= 1.0)) r.split = true;
+  }
+  if (r.split || !params.perspectiveAware) return r;
+  const Sector& s = node.sector();
+  const double texLon = (s.east - s.west) / static_cast<double>(params.tileWidthPx);
+  const double texLat = (s.north - s.south) / static_cast<double>(params.tileHeightPx);
+  const double t2 = params.threshold * params.threshold;
+  double worst = 0.0;
+  auto sample = [&](const SurfaceFrame& f) {
+    const double e = fisheyeLength2(camera, f.position, f.perDegLon * texLon);
+    const double n = fisheyeLength2(camera, f.position, f.perDegLat * texLat);
+    if (!(e <= t2)) r.eastWestOver = true;
+    if (!(n <= t2)) r.northSouthOver = true;
+    const double m = std::max(e, n) / t2;
+    worst = std::isnan(m) ? 1e300 : std::max(worst, m);
+  };
+  auto lifted = [&](SurfaceFrame f) {
+    f.position = lift(f.position);
+    return f;
+  };
+  for (std::size_t i = 0; i < 4; ++i)
+    sample(lifted(node.cornerFrames()[i]));
+  const double a = node.equatorialRadiusM(), b = node.polarRadiusM();
+  // The fisheye map is not a projective one: a node's largest texel can lie inside an edge (a
+  // grazing view near the horizon, the stretch around the axis). The edges' midpoints and the
+  // centre too.
+  {
+    const double mLat = 0.5 * (s.south + s.north), mLon = 0.5 * (s.west + s.east);
+    const std::array<std::array<double, 2>, 5> mids{
+        {{s.south, mLon}, {s.north, mLon}, {mLat, s.west}, {mLat, s.east}, {mLat, mLon}}};
+    for (const auto& m : mids) {
+      const SurfaceFrame f = lifted(surfaceFrame(a, b, m[0], m[1]));
+      if (glm::length(f.position - camera.position()) >= camera.nearM()) sample(f);
+    }
+  }
+  auto inCone = [&](const glm::dvec3& p) {
+    const glm::dvec3 d = glm::normalize(p - camera.position());
+    return std::acos(std::clamp(glm::dot(d, camera.forward()), -1.0, 1.0)) <=
+           camera.fisheyeHalfAngleRad();
+  };
+  const CameraPose& pose = camera.pose();
+  const double nearLat = std::clamp(pose.latDeg, s.south, s.north);
+  const double nearLon = clampLongitude(pose.lonDeg, s.west, s.east);
+  const bool interior =
+      (nearLat != s.south && nearLat != s.north) || (nearLon != s.west && nearLon != s.east);
+  if (interior) {
+    const SurfaceFrame f = lifted(surfaceFrame(a, b, nearLat, nearLon));
+    if (glm::length(f.position - camera.position()) >= camera.nearM() && inCone(f.position))
+      sample(f);
+  }
+  for (const Camera::GroundPoint& gp : camera.domeGround()) {
+    if (!gp.hit || gp.latDeg < s.south || gp.latDeg > s.north || gp.lonDeg < s.west ||
+        gp.lonDeg > s.east)
+      continue;
+    const SurfaceFrame f = lifted(surfaceFrame(a, b, gp.latDeg, gp.lonDeg));
+    if (glm::length(f.position - camera.position()) >= camera.nearM()) sample(f);
+  }
+  r.worstTexelRatioSquared = worst;
+  if (!(worst <= 1.0)) r.split = true;
+  return r;
+}
+
 } // namespace
 
 LodResult
@@ -63,6 +178,7 @@ evaluateLod(const Camera& camera, const NodeGeometry& node, const LodParams& par
         glm::normalize(glm::dvec3(p.x / (a0 * a0), p.y / (a0 * a0), p.z / (b0 * b0)));
     return p + n * liftM;
   };
+  if (camera.isFisheye()) return evaluateLodFisheye(camera, node, params, lift);
   for (std::size_t i = 0; i < 4; ++i) {
     clip[i] = camera.toClip(lift(node.corners()[i]));
     const glm::dvec4& c = clip[i];

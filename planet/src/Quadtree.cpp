@@ -134,17 +134,13 @@ bool Quadtree::fitsEastWest(const NodeKey& key, const Camera& camera) const noex
   // (perspective across a wide node enlarges the near texels more than the whole edge shows).
   const Sector s = sectorOf(key);
   const double limit = 0.5 * static_cast<double>(params_.lod.tileWidthPx) * params_.lod.threshold;
-  const double halfW = 0.5 * static_cast<double>(camera.viewport().width);
-  const double halfH = 0.5 * static_cast<double>(camera.viewport().height);
   const double lons[3] = {s.west, 0.5 * (s.west + s.east), s.east};
   for (const double lat : {s.south, s.north}) {
     if (lat == 90.0 || lat == -90.0) continue; // the pole: an edge of length 0
     glm::dvec2 px[3]{};
     for (std::size_t i = 0; i < 3; ++i) {
       const Ecef e = geodesy_.toEcef(lat, lons[i], 0.0);
-      const glm::dvec4 c = camera.toClip({e.x, e.y, e.z});
-      if (!(c.w >= camera.nearM())) return false;
-      px[i] = {c.x / c.w * halfW, c.y / c.w * halfH};
+      if (!camera.projectPx({e.x, e.y, e.z}, px[i])) return false;
     }
     for (std::size_t i = 0; i < 2; ++i) {
       const glm::dvec2 d = px[i + 1] - px[i];

@@ -1,5 +1,7 @@
 #include <tellus/planet/ScreenArea.hpp>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace tellus::planet {
@@ -31,6 +33,18 @@ template <class Dist> void clip(const Poly& in, Poly& out, Dist dist) noexcept {
 } // namespace
 
 double clippedScreenArea(const Camera& camera, const std::array<glm::dvec3, 4>& corners) noexcept {
+  if (camera.isFisheye()) {
+    // The fisheye-projected quad (not clipped to the circle), at most the whole image: a priority.
+    std::array<glm::dvec2, 4> px{};
+    for (std::size_t i = 0; i < 4; ++i)
+      if (!camera.projectPx(corners[i], px[i])) return 0.0;
+    double twice = 0.0;
+    for (std::size_t i = 0; i < 4; ++i)
+      twice += px[i].x * px[(i + 1) % 4].y - px[(i + 1) % 4].x * px[i].y;
+    const double full = static_cast<double>(camera.viewport().width) * camera.viewport().height;
+    const double area = std::min(0.5 * std::abs(twice), full);
+    return std::isfinite(area) ? area : 0.0;
+  }
   Poly a, b;
   for (const glm::dvec3& c : corners) {
     const glm::dvec4 p = camera.toClip(c);

@@ -152,6 +152,8 @@ TEST(ConfigYaml, DefaultsAreApplied) {
   EXPECT_FALSE(c->server.offline);
   EXPECT_EQ(c->renderer.earth, EarthShape::Wgs84);
   EXPECT_TRUE(c->renderer.geoid);
+  EXPECT_FALSE(c->renderer.dome.enabled);
+  EXPECT_EQ(c->renderer.dome.fovDeg, 180.0);
   EXPECT_EQ(c->server.limits.maxConnections, 4096);
   EXPECT_EQ(c->server.limits.maxHeaderBytes, 16384U);
   EXPECT_EQ(c->server.limits.maxParamBytes, 2048U);
@@ -230,6 +232,7 @@ renderer:
   earth: sphere
   geoid: false
   overlays_per_pass: 2
+  dome: {enabled: true, fov: 210, tilt: 30, face_scale: 0.8}
 upstreams:
   - name: ww
     type: worldwind
@@ -314,6 +317,10 @@ layers:
   EXPECT_EQ(c->renderer.uploadPerFrame, 2ULL << 20);
   EXPECT_EQ(c->renderer.maxInFlight, 4);
   EXPECT_EQ(c->renderer.maxSplitsPerFrame, 8);
+  EXPECT_TRUE(c->renderer.dome.enabled);
+  EXPECT_EQ(c->renderer.dome.fovDeg, 210.0);
+  EXPECT_EQ(c->renderer.dome.tiltDeg, 30.0);
+  EXPECT_EQ(c->renderer.dome.faceScale, 0.8);
   EXPECT_EQ(c->renderer.decodeThreads, 3);
   EXPECT_EQ(c->renderer.earth, EarthShape::Sphere);
   EXPECT_FALSE(c->renderer.geoid);

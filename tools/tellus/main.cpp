@@ -5,8 +5,8 @@
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/config/Config.hpp>
 #include <tellus/planet/Geodesy.hpp>
-#include <tellus/planet/RegionalSource.hpp>
 #include <tellus/planet/Geoid.hpp>
+#include <tellus/planet/RegionalSource.hpp>
 #include <tellus/planet/Terrain.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
 #include <tellus/planet_gl/Viewer.hpp>
@@ -73,13 +73,15 @@ commands:
              --camera LAT,LON,ALT[,HEADING,TILT] --out FILE.png [--size WxH]
              [--wait-complete[=SECONDS]] [--background R,G,B] [--stats FILE.json]
              [--layer NAME] [--threshold T] [--earth wgs84|sphere] [--offline | --server URL]
+             [--dome [FOV]] [--dome-tilt DEG]  a domemaster (angular fisheye, FOV 180 up to
+                                      220 degrees, --size N: N x N, black outside the circle)
              or a flight: --path PATH.json --frames DIR [--fps N] [--repeat N] instead of
              --camera/--out
              (PATH.json: [{"time":0,"lat":..,"lon":..,"alt":..,"heading":..,"tilt":..,
               "times":{"LAYER":"TIME"}}, ...]: a layer's time from that keyframe on)
   view     the interactive globe (a GLFW window)
              [--camera LAT,LON,ALT[,HEADING,TILT]] [--size WxH] [--layer NAME] [--threshold T]
-             [--earth wgs84|sphere] [--offline | --server URL]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc
+             [--earth wgs84|sphere] [--offline | --server URL] [--dome [FOV]] [--dome-tilt DEG]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc
              render and view: [--no-terrain] [--exaggeration X] [--sun LAT,LON]
              [--overlay NAME[,OPACITY]]... (imagery over the base; also renderer.layers);
              view: 0-9 select a layer (1-9 also show/hide it), - = opacity, , . order,
@@ -1369,8 +1371,36 @@ std::expected<std::optional<EarthModel>, std::string> earthArg(const Args& a) {
   return std::unexpected(*e);
 }
 
-/** The configuration's `renderer` settings; what the command line gave (--threshold, --earth)
- * wins (the caller applies --earth). */
+/** `--dome [FOV]` (also `--dome=FOV`; FOV may follow as the one positional argument) and
+ * `--dome-tilt DEG` of render and view: whether the command line asks for the dome, and what it
+ * gives. An error text for a bad value. */
+struct DomeArgs {
+  bool on = false;
+  std::optional<double> fovDeg, tiltDeg;
+};
+std::expected<DomeArgs, std::string> domeArgs(const Args& a) {
+  DomeArgs d;
+  d.on = a.flag("dome");
+  std::optional<std::string> fov;
+  if (const auto v = a.get("dome"); v && !v->empty()) fov = *v;
+  if (d.on && !fov && a.positional.size() == 1) fov = a.positional.front();
+  if (fov) {
+    const auto v = parseNumbers(*fov, 1, 1);
+    if (!v || !((*v)[0] > 0.0 && (*v)[0] <= 220.0))
+      return std::unexpected("--dome FOV must be in (0, 220] degrees, got '" + *fov + "'");
+    d.fovDeg = (*v)[0];
+  }
+  if (const auto t = a.get("dome-tilt")) {
+    const auto v = parseNumbers(*t, 1, 1);
+    if (!v || !((*v)[0] >= -180.0 && (*v)[0] <= 180.0))
+      return std::unexpected("--dome-tilt must be in [-180, 180] degrees, got '" + *t + "'");
+    d.tiltDeg = (*v)[0];
+  }
+  return d;
+}
+
+/** The configuration's `renderer` settings; what the command line gave (--threshold, --earth,
+ * --dome, --dome-tilt) wins (the caller applies --earth). */
 void applyRendererSettings(const RendererSettings& g,
                            const Args& a,
                            planet::RendererOptions& ro,
@@ -1388,6 +1418,12 @@ void applyRendererSettings(const RendererSettings& g,
   ro.verticalExaggeration = g.terrain.exaggeration;
   ro.terrainClearanceM = g.terrain.clearanceM;
   ro.sunLatLon = g.terrain.sun;
+  if (const auto d = domeArgs(a); d && (d->on || g.dome.enabled)) {
+    ro.dome = planet::DomeOptions{
+        d->fovDeg.value_or(g.dome.fovDeg), d->tiltDeg.value_or(g.dome.tiltDeg), g.dome.faceScale};
+    // A domemaster is square: without --size, the smaller side of the default.
+    if (!a.get("size")) ro.width = ro.height = std::min(ro.width, ro.height);
+  }
 }
 
 /** --exaggeration X and --sun LAT,LON over the configuration's renderer.terrain. */
@@ -1593,11 +1629,14 @@ int cmdRender(const Args& a) {
         "threshold", "offline",       "server",       "path",      "frames",
         "fps",       "no-terrain",    "exaggeration", "sun",       "edge-fixing",
         "earth",     "repeat",        "geoid",        "mesh-size", "upload-per-frame",
-        "vertices",  "overlay"};
+        "vertices",  "overlay",       "dome",         "dome-tilt"};
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
   }
-  if (!a.positional.empty()) return usage("unexpected argument", a.positional.front());
+  const auto dome = domeArgs(a);
+  if (!dome) return usage(dome.error().c_str(), "");
+  if (!a.positional.empty() && !(dome->on && a.positional.size() == 1))
+    return usage("unexpected argument", a.positional.front());
   // One view (--camera, --out) or a flight (--path, --frames).
   std::vector<Keyframe> keys;
   planet::CameraPose pose;
@@ -1646,8 +1685,14 @@ int cmdRender(const Args& a) {
   }
   planet::RendererOptions ro;
   if (auto size = a.get("size")) {
-    const auto x = size->find('x');
+    auto x = size->find('x');
     int w = 0, h = 0;
+    std::string square; // --size N with --dome: N x N
+    if (x == std::string::npos && dome->on) {
+      square = *size + "x" + *size;
+      size = square;
+      x = size->find('x');
+    }
     bool ok = x != std::string::npos;
     if (ok) {
       auto r1 = std::from_chars(size->data(), size->data() + x, w);
@@ -1656,8 +1701,11 @@ int cmdRender(const Args& a) {
            r2.ptr == size->data() + size->size() && w >= 1 && h >= 1 && w <= 16384 && h <= 16384;
     }
     if (!ok) return usage("--size must be WxH with 1 to 16384 pixels each", *size);
+    if (dome->on && w != h) return usage("--dome draws a square image: --size N or NxN", *size);
     ro.width = w;
     ro.height = h;
+  } else if (dome->on) {
+    ro.width = ro.height = 1024;
   }
   double waitSeconds = 0.0;
   const bool waitComplete = a.flag("wait-complete");
@@ -2009,7 +2057,9 @@ int cmdView(const Args& a) {
                                                  "sun",
                                                  "earth",
                                                  "geoid",
-                                                 "overlay"};
+                                                 "overlay",
+                                                 "dome",
+                                                 "dome-tilt"};
   for (const auto& [k, v] : a.options)
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
@@ -2025,6 +2075,8 @@ int cmdView(const Args& a) {
             cam->size() > 3 ? (*cam)[3] : 0.0,
             cam->size() > 4 ? (*cam)[4] : 0.0};
   }
+  const auto dome = domeArgs(a);
+  if (!dome) return usage("bad --dome or --dome-tilt", dome.error());
   planet::RendererOptions ro;
   ro.width = 1280;
   ro.height = 800;
@@ -2082,11 +2134,17 @@ int run(int argc, char** argv) {
     std::printf("tellus %s\n", TELLUS_VERSION);
     return kExitOk;
   }
-  const Args a = parseArgs(
-      argc,
-      argv,
-      2,
-      {"json", "dry-run", "include-pinned", "offline", "refresh", "wait-complete", "no-terrain"});
+  const Args a = parseArgs(argc,
+                           argv,
+                           2,
+                           {"json",
+                            "dry-run",
+                            "include-pinned",
+                            "offline",
+                            "refresh",
+                            "wait-complete",
+                            "no-terrain",
+                            "dome"});
   for (const auto& e : a.errors)
     std::fprintf(stderr, "tellus %s: %s\n", argv[1], e.c_str());
   if (!a.errors.empty()) return kExitUsage;

@@ -1,6 +1,7 @@
 // The GL layer of the planet renderer: see Renderer.hpp and docs/ARCHITECTURE.md ("The planet
 // renderer"). Every GL call here runs on the thread that created the Renderer.
 
+#include "Dome.hpp"
 #include "HeightDecode.hpp"
 #include "Shaders.hpp"
 #include "TextOverlay.hpp"
@@ -322,13 +323,15 @@ struct Renderer::Impl {
                                   : spec->grid.numLevels;
   }
   void swapReadyLayers();
-  void draw(const Camera& camera, bool present = true);
+  std::unique_ptr<Dome> dome; // opt.dome: the cube faces and the warp (Dome.hpp)
+  void draw(const Camera& camera, bool present = true, const DrawTarget* target = nullptr);
   void warmUp();
 };
 
 Renderer::Impl::~Impl() {
   if (window != nullptr) {
     glfwMakeContextCurrent(window);
+    dome.reset();
     for (auto& [k, m] : meshes) {
       glDeleteVertexArrays(1, &m.vao);
       glDeleteBuffers(1, &m.vbo);
@@ -940,16 +943,28 @@ void Renderer::Impl::evict(LayerTextures& l) {
   });
 }
 
-void Renderer::Impl::draw(const Camera& camera, bool present) {
-  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-  glViewport(0, 0, opt.width, opt.height);
+void Renderer::Impl::draw(const Camera& camera, bool present, const DrawTarget* target) {
+  // The dome: each face through this function into its cube face, the warp into fbo, then only
+  // the presentation below (the scene is not drawn again).
+  const DrawTarget warped{fbo, opt.width, opt.height, nullptr, false};
+  if (dome && target == nullptr && camera.isFisheye()) {
+    dome->render(
+        camera,
+        [this](const Camera& face, const DrawTarget& t) { draw(face, false, &t); },
+        fbo,
+        opt.width,
+        opt.height);
+    target = &warped;
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, target ? target->fbo : fbo);
+  glViewport(0, 0, target ? target->width : opt.width, target ? target->height : opt.height);
   if (stats.reversedZ) glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
   glClearColor(static_cast<float>(opt.background[0]),
                static_cast<float>(opt.background[1]),
                static_cast<float>(opt.background[2]),
                1.0f);
   glClearDepth(0.0);
-  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  if (target == nullptr || target->scene) glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_GREATER);
   glDisable(GL_CULL_FACE);
@@ -1001,6 +1016,7 @@ void Renderer::Impl::draw(const Camera& camera, bool present) {
       glDepthMask(GL_FALSE);
     }
     for (const DrawPart& p : parts) {
+      if (target && !target->draws(*p.node)) continue;
       const std::uint32_t from = std::min(p.overlayEnd, p.overlayBegin + pass * k);
       const std::uint32_t count = std::min(k, p.overlayEnd - from);
       if (pass > 0 && count == 0) continue;
@@ -1190,6 +1206,17 @@ Renderer::create(ITileSource& source, const Geodesy& geodesy, RendererOptions op
     for (LayerSlot& l : impl->layers)
       impl->applyTerrain(*l.current->tree);
   }
+  if (const auto& d = impl->opt.dome) {
+    if (!(d->fovDeg > 0.0 && d->fovDeg <= 220.0) || !std::isfinite(d->tiltDeg))
+      return std::unexpected(std::string("the dome's field of view must be in (0, 220] degrees"));
+    if (!(d->faceScale > 0.0 && d->faceScale <= 4.0))
+      return std::unexpected(std::string("the dome's face scale must be in (0, 4]"));
+    const int side = std::min(impl->opt.width, impl->opt.height);
+    auto made = Dome::create(std::max(8, static_cast<int>(std::lround(d->faceScale * side))),
+                             impl->gl45 ? "#version 450 core\n" : "#version 330 core\n");
+    if (!made) return std::unexpected(made.error());
+    impl->dome = std::move(*made);
+  }
   impl->warmUp();
   return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
 }
@@ -1270,6 +1297,12 @@ Camera Renderer::camera(const CameraPose& pose) const {
     if (std::isfinite(ground)) above -= ground;
   }
   const double aspect = static_cast<double>(o.width) / static_cast<double>(o.height);
+  if (o.dome) // the faces' near plane: 90-degree square views
+    return Camera(impl_->geodesy,
+                  pose,
+                  std::min(o.width, o.height),
+                  Fisheye{o.dome->fovDeg, o.dome->tiltDeg},
+                  nearDistanceFor(above, 90.0, 1.0));
   return Camera(impl_->geodesy,
                 pose,
                 {o.width, o.height},
@@ -1709,6 +1742,12 @@ void Renderer::resize(int width, int height) {
   m.opt.width = width;
   m.opt.height = height;
   m.makeFramebuffer();
+  if (m.dome) { // faces for the new size (kept when that fails: the old ones still draw)
+    const int n = std::min(width, height);
+    auto made = Dome::create(std::max(8, static_cast<int>(std::lround(m.opt.dome->faceScale * n))),
+                             m.gl45 ? "#version 450 core\n" : "#version 330 core\n");
+    if (made) m.dome = std::move(*made);
+  }
 }
 
 } // namespace tellus::planet

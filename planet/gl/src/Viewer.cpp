@@ -69,7 +69,16 @@ pick(const Geodesy& g, const Camera& cam, double px, double py, int width, int h
   const double t = std::tan(cam.verticalFovDeg() * M_PI / 360.0);
   const double nx = (2.0 * (px + 0.5) / width - 1.0) * t * width / height;
   const double ny = (1.0 - 2.0 * (py + 0.5) / height) * t;
-  const glm::dvec3 dir = glm::normalize(cam.forward() + cam.right() * nx + cam.up() * ny);
+  glm::dvec3 dir = glm::normalize(cam.forward() + cam.right() * nx + cam.up() * ny);
+  if (cam.isFisheye()) { // the dome: the pixel's angle from the centre is its radius x the scale
+    const double radius = 0.5 * std::min(width, height);
+    const double x = (px + 0.5 - 0.5 * width) / radius, y = (0.5 * height - py - 0.5) / radius;
+    const double r = std::hypot(x, y);
+    if (r > 1.0) return std::nullopt;
+    const double theta = r * cam.fisheyeHalfAngleRad();
+    dir = std::cos(theta) * cam.forward();
+    if (r > 0.0) dir += std::sin(theta) / r * (x * cam.right() + y * cam.up());
+  }
   const glm::dvec3 scale{1.0 / a, 1.0 / a, 1.0 / b};
   const glm::dvec3 o = cam.position() * scale, d = dir * scale;
   const double qa = glm::dot(d, d), qb = 2.0 * glm::dot(o, d), qc = glm::dot(o, o) - 1.0;

@@ -98,6 +98,14 @@ struct RenderLayerSettings {
   std::string time;              ///< a value of the layer's TIME dimension; "" = its default
 };
 
+/** YAML `renderer.dome` (issue #7): the angular fisheye domemaster of `--dome`. */
+struct DomeSettings {
+  bool enabled = false;    ///< true: render and view draw the dome without --dome
+  double fovDeg = 180.0;   ///< (0, 220]
+  double tiltDeg = 0.0;    ///< the dome's axis turned up from the view direction, [-180, 180]
+  double faceScale = 0.64; ///< cube face size / image size, [0.1, 4]
+};
+
 struct RendererSettings {
   double lodThreshold = 1.0;                  ///< texel-to-pixel threshold, 0.05 - 64
   int meshSize = 33;                          ///< vertices along a node's edge, 2^n + 1 in [3, 257]
@@ -114,6 +122,7 @@ struct RendererSettings {
   /** Overlay textures blended in one pass (0: as many as the GPU allows, up to 8); lower values
    * force extra passes, for comparisons (bench/layers.sh). */
   int overlaysPerPass = 0;
+  DomeSettings dome;                    ///< YAML `renderer.dome`
   EarthShape earth = EarthShape::Wgs84; ///< wgs84 | sphere
   /** Heights of mean-sea-level datasets moved onto the ellipsoid with the EGM96 geoid (h = H + N,
    * the bundled data/egm96-30.pgm); false: taken as ellipsoid heights. Used by terrain. */

@@ -15,10 +15,12 @@
 #include <tellus/planet/Geodesy.hpp>
 
 #include <glm/mat4x4.hpp>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
 #include <array>
+#include <span>
 
 namespace tellus::planet {
 
@@ -49,6 +51,18 @@ struct Frustum {
   std::array<Plane, 5> planes{};
 };
 
+/** An angular fisheye (azimuthal equidistant) view: the domemaster of a planetarium. A direction
+ * at angle theta from the view axis lands at radius theta x pixelsPerRadian from the image centre,
+ * pixelsPerRadian = size / fov, so the image's inscribed circle is the cone of half-angle fov / 2.
+ * Radially that is size / fov pixels per radian everywhere; along a circle around the axis the
+ * map stretches by theta / sin(theta) (pi / 2 at the rim of a 180-degree dome). */
+struct Fisheye {
+  double fovDeg = 180.0; ///< (0, 360)
+  /** The view axis turned up (towards the pose's up) from the pose's forward direction by this
+   * many degrees, the image turned with it (a tilted dome). */
+  double tiltDeg = 0.0;
+};
+
 /** Immutable once built; cheap to copy. Throws std::invalid_argument for a pose, viewport, field
  * of view or near distance that is out of range or not finite. */
 class Camera {
@@ -58,6 +72,35 @@ public:
          Viewport viewport,
          double verticalFovDeg = 45.0,
          double nearM = 0.1);
+
+  /** A fisheye camera (Fisheye): a sizePx x sizePx domemaster. forward() is the dome's axis (the
+   * pose's forward turned up by the tilt), up() and right() the image's axes. Its frustum passes
+   * everything (culling uses the cone of half-angle fov / 2, see Culling.hpp), its view matrix is
+   * the dome's frame and its projection a 90-degree perspective along the axis (for callers that
+   * need one; the LOD and culling use the fisheye). verticalFovDeg() is the fisheye's FOV. */
+  Camera(const Geodesy& geodesy,
+         const CameraPose& pose,
+         int sizePx,
+         const Fisheye& fisheye,
+         double nearM = 0.1);
+  /** The same camera position and pose turned to look along forward with this up (orthogonalised;
+   * a cube face of a dome), a perspective of this viewport and vertical field of view. */
+  Camera(const Camera& from,
+         const glm::dvec3& forward,
+         const glm::dvec3& up,
+         Viewport viewport,
+         double verticalFovDeg);
+
+  bool isFisheye() const noexcept { return fisheye_; }
+  /** Fisheye: half the FOV (the cone of visible directions) and the image's pixels per radian
+   * (radially). 0 for a perspective camera. */
+  double fisheyeHalfAngleRad() const noexcept { return halfAngle_; }
+  double pixelsPerRadian() const noexcept { return pixelsPerRadian_; }
+  /** Pixels from the viewport's centre (x right, y up) of a world point: the perspective
+   * division, or the fisheye map (radius theta x pixelsPerRadian). False when it cannot be
+   * projected: at or behind the near plane, or (fisheye) nearer than the near distance or within
+   * a degree of straight behind, where the map's direction is undefined. */
+  bool projectPx(const glm::dvec3& world, glm::dvec2& px) const noexcept;
 
   const CameraPose& pose() const noexcept { return pose_; }
   Viewport viewport() const noexcept { return viewport_; }
@@ -81,7 +124,8 @@ public:
   glm::dvec4 toClip(const glm::dvec3& world) const noexcept;
 
   /** The surface point (height 0 on the model) seen through a point of the viewport's border or
-   * its centre, where the ray meets the model. The texel-to-pixel test samples the ones inside a
+   * its centre, where the ray meets the model (fisheye: eight points of the rim, at 45-degree
+   * steps from the right, and the centre). The texel-to-pixel test samples the ones inside a
    * node: the nearest visible ground of a tilted view lies on the viewport's bottom edge, inside a
    * large node whose corners are all far away. */
   struct GroundPoint {
@@ -92,6 +136,11 @@ public:
   /** Corners (bottom-left, bottom-right, top-right, top-left), the midpoints of the bottom, right,
    * top and left edges, and the centre. */
   const std::array<GroundPoint, 9>& viewportGround() const noexcept { return ground_; }
+  /** Fisheye: the ground seen along 16 directions around the axis at 6 angles from it (a sixth of
+   * the half-FOV to the rim): the fisheye's largest texels lie where distance and the stretch
+   * around the axis (theta / sin(theta)) combine, which a node's corners alone miss. */
+  static constexpr std::size_t kDomeRays = 96;
+  const std::array<GroundPoint, kDomeRays>& domeGround() const noexcept { return domeGround_; }
 
 private:
   CameraPose pose_;
@@ -102,6 +151,14 @@ private:
   glm::dmat4 view_{1.0}, projection_{1.0}, viewProjection_{1.0};
   Frustum frustum_;
   std::array<GroundPoint, 9> ground_{};
+  std::array<GroundPoint, kDomeRays> domeGround_{};
+  bool fisheye_ = false;
+  double halfAngle_ = 0.0, pixelsPerRadian_ = 0.0;
+
+  void buildMatrices();
+  void castGroundRays(const Geodesy& geodesy,
+                      std::span<const glm::dvec3> directions,
+                      std::span<GroundPoint> out);
 };
 
 /** The near plane distance for a camera at this altitude above the ground: 0.1 m, but less for a

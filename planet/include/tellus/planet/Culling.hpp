@@ -26,10 +26,16 @@ FrustumResult classify(const Frustum& frustum, const OrientedBox& box) noexcept;
  * single plane. False (not provably outside) when a box corner is at or behind the near plane. */
 bool projectsOutsideViewport(const Camera& camera, const OrientedBox& box) noexcept;
 
-/** The frustum test of a node: its sphere, then, when the sphere only intersects, its box
- * against the planes, then the projected box against the viewport, then its two half boxes
- * (planes and viewport). Outside or Inside when any of them says so (all contain the patch;
- * Outside for the halves when both are). */
+/** A fisheye camera's frustum test: the sphere against the cone of half-angle fov / 2 around the
+ * view axis (the directions the domemaster shows; for a FOV over 180 degrees not convex, all but a
+ * cone behind). Outside when every direction to the sphere is more than the half-angle from the
+ * axis, Inside when every one is within it; a sphere around the eye intersects. */
+FrustumResult classifyCone(const Camera& camera, const BoundingSphere& sphere) noexcept;
+
+/** The frustum test of a node (a fisheye camera: classifyCone on its sphere): its sphere, then,
+ * when the sphere only intersects, its box against the planes, then the projected box against the
+ * viewport, then its two half boxes (planes and viewport). Outside or Inside when any of them says
+ * so (all contain the patch; Outside for the halves when both are). */
 FrustumResult classifyNode(const Camera& camera, const NodeGeometry& node) noexcept;
 
 /**

@@ -44,6 +44,13 @@ struct LayerOptions {
   int maxLevel = -1; ///< the deepest level fetched and drawn (-1: the layer's own deepest)
 };
 
+/** The dome (issue #7): an angular fisheye domemaster instead of a perspective view. */
+struct DomeOptions {
+  double fovDeg = 180.0;   ///< (0, 220]
+  double tiltDeg = 0.0;    ///< the dome's axis turned up from the pose's view direction
+  double faceScale = 0.64; ///< cube faces of faceScale x the image's size (2/pi matches the centre)
+};
+
 struct RendererOptions {
   int width = 1024; ///< framebuffer size in pixels
   int height = 768;
@@ -103,6 +110,9 @@ struct RendererOptions {
    * the frame (on llvmpipe drawing is CPU work too, and competing decoders made frames 2-5x
    * longer). 0: the process's priority. */
   int decodeNice = 10;
+  /** A domemaster (square image: the circle of diameter min(width, height), black around) drawn
+   * as cube faces and a warp, with the LOD and culling of the fisheye; nullopt: a perspective. */
+  std::optional<DomeOptions> dome;
   bool visibleWindow = false; ///< a window the user sees (`tellus view`); else hidden
   std::string windowTitle = "tellus";
 };

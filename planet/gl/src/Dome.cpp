@@ -1,0 +1,270 @@
+#include "Dome.hpp"
+
+#include "Shaders.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <vector>
+
+namespace tellus::planet {
+
+namespace {
+
+GLuint compile(GLenum type, const std::string& source, std::string* error) {
+  const GLuint s = glCreateShader(type);
+  const char* text = source.c_str();
+  glShaderSource(s, 1, &text, nullptr);
+  glCompileShader(s);
+  GLint ok = GL_FALSE;
+  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    char log[2048] = {};
+    glGetShaderInfoLog(s, sizeof log, nullptr, log);
+    *error = std::string("dome shader: ") + log;
+    glDeleteShader(s);
+    return 0;
+  }
+  return s;
+}
+
+/** The direction through the centre of face pixel (i, j) (bottom-up), in the cube's frame. */
+glm::dvec3 faceDirection(const CubeFace& f, int faceSize, double i, double j) noexcept {
+  const glm::dvec3 right = glm::cross(f.forward, f.up);
+  const double x = (i + 0.5) / faceSize * 2.0 - 1.0, y = (j + 0.5) / faceSize * 2.0 - 1.0;
+  return glm::normalize(f.forward + x * right + y * f.up);
+}
+
+} // namespace
+
+const std::array<CubeFace, 6>& cubeFaces() noexcept {
+  // GL's cube-map layout (the spec's face selection table): a face's s axis runs along
+  // forward x up, its t axis along up.
+  static const std::array<CubeFace, 6> faces{{
+      {{1, 0, 0}, {0, -1, 0}},
+      {{-1, 0, 0}, {0, -1, 0}},
+      {{0, 1, 0}, {0, 0, 1}},
+      {{0, -1, 0}, {0, 0, -1}},
+      {{0, 0, 1}, {0, -1, 0}},
+      {{0, 0, -1}, {0, -1, 0}},
+  }};
+  return faces;
+}
+
+FaceRect faceRegion(const CubeFace& face, int faceSize, double halfAngleRad) noexcept {
+  // Sampled on a grid of the face's pixels (every step-th, and the last): the region's bounding
+  // box in whole steps, grown by a step and a few pixels for the bilinear taps at its border.
+  const int step = std::max(1, faceSize / 256);
+  const double cosLimit = std::cos(std::min(halfAngleRad, 3.14159));
+  int x0 = faceSize, y0 = faceSize, x1 = -1, y1 = -1;
+  for (int j = 0; j < faceSize + step; j += step)
+    for (int i = 0; i < faceSize + step; i += step) {
+      const int ci = std::min(i, faceSize - 1), cj = std::min(j, faceSize - 1);
+      const glm::dvec3 d = faceDirection(face, faceSize, ci, cj);
+      // Within the cone (theta <= alpha) means -d.z >= cos(alpha); a little slack near its edge.
+      if (-d.z < cosLimit - 0.02) continue;
+      x0 = std::min(x0, ci);
+      y0 = std::min(y0, cj);
+      x1 = std::max(x1, ci);
+      y1 = std::max(y1, cj);
+    }
+  if (x1 < 0) return {};
+  const int grow = step + 1;
+  return {std::max(0, x0 - grow),
+          std::max(0, y0 - grow),
+          std::min(faceSize, x1 + grow + 1),
+          std::min(faceSize, y1 + grow + 1)};
+}
+
+std::expected<std::unique_ptr<Dome>, std::string> Dome::create(int faceSize,
+                                                               const std::string& glslHeader) {
+  if (faceSize < 8 || faceSize > 16384)
+    return std::unexpected(std::string("the dome's face size must be 8 to 16384 pixels"));
+  std::unique_ptr<Dome> d(new Dome());
+  d->size_ = faceSize;
+  std::string error;
+  const GLuint vs = compile(GL_VERTEX_SHADER, glslHeader + kShader_dome_vert, &error);
+  if (vs == 0) return std::unexpected(error);
+  const GLuint fs = compile(GL_FRAGMENT_SHADER, glslHeader + kShader_dome_frag, &error);
+  if (fs == 0) {
+    glDeleteShader(vs);
+    return std::unexpected(error);
+  }
+  d->program_ = glCreateProgram();
+  glAttachShader(d->program_, vs);
+  glAttachShader(d->program_, fs);
+  glLinkProgram(d->program_);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLint linked = GL_FALSE;
+  glGetProgramiv(d->program_, GL_LINK_STATUS, &linked);
+  if (linked != GL_TRUE) return std::unexpected(std::string("dome shader link failed"));
+  d->uCube_ = glGetUniformLocation(d->program_, "uCube");
+  d->uCircle_ = glGetUniformLocation(d->program_, "uCircle");
+  d->uViewport_ = glGetUniformLocation(d->program_, "uViewport");
+  glGenVertexArrays(1, &d->vao_);
+  glGenBuffers(1, &d->meshVbo_);
+  glGenBuffers(1, &d->meshEbo_);
+
+  // Filtering across face borders reads the neighbouring face (core since 3.2).
+  glEnable(GL_TEXTURE_CUBE_MAP_SEAMLESS);
+  glGenTextures(1, &d->cube_);
+  glBindTexture(GL_TEXTURE_CUBE_MAP, d->cube_);
+  for (int i = 0; i < 6; ++i)
+    glTexImage2D(GL_TEXTURE_CUBE_MAP_POSITIVE_X + static_cast<GLenum>(i),
+                 0,
+                 GL_RGBA8,
+                 faceSize,
+                 faceSize,
+                 0,
+                 GL_RGBA,
+                 GL_UNSIGNED_BYTE,
+                 nullptr);
+  glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MAX_LEVEL, 0);
+  glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
+  glBindTexture(GL_TEXTURE_CUBE_MAP, 0);
+  // One depth buffer for the faces (each is cleared before it is drawn): float, reversed Z.
+  glGenRenderbuffers(1, &d->depth_);
+  glBindRenderbuffer(GL_RENDERBUFFER, d->depth_);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, faceSize, faceSize);
+  glGenFramebuffers(6, d->fbos_.data());
+  for (int i = 0; i < 6; ++i) {
+    glBindFramebuffer(GL_FRAMEBUFFER, d->fbos_[static_cast<std::size_t>(i)]);
+    glFramebufferTexture2D(GL_FRAMEBUFFER,
+                           GL_COLOR_ATTACHMENT0,
+                           GL_TEXTURE_CUBE_MAP_POSITIVE_X + static_cast<GLenum>(i),
+                           d->cube_,
+                           0);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, d->depth_);
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      return std::unexpected(std::string("the dome's cube face framebuffer is incomplete"));
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  if (glGetError() != GL_NO_ERROR)
+    return std::unexpected(std::string("OpenGL error while setting up the dome"));
+  return d;
+}
+
+Dome::~Dome() {
+  glDeleteFramebuffers(6, fbos_.data());
+  glDeleteRenderbuffers(1, &depth_);
+  glDeleteTextures(1, &cube_);
+  glDeleteVertexArrays(1, &vao_);
+  glDeleteBuffers(1, &meshVbo_);
+  glDeleteBuffers(1, &meshEbo_);
+  glDeleteProgram(program_);
+}
+
+void Dome::buildMesh(double halfAngleRad, double radiusPx) {
+  // Rings of equal angle (64 up to the rim, one more a pixel and a half beyond it so the circle's
+  // edge pixels are covered), 256 segments around; at the centre a fan. Directions in double,
+  // then float. Interpolating a direction linearly across a cell of 1.4 x 1.4 degrees moves a
+  // pixel by about 0.05 px at the rim of a 4k dome.
+  constexpr int kRings = 64, kSegments = 256;
+  const double outer = 1.0 + 1.5 / std::max(1.0, radiusPx);
+  std::vector<float> v;
+  std::vector<std::uint32_t> idx;
+  auto vertex = [&](double r, double phi) {
+    const double theta = r * halfAngleRad;
+    v.insert(v.end(),
+             {static_cast<float>(r * std::cos(phi)),
+              static_cast<float>(r * std::sin(phi)),
+              static_cast<float>(std::sin(theta) * std::cos(phi)),
+              static_cast<float>(std::sin(theta) * std::sin(phi)),
+              static_cast<float>(-std::cos(theta))});
+  };
+  vertex(0.0, 0.0);
+  for (int k = 1; k <= kRings + 1; ++k) {
+    const double r = k <= kRings ? static_cast<double>(k) / kRings : outer;
+    for (int j = 0; j < kSegments; ++j)
+      vertex(r, 2.0 * std::numbers::pi * j / kSegments);
+  }
+  auto at = [](int ring, int seg) {
+    return static_cast<std::uint32_t>(1 + (ring - 1) * kSegments + (seg % kSegments));
+  };
+  for (int j = 0; j < kSegments; ++j)
+    idx.insert(idx.end(), {0u, at(1, j), at(1, j + 1)});
+  for (int k = 1; k <= kRings; ++k)
+    for (int j = 0; j < kSegments; ++j)
+      idx.insert(
+          idx.end(),
+          {at(k, j), at(k + 1, j), at(k + 1, j + 1), at(k, j), at(k + 1, j + 1), at(k, j + 1)});
+  glBindVertexArray(vao_);
+  glBindBuffer(GL_ARRAY_BUFFER, meshVbo_);
+  glBufferData(
+      GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(v.size() * sizeof(float)), v.data(), GL_STATIC_DRAW);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, meshEbo_);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(idx.size() * sizeof(std::uint32_t)),
+               idx.data(),
+               GL_STATIC_DRAW);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 5 * sizeof(float), nullptr);
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(1,
+                        3,
+                        GL_FLOAT,
+                        GL_FALSE,
+                        5 * sizeof(float),
+                        reinterpret_cast<const void*>(2 * sizeof(float)));
+  glBindVertexArray(0);
+  meshIndices_ = static_cast<GLsizei>(idx.size());
+  meshFor_ = halfAngleRad;
+  meshRadius_ = radiusPx;
+}
+
+void Dome::render(
+    const Camera& fisheye, const DrawFace& drawFace, GLuint target, int width, int height) {
+  const double alpha = fisheye.fisheyeHalfAngleRad();
+  const glm::dvec3 right = fisheye.right(), up = fisheye.up(), back = -fisheye.forward();
+  auto toWorld = [&](const glm::dvec3& v) { return v.x * right + v.y * up + v.z * back; };
+  facesDrawn_ = 0;
+  if (alpha != regionsFor_) { // once per field of view (a few hundred thousand directions)
+    for (std::size_t i = 0; i < 6; ++i)
+      regions_[i] = faceRegion(cubeFaces()[i], size_, alpha);
+    regionsFor_ = alpha;
+  }
+  for (std::size_t i = 0; i < 6; ++i) {
+    const CubeFace& f = cubeFaces()[i];
+    const FaceRect& r = regions_[i];
+    if (r.x1 <= r.x0 || r.y1 <= r.y0) continue;
+    const Camera face(fisheye, toWorld(f.forward), toWorld(f.up), {size_, size_}, 90.0);
+    glEnable(GL_SCISSOR_TEST);
+    glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+    drawFace(face, DrawTarget{fbos_[i], size_, size_, &face.frustum(), true});
+    glDisable(GL_SCISSOR_TEST);
+    ++facesDrawn_;
+  }
+  // The warp: black everywhere, then the circle from the cube (a polygon just around it; the
+  // shader leaves what lies outside the circle black).
+  glBindFramebuffer(GL_FRAMEBUFFER, target);
+  glViewport(0, 0, width, height);
+  glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
+  glClear(GL_COLOR_BUFFER_BIT);
+  glDisable(GL_DEPTH_TEST);
+  glUseProgram(program_);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_CUBE_MAP, cube_);
+  glUniform1i(uCube_, 0);
+  const double diameter = std::min(width, height);
+  if (alpha != meshFor_ || 0.5 * diameter != meshRadius_) buildMesh(alpha, 0.5 * diameter);
+  glUniform3f(uCircle_,
+              static_cast<float>(0.5 * width),
+              static_cast<float>(0.5 * height),
+              static_cast<float>(0.5 * diameter));
+  glUniform2f(uViewport_, static_cast<float>(width), static_cast<float>(height));
+  glBindVertexArray(vao_);
+  glDrawElements(GL_TRIANGLES, meshIndices_, GL_UNSIGNED_INT, nullptr);
+  glBindVertexArray(0);
+  glBindTexture(GL_TEXTURE_CUBE_MAP, 0);
+  glEnable(GL_DEPTH_TEST);
+}
+
+} // namespace tellus::planet

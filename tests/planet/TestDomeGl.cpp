@@ -1,0 +1,217 @@
+// The dome rendered (issue #7, label gl): the domemaster's geometry by pixels (black corners, the
+// circle at radius N / 2, the Earth's limb where the camera's altitude puts it), no seams at the
+// cube faces' borders on a flat-colour dataset, and the same image twice with --wait-complete.
+#include "GlTestSupport.hpp"
+
+#include <tellus/planet/Geodesy.hpp>
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <numbers>
+
+using namespace tellus;
+using namespace tellus::planet;
+using namespace tellus::planet::gltest;
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+/** Every tile the same colour, at any level. */
+class SolidSource final : public ITileSource {
+public:
+  SolidSource(GridSpec grid, std::array<std::uint8_t, 3> rgb) : grid_(grid) {
+    std::vector<std::uint8_t> px(static_cast<std::size_t>(grid.tileWidth * grid.tileHeight) * 4);
+    for (std::size_t i = 0; i < px.size(); i += 4) {
+      px[i] = rgb[0];
+      px[i + 1] = rgb[1];
+      px[i + 2] = rgb[2];
+      px[i + 3] = 255;
+    }
+    tile_ = encodePngRgba(grid.tileWidth, grid.tileHeight, px);
+  }
+  std::optional<DatasetSpec> describe(std::string_view, std::string_view) const override {
+    DatasetSpec d;
+    d.name = "solid";
+    d.grid = grid_;
+    d.mimeType = "image/png";
+    return d;
+  }
+  TileRequestId request(const TileAddress&, double, Callback done) override {
+    TileResult r;
+    r.status = TileStatus::Ok;
+    r.contentType = "image/png";
+    r.bytes = tile_;
+    done(std::move(r));
+    return ++next_;
+  }
+  void reprioritize(TileRequestId, double) override {}
+  bool cancel(TileRequestId) override { return false; }
+
+private:
+  GridSpec grid_;
+  std::vector<std::byte> tile_;
+  TileRequestId next_ = 0;
+};
+
+constexpr std::array<std::uint8_t, 3> kSolid{200, 120, 40};
+constexpr std::array<std::uint8_t, 3> kSky{255, 0, 255};
+
+GridSpec solidGrid() {
+  return GridSpec{Sector{}, 36.0, 256, 256, 20};
+}
+
+RendererOptions domeOptions(int n, double fov, double tilt = 0.0) {
+  RendererOptions o = options("solid", n, n);
+  o.globalImage.clear(); // no Blue Marble under a node still loading
+  o.background = {kSky[0] / 255.0, kSky[1] / 255.0, kSky[2] / 255.0};
+  o.dome = DomeOptions{fov, tilt, 0.64};
+  return o;
+}
+
+struct Pixel {
+  int r, g, b;
+};
+Pixel at(const std::vector<std::uint8_t>& px, int n, int x, int y) {
+  const auto i =
+      (static_cast<std::size_t>(y) * static_cast<std::size_t>(n) + static_cast<std::size_t>(x)) * 4;
+  return {px[i], px[i + 1], px[i + 2]};
+}
+bool near(const Pixel& p, const std::array<std::uint8_t, 3>& c, int tol) {
+  return std::abs(p.r - c[0]) <= tol && std::abs(p.g - c[1]) <= tol && std::abs(p.b - c[2]) <= tol;
+}
+/** The distance in pixels of pixel (x, y)'s centre from the image's centre (rows from the top). */
+double radiusOf(int n, int x, int y) {
+  return std::hypot(x + 0.5 - 0.5 * n, y + 0.5 - 0.5 * n);
+}
+
+} // namespace
+
+TEST(DomeGl, CircleCornersAndTheLimbWhereTheAltitudePutsIt) {
+  const Geodesy g(EarthModel::Sphere);
+  SolidSource source(solidGrid(), kSolid);
+  const int n = 400;
+  for (const double fov : {180.0, 220.0}) {
+    OPEN_RENDERER(r, source, g, domeOptions(n, fov));
+    const double h = 2e6; // the limb 49.56 degrees from the nadir
+    const Rendered out = renderComplete(r, {10.0, 20.0, h, 0.0, 0.0});
+    ASSERT_TRUE(out.complete);
+    const std::vector<std::uint8_t>& px = out.pixels;
+    // Black outside the circle, exactly; inside it is sky or ground, never black.
+    int outside = 0, inside = 0;
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        const double rad = radiusOf(n, x, y);
+        const Pixel p = at(px, n, x, y);
+        if (rad > 0.5 * n) {
+          ++outside;
+          ASSERT_TRUE(p.r == 0 && p.g == 0 && p.b == 0) << x << "," << y;
+        } else {
+          ++inside;
+          ASSERT_FALSE(p.r == 0 && p.g == 0 && p.b == 0) << x << "," << y;
+        }
+      }
+    EXPECT_NEAR(inside, kPi / 4.0 * n * n, 2.0 * kPi * 0.5 * n); // within a pixel of the circle
+    EXPECT_GT(outside, 0);
+    for (const auto& [cx, cy] : {std::pair{0, 0}, {n - 1, 0}, {0, n - 1}, {n - 1, n - 1}}) {
+      const Pixel p = at(px, n, cx, cy);
+      EXPECT_TRUE(p.r == 0 && p.g == 0 && p.b == 0);
+    }
+    // The circle's edge on the centre row and column: the outermost pixels are inside.
+    EXPECT_TRUE(near(at(px, n, 0, n / 2), kSky, 0));
+    EXPECT_TRUE(near(at(px, n, n - 1, n / 2), kSky, 0));
+    EXPECT_TRUE(near(at(px, n, n / 2, 0), kSky, 0));
+    EXPECT_TRUE(near(at(px, n, n / 2, n - 1), kSky, 0));
+    // The limb: asin(R / (R + h)) from the nadir, at that angle / (FOV / 2) x N / 2 pixels.
+    const double R = g.equatorialRadius();
+    const double limb = std::asin(R / (R + h));
+    const double expected = limb / (0.5 * fov * kPi / 180.0) * 0.5 * n;
+    for (int k = 0; k < 16; ++k) {
+      const double phi = 2.0 * kPi * k / 16.0;
+      double found = -1.0;
+      for (double s = 0.0; s < 0.5 * n; s += 0.25) {
+        const int x = static_cast<int>(std::floor(0.5 * n + s * std::cos(phi)));
+        const int y = static_cast<int>(std::floor(0.5 * n + s * std::sin(phi)));
+        const Pixel p = at(px, n, x, y);
+        // Closer to the sky than to the ground: past the limb.
+        const int toSky =
+            std::abs(p.r - kSky[0]) + std::abs(p.g - kSky[1]) + std::abs(p.b - kSky[2]);
+        const int toGround =
+            std::abs(p.r - kSolid[0]) + std::abs(p.g - kSolid[1]) + std::abs(p.b - kSolid[2]);
+        if (toSky < toGround) {
+          found = radiusOf(n, x, y);
+          break;
+        }
+      }
+      EXPECT_NEAR(found, expected, 1.5) << "fov " << fov << " direction " << k;
+    }
+  }
+}
+
+// A flat colour everywhere: every pixel whose ray meets the ground away from the limb is that
+// colour within 1, across the borders of the cube faces (front and side faces at 45-55 degrees
+// from the axis, the back face of a 220-degree dome looking at the horizon).
+TEST(DomeGl, FlatColourShowsNoSeams) {
+  const Geodesy g(EarthModel::Sphere);
+  SolidSource source(solidGrid(), kSolid);
+  const int n = 320;
+  struct View {
+    double fov, tiltDeg;
+  };
+  for (const View v : {View{180.0, 0.0}, View{220.0, 90.0}, View{200.0, 45.0}}) {
+    OPEN_RENDERER(r, source, g, domeOptions(n, v.fov));
+    const double h = 3000.0;
+    const CameraPose pose{30.0, 40.0, h, 20.0, v.tiltDeg};
+    const Rendered out = renderComplete(r, pose, 120.0);
+    ASSERT_TRUE(out.complete) << v.fov;
+    const Camera cam = r.camera(r.drawnPose());
+    const glm::dvec3 upLocal = glm::normalize(cam.position());
+    const double dip = std::acos(g.equatorialRadius() / (g.equatorialRadius() + h));
+    int ground = 0, sky = 0, bad = 0;
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        const double px = (x + 0.5 - 0.5 * n) / (0.5 * n), py = (0.5 * n - y - 0.5) / (0.5 * n);
+        const double rr = std::hypot(px, py);
+        if (rr > 0.995) continue; // the circle's edge blends with black
+        const double theta = rr * cam.fisheyeHalfAngleRad();
+        glm::dvec3 d = std::cos(theta) * cam.forward();
+        if (rr > 0.0) d += std::sin(theta) / rr * (px * cam.right() + py * cam.up());
+        const double elevation = std::asin(glm::dot(d, upLocal));
+        const Pixel p = at(out.pixels, n, x, y);
+        if (elevation < -dip - 0.03) {
+          ++ground;
+          if (!near(p, kSolid, 1)) ++bad;
+        } else if (elevation > 0.01) {
+          ++sky;
+          if (!near(p, kSky, 0)) ++bad;
+        }
+      }
+    EXPECT_EQ(bad, 0) << "fov " << v.fov << " tilt " << v.tiltDeg;
+    EXPECT_GT(ground, n * n / 4);
+    if (v.tiltDeg > 0.0) {
+      EXPECT_GT(sky, n * n / 8);
+    }
+  }
+}
+
+TEST(DomeGl, WaitCompleteTwiceGivesTheSameImage) {
+  BlueMarbleService bm("dome-gl");
+  ASSERT_TRUE(bm.service);
+  const Geodesy g;
+  std::vector<std::uint8_t> first;
+  for (int run = 0; run < 2; ++run) {
+    RendererOptions o = options("bluemarble", 256, 256);
+    o.dome = DomeOptions{200.0, 20.0, 0.64};
+    OPEN_RENDERER(r, *bm.service, g, o);
+    const Rendered out = renderComplete(r, {45.0, 7.0, 8e5, 30.0, 60.0});
+    ASSERT_TRUE(out.complete);
+    if (run == 0)
+      first = out.pixels;
+    else
+      EXPECT_TRUE(out.pixels == first);
+  }
+}
