@@ -14,7 +14,7 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 cd "$work"
 "$tellus" view --cache "$work/cache" --size 320x200 --camera 0,0,2e7 >"$work/out.txt" 2>&1 &
 pid=$!
-win=$(timeout 30 xdotool search --sync --name '^tellus') || fail "no window: $(cat "$work/out.txt")"
+win=$(timeout 30 xdotool search --sync --pid "$pid" --name '^tellus') || fail "no window: $(cat "$work/out.txt")"
 win=$(echo "$win" | head -1)
 xdotool windowfocus --sync "$win" || true
 hold() { xdotool keydown "$1"; sleep 0.3; xdotool keyup "$1"; }
@@ -72,7 +72,7 @@ grep -q "3 frames" "$work/sphere.txt" || fail "--earth sphere: $(cat "$work/sphe
 "$tellus" view --cache "$work/cache" --size 160x100 --camera 0,0,2e7 --overlay bluemarble,0.5 \
   >"$work/layers.txt" 2>&1 &
 pid=$!
-win=$(timeout 30 xdotool search --sync --name '^tellus') || fail "no window: $(cat "$work/layers.txt")"
+win=$(timeout 30 xdotool search --sync --pid "$pid" --name '^tellus') || fail "no window: $(cat "$work/layers.txt")"
 win=$(echo "$win" | head -1)
 xdotool windowfocus --sync "$win" || true
 sleep 2
