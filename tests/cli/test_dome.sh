@@ -4,6 +4,7 @@
 # --path flight as numbered complete domemasters, and usage errors (exit 2).
 set -euo pipefail
 tellus=$1
+here=$(cd "$(dirname "$0")" && pwd) # png_pixels.py
 work=$(mktemp -d "${TMPDIR:-/tmp}/tellus-dome.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 cache="$work/cache"
@@ -11,33 +12,11 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 
 # PNG size, and whether the corners are black and the centre is not (python: zlib only).
 check() {
-  python3 - "$1" "$2" <<'PY' || fail "domemaster $1"
-import struct, sys, zlib
-data = open(sys.argv[1], "rb").read()
-w, h = struct.unpack(">II", data[16:24])
+  PYTHONPATH="$here" python3 - "$1" "$2" <<'PY' || fail "domemaster $1"
+import sys
+from png_pixels import pixels
+w, h, rows, _ = pixels(sys.argv[1])
 assert f"{w}x{h}" == sys.argv[2], (w, h)
-i, idat = 8, b""
-while i < len(data):
-    n = struct.unpack(">I", data[i:i + 4])[0]
-    if data[i + 4:i + 8] == b"IDAT":
-        idat += data[i + 8:i + 8 + n]
-    i += 12 + n
-raw, stride, rows, prev = zlib.decompress(idat), w * 3, [], bytearray(w * 3)
-for y in range(h):
-    f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
-    for x in range(stride):
-        a = line[x - 3] if x >= 3 else 0
-        b = prev[x]
-        c = prev[x - 3] if x >= 3 else 0
-        if f == 1: line[x] = (line[x] + a) & 255
-        elif f == 2: line[x] = (line[x] + b) & 255
-        elif f == 3: line[x] = (line[x] + (a + b) // 2) & 255
-        elif f == 4:
-            p = a + b - c
-            pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
-            line[x] = (line[x] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
-    rows.append(line)
-    prev = line
 px = lambda x, y: tuple(rows[y][3 * x:3 * x + 3])
 for x, y in ((0, 0), (w - 1, 0), (0, h - 1), (w - 1, h - 1)):
     assert px(x, y) == (0, 0, 0), (x, y, px(x, y))

@@ -4,6 +4,7 @@
 # errors (exit 2), an incomplete view given up on (exit 1) and no display (exit 1, said so).
 set -euo pipefail
 tellus=$1
+here=$(cd "$(dirname "$0")" && pwd) # png_pixels.py
 work=$(mktemp -d "${TMPDIR:-/tmp}/tellus-render.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 cache="$work/cache"
@@ -127,36 +128,12 @@ MESA_GL_VERSION_OVERRIDE=3.3 "$tellus" render --cache "$cache" --camera 0,0,2e7 
 grep -q '"gl": "3.3' "$work/gl33.json" || fail "not a 3.3 context: $(grep '"gl"' "$work/gl33.json")"
 # 4.x draws with double vertex positions, 3.3 with two floats per coordinate: the same image up to
 # rounding (a handful of pixels one level apart), not necessarily the same bytes.
-python3 - "$work/a.png" "$work/gl33.png" <<'PY' || fail "the 3.3 context drew another image"
-import struct, sys, zlib
-def pixels(path):
-    data = open(path, "rb").read()
-    w, h = struct.unpack(">II", data[16:24])
-    i, idat = 8, b""
-    while i < len(data):
-        n = struct.unpack(">I", data[i:i + 4])[0]
-        if data[i + 4:i + 8] == b"IDAT":
-            idat += data[i + 8:i + 8 + n]
-        i += 12 + n
-    raw, stride, rows, prev = zlib.decompress(idat), w * 3, [], bytearray(w * 3)
-    for y in range(h):
-        f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
-        for x in range(stride):
-            a = line[x - 3] if x >= 3 else 0
-            b = prev[x]
-            c = prev[x - 3] if x >= 3 else 0
-            if f == 1: line[x] = (line[x] + a) & 255
-            elif f == 2: line[x] = (line[x] + b) & 255
-            elif f == 3: line[x] = (line[x] + (a + b) // 2) & 255
-            elif f == 4:
-                p = a + b - c
-                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
-                line[x] = (line[x] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
-        rows.append(line)
-        prev = line
-    return w, h, rows
-w, h, a = pixels(sys.argv[1])
-_, _, b = pixels(sys.argv[2])
+PYTHONPATH="$here" python3 - "$work/a.png" "$work/gl33.png" <<'PY' ||
+  fail "the 3.3 context drew another image"
+import sys
+from png_pixels import pixels
+w, h, a, _ = pixels(sys.argv[1])
+_, _, b, _ = pixels(sys.argv[2])
 worst = max(abs(p - q) for ra, rb in zip(a, b) for p, q in zip(ra, rb))
 differ = sum(1 for ra, rb in zip(a, b) for x in range(0, w * 3, 3) if ra[x:x + 3] != rb[x:x + 3])
 print(f"GL 3.3 against 4.x: {differ} of {w * h} pixels differ, by at most {worst}")

@@ -1,5 +1,6 @@
 #include "Dome.hpp"
 
+#include "GlShader.hpp"
 #include "Shaders.hpp"
 
 #include <glm/geometric.hpp>
@@ -13,23 +14,6 @@
 namespace tellus::planet {
 
 namespace {
-
-GLuint compile(GLenum type, const std::string& source, std::string* error) {
-  const GLuint s = glCreateShader(type);
-  const char* text = source.c_str();
-  glShaderSource(s, 1, &text, nullptr);
-  glCompileShader(s);
-  GLint ok = GL_FALSE;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (ok != GL_TRUE) {
-    char log[2048] = {};
-    glGetShaderInfoLog(s, sizeof log, nullptr, log);
-    *error = std::string("dome shader: ") + log;
-    glDeleteShader(s);
-    return 0;
-  }
-  return s;
-}
 
 /** The direction through the centre of face pixel (i, j) (bottom-up), in the cube's frame. */
 glm::dvec3 faceDirection(const CubeFace& f, int faceSize, double i, double j) noexcept {
@@ -86,9 +70,11 @@ std::expected<std::unique_ptr<Dome>, std::string> Dome::create(int faceSize,
   std::unique_ptr<Dome> d(new Dome());
   d->size_ = faceSize;
   std::string error;
-  const GLuint vs = compile(GL_VERTEX_SHADER, glslHeader + kShader_dome_vert, &error);
+  const GLuint vs =
+      compileShader(GL_VERTEX_SHADER, glslHeader + kShader_dome_vert, "dome shader", &error);
   if (vs == 0) return std::unexpected(error);
-  const GLuint fs = compile(GL_FRAGMENT_SHADER, glslHeader + kShader_dome_frag, &error);
+  const GLuint fs =
+      compileShader(GL_FRAGMENT_SHADER, glslHeader + kShader_dome_frag, "dome shader", &error);
   if (fs == 0) {
     glDeleteShader(vs);
     return std::unexpected(error);

@@ -2,6 +2,7 @@
 // renderer"). Every GL call here runs on the thread that created the Renderer.
 
 #include "Dome.hpp"
+#include "GlShader.hpp"
 #include "HeightDecode.hpp"
 #include "Shaders.hpp"
 #include "TextOverlay.hpp"
@@ -71,23 +72,6 @@ bool acquireGlfw(std::string* error) {
 void releaseGlfw() {
   std::lock_guard lock(glfwMutex);
   if (--glfwUsers == 0) glfwTerminate();
-}
-
-GLuint compileShader(GLenum type, const std::string& source, std::string* error) {
-  const GLuint s = glCreateShader(type);
-  const char* text = source.c_str();
-  glShaderSource(s, 1, &text, nullptr);
-  glCompileShader(s);
-  GLint ok = GL_FALSE;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (ok != GL_TRUE) {
-    char log[2048] = {};
-    glGetShaderInfoLog(s, sizeof log, nullptr, log);
-    *error = std::string("shader: ") + log;
-    glDeleteShader(s);
-    return 0;
-  }
-  return s;
 }
 
 struct GpuMesh {
@@ -406,10 +390,11 @@ std::string Renderer::Impl::initGl() {
   for (int i = 0; i < overlaysPerPass; ++i)
     fragDefines += " TELLUS_OVERLAY(" + std::to_string(i) + ")";
   fragDefines += "\n";
-  const GLuint vs = compileShader(GL_VERTEX_SHADER, header + defines + kShader_planet_vert, &error);
+  const GLuint vs =
+      compileShader(GL_VERTEX_SHADER, header + defines + kShader_planet_vert, "shader", &error);
   if (vs == 0) return error;
-  const GLuint fs =
-      compileShader(GL_FRAGMENT_SHADER, header + fragDefines + kShader_planet_frag, &error);
+  const GLuint fs = compileShader(
+      GL_FRAGMENT_SHADER, header + fragDefines + kShader_planet_frag, "shader", &error);
   if (fs == 0) {
     glDeleteShader(vs);
     return error;
