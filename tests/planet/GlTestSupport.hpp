@@ -7,14 +7,17 @@
 #include "../support/TempDir.hpp"
 
 #include <tellus/planet/Camera.hpp>
+#include <tellus/planet/Geodesy.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/TileService.hpp>
 
+#include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
@@ -141,6 +144,25 @@ inline RendererOptions options(const std::string& layer, int w, int h) {
   o.height = h;
   o.globalImage = kBlueMarble;
   return o;
+}
+
+/** Does the ray through the pixel centre hit the Earth model shrunk by `shrink` (a fraction)?
+ * (A camera inside the shrunk model counts as a hit.) */
+inline bool rayHitsEarth(const Camera& cam, const Geodesy& g, int px, int py, double shrink) {
+  const auto vp = cam.viewport();
+  const double t = std::tan(cam.verticalFovDeg() * M_PI / 360.0);
+  const double aspect = static_cast<double>(vp.width) / vp.height;
+  const double nx = 2.0 * (px + 0.5) / vp.width - 1.0;
+  const double ny = 1.0 - 2.0 * (py + 0.5) / vp.height;
+  glm::dvec3 d = cam.forward() + cam.right() * (nx * t * aspect) + cam.up() * (ny * t);
+  const double a = g.equatorialRadius() * (1.0 - shrink), b = g.polarRadius() * (1.0 - shrink);
+  const glm::dvec3 s(1.0 / a, 1.0 / a, 1.0 / b);
+  const glm::dvec3 o = cam.position() * s;
+  d = d * s;
+  const double A = glm::dot(d, d), B = 2.0 * glm::dot(o, d), C = glm::dot(o, o) - 1.0;
+  const double disc = B * B - 4.0 * A * C;
+  if (disc < 0.0) return false;
+  return (-B - std::sqrt(disc)) / (2.0 * A) > 0.0 || C < 0.0;
 }
 
 /** Frames until complete (or the limit); the pixels of the last frame. */

@@ -83,24 +83,6 @@ bool project(const Camera& cam, const glm::dvec3& p, double* x, double* y) {
   return true;
 }
 
-/** Does the ray through the pixel centre hit the ellipsoid shrunk by `shrink` (a fraction)? */
-bool rayHitsEarth(const Camera& cam, const Geodesy& g, int px, int py, double shrink) {
-  const auto vp = cam.viewport();
-  const double t = std::tan(cam.verticalFovDeg() * M_PI / 360.0);
-  const double aspect = static_cast<double>(vp.width) / vp.height;
-  const double nx = 2.0 * (px + 0.5) / vp.width - 1.0;
-  const double ny = 1.0 - 2.0 * (py + 0.5) / vp.height;
-  glm::dvec3 d = cam.forward() + cam.right() * (nx * t * aspect) + cam.up() * (ny * t);
-  const double a = g.equatorialRadius() * (1.0 - shrink), b = g.polarRadius() * (1.0 - shrink);
-  const glm::dvec3 s(1.0 / a, 1.0 / a, 1.0 / b);
-  const glm::dvec3 o = cam.position() * s;
-  d = d * s;
-  const double A = glm::dot(d, d), B = 2.0 * glm::dot(o, d), C = glm::dot(o, o) - 1.0;
-  const double disc = B * B - 4.0 * A * C;
-  if (disc < 0.0) return false;
-  return (-B - std::sqrt(disc)) / (2.0 * A) > 0.0 || C < 0.0;
-}
-
 int countColour(const std::vector<std::uint8_t>& px,
                 std::uint8_t r,
                 std::uint8_t g,
