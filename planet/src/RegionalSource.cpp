@@ -61,6 +61,9 @@ RegionalTileSource::create(ITileSource& inner, std::vector<CombinedLayer> layers
       c.datasets.push_back({d, s, g.numLevels, (s.east - s.west) * (s.north - s.south)});
     }
     // Smallest first; equal areas keep the listed order.
+    auto tiles = TileGrid::create(c.grid);
+    if (!tiles) return std::unexpected("combined layer '" + l.name + "': " + tiles.error());
+    c.tiles = *tiles;
     std::stable_sort(c.datasets.begin(), c.datasets.end(), [](const Dataset& a, const Dataset& b) {
       return a.area < b.area;
     });
@@ -91,9 +94,8 @@ std::optional<std::string> RegionalTileSource::datasetFor(std::string_view layer
                                                           const TileKey& key) const {
   const Combined* c = find(layer);
   if (c == nullptr) return std::string(layer);
-  const auto grid = TileGrid::create(c->grid);
-  if (!grid || !grid->isValid(key)) return std::nullopt;
-  const Sector s = grid->sectorOf(key);
+  if (!c->tiles->isValid(key)) return std::nullopt;
+  const Sector s = c->tiles->sectorOf(key);
   for (const Dataset& d : c->datasets)
     if (key.level < d.levels && contains(d.sector, s)) return d.name;
   return std::nullopt;

@@ -14,6 +14,7 @@
  * union of the sectors and the largest number of levels.
  */
 
+#include <tellus/cache/TileGrid.hpp>
 #include <tellus/cache/TileSource.hpp>
 
 #include <expected>
@@ -58,6 +59,7 @@ private:
     std::string name;
     std::vector<Dataset> datasets; ///< smallest area first
     GridSpec grid;                 ///< the combined grid
+    std::optional<TileGrid> tiles; ///< the same, validated once (tile sectors per request)
   };
   RegionalTileSource(ITileSource& inner, std::vector<Combined> layers)
       : inner_(inner), layers_(std::move(layers)) {}
