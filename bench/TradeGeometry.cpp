@@ -18,13 +18,17 @@
 //   geoid,<view>,<lat>,<max_abs_n_m> the largest |N| (EGM96) within 10 degrees of the view's
 //   centre:
 //     what --geoid off moves the terrain by there; "all" is the largest anywhere.
-//   float,<view>,<lat>,<max_m> the largest |x - float(x)| over the coordinates of ECEF points near
-//     the view's centre (within 1 degree): the rounding of a position to one float (the two-float
-//     path on a compiler that reorders its arithmetic snaps positions to the float grid;
-//     docs/ACCURACY.md, finding 5).
+//   float,<view>,<lat>,<max_m> the largest error of the eye-relative position the OpenGL 3.3
+//     vertex path computes (high/low float pairs, (high - eyeHigh) + (low - eyeLow) in float:
+//     packVertices and eyeRelativeFloatPairs) against the exact double difference, for points
+//     within 1 degree of the view's centre and the eye where bench/trade.sh puts the camera;
+//   double,<view>,<lat>,<max_m> the same for the fp64 path (the double difference narrowed to one
+//     float): what both paths share. (Until finding 7 of docs/ACCURACY.md was fixed, GCC 12 zeroed
+//     the low floats and the float path's error was the position's rounding to one float, 0.25 m.)
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/planet/Geodesy.hpp>
 #include <tellus/planet/Geoid.hpp>
+#include <tellus/planet/GpuVertex.hpp>
 #include <tellus/planet/Patch.hpp>
 #include <tellus/planet/Terrain.hpp>
 
@@ -186,15 +190,29 @@ int main(int argc, char** argv) {
   for (const View& v : kViews)
     std::printf("geoid,terrain,%s,%.2f,,,%.2f,\n", v.name, v.lat, maxN(v.lat, v.lon, 10.0));
   std::printf("geoid,terrain,all,,,,%.2f,\n", maxN(0.0, 0.0, 180.0));
-  for (const View& v : kViews) {
-    double m = 0.0;
+  // The cameras of bench/trade.sh's views (lat, lon, altitude).
+  constexpr double kEyes[][3] = {{20.0, 10.0, 7e6}, {44.0, 7.5, 1.5e5}, {46.4, 8.0, 1.2e4}};
+  for (std::size_t i = 0; i < std::size(kViews); ++i) {
+    const View& v = kViews[i];
+    const Ecef eyeE = wgs.toEcef(kEyes[i][0], kEyes[i][1], kEyes[i][2]);
+    const glm::dvec3 eye(eyeE.x, eyeE.y, eyeE.z);
+    double pairs = 0.0, narrowed = 0.0;
+    std::vector<float> packed;
     for (double la = v.lat - 1.0; la <= v.lat + 1.0; la += 0.01)
       for (double lo = v.lon - 1.0; lo <= v.lon + 1.0; lo += 0.01) {
         const Ecef e = wgs.toEcef(la, lo, 0.0);
-        for (const double x : {e.x, e.y, e.z})
-          m = std::max(m, std::abs(x - static_cast<double>(static_cast<float>(x))));
+        TerrainVertex t;
+        t.position = glm::dvec3(e.x, e.y, e.z);
+        t.normal = glm::vec3(0.0f, 0.0f, 1.0f);
+        packed.clear();
+        packVertices({&t, 1}, VertexPositions::FloatPairs, packed);
+        const glm::dvec3 exact = t.position - eye;
+        pairs = std::max(
+            pairs, glm::length(glm::dvec3(eyeRelativeFloatPairs(packed.data(), eye)) - exact));
+        narrowed = std::max(narrowed, glm::length(glm::dvec3(glm::vec3(exact)) - exact));
       }
-    std::printf("float,ellipsoid,%s,%.2f,,,%.4f,\n", v.name, v.lat, m);
+    std::printf("float,ellipsoid,%s,%.2f,,,%.4f,\n", v.name, v.lat, pairs);
+    std::printf("double,ellipsoid,%s,%.2f,,,%.4f,\n", v.name, v.lat, narrowed);
   }
   return 0;
 }

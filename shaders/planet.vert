@@ -6,10 +6,10 @@
 //
 // TELLUS_FP64 (OpenGL 4.x): the position is a dvec3 and the subtraction is one double operation.
 // Otherwise (OpenGL 3.3) it arrives as two floats, high = float(x) and low = float(x - high), and
-// (high - eyeHigh) + (low - eyeLow) is computed in float; that relies on the compiler keeping the
-// order of the operations (`precise` where GLSL has it), which Mesa's llvmpipe did not: positions
-// then snap to 0.5 m at the Earth's radius (docs/ACCURACY.md). The renderer prepends #version and
-// the #define.
+// (high - eyeHigh) + (low - eyeLow) is computed in float, in that order (`precise` where GLSL has
+// it). The floats are packed on the CPU by planet/src/GpuVertex.cpp, which GCC 12 once miscompiled
+// (the low floats zeroed: positions snapped to 0.5 m; docs/ACCURACY.md, finding 7). The renderer
+// prepends #version and the #define.
 #if __VERSION__ >= 400
 #define PRECISE precise
 #else

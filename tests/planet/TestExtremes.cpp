@@ -8,14 +8,17 @@
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/planet/Camera.hpp>
 #include <tellus/planet/Geodesy.hpp>
+#include <tellus/planet/GpuVertex.hpp>
 #include <tellus/planet/Patch.hpp>
 #include <tellus/planet/Terrain.hpp>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <numbers>
 #include <vector>
 
@@ -337,14 +340,21 @@ TEST(PatchExtremes, DeepestLevelTheGridAllowsHasDistinctCornersAndFiniteMeshes) 
           const TerrainMesh tm = buildTerrainMesh(
               g, s, 33, [](double, double) { return 0.0; }, std::array<EdgeAdapt, 4>{});
           ASSERT_EQ(tm.vertices.size(), std::size_t{33 * 33});
+          // What the GL layer uploads on its OpenGL 3.3 path (packVertices, FloatPairs).
+          std::vector<float> packed;
+          packVertices(tm.vertices, VertexPositions::FloatPairs, packed);
+          ASSERT_EQ(packed.size(), tm.vertices.size() * kFloatsPerVertex);
+          for (const float f : packed)
+            ASSERT_TRUE(std::isfinite(f));
           glm::dvec3 previous(0.0);
           for (std::size_t i = 0; i < tm.vertices.size(); ++i) {
             const TerrainVertex& v = tm.vertices[i];
             ASSERT_TRUE(finite(v.position));
             ASSERT_NEAR(glm::length(glm::dvec3(v.normal)), 1.0, 1e-6);
-            const glm::vec3 hi(v.position);
-            const glm::vec3 lo(v.position - glm::dvec3(hi));
-            const glm::dvec3 back = glm::dvec3(hi) + glm::dvec3(lo);
+            const float* f = packed.data() + i * kFloatsPerVertex;
+            const glm::dvec3 hi(f[0], f[1], f[2]);
+            const glm::dvec3 lo(f[3], f[4], f[5]);
+            const glm::dvec3 back = hi + lo;
             ASSERT_LT(glm::length(back - v.position), 1e-7);
             const bool poleRow = (row == 0 && i < 33) || (row == rows - 1 && i >= 33 * 32);
             if (i % 33 != 0 && !poleRow) {
@@ -387,5 +397,68 @@ TEST(PatchExtremes, DeepestLevelTheGridAllowsHasDistinctCornersAndFiniteMeshes) 
             }
         }
       }
+  }
+}
+
+// The GL layer's vertex path at the extremes (GpuVertex.hpp): the camera-relative position the
+// vertex shader computes in float from the high/low pairs ((high - eyeHigh) + (low - eyeLow)),
+// emulated step by step on the CPU, against the double difference, for a camera 1 m and 0.1 m
+// above vertices of the deepest level at the exact poles, on both sides of the antimeridian, at
+// -0.0 and at the equator; and the fp64 path's bytes round-trip exactly.
+TEST(GpuVertexExtremes, EyeRelativeFloatPairsStaySubMillimetreAtTheDeepestLevel) {
+  const Geodesy g;
+  GridSpec spec;
+  spec.levelZeroDeltaDeg = 36.0;
+  spec.numLevels = kMaxLevel + 1;
+  const TileGrid grid = *TileGrid::create(spec);
+  const int level = kMaxLevel;
+  const std::int64_t rows = grid.rowCount(level), cols = grid.colCount(level);
+  struct Case {
+    const char* name;
+    std::int64_t row, col;
+  };
+  for (const Case& c : {Case{"south pole", 0, cols / 3},
+                        Case{"north pole", rows - 1, 7},
+                        Case{"antimeridian west", rows / 3, 0},
+                        Case{"antimeridian east", rows / 3, cols - 1},
+                        Case{"equator at -0.0 / 0.0", rows / 2, cols / 2}}) {
+    SCOPED_TRACE(c.name);
+    const Sector s = grid.sectorOf({level, c.row, c.col});
+    const TerrainMesh tm = buildTerrainMesh(
+        g, s, 33, [](double, double) { return 0.0; }, std::array<EdgeAdapt, 4>{});
+    std::vector<float> pairs, doubles;
+    packVertices(tm.vertices, VertexPositions::FloatPairs, pairs);
+    packVertices(tm.vertices, VertexPositions::Doubles, doubles);
+    ASSERT_EQ(doubles.size(), pairs.size());
+    for (const double above : {1.0, 0.1}) {
+      // The eye above the node's centre vertex, off the grid's points.
+      const TerrainVertex& mid = tm.vertices[16 * 33 + 16];
+      const glm::dvec3 eye = mid.position + glm::dvec3(mid.normal) * above;
+      double worst = 0.0;
+      for (std::size_t i = 0; i < tm.vertices.size(); ++i) {
+        const float* f = pairs.data() + i * kFloatsPerVertex;
+        const glm::dvec3 exact = tm.vertices[i].position - eye;
+        const glm::dvec3 gpu(eyeRelativeFloatPairs(f, eye));
+        ASSERT_TRUE(finite(gpu));
+        worst = std::max(worst, glm::length(gpu - exact));
+        double back[3];
+        std::memcpy(back, doubles.data() + i * kFloatsPerVertex, sizeof back);
+        ASSERT_EQ(back[0], tm.vertices[i].position.x);
+        ASSERT_EQ(back[1], tm.vertices[i].position.y);
+        ASSERT_EQ(back[2], tm.vertices[i].position.z);
+        // Normal and texture coordinates: finite and in range in both formats.
+        for (int k = 6; k < 11; ++k)
+          ASSERT_TRUE(std::isfinite(f[k]));
+        ASSERT_TRUE(f[9] >= 0.0f && f[9] <= 1.0f && f[10] >= 0.0f && f[10] <= 1.0f);
+      }
+      // Vertices of a ~0.6 m node lie within a metre of the eye: float's own resolution there is
+      // ~1e-7 m; a path that put an Earth-sized coordinate in one float would be off by ~0.25 m.
+      EXPECT_LT(worst, 1e-5) << "at " << above << " m";
+    }
+    // -0.0 in the uv transform and an exact ancestor transform 30 levels up stay finite.
+    const auto u = uvUniform(
+        ancestorUv(NodeKey{level, c.row, c.col, 1}, NodeKey{0, c.row >> level, c.col >> level, 1}));
+    for (const float x : u)
+      EXPECT_TRUE(std::isfinite(x));
   }
 }

@@ -194,10 +194,11 @@ namespace {
 /** Low views over tiles of every level down to 30 (the deepest the cache allows), looking down
  * and tilted, at the equator, on the antimeridian and at the poles: no hole and, straight down,
  * every pixel drawn. */
-void expectNoHolesInLowViews(double alt) {
+void expectNoHolesInLowViews(double alt, bool fp64Vertices = true) {
   const Geodesy geodesy;
   RampSource ramp(deepGrid(), 8, 248);
   auto o = extremesOptions("ramp", 128, 128);
+  o.fp64Vertices = fp64Vertices;
   OPEN_RENDERER(r, ramp, geodesy, o);
   {
     for (const CameraPose& base : {CameraPose{-6.0, 12.0, 0.0, 0.0, 0.0},
@@ -239,13 +240,10 @@ TEST(RenderExtremesGl, OneMetreAboveTheEllipsoidHasNoHoles) {
   expectNoHolesInLowViews(1.0);
 }
 
-// 0.1 m above the ellipsoid (levels 25-26). Passed with the near-plane fix (nearDistanceFor) on
-// the renderer before terrain (issue #6) was merged; since then nodes from level 24 on leave holes
-// (1,543 of 16,384 pixels at -6, 12 looking down; all of them at the poles; already at 0.3 m) with
-// the near plane unchanged. Not the eye-relative float path (a CPU emulation of the shader's
-// high/low subtraction is within 4e-8 m, and a shader variant changed nothing). Disabled until the
-// renderer's owner finds it: docs/ACCURACY.md, "Numerical stability findings". Run it with
-// --gtest_also_run_disabled_tests.
+// 0.1 m above the ellipsoid (levels 25-26). Failed after the terrain merge (1,543 of 16,384 pixels
+// holes at -6, 12 looking down, all of them at the poles) while the vertices went as high/low
+// float pairs, which GCC 12 had packed with the low floats zeroed (docs/ACCURACY.md, findings 4
+// and 7).
 TEST(RenderExtremesGl, ATenthOfAMetreAboveTheEllipsoidHasNoHoles) {
   expectNoHolesInLowViews(0.1);
 }
@@ -316,15 +314,15 @@ TEST(RenderExtremesGl, BillionMetresOutTheEarthIsADiscOfThePredictedRadius) {
 // (red east, green north), away from tile edges; a camera snapped to a float grid (0.5 m at
 // ECEF magnitudes) would move 0 or many pixels.
 //
-// Measured 0.297 px on the renderer before terrain (issue #6) was merged; on the renderer as merged
-// (positions as high/low float pairs relative to the eye) the same step moves the image 0.041 px
-// (0.13 mm of the 1 mm): the camera's sub-millimetre motion is lost. Disabled until the renderer's
-// owner finds it (docs/ACCURACY.md); --gtest_also_run_disabled_tests runs it.
-TEST(RenderExtremesGl, OneMillimetreStepAtOneMetreMovesTheImageByTheExpectedSubPixelAmount) {
+// On the float-pair path with GCC 12's miscompiled packing (findings 5 and 7 of docs/ACCURACY.md)
+// the step moved the image 0.041 px: the camera's sub-millimetre motion was lost.
+namespace {
+void expectOneMillimetreStepMovesTheImage(bool fp64Vertices) {
   const Geodesy geodesy;
   RampSource ramp(deepGrid(), 8, 248);
   const int size = 256;
   auto o = extremesOptions("ramp", size, size);
+  o.fp64Vertices = fp64Vertices;
   OPEN_RENDERER(r, ramp, geodesy, o);
   const double lat = -6.0, lon0 = 12.0, alt = 1.0;
   const double metreLon = 1.0 / (geodesy.equatorialRadius() * std::cos(lat * kDeg) * kDeg);
@@ -365,6 +363,21 @@ TEST(RenderExtremesGl, OneMillimetreStepAtOneMetreMovesTheImageByTheExpectedSubP
   EXPECT_GE(b.stats.maxLevel, 20);
   EXPECT_NEAR(east, expected, 0.25 * expected) << "the image did not move by the step";
   EXPECT_NEAR(north, 0.0, 0.05) << "an east step moved the image north-south";
+}
+} // namespace
+
+TEST(RenderExtremesGl, OneMillimetreStepAtOneMetreMovesTheImageByTheExpectedSubPixelAmount) {
+  expectOneMillimetreStepMovesTheImage(true);
+}
+
+// The same two extremes on the OpenGL 3.3 vertex path (high/low float pairs, the eye subtracted
+// in float in the shader): this path lost its low floats to a GCC 12 vectoriser bug in the
+// packing loop (docs/ACCURACY.md, finding 7) and then snapped every position to 0.5 m.
+TEST(RenderExtremesGl, FloatPairVerticesATenthOfAMetreAboveTheEllipsoidHaveNoHoles) {
+  expectNoHolesInLowViews(0.1, false);
+}
+TEST(RenderExtremesGl, FloatPairVerticesOneMillimetreStepMovesTheImage) {
+  expectOneMillimetreStepMovesTheImage(false);
 }
 
 // The sphere (renderer.earth: sphere) at the same extremes: no holes at the exact poles, across the
@@ -499,8 +512,8 @@ TEST(RenderExtremesGl, OneMetreAndATenthOfAMetreAboveTerrainHaveNoHoles) {
 // Found with terrain (issue #6, the renderer as merged): 1 m and 0.1 m above the plateau the LOD
 // stops at levels 12-13 (over the bare ellipsoid at 1 m: 22-23), as if the camera were 1,000 m
 // up (likely, not verified: the texel-to-pixel test measures the nodes' corners on the ellipsoid).
-// At 89.9999 N, 0.1 m above the plateau, 16,304 of 16,384 pixels are holes. Disabled until the
-// terrain's owner fixes them (docs/ACCURACY.md); --gtest_also_run_disabled_tests runs it.
+// At 89.9999 N, 0.1 m above the plateau, 16,304 of 16,384 pixels are holes. Fixed by measuring the
+// LOD at the node's height nearest the camera (docs/ACCURACY.md, finding 6).
 TEST(RenderExtremesGl, TerrainLodAndThePoleOverAPlateau) {
   expectNoHolesAboveThePlateau(
       {CameraPose{-6.0, 12.0, 0.0, 0.0, 0.0}, CameraPose{89.9999, 179.9999, 0.0, 0.0, 30.0}}, true);

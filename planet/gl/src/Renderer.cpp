@@ -9,6 +9,7 @@
 #include "TextureDecoder.hpp"
 #include "UploadPacer.hpp"
 
+#include <tellus/planet/GpuVertex.hpp>
 #include <tellus/planet/HeightStreamer.hpp>
 #include <tellus/planet/Patch.hpp>
 #include <tellus/planet/Quadtree.hpp>
@@ -87,14 +88,6 @@ struct GpuMesh {
   /** The n vertices along each side (Direction order) as drawn: what finer neighbours adapt to. */
   std::array<std::vector<glm::dvec3>, 4> sideVertices;
 };
-
-/** A double as two floats (high + low): the GPU subtracts the eye's pair, so positions reach the
- * shader relative to the camera without a float ever holding an Earth-sized coordinate, and two
- * nodes that hold the same point draw it at the same place bit for bit (no per-node matrix). */
-void splitDouble(double v, float& hi, float& lo) {
-  hi = static_cast<float>(v);
-  lo = static_cast<float>(v - static_cast<double>(hi));
-}
 
 struct Upload {
   DecodedTexture texture; ///< its tag names the layer (LayerTextures::tag)
@@ -686,33 +679,12 @@ const GpuMesh& Renderer::Impl::meshFor(const Node& node) {
       }
     }
   }
+  // 44 bytes a vertex either way (GpuVertex.hpp): the position as three doubles (fp64) or as
+  // high and low floats (positions then reach the shader relative to the camera without a float
+  // ever holding an Earth-sized coordinate, and two nodes that hold the same point draw it at the
+  // same place bit for bit), then the normal and the node uv as floats.
   std::vector<float> v;
-  v.reserve(mesh.vertices.size() * 11);
-  // 44 bytes a vertex either way: the position as three doubles (fp64) or as high and low floats,
-  // then the normal and the node uv as floats.
-  for (const TerrainVertex& p : mesh.vertices) {
-    float pos[6];
-    if (fp64) {
-      std::memcpy(pos, &p.position[0], sizeof(double));
-      std::memcpy(pos + 2, &p.position[1], sizeof(double));
-      std::memcpy(pos + 4, &p.position[2], sizeof(double));
-    } else {
-      for (int i = 0; i < 3; ++i)
-        splitDouble(p.position[i], pos[i], pos[3 + i]);
-    }
-    v.insert(v.end(),
-             {pos[0],
-              pos[1],
-              pos[2],
-              pos[3],
-              pos[4],
-              pos[5],
-              p.normal.x,
-              p.normal.y,
-              p.normal.z,
-              static_cast<float>(p.uvNode.x),
-              static_cast<float>(p.uvNode.y)});
-  }
+  packVertices(mesh.vertices, fp64 ? VertexPositions::Doubles : VertexPositions::FloatPairs, v);
   if (m.vao == 0) {
     glGenVertexArrays(1, &m.vao);
     glGenBuffers(1, &m.vbo);
@@ -965,11 +937,10 @@ void Renderer::Impl::draw(const Camera& camera, bool present, const DrawTarget* 
   if (fp64) {
     glUniform3d(uEye, camera.position().x, camera.position().y, camera.position().z);
   } else {
-    float eh[3], el[3];
-    for (int i = 0; i < 3; ++i)
-      splitDouble(camera.position()[i], eh[i], el[i]);
-    glUniform3f(uEyeHigh, eh[0], eh[1], eh[2]);
-    glUniform3f(uEyeLow, el[0], el[1], el[2]);
+    const glm::dvec3& eye = camera.position();
+    const SplitDouble x = splitDouble(eye.x), y = splitDouble(eye.y), z = splitDouble(eye.z);
+    glUniform3f(uEyeHigh, x.high, y.high, z.high);
+    glUniform3f(uEyeLow, x.low, y.low, z.low);
   }
   if (opt.sunLatLon) {
     const Ecef sun = geodesy.surfaceNormal((*opt.sunLatLon)[0], (*opt.sunLatLon)[1]);
@@ -1006,19 +977,14 @@ void Renderer::Impl::draw(const Camera& camera, bool present, const DrawTarget* 
       const std::uint32_t count = std::min(k, p.overlayEnd - from);
       if (pass > 0 && count == 0) continue;
       const GpuMesh& m = meshFor(*p.node);
-      glUniform4f(uUv,
-                  static_cast<float>(p.uv.scale.x),
-                  static_cast<float>(p.uv.scale.y),
-                  static_cast<float>(p.uv.offset.x),
-                  static_cast<float>(p.uv.offset.y));
+      const std::array<float, 4> uv = uvUniform(p.uv);
+      glUniform4f(uUv, uv[0], uv[1], uv[2], uv[3]);
       for (std::uint32_t i = 0; i < count; ++i) {
         const OverlayBinding& b = bindings[from + i];
         glActiveTexture(GL_TEXTURE1 + i);
         glBindTexture(GL_TEXTURE_2D, b.texture);
-        uvs[4 * i + 0] = static_cast<GLfloat>(b.uv.scale.x);
-        uvs[4 * i + 1] = static_cast<GLfloat>(b.uv.scale.y);
-        uvs[4 * i + 2] = static_cast<GLfloat>(b.uv.offset.x);
-        uvs[4 * i + 3] = static_cast<GLfloat>(b.uv.offset.y);
+        const std::array<float, 4> u = uvUniform(b.uv);
+        std::copy(u.begin(), u.end(), uvs.begin() + static_cast<std::ptrdiff_t>(4 * i));
         opacities[i] = b.opacity;
       }
       glUniform1i(uOverlayCount, static_cast<GLint>(count));

@@ -99,9 +99,9 @@ struct RendererOptions {
    * it costs and what it prevents (benchmarks, the test that shows the cracks it closes). */
   bool fixEdges = true;
   /** Vertex positions as doubles on the GPU (OpenGL 4.x), made eye-relative by one double
-   * subtraction. Off, or on a 3.3 context: two floats per coordinate (high + low), which needs a
-   * compiler that keeps the order of float operations (Mesa's llvmpipe does not: positions then
-   * snap to 0.5 m at the Earth's radius; docs/ACCURACY.md). */
+   * subtraction. Off, or on a 3.3 context: two floats per coordinate (high + low), the eye's
+   * pair subtracted in float (GpuVertex.hpp; as precise as doubles at the views measured,
+   * docs/ACCURACY.md "The trade"). */
   bool fp64Vertices = true;
   /** Diffuse lighting from the terrain's normals with the sun overhead at this latitude and
    * longitude (degrees); nullopt: unlit (the imagery's own colours). */
