@@ -1,6 +1,7 @@
 // The GL layer of the planet renderer: see Renderer.hpp and docs/ARCHITECTURE.md ("The planet
 // renderer"). Every GL call here runs on the thread that created the Renderer.
 
+#include "Depth.hpp"
 #include "Dome.hpp"
 #include "GlShader.hpp"
 #include "HeightDecode.hpp"
@@ -471,9 +472,9 @@ void Renderer::Impl::makeFramebuffer() {
   glGenRenderbuffers(1, &depthRb);
   glBindRenderbuffer(GL_RENDERBUFFER, colorRb);
   glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, opt.width, opt.height);
-  // 32-bit float depth with reversed Z: 1 m to 1e9 m in one frustum.
+  // 32-bit float depth with reversed Z: 0.1 m to 1e9 m in one frustum (Depth.hpp).
   glBindRenderbuffer(GL_RENDERBUFFER, depthRb);
-  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, opt.width, opt.height);
+  glRenderbufferStorage(GL_RENDERBUFFER, kDepthFormat, opt.width, opt.height);
   glBindFramebuffer(GL_FRAMEBUFFER, fbo);
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, colorRb);
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depthRb);
@@ -915,15 +916,12 @@ void Renderer::Impl::draw(const Camera& camera, bool present, const DrawTarget* 
   }
   glBindFramebuffer(GL_FRAMEBUFFER, target ? target->fbo : fbo);
   glViewport(0, 0, target ? target->width : opt.width, target ? target->height : opt.height);
-  if (stats.reversedZ) glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+  beginReversedZ(stats.reversedZ);
   glClearColor(static_cast<float>(opt.background[0]),
                static_cast<float>(opt.background[1]),
                static_cast<float>(opt.background[2]),
                1.0f);
-  glClearDepth(0.0);
   if (target == nullptr || target->scene) glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_GREATER);
   glDisable(GL_CULL_FACE);
   glUseProgram(program);
   glUniform1i(uTexture, 0);
