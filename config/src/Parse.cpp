@@ -435,16 +435,18 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
     g.maxSplitsPerFrame = int32(r, *v, m.path("max_splits_per_frame"));
   if (auto v = m.get("decode_threads")) g.decodeThreads = int32(r, *v, m.path("decode_threads"));
   const auto [tnode, twhere] = m.child("terrain");
-  const Map t(r,
-              tnode,
-              m.path("terrain"),
-              twhere,
-              {"enabled", "layer", "exaggeration", "clearance", "sun", "regional"});
+  const Map t(
+      r,
+      tnode,
+      m.path("terrain"),
+      twhere,
+      {"enabled", "layer", "exaggeration", "clearance", "sun", "regional", "min_relief_px"});
   TerrainSettings& ts = g.terrain;
   if (auto v = t.get("enabled")) ts.enabled = boolean(r, *v, t.path("enabled"));
   if (auto v = t.get("layer")) ts.layer = text(r, *v, t.path("layer"));
   if (auto v = t.get("exaggeration")) ts.exaggeration = number(r, *v, t.path("exaggeration"));
   if (auto v = t.get("clearance")) ts.clearanceM = number(r, *v, t.path("clearance"));
+  if (auto v = t.get("min_relief_px")) ts.minReliefPx = number(r, *v, t.path("min_relief_px"));
   if (auto v = t.get("sun")) {
     const std::string sp = t.path("sun");
     const auto items = list(r, *v, sp);

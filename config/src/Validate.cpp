@@ -306,6 +306,8 @@ std::optional<ValidationIssue> checkRenderer(const RendererSettings& g) {
     return issue("terrain.exaggeration", "must be in (0, 100], got " + num(t.exaggeration));
   if (!(t.clearanceM >= 0.0 && t.clearanceM <= 1e6))
     return issue("terrain.clearance", "must be in [0, 1e6] metres, got " + num(t.clearanceM));
+  if (!(t.minReliefPx >= 0.0 && t.minReliefPx <= 100.0))
+    return issue("terrain.min_relief_px", "must be in [0, 100] pixels, got " + num(t.minReliefPx));
   if (t.sun && !((*t.sun)[0] >= -90.0 && (*t.sun)[0] <= 90.0 && std::isfinite((*t.sun)[1])))
     return issue("terrain.sun", "must be [lat, lon] with lat in [-90, 90]");
   if (g.overlaysPerPass < 0 || g.overlaysPerPass > 8)

@@ -438,3 +438,42 @@ TEST(HeightDecode, Png16AndBil16GiveTheProxysHeights) {
   EXPECT_FALSE(decodeHeightTile({2, 1, 1}, w, h, junk, "image/png", enc).has_value());
   EXPECT_FALSE(decodeHeightTile({2, 1, 1}, w, h, junk, "image/tiff", enc).has_value());
 }
+
+// "Model only what a scene requires" (issue #8): from 36,000 km the largest relief the data can
+// have (11 km) moves a node by under a tenth of a pixel in a 256 x 192 view, so no drawn node asks
+// for heights (RendererOptions::terrainMinReliefPx, 0.5 px): no height tile is fetched and the view
+// completes on the ellipsoid; with the threshold at 0 the same view fetches heights. 20 km above
+// the Himalaya every drawn node asks.
+TEST(TerrainGl, FarViewsSkipSubPixelRelief) {
+  if (!haveDisplay()) GTEST_SKIP() << "no DISPLAY: run the gl label under xvfb-run";
+  const Geodesy wgs;
+  const auto run = [&](double minReliefPx, const CameraPose& pose) {
+    TerrainWorld world;
+    RendererOptions o;
+    o.layer = "imagery";
+    o.elevationLayer = "heights";
+    o.width = 256;
+    o.height = 192;
+    o.terrainMinReliefPx = minReliefPx;
+    auto made = Renderer::create(world, wgs, o);
+    EXPECT_TRUE(made.has_value()) << made.error();
+    const gltest::Rendered out = gltest::renderComplete(**made, pose, 120.0);
+    EXPECT_TRUE(out.complete);
+    return out.stats;
+  };
+  const CameraPose far{20.0, 10.0, 3.6e7, 0.0, 0.0};
+  const RenderStats skipped = run(0.5, far);
+  EXPECT_EQ(skipped.heightTilesRequested, 0u);
+  EXPECT_GT(skipped.nodesDrawn, 0u);
+  EXPECT_EQ(skipped.nodesWithoutHeights, skipped.nodesDrawn);
+  const RenderStats all = run(0.0, far);
+  EXPECT_GT(all.heightTilesRequested, 0u);
+  EXPECT_EQ(all.nodesWithoutHeights, 0u);
+  const RenderStats low = run(0.5, {27.9, 86.9, 20000.0, 0.0, 60.0});
+  EXPECT_GT(low.heightTilesRequested, 0u);
+  EXPECT_EQ(low.nodesWithoutHeights, 0u);
+  std::printf("36,000 km: %zu height tiles with the 0.5 px threshold, %zu without; 20 km: %zu\n",
+              skipped.heightTilesRequested,
+              all.heightTilesRequested,
+              low.heightTilesRequested);
+}

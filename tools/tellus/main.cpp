@@ -83,6 +83,7 @@ commands:
              [--camera LAT,LON,ALT[,HEADING,TILT]] [--size WxH] [--layer NAME] [--threshold T]
              [--earth wgs84|sphere] [--offline | --server URL] [--dome [FOV]] [--dome-tilt DEG]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc
              render and view: [--no-terrain] [--exaggeration X] [--sun LAT,LON]
+             [--min-relief-px PX] (renderer.terrain.min_relief_px: heights only where relief shows)
              [--overlay NAME[,OPACITY]]... (imagery over the base; also renderer.layers);
              view: 0-9 select a layer (1-9 also show/hide it), - = opacity, , . order,
              ; ' deepest level, [ ] its time
@@ -1000,6 +1001,7 @@ std::string renderStatsJson(const planet::RenderStats& s, double seconds, bool c
                 sizeof terrain,
                 ",\n  \"height_tiles_requested\": %zu,\n  \"height_tiles_received\": %zu,\n"
                 "  \"height_tiles_absent\": %zu,\n  \"height_tiles_failed\": %zu,\n"
+                "  \"nodes_without_heights\": %zu,\n"
                 "  \"meshes_built\": %zu,\n  \"meshes_built_last\": %zu,\n  \"mesh_ms\": %.3f,\n"
                 "  \"mesh_ms_total\": %.3f,\n"
                 "  \"edges_fixed\": %zu,\n  \"zero_area_triangles\": %zu,\n  \"camera_lifted\": %s",
@@ -1007,6 +1009,7 @@ std::string renderStatsJson(const planet::RenderStats& s, double seconds, bool c
                 s.heightTilesReceived,
                 s.heightTilesAbsent,
                 s.heightTilesFailed,
+                s.nodesWithoutHeights,
                 s.meshesBuilt,
                 s.meshesBuiltLast,
                 s.meshMs,
@@ -1417,6 +1420,7 @@ void applyRendererSettings(const RendererSettings& g,
   ro.overlaysPerPass = g.overlaysPerPass;
   ro.verticalExaggeration = g.terrain.exaggeration;
   ro.terrainClearanceM = g.terrain.clearanceM;
+  ro.terrainMinReliefPx = g.terrain.minReliefPx;
   ro.sunLatLon = g.terrain.sun;
   if (const auto d = domeArgs(a); d && (d->on || g.dome.enabled)) {
     ro.dome = planet::DomeOptions{
@@ -1433,6 +1437,12 @@ std::optional<std::string> applyTerrainArgs(const Args& a, planet::RendererOptio
     if (!v || !((*v)[0] > 0.0 && (*v)[0] <= 100.0))
       return "--exaggeration must be a number in (0, 100], got '" + *e + "'";
     ro.verticalExaggeration = (*v)[0];
+  }
+  if (auto e = a.get("min-relief-px")) {
+    const auto v = parseNumbers(*e, 1, 1);
+    if (!v || !((*v)[0] >= 0.0 && (*v)[0] <= 100.0))
+      return "--min-relief-px must be a number in [0, 100], got '" + *e + "'";
+    ro.terrainMinReliefPx = (*v)[0];
   }
   if (auto e = a.get("edge-fixing")) {
     if (*e != "on" && *e != "off") return "--edge-fixing must be on or off, got '" + *e + "'";
@@ -1629,7 +1639,7 @@ int cmdRender(const Args& a) {
         "threshold", "offline",       "server",       "path",      "frames",
         "fps",       "no-terrain",    "exaggeration", "sun",       "edge-fixing",
         "earth",     "repeat",        "geoid",        "mesh-size", "upload-per-frame",
-        "vertices",  "overlay",       "dome",         "dome-tilt"};
+        "vertices",  "overlay",       "dome",         "dome-tilt", "min-relief-px"};
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
   }
@@ -2054,6 +2064,7 @@ int cmdView(const Args& a) {
                                                  "exit-after",
                                                  "no-terrain",
                                                  "exaggeration",
+                                                 "min-relief-px",
                                                  "sun",
                                                  "earth",
                                                  "geoid",

@@ -33,6 +33,7 @@
 #include <cstring>
 #include <deque>
 #include <mutex>
+#include <numbers>
 #include <stdexcept>
 #include <unordered_map>
 #include <unordered_set>
@@ -285,7 +286,13 @@ struct Renderer::Impl {
   std::array<EdgeAdapt, 4> edgesOf(const Node& node) const;
   double surfaceHeightAt(double lat, double lon) const;
   CameraPose drawnPose{};
-  void updateTerrain(double nowS);
+  void updateTerrain(double nowS, const Camera& camera);
+  /** Whether a drawn node's relief could show (RendererOptions::terrainMinReliefPx), for the
+   * camera of the last updateTerrain. */
+  bool needsHeights(const Node& node) const;
+  glm::dvec3 reliefEye{0.0}; ///< the camera updateTerrain last saw
+  double reliefPxPerM = 0.0; ///< its focal length in pixels (px per metre at 1 m)
+  double reliefNearM = 0.1;
   void deliverHeights();
   bool heightsComplete(const Node& node) const;
   void launchDecode(LayerTextures& l, Node& node);
@@ -730,11 +737,32 @@ const GpuMesh& Renderer::Impl::meshFor(const Node& node) {
 // grid (one heightmap serves several node levels, thesis 4.5.1), coarse levels first. A few
 // arrivals per frame go into the field, and the meshes they change are rebuilt in the same frame
 // (meshFor), so every frame's meshes come from one state of the heights.
-void Renderer::Impl::updateTerrain(double nowS) {
+bool Renderer::Impl::needsHeights(const Node& node) const {
+  if (!(opt.terrainMinReliefPx > 0.0)) return true;
+  const double bound =
+      std::max(opt.terrainReliefBoundM, -field->lowest()) * opt.verticalExaggeration;
+  const BoundingSphere& b = node.geometry().bounds();
+  const double distance =
+      std::max(glm::length(b.centre - reliefEye) - b.radius - bound, reliefNearM);
+  return bound * reliefPxPerM / distance >= opt.terrainMinReliefPx;
+}
+
+void Renderer::Impl::updateTerrain(double nowS, const Camera& camera) {
   if (!field) return;
+  reliefEye = camera.position();
+  reliefNearM = camera.nearM();
+  reliefPxPerM = camera.isFisheye()
+                     ? camera.pixelsPerRadian()
+                     : 0.5 * camera.viewport().height /
+                           std::tan(camera.verticalFovDeg() * std::numbers::pi / 360.0);
   heightWish.clear();
+  stats.nodesWithoutHeights = 0;
   const int n = opt.meshSize;
   for (const Node* node : geo().drawList()) {
+    if (!needsHeights(*node)) {
+      ++stats.nodesWithoutHeights;
+      continue;
+    }
     const Sector& s = node->sector();
     const int level = field->levelForSpacing((s.north - s.south) / (n - 1));
     for (int l = 0; l <= level; l = l == level ? level + 1 : std::min(level, l + 3)) {
@@ -776,7 +804,7 @@ void Renderer::Impl::deliverHeights() {
 }
 
 bool Renderer::Impl::heightsComplete(const Node& node) const {
-  if (!field) return true;
+  if (!field || !needsHeights(node)) return true;
   const Sector& s = node.sector();
   const int level = field->levelForSpacing((s.north - s.south) / (opt.meshSize - 1));
   const auto keys = field->grid().keysCovering(s, level, 16);
@@ -1291,7 +1319,7 @@ void Renderer::frame(const CameraPose& pose) {
       if (l->updated) l->streamer->update(*l->tree, cam, nowS, &l->lru);
     }
   }
-  m.updateTerrain(nowS);
+  m.updateTerrain(nowS, cam);
   m.stats.updateMs = msSince(t0);
   m.stats.longestUpdateMs = std::max(m.stats.longestUpdateMs, m.stats.updateMs);
   FramePhases ph;

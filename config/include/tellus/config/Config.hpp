@@ -77,6 +77,9 @@ struct TerrainSettings {
   std::string layer;         ///< elevation layer; "" = the first one configured
   double exaggeration = 1.0; ///< heights are multiplied by this, (0, 100]
   double clearanceM = 2.0;   ///< the camera stays this far above the terrain, [0, 1e6]
+  /** A node fetches heights only where the largest relief could move it by this many pixels,
+   * [0, 100]; 0: everywhere (issue #8, "model only what a scene requires"). */
+  double minReliefPx = 0.5;
   std::optional<std::array<double, 2>>
       sun; ///< [lat, lon] of the subsolar point: lighting; none = unlit
   /** Elevation layers used where they cover a node whole, the smallest winning (a detailed
