@@ -127,9 +127,10 @@ MESA_GL_VERSION_OVERRIDE=3.3 "$tellus" render --cache "$cache" --camera 0,0,2e7 
   --out "$work/gl33.png" --wait-complete --stats "$work/gl33.json" >/dev/null || fail "GL 3.3"
 grep -q '"gl": "3.3' "$work/gl33.json" || fail "not a 3.3 context: $(grep '"gl"' "$work/gl33.json")"
 # 4.x draws with double vertex positions, 3.3 with two floats per coordinate: the same image up to
-# rounding (a handful of pixels one level apart), not necessarily the same bytes.
-PYTHONPATH="$here" python3 - "$work/a.png" "$work/gl33.png" <<'PY' ||
-  fail "the 3.3 context drew another image"
+# rounding (a handful of pixels one level apart), not necessarily the same bytes. (This check was
+# a no-op until session 7: with `|| fail` on the next line, bash read that line as the first line
+# of the here-document, and Python's IndentationError sent it to the `||`.)
+PYTHONPATH="$here" python3 - "$work/a.png" "$work/gl33.png" <<'PY' || fail "the 3.3 context drew another image"
 import sys
 from png_pixels import pixels
 w, h, a, _ = pixels(sys.argv[1])

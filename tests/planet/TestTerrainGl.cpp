@@ -440,10 +440,10 @@ TEST(HeightDecode, Png16AndBil16GiveTheProxysHeights) {
 }
 
 // "Model only what a scene requires" (issue #8): from 36,000 km the largest relief the data can
-// have (11 km) moves a node by under a tenth of a pixel in a 256 x 192 view, so no drawn node asks
-// for heights (RendererOptions::terrainMinReliefPx, 0.5 px): no height tile is fetched and the view
-// completes on the ellipsoid; with the threshold at 0 the same view fetches heights. 20 km above
-// the Himalaya every drawn node asks.
+// have (11 km) moves the surface by under a tenth of a pixel in a 256 x 192 view, so the frame
+// draws the bare ellipsoid (RendererOptions::terrainMinReliefPx, 0.5 px): no height tile is fetched
+// and the view completes; with the threshold at 0 the same view fetches heights. 20 km above the
+// Himalaya every drawn node has heights.
 TEST(TerrainGl, FarViewsSkipSubPixelRelief) {
   if (!haveDisplay()) GTEST_SKIP() << "no DISPLAY: run the gl label under xvfb-run";
   const Geodesy wgs;

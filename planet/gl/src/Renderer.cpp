@@ -84,6 +84,7 @@ struct GpuMesh {
   std::array<std::uint32_t, 5> quadrantStart{};
   std::size_t zeroAreaTriangles = 0;
   std::array<EdgeAdapt, 4> edges{};
+  bool reliefOff = false; ///< built on the bare ellipsoid (Impl::chooseRelief)
   std::uint64_t heightGeneration = 0;
   std::uint64_t lastUsed = 0;
   bool fixed = false; ///< some side adapted
@@ -281,18 +282,18 @@ struct Renderer::Impl {
   void releaseTexture(LayerTextures& l, GLuint id);
   const GpuMesh& meshFor(const Node& node);
   double heightAt(double lat, double lon) const {
-    return field ? field->heightAt(lat, lon) * opt.verticalExaggeration : 0.0;
+    return field && !reliefOff ? field->heightAt(lat, lon) * opt.verticalExaggeration : 0.0;
   }
   std::array<EdgeAdapt, 4> edgesOf(const Node& node) const;
   double surfaceHeightAt(double lat, double lon) const;
   CameraPose drawnPose{};
-  void updateTerrain(double nowS, const Camera& camera);
-  /** Whether a drawn node's relief could show (RendererOptions::terrainMinReliefPx), for the
-   * camera of the last updateTerrain. */
-  bool needsHeights(const Node& node) const;
-  glm::dvec3 reliefEye{0.0}; ///< the camera updateTerrain last saw
-  double reliefPxPerM = 0.0; ///< its focal length in pixels (px per metre at 1 m)
-  double reliefNearM = 0.1;
+  void updateTerrain(double nowS);
+  /** "Model only what a scene requires": whether any relief could show from this camera
+   * (RendererOptions::terrainMinReliefPx); a pure function of the camera, so a frame's image does
+   * not depend on the heights earlier frames loaded. Switching re-applies the heights (flat or
+   * not) to every tree and marks every mesh stale. */
+  void chooseRelief(const Camera& camera, double altitudeM);
+  bool reliefOff = false; ///< this frame draws the bare ellipsoid and fetches no heights
   void deliverHeights();
   bool heightsComplete(const Node& node) const;
   void launchDecode(LayerTextures& l, Node& node);
@@ -509,10 +510,11 @@ void Renderer::Impl::applyTerrain(Quadtree& t) const {
   const Impl* self = this;
   t.setTerrain(
       [self](const Sector& sec) {
+        if (self->reliefOff) return std::pair{0.0, 0.0};
         const auto [lo, hi] = self->field->rangeOver(sec);
         return std::pair{lo * self->opt.verticalExaggeration, hi * self->opt.verticalExaggeration};
       },
-      std::min(0.0, field->lowest() * opt.verticalExaggeration) - 1000.0);
+      reliefOff ? -1000.0 : std::min(0.0, field->lowest() * opt.verticalExaggeration) - 1000.0);
 }
 
 // A layer at a time: its grid (an overlay's must match the base's level-zero tile size), its tree
@@ -654,7 +656,8 @@ const GpuMesh& Renderer::Impl::meshFor(const Node& node) {
   const std::array<EdgeAdapt, 4> edges = edgesOf(node);
   // Stale when heights changed under the node, or under a coarser neighbour its edges follow
   // (whose chord ends may lie beyond this node's edge).
-  bool stale = field && field->changedSince(m.heightGeneration, node.sector());
+  bool stale =
+      m.reliefOff != reliefOff || (field && field->changedSince(m.heightGeneration, node.sector()));
   for (const EdgeAdapt& e : edges)
     stale = stale || (field && e.active && field->changedSince(m.heightGeneration, e.coarse));
   if (!inserted && edges == m.edges && !stale) return m;
@@ -666,6 +669,7 @@ const GpuMesh& Renderer::Impl::meshFor(const Node& node) {
       [this](double lat, double lon) { return heightAt(lat, lon); },
       edges);
   m.edges = edges;
+  m.reliefOff = reliefOff;
   m.heightGeneration = field ? field->generation() : 0;
   m.quadrantStart = mesh.quadrantStart;
   m.zeroAreaTriangles = mesh.zeroAreaTriangles;
@@ -737,32 +741,37 @@ const GpuMesh& Renderer::Impl::meshFor(const Node& node) {
 // grid (one heightmap serves several node levels, thesis 4.5.1), coarse levels first. A few
 // arrivals per frame go into the field, and the meshes they change are rebuilt in the same frame
 // (meshFor), so every frame's meshes come from one state of the heights.
-bool Renderer::Impl::needsHeights(const Node& node) const {
-  if (!(opt.terrainMinReliefPx > 0.0)) return true;
-  const double bound =
-      std::max(opt.terrainReliefBoundM, -field->lowest()) * opt.verticalExaggeration;
-  const BoundingSphere& b = node.geometry().bounds();
-  const double distance =
-      std::max(glm::length(b.centre - reliefEye) - b.radius - bound, reliefNearM);
-  return bound * reliefPxPerM / distance >= opt.terrainMinReliefPx;
+void Renderer::Impl::chooseRelief(const Camera& camera, double altitudeM) {
+  bool off = false;
+  if (field && opt.terrainMinReliefPx > 0.0 && std::isfinite(altitudeM)) {
+    // Relief of at most B along the normal, seen from at least D away (the altitude above the
+    // ellipsoid is the distance to its nearest point), moves a point by at most B f / D pixels.
+    const double bound =
+        std::max(opt.terrainReliefBoundM, -field->lowest()) * opt.verticalExaggeration;
+    const double f = camera.isFisheye()
+                         ? camera.pixelsPerRadian()
+                         : 0.5 * camera.viewport().height /
+                               std::tan(camera.verticalFovDeg() * std::numbers::pi / 360.0);
+    const double distance = altitudeM - bound;
+    off = distance > 0.0 && bound * f / distance < opt.terrainMinReliefPx;
+  }
+  if (off == reliefOff) return;
+  reliefOff = off;
+  for (LayerSlot& l : layers)
+    for (LayerTextures* t : {l.current.get(), l.pending.get()}) {
+      if (t == nullptr) continue;
+      applyTerrain(*t->tree);
+      t->tree->refreshHeights([](const Sector&) { return true; });
+    }
 }
 
-void Renderer::Impl::updateTerrain(double nowS, const Camera& camera) {
+void Renderer::Impl::updateTerrain(double nowS) {
   if (!field) return;
-  reliefEye = camera.position();
-  reliefNearM = camera.nearM();
-  reliefPxPerM = camera.isFisheye()
-                     ? camera.pixelsPerRadian()
-                     : 0.5 * camera.viewport().height /
-                           std::tan(camera.verticalFovDeg() * std::numbers::pi / 360.0);
   heightWish.clear();
-  stats.nodesWithoutHeights = 0;
+  stats.nodesWithoutHeights = reliefOff ? geo().drawList().size() : 0;
   const int n = opt.meshSize;
   for (const Node* node : geo().drawList()) {
-    if (!needsHeights(*node)) {
-      ++stats.nodesWithoutHeights;
-      continue;
-    }
+    if (reliefOff) break;
     const Sector& s = node->sector();
     const int level = field->levelForSpacing((s.north - s.south) / (n - 1));
     for (int l = 0; l <= level; l = l == level ? level + 1 : std::min(level, l + 3)) {
@@ -804,7 +813,7 @@ void Renderer::Impl::deliverHeights() {
 }
 
 bool Renderer::Impl::heightsComplete(const Node& node) const {
-  if (!field || !needsHeights(node)) return true;
+  if (!field || reliefOff) return true;
   const Sector& s = node.sector();
   const int level = field->levelForSpacing((s.north - s.south) / (opt.meshSize - 1));
   const auto keys = field->grid().keysCovering(s, level, 16);
@@ -1295,6 +1304,7 @@ void Renderer::frame(const CameraPose& pose) {
   m.stats.cameraLifted = safe.altitudeM != pose.altitudeM;
   m.drawnPose = safe;
   Camera cam = camera(safe);
+  m.chooseRelief(cam, safe.altitudeM);
   m.stats.meshesBuiltLast = 0;
   m.stats.meshMs = 0.0;
   if (m.window != nullptr) glfwMakeContextCurrent(m.window);
@@ -1319,7 +1329,7 @@ void Renderer::frame(const CameraPose& pose) {
       if (l->updated) l->streamer->update(*l->tree, cam, nowS, &l->lru);
     }
   }
-  m.updateTerrain(nowS, cam);
+  m.updateTerrain(nowS);
   m.stats.updateMs = msSince(t0);
   m.stats.longestUpdateMs = std::max(m.stats.longestUpdateMs, m.stats.updateMs);
   FramePhases ph;

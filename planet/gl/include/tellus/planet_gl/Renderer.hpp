@@ -95,11 +95,12 @@ struct RendererOptions {
   VerticalDatum verticalDatum;
   double verticalExaggeration = 1.0; ///< heights are multiplied by this (> 0)
   double terrainClearanceM = 2.0;    ///< the camera is kept this far above the terrain
-  /** "Model only what a scene requires" (issue #8): a drawn node asks for heights only when the
-   * largest relief the data can have there (terrainReliefBoundM x the exaggeration, or the
-   * lowest height held if deeper) would move its nearest point by at least this many pixels (the
-   * view's focal length, or the dome's pixels per radian, over the node's distance); below that
-   * the node is drawn with whatever heights are held (none: the ellipsoid). 0: every node asks. */
+  /** "Model only what a scene requires" (issue #8): a frame fetches and draws heights only when
+   * the largest relief the data can have (terrainReliefBoundM x the exaggeration, or the lowest
+   * height held if deeper) could move the nearest surface point by at least this many pixels
+   * (the view's focal length, or the dome's pixels per radian, over the altitude less that
+   * relief); below that it draws the bare ellipsoid. A function of the camera alone, so a frame
+   * does not depend on what earlier frames loaded. 0: heights always. */
   double terrainMinReliefPx = 0.5;
   double terrainReliefBoundM = 11000.0; ///< |height| bound for that test (Everest 8,849 m, +N)
   /** Edge fixing (finer edges onto coarser chords, zero-area triangles). Off only to measure what
@@ -170,18 +171,19 @@ struct RenderStats {
   std::size_t heightTilesReceived = 0;
   std::size_t heightTilesAbsent = 0;
   std::size_t heightTilesFailed = 0;
-  std::size_t meshesBuilt = 0;         ///< total
-  std::size_t meshesBuiltLast = 0;     ///< last frame
-  double meshMs = 0.0;                 ///< last frame: building meshes (heights, edge fixing)
-  double meshMsTotal = 0.0;            ///< since creation
-  std::size_t edgesFixed = 0;          ///< last frame: drawn node sides moved onto a coarser edge
-  std::size_t zeroAreaTriangles = 0;   ///< last frame: in the drawn meshes
-  bool cameraLifted = false;           ///< last frame: the pose was below terrain + clearance
-  std::size_t nodesWithoutHeights = 0; ///< last frame: drawn nodes whose relief is sub-pixel
-  double updateMs = 0.0;               ///< last frame: quadtree + streamer CPU time
-  double longestUpdateMs = 0.0;        ///< the longest update since creation
-  double frameMs = 0.0;                ///< last frame: everything, GL finished
-  FramePhases phases;                  ///< last frame, phase by phase
+  std::size_t meshesBuilt = 0;       ///< total
+  std::size_t meshesBuiltLast = 0;   ///< last frame
+  double meshMs = 0.0;               ///< last frame: building meshes (heights, edge fixing)
+  double meshMsTotal = 0.0;          ///< since creation
+  std::size_t edgesFixed = 0;        ///< last frame: drawn node sides moved onto a coarser edge
+  std::size_t zeroAreaTriangles = 0; ///< last frame: in the drawn meshes
+  bool cameraLifted = false;         ///< last frame: the pose was below terrain + clearance
+  std::size_t nodesWithoutHeights =
+      0;                 ///< last frame: drawn nodes on the bare ellipsoid (sub-pixel relief)
+  double updateMs = 0.0; ///< last frame: quadtree + streamer CPU time
+  double longestUpdateMs = 0.0; ///< the longest update since creation
+  double frameMs = 0.0;         ///< last frame: everything, GL finished
+  FramePhases phases;           ///< last frame, phase by phase
   /** Per layer (the base first, then the overlays): its time, a time it is switching to, tiles and
    * textures. */
   struct Layer {
