@@ -44,11 +44,25 @@ struct LayerOptions {
   int maxLevel = -1; ///< the deepest level fetched and drawn (-1: the layer's own deepest)
 };
 
+/** How the dome is drawn (issue #7; docs/ARCHITECTURE.md, "The dome"). */
+enum class DomeMethod {
+  /** One pass: the node shader maps each vertex through the fisheye itself (straight triangle
+   * edges: an approximation, DomeDirect.hpp); a frame whose estimated error exceeds
+   * DomeOptions::directMaxErrorPx is drawn with Cube instead. */
+  Direct,
+  /** Up to five cube faces of faceScale x N, then a warp pass into the fisheye. */
+  Cube,
+};
+
 /** The dome (issue #7): an angular fisheye domemaster instead of a perspective view. */
 struct DomeOptions {
   double fovDeg = 180.0;   ///< (0, 220]
   double tiltDeg = 0.0;    ///< the dome's axis turned up from the pose's view direction
   double faceScale = 0.64; ///< cube faces of faceScale x the image's size (2/pi matches the centre)
+  DomeMethod method = DomeMethod::Direct;
+  /** Direct: the largest estimated straight-edge error (fisheye pixels) a frame may have before it
+   * is drawn with the cube method (directChordErrorPx, DomeDirect.hpp). */
+  double directMaxErrorPx = 0.5;
 };
 
 struct RendererOptions {
@@ -173,7 +187,12 @@ struct RenderStats {
   double updateMs = 0.0;             ///< last frame: quadtree + streamer CPU time
   double longestUpdateMs = 0.0;      ///< the longest update since creation
   double frameMs = 0.0;              ///< last frame: everything, GL finished
-  FramePhases phases;                ///< last frame, phase by phase
+  /** The dome's last frame: "direct" or "cube" (a direct renderer's frame whose estimated
+   * straight-edge error exceeded DomeOptions::directMaxErrorPx is "cube"); "" without a dome.
+   * domeErrorPx: that estimate (0 for the cube method's renderers). */
+  std::string domeMethod;
+  double domeErrorPx = 0.0;
+  FramePhases phases; ///< last frame, phase by phase
   /** Per layer (the base first, then the overlays): its time, a time it is switching to, tiles and
    * textures. */
   struct Layer {
