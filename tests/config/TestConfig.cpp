@@ -167,6 +167,9 @@ TEST(Config, RendererSettingsAreValidated) {
   fails([](RendererSettings& g) { g.dome.fovDeg = 0.0; }, "dome.fov");
   fails([](RendererSettings& g) { g.dome.tiltDeg = std::nan(""); }, "dome.tilt");
   fails([](RendererSettings& g) { g.dome.faceScale = 0.05; }, "dome.face_scale");
+  fails([](RendererSettings& g) { g.dome.directMaxErrorPx = -1.0; }, "dome.direct_max_error");
+  fails([](RendererSettings& g) { g.dome.directMaxErrorPx = std::nan(""); },
+        "dome.direct_max_error");
   EXPECT_EQ(c.renderer.earth, EarthShape::Wgs84);
   EXPECT_TRUE(c.renderer.geoid);
   Config ok = c;

@@ -233,7 +233,7 @@ renderer:
   earth: sphere
   geoid: false
   overlays_per_pass: 2
-  dome: {enabled: true, fov: 210, tilt: 30, face_scale: 0.8, method: cube}
+  dome: {enabled: true, fov: 210, tilt: 30, face_scale: 0.8, method: cube, direct_max_error: 2}
 upstreams:
   - name: ww
     type: worldwind
@@ -323,6 +323,7 @@ layers:
   EXPECT_EQ(c->renderer.dome.tiltDeg, 30.0);
   EXPECT_EQ(c->renderer.dome.faceScale, 0.8);
   EXPECT_EQ(c->renderer.dome.method, DomeSettings::Method::Cube);
+  EXPECT_EQ(c->renderer.dome.directMaxErrorPx, 2.0);
   EXPECT_EQ(c->renderer.decodeThreads, 3);
   EXPECT_EQ(c->renderer.earth, EarthShape::Sphere);
   EXPECT_FALSE(c->renderer.geoid);

@@ -1442,6 +1442,7 @@ void applyRendererSettings(const RendererSettings& g,
     ro.dome->method = d->method.value_or(g.dome.method == DomeSettings::Method::Cube
                                              ? planet::DomeMethod::Cube
                                              : planet::DomeMethod::Direct);
+    ro.dome->directMaxErrorPx = g.dome.directMaxErrorPx;
     // A domemaster is square: without --size, the smaller side of the default.
     if (!a.get("size")) ro.width = ro.height = std::min(ro.width, ro.height);
   }

@@ -107,6 +107,9 @@ struct DomeSettings {
   /** `method`: direct (one pass through the fisheye map) or cube (faces, then a warp). */
   enum class Method { Direct, Cube };
   Method method = Method::Direct;
+  /** `direct_max_error`: the direct method's largest estimated straight-edge error in pixels
+   * before a frame is drawn with the cube method, [0, 1e9]. */
+  double directMaxErrorPx = 0.5;
 };
 
 struct RendererSettings {
