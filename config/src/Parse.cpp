@@ -488,7 +488,11 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
     }
   }
   const auto [dnode, dwhere] = m.child("dome");
-  const Map d(r, dnode, m.path("dome"), dwhere, {"enabled", "fov", "tilt", "face_scale", "method", "direct_max_error"});
+  const Map d(r,
+              dnode,
+              m.path("dome"),
+              dwhere,
+              {"enabled", "fov", "tilt", "face_scale", "method", "direct_max_error"});
   if (auto v = d.get("enabled")) g.dome.enabled = boolean(r, *v, d.path("enabled"));
   if (auto v = d.get("fov")) g.dome.fovDeg = number(r, *v, d.path("fov"));
   if (auto v = d.get("tilt")) g.dome.tiltDeg = number(r, *v, d.path("tilt"));

@@ -125,7 +125,8 @@ struct RendererOptions {
    * longer). 0: the process's priority. */
   int decodeNice = 10;
   /** A domemaster (square image: the circle of diameter min(width, height), black around) drawn
-   * as cube faces and a warp, with the LOD and culling of the fisheye; nullopt: a perspective. */
+   * directly or as cube faces and a warp (DomeOptions::method), with the LOD and culling of the
+   * fisheye; nullopt: a perspective. */
   std::optional<DomeOptions> dome;
   bool visibleWindow = false; ///< a window the user sees (`tellus view`); else hidden
   std::string windowTitle = "tellus";
