@@ -10,16 +10,6 @@
 // order of the operations (`precise` where GLSL has it), which Mesa's llvmpipe did not: positions
 // then snap to 0.5 m at the Earth's radius (docs/ACCURACY.md). The renderer prepends #version and
 // the #define.
-//
-// TELLUS_FISHEYE (a renderer whose dome draws directly, issue #7): with uFisheye = 1 each vertex
-// goes through the angular fisheye (azimuthal equidistant) map itself: q = p in the dome's frame
-// (x right, y up, the axis along -z), theta = atan(|q.xy|, -q.z) (not acos: stable near 0 and
-// pi), the image position theta / halfFov x q.xy / |q.xy| (its limit q.xy / |q| at the axis;
-// nearly straight behind, where the direction is lost, it fades to the centre: clipped anyway),
-// w = |q| (attributes interpolated perspective-correctly along the edge's angle), depth near / |q|
-// (reversed Z as in the flat path), and gl_ClipDistance[0] = halfFov + margin - theta drops what
-// lies behind. src/DomeDirect.cpp mirrors the map in double. uFisheye = 0: the perspective (the
-// cube faces of the fallback).
 #if __VERSION__ >= 400
 #define PRECISE precise
 #else
@@ -40,6 +30,15 @@ layout(location = 3) in vec2 aUvNode;
 uniform mat4 uViewProj; // projection * view rotation (the eye at the origin)
 // uvTexture = uvNode * uUv.xy + uUv.zw (own texture, a child's or an ancestor's part, or global)
 uniform vec4 uUv;
+// TELLUS_FISHEYE (a renderer whose dome draws directly, issue #7): with uFisheye = 1 each vertex
+// goes through the angular fisheye (azimuthal equidistant) map itself: q = p in the dome's frame
+// (x right, y up, the axis along -z), theta = atan(|q.xy|, -q.z) (not acos: stable near 0 and
+// pi), the image position theta / halfFov x q.xy / |q.xy| (its limit q.xy / |q| at the axis;
+// nearly straight behind, where the direction is lost, it fades to the centre: clipped anyway),
+// w = |q| (attributes interpolated perspective-correctly along the edge's angle), depth near / |q|
+// (reversed Z as in the flat path), and gl_ClipDistance[0] = halfFov + margin - theta drops what
+// lies behind. src/DomeDirect.cpp mirrors the map in double. uFisheye = 0: the perspective (the
+// cube faces of the fallback).
 #ifdef TELLUS_FISHEYE
 uniform int uFisheye;       // 1: the fisheye map below; 0: uViewProj
 uniform mat3 uDomeRotation; // world axes -> the dome's frame (x right, y up, axis -z)

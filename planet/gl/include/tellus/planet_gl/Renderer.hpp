@@ -188,12 +188,7 @@ struct RenderStats {
   double updateMs = 0.0;             ///< last frame: quadtree + streamer CPU time
   double longestUpdateMs = 0.0;      ///< the longest update since creation
   double frameMs = 0.0;              ///< last frame: everything, GL finished
-  /** The dome's last frame: "direct" or "cube" (a direct renderer's frame whose estimated
-   * straight-edge error exceeded DomeOptions::directMaxErrorPx is "cube"); "" without a dome.
-   * domeErrorPx: that estimate (0 for the cube method's renderers). */
-  std::string domeMethod;
-  double domeErrorPx = 0.0;
-  FramePhases phases; ///< last frame, phase by phase
+  FramePhases phases;                ///< last frame, phase by phase
   /** Per layer (the base first, then the overlays): its time, a time it is switching to, tiles and
    * textures. */
   struct Layer {
@@ -214,6 +209,11 @@ struct RenderStats {
   int passes = 0;          ///< last frame: draw passes (1 + those the overlays needed)
   std::string glVersion;   ///< GL_VERSION and GL_RENDERER
   bool reversedZ = false;  ///< glClipControl available (4.5 or ARB_clip_control)
+  /** The dome's last frame: "direct" or "cube" (a direct renderer's frame whose estimated
+   * straight-edge error exceeded DomeOptions::directMaxErrorPx is "cube"); "" without a dome.
+   * domeErrorPx: that estimate (0 for the cube method's renderers). */
+  std::string domeMethod;
+  double domeErrorPx = 0.0;
 };
 
 class Renderer {
