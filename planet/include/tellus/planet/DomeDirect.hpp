@@ -60,9 +60,10 @@ glm::dvec3 toDomeFrame(const Camera& fisheye, const glm::dvec3& world) noexcept;
 double directEdgeErrorPx(const Camera& fisheye, const glm::dvec3& a, const glm::dvec3& b) noexcept;
 
 /** The largest directEdgeErrorPx() over a sample of a node's mesh cells (meshSize x meshSize
- * vertices): the cells at the node's corners, edges' middles and centre, and the 3 x 3 cells
- * around the point of the node nearest the camera (where cells look largest), each cell's four
- * sides' first two and both diagonals, the vertices at the height of the ground below the camera
+ * vertices): 5 x 5 cells spread evenly over the node (its corners, edges and centre among them)
+ * and the 3 x 3 cells around the point of the node nearest the camera (where cells look largest),
+ * each cell's south and west sides and both diagonals (within 6% of every cell's largest on the
+ * views of tests/planet/TestDome.cpp), the vertices at the height of the ground below the camera
  * (groundBelowM, metres above the model; terrain heights vary within a node, so the estimate
  * takes one representative height: the cells nearest the camera are the ones that matter, and
  * they lie near that height) clamped to the node's height range. 0 for a camera that is not a
