@@ -12,6 +12,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <numbers>
 #include <string>
@@ -366,4 +367,36 @@ TEST(DomeMethodsGl, DirectOnTheTwoFloatPathDrawsTheSameDome) {
       ++differ;
   // The limb may round differently at a few of its ~500 pixels; nothing else.
   EXPECT_LE(differ, 20);
+}
+
+// `tellus view --dome` in a window that is not square: the circle of diameter min(width, height)
+// in the middle, exact black around it (the direct method's mask covers the wider framebuffer),
+// the same pixels inside as the cube method's.
+TEST(DomeMethodsGl, AWideFramebufferKeepsTheCircleInTheMiddle) {
+  const Geodesy g(EarthModel::Sphere);
+  SolidSource source(solidGrid(), kSolid);
+  const int w = 300, h = 200;
+  std::vector<std::uint8_t> images[2];
+  for (const DomeMethod m : {DomeMethod::Direct, DomeMethod::Cube}) {
+    RendererOptions o = domeOptions(h, 180.0, m);
+    o.width = w;
+    OPEN_RENDERER(r, source, g, o);
+    const Rendered out = renderComplete(r, {10.0, 20.0, 2e6, 0.0, 0.0});
+    ASSERT_TRUE(out.complete);
+    EXPECT_EQ(out.stats.domeMethod, methodName(m));
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const auto i = (static_cast<std::size_t>(y) * w + static_cast<std::size_t>(x)) * 4;
+        const bool black = out.pixels[i] == 0 && out.pixels[i + 1] == 0 && out.pixels[i + 2] == 0;
+        const double rad = std::hypot(x + 0.5 - 0.5 * w, y + 0.5 - 0.5 * h);
+        ASSERT_EQ(black, rad > 0.5 * h) << methodName(m) << " " << x << "," << y;
+      }
+    images[m == DomeMethod::Direct ? 0 : 1] = out.pixels;
+  }
+  int differ = 0; // at the limb, where the cube's resampling blends ground and sky
+  for (std::size_t i = 0; i < images[0].size(); i += 4)
+    if (std::abs(images[0][i] - images[1][i]) > 1) ++differ;
+  // The limb lies asin(R / (R + h)) = 49.6 degrees from the nadir: 55 px, 346 px around.
+  EXPECT_LT(differ, 346) << differ;
+  std::printf("wide dome: %d pixels differ between the methods\n", differ);
 }
