@@ -30,6 +30,21 @@ layout(location = 3) in vec2 aUvNode;
 uniform mat4 uViewProj; // projection * view rotation (the eye at the origin)
 // uvTexture = uvNode * uUv.xy + uUv.zw (own texture, a child's or an ancestor's part, or global)
 uniform vec4 uUv;
+// TELLUS_FISHEYE (a renderer whose dome draws directly, issue #7): with uFisheye = 1 each vertex
+// goes through the angular fisheye (azimuthal equidistant) map itself: q = p in the dome's frame
+// (x right, y up, the axis along -z), theta = atan(|q.xy|, -q.z) (not acos: stable near 0 and
+// pi), the image position theta / halfFov x q.xy / |q.xy| (its limit q.xy / |q| at the axis;
+// nearly straight behind, where the direction is lost, it fades to the centre: clipped anyway),
+// w = |q| (attributes interpolated perspective-correctly along the edge's angle), depth near / |q|
+// (reversed Z as in the flat path), and gl_ClipDistance[0] = halfFov + margin - theta drops what
+// lies behind. src/DomeDirect.cpp mirrors the map in double. uFisheye = 0: the perspective (the
+// cube faces of the fallback).
+#ifdef TELLUS_FISHEYE
+uniform int uFisheye;       // 1: the fisheye map below; 0: uViewProj
+uniform mat3 uDomeRotation; // world axes -> the dome's frame (x right, y up, axis -z)
+uniform vec4 uDomeMap;      // xy: NDC per radian along x and y; z: the clip angle; w: near (m)
+out float gl_ClipDistance[1];
+#endif
 
 out vec2 vUv;
 out vec2 vUvNode; // the node's own coordinates (overlays have transforms of their own)
@@ -48,6 +63,21 @@ void main() {
   PRECISE vec3 highDiff = aHigh - uEyeHigh;
   PRECISE vec3 lowDiff = aLow - uEyeLow;
   PRECISE vec3 p = highDiff + lowDiff;
+#endif
+#ifdef TELLUS_FISHEYE
+  if (uFisheye != 0) {
+    vec3 q = uDomeRotation * p;
+    float lateral = length(q.xy);
+    float dist = max(length(q), 1e-20);
+    float theta = atan(lateral, -q.z);
+    float k = lateral > 1e-6 * dist ? theta / lateral
+              : q.z < 0.0           ? 1.0 / dist
+                                    : theta / (1e-6 * dist);
+    gl_Position = vec4(q.xy * (k * dist) * uDomeMap.xy, uDomeMap.w, dist);
+    gl_ClipDistance[0] = uDomeMap.z - theta;
+    return;
+  }
+  gl_ClipDistance[0] = 1.0;
 #endif
   gl_Position = uViewProj * vec4(p, 1.0);
 }

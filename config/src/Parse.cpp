@@ -490,11 +490,21 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
     }
   }
   const auto [dnode, dwhere] = m.child("dome");
-  const Map d(r, dnode, m.path("dome"), dwhere, {"enabled", "fov", "tilt", "face_scale"});
+  const Map d(r,
+              dnode,
+              m.path("dome"),
+              dwhere,
+              {"enabled", "fov", "tilt", "face_scale", "method", "direct_max_error"});
   if (auto v = d.get("enabled")) g.dome.enabled = boolean(r, *v, d.path("enabled"));
   if (auto v = d.get("fov")) g.dome.fovDeg = number(r, *v, d.path("fov"));
   if (auto v = d.get("tilt")) g.dome.tiltDeg = number(r, *v, d.path("tilt"));
   if (auto v = d.get("face_scale")) g.dome.faceScale = number(r, *v, d.path("face_scale"));
+  if (auto v = d.get("method"))
+    g.dome.method = choice(r, *v, d.path("method"), {"direct", "cube"}) == 0
+                        ? DomeSettings::Method::Direct
+                        : DomeSettings::Method::Cube;
+  if (auto v = d.get("direct_max_error"))
+    g.dome.directMaxErrorPx = number(r, *v, d.path("direct_max_error"));
   if (auto v = m.get("earth"))
     g.earth = choice(r, *v, m.path("earth"), {"wgs84", "sphere"}) == 0 ? EarthShape::Wgs84
                                                                        : EarthShape::Sphere;

@@ -301,6 +301,9 @@ std::optional<ValidationIssue> checkRenderer(const RendererSettings& g) {
     return issue("dome.tilt", "must be in [-180, 180] degrees, got " + num(g.dome.tiltDeg));
   if (!(g.dome.faceScale >= 0.1 && g.dome.faceScale <= 4.0))
     return issue("dome.face_scale", "must be in [0.1, 4], got " + num(g.dome.faceScale));
+  if (!(g.dome.directMaxErrorPx >= 0.0 && g.dome.directMaxErrorPx <= 1e9))
+    return issue("dome.direct_max_error",
+                 "must be in [0, 1e9] pixels, got " + num(g.dome.directMaxErrorPx));
   const TerrainSettings& t = g.terrain;
   if (!(t.exaggeration > 0.0 && t.exaggeration <= 100.0))
     return issue("terrain.exaggeration", "must be in (0, 100], got " + num(t.exaggeration));

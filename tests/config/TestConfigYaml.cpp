@@ -154,6 +154,7 @@ TEST(ConfigYaml, DefaultsAreApplied) {
   EXPECT_TRUE(c->renderer.geoid);
   EXPECT_FALSE(c->renderer.dome.enabled);
   EXPECT_EQ(c->renderer.dome.fovDeg, 180.0);
+  EXPECT_EQ(c->renderer.dome.method, DomeSettings::Method::Direct);
   EXPECT_EQ(c->server.limits.maxConnections, 4096);
   EXPECT_EQ(c->server.limits.maxHeaderBytes, 16384U);
   EXPECT_EQ(c->server.limits.maxParamBytes, 2048U);
@@ -232,7 +233,7 @@ renderer:
   earth: sphere
   geoid: false
   overlays_per_pass: 2
-  dome: {enabled: true, fov: 210, tilt: 30, face_scale: 0.8}
+  dome: {enabled: true, fov: 210, tilt: 30, face_scale: 0.8, method: cube, direct_max_error: 2}
 upstreams:
   - name: ww
     type: worldwind
@@ -321,6 +322,8 @@ layers:
   EXPECT_EQ(c->renderer.dome.fovDeg, 210.0);
   EXPECT_EQ(c->renderer.dome.tiltDeg, 30.0);
   EXPECT_EQ(c->renderer.dome.faceScale, 0.8);
+  EXPECT_EQ(c->renderer.dome.method, DomeSettings::Method::Cube);
+  EXPECT_EQ(c->renderer.dome.directMaxErrorPx, 2.0);
   EXPECT_EQ(c->renderer.decodeThreads, 3);
   EXPECT_EQ(c->renderer.earth, EarthShape::Sphere);
   EXPECT_FALSE(c->renderer.geoid);
@@ -540,6 +543,12 @@ layers:
   EXPECT_EQ(earth.key, "renderer.earth");
   EXPECT_EQ(earth.line, 2);
   EXPECT_EQ(earth.message, "'flat' is not one of wgs84, sphere");
+
+  const ConfigError method =
+      errorOf("renderer:\n  dome: {method: sphere}\n" + std::string(kMinimal));
+  EXPECT_EQ(method.key, "renderer.dome.method");
+  EXPECT_EQ(method.line, 2);
+  EXPECT_EQ(method.message, "'sphere' is not one of direct, cube");
 
   const ConfigError geoid = errorOf("renderer: {geoid: egm96}\n" + std::string(kMinimal));
   EXPECT_EQ(geoid.key, "renderer.geoid");

@@ -235,6 +235,36 @@ TEST(LayersGl, OnePassAndSeveralPassesGiveTheSameImage) {
   EXPECT_LE(worst, 1) << "one pass and three passes differ";
 }
 
+// The same on the dome drawn directly (issue #7): the later passes map the vertices through the
+// fisheye again and must land on the first pass's depth exactly (invariant gl_Position, depth
+// test GEQUAL), or the overlays would be missing or z-fight.
+TEST(LayersGl, DirectDomeOnePassAndSeveralPassesGiveTheSameImage) {
+  ColourWorld w;
+  fill(w);
+  const Geodesy wgs;
+  const std::vector<LayerOptions> layers = {
+      {"blue", "", 0.5, true, -1}, {"empty", "", 1.0, true, -1}, {"green", "", 0.8, true, -1}};
+  std::vector<std::uint8_t> images[2];
+  for (const int perPass : {0, 1}) {
+    RendererOptions o = opts(layers, perPass);
+    o.width = o.height = 192; // the globe 28 px around the centre: the middle 20 x 20 is ground
+    o.dome = DomeOptions{180.0, 0.0, 0.64};
+    o.dome->method = DomeMethod::Direct;
+    OPEN_RENDERER(r, w, wgs, o);
+    const auto done = gltest::renderComplete(r, kView);
+    ASSERT_TRUE(done.complete);
+    EXPECT_EQ(done.stats.domeMethod, "direct");
+    EXPECT_EQ(done.stats.passes, perPass == 1 ? 2 : 1);
+    const auto want = over(over(kBaseRgb, kBlue, 0.5), kGreenHalf, 0.8);
+    EXPECT_LE(worstOff(r, done.pixels, want), 2) << perPass;
+    images[perPass] = done.pixels;
+  }
+  int worst = 0;
+  for (std::size_t i = 0; i < images[0].size(); ++i)
+    worst = std::max(worst, std::abs(int(images[0][i]) - int(images[1][i])));
+  EXPECT_LE(worst, 1) << "one pass and two passes differ on the direct dome";
+}
+
 TEST(LayersGl, OpacityVisibilityAndMaximumLevelChangeAtRunTime) {
   ColourWorld w;
   fill(w);

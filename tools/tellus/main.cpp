@@ -75,13 +75,15 @@ commands:
              [--layer NAME] [--threshold T] [--earth wgs84|sphere] [--offline | --server URL]
              [--dome [FOV]] [--dome-tilt DEG]  a domemaster (angular fisheye, FOV 180 up to
                                       220 degrees, --size N: N x N, black outside the circle)
+             [--dome-method direct|cube]  one pass through the fisheye (default) or cube
+                                      faces and a warp (renderer.dome.method)
              or a flight: --path PATH.json --frames DIR [--fps N] [--repeat N] instead of
              --camera/--out
              (PATH.json: [{"time":0,"lat":..,"lon":..,"alt":..,"heading":..,"tilt":..,
               "times":{"LAYER":"TIME"}}, ...]: a layer's time from that keyframe on)
   view     the interactive globe (a GLFW window)
              [--camera LAT,LON,ALT[,HEADING,TILT]] [--size WxH] [--layer NAME] [--threshold T]
-             [--earth wgs84|sphere] [--offline | --server URL] [--dome [FOV]] [--dome-tilt DEG]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc
+             [--earth wgs84|sphere] [--offline | --server URL] [--dome [FOV]] [--dome-tilt DEG] [--dome-method direct|cube]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc
              render and view: [--no-terrain] [--exaggeration X] [--sun LAT,LON]
              [--min-relief-px PX] (renderer.terrain.min_relief_px: heights only where relief shows)
              [--overlay NAME[,OPACITY]]... (imagery over the base; also renderer.layers);
@@ -1018,7 +1020,14 @@ std::string renderStatsJson(const planet::RenderStats& s, double seconds, bool c
                 s.zeroAreaTriangles,
                 s.cameraLifted ? "true" : "false");
   // The layers (issue #7): the base, then the overlays in drawing order.
-  std::string layers = ",\n  \"passes\": " + std::to_string(s.passes) +
+  // The dome (issue #7): how the last frame was drawn, and the direct method's error estimate.
+  char dome[128];
+  if (std::isfinite(s.domeErrorPx)) // infinite (an edge that cannot be mapped): null
+    std::snprintf(dome, sizeof dome, ",\n  \"dome_error_px\": %.4g", s.domeErrorPx);
+  else
+    std::snprintf(dome, sizeof dome, ",\n  \"dome_error_px\": null");
+  std::string layers = ",\n  \"dome_method\": " + jsonString(s.domeMethod) + dome +
+                       ",\n  \"passes\": " + std::to_string(s.passes) +
                        ",\n  \"overlays_per_pass\": " + std::to_string(s.overlaysPerPass) +
                        ",\n  \"layers\": [";
   for (std::size_t i = 0; i < s.layers.size(); ++i) {
@@ -1380,6 +1389,7 @@ std::expected<std::optional<EarthModel>, std::string> earthArg(const Args& a) {
 struct DomeArgs {
   bool on = false;
   std::optional<double> fovDeg, tiltDeg;
+  std::optional<planet::DomeMethod> method; ///< --dome-method direct|cube
 };
 std::expected<DomeArgs, std::string> domeArgs(const Args& a) {
   DomeArgs d;
@@ -1398,6 +1408,14 @@ std::expected<DomeArgs, std::string> domeArgs(const Args& a) {
     if (!v || !((*v)[0] >= -180.0 && (*v)[0] <= 180.0))
       return std::unexpected("--dome-tilt must be in [-180, 180] degrees, got '" + *t + "'");
     d.tiltDeg = (*v)[0];
+  }
+  if (const auto m = a.get("dome-method")) {
+    if (*m == "direct")
+      d.method = planet::DomeMethod::Direct;
+    else if (*m == "cube")
+      d.method = planet::DomeMethod::Cube;
+    else
+      return std::unexpected("--dome-method must be direct or cube, got '" + *m + "'");
   }
   return d;
 }
@@ -1425,6 +1443,10 @@ void applyRendererSettings(const RendererSettings& g,
   if (const auto d = domeArgs(a); d && (d->on || g.dome.enabled)) {
     ro.dome = planet::DomeOptions{
         d->fovDeg.value_or(g.dome.fovDeg), d->tiltDeg.value_or(g.dome.tiltDeg), g.dome.faceScale};
+    ro.dome->method = d->method.value_or(g.dome.method == DomeSettings::Method::Cube
+                                             ? planet::DomeMethod::Cube
+                                             : planet::DomeMethod::Direct);
+    ro.dome->directMaxErrorPx = g.dome.directMaxErrorPx;
     // A domemaster is square: without --size, the smaller side of the default.
     if (!a.get("size")) ro.width = ro.height = std::min(ro.width, ro.height);
   }
@@ -1634,12 +1656,13 @@ int cmdRender(const Args& a) {
   };
   for (const auto& [k, v] : a.options) {
     static const std::vector<std::string> known = {
-        "config",    "cache",         "data",         "camera",    "size",
-        "out",       "wait-complete", "background",   "stats",     "layer",
-        "threshold", "offline",       "server",       "path",      "frames",
-        "fps",       "no-terrain",    "exaggeration", "sun",       "edge-fixing",
-        "earth",     "repeat",        "geoid",        "mesh-size", "upload-per-frame",
-        "vertices",  "overlay",       "dome",         "dome-tilt", "min-relief-px"};
+        "config",     "cache",         "data",         "camera",    "size",
+        "out",        "wait-complete", "background",   "stats",     "layer",
+        "threshold",  "offline",       "server",       "path",      "frames",
+        "fps",        "no-terrain",    "exaggeration", "sun",       "edge-fixing",
+        "earth",      "repeat",        "geoid",        "mesh-size", "upload-per-frame",
+        "vertices",   "overlay",       "dome",         "dome-tilt", "min-relief-px",
+        "dome-method"};
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);
   }
@@ -2052,25 +2075,10 @@ int cmdView(const Args& a) {
     std::fprintf(stderr, "tellus view: %s, got '%s'\n", what, got.c_str());
     return kExitUsage;
   };
-  static const std::vector<std::string> known = {"config",
-                                                 "cache",
-                                                 "data",
-                                                 "camera",
-                                                 "size",
-                                                 "layer",
-                                                 "threshold",
-                                                 "offline",
-                                                 "server",
-                                                 "exit-after",
-                                                 "no-terrain",
-                                                 "exaggeration",
-                                                 "min-relief-px",
-                                                 "sun",
-                                                 "earth",
-                                                 "geoid",
-                                                 "overlay",
-                                                 "dome",
-                                                 "dome-tilt"};
+  static const std::vector<std::string> known = {
+      "config",  "cache",  "data",       "camera",     "size",         "layer",         "threshold",
+      "offline", "server", "exit-after", "no-terrain", "exaggeration", "min-relief-px", "sun",
+      "earth",   "geoid",  "overlay",    "dome",       "dome-tilt",    "dome-method"};
   for (const auto& [k, v] : a.options)
     if (std::find(known.begin(), known.end(), k) == known.end())
       return usage("unknown option (see tellus --help)", "--" + k);

@@ -22,6 +22,34 @@ glm::dvec3 faceDirection(const CubeFace& f, int faceSize, double i, double j) no
   return glm::normalize(f.forward + x * right + y * f.up);
 }
 
+/** A program from a vertex and a fragment shader; 0 with error set when either fails. */
+GLuint linkProgram(const std::string& vsSource,
+                   const std::string& fsSource,
+                   const char* what,
+                   std::string* error) {
+  const GLuint vs = compileShader(GL_VERTEX_SHADER, vsSource, what, error);
+  if (vs == 0) return 0;
+  const GLuint fs = compileShader(GL_FRAGMENT_SHADER, fsSource, what, error);
+  if (fs == 0) {
+    glDeleteShader(vs);
+    return 0;
+  }
+  const GLuint program = glCreateProgram();
+  glAttachShader(program, vs);
+  glAttachShader(program, fs);
+  glLinkProgram(program);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLint linked = GL_FALSE;
+  glGetProgramiv(program, GL_LINK_STATUS, &linked);
+  if (linked != GL_TRUE) {
+    glDeleteProgram(program);
+    *error = std::string(what) + " link failed";
+    return 0;
+  }
+  return program;
+}
+
 } // namespace
 
 const std::array<CubeFace, 6>& cubeFaces() noexcept {
@@ -94,6 +122,15 @@ std::expected<std::unique_ptr<Dome>, std::string> Dome::create(int faceSize,
   glGenVertexArrays(1, &d->vao_);
   glGenBuffers(1, &d->meshVbo_);
   glGenBuffers(1, &d->meshEbo_);
+  d->maskProgram_ = linkProgram(glslHeader + kShader_dome_mask_vert,
+                                glslHeader + kShader_dome_mask_frag,
+                                "dome mask shader",
+                                &error);
+  if (d->maskProgram_ == 0) return std::unexpected(error);
+  d->uMaskViewport_ = glGetUniformLocation(d->maskProgram_, "uViewport");
+  d->uMaskCircle_ = glGetUniformLocation(d->maskProgram_, "uCircle");
+  glGenVertexArrays(1, &d->maskVao_);
+  glGenBuffers(1, &d->maskVbo_);
 
   // Filtering across face borders reads the neighbouring face (core since 3.2).
   glEnable(GL_TEXTURE_CUBE_MAP_SEAMLESS);
@@ -146,6 +183,9 @@ Dome::~Dome() {
   glDeleteBuffers(1, &meshVbo_);
   glDeleteBuffers(1, &meshEbo_);
   glDeleteProgram(program_);
+  glDeleteVertexArrays(1, &maskVao_);
+  glDeleteBuffers(1, &maskVbo_);
+  glDeleteProgram(maskProgram_);
 }
 
 void Dome::buildMesh(double halfAngleRad, double radiusPx) {
@@ -250,6 +290,115 @@ void Dome::render(
   glDrawElements(GL_TRIANGLES, meshIndices_, GL_UNSIGNED_INT, nullptr);
   glBindVertexArray(0);
   glBindTexture(GL_TEXTURE_CUBE_MAP, 0);
+  glEnable(GL_DEPTH_TEST);
+}
+
+void Dome::beginDirect(GLuint nodeProgram, const Camera& fisheye, int width, int height) {
+  if (nodeProgram != directProgram_) {
+    uFisheye_ = glGetUniformLocation(nodeProgram, "uFisheye");
+    uDomeRotation_ = glGetUniformLocation(nodeProgram, "uDomeRotation");
+    uDomeMap_ = glGetUniformLocation(nodeProgram, "uDomeMap");
+    directProgram_ = nodeProgram;
+  }
+  // Rows right, up, -forward (the view matrix's rotation): q = R p; GL matrices are column-major.
+  const glm::dvec3 r = fisheye.right(), u = fisheye.up(), b = -fisheye.forward();
+  const std::array<GLfloat, 9> rotation{static_cast<GLfloat>(r.x),
+                                        static_cast<GLfloat>(u.x),
+                                        static_cast<GLfloat>(b.x),
+                                        static_cast<GLfloat>(r.y),
+                                        static_cast<GLfloat>(u.y),
+                                        static_cast<GLfloat>(b.y),
+                                        static_cast<GLfloat>(r.z),
+                                        static_cast<GLfloat>(u.z),
+                                        static_cast<GLfloat>(b.z)};
+  const double alpha = fisheye.fisheyeHalfAngleRad();
+  const double diameter = std::min(width, height);
+  // NDC per radian: the rim (theta = alpha) lands at the circle's radius, diameter / 2 pixels.
+  const double perRadX = diameter / static_cast<double>(width) / alpha;
+  const double perRadY = diameter / static_cast<double>(height) / alpha;
+  // The clip angle: a few of the fisheye's pixels beyond the rim (the mask blackens them).
+  const double clip = alpha + kDirectClipMarginPx / fisheye.pixelsPerRadian();
+  glUniform1i(uFisheye_, 1);
+  glUniformMatrix3fv(uDomeRotation_, 1, GL_FALSE, rotation.data());
+  glUniform4f(uDomeMap_,
+              static_cast<float>(perRadX),
+              static_cast<float>(perRadY),
+              static_cast<float>(clip),
+              static_cast<float>(fisheye.nearM()));
+  glEnable(GL_CLIP_DISTANCE0);
+}
+
+void Dome::buildMask(int width, int height) {
+  // Directions every 360/256 degrees and to the framebuffer's four corners; for each, a point
+  // just inside the circle (2 px) and the point where the direction leaves the framebuffer.
+  // Between two neighbouring directions the border is one straight side (a corner is itself a
+  // direction), so the quads cover everything outside the circle exactly.
+  constexpr int kSegments = 256;
+  const double cx = 0.5 * width, cy = 0.5 * height;
+  const double inner = std::max(0.0, 0.5 * std::min(width, height) - 2.0);
+  std::vector<double> phis;
+  for (int j = 0; j < kSegments; ++j)
+    phis.push_back(2.0 * std::numbers::pi * j / kSegments);
+  for (const double sx : {-1.0, 1.0})
+    for (const double sy : {-1.0, 1.0}) {
+      const double phi = std::atan2(sy * cy, sx * cx);
+      phis.push_back(phi < 0.0 ? phi + 2.0 * std::numbers::pi : phi);
+    }
+  std::sort(phis.begin(), phis.end());
+  phis.push_back(phis.front() + 2.0 * std::numbers::pi);
+  std::vector<float> v;
+  auto point = [&](double phi, bool outer) {
+    const double c = std::cos(phi), s = std::sin(phi);
+    const double t = outer ? std::min(std::abs(c) > 1e-12 ? cx / std::abs(c) : 1e300,
+                                      std::abs(s) > 1e-12 ? cy / std::abs(s) : 1e300)
+                           : inner;
+    // Outer points exactly on the border (the corners are exact).
+    double x = cx + t * c, y = cy + t * s;
+    if (outer) {
+      x = std::clamp(x, 0.0, static_cast<double>(width));
+      y = std::clamp(y, 0.0, static_cast<double>(height));
+    }
+    v.insert(v.end(), {static_cast<float>(x), static_cast<float>(y)});
+  };
+  for (std::size_t j = 0; j + 1 < phis.size(); ++j) {
+    const double a = phis[j], b = phis[j + 1];
+    if (!(b > a)) continue;
+    point(a, false);
+    point(a, true);
+    point(b, true);
+    point(a, false);
+    point(b, true);
+    point(b, false);
+  }
+  glBindVertexArray(maskVao_);
+  glBindBuffer(GL_ARRAY_BUFFER, maskVbo_);
+  glBufferData(
+      GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(v.size() * sizeof(float)), v.data(), GL_STATIC_DRAW);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 2 * sizeof(float), nullptr);
+  glBindVertexArray(0);
+  maskVertices_ = static_cast<GLsizei>(v.size() / 2);
+  maskW_ = width;
+  maskH_ = height;
+}
+
+void Dome::endDirect(GLuint nodeProgram, GLuint target, int width, int height) {
+  glDisable(GL_CLIP_DISTANCE0);
+  if (nodeProgram == directProgram_) glUniform1i(uFisheye_, 0);
+  glBindFramebuffer(GL_FRAMEBUFFER, target);
+  glViewport(0, 0, width, height);
+  if (width != maskW_ || height != maskH_) buildMask(width, height);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_BLEND);
+  glUseProgram(maskProgram_);
+  glUniform2f(uMaskViewport_, static_cast<float>(width), static_cast<float>(height));
+  glUniform3f(uMaskCircle_,
+              static_cast<float>(0.5 * width),
+              static_cast<float>(0.5 * height),
+              static_cast<float>(0.5 * std::min(width, height)));
+  glBindVertexArray(maskVao_);
+  glDrawArrays(GL_TRIANGLES, 0, maskVertices_);
+  glBindVertexArray(0);
   glEnable(GL_DEPTH_TEST);
 }
 

@@ -1,7 +1,8 @@
 #pragma once
 /**
  * @file Dome.hpp
- * @brief The dome (issue #7): an angular fisheye domemaster drawn as cube faces, then a warp pass.
+ * @brief The dome (issue #7): an angular fisheye domemaster drawn as cube faces, then a warp pass,
+ * or directly (the node shader's fisheye map, DomeMethod::Direct; then a mask).
  *
  * The tree's update and the streaming run once per frame with the fisheye camera (Camera with a
  * Fisheye: LOD in the fisheye's pixels, culling against its cone); then each cube face the cone
@@ -10,11 +11,16 @@
  * the part of the face the cone reaches: a scissor), and the warp pass samples the cube map with
  * seamless filtering (GL_TEXTURE_CUBE_MAP_SEAMLESS: no lines at face borders) into the
  * renderer's framebuffer: the inscribed circle, black outside. Lighting is in world space in the
- * node shader, so faces agree. GL-private; used by Renderer.cpp only.
+ * node shader, so faces agree. The direct method instead draws the draw list once into the
+ * renderer's framebuffer with the node program's fisheye map (shaders/planet.vert, TELLUS_FISHEYE:
+ * beginDirect sets its uniforms and the clip plane), then paints black what lies outside the
+ * circle (endDirect: a ring from just inside the circle to the border). GL-private; used by
+ * Renderer.cpp only.
  */
 
 #include <tellus/planet/Camera.hpp>
 #include <tellus/planet/Culling.hpp>
+#include <tellus/planet/DomeDirect.hpp>
 #include <tellus/planet/Quadtree.hpp>
 
 #include <epoxy/gl.h>
@@ -63,6 +69,14 @@ public:
   void
   render(const Camera& fisheye, const DrawFace& drawFace, GLuint target, int width, int height);
   int faceSize() const noexcept { return size_; }
+
+  /** The direct method: with the node program (compiled with TELLUS_FISHEYE) current, switches
+   * its vertex map to the fisheye of this camera for a width x height framebuffer (the circle of
+   * diameter min(width, height), centred) and enables gl_ClipDistance[0]. */
+  void beginDirect(GLuint nodeProgram, const Camera& fisheye, int width, int height);
+  /** Ends what beginDirect began (the program still current: back to its perspective, the clip
+   * plane off), then paints black everything in target outside the circle. */
+  void endDirect(GLuint nodeProgram, GLuint target, int width, int height);
   /** Faces drawn by the last render(). */
   int facesDrawn() const noexcept { return facesDrawn_; }
 
@@ -78,6 +92,14 @@ private:
   double meshRadius_ = -1.0;
   void buildMesh(double halfAngleRad, double radiusPx);
   int facesDrawn_ = 0;
+  // The direct method's node-program uniforms (looked up for directProgram_) and the mask.
+  GLuint directProgram_ = 0;
+  GLint uFisheye_ = -1, uDomeRotation_ = -1, uDomeMap_ = -1;
+  GLuint maskProgram_ = 0, maskVao_ = 0, maskVbo_ = 0;
+  GLint uMaskViewport_ = -1, uMaskCircle_ = -1;
+  GLsizei maskVertices_ = 0;
+  int maskW_ = 0, maskH_ = 0;
+  void buildMask(int width, int height);
   double regionsFor_ = -1.0; ///< the half-angle the face regions were computed for
   std::array<FaceRect, 6> regions_{};
 };

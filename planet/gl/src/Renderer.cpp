@@ -380,7 +380,8 @@ std::string Renderer::Impl::initGl() {
   // Double vertex positions where the GL has them (4.0+: ARB_gpu_shader_fp64; 64-bit vertex
   // attributes are core from 4.1), else the two-float path.
   fp64 = gl45 && opt.fp64Vertices;
-  const std::string defines = fp64 ? "#define TELLUS_FP64 1\n" : "";
+  std::string defines = fp64 ? "#define TELLUS_FP64 1\n" : "";
+  if (opt.dome && opt.dome->method == DomeMethod::Direct) defines += "#define TELLUS_FISHEYE 1\n";
   // Overlay layers blended in one pass: one texture unit each after the base's (unit 0).
   GLint units = 16;
   glGetIntegerv(GL_MAX_TEXTURE_IMAGE_UNITS, &units);
@@ -942,7 +943,21 @@ void Renderer::Impl::draw(const Camera& camera, bool present, const DrawTarget* 
   // The dome: each face through this function into its cube face, the warp into fbo, then only
   // the presentation below (the scene is not drawn again).
   const DrawTarget warped{fbo, opt.width, opt.height, nullptr, false};
+  // The direct method draws the scene once through the fisheye map (Dome::beginDirect), unless
+  // the frame's straight edges would be off by more than directMaxErrorPx (DomeDirect.hpp).
+  bool direct = false;
   if (dome && target == nullptr && camera.isFisheye()) {
+    stats.domeErrorPx = 0.0;
+    if (opt.dome->method == DomeMethod::Direct) {
+      stats.domeErrorPx = directChordErrorPx(camera,
+                                             geo().drawList(),
+                                             opt.meshSize,
+                                             heightAt(camera.pose().latDeg, camera.pose().lonDeg));
+      direct = stats.domeErrorPx <= opt.dome->directMaxErrorPx;
+    }
+    stats.domeMethod = direct ? "direct" : "cube";
+  }
+  if (dome && target == nullptr && camera.isFisheye() && !direct) {
     dome->render(
         camera,
         [this](const Camera& face, const DrawTarget& t) { draw(face, false, &t); },
@@ -987,6 +1002,7 @@ void Renderer::Impl::draw(const Camera& camera, bool present, const DrawTarget* 
   } else {
     glUniform4f(uSun, 0.0f, 0.0f, 0.0f, 0.0f);
   }
+  if (direct) dome->beginDirect(program, camera, opt.width, opt.height);
   // Pass 0: the base texture and the first overlaysPerPass overlays of each part. Pass j > 0: the
   // parts with more overlays, drawn again with the next ones, blended over (same mesh, depth equal
   // passes, nothing written to depth).
@@ -1045,6 +1061,7 @@ void Renderer::Impl::draw(const Camera& camera, bool present, const DrawTarget* 
     glDepthMask(GL_TRUE);
   }
   glBindVertexArray(0);
+  if (direct) dome->endDirect(program, fbo, opt.width, opt.height);
   if (present && window != nullptr && opt.visibleWindow) {
     int fw = 0, fh = 0;
     glfwGetFramebufferSize(window, &fw, &fh);

@@ -107,6 +107,12 @@ struct DomeSettings {
   double fovDeg = 180.0;   ///< (0, 220]
   double tiltDeg = 0.0;    ///< the dome's axis turned up from the view direction, [-180, 180]
   double faceScale = 0.64; ///< cube face size / image size, [0.1, 4]
+  /** `method`: direct (one pass through the fisheye map) or cube (faces, then a warp). */
+  enum class Method { Direct, Cube };
+  Method method = Method::Direct;
+  /** `direct_max_error`: the direct method's largest estimated straight-edge error in pixels
+   * before a frame is drawn with the cube method, [0, 1e9]. */
+  double directMaxErrorPx = 0.5;
 };
 
 struct RendererSettings {

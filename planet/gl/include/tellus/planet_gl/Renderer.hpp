@@ -44,11 +44,25 @@ struct LayerOptions {
   int maxLevel = -1; ///< the deepest level fetched and drawn (-1: the layer's own deepest)
 };
 
+/** How the dome is drawn (issue #7; docs/ARCHITECTURE.md, "The dome"). */
+enum class DomeMethod {
+  /** One pass: the node shader maps each vertex through the fisheye itself (straight triangle
+   * edges: an approximation, DomeDirect.hpp); a frame whose estimated error exceeds
+   * DomeOptions::directMaxErrorPx is drawn with Cube instead. */
+  Direct,
+  /** Up to five cube faces of faceScale x N, then a warp pass into the fisheye. */
+  Cube,
+};
+
 /** The dome (issue #7): an angular fisheye domemaster instead of a perspective view. */
 struct DomeOptions {
   double fovDeg = 180.0;   ///< (0, 220]
   double tiltDeg = 0.0;    ///< the dome's axis turned up from the pose's view direction
   double faceScale = 0.64; ///< cube faces of faceScale x the image's size (2/pi matches the centre)
+  DomeMethod method = DomeMethod::Direct;
+  /** Direct: the largest estimated straight-edge error (fisheye pixels) a frame may have before it
+   * is drawn with the cube method (directChordErrorPx, DomeDirect.hpp). */
+  double directMaxErrorPx = 0.5;
 };
 
 struct RendererOptions {
@@ -119,7 +133,8 @@ struct RendererOptions {
    * longer). 0: the process's priority. */
   int decodeNice = 10;
   /** A domemaster (square image: the circle of diameter min(width, height), black around) drawn
-   * as cube faces and a warp, with the LOD and culling of the fisheye; nullopt: a perspective. */
+   * directly or as cube faces and a warp (DomeOptions::method), with the LOD and culling of the
+   * fisheye; nullopt: a perspective. */
   std::optional<DomeOptions> dome;
   bool visibleWindow = false; ///< a window the user sees (`tellus view`); else hidden
   std::string windowTitle = "tellus";
@@ -204,6 +219,11 @@ struct RenderStats {
   int passes = 0;          ///< last frame: draw passes (1 + those the overlays needed)
   std::string glVersion;   ///< GL_VERSION and GL_RENDERER
   bool reversedZ = false;  ///< glClipControl available (4.5 or ARB_clip_control)
+  /** The dome's last frame: "direct" or "cube" (a direct renderer's frame whose estimated
+   * straight-edge error exceeded DomeOptions::directMaxErrorPx is "cube"); "" without a dome.
+   * domeErrorPx: that estimate (0 for the cube method's renderers). */
+  std::string domeMethod;
+  double domeErrorPx = 0.0;
 };
 
 class Renderer {
