@@ -50,10 +50,42 @@ bool globalInLongitude(const GridSpec& spec) noexcept {
 
 /** Longitude into [-180, 180). */
 double wrapLongitude(double lon) noexcept {
-  double w = std::fmod(lon + 180.0, 360.0);
+  const double x = lon + 180.0;
+  // fmod's value without the call where it is a subtraction: fmod is exact, and so is x - 360
+  // for x in [360, 720] (Sterbenz).
+  double w = x >= 0.0 && x < 360.0 ? x : x >= 360.0 && x < 720.0 ? x - 360.0 : std::fmod(x, 360.0);
   if (w < 0.0) w += 360.0;
   if (w >= 360.0) w = 0.0;
   return w - 180.0;
+}
+
+/** `x` modulo `total` into [0, total): the division only for texels off the grid (the two
+ * divisions per texel were most of the axes' cost). */
+std::int64_t wrapIndex(std::int64_t x, std::int64_t total) noexcept {
+  if (x >= 0 && x < total) return x;
+  return (x % total + total) % total;
+}
+
+/** A texel index (>= 0) as a tile and the texel's offset in it. */
+struct TexelInTile {
+  std::int64_t tile;
+  std::int32_t offset;
+};
+
+TexelInTile texelInTile(std::int64_t x, std::int32_t tileSize) noexcept {
+  const std::int64_t tile = x / tileSize;
+  return {tile, static_cast<std::int32_t>(x - tile * tileSize)};
+}
+
+/** texelInTile(x1) knowing texelInTile(x0) = `a`: no division when x1 is x0 or its neighbour
+ * inside the same tile (nearly every sample). */
+TexelInTile nextTexelInTile(const TexelInTile& a,
+                            std::int64_t x0,
+                            std::int64_t x1,
+                            std::int32_t tileSize) noexcept {
+  if (x1 == x0) return a;
+  if (x1 == x0 + 1 && a.offset + 1 < tileSize) return {a.tile, a.offset + 1};
+  return texelInTile(x1, tileSize);
 }
 
 std::int32_t slotOf(std::vector<std::int64_t>& tiles, std::int64_t tile) {
@@ -92,17 +124,19 @@ Axis columns(const TileGrid& grid, const Sector& box, std::int32_t width, std::i
     auto x0 = static_cast<std::int64_t>(fl);
     auto x1 = x0 + 1;
     if (wrap) {
-      x0 = (x0 % total + total) % total;
-      x1 = (x1 % total + total) % total;
+      x0 = wrapIndex(x0, total);
+      x1 = wrapIndex(x1, total);
     } else {
       x0 = std::clamp(x0, first, last);
       x1 = std::clamp(x1, first, last);
     }
     AxisSample& s = a.samples[static_cast<std::size_t>(i)];
-    s.slotA = slotOf(a.tiles, x0 / spec.tileWidth);
-    s.slotB = slotOf(a.tiles, x1 / spec.tileWidth);
-    s.offA = static_cast<std::int32_t>(x0 % spec.tileWidth);
-    s.offB = static_cast<std::int32_t>(x1 % spec.tileWidth);
+    const TexelInTile ta = texelInTile(x0, spec.tileWidth);
+    const TexelInTile tb = nextTexelInTile(ta, x0, x1, spec.tileWidth);
+    s.slotA = slotOf(a.tiles, ta.tile);
+    s.slotB = ta.tile == tb.tile ? s.slotA : slotOf(a.tiles, tb.tile);
+    s.offA = ta.offset;
+    s.offB = tb.offset;
     a.use(s.slotA, s.offA);
     a.use(s.slotB, s.offB);
     s.exactWeightB = f;
@@ -136,10 +170,12 @@ Axis rows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int
     const auto y0 = std::clamp(static_cast<std::int64_t>(fl), first, last);
     const auto y1 = std::clamp(static_cast<std::int64_t>(fl) + 1, first, last);
     AxisSample& s = a.samples[static_cast<std::size_t>(j)];
-    s.slotA = slotOf(a.tiles, rowCount - 1 - y0 / spec.tileHeight);
-    s.slotB = slotOf(a.tiles, rowCount - 1 - y1 / spec.tileHeight);
-    s.offA = static_cast<std::int32_t>(y0 % spec.tileHeight);
-    s.offB = static_cast<std::int32_t>(y1 % spec.tileHeight);
+    const TexelInTile ta = texelInTile(y0, spec.tileHeight);
+    const TexelInTile tb = nextTexelInTile(ta, y0, y1, spec.tileHeight);
+    s.slotA = slotOf(a.tiles, rowCount - 1 - ta.tile);
+    s.slotB = ta.tile == tb.tile ? s.slotA : slotOf(a.tiles, rowCount - 1 - tb.tile);
+    s.offA = ta.offset;
+    s.offB = tb.offset;
     a.use(s.slotA, s.offA);
     a.use(s.slotB, s.offB);
     s.exactWeightB = f;
@@ -368,84 +404,91 @@ std::uint8_t sampleOne(const Quad& q) noexcept {
  * The horizontal half of the planar filter, precomputed per output column: out[i] = (v[xa] * wa +
  * v[xb] * wb + 32768) >> 16 over the vertically blended row v. Columns are grouped in segments of
  * a run of columns inside the layer; a segment of 8 columns whose texel pairs are neighbours
- * (xb = xa + 1, or wb = 0) within 16 texels of `base` is done with AVX2 (when the CPU has it) from
- * `pairs` (pairs[x] = v[x] | v[x + 1] << 16): two loads of 8 pairs and two in-register
- * permutations instead of 16 loads at computed addresses. The same integer arithmetic either way.
+ * (xb = xa + 1, or wb = 0) within 16 texels of `base` is done with AVX2 (when the CPU has it)
+ * straight from v: two unaligned loads of 16 texels (v[base..] and v[base + 1..]) interleaved into
+ * the 16 pairs (v[x], v[x + 1]), two in-register permutations and a blend that pick each column's
+ * pair, and one multiply-add of 16-bit pairs (pmaddwd) for v[xa] * wa + v[xb] * wb. pmaddwd
+ * multiplies signed 16-bit values and v reaches 65,280, so the texels go in less 32,768 (the sign
+ * bit flipped) and 32,768 * (wa + wb) = 2^23 is added back: exact, the same integer arithmetic as
+ * the plain loop.
  */
 struct Horizontal {
   struct Segment {
     std::uint32_t begin, end; ///< output columns
-    std::uint32_t base;       ///< for a SIMD segment (end - begin = 8): the first texel pair
+    std::uint32_t base;       ///< for a SIMD segment (end - begin = 8): its first texel in v
     bool simd;
   };
-  std::vector<std::uint32_t> xa, xb, wa, wb, rel; ///< rel: xa - base in SIMD segments
+  std::vector<std::uint32_t> xa, xb, wa, wb;
+  /// SIMD segments, per column: the pair's 32-bit lane in the interleaved registers (bits 0-2)
+  /// and which of the two (bit 31), from r = xa - base: (r & 3) | (r & 8) >> 1, r & 4.
+  std::vector<std::uint32_t> lane;
+  std::vector<std::uint32_t> weights; ///< SIMD segments, per column: wa | wb << 16
   std::vector<Segment> segments;
+
+  /// How far past the last texel of v the SIMD loads read (v must have these elements).
+  static constexpr std::size_t kPadding = 16;
 
   void scalar(const std::uint16_t* v, std::uint8_t* out, std::size_t b, std::size_t e) const {
     for (std::size_t i = b; i < e; ++i)
       out[i] = static_cast<std::uint8_t>((v[xa[i]] * wa[i] + v[xb[i]] * wb[i] + 32768u) >> 16);
   }
-  void run(const std::uint16_t* v, const std::uint32_t* pairs, std::uint8_t* out) const;
+  void run(const std::uint16_t* v, std::uint8_t* out) const;
 };
 
 #ifdef TELLUS_COMPOSE_AVX2
 // TELLUS_COMPOSE_NO_AVX2=1 takes the plain code on any CPU (the tests run both).
 const bool kHasAvx2 = __builtin_cpu_supports("avx2") && !std::getenv("TELLUS_COMPOSE_NO_AVX2");
 
-__attribute__((target("avx2"))) void horizontalAvx2(const Horizontal& h,
-                                                    const std::uint16_t* v,
-                                                    const std::uint32_t* pairs,
-                                                    std::uint8_t* out) {
-  const __m256i low = _mm256_set1_epi32(0xFFFF);
-  const __m256i half = _mm256_set1_epi32(32768);
-  const __m256i seven = _mm256_set1_epi32(7);
-  // The low byte of each 32-bit lane to the first four bytes of each 128-bit half.
+__attribute__((target("avx2"))) void
+horizontalAvx2(const Horizontal& h, const std::uint16_t* v, std::uint8_t* out) {
+  const __m256i flip = _mm256_set1_epi16(static_cast<short>(0x8000));
+  const __m256i offset = _mm256_set1_epi32((1 << 23) + 32768);
+  // The low byte of each 32-bit lane to the first four bytes of each 128-bit half, then those two
+  // words side by side.
   // clang-format off
   const __m256i bytes = _mm256_setr_epi8(0, 4, 8, 12, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
                                          0, 4, 8, 12, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
   // clang-format on
+  const __m256i gather = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
   for (const Horizontal::Segment& s : h.segments) {
     if (!s.simd) {
       h.scalar(v, out, s.begin, s.end);
       continue;
     }
-    const __m256i rel =
-        _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h.rel.data() + s.begin));
-    const __m256i first = _mm256_permutevar8x32_epi32(
-        _mm256_loadu_si256(reinterpret_cast<const __m256i*>(pairs + s.base)), rel);
-    const __m256i second = _mm256_permutevar8x32_epi32(
-        _mm256_loadu_si256(reinterpret_cast<const __m256i*>(pairs + s.base + 8)), rel);
-    const __m256i p = _mm256_blendv_epi8(first, second, _mm256_cmpgt_epi32(rel, seven));
-    const __m256i a = _mm256_and_si256(p, low);
-    const __m256i b = _mm256_srli_epi32(p, 16);
-    __m256i r = _mm256_add_epi32(
-        _mm256_mullo_epi32(
-            a, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h.wa.data() + s.begin))),
-        _mm256_mullo_epi32(
-            b, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h.wb.data() + s.begin))));
-    r = _mm256_shuffle_epi8(_mm256_srli_epi32(_mm256_add_epi32(r, half), 16), bytes);
-    const auto lo = static_cast<std::uint32_t>(_mm256_cvtsi256_si32(r));
-    const auto hi = static_cast<std::uint32_t>(_mm256_extract_epi32(r, 4));
-    std::memcpy(out + s.begin, &lo, 4);
-    std::memcpy(out + s.begin + 4, &hi, 4);
+    const __m256i v0 =
+        _mm256_xor_si256(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(v + s.base)), flip);
+    const __m256i v1 = _mm256_xor_si256(
+        _mm256_loadu_si256(reinterpret_cast<const __m256i*>(v + s.base + 1)), flip);
+    // Pairs (v[x], v[x + 1]) for x = base + 0-3 | 8-11 (lo) and base + 4-7 | 12-15 (hi).
+    const __m256i lo = _mm256_unpacklo_epi16(v0, v1);
+    const __m256i hi = _mm256_unpackhi_epi16(v0, v1);
+    const __m256i lane =
+        _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h.lane.data() + s.begin));
+    const __m256 pick = _mm256_blendv_ps(_mm256_castsi256_ps(_mm256_permutevar8x32_epi32(lo, lane)),
+                                         _mm256_castsi256_ps(_mm256_permutevar8x32_epi32(hi, lane)),
+                                         _mm256_castsi256_ps(lane));
+    const __m256i sum = _mm256_madd_epi16(
+        _mm256_castps_si256(pick),
+        _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h.weights.data() + s.begin)));
+    const __m256i r = _mm256_permutevar8x32_epi32(
+        _mm256_shuffle_epi8(_mm256_srli_epi32(_mm256_add_epi32(sum, offset), 16), bytes), gather);
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(out + s.begin), _mm256_castsi256_si128(r));
   }
 }
 #endif
 
-void Horizontal::run(const std::uint16_t* v, const std::uint32_t* pairs, std::uint8_t* out) const {
+void Horizontal::run(const std::uint16_t* v, std::uint8_t* out) const {
 #ifdef TELLUS_COMPOSE_AVX2
-  if (kHasAvx2) return horizontalAvx2(*this, v, pairs, out);
+  if (kHasAvx2) return horizontalAvx2(*this, v, out);
 #endif
-  (void)pairs;
   for (const Segment& s : segments)
     scalar(v, out, s.begin, s.end);
 }
 
-/** The vertical half of the filter over one texel row of a tile column, and the texel pairs of
- * the horizontal half (pairs[x] = v[x] | v[x + 1] << 16): plain loops that the compiler
- * vectorises, inlined once more into AVX2 functions used where the CPU has it (dispatched at run
- * time like the horizontal pass; not with target_clones, whose ifunc resolvers run before
- * ThreadSanitizer's runtime is up). */
+/** The vertical half of the filter over one texel row of a tile column: a plain loop that the
+ * compiler vectorises, inlined once more into an AVX2 function used where the CPU has it
+ * (dispatched at run time like the horizontal pass; not with target_clones, whose ifunc resolvers
+ * run before ThreadSanitizer's runtime is up). */
 [[gnu::always_inline]] inline void blendRowsLoop(const std::uint8_t* a,
                                                  const std::uint8_t* b,
                                                  std::uint32_t wy,
@@ -455,12 +498,6 @@ void Horizontal::run(const std::uint16_t* v, const std::uint32_t* pairs, std::ui
     out[x] = static_cast<std::uint16_t>(a[x] * (256u - wy) + b[x] * wy);
 }
 
-[[gnu::always_inline]] inline void
-makePairsLoop(const std::uint16_t* v, std::uint32_t* pairs, std::size_t n) noexcept {
-  for (std::size_t x = 0; x < n; ++x)
-    pairs[x] = v[x] | static_cast<std::uint32_t>(v[x + 1]) << 16;
-}
-
 #ifdef TELLUS_COMPOSE_AVX2
 __attribute__((target("avx2"))) void blendRowsAvx2(const std::uint8_t* a,
                                                    const std::uint8_t* b,
@@ -468,10 +505,6 @@ __attribute__((target("avx2"))) void blendRowsAvx2(const std::uint8_t* a,
                                                    std::uint16_t* out,
                                                    std::size_t n) noexcept {
   blendRowsLoop(a, b, wy, out, n);
-}
-__attribute__((target("avx2"))) void
-makePairsAvx2(const std::uint16_t* v, std::uint32_t* pairs, std::size_t n) noexcept {
-  makePairsLoop(v, pairs, n);
 }
 #endif
 
@@ -484,13 +517,6 @@ void blendRows(const std::uint8_t* a,
   if (kHasAvx2) return blendRowsAvx2(a, b, wy, out, n);
 #endif
   blendRowsLoop(a, b, wy, out, n);
-}
-
-void makePairs(const std::uint16_t* v, std::uint32_t* pairs, std::size_t n) noexcept {
-#ifdef TELLUS_COMPOSE_AVX2
-  if (kHasAvx2) return makePairsAvx2(v, pairs, n);
-#endif
-  makePairsLoop(v, pairs, n);
 }
 
 /**
@@ -526,7 +552,8 @@ ComposeStats composePlane(const TileGrid& grid,
   hz.xb.assign(w, 0);
   hz.wa.assign(w, 0);
   hz.wb.assign(w, 0);
-  hz.rel.assign(w, 0);
+  hz.lane.assign(w, 0);
+  hz.weights.assign(w, 0);
   std::vector<std::uint32_t>&xa = hz.xa, &xb = hz.xb, &wa = hz.wa, &wb = hz.wb;
   // Runs of columns inside the layer [begin, end).
   std::vector<std::pair<std::int32_t, std::int32_t>> runs;
@@ -559,8 +586,11 @@ ComposeStats composePlane(const TileGrid& grid,
       }
       const bool simd = neighbours && hi - lo < 16;
       if (simd) {
-        for (std::uint32_t k = i; k < i + 8; ++k)
-          hz.rel[k] = xa[k] - lo;
+        for (std::uint32_t k = i; k < i + 8; ++k) {
+          const std::uint32_t r = xa[k] - lo;
+          hz.lane[k] = (r & 3u) | (r & 8u) >> 1 | (r & 4u ? 0x80000000u : 0u);
+          hz.weights[k] = wa[k] | wb[k] << 16;
+        }
       }
       if (!simd && !hz.segments.empty() && !hz.segments.back().simd &&
           hz.segments.back().end == i) {
@@ -571,9 +601,8 @@ ComposeStats composePlane(const TileGrid& grid,
     }
     if (i < e) hz.segments.push_back({i, e, 0, false});
   }
-  // + 1: v[x + 1] of the last pair; + 16: the SIMD loads of 8 pairs from a base up to span - 1.
-  std::vector<std::uint16_t> blended(span + 1);
-  std::vector<std::uint32_t> pairs(span + 16);
+  // + 1: v[x + 1] of the last pair; the SIMD loads read up to 16 texels past a base <= span - 1.
+  std::vector<std::uint16_t> blended(span + 1 + Horizontal::kPadding);
   std::vector<char> present(nc);
   Quad q{};
   for (std::int32_t j = 0; j < height; ++j) {
@@ -601,8 +630,7 @@ ComposeStats composePlane(const TileGrid& grid,
     std::uint8_t* out = canvas + static_cast<std::size_t>(j) * w;
     const std::uint16_t* v = blended.data();
     if (all) {
-      makePairs(v, pairs.data(), span);
-      hz.run(v, pairs.data(), out);
+      hz.run(v, out);
       continue;
     }
     for (std::int32_t i = 0; i < width; ++i) {
