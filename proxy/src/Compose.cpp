@@ -526,14 +526,15 @@ void blendRows(const std::uint8_t* a,
  * no test per pixel while every tile of the row is there. The same integer arithmetic as the RGB
  * path's (weights in 1/256, one rounding), so the same values.
  */
-ComposeStats composePlane(const TileGrid& grid,
-                          const Sector& box,
-                          std::int32_t width,
-                          std::int32_t height,
-                          std::int32_t level,
-                          std::int32_t firstLevel,
-                          const TileLookup& tiles,
-                          std::uint8_t* canvas) {
+ComposeStats composePlaneInto(const TileGrid& grid,
+                              const Sector& box,
+                              std::int32_t width,
+                              std::int32_t height,
+                              std::int32_t level,
+                              std::int32_t firstLevel,
+                              const TileLookup& tiles,
+                              const std::uint8_t* background,
+                              std::uint8_t* canvas) {
   ComposeStats stats;
   const LevelTiles t = levelTiles(grid, box, width, height, level, tiles);
   Fallback fallback(grid, box, width, height, level, std::max(0, firstLevel), tiles);
@@ -605,9 +606,18 @@ ComposeStats composePlane(const TileGrid& grid,
   std::vector<std::uint16_t> blended(span + 1 + Horizontal::kPadding);
   std::vector<char> present(nc);
   Quad q{};
+  // With a background, the columns outside the layer are filled in each row drawn.
+  const bool outsideColumns =
+      background && std::any_of(t.cols.samples.begin(),
+                                t.cols.samples.end(),
+                                [](const AxisSample& c) { return c.slotA < 0; });
   for (std::int32_t j = 0; j < height; ++j) {
     const AxisSample& r = t.rows.samples[static_cast<std::size_t>(j)];
-    if (r.slotA < 0) continue;
+    std::uint8_t* out = canvas + static_cast<std::size_t>(j) * w;
+    if (r.slotA < 0 || outsideColumns) {
+      if (background) std::memset(out, *background, w);
+      if (r.slotA < 0) continue;
+    }
     const auto wy = static_cast<std::uint32_t>(r.weightB);
     bool all = true;
     for (std::size_t k = 0; k < nc; ++k) {
@@ -622,12 +632,10 @@ ComposeStats composePlane(const TileGrid& grid,
           sa->rgb + static_cast<std::size_t>(r.offA) * static_cast<std::size_t>(sa->width);
       const std::uint8_t* b =
           sb->rgb + static_cast<std::size_t>(r.offB) * static_cast<std::size_t>(sb->width);
-      std::uint16_t* out = blended.data() + base[k];
       const auto lo = static_cast<std::size_t>(t.cols.lo[k]);
       const std::size_t n = static_cast<std::size_t>(t.cols.hi[k]) + 1 - lo;
-      blendRows(a + lo, b + lo, wy, out, n);
+      blendRows(a + lo, b + lo, wy, blended.data() + base[k], n);
     }
-    std::uint8_t* out = canvas + static_cast<std::size_t>(j) * w;
     const std::uint16_t* v = blended.data();
     if (all) {
       hz.run(v, out);
@@ -646,6 +654,7 @@ ComposeStats composePlane(const TileGrid& grid,
         out[ui] = sampleOne(q);
       } else {
         ++stats.missingPixels;
+        if (background) out[ui] = *background;
       }
     }
   }
@@ -761,7 +770,8 @@ ComposeStats composeImagery(const TileGrid& grid,
                             std::int32_t canvasChannels) {
   if (canvasChannels == 1) {
     canvas.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
-    return composePlane(grid, box, width, height, level, firstLevel, tiles, canvas.data());
+    return composePlaneInto(
+        grid, box, width, height, level, firstLevel, tiles, nullptr, canvas.data());
   }
   const int cc = canvasChannels == 3 ? 3 : 4;
   canvas.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) *
@@ -852,6 +862,20 @@ ComposeStats composeImagery(const TileGrid& grid,
     }
   }
   return stats;
+}
+
+ComposeStats composePlane(const TileGrid& grid,
+                          const Sector& box,
+                          std::int32_t width,
+                          std::int32_t height,
+                          std::int32_t level,
+                          std::int32_t firstLevel,
+                          const TileLookup& tiles,
+                          std::uint8_t background,
+                          std::vector<std::uint8_t>& plane) {
+  plane.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  return composePlaneInto(
+      grid, box, width, height, level, firstLevel, tiles, &background, plane.data());
 }
 
 ComposeStats composeHeights(const TileGrid& grid,
