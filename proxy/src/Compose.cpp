@@ -77,6 +77,22 @@ TexelInTile texelInTile(std::int64_t x, std::int32_t tileSize) noexcept {
   return {tile, static_cast<std::int32_t>(x - tile * tileSize)};
 }
 
+/** texelInTile along an axis whose texels mostly grow: the last tile is kept, and a texel in it
+ * needs no division. */
+struct TileCursor {
+  std::int32_t size;
+  std::int64_t tile = 0, start = 0;
+
+  TexelInTile operator()(std::int64_t x) noexcept {
+    const std::int64_t d = x - start;
+    if (d >= 0 && d < size) return {tile, static_cast<std::int32_t>(d)};
+    const TexelInTile t = texelInTile(x, size);
+    tile = t.tile;
+    start = x - t.offset;
+    return t;
+  }
+};
+
 /** texelInTile(x1) knowing texelInTile(x0) = `a`: no division when x1 is x0 or its neighbour
  * inside the same tile (nearly every sample). */
 TexelInTile nextTexelInTile(const TexelInTile& a,
@@ -111,6 +127,7 @@ Axis columns(const TileGrid& grid, const Sector& box, std::int32_t width, std::i
   const double dx = (box.east - box.west) / width;
   Axis a;
   a.samples.resize(static_cast<std::size_t>(width));
+  TileCursor cursor{spec.tileWidth};
   for (std::int32_t i = 0; i < width; ++i) {
     double lon = box.west + (i + 0.5) * dx;
     if (wrap) {
@@ -131,7 +148,7 @@ Axis columns(const TileGrid& grid, const Sector& box, std::int32_t width, std::i
       x1 = std::clamp(x1, first, last);
     }
     AxisSample& s = a.samples[static_cast<std::size_t>(i)];
-    const TexelInTile ta = texelInTile(x0, spec.tileWidth);
+    const TexelInTile ta = cursor(x0);
     const TexelInTile tb = nextTexelInTile(ta, x0, x1, spec.tileWidth);
     s.slotA = slotOf(a.tiles, ta.tile);
     s.slotB = ta.tile == tb.tile ? s.slotA : slotOf(a.tiles, tb.tile);
@@ -161,6 +178,7 @@ Axis rows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int
   const double dy = (box.north - box.south) / height;
   Axis a;
   a.samples.resize(static_cast<std::size_t>(height));
+  TileCursor cursor{spec.tileHeight};
   for (std::int32_t j = 0; j < height; ++j) {
     const double lat = box.north - (j + 0.5) * dy;
     if (lat > north || lat < south) continue; // past a pole or outside the layer
@@ -170,7 +188,7 @@ Axis rows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int
     const auto y0 = std::clamp(static_cast<std::int64_t>(fl), first, last);
     const auto y1 = std::clamp(static_cast<std::int64_t>(fl) + 1, first, last);
     AxisSample& s = a.samples[static_cast<std::size_t>(j)];
-    const TexelInTile ta = texelInTile(y0, spec.tileHeight);
+    const TexelInTile ta = cursor(y0);
     const TexelInTile tb = nextTexelInTile(ta, y0, y1, spec.tileHeight);
     s.slotA = slotOf(a.tiles, rowCount - 1 - ta.tile);
     s.slotB = ta.tile == tb.tile ? s.slotA : slotOf(a.tiles, rowCount - 1 - tb.tile);
