@@ -116,7 +116,10 @@ std::int32_t slotOf(std::vector<std::int64_t>& tiles, std::int64_t tile) {
  * Columns: texel x counted from -180 (texel centres at x + 0.5), wrapped around a global layer,
  * clamped to the sector's texels otherwise.
  */
-Axis columns(const TileGrid& grid, const Sector& box, std::int32_t width, std::int32_t level) {
+Axis computeColumns(const TileGrid& grid,
+                    const Sector& box,
+                    std::int32_t width,
+                    std::int32_t level) {
   const GridSpec& spec = grid.spec();
   const double res = grid.deltaDeg(level) / spec.tileWidth;
   const std::int64_t total = grid.colCount(level) * spec.tileWidth;
@@ -164,7 +167,7 @@ Axis columns(const TileGrid& grid, const Sector& box, std::int32_t width, std::i
 
 /** Rows: texel y counted from +90 down (tile rows are counted from the south), clamped at the
  * poles and at the sector's edges. */
-Axis rows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int32_t level) {
+Axis computeRows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int32_t level) {
   const GridSpec& spec = grid.spec();
   const double res = grid.deltaDeg(level) / spec.tileHeight;
   const std::int64_t rowCount = grid.rowCount(level);
@@ -200,6 +203,61 @@ Axis rows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int
     s.weightB = static_cast<std::int32_t>(std::lround(f * 256.0));
   }
   return a;
+}
+
+/**
+ * The axes last computed on this thread, by what they depend on: a JPEG map composed on planes
+ * asks for its luma axes twice (composeTilesYcc, the Y plane) and for its chroma axes three times
+ * (composeTilesYcc, Cb, Cr), and computing one costs tens of nanoseconds per sample. A copy of
+ * the same values is returned.
+ */
+template <class Compute>
+Axis memoAxis(bool isColumns,
+              const GridSpec& spec,
+              double from,
+              double to,
+              std::int32_t samples,
+              std::int32_t level,
+              Compute&& compute) {
+  struct Entry {
+    bool isColumns;
+    GridSpec spec;
+    double from, to;
+    std::int32_t samples, level;
+    Axis axis;
+  };
+  constexpr std::size_t kEntries = 4;
+  constexpr std::int32_t kLargest = 4096; // larger maps' axes are not kept
+  thread_local std::vector<Entry> memo;
+  thread_local std::size_t next = 0;
+  for (const Entry& e : memo) {
+    if (e.isColumns == isColumns && e.spec == spec && e.from == from && e.to == to &&
+        e.samples == samples && e.level == level)
+      return e.axis;
+  }
+  Axis a = compute();
+  if (samples <= kLargest) {
+    Entry e{isColumns, spec, from, to, samples, level, a};
+    if (memo.size() < kEntries) {
+      memo.push_back(std::move(e));
+    } else {
+      memo[next] = std::move(e);
+      next = (next + 1) % kEntries;
+    }
+  }
+  return a;
+}
+
+Axis columns(const TileGrid& grid, const Sector& box, std::int32_t width, std::int32_t level) {
+  return memoAxis(true, grid.spec(), box.west, box.east, width, level, [&] {
+    return computeColumns(grid, box, width, level);
+  });
+}
+
+Axis rows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int32_t level) {
+  return memoAxis(false, grid.spec(), box.north, box.south, height, level, [&] {
+    return computeRows(grid, box, height, level);
+  });
 }
 
 /** The tiles of one level laid out by (row slot, column slot). */
