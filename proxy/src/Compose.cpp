@@ -489,20 +489,28 @@ std::uint8_t sampleOne(const Quad& q) noexcept {
  * the plain loop.
  */
 struct Horizontal {
+  enum class Kind : std::uint8_t {
+    Scalar,
+    Avx2,   ///< 8 columns within 16 texels
+    Avx512, ///< 16 columns within 32 texels (xa - base <= 30)
+  };
   struct Segment {
     std::uint32_t begin, end; ///< output columns
-    std::uint32_t base;       ///< for a SIMD segment (end - begin = 8): its first texel in v
-    bool simd;
+    std::uint32_t base;       ///< for a SIMD segment: its first texel in v
+    Kind kind;
   };
   std::vector<std::uint32_t> xa, xb, wa, wb;
-  /// SIMD segments, per column: the pair's 32-bit lane in the interleaved registers (bits 0-2)
+  /// AVX2 segments, per column: the pair's 32-bit lane in the interleaved registers (bits 0-2)
   /// and which of the two (bit 31), from r = xa - base: (r & 3) | (r & 8) >> 1, r & 4.
   std::vector<std::uint32_t> lane;
+  /// AVX-512 segments, per column: the 16-bit indices of v[xa] and v[xa + 1] from the base, so
+  /// that one permutation of 32 texels (vpermw) gives the 16 pairs.
+  std::vector<std::uint16_t> pairIndex;
   std::vector<std::uint32_t> weights; ///< SIMD segments, per column: wa | wb << 16
   std::vector<Segment> segments;
 
   /// How far past the last texel of v the SIMD loads read (v must have these elements).
-  static constexpr std::size_t kPadding = 16;
+  static constexpr std::size_t kPadding = 32;
 
   void scalar(const std::uint16_t* v, std::uint8_t* out, std::size_t b, std::size_t e) const {
     for (std::size_t i = b; i < e; ++i)
@@ -512,11 +520,15 @@ struct Horizontal {
 };
 
 #ifdef TELLUS_COMPOSE_AVX2
-// TELLUS_COMPOSE_NO_AVX2=1 takes the plain code on any CPU (the tests run both).
+// TELLUS_COMPOSE_NO_AVX2=1 takes the plain code on any CPU, TELLUS_COMPOSE_NO_AVX512=1 the AVX2
+// code on a CPU with AVX-512 (the tests run all three).
 const bool kHasAvx2 = __builtin_cpu_supports("avx2") && !std::getenv("TELLUS_COMPOSE_NO_AVX2");
+const bool kHasAvx512 =
+    kHasAvx2 && __builtin_cpu_supports("avx512bw") && !std::getenv("TELLUS_COMPOSE_NO_AVX512");
 
-__attribute__((target("avx2"))) void
-horizontalAvx2(const Horizontal& h, const std::uint16_t* v, std::uint8_t* out) {
+/** One AVX2 segment (8 columns). */
+[[gnu::always_inline]] inline __attribute__((target("avx2"))) void segmentAvx2(
+    const Horizontal& h, const Horizontal::Segment& s, const std::uint16_t* v, std::uint8_t* out) {
   const __m256i flip = _mm256_set1_epi16(static_cast<short>(0x8000));
   const __m256i offset = _mm256_set1_epi32((1 << 23) + 32768);
   // The low byte of each 32-bit lane to the first four bytes of each 128-bit half, then those two
@@ -526,35 +538,67 @@ horizontalAvx2(const Horizontal& h, const std::uint16_t* v, std::uint8_t* out) {
                                          0, 4, 8, 12, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
   // clang-format on
   const __m256i gather = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
+  const __m256i v0 =
+      _mm256_xor_si256(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(v + s.base)), flip);
+  const __m256i v1 =
+      _mm256_xor_si256(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(v + s.base + 1)), flip);
+  // Pairs (v[x], v[x + 1]) for x = base + 0-3 | 8-11 (lo) and base + 4-7 | 12-15 (hi).
+  const __m256i lo = _mm256_unpacklo_epi16(v0, v1);
+  const __m256i hi = _mm256_unpackhi_epi16(v0, v1);
+  const __m256i lane =
+      _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h.lane.data() + s.begin));
+  const __m256 pick = _mm256_blendv_ps(_mm256_castsi256_ps(_mm256_permutevar8x32_epi32(lo, lane)),
+                                       _mm256_castsi256_ps(_mm256_permutevar8x32_epi32(hi, lane)),
+                                       _mm256_castsi256_ps(lane));
+  const __m256i sum = _mm256_madd_epi16(
+      _mm256_castps_si256(pick),
+      _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h.weights.data() + s.begin)));
+  const __m256i r = _mm256_permutevar8x32_epi32(
+      _mm256_shuffle_epi8(_mm256_srli_epi32(_mm256_add_epi32(sum, offset), 16), bytes), gather);
+  _mm_storel_epi64(reinterpret_cast<__m128i*>(out + s.begin), _mm256_castsi256_si128(r));
+}
+
+__attribute__((target("avx2"))) void
+horizontalAvx2(const Horizontal& h, const std::uint16_t* v, std::uint8_t* out) {
   for (const Horizontal::Segment& s : h.segments) {
-    if (!s.simd) {
+    if (s.kind == Horizontal::Kind::Avx2) {
+      segmentAvx2(h, s, v, out);
+    } else {
       h.scalar(v, out, s.begin, s.end);
-      continue;
     }
-    const __m256i v0 =
-        _mm256_xor_si256(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(v + s.base)), flip);
-    const __m256i v1 = _mm256_xor_si256(
-        _mm256_loadu_si256(reinterpret_cast<const __m256i*>(v + s.base + 1)), flip);
-    // Pairs (v[x], v[x + 1]) for x = base + 0-3 | 8-11 (lo) and base + 4-7 | 12-15 (hi).
-    const __m256i lo = _mm256_unpacklo_epi16(v0, v1);
-    const __m256i hi = _mm256_unpackhi_epi16(v0, v1);
-    const __m256i lane =
-        _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h.lane.data() + s.begin));
-    const __m256 pick = _mm256_blendv_ps(_mm256_castsi256_ps(_mm256_permutevar8x32_epi32(lo, lane)),
-                                         _mm256_castsi256_ps(_mm256_permutevar8x32_epi32(hi, lane)),
-                                         _mm256_castsi256_ps(lane));
-    const __m256i sum = _mm256_madd_epi16(
-        _mm256_castps_si256(pick),
-        _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h.weights.data() + s.begin)));
-    const __m256i r = _mm256_permutevar8x32_epi32(
-        _mm256_shuffle_epi8(_mm256_srli_epi32(_mm256_add_epi32(sum, offset), 16), bytes), gather);
-    _mm_storel_epi64(reinterpret_cast<__m128i*>(out + s.begin), _mm256_castsi256_si128(r));
+  }
+}
+
+/** With AVX-512 (BW), 16 columns at a time: 32 texels from the base in one register, one vpermw
+ * for the 16 pairs, the same multiply-add. */
+__attribute__((target("avx2,avx512f,avx512bw"))) void
+horizontalAvx512(const Horizontal& h, const std::uint16_t* v, std::uint8_t* out) {
+  const __m512i flip = _mm512_set1_epi16(static_cast<short>(0x8000));
+  const __m512i offset = _mm512_set1_epi32((1 << 23) + 32768);
+  const __mmask16 all = 0xFFFF;
+  for (const Horizontal::Segment& s : h.segments) {
+    if (s.kind == Horizontal::Kind::Avx512) {
+      const __m512i texels = _mm512_xor_si512(_mm512_loadu_si512(v + s.base), flip);
+      const __m512i pairs = _mm512_permutexvar_epi16(
+          _mm512_loadu_si512(h.pairIndex.data() + 2 * static_cast<std::size_t>(s.begin)), texels);
+      const __m512i sum = _mm512_madd_epi16(pairs, _mm512_loadu_si512(h.weights.data() + s.begin));
+      // The zero-masked forms: GCC 12's plain ones start from an "undefined" register that
+      // -Wmaybe-uninitialized flags.
+      const __m512i r = _mm512_maskz_srli_epi32(all, _mm512_add_epi32(sum, offset), 16);
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(out + s.begin),
+                       _mm512_maskz_cvtepi32_epi8(all, r));
+    } else if (s.kind == Horizontal::Kind::Avx2) {
+      segmentAvx2(h, s, v, out);
+    } else {
+      h.scalar(v, out, s.begin, s.end);
+    }
   }
 }
 #endif
 
 void Horizontal::run(const std::uint16_t* v, std::uint8_t* out) const {
 #ifdef TELLUS_COMPOSE_AVX2
+  if (kHasAvx512) return horizontalAvx512(*this, v, out);
   if (kHasAvx2) return horizontalAvx2(*this, v, out);
 #endif
   for (const Segment& s : segments)
@@ -650,35 +694,66 @@ ComposeStats composePlaneInto(const TileGrid& grid,
       runs.emplace_back(i, i + 1);
     }
   }
+#ifdef TELLUS_COMPOSE_AVX2
+  const bool wide = kHasAvx512;
+#else
+  const bool wide = false;
+#endif
+  if (wide) hz.pairIndex.assign(2 * w, 0);
+  // Whether columns [i, i + n) can be one SIMD segment of n columns (texel pairs that are
+  // neighbours within `reach` texels of the first); the first texel when they can.
+  const auto fits = [&](std::uint32_t i, std::uint32_t n, std::uint32_t reach, std::uint32_t& lo) {
+    std::uint32_t hi = xa[i];
+    lo = xa[i];
+    bool neighbours = true;
+    for (std::uint32_t k = i; k < i + n; ++k) {
+      lo = std::min(lo, xa[k]);
+      hi = std::max(hi, xa[k]);
+      neighbours = neighbours && (xb[k] == xa[k] + 1 || wb[k] == 0);
+    }
+    return neighbours && hi - lo < reach;
+  };
+  const auto add =
+      [&](std::uint32_t begin, std::uint32_t end, std::uint32_t first, Horizontal::Kind kind) {
+        if (kind == Horizontal::Kind::Scalar && !hz.segments.empty() &&
+            hz.segments.back().kind == Horizontal::Kind::Scalar &&
+            hz.segments.back().end == begin) {
+          hz.segments.back().end = end;
+        } else {
+          hz.segments.push_back({begin, end, first, kind});
+        }
+      };
   for (const auto& [begin, end] : runs) {
     auto i = static_cast<std::uint32_t>(begin);
     const auto e = static_cast<std::uint32_t>(end);
-    for (; i + 8 <= e; i += 8) {
-      std::uint32_t lo = xa[i], hi = xa[i];
-      bool neighbours = true;
-      for (std::uint32_t k = i; k < i + 8; ++k) {
-        lo = std::min(lo, xa[k]);
-        hi = std::max(hi, xa[k]);
-        neighbours = neighbours && (xb[k] == xa[k] + 1 || wb[k] == 0);
+    std::uint32_t lo = 0;
+    while (i + 8 <= e) {
+      if (wide && i + 16 <= e && fits(i, 16, 31, lo)) {
+        for (std::uint32_t k = i; k < i + 16; ++k) {
+          const std::uint32_t r = xa[k] - lo;
+          hz.pairIndex[2 * k] = static_cast<std::uint16_t>(r);
+          hz.pairIndex[2 * k + 1] = static_cast<std::uint16_t>(r + 1);
+          hz.weights[k] = wa[k] | wb[k] << 16;
+        }
+        add(i, i + 16, lo, Horizontal::Kind::Avx512);
+        i += 16;
+        continue;
       }
-      const bool simd = neighbours && hi - lo < 16;
-      if (simd) {
+      if (fits(i, 8, 16, lo)) {
         for (std::uint32_t k = i; k < i + 8; ++k) {
           const std::uint32_t r = xa[k] - lo;
           hz.lane[k] = (r & 3u) | (r & 8u) >> 1 | (r & 4u ? 0x80000000u : 0u);
           hz.weights[k] = wa[k] | wb[k] << 16;
         }
-      }
-      if (!simd && !hz.segments.empty() && !hz.segments.back().simd &&
-          hz.segments.back().end == i) {
-        hz.segments.back().end = i + 8;
+        add(i, i + 8, lo, Horizontal::Kind::Avx2);
       } else {
-        hz.segments.push_back({i, i + 8, lo, simd});
+        add(i, i + 8, 0, Horizontal::Kind::Scalar);
       }
+      i += 8;
     }
-    if (i < e) hz.segments.push_back({i, e, 0, false});
+    if (i < e) add(i, e, 0, Horizontal::Kind::Scalar);
   }
-  // + 1: v[x + 1] of the last pair; the SIMD loads read up to 16 texels past a base <= span - 1.
+  // + 1: v[x + 1] of the last pair; the SIMD loads read up to 32 texels from a base <= span - 1.
   std::vector<std::uint16_t> blended(span + 1 + Horizontal::kPadding);
   std::vector<char> present(nc);
   Quad q{};
