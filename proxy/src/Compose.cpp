@@ -5,6 +5,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <memory>
+#include <mutex>
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
@@ -206,38 +208,48 @@ Axis computeRows(const TileGrid& grid, const Sector& box, std::int32_t height, s
 }
 
 /**
- * The axes last computed on this thread, by what they depend on: a JPEG map composed on planes
- * asks for its luma axes twice (composeTilesYcc, the Y plane) and for its chroma axes three times
- * (composeTilesYcc, Cb, Cr), and computing one costs tens of nanoseconds per sample. A copy of
- * the same values is returned.
+ * The axes last computed, by what they depend on: a JPEG map composed on planes asks for its luma
+ * axes twice (composeTilesYcc on the thread that takes the request, the Y plane on a composer
+ * thread) and for its chroma axes three times (composeTilesYcc, Cb, Cr), and computing one costs
+ * tens of nanoseconds per sample. Shared by all threads (under a lock, held only to look up and
+ * to store a pointer); the axes are immutable once made.
  */
 template <class Compute>
-Axis memoAxis(bool isColumns,
-              const GridSpec& spec,
-              double from,
-              double to,
-              std::int32_t samples,
-              std::int32_t level,
-              Compute&& compute) {
+std::shared_ptr<const Axis> memoAxis(bool isColumns,
+                                     const GridSpec& spec,
+                                     double from,
+                                     double to,
+                                     std::int32_t samples,
+                                     std::int32_t level,
+                                     Compute&& compute) {
   struct Entry {
     bool isColumns;
     GridSpec spec;
     double from, to;
     std::int32_t samples, level;
-    Axis axis;
+    std::shared_ptr<const Axis> axis;
   };
-  constexpr std::size_t kEntries = 4;
+  constexpr std::size_t kEntries = 16;    // the axes of four maps at a time
   constexpr std::int32_t kLargest = 4096; // larger maps' axes are not kept
-  thread_local std::vector<Entry> memo;
-  thread_local std::size_t next = 0;
-  for (const Entry& e : memo) {
-    if (e.isColumns == isColumns && e.spec == spec && e.from == from && e.to == to &&
-        e.samples == samples && e.level == level)
-      return e.axis;
+  static std::mutex lock;
+  static std::vector<Entry> memo;
+  static std::size_t next = 0;
+  std::shared_ptr<const Axis> found;
+  {
+    const std::lock_guard<std::mutex> guard(lock);
+    for (const Entry& e : memo) {
+      if (e.isColumns == isColumns && e.spec == spec && e.from == from && e.to == to &&
+          e.samples == samples && e.level == level) {
+        found = e.axis;
+        break;
+      }
+    }
   }
-  Axis a = compute();
+  if (found) return found;
+  auto a = std::make_shared<const Axis>(compute());
   if (samples <= kLargest) {
     Entry e{isColumns, spec, from, to, samples, level, a};
+    const std::lock_guard<std::mutex> guard(lock);
     if (memo.size() < kEntries) {
       memo.push_back(std::move(e));
     } else {
@@ -248,13 +260,15 @@ Axis memoAxis(bool isColumns,
   return a;
 }
 
-Axis columns(const TileGrid& grid, const Sector& box, std::int32_t width, std::int32_t level) {
+std::shared_ptr<const Axis>
+columns(const TileGrid& grid, const Sector& box, std::int32_t width, std::int32_t level) {
   return memoAxis(true, grid.spec(), box.west, box.east, width, level, [&] {
     return computeColumns(grid, box, width, level);
   });
 }
 
-Axis rows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int32_t level) {
+std::shared_ptr<const Axis>
+rows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int32_t level) {
   return memoAxis(false, grid.spec(), box.north, box.south, height, level, [&] {
     return computeRows(grid, box, height, level);
   });
@@ -262,9 +276,13 @@ Axis rows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int
 
 /** The tiles of one level laid out by (row slot, column slot). */
 struct LevelTiles {
-  Axis cols;
-  Axis rows;
+  std::shared_ptr<const Axis> colsAxis, rowsAxis; ///< (shared with memoAxis)
+  const Axis& cols;
+  const Axis& rows;
   std::vector<const TileSamples*> tiles; ///< rows.tiles.size() x cols.tiles.size()
+
+  LevelTiles(std::shared_ptr<const Axis> c, std::shared_ptr<const Axis> r)
+      : colsAxis(std::move(c)), rowsAxis(std::move(r)), cols(*colsAxis), rows(*rowsAxis) {}
 
   const TileSamples* at(std::int32_t rowSlot, std::int32_t colSlot) const noexcept {
     return tiles[static_cast<std::size_t>(rowSlot) * cols.tiles.size() +
@@ -278,7 +296,7 @@ LevelTiles levelTiles(const TileGrid& grid,
                       std::int32_t height,
                       std::int32_t level,
                       const TileLookup& lookup) {
-  LevelTiles t{columns(grid, box, width, level), rows(grid, box, height, level), {}};
+  LevelTiles t(columns(grid, box, width, level), rows(grid, box, height, level));
   t.tiles.reserve(t.rows.tiles.size() * t.cols.tiles.size());
   for (const auto row : t.rows.tiles) {
     for (const auto col : t.cols.tiles) {
@@ -893,8 +911,10 @@ std::expected<std::vector<ComposeTile>, std::size_t> composeTiles(const TileGrid
                                                                   std::int32_t height,
                                                                   std::int32_t level,
                                                                   std::size_t maxTiles) {
-  const Axis c = columns(grid, box, width, level);
-  const Axis r = rows(grid, box, height, level);
+  const auto columnAxis = columns(grid, box, width, level);
+  const auto rowAxis = rows(grid, box, height, level);
+  const Axis& c = *columnAxis;
+  const Axis& r = *rowAxis;
   const std::size_t count = c.tiles.size() * r.tiles.size();
   if (count > maxTiles) return std::unexpected(count);
   std::vector<ComposeTile> keys;
