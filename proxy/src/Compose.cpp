@@ -231,13 +231,18 @@ std::shared_ptr<const Axis> memoAxis(bool isColumns,
   };
   constexpr std::size_t kEntries = 16;    // the axes of four maps at a time
   constexpr std::int32_t kLargest = 4096; // larger maps' axes are not kept
-  static std::mutex lock;
-  static std::vector<Entry> memo;
-  static std::size_t next = 0;
+  struct Memo {
+    std::mutex lock;
+    std::vector<Entry> entries;
+    std::size_t next = 0;
+  };
+  // Never destroyed: a composer thread still running while statics are torn down at exit finds
+  // it intact.
+  static Memo& memo = *new Memo;
   std::shared_ptr<const Axis> found;
   {
-    const std::lock_guard<std::mutex> guard(lock);
-    for (const Entry& e : memo) {
+    const std::lock_guard<std::mutex> guard(memo.lock);
+    for (const Entry& e : memo.entries) {
       if (e.isColumns == isColumns && e.spec == spec && e.from == from && e.to == to &&
           e.samples == samples && e.level == level) {
         found = e.axis;
@@ -249,12 +254,12 @@ std::shared_ptr<const Axis> memoAxis(bool isColumns,
   auto a = std::make_shared<const Axis>(compute());
   if (samples <= kLargest) {
     Entry e{isColumns, spec, from, to, samples, level, a};
-    const std::lock_guard<std::mutex> guard(lock);
-    if (memo.size() < kEntries) {
-      memo.push_back(std::move(e));
+    const std::lock_guard<std::mutex> guard(memo.lock);
+    if (memo.entries.size() < kEntries) {
+      memo.entries.push_back(std::move(e));
     } else {
-      memo[next] = std::move(e);
-      next = (next + 1) % kEntries;
+      memo.entries[memo.next] = std::move(e);
+      memo.next = (memo.next + 1) % kEntries;
     }
   }
   return a;
