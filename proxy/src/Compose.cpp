@@ -5,6 +5,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <memory>
+#include <mutex>
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
@@ -50,10 +52,58 @@ bool globalInLongitude(const GridSpec& spec) noexcept {
 
 /** Longitude into [-180, 180). */
 double wrapLongitude(double lon) noexcept {
-  double w = std::fmod(lon + 180.0, 360.0);
+  const double x = lon + 180.0;
+  // fmod's value without the call where it is a subtraction: fmod is exact, and so is x - 360
+  // for x in [360, 720] (Sterbenz).
+  double w = x >= 0.0 && x < 360.0 ? x : x >= 360.0 && x < 720.0 ? x - 360.0 : std::fmod(x, 360.0);
   if (w < 0.0) w += 360.0;
   if (w >= 360.0) w = 0.0;
   return w - 180.0;
+}
+
+/** `x` modulo `total` into [0, total): the division only for texels off the grid (the two
+ * divisions per texel were most of the axes' cost). */
+std::int64_t wrapIndex(std::int64_t x, std::int64_t total) noexcept {
+  if (x >= 0 && x < total) return x;
+  return (x % total + total) % total;
+}
+
+/** A texel index (>= 0) as a tile and the texel's offset in it. */
+struct TexelInTile {
+  std::int64_t tile;
+  std::int32_t offset;
+};
+
+TexelInTile texelInTile(std::int64_t x, std::int32_t tileSize) noexcept {
+  const std::int64_t tile = x / tileSize;
+  return {tile, static_cast<std::int32_t>(x - tile * tileSize)};
+}
+
+/** texelInTile along an axis whose texels mostly grow: the last tile is kept, and a texel in it
+ * needs no division. */
+struct TileCursor {
+  std::int32_t size;
+  std::int64_t tile = 0, start = 0;
+
+  TexelInTile operator()(std::int64_t x) noexcept {
+    const std::int64_t d = x - start;
+    if (d >= 0 && d < size) return {tile, static_cast<std::int32_t>(d)};
+    const TexelInTile t = texelInTile(x, size);
+    tile = t.tile;
+    start = x - t.offset;
+    return t;
+  }
+};
+
+/** texelInTile(x1) knowing texelInTile(x0) = `a`: no division when x1 is x0 or its neighbour
+ * inside the same tile (nearly every sample). */
+TexelInTile nextTexelInTile(const TexelInTile& a,
+                            std::int64_t x0,
+                            std::int64_t x1,
+                            std::int32_t tileSize) noexcept {
+  if (x1 == x0) return a;
+  if (x1 == x0 + 1 && a.offset + 1 < tileSize) return {a.tile, a.offset + 1};
+  return texelInTile(x1, tileSize);
 }
 
 std::int32_t slotOf(std::vector<std::int64_t>& tiles, std::int64_t tile) {
@@ -68,7 +118,10 @@ std::int32_t slotOf(std::vector<std::int64_t>& tiles, std::int64_t tile) {
  * Columns: texel x counted from -180 (texel centres at x + 0.5), wrapped around a global layer,
  * clamped to the sector's texels otherwise.
  */
-Axis columns(const TileGrid& grid, const Sector& box, std::int32_t width, std::int32_t level) {
+Axis computeColumns(const TileGrid& grid,
+                    const Sector& box,
+                    std::int32_t width,
+                    std::int32_t level) {
   const GridSpec& spec = grid.spec();
   const double res = grid.deltaDeg(level) / spec.tileWidth;
   const std::int64_t total = grid.colCount(level) * spec.tileWidth;
@@ -79,6 +132,7 @@ Axis columns(const TileGrid& grid, const Sector& box, std::int32_t width, std::i
   const double dx = (box.east - box.west) / width;
   Axis a;
   a.samples.resize(static_cast<std::size_t>(width));
+  TileCursor cursor{spec.tileWidth};
   for (std::int32_t i = 0; i < width; ++i) {
     double lon = box.west + (i + 0.5) * dx;
     if (wrap) {
@@ -92,17 +146,19 @@ Axis columns(const TileGrid& grid, const Sector& box, std::int32_t width, std::i
     auto x0 = static_cast<std::int64_t>(fl);
     auto x1 = x0 + 1;
     if (wrap) {
-      x0 = (x0 % total + total) % total;
-      x1 = (x1 % total + total) % total;
+      x0 = wrapIndex(x0, total);
+      x1 = wrapIndex(x1, total);
     } else {
       x0 = std::clamp(x0, first, last);
       x1 = std::clamp(x1, first, last);
     }
     AxisSample& s = a.samples[static_cast<std::size_t>(i)];
-    s.slotA = slotOf(a.tiles, x0 / spec.tileWidth);
-    s.slotB = slotOf(a.tiles, x1 / spec.tileWidth);
-    s.offA = static_cast<std::int32_t>(x0 % spec.tileWidth);
-    s.offB = static_cast<std::int32_t>(x1 % spec.tileWidth);
+    const TexelInTile ta = cursor(x0);
+    const TexelInTile tb = nextTexelInTile(ta, x0, x1, spec.tileWidth);
+    s.slotA = slotOf(a.tiles, ta.tile);
+    s.slotB = ta.tile == tb.tile ? s.slotA : slotOf(a.tiles, tb.tile);
+    s.offA = ta.offset;
+    s.offB = tb.offset;
     a.use(s.slotA, s.offA);
     a.use(s.slotB, s.offB);
     s.exactWeightB = f;
@@ -113,7 +169,7 @@ Axis columns(const TileGrid& grid, const Sector& box, std::int32_t width, std::i
 
 /** Rows: texel y counted from +90 down (tile rows are counted from the south), clamped at the
  * poles and at the sector's edges. */
-Axis rows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int32_t level) {
+Axis computeRows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int32_t level) {
   const GridSpec& spec = grid.spec();
   const double res = grid.deltaDeg(level) / spec.tileHeight;
   const std::int64_t rowCount = grid.rowCount(level);
@@ -127,6 +183,7 @@ Axis rows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int
   const double dy = (box.north - box.south) / height;
   Axis a;
   a.samples.resize(static_cast<std::size_t>(height));
+  TileCursor cursor{spec.tileHeight};
   for (std::int32_t j = 0; j < height; ++j) {
     const double lat = box.north - (j + 0.5) * dy;
     if (lat > north || lat < south) continue; // past a pole or outside the layer
@@ -136,10 +193,12 @@ Axis rows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int
     const auto y0 = std::clamp(static_cast<std::int64_t>(fl), first, last);
     const auto y1 = std::clamp(static_cast<std::int64_t>(fl) + 1, first, last);
     AxisSample& s = a.samples[static_cast<std::size_t>(j)];
-    s.slotA = slotOf(a.tiles, rowCount - 1 - y0 / spec.tileHeight);
-    s.slotB = slotOf(a.tiles, rowCount - 1 - y1 / spec.tileHeight);
-    s.offA = static_cast<std::int32_t>(y0 % spec.tileHeight);
-    s.offB = static_cast<std::int32_t>(y1 % spec.tileHeight);
+    const TexelInTile ta = cursor(y0);
+    const TexelInTile tb = nextTexelInTile(ta, y0, y1, spec.tileHeight);
+    s.slotA = slotOf(a.tiles, rowCount - 1 - ta.tile);
+    s.slotB = ta.tile == tb.tile ? s.slotA : slotOf(a.tiles, rowCount - 1 - tb.tile);
+    s.offA = ta.offset;
+    s.offB = tb.offset;
     a.use(s.slotA, s.offA);
     a.use(s.slotB, s.offB);
     s.exactWeightB = f;
@@ -148,11 +207,87 @@ Axis rows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int
   return a;
 }
 
+/**
+ * The axes last computed, by what they depend on: a JPEG map composed on planes asks for its luma
+ * axes twice (composeTilesYcc on the thread that takes the request, the Y plane on a composer
+ * thread) and for its chroma axes three times (composeTilesYcc, Cb, Cr), and computing one costs
+ * tens of nanoseconds per sample. Shared by all threads (under a lock, held only to look up and
+ * to store a pointer); the axes are immutable once made.
+ */
+template <class Compute>
+std::shared_ptr<const Axis> memoAxis(bool isColumns,
+                                     const GridSpec& spec,
+                                     double from,
+                                     double to,
+                                     std::int32_t samples,
+                                     std::int32_t level,
+                                     Compute&& compute) {
+  struct Entry {
+    bool isColumns;
+    GridSpec spec;
+    double from, to;
+    std::int32_t samples, level;
+    std::shared_ptr<const Axis> axis;
+  };
+  constexpr std::size_t kEntries = 16;    // the axes of four maps at a time
+  constexpr std::int32_t kLargest = 4096; // larger maps' axes are not kept
+  struct Memo {
+    std::mutex lock;
+    std::vector<Entry> entries;
+    std::size_t next = 0;
+  };
+  // Never destroyed: a composer thread still running while statics are torn down at exit finds
+  // it intact.
+  static Memo& memo = *new Memo;
+  std::shared_ptr<const Axis> found;
+  {
+    const std::lock_guard<std::mutex> guard(memo.lock);
+    for (const Entry& e : memo.entries) {
+      if (e.isColumns == isColumns && e.spec == spec && e.from == from && e.to == to &&
+          e.samples == samples && e.level == level) {
+        found = e.axis;
+        break;
+      }
+    }
+  }
+  if (found) return found;
+  auto a = std::make_shared<const Axis>(compute());
+  if (samples <= kLargest) {
+    Entry e{isColumns, spec, from, to, samples, level, a};
+    const std::lock_guard<std::mutex> guard(memo.lock);
+    if (memo.entries.size() < kEntries) {
+      memo.entries.push_back(std::move(e));
+    } else {
+      memo.entries[memo.next] = std::move(e);
+      memo.next = (memo.next + 1) % kEntries;
+    }
+  }
+  return a;
+}
+
+std::shared_ptr<const Axis>
+columns(const TileGrid& grid, const Sector& box, std::int32_t width, std::int32_t level) {
+  return memoAxis(true, grid.spec(), box.west, box.east, width, level, [&] {
+    return computeColumns(grid, box, width, level);
+  });
+}
+
+std::shared_ptr<const Axis>
+rows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int32_t level) {
+  return memoAxis(false, grid.spec(), box.north, box.south, height, level, [&] {
+    return computeRows(grid, box, height, level);
+  });
+}
+
 /** The tiles of one level laid out by (row slot, column slot). */
 struct LevelTiles {
-  Axis cols;
-  Axis rows;
+  std::shared_ptr<const Axis> colsAxis, rowsAxis; ///< (shared with memoAxis)
+  const Axis& cols;
+  const Axis& rows;
   std::vector<const TileSamples*> tiles; ///< rows.tiles.size() x cols.tiles.size()
+
+  LevelTiles(std::shared_ptr<const Axis> c, std::shared_ptr<const Axis> r)
+      : colsAxis(std::move(c)), rowsAxis(std::move(r)), cols(*colsAxis), rows(*rowsAxis) {}
 
   const TileSamples* at(std::int32_t rowSlot, std::int32_t colSlot) const noexcept {
     return tiles[static_cast<std::size_t>(rowSlot) * cols.tiles.size() +
@@ -166,7 +301,7 @@ LevelTiles levelTiles(const TileGrid& grid,
                       std::int32_t height,
                       std::int32_t level,
                       const TileLookup& lookup) {
-  LevelTiles t{columns(grid, box, width, level), rows(grid, box, height, level), {}};
+  LevelTiles t(columns(grid, box, width, level), rows(grid, box, height, level));
   t.tiles.reserve(t.rows.tiles.size() * t.cols.tiles.size());
   for (const auto row : t.rows.tiles) {
     for (const auto col : t.cols.tiles) {
@@ -368,84 +503,135 @@ std::uint8_t sampleOne(const Quad& q) noexcept {
  * The horizontal half of the planar filter, precomputed per output column: out[i] = (v[xa] * wa +
  * v[xb] * wb + 32768) >> 16 over the vertically blended row v. Columns are grouped in segments of
  * a run of columns inside the layer; a segment of 8 columns whose texel pairs are neighbours
- * (xb = xa + 1, or wb = 0) within 16 texels of `base` is done with AVX2 (when the CPU has it) from
- * `pairs` (pairs[x] = v[x] | v[x + 1] << 16): two loads of 8 pairs and two in-register
- * permutations instead of 16 loads at computed addresses. The same integer arithmetic either way.
+ * (xb = xa + 1, or wb = 0) within 16 texels of `base` is done with AVX2 (when the CPU has it)
+ * straight from v: two unaligned loads of 16 texels (v[base..] and v[base + 1..]) interleaved into
+ * the 16 pairs (v[x], v[x + 1]), two in-register permutations and a blend that pick each column's
+ * pair, and one multiply-add of 16-bit pairs (pmaddwd) for v[xa] * wa + v[xb] * wb. pmaddwd
+ * multiplies signed 16-bit values and v reaches 65,280, so the texels go in less 32,768 (the sign
+ * bit flipped) and 32,768 * (wa + wb) = 2^23 is added back: exact, the same integer arithmetic as
+ * the plain loop.
  */
 struct Horizontal {
+  enum class Kind : std::uint8_t {
+    Scalar,
+    Avx2,   ///< 8 columns within 16 texels
+    Avx512, ///< 16 columns within 32 texels (xa - base <= 30)
+  };
   struct Segment {
     std::uint32_t begin, end; ///< output columns
-    std::uint32_t base;       ///< for a SIMD segment (end - begin = 8): the first texel pair
-    bool simd;
+    std::uint32_t base;       ///< for a SIMD segment: its first texel in v
+    Kind kind;
   };
-  std::vector<std::uint32_t> xa, xb, wa, wb, rel; ///< rel: xa - base in SIMD segments
+  std::vector<std::uint32_t> xa, xb, wa, wb;
+  /// AVX2 segments, per column: the pair's 32-bit lane in the interleaved registers (bits 0-2)
+  /// and which of the two (bit 31), from r = xa - base: (r & 3) | (r & 8) >> 1, r & 4.
+  std::vector<std::uint32_t> lane;
+  /// AVX-512 segments, per column: the 16-bit indices of v[xa] and v[xa + 1] from the base, so
+  /// that one permutation of 32 texels (vpermw) gives the 16 pairs.
+  std::vector<std::uint16_t> pairIndex;
+  std::vector<std::uint32_t> weights; ///< SIMD segments, per column: wa | wb << 16
   std::vector<Segment> segments;
+
+  /// How far past the last texel of v the SIMD loads read (v must have these elements).
+  static constexpr std::size_t kPadding = 32;
 
   void scalar(const std::uint16_t* v, std::uint8_t* out, std::size_t b, std::size_t e) const {
     for (std::size_t i = b; i < e; ++i)
       out[i] = static_cast<std::uint8_t>((v[xa[i]] * wa[i] + v[xb[i]] * wb[i] + 32768u) >> 16);
   }
-  void run(const std::uint16_t* v, const std::uint32_t* pairs, std::uint8_t* out) const;
+  void run(const std::uint16_t* v, std::uint8_t* out) const;
 };
 
 #ifdef TELLUS_COMPOSE_AVX2
-// TELLUS_COMPOSE_NO_AVX2=1 takes the plain code on any CPU (the tests run both).
+// TELLUS_COMPOSE_NO_AVX2=1 takes the plain code on any CPU, TELLUS_COMPOSE_NO_AVX512=1 the AVX2
+// code on a CPU with AVX-512 (the tests run all three).
 const bool kHasAvx2 = __builtin_cpu_supports("avx2") && !std::getenv("TELLUS_COMPOSE_NO_AVX2");
+const bool kHasAvx512 =
+    kHasAvx2 && __builtin_cpu_supports("avx512bw") && !std::getenv("TELLUS_COMPOSE_NO_AVX512");
 
-__attribute__((target("avx2"))) void horizontalAvx2(const Horizontal& h,
-                                                    const std::uint16_t* v,
-                                                    const std::uint32_t* pairs,
-                                                    std::uint8_t* out) {
-  const __m256i low = _mm256_set1_epi32(0xFFFF);
-  const __m256i half = _mm256_set1_epi32(32768);
-  const __m256i seven = _mm256_set1_epi32(7);
-  // The low byte of each 32-bit lane to the first four bytes of each 128-bit half.
+/** One AVX2 segment (8 columns). */
+[[gnu::always_inline]] inline __attribute__((target("avx2"))) void segmentAvx2(
+    const Horizontal& h, const Horizontal::Segment& s, const std::uint16_t* v, std::uint8_t* out) {
+  const __m256i flip = _mm256_set1_epi16(static_cast<short>(0x8000));
+  const __m256i offset = _mm256_set1_epi32((1 << 23) + 32768);
+  // The low byte of each 32-bit lane to the first four bytes of each 128-bit half, then those two
+  // words side by side.
   // clang-format off
   const __m256i bytes = _mm256_setr_epi8(0, 4, 8, 12, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
                                          0, 4, 8, 12, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
   // clang-format on
+  const __m256i gather = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
+  const __m256i v0 =
+      _mm256_xor_si256(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(v + s.base)), flip);
+  const __m256i v1 =
+      _mm256_xor_si256(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(v + s.base + 1)), flip);
+  // Pairs (v[x], v[x + 1]) for x = base + 0-3 | 8-11 (lo) and base + 4-7 | 12-15 (hi).
+  const __m256i lo = _mm256_unpacklo_epi16(v0, v1);
+  const __m256i hi = _mm256_unpackhi_epi16(v0, v1);
+  const __m256i lane =
+      _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h.lane.data() + s.begin));
+  const __m256 pick = _mm256_blendv_ps(_mm256_castsi256_ps(_mm256_permutevar8x32_epi32(lo, lane)),
+                                       _mm256_castsi256_ps(_mm256_permutevar8x32_epi32(hi, lane)),
+                                       _mm256_castsi256_ps(lane));
+  const __m256i sum = _mm256_madd_epi16(
+      _mm256_castps_si256(pick),
+      _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h.weights.data() + s.begin)));
+  const __m256i r = _mm256_permutevar8x32_epi32(
+      _mm256_shuffle_epi8(_mm256_srli_epi32(_mm256_add_epi32(sum, offset), 16), bytes), gather);
+  _mm_storel_epi64(reinterpret_cast<__m128i*>(out + s.begin), _mm256_castsi256_si128(r));
+}
+
+__attribute__((target("avx2"))) void
+horizontalAvx2(const Horizontal& h, const std::uint16_t* v, std::uint8_t* out) {
   for (const Horizontal::Segment& s : h.segments) {
-    if (!s.simd) {
+    if (s.kind == Horizontal::Kind::Avx2) {
+      segmentAvx2(h, s, v, out);
+    } else {
       h.scalar(v, out, s.begin, s.end);
-      continue;
     }
-    const __m256i rel =
-        _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h.rel.data() + s.begin));
-    const __m256i first = _mm256_permutevar8x32_epi32(
-        _mm256_loadu_si256(reinterpret_cast<const __m256i*>(pairs + s.base)), rel);
-    const __m256i second = _mm256_permutevar8x32_epi32(
-        _mm256_loadu_si256(reinterpret_cast<const __m256i*>(pairs + s.base + 8)), rel);
-    const __m256i p = _mm256_blendv_epi8(first, second, _mm256_cmpgt_epi32(rel, seven));
-    const __m256i a = _mm256_and_si256(p, low);
-    const __m256i b = _mm256_srli_epi32(p, 16);
-    __m256i r = _mm256_add_epi32(
-        _mm256_mullo_epi32(
-            a, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h.wa.data() + s.begin))),
-        _mm256_mullo_epi32(
-            b, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(h.wb.data() + s.begin))));
-    r = _mm256_shuffle_epi8(_mm256_srli_epi32(_mm256_add_epi32(r, half), 16), bytes);
-    const auto lo = static_cast<std::uint32_t>(_mm256_cvtsi256_si32(r));
-    const auto hi = static_cast<std::uint32_t>(_mm256_extract_epi32(r, 4));
-    std::memcpy(out + s.begin, &lo, 4);
-    std::memcpy(out + s.begin + 4, &hi, 4);
+  }
+}
+
+/** With AVX-512 (BW), 16 columns at a time: 32 texels from the base in one register, one vpermw
+ * for the 16 pairs, the same multiply-add. */
+__attribute__((target("avx2,avx512f,avx512bw"))) void
+horizontalAvx512(const Horizontal& h, const std::uint16_t* v, std::uint8_t* out) {
+  const __m512i flip = _mm512_set1_epi16(static_cast<short>(0x8000));
+  const __m512i offset = _mm512_set1_epi32((1 << 23) + 32768);
+  const __mmask16 all = 0xFFFF;
+  for (const Horizontal::Segment& s : h.segments) {
+    if (s.kind == Horizontal::Kind::Avx512) {
+      const __m512i texels = _mm512_xor_si512(_mm512_loadu_si512(v + s.base), flip);
+      const __m512i pairs = _mm512_permutexvar_epi16(
+          _mm512_loadu_si512(h.pairIndex.data() + 2 * static_cast<std::size_t>(s.begin)), texels);
+      const __m512i sum = _mm512_madd_epi16(pairs, _mm512_loadu_si512(h.weights.data() + s.begin));
+      // The zero-masked forms: GCC 12's plain ones start from an "undefined" register that
+      // -Wmaybe-uninitialized flags.
+      const __m512i r = _mm512_maskz_srli_epi32(all, _mm512_add_epi32(sum, offset), 16);
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(out + s.begin),
+                       _mm512_maskz_cvtepi32_epi8(all, r));
+    } else if (s.kind == Horizontal::Kind::Avx2) {
+      segmentAvx2(h, s, v, out);
+    } else {
+      h.scalar(v, out, s.begin, s.end);
+    }
   }
 }
 #endif
 
-void Horizontal::run(const std::uint16_t* v, const std::uint32_t* pairs, std::uint8_t* out) const {
+void Horizontal::run(const std::uint16_t* v, std::uint8_t* out) const {
 #ifdef TELLUS_COMPOSE_AVX2
-  if (kHasAvx2) return horizontalAvx2(*this, v, pairs, out);
+  if (kHasAvx512) return horizontalAvx512(*this, v, out);
+  if (kHasAvx2) return horizontalAvx2(*this, v, out);
 #endif
-  (void)pairs;
   for (const Segment& s : segments)
     scalar(v, out, s.begin, s.end);
 }
 
-/** The vertical half of the filter over one texel row of a tile column, and the texel pairs of
- * the horizontal half (pairs[x] = v[x] | v[x + 1] << 16): plain loops that the compiler
- * vectorises, inlined once more into AVX2 functions used where the CPU has it (dispatched at run
- * time like the horizontal pass; not with target_clones, whose ifunc resolvers run before
- * ThreadSanitizer's runtime is up). */
+/** The vertical half of the filter over one texel row of a tile column: a plain loop that the
+ * compiler vectorises, inlined once more into an AVX2 function used where the CPU has it
+ * (dispatched at run time like the horizontal pass; not with target_clones, whose ifunc resolvers
+ * run before ThreadSanitizer's runtime is up). */
 [[gnu::always_inline]] inline void blendRowsLoop(const std::uint8_t* a,
                                                  const std::uint8_t* b,
                                                  std::uint32_t wy,
@@ -455,12 +641,6 @@ void Horizontal::run(const std::uint16_t* v, const std::uint32_t* pairs, std::ui
     out[x] = static_cast<std::uint16_t>(a[x] * (256u - wy) + b[x] * wy);
 }
 
-[[gnu::always_inline]] inline void
-makePairsLoop(const std::uint16_t* v, std::uint32_t* pairs, std::size_t n) noexcept {
-  for (std::size_t x = 0; x < n; ++x)
-    pairs[x] = v[x] | static_cast<std::uint32_t>(v[x + 1]) << 16;
-}
-
 #ifdef TELLUS_COMPOSE_AVX2
 __attribute__((target("avx2"))) void blendRowsAvx2(const std::uint8_t* a,
                                                    const std::uint8_t* b,
@@ -468,10 +648,6 @@ __attribute__((target("avx2"))) void blendRowsAvx2(const std::uint8_t* a,
                                                    std::uint16_t* out,
                                                    std::size_t n) noexcept {
   blendRowsLoop(a, b, wy, out, n);
-}
-__attribute__((target("avx2"))) void
-makePairsAvx2(const std::uint16_t* v, std::uint32_t* pairs, std::size_t n) noexcept {
-  makePairsLoop(v, pairs, n);
 }
 #endif
 
@@ -486,13 +662,6 @@ void blendRows(const std::uint8_t* a,
   blendRowsLoop(a, b, wy, out, n);
 }
 
-void makePairs(const std::uint16_t* v, std::uint32_t* pairs, std::size_t n) noexcept {
-#ifdef TELLUS_COMPOSE_AVX2
-  if (kHasAvx2) return makePairsAvx2(v, pairs, n);
-#endif
-  makePairsLoop(v, pairs, n);
-}
-
 /**
  * composeImagery for one plane (tiles and canvas of one channel, opaque). Per output row, the
  * vertical half of the filter once per tile column into one row of the texels the map samples
@@ -500,14 +669,15 @@ void makePairs(const std::uint16_t* v, std::uint32_t* pairs, std::size_t n) noex
  * no test per pixel while every tile of the row is there. The same integer arithmetic as the RGB
  * path's (weights in 1/256, one rounding), so the same values.
  */
-ComposeStats composePlane(const TileGrid& grid,
-                          const Sector& box,
-                          std::int32_t width,
-                          std::int32_t height,
-                          std::int32_t level,
-                          std::int32_t firstLevel,
-                          const TileLookup& tiles,
-                          std::uint8_t* canvas) {
+ComposeStats composePlaneInto(const TileGrid& grid,
+                              const Sector& box,
+                              std::int32_t width,
+                              std::int32_t height,
+                              std::int32_t level,
+                              std::int32_t firstLevel,
+                              const TileLookup& tiles,
+                              const std::uint8_t* background,
+                              std::uint8_t* canvas) {
   ComposeStats stats;
   const LevelTiles t = levelTiles(grid, box, width, height, level, tiles);
   Fallback fallback(grid, box, width, height, level, std::max(0, firstLevel), tiles);
@@ -526,7 +696,8 @@ ComposeStats composePlane(const TileGrid& grid,
   hz.xb.assign(w, 0);
   hz.wa.assign(w, 0);
   hz.wb.assign(w, 0);
-  hz.rel.assign(w, 0);
+  hz.lane.assign(w, 0);
+  hz.weights.assign(w, 0);
   std::vector<std::uint32_t>&xa = hz.xa, &xb = hz.xb, &wa = hz.wa, &wb = hz.wb;
   // Runs of columns inside the layer [begin, end).
   std::vector<std::pair<std::int32_t, std::int32_t>> runs;
@@ -546,39 +717,81 @@ ComposeStats composePlane(const TileGrid& grid,
       runs.emplace_back(i, i + 1);
     }
   }
+#ifdef TELLUS_COMPOSE_AVX2
+  const bool wide = kHasAvx512;
+#else
+  const bool wide = false;
+#endif
+  if (wide) hz.pairIndex.assign(2 * w, 0);
+  // Whether columns [i, i + n) can be one SIMD segment of n columns (texel pairs that are
+  // neighbours within `reach` texels of the first); the first texel when they can.
+  const auto fits = [&](std::uint32_t i, std::uint32_t n, std::uint32_t reach, std::uint32_t& lo) {
+    std::uint32_t hi = xa[i];
+    lo = xa[i];
+    bool neighbours = true;
+    for (std::uint32_t k = i; k < i + n; ++k) {
+      lo = std::min(lo, xa[k]);
+      hi = std::max(hi, xa[k]);
+      neighbours = neighbours && (xb[k] == xa[k] + 1 || wb[k] == 0);
+    }
+    return neighbours && hi - lo < reach;
+  };
+  const auto add =
+      [&](std::uint32_t begin, std::uint32_t end, std::uint32_t first, Horizontal::Kind kind) {
+        if (kind == Horizontal::Kind::Scalar && !hz.segments.empty() &&
+            hz.segments.back().kind == Horizontal::Kind::Scalar &&
+            hz.segments.back().end == begin) {
+          hz.segments.back().end = end;
+        } else {
+          hz.segments.push_back({begin, end, first, kind});
+        }
+      };
   for (const auto& [begin, end] : runs) {
     auto i = static_cast<std::uint32_t>(begin);
     const auto e = static_cast<std::uint32_t>(end);
-    for (; i + 8 <= e; i += 8) {
-      std::uint32_t lo = xa[i], hi = xa[i];
-      bool neighbours = true;
-      for (std::uint32_t k = i; k < i + 8; ++k) {
-        lo = std::min(lo, xa[k]);
-        hi = std::max(hi, xa[k]);
-        neighbours = neighbours && (xb[k] == xa[k] + 1 || wb[k] == 0);
+    std::uint32_t lo = 0;
+    while (i + 8 <= e) {
+      if (wide && i + 16 <= e && fits(i, 16, 31, lo)) {
+        for (std::uint32_t k = i; k < i + 16; ++k) {
+          const std::uint32_t r = xa[k] - lo;
+          hz.pairIndex[2 * k] = static_cast<std::uint16_t>(r);
+          hz.pairIndex[2 * k + 1] = static_cast<std::uint16_t>(r + 1);
+          hz.weights[k] = wa[k] | wb[k] << 16;
+        }
+        add(i, i + 16, lo, Horizontal::Kind::Avx512);
+        i += 16;
+        continue;
       }
-      const bool simd = neighbours && hi - lo < 16;
-      if (simd) {
-        for (std::uint32_t k = i; k < i + 8; ++k)
-          hz.rel[k] = xa[k] - lo;
-      }
-      if (!simd && !hz.segments.empty() && !hz.segments.back().simd &&
-          hz.segments.back().end == i) {
-        hz.segments.back().end = i + 8;
+      if (fits(i, 8, 16, lo)) {
+        for (std::uint32_t k = i; k < i + 8; ++k) {
+          const std::uint32_t r = xa[k] - lo;
+          hz.lane[k] = (r & 3u) | (r & 8u) >> 1 | (r & 4u ? 0x80000000u : 0u);
+          hz.weights[k] = wa[k] | wb[k] << 16;
+        }
+        add(i, i + 8, lo, Horizontal::Kind::Avx2);
       } else {
-        hz.segments.push_back({i, i + 8, lo, simd});
+        add(i, i + 8, 0, Horizontal::Kind::Scalar);
       }
+      i += 8;
     }
-    if (i < e) hz.segments.push_back({i, e, 0, false});
+    if (i < e) add(i, e, 0, Horizontal::Kind::Scalar);
   }
-  // + 1: v[x + 1] of the last pair; + 16: the SIMD loads of 8 pairs from a base up to span - 1.
-  std::vector<std::uint16_t> blended(span + 1);
-  std::vector<std::uint32_t> pairs(span + 16);
+  // + 1: v[x + 1] of the last pair; the SIMD loads read up to 32 texels from a base <= span - 1.
+  std::vector<std::uint16_t> blended(span + 1 + Horizontal::kPadding);
   std::vector<char> present(nc);
   Quad q{};
+  // With a background, the columns outside the layer are filled in each row drawn.
+  const bool outsideColumns =
+      background && std::any_of(t.cols.samples.begin(),
+                                t.cols.samples.end(),
+                                [](const AxisSample& c) { return c.slotA < 0; });
   for (std::int32_t j = 0; j < height; ++j) {
     const AxisSample& r = t.rows.samples[static_cast<std::size_t>(j)];
-    if (r.slotA < 0) continue;
+    std::uint8_t* out = canvas + static_cast<std::size_t>(j) * w;
+    if (r.slotA < 0 || outsideColumns) {
+      if (background) std::memset(out, *background, w);
+      if (r.slotA < 0) continue;
+    }
     const auto wy = static_cast<std::uint32_t>(r.weightB);
     bool all = true;
     for (std::size_t k = 0; k < nc; ++k) {
@@ -593,16 +806,13 @@ ComposeStats composePlane(const TileGrid& grid,
           sa->rgb + static_cast<std::size_t>(r.offA) * static_cast<std::size_t>(sa->width);
       const std::uint8_t* b =
           sb->rgb + static_cast<std::size_t>(r.offB) * static_cast<std::size_t>(sb->width);
-      std::uint16_t* out = blended.data() + base[k];
       const auto lo = static_cast<std::size_t>(t.cols.lo[k]);
       const std::size_t n = static_cast<std::size_t>(t.cols.hi[k]) + 1 - lo;
-      blendRows(a + lo, b + lo, wy, out, n);
+      blendRows(a + lo, b + lo, wy, blended.data() + base[k], n);
     }
-    std::uint8_t* out = canvas + static_cast<std::size_t>(j) * w;
     const std::uint16_t* v = blended.data();
     if (all) {
-      makePairs(v, pairs.data(), span);
-      hz.run(v, pairs.data(), out);
+      hz.run(v, out);
       continue;
     }
     for (std::int32_t i = 0; i < width; ++i) {
@@ -618,6 +828,7 @@ ComposeStats composePlane(const TileGrid& grid,
         out[ui] = sampleOne(q);
       } else {
         ++stats.missingPixels;
+        if (background) out[ui] = *background;
       }
     }
   }
@@ -705,8 +916,10 @@ std::expected<std::vector<ComposeTile>, std::size_t> composeTiles(const TileGrid
                                                                   std::int32_t height,
                                                                   std::int32_t level,
                                                                   std::size_t maxTiles) {
-  const Axis c = columns(grid, box, width, level);
-  const Axis r = rows(grid, box, height, level);
+  const auto columnAxis = columns(grid, box, width, level);
+  const auto rowAxis = rows(grid, box, height, level);
+  const Axis& c = *columnAxis;
+  const Axis& r = *rowAxis;
   const std::size_t count = c.tiles.size() * r.tiles.size();
   if (count > maxTiles) return std::unexpected(count);
   std::vector<ComposeTile> keys;
@@ -733,7 +946,8 @@ ComposeStats composeImagery(const TileGrid& grid,
                             std::int32_t canvasChannels) {
   if (canvasChannels == 1) {
     canvas.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
-    return composePlane(grid, box, width, height, level, firstLevel, tiles, canvas.data());
+    return composePlaneInto(
+        grid, box, width, height, level, firstLevel, tiles, nullptr, canvas.data());
   }
   const int cc = canvasChannels == 3 ? 3 : 4;
   canvas.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) *
@@ -824,6 +1038,20 @@ ComposeStats composeImagery(const TileGrid& grid,
     }
   }
   return stats;
+}
+
+ComposeStats composePlane(const TileGrid& grid,
+                          const Sector& box,
+                          std::int32_t width,
+                          std::int32_t height,
+                          std::int32_t level,
+                          std::int32_t firstLevel,
+                          const TileLookup& tiles,
+                          std::uint8_t background,
+                          std::vector<std::uint8_t>& plane) {
+  plane.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  return composePlaneInto(
+      grid, box, width, height, level, firstLevel, tiles, &background, plane.data());
 }
 
 ComposeStats composeHeights(const TileGrid& grid,

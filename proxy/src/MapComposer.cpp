@@ -326,12 +326,8 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
       if (job->elevation) {
         heights.assign(pixels, job->layers.front().spec.layer->noData);
       } else if (ycc) {
-        const auto ycbcr = codecs::rgbToYcc(bg[0], bg[1], bg[2]);
-        const auto chromaPixels =
-            static_cast<std::size_t>(chroma->width) * static_cast<std::size_t>(chroma->height);
-        canvas.assign(pixels, ycbcr[0]);
-        buffers.cb.assign(chromaPixels, ycbcr[1]);
-        buffers.cr.assign(chromaPixels, ycbcr[2]);
+        // Nothing to fill: composePlane writes every sample of the planes, the background where
+        // no tile covers it (a map's single layer; the RGB path fills again if it takes over).
       } else {
         canvas.resize(pixels * static_cast<std::size_t>(cc));
         // The first row pixel by pixel, the others copied from it.
@@ -454,7 +450,9 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
         }
         map.tiles += decoded.size();
         if (ycc) {
-          // The three planes, each from the tiles' plane of the same index.
+          // The three planes, each from the tiles' plane of the same index, each sample written
+          // (the background's Y, Cb or Cr where no tile covers it).
+          const auto ycbcr = codecs::rgbToYcc(bg[0], bg[1], bg[2]);
           ComposeStats stats;
           for (int plane = 0; plane < 3; ++plane) {
             const TileLookup lookup = [&decoded, plane](const TileKey& key) -> const TileSamples* {
@@ -465,20 +463,25 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
             std::vector<std::uint8_t>& target = plane == 0   ? canvas
                                                 : plane == 1 ? buffers.cb
                                                              : buffers.cr;
-            const ComposeStats s =
-                plane == 0
-                    ? composeImagery(
-                          *l.grid, r.bbox, r.width, r.height, l.level, 0, lookup, 1.0, target, 1)
-                    : composeImagery(chroma->grid,
-                                     chroma->box,
-                                     chroma->width,
-                                     chroma->height,
-                                     l.level,
-                                     0,
-                                     lookup,
-                                     1.0,
-                                     target,
-                                     1);
+            const auto background = ycbcr[static_cast<std::size_t>(plane)];
+            const ComposeStats s = plane == 0 ? composePlane(*l.grid,
+                                                             r.bbox,
+                                                             r.width,
+                                                             r.height,
+                                                             l.level,
+                                                             0,
+                                                             lookup,
+                                                             background,
+                                                             target)
+                                              : composePlane(chroma->grid,
+                                                             chroma->box,
+                                                             chroma->width,
+                                                             chroma->height,
+                                                             l.level,
+                                                             0,
+                                                             lookup,
+                                                             background,
+                                                             target);
             if (plane == 0) stats = s; // the map's pixels are the luma's
           }
           map.fallbackPixels += stats.fallbackPixels;

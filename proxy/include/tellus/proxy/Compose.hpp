@@ -126,6 +126,23 @@ ComposeStats composeImagery(const TileGrid& grid,
                             std::vector<std::uint8_t>& canvas,
                             std::int32_t canvasChannels = 4);
 
+/**
+ * composeImagery for one plane (tiles of one channel, opaque; `canvasChannels` 1) that writes every
+ * pixel of `plane` (resized to width * height): `background` where no tile covers it (outside the
+ * layer, past a pole, no tile at any level). The same plane as filling it with `background` and
+ * then composing over it, without the fill (a composed JPEG map's planes are nearly always all
+ * sampled).
+ */
+ComposeStats composePlane(const TileGrid& grid,
+                          const Sector& box,
+                          std::int32_t width,
+                          std::int32_t height,
+                          std::int32_t level,
+                          std::int32_t firstLevel,
+                          const TileLookup& tiles,
+                          std::uint8_t background,
+                          std::vector<std::uint8_t>& plane);
+
 /** Draws one elevation layer into `heights` (width * height): pixels with a value that is not
  * `noData` replace what is there (later layers win where they have data). */
 ComposeStats composeHeights(const TileGrid& grid,
