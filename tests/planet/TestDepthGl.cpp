@@ -62,17 +62,8 @@ Wrong drawPairs(GLenum depthFormat,
                 const glm::dmat4& projection,
                 const std::function<void()>& beginDepth) {
   std::string err;
-  const GLuint vs = compileShader(GL_VERTEX_SHADER, kVert, "depth test vertex shader", &err);
-  const GLuint fs = compileShader(GL_FRAGMENT_SHADER, kFrag, "depth test fragment shader", &err);
-  EXPECT_NE(vs, 0u) << err;
-  EXPECT_NE(fs, 0u) << err;
-  const GLuint program = glCreateProgram();
-  glAttachShader(program, vs);
-  glAttachShader(program, fs);
-  glLinkProgram(program);
-  GLint linked = GL_FALSE;
-  glGetProgramiv(program, GL_LINK_STATUS, &linked);
-  EXPECT_EQ(linked, GL_TRUE);
+  const GLuint program = linkProgram(kVert, kFrag, "depth test program", &err);
+  EXPECT_NE(program, 0u) << err;
 
   GLuint fbo = 0, color = 0, depth = 0;
   glGenFramebuffers(1, &fbo);
@@ -170,8 +161,6 @@ Wrong drawPairs(GLenum depthFormat,
   glDeleteRenderbuffers(1, &color);
   glDeleteRenderbuffers(1, &depth);
   glDeleteProgram(program);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
   return w;
 }
 

@@ -22,34 +22,6 @@ glm::dvec3 faceDirection(const CubeFace& f, int faceSize, double i, double j) no
   return glm::normalize(f.forward + x * right + y * f.up);
 }
 
-/** A program from a vertex and a fragment shader; 0 with error set when either fails. */
-GLuint linkProgram(const std::string& vsSource,
-                   const std::string& fsSource,
-                   const char* what,
-                   std::string* error) {
-  const GLuint vs = compileShader(GL_VERTEX_SHADER, vsSource, what, error);
-  if (vs == 0) return 0;
-  const GLuint fs = compileShader(GL_FRAGMENT_SHADER, fsSource, what, error);
-  if (fs == 0) {
-    glDeleteShader(vs);
-    return 0;
-  }
-  const GLuint program = glCreateProgram();
-  glAttachShader(program, vs);
-  glAttachShader(program, fs);
-  glLinkProgram(program);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint linked = GL_FALSE;
-  glGetProgramiv(program, GL_LINK_STATUS, &linked);
-  if (linked != GL_TRUE) {
-    glDeleteProgram(program);
-    *error = std::string(what) + " link failed";
-    return 0;
-  }
-  return program;
-}
-
 } // namespace
 
 const std::array<CubeFace, 6>& cubeFaces() noexcept {
@@ -98,24 +70,9 @@ std::expected<std::unique_ptr<Dome>, std::string> Dome::create(int faceSize,
   std::unique_ptr<Dome> d(new Dome());
   d->size_ = faceSize;
   std::string error;
-  const GLuint vs =
-      compileShader(GL_VERTEX_SHADER, glslHeader + kShader_dome_vert, "dome shader", &error);
-  if (vs == 0) return std::unexpected(error);
-  const GLuint fs =
-      compileShader(GL_FRAGMENT_SHADER, glslHeader + kShader_dome_frag, "dome shader", &error);
-  if (fs == 0) {
-    glDeleteShader(vs);
-    return std::unexpected(error);
-  }
-  d->program_ = glCreateProgram();
-  glAttachShader(d->program_, vs);
-  glAttachShader(d->program_, fs);
-  glLinkProgram(d->program_);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint linked = GL_FALSE;
-  glGetProgramiv(d->program_, GL_LINK_STATUS, &linked);
-  if (linked != GL_TRUE) return std::unexpected(std::string("dome shader link failed"));
+  d->program_ = linkProgram(
+      glslHeader + kShader_dome_vert, glslHeader + kShader_dome_frag, "dome shader", &error);
+  if (d->program_ == 0) return std::unexpected(error);
   d->uCube_ = glGetUniformLocation(d->program_, "uCube");
   d->uCircle_ = glGetUniformLocation(d->program_, "uCircle");
   d->uViewport_ = glGetUniformLocation(d->program_, "uViewport");

@@ -27,4 +27,34 @@ compileShader(GLenum type, const std::string& source, const char* what, std::str
   return s;
 }
 
+/** A program from a vertex and a fragment shader; 0 with error set when either fails. */
+inline GLuint linkProgram(const std::string& vsSource,
+                          const std::string& fsSource,
+                          const char* what,
+                          std::string* error) {
+  const GLuint vs = compileShader(GL_VERTEX_SHADER, vsSource, what, error);
+  if (vs == 0) return 0;
+  const GLuint fs = compileShader(GL_FRAGMENT_SHADER, fsSource, what, error);
+  if (fs == 0) {
+    glDeleteShader(vs);
+    return 0;
+  }
+  const GLuint program = glCreateProgram();
+  glAttachShader(program, vs);
+  glAttachShader(program, fs);
+  glLinkProgram(program);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLint linked = GL_FALSE;
+  glGetProgramiv(program, GL_LINK_STATUS, &linked);
+  if (linked != GL_TRUE) {
+    char log[2048] = {};
+    glGetProgramInfoLog(program, sizeof log, nullptr, log);
+    glDeleteProgram(program);
+    *error = std::string(what) + " link: " + log;
+    return 0;
+  }
+  return program;
+}
+
 } // namespace tellus::planet

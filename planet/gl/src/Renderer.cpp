@@ -393,28 +393,11 @@ std::string Renderer::Impl::initGl() {
   for (int i = 0; i < overlaysPerPass; ++i)
     fragDefines += " TELLUS_OVERLAY(" + std::to_string(i) + ")";
   fragDefines += "\n";
-  const GLuint vs =
-      compileShader(GL_VERTEX_SHADER, header + defines + kShader_planet_vert, "shader", &error);
-  if (vs == 0) return error;
-  const GLuint fs = compileShader(
-      GL_FRAGMENT_SHADER, header + fragDefines + kShader_planet_frag, "shader", &error);
-  if (fs == 0) {
-    glDeleteShader(vs);
-    return error;
-  }
-  program = glCreateProgram();
-  glAttachShader(program, vs);
-  glAttachShader(program, fs);
-  glLinkProgram(program);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint linked = GL_FALSE;
-  glGetProgramiv(program, GL_LINK_STATUS, &linked);
-  if (linked != GL_TRUE) {
-    char log[2048] = {};
-    glGetProgramInfoLog(program, sizeof log, nullptr, log);
-    return std::string("shader link: ") + log;
-  }
+  program = linkProgram(header + defines + kShader_planet_vert,
+                        header + fragDefines + kShader_planet_frag,
+                        "shader",
+                        &error);
+  if (program == 0) return error;
   uViewProj = glGetUniformLocation(program, "uViewProj");
   uEye = glGetUniformLocation(program, "uEye");
   uEyeHigh = glGetUniformLocation(program, "uEyeHigh");
