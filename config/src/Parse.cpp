@@ -342,6 +342,7 @@ void readServer(Reader& r, const Map& root, ServerSettings& s) {
                "threads",
                "log_level",
                "access_log",
+               "jpeg_quality",
                "limits"});
   if (auto v = m.get("listen")) {
     auto a = detail::parseListenAddress(text(r, *v, m.path("listen")));
@@ -363,6 +364,8 @@ void readServer(Reader& r, const Map& root, ServerSettings& s) {
     s.logLevel = std::array{"error", "warn", "info", "debug"}[static_cast<std::size_t>(
         choice(r, *v, m.path("log_level"), {"error", "warn", "info", "debug"}))];
   if (auto v = m.get("access_log")) s.accessLog = text(r, *v, m.path("access_log"));
+  if (auto v = m.get("jpeg_quality"))
+    s.jpegQuality = static_cast<int>(integer(r, *v, m.path("jpeg_quality"), 1, 100));
 
   const auto [ln, lwhere] = m.child("limits");
   const Map l(r,

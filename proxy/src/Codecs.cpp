@@ -115,6 +115,7 @@ bool encodeJpegRaw(int width,
                    int channels,
                    const std::uint8_t* pixels,
                    int restartInterval,
+                   int quality,
                    unsigned char** buffer,
                    unsigned long* size,
                    char* message) {
@@ -137,7 +138,7 @@ bool encodeJpegRaw(int width,
   cinfo.input_components = channels;
   cinfo.in_color_space = channels == 1 ? JCS_GRAYSCALE : JCS_RGB;
   jpeg_set_defaults(&cinfo);
-  jpeg_set_quality(&cinfo, 90, TRUE);
+  jpeg_set_quality(&cinfo, std::clamp(quality, 1, 100), TRUE);
   cinfo.restart_interval = static_cast<unsigned int>(std::max(restartInterval, 0));
   jpeg_start_compress(&cinfo, TRUE);
   const auto stride = static_cast<std::size_t>(width) * static_cast<std::size_t>(channels);
@@ -235,15 +236,19 @@ std::expected<void, std::string> checkPng(std::span<const std::byte> bytes,
   return {};
 }
 
-std::expected<std::vector<std::byte>, std::string>
-encodeJpeg(int width, int height, int channels, const std::uint8_t* pixels, int restartInterval) {
+std::expected<std::vector<std::byte>, std::string> encodeJpeg(int width,
+                                                              int height,
+                                                              int channels,
+                                                              const std::uint8_t* pixels,
+                                                              int restartInterval,
+                                                              int quality) {
   if (width <= 0 || height <= 0 || (channels != 1 && channels != 3) || !pixels)
     return std::unexpected("bad image shape for JPEG");
   unsigned char* buffer = nullptr;
   unsigned long size = 0;
   char message[JMSG_LENGTH_MAX] = {};
-  const bool ok =
-      encodeJpegRaw(width, height, channels, pixels, restartInterval, &buffer, &size, message);
+  const bool ok = encodeJpegRaw(
+      width, height, channels, pixels, restartInterval, quality, &buffer, &size, message);
   std::vector<std::byte> out;
   if (ok) {
     const auto* b = reinterpret_cast<const std::byte*>(buffer);

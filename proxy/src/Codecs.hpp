@@ -44,10 +44,14 @@ std::expected<void, std::string> checkPng(std::span<const std::byte> bytes,
  */
 inline constexpr int kTileRestartInterval = 4;
 
-/** Baseline JPEG, quality 90, from grey (1) or RGB (3) pixels; a restart marker every
- * `restartInterval` MCUs (0: none). */
-std::expected<std::vector<std::byte>, std::string> encodeJpeg(
-    int width, int height, int channels, const std::uint8_t* pixels, int restartInterval = 0);
+/** Baseline JPEG of `quality` (1-100; tiles are written at 90), from grey (1) or RGB (3) pixels;
+ * a restart marker every `restartInterval` MCUs (0: none). */
+std::expected<std::vector<std::byte>, std::string> encodeJpeg(int width,
+                                                              int height,
+                                                              int channels,
+                                                              const std::uint8_t* pixels,
+                                                              int restartInterval = 0,
+                                                              int quality = 90);
 
 /** 8-bit RGB, or RGBA when the PNG has alpha (palettes and 16-bit samples are converted);
  * returns the channels. */

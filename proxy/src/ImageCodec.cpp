@@ -15,7 +15,8 @@ std::expected<std::vector<std::byte>, std::string> encodeImage(std::string_view 
                                                                int height,
                                                                int channels,
                                                                const std::uint8_t* pixels,
-                                                               bool tile) {
+                                                               bool tile,
+                                                               int jpegQuality) {
   if (width <= 0 || height <= 0 || (channels != 1 && channels != 3 && channels != 4)) {
     return std::unexpected("bad image shape");
   }
@@ -27,11 +28,15 @@ std::expected<std::vector<std::byte>, std::string> encodeImage(std::string_view 
     std::vector<std::uint8_t> rgb(n * 3);
     for (std::size_t i = 0; i < n; ++i)
       std::memcpy(&rgb[i * 3], &pixels[i * 4], 3);
-    return encodeImage(mimeType, width, height, 3, rgb.data(), tile);
+    return encodeImage(mimeType, width, height, 3, rgb.data(), tile, jpegQuality);
   }
   return png ? codecs::encodePng(width, height, channels, pixels)
-             : codecs::encodeJpeg(
-                   width, height, channels, pixels, tile ? codecs::kTileRestartInterval : 0);
+             : codecs::encodeJpeg(width,
+                                  height,
+                                  channels,
+                                  pixels,
+                                  tile ? codecs::kTileRestartInterval : 0,
+                                  jpegQuality);
 }
 
 std::expected<std::vector<std::byte>, std::string>

@@ -303,6 +303,7 @@ bool encodeRaw(int width,
                const std::uint8_t* y,
                const std::uint8_t* cb,
                const std::uint8_t* cr,
+               int quality,
                std::uint8_t* scratch,
                std::vector<std::byte>* out,
                char* message) {
@@ -329,7 +330,7 @@ bool encodeRaw(int width,
   cinfo.input_components = 3;
   cinfo.in_color_space = JCS_YCbCr;
   jpeg_set_defaults(&cinfo); // 4:2:0 for YCbCr, as for RGB
-  jpeg_set_quality(&cinfo, 90, TRUE);
+  jpeg_set_quality(&cinfo, std::clamp(quality, 1, 100), TRUE);
   cinfo.raw_data_in = TRUE;
   jpeg_start_compress(&cinfo, TRUE);
   const auto w = static_cast<std::size_t>(width);
@@ -441,8 +442,12 @@ bool decodesFromSegments(std::span<const std::byte> bytes,
                       spliced);
 }
 
-std::expected<std::vector<std::byte>, std::string> encodeJpegYcc(
-    int width, int height, const std::uint8_t* y, const std::uint8_t* cb, const std::uint8_t* cr) {
+std::expected<std::vector<std::byte>, std::string> encodeJpegYcc(int width,
+                                                                 int height,
+                                                                 const std::uint8_t* y,
+                                                                 const std::uint8_t* cb,
+                                                                 const std::uint8_t* cr,
+                                                                 int quality) {
   if (width <= 0 || height <= 0 || !y || !cb || !cr)
     return std::unexpected("bad image shape for JPEG");
   const auto w = static_cast<std::size_t>(width);
@@ -452,7 +457,7 @@ std::expected<std::vector<std::byte>, std::string> encodeJpegYcc(
   // doubling.
   std::vector<std::byte> out(std::max<std::size_t>(4096, w * static_cast<std::size_t>(height) / 6));
   char message[JMSG_LENGTH_MAX] = {};
-  if (!encodeRaw(width, height, y, cb, cr, scratch.data(), &out, message))
+  if (!encodeRaw(width, height, y, cb, cr, quality, scratch.data(), &out, message))
     return std::unexpected(std::string("cannot encode JPEG: ") + message);
   return out;
 }

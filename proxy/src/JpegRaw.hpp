@@ -50,12 +50,16 @@ bool decodesFromSegments(std::span<const std::byte> bytes,
                          const std::array<std::int32_t, 4>& region);
 
 /**
- * Baseline JPEG, quality 90, 4:2:0 (what encodeJpeg writes from RGB) from planes: `y` width *
- * height, `cb` and `cr` ((width + 1) / 2) * ((height + 1) / 2), rows from the top, dense. The
- * edges are extended by repetition to whole blocks.
+ * Baseline JPEG of `quality` (1-100), 4:2:0 (what encodeJpeg writes from RGB) from planes: `y`
+ * width * height, `cb` and `cr` ((width + 1) / 2) * ((height + 1) / 2), rows from the top, dense.
+ * The edges are extended by repetition to whole blocks.
  */
-std::expected<std::vector<std::byte>, std::string> encodeJpegYcc(
-    int width, int height, const std::uint8_t* y, const std::uint8_t* cb, const std::uint8_t* cr);
+std::expected<std::vector<std::byte>, std::string> encodeJpegYcc(int width,
+                                                                 int height,
+                                                                 const std::uint8_t* y,
+                                                                 const std::uint8_t* cb,
+                                                                 const std::uint8_t* cr,
+                                                                 int quality = 90);
 
 /** JFIF's RGB -> YCbCr of one colour (rounded, clamped): the background of a map. */
 std::array<std::uint8_t, 3> rgbToYcc(std::uint8_t r, std::uint8_t g, std::uint8_t b) noexcept;

@@ -179,8 +179,9 @@ struct MapComposer::Job {
 MapComposer::MapComposer(TileService& tiles,
                          int threads,
                          std::size_t maxTiles,
-                         std::size_t decodedCacheBytes)
-    : tiles_(tiles), maxTiles_(maxTiles),
+                         std::size_t decodedCacheBytes,
+                         int jpegQuality)
+    : tiles_(tiles), maxTiles_(maxTiles), jpegQuality_(std::clamp(jpegQuality, 1, 100)),
       decodedCache_(decodedCacheBytes > 0 ? std::make_unique<DecodedCache>(decodedCacheBytes)
                                           : nullptr),
       gate_(std::make_shared<Gate>()), pool_(std::make_unique<Pool>(threads)) {
@@ -560,7 +561,7 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
     } else {
       if (ycc) {
         encoded = codecs::encodeJpegYcc(
-            r.width, r.height, canvas.data(), buffers.cb.data(), buffers.cr.data());
+            r.width, r.height, canvas.data(), buffers.cb.data(), buffers.cr.data(), jpegQuality_);
       } else if (png8) {
         const PalettedImage p = quantize(canvas.data(), cc, pixels);
         encoded = codecs::encodePngPalette(r.width, r.height, p.palette, p.indices.data());
@@ -569,7 +570,9 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
                               r.width,
                               r.height,
                               cc,
-                              canvas.data());
+                              canvas.data(),
+                              false,
+                              jpegQuality_);
       }
     }
     if (!encoded) {

@@ -52,8 +52,12 @@ struct ComposedMap {
 class MapComposer {
 public:
   /** `decodedCacheBytes`: decoded tiles kept between maps (0: none; then only the part of each
-   * JPEG tile a map samples is decoded). */
-  MapComposer(TileService& tiles, int threads, std::size_t maxTiles, std::size_t decodedCacheBytes);
+   * JPEG tile a map samples is decoded). `jpegQuality`: of JPEG maps, clamped to 1-100. */
+  MapComposer(TileService& tiles,
+              int threads,
+              std::size_t maxTiles,
+              std::size_t decodedCacheBytes,
+              int jpegQuality = 90);
   ~MapComposer();
 
   /** The tiles of every layer, or an error (for InvalidParameterValue) when they are more than
@@ -71,6 +75,7 @@ private:
 
   TileService& tiles_;
   std::size_t maxTiles_;
+  int jpegQuality_;
   bool yccDisabled_ = false; ///< TELLUS_COMPOSE_YCC=0: JPEG maps on the RGB path (for comparisons)
   class DecodedCache;
   std::unique_ptr<DecodedCache> decodedCache_;

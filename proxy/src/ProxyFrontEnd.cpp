@@ -113,7 +113,11 @@ struct ProxyFrontEnd::Impl {
 
   Impl(TileService& t, FrontEndOptions o)
       : tiles(t), options(std::move(o)), metrics(layerNames(t)),
-        composer(t, options.composeThreads, options.maxTilesPerMap, options.decodedTileCacheBytes) {
+        composer(t,
+                 options.composeThreads,
+                 options.maxTilesPerMap,
+                 options.decodedTileCacheBytes,
+                 options.jpegQuality) {
     const auto now = unixMillisNow();
     updateSequence =
         options.updateSequence.empty() ? std::to_string(now / 1000) : options.updateSequence;

@@ -206,6 +206,7 @@ server:
   exceptions_http_status: true
   offline_response: blank
   offline: yes
+  jpeg_quality: 85
   limits:
     max_connections: 10
     max_header_bytes: 8KiB
@@ -309,6 +310,7 @@ layers:
   EXPECT_EQ(s.limits.maxMapPixels, 1000000);
   EXPECT_EQ(s.limits.maxTilesPerMap, 64);
   EXPECT_EQ(s.limits.decodedTileCache, 8ULL << 20);
+  EXPECT_EQ(s.jpegQuality, 85);
   EXPECT_EQ(c->cache.root, "/srv/conf/cache/here");
   EXPECT_EQ(c->cache.sizeLimitBytes, 10ULL << 30);
   EXPECT_EQ(c->renderer.lodThreshold, 1.5);
@@ -586,6 +588,10 @@ TEST(ConfigYaml, BadDurationAndSize) {
   EXPECT_EQ(errorOf(std::string(kMinimal) + "    opacity: .nan\n").key, "layers[0].opacity");
   EXPECT_EQ(errorOf("server: {limits: {max_tiles_per_map: 0}}\n" + std::string(kMinimal)).key,
             "server.limits.max_tiles_per_map");
+  EXPECT_EQ(errorOf("server: {jpeg_quality: 0}\n" + std::string(kMinimal)).key,
+            "server.jpeg_quality");
+  EXPECT_EQ(errorOf("server: {jpeg_quality: 101}\n" + std::string(kMinimal)).key,
+            "server.jpeg_quality");
 }
 
 TEST(ConfigYaml, MissingRequiredKeys) {

@@ -1300,3 +1300,51 @@ TEST(ComposeIntegration, DecodedTilesAreReusedAndGiveTheSameMap) {
   compose(tiny, box);
   EXPECT_EQ(compose(tiny, box).decodedTiles, 6u);
 }
+
+namespace {
+/** The first value of a JPEG's first quantisation table (the luma DC step: 16 at quality 50,
+ * 5 at 85, 3 at 90 with libjpeg's scaling), or -1 without one. */
+int firstQuantStep(const std::vector<std::byte>& jpeg) {
+  for (std::size_t i = 2; i + 5 < jpeg.size(); ++i)
+    if (jpeg[i] == std::byte{0xFF} && jpeg[i + 1] == std::byte{0xDB})
+      return std::to_integer<int>(jpeg[i + 5]); // after the marker, the length and Pq/Tq
+  return -1;
+}
+} // namespace
+
+TEST(ComposeIntegration, JpegMapsHaveTheConfiguredQuality) {
+  test::FakeUpstream up(tileReply);
+  Proxy p(up.url("/wms"));
+  const LayerSpec* sat = p.tiles->layer("sat");
+  ASSERT_NE(sat, nullptr);
+  const auto compose = [&](MapComposer& c, double opacity) {
+    ComposeRequest r;
+    // Opaque: the YCbCr planes path; translucent: the RGB path.
+    r.layers = {ComposeLayer{sat, "", opacity}};
+    r.bbox = Sector{-170, -80, -100, -30};
+    r.width = 300;
+    r.height = 200;
+    r.format = "image/jpeg";
+    std::promise<ComposedMap> done;
+    EXPECT_TRUE(c.compose(r, nullptr, [&](ComposedMap&& m) { done.set_value(std::move(m)); }));
+    return done.get_future().get();
+  };
+  MapComposer byDefault(*p.tiles, 2, 256, 0);
+  MapComposer q85(*p.tiles, 2, 256, 0, 85);
+  MapComposer q50(*p.tiles, 2, 256, 0, 50);
+  MapComposer outOfRange(*p.tiles, 1, 256, 0, 1000); // clamped to 100
+  for (const double opacity : {1.0, 0.5}) {
+    SCOPED_TRACE(opacity);
+    const auto d = compose(byDefault, opacity), a = compose(q85, opacity),
+               b = compose(q50, opacity), top = compose(outOfRange, opacity);
+    for (const auto* m : {&d, &a, &b, &top})
+      ASSERT_EQ(m->kind, ComposedMap::Kind::Map) << m->message;
+    EXPECT_EQ(firstQuantStep(d.bytes), 3);
+    EXPECT_EQ(firstQuantStep(a.bytes), 5);
+    EXPECT_EQ(firstQuantStep(b.bytes), 16);
+    EXPECT_EQ(firstQuantStep(top.bytes), 1);
+    EXPECT_LT(b.bytes.size(), a.bytes.size());
+    EXPECT_LT(a.bytes.size(), d.bytes.size());
+    EXPECT_LT(d.bytes.size(), top.bytes.size());
+  }
+}

@@ -881,6 +881,7 @@ int cmdServe(const Args& a) {
   fo.maxMapPixels = server.limits.maxMapPixels;
   fo.maxTilesPerMap = static_cast<std::size_t>(server.limits.maxTilesPerMap);
   fo.decodedTileCacheBytes = static_cast<std::size_t>(server.limits.decodedTileCache);
+  fo.jpegQuality = server.jpegQuality;
   fo.composeThreads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   fo.limits.maxHeight = server.limits.maxHeight;
   fo.maxParamBytes = server.limits.maxParamBytes;

@@ -60,6 +60,9 @@ struct ServerSettings {
   int threads = 0;               ///< event-loop threads; 0 = cores - 1 (at least 1)
   std::string logLevel = "info"; ///< error, warn, info or debug (events on stderr)
   std::string accessLog;         ///< "" = none, "-" = stdout, else a file appended to
+  /** JPEG quality (1-100) of the maps tellus composes (GetMap boxes that are not one cached
+   * tile); cached tiles are served as stored. MapProxy's `jpeg_quality`, MapCache's <quality>. */
+  int jpegQuality = 90;
   ServerLimits limits;
 };
 

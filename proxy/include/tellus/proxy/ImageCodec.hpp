@@ -18,13 +18,15 @@ namespace tellus {
 
 /** Encodes 8-bit pixels (channels 1, 3 or 4, row-major, top row first) as "image/jpeg" (alpha is
  * dropped) or "image/png". `tile`: a JPEG is written as tellus's cached tiles are (with restart
- * markers, see codecs::kTileRestartInterval), for a tile rather than a map. */
+ * markers, see codecs::kTileRestartInterval), for a tile rather than a map. `jpegQuality`: 1-100.
+ */
 std::expected<std::vector<std::byte>, std::string> encodeImage(std::string_view mimeType,
                                                                int width,
                                                                int height,
                                                                int channels,
                                                                const std::uint8_t* pixels,
-                                                               bool tile = false);
+                                                               bool tile = false,
+                                                               int jpegQuality = 90);
 
 /** Encodes 16-bit signed heights as "application/bil16" (little-endian), "image/tiff" (Int16) or
  * "image/png" (16-bit greyscale holding height + 32768, so -32768 is 0 and sea level 32768). */

@@ -32,6 +32,7 @@ struct FrontEndOptions {
   /** Decoded tiles kept between composed maps (whole tiles, by ETag, least recently used out);
    * 0: none, and only the sampled part of each JPEG tile is decoded. */
   std::size_t decodedTileCacheBytes = 0;
+  int jpegQuality = 90; ///< of composed JPEG maps, 1-100
   std::size_t maxParamBytes = 2048;
   std::size_t maxQueryBytes = 16384;
   std::string updateSequence; ///< capabilities UpdateSequence ("" = derived from the start time)
