@@ -153,4 +153,34 @@ if err=$("$tellus" seed --cache "$tcache" --layer bluemarble --levels 0 --time 2
 fi
 echo "$err" | grep -q "no TIME dimension" || fail "no TIME dimension: $err"
 
+# server.jpeg_quality reaches the maps tellus composes: the first luma quantisation step of a
+# GetMap that is not one tile is 16 at quality 50 (libjpeg's table unscaled; 3 at the default 90).
+cat >"$work/q50.yaml" <<YAML
+server: {jpeg_quality: 50}
+upstreams:
+  - {name: local, type: local, path: $data/bmng_2048x1024.jpg}
+layers:
+  - name: bm
+    upstream: local
+    format: image/jpeg
+    grid: {level_zero_delta: 36, tile_size: 512, levels: 2}
+YAML
+"$tellus" serve --config "$work/q50.yaml" --cache "$work/qcache" --listen 127.0.0.1:0 \
+  >"$work/qserve.txt" 2>&1 &
+server=$!
+for _ in $(seq 50); do grep -q "listening on" "$work/qserve.txt" && break; sleep 0.1; done
+port=$(grep -o "127.0.0.1:[0-9]*" "$work/qserve.txt" | head -n 1 | cut -d: -f2)
+[ -n "$port" ] || fail "serve (q50) did not say where it listens: $(cat "$work/qserve.txt")"
+code=$(curl -s -o "$work/q50.jpg" -w "%{http_code}" "http://127.0.0.1:$port/wms?SERVICE=WMS&VERSION=1.1.1&REQUEST=GetMap&LAYERS=bm&STYLES=&SRS=EPSG:4326&BBOX=-30,-20,40,30&WIDTH=300&HEIGHT=200&FORMAT=image/jpeg")
+kill -TERM $server
+wait $server || fail "serve (q50) did not stop cleanly on SIGTERM"
+[ "$code" = 200 ] || fail "composed GetMap answered $code"
+python3 - "$work/q50.jpg" <<'PY' || fail "the composed map is not quality 50"
+import sys
+b = open(sys.argv[1], "rb").read()
+assert b[:2] == b"\xff\xd8", "not a JPEG"
+i = b.index(b"\xff\xdb")
+assert b[i + 5] == 16, f"first luma step {b[i + 5]}"
+PY
+
 echo "cli: all checks passed"

@@ -327,21 +327,29 @@ TEST(DomeMethodsGl, DirectFallsBackToTheCubeWhereTrianglesAreLarge) {
   const int n = 256;
   const CameraPose pose{30.0, 40.0, 30.0, 20.0, 80.0};
   std::vector<std::uint8_t> images[2];
+  std::size_t faceBytes[2] = {};
   for (const DomeMethod m : {DomeMethod::Direct, DomeMethod::Cube}) {
     OPEN_RENDERER(r, shallow, g, domeOptions(n, 220.0, m, 30.0));
     const Rendered out = renderComplete(r, pose);
     ASSERT_TRUE(out.complete);
     EXPECT_EQ(out.stats.domeMethod, "cube");
+    EXPECT_EQ(out.stats.domeError, "");
     if (m == DomeMethod::Direct) {
       EXPECT_GT(out.stats.domeErrorPx, 0.5);
     }
     images[m == DomeMethod::Direct ? 0 : 1] = out.pixels;
+    faceBytes[m == DomeMethod::Direct ? 0 : 1] = out.stats.domeFaceBytes;
   }
   EXPECT_TRUE(images[0] == images[1]);
+  // The fallback made the faces the cube renderer made when it was created.
+  EXPECT_GT(faceBytes[1], 0u);
+  EXPECT_EQ(faceBytes[0], faceBytes[1]);
   OPEN_RENDERER(r, deep, g, domeOptions(n, 220.0, DomeMethod::Direct, 30.0));
   const Rendered out = renderComplete(r, pose, 120.0);
   ASSERT_TRUE(out.complete);
   EXPECT_EQ(out.stats.domeMethod, "direct") << out.stats.domeErrorPx;
+  // A direct dome that never fell back holds no cube faces.
+  EXPECT_EQ(out.stats.domeFaceBytes, 0u);
 }
 
 // The direct map starts from the camera-relative position either vertex path computes: the

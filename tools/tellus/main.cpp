@@ -1028,6 +1028,8 @@ std::string renderStatsJson(const planet::RenderStats& s, double seconds, bool c
   else
     std::snprintf(dome, sizeof dome, ",\n  \"dome_error_px\": null");
   std::string layers = ",\n  \"dome_method\": " + jsonString(s.domeMethod) + dome +
+                       ",\n  \"dome_face_bytes\": " + std::to_string(s.domeFaceBytes) +
+                       ",\n  \"dome_error\": " + jsonString(s.domeError) +
                        ",\n  \"passes\": " + std::to_string(s.passes) +
                        ",\n  \"overlays_per_pass\": " + std::to_string(s.overlaysPerPass) +
                        ",\n  \"layers\": [";

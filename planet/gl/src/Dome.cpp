@@ -63,8 +63,8 @@ FaceRect faceRegion(const CubeFace& face, int faceSize, double halfAngleRad) noe
           std::min(faceSize, y1 + grow + 1)};
 }
 
-std::expected<std::unique_ptr<Dome>, std::string> Dome::create(int faceSize,
-                                                               const std::string& glslHeader) {
+std::expected<std::unique_ptr<Dome>, std::string>
+Dome::create(int faceSize, const std::string& glslHeader, bool allocateFaces) {
   if (faceSize < 8 || faceSize > 16384)
     return std::unexpected(std::string("the dome's face size must be 8 to 16384 pixels"));
   std::unique_ptr<Dome> d(new Dome());
@@ -88,11 +88,21 @@ std::expected<std::unique_ptr<Dome>, std::string> Dome::create(int faceSize,
   d->uMaskCircle_ = glGetUniformLocation(d->maskProgram_, "uCircle");
   glGenVertexArrays(1, &d->maskVao_);
   glGenBuffers(1, &d->maskVbo_);
+  if (glGetError() != GL_NO_ERROR)
+    return std::unexpected(std::string("OpenGL error while setting up the dome"));
+  if (allocateFaces) {
+    if (auto r = d->allocateFaces(); !r) return std::unexpected(r.error());
+  }
+  return d;
+}
 
+std::expected<void, std::string> Dome::allocateFaces() {
+  if (facesAllocated()) return {};
+  const int faceSize = size_;
   // Filtering across face borders reads the neighbouring face (core since 3.2).
   glEnable(GL_TEXTURE_CUBE_MAP_SEAMLESS);
-  glGenTextures(1, &d->cube_);
-  glBindTexture(GL_TEXTURE_CUBE_MAP, d->cube_);
+  glGenTextures(1, &cube_);
+  glBindTexture(GL_TEXTURE_CUBE_MAP, cube_);
   for (int i = 0; i < 6; ++i)
     glTexImage2D(GL_TEXTURE_CUBE_MAP_POSITIVE_X + static_cast<GLenum>(i),
                  0,
@@ -111,25 +121,43 @@ std::expected<std::unique_ptr<Dome>, std::string> Dome::create(int faceSize,
   glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
   glBindTexture(GL_TEXTURE_CUBE_MAP, 0);
   // One depth buffer for the faces (each is cleared before it is drawn): float, reversed Z.
-  glGenRenderbuffers(1, &d->depth_);
-  glBindRenderbuffer(GL_RENDERBUFFER, d->depth_);
+  glGenRenderbuffers(1, &depth_);
+  glBindRenderbuffer(GL_RENDERBUFFER, depth_);
   glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, faceSize, faceSize);
-  glGenFramebuffers(6, d->fbos_.data());
+  glGenFramebuffers(6, fbos_.data());
   for (int i = 0; i < 6; ++i) {
-    glBindFramebuffer(GL_FRAMEBUFFER, d->fbos_[static_cast<std::size_t>(i)]);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbos_[static_cast<std::size_t>(i)]);
     glFramebufferTexture2D(GL_FRAMEBUFFER,
                            GL_COLOR_ATTACHMENT0,
                            GL_TEXTURE_CUBE_MAP_POSITIVE_X + static_cast<GLenum>(i),
-                           d->cube_,
+                           cube_,
                            0);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, d->depth_);
-    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_);
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+      glBindFramebuffer(GL_FRAMEBUFFER, 0);
+      freeFaces();
       return std::unexpected(std::string("the dome's cube face framebuffer is incomplete"));
+    }
   }
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  if (glGetError() != GL_NO_ERROR)
-    return std::unexpected(std::string("OpenGL error while setting up the dome"));
-  return d;
+  if (glGetError() != GL_NO_ERROR) {
+    freeFaces();
+    const std::size_t bytes =
+        28u * static_cast<std::size_t>(faceSize) * static_cast<std::size_t>(faceSize);
+    return std::unexpected("OpenGL error while making the dome's " + std::to_string(faceSize) +
+                           "-pixel cube faces (" + std::to_string(bytes >> 20) +
+                           " MiB; out of GPU memory?)");
+  }
+  return {};
+}
+
+void Dome::freeFaces() {
+  glDeleteFramebuffers(6, fbos_.data());
+  fbos_.fill(0);
+  glDeleteRenderbuffers(1, &depth_);
+  depth_ = 0;
+  glDeleteTextures(1, &cube_);
+  cube_ = 0;
 }
 
 Dome::~Dome() {
@@ -203,8 +231,9 @@ void Dome::buildMesh(double halfAngleRad, double radiusPx) {
   meshRadius_ = radiusPx;
 }
 
-void Dome::render(
+std::expected<void, std::string> Dome::render(
     const Camera& fisheye, const DrawFace& drawFace, GLuint target, int width, int height) {
+  if (auto r = allocateFaces(); !r) return r;
   const double alpha = fisheye.fisheyeHalfAngleRad();
   const glm::dvec3 right = fisheye.right(), up = fisheye.up(), back = -fisheye.forward();
   auto toWorld = [&](const glm::dvec3& v) { return v.x * right + v.y * up + v.z * back; };
@@ -248,6 +277,7 @@ void Dome::render(
   glBindVertexArray(0);
   glBindTexture(GL_TEXTURE_CUBE_MAP, 0);
   glEnable(GL_DEPTH_TEST);
+  return {};
 }
 
 void Dome::beginDirect(GLuint nodeProgram, const Camera& fisheye, int width, int height) {

@@ -56,19 +56,32 @@ struct FaceRect {
 };
 class Dome {
 public:
-  /** faceSize: the cube faces' size in pixels; glslHeader: the "#version ..." line. */
-  static std::expected<std::unique_ptr<Dome>, std::string> create(int faceSize,
-                                                                  const std::string& glslHeader);
+  /** faceSize: the cube faces' size in pixels; glslHeader: the "#version ..." line. With
+   * allocateFaces false the cube map and the faces' depth buffer (faceBytes()) are made on the
+   * first render(): a direct-method dome that never falls back never holds them. */
+  static std::expected<std::unique_ptr<Dome>, std::string>
+  create(int faceSize, const std::string& glslHeader, bool allocateFaces = true);
   ~Dome();
   Dome(const Dome&) = delete;
   Dome& operator=(const Dome&) = delete;
 
   using DrawFace = std::function<void(const Camera& face, const DrawTarget& target)>;
   /** Draws the faces the fisheye camera's cone reaches through drawFace, then warps them into
-   * target (width x height: the circle of diameter min(width, height), centred; black around). */
-  void
+   * target (width x height: the circle of diameter min(width, height), centred; black around).
+   * Makes the faces first when they are not there yet (allocateFaces()); fails, drawing nothing,
+   * only when that fails. */
+  std::expected<void, std::string>
   render(const Camera& fisheye, const DrawFace& drawFace, GLuint target, int width, int height);
   int faceSize() const noexcept { return size_; }
+  /** The cube map (RGBA8) and the faces' depth buffer (32-bit float); idempotent. */
+  std::expected<void, std::string> allocateFaces();
+  bool facesAllocated() const noexcept { return cube_ != 0; }
+  /** GPU bytes of the faces when allocated: 6 x faceSize^2 x 4 + faceSize^2 x 4. */
+  std::size_t faceBytes() const noexcept {
+    return facesAllocated()
+               ? 28u * static_cast<std::size_t>(size_) * static_cast<std::size_t>(size_)
+               : 0u;
+  }
 
   /** The direct method: with the node program (compiled with TELLUS_FISHEYE) current, switches
    * its vertex map to the fisheye of this camera for a width x height framebuffer (the circle of
@@ -100,6 +113,7 @@ private:
   GLsizei maskVertices_ = 0;
   int maskW_ = 0, maskH_ = 0;
   void buildMask(int width, int height);
+  void freeFaces();
   double regionsFor_ = -1.0; ///< the half-angle the face regions were computed for
   std::array<FaceRect, 6> regions_{};
 };

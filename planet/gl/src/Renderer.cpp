@@ -941,14 +941,25 @@ void Renderer::Impl::draw(const Camera& camera, bool present, const DrawTarget* 
     stats.domeMethod = direct ? "direct" : "cube";
   }
   if (dome && target == nullptr && camera.isFisheye() && !direct) {
-    dome->render(
+    // A direct renderer makes its cube faces on its first fallback (Dome::render). Should that
+    // fail (GPU memory), the frame is drawn direct, over the error bound, and says so.
+    const auto drawn = dome->render(
         camera,
         [this](const Camera& face, const DrawTarget& t) { draw(face, false, &t); },
         fbo,
         opt.width,
         opt.height);
-    target = &warped;
+    if (drawn) {
+      target = &warped;
+    } else if (opt.dome->method == DomeMethod::Direct) {
+      direct = true;
+      stats.domeMethod = "direct";
+      stats.domeError = drawn.error();
+    } else {
+      stats.domeError = drawn.error();
+    }
   }
+  if (dome) stats.domeFaceBytes = dome->faceBytes();
   glBindFramebuffer(GL_FRAMEBUFFER, target ? target->fbo : fbo);
   glViewport(0, 0, target ? target->width : opt.width, target ? target->height : opt.height);
   beginReversedZ(stats.reversedZ);
@@ -1198,8 +1209,10 @@ Renderer::create(ITileSource& source, const Geodesy& geodesy, RendererOptions op
     if (!(d->faceScale > 0.0 && d->faceScale <= 4.0))
       return std::unexpected(std::string("the dome's face scale must be in (0, 4]"));
     const int side = std::min(impl->opt.width, impl->opt.height);
+    // The direct method makes the cube faces only when a frame falls back to them.
     auto made = Dome::create(std::max(8, static_cast<int>(std::lround(d->faceScale * side))),
-                             impl->gl45 ? "#version 450 core\n" : "#version 330 core\n");
+                             impl->gl45 ? "#version 450 core\n" : "#version 330 core\n",
+                             d->method == DomeMethod::Cube);
     if (!made) return std::unexpected(made.error());
     impl->dome = std::move(*made);
   }
@@ -1732,7 +1745,8 @@ void Renderer::resize(int width, int height) {
   if (m.dome) { // faces for the new size (kept when that fails: the old ones still draw)
     const int n = std::min(width, height);
     auto made = Dome::create(std::max(8, static_cast<int>(std::lround(m.opt.dome->faceScale * n))),
-                             m.gl45 ? "#version 450 core\n" : "#version 330 core\n");
+                             m.gl45 ? "#version 450 core\n" : "#version 330 core\n",
+                             m.opt.dome->method == DomeMethod::Cube || m.dome->facesAllocated());
     if (made) m.dome = std::move(*made);
   }
 }

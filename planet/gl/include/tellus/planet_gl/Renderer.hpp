@@ -224,6 +224,10 @@ struct RenderStats {
    * domeErrorPx: that estimate (0 for the cube method's renderers). */
   std::string domeMethod;
   double domeErrorPx = 0.0;
+  /** GPU bytes of the dome's cube faces (6 RGBA8 faces and a float depth buffer): 0 for a
+   * direct renderer until a frame first falls back to the cube. */
+  std::size_t domeFaceBytes = 0;
+  std::string domeError; ///< why the cube faces could not be made ("" when they could)
 };
 
 class Renderer {
