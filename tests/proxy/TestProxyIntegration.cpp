@@ -1258,21 +1258,28 @@ TEST(ComposeIntegration, HeightsAreExactWhereTheBoxIsAligned) {
             std::string::npos);
 }
 
+namespace {
+/** A 300 x 200 JPEG map of one layer through `c`, waited for. */
+ComposedMap composeJpeg(MapComposer& c, const LayerSpec* layer, const Sector& box, double opacity) {
+  ComposeRequest r;
+  r.layers = {ComposeLayer{layer, "", opacity}};
+  r.bbox = box;
+  r.width = 300;
+  r.height = 200;
+  r.format = "image/jpeg";
+  std::promise<ComposedMap> done;
+  EXPECT_TRUE(c.compose(r, nullptr, [&](ComposedMap&& m) { done.set_value(std::move(m)); }));
+  return done.get_future().get();
+}
+} // namespace
+
 TEST(ComposeIntegration, DecodedTilesAreReusedAndGiveTheSameMap) {
   test::FakeUpstream up(tileReply);
   Proxy p(up.url("/wms"));
   const LayerSpec* sat = p.tiles->layer("sat");
   ASSERT_NE(sat, nullptr);
   const auto compose = [&](MapComposer& c, const Sector& box) {
-    ComposeRequest r;
-    r.layers = {ComposeLayer{sat, "", 1.0}};
-    r.bbox = box;
-    r.width = 300;
-    r.height = 200;
-    r.format = "image/jpeg";
-    std::promise<ComposedMap> done;
-    EXPECT_TRUE(c.compose(r, nullptr, [&](ComposedMap&& m) { done.set_value(std::move(m)); }));
-    return done.get_future().get();
+    return composeJpeg(c, sat, box, 1.0);
   };
   MapComposer cached(*p.tiles, 2, 256, 8u << 20);
   MapComposer uncached(*p.tiles, 2, 256, 0);
@@ -1317,17 +1324,9 @@ TEST(ComposeIntegration, JpegMapsHaveTheConfiguredQuality) {
   Proxy p(up.url("/wms"));
   const LayerSpec* sat = p.tiles->layer("sat");
   ASSERT_NE(sat, nullptr);
+  // Opaque: the YCbCr planes path; translucent: the RGB path.
   const auto compose = [&](MapComposer& c, double opacity) {
-    ComposeRequest r;
-    // Opaque: the YCbCr planes path; translucent: the RGB path.
-    r.layers = {ComposeLayer{sat, "", opacity}};
-    r.bbox = Sector{-170, -80, -100, -30};
-    r.width = 300;
-    r.height = 200;
-    r.format = "image/jpeg";
-    std::promise<ComposedMap> done;
-    EXPECT_TRUE(c.compose(r, nullptr, [&](ComposedMap&& m) { done.set_value(std::move(m)); }));
-    return done.get_future().get();
+    return composeJpeg(c, sat, Sector{-170, -80, -100, -30}, opacity);
   };
   MapComposer byDefault(*p.tiles, 2, 256, 0);
   MapComposer q85(*p.tiles, 2, 256, 0, 85);
