@@ -26,19 +26,27 @@ for v in "0,0,2e7" "45.5,7.5,2e6,30,40" "90,0,1e6" "0,180,1e6"; do
     row "$v" "$c" "$work/s.json"
   done
 done
-cat >"$work/path.json" <<'JSON'
+cat >"$work/descent.json" <<'JSON'
 [{"time": 0, "lat": 30, "lon": -20, "alt": 2e7},
  {"time": 4, "lat": 46, "lon": 8, "alt": 2e4, "heading": 30, "tilt": 60}]
 JSON
-# The descent as streamed, flown twice in one renderer (--repeat 2): the first pass is what a viewer
+# A level pass: 2,000 km up, 60 degrees east along 30 N, tilted 30 degrees; level-2 tiles (and
+# heights) stream in all the way, while every view costs about the same to draw (unlike the
+# descent, whose views differ 4-8x on llvmpipe).
+cat >"$work/level.json" <<'JSON'
+[{"time": 0, "lat": 30, "lon": -40, "alt": 2e6, "heading": 90, "tilt": 30},
+ {"time": 4, "lat": 30, "lon": 20, "alt": 2e6, "heading": 90, "tilt": 30}]
+JSON
+# Each flight as streamed, flown twice in one renderer (--repeat 2): the first pass is what a viewer
 # sees; in the second everything is resident, so it gives each view's cost without streaming.
 # Stutter is the first pass's frame against the same view in the second (frame by frame).
+for flight in descent level; do
 echo
-echo "| descent 20,000 km to 20 km, 101 frames | cache | s | median ms | p95 ms | longest ms | longest / median | p95 / median | settled: median ms, longest / median | frame / settled frame: median, p95, max |"
+echo "| $flight, 101 frames | cache | s | median ms | p95 ms | longest ms | longest / median | p95 / median | settled: median ms, longest / median | frame / settled frame: median, p95, max |"
 echo "|---|---|---|---|---|---|---|---|---|---|"
 for c in cold warm; do
-  xvfb-run -a -s '-screen 0 1280x1024x24' "$tellus" render --cache "$work/cache-path" \
-    --path "$work/path.json" --frames "$work/frames" --fps 25 --size 1024x768 --repeat 2 \
+  xvfb-run -a -s '-screen 0 1280x1024x24' "$tellus" render --cache "$work/cache-$flight" \
+    --path "$work/$flight.json" --frames "$work/frames" --fps 25 --size 1024x768 --repeat 2 \
     --stats "$work/s.json" >/dev/null
   python3 - "$c" "$work/s.json" <<'PY2'
 import json, sys
@@ -52,4 +60,5 @@ print("| as streamed | %s | %.2f | %.1f | %.1f | %.1f | %.2f | %.2f | %.1f, %.2f
     sys.argv[1], s["seconds"], ma, q(a, 95), max(a), max(a) / ma, q(a, 95) / ma, mb, max(b) / mb,
     q(r, 50), q(r, 95), max(r)))
 PY2
+done
 done
