@@ -181,7 +181,7 @@ MapComposer::MapComposer(TileService& tiles,
                          std::size_t maxTiles,
                          std::size_t decodedCacheBytes,
                          int jpegQuality)
-    : tiles_(tiles), maxTiles_(maxTiles), jpegQuality_(std::clamp(jpegQuality, 1, 100)),
+    : tiles_(tiles), maxTiles_(maxTiles), jpegQuality_(jpegQuality),
       decodedCache_(decodedCacheBytes > 0 ? std::make_unique<DecodedCache>(decodedCacheBytes)
                                           : nullptr),
       gate_(std::make_shared<Gate>()), pool_(std::make_unique<Pool>(threads)) {

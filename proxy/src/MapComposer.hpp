@@ -52,7 +52,8 @@ struct ComposedMap {
 class MapComposer {
 public:
   /** `decodedCacheBytes`: decoded tiles kept between maps (0: none; then only the part of each
-   * JPEG tile a map samples is decoded). `jpegQuality`: of JPEG maps, clamped to 1-100. */
+   * JPEG tile a map samples is decoded). `jpegQuality`: of JPEG maps (the encoders clamp it to
+   * 1-100). */
   MapComposer(TileService& tiles,
               int threads,
               std::size_t maxTiles,

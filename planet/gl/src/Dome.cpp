@@ -142,10 +142,8 @@ std::expected<void, std::string> Dome::allocateFaces() {
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   if (glGetError() != GL_NO_ERROR) {
     freeFaces();
-    const std::size_t bytes =
-        28u * static_cast<std::size_t>(faceSize) * static_cast<std::size_t>(faceSize);
     return std::unexpected("OpenGL error while making the dome's " + std::to_string(faceSize) +
-                           "-pixel cube faces (" + std::to_string(bytes >> 20) +
+                           "-pixel cube faces (" + std::to_string(bytesOfFaces(faceSize) >> 20) +
                            " MiB; out of GPU memory?)");
   }
   return {};

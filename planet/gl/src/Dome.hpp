@@ -77,10 +77,9 @@ public:
   std::expected<void, std::string> allocateFaces();
   bool facesAllocated() const noexcept { return cube_ != 0; }
   /** GPU bytes of the faces when allocated: 6 x faceSize^2 x 4 + faceSize^2 x 4. */
-  std::size_t faceBytes() const noexcept {
-    return facesAllocated()
-               ? 28u * static_cast<std::size_t>(size_) * static_cast<std::size_t>(size_)
-               : 0u;
+  std::size_t faceBytes() const noexcept { return facesAllocated() ? bytesOfFaces(size_) : 0u; }
+  static std::size_t bytesOfFaces(int faceSize) noexcept {
+    return 28u * static_cast<std::size_t>(faceSize) * static_cast<std::size_t>(faceSize);
   }
 
   /** The direct method: with the node program (compiled with TELLUS_FISHEYE) current, switches

@@ -931,6 +931,7 @@ void Renderer::Impl::draw(const Camera& camera, bool present, const DrawTarget* 
   bool direct = false;
   if (dome && target == nullptr && camera.isFisheye()) {
     stats.domeErrorPx = 0.0;
+    stats.domeError.clear(); // of this frame only: a later fallback may make the faces
     if (opt.dome->method == DomeMethod::Direct) {
       stats.domeErrorPx = directChordErrorPx(camera,
                                              geo().drawList(),
@@ -951,12 +952,10 @@ void Renderer::Impl::draw(const Camera& camera, bool present, const DrawTarget* 
         opt.height);
     if (drawn) {
       target = &warped;
-    } else if (opt.dome->method == DomeMethod::Direct) {
-      direct = true;
-      stats.domeMethod = "direct";
-      stats.domeError = drawn.error();
     } else {
       stats.domeError = drawn.error();
+      direct = opt.dome->method == DomeMethod::Direct;
+      if (direct) stats.domeMethod = "direct";
     }
   }
   if (dome) stats.domeFaceBytes = dome->faceBytes();
