@@ -6,7 +6,9 @@
 #   bench/proxy/compose_cpu.sh [path/to/tellus] [seconds]
 #
 # CONFIG=file.yaml serves with that configuration (for example another server.limits.
-# decoded_tile_cache); BOX_LEVELS=0-2 seeds those levels.
+# decoded_tile_cache); BOX_LEVELS=0-2 seeds those levels; REGION=W,S,E,N draws the boxes inside
+# that region (default the whole world; bench/peers/run.sh's is -36,-18,72,54, where the spans
+# are 10-80 degrees instead of 10-90).
 #
 # Seeds the bundled Blue Marble (levels 0-2) into a scratch cache, serves it, runs wrk with one
 # connection for the given time (default 20 s) and prints requests, CPU seconds, CPU ms per map
@@ -26,13 +28,18 @@ config=()
 server=$!
 for _ in $(seq 50); do grep -q "listening on" "$work/serve.txt" && break; sleep 0.1; done
 port=$(grep -o "127.0.0.1:[0-9]*" "$work/serve.txt" | head -n 1 | cut -d: -f2)
-cat >"$work/arbitrary.lua" <<'LUA'
+IFS=, read -r rw rs re rn <<<"${REGION:--180,-90,180,90}"
+cat >"$work/arbitrary.lua" <<LUA
+local W, S, E, N = $rw, $rs, $re, $rn
+LUA
+cat >>"$work/arbitrary.lua" <<'LUA'
 math.randomseed(42)
+local maxSpan = math.min(90, E - W, (N - S) / 0.75)
 request = function()
-  local span = 10 + math.random() * 80
-  local w = -180 + math.random() * (360 - span)
+  local span = 10 + math.random() * (maxSpan - 10)
+  local w = W + math.random() * (E - W - span)
   local hs = span * 0.75
-  local s = -90 + math.random() * (180 - hs)
+  local s = S + math.random() * (N - S - hs)
   return wrk.format("GET", string.format("/wms?SERVICE=WMS&VERSION=1.3.0&REQUEST=GetMap&LAYERS=bluemarble&STYLES=&CRS=EPSG:4326&BBOX=%.6f,%.6f,%.6f,%.6f&WIDTH=1024&HEIGHT=768&FORMAT=image/jpeg", s, w, s + hs, w + span))
 end
 LUA

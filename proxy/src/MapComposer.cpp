@@ -1,5 +1,6 @@
 #include "MapComposer.hpp"
 
+#include "AdmittingLru.hpp"
 #include "Codecs.hpp"
 #include "JpegRaw.hpp"
 #include "Quantize.hpp"
@@ -14,13 +15,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <deque>
-#include <list>
 #include <map>
 #include <mutex>
 #include <span>
 #include <unordered_map>
-#include <unordered_set>
 
 namespace tellus {
 
@@ -96,65 +94,11 @@ struct KeyLess {
 
 } // namespace
 
-/** Decoded tiles by their ETag, least recently used first out, within a byte budget. */
-class MapComposer::DecodedCache {
+/** Decoded tiles by their ETag, least recently used first out, within a byte budget; a tile is
+ * kept once it is used often enough (AdmittingLru.hpp). */
+class MapComposer::DecodedCache : public AdmittingLru<Decoded> {
 public:
-  explicit DecodedCache(std::size_t budget) : budget_(budget) {}
-
-  std::shared_ptr<const Decoded> get(const std::string& key) {
-    std::lock_guard lock(mutex_);
-    const auto it = index_.find(key);
-    if (it == index_.end()) return nullptr;
-    lru_.splice(lru_.begin(), lru_, it->second);
-    return it->second->value;
-  }
-
-  /** Whether `key` was asked for before (and missed); remembers it when not. The memory of keys
-   * is bounded (the oldest half is forgotten when it is full). */
-  bool seenBefore(const std::string& key) {
-    std::lock_guard lock(mutex_);
-    if (seen_.contains(key)) return true;
-    if (seenOrder_.size() >= kSeenKeys) {
-      for (std::size_t k = 0; k < kSeenKeys / 2; ++k) {
-        seen_.erase(seenOrder_.front());
-        seenOrder_.pop_front();
-      }
-    }
-    seen_.insert(key);
-    seenOrder_.push_back(key);
-    return false;
-  }
-
-  void put(const std::string& key, std::shared_ptr<const Decoded> value, std::size_t bytes) {
-    if (bytes > budget_) return;
-    std::vector<std::shared_ptr<const Decoded>> evicted; // released outside the lock
-    std::lock_guard lock(mutex_);
-    if (index_.contains(key)) return;
-    lru_.push_front(Entry{key, std::move(value), bytes});
-    index_.emplace(key, lru_.begin());
-    bytes_ += bytes;
-    while (bytes_ > budget_ && !lru_.empty()) {
-      bytes_ -= lru_.back().bytes;
-      index_.erase(lru_.back().key);
-      evicted.push_back(std::move(lru_.back().value));
-      lru_.pop_back();
-    }
-  }
-
-private:
-  struct Entry {
-    std::string key;
-    std::shared_ptr<const Decoded> value;
-    std::size_t bytes;
-  };
-  std::mutex mutex_;
-  std::list<Entry> lru_;
-  std::unordered_map<std::string, std::list<Entry>::iterator> index_;
-  std::size_t bytes_ = 0;
-  std::size_t budget_;
-  static constexpr std::size_t kSeenKeys = 8192;
-  std::unordered_set<std::string> seen_;
-  std::deque<std::string> seenOrder_;
+  using AdmittingLru::AdmittingLru;
 };
 
 struct MapComposer::Job {
@@ -188,6 +132,10 @@ MapComposer::MapComposer(TileService& tiles,
   gate_->pool = &pool_->workers;
   if (const char* e = std::getenv("TELLUS_COMPOSE_YCC"); e && std::string_view(e) == "0")
     yccDisabled_ = true;
+}
+
+std::size_t MapComposer::decodedCacheBytes() const {
+  return decodedCache_ ? decodedCache_->bytes() : 0;
 }
 
 MapComposer::~MapComposer() {
@@ -359,9 +307,14 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
           bool keep = false;
           if (decodedCache_ && !a.etag.empty()) {
             if (auto hit = decodedCache_->get(cacheKey)) return hit;
-            // Admitted on its second use: a tile that one map needs once is decoded only in the
-            // part it samples; one that maps keep asking for is decoded whole and kept.
-            keep = decodedCache_->seenBefore(cacheKey);
+            // A tile that maps keep asking for is decoded whole and kept; one that is not (yet)
+            // worth a place is decoded only in the part this map samples.
+            const auto texels = static_cast<std::size_t>(g.tileWidth) *
+                                static_cast<std::size_t>(g.tileHeight);
+            keep = decodedCache_->admits(cacheKey,
+                                         spec.elevation ? texels * 2
+                                         : ycc          ? texels * 3 / 2
+                                                        : texels * 3);
             if (keep) region = nullptr;
           }
           const std::string_view type =

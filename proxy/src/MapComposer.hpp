@@ -51,8 +51,8 @@ struct ComposedMap {
 
 class MapComposer {
 public:
-  /** `decodedCacheBytes`: decoded tiles kept between maps (0: none; then only the part of each
-   * JPEG tile a map samples is decoded). `jpegQuality`: of JPEG maps (the encoders clamp it to
+  /** `decodedCacheBytes`: decoded tiles kept between maps, a tile admitted when it is used often
+   * enough (AdmittingLru; 0: none, and only the part of each JPEG tile a map samples is decoded). `jpegQuality`: of JPEG maps (the encoders clamp it to
    * 1-100). */
   MapComposer(TileService& tiles,
               int threads,
@@ -68,6 +68,9 @@ public:
   compose(ComposeRequest request,
           std::function<void(const LayerSpec&, const TileAnswer&)> onTile,
           std::function<void(ComposedMap&&)> done);
+
+  /** Bytes of decoded tiles kept between maps now. */
+  std::size_t decodedCacheBytes() const;
 
   struct Job;
 

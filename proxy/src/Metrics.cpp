@@ -109,8 +109,14 @@ const char* errorName(std::size_t code) {
 
 } // namespace
 
+void ProxyMetrics::composedTiles(std::uint64_t decoded, std::uint64_t kept) noexcept {
+  composedDecoded_.fetch_add(decoded, std::memory_order_relaxed);
+  composedKept_.fetch_add(kept, std::memory_order_relaxed);
+}
+
 std::string ProxyMetrics::render(const std::vector<UpstreamMetrics>& upstreams,
-                                 std::optional<std::int64_t> cacheBytes) const {
+                                 std::optional<std::int64_t> cacheBytes,
+                                 std::uint64_t decodedTileCacheBytes) const {
   std::string out;
   out.reserve(4096);
   header(out,
@@ -214,6 +220,20 @@ std::string ProxyMetrics::render(const std::vector<UpstreamMetrics>& upstreams,
   }
   header(out, "tellus_cache_bytes", "gauge", "Bytes of all cached tiles (from the index).");
   if (cacheBytes) out += "tellus_cache_bytes " + std::to_string(*cacheBytes) + "\n";
+  header(out,
+         "tellus_composed_map_tiles_total",
+         "counter",
+         "Tiles sampled by composed GetMaps: decoded for the map, or kept decoded from earlier maps "
+         "(server.limits.decoded_tile_cache).");
+  out += "tellus_composed_map_tiles_total{source=\"decoded\"} " +
+         std::to_string(composedDecoded_.load(std::memory_order_relaxed)) + "\n";
+  out += "tellus_composed_map_tiles_total{source=\"kept\"} " +
+         std::to_string(composedKept_.load(std::memory_order_relaxed)) + "\n";
+  header(out,
+         "tellus_decoded_tile_cache_bytes",
+         "gauge",
+         "Bytes of decoded tiles kept for composed GetMaps.");
+  out += "tellus_decoded_tile_cache_bytes " + std::to_string(decodedTileCacheBytes) + "\n";
   return out;
 }
 

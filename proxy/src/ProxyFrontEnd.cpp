@@ -106,7 +106,9 @@ struct ProxyFrontEnd::Impl {
   void metricsPage(const Responder& respond) const {
     auto r = HttpResponse::text(200,
                                 "text/plain; version=0.0.4; charset=utf-8",
-                                metrics.render(tiles.upstreamMetrics(), tiles.cachedBytes()));
+                                metrics.render(tiles.upstreamMetrics(),
+                                               tiles.cachedBytes(),
+                                               composer.decodedCacheBytes()));
     r.setHeader("Cache-Control", "no-store");
     respond(std::move(r));
   }
@@ -507,6 +509,8 @@ struct ProxyFrontEnd::Impl {
         std::move(cr),
         [this](const LayerSpec& layer, const TileAnswer& a) { countTile(&layer, a); },
         [this, ctx, respond](ComposedMap&& map) {
+          metrics.composedTiles(map.decodedTiles,
+                                map.tiles > map.decodedTiles ? map.tiles - map.decodedTiles : 0);
           if (map.kind == ComposedMap::Kind::Error) {
             return exception(
                 ctx, OgcException{std::string(ogc::kNoApplicableCode), "", map.message}, respond);

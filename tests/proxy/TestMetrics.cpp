@@ -54,7 +54,9 @@ TEST(Metrics, CountsRequestsByProtocolAndStatus) {
   m.tile(0, TileOutcome::Hit);
   m.tile(1, TileOutcome::Miss);
   m.tile(7, TileOutcome::Miss); // no such layer: ignored
-  const auto s = samples(m.render({}, 4096));
+  m.composedTiles(6, 0);
+  m.composedTiles(2, 4);
+  const auto s = samples(m.render({}, 4096, 3u << 20));
   EXPECT_EQ(s.at("tellus_http_requests_total{protocol=\"worldwind\",code=\"200\"}"), 1);
   EXPECT_EQ(s.at("tellus_http_requests_total{protocol=\"worldwind\",code=\"304\"}"), 1);
   EXPECT_EQ(s.at("tellus_http_requests_total{protocol=\"wms\",code=\"other\"}"), 1);
@@ -66,6 +68,9 @@ TEST(Metrics, CountsRequestsByProtocolAndStatus) {
   EXPECT_EQ(s.at("tellus_tiles_total{layer=\"etopo\",result=\"miss\"}"), 1);
   EXPECT_EQ(s.at("tellus_tiles_total{layer=\"etopo\",result=\"hit\"}"), 0);
   EXPECT_EQ(s.at("tellus_cache_bytes"), 4096);
+  EXPECT_EQ(s.at("tellus_composed_map_tiles_total{source=\"decoded\"}"), 8);
+  EXPECT_EQ(s.at("tellus_composed_map_tiles_total{source=\"kept\"}"), 4);
+  EXPECT_EQ(s.at("tellus_decoded_tile_cache_bytes"), 3 << 20);
 }
 
 TEST(Metrics, UpstreamHistogramIsCumulativeAndEndsAtItsCount) {

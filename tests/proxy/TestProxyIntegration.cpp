@@ -1273,6 +1273,29 @@ ComposedMap composeJpeg(MapComposer& c, const LayerSpec* layer, const Sector& bo
 }
 } // namespace
 
+TEST(ComposeIntegration, MetricsShowTheDecodedTilesKept) {
+  // tellus serve's default budget (server.limits.decoded_tile_cache, 32 MiB): the same map three
+  // times decodes its tiles for the first two (the second keeps them) and samples kept ones in
+  // the third; /metrics says so.
+  test::FakeUpstream up(tileReply);
+  Proxy p(up.url("/wms"));
+  const std::string map = getMap("sat", "-170,-80,-100,-30", 300, 200, "image/jpeg");
+  for (int i = 0; i < 3; ++i)
+    ASSERT_EQ(p.get(map).status, 200);
+  const auto m = p.get("/metrics");
+  ASSERT_EQ(m.status, 200);
+  const auto value = [&](const std::string& name) -> long long {
+    const auto at = m.body.find("\n" + name + " ");
+    if (at == std::string::npos) return -1;
+    return std::stoll(m.body.substr(at + name.size() + 2));
+  };
+  const long long decoded = value("tellus_composed_map_tiles_total{source=\"decoded\"}");
+  const long long kept = value("tellus_composed_map_tiles_total{source=\"kept\"}");
+  EXPECT_GT(kept, 0) << m.body;
+  EXPECT_EQ(decoded, 2 * kept) << m.body;
+  EXPECT_GT(value("tellus_decoded_tile_cache_bytes"), 0) << m.body;
+}
+
 TEST(ComposeIntegration, DecodedTilesAreReusedAndGiveTheSameMap) {
   test::FakeUpstream up(tileReply);
   Proxy p(up.url("/wms"));

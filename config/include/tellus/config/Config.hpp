@@ -45,7 +45,7 @@ struct ServerLimits {
   double requestsPerSecond = 0.0;                     ///< per client address; 0 = unlimited
   std::int64_t maxMapPixels = 4096LL * 4096LL;        ///< WIDTH x HEIGHT of a composed GetMap
   std::int32_t maxTilesPerMap = 256;  ///< tiles one composed GetMap may read (all layers)
-  std::uint64_t decodedTileCache = 0; ///< bytes of decoded tiles kept between maps (0: none)
+  std::uint64_t decodedTileCache = 32ULL << 20; ///< bytes of decoded tiles kept between maps (0: none)
 };
 
 /** YAML `server`. */

@@ -46,10 +46,15 @@ public:
   void requestFinished(Protocol p, int status, std::uint64_t bodyBytes) noexcept;
   /** `layer` indexes the names given at construction; others are ignored. */
   void tile(std::size_t layer, TileOutcome outcome) noexcept;
+  /** A composed map sampled `decoded` tiles it decoded and `kept` ones that came decoded from
+   * the composer's decoded-tile cache. */
+  void composedTiles(std::uint64_t decoded, std::uint64_t kept) noexcept;
 
-  /** The exposition: these counters plus the upstreams' and the cache's figures. */
+  /** The exposition: these counters plus the upstreams' and the cache's figures, and the bytes
+   * held by the decoded-tile cache. */
   std::string render(const std::vector<UpstreamMetrics>& upstreams,
-                     std::optional<std::int64_t> cacheBytes) const;
+                     std::optional<std::int64_t> cacheBytes,
+                     std::uint64_t decodedTileCacheBytes = 0) const;
 
   /** HTTP statuses counted one by one; any other is counted as "other". */
   static constexpr std::array<int, 14> kStatuses{
@@ -62,6 +67,7 @@ private:
   std::array<Counter, kProtocolCount> bytes_{};
   std::array<std::atomic<std::int64_t>, kProtocolCount> inFlight_{};
   std::unique_ptr<std::array<Counter, kTileOutcomeCount>[]> tiles_;
+  Counter composedDecoded_{0}, composedKept_{0};
 };
 
 /** A Prometheus label value with `\`, `"` and newlines escaped. */

@@ -29,9 +29,10 @@ struct FrontEndOptions {
   std::int64_t maxMapPixels = 4096LL * 4096LL;
   std::size_t maxTilesPerMap = 256;
   int composeThreads = 2; ///< workers that decode, sample and encode composed maps
-  /** Decoded tiles kept between composed maps (whole tiles, by ETag, least recently used out);
-   * 0: none, and only the sampled part of each JPEG tile is decoded. */
-  std::size_t decodedTileCacheBytes = 0;
+  /** Decoded tiles kept between composed maps (whole tiles, by ETag, least recently used out, a
+   * tile admitted when used often enough); 0: none, and only the sampled part of each JPEG tile
+   * is decoded. The configuration's default. */
+  std::size_t decodedTileCacheBytes = 32u << 20;
   int jpegQuality = 90; ///< of composed JPEG maps, 1-100
   std::size_t maxParamBytes = 2048;
   std::size_t maxQueryBytes = 16384;
