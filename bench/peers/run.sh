@@ -77,6 +77,10 @@
 #   OUT_DIR=build/bench           peers-runs.tsv, peers-summary.txt
 #   ONLY=                         seed: step 1 alone (the seeders and the ceilings), then the summary
 #   KEEP=0                        1: keep the work folder (configs, logs, caches, URL lists)
+#   UPSTREAM_CPUS=                CPU list (taskset -c, e.g. 0): the upstream (Apache and its mapserv
+#                                 processes) runs on these CPUs, and the seeders and the ceiling's
+#                                 wrk on the others: the upstream's own limit without the seeder's
+#                                 work taking CPU from it (on 2 CPUs both share them otherwise)
 #
 # Needs cgi-mapserver mapserver-bin gdal-bin wrk (in tools/debian-packages.txt), curl python3
 # iproute2 (base system) and, installed on the first run because CI does not need them,
@@ -121,6 +125,14 @@ MAX_LOAD="${MAX_LOAD:-0.8}"
 OUT_DIR="${OUT_DIR:-$repo/build/bench}"
 KEEP="${KEEP:-0}"
 ONLY="${ONLY:-}"
+UPSTREAM_CPUS="${UPSTREAM_CPUS:-}"
+up_pin=() seed_pin=()
+if [[ -n "$UPSTREAM_CPUS" ]]; then
+  [[ "$UPSTREAM_CPUS" =~ ^[0-9]+(,[0-9]+)*$ ]] || { echo "run.sh: UPSTREAM_CPUS=$UPSTREAM_CPUS: a list like 0 or 0,1" >&2; exit 1; }
+  other_cpus="$(python3 -c 'import os, sys; up = {int(c) for c in sys.argv[1].split(",")}; print(",".join(str(c) for c in sorted(os.sched_getaffinity(0) - up)))' "$UPSTREAM_CPUS")"
+  [[ -n "$other_cpus" ]] || { echo "run.sh: UPSTREAM_CPUS=$UPSTREAM_CPUS leaves no CPU for the seeders" >&2; exit 1; }
+  up_pin=(taskset -c "$UPSTREAM_CPUS") seed_pin=(taskset -c "$other_cpus")
+fi
 [[ -z "$ONLY" || "$ONLY" == seed ]] || { echo "run.sh: ONLY=$ONLY: only ONLY=seed is known" >&2; exit 1; }
 
 say() { echo "== $*"; }
@@ -238,10 +250,11 @@ open(p, "w").write(t)
 EOF
   done
 }
-start_apache() { # CONF: start a private Apache and wait until it answers
+start_apache() { # CONF PORT [COMMAND PREFIX...]: start a private Apache and wait until it answers
   local conf=$1 port=$2
+  shift 2
   apache_confs+=("$conf")
-  apache2 -f "$conf" -k start || die "apache2 -f $conf did not start: $(cat "$(dirname "$conf")/error.log" 2>/dev/null)"
+  "$@" apache2 -f "$conf" -k start || die "apache2 -f $conf did not start: $(cat "$(dirname "$conf")/error.log" 2>/dev/null)"
   for _ in $(seq 1 100); do
     curl -s -o /dev/null "http://127.0.0.1:$port/" && return 0
     sleep 0.1
@@ -376,7 +389,8 @@ fill "$here/mapserver.conf" "$work/upstream/mapserver.conf" "WORK=$work"
 fill "$here/httpd-upstream.conf" "$work/upstream/apache/httpd.conf" "WORK=$work" "PORT=$up_port" \
   "PROCS=$UPSTREAM_PROCS" "USER_LINES=$user_lines"
 [[ $EUID -ne 0 ]] || chown -R www-data:www-data "$work/upstream/apache/fcgid"
-start_apache "$work/upstream/apache/httpd.conf" "$up_port"
+start_apache "$work/upstream/apache/httpd.conf" "$up_port" "${up_pin[@]}"
+[[ -z "$UPSTREAM_CPUS" ]] || say "upstream pinned to CPU(s) $UPSTREAM_CPUS; the seeders and the ceiling's wrk to $other_cpus"
 up_log="$work/upstream/apache/access.log"
 upstream_requests() { if [[ -f "$up_log" ]]; then wc -l <"$up_log"; else echo 0; fi; }
 # answers other than 200 the upstream gave (mod_fcgid's 503 when no mapserv process is free, ...)
@@ -430,11 +444,11 @@ seed_row() { echo -e "$1\t$2\t$3\t$4\t$5\t${6:-0}" >>"$seeds"; }
 ceiling() { # NAME ROUND LIST TILES_PER_REQUEST: wrk on MapServer alone
   local name=$1 round=$2 list=$3 per=$4 res="$work/ceiling-$1-$2.txt" r0 r1
   if [[ $round == 1 ]]; then # start the mapserv processes and fill the page cache first
-    URLS="$list" SEED="$SEED" wrk -t"$WRK_THREADS" -c"$SEED_CONCURRENCY" -d2s --timeout 60s -s "$repo/bench/proxy/urls.lua" \
+    URLS="$list" SEED="$SEED" "${seed_pin[@]}" wrk -t"$WRK_THREADS" -c"$SEED_CONCURRENCY" -d2s --timeout 60s -s "$repo/bench/proxy/urls.lua" \
       "http://127.0.0.1:$up_port" >"$work/ceiling-$name-warm.log" 2>&1 || die "wrk failed: $(cat "$work/ceiling-$name-warm.log")"
   fi
   r0=$(upstream_requests)
-  URLS="$list" SEED="$SEED" RESULT="$res" wrk -t"$WRK_THREADS" -c"$SEED_CONCURRENCY" -d"$CEILING_DURATION" --timeout 60s \
+  URLS="$list" SEED="$SEED" RESULT="$res" "${seed_pin[@]}" wrk -t"$WRK_THREADS" -c"$SEED_CONCURRENCY" -d"$CEILING_DURATION" --timeout 60s \
     -s "$repo/bench/proxy/urls.lua" "http://127.0.0.1:$up_port" >"$work/ceiling-$name-$round.log" 2>&1 ||
     die "wrk failed: $(cat "$work/ceiling-$name-$round.log")"
   r1=$(upstream_requests)
@@ -463,16 +477,16 @@ seeder() { # NAME ROUND: one seeder into an empty cache, timed
       [[ $name == tellus1 ]] && meta=(--meta-tiles 1)
       timer=()
       [[ -n "$time_bin" ]] && timer=("$time_bin" -f '%U %S' -o "$work/seed-$name-$round.cpu")
-      "${timer[@]}" "$tellus" seed --config "$work/tellus/tellus.yaml" --cache "$work/tellus/cache" --layer world \
+      "${seed_pin[@]}" "${timer[@]}" "$tellus" seed --config "$work/tellus/tellus.yaml" --cache "$work/tellus/cache" --layer world \
         --levels "$LEVELS" --bbox "$REGION" --concurrency "$SEED_CONCURRENCY" "${meta[@]}" >"$log" 2>&1 ||
         die "tellus seed failed: $(tail -5 "$log")"
       ;;
     MapProxy)
-      (cd "$work/mapproxy" && "$venv/bin/mapproxy-seed" -f mapproxy.yaml -s seed.yaml --seed ALL -c "$SEED_CONCURRENCY") \
+      (cd "$work/mapproxy" && "${seed_pin[@]}" "$venv/bin/mapproxy-seed" -f mapproxy.yaml -s seed.yaml --seed ALL -c "$SEED_CONCURRENCY") \
         >"$log" 2>&1 || die "mapproxy-seed failed: $(tail -5 "$log")"
       ;;
     MapCache)
-      "${run_as[@]}" mapcache_seed -c "$work/mapcache/mapcache.xml" -t world -g ww4326 -z "${LEVEL_LO},${LEVEL_HI}" \
+      "${seed_pin[@]}" "${run_as[@]}" mapcache_seed -c "$work/mapcache/mapcache.xml" -t world -g ww4326 -z "${LEVEL_LO},${LEVEL_HI}" \
         -e "$REGION" -n "$SEED_CONCURRENCY" >"$log" 2>&1 || die "mapcache_seed failed: $(tail -c 600 "$log")"
       ;;
   esac
