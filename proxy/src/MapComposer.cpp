@@ -335,7 +335,7 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
           } else if (ycc) {
             const auto w = static_cast<std::size_t>(g.tileWidth);
             const auto h = static_cast<std::size_t>(g.tileHeight);
-            d->rgb = buffers.take();
+            if (!keep) d->rgb = buffers.take(); // a kept tile gets storage of its own size
             d->rgb.resize(w * h + 2 * (w / 2) * (h / 2));
             std::uint8_t* y = d->rgb.data();
             std::uint8_t* cb = y + w * h;
@@ -355,14 +355,17 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
                          TileSamples{g.tileWidth / 2, g.tileHeight / 2, 1, cb, nullptr},
                          TileSamples{g.tileWidth / 2, g.tileHeight / 2, 1, cr, nullptr}};
           } else {
-            d->rgb = buffers.take();
+            if (!keep) d->rgb = buffers.take();
             const auto channels =
                 decodeImageryInto(*bytes, type, g.tileWidth, g.tileHeight, d->rgb, region);
             if (!channels) return nullptr;
             d->view = TileSamples{g.tileWidth, g.tileHeight, *channels, d->rgb.data(), nullptr};
           }
           (void)key;
-          if (keep) decodedCache_->put(cacheKey, d, d->rgb.size() + d->heights.size() * 2);
+          // Counted by what they hold (storage of their own size, not a reused larger buffer).
+          if (keep)
+            decodedCache_->put(
+                cacheKey, d, d->rgb.capacity() + d->heights.capacity() * sizeof(std::int16_t));
           return d;
         };
         std::vector<TileKey> holes;
