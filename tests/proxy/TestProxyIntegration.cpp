@@ -21,6 +21,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cmath>
@@ -32,9 +33,13 @@
 #include <map>
 #include <mutex>
 #include <span>
+#include <fcntl.h>
+#include <spawn.h>
 #include <sys/wait.h>
+#include <string_view>
 #include <thread>
 #include <unistd.h>
+#include <vector>
 
 using namespace tellus;
 using namespace std::chrono_literals;
@@ -610,24 +615,43 @@ namespace {
 
 const char* kMapserv = "/usr/lib/cgi-bin/mapserv";
 
-/** Runs mapserv once as a CGI program and turns its output into a reply. */
+/** Runs mapserv once as a CGI program and turns its output into a reply. posix_spawn, not fork
+ * and setenv: the bridge's threads (and the sanitizers' allocators) may hold locks at the fork,
+ * and a child that takes one before exec hangs; the pipe is close-on-exec so that mapserv
+ * processes started at the same time do not keep each other's pipes open. */
 test::FakeReply
 runMapserv(const test::FakeRequest& req, const fs::path& conf, const fs::path& map) {
   const auto q = req.target.find('?');
   const std::string query = q == std::string::npos ? "" : req.target.substr(q + 1);
+  std::vector<std::string> env{"QUERY_STRING=" + query,
+                               "REQUEST_METHOD=GET",
+                               "MAPSERVER_CONFIG_FILE=" + conf.string(),
+                               "MS_MAPFILE=" + map.string()};
+  for (char** e = environ; *e != nullptr; ++e) {
+    const std::string_view v(*e);
+    const bool ours = std::any_of(env.begin(), env.end(), [&](const std::string& o) {
+      return v.substr(0, v.find('=') + 1) == std::string_view(o).substr(0, o.find('=') + 1);
+    });
+    if (!ours) env.emplace_back(v);
+  }
+  std::vector<char*> envp;
+  for (auto& e : env)
+    envp.push_back(e.data());
+  envp.push_back(nullptr);
   int out[2];
-  if (::pipe(out) != 0) return test::FakeReply::withStatus(500, "pipe");
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    ::dup2(out[1], 1);
+  if (::pipe2(out, O_CLOEXEC) != 0) return test::FakeReply::withStatus(500, "pipe");
+  posix_spawn_file_actions_t actions;
+  ::posix_spawn_file_actions_init(&actions);
+  ::posix_spawn_file_actions_adddup2(&actions, out[1], 1); // dup2 clears close-on-exec on 1
+  std::string program = kMapserv;
+  char* argv[] = {program.data(), nullptr};
+  pid_t pid = 0;
+  const int spawned = ::posix_spawn(&pid, kMapserv, &actions, nullptr, argv, envp.data());
+  ::posix_spawn_file_actions_destroy(&actions);
+  if (spawned != 0) {
     ::close(out[0]);
     ::close(out[1]);
-    ::setenv("QUERY_STRING", query.c_str(), 1);
-    ::setenv("REQUEST_METHOD", "GET", 1);
-    ::setenv("MAPSERVER_CONFIG_FILE", conf.c_str(), 1);
-    ::setenv("MS_MAPFILE", map.c_str(), 1);
-    ::execl(kMapserv, kMapserv, static_cast<char*>(nullptr));
-    ::_exit(127);
+    return test::FakeReply::withStatus(500, "posix_spawn");
   }
   ::close(out[1]);
   std::string all;
