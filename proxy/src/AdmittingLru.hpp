@@ -25,8 +25,7 @@
 
 namespace tellus {
 
-template <class V>
-class AdmittingLru {
+template <class V> class AdmittingLru {
 public:
   explicit AdmittingLru(std::size_t budgetBytes) : budget_(budgetBytes) {}
 

@@ -309,8 +309,8 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
             if (auto hit = decodedCache_->get(cacheKey)) return hit;
             // A tile that maps keep asking for is decoded whole and kept; one that is not (yet)
             // worth a place is decoded only in the part this map samples.
-            const auto texels = static_cast<std::size_t>(g.tileWidth) *
-                                static_cast<std::size_t>(g.tileHeight);
+            const auto texels =
+                static_cast<std::size_t>(g.tileWidth) * static_cast<std::size_t>(g.tileHeight);
             keep = decodedCache_->admits(cacheKey,
                                          spec.elevation ? texels * 2
                                          : ycc          ? texels * 3 / 2

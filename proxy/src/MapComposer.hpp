@@ -52,8 +52,8 @@ struct ComposedMap {
 class MapComposer {
 public:
   /** `decodedCacheBytes`: decoded tiles kept between maps, a tile admitted when it is used often
-   * enough (AdmittingLru; 0: none, and only the part of each JPEG tile a map samples is decoded). `jpegQuality`: of JPEG maps (the encoders clamp it to
-   * 1-100). */
+   * enough (AdmittingLru; 0: none, and only the part of each JPEG tile a map samples is decoded).
+   * `jpegQuality`: of JPEG maps (the encoders clamp it to 1-100). */
   MapComposer(TileService& tiles,
               int threads,
               std::size_t maxTiles,

@@ -220,11 +220,12 @@ std::string ProxyMetrics::render(const std::vector<UpstreamMetrics>& upstreams,
   }
   header(out, "tellus_cache_bytes", "gauge", "Bytes of all cached tiles (from the index).");
   if (cacheBytes) out += "tellus_cache_bytes " + std::to_string(*cacheBytes) + "\n";
-  header(out,
-         "tellus_composed_map_tiles_total",
-         "counter",
-         "Tiles sampled by composed GetMaps: decoded for the map, or kept decoded from earlier maps "
-         "(server.limits.decoded_tile_cache).");
+  header(
+      out,
+      "tellus_composed_map_tiles_total",
+      "counter",
+      "Tiles sampled by composed GetMaps: decoded for the map, or kept decoded from earlier maps "
+      "(server.limits.decoded_tile_cache).");
   out += "tellus_composed_map_tiles_total{source=\"decoded\"} " +
          std::to_string(composedDecoded_.load(std::memory_order_relaxed)) + "\n";
   out += "tellus_composed_map_tiles_total{source=\"kept\"} " +

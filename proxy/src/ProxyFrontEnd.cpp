@@ -104,11 +104,10 @@ struct ProxyFrontEnd::Impl {
   }
 
   void metricsPage(const Responder& respond) const {
-    auto r = HttpResponse::text(200,
-                                "text/plain; version=0.0.4; charset=utf-8",
-                                metrics.render(tiles.upstreamMetrics(),
-                                               tiles.cachedBytes(),
-                                               composer.decodedCacheBytes()));
+    auto r = HttpResponse::text(
+        200,
+        "text/plain; version=0.0.4; charset=utf-8",
+        metrics.render(tiles.upstreamMetrics(), tiles.cachedBytes(), composer.decodedCacheBytes()));
     r.setHeader("Cache-Control", "no-store");
     respond(std::move(r));
   }

@@ -44,8 +44,9 @@ struct ServerLimits {
   std::chrono::milliseconds keepaliveTimeout{60'000}; ///< idle keep-alive; 0 = close after each
   double requestsPerSecond = 0.0;                     ///< per client address; 0 = unlimited
   std::int64_t maxMapPixels = 4096LL * 4096LL;        ///< WIDTH x HEIGHT of a composed GetMap
-  std::int32_t maxTilesPerMap = 256;  ///< tiles one composed GetMap may read (all layers)
-  std::uint64_t decodedTileCache = 32ULL << 20; ///< bytes of decoded tiles kept between maps (0: none)
+  std::int32_t maxTilesPerMap = 256; ///< tiles one composed GetMap may read (all layers)
+  /// Bytes of decoded tiles kept between composed maps (0: none).
+  std::uint64_t decodedTileCache = 32ULL << 20;
 };
 
 /** YAML `server`. */
