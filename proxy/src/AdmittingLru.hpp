@@ -13,8 +13,10 @@
 // counted are bounded too. Hot tiles (a region clients keep looking at, the coarse levels every
 // zoomed-out map needs) stay decoded; a stream of tiles used once or twice passes by.
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <iterator>
 #include <list>
 #include <memory>
 #include <mutex>
