@@ -167,13 +167,51 @@ bool HorizonOccluder::segmentHitsOccluder(const glm::dvec3& cameraEcef,
   return glm::dot(x, x) < 1.0;
 }
 
+bool HorizonOccluder::isCapOccluded(const glm::dvec3& cameraEcef,
+                                    const NodeGeometry& node) const noexcept {
+  const Sector& s = node.sector();
+  const bool north = s.north == 90.0, south = s.south == -90.0;
+  if (!(s.west == -180.0 && s.east == 180.0) || north == south) return false;
+  if (!(equatorialRadiusM > 0.0 && polarRadiusM > 0.0)) return false;
+  const glm::dvec3 c = scaled(*this, cameraEcef);
+  const double d = glm::length(c);
+  if (!(d > 1.0)) return false;
+  // The cap's points at the largest height, from the rim to the pole: their largest scaled
+  // distance (the surface bulges between samples by far less than the margin below) and the rim's
+  // angle from the pole (latitude is monotonic in the scaled z, so the rim bounds the cap).
+  const double a = node.equatorialRadiusM(), b = node.polarRadiusM();
+  const double h = std::max(node.maxHeightM(), 0.0);
+  const double rimLat = north ? s.south : s.north;
+  const double poleLat = north ? 90.0 : -90.0;
+  double r = 0.0, rho = 0.0;
+  constexpr int kSamples = 9;
+  for (int i = 0; i < kSamples; ++i) {
+    const double lat = rimLat + (poleLat - rimLat) * i / (kSamples - 1);
+    const double phi = lat * std::numbers::pi / 180.0;
+    const double cp = std::cos(phi), sp = std::sin(phi);
+    const double w = std::sqrt(a * a * cp * cp + b * b * sp * sp);
+    const double n = a * a / w;
+    const glm::dvec3 p{(n + h) * cp, 0.0, (b * b / (a * a) * n + h) * sp};
+    const glm::dvec3 q = scaled(*this, p);
+    r = std::max(r, glm::length(q));
+    if (i == 0) rho = std::atan2(std::abs(q.x), std::abs(q.z));
+  }
+  r = std::max(r * (1.0 + 1e-9), 1.0);
+  const glm::dvec3 pole{0.0, 0.0, north ? 1.0 : -1.0};
+  const double gamma = std::atan2(glm::length(glm::cross(c, pole)), glm::dot(c, pole));
+  const double reach = std::acos(1.0 / d) + std::acos(1.0 / r);
+  return gamma - rho > reach + 1e-9;
+}
+
 CullResult
 cullNode(const Camera& camera, const NodeGeometry& node, const HorizonOccluder& occluder) noexcept {
   CullResult r;
   if (isBackFacing(camera, node)) return r;
   r.frustum = classifyNode(camera, node);
   if (r.frustum == FrustumResult::Outside) return r;
-  if (occluder.isOccluded(camera.position(), node.bounds())) return r;
+  if (occluder.isOccluded(camera.position(), node.bounds()) ||
+      occluder.isCapOccluded(camera.position(), node))
+    return r;
   r.visible = true;
   return r;
 }

@@ -136,7 +136,8 @@ double directChordErrorPx(const Camera& fisheye,
   double worst = 0.0;
   for (const Node* n : nodes)
     if (n != nullptr)
-      worst = std::max(worst, directChordErrorPx(fisheye, n->geometry(), meshSize, groundBelowM));
+      worst = std::max(
+          worst, directChordErrorPx(fisheye, n->geometry(), n->meshSize(meshSize), groundBelowM));
   return worst;
 }
 

@@ -143,6 +143,11 @@ LodResult evaluateLodFisheye(const Camera& camera,
     if (glm::length(f.position - camera.position()) >= camera.nearM() && inCone(f.position))
       sample(f);
   }
+  if (s.east - s.west >= 360.0) { // a polar cap: its rim's nearest point (see evaluateLod)
+    const SurfaceFrame f = lifted(surfaceFrame(a, b, s.north == 90.0 ? s.south : s.north, nearLon));
+    if (glm::length(f.position - camera.position()) >= camera.nearM() && inCone(f.position))
+      sample(f);
+  }
   for (const Camera::GroundPoint& gp : camera.domeGround()) {
     if (!gp.hit || gp.latDeg < s.south || gp.latDeg > s.north || gp.lonDeg < s.west ||
         gp.lonDeg > s.east)
@@ -251,6 +256,13 @@ evaluateLod(const Camera& camera, const NodeGeometry& node, const LodParams& par
       (nearLat != s.south && nearLat != s.north) || (nearLon != s.west && nearLon != s.east);
   if (interior) { // else it is a corner, sampled above
     const SurfaceFrame f = lifted(surfaceFrame(a, b, nearLat, nearLon));
+    const glm::dvec4 c = camera.toClip(f.position);
+    if (c.w >= camera.nearM() && inViewport(c)) sample(f, c);
+  }
+  // A polar cap (a whole top or bottom row) has its largest east-west texels along its rim, which
+  // has no corner but one: its point at the camera's longitude, the nearest, counts as well.
+  if (s.east - s.west >= 360.0) {
+    const SurfaceFrame f = lifted(surfaceFrame(a, b, s.north == 90.0 ? s.south : s.north, nearLon));
     const glm::dvec4 c = camera.toClip(f.position);
     if (c.w >= camera.nearM() && inViewport(c)) sample(f, c);
   }

@@ -51,9 +51,30 @@ Node::Node(const Geodesy& geodesy,
 
 std::unique_ptr<Node> Quadtree::makeNode(const NodeKey& key, Node* parent) {
   const Sector s = sectorOf(key);
-  if (!heightRange_) return std::make_unique<Node>(geodesy_, key, s, parent);
-  const auto [lo, hi] = heightRange_(s);
-  return std::make_unique<Node>(geodesy_, key, s, parent, lo, hi);
+  std::unique_ptr<Node> n;
+  if (!heightRange_) {
+    n = std::make_unique<Node>(geodesy_, key, s, parent);
+  } else {
+    const auto [lo, hi] = heightRange_(s);
+    n = std::make_unique<Node>(geodesy_, key, s, parent, lo, hi);
+  }
+  n->cap_ = isCapKey(key);
+  return n;
+}
+
+bool Quadtree::isCapKey(const NodeKey& key) const noexcept {
+  if (!caps_ || key.col != 0 || key.level < 0 || key.level >= grid_.numLevels() ||
+      key.span != grid_.colCount(key.level))
+    return false;
+  const Sector& s = grid_.spec().sector;
+  return (key.row == 0 && s.south == -90.0) ||
+         (key.row == grid_.rowCount(key.level) - 1 && s.north == 90.0);
+}
+
+LodParams Quadtree::lodFor(const NodeKey& key) const noexcept {
+  LodParams p = params_.lod;
+  if (isCapKey(key)) p.tileWidthPx *= kCapTextureWidthFactor;
+  return p;
 }
 
 void Quadtree::setTerrain(HeightRange range, double occluderHeightM) {
@@ -84,9 +105,24 @@ Quadtree::Quadtree(const Geodesy& geodesy, const TileGrid& grid, QuadtreeParams 
   globalLongitudes_ = s.west == -180.0 && s.east == 180.0;
   rootCols_ = grid_.colCount(0);
   const std::int64_t rows = grid_.rowCount(0);
+  // Caps need every column of the polar rows, and a column count that doubles per level.
+  caps_ = params_.polarCaps && params_.polarMerge && globalLongitudes_ && rows >= 2 &&
+          (s.north == 90.0 || s.south == -90.0);
+  for (std::int32_t L = 1; caps_ && L < grid_.numLevels(); ++L)
+    caps_ = grid_.colCount(L) == (rootCols_ << L) && grid_.rowCount(L) == (rows << L);
   roots_.resize(static_cast<std::size_t>(rows * rootCols_));
   for (std::int64_t r = 0; r < rows; ++r)
     for (std::int64_t c = 0; c < rootCols_; ++c) {
+      if (isCapKey({0, r, 0, rootCols_})) {
+        bool all = true;
+        for (std::int64_t i = 0; i < rootCols_; ++i)
+          all = all && grid_.isValid({0, r, i});
+        if (c == 0 && all) {
+          roots_[static_cast<std::size_t>(r * rootCols_)] = makeNode({0, r, 0, rootCols_}, nullptr);
+          ++nodeCount_;
+        }
+        continue;
+      }
       const NodeKey k{0, r, c, 1};
       if (!grid_.isValid(k.firstTile())) continue;
       roots_[static_cast<std::size_t>(r * rootCols_ + c)] = makeNode(k, nullptr);
@@ -187,11 +223,37 @@ bool Quadtree::widerPaysOff(const NodeKey& wide, std::int64_t span, const Camera
   return below < statics;
 }
 
+std::int64_t Quadtree::staticSpanOf(const Node& node) const noexcept {
+  const NodeKey& k = node.key_;
+  if (node.parent_ == nullptr) return k.span;
+  const std::int64_t width =
+      node.parent_->cap_ ? std::int64_t{1} << k.level : node.parent_->key_.span * 2;
+  return spanFor(k.level, k.row, width);
+}
+
 Quadtree::ChildKeys
 Quadtree::childKeysFor(const NodeKey& key, const Camera* camera, bool narrow) const {
   ChildKeys out;
   if (key.level + 1 >= grid_.numLevels()) return out;
   const std::int32_t L = key.level + 1;
+  if (isCapKey(key)) {
+    // The next cap, then the ring: per root column, the half of that column's merged row (its
+    // wedge at this cap's level) that the next cap does not cover.
+    const bool north = key.row != 0;
+    out.keys.assign(1, NodeKey{L, north ? key.row * 2 + 1 : 0, 0, grid_.colCount(L)});
+    out.present.assign(1, 1);
+    const std::int64_t rootWidth = std::int64_t{1} << key.level;
+    for (std::int64_t rc = 0; rc < rootCols_; ++rc) {
+      const ChildKeys w = childKeysFor({key.level, key.row, rc * rootWidth, rootWidth}, camera);
+      for (std::size_t i = 0; i < 2; ++i) {
+        const std::size_t slot = (north ? 0 : 2) + i;
+        if (!w.present[slot]) continue;
+        out.keys.push_back(w.keys[slot]);
+        out.present.push_back(1);
+      }
+    }
+    return out;
+  }
   const std::int64_t width = key.span * 2; // the parent's columns at the child level
   for (int half = 0; half < 2; ++half) {   // 0: south row, 1: north row
     const std::int64_t row = key.row * 2 + half;
@@ -211,7 +273,7 @@ Quadtree::childKeysFor(const NodeKey& key, const Camera* camera, bool narrow) co
       if (valid && span > 1) valid = grid_.isValid({L, row, k.col + span - 1});
       const auto slot = static_cast<std::size_t>(half * 2 + i);
       out.keys[slot] = k;
-      out.present[slot] = valid;
+      out.present[slot] = valid ? 1 : 0;
     }
   }
   return out;
@@ -222,6 +284,7 @@ Node* Quadtree::rootContaining(std::int32_t level,
                                std::int64_t col) const noexcept {
   const std::int64_t r = row >> level, c = col >> level;
   if (r < 0 || c < 0 || c >= rootCols_ || r >= grid_.rowCount(0)) return nullptr;
+  if (isCapKey({0, r, 0, rootCols_})) return roots_[static_cast<std::size_t>(r * rootCols_)].get();
   return roots_[static_cast<std::size_t>(r * rootCols_ + c)].get();
 }
 
@@ -347,14 +410,18 @@ bool Quadtree::childrenAsWide(const Node& node) const noexcept {
 
 bool Quadtree::splitWith(Node& node, bool narrow) {
   if (node.hasChildren()) return true;
-  const ChildKeys ck = childKeysFor(node.key_, splitCamera_, narrow);
+  const ChildKeys ck = childKeysFor(node.key_, splitCamera_, narrow && !node.cap_);
   int made = 0;
-  for (std::size_t i = 0; i < 4; ++i) {
+  node.children_.resize(ck.keys.size());
+  for (std::size_t i = 0; i < ck.keys.size(); ++i) {
     if (!ck.present[i]) continue;
     node.children_[i] = makeNode(ck.keys[i], &node);
     ++made;
   }
-  if (made == 0) return false;
+  if (made == 0) {
+    node.children_.clear();
+    return false;
+  }
   node.childCount_ = made;
   nodeCount_ += static_cast<std::size_t>(made);
   stats_.created += static_cast<std::size_t>(made);
@@ -370,8 +437,7 @@ void Quadtree::removeChildren(Node& node) {
   auto counter = [&count](Node&) { ++count; };
   for (auto& ch : node.children_)
     if (ch) forEachIn(*ch, counter);
-  for (auto& ch : node.children_)
-    ch.reset();
+  node.children_.clear();
   node.childCount_ = 0;
   nodeCount_ -= count;
   stats_.removed += count;
@@ -409,19 +475,19 @@ void Quadtree::visit(Node& node, bool insideFrustum, const Camera& camera) {
     }
     insideFrustum = f == FrustumResult::Inside;
   }
-  if (occluder_.isOccluded(camera.position(), g.bounds())) {
+  if (occluder_.isOccluded(camera.position(), g.bounds()) ||
+      (node.cap_ && occluder_.isCapOccluded(camera.position(), g))) {
     ++stats_.culledHorizon;
     return;
   }
   ++stats_.visible;
   node.lastVisible_ = frame_;
-  const LodResult lod = evaluateLod(camera, g, params_.lod);
+  const LodResult lod = evaluateLod(camera, g, node.cap_ ? lodFor(node.key_) : params_.lod);
   bool refine = lod.split;
   // A row widened for another camera (wider than the static rule) keeps the test it was made
   // with, each half of each east-west edge within half the limit: the whole-edge test alone
   // would let perspective enlarge its near texels further than a static node's.
-  if (!refine && node.parent_ != nullptr &&
-      node.key_.span > spanFor(node.key_.level, node.key_.row, node.parent_->key_.span * 2) &&
+  if (!refine && node.parent_ != nullptr && !node.cap_ && node.key_.span > staticSpanOf(node) &&
       !fitsEastWest(node.key_, camera))
     refine = true;
   bool descend = refine && node.key_.level + 1 < grid_.numLevels();
@@ -431,7 +497,8 @@ void Quadtree::visit(Node& node, bool insideFrustum, const Camera& camera) {
   // again, narrower. Where both are over, the layout of spanFor() (the row's shape) stands: a
   // north-south split halves the children's height, and a child row that becomes wider than
   // tall is narrowed by spanFor() itself.
-  const bool narrow = lod.eastWestOver && !lod.northSouthOver && node.key_.span > 1;
+  // A cap has no narrower form: its split halves the east-west texels of both its parts.
+  const bool narrow = !node.cap_ && lod.eastWestOver && !lod.northSouthOver && node.key_.span > 1;
   if (descend && narrow && node.hasChildren() && childrenAsWide(node)) {
     if (splitsThisFrame_ >= params_.maxSplitsPerFrame) {
       ++stats_.splitsDeferred;

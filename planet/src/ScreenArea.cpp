@@ -71,4 +71,26 @@ double clippedScreenArea(const Camera& camera, const std::array<glm::dvec3, 4>& 
   return std::isfinite(area) ? area : 0.0;
 }
 
+double nodeScreenArea(const Camera& camera, const NodeGeometry& node) noexcept {
+  const Sector& s = node.sector();
+  const bool north = s.north == 90.0, south = s.south == -90.0;
+  if (!(s.west == -180.0 && s.east == 180.0) || north == south)
+    return clippedScreenArea(camera, node.corners());
+  // The corners are the rim's point at 180 degrees (twice) and the pole (twice).
+  const glm::dvec3 pole = node.corners()[north ? NE : SW];
+  const double rimLat = north ? s.south : s.north;
+  const double a = node.equatorialRadiusM(), b = node.polarRadiusM();
+  constexpr int kWedges = 16;
+  double total = 0.0;
+  glm::dvec3 west = surfaceFrame(a, b, rimLat, -180.0).position;
+  for (int i = 1; i <= kWedges; ++i) {
+    const glm::dvec3 east =
+        surfaceFrame(a, b, rimLat, -180.0 + 360.0 * static_cast<double>(i) / kWedges).position;
+    total += north ? clippedScreenArea(camera, {west, east, pole, pole})
+                   : clippedScreenArea(camera, {pole, pole, east, west});
+    west = east;
+  }
+  return total;
+}
+
 } // namespace tellus::planet

@@ -48,8 +48,10 @@ TexturePlan planTexture(const Node& node) noexcept {
     plan.parts[0] = {&node, TextureSource::Own, &node, UvTransform{}};
     return plan;
   }
+  // A cap's children (the next cap and a ring of up to twenty nodes) are not drawn as its parts:
+  // it shows its nearest ready ancestor, a cap as well, or the global texture.
   bool anyChildReady = false;
-  for (int s = 0; s < 4; ++s)
+  for (int s = 0; s < (node.isCap() ? 0 : 4); ++s)
     if (const Node* c = node.child(s); c && ready(*c)) anyChildReady = true;
   if (anyChildReady) {
     plan.drawnInParts = true;

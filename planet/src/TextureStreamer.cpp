@@ -152,7 +152,7 @@ void TextureStreamer::update(Quadtree& tree,
         if (a->texture == TextureState::Absent) continue;
         if (needs(*a)) {
           ++stats_.candidates;
-          want(*a, clippedScreenArea(camera, n->geometry().corners()), nowS);
+          want(*a, nodeScreenArea(camera, n->geometry()), nowS);
         }
         break;
       }
@@ -167,7 +167,7 @@ void TextureStreamer::update(Quadtree& tree,
       const int level = p.source == TextureSource::Global ? -1 : p.texture->level();
       shown = std::min(shown, level);
     }
-    const double area = clippedScreenArea(camera, n->geometry().corners());
+    const double area = nodeScreenArea(camera, n->geometry());
     want(*n, area * (1.0 + static_cast<double>(n->level() - shown)), nowS);
   }
 

@@ -287,3 +287,54 @@ TEST(CullingExtremes, HorizonSpheresNearTheLimbAgainstSegments) {
   EXPECT_GT(culled, 500);
   EXPECT_GT(kept, 500);
 }
+
+// The exact horizon test of polar caps against the brute force: whenever a cap is culled, every
+// sampled point of it, at its highest height, is hidden by the occluder; and it culls the caps
+// a camera cannot see (the sphere test keeps a 36-degree cap whose sphere pokes over the horizon).
+TEST(CullingExtremes, PolarCapsBehindTheHorizonAgainstSegments) {
+  const Geodesy g;
+  const TileGrid grid = test::globalGrid();
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> lat(-90.0, 90.0), lon(-180.0, 180.0), logAlt(0.0, 9.0);
+  int culled = 0, kept = 0;
+  for (int i = 0; i < 300; ++i) {
+    const double la = i < 4 ? (i % 2 ? 90.0 : -90.0) : lat(rng), lo = lon(rng);
+    const double alt = i < 4 ? (i < 2 ? 1.0 : 1e9) : std::pow(10.0, logAlt(rng));
+    const HorizonOccluder occluder(g, i % 3 == 0 ? -500.0 : 0.0);
+    const glm::dvec3 eye = test::vec(g.toEcef(la, lo, alt));
+    for (int level : {0, 1, 3, 6, 12, 24}) {
+      for (const bool north : {true, false}) {
+        const double h = 36.0 / std::ldexp(1.0, level);
+        const Sector s =
+            north ? Sector{-180.0, 90.0 - h, 180.0, 90.0} : Sector{-180.0, -90.0, 180.0, -90.0 + h};
+        const double top = i % 4 == 1 ? 3000.0 : 0.0;
+        const NodeGeometry cap(g, s, 0.0, top);
+        if (!occluder.isCapOccluded(eye, cap)) {
+          ++kept;
+          continue;
+        }
+        ++culled;
+        for (int r = 0; r <= 16; ++r)
+          for (int c = 0; c < 64; ++c) {
+            const double pl = s.south + (s.north - s.south) * r / 16.0;
+            const glm::dvec3 p = test::vec(g.toEcef(pl, -180.0 + 360.0 * c / 64.0, top));
+            ASSERT_TRUE(occluder.segmentHitsOccluder(eye, p))
+                << "camera " << la << " " << lo << " " << alt << " level " << level;
+          }
+      }
+    }
+  }
+  EXPECT_GT(culled, 500);
+  EXPECT_GT(kept, 500);
+  // From 20 km at 45 degrees north the level-zero cap (from 54 degrees) lies beyond the horizon
+  // (505 km away); its bounding sphere pokes over it, so the sphere test keeps it.
+  const HorizonOccluder o(g);
+  const glm::dvec3 eye = test::vec(g.toEcef(45.0, 10.0, 2e4));
+  const NodeGeometry northCap(g, {-180.0, 54.0, 180.0, 90.0});
+  EXPECT_TRUE(o.isCapOccluded(eye, northCap));
+  EXPECT_FALSE(o.isOccluded(eye, northCap.bounds()));
+  // Any other node: false.
+  EXPECT_FALSE(o.isCapOccluded(eye, NodeGeometry(g, {0.0, 54.0, 36.0, 90.0})));
+  EXPECT_FALSE(o.isCapOccluded(eye, NodeGeometry(g, {-180.0, 0.0, 180.0, 36.0})));
+  (void)grid;
+}

@@ -385,8 +385,8 @@ FrameError frameError(const Geodesy& g, const TileGrid& grid, const Camera& cam,
   const auto t0 = std::chrono::steady_clock::now();
   f.sampled = directChordErrorPx(cam, tree.drawList(), meshSize);
   f.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  const int n = meshSize;
   for (const Node* node : tree.drawList()) {
+    const int n = node->meshSize(meshSize); // a cap's is finer
     const Sector& s = node->sector();
     auto v = [&](int r, int c) {
       return test::vec(

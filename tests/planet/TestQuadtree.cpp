@@ -47,7 +47,7 @@ void expectConsistent(const Quadtree& tree) {
     if (n->parent()) {
       EXPECT_TRUE(live.contains(n->parent()));
     }
-    for (int s = 0; s < 4; ++s)
+    for (int s = 0; s < n->childSlots(); ++s)
       if (Node* c = n->child(s)) {
         EXPECT_TRUE(live.contains(c));
         EXPECT_EQ(c->parent(), n);
@@ -78,7 +78,9 @@ std::size_t drawnTopDown(const Geodesy& g, double lat, double altitude, bool pol
 
 TEST(Quadtree, RootsAreTheLevelZeroTilesWithNeighbours) {
   const Geodesy g;
-  Quadtree tree(g, test::globalGrid(), params());
+  QuadtreeParams p = params();
+  p.polarCaps = false;
+  Quadtree tree(g, test::globalGrid(), p);
   EXPECT_EQ(tree.nodeCount(), 50u);
   expectConsistent(tree);
   const auto& roots = tree.roots();
@@ -93,6 +95,68 @@ TEST(Quadtree, RootsAreTheLevelZeroTilesWithNeighbours) {
   EXPECT_EQ(top.neighbour(Direction::North), nullptr); // across the north pole
 }
 
+// With polar caps the polar rows of level zero are one root each: 30 tiles and two caps.
+TEST(Quadtree, PolarCapsAreTheRootsOfThePolarRows) {
+  const Geodesy g;
+  Quadtree tree(g, test::globalGrid(), params());
+  ASSERT_TRUE(tree.capsEnabled());
+  EXPECT_EQ(tree.nodeCount(), 32u);
+  expectConsistent(tree);
+  const auto& roots = tree.roots();
+  const Node& south = *roots[0];
+  const Node& north = *roots[4 * 10];
+  EXPECT_TRUE(south.isCap());
+  EXPECT_TRUE(north.isCap());
+  EXPECT_EQ(south.key(), (NodeKey{0, 0, 0, 10}));
+  EXPECT_EQ(north.key(), (NodeKey{0, 4, 0, 10}));
+  EXPECT_EQ(north.sector().west, -180.0);
+  EXPECT_EQ(north.sector().east, 180.0);
+  EXPECT_EQ(north.sector().south, 54.0);
+  EXPECT_EQ(roots[4 * 10 + 3], nullptr);
+  for (Direction d : {Direction::North, Direction::East, Direction::West})
+    EXPECT_EQ(north.neighbour(d), nullptr);              // the pole; itself east and west
+  EXPECT_EQ(north.neighbour(Direction::South), nullptr); // ten tiles: no single node
+  const Node& below = *roots[3 * 10 + 7];
+  EXPECT_EQ(below.neighbour(Direction::North), &north); // a tile's edge lies on the cap's rim
+  EXPECT_EQ(tree.lodFor(north.key()).tileWidthPx, 512 * kCapTextureWidthFactor);
+  EXPECT_EQ(tree.lodFor(below.key()).tileWidthPx, 512);
+  // Its children: the next cap, then its ring west to east (one or two nodes per root column).
+  Quadtree::ChildKeys ck = tree.childKeys(north.key());
+  ASSERT_GE(ck.keys.size(), 11u);
+  EXPECT_EQ(ck.keys[0], (NodeKey{1, 9, 0, 20}));
+  std::int64_t col = 0;
+  for (std::size_t i = 1; i < ck.keys.size(); ++i) {
+    EXPECT_TRUE(ck.present[i]);
+    EXPECT_EQ(ck.keys[i].level, 1);
+    EXPECT_EQ(ck.keys[i].row, 8);
+    EXPECT_EQ(ck.keys[i].col, col);
+    col += ck.keys[i].span;
+  }
+  EXPECT_EQ(col, 20); // the whole ring
+  ck = tree.childKeys(south.key());
+  EXPECT_EQ(ck.keys[0], (NodeKey{1, 0, 0, 20}));
+  EXPECT_EQ(ck.keys[1].row, 1);
+  // A split cap: the ring's nodes and the next cap are neighbours across the next cap's rim.
+  Node& cap = const_cast<Node&>(north);
+  ASSERT_TRUE(tree.split(cap));
+  EXPECT_EQ(cap.childCount(), static_cast<int>(ck.keys.size()));
+  ASSERT_TRUE(tree.split(*cap.child(0)));
+  expectConsistent(tree);
+  for (int s = 1; s < cap.childSlots(); ++s) {
+    EXPECT_EQ(cap.child(s)->neighbour(Direction::North), cap.child(0));
+    EXPECT_FALSE(cap.child(s)->isCap());
+  }
+  EXPECT_TRUE(cap.child(0)->isCap());
+  EXPECT_TRUE(cap.child(0)->child(0)->isCap());
+  tree.removeChildren(cap);
+  expectConsistent(tree);
+  EXPECT_EQ(tree.nodeCount(), 32u);
+  // Caps need the poles and every longitude: a regional dataset has none.
+  QuadtreeParams off = params();
+  off.polarMerge = false;
+  EXPECT_FALSE(Quadtree(g, test::globalGrid(), off).capsEnabled());
+}
+
 TEST(Quadtree, GlobeFrom20000KmDrawsLevelZero) {
   const Geodesy g;
   Quadtree tree(g, test::globalGrid(), params());
@@ -100,7 +164,7 @@ TEST(Quadtree, GlobeFrom20000KmDrawsLevelZero) {
   const FrameStats& s = tree.update(cam);
   EXPECT_EQ(s.created, 0u);
   EXPECT_GE(s.drawn, 8u);
-  EXPECT_EQ(s.visited, 50u);
+  EXPECT_EQ(s.visited, 32u); // 30 tiles and two polar caps
   EXPECT_EQ(s.visited, s.visible + s.culledBackFace + s.culledFrustum + s.culledHorizon);
   EXPECT_GT(s.culledBackFace + s.culledHorizon, 0u);
   for (const Node* n : tree.drawList())
@@ -296,11 +360,14 @@ std::size_t minimumNodes(const Quadtree& tree, const Camera& cam, const Geodesy&
   return total;
 }
 
+// Merged rows without caps (the tiling of level-zero roots): see PolarCapsKeepThePole... below.
 TEST(QuadtreeExtremes, PoleTopDownCostsAtMostOneAndAHalfTheEquator) {
   const Geodesy g;
+  QuadtreeParams p = params();
+  p.polarCaps = false;
   for (double alt : {2e7, 6e6, 2e6, 1e6, 6e5, 2e5, 1e5, 6e4, 2e4, 1e4}) {
-    Quadtree eq(g, test::globalGrid(), params()), np(g, test::globalGrid(), params()),
-        sp(g, test::globalGrid(), params());
+    Quadtree eq(g, test::globalGrid(), p), np(g, test::globalGrid(), p),
+        sp(g, test::globalGrid(), p);
     const Camera eqCam(g, {0.0, 10.0, alt, 0.0, 0.0}, {1024, 768}, 45.0);
     const Camera npCam(g, {90.0, 10.0, alt, 0.0, 0.0}, {1024, 768}, 45.0);
     const Camera spCam(g, {-90.0, 10.0, alt, 0.0, 0.0}, {1024, 768}, 45.0);
@@ -321,6 +388,7 @@ TEST(QuadtreeExtremes, PoleTopDownCostsAtMostOneAndAHalfTheEquator) {
                 static_cast<double>(poleMin) / static_cast<double>(eqMin));
     EXPECT_EQ(southPole, pole) << alt; // the tiling is symmetric about the equator
     EXPECT_EQ(drawnTopDown(g, 0.0, alt, false), equator) << alt; // nothing changes off the poles
+    EXPECT_FALSE(np.capsEnabled());
     // The goal, wherever any tree over this tiling could reach it: 1.5x the equator view.
     const double leastRatio = static_cast<double>(poleMin) / static_cast<double>(eqMin);
     if (leastRatio <= 1.5) {
@@ -331,6 +399,47 @@ TEST(QuadtreeExtremes, PoleTopDownCostsAtMostOneAndAHalfTheEquator) {
     // view there needs only 6 to 16. The tree then stays within 1.25x of the least possible.
     EXPECT_LE(static_cast<double>(pole), 1.25 * static_cast<double>(poleMin)) << alt;
   }
+}
+
+QuadtreeParams capParams() {
+  QuadtreeParams p = params();
+  p.polarCaps = true;
+  return p;
+}
+
+// Polar caps: the whole top row of a level is one node, so the ten wedges that meet at the pole
+// become one node and the goal holds at every altitude.
+TEST(QuadtreeExtremes, PolarCapsKeepThePoleWithinOneAndAHalfTheEquator) {
+  const Geodesy g;
+  double worstRatio = 0.0;
+  for (double alt : {2e7, 6e6, 2e6, 1e6, 6e5, 2e5, 1e5, 6e4, 2e4, 1e4, 1e3, 1e2}) {
+    Quadtree eq(g, test::globalGrid(), capParams()), np(g, test::globalGrid(), capParams()),
+        sp(g, test::globalGrid(), capParams());
+    const Camera eqCam(g, {0.0, 10.0, alt, 0.0, 0.0}, {1024, 768}, 45.0);
+    const Camera npCam(g, {90.0, 10.0, alt, 0.0, 0.0}, {1024, 768}, 45.0);
+    const Camera spCam(g, {-90.0, 10.0, alt, 0.0, 0.0}, {1024, 768}, 45.0);
+    const std::size_t equator = converge(eq, eqCam).drawn;
+    const std::size_t pole = converge(np, npCam).drawn;
+    const std::size_t southPole = converge(sp, spCam).drawn;
+    expectConsistent(np);
+    const double ratio = static_cast<double>(pole) / static_cast<double>(equator);
+    worstRatio = std::max(worstRatio, ratio);
+    double worstTexel = 0.0;
+    for (const Node* n : np.drawList())
+      worstTexel = std::max(worstTexel, worstTexelPixels(npCam, g, *n, np.lodFor(n->key())));
+    std::printf("caps, altitude %9.0f m: equator %2zu, north pole %2zu, south pole %2zu; ratio "
+                "%.2f; largest texel at the pole %.3f px\n",
+                alt,
+                equator,
+                pole,
+                southPole,
+                ratio,
+                worstTexel);
+    EXPECT_EQ(southPole, pole) << alt;
+    EXPECT_LE(ratio, 1.5) << alt;
+    EXPECT_LE(worstTexel, 1.03) << alt;
+  }
+  std::printf("caps: worst pole/equator ratio %.2f\n", worstRatio);
 }
 
 // Over the drawn nodes of the pole views (merged rows, adaptive spans, the wedges) and the equator.
@@ -346,7 +455,7 @@ TEST(QuadtreeExtremes, TexelToPixelHoldsAtThePole) {
         converge(tree, cam);
         double worst = 0.0;
         for (const Node* n : tree.drawList())
-          worst = std::max(worst, worstTexelPixels(cam, g, *n, tree.params().lod));
+          worst = std::max(worst, worstTexelPixels(cam, g, *n, tree.lodFor(n->key())));
         // Top down and tilted, the local texels keep the largest within 3 % (the corner test alone
         // let tilted views reach ~1.45 px: TexelToPixelHoldsTiltedEverywhere).
         EXPECT_LE(worst, 1.03) << lat << " " << alt << " " << tilt;
@@ -377,7 +486,7 @@ TEST(QuadtreeExtremes, TexelToPixelHoldsTiltedEverywhere) {
           converge(tree, cam);
           double worst = 0.0;
           for (const Node* n : tree.drawList())
-            worst = std::max(worst, worstTexelPixels(cam, g, *n, tree.params().lod));
+            worst = std::max(worst, worstTexelPixels(cam, g, *n, tree.lodFor(n->key())));
           EXPECT_LE(worst, 1.03 * threshold)
               << "lat " << lat << " alt " << alt << " tilt " << tilt << " threshold " << threshold;
           EXPECT_GT(worst, 0.25 * threshold) << lat << " " << alt << " " << tilt;
@@ -389,7 +498,7 @@ TEST(QuadtreeExtremes, TexelToPixelHoldsTiltedEverywhere) {
             converge(corners, cam);
             double w = 0.0;
             for (const Node* n : corners.drawList())
-              w = std::max(w, worstTexelPixels(cam, g, *n, corners.params().lod));
+              w = std::max(w, worstTexelPixels(cam, g, *n, corners.lodFor(n->key())));
             worstCorners = std::max(worstCorners, w);
           }
         }
@@ -427,7 +536,7 @@ TEST(QuadtreeExtremes, EastWestTexelsAloneSplitAMergedRowEastWest) {
   EXPECT_LE(s.maxLevel, 16);
   double worst = 0.0;
   for (const Node* n : tree.drawList())
-    worst = std::max(worst, worstTexelPixels(tilted, g, *n, tree.params().lod));
+    worst = std::max(worst, worstTexelPixels(tilted, g, *n, tree.lodFor(n->key())));
   EXPECT_LE(worst, 1.03);
   expectConsistent(tree);
 }
@@ -458,14 +567,14 @@ TEST(QuadtreeExtremes, TexelToPixelHoldsAfterAPathOverThePole) {
     converge(tree, cam);
     double worst = 0.0;
     for (const Node* n : tree.drawList()) {
-      worst = std::max(worst, worstTexelPixels(cam, g, *n, tree.params().lod));
+      worst = std::max(worst, worstTexelPixels(cam, g, *n, tree.lodFor(n->key())));
       ++drawnChecked;
     }
     Quadtree fresh(g, test::globalGrid(), staticRows);
     converge(fresh, cam);
     double worstStatic = 0.0;
     for (const Node* n : fresh.drawList())
-      worstStatic = std::max(worstStatic, worstTexelPixels(cam, g, *n, fresh.params().lod));
+      worstStatic = std::max(worstStatic, worstTexelPixels(cam, g, *n, fresh.lodFor(n->key())));
     EXPECT_LE(worst, 1.03) << step << ": lat " << la << " alt " << alt << " tilt " << tilt;
     EXPECT_LE(worstStatic, 1.03) << step << ": lat " << la << " alt " << alt << " tilt " << tilt;
   }
@@ -486,6 +595,12 @@ TEST(QuadtreeExtremes, NeighboursAcrossTheAntimeridianAndAtThePoles) {
   const TileGrid grid = test::globalGrid();
   tree.forEach([&](const Node& n) {
     const NodeKey& k = n.key();
+    if (n.isCap()) { // a whole polar row: no east, west or poleward neighbour
+      for (Direction d : {Direction::North, Direction::East, Direction::South, Direction::West})
+        EXPECT_EQ(n.neighbour(d), nullptr);
+      ++poleNone;
+      return;
+    }
     if (k.col + k.span == grid.colCount(k.level)) { // the easternmost column
       const Node* e = n.neighbour(Direction::East);
       ASSERT_NE(e, nullptr);
@@ -530,7 +645,7 @@ TEST(QuadtreeExtremes, NonFiniteCameraIsRejectedAndTheTreeUntouched) {
   EXPECT_THROW(Camera(g, {nan, 0.0, 1e6, 0.0, 0.0}, {1024, 768}), std::invalid_argument);
   EXPECT_THROW(Camera(g, {0.0, 0.0, nan, 0.0, 0.0}, {1024, 768}), std::invalid_argument);
   EXPECT_THROW(Camera(g, {0.0, 0.0, 1e6, nan, 0.0}, {1024, 768}), std::invalid_argument);
-  EXPECT_EQ(tree.nodeCount(), 50u);
+  EXPECT_EQ(tree.nodeCount(), 32u);
   EXPECT_EQ(tree.frame(), 0u);
 }
 

@@ -403,7 +403,9 @@ TEST(TextureStreamer, NoRequestStormWhenEverythingFailsOrIsAbsent) {
 
 TEST(TextureStreamer, StatesFollowTheTiles) {
   const Geodesy g;
-  Quadtree tree(g, test::globalGrid(), treeParams());
+  QuadtreeParams p = treeParams();
+  p.polarCaps = false; // the roots one tile each: the first request is the first root's
+  Quadtree tree(g, test::globalGrid(), p);
   FakeSource src;
   TextureStreamer streamer(src, {"l", "", 100, 1.0, 120.0});
   TextureLru lru(1000 * kTileBytes);
@@ -469,4 +471,81 @@ TEST(TextureStreamer, AVeryWidePolarNodeAsksForAtMostSixteenTiles) {
   EXPECT_GT(widest, kMaxTextureTiles) << "the view should draw a merged row wider than 16";
   EXPECT_LE(src.requests.size(), wanted + 50); // the drawn nodes' tiles and the roots
   EXPECT_LT(src.requests.size(), 5000u);
+}
+
+// A polar cap spans every column of its level (ten root columns times 2^level): its texture is
+// made of every tile up to 80 (16 times the odd part, 5), then of the middle tile of each of 80
+// equal segments; the segments are exact and cover the row.
+TEST(TextureStreamer, PolarCapsAskForTheirRowUpToEightyTiles) {
+  for (int level : {0, 1, 2, 3, 4, 10, 24}) {
+    const std::int64_t span = std::int64_t{10} << level;
+    const NodeKey cap{level, (std::int64_t{5} << level) - 1, 0, span};
+    const std::int64_t count = textureTileCount(cap);
+    EXPECT_EQ(count, std::min<std::int64_t>(span, 80)) << level;
+    std::int64_t previous = -1;
+    for (std::int64_t i = 0; i < count; ++i) {
+      const TileKey t = textureTile(cap, i);
+      EXPECT_GT(t.col, previous);
+      EXPECT_LT(t.col, span);
+      EXPECT_EQ(t.col, i * (span / count) + (span / count) / 2);
+      previous = t.col;
+    }
+  }
+  // Powers of two keep the old rule (16 at most).
+  EXPECT_EQ(textureTileCount({5, 0, 0, 64}), kMaxTextureTiles);
+}
+
+// A cap's score is the area of its disc: its corner quad is a line (the rim's point at 180
+// degrees and the pole), so it is summed over wedges. Top down over the pole, with the whole
+// cap on screen, that is the rim's projected circle's area.
+TEST(ScreenArea, PolarCapIsItsDisc) {
+  const Geodesy g;
+  const Camera cam(g, {90.0, 0.0, 2e7, 0.0, 0.0}, {1024, 1024}, 45.0);
+  const NodeGeometry cap(g, {-180.0, 72.0, 180.0, 90.0});
+  EXPECT_NEAR(clippedScreenArea(cam, cap.corners()), 0.0, 1e-6);
+  glm::dvec2 rim, pole;
+  ASSERT_TRUE(cam.projectPx(test::vec(g.toEcef(72.0, 0.0, 0.0)), rim));
+  ASSERT_TRUE(cam.projectPx(test::vec(g.toEcef(90.0, 0.0, 0.0)), pole));
+  const double r = glm::length(rim - pole);
+  const double disc = std::numbers::pi * r * r;
+  const double area = nodeScreenArea(cam, cap);
+  // 16 wedges: a polygon inscribed in the circle, (16 / 2 pi) sin(2 pi / 16) = 97.4 % of it.
+  EXPECT_NEAR(area / disc, 8.0 * std::sin(std::numbers::pi / 8.0) / std::numbers::pi, 0.01);
+  const NodeGeometry southCap(g, {-180.0, -90.0, 180.0, -72.0});
+  const Camera southCam(g, {-90.0, 0.0, 2e7, 0.0, 0.0}, {1024, 1024}, 45.0);
+  EXPECT_NEAR(nodeScreenArea(southCam, southCap), area, 1e-6 * area);
+  // Any other node: its corner quad.
+  const NodeGeometry tile(g, {0.0, 0.0, 36.0, 36.0});
+  EXPECT_EQ(nodeScreenArea(cam, tile), clippedScreenArea(cam, tile.corners()));
+}
+
+// A cap whose texture is not ready shows its parent cap's (or the global texture), never its
+// children's: the next cap and the ring are not the quadrants the GL layer can draw in parts.
+TEST(TextureFallback, APolarCapIsNeverDrawnInParts) {
+  const Geodesy g;
+  Quadtree tree(g, test::globalGrid(), treeParams());
+  Node& root = *tree.roots()[4 * 10];
+  ASSERT_TRUE(root.isCap());
+  ASSERT_TRUE(tree.split(root));
+  Node& cap = *root.child(0);
+  ASSERT_TRUE(tree.split(cap));
+  for (int s = 0; s < cap.childSlots(); ++s)
+    cap.child(s)->texture = TextureState::Finished;
+  TexturePlan plan = planTexture(cap);
+  EXPECT_FALSE(plan.drawnInParts);
+  ASSERT_EQ(plan.partCount, 1);
+  EXPECT_EQ(plan.parts[0].source, TextureSource::Global);
+  root.texture = TextureState::Finished;
+  plan = planTexture(cap);
+  ASSERT_EQ(plan.partCount, 1);
+  EXPECT_EQ(plan.parts[0].source, TextureSource::Ancestor);
+  EXPECT_EQ(plan.parts[0].texture, &root);
+  // The next cap is the top half of its parent's texture; a ring node a tenth of its width.
+  EXPECT_EQ(plan.parts[0].uv.scale, glm::dvec2(1.0, 0.5));
+  EXPECT_EQ(plan.parts[0].uv.offset, glm::dvec2(0.0, 0.5));
+  const Node& ring = *root.child(1);
+  const UvTransform ringUv = ancestorUv(ring.key(), root.key());
+  EXPECT_NEAR(ringUv.scale.x, static_cast<double>(ring.key().span) / 20.0, 1e-15);
+  EXPECT_EQ(ringUv.scale.y, 0.5);
+  EXPECT_EQ(ringUv.offset, glm::dvec2(0.0, 0.0));
 }

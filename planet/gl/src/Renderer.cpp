@@ -155,7 +155,8 @@ struct LayerTextures {
   std::unique_ptr<TextureStreamer> streamer;
   TextureLru lru;
   std::unordered_map<NodeKey, GLuint, NodeKeyHash> textures;
-  std::vector<GLuint> pool; ///< free textures of this layer's size
+  std::vector<GLuint> pool;        ///< free textures of this layer's size
+  std::unordered_set<GLuint> wide; ///< textures of polar caps (wider): never pooled
   std::unordered_map<TileKey, StoredTile, TileKeyHash> received;
   std::unordered_set<NodeKey, NodeKeyHash> decoding;
   std::unordered_set<NodeKey, NodeKeyHash> uploading;
@@ -277,8 +278,8 @@ struct Renderer::Impl {
   makeLayer(const std::string& name, const std::string& time, bool overlay, int maxLevel);
   void applyTerrain(Quadtree& t) const;
   void freeLayer(LayerTextures& l);
-  GLuint newNodeTexture(const LayerTextures& l);
-  GLuint acquireTexture(LayerTextures& l);
+  GLuint newNodeTexture(int width, int height);
+  GLuint acquireTexture(LayerTextures& l, int width, int height);
   void releaseTexture(LayerTextures& l, GLuint id);
   const GpuMesh& meshFor(const Node& node);
   double heightAt(double lat, double lon) const {
@@ -296,6 +297,16 @@ struct Renderer::Impl {
   bool reliefOff = false; ///< this frame draws the bare ellipsoid and fetches no heights
   void deliverHeights();
   bool heightsComplete(const Node& node) const;
+  /** The elevation level a node's mesh needs (samples as fine as its grid); for a cap, the finest
+   * level whose tiles over the whole cap number at most kCapHeightKeys. */
+  int heightLevelFor(const Node& node) const;
+  static constexpr std::size_t kCapHeightKeys = 64;
+  /** A cap's mesh made whole: its two seam columns (longitude -180 and 180) bit-identical, and its
+   * rim row pushed out so that its chords reach the rim's circle (the ring's nodes draw the
+   * circle's finer polyline: chords inside it would leave a sliver between them; their edges are
+   * not fixed onto the cap's, 10 or 20 times theirs). Relief-free only: polar caps are off with
+   * terrain (see makeLayer). */
+  static void closeCap(const Node& node, TerrainMesh& mesh);
   void launchDecode(LayerTextures& l, Node& node);
   void stepUploads();
   void evict(LayerTextures& l);
@@ -532,6 +543,10 @@ std::expected<std::unique_ptr<LayerTextures>, std::string> Renderer::Impl::makeL
   qp.lod.tileHeightPx = l->texHeight;
   qp.lod.threshold = opt.lodThreshold;
   qp.maxSplitsPerFrame = opt.maxSplitsPerFrame;
+  // Polar caps on the bare globe only: with terrain their rim and the ring's finer edges differ in
+  // height between the cap's vertices (the relief view tests found pinholes there; fixing the
+  // ring's edges onto the cap's chords needs zero-area fans for a ratio of 10 or 20, not done).
+  qp.polarCaps = opt.elevationLayer.empty();
   l->tree = std::make_unique<Quadtree>(geodesy, *g, qp);
   applyTerrain(*l->tree);
   StreamParams sp;
@@ -542,9 +557,10 @@ std::expected<std::unique_ptr<LayerTextures>, std::string> Renderer::Impl::makeL
   return l;
 }
 
-GLuint Renderer::Impl::newNodeTexture(const LayerTextures& lt) {
-  const int texWidth = lt.texWidth, texHeight = lt.texHeight;
-  const GLsizei texLevels = lt.texLevels;
+GLuint Renderer::Impl::newNodeTexture(int texWidth, int texHeight) {
+  // Every level down to 1 x 1, as the decoder builds them.
+  const auto texLevels =
+      static_cast<GLsizei>(std::floor(std::log2(std::max(texWidth, texHeight))) + 1);
   GLuint id = 0;
   glGenTextures(1, &id);
   glBindTexture(GL_TEXTURE_2D, id);
@@ -567,19 +583,26 @@ GLuint Renderer::Impl::newNodeTexture(const LayerTextures& lt) {
 }
 
 // Every node texture of a layer has its grid's tile size, so any freed one fits the next node.
-GLuint Renderer::Impl::acquireTexture(LayerTextures& l) {
+GLuint Renderer::Impl::acquireTexture(LayerTextures& l, int width, int height) {
+  if (width != l.texWidth || height != l.texHeight) { // a polar cap's
+    const GLuint id = newNodeTexture(width, height);
+    l.wide.insert(id);
+    return id;
+  }
   if (!l.pool.empty()) {
     const GLuint id = l.pool.back();
     l.pool.pop_back();
     ++stats.texturesReused;
     return id;
   }
-  return newNodeTexture(l);
+  return newNodeTexture(l.texWidth, l.texHeight);
 }
 
 void Renderer::Impl::releaseTexture(LayerTextures& l, GLuint id) {
   constexpr std::size_t kMaxPool = 64;
-  if (l.pool.size() < kMaxPool)
+  if (l.wide.erase(id) > 0)
+    glDeleteTextures(1, &id);
+  else if (l.pool.size() < kMaxPool)
     l.pool.push_back(id);
   else
     glDeleteTextures(1, &id);
@@ -646,12 +669,13 @@ const GpuMesh& Renderer::Impl::meshFor(const Node& node) {
     stale = stale || (field && e.active && field->changedSince(m.heightGeneration, e.coarse));
   if (!inserted && edges == m.edges && !stale) return m;
   const auto t0 = Clock::now();
-  const TerrainMesh mesh = buildTerrainMesh(
+  TerrainMesh mesh = buildTerrainMesh(
       geodesy,
       node.sector(),
-      opt.meshSize,
+      node.meshSize(opt.meshSize),
       [this](double lat, double lon) { return heightAt(lat, lon); },
       edges);
+  if (node.isCap()) closeCap(node, mesh);
   m.edges = edges;
   m.reliefOff = reliefOff;
   m.heightGeneration = field ? field->generation() : 0;
@@ -659,7 +683,7 @@ const GpuMesh& Renderer::Impl::meshFor(const Node& node) {
   m.zeroAreaTriangles = mesh.zeroAreaTriangles;
   m.fixed = std::any_of(edges.begin(), edges.end(), [](const EdgeAdapt& a) { return a.active; });
   {
-    const int n = opt.meshSize;
+    const int n = mesh.n;
     for (int d = 0; d < 4; ++d) {
       auto& side = m.sideVertices[static_cast<std::size_t>(d)];
       side.resize(static_cast<std::size_t>(n));
@@ -753,13 +777,12 @@ void Renderer::Impl::updateTerrain(double nowS) {
   if (!field) return;
   heightWish.clear();
   stats.nodesWithoutHeights = reliefOff ? geo().drawList().size() : 0;
-  const int n = opt.meshSize;
   for (const Node* node : geo().drawList()) {
     if (reliefOff) break;
     const Sector& s = node->sector();
-    const int level = field->levelForSpacing((s.north - s.south) / (n - 1));
+    const int level = heightLevelFor(*node);
     for (int l = 0; l <= level; l = l == level ? level + 1 : std::min(level, l + 3)) {
-      const auto keys = field->grid().keysCovering(s, l, 16);
+      const auto keys = field->grid().keysCovering(s, l, node->isCap() ? kCapHeightKeys : 16);
       if (keys) heightWish.insert(heightWish.end(), keys->begin(), keys->end());
     }
   }
@@ -796,11 +819,48 @@ void Renderer::Impl::deliverHeights() {
   }
 }
 
+int Renderer::Impl::heightLevelFor(const Node& node) const {
+  const Sector& s = node.sector();
+  const int n = node.meshSize(opt.meshSize);
+  int level = field->levelForSpacing((s.north - s.south) / (n - 1));
+  if (node.isCap())
+    while (level > 0 && !field->grid().keysCovering(s, level, kCapHeightKeys))
+      --level;
+  return level;
+}
+
+void Renderer::Impl::closeCap(const Node& node, TerrainMesh& mesh) {
+  const int n = mesh.n;
+  const Sector& s = node.sector();
+  const bool north = s.north == 90.0;
+  auto at = [&](int r, int c) -> TerrainVertex& {
+    return mesh.vertices[static_cast<std::size_t>(r * n + c)];
+  };
+  for (int r = 0; r < n; ++r)
+    at(r, n - 1).position = at(r, 0).position;
+  // Chords of dLon around a circle of angular radius rho reach rho cos(dLon / 2) at their middles
+  // (on the sphere, closely enough at these radii): each rim vertex is turned away from the pole
+  // about its east axis to rho / cos(dLon / 2), with half as much again for the ellipsoid (a few
+  // metres of height at most). The texture's edge row is clamped there.
+  const double rho = (s.north - s.south) * std::numbers::pi / 180.0;
+  const double dLon = 2.0 * std::numbers::pi / (n - 1);
+  const double turn = rho * (1.0 / std::cos(0.5 * dLon) - 1.0) * 1.5 * (north ? 1.0 : -1.0);
+  const int rim = north ? 0 : n - 1;
+  const double ct = std::cos(turn), st = std::sin(turn);
+  for (int c = 0; c < n; ++c) {
+    const double lon = edgeLerp(s.west, s.east, c, n) * std::numbers::pi / 180.0;
+    const glm::dvec3 k{-std::sin(lon), std::cos(lon), 0.0};
+    const glm::dvec3 v = at(rim, c).position;
+    at(rim, c).position = v * ct + glm::cross(k, v) * st + k * glm::dot(k, v) * (1.0 - ct);
+  }
+  at(rim, n - 1).position = at(rim, 0).position;
+}
+
 bool Renderer::Impl::heightsComplete(const Node& node) const {
   if (!field || reliefOff) return true;
   const Sector& s = node.sector();
-  const int level = field->levelForSpacing((s.north - s.south) / (opt.meshSize - 1));
-  const auto keys = field->grid().keysCovering(s, level, 16);
+  const auto keys =
+      field->grid().keysCovering(s, heightLevelFor(node), node.isCap() ? kCapHeightKeys : 16);
   if (!keys) return true;
   return std::all_of(
       keys->begin(), keys->end(), [&](const TileKey& k) { return heights->settled(k, *field); });
@@ -832,7 +892,7 @@ void Renderer::Impl::launchDecode(LayerTextures& l, Node& node) {
   if (missing) return;
   DecodeJob job;
   job.key = k;
-  job.width = l.texWidth;
+  job.width = node.isCap() ? l.texWidth * kCapTextureWidthFactor : l.texWidth;
   job.height = l.texHeight;
   job.transparent = l.overlay;
   job.tag = l.tag;
@@ -865,7 +925,8 @@ void Renderer::Impl::stepUploads() {
       uploads.pop_front();
       continue;
     }
-    if (u.id == 0) u.id = acquireTexture(*l);
+    if (u.id == 0)
+      u.id = acquireTexture(*l, u.texture.levels.front().width, u.texture.levels.front().height);
     const MipLevel& level = u.texture.levels[u.level];
     const auto rowBytes = static_cast<std::size_t>(level.width) * 4;
     const auto band = pacer.bandBytes(sentThisFrame);
@@ -1104,11 +1165,11 @@ void Renderer::Impl::draw(const Camera& camera, bool present, const DrawTarget* 
 void Renderer::Impl::warmUp() {
   const Node* root = nullptr;
   for (const auto& r : geo().roots())
-    if (r && root == nullptr) root = r.get();
+    if (r && !r->isCap() && root == nullptr) root = r.get();
   if (root == nullptr) return;
   const RenderStats before = stats; // the warm-up counts no mesh, upload or texture
   const LayerTextures& base = *layers.front().current;
-  const GLuint texture = newNodeTexture(base);
+  const GLuint texture = newNodeTexture(base.texWidth, base.texHeight);
   const std::uint8_t texel[4] = {0, 0, 0, 255};
   glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
   glTexSubImage2D(GL_TEXTURE_2D, base.texLevels - 1, 0, 0, 1, 1, GL_RGBA, GL_UNSIGNED_BYTE, texel);
@@ -1226,10 +1287,10 @@ double Renderer::Impl::surfaceHeightAt(double lat, double lon) const {
   double h = heightAt(lat, lon);
   if (layers.empty() || !std::isfinite(h)) return h;
   lon = std::remainder(lon, 360.0);
-  const int n = opt.meshSize;
   for (const Node* node : geo().drawList()) {
     const Sector& s = node->sector();
     if (lat < s.south || lat > s.north || lon < s.west || lon > s.east) continue;
+    const int n = node->meshSize(opt.meshSize);
     const int r = std::clamp(
         static_cast<int>(std::floor((lat - s.south) / (s.north - s.south) * (n - 1))), 0, n - 2);
     const int c = std::clamp(

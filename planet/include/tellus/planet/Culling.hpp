@@ -72,6 +72,13 @@ struct HorizonOccluder {
   /** True when the segment from camera to point passes through the occluder's interior (the
    * brute-force reference the tests compare against). */
   bool segmentHitsOccluder(const glm::dvec3& cameraEcef, const glm::dvec3& point) const noexcept;
+  /** For a polar cap (a node spanning every longitude from a pole): true when the whole cap, at
+   * every height up to its maximum, lies beyond the horizon. Exact where the sphere test is
+   * loose: in scaled space the cap is the part of a sphere of radius r (the cap's highest point's
+   * scaled distance from the centre, bounded over its latitudes) within angle rho of the pole, and
+   * a point of it is visible only if its angle from the camera's direction is at most
+   * acos(1 / |camera|) + acos(1 / r). False for any other node. */
+  bool isCapOccluded(const glm::dvec3& cameraEcef, const NodeGeometry& node) const noexcept;
 };
 
 /** All three, the order of the thesis: back-face, frustum, horizon. */

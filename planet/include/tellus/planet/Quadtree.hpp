@@ -18,6 +18,16 @@
  * texel counts, so a texel is never larger than the threshold in pixels along either axis; the
  * texture of a wide node is composed from its `span` tiles (at most kMaxTextureTiles of them, see
  * below). See docs/ARCHITECTURE.md, "The poles".
+ *
+ * Polar caps (QuadtreeParams::polarCaps). Merged rows still leave one node per level-zero column
+ * at the pole at any altitude (ten with 36-degree roots), since no node spans two roots. With caps
+ * the whole top (and bottom) row of every level is one node, a cap: the roots of the polar rows
+ * are the two level-zero caps; a cap's children are the cap of the next level (slot 0) and the
+ * ring below it, the other half of the cap's row at the next level, cut into the nodes a root
+ * column's merged row would have there (slots 1 and up, west to east). The ring nodes and
+ * everything below them are ordinary nodes. A cap's texture is equirectangular like every node's,
+ * kCapTextureWidthFactor times a tile's width: at the cap's rim a parallel is at most 2 pi times
+ * the row's height, so its east-west texels are no larger than its north-south ones.
  */
 
 #include <tellus/cache/TileGrid.hpp>
@@ -26,6 +36,7 @@
 #include <tellus/planet/Lod.hpp>
 #include <tellus/planet/Patch.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -57,11 +68,17 @@ struct NodeKey {
  */
 inline constexpr std::int64_t kMaxTextureTiles = 16;
 
-/** How many tiles a node's texture is composed from: min(span, kMaxTextureTiles). */
+/** How many tiles a node's texture is composed from: min(span, kMaxTextureTiles x the odd part
+ * of span). Spans of merged rows are powers of two (odd part 1); a polar cap spans every column
+ * of its level, the root columns times a power of two (ten: odd part 5, at most 80 tiles). */
 constexpr std::int64_t textureTileCount(const NodeKey& k) noexcept {
-  return k.span < kMaxTextureTiles ? k.span : kMaxTextureTiles;
+  std::int64_t odd = k.span > 0 ? k.span : 1;
+  while (odd % 2 == 0)
+    odd /= 2;
+  const std::int64_t most = kMaxTextureTiles * odd;
+  return k.span < most ? k.span : most;
 }
-/** The i-th of them, west to east (spans are powers of two, so the segments are exact). */
+/** The i-th of them, west to east (the segments are exact: span / count is a power of two). */
 constexpr TileKey textureTile(const NodeKey& k, std::int64_t i) noexcept {
   const std::int64_t segment = k.span / textureTileCount(k);
   return {k.level, k.row, k.col + i * segment + segment / 2};
@@ -85,10 +102,19 @@ enum class TextureState : std::uint8_t {
   Absent,        ///< no tile exists here (never asked for again in this session)
 };
 
+/** A cap's texture is this many tiles wide (and one tall). */
+inline constexpr int kCapTextureWidthFactor = 8;
+/** A cap's mesh has kCapMeshFactor x (meshSize - 1) + 1 vertices a side (at most 1,025): its rim
+ * is a whole parallel, which meshSize columns would draw as a polygon of 32 chords (0.5 % of the
+ * cap's radius inside the circle at the chords' middles); four times as many keep that within
+ * 0.03 %, and its rim columns about as far apart as a ring node's. */
+inline constexpr int kCapMeshFactor = 4;
+
 class Quadtree;
 
 /** Children slots, a child's position in its parent. A row that is not split east-west has its
- * one child in the west slot (SW or NW) and the east slot empty. */
+ * one child in the west slot (SW or NW) and the east slot empty. A polar cap's children are
+ * numbered differently (the next cap in slot 0, then its ring; see the file comment). */
 enum ChildSlot { ChildSW = 0, ChildSE = 1, ChildNW = 2, ChildNE = 3 };
 
 class Node {
@@ -109,9 +135,21 @@ public:
   const NodeGeometry& geometry() const noexcept { return geometry_; }
 
   Node* parent() const noexcept { return parent_; }
-  Node* child(int slot) const noexcept { return children_[static_cast<std::size_t>(slot)].get(); }
+  /** The child in a slot, null when empty or out of range. */
+  Node* child(int slot) const noexcept {
+    const auto i = static_cast<std::size_t>(slot);
+    return slot >= 0 && i < children_.size() ? children_[i].get() : nullptr;
+  }
+  /** Child slots (4 for a split node, 0 for a leaf, one plus the ring for a split cap). */
+  int childSlots() const noexcept { return static_cast<int>(children_.size()); }
   bool hasChildren() const noexcept { return childCount_ > 0; }
   int childCount() const noexcept { return childCount_; }
+  /** A polar cap (QuadtreeParams::polarCaps): the whole top or bottom row of its level. */
+  bool isCap() const noexcept { return cap_; }
+  /** The vertices a side of this node's mesh when nodes have meshSize (see kCapMeshFactor). */
+  int meshSize(int meshSize) const noexcept {
+    return cap_ ? std::min(1025, kCapMeshFactor * (meshSize - 1) + 1) : meshSize;
+  }
   /** The deepest existing node of level <= this node's level across that side whose extent
    * along the shared edge contains this node's whole edge (same level, or coarser where the
    * same level does not exist). East and west wrap across the antimeridian. Null across the pole
@@ -131,9 +169,10 @@ private:
   NodeKey key_;
   NodeGeometry geometry_;
   Node* parent_;
-  std::array<std::unique_ptr<Node>, 4> children_{};
+  std::vector<std::unique_ptr<Node>> children_;
   std::array<Node*, 4> neighbours_{};
   int childCount_ = 0;
+  bool cap_ = false;
   std::uint64_t lastVisible_ = 0;
   std::uint64_t lastDrawn_ = 0;
 };
@@ -161,6 +200,10 @@ struct QuadtreeParams {
    * bounding sphere alone when false (for comparisons: it keeps nodes off the view's edges and
    * corners, and most of a pole view's ring just outside it). */
   bool tightFrustumCulling = true;
+  /** With polarMerge, over a dataset covering every longitude: the top and bottom rows of every
+   * level are single nodes, polar caps (see the file comment), instead of one merged node per
+   * level-zero column at least. */
+  bool polarCaps = true;
 };
 
 struct FrameStats {
@@ -206,14 +249,20 @@ public:
   const std::vector<std::unique_ptr<Node>>& roots() const noexcept { return roots_; }
 
   /** The keys of a node's children (2 to 4; invalid tiles of a partial dataset left out), in
-   * slot order with the slot of each; empty at the deepest level. */
+   * slot order with the slot of each; empty at the deepest level. A cap's: the next cap and its
+   * ring (see the file comment). */
   struct ChildKeys {
-    std::array<NodeKey, 4> keys{};
-    std::array<bool, 4> present{};
+    std::vector<NodeKey> keys = std::vector<NodeKey>(4);
+    std::vector<char> present = std::vector<char>(4, 0);
   };
   ChildKeys childKeys(const NodeKey& key) const noexcept;
   /** The sector a key covers (from the grid's integer edges). */
   Sector sectorOf(const NodeKey& key) const noexcept;
+  /** Whether this tree makes polar caps, and whether a key is one (a whole top or bottom row). */
+  bool capsEnabled() const noexcept { return caps_; }
+  bool isCapKey(const NodeKey& key) const noexcept;
+  /** The LOD parameters for a node's texture: a cap's is kCapTextureWidthFactor tiles wide. */
+  LodParams lodFor(const NodeKey& key) const noexcept;
 
   /** Creates the children of a leaf (no-op otherwise; false at the deepest level), with the keys
    * of childKeys() (the static layout). */
@@ -252,6 +301,9 @@ private:
   void enforceNodeLimit();
   std::int64_t
   spanFor(std::int32_t level, std::int64_t row, std::int64_t parentSpanInChildCols) const noexcept;
+  /** What spanFor() gives a node made by the static rule (its parent's width; a ring node's is
+   * its root column's, a cap being wider than any merged row). */
+  std::int64_t staticSpanOf(const Node& node) const noexcept;
   ChildKeys childKeysFor(const NodeKey& key, const Camera* camera, bool narrow = false) const;
   bool splitWith(Node& node, bool narrow);
   bool childrenAsWide(const Node& node) const noexcept;
@@ -266,6 +318,7 @@ private:
   QuadtreeParams params_;
   HorizonOccluder occluder_;
   bool globalLongitudes_ = false;
+  bool caps_ = false;
   std::int64_t rootCols_ = 0;
   std::vector<std::unique_ptr<Node>> roots_; // row-major from the south-west, null if invalid
   std::vector<Node*> drawList_;

@@ -15,4 +15,9 @@ namespace tellus::planet {
  * NaN. No allocation. */
 double clippedScreenArea(const Camera& camera, const std::array<glm::dvec3, 4>& corners) noexcept;
 
+/** The node's clipped area: its corner quad's, or for a polar cap (a sector spanning every
+ * longitude from a pole, whose corner quad is a line) the sum over 16 equal wedges of the rim
+ * points' and the pole's quads. */
+double nodeScreenArea(const Camera& camera, const NodeGeometry& node) noexcept;
+
 } // namespace tellus::planet
