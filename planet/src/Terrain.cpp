@@ -332,6 +332,110 @@ GridPoint onSide(const Sector& s, Direction d, double p) {
 
 } // namespace
 
+namespace {
+
+/** Edge fixing onto a coarser neighbour whose edge is not a power of two times ours (a polar
+ * cap's rim): our side's vertices go onto its chords by their coordinate along the edge (t, in
+ * coarse segments; a vertex within 1e-9 of a coarse vertex takes that vertex's position), and
+ * each coarse segment with our vertices strictly inside gets the zero-area fan from its first
+ * vertex over them to its last (an extra vertex where a coarse vertex lies beyond our edge), as
+ * in the power-of-two case. */
+void fixOntoPolyline(TerrainMesh& mesh,
+                     std::array<std::vector<std::uint32_t>, 4>& quad,
+                     int n,
+                     Direction d,
+                     double ma,
+                     double mb,
+                     double ca,
+                     double cb,
+                     const std::vector<glm::dvec3>& cpos) {
+  const auto nc = static_cast<std::int64_t>(cpos.size());
+  const double segments = static_cast<double>(nc - 1);
+  const int half = (n - 1) / 2;
+  auto vid = [n](int r, int c) { return static_cast<std::uint32_t>(r * n + c); };
+  auto fineIndex = [&](int i) {
+    switch (d) {
+    case Direction::North:
+      return vid(n - 1, i);
+    case Direction::South:
+      return vid(0, i);
+    case Direction::East:
+      return vid(i, n - 1);
+    case Direction::West:
+      return vid(i, 0);
+    }
+    return vid(0, 0);
+  };
+  auto quadrantOf = [&](int i) {
+    const int upper = i < half ? 0 : 1;
+    switch (d) {
+    case Direction::North:
+      return 2 + upper;
+    case Direction::South:
+      return upper;
+    case Direction::East:
+      return 2 * upper + 1;
+    case Direction::West:
+      return 2 * upper;
+    }
+    return 0;
+  };
+  std::vector<double> t(static_cast<std::size_t>(n));
+  std::vector<std::int64_t> on(static_cast<std::size_t>(n), -1); // the coarse vertex it is
+  for (int i = 0; i < n; ++i) {
+    const double x = (edgeLerp(ma, mb, i, n) - ca) / (cb - ca) * segments;
+    const double r = std::round(x);
+    const auto k = static_cast<std::size_t>(i);
+    t[k] = x;
+    if (std::abs(x - r) < 1e-9 && r >= 0.0 && r <= segments) on[k] = static_cast<std::int64_t>(r);
+    TerrainVertex& v = mesh.vertices[fineIndex(i)];
+    if (on[k] >= 0) {
+      v.position = cpos[static_cast<std::size_t>(on[k])];
+    } else {
+      const double j = std::clamp(std::floor(x), 0.0, segments - 1.0);
+      const auto jj = static_cast<std::size_t>(j);
+      v.position = cpos[jj] + (cpos[jj + 1] - cpos[jj]) * (x - j);
+    }
+  }
+  std::vector<std::uint32_t> extra(cpos.size(), UINT32_MAX);
+  auto coarseIndex = [&](std::int64_t j, int nearFine) {
+    for (int i = 0; i < n; ++i)
+      if (on[static_cast<std::size_t>(i)] == j) return fineIndex(i);
+    auto& slot = extra[static_cast<std::size_t>(j)];
+    if (slot == UINT32_MAX) {
+      TerrainVertex v = mesh.vertices[fineIndex(nearFine)];
+      v.position = cpos[static_cast<std::size_t>(j)];
+      slot = static_cast<std::uint32_t>(mesh.vertices.size());
+      mesh.vertices.push_back(v);
+    }
+    return slot;
+  };
+  const auto jFirst = static_cast<std::int64_t>(std::clamp(std::floor(t.front()), 0.0, segments));
+  const auto jLast = static_cast<std::int64_t>(std::clamp(std::ceil(t.back()), 0.0, segments));
+  for (std::int64_t j = jFirst; j < jLast; ++j) {
+    std::vector<std::uint32_t> chain;
+    int firstInner = -1;
+    for (int i = 0; i < n; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      if (on[k] < 0 && t[k] > static_cast<double>(j) && t[k] < static_cast<double>(j + 1)) {
+        if (firstInner < 0) firstInner = i;
+        chain.push_back(fineIndex(i));
+      }
+    }
+    if (firstInner < 0) continue;
+    const int lastInner = firstInner + static_cast<int>(chain.size()) - 1;
+    const std::uint32_t apex = coarseIndex(j, firstInner);
+    chain.push_back(coarseIndex(j + 1, lastInner));
+    auto& quadrant = quad[static_cast<std::size_t>(quadrantOf(firstInner))];
+    for (std::size_t a = 0; a + 1 < chain.size(); ++a) {
+      quadrant.insert(quadrant.end(), {apex, chain[a], chain[a + 1]});
+      ++mesh.zeroAreaTriangles;
+    }
+  }
+}
+
+} // namespace
+
 TerrainMesh buildTerrainMesh(const Geodesy& geodesy,
                              const Sector& sector,
                              int n,
@@ -437,8 +541,13 @@ TerrainMesh buildTerrainMesh(const Geodesy& geodesy,
     const double ratio = (cb - ca) / (mb - ma);
     const auto bigR = static_cast<std::int64_t>(std::llround(ratio));
     if (bigR < 2 || (bigR & (bigR - 1)) != 0 ||
-        std::abs(ratio - static_cast<double>(bigR)) > 1e-9 * ratio)
-      continue; // not a coarser quadtree neighbour along this side
+        std::abs(ratio - static_cast<double>(bigR)) > 1e-9 * ratio) {
+      // Not a quadtree neighbour: a polar cap, whose rim is a whole parallel (10 or 20 times our
+      // edge) drawn with its own vertex count (nc, given). The same fix in real coordinates.
+      if (ratio > 1.0 && ad.coarseVertices.size() >= 2)
+        fixOntoPolyline(mesh, quad, n, d, ma, mb, ca, cb, ad.coarseVertices);
+      continue;
+    }
     const auto q = static_cast<std::int64_t>(std::llround((ma - ca) / (mb - ma)));
     if (q < 0 || q >= bigR) continue;
     auto fineIndex = [&](int i) {

@@ -602,5 +602,53 @@ TEST(TerrainMesh, NonFiniteHeightsNeverReachAVertex) {
   }
 }
 
+// A polar cap's rim is a whole parallel with its own vertex count, 10 or 20 times a ring node's
+// edge (not a power of two): the ring node's vertices go onto the cap's chords by their longitude
+// and zero-area fans close the T-junctions, as for quadtree neighbours.
+TEST(EdgeFixingExtremes, ARingNodeLiesOnAPolarCapsRim) {
+  const int nCap = 17, n = 9;
+  const Sector cap{-180.0, 81.0, 180.0, 90.0};
+  const auto capMesh = buildTerrainMesh(wgs84(), cap, nCap, bumpy, {});
+  std::vector<glm::dvec3> rim; // its south side (row 0), west to east
+  for (int c = 0; c < nCap; ++c)
+    rim.push_back(capMesh.vertices[static_cast<std::size_t>(c)].position);
+  for (const Sector fine : {Sector{18.0, 72.0, 36.0, 81.0},
+                            Sector{-180.0, 72.0, -144.0, 81.0},
+                            Sector{144.0, 76.5, 180.0, 81.0}}) {
+    std::array<EdgeAdapt, 4> edges{};
+    edges[static_cast<std::size_t>(Direction::North)] = {true, cap, rim};
+    const auto fixed = buildTerrainMesh(wgs84(), fine, n, bumpy, edges);
+    const auto plain = buildTerrainMesh(wgs84(), fine, n, bumpy, {});
+    double before = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const auto k = static_cast<std::size_t>((n - 1) * n + i);
+      EXPECT_LT(toPolyline(fixed.vertices[k].position, rim), 1e-6) << fine.west << " " << i;
+      before = std::max(before, toPolyline(plain.vertices[k].position, rim));
+    }
+    EXPECT_GT(before, 1.0); // 22.5-degree chords: kilometres inside the circle
+    // A rim vertex within the edge is drawn at the very same place.
+    for (const auto& cv : rim)
+      for (int i = 0; i < n; ++i) {
+        const auto& p = fixed.vertices[static_cast<std::size_t>((n - 1) * n + i)].position;
+        if (glm::length(cv - p) < 1e-6) {
+          EXPECT_EQ(cv, p);
+        }
+      }
+    EXPECT_GT(fixed.zeroAreaTriangles, 0u);
+    for (std::size_t q = 2; q < 4; ++q) { // the north quadrants hold the fans
+      const std::size_t cells =
+          static_cast<std::size_t>((n - 1) / 2) * static_cast<std::size_t>((n - 1) / 2) * 6;
+      for (std::size_t i = fixed.quadrantStart[q] + cells; i < fixed.quadrantStart[q + 1]; i += 3) {
+        const glm::dvec3 a = fixed.vertices[fixed.indices[i]].position;
+        const glm::dvec3 b = fixed.vertices[fixed.indices[i + 1]].position;
+        const glm::dvec3 c = fixed.vertices[fixed.indices[i + 2]].position;
+        EXPECT_LT(glm::length(glm::cross(b - a, c - a)), 1e-3 * glm::length(b - a) + 1e-6);
+        EXPECT_LT(toPolyline(a, rim), 1e-6);
+        EXPECT_LT(toPolyline(c, rim), 1e-6);
+      }
+    }
+  }
+}
+
 } // namespace
 } // namespace tellus::planet
