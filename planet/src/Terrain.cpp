@@ -334,6 +334,38 @@ GridPoint onSide(const Sector& s, Direction d, double p) {
 
 namespace {
 
+/** The index of the i-th vertex (west to east, south to north) of side d of an n x n grid. */
+std::uint32_t sideVertex(int n, Direction d, int i) noexcept {
+  auto vid = [n](int r, int c) { return static_cast<std::uint32_t>(r * n + c); };
+  switch (d) {
+  case Direction::North:
+    return vid(n - 1, i);
+  case Direction::South:
+    return vid(0, i);
+  case Direction::East:
+    return vid(i, n - 1);
+  case Direction::West:
+    return vid(i, 0);
+  }
+  return vid(0, 0);
+}
+
+/** The quadrant range (SW, SE, NW, NE) whose cells hold the i-th vertex of side d. */
+int sideQuadrant(int n, Direction d, int i) noexcept {
+  const int upper = i < (n - 1) / 2 ? 0 : 1;
+  switch (d) {
+  case Direction::North:
+    return 2 + upper;
+  case Direction::South:
+    return upper;
+  case Direction::East:
+    return 2 * upper + 1;
+  case Direction::West:
+    return 2 * upper;
+  }
+  return 0;
+}
+
 /** Edge fixing onto a coarser neighbour whose edge is not a power of two times ours (a polar
  * cap's rim): our side's vertices go onto its chords by their coordinate along the edge (t, in
  * coarse segments; a vertex within 1e-9 of a coarse vertex takes that vertex's position), and
@@ -351,35 +383,8 @@ void fixOntoPolyline(TerrainMesh& mesh,
                      const std::vector<glm::dvec3>& cpos) {
   const auto nc = static_cast<std::int64_t>(cpos.size());
   const double segments = static_cast<double>(nc - 1);
-  const int half = (n - 1) / 2;
-  auto vid = [n](int r, int c) { return static_cast<std::uint32_t>(r * n + c); };
-  auto fineIndex = [&](int i) {
-    switch (d) {
-    case Direction::North:
-      return vid(n - 1, i);
-    case Direction::South:
-      return vid(0, i);
-    case Direction::East:
-      return vid(i, n - 1);
-    case Direction::West:
-      return vid(i, 0);
-    }
-    return vid(0, 0);
-  };
-  auto quadrantOf = [&](int i) {
-    const int upper = i < half ? 0 : 1;
-    switch (d) {
-    case Direction::North:
-      return 2 + upper;
-    case Direction::South:
-      return upper;
-    case Direction::East:
-      return 2 * upper + 1;
-    case Direction::West:
-      return 2 * upper;
-    }
-    return 0;
-  };
+  auto fineIndex = [&](int i) { return sideVertex(n, d, i); };
+  auto quadrantOf = [&](int i) { return sideQuadrant(n, d, i); };
   std::vector<double> t(static_cast<std::size_t>(n));
   std::vector<std::int64_t> on(static_cast<std::size_t>(n), -1); // the coarse vertex it is
   for (int i = 0; i < n; ++i) {
@@ -550,33 +555,8 @@ TerrainMesh buildTerrainMesh(const Geodesy& geodesy,
     }
     const auto q = static_cast<std::int64_t>(std::llround((ma - ca) / (mb - ma)));
     if (q < 0 || q >= bigR) continue;
-    auto fineIndex = [&](int i) {
-      switch (d) {
-      case Direction::North:
-        return vid(n - 1, i);
-      case Direction::South:
-        return vid(0, i);
-      case Direction::East:
-        return vid(i, n - 1);
-      case Direction::West:
-        return vid(i, 0);
-      }
-      return vid(0, 0);
-    };
-    auto quadrantOf = [&](int i) {
-      const int upper = i < half ? 0 : 1;
-      switch (d) {
-      case Direction::North:
-        return 2 + upper;
-      case Direction::South:
-        return upper;
-      case Direction::East:
-        return 2 * upper + 1;
-      case Direction::West:
-        return 2 * upper;
-      }
-      return 0;
-    };
+    auto fineIndex = [&](int i) { return sideVertex(n, d, i); };
+    auto quadrantOf = [&](int i) { return sideQuadrant(n, d, i); };
     // The coarse vertices: the neighbour's own grid points along the shared line, computed with
     // the neighbour's parameters, so they are the very points it draws.
     std::vector<glm::dvec3> cpos(static_cast<std::size_t>(n));
