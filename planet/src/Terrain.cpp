@@ -366,6 +366,18 @@ int sideQuadrant(int n, Direction d, int i) noexcept {
   return 0;
 }
 
+/** The zero-area fan of one coarse segment: from its first vertex (apex) over the chain (our
+ * vertices strictly inside it, then its last vertex), into the quadrant range given. */
+void addFan(TerrainMesh& mesh,
+            std::vector<std::uint32_t>& quadrant,
+            std::uint32_t apex,
+            const std::vector<std::uint32_t>& chain) {
+  for (std::size_t a = 0; a + 1 < chain.size(); ++a) {
+    quadrant.insert(quadrant.end(), {apex, chain[a], chain[a + 1]});
+    ++mesh.zeroAreaTriangles;
+  }
+}
+
 /** Edge fixing onto a coarser neighbour whose edge is not a power of two times ours (a polar
  * cap's rim): our side's vertices go onto its chords by their coordinate along the edge (t, in
  * coarse segments; a vertex within 1e-9 of a coarse vertex takes that vertex's position), and
@@ -431,11 +443,7 @@ void fixOntoPolyline(TerrainMesh& mesh,
     const int lastInner = firstInner + static_cast<int>(chain.size()) - 1;
     const std::uint32_t apex = coarseIndex(j, firstInner);
     chain.push_back(coarseIndex(j + 1, lastInner));
-    auto& quadrant = quad[static_cast<std::size_t>(quadrantOf(firstInner))];
-    for (std::size_t a = 0; a + 1 < chain.size(); ++a) {
-      quadrant.insert(quadrant.end(), {apex, chain[a], chain[a + 1]});
-      ++mesh.zeroAreaTriangles;
-    }
+    addFan(mesh, quad[static_cast<std::size_t>(quadrantOf(firstInner))], apex, chain);
   }
 }
 
@@ -612,11 +620,7 @@ TerrainMesh buildTerrainMesh(const Geodesy& geodesy,
       const int lastInner = firstInner + static_cast<int>(chain.size()) - 1;
       const std::uint32_t apex = coarseIndex(j, firstInner);
       chain.push_back(coarseIndex(j + 1, lastInner));
-      auto& quadrant = quad[static_cast<std::size_t>(quadrantOf(firstInner))];
-      for (std::size_t a = 0; a + 1 < chain.size(); ++a) {
-        quadrant.insert(quadrant.end(), {apex, chain[a], chain[a + 1]});
-        ++mesh.zeroAreaTriangles;
-      }
+      addFan(mesh, quad[static_cast<std::size_t>(quadrantOf(firstInner))], apex, chain);
     }
   }
 
