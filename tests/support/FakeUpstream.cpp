@@ -295,18 +295,28 @@ void FakeUpstream::serve(int fd) {
     } catch (...) {
       reply = FakeReply::withStatus(500, "handler threw");
     }
-    bool keep = answer(fd, request, reply);
-    if (request.header("connection") == "close") keep = false;
-    {
+    // The request stops being answered just before its last byte goes out: once the client has
+    // that byte it may send its next request (on this connection or another), which must not be
+    // counted while this one still is.
+    bool released = false;
+    auto release = [&] {
+      if (released) return;
+      released = true;
       std::lock_guard lock(mutex_);
       --concurrent_;
-    }
+    };
+    bool keep = answer(fd, request, reply, release);
+    release();
+    if (request.header("connection") == "close") keep = false;
     if (!keep) break;
   }
   ::close(fd);
 }
 
-bool FakeUpstream::answer(int fd, const FakeRequest& request, const FakeReply& reply) {
+bool FakeUpstream::answer(int fd,
+                          const FakeRequest& request,
+                          const FakeReply& reply,
+                          const std::function<void()>& beforeLastByte) {
   if (reply.closeWithoutResponse) return false;
   if (reply.delayBeforeHeaders.count() > 0 && !pause(reply.delayBeforeHeaders)) return false;
   if (reply.hangForever) {
@@ -342,15 +352,18 @@ bool FakeUpstream::answer(int fd, const FakeRequest& request, const FakeReply& r
   }
   if (reply.closeAfter) head += "Connection: close\r\n";
   head += "\r\n";
-  if (!sendAll(fd, head)) return false;
-  if (reply.dripBytesPerSecond > 0) {
+  // The whole reply but its last byte, then beforeLastByte(), then the last byte.
+  const std::string_view all = payload.empty() ? std::string_view(head) : std::string_view(payload);
+  if (!payload.empty() && !sendAll(fd, head)) return false;
+  if (reply.dripBytesPerSecond > 0 && !payload.empty()) {
     const auto gap = std::chrono::milliseconds(1000 / reply.dripBytesPerSecond);
-    for (char c : payload) {
-      if (!sendAll(fd, std::string_view(&c, 1)) || !pause(gap)) return false;
-    }
-  } else if (!sendAll(fd, payload)) {
+    for (std::size_t i = 0; i + 1 < all.size(); ++i)
+      if (!sendAll(fd, all.substr(i, 1)) || !pause(gap)) return false;
+  } else if (!sendAll(fd, all.substr(0, all.size() - 1))) {
     return false;
   }
+  beforeLastByte();
+  if (!sendAll(fd, all.substr(all.size() - 1))) return false;
   return !reply.truncate && !reply.closeAfter;
 }
 

@@ -88,7 +88,10 @@ private:
   void acceptLoop();
   void serve(int fd);
   /** Answers one request; false when the connection must close. */
-  bool answer(int fd, const FakeRequest& request, const FakeReply& reply);
+  bool answer(int fd,
+              const FakeRequest& request,
+              const FakeReply& reply,
+              const std::function<void()>& beforeLastByte);
   /** Waits until fd has `events` or the server stops: 1 ready, 0 timeout, -1 stopped or error. */
   int waitFor(int fd, short events, int timeoutMs) const;
   /** Sleeps unless the server stops first; false when it stopped. */
