@@ -445,6 +445,26 @@ void fixOntoPolyline(TerrainMesh& mesh,
     chain.push_back(coarseIndex(j + 1, lastInner));
     addFan(mesh, quad[static_cast<std::size_t>(quadrantOf(firstInner))], apex, chain);
   }
+  // A coarse vertex strictly between two of ours (never so in the power-of-two case) is a kink
+  // of the coarse edge that our straight segment cuts across: the triangle between them is not
+  // degenerate (a height step with relief), and without it a pixel falls through. Wound like the
+  // cells (counter-clockwise seen from outside) when the kink bends outwards.
+  const bool reversed = d == Direction::North || d == Direction::West;
+  for (int i = 0; i + 1 < n; ++i) {
+    const double a = t[static_cast<std::size_t>(i)], b = t[static_cast<std::size_t>(i) + 1];
+    for (auto j = static_cast<std::int64_t>(std::floor(a)) + 1; static_cast<double>(j) < b; ++j) {
+      if (static_cast<double>(j) <= a || j > static_cast<std::int64_t>(segments)) continue;
+      if (on[static_cast<std::size_t>(i)] == j || on[static_cast<std::size_t>(i) + 1] == j)
+        continue;
+      const std::uint32_t c = coarseIndex(j, i), p = fineIndex(i), q = fineIndex(i + 1);
+      auto& target = quad[static_cast<std::size_t>(quadrantOf(i))];
+      if (reversed)
+        target.insert(target.end(), {q, c, p});
+      else
+        target.insert(target.end(), {p, c, q});
+      ++mesh.kinkTriangles;
+    }
+  }
 }
 
 } // namespace

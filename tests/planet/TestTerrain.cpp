@@ -650,5 +650,52 @@ TEST(EdgeFixingExtremes, ARingNodeLiesOnAPolarCapsRim) {
   }
 }
 
+// A cap's rim vertex can fall between two of a ring node's (129 rim vertices against a 33-vertex
+// node 36 degrees wide: 2.5 of its steps a chord). Then the node's straight segment cuts the rim's
+// kink, and only a triangle with area closes the gap (with relief, a height step: the south pole's
+// relief view showed background pixels there). The node's open edges along the rim must be the
+// rim itself: each on the polyline, and together covering it between the node's corners.
+TEST(EdgeFixingExtremes, ARimVertexBetweenTwoOfARingNodesIsClosed) {
+  const int nCap = 33, n = 9; // 11.25-degree chords over 4.5-degree steps
+  const Sector cap{-180.0, 81.0, 180.0, 90.0};
+  const auto capMesh = buildTerrainMesh(wgs84(), cap, nCap, bumpy, {});
+  std::vector<glm::dvec3> rim;
+  for (int c = 0; c < nCap; ++c)
+    rim.push_back(capMesh.vertices[static_cast<std::size_t>(c)].position);
+  for (const Sector fine : {Sector{144.0, 72.0, 180.0, 81.0}, Sector{-180.0, 72.0, -144.0, 81.0}}) {
+    std::array<EdgeAdapt, 4> edges{};
+    edges[static_cast<std::size_t>(Direction::North)] = {true, cap, rim};
+    const auto m = buildTerrainMesh(wgs84(), fine, n, bumpy, edges);
+    EXPECT_EQ(m.kinkTriangles, 2u); // rim vertices at 146.25 and 168.75 (-168.75 and -146.25)
+    std::map<std::pair<std::uint32_t, std::uint32_t>, int> uses;
+    for (std::size_t i = 0; i < m.indices.size(); i += 3)
+      for (int e = 0; e < 3; ++e) {
+        std::uint32_t a = m.indices[i + static_cast<std::size_t>(e)],
+                      b = m.indices[i + static_cast<std::size_t>((e + 1) % 3)];
+        if (a > b) std::swap(a, b);
+        ++uses[{a, b}];
+      }
+    std::vector<std::pair<glm::dvec3, glm::dvec3>> open;
+    for (const auto& [edge, count] : uses) {
+      if (count != 1) continue;
+      const glm::dvec3 a = m.vertices[edge.first].position, b = m.vertices[edge.second].position;
+      if (toPolyline(a, rim) > 1e-6 || toPolyline(b, rim) > 1e-6) continue; // another side
+      EXPECT_LT(toPolyline(0.5 * (a + b), rim), 1e-6) << fine.west << ": an edge cuts a kink";
+      open.emplace_back(a, b);
+    }
+    // And they cover the rim between the node's corners.
+    for (int k = 0; k <= 360; ++k) {
+      const double lon = fine.west + (fine.east - fine.west) * k / 360.0;
+      const double x = (lon + 180.0) / 11.25;
+      const auto j = std::min<std::size_t>(static_cast<std::size_t>(x), rim.size() - 2);
+      const glm::dvec3 p = rim[j] + (rim[j + 1] - rim[j]) * (x - static_cast<double>(j));
+      bool covered = false;
+      for (const auto& [a, b] : open)
+        covered = covered || toPolyline(p, {a, b}) < 1e-6;
+      EXPECT_TRUE(covered) << fine.west << " at " << lon;
+    }
+  }
+}
+
 } // namespace
 } // namespace tellus::planet

@@ -540,9 +540,6 @@ std::expected<std::unique_ptr<LayerTextures>, std::string> Renderer::Impl::makeL
   qp.lod.tileHeightPx = l->texHeight;
   qp.lod.threshold = opt.lodThreshold;
   qp.maxSplitsPerFrame = opt.maxSplitsPerFrame;
-  // Polar caps on the bare globe only: with terrain the relief view of the south pole still
-  // shows two background pixels near a cap (not found yet; see docs/ARCHITECTURE.md).
-  qp.polarCaps = opt.elevationLayer.empty();
   l->tree = std::make_unique<Quadtree>(geodesy, *g, qp);
   applyTerrain(*l->tree);
   StreamParams sp;

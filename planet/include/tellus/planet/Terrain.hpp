@@ -171,6 +171,9 @@ struct TerrainMesh {
   std::vector<std::uint32_t> indices;
   std::array<std::uint32_t, 5> quadrantStart{}; ///< index offsets of SW, SE, NW, NE; [4] = end
   std::size_t zeroAreaTriangles = 0;
+  /** Triangles that fill a coarse edge's kink between two of our vertices (a polar cap's rim
+   * vertex strictly between two of a ring node's): they have area. */
+  std::size_t kinkTriangles = 0;
   double minHeightM = 0.0; ///< over the grid's vertices
   double maxHeightM = 0.0;
 };
