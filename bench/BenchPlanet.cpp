@@ -396,6 +396,31 @@ void BM_UpdatePass(benchmark::State& state) {
 }
 BENCHMARK(BM_UpdatePass)->Args({1, 1})->Args({1, 0})->Args({0, 1})->Unit(benchmark::kMicrosecond);
 
+/** The update pass over the pole with polar caps (arg 1) and without (merged rows only), beside
+ * the mid-latitude view of BM_UpdatePass (view 0): view 1 looks at the pole from 88 N tilted 70
+ * degrees, view 2 straight down on it; both from 300 km, threshold 0.125 as above. A cap's exact
+ * horizon test and its 16-wedge LOD/score cost more per node than a plain node's. */
+void BM_UpdatePassAtThePole(benchmark::State& state) {
+  const Geodesy g;
+  QuadtreeParams p = params(0.125);
+  p.polarCaps = state.range(1) != 0;
+  Quadtree tree(g, worldWindGrid(), p);
+  const CameraPose poses[] = {
+      {30.0, 10.0, 3e5, 0.0, 70.0}, {88.0, 10.0, 3e5, 0.0, 70.0}, {90.0, 0.0, 3e5, 0.0, 0.0}};
+  const Camera cam(g, poses[state.range(0)], {1920, 1080});
+  converge(tree, cam);
+  std::size_t created = 0;
+  for (auto _ : state)
+    created += tree.update(cam).created;
+  state.counters["visible"] = static_cast<double>(tree.stats().visible);
+  state.counters["drawn"] = static_cast<double>(tree.stats().drawn);
+  state.counters["visited"] = static_cast<double>(tree.stats().visited);
+  state.counters["created"] = static_cast<double>(created); // 0: the tree has settled
+}
+BENCHMARK(BM_UpdatePassAtThePole)
+    ->ArgsProduct({{0, 1, 2}, {1, 0}})
+    ->Unit(benchmark::kMicrosecond);
+
 /** The same view with the streamer's pass after the tree's (all textures resident: the steady
  * state of the whole CPU update; the time is tree.update + streamer.update on the thread's CPU
  * clock, without the simulated uploads and LRU bookkeeping around them). */

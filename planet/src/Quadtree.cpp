@@ -59,6 +59,8 @@ std::unique_ptr<Node> Quadtree::makeNode(const NodeKey& key, Node* parent) {
     n = std::make_unique<Node>(geodesy_, key, s, parent, lo, hi);
   }
   n->cap_ = isCapKey(key);
+  if (parent != nullptr && !n->cap_ && key.span > staticSpanOf(*n))
+    n->widened_ = std::make_unique<const EastWestEdges>(eastWestEdges(key));
   return n;
 }
 
@@ -164,26 +166,42 @@ Quadtree::ChildKeys Quadtree::childKeys(const NodeKey& key) const noexcept {
   return childKeysFor(key, nullptr);
 }
 
-bool Quadtree::fitsEastWest(const NodeKey& key, const Camera& camera) const noexcept {
+EastWestEdges Quadtree::eastWestEdges(const NodeKey& key) const noexcept {
+  const Sector s = sectorOf(key);
+  const double lons[3] = {s.west, 0.5 * (s.west + s.east), s.east};
+  EastWestEdges out;
+  const double lats[2] = {s.south, s.north};
+  for (std::size_t e = 0; e < 2; ++e) {
+    out.present[e] = lats[e] != 90.0 && lats[e] != -90.0; // the pole: an edge of length 0
+    if (!out.present[e]) continue;
+    for (std::size_t i = 0; i < 3; ++i) {
+      const Ecef p = geodesy_.toEcef(lats[e], lons[i], 0.0);
+      out.points[e * 3 + i] = {p.x, p.y, p.z};
+    }
+  }
+  return out;
+}
+
+bool Quadtree::fitsEastWest(const EastWestEdges& edges, const Camera& camera) const noexcept {
   // Each half of each east-west edge within half the limit: the wide node's texels are twice as
   // wide as its halves', so this is the test the two halves would pass, at their granularity
   // (perspective across a wide node enlarges the near texels more than the whole edge shows).
-  const Sector s = sectorOf(key);
   const double limit = 0.5 * static_cast<double>(params_.lod.tileWidthPx) * params_.lod.threshold;
-  const double lons[3] = {s.west, 0.5 * (s.west + s.east), s.east};
-  for (const double lat : {s.south, s.north}) {
-    if (lat == 90.0 || lat == -90.0) continue; // the pole: an edge of length 0
+  for (std::size_t e = 0; e < 2; ++e) {
+    if (!edges.present[e]) continue;
     glm::dvec2 px[3]{};
-    for (std::size_t i = 0; i < 3; ++i) {
-      const Ecef e = geodesy_.toEcef(lat, lons[i], 0.0);
-      if (!camera.projectPx({e.x, e.y, e.z}, px[i])) return false;
-    }
+    for (std::size_t i = 0; i < 3; ++i)
+      if (!camera.projectPx(edges.points[e * 3 + i], px[i])) return false;
     for (std::size_t i = 0; i < 2; ++i) {
       const glm::dvec2 d = px[i + 1] - px[i];
       if (!(d.x * d.x + d.y * d.y <= limit * limit)) return false; // NaN: does not fit
     }
   }
   return true;
+}
+
+bool Quadtree::fitsEastWest(const NodeKey& key, const Camera& camera) const noexcept {
+  return fitsEastWest(eastWestEdges(key), camera);
 }
 
 bool Quadtree::visibleNow(const NodeKey& key, const Camera& camera) const {
@@ -487,8 +505,7 @@ void Quadtree::visit(Node& node, bool insideFrustum, const Camera& camera) {
   // A row widened for another camera (wider than the static rule) keeps the test it was made
   // with, each half of each east-west edge within half the limit: the whole-edge test alone
   // would let perspective enlarge its near texels further than a static node's.
-  if (!refine && node.parent_ != nullptr && !node.cap_ && node.key_.span > staticSpanOf(node) &&
-      !fitsEastWest(node.key_, camera))
+  if (!refine && node.widened_ && !fitsEastWest(*node.widened_, camera))
     refine = true;
   bool descend = refine && node.key_.level + 1 < grid_.numLevels();
   // East-west texels over the limit while the north-south ones fit: children as wide as the node

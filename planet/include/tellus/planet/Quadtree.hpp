@@ -48,6 +48,13 @@
 namespace tellus::planet {
 
 /** A node's address: a row of its level and `span` columns from `col` (span 1: one tile). */
+/** A node's east-west edges at height 0, sampled at their ends and middles (south then north;
+ * an edge on a pole is absent: it has length 0). */
+struct EastWestEdges {
+  std::array<glm::dvec3, 6> points{};
+  std::array<bool, 2> present{};
+};
+
 struct NodeKey {
   std::int32_t level = 0;
   std::int64_t row = 0;
@@ -173,6 +180,10 @@ private:
   std::array<Node*, 4> neighbours_{};
   int childCount_ = 0;
   bool cap_ = false;
+  /** Wider than the static rule makes it (adaptivePolarSpans): its east-west edges' points at
+   * height 0 (south edge west, middle, east, then the north edge's), for the test it keeps while
+   * drawn; fixed for the node's life, so made once. Null for every other node. */
+  std::unique_ptr<const EastWestEdges> widened_;
   std::uint64_t lastVisible_ = 0;
   std::uint64_t lastDrawn_ = 0;
 };
@@ -307,6 +318,8 @@ private:
   ChildKeys childKeysFor(const NodeKey& key, const Camera* camera, bool narrow = false) const;
   bool splitWith(Node& node, bool narrow);
   bool childrenAsWide(const Node& node) const noexcept;
+  EastWestEdges eastWestEdges(const NodeKey& key) const noexcept;
+  bool fitsEastWest(const EastWestEdges& edges, const Camera& camera) const noexcept;
   bool fitsEastWest(const NodeKey& key, const Camera& camera) const noexcept;
   bool visibleNow(const NodeKey& key, const Camera& camera) const;
   bool widerPaysOff(const NodeKey& wide, std::int64_t span, const Camera& camera) const;
