@@ -120,7 +120,7 @@ void BM_TerrainMesh(benchmark::State& state) {
   }
   state.counters["zero_area_triangles"] = static_cast<double>(zeroArea);
 }
-BENCHMARK(BM_TerrainMesh)->ArgsProduct({{0, 1}, {17, 33, 65}})->ArgNames({"fixed", "n"});
+BENCHMARK(BM_TerrainMesh)->ArgsProduct({{0, 1}, {17, 33, 65, 129}})->ArgNames({"fixed", "n"});
 
 void BM_HeightAt(benchmark::State& state) {
   const HeightField& f = alps();
