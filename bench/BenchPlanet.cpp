@@ -417,9 +417,7 @@ void BM_UpdatePassAtThePole(benchmark::State& state) {
   state.counters["visited"] = static_cast<double>(tree.stats().visited);
   state.counters["created"] = static_cast<double>(created); // 0: the tree has settled
 }
-BENCHMARK(BM_UpdatePassAtThePole)
-    ->ArgsProduct({{0, 1, 2}, {1, 0}})
-    ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_UpdatePassAtThePole)->ArgsProduct({{0, 1, 2}, {1, 0}})->Unit(benchmark::kMicrosecond);
 
 /** The same view with the streamer's pass after the tree's (all textures resident: the steady
  * state of the whole CPU update; the time is tree.update + streamer.update on the thread's CPU

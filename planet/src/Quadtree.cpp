@@ -505,8 +505,7 @@ void Quadtree::visit(Node& node, bool insideFrustum, const Camera& camera) {
   // A row widened for another camera (wider than the static rule) keeps the test it was made
   // with, each half of each east-west edge within half the limit: the whole-edge test alone
   // would let perspective enlarge its near texels further than a static node's.
-  if (!refine && node.widened_ && !fitsEastWest(*node.widened_, camera))
-    refine = true;
+  if (!refine && node.widened_ && !fitsEastWest(*node.widened_, camera)) refine = true;
   bool descend = refine && node.key_.level + 1 < grid_.numLevels();
   // East-west texels over the limit while the north-south ones fit: children as wide as the node
   // would keep the same east-west texels (its equatorward edge is theirs), so a merged row then
