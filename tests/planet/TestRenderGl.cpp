@@ -376,6 +376,57 @@ TEST(RenderGl, TexelToPixelRatioIsKeptNearTheThreshold) {
   }
 }
 
+// The same at the poles, looked at straight down, where a polar cap and its ring are drawn: along
+// the row through the pole (left out: the 4 pixels around it) the radial direction is x, so green
+// (a tile's rows: every node's texture is one tile tall) per x step gives the north-south texel.
+// (Red cannot give the east-west one there: a cap's and a merged row's textures shrink many tiles
+// into a few tile widths. QuadtreeExtremes.PolarCapsKeepThePoleWithinOneAndAHalfTheEquator checks
+// it on the geometry: at most 0.95 px.)
+TEST(RenderGl, TexelToPixelRatioIsKeptAtThePoles) {
+  const Geodesy geodesy;
+  RampSource ramp(GridSpec{Sector{}, 36.0, 256, 256, 24});
+  for (const double threshold : {1.0, 2.0}) {
+    auto o = options("ramp", 320, 240);
+    o.lodThreshold = threshold;
+    OPEN_RENDERER(r, ramp, geodesy, o);
+    for (const double lat : {90.0, -90.0})
+      for (const double alt : {3.0e6, 1.5e4, 800.0}) {
+        SCOPED_TRACE("threshold " + std::to_string(threshold) + " latitude " + std::to_string(lat) +
+                     " altitude " + std::to_string(alt));
+        const Rendered out = renderComplete(r, {lat, 0.0, alt, 0.0, 0.0});
+        ASSERT_TRUE(out.complete);
+        save("ramp-t" + std::to_string(static_cast<int>(threshold)) + "-pole" +
+                 std::to_string(static_cast<int>(lat)) + "-" +
+                 std::to_string(static_cast<int>(alt)),
+             r,
+             out.pixels);
+        const int cx = o.width / 2, cy = o.height / 2;
+        double sum = 0;
+        int steps = 0;
+        for (int dx = 4; dx < 110; ++dx)
+          for (const int x : {cx + dx, cx - 1 - dx}) {
+            const Rgb c = pixelAt(out.pixels, o.width, x, cy);
+            const Rgb next = pixelAt(out.pixels, o.width, x + 1, cy);
+            if (std::abs(next.g - c.g) < 100 && next.b == c.b) { // not across a node's edge
+              sum += std::abs(next.g - c.g);
+              ++steps;
+            }
+          }
+        ASSERT_GT(steps, 150);
+        const double texelPx = steps / sum; // pixels per texel, north-south
+        std::printf("threshold %.1f pole %+.0f altitude %.0f m: level %d, a texel is %.3f px "
+                    "north-south\n",
+                    threshold,
+                    lat,
+                    alt,
+                    out.stats.maxLevel,
+                    texelPx);
+        EXPECT_LE(texelPx, threshold * 1.05);
+        EXPECT_GE(texelPx, threshold * 0.4);
+      }
+  }
+}
+
 // No jitter at 1 m: the camera 1 m above the ground moves east in 2 mm steps; the ramp texture's
 // texel coordinate under the screen's centre must move by the same amount each step (matrices are
 // built in double relative to the camera; ECEF in float would snap to ~0.5 m). The place is a third
