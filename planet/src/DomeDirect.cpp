@@ -87,24 +87,27 @@ double clampLongitude(double lon, double west, double east) noexcept {
 double directChordErrorPx(const Camera& fisheye,
                           const NodeGeometry& node,
                           int meshSize,
-                          double groundBelowM) noexcept {
-  if (!fisheye.isFisheye() || meshSize < 2) return 0.0;
+                          double groundBelowM,
+                          int meshRows) noexcept {
+  if (meshRows == 0) meshRows = meshSize;
+  if (!fisheye.isFisheye() || meshSize < 2 || meshRows < 2) return 0.0;
   const Sector& s = node.sector();
   const double a = node.equatorialRadiusM(), b = node.polarRadiusM();
   const double ground = std::isfinite(groundBelowM) ? groundBelowM : 0.0;
   const double lift =
       std::clamp(std::min(ground, fisheye.pose().altitudeM), node.minHeightM(), node.maxHeightM());
-  const int n = meshSize, cells = n - 1;
+  const int n = meshSize, cells = n - 1, rowCells = meshRows - 1;
   auto vertex = [&](int row, int col) {
     const glm::dvec3 p =
-        surfaceFrame(a, b, edgeLerp(s.south, s.north, row, n), edgeLerp(s.west, s.east, col, n))
+        surfaceFrame(
+            a, b, edgeLerp(s.south, s.north, row, meshRows), edgeLerp(s.west, s.east, col, n))
             .position;
     if (lift == 0.0) return p;
     return p + lift * glm::normalize(glm::dvec3(p.x / (a * a), p.y / (a * a), p.z / (b * b)));
   };
   double worst = 0.0;
   auto cell = [&](int r, int c) {
-    r = std::clamp(r, 0, cells - 1);
+    r = std::clamp(r, 0, rowCells - 1);
     c = std::clamp(c, 0, cells - 1);
     const std::array<glm::dvec3, 4> p{
         vertex(r, c), vertex(r, c + 1), vertex(r + 1, c), vertex(r + 1, c + 1)};
@@ -115,13 +118,13 @@ double directChordErrorPx(const Camera& fisheye,
     for (const auto& [u, v] : {std::pair<std::size_t, std::size_t>{0, 1}, {0, 2}, {0, 3}, {1, 2}})
       worst = std::max(worst, edgeError(fisheye, p[u], m[u], p[v], m[v]));
   };
-  for (const int r : {0, cells / 4, cells / 2, 3 * cells / 4, cells - 1})
+  for (const int r : {0, rowCells / 4, rowCells / 2, 3 * rowCells / 4, rowCells - 1})
     for (const int c : {0, cells / 4, cells / 2, 3 * cells / 4, cells - 1})
       cell(r, c);
   const CameraPose& pose = fisheye.pose();
   const double nearLat = std::clamp(pose.latDeg, s.south, s.north);
   const double nearLon = clampLongitude(pose.lonDeg, s.west, s.east);
-  const int nr = static_cast<int>(std::floor((nearLat - s.south) / (s.north - s.south) * cells));
+  const int nr = static_cast<int>(std::floor((nearLat - s.south) / (s.north - s.south) * rowCells));
   const int nc = static_cast<int>(std::floor((nearLon - s.west) / (s.east - s.west) * cells));
   for (int dr = -1; dr <= 1; ++dr)
     for (int dc = -1; dc <= 1; ++dc)
@@ -136,8 +139,9 @@ double directChordErrorPx(const Camera& fisheye,
   double worst = 0.0;
   for (const Node* n : nodes)
     if (n != nullptr)
-      worst = std::max(
-          worst, directChordErrorPx(fisheye, n->geometry(), n->meshSize(meshSize), groundBelowM));
+      worst = std::max(worst,
+                       directChordErrorPx(
+                           fisheye, n->geometry(), n->meshSize(meshSize), groundBelowM, meshSize));
   return worst;
 }
 

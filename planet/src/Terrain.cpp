@@ -473,9 +473,15 @@ TerrainMesh buildTerrainMesh(const Geodesy& geodesy,
                              const Sector& sector,
                              int n,
                              const HeightFunction& height,
-                             const std::array<EdgeAdapt, 4>& edges) {
-  if (n < 3 || n > 1025 || ((n - 1) & (n - 2)) != 0)
-    throw std::invalid_argument("planet: patch grid size must be 2^k + 1, 3 <= n <= 1025");
+                             const std::array<EdgeAdapt, 4>& edges,
+                             int rows) {
+  if (rows == 0) rows = n;
+  for (const int k : {n, rows})
+    if (k < 3 || k > 1025 || ((k - 1) & (k - 2)) != 0)
+      throw std::invalid_argument("planet: patch grid size must be 2^k + 1, 3 <= n <= 1025");
+  if (rows != n &&
+      std::any_of(edges.begin(), edges.end(), [](const EdgeAdapt& e) { return e.active; }))
+    throw std::invalid_argument("planet: edge fixing needs a square patch grid");
   const Sector& s = sector;
   if (!(std::isfinite(s.west) && std::isfinite(s.east) && std::isfinite(s.south) &&
         std::isfinite(s.north)) ||
@@ -497,25 +503,26 @@ TerrainMesh buildTerrainMesh(const Geodesy& geodesy,
 
   TerrainMesh mesh;
   mesh.n = n;
-  // Positions on an (n + 2)^2 ring: the grid plus one step outside for the normals.
-  const int m = n + 2;
-  const double dLat = (s.north - s.south) / (n - 1), dLon = (s.east - s.west) / (n - 1);
-  std::vector<glm::dvec3> ring(static_cast<std::size_t>(m) * static_cast<std::size_t>(m));
-  std::vector<double> lats(static_cast<std::size_t>(m)), lons(static_cast<std::size_t>(m));
-  for (int i = 0; i < m; ++i) {
-    lats[static_cast<std::size_t>(i)] = i == 0       ? std::max(-90.0, s.south - dLat)
-                                        : i == m - 1 ? std::min(90.0, s.north + dLat)
-                                                     : edgeLerp(s.south, s.north, i - 1, n);
+  mesh.rows = rows;
+  // Positions on an (rows + 2) x (n + 2) ring: the grid plus one step outside for the normals.
+  const int m = n + 2, mr = rows + 2;
+  const double dLat = (s.north - s.south) / (rows - 1), dLon = (s.east - s.west) / (n - 1);
+  std::vector<glm::dvec3> ring(static_cast<std::size_t>(mr) * static_cast<std::size_t>(m));
+  std::vector<double> lats(static_cast<std::size_t>(mr)), lons(static_cast<std::size_t>(m));
+  for (int i = 0; i < mr; ++i)
+    lats[static_cast<std::size_t>(i)] = i == 0        ? std::max(-90.0, s.south - dLat)
+                                        : i == mr - 1 ? std::min(90.0, s.north + dLat)
+                                                      : edgeLerp(s.south, s.north, i - 1, rows);
+  for (int i = 0; i < m; ++i)
     lons[static_cast<std::size_t>(i)] = i == 0       ? s.west - dLon
                                         : i == m - 1 ? s.east + dLon
                                                      : edgeLerp(s.west, s.east, i - 1, n);
-  }
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (int r = 0; r < m; ++r)
+  for (int r = 0; r < mr; ++r)
     for (int c = 0; c < m; ++c) {
       const double lat = lats[static_cast<std::size_t>(r)], lon = lons[static_cast<std::size_t>(c)];
       const double hgt = heightOf(lat, lat == 90.0 || lat == -90.0 ? 0.0 : lon);
-      if (r > 0 && r < m - 1 && c > 0 && c < m - 1) {
+      if (r > 0 && r < mr - 1 && c > 0 && c < m - 1) {
         lo = std::min(lo, hgt);
         hi = std::max(hi, hgt);
       }
@@ -525,8 +532,8 @@ TerrainMesh buildTerrainMesh(const Geodesy& geodesy,
   mesh.minHeightM = lo;
   mesh.maxHeightM = hi;
 
-  mesh.vertices.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(n));
-  for (int r = 0; r < n; ++r)
+  mesh.vertices.resize(static_cast<std::size_t>(rows) * static_cast<std::size_t>(n));
+  for (int r = 0; r < rows; ++r)
     for (int c = 0; c < n; ++c) {
       TerrainVertex& v = mesh.vertices[static_cast<std::size_t>(r * n + c)];
       const auto at = [&](int rr, int cc) { return ring[static_cast<std::size_t>(rr * m + cc)]; };
@@ -543,16 +550,16 @@ TerrainMesh buildTerrainMesh(const Geodesy& geodesy,
         nrm /= len;
       }
       v.normal = glm::vec3(nrm);
-      v.uvNode = {static_cast<double>(c) / (n - 1), static_cast<double>(r) / (n - 1)};
+      v.uvNode = {static_cast<double>(c) / (n - 1), static_cast<double>(r) / (rows - 1)};
     }
 
   // Triangles per quadrant: cells, then (below) the zero-area fans of its outer edges.
-  const int half = (n - 1) / 2;
+  const int half = (n - 1) / 2, halfRows = (rows - 1) / 2;
   std::array<std::vector<std::uint32_t>, 4> quad;
   auto vid = [n](int r, int c) { return static_cast<std::uint32_t>(r * n + c); };
-  for (int r = 0; r + 1 < n; ++r)
+  for (int r = 0; r + 1 < rows; ++r)
     for (int c = 0; c + 1 < n; ++c) {
-      auto& q = quad[static_cast<std::size_t>((r >= half ? 2 : 0) + (c >= half ? 1 : 0))];
+      auto& q = quad[static_cast<std::size_t>((r >= halfRows ? 2 : 0) + (c >= half ? 1 : 0))];
       const std::uint32_t a = vid(r, c), b = vid(r, c + 1), d = vid(r + 1, c),
                           e = vid(r + 1, c + 1);
       q.insert(q.end(), {a, b, e, a, e, d});

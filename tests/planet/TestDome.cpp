@@ -386,13 +386,13 @@ FrameError frameError(const Geodesy& g, const TileGrid& grid, const Camera& cam,
   f.sampled = directChordErrorPx(cam, tree.drawList(), meshSize);
   f.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   for (const Node* node : tree.drawList()) {
-    const int n = node->meshSize(meshSize); // a cap's is finer
+    const int n = node->meshSize(meshSize), rows = meshSize; // a cap has more columns
     const Sector& s = node->sector();
     auto v = [&](int r, int c) {
       return test::vec(
-          g.toEcef(edgeLerp(s.south, s.north, r, n), edgeLerp(s.west, s.east, c, n), 0.0));
+          g.toEcef(edgeLerp(s.south, s.north, r, rows), edgeLerp(s.west, s.east, c, n), 0.0));
     };
-    for (int r = 0; r + 1 < n; ++r)
+    for (int r = 0; r + 1 < rows; ++r)
       for (int c = 0; c + 1 < n; ++c)
         for (const auto& [a, b] : {std::pair{v(r, c), v(r, c + 1)},
                                    {v(r, c), v(r + 1, c)},

@@ -650,6 +650,33 @@ TEST(EdgeFixingExtremes, ARingNodeLiesOnAPolarCapsRim) {
   }
 }
 
+// A polar cap's mesh: 129 columns for its rim, the 33 rows every node of its level has (a
+// quarter of the vertices a square grid would take). Each row lies on its parallel, all four
+// quadrants are cells, and edge fixing, which needs a square grid, is refused.
+TEST(TerrainMesh, ACapsMeshHasMoreColumnsThanRows) {
+  const Sector cap{-180.0, 81.0, 180.0, 90.0};
+  const auto m = buildTerrainMesh(wgs84(), cap, 129, bumpy, {}, 33);
+  EXPECT_EQ(m.n, 129);
+  EXPECT_EQ(m.rows, 33);
+  ASSERT_EQ(m.vertices.size(), 129u * 33u);
+  EXPECT_EQ(m.indices.size(), 128u * 32u * 6u);
+  for (std::size_t q = 0; q < 4; ++q) // 64 x 16 cells each
+    EXPECT_EQ(m.quadrantStart[q + 1] - m.quadrantStart[q], 64u * 16u * 6u) << q;
+  for (int r = 0; r < 33; ++r)
+    for (const int c : {0, 37, 128}) {
+      const TerrainVertex& v = m.vertices[static_cast<std::size_t>(r * 129 + c)];
+      const double lat = edgeLerp(81.0, 90.0, r, 33);
+      const double lon = lat == 90.0 ? 0.0 : edgeLerp(-180.0, 180.0, c, 129); // the pole: one point
+      const Ecef e = wgs84().toEcef(lat, lon, bumpy(lat, lon));
+      EXPECT_LT(glm::length(v.position - glm::dvec3(e.x, e.y, e.z)), 1e-6) << r << " " << c;
+      EXPECT_DOUBLE_EQ(v.uvNode.y, r / 32.0);
+    }
+  std::array<EdgeAdapt, 4> edges{};
+  edges[static_cast<std::size_t>(Direction::South)] = {true, {-180.0, 72.0, 180.0, 81.0}, {}};
+  EXPECT_THROW(buildTerrainMesh(wgs84(), cap, 129, bumpy, edges, 33), std::invalid_argument);
+  EXPECT_THROW(buildTerrainMesh(wgs84(), cap, 129, bumpy, {}, 32), std::invalid_argument);
+}
+
 // A cap's rim vertex can fall between two of a ring node's (129 rim vertices against a 33-vertex
 // node 36 degrees wide: 2.5 of its steps a chord). Then the node's straight segment cuts the rim's
 // kink, and only a triangle with area closes the gap (with relief, a height step: the south pole's

@@ -667,7 +667,8 @@ const GpuMesh& Renderer::Impl::meshFor(const Node& node) {
       node.sector(),
       node.meshSize(opt.meshSize),
       [this](double lat, double lon) { return heightAt(lat, lon); },
-      edges);
+      edges,
+      opt.meshSize);
   if (node.isCap()) closeCap(mesh);
   m.edges = edges;
   m.reliefOff = reliefOff;
@@ -676,12 +677,14 @@ const GpuMesh& Renderer::Impl::meshFor(const Node& node) {
   m.zeroAreaTriangles = mesh.zeroAreaTriangles;
   m.fixed = std::any_of(edges.begin(), edges.end(), [](const EdgeAdapt& a) { return a.active; });
   {
-    const int n = mesh.n;
+    const int n = mesh.n, rows = mesh.rows;
     for (int d = 0; d < 4; ++d) {
       auto& side = m.sideVertices[static_cast<std::size_t>(d)];
-      side.resize(static_cast<std::size_t>(n));
-      for (int i = 0; i < n; ++i) {
-        const int r = d == static_cast<int>(Direction::North)   ? n - 1
+      const bool alongLon =
+          d == static_cast<int>(Direction::North) || d == static_cast<int>(Direction::South);
+      side.resize(static_cast<std::size_t>(alongLon ? n : rows));
+      for (int i = 0; i < static_cast<int>(side.size()); ++i) {
+        const int r = d == static_cast<int>(Direction::North)   ? rows - 1
                       : d == static_cast<int>(Direction::South) ? 0
                                                                 : i;
         const int c = d == static_cast<int>(Direction::East)   ? n - 1
@@ -814,8 +817,7 @@ void Renderer::Impl::deliverHeights() {
 
 int Renderer::Impl::heightLevelFor(const Node& node) const {
   const Sector& s = node.sector();
-  const int n = node.meshSize(opt.meshSize);
-  int level = field->levelForSpacing((s.north - s.south) / (n - 1));
+  int level = field->levelForSpacing((s.north - s.south) / (opt.meshSize - 1)); // its rows
   if (node.isCap())
     while (level > 0 && !field->grid().keysCovering(s, level, kCapHeightKeys))
       --level;
@@ -824,7 +826,7 @@ int Renderer::Impl::heightLevelFor(const Node& node) const {
 
 void Renderer::Impl::closeCap(TerrainMesh& mesh) {
   const int n = mesh.n;
-  for (int r = 0; r < n; ++r) {
+  for (int r = 0; r < mesh.rows; ++r) {
     const auto row = static_cast<std::size_t>(r * n);
     mesh.vertices[row + static_cast<std::size_t>(n - 1)].position = mesh.vertices[row].position;
   }
@@ -1264,16 +1266,18 @@ double Renderer::Impl::surfaceHeightAt(double lat, double lon) const {
   for (const Node* node : geo().drawList()) {
     const Sector& s = node->sector();
     if (lat < s.south || lat > s.north || lon < s.west || lon > s.east) continue;
-    const int n = node->meshSize(opt.meshSize);
-    const int r = std::clamp(
-        static_cast<int>(std::floor((lat - s.south) / (s.north - s.south) * (n - 1))), 0, n - 2);
+    const int n = node->meshSize(opt.meshSize), rows = opt.meshSize;
+    const int r =
+        std::clamp(static_cast<int>(std::floor((lat - s.south) / (s.north - s.south) * (rows - 1))),
+                   0,
+                   rows - 2);
     const int c = std::clamp(
         static_cast<int>(std::floor((lon - s.west) / (s.east - s.west) * (n - 1))), 0, n - 2);
     for (int dr = 0; dr < 2; ++dr)
       for (int dc = 0; dc < 2; ++dc)
-        h = std::max(
-            h,
-            heightAt(edgeLerp(s.south, s.north, r + dr, n), edgeLerp(s.west, s.east, c + dc, n)));
+        h = std::max(h,
+                     heightAt(edgeLerp(s.south, s.north, r + dr, rows),
+                              edgeLerp(s.west, s.east, c + dc, n)));
     if (const auto it = meshes.find(node->key()); it != meshes.end())
       for (int d = 0; d < 4; ++d) {
         const EdgeAdapt& e = it->second.edges[static_cast<std::size_t>(d)];
@@ -1283,10 +1287,12 @@ double Renderer::Impl::surfaceHeightAt(double lat, double lon) const {
         const double a = alongLon ? e.coarse.west : e.coarse.south,
                      b = alongLon ? e.coarse.east : e.coarse.north;
         const double p = alongLon ? lon : lat;
+        // The coarse side's own vertex count (a polar cap's rim has more than n).
+        const int cn = e.coarseVertices.size() >= 2 ? static_cast<int>(e.coarseVertices.size()) : n;
         const int j =
-            std::clamp(static_cast<int>(std::floor((p - a) / (b - a) * (n - 1))), 0, n - 2);
+            std::clamp(static_cast<int>(std::floor((p - a) / (b - a) * (cn - 1))), 0, cn - 2);
         for (int k = 0; k < 2; ++k) {
-          const double q = edgeLerp(a, b, j + k, n);
+          const double q = edgeLerp(a, b, j + k, cn);
           const double fixedCoord = d == static_cast<int>(Direction::North)   ? s.north
                                     : d == static_cast<int>(Direction::South) ? s.south
                                     : d == static_cast<int>(Direction::East)  ? s.east

@@ -59,19 +59,20 @@ glm::dvec3 toDomeFrame(const Camera& fisheye, const glm::dvec3& world) noexcept;
  * or when both ends are beyond the clip angle and the middle is not (the clip would drop it). */
 double directEdgeErrorPx(const Camera& fisheye, const glm::dvec3& a, const glm::dvec3& b) noexcept;
 
-/** The largest directEdgeErrorPx() over a sample of a node's mesh cells (meshSize x meshSize
- * vertices): 5 x 5 cells spread evenly over the node (its corners, edges and centre among them)
- * and the 3 x 3 cells around the point of the node nearest the camera (where cells look largest),
- * each cell's south and west sides and both diagonals (within 6% of every cell's largest on the
- * views of tests/planet/TestDome.cpp), the vertices at the height of the ground below the camera
- * (groundBelowM, metres above the model; terrain heights vary within a node, so the estimate
- * takes one representative height: the cells nearest the camera are the ones that matter, and
- * they lie near that height) clamped to the node's height range. 0 for a camera that is not a
- * fisheye. */
+/** The largest directEdgeErrorPx() over a sample of a node's mesh cells (meshRows x meshSize
+ * vertices; meshRows 0: meshSize x meshSize): 5 x 5 cells spread evenly over the node (its corners,
+ * edges and centre among them) and the 3 x 3 cells around the point of the node nearest the camera
+ * (where cells look largest), each cell's south and west sides and both diagonals (within 6% of
+ * every cell's largest on the views of tests/planet/TestDome.cpp), the vertices at the height of
+ * the ground below the camera (groundBelowM, metres above the model; terrain heights vary within a
+ * node, so the estimate takes one representative height: the cells nearest the camera are the ones
+ * that matter, and they lie near that height) clamped to the node's height range. 0 for a camera
+ * that is not a fisheye. */
 double directChordErrorPx(const Camera& fisheye,
                           const NodeGeometry& node,
                           int meshSize,
-                          double groundBelowM = 0.0) noexcept;
+                          double groundBelowM = 0.0,
+                          int meshRows = 0) noexcept;
 
 /** The largest directChordErrorPx() over a frame's drawn nodes. */
 double directChordErrorPx(const Camera& fisheye,

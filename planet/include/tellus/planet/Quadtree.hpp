@@ -111,10 +111,11 @@ enum class TextureState : std::uint8_t {
 
 /** A cap's texture is this many tiles wide (and one tall). */
 inline constexpr int kCapTextureWidthFactor = 8;
-/** A cap's mesh has kCapMeshFactor x (meshSize - 1) + 1 vertices a side (at most 1,025): its rim
- * is a whole parallel, which meshSize columns would draw as a polygon of 32 chords (0.5 % of the
- * cap's radius inside the circle at the chords' middles); four times as many keep that within
- * 0.03 %, and its rim columns about as far apart as a ring node's. */
+/** A cap's mesh has kCapMeshFactor x (meshSize - 1) + 1 columns (at most 1,025): its rim is a
+ * whole parallel, which meshSize columns would draw as a polygon of 32 chords (0.5 % of the cap's
+ * radius inside the circle at the chords' middles); four times as many keep that within 0.03 %,
+ * and its rim columns about as far apart as a ring node's. Its rows are meshSize, as every node's
+ * of its level (their latitude span is the same). */
 inline constexpr int kCapMeshFactor = 4;
 
 class Quadtree;
@@ -153,7 +154,8 @@ public:
   int childCount() const noexcept { return childCount_; }
   /** A polar cap (QuadtreeParams::polarCaps): the whole top or bottom row of its level. */
   bool isCap() const noexcept { return cap_; }
-  /** The vertices a side of this node's mesh when nodes have meshSize (see kCapMeshFactor). */
+  /** The vertices a row (west to east) of this node's mesh when nodes have meshSize x meshSize
+   * (more for a cap, see kCapMeshFactor); every node's mesh has meshSize rows. */
   int meshSize(int meshSize) const noexcept {
     return cap_ ? std::min(1025, kCapMeshFactor * (meshSize - 1) + 1) : meshSize;
   }

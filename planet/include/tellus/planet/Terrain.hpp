@@ -166,7 +166,8 @@ struct TerrainVertex {
  * holds the zero-area triangles along its outer edges.
  */
 struct TerrainMesh {
-  int n = 0;
+  int n = 0;    ///< vertices a row (west to east)
+  int rows = 0; ///< rows (south to north): n, or fewer for a polar cap (buildTerrainMesh's rows)
   std::vector<TerrainVertex> vertices;
   std::vector<std::uint32_t> indices;
   std::array<std::uint32_t, 5> quadrantStart{}; ///< index offsets of SW, SE, NW, NE; [4] = end
@@ -184,11 +185,15 @@ struct TerrainMesh {
  * differences over a ring of points one step outside the node, so neighbours agree); edges[d]
  * (indexed by Direction: North, East, South, West) moves that edge onto the coarser neighbour's
  * chords and adds the zero-area triangles. n as buildPatchMesh (2^k + 1, 3..1025).
+ * rows: the grid's rows when they differ from n (2^k + 1, 3..1025; 0 = n): a polar cap draws its
+ * rim, a whole parallel, with n = 4 x 32 + 1 columns but its latitude span with the 33 rows every
+ * node of its level has. Edge fixing needs a square grid (rows == n); a cap has no neighbour.
  */
 TerrainMesh buildTerrainMesh(const Geodesy& geodesy,
                              const Sector& sector,
                              int n,
                              const HeightFunction& height,
-                             const std::array<EdgeAdapt, 4>& edges);
+                             const std::array<EdgeAdapt, 4>& edges,
+                             int rows = 0);
 
 } // namespace tellus::planet
