@@ -453,7 +453,7 @@ void fixOntoPolyline(TerrainMesh& mesh,
   for (int i = 0; i + 1 < n; ++i) {
     const double a = t[static_cast<std::size_t>(i)], b = t[static_cast<std::size_t>(i) + 1];
     for (auto j = static_cast<std::int64_t>(std::floor(a)) + 1; static_cast<double>(j) < b; ++j) {
-      if (static_cast<double>(j) <= a || j > static_cast<std::int64_t>(segments)) continue;
+      if (j > static_cast<std::int64_t>(segments)) continue;
       if (on[static_cast<std::size_t>(i)] == j || on[static_cast<std::size_t>(i) + 1] == j)
         continue;
       const std::uint32_t c = coarseIndex(j, i), p = fineIndex(i), q = fineIndex(i + 1);
