@@ -176,13 +176,17 @@ EastWestEdges Quadtree::eastWestEdges(const NodeKey& key) const noexcept {
     if (!out.present[e]) continue;
     for (std::size_t i = 0; i < 3; ++i) {
       const Ecef p = geodesy_.toEcef(lats[e], lons[i], 0.0);
+      const Ecef n = geodesy_.surfaceNormal(lats[e], lons[i]);
       out.points[e * 3 + i] = {p.x, p.y, p.z};
+      out.normals[e * 3 + i] = {n.x, n.y, n.z};
     }
   }
   return out;
 }
 
-bool Quadtree::fitsEastWest(const EastWestEdges& edges, const Camera& camera) const noexcept {
+bool Quadtree::fitsEastWest(const EastWestEdges& edges,
+                            const Camera& camera,
+                            double liftM) const noexcept {
   // Each half of each east-west edge within half the limit: the wide node's texels are twice as
   // wide as its halves', so this is the test the two halves would pass, at their granularity
   // (perspective across a wide node enlarges the near texels more than the whole edge shows).
@@ -191,7 +195,8 @@ bool Quadtree::fitsEastWest(const EastWestEdges& edges, const Camera& camera) co
     if (!edges.present[e]) continue;
     glm::dvec2 px[3]{};
     for (std::size_t i = 0; i < 3; ++i)
-      if (!camera.projectPx(edges.points[e * 3 + i], px[i])) return false;
+      if (!camera.projectPx(edges.points[e * 3 + i] + edges.normals[e * 3 + i] * liftM, px[i]))
+        return false;
     for (std::size_t i = 0; i < 2; ++i) {
       const glm::dvec2 d = px[i + 1] - px[i];
       if (!(d.x * d.x + d.y * d.y <= limit * limit)) return false; // NaN: does not fit
@@ -200,8 +205,13 @@ bool Quadtree::fitsEastWest(const EastWestEdges& edges, const Camera& camera) co
   return true;
 }
 
-bool Quadtree::fitsEastWest(const NodeKey& key, const Camera& camera) const noexcept {
-  return fitsEastWest(eastWestEdges(key), camera);
+bool Quadtree::fitsEastWest(const NodeKey& key, const Camera& camera) const {
+  double lift = 0.0;
+  if (heightRange_) {
+    const auto [lo, hi] = heightRange_(sectorOf(key));
+    lift = std::clamp(camera.pose().altitudeM, lo, hi);
+  }
+  return fitsEastWest(eastWestEdges(key), camera, lift);
 }
 
 bool Quadtree::visibleNow(const NodeKey& key, const Camera& camera) const {
@@ -505,7 +515,11 @@ void Quadtree::visit(Node& node, bool insideFrustum, const Camera& camera) {
   // A row widened for another camera (wider than the static rule) keeps the test it was made
   // with, each half of each east-west edge within half the limit: the whole-edge test alone
   // would let perspective enlarge its near texels further than a static node's.
-  if (!refine && node.widened_ && !fitsEastWest(*node.widened_, camera)) refine = true;
+  if (!refine && node.widened_ &&
+      !fitsEastWest(*node.widened_,
+                    camera,
+                    std::clamp(camera.pose().altitudeM, g.minHeightM(), g.maxHeightM())))
+    refine = true;
   bool descend = refine && node.key_.level + 1 < grid_.numLevels();
   // East-west texels over the limit while the north-south ones fit: children as wide as the node
   // would keep the same east-west texels (its equatorward edge is theirs), so a merged row then

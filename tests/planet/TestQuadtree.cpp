@@ -442,6 +442,46 @@ TEST(QuadtreeExtremes, PolarCapsKeepThePoleWithinOneAndAHalfTheEquator) {
   std::printf("caps: worst pole/equator ratio %.2f\n", worstRatio);
 }
 
+// The same with terrain (the renderer makes caps with an elevation layer too): every node's
+// heights span -500 to 4,000 m (an ice sheet's range), which grows the bounding volumes the culling
+// tests and moves the occluder down, and lifts the points the LOD test measures to 4,000 m; the
+// camera is above the highest terrain. The merged rows' east-west test once measured at height 0
+// while the LOD measured at 4,000 m: from 20 km and 10 km the pole view refined rows as wide as
+// their parents down to the deepest level (692 and 51,004 nodes, caps or not).
+TEST(QuadtreeExtremes, PolarCapsKeepThePoleWithinOneAndAHalfTheEquatorWithTerrain) {
+  const Geodesy g;
+  for (double alt : {2e7, 2e6, 6e5, 1e5, 2e4, 1e4}) {
+    auto make = [&](bool caps = true) {
+      QuadtreeParams p = capParams();
+      p.polarCaps = caps;
+      auto t = std::make_unique<Quadtree>(g, test::globalGrid(), p);
+      t->setTerrain([](const Sector&) { return std::pair{-500.0, 4000.0}; }, -500.0);
+      t->refreshHeights([](const Sector&) { return true; });
+      return t;
+    };
+    const auto eq = make(), np = make(), sp = make();
+    const Camera eqCam(g, {0.0, 10.0, alt, 0.0, 0.0}, {1024, 768}, 45.0);
+    const Camera npCam(g, {90.0, 10.0, alt, 0.0, 0.0}, {1024, 768}, 45.0);
+    const Camera spCam(g, {-90.0, 10.0, alt, 0.0, 0.0}, {1024, 768}, 45.0);
+    const std::size_t equator = converge(*eq, eqCam).drawn;
+    const std::size_t pole = converge(*np, npCam).drawn;
+    const std::size_t southPole = converge(*sp, spCam).drawn;
+    expectConsistent(*np);
+    const double ratio = static_cast<double>(pole) / static_cast<double>(equator);
+    std::printf("caps with terrain, altitude %9.0f m: equator %2zu, north pole %2zu, south pole "
+                "%2zu; ratio %.2f\n",
+                alt,
+                equator,
+                pole,
+                southPole,
+                ratio);
+    EXPECT_EQ(southPole, pole) << alt;
+    EXPECT_LE(ratio, 1.5) << alt;
+    const auto rows = make(false); // merged rows alone: 2.5x at worst, as without terrain
+    EXPECT_LE(converge(*rows, npCam).drawn, 3 * equator) << alt;
+  }
+}
+
 // Over the drawn nodes of the pole views (merged rows, adaptive spans, the wedges) and the equator.
 TEST(QuadtreeExtremes, TexelToPixelHoldsAtThePole) {
   const Geodesy g;

@@ -49,9 +49,11 @@ namespace tellus::planet {
 
 /** A node's address: a row of its level and `span` columns from `col` (span 1: one tile). */
 /** A node's east-west edges at height 0, sampled at their ends and middles (south then north;
- * an edge on a pole is absent: it has length 0). */
+ * an edge on a pole is absent: it has length 0), with the surface normals there (to lift them to
+ * the height the LOD test measures at). */
 struct EastWestEdges {
   std::array<glm::dvec3, 6> points{};
+  std::array<glm::dvec3, 6> normals{};
   std::array<bool, 2> present{};
 };
 
@@ -321,8 +323,11 @@ private:
   bool splitWith(Node& node, bool narrow);
   bool childrenAsWide(const Node& node) const noexcept;
   EastWestEdges eastWestEdges(const NodeKey& key) const noexcept;
-  bool fitsEastWest(const EastWestEdges& edges, const Camera& camera) const noexcept;
-  bool fitsEastWest(const NodeKey& key, const Camera& camera) const noexcept;
+  /** liftM: the height the node's LOD test measures at (evaluateLod: the camera's altitude
+   * clamped to the node's height range), so both tests see the same texels. */
+  bool fitsEastWest(const EastWestEdges& edges, const Camera& camera, double liftM) const noexcept;
+  /** For a node not made yet: its height range from the terrain, as makeNode() will give it. */
+  bool fitsEastWest(const NodeKey& key, const Camera& camera) const;
   bool visibleNow(const NodeKey& key, const Camera& camera) const;
   bool widerPaysOff(const NodeKey& wide, std::int64_t span, const Camera& camera) const;
 
