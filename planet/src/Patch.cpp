@@ -8,6 +8,8 @@
 #include <limits>
 #include <numbers>
 #include <stdexcept>
+#include <tuple>
+#include <vector>
 
 namespace tellus::planet {
 
@@ -233,6 +235,62 @@ PatchMesh buildPatchMesh(const Geodesy& geodesy, const Sector& sector, int n) {
     }
   }
   return mesh;
+}
+
+namespace {
+
+// The point of triangle (a, b, c) nearest the origin (Ericson, Real-Time Collision Detection 5.1.5,
+// with the query point at the origin), by Voronoi regions: exact for degenerate triangles too.
+glm::dvec3 nearestToOrigin(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+  const glm::dvec3 ab = b - a, ac = c - a, ap = -a;
+  const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return a;
+  const glm::dvec3 bp = -b;
+  const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+  if (d3 >= 0.0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return a + ab * (d1 / (d1 - d3));
+  const glm::dvec3 cp = -c;
+  const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+  if (d6 >= 0.0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return a + ac * (d2 / (d2 - d6));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0)
+    return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  const double denom = 1.0 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+} // namespace
+
+double gridChordDepthM(const Geodesy& geodesy, const Sector& sector, int cols, int rows) {
+  validate(sector);
+  if (cols < 2 || rows < 2) throw std::invalid_argument("planet: a grid has at least 2 x 2 points");
+  const double a = geodesy.equatorialRadius(), b = geodesy.polarRadius();
+  // Grid points in the space where the ellipsoid is the unit sphere.
+  std::vector<glm::dvec3> p(static_cast<std::size_t>(cols) * static_cast<std::size_t>(rows));
+  for (int r = 0; r < rows; ++r) {
+    const double lat = edgeLerp(sector.south, sector.north, r, rows);
+    for (int c = 0; c < cols; ++c) {
+      const glm::dvec3 q =
+          surfacePoint(geodesy, lat, edgeLerp(sector.west, sector.east, c, cols), 0.0);
+      p[static_cast<std::size_t>(r * cols + c)] = {q.x / a, q.y / a, q.z / b};
+    }
+  }
+  const auto at = [&](int r, int c) -> const glm::dvec3& {
+    return p[static_cast<std::size_t>(r * cols + c)];
+  };
+  double smallest = 1.0;
+  for (int r = 0; r + 1 < rows; ++r)
+    for (int c = 0; c + 1 < cols; ++c) {
+      const glm::dvec3 &sw = at(r, c), &se = at(r, c + 1), &nw = at(r + 1, c),
+                       &ne = at(r + 1, c + 1);
+      for (const auto& [x, y, z] :
+           {std::tie(sw, se, ne), std::tie(sw, ne, nw), std::tie(sw, se, nw), std::tie(se, ne, nw)})
+        smallest = std::min(smallest, glm::length(nearestToOrigin(x, y, z)));
+    }
+  return (1.0 - smallest) * a;
 }
 
 } // namespace tellus::planet

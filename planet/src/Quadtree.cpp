@@ -85,6 +85,15 @@ void Quadtree::setTerrain(HeightRange range, double occluderHeightM) {
   occluder_ = HorizonOccluder(geodesy_, occluderHeightM);
 }
 
+double Quadtree::chordDepthM(int meshSize) const {
+  double depth = 0.0;
+  for (const auto& r : roots_)
+    if (r)
+      depth =
+          std::max(depth, gridChordDepthM(geodesy_, r->sector(), r->meshSize(meshSize), meshSize));
+  return depth;
+}
+
 std::size_t Quadtree::refreshHeights(const std::function<bool(const Sector&)>& changed) {
   if (!heightRange_) return 0;
   std::size_t count = 0;

@@ -184,3 +184,92 @@ TEST(PatchExtremes, Level24CornersDistinctAndFinite) {
       }
     }
 }
+
+namespace {
+
+// The smallest geodetic height and the smallest norm against an occluder of semi-axes (a + h,
+// a + h, b + h) over points sampled on both triangulations of every cell of a cols x rows grid.
+struct SampledChords {
+  double lowestHeightM = 0.0;
+  double smallestOccluderNorm = std::numeric_limits<double>::infinity();
+};
+SampledChords
+sampleChords(const Geodesy& g, const Sector& s, int cols, int rows, double occluderHeightM) {
+  const double a = g.equatorialRadius() + occluderHeightM, b = g.polarRadius() + occluderHeightM;
+  const auto point = [&](int r, int c) {
+    double lat = edgeLerp(s.south, s.north, r, rows), lon = edgeLerp(s.west, s.east, c, cols);
+    if (std::abs(lat) == 90.0) lon = 0.0;
+    return vec(g.toEcef(lat, lon, 0.0));
+  };
+  SampledChords out;
+  constexpr int k = 4; // barycentric steps
+  for (int r = 0; r + 1 < rows; ++r)
+    for (int c = 0; c + 1 < cols; ++c) {
+      const glm::dvec3 sw = point(r, c), se = point(r, c + 1), nw = point(r + 1, c),
+                       ne = point(r + 1, c + 1);
+      for (const auto& t : {std::array{sw, se, ne},
+                            std::array{sw, ne, nw},
+                            std::array{sw, se, nw},
+                            std::array{se, ne, nw}})
+        for (int i = 0; i <= k; ++i)
+          for (int j = 0; i + j <= k; ++j) {
+            const glm::dvec3 p = (t[0] * static_cast<double>(k - i - j) +
+                                  t[1] * static_cast<double>(i) + t[2] * static_cast<double>(j)) /
+                                 static_cast<double>(k);
+            out.lowestHeightM = std::min(out.lowestHeightM, g.fromEcef({p.x, p.y, p.z}).heightM);
+            out.smallestOccluderNorm = std::min(out.smallestOccluderNorm,
+                                                glm::length(glm::dvec3{p.x / a, p.y / a, p.z / b}));
+          }
+    }
+  return out;
+}
+
+} // namespace
+
+// A level-zero tile's triangles sag ~600 m under the ellipsoid: the horizon occluder must lie
+// that much lower, or it would hide what shows over a sagging triangle nearer the camera.
+TEST(Patch, ChordDepthOfALevelZeroTile) {
+  const Geodesy g;
+  // The equator's 36-degree tile with 33 points a side: cells of 1.125 degrees, the deepest
+  // point the middle of a diagonal, a half-diagonal of ~0.795 degrees from its ends.
+  const double depth = gridChordDepthM(g, {0.0, 0.0, 36.0, 36.0}, 33, 33);
+  const double halfDiag = std::acos(std::cos(1.125 * std::numbers::pi / 180.0) *
+                                    std::cos(1.125 * std::numbers::pi / 180.0)) /
+                          2.0;
+  EXPECT_NEAR(depth, g.equatorialRadius() * (1.0 - std::cos(halfDiag)), 5.0);
+  EXPECT_GT(depth, 600.0);
+  // Four times the points a side: a sixteenth of the depth.
+  EXPECT_NEAR(
+      gridChordDepthM(g, {0.0, 0.0, 36.0, 36.0}, 129, 129), depth / 16.0, depth / 16.0 * 0.02);
+}
+
+TEST(PatchExtremes, ChordDepthBoundsEverySampledTrianglePoint) {
+  // Level zero at the equator, across the antimeridian's west edge, a polar wedge (its pole row
+  // is one point: degenerate triangles), a polar cap's grid (129 columns round the pole, 33
+  // rows), a deep tile, and the sphere.
+  struct Case {
+    Sector s;
+    int cols, rows;
+  };
+  for (const EarthModel model : {EarthModel::Wgs84, EarthModel::Sphere}) {
+    const Geodesy geo(model);
+    for (const Case& c : {Case{{0.0, 0.0, 36.0, 36.0}, 33, 33},
+                          Case{{-180.0, -36.0, -144.0, 0.0}, 33, 33},
+                          Case{{-180.0, 54.0, -144.0, 90.0}, 33, 33},
+                          Case{{-180.0, -90.0, 180.0, -54.0}, 129, 33},
+                          Case{{10.0, 45.0, 10.0 + 36.0 / 1024, 45.0 + 36.0 / 1024}, 17, 17}}) {
+      const double depth = gridChordDepthM(geo, c.s, c.cols, c.rows);
+      ASSERT_TRUE(std::isfinite(depth));
+      EXPECT_GE(depth, 0.0);
+      // Every point on the triangles lies on or outside the occluder that far down ...
+      const SampledChords at = sampleChords(geo, c.s, c.cols, c.rows, -depth);
+      EXPECT_GE(at.smallestOccluderNorm, 1.0 - 1e-12) << c.s.west << " " << c.s.south;
+      // ... the bound is tight (a sampled point within 1 % of it, or 1 cm) ...
+      EXPECT_LE(at.lowestHeightM, -depth * 0.99 + 0.01) << c.s.west << " " << c.s.south;
+      // ... and an occluder at the ellipsoid itself would not lie under them.
+      if (depth > 1.0) {
+        EXPECT_LT(sampleChords(geo, c.s, c.cols, c.rows, 0.0).smallestOccluderNorm, 1.0);
+      }
+    }
+  }
+}

@@ -707,3 +707,31 @@ TEST(QuadtreeExtremes, DeepestLevelDoesNotSplitAndPartialDatasets) {
   });
   expectConsistent(tree);
 }
+
+// The horizon occluder's margin for the meshes' chords: the deepest of the roots' grids, a polar
+// cap's rim cells (2.8 degrees of longitude round the pole) deeper than a 36-degree tile's.
+TEST(Quadtree, ChordDepthIsTheDeepestRootGrid) {
+  const Geodesy g;
+  for (const bool caps : {false, true}) {
+    QuadtreeParams p = params();
+    p.polarCaps = caps;
+    const Quadtree tree(g, test::globalGrid(), p);
+    const double depth = tree.chordDepthM(33);
+    double deepest = 0.0;
+    for (const auto& r : tree.roots()) {
+      if (!r) continue;
+      const double d = gridChordDepthM(g, r->sector(), r->meshSize(33), 33);
+      EXPECT_LE(d, depth);
+      deepest = std::max(deepest, d);
+    }
+    EXPECT_EQ(depth, deepest);
+    std::printf("caps %d: chord depth %.1f m (33 points), %.2f m (65)\n",
+                caps ? 1 : 0,
+                depth,
+                tree.chordDepthM(65));
+    EXPECT_GT(depth, 600.0) << caps; // ~614 m: a level-zero tile's 1.125-degree cells
+    EXPECT_LT(depth, 2000.0) << caps;
+    // A finer mesh sags less: twice the points a side, a quarter.
+    EXPECT_LT(tree.chordDepthM(65), depth / 3.0) << caps;
+  }
+}

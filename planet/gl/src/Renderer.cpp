@@ -162,6 +162,9 @@ struct LayerTextures {
   std::unordered_set<NodeKey, NodeKeyHash> uploading;
   std::unordered_set<NodeKey, NodeKeyHash> undecodable;
   bool updated = false; ///< its tree was updated this frame
+  /** How far its meshes' triangles reach below the ellipsoid (its roots' chords, the coarsest):
+   * the horizon occluder sits that much lower (Impl::applyTerrain). */
+  double chordDepthM = 0.0;
 
   LayerTextures(TileGrid g, std::size_t budget) : grid(g), lru(budget) {}
   /** Nothing in flight, decoding or uploading. */
@@ -276,7 +279,7 @@ struct Renderer::Impl {
   void freeFramebuffer();
   std::expected<std::unique_ptr<LayerTextures>, std::string>
   makeLayer(const std::string& name, const std::string& time, bool overlay, int maxLevel);
-  void applyTerrain(Quadtree& t) const;
+  void applyTerrain(LayerTextures& l) const;
   void freeLayer(LayerTextures& l);
   GLuint newNodeTexture(int width, int height);
   GLuint acquireTexture(LayerTextures& l, int width, int height);
@@ -496,9 +499,16 @@ void Renderer::Impl::freeLayer(LayerTextures& l) {
   l.pool.clear();
 }
 
-// Heights (node bounds, the horizon occluder) for a tree, from the field.
-void Renderer::Impl::applyTerrain(Quadtree& t) const {
-  if (!field) return;
+// Heights (node bounds, the horizon occluder) for a layer's tree, from the field. The occluder lies
+// under everything drawn: below the lowest height, less the depth of the coarsest chords (a
+// level-zero tile's flat triangles sag ~600 m under the ellipsoid, a polar cap's rim cells more),
+// so the horizon test never culls what shows over a sagging triangle nearer the camera.
+void Renderer::Impl::applyTerrain(LayerTextures& l) const {
+  Quadtree& t = *l.tree;
+  if (!field) {
+    t.setTerrain({}, -l.chordDepthM);
+    return;
+  }
   const Impl* self = this;
   t.setTerrain(
       [self](const Sector& sec) {
@@ -506,7 +516,8 @@ void Renderer::Impl::applyTerrain(Quadtree& t) const {
         const auto [lo, hi] = self->field->rangeOver(sec);
         return std::pair{lo * self->opt.verticalExaggeration, hi * self->opt.verticalExaggeration};
       },
-      reliefOff ? -1000.0 : std::min(0.0, field->lowest() * opt.verticalExaggeration) - 1000.0);
+      (reliefOff ? 0.0 : std::min(0.0, field->lowest() * opt.verticalExaggeration)) -
+          l.chordDepthM);
 }
 
 // A layer at a time: its grid (an overlay's must match the base's level-zero tile size), its tree
@@ -541,7 +552,8 @@ std::expected<std::unique_ptr<LayerTextures>, std::string> Renderer::Impl::makeL
   qp.lod.threshold = opt.lodThreshold;
   qp.maxSplitsPerFrame = opt.maxSplitsPerFrame;
   l->tree = std::make_unique<Quadtree>(geodesy, *g, qp);
-  applyTerrain(*l->tree);
+  l->chordDepthM = l->tree->chordDepthM(opt.meshSize);
+  applyTerrain(*l);
   StreamParams sp;
   sp.layer = name;
   sp.time = time;
@@ -764,7 +776,7 @@ void Renderer::Impl::chooseRelief(const Camera& camera, double altitudeM) {
   for (LayerSlot& l : layers)
     for (LayerTextures* t : {l.current.get(), l.pending.get()}) {
       if (t == nullptr) continue;
-      applyTerrain(*t->tree);
+      applyTerrain(*t);
       t->tree->refreshHeights([](const Sector&) { return true; });
     }
 }
@@ -810,7 +822,7 @@ void Renderer::Impl::deliverHeights() {
         if (t == nullptr) continue;
         t->tree->refreshHeights(
             [&](const Sector& sec) { return field->changedSince(before, sec); });
-        applyTerrain(*t->tree);
+        applyTerrain(*t);
       }
   }
 }
@@ -1237,7 +1249,7 @@ Renderer::create(ITileSource& source, const Geodesy& geodesy, RendererOptions op
         hp,
         impl->opt.heightDecoder ? impl->opt.heightDecoder : HeightDecoder(decodeHeights));
     for (LayerSlot& l : impl->layers)
-      impl->applyTerrain(*l.current->tree);
+      impl->applyTerrain(*l.current);
   }
   if (const auto& d = impl->opt.dome) {
     if (!(d->fovDeg > 0.0 && d->fovDeg <= 220.0) || !std::isfinite(d->tiltDeg))

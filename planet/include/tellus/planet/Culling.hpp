@@ -57,12 +57,12 @@ bool isBackFacing(const Camera& camera, const NodeGeometry& node) noexcept;
  * @brief Horizon culling against an occluder ellipsoid with semi-axes (a + h, a + h, b + h).
  *
  * h (occluderHeightM) must be at or below the lowest terrain anywhere on the planet (0 for the
- * imagery-only globe, e.g. -11000 with bathymetry), less a margin for the chords of coarse meshes
- * lying under the ellipsoid. In the occluder's scaled space (the occluder is the unit sphere) the
- * node's bounding sphere is enlarged to a sphere by the largest scale, and culled only when it lies
- * strictly inside the camera's shadow cone of the unit sphere and strictly beyond the plane of the
- * tangent circle. A camera inside the occluder (below it), or inside the node's sphere, culls
- * nothing.
+ * imagery-only globe, e.g. -11000 with bathymetry), less the depth of the meshes' chords under the
+ * ellipsoid (gridChordDepthM, Quadtree::chordDepthM: ~600 m for 36-degree tiles of 33 x 33). In the
+ * occluder's scaled space (the occluder is the unit sphere) the node's bounding sphere is enlarged
+ * to a sphere by the largest scale, and culled only when it lies strictly inside the camera's
+ * shadow cone of the unit sphere and strictly beyond the plane of the tangent circle. A camera
+ * inside the occluder (below it), or inside the node's sphere, culls nothing.
  */
 struct HorizonOccluder {
   double equatorialRadiusM = 0.0;

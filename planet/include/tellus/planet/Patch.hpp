@@ -144,4 +144,16 @@ double edgeLerp(double a, double b, int i, int count) noexcept;
  * exactly, so neighbouring nodes share bit-identical edge vertices; a pole row is all the pole. */
 PatchMesh buildPatchMesh(const Geodesy& geodesy, const Sector& sector, int n);
 
+/**
+ * How far below the ellipsoid the flat triangles of a grid reach: cols x rows points from edgeLerp
+ * over the sector at height 0 (a mesh's grid, whatever its edge fixing does with the points), and
+ * both diagonals of every cell, so that the triangulation does not matter. The depth is what the
+ * horizon occluder needs, (1 - s) x a with s the smallest norm of a triangle point in the space
+ * where the ellipsoid is the unit sphere (semi-axes a, a, b): an occluder of semi-axes
+ * (a + h, a + h, b + h) with h at most the lowest vertex height less this depth lies under every
+ * triangle. 0 for a 36-degree level-zero tile is wrong by ~600 m (33 points a side: a cell
+ * 1.125 degrees, its diagonal's middle 614 m below the surface). cols and rows are at least 2.
+ */
+double gridChordDepthM(const Geodesy& geodesy, const Sector& sector, int cols, int rows);
+
 } // namespace tellus::planet

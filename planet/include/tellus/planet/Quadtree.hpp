@@ -292,6 +292,11 @@ public:
    * the horizon occluder's height (at or below the lowest terrain). Null: heights 0. */
   using HeightRange = std::function<std::pair<double, double>(const Sector&)>;
   void setTerrain(HeightRange range, double occluderHeightM);
+  /** How far the flat triangles of the roots' meshes (meshSize rows, Node::meshSize columns) reach
+   * below the ellipsoid (gridChordDepthM): the most any node's do, since a child's grid cells are
+   * no larger than its parent's. The horizon occluder must lie at least this much below the
+   * lowest terrain (setTerrain). */
+  double chordDepthM(int meshSize) const;
   /** Recomputes the bounds of the nodes for which changed(sector) holds (new height data);
    * returns how many nodes' bounds changed. */
   std::size_t refreshHeights(const std::function<bool(const Sector&)>& changed);
