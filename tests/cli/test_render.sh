@@ -65,6 +65,62 @@ set -e
 grep -q "layers.json" "$work/dead.txt" || fail "no message naming the server: $(cat "$work/dead.txt")"
 [ ! -e "$work/dead.png" ] || fail "an image was written without a server"
 
+# An imagery layer of format image/tiff from a World Wind tile server (a Python one on a free
+# loopback port, serving TIFFs that OpenImageIO's oiiotool wrote): the renderer reads TIFF through
+# the imaging module, as `serve` does for its maps. West of lon 0 the tiles are green, east blue.
+oiiotool --pattern constant:color=0.1,0.7,0.2 64x64 3 -d uint8 -o "$work/west.tif" >/dev/null
+oiiotool --pattern constant:color=0.1,0.2,0.8 64x64 3 -d uint8 -o "$work/east.tif" >/dev/null
+cat >"$work/tiffs.py" <<'PY'
+import http.server, sys, urllib.parse
+work = sys.argv[1]
+class Tiles(http.server.BaseHTTPRequestHandler):
+    def do_GET(self):
+        q = urllib.parse.parse_qs(urllib.parse.urlparse(self.path).query)
+        body = open(f"{work}/{'west' if int(q['X'][0]) < 5 else 'east'}.tif", "rb").read()
+        self.send_response(200)
+        self.send_header("Content-Type", "image/tiff")
+        self.send_header("Content-Length", str(len(body)))
+        self.end_headers()
+        self.wfile.write(body)
+    def log_message(self, *a):
+        pass
+s = http.server.HTTPServer(("127.0.0.1", 0), Tiles)
+open(f"{work}/tiffs.port", "w").write(str(s.server_address[1]))
+s.serve_forever()
+PY
+python3 "$work/tiffs.py" "$work" >"$work/tiffs.log" 2>&1 &
+tiffs=$!
+trap 'kill "$tiffs" 2>/dev/null; rm -rf "$work"' EXIT
+for _ in $(seq 50); do [ -s "$work/tiffs.port" ] && break; sleep 0.1; done
+cat >"$work/tiff.yaml" <<YAML
+upstreams:
+  - {name: ww, type: worldwind, url: "http://127.0.0.1:$(cat "$work/tiffs.port")/tiles"}
+layers:
+  - name: tiffy
+    upstream: ww
+    format: image/tiff
+    kind: imagery
+    grid: {level_zero_delta: 36, tile_size: 64, levels: 1}
+YAML
+"$tellus" render --config "$work/tiff.yaml" --cache "$work/tiff-cache" --layer tiffy \
+  --camera 0,-90,2e7 --size 64x64 --out "$work/tiff-west.png" --wait-complete=30 \
+  --stats "$work/tiff.json" >/dev/null 2>"$work/tiff.txt" || fail "TIFF layer: $(cat "$work/tiff.txt")"
+"$tellus" render --config "$work/tiff.yaml" --cache "$work/tiff-cache" --layer tiffy \
+  --camera 0,90,2e7 --size 64x64 --out "$work/tiff-east.png" --wait-complete=30 >/dev/null ||
+  fail "TIFF layer, east"
+kill "$tiffs"; wait "$tiffs" || true
+python3 - "$here" "$work/tiff-west.png" "$work/tiff-east.png" "$work/tiff.json" <<'PY'
+import json, sys
+sys.path.insert(0, sys.argv[1])
+from png_pixels import pixels
+for path, want in ((sys.argv[2], (26, 178, 51)), (sys.argv[3], (26, 51, 204))):
+    w, h, rows, n = pixels(path)
+    got = tuple(rows[h // 2][(w // 2) * n:(w // 2) * n + 3])
+    assert all(abs(a - b) <= 3 for a, b in zip(got, want)), (path, got, want)
+s = json.load(open(sys.argv[4]))
+assert s["complete"] and s["tiles_received"] > 0 and s["textures_uploaded"] > 0, s
+PY
+
 # The configuration's renderer section (docs/CONFIG.md): lod_threshold 8 draws coarser levels than
 # the default 1; --threshold on the command line wins over it.
 src=$(cd "$(dirname "$0")/../.." && pwd)

@@ -202,3 +202,72 @@ TEST(TextureDecoder, WorkersRunAtTheNiceValueAskedFor) {
   EXPECT_EQ(count(threadNiceValues(), base + 5), count(before, base + 5) + 1);
   EXPECT_EQ(getpriority(PRIO_PROCESS, static_cast<id_t>(gettid())), base);
 }
+
+// Tiles that are neither JPEG nor PNG (a layer of format image/tiff) go to the ImageDecoder given
+// (`tellus` passes the imaging module's, OpenImageIO); JPEG and PNG never do.
+TEST(TextureDecoder, OtherFormatsGoToTheImageDecoderWithTheirTypeAndTheTileSize) {
+  struct Call {
+    std::string type;
+    int width, height;
+  };
+  std::vector<Call> calls;
+  const ImageDecoder other = [&](std::span<const std::byte> bytes,
+                                 std::string_view type,
+                                 int w,
+                                 int h) -> std::expected<RgbaImage, std::string> {
+    calls.push_back({std::string(type), w, h});
+    if (bytes.size() < 4 || bytes[0] != std::byte{'I'}) return std::unexpected("not a TIFF");
+    RgbaImage img{w, h, std::vector<std::uint8_t>(static_cast<std::size_t>(w * h * 4), 0)};
+    for (std::size_t i = 0; i < img.pixels.size(); i += 4) {
+      img.pixels[i + 1] = 180; // green
+      img.pixels[i + 3] = 255;
+    }
+    return img;
+  };
+  const std::vector<std::byte> tiff = {
+      std::byte{'I'}, std::byte{'I'}, std::byte{42}, std::byte{0}, std::byte{8}};
+  DecodeJob job;
+  job.key = {3, 39, 8, 2}; // a merged node: a TIFF tile west, a PNG tile east
+  job.width = 16;
+  job.height = 8;
+  job.tileWidth = 32;
+  job.tileHeight = 16;
+  job.tiles.emplace_back(tiff);
+  job.tiles.emplace_back(twoTone(32, 16, {200, 0, 0}, {200, 0, 0}));
+  job.contentTypes = {"image/tiff", "image/png"};
+  const DecodedTexture t = decodeTexture(job, other);
+  ASSERT_TRUE(t.ok) << t.error;
+  ASSERT_EQ(calls.size(), 1u); // the PNG tile was read here
+  EXPECT_EQ(calls[0].type, "image/tiff");
+  EXPECT_EQ(calls[0].width, 32);
+  EXPECT_EQ(calls[0].height, 16);
+  EXPECT_EQ(at(t.levels[0], 2, 3), (std::array<int, 3>{0, 180, 0}));
+  EXPECT_EQ(at(t.levels[0], 12, 3), (std::array<int, 3>{200, 0, 0}));
+  // Without a decoder such a tile is an error, as before; the decoder's own error is kept.
+  DecodeJob one = job;
+  one.tiles.resize(1);
+  EXPECT_FALSE(decodeTexture(one).ok);
+  one.tiles[0] = std::vector<std::byte>(16, std::byte{0x42});
+  const DecodedTexture bad = decodeTexture(one, other);
+  EXPECT_FALSE(bad.ok);
+  EXPECT_NE(bad.error.find("not a TIFF"), std::string::npos) << bad.error;
+  // An answer that is not width x height x 4 bytes is refused, not read past its end.
+  const ImageDecoder shortAnswer = [](std::span<const std::byte>,
+                                      std::string_view,
+                                      int w,
+                                      int h) -> std::expected<RgbaImage, std::string> {
+    return RgbaImage{w, h, {1, 2, 3}};
+  };
+  one.tiles[0] = tiff;
+  EXPECT_FALSE(decodeTexture(one, shortAnswer).ok);
+  // The pool's workers use the decoder it was made with.
+  TextureDecoder pool(2, 0, other);
+  pool.submit(job);
+  std::vector<DecodedTexture> done;
+  for (int i = 0; i < 500 && done.empty(); ++i) {
+    done = pool.takeDone();
+    if (done.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  ASSERT_EQ(done.size(), 1u);
+  EXPECT_TRUE(done[0].ok) << done[0].error;
+}

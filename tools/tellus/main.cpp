@@ -1584,6 +1584,25 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
     std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());
     return std::unexpected(kExitUsage);
   }
+  // Imagery that is neither JPEG nor PNG (a layer of format image/tiff): the proxy's decoder,
+  // through the imaging module (OpenImageIO), on the renderer's decoder threads.
+  ro.imageDecoder = [](std::span<const std::byte> bytes,
+                       std::string_view type,
+                       int w,
+                       int h) -> std::expected<planet::RgbaImage, std::string> {
+    auto img = decodeImagery(bytes, type.empty() ? std::string_view("image/tiff") : type, w, h);
+    if (!img) return std::unexpected(img.error());
+    planet::RgbaImage out{img->width, img->height, {}};
+    const auto n = static_cast<std::size_t>(img->width) * static_cast<std::size_t>(img->height);
+    out.pixels.resize(n * 4);
+    const auto c = static_cast<std::size_t>(img->channels);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t k = 0; k < 3; ++k)
+        out.pixels[i * 4 + k] = img->pixels[i * c + k];
+      out.pixels[i * 4 + 3] = c == 4 ? img->pixels[i * 4 + 3] : 255;
+    }
+    return out;
+  };
   if (config.renderer.terrain.enabled && !a.flag("no-terrain"))
     for (const auto& l : config.layers)
       if (l.kind == LayerKind::Elevation &&

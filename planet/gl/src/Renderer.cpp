@@ -101,6 +101,7 @@ struct Upload {
 
 struct StoredTile {
   std::vector<std::byte> bytes;
+  std::string contentType;
   std::uint64_t frame = 0;
 };
 
@@ -222,7 +223,7 @@ partFor(const Node& node, const Node& region, GLuint texture, const UvTransform&
 struct Renderer::Impl {
   Impl(ITileSource& s, const Geodesy& g, RendererOptions o, TileGrid gr)
       : source(s), geodesy(g), opt(std::move(o)), grid(gr),
-        decoder(opt.decodeThreads, opt.decodeNice),
+        decoder(opt.decodeThreads, opt.decodeNice, opt.imageDecoder),
         pacer(UploadPacing{.bytesPerFrame = opt.uploadBytesPerFrame,
                            .shareOfFrame = opt.uploadShareOfFrame}) {}
   ~Impl();
@@ -882,14 +883,18 @@ void Renderer::Impl::launchDecode(LayerTextures& l, Node& node) {
   job.key = k;
   job.width = node.isCap() ? l.texWidth * kCapTextureWidthFactor : l.texWidth;
   job.height = l.texHeight;
+  job.tileWidth = l.texWidth;
+  job.tileHeight = l.texHeight;
   job.transparent = l.overlay;
   job.tag = l.tag;
   for (std::int64_t i = 0; i < textureTileCount(k); ++i) {
     const auto it = received.find(textureTile(k, i));
     if (it == received.end()) {
       job.tiles.emplace_back(std::nullopt);
+      job.contentTypes.emplace_back();
     } else {
       job.tiles.emplace_back(std::move(it->second.bytes));
+      job.contentTypes.push_back(std::move(it->second.contentType));
       received.erase(it);
     }
   }
@@ -1412,7 +1417,8 @@ void Renderer::frame(const CameraPose& pose) {
       if (l == nullptr) continue;
       for (ReceivedTile& r : l->streamer->takeReceived()) {
         m.stats.bytesReceived += r.result.bytes.size();
-        l->received[r.key] = {std::move(r.result.bytes), m.stats.frames};
+        l->received[r.key] = {
+            std::move(r.result.bytes), std::move(r.result.contentType), m.stats.frames};
       }
       if (!l->updated) continue;
       for (const auto& root : l->tree->roots())

@@ -42,7 +42,29 @@ std::vector<MipLevel> buildMips(MipLevel base) {
   return levels;
 }
 
-DecodedTexture decodeTexture(const DecodeJob& job) {
+namespace {
+
+// JPEG and PNG by their magic, here; anything else through the caller's decoder (TIFF through the
+// imaging module), whose answer must be the layer's tile size.
+std::expected<RgbaImage, std::string>
+decodeTile(const DecodeJob& job, std::size_t t, const ImageDecoder& other) {
+  const auto& bytes = *job.tiles[t];
+  const auto at = [&](std::size_t i) { return static_cast<unsigned char>(bytes[i]); };
+  const bool jpeg = bytes.size() >= 3 && at(0) == 0xFF && at(1) == 0xD8 && at(2) == 0xFF;
+  const bool png = bytes.size() >= 8 && at(0) == 0x89 && at(1) == 'P' && at(2) == 'N';
+  if (jpeg || png || !other) return codec::decode(bytes);
+  const std::string_view type = t < job.contentTypes.size() ? job.contentTypes[t] : "";
+  auto img = other(bytes, type, job.tileWidth, job.tileHeight);
+  if (img && (img->width <= 0 || img->height <= 0 ||
+              img->pixels.size() !=
+                  static_cast<std::size_t>(img->width) * static_cast<std::size_t>(img->height) * 4))
+    return std::unexpected(std::string("the image decoder gave a malformed image"));
+  return img;
+}
+
+} // namespace
+
+DecodedTexture decodeTexture(const DecodeJob& job, const ImageDecoder& other) {
   DecodedTexture out;
   out.key = job.key;
   out.tag = job.tag;
@@ -59,7 +81,7 @@ DecodedTexture decodeTexture(const DecodeJob& job) {
   for (int t = 0; t < span; ++t) {
     const auto& bytes = job.tiles[static_cast<std::size_t>(t)];
     if (!bytes) continue;
-    auto img = codec::decode(*bytes);
+    auto img = decodeTile(job, static_cast<std::size_t>(t), other);
     if (!img) {
       out.error = img.error();
       continue;
@@ -108,7 +130,8 @@ DecodedTexture decodeTexture(const DecodeJob& job) {
   return out;
 }
 
-TextureDecoder::TextureDecoder(int threads, int nice) : nice_(nice) {
+TextureDecoder::TextureDecoder(int threads, int nice, ImageDecoder other)
+    : other_(std::move(other)), nice_(nice) {
   for (int i = 0; i < std::max(1, threads); ++i)
     workers_.emplace_back([this](std::stop_token st) { run(st); });
 }
@@ -170,7 +193,7 @@ void TextureDecoder::run(std::stop_token stop) {
       job = std::move(queue_.front());
       queue_.pop_front();
     }
-    DecodedTexture t = decodeTexture(job);
+    DecodedTexture t = decodeTexture(job, other_);
     std::lock_guard lock(mutex_);
     done_.push_back(std::move(t));
   }

@@ -4,6 +4,7 @@
 // grid's tile size, rows from the south (GL's first row), with every mip level built on the CPU.
 
 #include <tellus/planet/Quadtree.hpp>
+#include <tellus/planet_gl/Renderer.hpp>
 
 #include <condition_variable>
 #include <cstddef>
@@ -29,6 +30,11 @@ struct DecodeJob {
   int height = 0;
   /** One entry per tile west to east; nullopt for an absent tile (left dark, or transparent). */
   std::vector<std::optional<std::vector<std::byte>>> tiles;
+  /** The tiles' content types (parallel to tiles; may be empty) and the layer's tile size, for
+   * the ImageDecoder of tiles that are neither JPEG nor PNG. */
+  std::vector<std::string> contentTypes;
+  int tileWidth = 0;
+  int tileHeight = 0;
   /** Absent tiles (and texels no tile covers) transparent rather than dark: overlay layers. */
   bool transparent = false;
   int tag = 0; ///< the caller's, returned in DecodedTexture (which layer the texture is for)
@@ -45,8 +51,9 @@ struct DecodedTexture {
   std::size_t bytes = 0;        ///< all levels
 };
 
-/** Composes, resamples and builds the mip chain (pure; what the workers run). */
-DecodedTexture decodeTexture(const DecodeJob& job);
+/** Composes, resamples and builds the mip chain (pure; what the workers run). JPEG and PNG
+ * tiles are read here; any other goes to `other` when it is set (else it is an error). */
+DecodedTexture decodeTexture(const DecodeJob& job, const ImageDecoder& other = {});
 /** The mip chain of an RGBA8 image whose rows are from the south (box filter). */
 std::vector<MipLevel> buildMips(MipLevel base);
 
@@ -54,7 +61,7 @@ class TextureDecoder {
 public:
   /** `threads` workers whose nice value is the process's plus `nice` (Linux sets it per thread;
    * a value it refuses is ignored). */
-  explicit TextureDecoder(int threads, int nice = 0);
+  explicit TextureDecoder(int threads, int nice = 0, ImageDecoder other = {});
   ~TextureDecoder();
   TextureDecoder(const TextureDecoder&) = delete;
   TextureDecoder& operator=(const TextureDecoder&) = delete;
@@ -70,6 +77,7 @@ public:
 
 private:
   void run(std::stop_token stop);
+  const ImageDecoder other_;      ///< set before the workers start; called by all of them
   void flush();                   ///< the outbox into the queue, when the lock is free
   std::vector<DecodeJob> outbox_; ///< main thread only
   std::size_t submitted_ = 0;     ///< main thread only

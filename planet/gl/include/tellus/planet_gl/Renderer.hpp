@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <expected>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
@@ -31,6 +32,19 @@
 #include <vector>
 
 namespace tellus::planet {
+
+/** 8-bit RGBA pixels, rows from the top (decoded images, readImageFile). */
+struct RgbaImage {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint8_t> pixels;
+};
+
+/** Decodes an imagery tile that is neither JPEG nor PNG (the renderer reads those itself, with
+ * libjpeg-turbo and libpng): its bytes, the content type the tile source gave, and the layer's
+ * tile size. Runs on the decoder threads, several at once: it must be thread safe. */
+using ImageDecoder = std::function<std::expected<RgbaImage, std::string>(
+    std::span<const std::byte> bytes, std::string_view contentType, int width, int height)>;
 
 /** An imagery layer drawn over the base imagery (issue #7): sea-surface temperature, night lights,
  * clouds. Its tiles must share the base layer's level-zero tile size (a key is the same sector in
@@ -94,6 +108,10 @@ struct RendererOptions {
   std::size_t maxInFlight = 16; ///< tile requests out at once
   int maxSplitsPerFrame = 64;
   int decodeThreads = 2;
+  /** Imagery tiles in other formats than JPEG and PNG (a layer of `format: image/tiff`); empty:
+   * they are undecodable and their nodes fall back. `tellus` passes the proxy's decodeImagery,
+   * which reads TIFF through the imaging module (OpenImageIO), as `serve` does for its maps. */
+  ImageDecoder imageDecoder;
   /** Terrain (issue #6): the elevation layer asked of the tile source ("" = none: the bare
    * ellipsoid), its time, and how its raw samples become metres. */
   std::string elevationLayer;
@@ -317,11 +335,6 @@ bool writePngRgb(const std::filesystem::path& file,
                  std::string* error);
 
 /** Reads a JPEG or PNG file as RGBA8 (rows from the top). For tests and tools. */
-struct RgbaImage {
-  int width = 0;
-  int height = 0;
-  std::vector<std::uint8_t> pixels;
-};
 std::expected<RgbaImage, std::string> readImageFile(const std::filesystem::path& file);
 /** Encodes RGBA8 as a PNG in memory (for test tile sources). */
 std::vector<std::byte> encodePngRgba(int width, int height, const std::vector<std::uint8_t>& rgba);
