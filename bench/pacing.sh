@@ -21,14 +21,7 @@ rounds=${2:-3}
 [ "$(nproc)" -ge 2 ] || { echo "pacing.sh: needs 2 CPUs" >&2; exit 2; }
 work=$(mktemp -d "${TMPDIR:-/tmp}/tellus-pacing.XXXXXX")
 trap 'rm -rf "$work"' EXIT
-cat >"$work/level.json" <<'JSON'
-[{"time": 0, "lat": 30, "lon": -40, "alt": 2e6, "heading": 90, "tilt": 30},
- {"time": 4, "lat": 30, "lon": 20, "alt": 2e6, "heading": 90, "tilt": 30}]
-JSON
-cat >"$work/descent.json" <<'JSON'
-[{"time": 0, "lat": 30, "lon": -20, "alt": 2e7},
- {"time": 4, "lat": 46, "lon": 8, "alt": 2e4, "heading": 30, "tilt": 60}]
-JSON
+paths="$(dirname "$0")/paths" # the flights: the same as bench/render.sh's
 cat >"$work/pin.py" <<'PY'
 # Pins the threads of process PID: its main thread and llvmpipe's to CPU 0, the rest to CPU 1,
 # until the process ends. Re-pins a thread whose name changes (llvmpipe names its threads after
@@ -56,17 +49,15 @@ while os.path.exists(f"/proc/{pid}"):
     time.sleep(0.005)
 PY
 report() { # mode flight stats.json
-  python3 - "$1" "$2" "$3" <<'PY'
-import json, sys
-s = json.load(open(sys.argv[3]))
-t = s["frame_times_ms"]; n = len(t) // 2; a, b = t[:n], t[n:]
-def q(v, p):  # nearest rank
-    o = sorted(v); return o[max(1, -(-p * len(o) // 100)) - 1]
-ma, mb = q(a, 50), q(b, 50)
-r = [x / y for x, y in zip(a, b)]
+  python3 - "$1" "$2" "$3" "$(dirname "$0")" <<'PY'
+import sys
+sys.path.insert(0, sys.argv[4])
+from flight_stats import flight
+f = flight(sys.argv[3])
 print("| %s | %s | %.1f | %.1f | %.2f | %.2f | %.1f, %.2f | %.2f, %.2f, %.2f |" % (
-    sys.argv[1], sys.argv[2], ma, max(a), max(a) / ma, q(a, 95) / ma, mb, max(b) / mb,
-    q(r, 50), q(r, 95), max(r)))
+    sys.argv[1], sys.argv[2], f["median"], f["longest"], f["longest"] / f["median"],
+    f["p95"] / f["median"], f["settled_median"], f["settled_longest"] / f["settled_median"],
+    f["ratio_median"], f["ratio_p95"], f["ratio_max"]))
 PY
 }
 fly() { # mode flight
@@ -76,7 +67,7 @@ fly() { # mode flight
     rm -f "$work/pid"
     LP_NUM_THREADS=1 taskset -c 1 xvfb-run -a -s '-screen 0 1280x1024x24' \
       sh -c 'echo $$ >"$0"; exec "$@"' "$work/pid" "$tellus" render \
-      --cache "$cache" --path "$work/$flight.json" --frames "$work/frames" --fps 25 \
+      --cache "$cache" --path "$paths/$flight.json" --frames "$work/frames" --fps 25 \
       --size 1024x768 --repeat 2 --stats "$work/s.json" >/dev/null &
     local runner=$!
     while [ ! -s "$work/pid" ] && kill -0 "$runner" 2>/dev/null; do sleep 0.002; done
@@ -85,7 +76,7 @@ fly() { # mode flight
     wait || true
   else
     xvfb-run -a -s '-screen 0 1280x1024x24' "$tellus" render --cache "$cache" \
-      --path "$work/$flight.json" --frames "$work/frames" --fps 25 --size 1024x768 --repeat 2 \
+      --path "$paths/$flight.json" --frames "$work/frames" --fps 25 --size 1024x768 --repeat 2 \
       --stats "$work/s.json" >/dev/null
   fi
   rm -rf "$cache" "$work/frames"

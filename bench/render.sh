@@ -26,17 +26,11 @@ for v in "0,0,2e7" "45.5,7.5,2e6,30,40" "90,0,1e6" "0,180,1e6"; do
     row "$v" "$c" "$work/s.json"
   done
 done
-cat >"$work/descent.json" <<'JSON'
-[{"time": 0, "lat": 30, "lon": -20, "alt": 2e7},
- {"time": 4, "lat": 46, "lon": 8, "alt": 2e4, "heading": 30, "tilt": 60}]
-JSON
-# A level pass: 2,000 km up, 60 degrees east along 30 N, tilted 30 degrees; level-2 tiles (and
-# heights) stream in all the way, while every view costs about the same to draw (unlike the
-# descent, whose views differ 4-8x on llvmpipe).
-cat >"$work/level.json" <<'JSON'
-[{"time": 0, "lat": 30, "lon": -40, "alt": 2e6, "heading": 90, "tilt": 30},
- {"time": 4, "lat": 30, "lon": 20, "alt": 2e6, "heading": 90, "tilt": 30}]
-JSON
+# The flights (bench/paths/): the descent, 20,000 km over the Atlantic to 20 km over the Alps,
+# tilted 60 degrees at the end; a level pass, 2,000 km up, 60 degrees east along 30 N, tilted 30
+# degrees: level-2 tiles (and heights) stream in all the way, while every view costs about the
+# same to draw (unlike the descent, whose views differ 4-8x on llvmpipe).
+paths="$(dirname "$0")/paths"
 # Each flight as streamed, flown twice in one renderer (--repeat 2): the first pass is what a viewer
 # sees; in the second everything is resident, so it gives each view's cost without streaming.
 # Stutter is the first pass's frame against the same view in the second (frame by frame).
@@ -46,19 +40,17 @@ echo "| $flight, 101 frames | cache | s | median ms | p95 ms | longest ms | long
 echo "|---|---|---|---|---|---|---|---|---|---|"
 for c in cold warm; do
   xvfb-run -a -s '-screen 0 1280x1024x24' "$tellus" render --cache "$work/cache-$flight" \
-    --path "$work/$flight.json" --frames "$work/frames" --fps 25 --size 1024x768 --repeat 2 \
+    --path "$paths/$flight.json" --frames "$work/frames" --fps 25 --size 1024x768 --repeat 2 \
     --stats "$work/s.json" >/dev/null
-  python3 - "$c" "$work/s.json" <<'PY2'
-import json, sys
-s = json.load(open(sys.argv[2]))
-t = s["frame_times_ms"]; n = len(t) // 2; a, b = t[:n], t[n:]
-def q(v, p):  # nearest rank
-    o = sorted(v); return o[max(1, -(-p * len(o) // 100)) - 1]
-ma, mb = q(a, 50), q(b, 50)
-r = [x / y for x, y in zip(a, b)]
+  python3 - "$c" "$work/s.json" "$(dirname "$0")" <<'PY2'
+import sys
+sys.path.insert(0, sys.argv[3])
+from flight_stats import flight
+f = flight(sys.argv[2])
 print("| as streamed | %s | %.2f | %.1f | %.1f | %.1f | %.2f | %.2f | %.1f, %.2f | %.2f, %.2f, %.2f |" % (
-    sys.argv[1], s["seconds"], ma, q(a, 95), max(a), max(a) / ma, q(a, 95) / ma, mb, max(b) / mb,
-    q(r, 50), q(r, 95), max(r)))
+    sys.argv[1], f["seconds"], f["median"], f["p95"], f["longest"], f["longest"] / f["median"],
+    f["p95"] / f["median"], f["settled_median"], f["settled_longest"] / f["settled_median"],
+    f["ratio_median"], f["ratio_p95"], f["ratio_max"]))
 PY2
 done
 done

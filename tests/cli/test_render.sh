@@ -90,7 +90,7 @@ s.serve_forever()
 PY
 python3 "$work/tiffs.py" "$work" >"$work/tiffs.log" 2>&1 &
 tiffs=$!
-trap 'kill "$tiffs" 2>/dev/null; rm -rf "$work"' EXIT
+trap 'kill "$tiffs" 2>/dev/null || true; rm -rf "$work"' EXIT
 for _ in $(seq 50); do [ -s "$work/tiffs.port" ] && break; sleep 0.1; done
 cat >"$work/tiff.yaml" <<YAML
 upstreams:
