@@ -239,27 +239,29 @@ PatchMesh buildPatchMesh(const Geodesy& geodesy, const Sector& sector, int n) {
 
 namespace {
 
-// The point of triangle (a, b, c) nearest the origin (Ericson, Real-Time Collision Detection 5.1.5,
-// with the query point at the origin), by Voronoi regions: exact for degenerate triangles too.
-glm::dvec3 nearestToOrigin(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
-  const glm::dvec3 ab = b - a, ac = c - a, ap = -a;
-  const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
-  if (d1 <= 0.0 && d2 <= 0.0) return a;
-  const glm::dvec3 bp = -b;
-  const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
-  if (d3 >= 0.0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return a + ab * (d1 / (d1 - d3));
-  const glm::dvec3 cp = -c;
-  const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
-  if (d6 >= 0.0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return a + ac * (d2 / (d2 - d6));
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0)
-    return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-  const double denom = 1.0 / (va + vb + vc);
-  return a + ab * (vb * denom) + ac * (vc * denom);
+// The distance from the origin to segment [a, b] (a point when a == b).
+double segmentNorm(const glm::dvec3& a, const glm::dvec3& b) {
+  const glm::dvec3 d = b - a;
+  const double dd = glm::dot(d, d);
+  const double t = dd > 0.0 ? std::clamp(-glm::dot(a, d) / dd, 0.0, 1.0) : 0.0;
+  return glm::length(a + t * d);
+}
+
+// The distance from the origin to triangle (a, b, c): its edges, and the foot of the perpendicular
+// from the origin onto its plane when that falls inside. A degenerate triangle (a polar cell with
+// two corners at the pole) is its edges.
+double triangleNorm(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+  double best = std::min({segmentNorm(a, b), segmentNorm(b, c), segmentNorm(c, a)});
+  const glm::dvec3 n = glm::cross(b - a, c - a);
+  const double nn = glm::dot(n, n);
+  if (nn > 0.0) {
+    const glm::dvec3 p = n * (glm::dot(n, a) / nn);
+    if (glm::dot(glm::cross(b - a, p - a), n) >= 0.0 &&
+        glm::dot(glm::cross(c - b, p - b), n) >= 0.0 &&
+        glm::dot(glm::cross(a - c, p - c), n) >= 0.0)
+      best = std::min(best, glm::length(p));
+  }
+  return best;
 }
 
 } // namespace
@@ -288,7 +290,7 @@ double gridChordDepthM(const Geodesy& geodesy, const Sector& sector, int cols, i
                        &ne = at(r + 1, c + 1);
       for (const auto& [x, y, z] :
            {std::tie(sw, se, ne), std::tie(sw, ne, nw), std::tie(sw, se, nw), std::tie(se, ne, nw)})
-        smallest = std::min(smallest, glm::length(nearestToOrigin(x, y, z)));
+        smallest = std::min(smallest, triangleNorm(x, y, z));
     }
   return (1.0 - smallest) * a;
 }
