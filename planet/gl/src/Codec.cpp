@@ -123,12 +123,24 @@ std::expected<RgbaImage, std::string> decodePng(std::span<const std::byte> bytes
 
 namespace codec {
 
+namespace {
+bool isJpeg(std::span<const std::byte> bytes) noexcept {
+  return bytes.size() >= 3 && bytes[0] == std::byte{0xFF} && bytes[1] == std::byte{0xD8} &&
+         bytes[2] == std::byte{0xFF};
+}
+bool isPng(std::span<const std::byte> bytes) noexcept {
+  return bytes.size() >= 8 && bytes[0] == std::byte{0x89} && bytes[1] == std::byte{'P'} &&
+         bytes[2] == std::byte{'N'} && bytes[3] == std::byte{'G'};
+}
+} // namespace
+
+bool isJpegOrPng(std::span<const std::byte> bytes) noexcept {
+  return isJpeg(bytes) || isPng(bytes);
+}
+
 std::expected<RgbaImage, std::string> decode(std::span<const std::byte> bytes) {
-  const auto at = [&](std::size_t i) { return static_cast<unsigned char>(bytes[i]); };
-  if (bytes.size() >= 3 && at(0) == 0xFF && at(1) == 0xD8 && at(2) == 0xFF)
-    return decodeJpeg(bytes);
-  if (bytes.size() >= 8 && at(0) == 0x89 && at(1) == 'P' && at(2) == 'N' && at(3) == 'G')
-    return decodePng(bytes);
+  if (isJpeg(bytes)) return decodeJpeg(bytes);
+  if (isPng(bytes)) return decodePng(bytes);
   return std::unexpected(std::string("neither JPEG nor PNG"));
 }
 

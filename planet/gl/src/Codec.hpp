@@ -10,6 +10,9 @@
 
 namespace tellus::planet::codec {
 
+/** Whether the bytes start like a JPEG or a PNG (what decode reads). */
+bool isJpegOrPng(std::span<const std::byte> bytes) noexcept;
+
 /** Decodes JPEG or PNG bytes (by their magic) into RGBA8 rows from the top. */
 std::expected<RgbaImage, std::string> decode(std::span<const std::byte> bytes);
 

@@ -49,10 +49,7 @@ namespace {
 std::expected<RgbaImage, std::string>
 decodeTile(const DecodeJob& job, std::size_t t, const ImageDecoder& other) {
   const auto& bytes = *job.tiles[t];
-  const auto at = [&](std::size_t i) { return static_cast<unsigned char>(bytes[i]); };
-  const bool jpeg = bytes.size() >= 3 && at(0) == 0xFF && at(1) == 0xD8 && at(2) == 0xFF;
-  const bool png = bytes.size() >= 8 && at(0) == 0x89 && at(1) == 'P' && at(2) == 'N';
-  if (jpeg || png || !other) return codec::decode(bytes);
+  if (!other || codec::isJpegOrPng(bytes)) return codec::decode(bytes);
   const std::string_view type = t < job.contentTypes.size() ? job.contentTypes[t] : "";
   auto img = other(bytes, type, job.tileWidth, job.tileHeight);
   if (img && (img->width <= 0 || img->height <= 0 ||
