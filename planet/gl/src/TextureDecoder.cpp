@@ -50,7 +50,8 @@ std::expected<RgbaImage, std::string>
 decodeTile(const DecodeJob& job, std::size_t t, const ImageDecoder& other) {
   const auto& bytes = *job.tiles[t];
   if (!other || codec::isJpegOrPng(bytes)) return codec::decode(bytes);
-  const std::string_view type = t < job.contentTypes.size() ? job.contentTypes[t] : "";
+  std::string_view type; // not `cond ? str : ""`: that is a temporary std::string
+  if (t < job.contentTypes.size()) type = job.contentTypes[t];
   auto img = other(bytes, type, job.tileWidth, job.tileHeight);
   if (img && (img->width <= 0 || img->height <= 0 ||
               img->pixels.size() !=
