@@ -1585,7 +1585,9 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
     return std::unexpected(kExitUsage);
   }
   // Imagery that is neither JPEG nor PNG (a layer of format image/tiff): the proxy's decoder,
-  // through the imaging module (OpenImageIO), on the renderer's decoder threads.
+  // through the imaging module (OpenImageIO), on the renderer's decoder threads. TIFF is the only
+  // other imagery format a layer can have (config validation), so a tile without a content type
+  // (a remote server that sent none) is read as one.
   ro.imageDecoder = [](std::span<const std::byte> bytes,
                        std::string_view type,
                        int w,

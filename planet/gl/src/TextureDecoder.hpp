@@ -77,7 +77,6 @@ public:
 
 private:
   void run(std::stop_token stop);
-  const ImageDecoder other_;      ///< set before the workers start; called by all of them
   void flush();                   ///< the outbox into the queue, when the lock is free
   std::vector<DecodeJob> outbox_; ///< main thread only
   std::size_t submitted_ = 0;     ///< main thread only
@@ -86,6 +85,7 @@ private:
   std::condition_variable_any wake_;
   std::deque<DecodeJob> queue_;
   std::vector<DecodedTexture> done_;
+  const ImageDecoder other_; ///< set before the workers start; called by all of them
   int nice_ = 0;
   std::vector<std::jthread> workers_;
 };
