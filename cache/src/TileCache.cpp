@@ -1296,6 +1296,40 @@ std::expected<std::vector<DatasetStats>, CacheError> TileCache::stats() const {
   return out;
 }
 
+std::expected<std::vector<DatasetStats>, CacheError>
+TileCache::prunable(const PruneOptions& options) const {
+  const UnixMillis cutoff = options.olderThan ? unixMillisNow() - options.olderThan->count()
+                                              : std::numeric_limits<UnixMillis>::max();
+  const auto infos = datasets();
+  auto lease = impl_->acquireReader();
+  if (!lease) return std::unexpected(lease.error());
+  sqlite3* db = lease->conn->db.get();
+  // The same selection as prune's.
+  sql::Stmt s(db,
+              "SELECT t.dataset, count(*), sum(t.bytes) FROM tiles t "
+              "JOIN datasets d ON d.id = t.dataset WHERE t.fetched_at < ?1 "
+              "AND (?2 IS NULL OR d.name = ?2) AND (?3 = 1 OR d.pinned = 0) "
+              "GROUP BY t.dataset ORDER BY t.dataset");
+  if (!s.ok()) return std::unexpected(sql::errorFrom(db, s.prepareRc(), "reading the index"));
+  sql::Stmt::Use u(s);
+  u.bind(1, cutoff);
+  if (options.datasetName)
+    u.bind(2, std::string_view(*options.datasetName));
+  else
+    u.bindNull(2);
+  u.bind(3, std::int64_t{options.includePinned ? 1 : 0});
+  std::vector<DatasetStats> out;
+  int rc = 0;
+  while ((rc = u.step()) == SQLITE_ROW) {
+    const auto info = std::find_if(
+        infos.begin(), infos.end(), [&](const DatasetInfo& d) { return d.id == u.i64(0); });
+    if (info == infos.end()) continue;
+    out.push_back(DatasetStats{*info, u.i64(1), u.i64(2), {}});
+  }
+  if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "reading the index"));
+  return out;
+}
+
 std::expected<VerifyReport, CacheError> TileCache::verify() const {
   VerifyReport report;
   const auto infos = datasets();

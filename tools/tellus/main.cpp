@@ -3,6 +3,7 @@
 
 #include <tellus/cache/GeoPackage.hpp>
 #include <tellus/cache/TileCache.hpp>
+#include <tellus/config/CommandLine.hpp>
 #include <tellus/config/Config.hpp>
 #include <tellus/planet/Geodesy.hpp>
 #include <tellus/planet/Geoid.hpp>
@@ -63,9 +64,11 @@ commands:
              [--meta-tiles N]         N x N tiles per WMS GetMap (default: the upstream's
                                       meta_tiles, 4; 1 = one GetMap per tile)
   cache    inspect and maintain the cache
-             stats [--json] | verify | rebuild | prune --older-than DURATION [--layer NAME]
+             stats [--json] | verify | rebuild
+             | prune --older-than DURATION [--layer NAME] [--include-pinned] [--dry-run]
+                                      DURATION: e.g. 30d, 12h, 15m, 45s; says what it removes
+                                      (every layer unless --layer) before it does
              | export --gpkg FILE --layer NAME [--levels A-B] | import --gpkg FILE --layer NAME
-             [--include-pinned]       DURATION: e.g. 30d, 12h, 15m, 45s
   serve    the WMS / World Wind tile server
              [--listen HOST:PORT] [--threads N] [--offline]
              [--log-level error|warn|info|debug] [--access-log FILE|-]
@@ -98,56 +101,13 @@ commands:
              --lat A --lon B [--elevation LAYER] [--datum msl|ellipsoid] [--offline | --server URL]
              (prints H above mean sea level, or h = H + N with --datum ellipsoid; both on stderr)
 
-options for every command:
+options for every command (anything else is refused with exit code 2; --help prints this):
   --cache DIR   cache root (default: $TELLUS_CACHE, $XDG_CACHE_HOME/tellus or ~/.cache/tellus)
   --data DIR    bundled data of the embedded default (default: $TELLUS_DATA_DIR or the source tree)
   --config F    a YAML configuration (docs/CONFIG.md; default: the embedded default)
 )";
 
-/** Command-line arguments after the command words: --key value pairs and flags. */
-struct Args {
-  std::vector<std::string> positional;
-  std::multimap<std::string, std::string> options;
-  std::vector<std::string> errors;
-
-  bool flag(const std::string& k) const { return options.contains(k); }
-  std::optional<std::string> get(const std::string& k) const {
-    auto it = options.find(k);
-    if (it == options.end()) return std::nullopt;
-    return it->second;
-  }
-  std::vector<std::string> all(const std::string& k) const {
-    std::vector<std::string> v;
-    for (auto [it, end] = options.equal_range(k); it != end; ++it)
-      v.push_back(it->second);
-    return v;
-  }
-};
-
-Args parseArgs(int argc, char** argv, int first, const std::vector<std::string>& flags) {
-  Args a;
-  for (int i = first; i < argc; ++i) {
-    std::string s = argv[i];
-    if (!s.starts_with("--")) {
-      a.positional.push_back(s);
-      continue;
-    }
-    std::string key = s.substr(2);
-    std::string value;
-    if (const auto eq = key.find('='); eq != std::string::npos) {
-      value = key.substr(eq + 1);
-      key = key.substr(0, eq);
-    } else if (std::find(flags.begin(), flags.end(), key) == flags.end()) {
-      if (i + 1 >= argc) {
-        a.errors.push_back("--" + key + " needs a value");
-        continue;
-      }
-      value = argv[++i];
-    }
-    a.options.emplace(key, value);
-  }
-  return a;
-}
+using cli::Args;
 
 std::optional<std::pair<int, int>> parseLevels(std::string_view s) {
   int a = 0;
@@ -748,6 +708,56 @@ int cmdCache(const Args& a) {
   po.olderThan = olderThan;
   po.datasetName = a.get("layer");
   po.includePinned = a.flag("include-pinned");
+  if (const auto name = po.datasetName) {
+    // A layer that neither the configuration nor the cache knows is a typo: refuse it rather
+    // than remove nothing (or, before, everything).
+    const auto held = ctx->cache->datasets();
+    const bool known =
+        ctx->config.layer(*name) != nullptr ||
+        std::any_of(held.begin(), held.end(), [&](const auto& d) { return d.spec.name == *name; });
+    if (!known) {
+      std::vector<std::string_view> names;
+      for (const auto& l : ctx->config.layers)
+        names.push_back(l.name);
+      for (const auto& d : held)
+        names.push_back(d.spec.name);
+      const auto guess = cli::closestName(*name, names);
+      std::fprintf(stderr,
+                   "tellus cache prune: no layer '%s' in the configuration or the cache%s\n",
+                   name->c_str(),
+                   guess ? (" (did you mean " + std::string(*guess) + "?)").c_str() : "");
+      return kExitUsage;
+    }
+  }
+  // Say what goes before it goes: which layers, which of their tiles, how many.
+  const auto doomed = ctx->cache->prunable(po);
+  if (!doomed) {
+    std::fprintf(stderr, "tellus cache prune: %s\n", doomed.error().message.c_str());
+    return kExitError;
+  }
+  std::int64_t doomedTiles = 0;
+  std::int64_t doomedBytes = 0;
+  for (const auto& d : *doomed) {
+    doomedTiles += d.tiles;
+    doomedBytes += d.bytes;
+  }
+  std::printf("%s tiles fetched more than %s ago from %s%s: %lld tiles, %s\n",
+              a.flag("dry-run") ? "would remove" : "removing",
+              a.get("older-than")->c_str(),
+              po.datasetName ? ("layer " + *po.datasetName).c_str() : "EVERY layer",
+              po.includePinned ? " (pinned ones too)" : " (pinned layers kept)",
+              static_cast<long long>(doomedTiles),
+              humanBytes(doomedBytes).c_str());
+  for (const auto& d : *doomed) {
+    std::printf("  %s/%s%s%s: %lld tiles, %s\n",
+                d.dataset.spec.server.c_str(),
+                d.dataset.spec.name.c_str(),
+                d.dataset.spec.time.empty() ? "" : " time ",
+                d.dataset.spec.time.c_str(),
+                static_cast<long long>(d.tiles),
+                humanBytes(d.bytes).c_str());
+  }
+  if (a.flag("dry-run")) return kExitOk;
   auto n = ctx->cache->prune(po);
   if (!n) {
     std::fprintf(stderr, "tellus cache prune: %s\n", n.error().message.c_str());
@@ -1386,7 +1396,7 @@ std::expected<std::optional<EarthModel>, std::string> earthArg(const Args& a) {
   return std::unexpected(*e);
 }
 
-/** `--dome [FOV]` (also `--dome=FOV`; FOV may follow as the one positional argument) and
+/** `--dome [FOV]` (also `--dome=FOV`) and
  * `--dome-tilt DEG` of render and view: whether the command line asks for the dome, and what it
  * gives. An error text for a bad value. */
 struct DomeArgs {
@@ -1399,7 +1409,6 @@ std::expected<DomeArgs, std::string> domeArgs(const Args& a) {
   d.on = a.flag("dome");
   std::optional<std::string> fov;
   if (const auto v = a.get("dome"); v && !v->empty()) fov = *v;
-  if (d.on && !fov && a.positional.size() == 1) fov = a.positional.front();
   if (fov) {
     const auto v = parseNumbers(*fov, 1, 1);
     if (!v || !((*v)[0] > 0.0 && (*v)[0] <= 220.0))
@@ -1678,22 +1687,8 @@ int cmdRender(const Args& a) {
       std::fprintf(stderr, "tellus render: %s, got '%s'\n", what, got.c_str());
     return kExitUsage;
   };
-  for (const auto& [k, v] : a.options) {
-    static const std::vector<std::string> known = {
-        "config",     "cache",         "data",         "camera",    "size",
-        "out",        "wait-complete", "background",   "stats",     "layer",
-        "threshold",  "offline",       "server",       "path",      "frames",
-        "fps",        "no-terrain",    "exaggeration", "sun",       "edge-fixing",
-        "earth",      "repeat",        "geoid",        "mesh-size", "upload-per-frame",
-        "vertices",   "overlay",       "dome",         "dome-tilt", "min-relief-px",
-        "dome-method"};
-    if (std::find(known.begin(), known.end(), k) == known.end())
-      return usage("unknown option (see tellus --help)", "--" + k);
-  }
   const auto dome = domeArgs(a);
   if (!dome) return usage(dome.error().c_str(), "");
-  if (!a.positional.empty() && !(dome->on && a.positional.size() == 1))
-    return usage("unexpected argument", a.positional.front());
   // One view (--camera, --out) or a flight (--path, --frames).
   std::vector<Keyframe> keys;
   planet::CameraPose pose;
@@ -1983,11 +1978,6 @@ int cmdHeight(const Args& a) {
     std::fprintf(stderr, "tellus height: %s, got '%s'\n", what, got.c_str());
     return kExitUsage;
   };
-  static const std::vector<std::string> known = {
-      "config", "cache", "data", "lat", "lon", "offline", "server", "elevation", "geoid", "datum"};
-  for (const auto& [k, v] : a.options)
-    if (std::find(known.begin(), known.end(), k) == known.end())
-      return usage("unknown option (see tellus --help)", "--" + k);
   const auto latArg = a.get("lat"), lonArg = a.get("lon");
   if (!latArg || !lonArg) return usage("--lat and --lon are required", "");
   const auto lat = parseNumbers(*latArg, 1, 1), lon = parseNumbers(*lonArg, 1, 1);
@@ -2099,13 +2089,6 @@ int cmdView(const Args& a) {
     std::fprintf(stderr, "tellus view: %s, got '%s'\n", what, got.c_str());
     return kExitUsage;
   };
-  static const std::vector<std::string> known = {
-      "config",  "cache",  "data",       "camera",     "size",         "layer",         "threshold",
-      "offline", "server", "exit-after", "no-terrain", "exaggeration", "min-relief-px", "sun",
-      "earth",   "geoid",  "overlay",    "dome",       "dome-tilt",    "dome-method"};
-  for (const auto& [k, v] : a.options)
-    if (std::find(known.begin(), known.end(), k) == known.end())
-      return usage("unknown option (see tellus --help)", "--" + k);
   planet::CameraPose pose{20.0, 10.0, 2.0e7, 0.0, 0.0};
   if (auto c = a.get("camera")) {
     const auto cam = parseNumbers(*c, 3, 5);
@@ -2167,6 +2150,110 @@ int cmdView(const Args& a) {
   return kExitOk;
 }
 
+/** The options of every command: what is not listed here is refused (exit 2) with a
+ * suggestion, never ignored. */
+std::optional<cli::CommandSpec> commandSpec(std::string_view cmd) {
+  using cli::OptionKind;
+  using K = OptionKind;
+  std::vector<cli::OptionSpec> o = {{"config", K::Value}, {"cache", K::Value}, {"data", K::Value}};
+  auto add = [&](std::initializer_list<cli::OptionSpec> more) { o.insert(o.end(), more); };
+  std::size_t positional = 0;
+  if (cmd == "seed") {
+    add({{"layer", K::Value, true},
+         {"levels", K::Value},
+         {"bbox", K::Value},
+         {"dry-run", K::Flag},
+         {"time", K::Value},
+         {"concurrency", K::Value},
+         {"rate", K::Value},
+         {"retries", K::Value},
+         {"refresh", K::Flag},
+         {"meta-tiles", K::Value}});
+  } else if (cmd == "cache") {
+    // The union of the subcommands' options; checkCacheSubcommand narrows it to the one given.
+    add({{"json", K::Flag},
+         {"older-than", K::Value},
+         {"layer", K::Value},
+         {"include-pinned", K::Flag},
+         {"dry-run", K::Flag},
+         {"gpkg", K::Value},
+         {"levels", K::Value}});
+    positional = 1;
+  } else if (cmd == "serve") {
+    add({{"listen", K::Value},
+         {"threads", K::Value},
+         {"offline", K::Flag},
+         {"log-level", K::Value},
+         {"access-log", K::Value}});
+  } else if (cmd == "render" || cmd == "view" || cmd == "height") {
+    add({{"offline", K::Flag}, {"server", K::Value}, {"geoid", K::Value}});
+    if (cmd == "height") {
+      add({{"lat", K::Value}, {"lon", K::Value}, {"elevation", K::Value}, {"datum", K::Value}});
+    } else {
+      add({{"camera", K::Value},
+           {"size", K::Value},
+           {"layer", K::Value},
+           {"threshold", K::Value},
+           {"earth", K::Value},
+           {"no-terrain", K::Flag},
+           {"exaggeration", K::Value},
+           {"min-relief-px", K::Value},
+           {"sun", K::Value},
+           {"overlay", K::Value, true},
+           {"dome", K::OptionalValue},
+           {"dome-tilt", K::Value},
+           {"dome-method", K::Value}});
+    }
+    if (cmd == "render") {
+      add({{"out", K::Value},
+           {"wait-complete", K::OptionalValue},
+           {"background", K::Value},
+           {"stats", K::Value},
+           {"path", K::Value},
+           {"frames", K::Value},
+           {"fps", K::Value},
+           {"repeat", K::Value},
+           {"edge-fixing", K::Value},
+           {"mesh-size", K::Value},
+           {"upload-per-frame", K::Value},
+           {"vertices", K::Value}});
+    }
+    if (cmd == "view") add({{"exit-after", K::Value}});
+  } else {
+    return std::nullopt;
+  }
+  return cli::CommandSpec{std::string(cmd), std::move(o), positional};
+}
+
+/** `cache <subcommand>`: the subcommand is known and every option given is one of its own (a
+ * `--json` on prune is a mistake, not something to ignore). The error text, or nothing. */
+std::optional<std::string> checkCacheSubcommand(const Args& a) {
+  static const std::map<std::string, std::vector<std::string>, std::less<>> own = {
+      {"stats", {"json"}},
+      {"verify", {}},
+      {"rebuild", {}},
+      {"prune", {"older-than", "layer", "include-pinned", "dry-run"}},
+      {"export", {"gpkg", "layer", "levels"}},
+      {"import", {"gpkg", "layer"}}};
+  if (a.positional.empty()) return "say stats, verify, rebuild, prune, export or import";
+  const auto sub = own.find(a.positional.front());
+  if (sub == own.end()) {
+    std::vector<std::string_view> names;
+    for (const auto& [n, _] : own)
+      names.push_back(n);
+    std::string msg = "unknown subcommand '" + a.positional.front() + "'";
+    if (const auto s = cli::closestName(a.positional.front(), names))
+      msg += " (did you mean " + std::string(*s) + "?)";
+    return msg;
+  }
+  for (const auto& [k, v] : a.options) {
+    if (k == "config" || k == "cache" || k == "data") continue;
+    if (std::find(sub->second.begin(), sub->second.end(), k) == sub->second.end())
+      return "--" + k + " is not an option of cache " + sub->first;
+  }
+  return std::nullopt;
+}
+
 int run(int argc, char** argv) {
   if (argc < 2 || std::string_view(argv[1]) == "help" || std::string_view(argv[1]) == "--help") {
     std::fputs(kUsage, argc < 2 ? stderr : stdout);
@@ -2177,20 +2264,31 @@ int run(int argc, char** argv) {
     std::printf("tellus %s\n", TELLUS_VERSION);
     return kExitOk;
   }
-  const Args a = parseArgs(argc,
-                           argv,
-                           2,
-                           {"json",
-                            "dry-run",
-                            "include-pinned",
-                            "offline",
-                            "refresh",
-                            "wait-complete",
-                            "no-terrain",
-                            "dome"});
-  for (const auto& e : a.errors)
-    std::fprintf(stderr, "tellus %s: %s\n", argv[1], e.c_str());
-  if (!a.errors.empty()) return kExitUsage;
+  const auto spec = commandSpec(cmd);
+  if (!spec) {
+    std::fprintf(stderr, "tellus: unknown command '%s'\n%s", argv[1], kUsage);
+    return kExitUsage;
+  }
+  const std::vector<std::string> words(argv + 2, argv + argc);
+  for (const auto& w : words) {
+    if (w == "--") break;
+    if (w == "--help" || w == "-h") {
+      std::fputs(kUsage, stdout);
+      return kExitOk;
+    }
+  }
+  auto parsed = cli::parse(*spec, words);
+  if (!parsed) {
+    std::fprintf(stderr, "tellus %s: %s (tellus --help)\n", argv[1], parsed.error().c_str());
+    return kExitUsage;
+  }
+  const Args& a = *parsed;
+  if (cmd == "cache") {
+    if (auto err = checkCacheSubcommand(a)) {
+      std::fprintf(stderr, "tellus cache: %s (tellus --help)\n", err->c_str());
+      return kExitUsage;
+    }
+  }
   if (cmd == "seed") return cmdSeed(a);
   if (cmd == "cache") return cmdCache(a);
   if (cmd == "serve") return cmdServe(a);

@@ -196,6 +196,9 @@ public:
 
   // --- maintenance ----------------------------------------------------------------------------
   std::expected<std::vector<DatasetStats>, CacheError> stats() const;
+  /** What prune(options) would remove now: per dataset with such tiles, their count and bytes
+   * (levels left empty). Read-only; `tellus cache prune` says it before it removes anything. */
+  std::expected<std::vector<DatasetStats>, CacheError> prunable(const PruneOptions& options) const;
   std::expected<VerifyReport, CacheError> verify() const;
   /** Rebuilds the index from the tree (datasets from their descriptors, tiles from file names);
    * removes stray temp files. Returns the number of tiles indexed. */
