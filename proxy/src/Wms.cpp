@@ -122,6 +122,67 @@ std::optional<double> parseCoordinate(std::string_view s) {
   return v == 0.0 ? 0.0 : v;
 }
 
+/** A decimal number exactly: (-1)^negative * 0.digits * 10^magnitude, `digits` without leading or
+ * trailing zeros (empty for zero, which is never negative). */
+struct Decimal {
+  bool negative = false;
+  std::string digits;
+  std::int64_t magnitude = 0;
+};
+
+// [+-] digits [. digits] [(e|E) [+-] digits], at least one digit in the mantissa, at most 18
+// in the exponent: every lexical form of xsd:decimal and xsd:double that a client may send.
+std::optional<Decimal> parseDecimal(std::string_view s) {
+  Decimal d;
+  std::size_t i = 0;
+  if (i < s.size() && (s[i] == '+' || s[i] == '-')) d.negative = s[i++] == '-';
+  std::string mantissa;
+  std::int64_t pointAt = -1;
+  bool anyDigit = false;
+  for (; i < s.size() && (isDigit(s[i]) || (s[i] == '.' && pointAt < 0)); ++i) {
+    if (s[i] == '.') {
+      pointAt = static_cast<std::int64_t>(mantissa.size());
+      continue;
+    }
+    anyDigit = true;
+    mantissa.push_back(s[i]);
+  }
+  if (!anyDigit) return std::nullopt;
+  if (pointAt < 0) pointAt = static_cast<std::int64_t>(mantissa.size());
+  std::int64_t exponent = 0;
+  if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
+    ++i;
+    bool negativeExponent = false;
+    if (i < s.size() && (s[i] == '+' || s[i] == '-')) negativeExponent = s[i++] == '-';
+    const std::string_view e = s.substr(i);
+    if (e.empty() || e.size() > 18 || !allDigits(e)) return std::nullopt;
+    std::from_chars(e.data(), e.data() + e.size(), exponent);
+    if (negativeExponent) exponent = -exponent;
+    i = s.size();
+  }
+  if (i != s.size()) return std::nullopt;
+  std::size_t lead = 0;
+  while (lead < mantissa.size() && mantissa[lead] == '0')
+    ++lead;
+  std::size_t end = mantissa.size();
+  while (end > lead && mantissa[end - 1] == '0')
+    --end;
+  d.digits = mantissa.substr(lead, end - lead);
+  if (d.digits.empty()) return Decimal{}; // zero, whatever its sign
+  d.magnitude = pointAt - static_cast<std::int64_t>(lead) + exponent;
+  return d;
+}
+
+std::strong_ordering compareDecimals(const Decimal& a, const Decimal& b) {
+  const auto sign = [](const Decimal& d) { return d.digits.empty() ? 0 : d.negative ? -1 : 1; };
+  if (sign(a) != sign(b)) return sign(a) <=> sign(b);
+  if (sign(a) == 0) return std::strong_ordering::equal;
+  std::strong_ordering abs = a.magnitude <=> b.magnitude;
+  if (abs == std::strong_ordering::equal) abs = a.digits.compare(b.digits) <=> 0;
+  if (a.negative) return 0 <=> abs; // larger magnitudes are smaller below zero
+  return abs;
+}
+
 // ---- parameters ------------------------------------------------------------------------------
 
 std::vector<std::string> splitCommas(std::string_view s) {
@@ -468,19 +529,10 @@ WmsErrorContext wmsErrorContext(const QueryParams& params, const WmsLimits& limi
 std::optional<OgcException> checkUpdateSequence(std::string_view requested,
                                                 std::string_view current) {
   if (requested.empty() || current.empty()) return std::nullopt;
-  std::strong_ordering order = std::strong_ordering::equal;
-  if (allDigits(requested) && allDigits(current)) {
-    const auto stripZeros = [](std::string_view s) {
-      while (s.size() > 1 && s.front() == '0')
-        s.remove_prefix(1);
-      return s;
-    };
-    const std::string_view a = stripZeros(requested);
-    const std::string_view b = stripZeros(current);
-    order = a.size() != b.size() ? a.size() <=> b.size() : a.compare(b) <=> 0;
-  } else {
-    order = requested.compare(current) <=> 0;
-  }
+  const auto a = parseDecimal(requested);
+  const auto b = parseDecimal(current);
+  const std::strong_ordering order =
+      a && b ? compareDecimals(*a, *b) : requested.compare(current) <=> 0;
   if (order == std::strong_ordering::equal) {
     return OgcException{std::string(ogc::kCurrentUpdateSequence),
                         "UPDATESEQUENCE",

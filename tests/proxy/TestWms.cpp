@@ -134,6 +134,49 @@ TEST(Wms, UpdateSequenceRules) {
   EXPECT_FALSE(checkUpdateSequence("2026-11-22T00:00:00Z", "2026-11-23T00:00:00Z").has_value());
 }
 
+// Numbers compare as numbers in any lexical form a client may send (exactly, not through a
+// double), anything else as strings.
+TEST(Wms, UpdateSequenceComparesNumbersInAnySpelling) {
+  const auto code = [](std::string_view requested, std::string_view current) {
+    const auto e = checkUpdateSequence(requested, current);
+    return e ? e->code : std::string("send");
+  };
+  const std::string equal(ogc::kCurrentUpdateSequence);
+  const std::string greater(ogc::kInvalidUpdateSequence);
+  for (const char* same : {"1796151274",
+                           "1.796151274E9",
+                           "1.796151274e+9",
+                           "01796151274",
+                           "+1796151274",
+                           "1796151274.0",
+                           "1796151274.",
+                           "17961512740e-1",
+                           "0.1796151274e10",
+                           "1796151274.000000000000000000000000001e0"}) {
+    if (std::string_view(same) == "1796151274.000000000000000000000000001e0") {
+      EXPECT_EQ(code(same, "1796151274"), greater) << "no rounding through a double";
+      continue;
+    }
+    EXPECT_EQ(code(same, "1796151274"), equal) << same;
+    EXPECT_EQ(code("1796151274", same), equal) << same;
+  }
+  EXPECT_EQ(code("1.796151275E9", "1796151274"), greater);
+  EXPECT_EQ(code("1.796151273E9", "1796151274"), "send");
+  EXPECT_EQ(code("-5", "3"), "send");
+  EXPECT_EQ(code("3", "-5"), greater);
+  EXPECT_EQ(code("-0", "0.0"), equal);
+  EXPECT_EQ(code("-1e-3", "-0.001"), equal);
+  EXPECT_EQ(code("-2", "-10"), greater);
+  EXPECT_EQ(code("1e400", "9e399"), greater); // beyond a double: still exact
+  EXPECT_EQ(code(".5", "0.5"), equal);
+  EXPECT_EQ(code("1e999999999999", "1"), greater);
+  // Not numbers (or only one of them is): string order.
+  for (const char* notANumber : {"1796151274x", "1.2.3", "e5", "+", ".", "1e", "0x10", " 1", "1 "})
+    EXPECT_EQ(code(notANumber, notANumber), equal) << notANumber;
+  EXPECT_EQ(code("b", "a"), greater);
+  EXPECT_EQ(code("10", "9a"), "send"); // "10" < "9a" as strings
+}
+
 // ---- REQUEST -------------------------------------------------------------------------------
 
 TEST(Wms, RequestMissingOrUnsupported) {

@@ -146,8 +146,10 @@ WmsErrorContext wmsErrorContext(const QueryParams& params, const WmsLimits& limi
 /**
  * @brief The UPDATESEQUENCE rule of GetCapabilities: equal to the server's ->
  * CurrentUpdateSequence, greater -> InvalidUpdateSequence, lower or absent (either side empty) ->
- * std::nullopt (send the document). Sequences of digits compare numerically, anything else as
- * strings (ISO 8601 times compare correctly that way).
+ * std::nullopt (send the document). When both are decimal numbers in any lexical form
+ * (`1796151274`, `1.796151274E9`, `01796151274`, `+1796151274.0`) they compare as numbers,
+ * exactly (no rounding through a double); anything else compares as strings (ISO 8601 times
+ * compare correctly that way).
  */
 std::optional<OgcException> checkUpdateSequence(std::string_view requested,
                                                 std::string_view current);
