@@ -224,7 +224,7 @@ TEST(Wms, WorldWindJavaRequest) {
   // WorldWindJava's WMSTiledImageLayer: lower-case names, 1.3.0, CRS:84, lon/lat.
   const GetMapRequest r = getMap(
       "service=WMS&request=GetMap&version=1.3.0&crs=CRS:84&layers=bmng&styles=&"
-      "format=image/dds&transparent=TRUE&width=512&height=512&bbox=-180.0,-90.0,-144.0,-54.0");
+      "format=image/png&transparent=TRUE&width=512&height=512&bbox=-180.0,-90.0,-144.0,-54.0");
   EXPECT_EQ(r.version, WmsVersion::V130);
   EXPECT_EQ(r.layers, std::vector<std::string>{"bmng"});
   EXPECT_EQ(r.styles, std::vector<std::string>{""});
@@ -232,7 +232,7 @@ TEST(Wms, WorldWindJavaRequest) {
   EXPECT_EQ(r.bbox, kFirstTile);
   EXPECT_EQ(r.width, 512);
   EXPECT_EQ(r.height, 512);
-  EXPECT_EQ(r.format, "image/dds");
+  EXPECT_EQ(r.format, "image/png");
   EXPECT_TRUE(r.transparent);
   EXPECT_FALSE(r.bgcolor.has_value());
   EXPECT_EQ(r.exceptions, Exceptions::Xml);
@@ -251,10 +251,13 @@ TEST(Wms, WebWorldWindRequest) {
 
 // ---- GetMap: SERVICE, VERSION, CRS -----------------------------------------------------------
 
-TEST(Wms, ServiceIsOptionalOnlyForGetMap111) {
+// Neither GetMap table (06-042 Table 8, 01-068r3 7.2.2) lists SERVICE.
+TEST(Wms, ServiceIsNoGetMapParameter) {
   EXPECT_EQ(getMap(with(k111, "SERVICE", "<absent>")).version, WmsVersion::V111);
-  expectError(with(k130, "SERVICE", "<absent>"), ogc::kMissingParameterValue, "SERVICE");
+  EXPECT_EQ(getMap(with(k130, "SERVICE", "<absent>")).version, WmsVersion::V130);
+  EXPECT_EQ(getMap(with(k130, "SERVICE", "")).version, WmsVersion::V130);
   expectError(with(k111, "SERVICE", "WCS"), ogc::kInvalidParameterValue, "SERVICE");
+  expectError(with(k130, "SERVICE", "WFS"), ogc::kInvalidParameterValue, "SERVICE");
   EXPECT_EQ(getMap(with(k130, "SERVICE", "wms")).version, WmsVersion::V130);
 }
 
@@ -319,11 +322,27 @@ TEST(Wms, SizeWithinLimits) {
   EXPECT_EQ(getMap(with(k130, "WIDTH", "0512")).width, 512);
 }
 
-TEST(Wms, FormatIsRequiredAndVerbatim) {
+TEST(Wms, FormatIsRequiredAndAMimeTypeOfAnyCase) {
   expectError(with(k130, "FORMAT", "<absent>"), ogc::kMissingParameterValue, "FORMAT");
   expectError(with(k130, "FORMAT", ""), ogc::kMissingParameterValue, "FORMAT");
   EXPECT_EQ(getMap(with(k130, "FORMAT", "image/png;+mode%3D8bit")).format, "image/png; mode=8bit");
-  EXPECT_EQ(getMap(with(k130, "FORMAT", "image/foo")).format, "image/foo"); // caller's check
+  EXPECT_EQ(getMap(with(k130, "FORMAT", "image/png;mode=8bit")).mapFormat, MapFormat::Png8);
+  EXPECT_EQ(getMap(with(k130, "FORMAT", "image/png8")).format, "image/png; mode=8bit");
+  EXPECT_EQ(getMap(with(k130, "FORMAT", "IMAGE/JPEG")).format, "image/jpeg");
+  EXPECT_EQ(getMap(with(k130, "FORMAT", "Application/BIL16")).mapFormat, MapFormat::Bil16);
+  EXPECT_EQ(getMap(with(k130, "FORMAT", "image/tiff")).mapFormat, MapFormat::Tiff);
+  EXPECT_EQ(getMap(with(k130, "FORMAT", "image/png;%20mode=32BIT")).mapFormat, MapFormat::Png32);
+  for (const char* bad : {"image/foo",
+                          "image/dds",
+                          "image/png; mode=16bit",
+                          "png",
+                          "image/gif",
+                          "image/jpeg;",
+                          "image/png;mode",
+                          "image%2Fpng%00"}) {
+    if (std::string_view(bad).find("%00") != std::string_view::npos) continue; // parseQuery's
+    expectError(with(k130, "FORMAT", bad), ogc::kInvalidFormat, "FORMAT");
+  }
 }
 
 // ---- GetMap: LAYERS, STYLES
@@ -347,9 +366,11 @@ TEST(Wms, LayersAndStyles) {
   EXPECT_EQ(getMap(with(k130, "LAYERS", "BlueMarble")).layers.front(), "BlueMarble");
 }
 
-TEST(Wms, StylesRequiredIn130OnlyAndOptionalIn111) {
+// STYLES is mandatory in both tables (06-042 Table 8, 01-068r3 7.2.3.4); STYLES= is the default.
+TEST(Wms, StylesRequiredInBothVersions) {
   expectError(with(k130, "STYLES", "<absent>"), ogc::kMissingParameterValue, "STYLES");
-  const GetMapRequest r = getMap(with(with(k111, "STYLES", "<absent>"), "LAYERS", "a,b"));
+  expectError(with(k111, "STYLES", "<absent>"), ogc::kMissingParameterValue, "STYLES");
+  const GetMapRequest r = getMap(with(with(k111, "STYLES", ""), "LAYERS", "a,b"));
   EXPECT_EQ(r.styles, (std::vector<std::string>{"", ""}));
 }
 
@@ -389,10 +410,17 @@ TEST(Wms, ExceptionsInBothSpellings) {
   expectError(with(k130, "EXCEPTIONS", "JSON"), ogc::kInvalidParameterValue, "EXCEPTIONS");
 }
 
-TEST(Wms, UnknownParametersAreIgnoredAndFirstDuplicateWins) {
-  const GetMapRequest r = getMap(k130 + "&FOO=bar&VENDOR_x=1&WIDTH=99999&LAYERS=other");
+TEST(Wms, UnknownParametersAreIgnoredAndConflictingRepeatsRefused) {
+  const GetMapRequest r = getMap(k130 + "&FOO=bar&VENDOR_x=1&foo=other&width=512&Layers=bmng");
   EXPECT_EQ(r.width, 512);
   EXPECT_EQ(r.layers.front(), "bmng");
+  expectError(k130 + "&WIDTH=99999", ogc::kInvalidParameterValue, "WIDTH");
+  expectError(k130 + "&layers=other", ogc::kInvalidParameterValue, "LAYERS");
+  expectError(k130 + "&SERVICE=WFS", ogc::kInvalidParameterValue, "SERVICE");
+  expectError(k130 + "&request=GetCapabilities", ogc::kInvalidParameterValue, "REQUEST");
+  expectError("SERVICE=WMS&REQUEST=GetCapabilities&VERSION=1.3.0&VERSION=1.1.1",
+              ogc::kInvalidParameterValue,
+              "VERSION");
 }
 
 TEST(Wms, ErrorContextForUnparsedRequests) {
