@@ -715,31 +715,4 @@ std::optional<StaticTilePath> parseStaticTilePath(std::string_view pathAfterPref
   return out;
 }
 
-std::expected<std::string, OgcException>
-resolveTimeDimension(std::string_view layer,
-                     const std::vector<std::string>& values,
-                     std::string_view period,
-                     std::string_view defaultValue,
-                     std::string_view t) {
-  if (values.empty() && period.empty()) return std::string(); // no TIME dimension: ignored
-  if (t.empty()) {
-    if (!defaultValue.empty()) return std::string(defaultValue);
-    return std::unexpected(OgcException{std::string(ogc::kMissingDimensionValue),
-                                        "TIME",
-                                        "layer '" + std::string(layer) + "' needs a TIME value"});
-  }
-  if (std::find(values.begin(), values.end(), t) != values.end()) return std::string(t);
-  if (!period.empty()) { // start/end/step: ISO 8601 strings of one shape compare lexically
-    const auto a = period.find('/');
-    const auto b = a == std::string_view::npos ? a : period.find('/', a + 1);
-    if (a != std::string_view::npos && b != std::string_view::npos) {
-      const std::string_view start = period.substr(0, a);
-      const std::string_view end = period.substr(a + 1, b - a - 1);
-      if (t.size() == start.size() && t >= start && t <= end) return std::string(t);
-    }
-  }
-  return std::unexpected(OgcException{
-      std::string(ogc::kInvalidDimensionValue), "TIME", "TIME is not one of the layer's times"});
-}
-
 } // namespace tellus

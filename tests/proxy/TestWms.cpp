@@ -659,3 +659,116 @@ TEST(StaticTilePathExtremes, RejectsUnsafeOrMalformedPaths) {
   EXPECT_FALSE(parseStaticTilePath(std::string(kMaxStaticLayerName + 1, 'a') + "/0/0/0_0.jpg"));
   EXPECT_TRUE(parseStaticTilePath(".../0/0/0_0.jpg")); // three dots is a plain name
 }
+
+// ---- TIME ------------------------------------------------------------------------------------
+
+namespace {
+
+std::string timeOf(const std::vector<std::string>& values,
+                   std::string_view period,
+                   std::string_view defaultValue,
+                   std::string_view t) {
+  const auto r = resolveTimeDimension("l", values, period, defaultValue, t);
+  return r ? *r : "!" + r.error().code;
+}
+
+const std::string kInvalidTime = "!" + std::string(ogc::kInvalidDimensionValue);
+
+} // namespace
+
+// A period kept as a period: only instants on its grid, and each in one spelling.
+TEST(WmsTime, APeriodTakesOnlyInstantsOnItsGrid) {
+  const std::string hourly = "2010-01-01T00:00Z/2010-12-31T00:00Z/PT1H";
+  const auto at = [&](std::string_view t) { return timeOf({}, hourly, "2010-12-31T00:00Z", t); };
+  EXPECT_EQ(at("2010-01-01T05:00Z"), "2010-01-01T05:00Z");
+  // Other spellings of the same instant: the period's own.
+  EXPECT_EQ(at("2010-01-01T05:00:00Z"), "2010-01-01T05:00Z");
+  EXPECT_EQ(at("2010-01-01T05:00:00.000Z"), "2010-01-01T05:00Z");
+  EXPECT_EQ(at("2010-01-01T05:00"), "2010-01-01T05:00Z");
+  EXPECT_EQ(at("2010-01-01T06:00+01:00"), "2010-01-01T05:00Z");
+  EXPECT_EQ(at("2010-01-01T04:30-0030"), "2010-01-01T05:00Z");
+  EXPECT_EQ(at("2010-01-01"), "2010-01-01T00:00Z");
+  EXPECT_EQ(at(""), "2010-12-31T00:00Z"); // the default
+  // Strings of the right length that sort inside, off-grid times, outside, junk: refused.
+  for (const char* bad : {"2010-99-99T99:99Z",
+                          "2010-02-30T00:00Z",
+                          "2010-01-01T24:00Z",
+                          "2010-01-01T00:60Z",
+                          "2010-01-01T00:30Z",
+                          "2010-01-01T05:00:01Z",
+                          "2010-01-01T05:00:00.5Z",
+                          "2009-12-31T23:00Z",
+                          "2010-12-31T01:00Z",
+                          "2010/../..",
+                          "2010-06-01T00:00Y",
+                          "2010-06-01T00:00Z ",
+                          " 2010-06-01T00:00Z",
+                          "2010-06-01t00:00z",
+                          "20100601T0000Z",
+                          "current",
+                          "2010-06-01T00:00+24:00"}) {
+    EXPECT_EQ(at(bad), kInvalidTime) << bad;
+  }
+  // Lists and ranges: a map is made for one time.
+  for (const char* many : {"2010-01-01T00:00Z,2010-01-01T01:00Z",
+                           "2010-01-01T00:00Z/2010-01-02T00:00Z",
+                           "2010-01-01T00:00Z/2010-01-02T00:00Z/PT1H",
+                           ","}) {
+    const auto r = resolveTimeDimension("l", {}, hourly, "", many);
+    ASSERT_FALSE(r) << many;
+    EXPECT_EQ(r.error().code, ogc::kInvalidDimensionValue);
+    EXPECT_EQ(r.error().locator, "TIME");
+    EXPECT_NE(r.error().message.find("one time"), std::string::npos) << r.error().message;
+  }
+}
+
+TEST(WmsTime, DaysMonthsYearsAndWeeks) {
+  const std::string daily = "2000-02-24/2025-12-31/P1D";
+  EXPECT_EQ(timeOf({}, daily, "", "2000-02-24"), "2000-02-24");
+  EXPECT_EQ(timeOf({}, daily, "", "2024-02-29"), "2024-02-29");
+  EXPECT_EQ(timeOf({}, daily, "", "2024-02-29T00:00:00Z"), "2024-02-29");
+  EXPECT_EQ(timeOf({}, daily, "", "2024-02-29T12:00Z"), kInvalidTime);
+  EXPECT_EQ(timeOf({}, daily, "", "2023-02-29"), kInvalidTime);
+  EXPECT_EQ(timeOf({}, daily, "", "2000-02-23"), kInvalidTime);
+  EXPECT_EQ(timeOf({}, daily, "", "2026-01-01"), kInvalidTime);
+  // Months on the calendar from the start, the day clamped to the month's end.
+  const std::string monthly = "2002-01-31/2024-12-31/P1M";
+  EXPECT_EQ(timeOf({}, monthly, "", "2002-02-28"), "2002-02-28");
+  EXPECT_EQ(timeOf({}, monthly, "", "2004-02-29"), "2004-02-29");
+  EXPECT_EQ(timeOf({}, monthly, "", "2024-12-31"), "2024-12-31");
+  EXPECT_EQ(timeOf({}, monthly, "", "2002-03-31"), "2002-03-31");
+  EXPECT_EQ(timeOf({}, monthly, "", "2002-03-28"), kInvalidTime);
+  EXPECT_EQ(timeOf({}, "2002-07-01/2024-12-01/P3M", "", "2002-10-01"), "2002-10-01");
+  EXPECT_EQ(timeOf({}, "2002-07-01/2024-12-01/P3M", "", "2002-09-01"), kInvalidTime);
+  EXPECT_EQ(timeOf({}, "2000-01-01/2100-01-01/P1Y", "", "2099-01-01"), "2099-01-01");
+  EXPECT_EQ(timeOf({}, "2000-01-01/2100-01-01/P1Y", "", "2099-01-02"), kInvalidTime);
+  EXPECT_EQ(timeOf({}, "2024-01-01/2024-12-31/P1W", "", "2024-01-08"), "2024-01-08");
+  EXPECT_EQ(timeOf({}, "2024-01-01/2024-12-31/P1W", "", "2024-01-09"), kInvalidTime);
+  // Minutes and a date-only start with a time step.
+  EXPECT_EQ(timeOf({}, "2024-03-01/2024-03-02/PT6H", "", "2024-03-01T18:00:00Z"),
+            "2024-03-01T18:00Z");
+  EXPECT_EQ(timeOf({}, "2024-03-01T00:00:00Z/2024-03-02T00:00:00Z/PT10M", "", "2024-03-01T00:50Z"),
+            "2024-03-01T00:50:00Z");
+  EXPECT_EQ(timeOf({}, "2024-03-01T00:00:00Z/2024-03-02T00:00:00Z/PT10M", "", "2024-03-01T00:55Z"),
+            kInvalidTime);
+}
+
+TEST(WmsTime, ValuesMatchByInstantAndKeepTheirSpelling) {
+  const std::vector<std::string> values{"2024-01-01", "2024-01-02T12:00:00Z", "2004-08"};
+  EXPECT_EQ(timeOf(values, "", "", "2024-01-01"), "2024-01-01");
+  EXPECT_EQ(timeOf(values, "", "", "2024-01-01T00:00Z"), "2024-01-01");
+  EXPECT_EQ(timeOf(values, "", "", "2024-01-02T12:00Z"), "2024-01-02T12:00:00Z");
+  EXPECT_EQ(timeOf(values, "", "", "2004-08"), "2004-08"); // listed verbatim
+  EXPECT_EQ(timeOf(values, "", "", "2024-01-03"), kInvalidTime);
+  EXPECT_EQ(timeOf(values, "", "", "2004-09"), kInvalidTime);
+  EXPECT_EQ(timeOf(values, "", "2024-01-01T00:00:00Z", ""), "2024-01-01");
+  EXPECT_EQ(timeOf({"a"}, "", "", ""), "!" + std::string(ogc::kMissingDimensionValue));
+  // A layer without a dimension ignores TIME.
+  EXPECT_EQ(timeOf({}, "", "", "2010-99-99"), "");
+  // An expanded period (values and the period): the values' spelling wins.
+  EXPECT_EQ(timeOf({"2024-03-01T00:00:00Z", "2024-03-01T06:00:00Z"},
+                   "2024-03-01T00:00Z/2024-03-01T06:00Z/PT6H",
+                   "",
+                   "2024-03-01T06:00Z"),
+            "2024-03-01T06:00:00Z");
+}

@@ -191,11 +191,19 @@ std::optional<OgcException> checkUpdateSequence(std::string_view requested,
                                                 std::string_view current);
 
 /**
- * @brief The TIME of a request for a layer with a TIME dimension (`values` listed, or a
- * `period` "start/end/step" too long to list): the value itself when it is one of them, the
- * default when the request has none, MissingDimensionValue when there is no default,
- * InvalidDimensionValue otherwise. Within a period, values of the period's ISO 8601 shape between
- * start and end are accepted. A layer without a dimension ignores TIME ("").
+ * @brief The TIME of a request for a layer with a TIME dimension (`values` listed, and/or a
+ * `period` "start/end/step", kept as such when too long to list), in the layer's own spelling.
+ *
+ * TIME is read as one ISO 8601 instant: `YYYY-MM-DD`, or `YYYY-MM-DDThh:mm[:ss[.000]]` with `Z`,
+ * an offset (`+01:00`) or nothing (UTC). It must be one of the values (the same string, or the
+ * same instant spelt otherwise) or lie on the period's grid: start + k * step for a whole k >= 0,
+ * not after the end, months and years added on the calendar (P1D, PT6H, P1M, P1Y, P1W...). The
+ * answer is the matching value as listed, or the instant written as the period's start is
+ * (`2024-03-01`, `2024-03-01T06:00Z`, `2024-03-01T06:00:00Z`), so that every spelling of one
+ * instant names one dataset. Anything else, lists (`a,b`) and ranges (`a/b`, `a/b/P1D`) included,
+ * is InvalidDimensionValue: a map is made for one time, and a time a layer does not have must not
+ * create a dataset or an upstream request. No TIME: the default (in the same spelling), or
+ * MissingDimensionValue when there is none. A layer without a dimension ignores TIME ("").
  */
 std::expected<std::string, OgcException>
 resolveTimeDimension(std::string_view layer,
