@@ -333,14 +333,11 @@ resolveTimeDimension(std::string_view layer,
                                        "' is a range; a map is made for one time, ask for one"));
   }
   if (auto c = canonicalTime(values, period, t)) return std::move(*c);
-  if (!parseInstant(t) && std::find(values.begin(), values.end(), t) == values.end()) {
-    return std::unexpected(invalidTime("TIME '" + shortened(t) +
-                                       "' is not an ISO 8601 date or time of layer '" +
-                                       std::string(layer) + "'"));
-  }
-  return std::unexpected(invalidTime("TIME '" + shortened(t) + "' is not one of layer '" +
-                                     std::string(layer) + "''s times" +
-                                     (period ? " (" + std::string(periodText) + ")" : "")));
+  const std::string why = parseInstant(t) ? (period ? "is not on " + std::string(periodText)
+                                                    : std::string("is not listed"))
+                                          : std::string("is no ISO 8601 date or time");
+  return std::unexpected(
+      invalidTime("TIME is not one of the layer's times: '" + shortened(t) + "' " + why));
 }
 
 } // namespace tellus

@@ -24,7 +24,9 @@ fs::path goldenDir() {
 #ifdef TELLUS_TEST_GOLDEN_DIR
   return fs::path(TELLUS_TEST_GOLDEN_DIR);
 #else
-  return fs::path(__FILE__).parent_path().parent_path() / "data" / "golden";
+  // Absolute (TELLUS_TEST_SOURCE_DIR): __FILE__ is relative to the build tree under Ninja, and
+  // ctest runs the tests from another folder.
+  return fs::path(TELLUS_TEST_SOURCE_DIR) / "data" / "golden";
 #endif
 }
 
