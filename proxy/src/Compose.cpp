@@ -1071,4 +1071,37 @@ ComposeStats composeHeights(const TileGrid& grid,
       });
 }
 
+std::uint8_t heightToGrey(std::int16_t raw) noexcept {
+  const std::int32_t span = kGreyRampHigh - kGreyRampLow;
+  const std::int32_t v = std::clamp<std::int32_t>(raw, kGreyRampLow, kGreyRampHigh) - kGreyRampLow;
+  return static_cast<std::uint8_t>((v * 255 + span / 2) / span);
+}
+
+void drawHeightsAsGrey(const std::vector<std::int16_t>& heights,
+                       std::int16_t noData,
+                       double opacity,
+                       std::vector<std::uint8_t>& canvas,
+                       std::int32_t canvasChannels) {
+  const auto alpha = static_cast<std::uint8_t>(std::lround(std::clamp(opacity, 0.0, 1.0) * 255.0));
+  const auto channels = static_cast<std::size_t>(canvasChannels);
+  for (std::size_t p = 0; p < heights.size() && (p + 1) * channels <= canvas.size(); ++p) {
+    if (heights[p] == noData) continue;
+    const std::uint8_t g = heightToGrey(heights[p]);
+    const std::uint8_t src[4] = {g, g, g, alpha};
+    over(src, &canvas[p * channels], canvasChannels);
+  }
+}
+
+std::uint8_t luminance(std::uint8_t r, std::uint8_t g, std::uint8_t b) noexcept {
+  return static_cast<std::uint8_t>((299 * r + 587 * g + 114 * b + 500) / 1000);
+}
+
+void drawLuminanceAsHeights(const std::vector<std::uint8_t>& rgba,
+                            std::vector<std::int16_t>& heights) {
+  for (std::size_t p = 0; p < heights.size() && (p + 1) * 4 <= rgba.size(); ++p) {
+    const std::uint8_t* px = &rgba[p * 4];
+    if (px[3] >= 128) heights[p] = luminance(px[0], px[1], px[2]);
+  }
+}
+
 } // namespace tellus

@@ -1,5 +1,6 @@
 #include "Codecs.hpp"
 #include "ImagingLoader.hpp"
+#include "Quantize.hpp"
 
 #include <tellus/proxy/ImageCodec.hpp>
 
@@ -73,29 +74,56 @@ encodeHeights(std::string_view mimeType, int width, int height, const std::int16
   return out;
 }
 
-std::expected<std::vector<std::byte>, std::string> blankImage(std::string_view mimeType,
-                                                              int width,
-                                                              int height,
-                                                              std::optional<std::uint32_t> bgcolor,
-                                                              bool transparent,
-                                                              std::string_view text) {
+std::expected<std::vector<std::byte>, std::string> blankMap(MapFormat format,
+                                                            bool heights,
+                                                            int width,
+                                                            int height,
+                                                            std::optional<std::uint32_t> bgcolor,
+                                                            bool transparent,
+                                                            std::string_view text,
+                                                            std::int16_t noData) {
   if (width <= 0 || height <= 0) return std::unexpected("bad image shape");
+  const auto n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  if (heights) {
+    const std::vector<std::int16_t> values(n, noData);
+    return encodeHeights(
+        format == MapFormat::Png ? "image/png" : toString(format), width, height, values.data());
+  }
+  const bool alpha = format == MapFormat::Png32 ||
+                     (transparent && (format == MapFormat::Png || format == MapFormat::Png8));
   const std::uint32_t c = bgcolor.value_or(0xFFFFFF);
-  const float rgba[4] = {static_cast<float>((c >> 16) & 0xFF) / 255.0f,
-                         static_cast<float>((c >> 8) & 0xFF) / 255.0f,
-                         static_cast<float>(c & 0xFF) / 255.0f,
-                         transparent ? 0.0f : 1.0f};
-  auto api = imaging::table();
-  if (!api) return std::unexpected(api.error());
-  imaging::BytesSink px;
-  if ((*api)->drawBlank(width, height, rgba, text.data(), text.size(), px.get()) !=
-      TELLUS_IMAGING_OK)
-    return std::unexpected(px.error());
-  return encodeImage(mimeType == "image/png" ? "image/png" : "image/jpeg",
+  const std::uint8_t rgba[4] = {static_cast<std::uint8_t>(c >> 16),
+                                static_cast<std::uint8_t>(c >> 8),
+                                static_cast<std::uint8_t>(c),
+                                static_cast<std::uint8_t>(transparent && alpha ? 0 : 255)};
+  std::vector<std::uint8_t> px(n * 4);
+  if (text.empty()) {
+    for (std::size_t i = 0; i < n; ++i)
+      std::memcpy(&px[i * 4], rgba, 4);
+  } else {
+    const float f[4] = {rgba[0] / 255.0f, rgba[1] / 255.0f, rgba[2] / 255.0f, rgba[3] / 255.0f};
+    auto api = imaging::table();
+    if (!api) return std::unexpected(api.error());
+    imaging::BytesSink drawn;
+    if ((*api)->drawBlank(width, height, f, text.data(), text.size(), drawn.get()) !=
+        TELLUS_IMAGING_OK)
+      return std::unexpected(drawn.error());
+    if (drawn.bytes.size() != px.size()) return std::unexpected("the drawn image has a bad size");
+    std::memcpy(px.data(), drawn.bytes.data(), px.size());
+  }
+  if (format == MapFormat::Png8) {
+    const PalettedImage p = quantize(px.data(), 4, n);
+    return codecs::encodePngPalette(width, height, p.palette, p.indices.data());
+  }
+  if (!alpha) { // RGB: no alpha channel in an opaque format
+    for (std::size_t i = 0; i < n; ++i)
+      std::memmove(&px[i * 3], &px[i * 4], 3);
+  }
+  return encodeImage(format == MapFormat::Jpeg ? "image/jpeg" : "image/png",
                      width,
                      height,
-                     4,
-                     reinterpret_cast<const std::uint8_t*>(px.bytes.data()));
+                     alpha ? 4 : 3,
+                     px.data());
 }
 
 namespace {

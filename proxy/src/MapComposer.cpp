@@ -110,7 +110,6 @@ struct MapComposer::Job {
     std::vector<TileAnswer> answers; // parallel to keys
   };
   ComposeRequest request;
-  bool elevation = false;
   /// Composed as Y, Cb and Cr planes when every tile turns out to be a 4:2:0 JPEG: a JPEG map of
   /// one opaque imagery layer (else, or when a tile is not, the RGB path).
   bool ycc = false;
@@ -157,7 +156,7 @@ MapComposer::compose(ComposeRequest request,
   job->onTile = std::move(onTile);
   job->done = std::move(done);
   const ComposeRequest& r = job->request;
-  job->ycc = r.format == "image/jpeg" && r.layers.size() == 1 &&
+  job->ycc = r.format == MapFormat::Jpeg && r.layers.size() == 1 &&
              !r.layers.front().layer->elevation && r.layers.front().opacity >= 1.0 - 1.0 / 512 &&
              !yccDisabled_;
   std::size_t total = 0;
@@ -166,7 +165,6 @@ MapComposer::compose(ComposeRequest request,
     l.spec = cl;
     l.grid = tiles_.grid(cl.layer->name);
     if (!l.grid) return std::unexpected("no layer '" + cl.layer->name + "'");
-    job->elevation = cl.layer->elevation;
     l.level = composeLevel(*l.grid, r.bbox, r.width, r.height, 0);
     const std::size_t left = maxTiles_ > total ? maxTiles_ - total : 0;
     auto keys = job->ycc ? composeTilesYcc(*l.grid, r.bbox, r.width, r.height, l.level, left)
@@ -206,7 +204,7 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
   try {
     const ComposeRequest& r = job->request;
     // The validators first: a client that has this map gets 304 before anything is decoded.
-    std::string validators = r.format + "|" + std::to_string(r.width) + "x" +
+    std::string validators = std::string(toString(r.format)) + "|" + std::to_string(r.width) + "x" +
                              std::to_string(r.height) + "|" + (r.transparent ? "t" : "o") + "|" +
                              std::to_string(r.bgcolor.value_or(0x1000000));
     char box[128];
@@ -256,13 +254,16 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
     // Decode what arrived; fill the holes from coarser cached tiles.
     // Opaque output (JPEG, 24-bit PNG, PNG without TRANSPARENT) composes on an RGB canvas; a JPEG
     // map of one opaque layer of 4:2:0 JPEG tiles on Y, Cb and Cr planes (see JpegRaw.hpp).
-    const bool png8 = r.format == "image/png; mode=8bit";
+    const bool png8 = r.format == MapFormat::Png8;
     const int cc =
-        r.format == "image/png; mode=32bit" || (r.transparent && (r.format == "image/png" || png8))
-            ? 4
-            : 3;
+        r.format == MapFormat::Png32 || (r.transparent && (r.format == MapFormat::Png || png8)) ? 4
+                                                                                                : 3;
     std::vector<std::uint8_t>& canvas = buffers.canvas;
     std::vector<std::int16_t> heights;
+    // One layer of the other kind than the map, before it is drawn over the map (see
+    // ComposeRequest::layers).
+    std::vector<std::int16_t> layerHeights;
+    std::vector<std::uint8_t> layerPicture;
     const auto pixels = static_cast<std::size_t>(r.width) * static_cast<std::size_t>(r.height);
     const std::uint32_t bgColour = r.bgcolor.value_or(0xFFFFFF);
     const std::uint8_t bg[4] = {static_cast<std::uint8_t>(bgColour >> 16),
@@ -272,8 +273,8 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
     std::optional<ChromaLayout> chroma;
     if (job->ycc) chroma = chromaLayout(*job->layers.front().grid, r.bbox, r.width, r.height);
     const auto fill = [&](bool ycc) {
-      if (job->elevation) {
-        heights.assign(pixels, job->layers.front().spec.layer->noData);
+      if (r.heights) {
+        heights.assign(pixels, r.noData);
       } else if (ycc) {
         // Nothing to fill: composePlane writes every sample of the planes, the background where
         // no tile covers it (a map's single layer; the RGB path fills again if it takes over).
@@ -449,29 +450,25 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
           const auto it = decoded.find(key);
           return it == decoded.end() ? nullptr : &it->second->view;
         };
-        const ComposeStats stats =
-            spec.elevation
-                ? composeHeights(
-                      *l.grid,
-                      r.bbox,
-                      r.width,
-                      r.height,
-                      l.level,
-                      0, // every level of the grid is served (firstLevel is an upstream offset)
-                      lookup,
-                      spec.noData,
-                      heights)
-                : composeImagery(
-                      *l.grid,
-                      r.bbox,
-                      r.width,
-                      r.height,
-                      l.level,
-                      0, // every level of the grid is served (firstLevel is an upstream offset)
-                      lookup,
-                      l.spec.opacity,
-                      canvas,
-                      cc);
+        // Every level of the grid is served (firstLevel is an upstream offset): first level 0.
+        ComposeStats stats;
+        if (spec.elevation && r.heights) {
+          stats = composeHeights(
+              *l.grid, r.bbox, r.width, r.height, l.level, 0, lookup, spec.noData, heights);
+        } else if (spec.elevation) { // heights in a picture: grey over the canvas
+          layerHeights.assign(pixels, spec.noData);
+          stats = composeHeights(
+              *l.grid, r.bbox, r.width, r.height, l.level, 0, lookup, spec.noData, layerHeights);
+          drawHeightsAsGrey(layerHeights, spec.noData, l.spec.opacity, canvas, cc);
+        } else if (r.heights) { // a picture in heights: its luminance where it is opaque
+          layerPicture.assign(pixels * 4, 0);
+          stats = composeImagery(
+              *l.grid, r.bbox, r.width, r.height, l.level, 0, lookup, 1.0, layerPicture, 4);
+          drawLuminanceAsHeights(layerPicture, heights);
+        } else {
+          stats = composeImagery(
+              *l.grid, r.bbox, r.width, r.height, l.level, 0, lookup, l.spec.opacity, canvas, cc);
+        }
         map.fallbackPixels += stats.fallbackPixels;
         missing += stats.missingPixels;
       }
@@ -512,8 +509,11 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
       map.etag = etag;
     }
     std::expected<std::vector<std::byte>, std::string> encoded;
-    if (job->elevation) {
-      encoded = encodeHeights(r.format, r.width, r.height, heights.data());
+    if (r.heights) {
+      encoded = encodeHeights(r.format == MapFormat::Png ? "image/png" : toString(r.format),
+                              r.width,
+                              r.height,
+                              heights.data());
     } else {
       if (ycc) {
         encoded = codecs::encodeJpegYcc(
@@ -522,7 +522,7 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
         const PalettedImage p = quantize(canvas.data(), cc, pixels);
         encoded = codecs::encodePngPalette(r.width, r.height, p.palette, p.indices.data());
       } else {
-        encoded = encodeImage(r.format == "image/jpeg" ? "image/jpeg" : "image/png",
+        encoded = encodeImage(r.format == MapFormat::Jpeg ? "image/jpeg" : "image/png",
                               r.width,
                               r.height,
                               cc,
@@ -540,7 +540,7 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
     if (buffers.cb.capacity() > (4u << 20)) buffers.cb = buffers.cr = {};
     map.kind = ComposedMap::Kind::Map;
     map.bytes = std::move(*encoded);
-    map.contentType = r.format.starts_with("image/png") ? "image/png" : r.format;
+    map.contentType = std::string(contentTypeOf(r.format));
     job->done(std::move(map));
   } catch (const std::exception& e) {
     ComposedMap failedMap;

@@ -5,6 +5,7 @@
 
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/proxy/TileService.hpp>
+#include <tellus/proxy/Wms.hpp>
 
 #include <cstddef>
 #include <cstdint>
@@ -25,12 +26,16 @@ struct ComposeLayer {
 };
 
 struct ComposeRequest {
-  std::vector<ComposeLayer> layers; ///< drawn in order; all imagery or all elevation
-  Sector bbox{};                    ///< lon/lat, west < east, south < north
+  /** Drawn in order, imagery and elevation layers alike: into a picture, heights as grey
+   * (drawHeightsAsGrey); into heights, imagery as its luminance (drawLuminanceAsHeights). */
+  std::vector<ComposeLayer> layers;
+  Sector bbox{}; ///< lon/lat, west < east, south < north
   std::int32_t width = 0;
   std::int32_t height = 0;
-  std::string format; ///< imagery: image/jpeg, image/png; heights: application/bil16,
-                      ///< image/tiff, image/png
+  MapFormat format = MapFormat::Png;
+  /** The map is heights (mapIsHeights): BIL16, Int16 TIFF or 16-bit PNG, else a picture. */
+  bool heights = false;
+  std::int16_t noData = -32768; ///< of a heights map: where no layer has data
   bool transparent = false;
   std::optional<std::uint32_t> bgcolor;
   std::string ifNoneMatch; ///< the client's If-None-Match ("" = none)

@@ -160,7 +160,7 @@ formatWmsException(WmsVersion version, const OgcException& exception, bool httpS
   if (version == WmsVersion::V111) {
     r.contentType = "application/vnd.ogc.se_xml";
     b += "<!DOCTYPE ServiceExceptionReport SYSTEM "
-         "\"http://schemas.opengis.net/wms/1.1.1/exception_1_1_1.dtd\">\n";
+         "\"http://schemas.opengis.net/wms/1.1.1/WMS_exception_1_1_1.dtd\">\n";
     b += "<ServiceExceptionReport version=\"1.1.1\">\n";
   } else {
     r.contentType = "text/xml";
@@ -171,8 +171,10 @@ formatWmsException(WmsVersion version, const OgcException& exception, bool httpS
   }
   b += "  <ServiceException";
   if (!exception.code.empty()) b += " code=\"" + xmlEscape(exception.code) + "\"";
+  // WMS_exception_1_1_1.dtd declares no locator attribute (exceptions_1_3_0.xsd does).
   const std::string locator = cutUtf8(sanitizeForClient(exception.locator), 128);
-  if (!locator.empty()) b += " locator=\"" + xmlEscape(locator) + "\"";
+  if (!locator.empty() && version == WmsVersion::V130)
+    b += " locator=\"" + xmlEscape(locator) + "\"";
   b += ">";
   b += xmlEscape(cutUtf8(sanitizeForClient(exception.message), kMaxClientMessageBytes));
   b += "</ServiceException>\n";

@@ -287,20 +287,51 @@ struct ProxyFrontEnd::Impl {
 
   // ----------------------------------------------------------------------------- WMS
 
+  /** What a map of these layers is made of: heights (mapIsHeights) or a picture, and the
+   * no-data value of heights (the first elevation layer's, else -32768). Unknown names count as
+   * imagery. */
+  struct MapKind {
+    bool heights = false;
+    std::int16_t noData = -32768;
+  };
+  MapKind mapKind(MapFormat format, const std::vector<std::string>& names) const {
+    MapKind k;
+    bool allElevation = !names.empty();
+    bool noDataSet = false;
+    for (const std::string& n : names) {
+      const LayerSpec* l = tiles.layer(n);
+      allElevation = allElevation && l && l->elevation;
+      if (l && l->elevation && !noDataSet) {
+        k.noData = l->noData;
+        noDataSet = true;
+      }
+    }
+    k.heights = mapIsHeights(format, allElevation);
+    return k;
+  }
+
+  /** An OGC exception in the form the request asked for: XML, or for a GetMap with
+   * EXCEPTIONS=BLANK/INIMAGE an image in its FORMAT (every format: see blankMap). */
   void
   exception(const WmsErrorContext& ctx, const OgcException& e, const Responder& respond) const {
-    const bool image = ctx.format == "image/png" || ctx.format == "image/jpeg";
-    if (ctx.exceptions != GetMapRequest::Exceptions::Xml && image && ctx.width > 0 &&
-        ctx.height > 0) {
+    if (ctx.exceptions != GetMapRequest::Exceptions::Xml && ctx.width > 0 && ctx.height > 0) {
       const std::string text = ctx.exceptions == GetMapRequest::Exceptions::InImage
                                    ? sanitizeForClient(e.code + ": " + e.message)
                                    : std::string();
-      if (auto img =
-              blankImage(ctx.format, ctx.width, ctx.height, ctx.bgcolor, ctx.transparent, text)) {
+      const MapKind kind = mapKind(ctx.mapFormat, ctx.layers);
+      if (auto img = blankMap(ctx.mapFormat,
+                              kind.heights,
+                              ctx.width,
+                              ctx.height,
+                              ctx.bgcolor,
+                              ctx.transparent,
+                              text,
+                              kind.noData)) {
         HttpResponse r;
         common(r);
         r.status = 200;
-        r.setHeader("Content-Type", ctx.format);
+        r.setHeader("Content-Type", std::string(contentTypeOf(ctx.mapFormat)));
+        r.setHeader("Cache-Control", "no-store"); // an error, drawn: never kept as the map
         r.body = std::move(*img);
         return respond(std::move(r));
       }
@@ -311,26 +342,23 @@ struct ProxyFrontEnd::Impl {
     respond(std::move(r));
   }
 
+  /** A GetMap where there is no tile: the empty map in the request's format. */
   void emptyImage(const GetMapRequest& m,
+                  const MapKind& kind,
                   std::string_view why,
                   TileOrigin origin,
                   const Responder& respond) const {
-    auto img = blankImage(
-        m.format, m.width, m.height, m.bgcolor, m.transparent || m.format == "image/png");
+    auto img = blankMap(
+        m.mapFormat, kind.heights, m.width, m.height, m.bgcolor, m.transparent, {}, kind.noData);
     if (!img) {
-      WmsErrorContext ctx{m.version,
-                          GetMapRequest::Exceptions::Xml,
-                          m.format,
-                          m.width,
-                          m.height,
-                          m.transparent,
-                          m.bgcolor};
+      WmsErrorContext ctx;
+      ctx.version = m.version;
       return exception(
           ctx, OgcException{std::string(ogc::kNoApplicableCode), "", std::string(why)}, respond);
     }
     HttpResponse r;
     common(r);
-    r.setHeader("Content-Type", m.format);
+    r.setHeader("Content-Type", std::string(contentTypeOf(m.mapFormat)));
     r.setHeader("X-Cache", toString(origin));
     r.setHeader("Cache-Control", "public, max-age=60");
     r.body = std::move(*img);
@@ -352,17 +380,14 @@ struct ProxyFrontEnd::Impl {
       if (std::find(formats.begin(), formats.end(), f) == formats.end())
         formats.push_back(std::move(f));
     };
-    for (const auto& l : tiles.layers()) { // each layer's own format first, then the composed ones
+    // The list is service-wide: every layer answers every format (heights as a grey picture,
+    // imagery as its luminance in heights; docs/CONFIG.md, "WMS"). The layers' own formats first
+    // (a client that takes the first one gets cached tiles as they are), then the rest.
+    for (const auto& l : tiles.layers())
       add(l.dataset.mimeType);
-      if (l.elevation) {
-        add("application/bil16");
-        add("image/tiff");
-      } else {
-        add("image/jpeg");
-        add("image/png; mode=8bit");
-      }
-      add("image/png");
-    }
+    for (const MapFormat f :
+         {MapFormat::Jpeg, MapFormat::Png, MapFormat::Png8, MapFormat::Bil16, MapFormat::Tiff})
+      add(std::string(toString(f)));
     m.getMapFormats = formats;
     m.updateSequence = updateSequence;
     m.lastUpdate = lastUpdate;
@@ -417,7 +442,8 @@ struct ProxyFrontEnd::Impl {
       return respond(std::move(r));
     }
     auto& m = std::get<GetMapRequest>(*parsed);
-    // Every layer first: known, style, time; imagery and heights do not mix.
+    // Every layer first: known, style, time. Imagery and heights mix: the format says what the
+    // map is (mapIsHeights), and each layer is drawn as that (MapComposer).
     std::vector<ComposeLayer> layers;
     for (std::size_t k = 0; k < m.layers.size(); ++k) {
       const LayerSpec* l = tiles.layer(m.layers[k]);
@@ -437,30 +463,14 @@ struct ProxyFrontEnd::Impl {
       }
       auto time = resolveTime(*l, m.time);
       if (!time) return exception(ctx, time.error(), respond);
-      if (!layers.empty() && layers.front().layer->elevation != l->elevation) {
-        return exception(ctx,
-                         OgcException{std::string(ogc::kInvalidParameterValue),
-                                      "LAYERS",
-                                      "elevation and imagery layers cannot be drawn in one map"},
-                         respond);
-      }
       layers.push_back(
           ComposeLayer{l, std::move(*time), m.opacities.empty() ? l->opacity : m.opacities[k]});
     }
     const LayerSpec* l = layers.front().layer;
-    const std::string format = normalizedFormat(m.format);
-    if (!composableFormat(*l, format) || (l->elevation && format != m.format)) {
-      return exception(ctx,
-                       OgcException{std::string(ogc::kInvalidFormat),
-                                    "FORMAT",
-                                    l->elevation ? "elevation is served as application/bil16, "
-                                                   "image/tiff or image/png"
-                                                 : "imagery is served as image/jpeg or image/png "
-                                                   "(also mode=8bit, 24bit, 32bit)"},
-                       respond);
-    }
-    // One layer, its own format, exactly one tile: the cached file itself (the fast path).
-    if (layers.size() == 1 && m.format == l->dataset.mimeType &&
+    const MapKind kind = mapKind(m.mapFormat, m.layers);
+    // One layer, its own format (as what it is: heights as heights), exactly one tile: the cached
+    // file itself (the fast path).
+    if (layers.size() == 1 && m.format == l->dataset.mimeType && kind.heights == l->elevation &&
         (m.opacities.empty() || m.opacities.front() >= 1.0)) {
       const TileGrid* g = tiles.grid(l->name);
       if (const auto key = g->keyForBbox(m.bbox, m.width, m.height)) {
@@ -468,7 +478,7 @@ struct ProxyFrontEnd::Impl {
             l->name,
             layers.front().time,
             *key,
-            [this, v = Validators(req), l, m = std::move(m), ctx, respond](TileAnswer&& a) {
+            [this, v = Validators(req), l, m = std::move(m), kind, ctx, respond](TileAnswer&& a) {
               countTile(l, a);
               if (a.kind == TileAnswer::Kind::Tile) return sendTile(v, std::move(a), *l, respond);
               if (a.kind == TileAnswer::Kind::Absent) {
@@ -478,8 +488,8 @@ struct ProxyFrontEnd::Impl {
                                    OgcException{std::string(ogc::kNoApplicableCode), "", a.message},
                                    respond);
                 }
-                return emptyImage(
-                    m, a.message, a.origin, respond); // no tile there: an empty map, not an error
+                // No tile there: an empty map, not an error.
+                return emptyImage(m, kind, a.message, a.origin, respond);
               }
               exception(
                   ctx, OgcException{std::string(ogc::kNoApplicableCode), "", a.message}, respond);
@@ -500,7 +510,9 @@ struct ProxyFrontEnd::Impl {
     cr.bbox = m.bbox;
     cr.width = m.width;
     cr.height = m.height;
-    cr.format = format;
+    cr.format = m.mapFormat;
+    cr.heights = kind.heights;
+    cr.noData = kind.noData;
     cr.transparent = m.transparent;
     cr.bgcolor = m.bgcolor;
     cr.ifNoneMatch = std::string(req.header("if-none-match"));
@@ -534,26 +546,6 @@ struct ProxyFrontEnd::Impl {
           OgcException{std::string(ogc::kInvalidParameterValue), "BBOX", started.error()},
           respond);
     }
-  }
-
-  /** The formats a layer's maps are composed in. */
-  static bool composableFormat(const LayerSpec& l, std::string_view format) {
-    if (l.elevation)
-      return format == "application/bil16" || format == "image/tiff" || format == "image/png";
-    return format == "image/jpeg" || format.starts_with("image/png");
-  }
-
-  /** PNG's bit depths as MapServer and MapProxy spell them ("image/png; mode=8bit", also
-   * GeoServer's "image/png8"), in one spelling; any other FORMAT unchanged. */
-  static std::string normalizedFormat(std::string_view format) {
-    std::string f;
-    for (const char c : format) {
-      if (c != ' ') f.push_back(static_cast<char>(std::tolower(static_cast<unsigned char>(c))));
-    }
-    if (f == "image/png8" || f == "image/png;mode=8bit") return "image/png; mode=8bit";
-    if (f == "image/png;mode=24bit") return "image/png; mode=24bit";
-    if (f == "image/png;mode=32bit") return "image/png; mode=32bit";
-    return std::string(format);
   }
 
   /** The page (WebPage.hpp): `/` and its files, `/layers.json`, and the plain-text index at

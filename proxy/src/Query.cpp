@@ -92,6 +92,11 @@ bool QueryParams::isDuplicated(std::string_view lowerKey) const noexcept {
   return e != nullptr && e->occurrences > 1;
 }
 
+bool QueryParams::isConflicting(std::string_view lowerKey) const noexcept {
+  const Entry* e = find(lowerKey);
+  return e != nullptr && e->conflicting;
+}
+
 bool QueryParams::hasDuplicates() const noexcept {
   for (const Entry& e : entries_) {
     if (e.occurrences > 1) return true;
@@ -107,6 +112,7 @@ void QueryParams::take(std::string&& key, std::string&& value) {
   for (Entry& e : entries_) {
     if (equalsIgnoreCase(e.key, key)) {
       ++e.occurrences;
+      if (value != e.value) e.conflicting = true;
       return;
     }
   }

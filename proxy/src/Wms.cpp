@@ -122,6 +122,67 @@ std::optional<double> parseCoordinate(std::string_view s) {
   return v == 0.0 ? 0.0 : v;
 }
 
+/** A decimal number exactly: (-1)^negative * 0.digits * 10^magnitude, `digits` without leading or
+ * trailing zeros (empty for zero, which is never negative). */
+struct Decimal {
+  bool negative = false;
+  std::string digits;
+  std::int64_t magnitude = 0;
+};
+
+// [+-] digits [. digits] [(e|E) [+-] digits], at least one digit in the mantissa, at most 18
+// in the exponent: every lexical form of xsd:decimal and xsd:double that a client may send.
+std::optional<Decimal> parseDecimal(std::string_view s) {
+  Decimal d;
+  std::size_t i = 0;
+  if (i < s.size() && (s[i] == '+' || s[i] == '-')) d.negative = s[i++] == '-';
+  std::string mantissa;
+  std::int64_t pointAt = -1;
+  bool anyDigit = false;
+  for (; i < s.size() && (isDigit(s[i]) || (s[i] == '.' && pointAt < 0)); ++i) {
+    if (s[i] == '.') {
+      pointAt = static_cast<std::int64_t>(mantissa.size());
+      continue;
+    }
+    anyDigit = true;
+    mantissa.push_back(s[i]);
+  }
+  if (!anyDigit) return std::nullopt;
+  if (pointAt < 0) pointAt = static_cast<std::int64_t>(mantissa.size());
+  std::int64_t exponent = 0;
+  if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
+    ++i;
+    bool negativeExponent = false;
+    if (i < s.size() && (s[i] == '+' || s[i] == '-')) negativeExponent = s[i++] == '-';
+    const std::string_view e = s.substr(i);
+    if (e.empty() || e.size() > 18 || !allDigits(e)) return std::nullopt;
+    std::from_chars(e.data(), e.data() + e.size(), exponent);
+    if (negativeExponent) exponent = -exponent;
+    i = s.size();
+  }
+  if (i != s.size()) return std::nullopt;
+  std::size_t lead = 0;
+  while (lead < mantissa.size() && mantissa[lead] == '0')
+    ++lead;
+  std::size_t end = mantissa.size();
+  while (end > lead && mantissa[end - 1] == '0')
+    --end;
+  d.digits = mantissa.substr(lead, end - lead);
+  if (d.digits.empty()) return Decimal{}; // zero, whatever its sign
+  d.magnitude = pointAt - static_cast<std::int64_t>(lead) + exponent;
+  return d;
+}
+
+std::strong_ordering compareDecimals(const Decimal& a, const Decimal& b) {
+  const auto sign = [](const Decimal& d) { return d.digits.empty() ? 0 : d.negative ? -1 : 1; };
+  if (sign(a) != sign(b)) return sign(a) <=> sign(b);
+  if (sign(a) == 0) return std::strong_ordering::equal;
+  std::strong_ordering abs = a.magnitude <=> b.magnitude;
+  if (abs == std::strong_ordering::equal) abs = a.digits.compare(b.digits) <=> 0;
+  if (a.negative) return 0 <=> abs; // larger magnitudes are smaller below zero
+  return abs;
+}
+
 // ---- parameters ------------------------------------------------------------------------------
 
 std::vector<std::string> splitCommas(std::string_view s) {
@@ -198,6 +259,49 @@ std::optional<OgcException> checkService(const QueryParams& params, bool require
   return std::nullopt;
 }
 
+// The parameters of each request's table (and the vendor ones tellus reads), upper-case as
+// locators: one of them given twice with different values is ambiguous.
+constexpr std::array<std::string_view, 18> kGetMapParameters{"VERSION",
+                                                             "WMTVER",
+                                                             "REQUEST",
+                                                             "SERVICE",
+                                                             "LAYERS",
+                                                             "STYLES",
+                                                             "CRS",
+                                                             "SRS",
+                                                             "BBOX",
+                                                             "WIDTH",
+                                                             "HEIGHT",
+                                                             "FORMAT",
+                                                             "TRANSPARENT",
+                                                             "BGCOLOR",
+                                                             "EXCEPTIONS",
+                                                             "TIME",
+                                                             "ELEVATION",
+                                                             "OPACITIES"};
+constexpr std::array<std::string_view, 6> kGetCapabilitiesParameters{
+    "VERSION", "WMTVER", "REQUEST", "SERVICE", "FORMAT", "UPDATESEQUENCE"};
+
+std::string lowerCopy(std::string_view s) {
+  std::string out(s);
+  for (char& c : out)
+    c = toLowerAscii(c);
+  return out;
+}
+
+template <std::size_t N>
+std::optional<OgcException> checkConflicts(const QueryParams& params,
+                                           const std::array<std::string_view, N>& names) {
+  for (const std::string_view name : names) {
+    if (params.isConflicting(lowerCopy(name))) {
+      return OgcException{std::string(ogc::kInvalidParameterValue),
+                          std::string(name),
+                          std::string(name) + " is given more than once with different values"};
+    }
+  }
+  return std::nullopt;
+}
+
 bool isGetMapName(std::string_view request) {
   return iequals(request, "GetMap") || iequals(request, "map");
 }
@@ -205,6 +309,8 @@ bool isGetMapName(std::string_view request) {
 // ---- requests ------------------------------------------------------------------------------
 
 std::expected<WmsRequest, OgcException> parseGetCapabilities(const QueryParams& params) {
+  if (auto e = checkConflicts(params, kGetCapabilitiesParameters))
+    return std::unexpected(std::move(*e));
   if (auto e = checkService(params, true)) return std::unexpected(std::move(*e));
   GetCapabilitiesRequest req;
   if (const auto v = versionValue(params)) {
@@ -256,6 +362,7 @@ parseBbox(std::string_view value, bool latFirst, std::string_view crs) {
 std::expected<WmsRequest, OgcException> parseGetMap(const QueryParams& params,
                                                     const WmsLimits& limits) {
   GetMapRequest req;
+  if (auto e = checkConflicts(params, kGetMapParameters)) return std::unexpected(std::move(*e));
   const auto versionText = versionValue(params);
   if (!versionText) {
     return fail(ogc::kMissingParameterValue, "VERSION", "VERSION is required for GetMap");
@@ -271,7 +378,8 @@ std::expected<WmsRequest, OgcException> parseGetMap(const QueryParams& params,
                 "VERSION " + quoted(*versionText) + " is not supported (1.1.1 or 1.3.0)");
   }
   const bool v130 = req.version == WmsVersion::V130;
-  if (auto e = checkService(params, v130)) return std::unexpected(std::move(*e));
+  // Neither version's GetMap table has SERVICE: it may be left out, but not be another service.
+  if (auto e = checkService(params, false)) return std::unexpected(std::move(*e));
 
   // LAYERS and STYLES.
   const auto layers = nonEmpty(params, "layers");
@@ -283,12 +391,12 @@ std::expected<WmsRequest, OgcException> parseGetMap(const QueryParams& params,
     }
   }
   const auto styles = params.get("styles");
-  if (!styles && v130) {
+  if (!styles) { // required by both versions' tables (01-068r3 7.2.3.4, 06-042 7.3.3.4)
     return fail(ogc::kMissingParameterValue,
                 "STYLES",
                 "STYLES is required (STYLES= selects the default styles)");
   }
-  if (!styles || styles->empty()) {
+  if (styles->empty()) {
     req.styles.assign(req.layers.size(), std::string());
   } else {
     req.styles = splitCommas(*styles);
@@ -349,7 +457,16 @@ std::expected<WmsRequest, OgcException> parseGetMap(const QueryParams& params,
 
   const auto format = nonEmpty(params, "format");
   if (!format) return fail(ogc::kMissingParameterValue, "FORMAT", "FORMAT is required");
-  req.format = std::string(*format);
+  const auto mapFormat = parseMapFormat(*format);
+  if (!mapFormat) {
+    return fail(ogc::kInvalidFormat,
+                "FORMAT",
+                "FORMAT " + quoted(*format) +
+                    " is not served (image/jpeg, image/png, image/png; mode=8bit, "
+                    "application/bil16 or image/tiff)");
+  }
+  req.mapFormat = *mapFormat;
+  req.format = std::string(toString(*mapFormat));
 
   const auto transparent = parseTransparent(params.get("transparent").value_or(""));
   if (!transparent) {
@@ -409,6 +526,63 @@ bool isAlnum(char c) noexcept {
 
 } // namespace
 
+std::optional<MapFormat> parseMapFormat(std::string_view format) noexcept {
+  // Lower-cased, without spaces or tabs (a MIME type has none that matter): at most 32 bytes.
+  char buf[32];
+  std::size_t n = 0;
+  for (const char c : format) {
+    if (c == ' ' || c == '\t') continue;
+    if (n == sizeof buf) return std::nullopt;
+    buf[n++] = toLowerAscii(c);
+  }
+  const std::string_view f(buf, n);
+  if (f == "image/jpeg") return MapFormat::Jpeg;
+  if (f == "image/png") return MapFormat::Png;
+  if (f == "image/png;mode=8bit" || f == "image/png8") return MapFormat::Png8;
+  if (f == "image/png;mode=24bit") return MapFormat::Png24;
+  if (f == "image/png;mode=32bit") return MapFormat::Png32;
+  if (f == "application/bil16") return MapFormat::Bil16;
+  if (f == "image/tiff") return MapFormat::Tiff;
+  return std::nullopt;
+}
+
+std::string_view toString(MapFormat format) noexcept {
+  switch (format) {
+  case MapFormat::Jpeg:
+    return "image/jpeg";
+  case MapFormat::Png:
+    return "image/png";
+  case MapFormat::Png8:
+    return "image/png; mode=8bit";
+  case MapFormat::Png24:
+    return "image/png; mode=24bit";
+  case MapFormat::Png32:
+    return "image/png; mode=32bit";
+  case MapFormat::Bil16:
+    return "application/bil16";
+  case MapFormat::Tiff:
+    return "image/tiff";
+  }
+  return "image/png";
+}
+
+std::string_view contentTypeOf(MapFormat format) noexcept {
+  switch (format) {
+  case MapFormat::Png:
+  case MapFormat::Png8:
+  case MapFormat::Png24:
+  case MapFormat::Png32:
+    return "image/png";
+  default:
+    return toString(format);
+  }
+}
+
+bool mapIsHeights(MapFormat format, bool everyLayerIsElevation) noexcept {
+  return format == MapFormat::Bil16 || format == MapFormat::Tiff ||
+         (format == MapFormat::Png && everyLayerIsElevation);
+}
+
 std::string_view toString(WmsVersion version) noexcept {
   return version == WmsVersion::V111 ? "1.1.1" : "1.3.0";
 }
@@ -444,9 +618,17 @@ WmsErrorContext wmsErrorContext(const QueryParams& params, const WmsLimits& limi
   }
   const auto request = params.get("request");
   if (!request || !isGetMapName(*request)) return ctx;
+  for (const std::string_view name :
+       {"exceptions", "format", "width", "height", "transparent", "bgcolor"}) {
+    if (params.isConflicting(name)) return ctx;
+  }
   const auto exceptions = parseExceptionsValue(params.get("exceptions").value_or(""));
   if (!exceptions || *exceptions == Exceptions::Xml) return ctx;
-  const auto format = nonEmpty(params, "format");
+  const auto formatText = nonEmpty(params, "format");
+  if (!formatText) return ctx;
+  const auto format = parseMapFormat(*formatText);
+  if (!format) return ctx;
+  const MapFormat mapFormat = *format;
   const auto width = parseSize(params.get("width").value_or(""), limits.maxWidth);
   const auto height = parseSize(params.get("height").value_or(""), limits.maxHeight);
   const auto transparent = parseTransparent(params.get("transparent").value_or(""));
@@ -455,9 +637,11 @@ WmsErrorContext wmsErrorContext(const QueryParams& params, const WmsLimits& limi
     bgcolor = parseBgcolor(*bg);
     if (!bgcolor) return ctx;
   }
-  if (!format || !width || !height || !transparent) return ctx;
+  if (!width || !height || !transparent) return ctx;
   ctx.exceptions = *exceptions;
-  ctx.format = std::string(*format);
+  ctx.mapFormat = mapFormat;
+  ctx.format = std::string(toString(mapFormat));
+  if (const auto layers = nonEmpty(params, "layers")) ctx.layers = splitCommas(*layers);
   ctx.width = *width;
   ctx.height = *height;
   ctx.transparent = *transparent;
@@ -468,19 +652,10 @@ WmsErrorContext wmsErrorContext(const QueryParams& params, const WmsLimits& limi
 std::optional<OgcException> checkUpdateSequence(std::string_view requested,
                                                 std::string_view current) {
   if (requested.empty() || current.empty()) return std::nullopt;
-  std::strong_ordering order = std::strong_ordering::equal;
-  if (allDigits(requested) && allDigits(current)) {
-    const auto stripZeros = [](std::string_view s) {
-      while (s.size() > 1 && s.front() == '0')
-        s.remove_prefix(1);
-      return s;
-    };
-    const std::string_view a = stripZeros(requested);
-    const std::string_view b = stripZeros(current);
-    order = a.size() != b.size() ? a.size() <=> b.size() : a.compare(b) <=> 0;
-  } else {
-    order = requested.compare(current) <=> 0;
-  }
+  const auto a = parseDecimal(requested);
+  const auto b = parseDecimal(current);
+  const std::strong_ordering order =
+      a && b ? compareDecimals(*a, *b) : requested.compare(current) <=> 0;
   if (order == std::strong_ordering::equal) {
     return OgcException{std::string(ogc::kCurrentUpdateSequence),
                         "UPDATESEQUENCE",
@@ -538,33 +713,6 @@ std::optional<StaticTilePath> parseStaticTilePath(std::string_view pathAfterPref
   out.layer = std::string(layer);
   out.key = *key;
   return out;
-}
-
-std::expected<std::string, OgcException>
-resolveTimeDimension(std::string_view layer,
-                     const std::vector<std::string>& values,
-                     std::string_view period,
-                     std::string_view defaultValue,
-                     std::string_view t) {
-  if (values.empty() && period.empty()) return std::string(); // no TIME dimension: ignored
-  if (t.empty()) {
-    if (!defaultValue.empty()) return std::string(defaultValue);
-    return std::unexpected(OgcException{std::string(ogc::kMissingDimensionValue),
-                                        "TIME",
-                                        "layer '" + std::string(layer) + "' needs a TIME value"});
-  }
-  if (std::find(values.begin(), values.end(), t) != values.end()) return std::string(t);
-  if (!period.empty()) { // start/end/step: ISO 8601 strings of one shape compare lexically
-    const auto a = period.find('/');
-    const auto b = a == std::string_view::npos ? a : period.find('/', a + 1);
-    if (a != std::string_view::npos && b != std::string_view::npos) {
-      const std::string_view start = period.substr(0, a);
-      const std::string_view end = period.substr(a + 1, b - a - 1);
-      if (t.size() == start.size() && t >= start && t <= end) return std::string(t);
-    }
-  }
-  return std::unexpected(OgcException{
-      std::string(ogc::kInvalidDimensionValue), "TIME", "TIME is not one of the layer's times"});
 }
 
 } // namespace tellus

@@ -2,7 +2,8 @@
 # Interoperability: GDAL (Debian's gdal-bin) reads tellus serve as a user would point it at it.
 #   - the WMS driver's capabilities parser lists the layers of GetCapabilities;
 #   - the WMS driver's WorldWind mini-driver reads /wwtile tiles, and its pixels are the cached
-#     tile's (rows counted from the south, levels as tellus numbers them).
+#     tile's (rows counted from the south, levels as tellus numbers them);
+#   - the WMS driver reads the elevation layer in a picture format (grey).
 # Usage: test_gdal.sh path/to/tellus
 set -euo pipefail
 tellus=$1
@@ -87,5 +88,24 @@ b = [int(v) for v in sys.argv[2].split()]
 sys.exit(0 if len(a) == 3 and len(b) == 3 and max(abs(x - y) for x, y in zip(a, b)) <= 8 else 1)
 PY
 done
+
+# Heights in a picture format (the GetMap format list is service-wide): GDAL's WMS driver reads
+# the elevation layer as a JPEG, a grey picture of the relief (docs/CONFIG.md, "WMS": -11000 m
+# black, +9000 m white).
+etopo="WMS:$base/wms?SERVICE=WMS&VERSION=1.1.1&REQUEST=GetMap&LAYERS=etopo&SRS=EPSG:4326&BBOX=-180,-90,180,90"
+gdal_translate -q -of GTiff -outsize 360 180 "$etopo&FORMAT=image/jpeg" "$work/etopo-grey.tif" \
+  || fail "GDAL could not read the heights layer as image/jpeg"
+grey() {
+  # shellcheck disable=SC2086
+  gdallocationinfo -valonly -wgs84 "$work/etopo-grey.tif" $1 | tr '\n' ' '
+}
+python3 - "$(grey "86.9 28.0")" "$(grey "-150 0")" <<'PY' \
+  || fail "the heights as a picture are not grey, Himalaya over Pacific: '$(grey "86.9 28.0")' '$(grey "-150 0")'"
+import sys
+high = [int(v) for v in sys.argv[1].split()]
+deep = [int(v) for v in sys.argv[2].split()]
+grey = lambda p: len(p) >= 3 and max(p[:3]) - min(p[:3]) <= 4
+sys.exit(0 if grey(high) and grey(deep) and high[0] > deep[0] + 60 else 1)
+PY
 
 echo "gdal interop: all checks passed"

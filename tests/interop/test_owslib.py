@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Interoperability: OWSLib (Debian's python3-owslib) reads tellus serve's capabilities in WMS
-1.1.1 and 1.3.0 and fetches tile-aligned maps through its GetMap, as a Python user would.
+1.1.1 and 1.3.0 and fetches tile-aligned maps through its GetMap, as a Python user would; every
+advertised format for every layer, and EXCEPTIONS=BLANK in 8-bit PNG.
 
 Usage: test_owslib.py path/to/tellus
 """
@@ -82,6 +83,29 @@ def main():
                 composed = body
             elif body != composed:
                 fail("1.1.1 and 1.3.0 composed maps differ")
+            # Every advertised format for every layer (the list is service-wide): the heights
+            # layer as a JPEG picture, the imagery as BIL16 luminance.
+            formats = wms.getOperationByName("GetMap").formatOptions
+            for f in ("image/jpeg", "image/png", "image/png; mode=8bit", "application/bil16",
+                      "image/tiff"):
+                if f not in formats:
+                    fail("%s: %s is not advertised: %s" % (version, f, formats))
+            body = wms.getmap(layers=["etopo"], styles=[""], srs="EPSG:4326",
+                              bbox=(60, 10, 100, 40), size=(80, 60), format="image/jpeg").read()
+            if body[:3] != b"\xff\xd8\xff":
+                fail("%s: heights as image/jpeg: %r" % (version, body[:300]))
+            body = wms.getmap(layers=["bluemarble"], styles=[""], srs="EPSG:4326",
+                              bbox=(5, -10, 30, 10), size=(64, 32),
+                              format="application/bil16").read()
+            if len(body) != 64 * 32 * 2 or max(struct.unpack("<2048h", body)) > 255:
+                fail("%s: imagery as application/bil16: %r" % (version, body[:300]))
+            # EXCEPTIONS=BLANK (each version's spelling) in 8-bit PNG: an image, never XML.
+            blank = "BLANK" if version == "1.3.0" else "application/vnd.ogc.se_blank"
+            body = wms.getmap(layers=["bluemarble"], styles=[""], srs="EPSG:3857",
+                              bbox=(5, -10, 30, 10), size=(64, 32), format="image/png; mode=8bit",
+                              transparent=True, exceptions=blank).read()
+            if body[:8] != b"\x89PNG\r\n\x1a\n" or body[25] != 3:
+                fail("%s: BLANK in image/png; mode=8bit: %r" % (version, body[:300]))
         cached = [os.path.join(root, f) for root, _, files in os.walk(cache) for f in files
                   if f == "2_5.jpg"]
         if not cached or open(cached[0], "rb").read() != tile:

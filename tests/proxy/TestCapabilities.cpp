@@ -1,3 +1,5 @@
+#include "../support/WmsSchemas.hpp"
+
 #include <tellus/proxy/Capabilities.hpp>
 #include <tellus/proxy/Wms.hpp>
 
@@ -22,7 +24,9 @@ fs::path goldenDir() {
 #ifdef TELLUS_TEST_GOLDEN_DIR
   return fs::path(TELLUS_TEST_GOLDEN_DIR);
 #else
-  return fs::path(__FILE__).parent_path().parent_path() / "data" / "golden";
+  // Absolute (TELLUS_TEST_SOURCE_DIR): __FILE__ is relative to the build tree under Ninja, and
+  // ctest runs the tests from another folder.
+  return fs::path(TELLUS_TEST_SOURCE_DIR) / "data" / "golden";
 #endif
 }
 
@@ -376,4 +380,92 @@ TEST(Capabilities, LayerLastUpdateKeywordForWorldWindJava) {
     ASSERT_NE(keyword, std::string::npos);
     EXPECT_GT(keyword, name) << "inside the layer, after its name";
   }
+}
+
+namespace {
+
+test::WmsDocument capabilitiesKind(WmsVersion v) {
+  return v == WmsVersion::V111 ? test::WmsDocument::Capabilities111
+                               : test::WmsDocument::Capabilities130;
+}
+
+} // namespace
+
+// Every shape of the document, both versions, valid against the official WMS_MS_Capabilities.dtd
+// and capabilities_1_3_0.xsd (tests/data/schemas). The documents a running server writes are
+// validated in TestWmsConformance.cpp.
+TEST(CapabilitiesSchemas, EveryModelIsValidAgainstTheOfficialSchemas) {
+  std::vector<std::pair<std::string, CapabilitiesModel>> models;
+  models.emplace_back("fixed", fixedModel());
+  CapabilitiesModel empty;
+  empty.title = "empty";
+  empty.onlineResource = "http://h/wms?";
+  empty.getMapFormats = {"image/png"};
+  models.emplace_back("no layers", empty);
+  CapabilitiesModel hostile = fixedModel();
+  hostile.layers[0].name = "a</Name><Evil/>\x01";
+  hostile.updateSequence = "\"><x";
+  hostile.abstract = "]]> <!-- &";
+  models.emplace_back("hostile text", hostile);
+  CapabilitiesModel heights = empty;
+  heights.getMapFormats = {
+      "application/bil16", "image/tiff", "image/png", "image/jpeg", "image/png; mode=8bit"};
+  CapabilitiesLayer dem;
+  dem.name = "etopo";
+  dem.title = "heights";
+  dem.bbox = Sector{-180, -90, 180, 90};
+  dem.lastUpdateMillis = 1795477530123;
+  heights.layers = {dem};
+  heights.maxWidth = 4096;
+  heights.maxHeight = 4096;
+  models.emplace_back("heights", heights);
+  CapabilitiesModel timed = heights;
+  CapabilitiesLayer daily = dem;
+  daily.name = "daily";
+  daily.timePeriod = "2000-02-24/2025-12-31/P1D";
+  daily.timeDefault = "2025-12-31";
+  daily.opaque = false;
+  daily.styles = {"default"};
+  CapabilitiesLayer monthly = dem;
+  monthly.name = "monthly";
+  monthly.timeValues = {"2004-01", "2004-02"};
+  timed.layers = {daily, monthly, dem};
+  models.emplace_back("time", timed);
+  for (const auto& [what, model] : models) {
+    for (const WmsVersion v : {WmsVersion::V111, WmsVersion::V130}) {
+      const std::string xml = capabilitiesXml(v, model);
+      const auto verdict = test::validateWms(xml, capabilitiesKind(v));
+      EXPECT_TRUE(verdict.valid) << what << " " << toString(v) << "\n" << verdict.output;
+    }
+  }
+}
+
+// The validation can fail: documents that break the schemas are refused.
+TEST(CapabilitiesSchemas, TheValidationRefusesBrokenDocuments) {
+  for (const WmsVersion v : {WmsVersion::V111, WmsVersion::V130}) {
+    const std::string good = capabilitiesXml(v, fixedModel());
+    ASSERT_TRUE(test::validateWms(good, capabilitiesKind(v)).valid);
+    // A layer's Title before its Name: out of the order both schemas fix.
+    std::string swapped = good;
+    const std::string nameTitle =
+        "<Name>bmng</Name>\n        <Title>Blue Marble Next Generation</Title>";
+    const auto at = swapped.find(nameTitle);
+    ASSERT_NE(at, std::string::npos) << swapped;
+    swapped.replace(at,
+                    nameTitle.size(),
+                    "<Title>Blue Marble Next Generation</Title>\n        <Name>bmng</Name>");
+    const auto verdict = test::validateWms(swapped, capabilitiesKind(v));
+    EXPECT_FALSE(verdict.valid) << toString(v);
+    EXPECT_NE(verdict.output.find("Name"), std::string::npos) << verdict.output;
+    // An element neither schema knows.
+    std::string unknown = good;
+    unknown.replace(unknown.find("<Fees>"), 6, "<Feez>");
+    unknown.replace(unknown.find("</Fees>"), 7, "</Feez>");
+    EXPECT_FALSE(test::validateWms(unknown, capabilitiesKind(v)).valid) << toString(v);
+  }
+  // A 1.1.1 document must name its DTD.
+  std::string noDoctype = capabilitiesXml(WmsVersion::V111, fixedModel());
+  const auto d = noDoctype.find("<!DOCTYPE");
+  noDoctype.erase(d, noDoctype.find('>', d) + 2 - d);
+  EXPECT_FALSE(test::validateWms(noDoctype, test::WmsDocument::Capabilities111).valid);
 }

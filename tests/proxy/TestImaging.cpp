@@ -220,8 +220,11 @@ TEST(ImagingModuleIntegration, AMissingModuleIsAClearErrorWhereItIsNeeded) {
     auto tiff = encodeHeights("image/tiff", 1, 1, h1);
     if (tiff || tiff.error().find(expected) != 0)
       return "encodeHeights TIFF: " + (tiff ? std::string("succeeded") : tiff.error());
-    auto blank = blankImage("image/png", 4, 4, std::nullopt, false);
-    if (blank || blank.error().find(expected) != 0) return "blankImage";
+    // A blank map is the proxy's own too; only INIMAGE's text is drawn by the module.
+    if (auto blank = blankMap(MapFormat::Png, false, 4, 4, std::nullopt, false); !blank)
+      return "blankMap without text: " + blank.error();
+    auto drawn = blankMap(MapFormat::Png, false, 4, 4, std::nullopt, false, "text");
+    if (drawn || drawn.error().find(expected) != 0) return "blankMap with text";
     // BIL16 needs no module.
     const std::int16_t heights[1] = {42};
     if (!encodeHeights("application/bil16", 1, 1, heights)) return "bil16";

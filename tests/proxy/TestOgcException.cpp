@@ -1,3 +1,5 @@
+#include "../support/WmsSchemas.hpp"
+
 #include <tellus/proxy/OgcExceptionFormat.hpp>
 
 #include <gtest/gtest.h>
@@ -66,9 +68,9 @@ TEST(OgcException, Version111Report) {
   EXPECT_EQ(r.body,
             "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
             "<!DOCTYPE ServiceExceptionReport SYSTEM "
-            "\"http://schemas.opengis.net/wms/1.1.1/exception_1_1_1.dtd\">\n"
+            "\"http://schemas.opengis.net/wms/1.1.1/WMS_exception_1_1_1.dtd\">\n"
             "<ServiceExceptionReport version=\"1.1.1\">\n"
-            "  <ServiceException code=\"InvalidSRS\" locator=\"SRS\">SRS &apos;EPSG:3857&apos; "
+            "  <ServiceException code=\"InvalidSRS\">SRS &apos;EPSG:3857&apos; "
             "is not supported</ServiceException>\n"
             "</ServiceExceptionReport>\n");
   EXPECT_TRUE(xmllintAccepts(r.body));
@@ -206,4 +208,63 @@ TEST(OgcExceptionExtremes, SanitizeHandlesEdgeInputs) {
   }();
   const std::string out = sanitizeForClient(many);
   EXPECT_EQ(out.find("/p"), std::string::npos);
+}
+
+// Every code tellus may send, in both versions, valid against the official DTD / XSD
+// (WMS_exception_1_1_1.dtd declares no locator attribute; exceptions_1_3_0.xsd does).
+TEST(OgcExceptionSchemas, EveryCodeOfBothVersionsIsValid) {
+  for (const std::string_view code : {ogc::kLayerNotDefined,
+                                      ogc::kInvalidCrs,
+                                      ogc::kInvalidSrs,
+                                      ogc::kInvalidFormat,
+                                      ogc::kStyleNotDefined,
+                                      ogc::kLayerNotQueryable,
+                                      ogc::kInvalidPoint,
+                                      ogc::kMissingDimensionValue,
+                                      ogc::kInvalidDimensionValue,
+                                      ogc::kOperationNotSupported,
+                                      ogc::kMissingParameterValue,
+                                      ogc::kInvalidParameterValue,
+                                      ogc::kInvalidUpdateSequence,
+                                      ogc::kCurrentUpdateSequence,
+                                      ogc::kNoApplicableCode,
+                                      std::string_view()}) {
+    for (const std::string_view locator : {std::string_view("LAYERS"), std::string_view()}) {
+      const OgcException e{std::string(code), std::string(locator), "x < y & \"z\" 'w'"};
+      const auto v111 = test::validateWms(formatWmsException(WmsVersion::V111, e, false).body,
+                                          test::WmsDocument::Exception111);
+      EXPECT_TRUE(v111.valid) << code << " " << locator << "\n" << v111.output;
+      const auto v130 = test::validateWms(formatWmsException(WmsVersion::V130, e, true).body,
+                                          test::WmsDocument::Exception130);
+      EXPECT_TRUE(v130.valid) << code << " " << locator << "\n" << v130.output;
+    }
+  }
+}
+
+// The validation can fail: what the 1.1.1 DTD does not declare, or a 1.3.0 report in the wrong
+// namespace, is refused.
+TEST(OgcExceptionSchemas, TheValidationRefusesWhatTheSchemasDoNotAllow) {
+  const std::string withLocator =
+      "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+      "<!DOCTYPE ServiceExceptionReport SYSTEM "
+      "\"http://schemas.opengis.net/wms/1.1.1/WMS_exception_1_1_1.dtd\">\n"
+      "<ServiceExceptionReport version=\"1.1.1\">\n"
+      "  <ServiceException code=\"LayerNotDefined\" locator=\"LAYERS\">m</ServiceException>\n"
+      "</ServiceExceptionReport>\n";
+  const auto refused = test::validateWms(withLocator, test::WmsDocument::Exception111);
+  EXPECT_FALSE(refused.valid);
+  EXPECT_NE(refused.output.find("locator"), std::string::npos) << refused.output;
+  std::string withoutLocator = withLocator;
+  withoutLocator.erase(withoutLocator.find(" locator=\"LAYERS\""), 17);
+  const auto accepted = test::validateWms(withoutLocator, test::WmsDocument::Exception111);
+  EXPECT_TRUE(accepted.valid) << accepted.output;
+  // Version 1.1.1 is fixed by the DTD.
+  std::string wrongVersion = withoutLocator;
+  wrongVersion.replace(wrongVersion.find("version=\"1.1.1\""), 15, "version=\"1.3.0\"");
+  EXPECT_FALSE(test::validateWms(wrongVersion, test::WmsDocument::Exception111).valid);
+  // A 1.3.0 report outside the http://www.opengis.net/ogc namespace.
+  std::string v130 = formatWmsException(WmsVersion::V130, kLayer, false).body;
+  EXPECT_TRUE(test::validateWms(v130, test::WmsDocument::Exception130).valid);
+  v130.replace(v130.find("xmlns=\"http://www.opengis.net/ogc\""), 35, "xmlns=\"urn:x\"");
+  EXPECT_FALSE(test::validateWms(v130, test::WmsDocument::Exception130).valid);
 }

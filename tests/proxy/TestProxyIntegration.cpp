@@ -10,6 +10,7 @@
 
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/cache/TilePath.hpp>
+#include <tellus/proxy/Compose.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
@@ -1225,8 +1226,10 @@ TEST(ComposeIntegration, JpegMapsFromTilesOfAnySubsampling) {
 }
 
 TEST(ComposeIntegration, HeightsAreExactWhereTheBoxIsAligned) {
-  // The upstream's heights are ten times the longitude of each texel's centre.
+  // The upstream's heights are ten times the longitude of each texel's centre (and "sat" is
+  // imagery as everywhere).
   test::FakeUpstream up([](const test::FakeRequest& req) {
+    if (req.target.find("LAYERS=upsat") != std::string::npos) return tileReply(req);
     const auto at = req.target.find("BBOX=");
     double s = 0, w = 0, n = 0, e = 0;
     std::sscanf(req.target.c_str() + at + 5, "%lf,%lf,%lf,%lf", &s, &w, &n, &e);
@@ -1275,11 +1278,42 @@ TEST(ComposeIntegration, HeightsAreExactWhereTheBoxIsAligned) {
     }
     EXPECT_EQ(wrong, 0);
   }
-  // Imagery formats are refused for heights, and heights do not mix with imagery.
-  EXPECT_NE(p.get(getMap("dem", bbox, 100, 60, "image/jpeg")).body.find("InvalidFormat"),
-            std::string::npos);
-  EXPECT_NE(p.get(getMap("sat,dem", bbox, 100, 60, "image/png")).body.find("InvalidParameterValue"),
-            std::string::npos);
+  // Heights in a picture format are the grey picture of the same heights (heightToGrey), exact
+  // in a lossless one; so are heights drawn over imagery (they have data everywhere here).
+  for (const std::string layers : {"dem", "sat,dem"}) {
+    for (const char* format : {"image/png;%20mode=24bit", "image/png"}) {
+      if (layers == "dem" && std::string_view(format) == "image/png") continue; // 16-bit heights
+      SCOPED_TRACE(layers + " " + format);
+      const auto r = p.get(getMap(layers, bbox, 100, 60, format));
+      ASSERT_EQ(r.header("content-type"), "image/png") << r.body.substr(0, 400);
+      const auto img = decodeAnswer(r, 100, 60);
+      ASSERT_FALSE(img.pixels.empty());
+      int wrong = 0;
+      for (int j = 0; j < 60; ++j) {
+        for (int i = 0; i < 100; ++i) {
+          const int grey =
+              heightToGrey(static_cast<std::int16_t>(std::lround((west + (i + 0.5) * t) * 10)));
+          wrong += rgbAt(img, i, j) != std::array<int, 3>{grey, grey, grey};
+        }
+      }
+      EXPECT_EQ(wrong, 0);
+    }
+  }
+  const auto jpeg = p.get(getMap("dem", bbox, 100, 60, "image/jpeg"));
+  EXPECT_EQ(jpeg.header("content-type"), "image/jpeg") << jpeg.body.substr(0, 400);
+  // Imagery in heights is its luminance: drawn over the heights it replaces them (0 - 255).
+  const auto luma = p.get(getMap("dem,sat", bbox, 100, 60, "application/bil16"));
+  ASSERT_EQ(luma.header("content-type"), "application/bil16") << luma.body.substr(0, 400);
+  const auto values =
+      decodeHeights(std::span<const std::byte>(reinterpret_cast<const std::byte*>(luma.body.data()),
+                                               luma.body.size()),
+                    "application/bil16",
+                    100,
+                    60);
+  ASSERT_TRUE(values) << values.error();
+  EXPECT_EQ(std::count_if(
+                values->begin(), values->end(), [](std::int16_t v) { return v < 0 || v > 255; }),
+            0);
 }
 
 namespace {
@@ -1290,7 +1324,7 @@ ComposedMap composeJpeg(MapComposer& c, const LayerSpec* layer, const Sector& bo
   r.bbox = box;
   r.width = 300;
   r.height = 200;
-  r.format = "image/jpeg";
+  r.format = MapFormat::Jpeg;
   std::promise<ComposedMap> done;
   EXPECT_TRUE(c.compose(r, nullptr, [&](ComposedMap&& m) { done.set_value(std::move(m)); }));
   return done.get_future().get();

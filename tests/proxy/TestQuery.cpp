@@ -66,6 +66,20 @@ TEST(Query, FirstValueWinsAndDuplicatesAreRecorded) {
   EXPECT_FALSE(parsed("a=1&b=2").hasDuplicates());
 }
 
+TEST(Query, RepeatedKeysConflictOnlyWithAnotherValue) {
+  const QueryParams q =
+      parsed("width=1&WIDTH=1&layers=a&Layers=b&format=image%2Fpng&FORMAT=image/png&x=&X=");
+  EXPECT_FALSE(q.isConflicting("width")) << "the same value twice";
+  EXPECT_TRUE(q.isDuplicated("width"));
+  EXPECT_TRUE(q.isConflicting("layers"));
+  EXPECT_TRUE(q.isConflicting("LAYERS"));
+  EXPECT_FALSE(q.isConflicting("format")) << "compared after decoding";
+  EXPECT_FALSE(q.isConflicting("x"));
+  EXPECT_FALSE(q.isConflicting("absent"));
+  EXPECT_TRUE(parsed("a=1&a=1&a=2").isConflicting("a"));
+  EXPECT_TRUE(parsed("a=X&a=x").isConflicting("a")) << "values are case-sensitive";
+}
+
 TEST(Query, EmptySegmentsKeyOnlyAndEmptyKeys) {
   const QueryParams q = parsed("?&&styles&a=&=orphan&b=x=y&&");
   EXPECT_EQ(q.get("styles"), "");

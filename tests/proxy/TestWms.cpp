@@ -134,6 +134,49 @@ TEST(Wms, UpdateSequenceRules) {
   EXPECT_FALSE(checkUpdateSequence("2026-11-22T00:00:00Z", "2026-11-23T00:00:00Z").has_value());
 }
 
+// Numbers compare as numbers in any lexical form a client may send (exactly, not through a
+// double), anything else as strings.
+TEST(Wms, UpdateSequenceComparesNumbersInAnySpelling) {
+  const auto code = [](std::string_view requested, std::string_view current) {
+    const auto e = checkUpdateSequence(requested, current);
+    return e ? e->code : std::string("send");
+  };
+  const std::string equal(ogc::kCurrentUpdateSequence);
+  const std::string greater(ogc::kInvalidUpdateSequence);
+  for (const char* same : {"1796151274",
+                           "1.796151274E9",
+                           "1.796151274e+9",
+                           "01796151274",
+                           "+1796151274",
+                           "1796151274.0",
+                           "1796151274.",
+                           "17961512740e-1",
+                           "0.1796151274e10",
+                           "1796151274.000000000000000000000000001e0"}) {
+    if (std::string_view(same) == "1796151274.000000000000000000000000001e0") {
+      EXPECT_EQ(code(same, "1796151274"), greater) << "no rounding through a double";
+      continue;
+    }
+    EXPECT_EQ(code(same, "1796151274"), equal) << same;
+    EXPECT_EQ(code("1796151274", same), equal) << same;
+  }
+  EXPECT_EQ(code("1.796151275E9", "1796151274"), greater);
+  EXPECT_EQ(code("1.796151273E9", "1796151274"), "send");
+  EXPECT_EQ(code("-5", "3"), "send");
+  EXPECT_EQ(code("3", "-5"), greater);
+  EXPECT_EQ(code("-0", "0.0"), equal);
+  EXPECT_EQ(code("-1e-3", "-0.001"), equal);
+  EXPECT_EQ(code("-2", "-10"), greater);
+  EXPECT_EQ(code("1e400", "9e399"), greater); // beyond a double: still exact
+  EXPECT_EQ(code(".5", "0.5"), equal);
+  EXPECT_EQ(code("1e999999999999", "1"), greater);
+  // Not numbers (or only one of them is): string order.
+  for (const char* notANumber : {"1796151274x", "1.2.3", "e5", "+", ".", "1e", "0x10", " 1", "1 "})
+    EXPECT_EQ(code(notANumber, notANumber), equal) << notANumber;
+  EXPECT_EQ(code("b", "a"), greater);
+  EXPECT_EQ(code("10", "9a"), "send"); // "10" < "9a" as strings
+}
+
 // ---- REQUEST -------------------------------------------------------------------------------
 
 TEST(Wms, RequestMissingOrUnsupported) {
@@ -181,7 +224,7 @@ TEST(Wms, WorldWindJavaRequest) {
   // WorldWindJava's WMSTiledImageLayer: lower-case names, 1.3.0, CRS:84, lon/lat.
   const GetMapRequest r = getMap(
       "service=WMS&request=GetMap&version=1.3.0&crs=CRS:84&layers=bmng&styles=&"
-      "format=image/dds&transparent=TRUE&width=512&height=512&bbox=-180.0,-90.0,-144.0,-54.0");
+      "format=image/png&transparent=TRUE&width=512&height=512&bbox=-180.0,-90.0,-144.0,-54.0");
   EXPECT_EQ(r.version, WmsVersion::V130);
   EXPECT_EQ(r.layers, std::vector<std::string>{"bmng"});
   EXPECT_EQ(r.styles, std::vector<std::string>{""});
@@ -189,7 +232,7 @@ TEST(Wms, WorldWindJavaRequest) {
   EXPECT_EQ(r.bbox, kFirstTile);
   EXPECT_EQ(r.width, 512);
   EXPECT_EQ(r.height, 512);
-  EXPECT_EQ(r.format, "image/dds");
+  EXPECT_EQ(r.format, "image/png");
   EXPECT_TRUE(r.transparent);
   EXPECT_FALSE(r.bgcolor.has_value());
   EXPECT_EQ(r.exceptions, Exceptions::Xml);
@@ -208,10 +251,13 @@ TEST(Wms, WebWorldWindRequest) {
 
 // ---- GetMap: SERVICE, VERSION, CRS -----------------------------------------------------------
 
-TEST(Wms, ServiceIsOptionalOnlyForGetMap111) {
+// Neither GetMap table (06-042 Table 8, 01-068r3 7.2.2) lists SERVICE.
+TEST(Wms, ServiceIsNoGetMapParameter) {
   EXPECT_EQ(getMap(with(k111, "SERVICE", "<absent>")).version, WmsVersion::V111);
-  expectError(with(k130, "SERVICE", "<absent>"), ogc::kMissingParameterValue, "SERVICE");
+  EXPECT_EQ(getMap(with(k130, "SERVICE", "<absent>")).version, WmsVersion::V130);
+  EXPECT_EQ(getMap(with(k130, "SERVICE", "")).version, WmsVersion::V130);
   expectError(with(k111, "SERVICE", "WCS"), ogc::kInvalidParameterValue, "SERVICE");
+  expectError(with(k130, "SERVICE", "WFS"), ogc::kInvalidParameterValue, "SERVICE");
   EXPECT_EQ(getMap(with(k130, "SERVICE", "wms")).version, WmsVersion::V130);
 }
 
@@ -276,11 +322,27 @@ TEST(Wms, SizeWithinLimits) {
   EXPECT_EQ(getMap(with(k130, "WIDTH", "0512")).width, 512);
 }
 
-TEST(Wms, FormatIsRequiredAndVerbatim) {
+TEST(Wms, FormatIsRequiredAndAMimeTypeOfAnyCase) {
   expectError(with(k130, "FORMAT", "<absent>"), ogc::kMissingParameterValue, "FORMAT");
   expectError(with(k130, "FORMAT", ""), ogc::kMissingParameterValue, "FORMAT");
   EXPECT_EQ(getMap(with(k130, "FORMAT", "image/png;+mode%3D8bit")).format, "image/png; mode=8bit");
-  EXPECT_EQ(getMap(with(k130, "FORMAT", "image/foo")).format, "image/foo"); // caller's check
+  EXPECT_EQ(getMap(with(k130, "FORMAT", "image/png;mode=8bit")).mapFormat, MapFormat::Png8);
+  EXPECT_EQ(getMap(with(k130, "FORMAT", "image/png8")).format, "image/png; mode=8bit");
+  EXPECT_EQ(getMap(with(k130, "FORMAT", "IMAGE/JPEG")).format, "image/jpeg");
+  EXPECT_EQ(getMap(with(k130, "FORMAT", "Application/BIL16")).mapFormat, MapFormat::Bil16);
+  EXPECT_EQ(getMap(with(k130, "FORMAT", "image/tiff")).mapFormat, MapFormat::Tiff);
+  EXPECT_EQ(getMap(with(k130, "FORMAT", "image/png;%20mode=32BIT")).mapFormat, MapFormat::Png32);
+  for (const char* bad : {"image/foo",
+                          "image/dds",
+                          "image/png; mode=16bit",
+                          "png",
+                          "image/gif",
+                          "image/jpeg;",
+                          "image/png;mode",
+                          "image%2Fpng%00"}) {
+    if (std::string_view(bad).find("%00") != std::string_view::npos) continue; // parseQuery's
+    expectError(with(k130, "FORMAT", bad), ogc::kInvalidFormat, "FORMAT");
+  }
 }
 
 // ---- GetMap: LAYERS, STYLES
@@ -304,9 +366,11 @@ TEST(Wms, LayersAndStyles) {
   EXPECT_EQ(getMap(with(k130, "LAYERS", "BlueMarble")).layers.front(), "BlueMarble");
 }
 
-TEST(Wms, StylesRequiredIn130OnlyAndOptionalIn111) {
+// STYLES is mandatory in both tables (06-042 Table 8, 01-068r3 7.2.3.4); STYLES= is the default.
+TEST(Wms, StylesRequiredInBothVersions) {
   expectError(with(k130, "STYLES", "<absent>"), ogc::kMissingParameterValue, "STYLES");
-  const GetMapRequest r = getMap(with(with(k111, "STYLES", "<absent>"), "LAYERS", "a,b"));
+  expectError(with(k111, "STYLES", "<absent>"), ogc::kMissingParameterValue, "STYLES");
+  const GetMapRequest r = getMap(with(with(k111, "STYLES", ""), "LAYERS", "a,b"));
   EXPECT_EQ(r.styles, (std::vector<std::string>{"", ""}));
 }
 
@@ -346,10 +410,17 @@ TEST(Wms, ExceptionsInBothSpellings) {
   expectError(with(k130, "EXCEPTIONS", "JSON"), ogc::kInvalidParameterValue, "EXCEPTIONS");
 }
 
-TEST(Wms, UnknownParametersAreIgnoredAndFirstDuplicateWins) {
-  const GetMapRequest r = getMap(k130 + "&FOO=bar&VENDOR_x=1&WIDTH=99999&LAYERS=other");
+TEST(Wms, UnknownParametersAreIgnoredAndConflictingRepeatsRefused) {
+  const GetMapRequest r = getMap(k130 + "&FOO=bar&VENDOR_x=1&foo=other&width=512&Layers=bmng");
   EXPECT_EQ(r.width, 512);
   EXPECT_EQ(r.layers.front(), "bmng");
+  expectError(k130 + "&WIDTH=99999", ogc::kInvalidParameterValue, "WIDTH");
+  expectError(k130 + "&layers=other", ogc::kInvalidParameterValue, "LAYERS");
+  expectError(k130 + "&SERVICE=WFS", ogc::kInvalidParameterValue, "SERVICE");
+  expectError(k130 + "&request=GetCapabilities", ogc::kInvalidParameterValue, "REQUEST");
+  expectError("SERVICE=WMS&REQUEST=GetCapabilities&VERSION=1.3.0&VERSION=1.1.1",
+              ogc::kInvalidParameterValue,
+              "VERSION");
 }
 
 TEST(Wms, ErrorContextForUnparsedRequests) {
@@ -587,4 +658,117 @@ TEST(StaticTilePathExtremes, RejectsUnsafeOrMalformedPaths) {
   EXPECT_TRUE(parseStaticTilePath(std::string(kMaxStaticLayerName, 'a') + "/0/0/0_0.jpg"));
   EXPECT_FALSE(parseStaticTilePath(std::string(kMaxStaticLayerName + 1, 'a') + "/0/0/0_0.jpg"));
   EXPECT_TRUE(parseStaticTilePath(".../0/0/0_0.jpg")); // three dots is a plain name
+}
+
+// ---- TIME ------------------------------------------------------------------------------------
+
+namespace {
+
+std::string timeOf(const std::vector<std::string>& values,
+                   std::string_view period,
+                   std::string_view defaultValue,
+                   std::string_view t) {
+  const auto r = resolveTimeDimension("l", values, period, defaultValue, t);
+  return r ? *r : "!" + r.error().code;
+}
+
+const std::string kInvalidTime = "!" + std::string(ogc::kInvalidDimensionValue);
+
+} // namespace
+
+// A period kept as a period: only instants on its grid, and each in one spelling.
+TEST(WmsTime, APeriodTakesOnlyInstantsOnItsGrid) {
+  const std::string hourly = "2010-01-01T00:00Z/2010-12-31T00:00Z/PT1H";
+  const auto at = [&](std::string_view t) { return timeOf({}, hourly, "2010-12-31T00:00Z", t); };
+  EXPECT_EQ(at("2010-01-01T05:00Z"), "2010-01-01T05:00Z");
+  // Other spellings of the same instant: the period's own.
+  EXPECT_EQ(at("2010-01-01T05:00:00Z"), "2010-01-01T05:00Z");
+  EXPECT_EQ(at("2010-01-01T05:00:00.000Z"), "2010-01-01T05:00Z");
+  EXPECT_EQ(at("2010-01-01T05:00"), "2010-01-01T05:00Z");
+  EXPECT_EQ(at("2010-01-01T06:00+01:00"), "2010-01-01T05:00Z");
+  EXPECT_EQ(at("2010-01-01T04:30-0030"), "2010-01-01T05:00Z");
+  EXPECT_EQ(at("2010-01-01"), "2010-01-01T00:00Z");
+  EXPECT_EQ(at(""), "2010-12-31T00:00Z"); // the default
+  // Strings of the right length that sort inside, off-grid times, outside, junk: refused.
+  for (const char* bad : {"2010-99-99T99:99Z",
+                          "2010-02-30T00:00Z",
+                          "2010-01-01T24:00Z",
+                          "2010-01-01T00:60Z",
+                          "2010-01-01T00:30Z",
+                          "2010-01-01T05:00:01Z",
+                          "2010-01-01T05:00:00.5Z",
+                          "2009-12-31T23:00Z",
+                          "2010-12-31T01:00Z",
+                          "2010/../..",
+                          "2010-06-01T00:00Y",
+                          "2010-06-01T00:00Z ",
+                          " 2010-06-01T00:00Z",
+                          "2010-06-01t00:00z",
+                          "20100601T0000Z",
+                          "current",
+                          "2010-06-01T00:00+24:00"}) {
+    EXPECT_EQ(at(bad), kInvalidTime) << bad;
+  }
+  // Lists and ranges: a map is made for one time.
+  for (const char* many : {"2010-01-01T00:00Z,2010-01-01T01:00Z",
+                           "2010-01-01T00:00Z/2010-01-02T00:00Z",
+                           "2010-01-01T00:00Z/2010-01-02T00:00Z/PT1H",
+                           ","}) {
+    const auto r = resolveTimeDimension("l", {}, hourly, "", many);
+    ASSERT_FALSE(r) << many;
+    EXPECT_EQ(r.error().code, ogc::kInvalidDimensionValue);
+    EXPECT_EQ(r.error().locator, "TIME");
+    EXPECT_NE(r.error().message.find("one time"), std::string::npos) << r.error().message;
+  }
+}
+
+TEST(WmsTime, DaysMonthsYearsAndWeeks) {
+  const std::string daily = "2000-02-24/2025-12-31/P1D";
+  EXPECT_EQ(timeOf({}, daily, "", "2000-02-24"), "2000-02-24");
+  EXPECT_EQ(timeOf({}, daily, "", "2024-02-29"), "2024-02-29");
+  EXPECT_EQ(timeOf({}, daily, "", "2024-02-29T00:00:00Z"), "2024-02-29");
+  EXPECT_EQ(timeOf({}, daily, "", "2024-02-29T12:00Z"), kInvalidTime);
+  EXPECT_EQ(timeOf({}, daily, "", "2023-02-29"), kInvalidTime);
+  EXPECT_EQ(timeOf({}, daily, "", "2000-02-23"), kInvalidTime);
+  EXPECT_EQ(timeOf({}, daily, "", "2026-01-01"), kInvalidTime);
+  // Months on the calendar from the start, the day clamped to the month's end.
+  const std::string monthly = "2002-01-31/2024-12-31/P1M";
+  EXPECT_EQ(timeOf({}, monthly, "", "2002-02-28"), "2002-02-28");
+  EXPECT_EQ(timeOf({}, monthly, "", "2004-02-29"), "2004-02-29");
+  EXPECT_EQ(timeOf({}, monthly, "", "2024-12-31"), "2024-12-31");
+  EXPECT_EQ(timeOf({}, monthly, "", "2002-03-31"), "2002-03-31");
+  EXPECT_EQ(timeOf({}, monthly, "", "2002-03-28"), kInvalidTime);
+  EXPECT_EQ(timeOf({}, "2002-07-01/2024-12-01/P3M", "", "2002-10-01"), "2002-10-01");
+  EXPECT_EQ(timeOf({}, "2002-07-01/2024-12-01/P3M", "", "2002-09-01"), kInvalidTime);
+  EXPECT_EQ(timeOf({}, "2000-01-01/2100-01-01/P1Y", "", "2099-01-01"), "2099-01-01");
+  EXPECT_EQ(timeOf({}, "2000-01-01/2100-01-01/P1Y", "", "2099-01-02"), kInvalidTime);
+  EXPECT_EQ(timeOf({}, "2024-01-01/2024-12-31/P1W", "", "2024-01-08"), "2024-01-08");
+  EXPECT_EQ(timeOf({}, "2024-01-01/2024-12-31/P1W", "", "2024-01-09"), kInvalidTime);
+  // Minutes and a date-only start with a time step.
+  EXPECT_EQ(timeOf({}, "2024-03-01/2024-03-02/PT6H", "", "2024-03-01T18:00:00Z"),
+            "2024-03-01T18:00Z");
+  EXPECT_EQ(timeOf({}, "2024-03-01T00:00:00Z/2024-03-02T00:00:00Z/PT10M", "", "2024-03-01T00:50Z"),
+            "2024-03-01T00:50:00Z");
+  EXPECT_EQ(timeOf({}, "2024-03-01T00:00:00Z/2024-03-02T00:00:00Z/PT10M", "", "2024-03-01T00:55Z"),
+            kInvalidTime);
+}
+
+TEST(WmsTime, ValuesMatchByInstantAndKeepTheirSpelling) {
+  const std::vector<std::string> values{"2024-01-01", "2024-01-02T12:00:00Z", "2004-08"};
+  EXPECT_EQ(timeOf(values, "", "", "2024-01-01"), "2024-01-01");
+  EXPECT_EQ(timeOf(values, "", "", "2024-01-01T00:00Z"), "2024-01-01");
+  EXPECT_EQ(timeOf(values, "", "", "2024-01-02T12:00Z"), "2024-01-02T12:00:00Z");
+  EXPECT_EQ(timeOf(values, "", "", "2004-08"), "2004-08"); // listed verbatim
+  EXPECT_EQ(timeOf(values, "", "", "2024-01-03"), kInvalidTime);
+  EXPECT_EQ(timeOf(values, "", "", "2004-09"), kInvalidTime);
+  EXPECT_EQ(timeOf(values, "", "2024-01-01T00:00:00Z", ""), "2024-01-01");
+  EXPECT_EQ(timeOf({"a"}, "", "", ""), "!" + std::string(ogc::kMissingDimensionValue));
+  // A layer without a dimension ignores TIME.
+  EXPECT_EQ(timeOf({}, "", "", "2010-99-99"), "");
+  // An expanded period (values and the period): the values' spelling wins.
+  EXPECT_EQ(timeOf({"2024-03-01T00:00:00Z", "2024-03-01T06:00:00Z"},
+                   "2024-03-01T00:00Z/2024-03-01T06:00Z/PT6H",
+                   "",
+                   "2024-03-01T06:00Z"),
+            "2024-03-01T06:00:00Z");
 }

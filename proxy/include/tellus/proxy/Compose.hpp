@@ -155,4 +155,34 @@ ComposeStats composeHeights(const TileGrid& grid,
                             std::int16_t noData,
                             std::vector<std::int16_t>& heights);
 
+/**
+ * Heights as a picture (a heights layer in a JPEG or 8-bit PNG map): one fixed, linear grey ramp
+ * over the Earth's relief, raw value -11000 black and +9000 white (sea level 0 is grey 140),
+ * clamped outside; the same for every map, so that tiles of a picture fit together. Raw values are
+ * the layer's samples before its scale and offset.
+ */
+inline constexpr std::int32_t kGreyRampLow = -11000;
+inline constexpr std::int32_t kGreyRampHigh = 9000;
+std::uint8_t heightToGrey(std::int16_t raw) noexcept;
+
+/** Draws a map of heights (width * height values, one layer composed with composeHeights) over
+ * `canvas` as grey (heightToGrey), pixels of `noData` left as they are, the others drawn "over"
+ * with `opacity` (as composeImagery draws a layer). */
+void drawHeightsAsGrey(const std::vector<std::int16_t>& heights,
+                       std::int16_t noData,
+                       double opacity,
+                       std::vector<std::uint8_t>& canvas,
+                       std::int32_t canvasChannels);
+
+/** A picture as heights (an imagery layer in a BIL16, TIFF or 16-bit PNG map): the luminance of
+ * each pixel of `rgba` (width * height RGBA, one layer composed on a transparent canvas),
+ * Y = 0.299 R + 0.587 G + 0.114 B rounded (0 - 255, JPEG's and MapServer's weights), written into
+ * `heights` where the pixel's alpha is at least 128; the rest keeps what `heights` holds (later
+ * layers win where they have data, as composeHeights draws). */
+void drawLuminanceAsHeights(const std::vector<std::uint8_t>& rgba,
+                            std::vector<std::int16_t>& heights);
+
+/** The luminance drawLuminanceAsHeights writes for one colour. */
+std::uint8_t luminance(std::uint8_t r, std::uint8_t g, std::uint8_t b) noexcept;
+
 } // namespace tellus

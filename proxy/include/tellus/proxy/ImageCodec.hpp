@@ -4,6 +4,8 @@
  * @brief Encoding pixels into the formats tellus serves (OpenImageIO stays inside proxy/src).
  */
 
+#include <tellus/proxy/Wms.hpp>
+
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -34,16 +36,22 @@ std::expected<std::vector<std::byte>, std::string>
 encodeHeights(std::string_view mimeType, int width, int height, const std::int16_t* heights);
 
 /**
- * A plain image for WMS EXCEPTIONS=BLANK (and, with `text`, INIMAGE): BGCOLOR (default white),
- * fully transparent when `transparent` and the format has alpha. The text, if any, is drawn in
- * black with the DejaVu Sans Mono font when it is installed (else the image stays plain).
+ * A map without data, in any GetMap format: for WMS EXCEPTIONS=BLANK and INIMAGE, and for a map
+ * where there is no tile. A picture (`heights` false) is BGCOLOR (default white), fully
+ * transparent when `transparent` and the format has alpha (PNG, 8-bit PNG, 32-bit PNG; a 32-bit
+ * PNG is opaque otherwise); `text`, if any, is drawn in black with the DejaVu Sans Mono font when
+ * it is installed (INIMAGE; else the image stays plain; only drawing text loads the imaging
+ * module). Heights (`heights`: BIL16, Int16 TIFF or 16-bit PNG, see mapIsHeights) are `noData`
+ * everywhere, and `text` is not drawn: text drawn into heights would be terrain.
  */
-std::expected<std::vector<std::byte>, std::string> blankImage(std::string_view mimeType,
-                                                              int width,
-                                                              int height,
-                                                              std::optional<std::uint32_t> bgcolor,
-                                                              bool transparent,
-                                                              std::string_view text = {});
+std::expected<std::vector<std::byte>, std::string> blankMap(MapFormat format,
+                                                            bool heights,
+                                                            int width,
+                                                            int height,
+                                                            std::optional<std::uint32_t> bgcolor,
+                                                            bool transparent,
+                                                            std::string_view text = {},
+                                                            std::int16_t noData = -32768);
 
 /** Decoded imagery: 8-bit RGB (channels 3) or RGBA (4), row-major, top row first. */
 struct DecodedImage {

@@ -28,11 +28,12 @@ struct FormattedResponse {
 /**
  * @brief The XML exception report of a version.
  *
- * 1.3.0: text/xml, `<ServiceExceptionReport version="1.3.0" xmlns="http://www.opengis.net/ogc">`;
- * 1.1.1: application/vnd.ogc.se_xml with the exception_1_1_1.dtd DOCTYPE. code and locator
- * attributes are omitted when empty. The message goes through sanitizeForClient, is cut to
- * kMaxClientMessageBytes and XML-escaped; the locator is sanitized and escaped too.
- * Status 200 (what WMS clients and CITE expect) unless httpStatusCodes: then
+ * 1.3.0: text/xml, `<ServiceExceptionReport version="1.3.0" xmlns="http://www.opengis.net/ogc">`
+ * (valid against exceptions_1_3_0.xsd); 1.1.1: application/vnd.ogc.se_xml with the
+ * WMS_exception_1_1_1.dtd DOCTYPE (valid against it: no locator attribute, which that DTD does not
+ * declare). code and locator attributes are omitted when empty. The message goes through
+ * sanitizeForClient, is cut to kMaxClientMessageBytes and XML-escaped; the locator is sanitized and
+ * escaped too. Status 200 (what WMS clients and CITE expect) unless httpStatusCodes: then
  * wmsExceptionHttpStatus(code).
  */
 FormattedResponse

@@ -31,6 +31,7 @@ public:
     std::string key;             ///< lower-case
     std::string value;           ///< decoded, first occurrence
     std::size_t occurrences = 1; ///< how often the key occurred
+    bool conflicting = false;    ///< a later occurrence had another value than the first
   };
 
   /** The value of a key (compared ASCII case-insensitively), or std::nullopt when absent. A key
@@ -41,6 +42,9 @@ public:
   bool isDuplicated(std::string_view lowerKey) const noexcept;
   /** True when any key occurred more than once. */
   bool hasDuplicates() const noexcept;
+  /** True when the key occurred more than once with different values (`WIDTH=1&WIDTH=2`; the
+   * same value repeated is no conflict). */
+  bool isConflicting(std::string_view lowerKey) const noexcept;
 
   std::size_t size() const noexcept { return entries_.size(); }
   bool empty() const noexcept { return entries_.empty(); }

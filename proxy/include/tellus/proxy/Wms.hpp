@@ -67,6 +67,30 @@ struct WmsLimits {
  * requests (the outside is drawn empty), but a box of 1e300 degrees is an attack, not a map. */
 inline constexpr double kMaxBboxMagnitudeDeg = 1.0e6;
 
+/**
+ * The GetMap output formats tellus serves, for every layer (docs/CONFIG.md, "WMS"): pictures
+ * (JPEG; PNG 24-bit, or 32-bit with TRANSPARENT=TRUE; PNG 8-bit paletted, 24-bit and 32-bit) and
+ * heights (BIL16, Int16 TIFF; PNG is 16-bit heights when every layer of the map is an elevation
+ * layer). Which a map is made as: mapIsHeights().
+ */
+enum class MapFormat { Jpeg, Png, Png8, Png24, Png32, Bil16, Tiff };
+
+/**
+ * A FORMAT value as a MapFormat. A MIME type is case-insensitive in its type, subtype and
+ * parameter names and values (RFC 2045), and spaces around ';' and '=' do not count:
+ * "IMAGE/PNG; Mode=8BIT" is "image/png; mode=8bit". Also accepted: "image/png8" (GeoServer's
+ * 8-bit PNG). std::nullopt for anything else.
+ */
+std::optional<MapFormat> parseMapFormat(std::string_view format) noexcept;
+/** The canonical spelling: "image/jpeg", "image/png", "image/png; mode=8bit",
+ * "image/png; mode=24bit", "image/png; mode=32bit", "application/bil16", "image/tiff". */
+std::string_view toString(MapFormat format) noexcept;
+/** The Content-Type of a map in that format ("image/png" for every PNG). */
+std::string_view contentTypeOf(MapFormat format) noexcept;
+/** Whether a map in `format` carries heights (16-bit values) rather than a picture: BIL16 and
+ * TIFF always, PNG when every layer of the map is an elevation layer. */
+bool mapIsHeights(MapFormat format, bool everyLayerIsElevation) noexcept;
+
 struct GetCapabilitiesRequest {
   WmsVersion version = WmsVersion::V130; ///< after version negotiation
   std::string updateSequence;            ///< UPDATESEQUENCE, empty when absent
@@ -86,7 +110,8 @@ struct GetMapRequest {
   Sector bbox{};
   std::int32_t width = 0;  ///< 1 .. WmsLimits::maxWidth
   std::int32_t height = 0; ///< 1 .. WmsLimits::maxHeight
-  std::string format; ///< FORMAT verbatim (non-empty); checking it against a layer is the caller's
+  std::string format;      ///< FORMAT in its canonical spelling (toString(mapFormat))
+  MapFormat mapFormat = MapFormat::Png;
   bool transparent = false;
   std::optional<std::uint32_t> bgcolor; ///< 0xRRGGBB; std::nullopt = not given (white)
   std::string time;                     ///< TIME verbatim, empty when absent
@@ -102,11 +127,17 @@ using WmsRequest = std::variant<GetCapabilitiesRequest, GetMapRequest>;
 /**
  * @brief Parses a WMS request (keys as parseQuery stores them).
  *
+ * Each version's request tables are followed (OGC 06-042 Tables 3 and 8 for 1.3.0, 01-068r3
+ * 7.1.2 and 7.2.2 for 1.1.1); parameter names are case-insensitive (parseQuery), values
+ * case-sensitive except REQUEST, SERVICE, CRS/SRS, FORMAT (a MIME type), TRANSPARENT and
+ * EXCEPTIONS, which clients spell in any case.
  * - REQUEST missing -> MissingParameterValue (locator REQUEST); GetCapabilities (also WMS 1.0's
  *   "capabilities") and GetMap ("map") are served; GetFeatureInfo, GetLegendGraphic and anything
- *   else -> OperationNotSupported (locator REQUEST). REQUEST values are case-insensitive.
- * - SERVICE=WMS is required for GetCapabilities and for GetMap 1.3.0; GetMap 1.1.1 may omit it.
- *   A SERVICE other than WMS -> InvalidParameterValue (locator SERVICE).
+ *   else -> OperationNotSupported (locator REQUEST).
+ * - SERVICE=WMS is required for GetCapabilities only; GetMap's tables have no SERVICE (either
+ *   version), so it may be absent or empty. A SERVICE other than WMS -> InvalidParameterValue.
+ * - A parameter of the request's table given twice with different values -> InvalidParameterValue
+ *   (locator: the parameter); the same value repeated is accepted.
  * - GetCapabilities negotiates VERSION (or WMTVER): none or above 1.3.0 -> 1.3.0, 1.3.0 ->
  *   1.3.0, anything below -> 1.1.1; an unparseable version -> InvalidParameterValue.
  * - GetMap needs VERSION 1.1.1 or 1.3.0 (missing -> MissingParameterValue, other ->
@@ -116,9 +147,10 @@ using WmsRequest = std::variant<GetCapabilitiesRequest, GetMapRequest>;
  * - BBOX: four finite numbers with min < max on both axes and |value| <= kMaxBboxMagnitudeDeg,
  *   else InvalidParameterValue (locator BBOX).
  * - WIDTH/HEIGHT: whole numbers in [1, limits], else InvalidParameterValue.
- * - FORMAT, LAYERS (non-empty) and, for 1.3.0, STYLES are required (MissingParameterValue);
- *   an empty layer name in LAYERS -> LayerNotDefined; a STYLES list whose count differs from
- *   LAYERS -> InvalidParameterValue (locator STYLES).
+ * - FORMAT, LAYERS (non-empty) and STYLES (both versions; `STYLES=` selects the default styles)
+ *   are required (MissingParameterValue); a FORMAT that parseMapFormat does not know ->
+ *   InvalidFormat; an empty layer name in LAYERS -> LayerNotDefined; a STYLES list whose count
+ *   differs from LAYERS -> InvalidParameterValue (locator STYLES).
  * - TRANSPARENT TRUE/FALSE, BGCOLOR 0xRRGGBB, EXCEPTIONS in either version's spelling, else
  *   InvalidParameterValue. Unknown parameters are ignored.
  * Messages quote client values only shortened; format them with formatWmsException.
@@ -130,12 +162,16 @@ std::expected<WmsRequest, OgcException> parseWms(const QueryParams& params,
  * @brief How to report an error for a request that may not have parsed: the version (from
  * VERSION/WMTVER, 1.3.0 when absent or unreadable), and the EXCEPTIONS mode with the image
  * parameters needed to honour INIMAGE/BLANK. When any of those (FORMAT, WIDTH, HEIGHT,
- * TRANSPARENT, BGCOLOR) is missing or invalid, or the request is no GetMap, exceptions is Xml.
+ * TRANSPARENT, BGCOLOR) is missing, invalid or given twice with different values, or the request
+ * is no GetMap, exceptions is Xml.
  */
 struct WmsErrorContext {
   WmsVersion version = WmsVersion::V130;
   GetMapRequest::Exceptions exceptions = GetMapRequest::Exceptions::Xml;
-  std::string format;
+  std::string format; ///< canonical (toString(mapFormat))
+  MapFormat mapFormat = MapFormat::Png;
+  std::vector<std::string>
+      layers; ///< LAYERS as given (to tell heights from pictures), may be empty
   std::int32_t width = 0;
   std::int32_t height = 0;
   bool transparent = false;
@@ -146,18 +182,28 @@ WmsErrorContext wmsErrorContext(const QueryParams& params, const WmsLimits& limi
 /**
  * @brief The UPDATESEQUENCE rule of GetCapabilities: equal to the server's ->
  * CurrentUpdateSequence, greater -> InvalidUpdateSequence, lower or absent (either side empty) ->
- * std::nullopt (send the document). Sequences of digits compare numerically, anything else as
- * strings (ISO 8601 times compare correctly that way).
+ * std::nullopt (send the document). When both are decimal numbers in any lexical form
+ * (`1796151274`, `1.796151274E9`, `01796151274`, `+1796151274.0`) they compare as numbers,
+ * exactly (no rounding through a double); anything else compares as strings (ISO 8601 times
+ * compare correctly that way).
  */
 std::optional<OgcException> checkUpdateSequence(std::string_view requested,
                                                 std::string_view current);
 
 /**
- * @brief The TIME of a request for a layer with a TIME dimension (`values` listed, or a
- * `period` "start/end/step" too long to list): the value itself when it is one of them, the
- * default when the request has none, MissingDimensionValue when there is no default,
- * InvalidDimensionValue otherwise. Within a period, values of the period's ISO 8601 shape between
- * start and end are accepted. A layer without a dimension ignores TIME ("").
+ * @brief The TIME of a request for a layer with a TIME dimension (`values` listed, and/or a
+ * `period` "start/end/step", kept as such when too long to list), in the layer's own spelling.
+ *
+ * TIME is read as one ISO 8601 instant: `YYYY-MM-DD`, or `YYYY-MM-DDThh:mm[:ss[.000]]` with `Z`,
+ * an offset (`+01:00`) or nothing (UTC). It must be one of the values (the same string, or the
+ * same instant spelt otherwise) or lie on the period's grid: start + k * step for a whole k >= 0,
+ * not after the end, months and years added on the calendar (P1D, PT6H, P1M, P1Y, P1W...). The
+ * answer is the matching value as listed, or the instant written as the period's start is
+ * (`2024-03-01`, `2024-03-01T06:00Z`, `2024-03-01T06:00:00Z`), so that every spelling of one
+ * instant names one dataset. Anything else, lists (`a,b`) and ranges (`a/b`, `a/b/P1D`) included,
+ * is InvalidDimensionValue: a map is made for one time, and a time a layer does not have must not
+ * create a dataset or an upstream request. No TIME: the default (in the same spelling), or
+ * MissingDimensionValue when there is none. A layer without a dimension ignores TIME ("").
  */
 std::expected<std::string, OgcException>
 resolveTimeDimension(std::string_view layer,
