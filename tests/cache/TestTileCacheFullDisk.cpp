@@ -54,9 +54,7 @@ std::unique_ptr<TileCache> openOn(const fs::path& root,
 } // namespace
 
 TEST(CacheFullDiskIntegration, ARestartOnAFullDiskServesWhatItHasAndStoresAgainWhenRoomReturns) {
-  test::TempDir dir("fulldisk");
-  const fs::path mnt = dir.path();
-  TELLUS_ON_TMPFS(mnt, 1 << 20, 1000, [&] {
+  TELLUS_ON_TMPFS(1 << 20, 1000, [&](const fs::path& mnt) {
     const fs::path root = mnt / "cache";
     {
       auto cache = openOn(root);
@@ -114,9 +112,7 @@ TEST(CacheFullDiskIntegration, ARestartOnAFullDiskServesWhatItHasAndStoresAgainW
 }
 
 TEST(CacheFullDiskIntegration, ACommitRefusedAfterTheRenameKeepsTheTileItWouldHaveReplaced) {
-  test::TempDir dir("fullcommit");
-  const fs::path mnt = dir.path();
-  TELLUS_ON_TMPFS(mnt, 2 << 20, 1000, [&] {
+  TELLUS_ON_TMPFS(2 << 20, 1000, [&](const fs::path& mnt) {
     const fs::path root = mnt / "cache";
     auto cache = openOn(root, nullptr, 0ms); // no pause after a refusal: every put tries
     ASSERT_TRUE(cache);
@@ -166,9 +162,7 @@ TEST(CacheFullDiskIntegration, ACommitRefusedAfterTheRenameKeepsTheTileItWouldHa
 }
 
 TEST(CacheFullDiskIntegration, NoInodesLeftIsADiskFullThatNamesTheInodes) {
-  test::TempDir dir("noinodes");
-  const fs::path mnt = dir.path();
-  TELLUS_ON_TMPFS(mnt, 8 << 20, 48, [&] {
+  TELLUS_ON_TMPFS(8 << 20, 48, [&](const fs::path& mnt) {
     const fs::path root = mnt / "cache";
     auto cache = openOn(root, nullptr, 0ms);
     ASSERT_TRUE(cache);

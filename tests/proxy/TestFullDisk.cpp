@@ -146,9 +146,7 @@ std::string readAll(std::FILE* f) {
 } // namespace
 
 TEST(ProxyFullDiskIntegration, SeedingOntoAFullDiskCountsWhatWasStoredAndStopsAskingTheUpstream) {
-  test::TempDir dir("seedfull");
-  const fs::path mnt = dir.path();
-  TELLUS_ON_TMPFS(mnt, 1 << 20, 4096, [&] {
+  TELLUS_ON_TMPFS(1 << 20, 4096, [&](const fs::path& mnt) {
     test::FakeUpstream upstream(noisyTile);
     const fs::path root = mnt / "cache";
     Stack s(root, upstream.url("/wms"), /*writeBehind=*/true); // as `tellus seed` opens it
@@ -181,9 +179,7 @@ TEST(ProxyFullDiskIntegration, SeedingOntoAFullDiskCountsWhatWasStoredAndStopsAs
 }
 
 TEST(ProxyFullDiskIntegration, ServingFromAFullDiskAnswersEverythingAndStoresAgainWhenThereIsRoom) {
-  test::TempDir dir("servefull");
-  const fs::path mnt = dir.path();
-  TELLUS_ON_TMPFS(mnt, 1 << 20, 4096, [&] {
+  TELLUS_ON_TMPFS(1 << 20, 4096, [&](const fs::path& mnt) {
     test::FakeUpstream upstream(noisyTile);
     const fs::path root = mnt / "cache";
     const std::vector<TileKey> cached{{0, 0, 0}, {0, 0, 1}, {0, 1, 0}};

@@ -1,23 +1,25 @@
 #pragma once
-// A real full disk for fault tests: a test body runs in a child process that sees a small tmpfs
-// (a byte size and an inode count) mounted on a directory, in its own mount namespace.
+// A real full disk for fault tests: the test's body runs in a process that sees a small tmpfs (a
+// byte size and an inode count) mounted on a directory, in its own mount namespace.
 //
-// The child first enters a user namespace with a mount namespace (unshare(CLONE_NEWUSER |
+// A forked child first enters a user namespace with a mount namespace (unshare(CLONE_NEWUSER |
 // CLONE_NEWNS), as `unshare -rm` does: works unprivileged where user namespaces are allowed);
-// failing that, a plain mount namespace (needs root). When neither can mount, the test is skipped
-// with the reason (TELLUS_ON_TMPFS). The mount disappears with the child.
-//
-// The body runs in the child: GoogleTest assertions work there (their failures print from the
-// child and make it exit 1); the child must not return into the test framework, so the body is
-// followed by _exit.
+// failing that, a plain mount namespace (needs root). It mounts the tmpfs and then executes this
+// test executable again, for this one test (a fresh process: no threads inherited from the one
+// that forked, which ThreadSanitizer could not follow), where the body runs on the mount. When no
+// namespace can mount, the test is skipped with the reasons. The mount disappears with the child.
+
+#include "TempDir.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fcntl.h>
 #include <filesystem>
+#include <optional>
 #include <sched.h>
 #include <string>
 #include <sys/mount.h>
@@ -27,6 +29,8 @@
 namespace tellus::test {
 
 inline constexpr int kTmpfsUnavailable = 77;
+inline constexpr const char* kTmpfsInsideEnv = "TELLUS_TEST_TMPFS_INSIDE"; // the mount, inside
+inline constexpr const char* kTmpfsTestEnv = "TELLUS_TEST_TMPFS_TEST";     // the test it is for
 
 namespace detail {
 
@@ -64,19 +68,32 @@ inline std::string mountTmpfs(bool userNamespace,
   return {};
 }
 
+inline std::string currentTestName() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  return info ? std::string(info->test_suite_name()) + "." + info->name() : std::string();
+}
+
 } // namespace detail
 
+/** The tmpfs this process runs on, when it is the re-executed test inside the namespace. */
+inline std::optional<std::filesystem::path> insideTmpfs() {
+  const char* inside = std::getenv(kTmpfsInsideEnv);
+  const char* test = std::getenv(kTmpfsTestEnv);
+  if (!inside || !test || detail::currentTestName() != test) return std::nullopt;
+  return std::filesystem::path(inside);
+}
+
 /**
- * Runs body() in a child that sees a tmpfs of `sizeBytes` bytes and `inodes` inodes on `dir`.
- * Returns the child's exit code (0: the body's assertions held), or kTmpfsUnavailable with `why`
- * set when no mount was possible.
+ * Mounts a tmpfs of `sizeBytes` bytes and `inodes` inodes on `dir` in a child's namespaces and runs
+ * the current test again in it (see the file comment). Returns the inner run's exit code (0: its
+ * assertions held), or kTmpfsUnavailable with `why` set when no mount was possible.
  */
-template <class Body>
-int runOnTmpfs(const std::filesystem::path& dir,
-               std::size_t sizeBytes,
-               std::size_t inodes,
-               std::string& why,
-               Body body) {
+inline int runTestOnTmpfs(const std::filesystem::path& dir,
+                          std::size_t sizeBytes,
+                          std::size_t inodes,
+                          std::string& why) {
+  const std::string test = detail::currentTestName();
+  const std::string filter = "--gtest_filter=" + test;
   std::string reasons;
   for (const bool userNamespace : {true, false}) {
     int pipeFds[2];
@@ -89,16 +106,17 @@ int runOnTmpfs(const std::filesystem::path& dir,
     const pid_t pid = ::fork();
     if (pid == 0) {
       ::close(pipeFds[0]);
-      const std::string err = detail::mountTmpfs(userNamespace, dir, sizeBytes, inodes);
-      if (!err.empty()) {
-        (void)!::write(pipeFds[1], err.data(), err.size());
-        ::_exit(kTmpfsUnavailable);
+      std::string err = detail::mountTmpfs(userNamespace, dir, sizeBytes, inodes);
+      if (err.empty()) {
+        ::setenv(kTmpfsInsideEnv, dir.c_str(), 1);
+        ::setenv(kTmpfsTestEnv, test.c_str(), 1);
+        char* const argv[] = {
+            const_cast<char*>("tellus-test-on-tmpfs"), const_cast<char*>(filter.c_str()), nullptr};
+        ::execv("/proc/self/exe", argv); // closes the pipe: the parent reads "" and waits
+        err = std::string("exec /proc/self/exe: ") + std::strerror(errno);
       }
-      ::close(pipeFds[1]);
-      body();
-      std::fflush(stdout);
-      std::fflush(stderr);
-      ::_exit(::testing::Test::HasFailure() ? 1 : 0);
+      (void)!::write(pipeFds[1], err.data(), err.size());
+      ::_exit(kTmpfsUnavailable);
     }
     ::close(pipeFds[1]);
     std::string message;
@@ -109,7 +127,7 @@ int runOnTmpfs(const std::filesystem::path& dir,
     int status = 0;
     ::waitpid(pid, &status, 0);
     const int code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    if (code != kTmpfsUnavailable || message.empty()) return code;
+    if (message.empty()) return code;
     reasons += (reasons.empty() ? "" : "; ") + message;
   }
   why = "no tmpfs could be mounted for this fault test (" + reasons + ")";
@@ -132,30 +150,25 @@ inline std::filesystem::path fillDisk(const std::filesystem::path& dir) {
   return path;
 }
 
-/** Uses up every free inode under `dir` with empty files; returns how many it made. */
-inline int useUpInodes(const std::filesystem::path& dir) {
-  std::filesystem::create_directories(dir / "inodes");
-  int n = 0;
-  for (;; ++n) {
-    const auto p = dir / "inodes" / std::to_string(n);
-    const int fd = ::open(p.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-    if (fd < 0) break;
-    ::close(fd);
-  }
-  return n;
-}
-
 } // namespace tellus::test
 
-/** Runs the body (a lambda) on a tmpfs in a child (see runOnTmpfs); skips the test with the reason
- * when no tmpfs can be mounted, and fails it when the child's assertions failed. */
-#define TELLUS_ON_TMPFS(dir, sizeBytes, inodes, ...)                                               \
+/**
+ * Runs the body, a callable taking the mount's path, on a tmpfs of `sizeBytes` bytes and `inodes`
+ * inodes: in the re-executed test inside the namespace it runs the body; in the test as ctest
+ * starts it, it mounts and re-executes (runTestOnTmpfs), skips the test with the reasons when no
+ * tmpfs can be mounted, and fails it when the inner run failed.
+ */
+#define TELLUS_ON_TMPFS(sizeBytes, inodes, ...)                                                    \
   do {                                                                                             \
+    if (const auto tellusTmpfsInside = ::tellus::test::insideTmpfs()) {                            \
+      (__VA_ARGS__)(*tellusTmpfsInside);                                                           \
+      break;                                                                                       \
+    }                                                                                              \
+    ::tellus::test::TempDir tellusTmpfsDir("tmpfs");                                               \
     std::string tellusTmpfsWhy;                                                                    \
-    const int tellusTmpfsCode =                                                                    \
-        ::tellus::test::runOnTmpfs((dir), (sizeBytes), (inodes), tellusTmpfsWhy, __VA_ARGS__);     \
+    const int tellusTmpfsCode = ::tellus::test::runTestOnTmpfs(                                    \
+        tellusTmpfsDir.path(), (sizeBytes), (inodes), tellusTmpfsWhy);                             \
     if (tellusTmpfsCode == ::tellus::test::kTmpfsUnavailable && !tellusTmpfsWhy.empty())           \
       GTEST_SKIP() << tellusTmpfsWhy;                                                              \
-    EXPECT_EQ(tellusTmpfsCode, 0)                                                                  \
-        << "the test's child on the tmpfs failed (see its output above)";                          \
+    EXPECT_EQ(tellusTmpfsCode, 0) << "the test's run on the tmpfs failed (its output is above)";   \
   } while (false)
