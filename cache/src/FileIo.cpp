@@ -4,11 +4,14 @@
 
 #include <atomic>
 #include <cerrno>
+#include <charconv>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
 #include <fcntl.h>
 #include <mutex>
 #include <string>
+#include <string_view>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -18,35 +21,113 @@ namespace {
 
 std::atomic<std::uint64_t> gTempCounter{0};
 
-CacheError errnoError(int err, const std::string& what, const std::filesystem::path& path) {
-  const bool full = err == ENOSPC || err == EFBIG || err == EDQUOT;
-  return CacheError{full ? CacheErrc::DiskFull : CacheErrc::Io,
-                    what + " " + path.string() + ": " + std::strerror(err)};
+/** A process's start time (field 22 of /proc/<pid>/stat, clock ticks since boot); 0 if unknown. */
+std::uint64_t processStartTime(pid_t pid) {
+  const std::string path = "/proc/" + std::to_string(pid) + "/stat";
+  std::FILE* f = std::fopen(path.c_str(), "re");
+  if (!f) return 0;
+  char buf[1024];
+  const std::size_t n = std::fread(buf, 1, sizeof buf - 1, f);
+  std::fclose(f);
+  const std::string_view text(buf, n);
+  // The command name (field 2) is in parentheses and may hold spaces: count from after it.
+  std::size_t pos = text.rfind(')');
+  if (pos == std::string_view::npos) return 0;
+  ++pos;
+  for (int field = 3; field <= 22; ++field) {
+    while (pos < text.size() && text[pos] == ' ')
+      ++pos;
+    const std::size_t end = std::min(text.find(' ', pos), text.size());
+    if (field == 22) {
+      std::uint64_t v = 0;
+      const auto [p, ec] = std::from_chars(text.data() + pos, text.data() + end, v);
+      return ec == std::errc{} ? v : 0;
+    }
+    pos = end;
+  }
+  return 0;
+}
+
+/** This process's start time, read once per process (a forked child reads its own). */
+std::uint64_t ownStartTime() {
+  static std::atomic<pid_t> cachedPid{0};
+  static std::atomic<std::uint64_t> cachedStart{0};
+  const pid_t pid = ::getpid();
+  if (cachedPid.load(std::memory_order_acquire) == pid)
+    return cachedStart.load(std::memory_order_relaxed);
+  const std::uint64_t start = processStartTime(pid);
+  cachedStart.store(start, std::memory_order_relaxed);
+  cachedPid.store(pid, std::memory_order_release);
+  return start;
+}
+
+template <class T> bool parseNumber(std::string_view s, T& out) {
+  if (s.empty()) return false;
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
+  return ec == std::errc{} && p == s.data() + s.size();
 }
 
 } // namespace
+
+bool isNoSpace(int err) noexcept {
+  return err == ENOSPC || err == EFBIG || err == EDQUOT;
+}
+
+CacheError errnoError(int err, const std::string& what, const std::filesystem::path& path) {
+  return CacheError{isNoSpace(err) ? CacheErrc::DiskFull : CacheErrc::Io,
+                    what + " " + path.string() + ": " + std::strerror(err)};
+}
 
 void ignoreFileSizeSignal() {
   static std::once_flag once;
   std::call_once(once, [] { std::signal(SIGXFSZ, SIG_IGN); });
 }
 
+std::string tempNameFor(const std::string& targetName) {
+  // Built with append: g++ 12 reports a false -Wrestrict on `"." + std::string`.
+  std::string name(1, '.');
+  name.append(targetName);
+  name.append(1, '.').append(std::to_string(::getpid()));
+  name.append(1, '-').append(std::to_string(ownStartTime()));
+  name.append(1, '.').append(std::to_string(gTempCounter.fetch_add(1)));
+  name.append(".tmp");
+  return name;
+}
+
 bool isTempName(const std::string& name) {
   return name.size() > 5 && name.front() == '.' && name.ends_with(".tmp");
 }
 
-std::expected<void, CacheError> writeFileAtomic(const std::filesystem::path& target,
-                                                std::span<const std::byte> bytes,
-                                                bool fsyncFile) {
-  // Built with append: g++ 12 reports a false -Wrestrict on `"." + std::string`.
-  std::string name(1, '.');
-  name.append(target.filename().native());
-  name.append(1, '.').append(std::to_string(::getpid()));
-  name.append(1, '.').append(std::to_string(gTempCounter.fetch_add(1)));
-  name.append(".tmp");
-  const std::filesystem::path temp = target.parent_path() / name;
+bool tempOwnerAlive(const std::string& name) {
+  if (!isTempName(name)) return true;
+  const std::string_view body = std::string_view(name).substr(1, name.size() - 5);
+  const auto lastDot = body.rfind('.');
+  if (lastDot == std::string_view::npos || lastDot == 0) return true;
+  std::uint64_t counter = 0;
+  if (!parseNumber(body.substr(lastDot + 1), counter)) return true;
+  const auto ownerDot = body.rfind('.', lastDot - 1);
+  if (ownerDot == std::string_view::npos) return true;
+  const std::string_view owner = body.substr(ownerDot + 1, lastDot - ownerDot - 1);
+  const auto dash = owner.find('-');
+  pid_t pid = 0;
+  std::uint64_t start = 0;
+  if (!parseNumber(owner.substr(0, dash), pid) || pid <= 0) return true;
+  if (dash != std::string_view::npos && !parseNumber(owner.substr(dash + 1), start)) return true;
+  if (start != 0) {
+    const std::uint64_t actual = pid == ::getpid() ? ownStartTime() : processStartTime(pid);
+    if (actual != 0) return actual == start; // the pid runs: the same process, or a reuse of it
+  }
+  if (pid == ::getpid()) return true;
+  // No start time to compare (an older name, or no /proc): alive while the pid exists.
+  return ::kill(pid, 0) == 0 || errno == EPERM;
+}
+
+std::expected<void, CacheError> writeTemp(const std::filesystem::path& temp,
+                                          std::span<const std::byte> bytes,
+                                          bool fsyncFile,
+                                          const std::filesystem::path& target) {
   const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-  if (fd < 0) return std::unexpected(errnoError(errno, "cannot create", temp));
+  if (fd < 0) return std::unexpected(errnoError(errno, "cannot create a temp file for", target));
   auto failWith = [&](int err, const char* what) -> std::expected<void, CacheError> {
     ::close(fd);
     ::unlink(temp.c_str());
@@ -69,6 +150,14 @@ std::expected<void, CacheError> writeFileAtomic(const std::filesystem::path& tar
     ::unlink(temp.c_str());
     return std::unexpected(errnoError(err, "cannot close", target));
   }
+  return {};
+}
+
+std::expected<void, CacheError> writeFileAtomic(const std::filesystem::path& target,
+                                                std::span<const std::byte> bytes,
+                                                bool fsyncFile) {
+  const std::filesystem::path temp = target.parent_path() / tempNameFor(target.filename());
+  if (auto w = writeTemp(temp, bytes, fsyncFile, target); !w) return w;
   if (::rename(temp.c_str(), target.c_str()) != 0) {
     const int err = errno;
     ::unlink(temp.c_str());

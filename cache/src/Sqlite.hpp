@@ -5,7 +5,9 @@
 
 #include <sqlite3.h>
 
+#include <cerrno>
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <optional>
 #include <string>
@@ -38,11 +40,23 @@ inline CacheErrc errcFor(int rc) noexcept {
   }
 }
 
+/** The error of a failed call: SQLITE_FULL, and an I/O error whose system errno is ENOSPC, EDQUOT
+ * or EFBIG (a WAL or shared-memory file that cannot grow), are DiskFull. */
 inline CacheError errorFrom(sqlite3* db, int rc, std::string_view what) {
   std::string msg(what);
   msg += ": ";
   msg += db ? sqlite3_errmsg(db) : sqlite3_errstr(rc);
-  return CacheError{errcFor(rc), std::move(msg)};
+  CacheErrc code = errcFor(rc);
+  if (db && (rc & 0xFF) == SQLITE_IOERR) {
+    const int err = sqlite3_system_errno(db);
+    if (err == ENOSPC || err == EDQUOT || err == EFBIG) {
+      code = CacheErrc::DiskFull;
+      msg += " (";
+      msg += std::strerror(err);
+      msg += ')';
+    }
+  }
+  return CacheError{code, std::move(msg)};
 }
 
 /** A prepared statement that resets itself when a use ends (see Use). */

@@ -20,7 +20,9 @@
 #include <mutex>
 #include <set>
 #include <shared_mutex>
+#include <sys/file.h>
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <thread>
 #include <unistd.h>
 #include <unordered_map>
@@ -64,6 +66,9 @@ namespace {
 constexpr const char* kIndexName = "index.sqlite";
 constexpr const char* kCorruptMarker = "index.corrupt";
 constexpr const char* kDescriptorName = "dataset.txt";
+// Each dataset's temp files (tiles being written, tiles being replaced) live in `<dataset>/.tmp`:
+// the one folder per dataset that open() looks into for temp files of writers that are gone.
+constexpr const char* kTempDirName = ".tmp";
 constexpr int kStatePresent = 1;
 constexpr int kStateAbsent = 2;
 constexpr std::size_t kMaxBatch = 1024;
@@ -118,7 +123,100 @@ sql::DbPtr openDb(const fs::path& path, bool readOnly, bool create, int busyMs, 
   if (rc != SQLITE_OK) return nullptr;
   sqlite3_busy_timeout(db.get(), busyMs);
   sqlite3_extended_result_codes(db.get(), 1);
+  // The WAL and its shared-memory index stay when the last connection closes: a cache whose disk
+  // filled up can still be opened and read (creating them needs room), and commits that fit in
+  // the kept WAL still succeed on a full disk.
+  int persist = 1;
+  (void)sqlite3_file_control(db.get(), "main", SQLITE_FCNTL_PERSIST_WAL, &persist);
   return db;
+}
+
+/** A tile's new file going into place (a put): the temp file, and the tile it replaces kept as a
+ * hard link in the dataset's `.tmp` until the put's row is committed, so that a commit that fails
+ * (a full disk) puts the old tile back instead of losing it. Writer thread, under the files lock.
+ */
+struct TilePlacement {
+  fs::path temp;   // the new bytes, fsynced
+  fs::path target; // where the tile lives
+  fs::path backup; // the old tile while the row is not committed
+  bool renamed = false;
+  bool hasBackup = false;
+
+  std::expected<void, CacheError> install() {
+    if (::link(target.c_str(), backup.c_str()) == 0) {
+      hasBackup = true;
+    } else if (fileio::isNoSpace(errno)) {
+      // No room to keep the old tile (a link takes an inode on tmpfs): refused, the tile stays.
+      return std::unexpected(fileio::errnoError(errno, "cannot keep the tile it replaces", target));
+    }
+    // ENOENT: a new tile. A file system without hard links: replaced without a way back.
+    if (::rename(temp.c_str(), target.c_str()) != 0) {
+      const int err = errno;
+      if (hasBackup) ::unlink(backup.c_str());
+      hasBackup = false;
+      return std::unexpected(fileio::errnoError(err, "cannot rename into", target));
+    }
+    renamed = true;
+    return {};
+  }
+
+  /** After the commit (or the rollback) of the put's row. */
+  void finish(bool committed) {
+    if (!renamed) {
+      ::unlink(temp.c_str());
+    } else if (committed) {
+      if (hasBackup) ::unlink(backup.c_str());
+    } else if (hasBackup) {
+      ::rename(backup.c_str(), target.c_str()); // the old tile, which its row still describes
+    } else {
+      ::unlink(target.c_str()); // a new tile without a row
+    }
+    renamed = hasBackup = false;
+  }
+};
+
+/** A tile's file going away with its row (erase, an absent marker): moved aside into the dataset's
+ * `.tmp` in the writer's transaction, removed after the commit, put back if the commit fails.
+ * Writer thread, under the files lock. */
+struct TileRemoval {
+  fs::path target;
+  fs::path aside; // empty: no `.tmp` could be made (a full disk): unlinked after the commit
+  bool moved = false;
+
+  std::expected<void, CacheError> hide() {
+    if (aside.empty()) return {};
+    if (::rename(target.c_str(), aside.c_str()) == 0) {
+      moved = true;
+    } else if (errno != ENOENT) {
+      return std::unexpected(fileio::errnoError(errno, "cannot remove", target));
+    }
+    return {};
+  }
+  void finish(bool committed) {
+    if (aside.empty()) {
+      if (committed) ::unlink(target.c_str());
+    } else if (moved) {
+      if (committed)
+        ::unlink(aside.c_str());
+      else
+        ::rename(aside.c_str(), target.c_str());
+    }
+    moved = false;
+  }
+};
+
+/** Removes the temp files of writers that are gone from one folder (not recursive). */
+std::size_t removeDeadTempFiles(const fs::path& dir) {
+  std::size_t removed = 0;
+  std::error_code ec;
+  for (auto it = fs::directory_iterator(dir, ec); !ec && it != fs::directory_iterator();
+       it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (!fileio::isTempName(name) || fileio::tempOwnerAlive(name)) continue;
+    if (!it->is_regular_file(ec)) continue;
+    if (::unlink(it->path().c_str()) == 0) ++removed;
+  }
+  return removed;
 }
 
 } // namespace
@@ -129,6 +227,18 @@ struct TileCache::Impl {
   Options options;
   fs::path indexPath;
   bool rebuiltAtOpen = false;
+  std::size_t tempFilesRemoved = 0;
+
+  // The files lock: an flock on the root directory, held by the writer while it changes tile files
+  // and their rows together (a put's rename and commit, a removal's commit and unlink), so that
+  // those pairs never interleave between processes. -1 for a read-only cache.
+  int rootFd = -1;
+
+  // Whether puts are stored (StoreStatus), and until when a full disk is believed.
+  std::atomic<bool> full{false};
+  std::atomic<std::int64_t> fullUntilNs{0};
+  std::atomic<std::uint64_t> refusedPuts{0};
+  std::atomic<std::uint64_t> droppedPuts{0};
 
   // Datasets, loaded at open, refreshed on an unknown id (another process may register some).
   mutable std::shared_mutex datasetsMutex;
@@ -147,10 +257,11 @@ struct TileCache::Impl {
   // whoever holds writeMutex: the caller of submit() itself when the connection is free (no thread
   // hand-off on the common, uncontended path), else the writer thread, which also writes access
   // times and runs eviction.
+  using After = std::function<void(const Result& outcome)>;
   struct WriteOp {
-    std::function<Result(Impl&)> apply;        // inside the transaction
-    std::function<void(bool committed)> after; // after commit/rollback (file clean-up)
-    bool ownTransactions = false;              // runs alone and manages its transactions
+    std::function<Result(Impl&)> apply; // inside the transaction
+    After after; // after commit/rollback (file clean-up), with the operation's outcome
+    bool ownTransactions = false; // runs alone and manages its transactions
     std::promise<Result> done;
   };
   sql::DbPtr writeDb;
@@ -168,6 +279,7 @@ struct TileCache::Impl {
     std::int64_t size;
     TileMeta meta;
     std::uint64_t generation;
+    fs::path temp; // the bytes until the writer renames them into place
   };
   std::mutex pendingMutex;
   std::unordered_map<TouchKey, PendingRow, TouchKeyHash> pendingRows;
@@ -241,10 +353,113 @@ struct TileCache::Impl {
   }
 
   // Writer-side prepared statements (used under writeMutex only).
-  sql::Stmt upsertTile, deleteTile, touchTile, totalStmt;
+  sql::Stmt upsertTile, deleteTile, touchTile, totalStmt, rowBytesStmt;
   sql::Stmt beginStmt, commitStmt, rollbackStmt, savepointStmt, releaseStmt, rollbackToStmt;
 
-  ~Impl() { stopWriter(); }
+  ~Impl() {
+    stopWriter();
+    if (rootFd >= 0) ::close(rootFd);
+    // Readers close first: the write connection, last, checkpoints and empties the (kept) WAL, so
+    // the next open reads the database file itself.
+    std::lock_guard lock(readMutex);
+    idleReaders.clear();
+  }
+
+  // ---------------------------------------------------------------------------- full disk
+  std::int64_t nowNs() const {
+    const auto t = options.clock ? options.clock() : Clock::now();
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
+  }
+
+  std::optional<DiskSpace> diskSpace() const {
+    struct statvfs v {};
+    if (::statvfs(options.root.c_str(), &v) != 0) return std::nullopt;
+    return DiskSpace{static_cast<std::uint64_t>(v.f_bavail) * v.f_frsize,
+                     static_cast<std::uint64_t>(v.f_favail)};
+  }
+
+  /** A DiskFull error that names the root and what is left on its file system. */
+  CacheError fullError(const std::string& detail) const {
+    std::string msg = "the cache at " + options.root.string() + " is full";
+    if (const auto space = diskSpace()) {
+      msg += " (" + std::to_string(space->freeBytes) + " bytes and " +
+             std::to_string(space->freeInodes) + " inodes free)";
+    }
+    msg += ": " + detail;
+    return CacheError{CacheErrc::DiskFull, std::move(msg)};
+  }
+
+  /** A write refused for lack of space: refuse puts at once until fullRecheck has passed. */
+  void noteFull() {
+    fullUntilNs.store(nowNs() + std::chrono::nanoseconds(options.fullRecheck).count(),
+                      std::memory_order_relaxed);
+    full.store(true, std::memory_order_release);
+  }
+  /** A tile stored or removed: the disk has room (again). */
+  void noteRoom() { full.store(false, std::memory_order_release); }
+
+  /** Whether a refusal for lack of space is recent (fullRecheck has not passed). */
+  bool refusingNow() const {
+    return full.load(std::memory_order_acquire) &&
+           nowNs() < fullUntilNs.load(std::memory_order_relaxed);
+  }
+
+  /** DiskFull at once while a refusal is recent (nothing touches the disk). */
+  Result refuseWhileFull() {
+    if (!refusingNow()) return {};
+    refusedPuts.fetch_add(1, std::memory_order_relaxed);
+    return std::unexpected(fullError("a write was refused for lack of space less than " +
+                                     std::to_string(options.fullRecheck.count()) +
+                                     " ms ago; nothing was written"));
+  }
+
+  /** The outcome of a put as the caller sees it: a refusal for lack of space is counted, remembered
+   * and worded with the root and its free space. */
+  Result putOutcome(Result r) {
+    if (r) {
+      noteRoom();
+      return r;
+    }
+    if (r.error().code != CacheErrc::DiskFull) return r;
+    noteFull();
+    refusedPuts.fetch_add(1, std::memory_order_relaxed);
+    return std::unexpected(fullError(r.error().message));
+  }
+
+  // ---------------------------------------------------------------------------- files lock
+  struct FilesLock {
+    int fd = -1;
+    FilesLock() = default;
+    explicit FilesLock(int f) : fd(f) {}
+    FilesLock(FilesLock&& o) noexcept : fd(std::exchange(o.fd, -1)) {}
+    FilesLock& operator=(FilesLock&&) = delete;
+    ~FilesLock() {
+      if (fd >= 0) ::flock(fd, LOCK_UN);
+    }
+  };
+
+  /** Takes the files lock, waiting at most busyTimeout for another process to let go of it.
+   * Writer thread (under writeMutex: one holder per process). Never taken while this connection
+   * holds SQLite's write lock, so the two locks cannot deadlock. */
+  std::expected<FilesLock, CacheError> lockFiles() const {
+    if (rootFd < 0) return FilesLock{};
+    const auto deadline = Clock::now() + options.busyTimeout;
+    auto pause = std::chrono::microseconds(200);
+    for (;;) {
+      if (::flock(rootFd, LOCK_EX | LOCK_NB) == 0) return FilesLock{rootFd};
+      if (errno == EINTR) continue;
+      // A file system without flock: work unlocked, as before the lock existed.
+      if (errno != EWOULDBLOCK) return FilesLock{};
+      if (Clock::now() >= deadline) {
+        return std::unexpected(CacheError{CacheErrc::Io,
+                                          "another process has held the cache's files lock (" +
+                                              options.root.string() + ") for more than " +
+                                              std::to_string(options.busyTimeout.count()) + " ms"});
+      }
+      std::this_thread::sleep_for(pause);
+      pause = std::min(pause * 2, std::chrono::microseconds(20000));
+    }
+  }
 
   // ---------------------------------------------------------------------------- connections
   std::expected<std::unique_ptr<ReadConn>, CacheError> makeReader() const {
@@ -371,6 +586,15 @@ struct TileCache::Impl {
     return d.dir / tileRelativePath(key, d.info.spec.extension);
   }
 
+  /** How a tile's file goes away with its row (see TileRemoval). */
+  std::shared_ptr<TileRemoval> removalOf(const DatasetEntry& d, const TileKey& key) {
+    auto r = std::make_shared<TileRemoval>();
+    r->target = tilePath(d, key);
+    const fs::path tempDir = d.dir / kTempDirName;
+    if (ensureDir(tempDir)) r->aside = tempDir / fileio::tempNameFor(r->target.filename());
+    return r;
+  }
+
   Result ensureDir(const fs::path& dir) {
     {
       std::lock_guard lock(dirsMutex);
@@ -379,8 +603,10 @@ struct TileCache::Impl {
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec) {
-      const bool full = ec == std::errc::no_space_on_device || ec == std::errc::file_too_large;
-      return std::unexpected(CacheError{full ? CacheErrc::DiskFull : CacheErrc::Io,
+      const bool noRoom =
+          (ec.category() == std::generic_category() || ec.category() == std::system_category()) &&
+          fileio::isNoSpace(ec.value());
+      return std::unexpected(CacheError{noRoom ? CacheErrc::DiskFull : CacheErrc::Io,
                                         "cannot create " + dir.string() + ": " + ec.message()});
     }
     std::lock_guard lock(dirsMutex);
@@ -409,6 +635,9 @@ struct TileCache::Impl {
                           "UPDATE tiles SET last_access = max(last_access, ?5) WHERE "
                           "dataset = ?1 AND level = ?2 AND row = ?3 AND col = ?4");
     totalStmt = sql::Stmt(db, "SELECT coalesce(sum(bytes), 0) FROM usage");
+    rowBytesStmt = sql::Stmt(db,
+                             "SELECT state, bytes FROM tiles WHERE dataset = ?1 AND level = ?2 "
+                             "AND row = ?3 AND col = ?4");
     beginStmt = sql::Stmt(db, "BEGIN IMMEDIATE");
     commitStmt = sql::Stmt(db, "COMMIT");
     rollbackStmt = sql::Stmt(db, "ROLLBACK");
@@ -419,6 +648,7 @@ struct TileCache::Impl {
                                &deleteTile,
                                &touchTile,
                                &totalStmt,
+                               &rowBytesStmt,
                                &beginStmt,
                                &commitStmt,
                                &rollbackStmt,
@@ -444,12 +674,16 @@ struct TileCache::Impl {
     writer.join();
   }
 
-  /** Queues an operation for the writer thread and waits for its commit. */
-  Result submit(std::function<Result(Impl&)> apply,
-                std::function<void(bool)> after = {},
-                bool ownTransactions = false) {
-    if (options.readOnly)
-      return std::unexpected(CacheError{CacheErrc::ReadOnly, "the cache is read-only"});
+  /** Queues an operation for the writer thread and waits for its commit. `after` runs in every
+   * case, with the outcome. */
+  Result
+  submit(std::function<Result(Impl&)> apply, After after = {}, bool ownTransactions = false) {
+    auto refuse = [&](CacheError e) -> Result {
+      Result r = std::unexpected(std::move(e));
+      if (after) after(r);
+      return r;
+    };
+    if (options.readOnly) return refuse(CacheError{CacheErrc::ReadOnly, "the cache is read-only"});
     auto op = std::make_unique<WriteOp>();
     op->apply = std::move(apply);
     op->after = std::move(after);
@@ -457,7 +691,10 @@ struct TileCache::Impl {
     auto fut = op->done.get_future();
     {
       std::lock_guard lock(queueMutex);
-      if (stopping) return std::unexpected(CacheError{CacheErrc::Io, "the cache is closing"});
+      if (stopping) {
+        after = std::move(op->after);
+        return refuse(CacheError{CacheErrc::Io, "the cache is closing"});
+      }
       queue.push_back(std::move(op));
     }
     if (writeMutex.try_lock()) {
@@ -470,16 +707,22 @@ struct TileCache::Impl {
     return fut.get();
   }
 
-  /** Queues without waiting (self-healing clean-ups from readers). */
-  void submitDetached(std::function<Result(Impl&)> apply, std::function<void(bool)> after = {}) {
-    if (options.readOnly) return;
+  /** Queues without waiting (self-healing clean-ups from readers, write-behind puts). `after`
+   * runs in every case, with the outcome. */
+  void submitDetached(std::function<Result(Impl&)> apply, After after = {}) {
     auto op = std::make_unique<WriteOp>();
     op->apply = std::move(apply);
     op->after = std::move(after);
     {
       std::lock_guard lock(queueMutex);
-      if (stopping) return;
-      queue.push_back(std::move(op));
+      if (!stopping && !options.readOnly) {
+        queue.push_back(std::move(op));
+        op = nullptr;
+      }
+    }
+    if (op) {
+      if (op->after) op->after(std::unexpected(CacheError{CacheErrc::Io, "the cache is closing"}));
+      return;
     }
     queueCv.notify_one();
   }
@@ -518,23 +761,35 @@ struct TileCache::Impl {
     batch.clear();
   }
 
+  /** One transaction for a batch of operations, under the files lock. Operations change tile
+   * files in their `apply`, in order (a put renames its file into place, a removal moves the file
+   * aside), and their `after` keeps or undoes that: an operation that fails is undone at once,
+   * before the next one runs; when the commit fails, every one is undone, the last first. */
   void runBatch(std::vector<std::unique_ptr<WriteOp>>& ops) {
     std::vector<Result> results(ops.size());
+    std::vector<bool> finished(ops.size(), false);
+    auto finish = [&](std::size_t i, const Result& outcome) {
+      if (ops[i]->after) ops[i]->after(outcome);
+      finished[i] = true;
+    };
+    auto failAll = [&](const CacheError& e) {
+      const Result r = std::unexpected(e);
+      for (std::size_t i = ops.size(); i-- > 0;)
+        finish(i, r);
+      for (auto& op : ops)
+        op->done.set_value(r);
+    };
+    auto filesLock = lockFiles();
+    if (!filesLock) return failAll(filesLock.error());
     auto started = begin();
-    if (!started) {
-      for (std::size_t i = 0; i < ops.size(); ++i) {
-        if (ops[i]->after) ops[i]->after(false);
-        ops[i]->done.set_value(std::unexpected(started.error()));
-      }
-      return;
-    }
+    if (!started) return failAll(started.error());
     if (ops.size() == 1) {
       // Alone in its transaction: a failure rolls the whole (one-operation) batch back.
       results[0] = ops[0]->apply(*this);
       if (!results[0]) {
         run(rollbackStmt);
         publishRowChanges();
-        if (ops[0]->after) ops[0]->after(false);
+        finish(0, results[0]);
         ops[0]->done.set_value(std::move(results[0]));
         return;
       }
@@ -543,17 +798,22 @@ struct TileCache::Impl {
       for (std::size_t i = 0; i < ops.size(); ++i) {
         run(savepointStmt);
         results[i] = ops[i]->apply(*this);
-        if (!results[i]) run(rollbackToStmt);
+        if (!results[i]) {
+          run(rollbackToStmt);
+          finish(i, results[i]);
+        }
         run(releaseStmt);
       }
     }
     const auto committed = commit();
     publishRowChanges(); // before anyone is told: a put is visible to the next get
-    for (std::size_t i = 0; i < ops.size(); ++i) {
-      const bool ok = committed && results[i];
-      if (ops[i]->after) ops[i]->after(ok);
-      ops[i]->done.set_value(!committed ? std::unexpected(committed.error()) : results[i]);
+    for (std::size_t i = ops.size(); i-- > 0;) {
+      if (finished[i]) continue;
+      finish(i, committed ? results[i] : Result(std::unexpected(committed.error())));
     }
+    for (std::size_t i = 0; i < ops.size(); ++i)
+      ops[i]->done.set_value(!committed && results[i] ? Result(std::unexpected(committed.error()))
+                                                      : results[i]);
   }
 
   /** Runs queued operations until the queue is empty. Requires writeMutex. */
@@ -579,7 +839,7 @@ struct TileCache::Impl {
         group.clear();
         auto r = op->apply(*this);
         publishRowChanges();
-        if (op->after) op->after(r.has_value());
+        if (op->after) op->after(r);
         op->done.set_value(std::move(r));
       }
       if (!group.empty()) runBatch(group);
@@ -641,8 +901,12 @@ struct TileCache::Impl {
   }
 
   /** Deletes rows chosen by a query (dataset, level, row, col, folder, extension, bytes), in chunks
-   * of at most 1000 rows per transaction, rows first and then their files. Stops after `maxRows`
-   * rows or once `bytesToFree` bytes are gone. Writer thread only. Returns the number removed. */
+   * of at most 1000 rows per transaction, rows first and then their files, each chunk under the
+   * files lock (so the files unlinked are the ones the deleted rows named: no put can rename a new
+   * tile into place between the commit and the unlink). When the disk is so full that the deletion
+   * cannot be committed, the chunk's files go first (they free the room) and the rows after. Stops
+   * after `maxRows` rows or once `bytesToFree` bytes are gone. Writer thread only. Returns the
+   * number removed. */
   std::expected<std::int64_t, CacheError>
   deleteSelected(const char* selectSql,
                  const std::function<void(sql::Stmt::Use&)>& bind,
@@ -652,6 +916,8 @@ struct TileCache::Impl {
     std::int64_t freed = 0;
     auto done = [&] { return removed >= maxRows || (bytesToFree && freed >= *bytesToFree); };
     while (!done()) {
+      auto filesLock = lockFiles();
+      if (!filesLock) return std::unexpected(filesLock.error());
       std::vector<std::pair<TouchKey, fs::path>> victims;
       {
         sql::Stmt sel(writeDb.get(), selectSql);
@@ -677,19 +943,38 @@ struct TileCache::Impl {
         freed += chunkFreed;
       }
       if (victims.empty()) break;
-      if (auto b = begin(); !b) return std::unexpected(b.error());
-      for (const auto& [tk, path] : victims) {
-        sql::Stmt::Use d(deleteTile);
-        bindKey(d, tk.dataset, tk.key);
-        d.step();
-        rowChanged(tk.dataset, tk.key);
+      auto deleteRows = [&]() -> Result {
+        if (auto b = begin(); !b) return b;
+        for (const auto& [tk, path] : victims) {
+          sql::Stmt::Use d(deleteTile);
+          bindKey(d, tk.dataset, tk.key);
+          d.step();
+          rowChanged(tk.dataset, tk.key);
+        }
+        auto c = commit();
+        publishRowChanges();
+        return c;
+      };
+      auto c = deleteRows();
+      if (!c && c.error().code == CacheErrc::DiskFull) {
+        for (const auto& [tk, path] : victims)
+          ::unlink(path.c_str());
+        c = deleteRows();
+        if (!c) {
+          return std::unexpected(CacheError{
+              CacheErrc::DiskFull,
+              c.error().message + ": " + std::to_string(victims.size()) +
+                  " tiles were removed but the index is too full to forget them; free some "
+                  "space and run `tellus cache rebuild`"});
+        }
+      } else if (!c) {
+        return std::unexpected(c.error());
+      } else {
+        for (const auto& [tk, path] : victims)
+          ::unlink(path.c_str());
       }
-      auto c = commit();
-      publishRowChanges();
-      if (!c) return std::unexpected(c.error());
-      for (const auto& [tk, path] : victims)
-        ::unlink(path.c_str());
       removed += static_cast<std::int64_t>(victims.size());
+      noteRoom();
     }
     return removed;
   }
@@ -745,6 +1030,33 @@ struct TileCache::Impl {
     if (rc != SQLITE_DONE)
       return std::unexpected(sql::errorFrom(writeDb.get(), rc, "removing tile"));
     return {};
+  }
+
+  /** A reader found a present row whose file is missing or of another size: drops the row if that
+   * is still so now, under the files lock (where a row and its file agree unless something outside
+   * the cache changed them), not if a put or a prune came between and made them agree again. */
+  Result healRow(DatasetId id, const TileKey& key) {
+    const auto d = findDataset(id);
+    if (!d) return {};
+    std::optional<std::int64_t> bytes;
+    {
+      sql::Stmt::Use u(rowBytesStmt);
+      bindKey(u, id, key);
+      const int rc = u.step();
+      if (rc == SQLITE_ROW && u.i64(0) == kStatePresent) {
+        bytes = u.i64(1);
+      } else if (rc != SQLITE_ROW && rc != SQLITE_DONE) {
+        return std::unexpected(sql::errorFrom(writeDb.get(), rc, "checking a tile"));
+      }
+    }
+    if (!bytes) return {};
+    const fs::path path = tilePath(*d, key);
+    struct stat st {};
+    const bool exists = ::stat(path.c_str(), &st) == 0;
+    if (exists && st.st_size == *bytes) return {};
+    // A file of another size than its row says is not that tile: both go (it is fetched again).
+    if (exists) ::unlink(path.c_str());
+    return deleteRow(id, key);
   }
 };
 
@@ -807,8 +1119,13 @@ Result probe(sqlite3* db) {
 
 Result configure(sqlite3* db, bool readOnly) {
   if (readOnly) return {};
-  return runAll(
-      db, {"PRAGMA journal_mode = WAL", "PRAGMA synchronous = NORMAL"}, "configuring index");
+  // The WAL persists (openDb); it is cut back to 64 MiB when it is reset, so one huge transaction
+  // (a rebuild) does not keep its size forever.
+  return runAll(db,
+                {"PRAGMA journal_mode = WAL",
+                 "PRAGMA synchronous = NORMAL",
+                 "PRAGMA journal_size_limit = 67108864"},
+                "configuring index");
 }
 
 void moveAside(const fs::path& indexPath) {
@@ -862,8 +1179,20 @@ std::expected<std::unique_ptr<TileCache>, CacheError> TileCache::open(const Opti
   }
   if (!options.readOnly) {
     if (auto r = impl->prepareWriter(); !r) return std::unexpected(r.error());
+    impl->rootFd = ::open(options.root.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (impl->rootFd < 0)
+      return std::unexpected(fileio::errnoError(errno, "cannot open cache root", options.root));
   }
   if (auto r = impl->loadDatasets(impl->writeDb.get()); !r) return std::unexpected(r.error());
+  if (!options.readOnly) {
+    // Temp files of writers that are gone (killed mid-write): only where writers put them, no scan.
+    impl->tempFilesRemoved = removeDeadTempFiles(options.root);
+    std::shared_lock lock(impl->datasetsMutex);
+    for (const auto& [id, d] : impl->datasetsById) {
+      impl->tempFilesRemoved += removeDeadTempFiles(d->dir);
+      impl->tempFilesRemoved += removeDeadTempFiles(d->dir / kTempDirName);
+    }
+  }
   impl->rows.configure(options.rowCacheEntries, options.openFiles);
   impl->dataVersionStmt = sql::Stmt(impl->writeDb.get(), "PRAGMA data_version");
   std::unique_ptr<TileCache> cache(new TileCache(std::move(impl)));
@@ -901,16 +1230,66 @@ std::expected<DatasetId, CacheError> TileCache::registerDataset(const DatasetSpe
   }
   const std::string folder = datasetFolder(spec);
   const fs::path dir = impl_->options.root / folder;
-  if (auto r = impl_->ensureDir(dir); !r) return std::unexpected(r.error());
-  // The descriptor goes first: a rebuild from the tree needs it, and it is harmless without a row.
   const std::string descriptor = serializeDatasetSpec(spec);
-  if (auto r =
-          fileio::writeFileAtomic(dir / kDescriptorName,
-                                  std::as_bytes(std::span(descriptor.data(), descriptor.size())),
-                                  impl_->options.fsyncTiles);
-      !r) {
-    return std::unexpected(r.error());
+  const fs::path descriptorPath = dir / kDescriptorName;
+  // Registered already as it is now defined? Then nothing is written: a restart on a full disk
+  // finds every dataset it had and starts.
+  struct Known {
+    DatasetId id;
+    UnixMillis createdAt;
+    bool pinned;
+  };
+  std::optional<Known> known;
+  if (auto lease = impl_->acquireReader()) {
+    sql::Stmt find(lease->conn->db.get(),
+                   "SELECT id, created_at, pinned FROM datasets WHERE folder = ?1");
+    if (find.ok()) {
+      sql::Stmt::Use u(find);
+      u.bind(1, std::string_view(folder));
+      if (u.step() == SQLITE_ROW) known = Known{u.i64(0), u.i64(1), u.i64(2) != 0};
+    }
   }
+  auto remember = [&](DatasetId id, UnixMillis createdAt, bool pinned) {
+    std::unique_lock lock(impl_->datasetsMutex);
+    DatasetSpec stored = spec;
+    stored.pinned = pinned;
+    impl_->datasetsById.insert_or_assign(
+        id,
+        std::make_shared<const DatasetEntry>(
+            DatasetEntry{DatasetInfo{id, std::move(stored), folder, createdAt}, *grid, dir}));
+    return id;
+  };
+  const auto onDisk = fileio::readFile(descriptorPath, std::nullopt);
+  const bool descriptorCurrent =
+      onDisk &&
+      std::string_view(reinterpret_cast<const char*>(onDisk->data()), onDisk->size()) == descriptor;
+  if (known && known->pinned == spec.pinned && descriptorCurrent)
+    return remember(known->id, known->createdAt, known->pinned);
+  if (!known && impl_->refusingNow()) {
+    return std::unexpected(
+        impl_->fullError("dataset '" + spec.name + "' is not registered while the disk is full"));
+  }
+  if (auto r = impl_->ensureDir(dir); !r) {
+    if (!known) {
+      if (r.error().code != CacheErrc::DiskFull) return std::unexpected(r.error());
+      impl_->noteFull();
+      return std::unexpected(impl_->fullError(r.error().message));
+    }
+  } else if (!descriptorCurrent) {
+    // The descriptor goes first: a rebuild from the tree needs it, and it is harmless without a
+    // row. A known dataset keeps working without it (its old descriptor stays).
+    if (auto w =
+            fileio::writeFileAtomic(descriptorPath,
+                                    std::as_bytes(std::span(descriptor.data(), descriptor.size())),
+                                    impl_->options.fsyncTiles);
+        !w && !known) {
+      if (w.error().code != CacheErrc::DiskFull) return std::unexpected(w.error());
+      impl_->noteFull();
+      return std::unexpected(impl_->fullError(w.error().message));
+    }
+  }
+  if (known && known->pinned == spec.pinned)
+    return remember(known->id, known->createdAt, known->pinned);
   DatasetId id = 0;
   UnixMillis createdAt = unixMillisNow();
   auto r = impl_->submit([&](Impl& im) -> Result {
@@ -940,16 +1319,16 @@ std::expected<DatasetId, CacheError> TileCache::registerDataset(const DatasetSpe
     id = *inserted;
     return {};
   });
-  if (!r) return std::unexpected(r.error());
-  {
-    std::unique_lock lock(impl_->datasetsMutex);
-    DatasetSpec stored = spec;
-    impl_->datasetsById.insert_or_assign(
-        id,
-        std::make_shared<const DatasetEntry>(
-            DatasetEntry{DatasetInfo{id, std::move(stored), folder, createdAt}, *grid, dir}));
+  if (!r && known) {
+    // Only `pinned` could not be recorded (a full index): the dataset is there and works.
+    return remember(known->id, known->createdAt, known->pinned);
   }
-  return id;
+  if (!r) {
+    if (r.error().code != CacheErrc::DiskFull) return std::unexpected(r.error());
+    impl_->noteFull();
+    return std::unexpected(impl_->fullError(r.error().message));
+  }
+  return remember(id, createdAt, spec.pinned);
 }
 
 std::optional<DatasetInfo> TileCache::dataset(DatasetId id) const {
@@ -1085,11 +1464,24 @@ std::expected<CacheLookup, CacheError> TileCache::openTile(DatasetId id, const T
     return out;
   };
   im.noticeOtherWriters();
-  const bool pending = [&] {
-    if (!im.options.indexWriteBehind) return false;
+  const auto pendingRow = [&]() -> std::optional<Impl::PendingRow> {
+    if (!im.options.indexWriteBehind) return std::nullopt;
     std::lock_guard lock(im.pendingMutex);
-    return im.pendingRows.contains(tk);
+    const auto it = im.pendingRows.find(tk);
+    if (it == im.pendingRows.end()) return std::nullopt;
+    return it->second;
   }();
+  if (pendingRow) {
+    // Written, not yet committed: the bytes are in the temp file, or already in place.
+    CacheLookup row;
+    row.meta = pendingRow->meta;
+    row.size = pendingRow->size;
+    for (const fs::path& path : {pendingRow->temp, im.tilePath(**d, key)}) {
+      if (auto r = openRowFile(path, row)) return hit(*r);
+    }
+    // Neither: committed (or dropped) meanwhile; the index says which.
+  }
+  const bool pending = pendingRow.has_value();
   if (!pending) {
     if (auto r = im.rows.find(tk)) {
       const auto recheck = im.options.fileRecheck.count() * 1000000;
@@ -1110,8 +1502,9 @@ std::expected<CacheLookup, CacheError> TileCache::openTile(DatasetId id, const T
   if (!found || found->kind != CacheLookup::Kind::Hit) return found;
   auto row = openRowFile(im.tilePath(**d, key), *found);
   if (!row) {
-    // The file vanished or changed under us: forget the row (self-healing) and report a miss.
-    im.submitDetached([id, key](Impl& w) { return w.deleteRow(id, key); });
+    // The file vanished or changed under us: report a miss, and let the writer drop the row if
+    // it still names no such file (self-healing).
+    im.submitDetached([id, key](Impl& w) { return w.healRow(id, key); });
     return CacheLookup{};
   }
   if (!pending) im.rows.insert(tk, row, generation);
@@ -1124,7 +1517,7 @@ std::expected<CacheLookup, CacheError> TileCache::get(DatasetId id, const TileKe
   auto bytes = found->file->readAll();
   if (!bytes) {
     impl_->rows.invalidate(TouchKey{id, key});
-    impl_->submitDetached([id, key](Impl& w) { return w.deleteRow(id, key); });
+    impl_->submitDetached([id, key](Impl& w) { return w.healRow(id, key); });
     return CacheLookup{};
   }
   found->bytes = std::move(*bytes);
@@ -1136,48 +1529,67 @@ std::expected<void, CacheError> TileCache::put(DatasetId id,
                                                const TileKey& key,
                                                std::span<const std::byte> bytes,
                                                const TileMeta& meta) {
-  if (impl_->options.readOnly)
+  Impl& im = *impl_;
+  if (im.options.readOnly)
     return std::unexpected(CacheError{CacheErrc::ReadOnly, "the cache is read-only"});
-  auto d = impl_->checkedDataset(id, key);
+  auto d = im.checkedDataset(id, key);
   if (!d) return std::unexpected(d.error());
-  const fs::path path = impl_->tilePath(**d, key);
-  if (auto r = impl_->ensureDir(path.parent_path()); !r) return r;
-  if (auto r = fileio::writeFileAtomic(path, bytes, impl_->options.fsyncTiles); !r) return r;
+  if (auto refused = im.refuseWhileFull(); !refused) return refused;
+  auto placement = std::make_shared<TilePlacement>();
+  placement->target = im.tilePath(**d, key);
+  const fs::path tempDir = (*d)->dir / kTempDirName;
+  const std::string tileName = placement->target.filename().string();
+  placement->temp = tempDir / fileio::tempNameFor(tileName);
+  placement->backup = tempDir / fileio::tempNameFor(tileName);
+  if (auto r = im.ensureDir(placement->target.parent_path()); !r) return im.putOutcome(r);
+  if (auto r = im.ensureDir(tempDir); !r) return im.putOutcome(r);
+  if (auto r = fileio::writeTemp(placement->temp, bytes, im.options.fsyncTiles, placement->target);
+      !r)
+    return im.putOutcome(r);
   TileMeta m = meta;
   if (m.contentType.empty()) m.contentType = (*d)->info.spec.mimeType;
   if (m.fetchedAt == 0) m.fetchedAt = unixMillisNow();
   const auto n = static_cast<std::int64_t>(bytes.size());
-  auto apply = [entry = *d, key, n, m](Impl& im) {
-    return im.writeRow(*entry, key, kStatePresent, n, m, std::nullopt);
+  // In the writer's transaction, under the files lock: the file goes into place and its row is
+  // written; after the commit (or the rollback) the placement keeps or undoes what it did.
+  auto apply = [entry = *d, key, n, m, placement](Impl& w) -> Result {
+    if (auto r = placement->install(); !r) return r;
+    return w.writeRow(*entry, key, kStatePresent, n, m, std::nullopt);
   };
-  if (!impl_->options.indexWriteBehind) {
-    return impl_->submit(std::move(apply), [path](bool committed) {
-      // Without its row the new file must not linger (the index stays as it was).
-      if (!committed) ::unlink(path.c_str());
-    });
+  if (!im.options.indexWriteBehind) {
+    return im.putOutcome(im.submit(
+        std::move(apply), [placement](const Result& r) { placement->finish(r.has_value()); }));
   }
-  // Write-behind: visible to this process at once through the pending overlay, committed by the
-  // writer thread with whatever else is queued.
+  // Write-behind: visible to this process at once through the pending overlay (from the temp file
+  // until it is in place), renamed and committed by the writer with whatever else is queued.
   const TouchKey tk{id, key};
   std::uint64_t generation = 0;
   {
-    std::lock_guard lock(impl_->pendingMutex);
-    generation = ++impl_->pendingGeneration;
-    impl_->pendingRows.insert_or_assign(tk, Impl::PendingRow{n, m, generation});
+    std::lock_guard lock(im.pendingMutex);
+    generation = ++im.pendingGeneration;
+    im.pendingRows.insert_or_assign(tk, Impl::PendingRow{n, m, generation, placement->temp});
   }
-  impl_->submitDetached(std::move(apply), [im = impl_.get(), tk, generation, path](bool committed) {
-    {
-      std::lock_guard lock(im->pendingMutex);
-      const auto it = im->pendingRows.find(tk);
-      if (it != im->pendingRows.end() && it->second.generation == generation)
-        im->pendingRows.erase(it);
-    }
-    if (!committed) {
-      ::unlink(path.c_str());
-      std::fprintf(
-          stderr, "tellus: cache: could not index %s; the tile was dropped\n", path.c_str());
-    }
-  });
+  im.submitDetached(std::move(apply),
+                    [w = impl_.get(), tk, generation, placement](const Result& r) {
+                      placement->finish(r.has_value());
+                      {
+                        std::lock_guard lock(w->pendingMutex);
+                        const auto it = w->pendingRows.find(tk);
+                        if (it != w->pendingRows.end() && it->second.generation == generation)
+                          w->pendingRows.erase(it);
+                      }
+                      if (r) {
+                        w->noteRoom();
+                        return;
+                      }
+                      // Counted, not printed: the seeder reports how many were dropped
+                      // (storeStatus).
+                      w->droppedPuts.fetch_add(1, std::memory_order_relaxed);
+                      if (r.error().code == CacheErrc::DiskFull) {
+                        w->noteFull();
+                        w->refusedPuts.fetch_add(1, std::memory_order_relaxed);
+                      }
+                    });
   return {};
 }
 
@@ -1208,27 +1620,28 @@ TileCache::putAbsent(DatasetId id, const TileKey& key, UnixMillis retryAfter) {
   auto d = impl_->checkedDataset(id, key);
   if (!d) return std::unexpected(d.error());
   impl_->dropPending(id, key);
-  const fs::path path = impl_->tilePath(**d, key);
+  auto removal = impl_->removalOf(**d, key);
   return impl_->submit(
-      [entry = *d, key, retryAfter](Impl& im) {
+      [entry = *d, key, retryAfter, removal](Impl& im) -> Result {
+        if (auto r = removal->hide(); !r) return r;
         TileMeta m;
         m.fetchedAt = unixMillisNow();
         return im.writeRow(*entry, key, kStateAbsent, 0, m, retryAfter);
       },
-      [path](bool committed) {
-        if (committed) ::unlink(path.c_str());
-      });
+      [removal](const Result& r) { removal->finish(r.has_value()); });
 }
 
 std::expected<void, CacheError> TileCache::erase(DatasetId id, const TileKey& key) {
   auto d = impl_->checkedDataset(id, key);
   if (!d) return std::unexpected(d.error());
   impl_->dropPending(id, key);
-  const fs::path path = impl_->tilePath(**d, key);
-  return impl_->submit([id, key](Impl& im) { return im.deleteRow(id, key); },
-                       [path](bool committed) {
-                         if (committed) ::unlink(path.c_str());
-                       });
+  auto removal = impl_->removalOf(**d, key);
+  return impl_->submit(
+      [id, key, removal](Impl& im) -> Result {
+        if (auto r = removal->hide(); !r) return r;
+        return im.deleteRow(id, key);
+      },
+      [removal](const Result& r) { removal->finish(r.has_value()); });
 }
 
 std::expected<void, CacheError>
@@ -1360,6 +1773,20 @@ std::expected<VerifyReport, CacheError> TileCache::verify() const {
     }
     if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "verifying"));
   }
+  // Temp files beside the index (a damage marker being written).
+  {
+    std::error_code ec;
+    for (auto it = fs::directory_iterator(impl_->options.root, ec);
+         !ec && it != fs::directory_iterator();
+         it.increment(ec)) {
+      const std::string name = it->path().filename().string();
+      if (!fileio::isTempName(name)) continue;
+      if (fileio::tempOwnerAlive(name))
+        ++report.tempFilesInUse;
+      else
+        report.strayTempFiles.push_back(name);
+    }
+  }
   // Files -> rows.
   for (const auto& info : infos) {
     const fs::path dir = impl_->options.root / info.folder;
@@ -1371,7 +1798,11 @@ std::expected<VerifyReport, CacheError> TileCache::verify() const {
       const std::string name = it->path().filename().string();
       const std::string rel = fs::relative(it->path(), dir, ec).generic_string();
       if (fileio::isTempName(name)) {
-        report.strayTempFiles.push_back(info.folder + "/" + rel);
+        // A running writer's (a tile on its way, a replaced tile kept until its commit) is fine.
+        if (fileio::tempOwnerAlive(name))
+          ++report.tempFilesInUse;
+        else
+          report.strayTempFiles.push_back(info.folder + "/" + rel);
         continue;
       }
       if (name == kDescriptorName) continue;
@@ -1401,6 +1832,7 @@ std::expected<std::int64_t, CacheError> TileCache::rebuild() {
       return std::unexpected(sql::errorFrom(db, sqlite3_errcode(db), "clearing index"));
     }
     const fs::path& root = im.options.root;
+    removeDeadTempFiles(root);
     std::error_code ec;
     for (const auto& server : fs::directory_iterator(root, ec)) {
       if (!server.is_directory(ec)) continue;
@@ -1424,7 +1856,8 @@ std::expected<std::int64_t, CacheError> TileCache::rebuild() {
           if (!it->is_regular_file(ec)) continue;
           const std::string name = it->path().filename().string();
           if (fileio::isTempName(name)) {
-            fs::remove(it->path(), ec); // an interrupted write: never a valid tile
+            // An interrupted write is never a valid tile; a running writer's is left to it.
+            if (!fileio::tempOwnerAlive(name)) fs::remove(it->path(), ec);
             ec.clear();
             continue;
           }
@@ -1501,6 +1934,22 @@ std::expected<std::int64_t, CacheError> TileCache::evictToLimit() {
       true);
   if (!r) return std::unexpected(r.error());
   return evicted;
+}
+
+StoreStatus TileCache::storeStatus() const noexcept {
+  StoreStatus s;
+  s.writable = !impl_->full.load(std::memory_order_acquire);
+  s.refused = impl_->refusedPuts.load(std::memory_order_relaxed);
+  s.dropped = impl_->droppedPuts.load(std::memory_order_relaxed);
+  return s;
+}
+
+std::optional<DiskSpace> TileCache::diskSpace() const {
+  return impl_->diskSpace();
+}
+
+std::size_t TileCache::tempFilesRemovedAtOpen() const noexcept {
+  return impl_->tempFilesRemoved;
 }
 
 void TileCache::flush() {

@@ -116,7 +116,8 @@ void ProxyMetrics::composedTiles(std::uint64_t decoded, std::uint64_t kept) noex
 
 std::string ProxyMetrics::render(const std::vector<UpstreamMetrics>& upstreams,
                                  std::optional<std::int64_t> cacheBytes,
-                                 std::uint64_t decodedTileCacheBytes) const {
+                                 std::uint64_t decodedTileCacheBytes,
+                                 const std::optional<CacheHealthMetrics>& cacheHealth) const {
   std::string out;
   out.reserve(4096);
   header(out,
@@ -220,6 +221,34 @@ std::string ProxyMetrics::render(const std::vector<UpstreamMetrics>& upstreams,
   }
   header(out, "tellus_cache_bytes", "gauge", "Bytes of all cached tiles (from the index).");
   if (cacheBytes) out += "tellus_cache_bytes " + std::to_string(*cacheBytes) + "\n";
+  if (cacheHealth) {
+    header(out,
+           "tellus_cache_writable",
+           "gauge",
+           "1 while the cache stores fetched tiles, 0 after it refused one for lack of space (disk "
+           "or inodes full) until it stores one again.");
+    out += std::string("tellus_cache_writable ") + (cacheHealth->writable ? "1" : "0") + "\n";
+    header(
+        out,
+        "tellus_cache_store_refused_total",
+        "counter",
+        "Fetched tiles the cache did not keep for lack of space (each was served all the same).");
+    out += "tellus_cache_store_refused_total " + std::to_string(cacheHealth->refusedStores) + "\n";
+    if (cacheHealth->freeBytes) {
+      header(out,
+             "tellus_cache_free_bytes",
+             "gauge",
+             "Bytes free for tellus on the file system of the cache root.");
+      out += "tellus_cache_free_bytes " + std::to_string(*cacheHealth->freeBytes) + "\n";
+    }
+    if (cacheHealth->freeInodes) {
+      header(out,
+             "tellus_cache_free_inodes",
+             "gauge",
+             "Inodes free for tellus on the file system of the cache root.");
+      out += "tellus_cache_free_inodes " + std::to_string(*cacheHealth->freeInodes) + "\n";
+    }
+  }
   header(
       out,
       "tellus_composed_map_tiles_total",

@@ -104,10 +104,12 @@ struct ProxyFrontEnd::Impl {
   }
 
   void metricsPage(const Responder& respond) const {
-    auto r = HttpResponse::text(
-        200,
-        "text/plain; version=0.0.4; charset=utf-8",
-        metrics.render(tiles.upstreamMetrics(), tiles.cachedBytes(), composer.decodedCacheBytes()));
+    auto r = HttpResponse::text(200,
+                                "text/plain; version=0.0.4; charset=utf-8",
+                                metrics.render(tiles.upstreamMetrics(),
+                                               tiles.cachedBytes(),
+                                               composer.decodedCacheBytes(),
+                                               tiles.cacheHealth()));
     r.setHeader("Cache-Control", "no-store");
     respond(std::move(r));
   }

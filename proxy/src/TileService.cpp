@@ -101,6 +101,9 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
   std::atomic<bool> forcedOffline{false};
   std::atomic<std::uint64_t> fetches{0};
   std::atomic<std::uint64_t> metaFetches{0};
+  // Fetched tiles served but not kept for lack of space, and whether the log last said "storing".
+  std::atomic<std::uint64_t> refusedStores{0};
+  std::atomic<bool> storingLogged{true};
 
   // (layer, time) -> dataset id, registered on first use.
   std::mutex datasetsMutex;
@@ -123,6 +126,13 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
 
   Impl(TileCache& c, Fetcher& f, TileServiceOptions o) : cache(c), fetcher(f), options(o) {}
 
+  /** A stand-in id for a dataset the cache could not register (a full disk): negative, never a
+   * real id, and one per folder so that flights of different datasets stay apart. Its tiles are
+   * fetched and served, never looked up or stored. */
+  static DatasetId unregisteredId(const std::string& folder) {
+    return -1 - static_cast<DatasetId>(stableHash64(folder) >> 2);
+  }
+
   std::expected<std::pair<DatasetId, std::string>, std::string> dataset(const LayerSpec& l,
                                                                         std::string_view time) {
     std::lock_guard lock(datasetsMutex);
@@ -131,10 +141,41 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     DatasetSpec spec = l.dataset;
     spec.time = std::string(time);
     auto id = cache.registerDataset(spec);
+    if (!id && id.error().code == CacheErrc::DiskFull) {
+      // Served from the upstream, not stored; registered by a later request once there is room.
+      noticeStoreState(&id.error());
+      const std::string folder = datasetFolder(spec);
+      return std::make_pair(unregisteredId(folder), folder);
+    }
     if (!id) return std::unexpected("cache: " + id.error().message);
     const auto value = std::make_pair(*id, datasetFolder(spec));
     datasets.emplace(key, value);
     return value;
+  }
+
+  /** Logs the cache's change between storing and refusing (a full disk), once per change: the
+   * state is the cache's, looked at after each store. */
+  void noticeStoreState(const CacheError* refusal) {
+    const bool writable = refusal == nullptr && cache.storeStatus().writable;
+    if (storingLogged.exchange(writable) == writable) return;
+    const std::string root = cache.root().string();
+    const auto space = cache.diskSpace();
+    const std::string freeBytes = space ? std::to_string(space->freeBytes) : "?";
+    const std::string freeInodes = space ? std::to_string(space->freeInodes) : "?";
+    if (!writable) {
+      logger().log(LogLevel::Error,
+                   "cache",
+                   "the cache is full: tiles are served but not stored until there is room",
+                   {{"root", root},
+                    {"free_bytes", freeBytes},
+                    {"free_inodes", freeInodes},
+                    {"error", refusal ? std::string_view(refusal->message) : "disk full"}});
+    } else {
+      logger().log(LogLevel::Warn,
+                   "cache",
+                   "the cache stores tiles again",
+                   {{"root", root}, {"free_bytes", freeBytes}, {"free_inodes", freeInodes}});
+    }
   }
 
   bool remoteReachable(const UpstreamSpec& u) const {
@@ -208,21 +249,34 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                 std::move(old.file));
   }
 
-  /** Stores a good tile and lands the flight (worker thread). */
+  /** Stores a good tile and lands the flight (worker thread). A tile the cache does not keep is
+   * still served: a full disk never fails a client (the answer says it was not stored). */
   void store(const FlightKey& fk,
              const std::string& folder,
              std::vector<std::byte> bytes,
              TileMeta meta) {
-    if (auto put = cache.put(fk.dataset, fk.key, bytes, meta); !put) {
-      // A full disk must not fail the client: serve what we have, the error is in the log.
+    std::optional<CacheError> notStored;
+    if (fk.dataset < 0) {
+      notStored = CacheError{CacheErrc::DiskFull,
+                             "the cache is full: the layer's dataset could not be registered"};
+    } else if (auto put = cache.put(fk.dataset, fk.key, bytes, meta); !put) {
+      notStored = std::move(put.error());
+    }
+    if (notStored && notStored->code == CacheErrc::DiskFull) {
+      refusedStores.fetch_add(1, std::memory_order_relaxed);
+      noticeStoreState(&*notStored); // logged once per change, not once per tile
+    } else if (notStored) {
       logger().log(LogLevel::Error,
                    "cache",
                    "cannot cache a tile; it is served but not kept",
-                   {{"error", put.error().message}});
+                   {{"error", notStored->message}});
+    } else {
+      noticeStoreState(nullptr);
     }
-    land(
-        fk,
-        tile(TileOrigin::Miss, std::move(bytes), meta.contentType, meta.fetchedAt, folder, fk.key));
+    TileAnswer a =
+        tile(TileOrigin::Miss, std::move(bytes), meta.contentType, meta.fetchedAt, folder, fk.key);
+    a.notStored = std::move(notStored);
+    land(fk, std::move(a));
   }
 
   TileMeta freshMeta(const LayerSpec& l) const {
@@ -369,9 +423,17 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
       timed = std::move(*found);
       ds = &timed;
     }
+    if (time.empty() && ds->first < 0) { // not registered for lack of space: room now?
+      auto again = dataset(l, time);
+      if (!again) return done(error(again.error()));
+      timed = std::move(*again);
+      ds = &timed;
+    }
     const auto& [id, folder] = *ds;
-    // The file held open, not read: the HTTP server sends it with sendfile(2).
-    auto found = cache.openTile(id, key);
+    // The file held open, not read: the HTTP server sends it with sendfile(2). A dataset the
+    // cache could not register has nothing cached.
+    auto found =
+        id < 0 ? std::expected<CacheLookup, CacheError>(CacheLookup{}) : cache.openTile(id, key);
     if (!found) return done(error("cache: " + std::string(toString(found.error().code))));
     const UnixMillis now = unixMillisNow();
     if (found->kind == CacheLookup::Kind::Hit && !found->stale) {
@@ -640,9 +702,10 @@ TileService::create(TileCache& cache,
     impl->layers.push_back(std::move(l));
   }
   for (const auto& l : impl->layers) {
+    // On a full disk a new layer starts unregistered: served from its upstream, not kept.
     auto ds = impl->dataset(l, "");
     if (!ds) return std::unexpected("layer '" + l.name + "': " + ds.error());
-    const auto info = cache.dataset(ds->first);
+    const auto info = ds->first < 0 ? std::nullopt : cache.dataset(ds->first);
     impl->layerSince.push_back(info ? info->createdAt : 0);
     impl->defaultDatasets.push_back(*ds);
   }
@@ -757,6 +820,17 @@ bool TileService::offline() const noexcept {
 
 std::uint64_t TileService::upstreamFetches() const noexcept {
   return impl_->fetches.load();
+}
+
+CacheHealthMetrics TileService::cacheHealth() const {
+  CacheHealthMetrics h;
+  h.writable = impl_->cache.storeStatus().writable;
+  h.refusedStores = impl_->refusedStores.load(std::memory_order_relaxed);
+  if (const auto space = impl_->cache.diskSpace()) {
+    h.freeBytes = space->freeBytes;
+    h.freeInodes = space->freeInodes;
+  }
+  return h;
 }
 
 std::optional<DatasetSpec> TileService::describe(std::string_view layer,

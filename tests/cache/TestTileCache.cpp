@@ -8,6 +8,7 @@
 #include <sqlite3.h>
 
 #include <atomic>
+#include <chrono>
 #include <fstream>
 #include <sys/resource.h>
 #include <thread>
@@ -406,6 +407,63 @@ TEST(TileCache, ManyThreadsReadAndWriteWithoutErrors) {
   for (int t = 0; t < 4; ++t) {
     for (std::int64_t i = 0; i < 100; ++i)
       EXPECT_EQ(cache->peek(id, TileKey{4, t, i})->kind, CacheLookup::Kind::Hit);
+  }
+}
+
+TEST(TileCache, PutsErasesAbsentMarkersAndPrunesOnTheSameTilesKeepRowsAndFilesTogether) {
+  // Threads of one process store, erase, mark absent and prune the same few tiles at once, so
+  // that the writer's batches hold several operations on one tile: whatever order they commit
+  // in, each file must be the one its row describes.
+  test::TempDir dir("cache");
+  auto cache = openCache(dir.path());
+  const auto id = *cache->registerDataset(imagery());
+  constexpr std::int64_t kTiles = 6;
+  std::atomic<bool> stop{false};
+  std::atomic<int> failures{0};
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t) {
+    threads.emplace_back([&, t] {
+      for (std::size_t i = 0; !stop; ++i) {
+        const TileKey k{5, 2, static_cast<std::int64_t>(i) % kTiles};
+        if (!cache->put(id, k, payload(k, 300 + ((i + static_cast<std::size_t>(t)) % 7) * 100), {}))
+          ++failures;
+      }
+    });
+  }
+  threads.emplace_back([&] {
+    for (std::int64_t i = 0; !stop; ++i) {
+      const TileKey k{5, 2, (i * 5) % kTiles};
+      if (!(i % 2 ? cache->erase(id, k) : cache->putAbsent(id, k, unixMillisNow() + 60000)))
+        ++failures;
+    }
+  });
+  threads.emplace_back([&] {
+    PruneOptions all;
+    all.olderThan = std::chrono::milliseconds(0);
+    all.includePinned = true;
+    while (!stop) {
+      if (!cache->prune(all)) ++failures;
+    }
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));
+  stop = true;
+  for (auto& th : threads)
+    th.join();
+  cache->flush();
+  EXPECT_EQ(failures.load(), 0);
+  const auto report = cache->verify();
+  ASSERT_TRUE(report);
+  EXPECT_TRUE(report->rowsWithoutFiles.empty()) << report->rowsWithoutFiles.size();
+  EXPECT_TRUE(report->filesWithoutRows.empty()) << report->filesWithoutRows.size();
+  EXPECT_TRUE(report->sizeMismatches.empty()) << report->sizeMismatches.size();
+  EXPECT_TRUE(report->ok());
+  for (std::int64_t c = 0; c < kTiles; ++c) {
+    const TileKey k{5, 2, c};
+    const auto g = cache->get(id, k);
+    ASSERT_TRUE(g);
+    if (g->kind == CacheLookup::Kind::Hit) {
+      EXPECT_EQ(static_cast<std::int64_t>(g->bytes.size()), g->size);
+    }
   }
 }
 

@@ -8,7 +8,9 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <csignal>
+#include <fstream>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -34,7 +36,7 @@ std::size_t countTempFiles(const fs::path& root) {
   std::size_t n = 0;
   for (const auto& e : fs::recursive_directory_iterator(root)) {
     const auto name = e.path().filename().string();
-    n += name.starts_with(".") && name.ends_with(".tmp");
+    n += e.is_regular_file() && name.starts_with(".") && name.ends_with(".tmp");
   }
   return n;
 }
@@ -230,4 +232,119 @@ TEST(TileCacheIntegration, CrashMidWriteNeverLeavesACorruptTile) {
   ASSERT_TRUE(report);
   EXPECT_EQ(report->integrity, "ok");
   EXPECT_TRUE(report->rowsWithoutFiles.empty());
+}
+
+TEST(TileCacheIntegration, PruneRacingPutsNeverLeavesARowWithoutItsFile) {
+  // `tellus cache prune` in one process while another (a server, a seeder) stores the same tiles
+  // again and again: a tile stored between the prune's row delete and its unlink must keep its
+  // file. The putter checks after each put: a tile whose file is gone must have no row either
+  // (only this process stores; the pruner removes the row before the file).
+  test::TempDir dir("race");
+  std::string folder;
+  {
+    auto setup = openCache(dir.path());
+    ASSERT_TRUE(setup->registerDataset(imagery()));
+    folder = setup->datasets().at(0).folder;
+  }
+  const fs::path stop = dir.path() / "stop";
+  constexpr auto kRun = std::chrono::milliseconds(1500);
+  const pid_t putter = spawn([&] {
+    auto cache = openCache(dir.path());
+    if (!cache) return 3;
+    const auto id = cache->datasets().at(0).id;
+    const auto until = std::chrono::steady_clock::now() + kRun;
+    int lost = 0;
+    for (std::int64_t round = 0; std::chrono::steady_clock::now() < until && lost == 0; ++round) {
+      for (std::int64_t c = 0; c < 16; ++c) {
+        const TileKey k{6, 3, c};
+        if (!cache->put(id, k, payload(k, 500 + static_cast<std::size_t>(round % 5) * 300), {}))
+          continue;
+        const fs::path file = dir.path() / folder / tileRelativePath(k, "jpg");
+        if (fs::exists(file)) continue;
+        const auto row = cache->peek(id, k);
+        if (row && row->kind == CacheLookup::Kind::Hit) {
+          std::fprintf(stderr,
+                       "round %lld: %s has an index row but its file is gone\n",
+                       static_cast<long long>(round),
+                       tileRelativePath(k, "jpg").c_str());
+          ++lost;
+        }
+      }
+    }
+    return lost == 0 ? 0 : 10;
+  });
+  const pid_t pruner = spawn([&] {
+    auto cache = openCache(dir.path());
+    if (!cache) return 3;
+    PruneOptions all;
+    all.olderThan = std::chrono::milliseconds(0);
+    all.includePinned = true;
+    while (!fs::exists(stop)) {
+      if (!cache->prune(all)) return 4;
+    }
+    return 0;
+  });
+  EXPECT_EQ(waitExit(putter), 0) << "a prune removed the file of a tile stored after its row";
+  { std::ofstream(stop).put('x'); }
+  EXPECT_EQ(waitExit(pruner), 0);
+  auto cache = openCache(dir.path());
+  const auto report = cache->verify();
+  ASSERT_TRUE(report);
+  EXPECT_TRUE(report->rowsWithoutFiles.empty()) << report->rowsWithoutFiles.size() << " rows";
+  EXPECT_TRUE(report->filesWithoutRows.empty()) << report->filesWithoutRows.size() << " files";
+  EXPECT_TRUE(report->ok());
+}
+
+TEST(TileCacheIntegration, TempFilesOfWritersThatAreGoneAreRemovedAtOpenAndFailVerify) {
+  test::TempDir dir("temps");
+  std::string folder;
+  {
+    auto cache = openCache(dir.path());
+    const auto id = *cache->registerDataset(imagery());
+    ASSERT_TRUE(cache->put(id, TileKey{3, 1, 2}, payload({3, 1, 2}), {}));
+    folder = cache->datasets().at(0).folder;
+  }
+  // A writer that is gone: a child that has exited (its pid names no process any more).
+  const pid_t gone = spawn([] { return 0; });
+  ASSERT_EQ(waitExit(gone), 0);
+  const std::string deadPid = std::to_string(gone);
+  const std::string livePid = std::to_string(::getpid());
+  const fs::path ds = dir.path() / folder;
+  auto touch = [](const fs::path& p) {
+    fs::create_directories(p.parent_path());
+    std::ofstream(p) << "partial";
+    return p;
+  };
+  // Where writers put their temp files, owned by the dead writer (pid and start time), by a
+  // process that reuses this process's pid but started at another time, and by this process.
+  const auto deadInTmp = touch(ds / ".tmp" / (".1_3.jpg." + deadPid + "-12345.0.tmp"));
+  const auto reusedPid = touch(ds / ".tmp" / (".1_4.jpg." + livePid + "-1.0.tmp"));
+  const auto liveInTmp = touch(ds / ".tmp" / (".1_5.jpg." + livePid + ".1.tmp"));
+  // Beside the tiles, where earlier versions wrote them (left to verify and rebuild).
+  const auto deadBeside = touch(ds / "3" / "1" / (".1_6.jpg." + deadPid + ".7.tmp"));
+  const auto liveBeside = touch(ds / "3" / "1" / (".1_7.jpg." + livePid + ".8.tmp"));
+
+  auto cache = openCache(dir.path());
+  EXPECT_FALSE(fs::exists(deadInTmp)) << "a dead writer's temp file survived the open";
+  EXPECT_FALSE(fs::exists(reusedPid)) << "a temp file of a reused pid survived the open";
+  EXPECT_TRUE(fs::exists(liveInTmp)) << "a running writer's temp file was removed";
+  EXPECT_TRUE(fs::exists(deadBeside)); // no scan of the tree at open
+  EXPECT_TRUE(fs::exists(liveBeside));
+  EXPECT_EQ(cache->tempFilesRemovedAtOpen(), 2u);
+
+  auto report = cache->verify();
+  ASSERT_TRUE(report);
+  ASSERT_EQ(report->strayTempFiles.size(), 1u);
+  EXPECT_EQ(report->strayTempFiles[0], folder + "/3/1/.1_6.jpg." + deadPid + ".7.tmp");
+  EXPECT_EQ(report->tempFilesInUse, 2);
+  EXPECT_FALSE(report->ok()) << "a stray temp file must fail verify";
+
+  ASSERT_TRUE(cache->rebuild());
+  EXPECT_FALSE(fs::exists(deadBeside));
+  EXPECT_TRUE(fs::exists(liveBeside)) << "rebuild removed a running writer's temp file";
+  EXPECT_TRUE(fs::exists(liveInTmp));
+  report = cache->verify();
+  ASSERT_TRUE(report);
+  EXPECT_TRUE(report->strayTempFiles.empty());
+  EXPECT_TRUE(report->ok());
 }

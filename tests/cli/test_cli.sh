@@ -38,6 +38,28 @@ grep -q "index rows without files: 1" "$work/verify.txt" || fail "verify report:
 "$tellus" cache rebuild --cache "$cache" | grep -q "15 tiles" || fail "rebuild count"
 "$tellus" cache verify --cache "$cache" >/dev/null || fail "verify after rebuild"
 
+# Temp files of a writer that was killed (its pid is in the name and names no process now): one
+# where writers put them (<dataset>/.tmp, removed when the cache is opened), one beside the tiles
+# where earlier versions wrote them (a problem for verify until rebuild removes it).
+sh -c 'exit 0' &
+wait $!
+dead=$!
+ds=$(echo "$cache"/local/bluemarble-*)
+mkdir -p "$ds/.tmp"
+echo partial >"$ds/.tmp/.2_5.jpg.$dead-1.0.tmp"
+echo partial >"$ds/1/4/.4_9.jpg.$dead.4.tmp"
+set +e
+"$tellus" cache verify --cache "$cache" >"$work/verify.txt"
+rc=$?
+set -e
+[ $rc -eq 3 ] || fail "verify should exit 3 with a stray temp file, got $rc: $(cat "$work/verify.txt")"
+grep -q "stray temp files: 1" "$work/verify.txt" || fail "verify temp report: $(cat "$work/verify.txt")"
+grep -q "1/4/.4_9.jpg.$dead.4.tmp" "$work/verify.txt" || fail "verify lists: $(cat "$work/verify.txt")"
+[ ! -e "$ds/.tmp/.2_5.jpg.$dead-1.0.tmp" ] || fail "a dead writer's temp file survived opening the cache"
+"$tellus" cache rebuild --cache "$cache" >/dev/null || fail "rebuild with a stray temp file"
+[ ! -e "$ds/1/4/.4_9.jpg.$dead.4.tmp" ] || fail "rebuild left a stray temp file"
+"$tellus" cache verify --cache "$cache" >/dev/null || fail "verify after rebuild removed the temp file"
+
 "$tellus" cache prune --older-than 0s --cache "$cache" | grep -q "pruned 0 tiles" || fail "prune keeps pinned"
 "$tellus" cache prune --older-than 0s --include-pinned --cache "$cache" | grep -q "pruned 15 tiles" || fail "prune pinned"
 
@@ -182,5 +204,78 @@ assert b[:2] == b"\xff\xd8", "not a JPEG"
 i = b.index(b"\xff\xdb")
 assert b[i + 5] == 16, f"first luma step {b[i + 5]}"
 PY
+
+# A full disk (issue 21): seed onto a 2 MiB tmpfs, and onto one without inodes left, then serve
+# from the full one. The tmpfs is mounted in a private mount namespace: a user namespace where
+# that is allowed (unprivileged), else a plain one (root).
+if unshare -rm true 2>/dev/null; then
+  ns="unshare -rm"
+elif unshare -m true 2>/dev/null; then
+  ns="unshare -m"
+else
+  ns=""
+fi
+if [ -z "$ns" ]; then
+  echo "SKIPPED!!! cli full-disk checks: neither 'unshare -rm' nor 'unshare -m' can make a mount namespace here" >&2
+else
+  mkdir -p "$work/full" "$work/noinodes"
+  cat >"$work/full.sh" <<'SH'
+set -eu
+tellus=$1 work=$2
+mnt=$work/full
+mount -t tmpfs -o size=2m,nr_inodes=4096 tmpfs "$mnt"
+set +e
+"$tellus" seed --cache "$mnt/c" --layer bluemarble --levels 0-2 >"$work/full-seed.txt" 2>&1
+echo $? >"$work/full-seed.rc"
+set -e
+"$tellus" cache stats --json --cache "$mnt/c" >"$work/full-stats.json"
+set +e
+"$tellus" cache verify --cache "$mnt/c" >"$work/full-verify.txt" 2>&1
+echo $? >"$work/full-verify.rc"
+set -e
+dd if=/dev/zero of="$mnt/filler" bs=4k >/dev/null 2>&1 || true
+"$tellus" serve --cache "$mnt/c" --listen 127.0.0.1:0 >"$work/full-serve.txt" 2>&1 &
+server=$!
+for _ in $(seq 50); do grep -q "listening on" "$work/full-serve.txt" && break; sleep 0.1; done
+port=$(grep -o "127.0.0.1:[0-9]*" "$work/full-serve.txt" | head -n 1 | cut -d: -f2)
+if [ -n "$port" ]; then
+  curl -s -D "$work/full-hit.hdr" -o /dev/null -w "%{http_code}" \
+    "http://127.0.0.1:$port/wwtile?T=bluemarble&L=0&X=0&Y=0" >"$work/full-hit.code"
+  curl -s -D "$work/full-miss.hdr" -o "$work/full-miss.jpg" -w "%{http_code}" \
+    "http://127.0.0.1:$port/wwtile?T=bluemarble&L=2&X=7&Y=3" >"$work/full-miss.code"
+  curl -s "http://127.0.0.1:$port/metrics" >"$work/full-metrics.txt"
+  kill -TERM $server
+fi
+wait $server || echo "serve exited $?" >>"$work/full-serve.txt"
+mnt=$work/noinodes
+mount -t tmpfs -o size=16m,nr_inodes=40 tmpfs "$mnt"
+set +e
+"$tellus" seed --cache "$mnt/c" --layer bluemarble --levels 0-2 >"$work/noinodes-seed.txt" 2>&1
+echo $? >"$work/noinodes-seed.rc"
+set -e
+"$tellus" cache verify --cache "$mnt/c" >"$work/noinodes-verify.txt" 2>&1 || true
+SH
+  $ns sh "$work/full.sh" "$tellus" "$work" || fail "the full-disk script failed under $ns"
+  seedout=$(cat "$work/full-seed.txt")
+  [ "$(cat "$work/full-seed.rc")" = 4 ] || fail "seed onto a full disk should exit 4, got $(cat "$work/full-seed.rc"): $seedout"
+  echo "$seedout" | grep -q "stopped, the cache refuses tiles: the cache at $work/full/c is full (" \
+    || fail "seed onto a full disk does not name the cache and its free space: $seedout"
+  written=$(echo "$seedout" | grep -o "[0-9]* written" | cut -d" " -f1)
+  stored=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["tiles"])' "$work/full-stats.json")
+  [ -n "$written" ] && [ "$written" = "$stored" ] || fail "seed said $written written, the cache holds $stored: $seedout"
+  [ "$(cat "$work/full-verify.rc")" = 0 ] || fail "verify after a full-disk seed: $(cat "$work/full-verify.txt")"
+  grep -q "listening on" "$work/full-serve.txt" || fail "serve did not start on a full disk: $(cat "$work/full-serve.txt")"
+  [ "$(cat "$work/full-hit.code")" = 200 ] || fail "a cached tile on a full disk answered $(cat "$work/full-hit.code")"
+  grep -qi "^X-Cache: HIT" "$work/full-hit.hdr" || fail "not a hit: $(cat "$work/full-hit.hdr")"
+  [ "$(cat "$work/full-miss.code")" = 200 ] || fail "a miss on a full disk answered $(cat "$work/full-miss.code")"
+  head -c 3 "$work/full-miss.jpg" | od -An -tx1 | grep -q "ff d8 ff" || fail "the miss on a full disk is not a JPEG"
+  grep -q "^tellus_cache_writable 0$" "$work/full-metrics.txt" || fail "metrics do not say the cache is full: $(grep tellus_cache "$work/full-metrics.txt")"
+  grep -q "^tellus_cache_store_refused_total 1$" "$work/full-metrics.txt" || fail "refused stores: $(grep tellus_cache "$work/full-metrics.txt")"
+  [ "$(grep -c "the cache is full" "$work/full-serve.txt")" = 1 ] || fail "serve's log: $(cat "$work/full-serve.txt")"
+  seedout=$(cat "$work/noinodes-seed.txt")
+  [ "$(cat "$work/noinodes-seed.rc")" = 4 ] || fail "seed without inodes left should exit 4, got $(cat "$work/noinodes-seed.rc"): $seedout"
+  echo "$seedout" | grep -q " 0 inodes free)" || fail "seed without inodes does not say so: $seedout"
+  grep -q "cache is consistent" "$work/noinodes-verify.txt" || fail "verify without inodes: $(cat "$work/noinodes-verify.txt")"
+fi
 
 echo "cli: all checks passed"

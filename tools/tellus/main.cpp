@@ -54,6 +54,7 @@ constexpr int kExitOk = 0;
 constexpr int kExitError = 1;
 constexpr int kExitUsage = 2;
 constexpr int kExitProblems = 3;
+constexpr int kExitCacheFull = 4; // seed: the cache refused tiles for lack of space
 
 constexpr const char* kUsage = R"(usage: tellus <command> [options]
 
@@ -339,10 +340,11 @@ std::int64_t estimateTileBytes(TileCache& cache, const LayerConfig& layer) {
   return pixels * 2;                                              // PNG/TIFF: a guess
 }
 
-/** The one summary line of a seeded layer (both seeding paths) and its failures; false if any. */
-bool printSeedSummary(const LayerConfig& layer, const SeedOptions& so, const SeedReport& r) {
+/** The one summary line of a seeded layer (both seeding paths), its failures, and why it stopped
+ * early (a full cache). The exit code it calls for: 0, kExitProblems or kExitCacheFull. */
+int printSeedSummary(const LayerConfig& layer, const SeedOptions& so, const SeedReport& r) {
   std::printf("%-12s levels %d-%d: %lld tiles planned, %lld already cached, %lld written (%s), "
-              "%lld absent upstream, %lld retried, %lld failed%s\n",
+              "%lld absent upstream, %lld retried, %lld failed%s%s\n",
               layer.name.c_str(),
               so.fromLevel,
               std::min(so.toLevel, layer.dataset.grid.numLevels - 1),
@@ -353,10 +355,24 @@ bool printSeedSummary(const LayerConfig& layer, const SeedOptions& so, const See
               static_cast<long long>(r.absent),
               static_cast<long long>(r.retried),
               static_cast<long long>(r.failed),
+              r.notStored ? (", " + std::to_string(r.notStored) + " not stored").c_str() : "",
               so.dryRun ? " (dry run)" : "");
   for (const auto& f : r.failures)
     std::fprintf(stderr, "  failed: %s\n", f.c_str());
-  return r.failed == 0;
+  if (!r.stoppedBecause.empty()) {
+    const std::int64_t done = r.skipped + r.written + r.absent + r.failed + r.notStored;
+    std::fprintf(stderr,
+                 "tellus seed: %s: stopped, the cache refuses tiles: %s\n"
+                 "  %lld tiles stored, %lld fetched but not stored, %lld not fetched; free "
+                 "space and run the same command again (it resumes)\n",
+                 layer.name.c_str(),
+                 r.stoppedBecause.c_str(),
+                 static_cast<long long>(r.written),
+                 static_cast<long long>(r.notStored),
+                 static_cast<long long>(std::max<std::int64_t>(0, r.planned - done)));
+    return kExitCacheFull;
+  }
+  return r.failed == 0 ? kExitOk : kExitProblems;
 }
 
 int cmdSeed(const Args& a) {
@@ -510,14 +526,16 @@ int cmdSeed(const Args& a) {
                     humanBytes(report->bytes).c_str());
         continue;
       }
-      if (!printSeedSummary(*layer, so, *report)) rc = kExitProblems;
+      const int layerRc = printSeedSummary(*layer, so, *report);
+      if (layerRc == kExitCacheFull) return kExitCacheFull; // the next layers would not fit either
+      if (layerRc != kExitOk) rc = layerRc;
       continue;
     }
     auto id = ctx->cache->registerDataset(layer->dataset);
     if (!id) {
       std::fprintf(
           stderr, "tellus seed: %s: %s\n", layer->name.c_str(), id.error().message.c_str());
-      return kExitError;
+      return id.error().code == CacheErrc::DiskFull ? kExitCacheFull : kExitError;
     }
     auto source = LocalRasterSource::open(upstream->path);
     if (!source) {
@@ -530,7 +548,9 @@ int cmdSeed(const Args& a) {
           stderr, "tellus seed: %s: %s\n", layer->name.c_str(), report.error().message.c_str());
       return kExitError;
     }
-    if (!printSeedSummary(*layer, so, *report)) rc = kExitProblems;
+    const int layerRc = printSeedSummary(*layer, so, *report);
+    if (layerRc == kExitCacheFull) return kExitCacheFull;
+    if (layerRc != kExitOk) rc = layerRc;
   }
   return rc;
 }
@@ -691,6 +711,10 @@ int cmdCache(const Args& a) {
     list("index rows without files", r->rowsWithoutFiles);
     list("size mismatches", r->sizeMismatches);
     list("stray temp files", r->strayTempFiles);
+    if (r->tempFilesInUse > 0) {
+      std::printf("temp files of running writers: %lld (not a problem)\n",
+                  static_cast<long long>(r->tempFilesInUse));
+    }
     std::printf(r->ok() ? "cache is consistent\n"
                         : "cache has problems: `tellus cache rebuild` repairs the index\n");
     return r->ok() ? kExitOk : kExitProblems;

@@ -9,10 +9,19 @@
  * read through it.
  *
  * Guarantees:
- * - a tile is never visible half written: bytes go to a temp file, are fsynced and renamed into
- * place, and only then does the index row appear (one batched transaction for many writers);
- * - a full disk (ENOSPC, EFBIG, SQLITE_FULL) is reported as CacheErrc::DiskFull, the temp file is
- *   removed and the index is left as it was;
+ * - a tile is never visible half written: bytes go to a temp file in the dataset's `.tmp` folder,
+ *   are fsynced, and are renamed into place by the writer together with its index row (one
+ *   batched transaction for many writers);
+ * - a tile file and its row change together: the rename and the commit of a put, and the commit and
+ *   the unlink of a removal (prune, eviction, erase), run under one lock shared by every process
+ *   on the cache (flock on the root), so a prune racing a put never leaves a row without its file
+ *   or a file without its row;
+ * - a full disk (ENOSPC, EDQUOT, EFBIG, SQLITE_FULL) is reported as CacheErrc::DiskFull with the
+ *   root and its free bytes and inodes; the temp file is removed, a tile being replaced is kept
+ *   (even when the commit fails after the rename) and the index is left as it was. After a refusal
+ *   the cache refuses puts at once for Options::fullRecheck, then tries again (storeStatus());
+ * - temp files of writers that are gone (their pid and start time are in the name) are removed
+ *   at open, from the `.tmp` folders, without a scan of the tree;
  * - many threads may read at once (pooled read connections, WAL); one writer thread per process
  *   batches writes; two processes (a server and a seeder) may share one cache without
  *   "database is locked" (WAL, BEGIN IMMEDIATE, a busy timeout);
@@ -98,11 +107,12 @@ struct VerifyReport {
   std::vector<std::string> filesWithoutRows; ///< tile files the index does not know
   std::vector<std::string> rowsWithoutFiles; ///< index rows whose file is missing
   std::vector<std::string> sizeMismatches;   ///< index bytes != file size
-  std::vector<std::string> strayTempFiles;   ///< leftovers of interrupted writes
+  std::vector<std::string> strayTempFiles;   ///< temp files of writers that are gone
+  std::int64_t tempFilesInUse = 0;           ///< temp files of running writers (not a problem)
   std::string integrity;                     ///< "ok" or SQLite's quick_check message
   bool ok() const {
     return filesWithoutRows.empty() && rowsWithoutFiles.empty() && sizeMismatches.empty() &&
-           integrity == "ok";
+           strayTempFiles.empty() && integrity == "ok";
   }
 };
 
@@ -113,17 +123,36 @@ struct PruneOptions {
   bool includePinned = false;                         ///< pinned datasets are kept unless set
 };
 
+/** Whether the cache stores what it is given (see TileCache::storeStatus). */
+struct StoreStatus {
+  /// False from a put refused for lack of space until a put succeeds or tiles are removed.
+  bool writable = true;
+  std::uint64_t refused = 0; ///< puts refused for lack of space (counting write-behind drops)
+  std::uint64_t dropped = 0; ///< write-behind puts whose row could not be committed, any cause
+};
+
+/** Free space of the file system under the cache root (statvfs, as an unprivileged user sees it).
+ */
+struct DiskSpace {
+  std::uint64_t freeBytes = 0;
+  std::uint64_t freeInodes = 0;
+};
+
 class TileCache {
 public:
+  using Clock = std::chrono::steady_clock;
+
   struct Options {
     std::filesystem::path root;       ///< created if missing (unless readOnly)
     std::uint64_t sizeLimitBytes = 0; ///< 0 = unlimited; LRU beyond it
     bool readOnly = false;            ///< offline media: no writes at all
     bool fsyncTiles = true;           ///< fsync each tile before its rename
-    /// Write-behind (for seeding): put() returns once the file is in place; the row is visible to
-    /// this process at once and committed by the writer thread with everything else queued. A
-    /// crash can lose rows (never tiles: `rebuild` adopts the files), another process sees the row
-    /// a few milliseconds later, and an index failure is logged and drops the tile, not returned.
+    /// Write-behind (for seeding): put() returns once the bytes are in their temp file; the tile
+    /// is visible to this process at once and renamed into place and committed by the writer
+    /// thread with everything else queued. A crash loses the tiles not yet committed (their temp
+    /// files are removed at the next open; seeding resumes from the index), another process sees
+    /// the tile a few milliseconds later, and a failure to commit drops the tile and is counted in
+    /// storeStatus().dropped, not returned.
     bool indexWriteBehind = false;
     std::chrono::milliseconds busyTimeout{60000}; ///< wait for another process's writer
     std::chrono::milliseconds accessFlushInterval{
@@ -141,6 +170,11 @@ public:
     /// How often a held-open file is checked (stat) against the path it came from, to notice a
     /// file replaced or deleted behind the index.
     std::chrono::milliseconds fileRecheck{1000};
+    /// After a put refused for lack of space, further puts are refused at once (nothing is
+    /// written) for this long; the first put after it tries the disk again.
+    std::chrono::milliseconds fullRecheck{10000};
+    /// The clock of fullRecheck (tests inject one); empty: the steady clock.
+    std::function<Clock::time_point()> clock;
   };
 
   /** Opens (creating or migrating) the cache. A damaged index is moved aside to
@@ -173,7 +207,9 @@ public:
   std::expected<CacheLookup, CacheError> openTile(DatasetId id, const TileKey& key);
   /** Index-only check (no file access): Hit/Absent/Miss kind and staleness, no bytes, no touch. */
   std::expected<CacheLookup, CacheError> peek(DatasetId id, const TileKey& key) const;
-  /** Stores a tile durably; returns when the index row is committed. */
+  /** Stores a tile durably; returns when the index row is committed (write-behind: when the
+   * bytes are in a temp file). DiskFull when the disk (bytes, inodes, quota) or the index refuses,
+   * or at once while storeStatus().writable is false and Options::fullRecheck has not passed. */
   std::expected<void, CacheError>
   put(DatasetId id, const TileKey& key, std::span<const std::byte> bytes, const TileMeta& meta);
   /** Records a successful revalidation (HTTP 304): new expiry, ETag, Last-Modified, fetched-at;
@@ -183,7 +219,8 @@ public:
   /** Remembers that upstream has no tile here until retryAfter (its file, if any, is removed). */
   std::expected<void, CacheError>
   putAbsent(DatasetId id, const TileKey& key, UnixMillis retryAfter);
-  /** Removes a tile (row first, then the file). Removing an unknown tile is not an error. */
+  /** Removes a tile (row, then the file, under the files lock). Removing an unknown tile is not an
+   * error. */
   std::expected<void, CacheError> erase(DatasetId id, const TileKey& key);
 
   /** Calls `visit` with every present tile of a dataset in levels [fromLevel, toLevel] (index
@@ -201,9 +238,10 @@ public:
   std::expected<std::vector<DatasetStats>, CacheError> prunable(const PruneOptions& options) const;
   std::expected<VerifyReport, CacheError> verify() const;
   /** Rebuilds the index from the tree (datasets from their descriptors, tiles from file names);
-   * removes stray temp files. Returns the number of tiles indexed. */
+   * removes the temp files of writers that are gone. Returns the number of tiles indexed. */
   std::expected<std::int64_t, CacheError> rebuild();
-  /** Removes tiles as selected; returns how many. */
+  /** Removes tiles as selected; returns how many. On a disk so full that the index cannot record
+   * the removal, the files go first (freeing the room) and the rows after. */
   std::expected<std::int64_t, CacheError> prune(const PruneOptions& options);
   /** Evicts least recently used tiles of unpinned datasets until the total is at most the limit.
    * Runs by itself after writes; returns the number evicted. */
@@ -212,6 +250,13 @@ public:
   std::expected<std::int64_t, CacheError> totalBytes() const;
   /** Writes pending last-access times and waits until every queued write is committed. */
   void flush();
+
+  /** Whether the cache stores tiles now, and how many it refused or dropped. Lock-free. */
+  StoreStatus storeStatus() const noexcept;
+  /** Free bytes and inodes under the root; nullopt when statvfs fails. */
+  std::optional<DiskSpace> diskSpace() const;
+  /** How many temp files of writers that are gone open() removed. */
+  std::size_t tempFilesRemovedAtOpen() const noexcept;
 
 private:
   struct Impl;

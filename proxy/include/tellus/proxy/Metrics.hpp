@@ -32,6 +32,15 @@ enum class TileOutcome : std::uint8_t { Hit, Miss, Stale, Offline, Absent, Error
 inline constexpr std::size_t kTileOutcomeCount = 6;
 const char* toString(TileOutcome o) noexcept;
 
+/** The cache as /metrics shows it: whether it stores tiles, how many fetched tiles it refused for
+ * lack of space (they were served all the same), and the free space under its root. */
+struct CacheHealthMetrics {
+  bool writable = true;
+  std::uint64_t refusedStores = 0;
+  std::optional<std::uint64_t> freeBytes;
+  std::optional<std::uint64_t> freeInodes;
+};
+
 /** One upstream as /metrics shows it. */
 struct UpstreamMetrics {
   std::string name;
@@ -54,7 +63,8 @@ public:
    * held by the decoded-tile cache. */
   std::string render(const std::vector<UpstreamMetrics>& upstreams,
                      std::optional<std::int64_t> cacheBytes,
-                     std::uint64_t decodedTileCacheBytes = 0) const;
+                     std::uint64_t decodedTileCacheBytes = 0,
+                     const std::optional<CacheHealthMetrics>& cacheHealth = std::nullopt) const;
 
   /** HTTP statuses counted one by one; any other is counted as "other". */
   static constexpr std::array<int, 14> kStatuses{

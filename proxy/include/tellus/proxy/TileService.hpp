@@ -75,6 +75,8 @@ struct TileAnswer {
   UnixMillis fetchedAt = 0; ///< Last-Modified
   std::string etag;         ///< strong validator of these bytes, quoted
   std::string message;      ///< Absent/Error: why (safe to show a client)
+  /// Tile fetched or rendered now that the cache did not keep (why: DiskFull for lack of space).
+  std::optional<CacheError> notStored;
 };
 
 struct TileServiceOptions {
@@ -146,6 +148,9 @@ public:
 
   /** Upstream requests started for tiles (not counting revalidations), for tests and metrics. */
   std::uint64_t upstreamFetches() const noexcept;
+  /** Whether the cache stores tiles, how many fetched tiles it refused for lack of space (served
+   * all the same) and the free space under its root, for /metrics. */
+  CacheHealthMetrics cacheHealth() const;
 
   // ITileSource
   std::optional<DatasetSpec> describe(std::string_view layer,
