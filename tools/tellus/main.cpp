@@ -780,6 +780,10 @@ std::pair<std::vector<UpstreamSpec>, std::vector<LayerSpec>> proxySpecs(const Co
     s.policy.openInterval = u.openInterval;
     s.policy.maxRetryAfterWait = u.maxRetryAfterWait;
     s.policy.headers = u.headers;
+    s.policy.redirects = u.redirects == RedirectPolicy::Any ? UpstreamPolicy::Redirects::Any
+                         : u.redirects == RedirectPolicy::None
+                             ? UpstreamPolicy::Redirects::None
+                             : UpstreamPolicy::Redirects::SameOrigin;
     ups.push_back(std::move(s));
   }
   std::vector<LayerSpec> layers;
