@@ -889,6 +889,7 @@ int cmdServe(const Args& a) {
   fo.composeThreads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   fo.limits.maxHeight = server.limits.maxHeight;
   fo.maxParamBytes = server.limits.maxParamBytes;
+  fo.fetchesPerClientPerMinute = server.limits.fetchesPerClientPerMinute;
   ProxyFrontEnd front(**tiles, fo);
   HttpServerOptions ho;
   ho.host = server.listenHost;
