@@ -180,8 +180,8 @@ private:
   void doRead(bool first) {
     parser_.emplace();
     parser_->header_limit(static_cast<std::uint32_t>(server_->options.maxHeaderBytes));
-    parser_->body_limit(
-        8192); // tellus serves GET, HEAD and OPTIONS; a small body is read to refuse
+    // tellus serves GET, HEAD and OPTIONS; a small body is read (to refuse its request).
+    parser_->body_limit(8192);
     // The first request must arrive within the request timeout; later ones within keep-alive.
     stream_.expires_after(first ? server_->options.requestTimeout
                                 : server_->options.keepAliveTimeout);
