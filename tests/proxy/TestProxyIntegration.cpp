@@ -1588,18 +1588,20 @@ TEST(ProxyIntegration, NoEndpointEchoesTheUpstreamsSecrets) {
   EXPECT_EQ(*p.cache->totalBytes(), 0);
 }
 
-// A connection the upstream drops or resets, a 5xx, an open breaker: temporary failures, answered
-// 503 with Retry-After on every endpoint, never "absent" (404, an empty map), and never cached.
+// A connection the upstream drops or resets, a 5xx, a timeout: temporary failures, answered 503
+// with Retry-After on every endpoint, never "absent" (404, an empty map), and never cached.
 TEST(ProxyIntegration, AnUpstreamResetIsATemporaryFailureOnEveryEndpoint) {
   std::atomic<int> mode{0};
   test::FakeUpstream up([&](const test::FakeRequest& r) {
     test::FakeReply reply = tileReply(r);
     reply.closeWithoutResponse = mode == 0;
     reply.resetWithoutResponse = mode == 1;
+    reply.hangForever = mode == 3;
     if (mode == 2) return test::FakeReply::withStatus(502, "upstream's proxy says no");
     return reply;
   });
   auto policy = Proxy::fastPolicy();
+  policy.timeout = 400ms;            // mode 3 hangs: two attempts of this each
   policy.failureThreshold = 1000000; // the breaker stays closed: each request meets the fault
   Proxy p(up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, policy);
   const std::vector<std::string> targets{
@@ -1608,7 +1610,7 @@ TEST(ProxyIntegration, AnUpstreamResetIsATemporaryFailureOnEveryEndpoint) {
       kWms130,                                                   // one tile: the cached file path
       getMap("sat", "-170,-80,-150,-60", 256, 256, "image/png"), // composed from tiles
       getMap("sat", "-170,-80,-150,-60", 256, 256, "image/png", "&EXCEPTIONS=INIMAGE")};
-  for (int m = 0; m < 3; ++m) {
+  for (int m = 0; m < 4; ++m) {
     mode = m;
     for (const auto& target : targets) {
       const auto r = p.get(target);
@@ -1619,7 +1621,7 @@ TEST(ProxyIntegration, AnUpstreamResetIsATemporaryFailureOnEveryEndpoint) {
   }
   EXPECT_EQ(*p.cache->totalBytes(), 0);
   // Nothing was remembered as absent: once the upstream is back, every tile comes.
-  mode = 3;
+  mode = 4;
   for (const auto& target : targets) {
     const auto r = p.get(target);
     EXPECT_EQ(r.status, 200) << target << "\n" << r.body.substr(0, 300);
