@@ -380,6 +380,7 @@ void readServer(Reader& r, const Map& root, ServerSettings& s) {
                "request_timeout",
                "keepalive_timeout",
                "requests_per_second",
+               "fetches_per_client_per_minute",
                "max_map_pixels",
                "max_tiles_per_map",
                "decoded_tile_cache"});
@@ -398,6 +399,8 @@ void readServer(Reader& r, const Map& root, ServerSettings& s) {
     lim.keepaliveTimeout = duration(r, *v, l.path("keepalive_timeout"));
   if (auto v = l.get("requests_per_second"))
     lim.requestsPerSecond = number(r, *v, l.path("requests_per_second"));
+  if (auto v = l.get("fetches_per_client_per_minute"))
+    lim.fetchesPerClientPerMinute = number(r, *v, l.path("fetches_per_client_per_minute"));
   if (auto v = l.get("max_map_pixels"))
     lim.maxMapPixels = integer(r, *v, l.path("max_map_pixels"), 1, std::int64_t{1} << 40);
   if (auto v = l.get("decoded_tile_cache"))
@@ -546,6 +549,7 @@ readUpstream(Reader& r, const YAML::Node& node, std::string path, const fs::path
                "open_interval",
                "max_retry_after_wait",
                "headers",
+               "redirects",
                "meta_tiles"});
   if (node.IsNull())
     r.fail(node.Mark(), m.path(), "expected a mapping (name, type, ...), got nothing");
@@ -579,7 +583,8 @@ readUpstream(Reader& r, const YAML::Node& node, std::string path, const fs::path
                            "failure_threshold",
                            "open_interval",
                            "max_retry_after_wait",
-                           "headers"})
+                           "headers",
+                           "redirects"})
       notFor(key, "wms and worldwind");
     notFor("version", "wms");
     notFor("crs", "wms");
@@ -612,6 +617,19 @@ readUpstream(Reader& r, const YAML::Node& node, std::string path, const fs::path
   if (auto v = m.get("meta_tiles")) u.metaTiles = int32(r, *v, m.path("meta_tiles"));
   if (auto v = m.get("failure_threshold"))
     u.failureThreshold = int32(r, *v, m.path("failure_threshold"));
+  if (auto v = m.get("redirects")) {
+    switch (choice(r, *v, m.path("redirects"), {"same-origin", "any", "none"})) {
+    case 0:
+      u.redirects = RedirectPolicy::SameOrigin;
+      break;
+    case 1:
+      u.redirects = RedirectPolicy::Any;
+      break;
+    default:
+      u.redirects = RedirectPolicy::None;
+      break;
+    }
+  }
   if (auto v = m.get("headers")) {
     const std::string hp = m.path("headers");
     if (!v->IsMap())

@@ -104,6 +104,8 @@ std::optional<ValidationIssue> checkServer(const ServerSettings& s) {
     return issue("limits.keepalive_timeout", "must not be negative");
   if (!std::isfinite(l.requestsPerSecond) || l.requestsPerSecond < 0.0)
     return issue("limits.requests_per_second", "must be a finite number >= 0");
+  if (!std::isfinite(l.fetchesPerClientPerMinute) || l.fetchesPerClientPerMinute < 0.0)
+    return issue("limits.fetches_per_client_per_minute", "must be a finite number >= 0");
   return std::nullopt;
 }
 

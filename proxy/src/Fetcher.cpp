@@ -1,4 +1,5 @@
 #include <tellus/proxy/Fetcher.hpp>
+#include <tellus/proxy/Log.hpp>
 #include <tellus/proxy/ProxyFrontEnd.hpp> // parseHttpDate
 
 #include <curl/curl.h>
@@ -53,10 +54,38 @@ const char* toString(FetchErrc code) noexcept {
     return "cancelled";
   case FetchErrc::Throttled:
     return "throttled";
+  case FetchErrc::Redirect:
+    return "redirect";
   case FetchErrc::Unknown:
     return "unknown";
   }
   return "unknown";
+}
+
+std::optional<std::string> urlOrigin(std::string_view url) {
+  CURLU* h = curl_url();
+  if (!h) return std::nullopt;
+  std::optional<std::string> out;
+  const std::string u(url);
+  if (curl_url_set(h, CURLUPART_URL, u.c_str(), 0) == CURLUE_OK) {
+    char* scheme = nullptr;
+    char* host = nullptr;
+    char* port = nullptr;
+    if (curl_url_get(h, CURLUPART_SCHEME, &scheme, 0) == CURLUE_OK &&
+        curl_url_get(h, CURLUPART_HOST, &host, 0) == CURLUE_OK &&
+        curl_url_get(h, CURLUPART_PORT, &port, CURLU_DEFAULT_PORT) == CURLUE_OK) {
+      std::string o = std::string(scheme) + "://" + host + ":" + port;
+      std::transform(o.begin(), o.end(), o.begin(), [](unsigned char c) {
+        return static_cast<char>(std::tolower(c));
+      });
+      out = std::move(o);
+    }
+    curl_free(scheme);
+    curl_free(host);
+    curl_free(port);
+  }
+  curl_url_cleanup(h);
+  return out;
 }
 
 namespace {
@@ -118,6 +147,8 @@ struct Fetcher::Impl {
     int attempts = 0;
     bool probe = false; ///< the half-open probe: one attempt, its outcome decides the breaker
     FetchError lastError{};
+    std::string url; ///< this attempt's: the request's, or where its redirects led
+    int hops = 0;    ///< redirects followed in this attempt
   };
   using JobPtr = std::unique_ptr<Job>;
 
@@ -200,6 +231,7 @@ struct Fetcher::Impl {
   void fetch(FetchRequest request, std::function<void(FetchResult&&)> done) {
     auto job = std::make_unique<Job>();
     job->request = std::move(request);
+    job->url = job->request.url;
     job->done = std::move(done);
     job->start = Clock::now();
     {
@@ -227,6 +259,16 @@ struct Fetcher::Impl {
     if (up->state == BreakerState::Open && Clock::now() >= up->openUntil)
       return BreakerState::HalfOpen;
     return up->state;
+  }
+
+  milliseconds unavailableFor(const std::string& name) const {
+    std::lock_guard lock(mutex_);
+    const Upstream* up = findLocked(name);
+    if (!up) return milliseconds(0);
+    const auto now = Clock::now();
+    auto until = up->pausedUntil;
+    if (up->state != BreakerState::Closed) until = std::max(until, up->openUntil);
+    return until > now ? std::chrono::ceil<milliseconds>(until - now) : milliseconds(0);
   }
 
   Fetcher::Stats stats(const std::string& name) const {
@@ -415,7 +457,9 @@ struct Fetcher::Impl {
     }
   }
 
-  void startAttempt(JobPtr job) {
+  /** Starts a transfer: a new attempt, or (`hop`) the next request of one whose answer was a
+   * redirect that is followed. */
+  void startAttempt(JobPtr job, bool hop = false) {
     Upstream& up = *job->upstream;
     const UpstreamPolicy& policy = *job->policy;
     CURL* easy = nullptr;
@@ -448,8 +492,11 @@ struct Fetcher::Impl {
       else
         headersOk = false;
     };
-    for (const auto& [name, value] : policy.headers)
-      addHeader(name, value);
+    // The configured headers (API keys among them) go to the upstream's own origin only.
+    if (job->hops == 0 || urlOrigin(job->url) == urlOrigin(job->request.url)) {
+      for (const auto& [name, value] : policy.headers)
+        addHeader(name, value);
+    }
     if (!job->request.ifNoneMatch.empty()) addHeader("If-None-Match", job->request.ifNoneMatch);
     if (!job->request.ifModifiedSince.empty())
       addHeader("If-Modified-Since", job->request.ifModifiedSince);
@@ -466,7 +513,7 @@ struct Fetcher::Impl {
     auto set = [&](CURLcode r) {
       if (rc == CURLE_OK) rc = r;
     };
-    set(curl_easy_setopt(easy, CURLOPT_URL, job->request.url.c_str()));
+    set(curl_easy_setopt(easy, CURLOPT_URL, job->url.c_str()));
     set(curl_easy_setopt(easy, CURLOPT_PRIVATE, tp));
     set(curl_easy_setopt(easy, CURLOPT_WRITEFUNCTION, onBodyFn));
     set(curl_easy_setopt(easy, CURLOPT_WRITEDATA, tp));
@@ -477,10 +524,10 @@ struct Fetcher::Impl {
     set(curl_easy_setopt(easy, CURLOPT_HTTPGET, 1L));
     set(curl_easy_setopt(easy, CURLOPT_CONNECTTIMEOUT_MS, toLongMs(policy.connectTimeout)));
     set(curl_easy_setopt(easy, CURLOPT_TIMEOUT_MS, toLongMs(policy.timeout)));
-    set(curl_easy_setopt(easy, CURLOPT_FOLLOWLOCATION, 1L));
-    set(curl_easy_setopt(easy, CURLOPT_MAXREDIRS, 3L));
+    // Redirects are followed here, not by libcurl (finish() -> redirect()): libcurl would send
+    // the configured headers to whatever host a redirect names.
+    set(curl_easy_setopt(easy, CURLOPT_FOLLOWLOCATION, 0L));
     set(curl_easy_setopt(easy, CURLOPT_PROTOCOLS_STR, "http,https"));
-    set(curl_easy_setopt(easy, CURLOPT_REDIR_PROTOCOLS_STR, "http,https"));
     set(curl_easy_setopt(easy, CURLOPT_ACCEPT_ENCODING, ""));
     set(curl_easy_setopt(easy, CURLOPT_USERAGENT, "tellus"));
     set(curl_easy_setopt(easy, CURLOPT_TCP_KEEPALIVE, 1L));
@@ -498,10 +545,12 @@ struct Fetcher::Impl {
       return;
     }
 
-    ++job->attempts;
-    if (job->attempts > 1) {
-      std::lock_guard lock(mutex_);
-      ++up.stats.retries;
+    if (!hop) {
+      ++job->attempts;
+      if (job->attempts > 1) {
+        std::lock_guard lock(mutex_);
+        ++up.stats.retries;
+      }
     }
     t->job = std::move(job);
     if (curl_multi_add_handle(multi_, easy) != CURLM_OK) {
@@ -694,6 +743,11 @@ struct Fetcher::Impl {
     --up.active;
 
     Classified c = classify(*t, rc, status);
+    std::string location;
+    if (rc == CURLE_OK && isRedirect(status)) {
+      char* to = nullptr; // absolute, resolved against this request's URL
+      if (curl_easy_getinfo(easy, CURLINFO_REDIRECT_URL, &to) == CURLE_OK && to) location = to;
+    }
     curl_easy_reset(easy); // drop pointers into the transfer before it dies
     t.reset();
     int cap = 1;
@@ -707,6 +761,8 @@ struct Fetcher::Impl {
       up.idle.push_back(easy);
     else
       curl_easy_cleanup(easy);
+
+    if (!location.empty()) return redirect(std::move(job), up, std::move(location), status);
 
     const UpstreamPolicy& policy = *job->policy;
     bool waitable = true;
@@ -725,6 +781,8 @@ struct Fetcher::Impl {
         breakerClosed) {
       c.error.attempts = job->attempts;
       job->lastError = std::move(c.error);
+      job->url = job->request.url; // a retry starts from the URL asked, not where it was led
+      job->hops = 0;
       auto at = Clock::now() + backoff(policy.retryBackoff, job->attempts - 1);
       {
         std::lock_guard lock(mutex_);
@@ -736,11 +794,78 @@ struct Fetcher::Impl {
     c.error.attempts = job->attempts;
 
     const bool opened = recordVerdict(up, job->probe, c.verdict);
-    if (c.response)
+    if (c.response) {
+      c.response->url = job->url;
+      c.response->redirects = job->hops;
+      // The final URL: worth the operator's attention when it is on another origin.
+      const LogLevel level = job->hops > 0 && urlOrigin(job->url) != urlOrigin(job->request.url)
+                                 ? LogLevel::Info
+                                 : LogLevel::Debug;
+      if (job->hops > 0 && logger().enabled(level)) {
+        logger().log(level,
+                     "fetcher",
+                     "fetched through redirects",
+                     {{"upstream", job->request.upstream},
+                      {"url", job->request.url},
+                      {"final_url", job->url},
+                      {"redirects", std::to_string(job->hops)}});
+      }
       complete(std::move(job), std::move(*c.response));
-    else
+    } else
       complete(std::move(job), std::unexpected(std::move(c.error)));
     if (opened) flush(up);
+  }
+
+  static bool isRedirect(long status) noexcept {
+    return status == 301 || status == 302 || status == 303 || status == 307 || status == 308;
+  }
+
+  /** A redirect to `location`: followed at once when the policy allows it (same origin, or any
+   * with `Any`; at most maxRedirects), else the fetch fails with FetchErrc::Redirect. The hop
+   * is no new attempt: a retry after a failure starts again from the URL asked. */
+  void redirect(JobPtr job, Upstream& up, std::string location, long status) {
+    const UpstreamPolicy& policy = *job->policy;
+    const auto from = urlOrigin(job->request.url);
+    const auto to = urlOrigin(location);
+    const bool sameOrigin = from && to && *from == *to;
+    const bool web = to && (to->starts_with("http://") || to->starts_with("https://"));
+    std::string why;
+    if (policy.redirects == UpstreamPolicy::Redirects::None) {
+      why = "the upstream redirected (HTTP " + std::to_string(status) +
+            ") and its redirects are not followed (redirects: none)";
+    } else if (!web) {
+      why = "the upstream redirected (HTTP " + std::to_string(status) +
+            ") to a URL that is not "
+            "http(s)";
+    } else if (!sameOrigin && policy.redirects == UpstreamPolicy::Redirects::SameOrigin) {
+      why = "the upstream redirected (HTTP " + std::to_string(status) + ") to another origin (" +
+            *to + ") and redirects: same-origin refuses it";
+    } else if (job->hops >= policy.maxRedirects) {
+      why = "more than " + std::to_string(policy.maxRedirects) + " redirects";
+    }
+    if (!why.empty()) {
+      logger().log(LogLevel::Warn,
+                   "fetcher",
+                   "redirect refused",
+                   {{"upstream", job->request.upstream},
+                    {"url", job->url},
+                    {"location", location},
+                    {"why", why}});
+      const bool opened = recordVerdict(up, job->probe, Verdict::Neutral);
+      fail(std::move(job), FetchErrc::Redirect, std::move(why), static_cast<int>(status));
+      if (opened) flush(up);
+      return;
+    }
+    if (!sameOrigin && logger().enabled(LogLevel::Debug)) {
+      logger().log(
+          LogLevel::Debug,
+          "fetcher",
+          "following a redirect to another origin, without the configured headers",
+          {{"upstream", job->request.upstream}, {"url", job->url}, {"location", location}});
+    }
+    job->url = std::move(location);
+    ++job->hops;
+    startAttempt(std::move(job), true);
   }
 
   milliseconds backoff(milliseconds base, int retry) {
@@ -872,6 +997,10 @@ BreakerState Fetcher::breaker(const std::string& upstream) const {
 
 bool Fetcher::reachable(const std::string& upstream) const {
   return impl_->breaker(upstream) != BreakerState::Open;
+}
+
+std::chrono::milliseconds Fetcher::unavailableFor(const std::string& upstream) const {
+  return impl_->unavailableFor(upstream);
 }
 
 Fetcher::Stats Fetcher::stats(const std::string& upstream) const {

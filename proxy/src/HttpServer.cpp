@@ -56,6 +56,24 @@ HttpResponse HttpResponse::text(int status, std::string_view contentType, std::s
   return r;
 }
 
+const char* toString(HttpRefusal refusal) noexcept {
+  switch (refusal) {
+  case HttpRefusal::None:
+    return "none";
+  case HttpRefusal::BadRequest:
+    return "bad-request";
+  case HttpRefusal::MethodNotAllowed:
+    return "method-not-allowed";
+  case HttpRefusal::BodyTooLarge:
+    return "body-too-large";
+  case HttpRefusal::TooManyRequests:
+    return "too-many-requests";
+  case HttpRefusal::HeaderTooLarge:
+    return "header-too-large";
+  }
+  return "none";
+}
+
 namespace {
 class Session;
 }
@@ -162,7 +180,8 @@ private:
   void doRead(bool first) {
     parser_.emplace();
     parser_->header_limit(static_cast<std::uint32_t>(server_->options.maxHeaderBytes));
-    parser_->body_limit(8192); // tellus serves GET and HEAD; a small body is read to answer 405
+    // tellus serves GET, HEAD and OPTIONS; a small body is read (to refuse its request).
+    parser_->body_limit(8192);
     // The first request must arrive within the request timeout; later ones within keep-alive.
     stream_.expires_after(first ? server_->options.requestTimeout
                                 : server_->options.keepAliveTimeout);
@@ -172,20 +191,75 @@ private:
         });
   }
 
+  /** Whether a read error means the request was malformed (answered 400), as opposed to the
+   * connection ending or timing out (closed without an answer). */
+  static bool malformed(const beast::error_code& ec) {
+    if (ec.category() != http::make_error_code(http::error::bad_target).category()) return false;
+    return ec != http::error::end_of_stream && ec != http::error::partial_message &&
+           ec != http::error::need_more && ec != http::error::need_buffer;
+  }
+
+  /** Method and target of what could be read of the request line (a request the parser refused:
+   * its bytes are still in the buffer), for the handler and the access log. */
+  void requestLineFromBuffer(HttpRequest& req) const {
+    const auto data = buffer_.data();
+    std::string_view raw(static_cast<const char*>(data.data()),
+                         std::min<std::size_t>(data.size(), server_->options.maxHeaderBytes));
+    if (const auto eol = raw.find_first_of("\r\n"); eol != std::string_view::npos)
+      raw = raw.substr(0, eol);
+    const auto sp = raw.find(' ');
+    if (sp == std::string_view::npos) {
+      req.method = std::string(raw.substr(0, 32));
+      return;
+    }
+    req.method = std::string(raw.substr(0, std::min<std::size_t>(sp, 32)));
+    std::string_view target = raw.substr(sp + 1);
+    // The version is the last word when it looks like one: a raw space stays in the target.
+    if (const auto v = target.rfind(" HTTP/"); v != std::string_view::npos)
+      target = target.substr(0, v);
+    req.target = std::string(target.substr(0, kMaxRefusedTarget));
+  }
+
+  static constexpr std::size_t kMaxRefusedTarget = 2048;
+
   void onRead(beast::error_code ec) {
-    if (ec == http::error::header_limit) {
-      keepAlive_ = false;
-      write(HttpResponse::text(431, "text/plain", "request header fields too large\n"));
-      return;
-    }
-    if (ec == http::error::body_limit) {
-      keepAlive_ = false;
-      write(HttpResponse::text(413, "text/plain", "request body too large\n"));
-      return;
-    }
-    if (ec) return shutdownSend(); // timeout, end of stream, malformed request
-    auto& msg = parser_->get();
     HttpRequest req;
+    req.remoteAddress = remoteAddress_;
+    if (ec == http::error::header_limit || ec == http::error::body_limit || malformed(ec)) {
+      // Refused before it could be served; the handler answers (and logs) it, then the connection
+      // closes: what follows on it cannot be told apart from the refused request.
+      req.refusal = ec == http::error::header_limit ? HttpRefusal::HeaderTooLarge
+                    : ec == http::error::body_limit ? HttpRefusal::BodyTooLarge
+                                                    : HttpRefusal::BadRequest;
+      // The parser consumes the request line (and each header line) as it reads them: what it
+      // has read is in its message, what it refused is still in the buffer.
+      if (parser_ && !parser_->get().target().empty()) {
+        copyRequest(parser_->get(), req);
+      } else {
+        requestLineFromBuffer(req);
+      }
+      keepAlive_ = false;
+      head_ = false;
+      stream_.expires_never();
+      return dispatch(std::move(req));
+    }
+    if (ec) return shutdownSend(); // timeout, end of stream, a reset
+    auto& msg = parser_->get();
+    copyRequest(msg, req);
+    keepAlive_ = msg.keep_alive();
+    head_ = msg.method() == http::verb::head;
+    version_ = msg.version();
+    stream_.expires_never(); // the handler's own timeouts bound the wait for the answer
+    if (msg.method() != http::verb::get && msg.method() != http::verb::head &&
+        msg.method() != http::verb::options) {
+      req.refusal = HttpRefusal::MethodNotAllowed;
+    } else if (!server_->admit(req.remoteAddress)) {
+      req.refusal = HttpRefusal::TooManyRequests;
+    }
+    dispatch(std::move(req));
+  }
+
+  template <class Message> static void copyRequest(const Message& msg, HttpRequest& req) {
     req.method = std::string(msg.method_string());
     req.target = std::string(msg.target());
     const auto q = req.target.find('?');
@@ -198,25 +272,20 @@ private:
       });
       req.headers.emplace_back(std::move(name), std::string(field.value()));
     }
-    req.remoteAddress = remoteAddress_;
-    keepAlive_ = msg.keep_alive();
-    head_ = msg.method() == http::verb::head;
-    version_ = msg.version();
-    stream_.expires_never(); // the handler's own timeouts bound the wait for the answer
-    if (msg.method() != http::verb::get && msg.method() != http::verb::head) {
-      auto r = HttpResponse::text(405, "text/plain", "only GET and HEAD\n");
-      r.setHeader("Allow", "GET, HEAD");
-      write(std::move(r));
-      return;
-    }
-    if (!server_->admit(req.remoteAddress)) {
-      auto r = HttpResponse::text(429, "text/plain", "too many requests\n");
-      r.setHeader("Retry-After", "1");
-      write(std::move(r));
-      return;
+  }
+
+  void dispatch(HttpRequest&& req) {
+    if (req.refusal != HttpRefusal::None && req.path.empty()) {
+      const auto q = req.target.find('?');
+      req.path = req.target.substr(0, q);
+      if (q != std::string::npos) req.query = req.target.substr(q + 1);
     }
     auto server = server_;
-    Responder respond = [self = shared_from_this(), server](HttpResponse&& r) {
+    const bool refused = req.refusal != HttpRefusal::None;
+    Responder respond = [self = shared_from_this(), server, refused](HttpResponse&& r) {
+      // A refused request is never served, whatever the handler does with it.
+      if (refused && r.status < 400)
+        r = HttpResponse::text(500, "text/plain", "internal error: a refused request was served\n");
       // Answered on the connection's own strand (a cache hit, an error): write at once. Posting
       // would hand the connection to whichever loop thread is free, a thread hop per request.
       if (self->onOwnStrand()) return self->write(std::move(r));

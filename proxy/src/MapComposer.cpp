@@ -189,10 +189,14 @@ MapComposer::compose(ComposeRequest request,
     Job::Layer& l = job->layers[li];
     for (std::size_t k = 0; k < l.keys.size(); ++k) {
       tiles_.getTile(
-          l.spec.layer->name, l.spec.time, l.keys[k].key, [job, li, k, arrived](TileAnswer&& a) {
+          l.spec.layer->name,
+          l.spec.time,
+          l.keys[k].key,
+          [job, li, k, arrived](TileAnswer&& a) {
             job->layers[li].answers[k] = std::move(a);
             arrived();
-          });
+          },
+          FetchGate{r.fetchBudget, r.client});
     }
   }
   arrived();
@@ -235,6 +239,13 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
           if (a.kind == TileAnswer::Kind::Error) {
             failed = true;
             failure = a.message;
+            const auto rank = [](TileAnswer::Failure f) {
+              return f == TileAnswer::Failure::Unavailable  ? 2
+                     : f == TileAnswer::Failure::OverBudget ? 1
+                                                            : 0;
+            };
+            if (rank(a.failure) > rank(map.failure)) map.failure = a.failure;
+            map.retryAfterSeconds = std::max(map.retryAfterSeconds, a.retryAfterSeconds);
           }
         }
       }

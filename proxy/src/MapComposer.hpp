@@ -39,6 +39,10 @@ struct ComposeRequest {
   bool transparent = false;
   std::optional<std::uint32_t> bgcolor;
   std::string ifNoneMatch; ///< the client's If-None-Match ("" = none)
+  /// Asked before a tile of this map starts an upstream fetch (TileService::getTile); the client
+  /// it is charged to.
+  FetchBudget* fetchBudget = nullptr;
+  std::string client;
 };
 
 struct ComposedMap {
@@ -48,7 +52,11 @@ struct ComposedMap {
   TileOrigin origin = TileOrigin::Hit; ///< the least fresh of the tiles used
   std::string etag;                    ///< quoted; from the tiles' validators and the request
   std::int64_t maxAgeSeconds = 0;
-  std::string message;          ///< Error: why (safe to show)
+  std::string message; ///< Error: why (safe to show)
+  /// Error: of a tile that failed (TileAnswer::Failure; Unavailable wins over OverBudget, which
+  /// wins over Bad) and the longest Retry-After of those tiles.
+  TileAnswer::Failure failure = TileAnswer::Failure::Bad;
+  std::int64_t retryAfterSeconds = 0;
   std::size_t tiles = 0;        ///< tiles sampled (all layers, fallbacks included)
   std::size_t decodedTiles = 0; ///< of those, decoded for this map (the rest came decoded)
   std::size_t fallbackPixels = 0;

@@ -36,6 +36,8 @@ const char* toString(TileOutcome o) noexcept {
     return "absent";
   case TileOutcome::Error:
     return "error";
+  case TileOutcome::Refused:
+    return "refused";
   }
   return "error";
 }
@@ -117,6 +119,7 @@ void ProxyMetrics::composedTiles(std::uint64_t decoded, std::uint64_t kept) noex
 std::string ProxyMetrics::render(const std::vector<UpstreamMetrics>& upstreams,
                                  std::optional<std::int64_t> cacheBytes,
                                  std::uint64_t decodedTileCacheBytes,
+                                 const FetchBudgetMetrics& budget,
                                  const std::optional<CacheHealthMetrics>& cacheHealth) const {
   std::string out;
   out.reserve(4096);
@@ -156,7 +159,8 @@ std::string ProxyMetrics::render(const std::vector<UpstreamMetrics>& upstreams,
   header(out,
          "tellus_tiles_total",
          "counter",
-         "Tile requests by layer and outcome (hit, miss, stale, offline, absent, error).");
+         "Tile requests by layer and outcome (hit, miss, stale, offline, absent, error, refused: "
+         "over the client's fetch budget).");
   for (std::size_t l = 0; l < layers_.size(); ++l) {
     for (std::size_t o = 0; o < kTileOutcomeCount; ++o) {
       out += "tellus_tiles_total{layer=\"" + prometheusLabel(layers_[l]) + "\",result=\"";
@@ -264,6 +268,22 @@ std::string ProxyMetrics::render(const std::vector<UpstreamMetrics>& upstreams,
          "gauge",
          "Bytes of decoded tiles kept for composed GetMaps.");
   out += "tellus_decoded_tile_cache_bytes " + std::to_string(decodedTileCacheBytes) + "\n";
+  header(out,
+         "tellus_client_fetch_budget_per_minute",
+         "gauge",
+         "Upstream fetches one client address may cause per minute (0: unlimited; "
+         "server.limits.fetches_per_client_per_minute).");
+  out += "tellus_client_fetch_budget_per_minute " + number(budget.perMinute) + "\n";
+  header(out,
+         "tellus_client_fetch_budget_refused_total",
+         "counter",
+         "Upstream fetches refused because the client's budget was spent (answered 429).");
+  out += "tellus_client_fetch_budget_refused_total " + std::to_string(budget.refused) + "\n";
+  header(out,
+         "tellus_client_fetch_budget_clients",
+         "gauge",
+         "Client addresses whose fetch budget is being tracked.");
+  out += "tellus_client_fetch_budget_clients " + std::to_string(budget.clients) + "\n";
   return out;
 }
 

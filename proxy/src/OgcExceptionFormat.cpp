@@ -1,6 +1,8 @@
 #include <tellus/proxy/OgcExceptionFormat.hpp>
 #include <tellus/proxy/Query.hpp>
 
+#include <algorithm>
+
 namespace tellus {
 
 namespace {
@@ -100,6 +102,86 @@ std::size_t pathAt(std::string_view s, std::size_t i) {
   return tokenEnd(s, i, bodyStart) - i;
 }
 
+char lowerAscii(char c) noexcept {
+  return (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c;
+}
+
+// A name that says its value is a secret: api_key, apikey, X-Api-Key, access_token, password,
+// client_secret, signature, sig, auth, session ...
+bool credentialName(std::string_view name) {
+  std::string n;
+  for (char c : name)
+    if (c != '-' && c != '_' && c != '.') n.push_back(lowerAscii(c));
+  if (n == "sig" || n == "key" || n == "pwd" || n == "pass") return true;
+  for (std::string_view w : {"apikey",
+                             "token",
+                             "secret",
+                             "passw",
+                             "auth",
+                             "signature",
+                             "session",
+                             "credential",
+                             "accesskey",
+                             "privatekey"}) {
+    if (n.find(w) != std::string::npos) return true;
+  }
+  return n.ends_with("key");
+}
+
+bool isNameChar(char c) noexcept {
+  return isAlpha(c) || (c >= '0' && c <= '9') || c == '_' || c == '-' || c == '.';
+}
+
+// May precede a key=value pair or a bare credential.
+bool isWordBoundary(char c) noexcept {
+  return isPathBoundary(c) || c == '?' || c == '&' || c == '/';
+}
+
+// Ends the value of a key=value pair.
+bool endsValue(char c) noexcept {
+  return isTerminator(c) || c == '&' || c == ',' || c == ';';
+}
+
+// "name=value" or "name: value" whose name says it is a secret, starting at i: the length of the
+// name and its separator (the value follows), or 0.
+std::size_t credentialAt(std::string_view s, std::size_t i) {
+  if (i > 0 && !isWordBoundary(s[i - 1])) return 0;
+  std::size_t j = i;
+  while (j < s.size() && isNameChar(s[j]))
+    ++j;
+  if (j == i || j >= s.size() || !credentialName(s.substr(i, j - i))) return 0;
+  if (s[j] == '=') return j + 1 - i;
+  if (s[j] == ':' && j + 1 < s.size() && s[j + 1] == ' ') return j + 2 - i;
+  return 0;
+}
+
+// An HTTP authorisation scheme followed by its credentials ("Bearer abc", "Basic dXNlcg=="),
+// starting at i: the length of the scheme and the blank, or 0.
+std::size_t authSchemeAt(std::string_view s, std::size_t i) {
+  if (i > 0 && !isWordBoundary(s[i - 1])) return 0;
+  for (std::string_view scheme : {"bearer ", "basic ", "digest "}) {
+    if (s.size() - i <= scheme.size()) continue;
+    bool same = true;
+    for (std::size_t k = 0; k < scheme.size() && same; ++k)
+      same = lowerAscii(s[i + k]) == scheme[k];
+    if (same && !isTerminator(s[i + scheme.size()])) return scheme.size();
+  }
+  return 0;
+}
+
+// "user:password@host..." without a scheme, starting at i: the length of the whole token, or 0.
+std::size_t userinfoAt(std::string_view s, std::size_t i) {
+  if (i > 0 && !isWordBoundary(s[i - 1])) return 0;
+  if (!isNameChar(s[i])) return 0;
+  bool colon = false;
+  const std::size_t end = std::min(s.size(), i + 512); // user:password@ is short
+  for (std::size_t j = i; j < end && !isTerminator(s[j]) && s[j] != '/'; ++j) {
+    if (s[j] == ':') colon = true;
+    if (s[j] == '@') return colon && j > i ? tokenEnd(s, i, j + 1) - i : 0;
+  }
+  return 0;
+}
+
 std::string cutUtf8(std::string text, std::size_t maxBytes) {
   if (text.size() <= maxBytes) return text;
   std::size_t cut = maxBytes;
@@ -116,6 +198,11 @@ std::string sanitizeForClient(std::string_view message) {
   std::string out;
   out.reserve(message.size());
   std::size_t i = 0;
+  const auto skipValue = [&](std::size_t from) {
+    while (from < message.size() && !endsValue(message[from]))
+      ++from;
+    return from;
+  };
   while (i < message.size()) {
     if (const std::size_t n = urlAt(message, i); n > 0) {
       out += "[url]";
@@ -123,6 +210,19 @@ std::string sanitizeForClient(std::string_view message) {
     } else if (const std::size_t m = pathAt(message, i); m > 0) {
       out += "[path]";
       i += m;
+    } else if (const std::size_t u = userinfoAt(message, i); u > 0) {
+      out += "[url]";
+      i += u;
+    } else if (const std::size_t c = credentialAt(message, i); c > 0) {
+      out.append(message.substr(i, c));
+      out += "[redacted]";
+      std::size_t value = i + c; // "Authorization: Bearer abc": the scheme and its credentials
+      value += authSchemeAt(message, value);
+      i = skipValue(value);
+    } else if (const std::size_t a = authSchemeAt(message, i); a > 0) {
+      out.append(message.substr(i, a));
+      out += "[redacted]";
+      i = skipValue(i + a);
     } else {
       out.push_back(message[i]);
       ++i;

@@ -73,6 +73,7 @@ struct ProxyFrontEnd::Impl {
   std::string updateSequence;
   std::string lastUpdate;
   std::int64_t startedMillis = unixMillisNow();
+  FetchBudget budget;   // upstream fetches per client address
   MapComposer composer; // last: its workers stop first
 
   static std::vector<std::string> layerNames(const TileService& t) {
@@ -83,7 +84,10 @@ struct ProxyFrontEnd::Impl {
   }
 
   static TileOutcome outcomeOf(const TileAnswer& a) {
-    if (a.kind == TileAnswer::Kind::Error) return TileOutcome::Error;
+    if (a.kind == TileAnswer::Kind::Error) {
+      if (a.failure == TileAnswer::Failure::OverBudget) return TileOutcome::Refused;
+      return a.origin == TileOrigin::Offline ? TileOutcome::Offline : TileOutcome::Error;
+    }
     if (a.kind == TileAnswer::Kind::Absent)
       return a.origin == TileOrigin::Offline ? TileOutcome::Offline : TileOutcome::Absent;
     switch (a.origin) {
@@ -104,18 +108,21 @@ struct ProxyFrontEnd::Impl {
   }
 
   void metricsPage(const Responder& respond) const {
-    auto r = HttpResponse::text(200,
-                                "text/plain; version=0.0.4; charset=utf-8",
-                                metrics.render(tiles.upstreamMetrics(),
-                                               tiles.cachedBytes(),
-                                               composer.decodedCacheBytes(),
-                                               tiles.cacheHealth()));
+    auto r = HttpResponse::text(
+        200,
+        "text/plain; version=0.0.4; charset=utf-8",
+        metrics.render(tiles.upstreamMetrics(),
+                       tiles.cachedBytes(),
+                       composer.decodedCacheBytes(),
+                       FetchBudgetMetrics{budget.perMinute(), budget.refused(), budget.clients()},
+                       tiles.cacheHealth()));
     r.setHeader("Cache-Control", "no-store");
     respond(std::move(r));
   }
 
   Impl(TileService& t, FrontEndOptions o)
       : tiles(t), options(std::move(o)), metrics(layerNames(t)),
+        budget(options.fetchesPerClientPerMinute, options.clock),
         composer(t,
                  options.composeThreads,
                  options.maxTilesPerMap,
@@ -144,6 +151,132 @@ struct ProxyFrontEnd::Impl {
     auto r = HttpResponse::text(status, "text/plain; charset=utf-8", text);
     common(r);
     return r;
+  }
+
+  // ----------------------------------------------------------------------------- errors
+
+  /** What a client may see of an error message: the one redaction (sanitizeForClient: URLs, file
+   * paths, credentials in user:password@ and key=value form), cut to kMaxClientMessageBytes.
+   * Every error any endpoint sends goes through here: the plain-text errors (errorText) and the
+   * OGC exceptions, XML or drawn into an image (exception). */
+  static std::string clientMessage(std::string_view message) {
+    // Cut first as well: a message is at most kMaxClientMessageBytes once it is redacted.
+    std::string m = sanitizeForClient(message.substr(0, 8 * kMaxClientMessageBytes));
+    if (m.size() > kMaxClientMessageBytes) {
+      std::size_t cut = kMaxClientMessageBytes;
+      while (cut > 0 && (static_cast<unsigned char>(m[cut]) & 0xC0u) == 0x80u)
+        --cut;
+      m.resize(cut);
+      m += "...";
+    }
+    return m;
+  }
+
+  /** A plain-text error: the status and the redacted message. */
+  HttpResponse errorText(int status, std::string_view message) const {
+    return plain(status, clientMessage(message) + "\n");
+  }
+
+  /** The HTTP status of a temporary failure and when to try again: the upstream is unavailable
+   * (503) or the client's fetch budget is spent (429). */
+  struct Temporary {
+    int status = 503;
+    std::int64_t retryAfterSeconds = 1;
+  };
+  static std::optional<Temporary> temporary(TileAnswer::Failure f, std::int64_t retryAfter) {
+    if (f == TileAnswer::Failure::Bad) return std::nullopt;
+    return Temporary{f == TileAnswer::Failure::OverBudget ? 429 : 503,
+                     std::max<std::int64_t>(1, retryAfter)};
+  }
+  static void markTemporary(HttpResponse& r, const Temporary& t) {
+    r.status = t.status;
+    r.setHeader("Retry-After", std::to_string(t.retryAfterSeconds));
+    r.setHeader("Cache-Control", "no-store");
+  }
+
+  /** A tile that could not be had, for the World Wind and static endpoints: 404 when there is no
+   * such tile, 503 or 429 with Retry-After when it may come later, 502 when the upstream's answer
+   * was not a tile. */
+  HttpResponse tileError(const TileAnswer& a) const {
+    if (a.kind == TileAnswer::Kind::Absent) {
+      auto r = errorText(404, a.message);
+      r.setHeader("X-Cache", toString(a.origin));
+      r.setHeader("Cache-Control", "public, max-age=60");
+      return r;
+    }
+    auto r = errorText(502, a.message);
+    r.setHeader("X-Cache", toString(a.origin));
+    if (const auto t = temporary(a.failure, a.retryAfterSeconds))
+      markTemporary(r, *t);
+    else
+      r.setHeader("Cache-Control", "no-store");
+    return r;
+  }
+
+  /** What the HTTP server refused (HttpRequest::refusal): answered here like any other request,
+   * so that it is counted and logged. */
+  HttpResponse refusalResponse(const HttpRequest& req) const {
+    switch (req.refusal) {
+    case HttpRefusal::BadRequest:
+      return errorText(400, "bad request: malformed request line or header");
+    case HttpRefusal::MethodNotAllowed: {
+      auto r = errorText(405, "only GET, HEAD and OPTIONS");
+      r.setHeader("Allow", kAllowedMethods);
+      return r;
+    }
+    case HttpRefusal::BodyTooLarge:
+      return errorText(413, "request body too large");
+    case HttpRefusal::TooManyRequests: {
+      auto r = errorText(429, "too many requests");
+      markTemporary(r, Temporary{429, 1});
+      return r;
+    }
+    case HttpRefusal::HeaderTooLarge:
+      return errorText(431, "request header fields too large");
+    case HttpRefusal::None:
+      break;
+    }
+    return errorText(500, "internal error");
+  }
+
+  static constexpr const char* kAllowedMethods = "GET, HEAD, OPTIONS";
+
+  /** A header list such as Access-Control-Request-Headers asks for: tokens (RFC 9110) separated
+   * by commas and blanks, not too long. */
+  static bool tokenList(std::string_view v) {
+    if (v.empty() || v.size() > 1024) return false;
+    return std::all_of(v.begin(), v.end(), [](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) ||
+             std::string_view("!#$%&'*+-.^_`|~, \t").find(c) != std::string_view::npos;
+    });
+  }
+
+  /** OPTIONS: a CORS preflight (Origin and Access-Control-Request-Method) gets 204 with what a
+   * browser needs to send the real request (the headers it asked for are allowed: tellus
+   * ignores them, an Authorization or a Cesium Resource header included); a plain OPTIONS gets
+   * 204 with Allow. */
+  HttpResponse optionsResponse(const HttpRequest& req) const {
+    HttpResponse r;
+    r.status = 204;
+    r.setHeader("Allow", kAllowedMethods);
+    const bool preflight =
+        !req.header("origin").empty() && !req.header("access-control-request-method").empty();
+    if (!preflight || options.cors.empty()) return r;
+    r.setHeader("Access-Control-Allow-Origin", options.cors);
+    r.setHeader("Access-Control-Allow-Methods", kAllowedMethods);
+    const std::string_view asked = req.header("access-control-request-headers");
+    r.setHeader("Access-Control-Allow-Headers",
+                tokenList(asked) ? std::string(asked)
+                                 : std::string("Authorization, X-Requested-With, If-None-Match, "
+                                               "If-Modified-Since, Cache-Control"));
+    r.setHeader("Access-Control-Max-Age", "86400");
+    r.setHeader("Vary", "Origin, Access-Control-Request-Method, Access-Control-Request-Headers");
+    return r;
+  }
+
+  /** The budget the requests of this client are charged to (none when unlimited). */
+  FetchGate gateFor(const HttpRequest& req) {
+    return FetchGate{budget.unlimited() ? nullptr : &budget, req.remoteAddress};
   }
 
   static bool safeHost(std::string_view h) {
@@ -235,27 +368,23 @@ struct ProxyFrontEnd::Impl {
                      const std::string* time = nullptr) {
     const LayerSpec* l = tiles.layer(layerName);
     if (!l) return respond(plain(404, "no such layer\n"));
-    tiles.getTile(layerName,
-                  time ? *time : l->timeDefault,
-                  key,
-                  [this, v = Validators(req), l, respond](TileAnswer&& a) {
-                    countTile(l, a);
-                    if (a.kind == TileAnswer::Kind::Tile)
-                      return sendTile(v, std::move(a), *l, respond);
-                    auto r =
-                        plain(a.kind == TileAnswer::Kind::Absent ? 404 : 502, a.message + "\n");
-                    r.setHeader("X-Cache", toString(a.origin));
-                    if (a.kind == TileAnswer::Kind::Absent)
-                      r.setHeader("Cache-Control", "public, max-age=60");
-                    respond(std::move(r));
-                  });
+    tiles.getTile(
+        layerName,
+        time ? *time : l->timeDefault,
+        key,
+        [this, v = Validators(req), l, respond](TileAnswer&& a) {
+          countTile(l, a);
+          if (a.kind == TileAnswer::Kind::Tile) return sendTile(v, std::move(a), *l, respond);
+          respond(tileError(a));
+        },
+        gateFor(req));
   }
 
   void worldWind(const HttpRequest& req, const Responder& respond) {
     auto params = parseQuery(req.query, options.maxParamBytes, options.maxQueryBytes);
-    if (!params) return respond(plain(400, "bad query: " + params.error() + "\n"));
+    if (!params) return respond(errorText(400, "bad query: " + params.error()));
     auto ww = parseWorldWindTile(*params);
-    if (!ww) return respond(plain(400, ww.error() + "\n"));
+    if (!ww) return respond(errorText(400, ww.error()));
     serveTilePath(req, ww->dataset, TileKey{ww->level, ww->row, ww->col}, respond);
   }
 
@@ -274,12 +403,11 @@ struct ProxyFrontEnd::Impl {
     const std::string* timeOrDefault = nullptr; // the hot path (no query) allocates nothing
     if (!req.query.empty()) {
       auto params = parseQuery(req.query, options.maxParamBytes, options.maxQueryBytes);
-      if (!params) return respond(plain(400, "bad query: " + params.error() + "\n"));
+      if (!params) return respond(errorText(400, "bad query: " + params.error()));
       if (const auto t = params->get("time")) {
         auto resolved = resolveTime(*l, *t);
         if (!resolved)
-          return respond(
-              plain(400, resolved.error().code + ": " + resolved.error().message + "\n"));
+          return respond(errorText(400, resolved.error().code + ": " + resolved.error().message));
         time = std::move(*resolved);
         timeOrDefault = &time;
       }
@@ -315,7 +443,8 @@ struct ProxyFrontEnd::Impl {
   /** An OGC exception in the form the request asked for: XML, or for a GetMap with
    * EXCEPTIONS=BLANK/INIMAGE an image in its FORMAT (every format: see blankMap). */
   void
-  exception(const WmsErrorContext& ctx, const OgcException& e, const Responder& respond) const {
+  exception(const WmsErrorContext& ctx, const OgcException& raw, const Responder& respond) const {
+    const OgcException e{raw.code, clientMessage(raw.locator), clientMessage(raw.message)};
     if (ctx.exceptions != GetMapRequest::Exceptions::Xml && ctx.width > 0 && ctx.height > 0) {
       const std::string text = ctx.exceptions == GetMapRequest::Exceptions::InImage
                                    ? sanitizeForClient(e.code + ": " + e.message)
@@ -342,6 +471,22 @@ struct ProxyFrontEnd::Impl {
     auto r = HttpResponse::text(f.httpStatus, f.contentType, f.body);
     common(r);
     respond(std::move(r));
+  }
+
+  /** An exception for a tile or map that could not be had: a temporary failure (an upstream
+   * unavailable, the client's fetch budget spent) has its own status (503, 429) and Retry-After
+   * whatever exceptions_http_status says, so that no client keeps it; the body is what the
+   * request's EXCEPTIONS asks for. */
+  void exception(const WmsErrorContext& ctx,
+                 const OgcException& e,
+                 const Responder& respond,
+                 std::optional<Temporary> temporaryFailure) const {
+    if (!temporaryFailure) return exception(ctx, e, respond);
+    // exception() answers before it returns: the references outlive the call.
+    exception(ctx, e, [&](HttpResponse&& r) {
+      markTemporary(r, *temporaryFailure);
+      respond(std::move(r));
+    });
   }
 
   /** A GetMap where there is no tile: the empty map in the request's format. */
@@ -476,6 +621,7 @@ struct ProxyFrontEnd::Impl {
         (m.opacities.empty() || m.opacities.front() >= 1.0)) {
       const TileGrid* g = tiles.grid(l->name);
       if (const auto key = g->keyForBbox(m.bbox, m.width, m.height)) {
+        const FetchGate gate = gateFor(req);
         return tiles.getTile(
             l->name,
             layers.front().time,
@@ -493,9 +639,12 @@ struct ProxyFrontEnd::Impl {
                 // No tile there: an empty map, not an error.
                 return emptyImage(m, kind, a.message, a.origin, respond);
               }
-              exception(
-                  ctx, OgcException{std::string(ogc::kNoApplicableCode), "", a.message}, respond);
-            });
+              exception(ctx,
+                        OgcException{std::string(ogc::kNoApplicableCode), "", a.message},
+                        respond,
+                        temporary(a.failure, a.retryAfterSeconds));
+            },
+            gate);
       }
     }
     // Any other box, size, format or several layers: composed from the tiles.
@@ -518,6 +667,8 @@ struct ProxyFrontEnd::Impl {
     cr.transparent = m.transparent;
     cr.bgcolor = m.bgcolor;
     cr.ifNoneMatch = std::string(req.header("if-none-match"));
+    cr.fetchBudget = gateFor(req).budget;
+    cr.client = req.remoteAddress;
     auto started = composer.compose(
         std::move(cr),
         [this](const LayerSpec& layer, const TileAnswer& a) { countTile(&layer, a); },
@@ -525,8 +676,10 @@ struct ProxyFrontEnd::Impl {
           metrics.composedTiles(map.decodedTiles,
                                 map.tiles > map.decodedTiles ? map.tiles - map.decodedTiles : 0);
           if (map.kind == ComposedMap::Kind::Error) {
-            return exception(
-                ctx, OgcException{std::string(ogc::kNoApplicableCode), "", map.message}, respond);
+            return exception(ctx,
+                             OgcException{std::string(ogc::kNoApplicableCode), "", map.message},
+                             respond,
+                             temporary(map.failure, map.retryAfterSeconds));
           }
           HttpResponse r;
           common(r);
@@ -633,6 +786,8 @@ void ProxyFrontEnd::handle(HttpRequest&& req, Responder respond) {
     respond(std::move(r));
   };
   try {
+    if (req.refusal != HttpRefusal::None) return counted(im.refusalResponse(req));
+    if (req.method == "OPTIONS") return counted(im.optionsResponse(req));
     switch (protocol) {
     case Protocol::Wms:
       return im.wms(req, counted);

@@ -190,6 +190,26 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     return inserted;
   }
 
+  struct Joined {
+    bool first = false;                               ///< the caller starts the work
+    std::optional<std::chrono::milliseconds> refused; ///< the gate's budget said no (done kept)
+  };
+  /** join() for a client's request: joining a flight under way costs nothing; starting one asks
+   * the gate's budget first (under the flights' lock, so that the check and the start are one
+   * step). `done` is taken unless refused. */
+  Joined joinGated(const FlightKey& k, Done& done, FetchGate gate) {
+    std::lock_guard lock(flightsMutex);
+    if (const auto it = flights.find(k); it != flights.end()) {
+      it->second.push_back(std::move(done));
+      return {};
+    }
+    if (gate.budget) {
+      if (auto wait = gate.budget->take(gate.client)) return {false, wait};
+    }
+    flights[k].push_back(std::move(done));
+    return {true, std::nullopt};
+  }
+
   void land(const FlightKey& k, TileAnswer&& answer) {
     std::vector<Done> waiters;
     {
@@ -219,6 +239,55 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     a.message = std::move(message);
     return a;
   }
+
+  /// The least Retry-After of a temporary failure: the fetch has been retried already.
+  static constexpr std::int64_t kMinRetryAfterSeconds = 5;
+
+  /** A temporary failure of this upstream: try again once its breaker or pause would let a fetch
+   * through, and not before kMinRetryAfterSeconds. */
+  TileAnswer unavailable(const std::string& upstream, std::string message) const {
+    TileAnswer a = error(std::move(message));
+    a.failure = TileAnswer::Failure::Unavailable;
+    const auto wait = std::chrono::ceil<std::chrono::seconds>(fetcher.unavailableFor(upstream));
+    a.retryAfterSeconds = std::max<std::int64_t>(kMinRetryAfterSeconds, wait.count());
+    return a;
+  }
+
+  static TileAnswer overBudget(std::chrono::milliseconds wait) {
+    TileAnswer a = error("too many upstream fetches from this client; try again later");
+    a.failure = TileAnswer::Failure::OverBudget;
+    a.retryAfterSeconds =
+        std::max<std::int64_t>(1, std::chrono::ceil<std::chrono::seconds>(wait).count());
+    return a;
+  }
+
+  /** What a failed fetch is to a client: temporary (the upstream could not be reached, reset or
+   * closed the connection, timed out, failed with 5xx or asked for a pause) or not (its answer
+   * was too large, a redirect was refused, the URL is bad). Never "absent". */
+  TileAnswer fetchFailure(const std::string& upstream, const FetchError& e) const {
+    const std::string what = e.code == FetchErrc::HttpError && e.httpStatus > 0
+                                 ? "HTTP " + std::to_string(e.httpStatus)
+                                 : std::string(toString(e.code));
+    switch (e.code) {
+    case FetchErrc::Timeout:
+    case FetchErrc::Connect:
+    case FetchErrc::CircuitOpen:
+    case FetchErrc::Truncated:
+    case FetchErrc::Throttled:
+    case FetchErrc::Cancelled:
+      return unavailable(upstream, "the upstream is unavailable (" + what + ")");
+    case FetchErrc::HttpError:
+      if (e.httpStatus >= 500 || e.httpStatus == 429)
+        return unavailable(upstream, "the upstream is unavailable (" + what + ")");
+      break;
+    default:
+      break;
+    }
+    return error("the upstream failed (" + what + ")");
+  }
+
+  /** The upstream says there is no tile there: 404, or 204 No Content. */
+  static bool noSuchTile(int status) noexcept { return status == 404 || status == 204; }
   static TileAnswer tile(TileOrigin origin,
                          std::vector<std::byte> bytes,
                          std::string contentType,
@@ -358,13 +427,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     };
     if (!r) {
       if (serveStale()) return;
-      const auto code = r.error().code;
-      if (code == FetchErrc::Connect || code == FetchErrc::CircuitOpen) {
-        land(fk,
-             absent(TileOrigin::Offline, "the upstream is unreachable and the tile is not cached"));
-      } else {
-        land(fk, error(std::string("the upstream failed (") + toString(code) + ")"));
-      }
+      land(fk, fetchFailure(l.upstream, r.error()));
       return;
     }
     FetchResponse& resp = *r;
@@ -383,7 +446,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                 std::move(stale->file)));
       return;
     }
-    if (resp.status == 404) {
+    if (noSuchTile(resp.status)) {
       (void)cache.putAbsent(fk.dataset, fk.key, unixMillisNow() + options.absentRetry.count());
       land(fk, absent(TileOrigin::Miss, "the upstream has no tile here"));
       return;
@@ -406,7 +469,11 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     store(fk, folder, std::move(resp.body), std::move(m));
   }
 
-  void getTile(std::string_view layerName, std::string_view time, const TileKey& key, Done done) {
+  void getTile(std::string_view layerName,
+               std::string_view time,
+               const TileKey& key,
+               Done done,
+               FetchGate gate = {}) {
     const auto li = layerIndex.find(layerName);
     if (li == layerIndex.end()) return done(error("no layer '" + std::string(layerName) + "'"));
     const LayerSpec& l = layers[li->second];
@@ -449,17 +516,30 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
       return done(absent(TileOrigin::Hit, "the upstream has no tile here"));
     }
     const UpstreamSpec& u = upstreams.at(l.upstream);
-    const bool isOffline = forcedOffline.load() || !remoteReachable(u);
+    const bool forced = forcedOffline.load();
     std::optional<CacheLookup> stale;
     if (found->kind == CacheLookup::Kind::Hit) stale = std::move(*found);
-    if (isOffline) {
+    if (forced || !remoteReachable(u)) {
       if (stale) {
         return done(staleTile(std::move(*stale), folder, key));
       }
-      return done(absent(TileOrigin::Offline, "offline: the tile is not cached"));
+      // Offline by choice: there is no tile to be had. An open breaker is a temporary failure.
+      if (forced) return done(absent(TileOrigin::Offline, "offline: the tile is not cached"));
+      TileAnswer a = unavailable(
+          u.name, "the upstream is unreachable (circuit open) and the tile is not cached");
+      a.origin = TileOrigin::Offline;
+      return done(std::move(a));
     }
     const FlightKey fk{id, key};
-    if (!join(fk, std::move(done))) return; // someone is already fetching it
+    // Local rasters are rendered here, not fetched: the budget counts upstream fetches.
+    const auto joined =
+        joinGated(fk, done, u.type == UpstreamSpec::Type::Local ? FetchGate{} : gate);
+    if (joined.refused) {
+      // Over the client's budget: what the cache has is still served.
+      if (stale) return done(staleTile(std::move(*stale), folder, key));
+      return done(overBudget(*joined.refused));
+    }
+    if (!joined.first) return; // someone is already fetching it
     if (u.type == UpstreamSpec::Type::Local) {
       renderLocal(fk, l, g, folder, std::move(stale));
     } else {
@@ -578,17 +658,11 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
       }
     };
     if (!r) {
-      const auto code = r.error().code;
-      if (code == FetchErrc::Connect || code == FetchErrc::CircuitOpen) {
-        landAll(
-            absent(TileOrigin::Offline, "the upstream is unreachable and the tile is not cached"));
-      } else {
-        landAll(error(std::string("the upstream failed (") + toString(code) + ")"));
-      }
+      landAll(fetchFailure(l.upstream, r.error()));
       return;
     }
     FetchResponse& resp = *r;
-    if (resp.status == 404) {
+    if (noSuchTile(resp.status)) {
       for (const TileKey& k : owned)
         (void)cache.putAbsent(id, k, unixMillisNow() + options.absentRetry.count());
       landAll(absent(TileOrigin::Miss, "the upstream has no tile here"));
@@ -757,8 +831,9 @@ const TileGrid* TileService::grid(std::string_view name) const noexcept {
 void TileService::getTile(std::string_view layer,
                           std::string_view time,
                           const TileKey& key,
-                          std::function<void(TileAnswer&&)> done) {
-  impl_->getTile(layer, time, key, std::move(done));
+                          std::function<void(TileAnswer&&)> done,
+                          FetchGate gate) {
+  impl_->getTile(layer, time, key, std::move(done), gate);
 }
 
 void TileService::getTiles(std::string_view layer,

@@ -216,6 +216,7 @@ server:
     request_timeout: 500ms
     keepalive_timeout: 0
     requests_per_second: 2.5
+    fetches_per_client_per_minute: 120
     max_map_pixels: 1000000
     max_tiles_per_map: 64
     decoded_tile_cache: 8MiB
@@ -248,6 +249,7 @@ upstreams:
     open_interval: 1h
     max_retry_after_wait: 90s
     headers: {User-Agent: "tellus/0.1", Referer: "https://example.org/"}
+    redirects: any
   - name: w
     type: wms
     url: http://127.0.0.1:9/wms
@@ -307,6 +309,7 @@ layers:
   EXPECT_EQ(s.limits.requestTimeout, milliseconds(500));
   EXPECT_EQ(s.limits.keepaliveTimeout, milliseconds(0));
   EXPECT_EQ(s.limits.requestsPerSecond, 2.5);
+  EXPECT_EQ(s.limits.fetchesPerClientPerMinute, 120.0);
   EXPECT_EQ(s.limits.maxMapPixels, 1000000);
   EXPECT_EQ(s.limits.maxTilesPerMap, 64);
   EXPECT_EQ(s.limits.decodedTileCache, 8ULL << 20);
@@ -345,6 +348,7 @@ layers:
   ASSERT_EQ(ww.headers.size(), 2U);
   EXPECT_EQ(ww.headers[0], (std::pair<std::string, std::string>{"User-Agent", "tellus/0.1"}));
   EXPECT_EQ(ww.headers[1].first, "Referer");
+  EXPECT_EQ(ww.redirects, RedirectPolicy::Any);
   const UpstreamConfig& w = c->upstreams.at(1);
   EXPECT_EQ(w.wmsVersion, "1.1.1");
   EXPECT_EQ(w.crs, "CRS:84");
@@ -1029,4 +1033,51 @@ TEST(ConfigYaml, RendererLayersAreValidated) {
             std::string::npos);
   EXPECT_NE(bad("      max_level: 1", "      max_level: -3").find("[0, 40]"), std::string::npos);
   EXPECT_NE(bad("      max_level: 1", "      depth: 1").find("depth"), std::string::npos);
+}
+
+// Issue 21: which redirects of an upstream are followed, and the per-client fetch budget.
+TEST(ConfigYaml, UpstreamRedirectsAndTheClientFetchBudget) {
+  const auto defaults = parse(kMinimal);
+  ASSERT_TRUE(defaults) << defaults.error().toString();
+  EXPECT_EQ(defaults->upstreams.at(0).redirects, RedirectPolicy::SameOrigin);
+  EXPECT_EQ(defaults->server.limits.fetchesPerClientPerMinute, 600.0);
+  const std::string url = "    url: http://example.org/wms\n";
+  for (const auto& [text, want] : {std::pair{"same-origin", RedirectPolicy::SameOrigin},
+                                   std::pair{"any", RedirectPolicy::Any},
+                                   std::pair{"none", RedirectPolicy::None}}) {
+    const auto c = parse(swap(kMinimal, url, url + "    redirects: " + text + "\n"));
+    ASSERT_TRUE(c) << c.error().toString();
+    EXPECT_EQ(c->upstreams.at(0).redirects, want) << text;
+  }
+  const ConfigError bad = errorOf(swap(kMinimal, url, url + "    redirects: elsewhere\n"));
+  EXPECT_EQ(bad.line, 5);
+  EXPECT_EQ(bad.column, 16);
+  EXPECT_EQ(bad.key, "upstreams[0].redirects");
+  EXPECT_EQ(bad.message, "'elsewhere' is not one of same-origin, any, none");
+  const ConfigError local = errorOf(R"(upstreams:
+  - name: up
+    type: local
+    path: /x.jpg
+    redirects: any
+layers: []
+)");
+  EXPECT_EQ(local.line, 5);
+  EXPECT_EQ(local.key, "upstreams[0].redirects");
+  EXPECT_EQ(local.message, "'redirects' applies to wms and worldwind upstreams only");
+
+  const auto budget =
+      parse("server: {limits: {fetches_per_client_per_minute: 30}}\n" + std::string(kMinimal));
+  ASSERT_TRUE(budget) << budget.error().toString();
+  EXPECT_EQ(budget->server.limits.fetchesPerClientPerMinute, 30.0);
+  const auto unlimited =
+      parse("server: {limits: {fetches_per_client_per_minute: 0}}\n" + std::string(kMinimal));
+  ASSERT_TRUE(unlimited) << unlimited.error().toString();
+  const ConfigError negative =
+      errorOf("server: {limits: {fetches_per_client_per_minute: -5}}\n" + std::string(kMinimal));
+  EXPECT_EQ(negative.line, 1);
+  EXPECT_EQ(negative.key, "server.limits.fetches_per_client_per_minute");
+  EXPECT_EQ(negative.message, "server: must be a finite number >= 0");
+  const ConfigError word =
+      errorOf("server: {limits: {fetches_per_client_per_minute: many}}\n" + std::string(kMinimal));
+  EXPECT_EQ(word.key, "server.limits.fetches_per_client_per_minute");
 }

@@ -140,6 +140,18 @@ TEST(Fetcher, ErrorCodesHaveNames) {
   EXPECT_STREQ(toString(FetchErrc::CircuitOpen), "circuit-open");
   EXPECT_STREQ(toString(FetchErrc::TooLarge), "too-large");
   EXPECT_STREQ(toString(FetchErrc::Throttled), "throttled");
+  EXPECT_STREQ(toString(FetchErrc::Redirect), "redirect");
+}
+
+TEST(Fetcher, OriginsAreSchemeHostAndPort) {
+  EXPECT_EQ(urlOrigin("http://Example.COM/wms?x=1"), "http://example.com:80");
+  EXPECT_EQ(urlOrigin("https://example.com:443/a"), "https://example.com:443");
+  EXPECT_EQ(urlOrigin("https://example.com/a"), urlOrigin("https://example.com:443/b"));
+  EXPECT_NE(urlOrigin("http://example.com/a"), urlOrigin("https://example.com/a"));
+  EXPECT_NE(urlOrigin("http://127.0.0.1:8080/a"), urlOrigin("http://127.0.0.1:8081/a"));
+  EXPECT_NE(urlOrigin("http://example.com/a"), urlOrigin("http://example.com.evil.net/a"));
+  EXPECT_EQ(urlOrigin("http://user:pw@example.com/a"), "http://example.com:80");
+  EXPECT_FALSE(urlOrigin("not a url"));
 }
 
 // ---- FetcherIntegration: against FakeUpstream on 127.0.0.1 ------------------------------------
@@ -400,11 +412,68 @@ TEST(FetcherIntegration, FollowsAFewRedirectsButNotLoops) {
   auto r = fetchNow(f, get("u", server.url("/hop")));
   ASSERT_TRUE(r) << r.error().message;
   EXPECT_EQ(text(r->body), "here");
+  EXPECT_EQ(r->url, server.url("/final")); // the final URL is recorded
+  EXPECT_EQ(r->redirects, 1);
+  EXPECT_EQ(r->attempts, 1); // a hop is not a retry
   auto loop = fetchNow(f, get("u", server.url("/loop")));
   ASSERT_FALSE(loop);
-  EXPECT_EQ(loop.error().code, FetchErrc::HttpError);
+  EXPECT_EQ(loop.error().code, FetchErrc::Redirect);
   EXPECT_EQ(loop.error().attempts, 1);
-  EXPECT_LE(server.requests("/loop"), 4u); // the first request and at most 3 redirects
+  EXPECT_EQ(server.requests("/loop"), 1u + 5u); // the first request and at most 5 redirects
+}
+
+// Two fake upstreams on two ports of 127.0.0.1 are two origins. The first redirects; the
+// configured header (an API key) must reach the first only, whatever the policy.
+TEST(FetcherIntegration, RedirectsStayInTheUpstreamsOriginAndHeadersNeverLeaveIt) {
+  FakeUpstream other([](const FakeRequest&) { return FakeReply::ok("from the other origin"); });
+  FakeUpstream server([&](const FakeRequest& req) {
+    if (req.target == "/tile") return FakeReply::ok("from the upstream");
+    FakeReply r = FakeReply::withStatus(req.target == "/same" ? 301 : 307);
+    r.headers.emplace_back("Location", req.target == "/same" ? "/tile" : other.url("/elsewhere"));
+    return r;
+  });
+  const auto policyWith = [](UpstreamPolicy::Redirects redirects) {
+    UpstreamPolicy p = fastPolicy();
+    p.headers = {{"X-Api-Key", "SECRET-KEY"}, {"Authorization", "Bearer SECRET-TOKEN"}};
+    p.redirects = redirects;
+    return p;
+  };
+  Fetcher f;
+  // The default: within the upstream's origin, with its headers on every hop.
+  f.setPolicy("same-origin", policyWith(UpstreamPolicy::Redirects::SameOrigin));
+  auto same = fetchNow(f, get("same-origin", server.url("/same")));
+  ASSERT_TRUE(same) << same.error().message;
+  EXPECT_EQ(text(same->body), "from the upstream");
+  EXPECT_EQ(same->url, server.url("/tile"));
+  for (const auto& req : server.received())
+    EXPECT_EQ(req.header("x-api-key"), "SECRET-KEY") << req.target;
+  // To another origin: refused, an upstream failure, and the other origin sees nothing.
+  auto cross = fetchNow(f, get("same-origin", server.url("/cross")));
+  ASSERT_FALSE(cross);
+  EXPECT_EQ(cross.error().code, FetchErrc::Redirect);
+  EXPECT_EQ(cross.error().httpStatus, 307);
+  EXPECT_EQ(cross.error().attempts, 1); // not retried
+  EXPECT_NE(cross.error().message.find("another origin"), std::string::npos)
+      << cross.error().message;
+  EXPECT_EQ(other.requests(), 0u);
+  // `any`: followed, but without the configured headers.
+  f.setPolicy("any", policyWith(UpstreamPolicy::Redirects::Any));
+  auto any = fetchNow(f, get("any", server.url("/cross")));
+  ASSERT_TRUE(any) << any.error().message;
+  EXPECT_EQ(text(any->body), "from the other origin");
+  EXPECT_EQ(any->url, other.url("/elsewhere"));
+  ASSERT_EQ(other.requests(), 1u);
+  const FakeRequest there = other.received().at(0);
+  EXPECT_EQ(there.header("x-api-key"), "");
+  EXPECT_EQ(there.header("authorization"), "");
+  EXPECT_EQ(server.received().back().header("x-api-key"), "SECRET-KEY");
+  // `none`: not even within the origin.
+  f.setPolicy("none", policyWith(UpstreamPolicy::Redirects::None));
+  const auto before = server.requests();
+  auto none = fetchNow(f, get("none", server.url("/same")));
+  ASSERT_FALSE(none);
+  EXPECT_EQ(none.error().code, FetchErrc::Redirect);
+  EXPECT_EQ(server.requests(), before + 1);
 }
 
 TEST(FetcherIntegration, DroppedConnectionIsAConnectFailureAndRetried) {

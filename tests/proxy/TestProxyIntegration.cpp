@@ -23,6 +23,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <arpa/inet.h>
 #include <array>
 #include <atomic>
 #include <cmath>
@@ -34,9 +35,12 @@
 #include <future>
 #include <map>
 #include <mutex>
+#include <netinet/in.h>
+#include <poll.h>
 #include <span>
 #include <spawn.h>
 #include <string_view>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <thread>
 #include <unistd.h>
@@ -82,7 +86,8 @@ struct Proxy {
                  UpstreamPolicy policy = fastPolicy(),
                  const std::string& upstreamLayer = "upsat",
                  FrontEndOptions frontOptions = {},
-                 std::vector<LayerSpec> extraLayers = {}) {
+                 std::vector<LayerSpec> extraLayers = {},
+                 HttpServerOptions serverOptions = {}) {
     cache = test::openTestCache(dir.path());
     fetcher = std::make_unique<Fetcher>();
     UpstreamSpec u;
@@ -110,7 +115,7 @@ struct Proxy {
     EXPECT_TRUE(t) << (t ? "" : t.error());
     tiles = std::move(*t);
     front = std::make_unique<ProxyFrontEnd>(*tiles, std::move(frontOptions));
-    HttpServerOptions so;
+    HttpServerOptions so = std::move(serverOptions);
     so.threads = 2;
     server = std::make_unique<HttpServer>(so, [this](HttpRequest&& r, Responder respond) {
       front->handle(std::move(r), std::move(respond));
@@ -261,8 +266,10 @@ TEST(ProxyIntegration, AbsentIsRememberedServerErrorsAreNot) {
             "&BBOX=-153,-54,-144,-45&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg");
   EXPECT_EQ(wms.status, 200);
   EXPECT_EQ(wms.header("content-type"), "image/jpeg");
-  status = 500;
-  EXPECT_EQ(p.get("/wwtile?T=sat&L=1&X=0&Y=0").status, 502);
+  status = 500; // a temporary failure: 503 with Retry-After, not cached
+  const auto failed = p.get("/wwtile?T=sat&L=1&X=0&Y=0");
+  EXPECT_EQ(failed.status, 503);
+  EXPECT_FALSE(failed.header("retry-after").empty());
   const auto before = up.requests();
   EXPECT_EQ(before, 1u + 2u); // one retry
   status = 200;
@@ -327,14 +334,18 @@ TEST(ProxyIntegration, ADeadUpstreamOpensTheBreakerAndGoesOffline) {
           UpstreamSpec::Type::Wms,
           0ms,
           policy);
-  EXPECT_EQ(p.get("/wwtile?T=sat&L=0&X=0&Y=0").status, 404);
-  EXPECT_EQ(p.get("/wwtile?T=sat&L=0&X=1&Y=0").status, 404);
+  // Unreachable is not "no such tile": 503 with Retry-After, never 404.
+  EXPECT_EQ(p.get("/wwtile?T=sat&L=0&X=0&Y=0").status, 503);
+  EXPECT_EQ(p.get("/wwtile?T=sat&L=0&X=1&Y=0").status, 503);
   EXPECT_TRUE(p.tiles->offline());
   const auto t0 = std::chrono::steady_clock::now();
   const auto r = p.get("/wwtile?T=sat&L=0&X=2&Y=0");
   EXPECT_LT(std::chrono::steady_clock::now() - t0, 1500ms); // the breaker answers, not a timeout
-  EXPECT_EQ(r.status, 404);
+  EXPECT_EQ(r.status, 503);
   EXPECT_EQ(r.header("x-cache"), "OFFLINE");
+  // Until the breaker lets a probe through (60 s).
+  EXPECT_GE(std::stoi(r.header("retry-after")), 55) << r.header("retry-after");
+  EXPECT_EQ(r.header("cache-control"), "no-store");
 }
 
 TEST(ProxyIntegration, ExpiredTilesAreRevalidatedOrServedStale) {
@@ -1427,4 +1438,322 @@ TEST(ComposeIntegration, JpegMapsHaveTheConfiguredQuality) {
     EXPECT_LT(a.bytes.size(), d.bytes.size());
     EXPECT_LT(d.bytes.size(), top.bytes.size());
   }
+}
+
+// ------------------------------------------------------------------ issue 21: HTTP edges,
+// credentials
+
+namespace {
+
+/** Sends exactly these bytes on a new loopback connection and returns what comes back until the
+ * server closes or `quiet` passes without a byte. */
+std::string
+rawExchange(std::uint16_t port, const std::string& bytes, std::chrono::milliseconds quiet = 500ms) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(port);
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  std::string got;
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0) {
+    (void)::send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL);
+    for (;;) {
+      pollfd p{fd, POLLIN, 0};
+      if (::poll(&p, 1, static_cast<int>(quiet.count())) <= 0) break;
+      char buf[65536];
+      const auto n = ::recv(fd, buf, sizeof buf, 0);
+      if (n <= 0) break;
+      got.append(buf, static_cast<std::size_t>(n));
+    }
+  }
+  ::close(fd);
+  return got;
+}
+
+std::vector<std::string> readLines(const fs::path& file) {
+  std::ifstream in(file);
+  std::vector<std::string> lines;
+  for (std::string l; std::getline(in, l);)
+    lines.push_back(l);
+  return lines;
+}
+
+bool hasLine(const std::string& body, const std::string& line) {
+  return body.find("\n" + line + "\n") != std::string::npos;
+}
+
+} // namespace
+
+TEST(ProxyIntegration, CorsPreflightGets204WithWhatTheBrowserAsked) {
+  test::FakeUpstream up(tileReply);
+  Proxy p(up.url("/wms"));
+  const std::string preflight = rawExchange(
+      p.server->port(),
+      "OPTIONS /tiles/sat/0/0/0_0.jpg HTTP/1.1\r\nHost: a\r\nOrigin: http://127.0.0.1:9\r\n"
+      "Access-Control-Request-Method: GET\r\n"
+      "Access-Control-Request-Headers: authorization,x-requested-with\r\n\r\n");
+  EXPECT_TRUE(preflight.starts_with("HTTP/1.1 204")) << preflight;
+  EXPECT_NE(preflight.find("Access-Control-Allow-Origin: *\r\n"), std::string::npos) << preflight;
+  EXPECT_NE(preflight.find("Access-Control-Allow-Methods: GET, HEAD, OPTIONS\r\n"),
+            std::string::npos)
+      << preflight;
+  EXPECT_NE(preflight.find("Access-Control-Allow-Headers: authorization,x-requested-with\r\n"),
+            std::string::npos)
+      << preflight;
+  EXPECT_NE(preflight.find("Access-Control-Max-Age: 86400\r\n"), std::string::npos) << preflight;
+  // A plain OPTIONS (no Origin, no requested method) says what is allowed.
+  const std::string plain =
+      rawExchange(p.server->port(), "OPTIONS /wms HTTP/1.1\r\nHost: a\r\n\r\n");
+  EXPECT_TRUE(plain.starts_with("HTTP/1.1 204")) << plain;
+  EXPECT_NE(plain.find("Allow: GET, HEAD, OPTIONS\r\n"), std::string::npos) << plain;
+  EXPECT_EQ(plain.find("Access-Control-Allow-Methods"), std::string::npos) << plain;
+  // Other methods: 405 with Allow.
+  const std::string del = rawExchange(p.server->port(), "DELETE /wms HTTP/1.1\r\nHost: a\r\n\r\n");
+  EXPECT_TRUE(del.starts_with("HTTP/1.1 405")) << del;
+  EXPECT_NE(del.find("Allow: GET, HEAD, OPTIONS\r\n"), std::string::npos) << del;
+  // Nothing asked of the upstream by any of it; the real request then works cross-origin.
+  EXPECT_EQ(up.requests(), 0u);
+  const auto tile = p.get("/tiles/sat/0/0/0_0.jpg",
+                          {{"Origin", "http://127.0.0.1:9"}, {"Authorization", "Bearer x"}});
+  EXPECT_EQ(tile.status, 200);
+  EXPECT_EQ(tile.header("access-control-allow-origin"), "*");
+}
+
+// 405, 413, 429, 431 and 400 (the raw space) are in the access log and the request counters like
+// any other request.
+TEST(ProxyIntegration, RefusedRequestsAreCountedAndLogged) {
+  test::FakeUpstream up(tileReply);
+  HttpServerOptions so;
+  so.requestsPerSecond = 1; // a burst of 2
+  so.maxHeaderBytes = 2048;
+  Proxy p(up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, Proxy::fastPolicy(), "upsat", {}, {}, so);
+  const auto file = p.dir.path() / "access.log";
+  std::string err;
+  ASSERT_TRUE(logger().openAccessLog(file.string(), &err)) << err;
+  const std::uint16_t port = p.server->port();
+  const auto statusOf = [](const std::string& r) { return r.substr(0, 12); };
+  // Connection: close, so that each exchange ends at once (the rate limit refills meanwhile).
+  EXPECT_EQ(
+      statusOf(rawExchange(
+          port,
+          "POST /wms HTTP/1.1\r\nHost: a\r\nConnection: close\r\nContent-Length: 1\r\n\r\nx")),
+      "HTTP/1.1 405");
+  EXPECT_EQ(statusOf(rawExchange(port, "GET /wwtile?T=sat a HTTP/1.1\r\nHost: a\r\n\r\n")),
+            "HTTP/1.1 400");
+  EXPECT_EQ(statusOf(rawExchange(port,
+                                 "GET /tiles/big HTTP/1.1\r\nHost: a\r\nX-Big: " +
+                                     std::string(3000, 'b') + "\r\n\r\n")),
+            "HTTP/1.1 431");
+  EXPECT_EQ(statusOf(rawExchange(
+                port, "GET /wms HTTP/1.1\r\nHost: a\r\nContent-Length: 9999999\r\n\r\n")),
+            "HTTP/1.1 413");
+  int limited = 0;
+  for (int i = 0; i < 4; ++i)
+    limited += statusOf(rawExchange(
+                   port, "GET /nothing HTTP/1.1\r\nHost: a\r\nConnection: close\r\n\r\n")) ==
+               "HTTP/1.1 429";
+  EXPECT_GE(limited, 1);
+  ASSERT_TRUE(logger().openAccessLog("", &err));
+  const auto lines = readLines(file);
+  const auto logged = [&](const std::string& what) {
+    return std::count_if(lines.begin(), lines.end(), [&](const std::string& l) {
+      return l.find(what) != std::string::npos;
+    });
+  };
+  EXPECT_EQ(logged("method=POST target=/wms status=405"), 1) << testing::PrintToString(lines);
+  EXPECT_EQ(logged("target=\"/wwtile?T=sat a\" status=400"), 1) << testing::PrintToString(lines);
+  EXPECT_EQ(logged("status=431"), 1) << testing::PrintToString(lines);
+  EXPECT_EQ(logged("target=/wms status=413"), 1) << testing::PrintToString(lines);
+  EXPECT_EQ(logged("target=/nothing status=429"), limited) << testing::PrintToString(lines);
+  // The request counters: the rate limit let the metrics request through a second later.
+  std::this_thread::sleep_for(1100ms);
+  const auto m = p.get("/metrics");
+  ASSERT_EQ(m.status, 200) << m.body;
+  EXPECT_TRUE(hasLine(m.body, "tellus_http_requests_total{protocol=\"wms\",code=\"405\"} 1"))
+      << m.body;
+  EXPECT_TRUE(hasLine(m.body, "tellus_http_requests_total{protocol=\"worldwind\",code=\"400\"} 1"))
+      << m.body;
+  EXPECT_TRUE(hasLine(m.body, "tellus_http_requests_total{protocol=\"wms\",code=\"413\"} 1"))
+      << m.body;
+  EXPECT_TRUE(hasLine(m.body, "tellus_http_requests_total{protocol=\"static\",code=\"431\"} 1"))
+      << m.body;
+  EXPECT_TRUE(hasLine(m.body,
+                      "tellus_http_requests_total{protocol=\"other\",code=\"429\"} " +
+                          std::to_string(limited)))
+      << m.body;
+  EXPECT_EQ(up.requests(), 0u);
+}
+
+// An upstream error text with a server path, a URL with user:password and API keys: no endpoint
+// may echo any of it, in any form of error.
+TEST(ProxyIntegration, NoEndpointEchoesTheUpstreamsSecrets) {
+  test::FakeUpstream up([](const test::FakeRequest&) {
+    return test::FakeReply::ok(
+        "<?xml version=\"1.0\"?><ServiceExceptionReport><ServiceException>msWMSLoadGetMapParams: "
+        "cannot open /srv/maps/secret-world.map via http://admin:hunter2@tiles.internal:8080/x "
+        "(apikey=SECRET123, db admin:pw42@db.internal, Authorization: Bearer TOKEN42)"
+        "</ServiceException></ServiceExceptionReport>",
+        "text/xml");
+  });
+  Proxy p(up.url("/wms"));
+  const std::vector<std::string> targets{
+      "/wwtile?T=sat&L=0&X=0&Y=0",
+      "/tiles/sat/0/1/1_1.jpg",
+      kWms130,
+      kWms130 + "&EXCEPTIONS=XML",
+      getMap("sat", "2,-16,16,-2", 200, 200, "image/png"),
+      "/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.1.1&LAYERS=sat&STYLES=&SRS=EPSG:4326"
+      "&BBOX=-108,-90,-72,-54&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg"};
+  for (const auto& target : targets) {
+    const auto r = p.get(target);
+    for (const char* secret : {"secret-world",
+                               "/srv/",
+                               "hunter2",
+                               "tiles.internal",
+                               "SECRET123",
+                               "pw42",
+                               "db.internal",
+                               "TOKEN42"}) {
+      EXPECT_EQ(r.body.find(secret), std::string::npos)
+          << target << " echoes '" << secret << "': " << r.body;
+    }
+    EXPECT_FALSE(r.body.empty()) << target; // an error was said, only without the secrets
+  }
+  EXPECT_EQ(*p.cache->totalBytes(), 0);
+}
+
+// A connection the upstream drops or resets, a 5xx, a timeout: temporary failures, answered 503
+// with Retry-After on every endpoint, never "absent" (404, an empty map), and never cached.
+TEST(ProxyIntegration, AnUpstreamResetIsATemporaryFailureOnEveryEndpoint) {
+  std::atomic<int> mode{0};
+  test::FakeUpstream up([&](const test::FakeRequest& r) {
+    test::FakeReply reply = tileReply(r);
+    reply.closeWithoutResponse = mode == 0;
+    reply.resetWithoutResponse = mode == 1;
+    reply.hangForever = mode == 3;
+    if (mode == 2) return test::FakeReply::withStatus(502, "upstream's proxy says no");
+    return reply;
+  });
+  auto policy = Proxy::fastPolicy();
+  policy.timeout = 400ms;            // mode 3 hangs: two attempts of this each
+  policy.failureThreshold = 1000000; // the breaker stays closed: each request meets the fault
+  Proxy p(up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, policy);
+  const std::vector<std::string> targets{
+      "/wwtile?T=sat&L=1&X=3&Y=2",
+      "/tiles/sat/1/4/4_5.jpg",
+      kWms130,                                                   // one tile: the cached file path
+      getMap("sat", "-170,-80,-150,-60", 256, 256, "image/png"), // composed from tiles
+      getMap("sat", "-170,-80,-150,-60", 256, 256, "image/png", "&EXCEPTIONS=INIMAGE")};
+  for (int m = 0; m < 4; ++m) {
+    mode = m;
+    for (const auto& target : targets) {
+      const auto r = p.get(target);
+      EXPECT_EQ(r.status, 503) << "mode " << m << " " << target << "\n" << r.body.substr(0, 300);
+      EXPECT_GE(std::atoi(r.header("retry-after").c_str()), 1) << "mode " << m << " " << target;
+      EXPECT_EQ(r.header("cache-control"), "no-store") << "mode " << m << " " << target;
+    }
+  }
+  EXPECT_EQ(*p.cache->totalBytes(), 0);
+  // Nothing was remembered as absent: once the upstream is back, every tile comes.
+  mode = 4;
+  for (const auto& target : targets) {
+    const auto r = p.get(target);
+    EXPECT_EQ(r.status, 200) << target << "\n" << r.body.substr(0, 300);
+  }
+  // Only a real "no such tile" is 404: the upstream's 404 or 204, or a key outside the grid.
+  test::FakeUpstream empty(
+      [](const test::FakeRequest&) { return test::FakeReply::withStatus(204); });
+  Proxy q(empty.url("/wms"));
+  EXPECT_EQ(q.get("/wwtile?T=sat&L=1&X=3&Y=2").status, 404);
+  EXPECT_EQ(q.get("/wwtile?T=sat&L=0&X=10&Y=0").status, 404);
+}
+
+// A redirect to another origin is refused by default: the tile is an upstream failure, nothing is
+// cached, and the other origin never sees the configured API key.
+TEST(ProxyIntegration, ARedirectToAnotherOriginIsRefusedAndNeverCached) {
+  test::FakeUpstream elsewhere(tileReply);
+  test::FakeUpstream up([&](const test::FakeRequest& r) {
+    auto reply = test::FakeReply::withStatus(302);
+    reply.headers.emplace_back("Location", elsewhere.url(r.target));
+    return reply;
+  });
+  auto policy = Proxy::fastPolicy();
+  policy.headers = {{"X-Api-Key", "SECRET-KEY"}};
+  {
+    Proxy p(up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, policy);
+    const auto r = p.get("/wwtile?T=sat&L=0&X=0&Y=0");
+    EXPECT_EQ(r.status, 502) << r.body;
+    EXPECT_EQ(elsewhere.requests(), 0u);
+    EXPECT_EQ(*p.cache->totalBytes(), 0);
+    EXPECT_EQ(p.get("/wwtile?T=sat&L=0&X=0&Y=0").status, 502) << "not remembered as anything";
+  }
+  policy.redirects = UpstreamPolicy::Redirects::Any;
+  Proxy p(up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, policy);
+  EXPECT_EQ(p.get("/wwtile?T=sat&L=0&X=0&Y=0").status, 200);
+  ASSERT_EQ(elsewhere.requests(), 1u);
+  EXPECT_EQ(elsewhere.received().at(0).header("x-api-key"), "");
+  EXPECT_EQ(up.received().back().header("x-api-key"), "SECRET-KEY");
+}
+
+namespace {
+
+/** A clock the test moves by hand, for the fetch budget. */
+struct ManualClock {
+  std::shared_ptr<std::atomic<std::int64_t>> ms = std::make_shared<std::atomic<std::int64_t>>(0);
+  FetchBudget::Clock clock() const {
+    return [ms = ms] {
+      return std::chrono::steady_clock::time_point(std::chrono::milliseconds(ms->load()));
+    };
+  }
+  void advance(std::chrono::milliseconds d) { *ms += d.count(); }
+};
+
+} // namespace
+
+// A client past its budget of upstream fetches gets 429 (an OGC exception with status 429 on
+// /wms) with Retry-After, while what is cached is still served, and /metrics counts it.
+TEST(ProxyIntegration, TheFetchBudgetRefusesPastItAndServesTheCache) {
+  test::FakeUpstream up(tileReply);
+  ManualClock t;
+  FrontEndOptions fo;
+  fo.fetchesPerClientPerMinute = 3; // three at once, then one every 20 s
+  fo.clock = t.clock();
+  Proxy p(up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, Proxy::fastPolicy(), "upsat", fo);
+  for (int x = 0; x < 3; ++x)
+    ASSERT_EQ(p.get("/wwtile?T=sat&L=1&X=" + std::to_string(x) + "&Y=0").status, 200) << x;
+  const auto refused = p.get("/wwtile?T=sat&L=1&X=3&Y=0");
+  EXPECT_EQ(refused.status, 429) << refused.body;
+  EXPECT_EQ(refused.header("retry-after"), "20");
+  EXPECT_EQ(refused.header("cache-control"), "no-store");
+  EXPECT_EQ(p.get("/tiles/sat/1/1/1_5.jpg").status, 429);
+  // Cached tiles stay served.
+  const auto hit = p.get("/tiles/sat/1/0/0_0.jpg");
+  EXPECT_EQ(hit.status, 200);
+  EXPECT_EQ(hit.header("x-cache"), "HIT");
+  // /wms: an OGC exception with the status 429, for one tile and for a composed map.
+  const auto wms = p.get(kWms130);
+  EXPECT_EQ(wms.status, 429);
+  EXPECT_NE(wms.body.find("ServiceException"), std::string::npos) << wms.body;
+  EXPECT_EQ(wms.header("retry-after"), "20");
+  const auto composed = p.get(getMap("sat", "-110,2,-96,16", 200, 200, "image/png"));
+  EXPECT_EQ(composed.status, 429) << composed.body.substr(0, 300);
+  EXPECT_EQ(up.requests(), 3u);
+  // A minute's share later, one more fetch.
+  t.advance(20s);
+  EXPECT_EQ(p.get("/wwtile?T=sat&L=1&X=3&Y=0").status, 200);
+  EXPECT_EQ(p.get("/wwtile?T=sat&L=1&X=4&Y=0").status, 429);
+  const auto m = p.get("/metrics");
+  EXPECT_TRUE(hasLine(m.body, "tellus_client_fetch_budget_per_minute 3")) << m.body;
+  const auto count = [&](const std::string& name) {
+    const auto at = m.body.find("\n" + name + " ");
+    return at == std::string::npos ? -1 : std::stoll(m.body.substr(at + name.size() + 2));
+  };
+  // Four requests of one tile each, and the composed map's tiles.
+  EXPECT_GE(count("tellus_tiles_total{layer=\"sat\",result=\"refused\"}"), 5) << m.body;
+  EXPECT_EQ(count("tellus_tiles_total{layer=\"sat\",result=\"refused\"}"),
+            count("tellus_client_fetch_budget_refused_total"))
+      << m.body;
+  EXPECT_TRUE(hasLine(m.body, "tellus_http_requests_total{protocol=\"worldwind\",code=\"429\"} 2"))
+      << m.body;
+  EXPECT_EQ(up.requests(), 4u);
 }

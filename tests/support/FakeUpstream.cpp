@@ -318,6 +318,12 @@ bool FakeUpstream::answer(int fd,
                           const FakeReply& reply,
                           const std::function<void()>& beforeLastByte) {
   if (reply.closeWithoutResponse) return false;
+  if (reply.resetWithoutResponse) {
+    // Linger on with a zero timeout: close() sends RST instead of FIN.
+    const linger hard{1, 0};
+    ::setsockopt(fd, SOL_SOCKET, SO_LINGER, &hard, sizeof hard);
+    return false;
+  }
   if (reply.delayBeforeHeaders.count() > 0 && !pause(reply.delayBeforeHeaders)) return false;
   if (reply.hangForever) {
     waitFor(-1, 0, -1); // until stop()

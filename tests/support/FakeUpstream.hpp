@@ -1,6 +1,6 @@
 #pragma once
 // A scriptable HTTP/1.1 server on 127.0.0.1 for fetcher tests: keep-alive, request counting, and
-// faults on demand (delays, drip-fed bodies, truncation, dropped connections, hangs).
+// faults on demand (delays, drip-fed bodies, truncation, dropped and reset connections, hangs).
 
 #include <chrono>
 #include <cstddef>
@@ -37,6 +37,7 @@ struct FakeReply {
   bool chunked = false;              ///< Transfer-Encoding: chunked instead of Content-Length
   bool closeAfter = false;           ///< "Connection: close" and close after the reply
   bool closeWithoutResponse = false; ///< read the request, then close
+  bool resetWithoutResponse = false; ///< read the request, then reset the connection (RST)
   bool hangForever = false;          ///< read the request, then wait until the server stops
 
   static FakeReply ok(std::string body, std::string contentType = "application/octet-stream") {

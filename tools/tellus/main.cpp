@@ -814,6 +814,10 @@ std::pair<std::vector<UpstreamSpec>, std::vector<LayerSpec>> proxySpecs(const Co
     s.policy.openInterval = u.openInterval;
     s.policy.maxRetryAfterWait = u.maxRetryAfterWait;
     s.policy.headers = u.headers;
+    s.policy.redirects = u.redirects == RedirectPolicy::Any ? UpstreamPolicy::Redirects::Any
+                         : u.redirects == RedirectPolicy::None
+                             ? UpstreamPolicy::Redirects::None
+                             : UpstreamPolicy::Redirects::SameOrigin;
     ups.push_back(std::move(s));
   }
   std::vector<LayerSpec> layers;
@@ -919,6 +923,7 @@ int cmdServe(const Args& a) {
   fo.composeThreads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   fo.limits.maxHeight = server.limits.maxHeight;
   fo.maxParamBytes = server.limits.maxParamBytes;
+  fo.fetchesPerClientPerMinute = server.limits.fetchesPerClientPerMinute;
   ProxyFrontEnd front(**tiles, fo);
   HttpServerOptions ho;
   ho.host = server.listenHost;

@@ -43,8 +43,11 @@ struct ServerLimits {
   std::chrono::milliseconds requestTimeout{10'000};   ///< to receive a whole request
   std::chrono::milliseconds keepaliveTimeout{60'000}; ///< idle keep-alive; 0 = close after each
   double requestsPerSecond = 0.0;                     ///< per client address; 0 = unlimited
-  std::int64_t maxMapPixels = 4096LL * 4096LL;        ///< WIDTH x HEIGHT of a composed GetMap
-  std::int32_t maxTilesPerMap = 256; ///< tiles one composed GetMap may read (all layers)
+  /// Upstream fetches one client address may cause per minute (a minute's worth at once, then
+  /// refilled evenly); past it 429 with Retry-After. 0 = unlimited.
+  double fetchesPerClientPerMinute = 600.0;
+  std::int64_t maxMapPixels = 4096LL * 4096LL; ///< WIDTH x HEIGHT of a composed GetMap
+  std::int32_t maxTilesPerMap = 256;           ///< tiles one composed GetMap may read (all layers)
   /// Bytes of decoded tiles kept between composed maps (0: none).
   std::uint64_t decodedTileCache = 32ULL << 20;
 };
@@ -148,6 +151,13 @@ struct CacheSettings {
   std::uint64_t sizeLimitBytes = 0; ///< 0 = unlimited
 };
 
+/** YAML `upstreams[].redirects`: which redirects of an upstream are followed. */
+enum class RedirectPolicy {
+  SameOrigin, ///< within the origin (scheme, host, port) of the upstream's URL only
+  Any,        ///< to any http(s) URL (configured headers still go to the upstream's origin only)
+  None,       ///< none: a redirect fails the request
+};
+
 /** One entry of YAML `upstreams`: where tiles come from. */
 struct UpstreamConfig {
   enum class Type {
@@ -173,6 +183,7 @@ struct UpstreamConfig {
   int metaTiles = 4;
   int failureThreshold = 5; ///< consecutive failures that open the circuit breaker
   std::vector<std::pair<std::string, std::string>> headers; ///< sent with every request, in order
+  RedirectPolicy redirects = RedirectPolicy::SameOrigin;    ///< redirects followed (at most 5 hops)
 };
 
 enum class LayerKind { Imagery, Elevation };

@@ -35,7 +35,16 @@ struct UpstreamPolicy {
   /// for the time asked (at most an hour): fetches meanwhile fail with Throttled, no network.
   std::chrono::milliseconds maxRetryAfterWait{10000};
   std::size_t maxBodyBytes = 64 << 20;
-  std::vector<std::pair<std::string, std::string>> headers; ///< sent with every request
+  /// Sent with every request to the upstream's own origin (the scheme, host and port of the URL
+  /// asked), never to another one a redirect leads to.
+  std::vector<std::pair<std::string, std::string>> headers;
+  /// Redirects (301, 302, 303, 307, 308 with a Location) are followed by the fetcher itself:
+  /// within the origin of the URL asked only (SameOrigin), to any http(s) URL (Any), or not at all
+  /// (None). A redirect refused, or more than maxRedirects of them, fails the fetch with
+  /// FetchErrc::Redirect.
+  enum class Redirects : std::uint8_t { SameOrigin, Any, None };
+  Redirects redirects = Redirects::SameOrigin;
+  int maxRedirects = 5;
 };
 
 struct FetchRequest {
@@ -56,6 +65,8 @@ struct FetchResponse {
   std::string expires;
   int attempts = 0;
   std::chrono::milliseconds elapsed{0}; ///< from fetch() to completion, retries included
+  std::string url;   ///< where the answer came from: the URL asked, or where redirects led
+  int redirects = 0; ///< redirects followed to get there
 };
 
 enum class FetchErrc {
@@ -67,6 +78,7 @@ enum class FetchErrc {
   TooLarge,    ///< the body exceeds UpstreamPolicy::maxBodyBytes (not retried)
   Cancelled,   ///< the fetcher was destroyed first
   Throttled,   ///< the upstream asked for a pause (Retry-After) that has not ended: no network
+  Redirect,    ///< a redirect the policy refuses (UpstreamPolicy::redirects), or too many
   Unknown      ///< bad URL, unsupported protocol, invalid header, internal failure
 };
 
@@ -85,6 +97,11 @@ std::optional<std::chrono::milliseconds> parseRetryAfter(std::string_view value,
                                                          std::chrono::system_clock::time_point now);
 
 enum class BreakerState { Closed, Open, HalfOpen };
+
+/** "scheme://host:port" of an http(s) URL (scheme and host in lower case, the scheme's default
+ * port filled in); nullopt when it cannot be parsed. Two URLs are of one origin when these agree.
+ */
+std::optional<std::string> urlOrigin(std::string_view url);
 
 /** A short name for logs: "timeout", "connect", "circuit-open", ... */
 const char* toString(FetchErrc code) noexcept;
@@ -128,6 +145,9 @@ public:
   /** False while the breaker is open and its interval has not passed (fetches fail with
    * CircuitOpen); true when closed or when a half-open probe may go or is going. */
   bool reachable(const std::string& upstream) const;
+  /** How long fetches from this upstream will fail without touching the network: the rest of an
+   * open breaker's interval or of a pause the upstream asked for (Retry-After); 0 when neither. */
+  std::chrono::milliseconds unavailableFor(const std::string& upstream) const;
 
   /// Upper bounds (seconds) of the latency histogram buckets; the last bucket is +Inf.
   static constexpr std::array<double, 11> kLatencyBounds{
@@ -143,7 +163,7 @@ public:
     std::uint64_t latencyCount = 0;
     double latencySumSeconds = 0.0;
     /// Failed fetches by FetchErrc (index = the enum's value).
-    std::array<std::uint64_t, 9> errorsByCode{};
+    std::array<std::uint64_t, 10> errorsByCode{};
     BreakerState breaker = BreakerState::Closed;
   };
   Stats stats(const std::string& upstream) const;

@@ -7,7 +7,10 @@
  * A fixed pool of threads runs one event loop; each connection lives on its own strand. A handler
  * gets the parsed request and a Responder it may call later from any thread (the proxy answers
  * misses after an upstream fetch without ever blocking the loop). Limits: header bytes, request
- * time (slow clients are cut off), keep-alive idle time, connection count.
+ * time (slow clients are cut off), keep-alive idle time, connection count. GET, HEAD and OPTIONS
+ * are served; what the server refuses (another method, a malformed request, oversized headers or
+ * body, a client over its rate) reaches the handler too, flagged with an HttpRefusal, so that it
+ * is answered, counted and logged in one place.
  */
 
 #include <chrono>
@@ -24,6 +27,20 @@
 
 namespace tellus {
 
+/** Why the server refuses a request before it is served; the handler answers it (the front end
+ * makes the status and the body, counts it and logs it like any other request). */
+enum class HttpRefusal : std::uint8_t {
+  None,             ///< a request to serve
+  BadRequest,       ///< malformed: request line (a raw space or control byte in the target),
+                    ///< header or body framing; the connection closes after the answer
+  MethodNotAllowed, ///< a method other than GET, HEAD and OPTIONS
+  BodyTooLarge,     ///< a body over 8 KiB; the connection closes after the answer
+  TooManyRequests,  ///< over HttpServerOptions::requestsPerSecond for its address
+  HeaderTooLarge,   ///< request line and headers over maxHeaderBytes; closes after the answer
+};
+/** "bad-request", "method-not-allowed", ... ("none" for None). */
+const char* toString(HttpRefusal refusal) noexcept;
+
 struct HttpRequest {
   std::string method; ///< "GET", "HEAD", ...
   std::string target; ///< as sent: path and query
@@ -31,6 +48,10 @@ struct HttpRequest {
   std::string query;  ///< raw query string without '?', "" if none
   std::vector<std::pair<std::string, std::string>> headers; ///< names in lower case
   std::string remoteAddress;
+  /// Not None: the server refuses this request and the handler must answer it with a 4xx (any
+  /// other answer is replaced by a 500). method and target are what could be read of the request
+  /// line ("" when nothing could), headers only when they were parsed.
+  HttpRefusal refusal = HttpRefusal::None;
 
   /** First header with this lower-case name, or "". */
   std::string_view header(std::string_view lowerName) const noexcept;
@@ -55,7 +76,8 @@ struct HttpResponse {
 
 /** Call exactly once, from any thread. */
 using Responder = std::function<void(HttpResponse&&)>;
-/** Must not throw; may keep the Responder and call it later. */
+/** Must not throw; may keep the Responder and call it later. Also called for refused requests
+ * (HttpRequest::refusal), which it must answer with a 4xx. */
 using HttpHandler = std::function<void(HttpRequest&&, Responder)>;
 
 struct HttpServerOptions {
@@ -68,7 +90,7 @@ struct HttpServerOptions {
   std::chrono::milliseconds keepAliveTimeout{60000};
   std::string serverName = "tellus";
   /// Per client address: sustained requests per second (0 = unlimited) with a burst of twice that;
-  /// requests beyond it get 429 with Retry-After, before any handler runs.
+  /// requests beyond it reach the handler as HttpRefusal::TooManyRequests.
   double requestsPerSecond = 0;
 };
 

@@ -3,8 +3,8 @@
  * @file Metrics.hpp
  * @brief Counters of `tellus serve` and their Prometheus text exposition (format 0.0.4) at
  * `/metrics`: requests by protocol and status, bytes, in-flight, tile outcomes per layer (hit,
- * miss, stale, offline, absent, error), upstream requests, errors by kind, latency histograms,
- * breaker state, and the cache's size.
+ * miss, stale, offline, absent, error, refused), upstream requests, errors by kind, latency
+ * histograms, breaker state, the cache's size and the per-client fetch budget.
  *
  * Counting is lock-free (relaxed atomics in fixed arrays): the hit path pays a few increments.
  */
@@ -27,9 +27,10 @@ enum class Protocol : std::uint8_t { Wms, WorldWind, Static, Page, Metrics, Othe
 inline constexpr std::size_t kProtocolCount = 6;
 const char* toString(Protocol p) noexcept;
 
-/** What a tile request came to (the X-Cache header, plus the two non-tile answers). */
-enum class TileOutcome : std::uint8_t { Hit, Miss, Stale, Offline, Absent, Error };
-inline constexpr std::size_t kTileOutcomeCount = 6;
+/** What a tile request came to (the X-Cache header, plus the non-tile answers; Refused: the
+ * client's budget of upstream fetches was spent). */
+enum class TileOutcome : std::uint8_t { Hit, Miss, Stale, Offline, Absent, Error, Refused };
+inline constexpr std::size_t kTileOutcomeCount = 7;
 const char* toString(TileOutcome o) noexcept;
 
 /** The cache as /metrics shows it: whether it stores tiles, how many fetched tiles it refused for
@@ -39,6 +40,13 @@ struct CacheHealthMetrics {
   std::uint64_t refusedStores = 0;
   std::optional<std::uint64_t> freeBytes;
   std::optional<std::uint64_t> freeInodes;
+};
+
+/** The per-client budget of upstream fetches (FetchBudget) as /metrics shows it. */
+struct FetchBudgetMetrics {
+  double perMinute = 0;      ///< 0: unlimited
+  std::uint64_t refused = 0; ///< fetches refused, all clients
+  std::size_t clients = 0;   ///< client addresses with a budget held now
 };
 
 /** One upstream as /metrics shows it. */
@@ -59,11 +67,12 @@ public:
    * the composer's decoded-tile cache. */
   void composedTiles(std::uint64_t decoded, std::uint64_t kept) noexcept;
 
-  /** The exposition: these counters plus the upstreams' and the cache's figures, and the bytes
-   * held by the decoded-tile cache. */
+  /** The exposition: these counters plus the upstreams' and the cache's figures, the bytes
+   * held by the decoded-tile cache and the per-client fetch budget. */
   std::string render(const std::vector<UpstreamMetrics>& upstreams,
                      std::optional<std::int64_t> cacheBytes,
                      std::uint64_t decodedTileCacheBytes = 0,
+                     const FetchBudgetMetrics& budget = {},
                      const std::optional<CacheHealthMetrics>& cacheHealth = std::nullopt) const;
 
   /** HTTP statuses counted one by one; any other is counted as "other". */

@@ -45,10 +45,15 @@ formatWmsException(WmsVersion version, const OgcException& exception, bool httpS
 int wmsExceptionHttpStatus(std::string_view code) noexcept;
 
 /**
- * @brief Removes what must not leak to a client: URLs (`scheme://...`, replaced by "[url]") and
- * absolute file-system paths (`/...`, `~/...`, `C:\...`, replaced by "[path]"), up to the next
- * whitespace, quote or closing bracket; trailing sentence punctuation is kept. A '/' inside a word
- * ("image/png", "1/2") is not a path.
+ * @brief Removes what must not leak to a client: URLs (`scheme://...`, and `user:password@host`
+ * without a scheme, replaced by "[url]"), absolute file-system paths (`/...`, `~/...`, `C:\...`,
+ * replaced by "[path]"), up to the next whitespace, quote or closing bracket (trailing sentence
+ * punctuation is kept; a '/' inside a word, "image/png" or "1/2", is not a path), and the values of
+ * credentials: `name=value` and `name: value` whose name says it is a secret (api_key, apikey,
+ * X-Api-Key, token, access_token, password, secret, signature, sig, auth, session, ...) and the
+ * credentials after `Bearer`, `Basic` and `Digest`, replaced by "[redacted]" up to the next `&`,
+ * `,`, `;`, whitespace or quote. The one redaction of every error a client sees (the front end
+ * applies it to all of them).
  */
 std::string sanitizeForClient(std::string_view message);
 

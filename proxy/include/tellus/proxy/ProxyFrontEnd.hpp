@@ -7,6 +7,7 @@
  * caching headers and OGC exception bodies are made.
  */
 
+#include <tellus/proxy/FetchBudget.hpp>
 #include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/TileService.hpp>
 #include <tellus/proxy/Wms.hpp>
@@ -37,6 +38,11 @@ struct FrontEndOptions {
   std::size_t maxParamBytes = 2048;
   std::size_t maxQueryBytes = 16384;
   std::string updateSequence; ///< capabilities UpdateSequence ("" = derived from the start time)
+  /** Upstream fetches one client address may cause per minute (FetchBudget: a minute's worth at
+   * once, refilled evenly); past it a request that needs a fetch gets 429 with Retry-After (an OGC
+   * exception with status 429 for /wms) while cached tiles stay served. 0 = unlimited. */
+  double fetchesPerClientPerMinute = 600;
+  FetchBudget::Clock clock; ///< the budget's clock; empty: std::chrono::steady_clock (tests inject)
 };
 
 class ProxyFrontEnd {
@@ -44,7 +50,8 @@ public:
   ProxyFrontEnd(TileService& tiles, FrontEndOptions options);
   ~ProxyFrontEnd();
 
-  /** The HttpHandler: never throws, answers exactly once. */
+  /** The HttpHandler: never throws, answers exactly once. Refused requests
+   * (HttpRequest::refusal) are answered here too, counted and logged like any other. */
   void handle(HttpRequest&& request, Responder respond);
 
 private:

@@ -11,6 +11,7 @@
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/cache/TileSource.hpp>
+#include <tellus/proxy/FetchBudget.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/Metrics.hpp>
 
@@ -66,8 +67,19 @@ struct LayerSpec {
 enum class TileOrigin { Hit, Miss, Stale, Offline };
 
 struct TileAnswer {
+  /// Absent is only ever "there is no such tile": the upstream said so (404 or 204), the key lies
+  /// outside the layer's grid, or the proxy runs offline (`--offline`). A failure to get a tile,
+  /// however temporary, is an Error.
   enum class Kind { Tile, Absent, Error };
+  /// Why an Error (what the front end answers): Bad, the upstream's answer is not a tile or a tile
+  /// could not be made (502); Unavailable, the upstream could not be reached, reset or closed the
+  /// connection, timed out, failed with 5xx or asked for a pause, or its circuit breaker is open
+  /// (503); OverBudget, the client's budget of upstream fetches is spent and no upstream was asked
+  /// (429).
+  enum class Failure : std::uint8_t { Bad, Unavailable, OverBudget };
   Kind kind = Kind::Error;
+  Failure failure = Failure::Bad;
+  std::int64_t retryAfterSeconds = 0; ///< Unavailable, OverBudget: when to try again (>= 1)
   TileOrigin origin = TileOrigin::Miss;
   std::vector<std::byte> bytes;         ///< Tile: the bytes, unless `file` holds them
   std::shared_ptr<const TileFile> file; ///< Tile from the cache: its open file (bytes empty)
@@ -109,11 +121,15 @@ public:
   const TileGrid* grid(std::string_view layer) const noexcept;
 
   /** One tile; `done` runs exactly once, possibly on another thread, possibly before return.
-   * `time` must already be validated ("" = no time). */
+   * `time` must already be validated ("" = no time). When the request would start a fetch from a
+   * remote upstream (a miss or an expired tile that no flight is fetching yet), `gate`'s budget is
+   * asked first: a refusal answers an expired tile stale, anything else an Error with
+   * Failure::OverBudget. */
   void getTile(std::string_view layer,
                std::string_view time,
                const TileKey& key,
-               std::function<void(TileAnswer&&)> done);
+               std::function<void(TileAnswer&&)> done,
+               FetchGate gate = {});
 
   /**
    * Several tiles (normally of one metatile: one level, close together), each answered
