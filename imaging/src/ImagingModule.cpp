@@ -89,6 +89,12 @@ std::int32_t encodeImage(const char* format,
                     OIIO::TypeDesc::UINT8,
                     out);
     }
+    if (f == "tiff") { // a picture as TIFF: 8-bit grey, RGB or RGBA, zip-compressed
+      OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);
+      spec.attribute("compression", "zip");
+      if (channels == 4) spec.alpha_channel = 3;
+      return encode("tiff", spec, pixels, OIIO::TypeDesc::UINT8, out);
+    }
     if (f != "jpeg") return fail(out, "cannot encode " + std::string(f));
     if (channels == 4) return fail(out, "JPEG has no alpha channel");
     OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);

@@ -21,6 +21,15 @@ std::expected<std::vector<std::byte>, std::string> encodeImage(std::string_view 
   if (width <= 0 || height <= 0 || (channels != 1 && channels != 3 && channels != 4)) {
     return std::unexpected("bad image shape");
   }
+  if (mimeType == "image/tiff") { // a picture as TIFF: through the imaging module
+    auto api = imaging::table();
+    if (!api) return std::unexpected(api.error());
+    imaging::BytesSink out;
+    if ((*api)->encodeImage("tiff", width, height, channels, pixels, out.get()) !=
+        TELLUS_IMAGING_OK)
+      return std::unexpected(out.error());
+    return std::move(out.bytes);
+  }
   const bool png = mimeType == "image/png";
   if (!png && mimeType != "image/jpeg")
     return std::unexpected("cannot encode " + std::string(mimeType));
@@ -90,7 +99,8 @@ std::expected<std::vector<std::byte>, std::string> blankMap(MapFormat format,
         format == MapFormat::Png ? "image/png" : toString(format), width, height, values.data());
   }
   const bool alpha = format == MapFormat::Png32 ||
-                     (transparent && (format == MapFormat::Png || format == MapFormat::Png8));
+                     (transparent && (format == MapFormat::Png || format == MapFormat::Png8 ||
+                                      format == MapFormat::Tiff));
   const std::uint32_t c = bgcolor.value_or(0xFFFFFF);
   const std::uint8_t rgba[4] = {static_cast<std::uint8_t>(c >> 16),
                                 static_cast<std::uint8_t>(c >> 8),
@@ -119,7 +129,9 @@ std::expected<std::vector<std::byte>, std::string> blankMap(MapFormat format,
     for (std::size_t i = 0; i < n; ++i)
       std::memmove(&px[i * 3], &px[i * 4], 3);
   }
-  return encodeImage(format == MapFormat::Jpeg ? "image/jpeg" : "image/png",
+  return encodeImage(format == MapFormat::Jpeg   ? "image/jpeg"
+                     : format == MapFormat::Tiff ? "image/tiff"
+                                                 : "image/png",
                      width,
                      height,
                      alpha ? 4 : 3,

@@ -266,9 +266,11 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
     // Opaque output (JPEG, 24-bit PNG, PNG without TRANSPARENT) composes on an RGB canvas; a JPEG
     // map of one opaque layer of 4:2:0 JPEG tiles on Y, Cb and Cr planes (see JpegRaw.hpp).
     const bool png8 = r.format == MapFormat::Png8;
-    const int cc =
-        r.format == MapFormat::Png32 || (r.transparent && (r.format == MapFormat::Png || png8)) ? 4
-                                                                                                : 3;
+    const int cc = r.format == MapFormat::Png32 ||
+                           (r.transparent &&
+                            (r.format == MapFormat::Png || png8 || r.format == MapFormat::Tiff))
+                       ? 4
+                       : 3;
     std::vector<std::uint8_t>& canvas = buffers.canvas;
     std::vector<std::int16_t> heights;
     // One layer of the other kind than the map, before it is drawn over the map (see
@@ -533,7 +535,9 @@ void MapComposer::finish(const std::shared_ptr<Job>& job) {
         const PalettedImage p = quantize(canvas.data(), cc, pixels);
         encoded = codecs::encodePngPalette(r.width, r.height, p.palette, p.indices.data());
       } else {
-        encoded = encodeImage(r.format == MapFormat::Jpeg ? "image/jpeg" : "image/png",
+        encoded = encodeImage(r.format == MapFormat::Jpeg   ? "image/jpeg"
+                              : r.format == MapFormat::Tiff ? "image/tiff"
+                                                            : "image/png",
                               r.width,
                               r.height,
                               cc,

@@ -579,8 +579,8 @@ std::string_view contentTypeOf(MapFormat format) noexcept {
 }
 
 bool mapIsHeights(MapFormat format, bool everyLayerIsElevation) noexcept {
-  return format == MapFormat::Bil16 || format == MapFormat::Tiff ||
-         (format == MapFormat::Png && everyLayerIsElevation);
+  return format == MapFormat::Bil16 ||
+         ((format == MapFormat::Png || format == MapFormat::Tiff) && everyLayerIsElevation);
 }
 
 std::string_view toString(WmsVersion version) noexcept {

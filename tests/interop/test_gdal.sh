@@ -108,4 +108,15 @@ grey = lambda p: len(p) >= 3 and max(p[:3]) - min(p[:3]) <= 4
 sys.exit(0 if grey(high) and grey(deep) and high[0] > deep[0] + 60 else 1)
 PY
 
+# image/tiff is what the layers make it: Int16 heights for the elevation layer alone, an 8-bit
+# picture for imagery (RGBA with TRANSPARENT). GDAL's own TIFF reader judges the files.
+map="$base/wms?SERVICE=WMS&VERSION=1.1.1&REQUEST=GetMap&STYLES=&SRS=EPSG:4326&BBOX=60,10,100,40&WIDTH=80&HEIGHT=60&FORMAT=image/tiff"
+curl -sf -o "$work/heights.tif" "$map&LAYERS=etopo" || fail "GetMap etopo as image/tiff"
+gdalinfo "$work/heights.tif" | grep -q "Band 1 Block=.* Type=Int16" || fail "heights as TIFF: $(gdalinfo "$work/heights.tif")"
+[ "$(gdalinfo "$work/heights.tif" | grep -c '^Band ')" = 1 ] || fail "heights as TIFF: more than one band"
+curl -sf -o "$work/picture.tif" "$map&LAYERS=bluemarble&TRANSPARENT=TRUE" || fail "GetMap bluemarble as image/tiff"
+info=$(gdalinfo "$work/picture.tif")
+[ "$(echo "$info" | grep -c '^Band .* Type=Byte')" = 4 ] || fail "imagery as TIFF: not 4 Byte bands: $info"
+echo "$info" | grep -q "ColorInterp=Alpha" || fail "imagery as TIFF with TRANSPARENT: no alpha band: $info"
+
 echo "gdal interop: all checks passed"

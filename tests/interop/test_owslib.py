@@ -99,6 +99,11 @@ def main():
                               format="application/bil16").read()
             if len(body) != 64 * 32 * 2 or max(struct.unpack("<2048h", body)) > 255:
                 fail("%s: imagery as application/bil16: %r" % (version, body[:300]))
+            # image/tiff: heights alone are Int16 heights, imagery a picture.
+            body = wms.getmap(layers=["bluemarble"], styles=[""], srs="EPSG:4326",
+                              bbox=(5, -10, 30, 10), size=(64, 32), format="image/tiff").read()
+            if body[:4] not in (b"II*\x00", b"MM\x00*"):
+                fail("%s: imagery as image/tiff: %r" % (version, body[:300]))
             # EXCEPTIONS=BLANK (each version's spelling) in 8-bit PNG: an image, never XML.
             blank = "BLANK" if version == "1.3.0" else "application/vnd.ogc.se_blank"
             body = wms.getmap(layers=["bluemarble"], styles=[""], srs="EPSG:3857",

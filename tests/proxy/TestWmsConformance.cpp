@@ -218,6 +218,13 @@ std::string checkImage(const test::HttpResult& r,
     auto img = decodeImagery(span(r.body), "image/jpeg", w, h);
     return img ? std::string() : "jpeg: " + img.error();
   }
+  if (format == MapFormat::Tiff) { // a picture: 8-bit RGB, RGBA with TRANSPARENT
+    auto img = decodeImagery(span(r.body), "image/tiff", w, h);
+    if (!img) return "tiff: " + img.error();
+    if (img->channels != (transparent ? 4 : 3))
+      return "TIFF channels " + std::to_string(img->channels);
+    return {};
+  }
   const auto png = pngHeader(r.body);
   if (!png) return "not a PNG";
   if (png->width != w || png->height != h) return "PNG size";
@@ -772,12 +779,17 @@ TEST(WmsConformanceIntegration, BlankAndInImageInEveryFormat) {
             if (exceptions.find("blank") == std::string::npos &&
                 exceptions.find("BLANK") == std::string::npos)
               continue; // INIMAGE has text on it
-            const auto img = decodeImagery(
-                span(r.body), f == MapFormat::Jpeg ? "image/jpeg" : "image/png", 64, 32);
+            const auto img = decodeImagery(span(r.body),
+                                           f == MapFormat::Jpeg   ? "image/jpeg"
+                                           : f == MapFormat::Tiff ? "image/tiff"
+                                                                  : "image/png",
+                                           64,
+                                           32);
             ASSERT_TRUE(img) << img.error();
             const std::uint8_t* px = &img->pixels[static_cast<std::size_t>(img->channels) * 100];
             const bool alpha = f == MapFormat::Png32 ||
-                               (transparent && (f == MapFormat::Png || f == MapFormat::Png8));
+                               (transparent && (f == MapFormat::Png || f == MapFormat::Png8 ||
+                                                f == MapFormat::Tiff));
             EXPECT_EQ(img->channels, alpha ? 4 : 3);
             if (alpha) {
               EXPECT_EQ(px[3], transparent ? 0 : 255);

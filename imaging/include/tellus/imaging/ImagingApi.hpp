@@ -74,8 +74,8 @@ struct TellusImagingTable {
   std::uint32_t size;       ///< sizeof(TellusImagingTable) as the module was built
 
   /**
-   * Encodes 8-bit pixels (row-major, top row first) as "jpeg" (channels 1 or 3, quality 90) or
-   * "png" (1, 3 or 4). The encoded bytes go to one allocate().
+   * Encodes 8-bit pixels (row-major, top row first) as "jpeg" (channels 1 or 3, quality 90),
+   * "png" or "tiff" (1, 3 or 4; TIFF zip-compressed). The encoded bytes go to one allocate().
    */
   std::int32_t (*encodeImage)(const char* format,
                               std::int32_t width,

@@ -69,9 +69,9 @@ inline constexpr double kMaxBboxMagnitudeDeg = 1.0e6;
 
 /**
  * The GetMap output formats tellus serves, for every layer (docs/CONFIG.md, "WMS"): pictures
- * (JPEG; PNG 24-bit, or 32-bit with TRANSPARENT=TRUE; PNG 8-bit paletted, 24-bit and 32-bit) and
- * heights (BIL16, Int16 TIFF; PNG is 16-bit heights when every layer of the map is an elevation
- * layer). Which a map is made as: mapIsHeights().
+ * (JPEG; PNG 24-bit, or 32-bit with TRANSPARENT=TRUE; PNG 8-bit paletted, 24-bit and 32-bit;
+ * 8-bit RGB(A) TIFF) and heights (BIL16; PNG is 16-bit and TIFF Int16 heights when every layer
+ * of the map is an elevation layer). Which a map is made as: mapIsHeights().
  */
 enum class MapFormat { Jpeg, Png, Png8, Png24, Png32, Bil16, Tiff };
 
@@ -87,8 +87,9 @@ std::optional<MapFormat> parseMapFormat(std::string_view format) noexcept;
 std::string_view toString(MapFormat format) noexcept;
 /** The Content-Type of a map in that format ("image/png" for every PNG). */
 std::string_view contentTypeOf(MapFormat format) noexcept;
-/** Whether a map in `format` carries heights (16-bit values) rather than a picture: BIL16 and
- * TIFF always, PNG when every layer of the map is an elevation layer. */
+/** Whether a map in `format` carries heights (16-bit values) rather than a picture: BIL16
+ * always, PNG and TIFF when every layer of the map is an elevation layer (a TIFF of imagery is
+ * a picture: an imagery layer whose tiles are TIFF is served as it is cached). */
 bool mapIsHeights(MapFormat format, bool everyLayerIsElevation) noexcept;
 
 struct GetCapabilitiesRequest {
