@@ -210,6 +210,25 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     return {true, std::nullopt};
   }
 
+  /** For the owner of a new flight: the cache lookup before the join and the join are two steps,
+   * and a flight that landed between them has stored the tile; fetching it again would be a
+   * second upstream request for one tile. Lands the flight with the cached tile when it is
+   * there and fresh now. */
+  bool landIfCachedNow(const FlightKey& fk, const std::string& folder) {
+    if (fk.dataset < 0) return false;
+    auto again = cache.openTile(fk.dataset, fk.key);
+    if (!again || again->kind != CacheLookup::Kind::Hit || again->stale) return false;
+    land(fk,
+         tile(TileOrigin::Hit,
+              {},
+              std::move(again->meta.contentType),
+              again->meta.fetchedAt,
+              folder,
+              fk.key,
+              std::move(again->file)));
+    return true;
+  }
+
   void land(const FlightKey& k, TileAnswer&& answer) {
     std::vector<Done> waiters;
     {
@@ -540,6 +559,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
       return done(overBudget(*joined.refused));
     }
     if (!joined.first) return; // someone is already fetching it
+    if (landIfCachedNow(fk, folder)) return;
     if (u.type == UpstreamSpec::Type::Local) {
       renderLocal(fk, l, g, folder, std::move(stale));
     } else {
@@ -602,7 +622,8 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
         continue;
       }
       // Missing or expired: ours to fetch unless a flight for it is already out (it answers).
-      if (join(FlightKey{id, k}, waiter(k))) owned.push_back(k);
+      if (join(FlightKey{id, k}, waiter(k)) && !landIfCachedNow(FlightKey{id, k}, folder))
+        owned.push_back(k);
     }
     if (owned.empty()) return;
     const TileBlock block = boundingBlock(owned);
