@@ -46,10 +46,10 @@ test-sanitizers: setup
 	cmake --build build-asan -j$(JOBS)
 	cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  LSAN_OPTIONS=suppressions=$(CURDIR)/tools/sanitizers/lsan.supp \
-	  ctest --output-on-failure -j$(JOBS) -LE 'gl|slow'
+	  ctest --output-on-failure -j$(JOBS) -LE 'gl|slow|interop'
 	@[ -f build-tsan/build.ninja ] || cmake --preset tsan
 	cmake --build build-tsan -j$(JOBS)
-	cd build-tsan && TSAN_OPTIONS="halt_on_error=1 suppressions=$(CURDIR)/tools/sanitizers/tsan.supp" ctest --output-on-failure -j$(JOBS) -LE 'gl|slow'
+	cd build-tsan && TSAN_OPTIONS="halt_on_error=1 suppressions=$(CURDIR)/tools/sanitizers/tsan.supp" ctest --output-on-failure -j$(JOBS) -LE 'gl|slow|interop'
 
 # libFuzzer on the request parsers (fuzz/, clang, ASan+UBSan): each target runs FUZZ_SECONDS on a
 # copy of its seeds (build-fuzz/corpus-work/<target>, which keeps what it finds between runs; the
