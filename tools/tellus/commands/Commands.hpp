@@ -8,6 +8,8 @@
 
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/cache/TileGrid.hpp>
+#include <tellus/cli/ProxyFromConfig.hpp>
+#include <tellus/cli/Values.hpp>
 #include <tellus/config/CommandLine.hpp>
 #include <tellus/config/Config.hpp>
 #include <tellus/proxy/TileService.hpp>
@@ -35,15 +37,16 @@ extern const char* const kUsage;
 
 using cli::Args;
 
-std::optional<std::pair<int, int>> parseLevels(std::string_view s);
-std::optional<Sector> parseBbox(const std::string& s);
-std::optional<std::chrono::milliseconds> parseDuration(std::string_view s);
-std::optional<std::vector<double>>
-parseNumbers(const std::string& s, std::size_t minCount, std::size_t maxCount);
-std::optional<std::pair<int, int>> parseSize(const std::string& size);
+using cli::humanBytes;
+using cli::parseBbox;
+using cli::parseDuration;
+using cli::parseLevels;
+using cli::parseNumbers;
+using cli::parseSize;
+using cli::proxySpecs;
+
 std::filesystem::path dataDir(const Args& a);
 std::string jsonString(std::string_view s);
-std::string humanBytes(std::int64_t b);
 
 struct Context {
   Config config;
@@ -52,7 +55,6 @@ struct Context {
 
 std::size_t descriptorBudget(int maxConnections);
 std::optional<Context> setUp(const Args& a, bool seeding = false, bool serving = false);
-std::pair<std::vector<UpstreamSpec>, std::vector<LayerSpec>> proxySpecs(const Config& c);
 
 int cmdSeed(const Args& a);
 int cmdCache(const Args& a);

@@ -366,8 +366,8 @@ openPlanetTiles(const Args& a, const char* cmd, planet::RendererOptions& ro) {
   }
   t.fetcher = std::make_unique<Fetcher>();
   auto [upstreams, layers] = proxySpecs(config);
-  TileServiceOptions tso;
-  tso.offline = a.flag("offline") || config.server.offline;
+  TileServiceOptions tso = cli::tileServiceOptions(config.server);
+  tso.offline = a.flag("offline") || tso.offline;
   // Tiles rendered from local rasters (a cold cache) are background work here: at the decoders'
   // priority, below the thread that draws (on llvmpipe they competed with rasterising).
   tso.workerNice = ro.decodeNice;

@@ -75,40 +75,18 @@ int cmdServe(const Args& a) {
 
   Fetcher fetcher;
   auto [upstreams, layers] = proxySpecs(ctx->config);
-  TileServiceOptions tso;
-  tso.offline = server.offline;
-  auto tiles =
-      TileService::create(*ctx->cache, fetcher, std::move(upstreams), std::move(layers), tso);
+  auto tiles = TileService::create(*ctx->cache,
+                                   fetcher,
+                                   std::move(upstreams),
+                                   std::move(layers),
+                                   cli::tileServiceOptions(server));
   if (!tiles) {
     std::fprintf(stderr, "tellus serve: %s\n", tiles.error().c_str());
     return kExitError;
   }
-  FrontEndOptions fo;
-  fo.publicUrl = server.publicUrl;
-  fo.cors = server.cors;
-  fo.exceptionsHttpStatus = server.exceptionsHttpStatus;
-  fo.offlineResponse = server.offlineResponse == OfflineResponse::Blank
-                           ? FrontEndOptions::OfflineResponse::Blank
-                           : FrontEndOptions::OfflineResponse::Exception;
-  fo.limits.maxWidth = server.limits.maxWidth;
-  fo.maxMapPixels = server.limits.maxMapPixels;
-  fo.maxTilesPerMap = static_cast<std::size_t>(server.limits.maxTilesPerMap);
-  fo.decodedTileCacheBytes = static_cast<std::size_t>(server.limits.decodedTileCache);
-  fo.jpegQuality = server.jpegQuality;
-  fo.composeThreads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-  fo.limits.maxHeight = server.limits.maxHeight;
-  fo.maxParamBytes = server.limits.maxParamBytes;
-  fo.fetchesPerClientPerMinute = server.limits.fetchesPerClientPerMinute;
-  ProxyFrontEnd front(**tiles, fo);
-  HttpServerOptions ho;
-  ho.host = server.listenHost;
-  ho.port = server.listenPort;
-  ho.maxConnections = static_cast<std::size_t>(std::max(1, server.limits.maxConnections));
-  ho.maxHeaderBytes = server.limits.maxHeaderBytes;
-  ho.requestTimeout = server.limits.requestTimeout;
-  ho.keepAliveTimeout = server.limits.keepaliveTimeout;
-  ho.requestsPerSecond = server.limits.requestsPerSecond;
-  ho.threads = server.threads;
+  const int cores = static_cast<int>(std::thread::hardware_concurrency());
+  ProxyFrontEnd front(**tiles, cli::frontEndOptions(server, cores));
+  const HttpServerOptions ho = cli::httpServerOptions(server);
   HttpServer http(ho, [&front](HttpRequest&& r, Responder respond) {
     front.handle(std::move(r), std::move(respond));
   });
