@@ -1,8 +1,9 @@
-// tellus: the composition root. Parses the command line and runs one subcommand; the commands
-// (tools/tellus/commands/, one file each) build the configuration and wire the cache, the proxy and
-// the planet together.
+// tellus: the composition root. Parses the command line against the command's options and runs
+// it; the commands (tools/tellus/commands/, one file each) wire the cache, the proxy and the
+// planet together from the configuration.
 
 #include "commands/Commands.hpp"
+#include "commands/Context.hpp"
 
 #include <tellus/config/CommandLine.hpp>
 
@@ -18,79 +19,22 @@ using namespace tellus::commands;
 
 namespace {
 
-/** The options of every command: what is not listed here is refused (exit 2) with a
- * suggestion, never ignored. */
-std::optional<cli::CommandSpec> commandSpec(std::string_view cmd) {
-  using cli::OptionKind;
-  using K = OptionKind;
-  std::vector<cli::OptionSpec> o = {{"config", K::Value}, {"cache", K::Value}, {"data", K::Value}};
-  auto add = [&](std::initializer_list<cli::OptionSpec> more) { o.insert(o.end(), more); };
-  std::size_t positional = 0;
-  if (cmd == "seed") {
-    add({{"layer", K::Value, true},
-         {"levels", K::Value},
-         {"bbox", K::Value},
-         {"dry-run", K::Flag},
-         {"time", K::Value},
-         {"concurrency", K::Value},
-         {"rate", K::Value},
-         {"retries", K::Value},
-         {"refresh", K::Flag},
-         {"meta-tiles", K::Value}});
-  } else if (cmd == "cache") {
-    // The union of the subcommands' options; checkCacheSubcommand narrows it to the one given.
-    add({{"json", K::Flag},
-         {"older-than", K::Value},
-         {"layer", K::Value},
-         {"include-pinned", K::Flag},
-         {"dry-run", K::Flag},
-         {"gpkg", K::Value},
-         {"levels", K::Value}});
-    positional = 1;
-  } else if (cmd == "serve") {
-    add({{"listen", K::Value},
-         {"threads", K::Value},
-         {"offline", K::Flag},
-         {"log-level", K::Value},
-         {"access-log", K::Value}});
-  } else if (cmd == "render" || cmd == "view" || cmd == "height") {
-    add({{"offline", K::Flag}, {"server", K::Value}, {"geoid", K::Value}});
-    if (cmd == "height") {
-      add({{"lat", K::Value}, {"lon", K::Value}, {"elevation", K::Value}, {"datum", K::Value}});
-    } else {
-      add({{"camera", K::Value},
-           {"size", K::Value},
-           {"layer", K::Value},
-           {"threshold", K::Value},
-           {"earth", K::Value},
-           {"no-terrain", K::Flag},
-           {"exaggeration", K::Value},
-           {"min-relief-px", K::Value},
-           {"sun", K::Value},
-           {"overlay", K::Value, true},
-           {"dome", K::OptionalValue},
-           {"dome-tilt", K::Value},
-           {"dome-method", K::Value}});
-    }
-    if (cmd == "render") {
-      add({{"out", K::Value},
-           {"wait-complete", K::OptionalValue},
-           {"background", K::Value},
-           {"stats", K::Value},
-           {"path", K::Value},
-           {"frames", K::Value},
-           {"fps", K::Value},
-           {"repeat", K::Value},
-           {"edge-fixing", K::Value},
-           {"mesh-size", K::Value},
-           {"upload-per-frame", K::Value},
-           {"vertices", K::Value}});
-    }
-    if (cmd == "view") add({{"exit-after", K::Value}});
-  } else {
-    return std::nullopt;
+std::optional<Command> findCommand(std::string_view name) {
+  for (const auto make :
+       {&seedCommand, &cacheCommand, &serveCommand, &renderCommand, &viewCommand, &heightCommand}) {
+    Command c = make();
+    if (c.name == name) return c;
   }
-  return cli::CommandSpec{std::string(cmd), std::move(o), positional};
+  return std::nullopt;
+}
+
+/** What the parser takes for a command: every command's --config, --cache and --data, then its
+ * own options. */
+cli::CommandSpec commandSpec(const Command& c) {
+  using K = cli::OptionKind;
+  std::vector<cli::OptionSpec> o = {{"config", K::Value}, {"cache", K::Value}, {"data", K::Value}};
+  o.insert(o.end(), c.options.begin(), c.options.end());
+  return cli::CommandSpec{std::string(c.name), std::move(o), c.maxPositional};
 }
 
 int run(int argc, char** argv) {
@@ -98,13 +42,13 @@ int run(int argc, char** argv) {
     std::fputs(kUsage, argc < 2 ? stderr : stdout);
     return argc < 2 ? kExitUsage : kExitOk;
   }
-  const std::string_view cmd = argv[1];
-  if (cmd == "--version") {
+  const std::string_view name = argv[1];
+  if (name == "--version") {
     std::printf("tellus %s\n", TELLUS_VERSION);
     return kExitOk;
   }
-  const auto spec = commandSpec(cmd);
-  if (!spec) {
+  const auto command = findCommand(name);
+  if (!command) {
     std::fprintf(stderr, "tellus: unknown command '%s'\n%s", argv[1], kUsage);
     return kExitUsage;
   }
@@ -116,26 +60,12 @@ int run(int argc, char** argv) {
       return kExitOk;
     }
   }
-  auto parsed = cli::parse(*spec, words);
+  auto parsed = cli::parse(commandSpec(*command), words);
   if (!parsed) {
     std::fprintf(stderr, "tellus %s: %s (tellus --help)\n", argv[1], parsed.error().c_str());
     return kExitUsage;
   }
-  const Args& a = *parsed;
-  if (cmd == "cache") {
-    if (auto err = checkCacheSubcommand(a)) {
-      std::fprintf(stderr, "tellus cache: %s (tellus --help)\n", err->c_str());
-      return kExitUsage;
-    }
-  }
-  if (cmd == "seed") return cmdSeed(a);
-  if (cmd == "cache") return cmdCache(a);
-  if (cmd == "serve") return cmdServe(a);
-  if (cmd == "render") return cmdRender(a);
-  if (cmd == "view") return cmdView(a);
-  if (cmd == "height") return cmdHeight(a);
-  std::fprintf(stderr, "tellus: unknown command '%s'\n%s", argv[1], kUsage);
-  return kExitUsage;
+  return command->run(*parsed);
 }
 
 } // namespace

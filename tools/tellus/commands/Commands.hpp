@@ -2,66 +2,36 @@
 /**
  * @file Commands.hpp
  * @brief The commands of `tellus`, one file each (Seed.cpp, Cache.cpp, Serve.cpp, Render.cpp,
- * View.cpp, Height.cpp), and what they share (Shared.cpp, PlanetTiles.cpp), as they were in
- * main.cpp.
+ * View.cpp, Height.cpp): what options each takes and what it does. main.cpp parses the command
+ * line against a command's options and runs it; nothing else is shared but Context.hpp.
  */
 
-#include <tellus/cache/TileCache.hpp>
-#include <tellus/cache/TileGrid.hpp>
-#include <tellus/cli/ProxyFromConfig.hpp>
-#include <tellus/cli/Values.hpp>
 #include <tellus/config/CommandLine.hpp>
-#include <tellus/config/Config.hpp>
-#include <tellus/proxy/TileService.hpp>
 
-#include <chrono>
 #include <cstddef>
-#include <cstdint>
-#include <filesystem>
-#include <memory>
-#include <optional>
-#include <string>
 #include <string_view>
-#include <utility>
 #include <vector>
 
 namespace tellus::commands {
 
-inline constexpr int kExitOk = 0;
-inline constexpr int kExitError = 1;
-inline constexpr int kExitUsage = 2;
-inline constexpr int kExitProblems = 3;
-inline constexpr int kExitCacheFull = 4; // seed: the cache refused tiles for lack of space
-
-extern const char* const kUsage;
-
-using cli::Args;
-
-using cli::humanBytes;
-using cli::parseBbox;
-using cli::parseDuration;
-using cli::parseLevels;
-using cli::parseNumbers;
-using cli::parseSize;
-using cli::proxySpecs;
-
-std::filesystem::path dataDir(const Args& a);
-std::string jsonString(std::string_view s);
-
-struct Context {
-  Config config;
-  std::unique_ptr<TileCache> cache;
+struct Command {
+  std::string_view name;
+  /** What the command takes besides --config, --cache and --data (every command's): anything
+   * else is refused (exit 2) with a suggestion, never ignored. */
+  std::vector<cli::OptionSpec> options;
+  std::size_t maxPositional = 0; ///< `cache <subcommand>`: 1
+  /** Runs the parsed command line; the process's exit code (Context.hpp). */
+  int (*run)(const cli::Args& args) = nullptr;
 };
 
-std::size_t descriptorBudget(int maxConnections);
-std::optional<Context> setUp(const Args& a, bool seeding = false, bool serving = false);
+Command seedCommand();
+Command cacheCommand();
+Command serveCommand();
+Command renderCommand();
+Command viewCommand();
+Command heightCommand();
 
-int cmdSeed(const Args& a);
-int cmdCache(const Args& a);
-std::optional<std::string> checkCacheSubcommand(const Args& a);
-int cmdServe(const Args& a);
-int cmdRender(const Args& a);
-int cmdView(const Args& a);
-int cmdHeight(const Args& a);
+/** `tellus --help`: every command and its options. */
+extern const char* const kUsage;
 
 } // namespace tellus::commands

@@ -1,7 +1,9 @@
 // `tellus serve`: the WMS / World Wind tile server over the cache, until SIGINT or SIGTERM.
 
 #include "Commands.hpp"
+#include "Context.hpp"
 
+#include <tellus/cli/ProxyFromConfig.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/Log.hpp>
@@ -9,19 +11,19 @@
 #include <tellus/proxy/TileService.hpp>
 #include <tellus/proxy/WebPage.hpp>
 
-#include <algorithm>
 #include <charconv>
 #include <csignal>
 #include <cstdio>
 #include <pthread.h>
+#include <string>
 #include <thread>
 
 namespace tellus::commands {
+namespace {
 
-int cmdServe(const Args& a) {
-  auto ctx = setUp(a, false, /*serving=*/true);
-  if (!ctx) return kExitError;
-  ServerSettings server = ctx->config.server;
+/** --listen, --threads, --offline, --log-level and --access-log over YAML `server`, and the log
+ * set up from them; kExitUsage or kExitError after saying why. */
+int applyServeArgs(const cli::Args& a, ServerSettings& server) {
   if (auto listen = a.get("listen")) {
     const auto colon = listen->rfind(':');
     int port = -1;
@@ -65,45 +67,23 @@ int cmdServe(const Args& a) {
     std::fprintf(stderr, "tellus serve: %s\n", err.c_str());
     return kExitError;
   }
+  return kExitOk;
+}
 
-  // Signals are taken by sigwait below: block them before any thread starts.
-  sigset_t stopSignals;
-  sigemptyset(&stopSignals);
-  sigaddset(&stopSignals, SIGINT);
-  sigaddset(&stopSignals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &stopSignals, nullptr);
-
-  Fetcher fetcher;
-  auto [upstreams, layers] = proxySpecs(ctx->config);
-  auto tiles = TileService::create(*ctx->cache,
-                                   fetcher,
-                                   std::move(upstreams),
-                                   std::move(layers),
-                                   cli::tileServiceOptions(server));
-  if (!tiles) {
-    std::fprintf(stderr, "tellus serve: %s\n", tiles.error().c_str());
-    return kExitError;
-  }
-  const int cores = static_cast<int>(std::thread::hardware_concurrency());
-  ProxyFrontEnd front(**tiles, cli::frontEndOptions(server, cores));
-  const HttpServerOptions ho = cli::httpServerOptions(server);
-  HttpServer http(ho, [&front](HttpRequest&& r, Responder respond) {
-    front.handle(std::move(r), std::move(respond));
-  });
-  if (auto started = http.start(); !started) {
-    std::fprintf(stderr, "tellus serve: %s\n", started.error().c_str());
-    return kExitError;
-  }
-  const std::string host = ho.host == "0.0.0.0" || ho.host == "::" ? "127.0.0.1" : ho.host;
-  const std::string base = "http://" + host + ":" + std::to_string(http.port());
+/** Where to point a browser or a client: the page, the capabilities, the metrics and a tile and a
+ * map of each layer. */
+void printEndpoints(const std::string& base,
+                    const Context& ctx,
+                    const ServerSettings& server,
+                    const TileService& tiles) {
   std::printf("tellus serve: listening on %s (cache %s%s)\n",
               base.c_str(),
-              ctx->config.cache.root.c_str(),
+              ctx.config.cache.root.c_str(),
               server.offline ? ", offline" : "");
   if (webPageEmbedded()) std::printf("  map page      %s/\n", base.c_str());
   std::printf("  capabilities  %s/wms?SERVICE=WMS&REQUEST=GetCapabilities\n", base.c_str());
   std::printf("  metrics       %s/metrics  (Prometheus)\n", base.c_str());
-  for (const auto& l : (*tiles)->layers()) {
+  for (const auto& l : tiles.layers()) {
     const auto& g = l.dataset.grid;
     std::printf(
         "  %-12s  %s/wwtile?T=%s&L=0&X=0&Y=0\n", l.name.c_str(), base.c_str(), l.name.c_str());
@@ -123,11 +103,63 @@ int cmdServe(const Args& a) {
   }
   std::printf("Ctrl-C stops it.\n");
   std::fflush(stdout);
+}
+
+int runServe(const cli::Args& a) {
+  auto ctx = setUp(a, CacheUse::Serve);
+  if (!ctx) return kExitError;
+  ServerSettings server = ctx->config.server;
+  if (const int rc = applyServeArgs(a, server); rc != kExitOk) return rc;
+
+  // Signals are taken by sigwait below: block them before any thread starts.
+  sigset_t stopSignals;
+  sigemptyset(&stopSignals);
+  sigaddset(&stopSignals, SIGINT);
+  sigaddset(&stopSignals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stopSignals, nullptr);
+
+  Fetcher fetcher;
+  auto specs = cli::proxySpecs(ctx->config);
+  auto tiles = TileService::create(*ctx->cache,
+                                   fetcher,
+                                   std::move(specs.upstreams),
+                                   std::move(specs.layers),
+                                   cli::tileServiceOptions(server));
+  if (!tiles) {
+    std::fprintf(stderr, "tellus serve: %s\n", tiles.error().c_str());
+    return kExitError;
+  }
+  const int cores = static_cast<int>(std::thread::hardware_concurrency());
+  ProxyFrontEnd front(**tiles, cli::frontEndOptions(server, cores));
+  const HttpServerOptions ho = cli::httpServerOptions(server);
+  HttpServer http(ho, [&front](HttpRequest&& r, Responder respond) {
+    front.handle(std::move(r), std::move(respond));
+  });
+  if (auto started = http.start(); !started) {
+    std::fprintf(stderr, "tellus serve: %s\n", started.error().c_str());
+    return kExitError;
+  }
+  const std::string host = ho.host == "0.0.0.0" || ho.host == "::" ? "127.0.0.1" : ho.host;
+  printEndpoints("http://" + host + ":" + std::to_string(http.port()), *ctx, server, **tiles);
   int signal = 0;
   sigwait(&stopSignals, &signal);
   std::printf("tellus serve: stopping (%s)\n", signal == SIGINT ? "SIGINT" : "SIGTERM");
   http.stop();
   return kExitOk;
+}
+
+} // namespace
+
+Command serveCommand() {
+  using K = cli::OptionKind;
+  return {"serve",
+          {{"listen", K::Value},
+           {"threads", K::Value},
+           {"offline", K::Flag},
+           {"log-level", K::Value},
+           {"access-log", K::Value}},
+          0,
+          &runServe};
 }
 
 } // namespace tellus::commands
