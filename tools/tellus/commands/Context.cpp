@@ -1,0 +1,80 @@
+#include "Context.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <sys/resource.h>
+#include <utility>
+
+namespace fs = std::filesystem;
+
+namespace tellus::commands {
+
+fs::path dataDir(const cli::Args& a) {
+  if (auto d = a.get("data")) return *d;
+  if (const char* e = std::getenv("TELLUS_DATA_DIR"); e && *e) return e;
+  return TELLUS_SOURCE_DATA_DIR;
+}
+
+std::optional<Config> loadConfiguration(const cli::Args& a) {
+  Config config;
+  if (auto file = a.get("config")) {
+    auto loaded = loadConfig(*file);
+    if (!loaded) {
+      std::fprintf(stderr, "tellus: configuration: %s\n", loaded.error().toString().c_str());
+      return std::nullopt;
+    }
+    config = std::move(*loaded);
+    if (auto c = a.get("cache")) config.cache.root = *c;
+  } else {
+    const fs::path root = a.get("cache") ? fs::path(*a.get("cache")) : defaultCacheRoot();
+    config = embeddedDefault(dataDir(a), root);
+  }
+  if (auto v = validate(config); !v) {
+    std::fprintf(stderr, "tellus: configuration: %s\n", v.error().c_str());
+    return std::nullopt;
+  }
+  return config;
+}
+
+std::size_t descriptorBudget(int maxConnections) {
+  rlimit rl{};
+  if (::getrlimit(RLIMIT_NOFILE, &rl) != 0) return 64;
+  const rlim_t wanted = std::min<rlim_t>(rl.rlim_max, 1 << 20);
+  if (rl.rlim_cur < wanted) {
+    rlimit raised = rl;
+    raised.rlim_cur = wanted;
+    if (::setrlimit(RLIMIT_NOFILE, &raised) == 0) rl = raised;
+  }
+  const auto limit = static_cast<long long>(std::min<rlim_t>(rl.rlim_cur, 1 << 20));
+  const long long spare = limit - maxConnections - 256; // SQLite, libcurl, logs, the listener
+  return static_cast<std::size_t>(std::clamp(spare / 2, 64LL, 16384LL));
+}
+
+std::optional<Context> setUp(const cli::Args& a, CacheUse use) {
+  auto config = loadConfiguration(a);
+  if (!config) return std::nullopt;
+  Context ctx{std::move(*config), nullptr};
+  TileCache::Options o;
+  o.root = ctx.config.cache.root;
+  o.sizeLimitBytes = ctx.config.cache.sizeLimitBytes;
+  // A seeder writes many tiles: rows are committed behind the files in batches (bench/RESULTS.md).
+  o.indexWriteBehind = use == CacheUse::Seed;
+  if (use == CacheUse::Serve)
+    o.openFiles = descriptorBudget(ctx.config.server.limits.maxConnections);
+  auto cache = TileCache::open(o);
+  if (!cache) {
+    std::fprintf(stderr, "tellus: cache %s: %s\n", o.root.c_str(), cache.error().message.c_str());
+    return std::nullopt;
+  }
+  if ((*cache)->wasRebuiltAtOpen()) {
+    std::fprintf(
+        stderr,
+        "tellus: the cache index was damaged; it was moved aside and rebuilt from the tree\n");
+  }
+  ctx.cache = std::move(*cache);
+  return ctx;
+}
+
+} // namespace tellus::commands

@@ -1,0 +1,55 @@
+#pragma once
+/**
+ * @file GlobeArgs.hpp
+ * @brief The options `render` and `view` (and `height`, some of them) share: the renderer's
+ * settings of the configuration (YAML `renderer`) with what the command line gives over them.
+ */
+
+#include <tellus/config/CommandLine.hpp>
+#include <tellus/config/Config.hpp>
+#include <tellus/planet/Geodesy.hpp>
+#include <tellus/planet_gl/Renderer.hpp>
+
+#include <expected>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace tellus::commands {
+
+/** --offline, --server and --geoid: where render, view and height get their tiles. */
+std::vector<cli::OptionSpec> tileSourceOptions();
+/** What render and view both take: --camera, --size, --layer, --threshold, --earth, terrain,
+ * --overlay and the dome's options. */
+std::vector<cli::OptionSpec> globeOptions();
+
+/** `--earth wgs84|sphere`; nullopt when absent, the value given when bad. */
+std::expected<std::optional<EarthModel>, std::string> earthArg(const cli::Args& a);
+
+/** `--dome [FOV]` (also `--dome=FOV`), `--dome-tilt DEG` and `--dome-method direct|cube`: whether
+ * the command line asks for the dome, and what it gives. An error text for a bad value. */
+struct DomeArgs {
+  bool on = false;
+  std::optional<double> fovDeg, tiltDeg;
+  std::optional<planet::DomeMethod> method;
+};
+std::expected<DomeArgs, std::string> domeArgs(const cli::Args& a);
+
+/** The configuration's `renderer` settings into `ro` and `earth`; what the command line gave
+ * (--threshold, --dome, --dome-tilt, --dome-method) wins (the caller applies --earth). */
+void applyRendererSettings(const RendererSettings& g,
+                           const cli::Args& a,
+                           planet::RendererOptions& ro,
+                           EarthModel& earth);
+
+/** --exaggeration, --min-relief-px, --edge-fixing, --geoid (checked only), --mesh-size,
+ * --upload-per-frame, --vertices and --sun over the configuration's; the usage error, if any. */
+std::optional<std::string> applyTerrainArgs(const cli::Args& a, planet::RendererOptions& ro);
+
+/** `renderer.geoid` (the configuration's, or --geoid on|off): the elevation layer's
+ * mean-sea-level heights onto the ellipsoid with the bundled EGM96 grid of the data directory.
+ * An error text when the grid cannot be read. */
+std::optional<std::string>
+applyGeoid(const cli::Args& a, bool configured, planet::RendererOptions& ro);
+
+} // namespace tellus::commands

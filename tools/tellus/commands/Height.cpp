@@ -1,0 +1,182 @@
+// `tellus height --lat A --lon B`: the terrain height there from the deepest level of the
+// elevation layer that has a tile at the point (with the neighbours its bilinear taps reach), the
+// same height function the renderer draws (planet::HeightField).
+
+#include "Commands.hpp"
+#include "Context.hpp"
+#include "GlobeArgs.hpp"
+#include "PlanetTiles.hpp"
+
+#include <tellus/cache/TileGrid.hpp>
+#include <tellus/cli/Values.hpp>
+#include <tellus/planet/Terrain.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <future>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace tellus::commands {
+namespace {
+
+int usage(const char* what, const std::string& got) {
+  std::fprintf(stderr, "tellus height: %s, got '%s'\n", what, got.c_str());
+  return kExitUsage;
+}
+
+/** One tile, waited for (the tile source answers on its own threads). */
+TileResult fetchTile(ITileSource& source, const TileAddress& address, std::chrono::seconds limit) {
+  auto done = std::make_shared<std::promise<TileResult>>();
+  auto answer = done->get_future();
+  source.request(address, 1.0, [done](TileResult&& r) { done->set_value(std::move(r)); });
+  if (answer.wait_for(limit) != std::future_status::ready) {
+    TileResult late;
+    late.status = TileStatus::Failed;
+    late.message = "no answer within " + std::to_string(limit.count()) + " s";
+    return late;
+  }
+  return answer.get();
+}
+
+/** The heights at a point read two ways from the same tiles: as the layer gives them (H, above
+ * mean sea level) and as the renderer draws them (h = H + N when renderer.geoid is on,
+ * applyVerticalDatum per tile). */
+struct PointHeights {
+  planet::HeightField field;
+  planet::HeightField drawn;
+  std::string lastError; ///< of the last tile that failed
+};
+
+/** The tile at the point on `level` and the neighbours within one sample of it (bilinear taps)
+ * into `heights`; whether the tile at the point itself was there. */
+bool loadLevel(const TileGrid& grid,
+               int level,
+               double la,
+               double lo,
+               ITileSource& source,
+               const planet::RendererOptions& ro,
+               PointHeights& heights) {
+  const auto centre = grid.keyAt(la, lo == 180.0 ? -180.0 : lo, level);
+  if (!centre) return false;
+  const Sector s = grid.sectorOf(*centre);
+  const double dx = (s.east - s.west) / grid.spec().tileWidth;
+  const double dy = (s.north - s.south) / grid.spec().tileHeight;
+  std::vector<TileKey> keys{*centre};
+  for (const double y : {la - dy, la, la + dy})
+    for (const double x : {lo - dx, lo, lo + dx}) {
+      const auto k = grid.keyAt(std::clamp(y, -90.0, 90.0), std::remainder(x, 360.0), level);
+      if (k && std::find(keys.begin(), keys.end(), *k) == keys.end()) keys.push_back(*k);
+    }
+  bool haveCentre = false;
+  for (const TileKey& k : keys) {
+    const TileResult r = fetchTile(source, {ro.elevationLayer, "", k}, std::chrono::seconds(60));
+    if (r.status != TileStatus::Ok) {
+      if (r.status == TileStatus::Failed) heights.lastError = r.message;
+      continue;
+    }
+    const int tw = grid.spec().tileWidth, th = grid.spec().tileHeight;
+    auto t =
+        ro.heightDecoder
+            ? ro.heightDecoder(k, tw, th, r.bytes, r.contentType, ro.elevationEncoding)
+            : planet::decodeHeightTile(k, tw, th, r.bytes, r.contentType, ro.elevationEncoding);
+    if (!t) {
+      heights.lastError = t.error();
+      continue;
+    }
+    planet::HeightTile onEllipsoid = *t;
+    planet::applyVerticalDatum(onEllipsoid, grid.sectorOf(k), ro.verticalDatum);
+    heights.field.insert(std::move(*t));
+    heights.drawn.insert(std::move(onEllipsoid));
+    haveCentre = haveCentre || k == *centre;
+  }
+  return haveCentre;
+}
+
+void printHeights(
+    const planet::RendererOptions& ro, int level, double H, double h, bool ellipsoid) {
+  std::printf("%.2f\n", ellipsoid ? h : H);
+  if (ro.verticalDatum.usesGeoid())
+    std::fprintf(stderr,
+                 "tellus height: layer %s, level %d: H %.2f m above mean sea level, h = H + N "
+                 "%.2f m above the WGS84 ellipsoid (N %.2f m, EGM96; the renderer draws h); "
+                 "printed: %s\n",
+                 ro.elevationLayer.c_str(),
+                 level,
+                 H,
+                 h,
+                 h - H,
+                 ellipsoid ? "h" : "H");
+  else
+    std::fprintf(stderr,
+                 "tellus height: layer %s, level %d: H %.2f m above mean sea level, drawn as a "
+                 "height above the ellipsoid (the geoid off); printed: H\n",
+                 ro.elevationLayer.c_str(),
+                 level,
+                 H);
+}
+
+int runHeight(const cli::Args& a) {
+  const auto latArg = a.get("lat"), lonArg = a.get("lon");
+  if (!latArg || !lonArg) return usage("--lat and --lon are required", "");
+  const auto lat = cli::parseNumbers(*latArg, 1, 1), lon = cli::parseNumbers(*lonArg, 1, 1);
+  if (!lat || !((*lat)[0] >= -90.0 && (*lat)[0] <= 90.0))
+    return usage("--lat must be a latitude in [-90, 90]", *latArg);
+  if (!lon || !std::isfinite((*lon)[0])) return usage("--lon must be a longitude", *lonArg);
+  const auto datumArg = a.get("datum");
+  if (datumArg && *datumArg != "msl" && *datumArg != "ellipsoid")
+    return usage("--datum must be msl or ellipsoid", *datumArg);
+  planet::RendererOptions ro;
+  auto tiles = openPlanetTiles(a, "height", ro);
+  if (!tiles) return tiles.error();
+  if (const auto layer = a.get("elevation")) ro.elevationLayer = *layer;
+  if (ro.elevationLayer.empty()) {
+    std::fprintf(stderr, "tellus height: no elevation layer (renderer.terrain)\n");
+    return kExitError;
+  }
+  const auto spec = tiles->source->describe(ro.elevationLayer, "");
+  if (!spec) return usage("--elevation must name an elevation layer", ro.elevationLayer);
+  const auto grid = TileGrid::create(spec->grid);
+  if (!grid) {
+    std::fprintf(stderr, "tellus height: %s\n", grid.error().c_str());
+    return kExitError;
+  }
+  PointHeights heights{planet::HeightField(*grid), planet::HeightField(*grid), {}};
+  const double la = (*lat)[0], lo = std::remainder((*lon)[0], 360.0);
+  int level = grid->numLevels() - 1;
+  while (level >= 0 && !loadLevel(*grid, level, la, lo, *tiles->source, ro, heights))
+    --level;
+  if (level < 0) {
+    std::fprintf(stderr,
+                 "tellus height: no elevation tile at %.6f, %.6f%s%s\n",
+                 la,
+                 lo,
+                 heights.lastError.empty() ? "" : ": ",
+                 heights.lastError.c_str());
+    return kExitError;
+  }
+  const double H = heights.field.heightAt(la, lo), h = heights.drawn.heightAt(la, lo);
+  const bool ellipsoid = datumArg && *datumArg == "ellipsoid";
+  if (ellipsoid && !ro.verticalDatum.usesGeoid()) {
+    std::fprintf(stderr, "tellus height: --datum ellipsoid needs the geoid (--geoid on)\n");
+    return kExitUsage;
+  }
+  printHeights(ro, level, H, h, ellipsoid);
+  return kExitOk;
+}
+
+} // namespace
+
+Command heightCommand() {
+  using K = cli::OptionKind;
+  Command c{"height", tileSourceOptions(), 0, &runHeight};
+  c.options.insert(
+      c.options.end(),
+      {{"lat", K::Value}, {"lon", K::Value}, {"elevation", K::Value}, {"datum", K::Value}});
+  return c;
+}
+
+} // namespace tellus::commands

@@ -1,0 +1,48 @@
+#pragma once
+/**
+ * @file PlanetTiles.hpp
+ * @brief Where `render`, `view` and `height` get their tiles: the in-process tile service over
+ * the cache (the default, fetching misses upstream as `serve` does), or a remote `tellus serve`
+ * (--server URL, through its /layers.json and /tiles/). Also picks the layers drawn: --layer, else
+ * renderer.layers, else the first imagery layer; the overlays; the elevation layer and its
+ * decoders; the geoid.
+ */
+
+#include "Context.hpp"
+
+#include <tellus/cache/TileSource.hpp>
+#include <tellus/config/CommandLine.hpp>
+#include <tellus/planet/Geodesy.hpp>
+#include <tellus/planet/RegionalSource.hpp>
+#include <tellus/planet_gl/Renderer.hpp>
+#include <tellus/proxy/Fetcher.hpp>
+#include <tellus/proxy/RemoteTileSource.hpp>
+#include <tellus/proxy/TileService.hpp>
+
+#include <expected>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace tellus::commands {
+
+struct PlanetTiles {
+  std::optional<Context> ctx; ///< the local configuration and cache (not with --server)
+  std::unique_ptr<Fetcher> fetcher;
+  std::unique_ptr<TileService> service;
+  std::unique_ptr<RemoteTileSource> remote;
+  std::unique_ptr<planet::RegionalTileSource> regional; ///< over service or remote, when used
+  ITileSource* source = nullptr;                        ///< what the renderer reads
+  EarthModel earth = EarthModel::Wgs84;                 ///< the configuration's renderer.earth
+  /** Per renderer layer (base, overlays): the TIME values `view` steps through ([ and ]). */
+  std::vector<std::vector<std::string>> layerTimes;
+};
+
+/** The tile source and the layers for command `cmd` ("render", "view", "height"), filling `ro`
+ * from the configuration and the command line. The exit code on failure (usage errors 2, the
+ * rest 1) after saying why. */
+std::expected<PlanetTiles, int>
+openPlanetTiles(const cli::Args& a, const char* cmd, planet::RendererOptions& ro);
+
+} // namespace tellus::commands

@@ -1,0 +1,61 @@
+// `tellus --help`: every command and its options (tests/cli/test_options.sh reads it).
+
+#include "Commands.hpp"
+
+namespace tellus::commands {
+
+// clang-format off
+const char* const kUsage = R"(usage: tellus <command> [options]
+
+commands:
+  seed     fill the cache from the layers' upstreams
+             [--layer NAME]... [--levels A-B] [--bbox W,S,E,N] [--dry-run]
+             [--time T] [--concurrency N] [--rate TILES/S] [--retries N] [--refresh]
+             [--meta-tiles N]         N x N tiles per WMS GetMap (default: the upstream's
+                                      meta_tiles, 4; 1 = one GetMap per tile)
+  cache    inspect and maintain the cache
+             stats [--json] | verify | rebuild
+             | prune --older-than DURATION [--layer NAME] [--include-pinned] [--dry-run]
+                                      DURATION: e.g. 30d, 12h, 15m, 45s; says what it removes
+                                      (every layer unless --layer) before it does
+             | export --gpkg FILE --layer NAME [--levels A-B] | import --gpkg FILE --layer NAME
+  serve    the WMS / World Wind tile server
+             [--listen HOST:PORT] [--threads N] [--offline]
+             [--log-level error|warn|info|debug] [--access-log FILE|-]
+  render   headless globe rendering to PNG (an X display or xvfb-run)
+             --camera LAT,LON,ALT[,HEADING,TILT] --out FILE.png [--size WxH]
+             [--wait-complete[=SECONDS]] [--background R,G,B] [--stats FILE.json]
+             [--layer NAME] [--threshold T] [--earth wgs84|sphere] [--offline | --server URL]
+             [--dome [FOV]] [--dome-tilt DEG]  a domemaster (angular fisheye, FOV 180 up to
+                                      220 degrees, --size N: N x N, black outside the circle)
+             [--dome-method direct|cube]  one pass through the fisheye (default) or cube
+                                      faces and a warp (renderer.dome.method)
+             or a flight: --path PATH.json --frames DIR [--fps N] [--repeat N] instead of
+             --camera/--out
+             (PATH.json: [{"time":0,"lat":..,"lon":..,"alt":..,"heading":..,"tilt":..,
+              "times":{"LAYER":"TIME"}}, ...]: a layer's time from that keyframe on)
+  view     the interactive globe (a GLFW window)
+             [--camera LAT,LON,ALT[,HEADING,TILT]] [--size WxH] [--layer NAME] [--threshold T]
+             [--earth wgs84|sphere] [--offline | --server URL] [--dome [FOV]] [--dome-tilt DEG] [--dome-method direct|cube]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc
+             render and view: [--no-terrain] [--exaggeration X] [--sun LAT,LON]
+             [--min-relief-px PX] (renderer.terrain.min_relief_px: heights only where relief shows)
+             [--overlay NAME[,OPACITY]]... (imagery over the base; also renderer.layers);
+             view: 0-9 select a layer (1-9 also show/hide it), - = opacity, , . order,
+             ; ' deepest level, [ ] its time
+             render: [--edge-fixing on|off] (off shows the cracks it closes; for comparisons)
+             render, view and height: [--geoid on|off] (renderer.geoid: mean-sea-level heights
+             onto the ellipsoid, h = H + N)
+             render, for the speed/accuracy sweep (bench/trade.sh): [--mesh-size N]
+             [--upload-per-frame BYTES] [--vertices double|float]
+  height   the terrain height in metres at a point, from the elevation layer's deepest level
+             --lat A --lon B [--elevation LAYER] [--datum msl|ellipsoid] [--offline | --server URL]
+             (prints H above mean sea level, or h = H + N with --datum ellipsoid; both on stderr)
+
+options for every command (anything else is refused with exit code 2; --help prints this):
+  --cache DIR   cache root (default: $TELLUS_CACHE, $XDG_CACHE_HOME/tellus or ~/.cache/tellus)
+  --data DIR    bundled data of the embedded default (default: $TELLUS_DATA_DIR or the source tree)
+  --config F    a YAML configuration (docs/CONFIG.md; default: the embedded default)
+)";
+// clang-format on
+
+} // namespace tellus::commands

@@ -1,0 +1,106 @@
+// `tellus view`: the interactive globe in a GLFW window (planet::runViewer).
+
+#include "Commands.hpp"
+#include "Context.hpp"
+#include "GlobeArgs.hpp"
+#include "PlanetTiles.hpp"
+
+#include <tellus/cli/Values.hpp>
+#include <tellus/planet_gl/Renderer.hpp>
+#include <tellus/planet_gl/Viewer.hpp>
+
+#include <cstdio>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace tellus::commands {
+namespace {
+
+int usage(const char* what, const std::string& got) {
+  std::fprintf(stderr, "tellus view: %s, got '%s'\n", what, got.c_str());
+  return kExitUsage;
+}
+
+/** --camera, --size, --threshold and --exit-after into the start pose and the options. */
+int parseViewArgs(const cli::Args& a,
+                  planet::CameraPose& pose,
+                  planet::RendererOptions& ro,
+                  planet::ViewerOptions& vo) {
+  if (auto c = a.get("camera")) {
+    const auto cam = cli::parseNumbers(*c, 3, 5);
+    if (!cam || (*cam)[0] < -90.0 || (*cam)[0] > 90.0 || (*cam)[2] < -11000.0 || (*cam)[2] > 1e10 ||
+        (cam->size() > 4 && ((*cam)[4] < 0.0 || (*cam)[4] > 180.0)))
+      return usage("--camera must be LAT,LON,ALT[,HEADING,TILT] within range", *c);
+    pose = {(*cam)[0],
+            (*cam)[1],
+            (*cam)[2],
+            cam->size() > 3 ? (*cam)[3] : 0.0,
+            cam->size() > 4 ? (*cam)[4] : 0.0};
+  }
+  const auto dome = domeArgs(a);
+  if (!dome) return usage("bad --dome or --dome-tilt", dome.error());
+  if (auto size = a.get("size")) {
+    const auto wh = cli::parseSize(*size);
+    if (!wh) return usage("--size must be WxH with 1 to 16384 pixels each", *size);
+    ro.width = wh->first;
+    ro.height = wh->second;
+  }
+  if (auto t = a.get("threshold")) {
+    const auto v = cli::parseNumbers(*t, 1, 1);
+    if (!v || (*v)[0] < 0.05 || (*v)[0] > 64.0)
+      return usage("--threshold must be a number in [0.05, 64]", *t);
+    ro.lodThreshold = (*v)[0];
+  }
+  if (auto e = a.get("exit-after")) {
+    const auto v = cli::parseNumbers(*e, 1, 1);
+    if (!v || (*v)[0] < 1) return usage("--exit-after must be a frame count", *e);
+    vo.maxFrames = static_cast<std::uint64_t>((*v)[0]);
+  }
+  return kExitOk;
+}
+
+int runView(const cli::Args& a) {
+  planet::CameraPose pose{20.0, 10.0, 2.0e7, 0.0, 0.0};
+  planet::RendererOptions ro;
+  ro.width = 1280;
+  ro.height = 800;
+  ro.visibleWindow = true;
+  ro.windowTitle = "tellus";
+  planet::ViewerOptions vo;
+  if (const int rc = parseViewArgs(a, pose, ro, vo); rc != kExitOk) return rc;
+  const auto earth = earthArg(a);
+  if (!earth) return usage("--earth must be wgs84 or sphere", earth.error());
+  auto tiles = openPlanetTiles(a, "view", ro);
+  if (!tiles) return tiles.error();
+  if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg"; fs::exists(global))
+    ro.globalImage = global;
+  const Geodesy geodesy(earth->value_or(tiles->earth));
+  auto renderer = planet::Renderer::create(*tiles->source, geodesy, ro);
+  if (!renderer) {
+    std::fprintf(stderr, "tellus view: %s\n", renderer.error().c_str());
+    return kExitError;
+  }
+  vo.start = pose;
+  vo.layerTimes = tiles->layerTimes;
+  std::printf("tellus view: drag to move, wheel to zoom, W/S tilt, A/D heading, R reset, "
+              "P screenshot, Esc quits%s\n",
+              ro.overlays.empty() ? ""
+                                  : "; layers: 0-9 select (1-9 show/hide), - = opacity, [ ] time");
+  std::fflush(stdout);
+  const auto frames = planet::runViewer(**renderer, vo);
+  std::printf("tellus view: %llu frames\n", static_cast<unsigned long long>(frames));
+  return kExitOk;
+}
+
+} // namespace
+
+Command viewCommand() {
+  Command c{"view", tileSourceOptions(), 0, &runView};
+  const auto globe = globeOptions();
+  c.options.insert(c.options.end(), globe.begin(), globe.end());
+  c.options.push_back({"exit-after", cli::OptionKind::Value});
+  return c;
+}
+
+} // namespace tellus::commands
