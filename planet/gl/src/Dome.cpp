@@ -69,21 +69,20 @@ Dome::create(int faceSize, const std::string& glslHeader, bool allocateFaces) {
     return std::unexpected(std::string("the dome's face size must be 8 to 16384 pixels"));
   std::unique_ptr<Dome> d(new Dome());
   d->size_ = faceSize;
-  std::string error;
-  d->program_ = linkProgram(
-      glslHeader + kShader_dome_vert, glslHeader + kShader_dome_frag, "dome shader", &error);
-  if (d->program_ == 0) return std::unexpected(error);
+  auto warp =
+      linkProgram(glslHeader + kShader_dome_vert, glslHeader + kShader_dome_frag, "dome shader");
+  if (!warp) return std::unexpected(warp.error());
+  d->program_ = warp->release(); // until the dome holds handles too
   d->uCube_ = glGetUniformLocation(d->program_, "uCube");
   d->uCircle_ = glGetUniformLocation(d->program_, "uCircle");
   d->uViewport_ = glGetUniformLocation(d->program_, "uViewport");
   glGenVertexArrays(1, &d->vao_);
   glGenBuffers(1, &d->meshVbo_);
   glGenBuffers(1, &d->meshEbo_);
-  d->maskProgram_ = linkProgram(glslHeader + kShader_dome_mask_vert,
-                                glslHeader + kShader_dome_mask_frag,
-                                "dome mask shader",
-                                &error);
-  if (d->maskProgram_ == 0) return std::unexpected(error);
+  auto mask = linkProgram(
+      glslHeader + kShader_dome_mask_vert, glslHeader + kShader_dome_mask_frag, "dome mask shader");
+  if (!mask) return std::unexpected(mask.error());
+  d->maskProgram_ = mask->release();
   d->uMaskViewport_ = glGetUniformLocation(d->maskProgram_, "uViewport");
   d->uMaskCircle_ = glGetUniformLocation(d->maskProgram_, "uCircle");
   glGenVertexArrays(1, &d->maskVao_);

@@ -405,11 +405,10 @@ std::string Renderer::Impl::initGl() {
   for (int i = 0; i < overlaysPerPass; ++i)
     fragDefines += " TELLUS_OVERLAY(" + std::to_string(i) + ")";
   fragDefines += "\n";
-  program = linkProgram(header + defines + kShader_planet_vert,
-                        header + fragDefines + kShader_planet_frag,
-                        "shader",
-                        &error);
-  if (program == 0) return error;
+  auto linked = linkProgram(
+      header + defines + kShader_planet_vert, header + fragDefines + kShader_planet_frag, "shader");
+  if (!linked) return linked.error();
+  program = linked->release(); // until the renderer holds handles too
   uViewProj = glGetUniformLocation(program, "uViewProj");
   uEye = glGetUniformLocation(program, "uEye");
   uEyeHigh = glGetUniformLocation(program, "uEyeHigh");
