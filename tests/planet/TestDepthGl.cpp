@@ -61,21 +61,19 @@ struct Wrong {
 Wrong drawPairs(GLenum depthFormat,
                 const glm::dmat4& projection,
                 const std::function<void()>& beginDepth) {
-  std::string err;
-  const GLuint program = linkProgram(kVert, kFrag, "depth test program", &err);
-  EXPECT_NE(program, 0u) << err;
+  auto linked = linkProgram(kVert, kFrag, "depth test program");
+  EXPECT_TRUE(linked.has_value()) << linked.error();
+  const GlProgram program = linked ? std::move(*linked) : GlProgram(NoCreate);
 
-  GLuint fbo = 0, color = 0, depth = 0;
-  glGenFramebuffers(1, &fbo);
-  glGenRenderbuffers(1, &color);
-  glGenRenderbuffers(1, &depth);
-  glBindRenderbuffer(GL_RENDERBUFFER, color);
+  const GlFramebuffer fbo;
+  const GlRenderbuffer color, depth;
+  glBindRenderbuffer(GL_RENDERBUFFER, color.id());
   glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, kWidth, kHeight);
-  glBindRenderbuffer(GL_RENDERBUFFER, depth);
+  glBindRenderbuffer(GL_RENDERBUFFER, depth.id());
   glRenderbufferStorage(GL_RENDERBUFFER, depthFormat, kWidth, kHeight);
-  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color);
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo.id());
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color.id());
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth.id());
   EXPECT_EQ(glCheckFramebufferStatus(GL_FRAMEBUFFER), GLenum{GL_FRAMEBUFFER_COMPLETE});
   glViewport(0, 0, kWidth, kHeight);
   glDisable(GL_BLEND);
@@ -123,21 +121,20 @@ Wrong drawPairs(GLenum depthFormat,
       }
     }
   }
-  GLuint vao = 0, vbo = 0;
-  glGenVertexArrays(1, &vao);
-  glGenBuffers(1, &vbo);
-  glBindVertexArray(vao);
-  glBindBuffer(GL_ARRAY_BUFFER, vbo);
+  const GlVertexArray vao;
+  const GlBuffer vbo;
+  glBindVertexArray(vao.id());
+  glBindBuffer(GL_ARRAY_BUFFER, vbo.id());
   glBufferData(GL_ARRAY_BUFFER,
                static_cast<GLsizeiptr>(all.size() * sizeof(float)),
                all.data(),
                GL_STATIC_DRAW);
   glEnableVertexAttribArray(0);
   glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 3 * sizeof(float), nullptr);
-  glUseProgram(program);
+  glUseProgram(program.id());
   const glm::mat4 viewProj(projection); // the eye at the origin looking down -z, as the renderer
-  glUniformMatrix4fv(glGetUniformLocation(program, "uViewProj"), 1, GL_FALSE, &viewProj[0][0]);
-  const GLint uColor = glGetUniformLocation(program, "uColor");
+  glUniformMatrix4fv(glGetUniformLocation(program.id(), "uViewProj"), 1, GL_FALSE, &viewProj[0][0]);
+  const GLint uColor = glGetUniformLocation(program.id(), "uColor");
   for (std::size_t q = 0; q < colours.size(); ++q) {
     glUniform4fv(uColor, 1, colours[q].data());
     glDrawArrays(GL_TRIANGLES, static_cast<GLint>(q * 6), 6);
@@ -155,13 +152,7 @@ Wrong drawPairs(GLenum depthFormat,
       ++w.total;
     }
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  glDeleteBuffers(1, &vbo);
-  glDeleteVertexArrays(1, &vao);
-  glDeleteFramebuffers(1, &fbo);
-  glDeleteRenderbuffers(1, &color);
-  glDeleteRenderbuffers(1, &depth);
-  glDeleteProgram(program);
-  return w;
+  return w; // the GL objects go with their handles
 }
 
 std::string describe(const Wrong& w) {

@@ -69,25 +69,24 @@ Dome::create(int faceSize, const std::string& glslHeader, bool allocateFaces) {
     return std::unexpected(std::string("the dome's face size must be 8 to 16384 pixels"));
   std::unique_ptr<Dome> d(new Dome());
   d->size_ = faceSize;
-  std::string error;
-  d->program_ = linkProgram(
-      glslHeader + kShader_dome_vert, glslHeader + kShader_dome_frag, "dome shader", &error);
-  if (d->program_ == 0) return std::unexpected(error);
-  d->uCube_ = glGetUniformLocation(d->program_, "uCube");
-  d->uCircle_ = glGetUniformLocation(d->program_, "uCircle");
-  d->uViewport_ = glGetUniformLocation(d->program_, "uViewport");
-  glGenVertexArrays(1, &d->vao_);
-  glGenBuffers(1, &d->meshVbo_);
-  glGenBuffers(1, &d->meshEbo_);
-  d->maskProgram_ = linkProgram(glslHeader + kShader_dome_mask_vert,
-                                glslHeader + kShader_dome_mask_frag,
-                                "dome mask shader",
-                                &error);
-  if (d->maskProgram_ == 0) return std::unexpected(error);
-  d->uMaskViewport_ = glGetUniformLocation(d->maskProgram_, "uViewport");
-  d->uMaskCircle_ = glGetUniformLocation(d->maskProgram_, "uCircle");
-  glGenVertexArrays(1, &d->maskVao_);
-  glGenBuffers(1, &d->maskVbo_);
+  auto program =
+      linkProgram(glslHeader + kShader_dome_vert, glslHeader + kShader_dome_frag, "dome shader");
+  if (!program) return std::unexpected(program.error());
+  d->program_ = std::move(*program);
+  d->uCube_ = glGetUniformLocation(d->program_.id(), "uCube");
+  d->uCircle_ = glGetUniformLocation(d->program_.id(), "uCircle");
+  d->uViewport_ = glGetUniformLocation(d->program_.id(), "uViewport");
+  d->vao_ = GlVertexArray();
+  d->meshVbo_ = GlBuffer();
+  d->meshEbo_ = GlBuffer();
+  auto mask = linkProgram(
+      glslHeader + kShader_dome_mask_vert, glslHeader + kShader_dome_mask_frag, "dome mask shader");
+  if (!mask) return std::unexpected(mask.error());
+  d->maskProgram_ = std::move(*mask);
+  d->uMaskViewport_ = glGetUniformLocation(d->maskProgram_.id(), "uViewport");
+  d->uMaskCircle_ = glGetUniformLocation(d->maskProgram_.id(), "uCircle");
+  d->maskVao_ = GlVertexArray();
+  d->maskVbo_ = GlBuffer();
   if (glGetError() != GL_NO_ERROR)
     return std::unexpected(std::string("OpenGL error while setting up the dome"));
   if (allocateFaces) {
@@ -101,8 +100,8 @@ std::expected<void, std::string> Dome::allocateFaces() {
   const int faceSize = size_;
   // Filtering across face borders reads the neighbouring face (core since 3.2).
   glEnable(GL_TEXTURE_CUBE_MAP_SEAMLESS);
-  glGenTextures(1, &cube_);
-  glBindTexture(GL_TEXTURE_CUBE_MAP, cube_);
+  cube_ = GlTexture();
+  glBindTexture(GL_TEXTURE_CUBE_MAP, cube_.id());
   for (int i = 0; i < 6; ++i)
     glTexImage2D(GL_TEXTURE_CUBE_MAP_POSITIVE_X + static_cast<GLenum>(i),
                  0,
@@ -121,18 +120,19 @@ std::expected<void, std::string> Dome::allocateFaces() {
   glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
   glBindTexture(GL_TEXTURE_CUBE_MAP, 0);
   // One depth buffer for the faces (each is cleared before it is drawn): float, reversed Z.
-  glGenRenderbuffers(1, &depth_);
-  glBindRenderbuffer(GL_RENDERBUFFER, depth_);
+  depth_ = GlRenderbuffer();
+  glBindRenderbuffer(GL_RENDERBUFFER, depth_.id());
   glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, faceSize, faceSize);
-  glGenFramebuffers(6, fbos_.data());
+  for (GlFramebuffer& fbo : fbos_)
+    fbo = GlFramebuffer();
   for (int i = 0; i < 6; ++i) {
-    glBindFramebuffer(GL_FRAMEBUFFER, fbos_[static_cast<std::size_t>(i)]);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbos_[static_cast<std::size_t>(i)].id());
     glFramebufferTexture2D(GL_FRAMEBUFFER,
                            GL_COLOR_ATTACHMENT0,
                            GL_TEXTURE_CUBE_MAP_POSITIVE_X + static_cast<GLenum>(i),
-                           cube_,
+                           cube_.id(),
                            0);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_.id());
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
       glBindFramebuffer(GL_FRAMEBUFFER, 0);
       freeFaces();
@@ -150,25 +150,10 @@ std::expected<void, std::string> Dome::allocateFaces() {
 }
 
 void Dome::freeFaces() {
-  glDeleteFramebuffers(6, fbos_.data());
-  fbos_.fill(0);
-  glDeleteRenderbuffers(1, &depth_);
-  depth_ = 0;
-  glDeleteTextures(1, &cube_);
-  cube_ = 0;
-}
-
-Dome::~Dome() {
-  glDeleteFramebuffers(6, fbos_.data());
-  glDeleteRenderbuffers(1, &depth_);
-  glDeleteTextures(1, &cube_);
-  glDeleteVertexArrays(1, &vao_);
-  glDeleteBuffers(1, &meshVbo_);
-  glDeleteBuffers(1, &meshEbo_);
-  glDeleteProgram(program_);
-  glDeleteVertexArrays(1, &maskVao_);
-  glDeleteBuffers(1, &maskVbo_);
-  glDeleteProgram(maskProgram_);
+  for (GlFramebuffer& fbo : fbos_)
+    fbo.reset();
+  depth_.reset();
+  cube_.reset();
 }
 
 void Dome::buildMesh(double halfAngleRad, double radiusPx) {
@@ -205,11 +190,11 @@ void Dome::buildMesh(double halfAngleRad, double radiusPx) {
       idx.insert(
           idx.end(),
           {at(k, j), at(k + 1, j), at(k + 1, j + 1), at(k, j), at(k + 1, j + 1), at(k, j + 1)});
-  glBindVertexArray(vao_);
-  glBindBuffer(GL_ARRAY_BUFFER, meshVbo_);
+  glBindVertexArray(vao_.id());
+  glBindBuffer(GL_ARRAY_BUFFER, meshVbo_.id());
   glBufferData(
       GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(v.size() * sizeof(float)), v.data(), GL_STATIC_DRAW);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, meshEbo_);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, meshEbo_.id());
   glBufferData(GL_ELEMENT_ARRAY_BUFFER,
                static_cast<GLsizeiptr>(idx.size() * sizeof(std::uint32_t)),
                idx.data(),
@@ -248,7 +233,7 @@ std::expected<void, std::string> Dome::render(
     const Camera face(fisheye, toWorld(f.forward), toWorld(f.up), {size_, size_}, 90.0);
     glEnable(GL_SCISSOR_TEST);
     glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
-    drawFace(face, DrawTarget{fbos_[i], size_, size_, &face.frustum(), true});
+    drawFace(face, DrawTarget{fbos_[i].id(), size_, size_, &face.frustum()});
     glDisable(GL_SCISSOR_TEST);
     ++facesDrawn_;
   }
@@ -259,9 +244,9 @@ std::expected<void, std::string> Dome::render(
   glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
   glClear(GL_COLOR_BUFFER_BIT);
   glDisable(GL_DEPTH_TEST);
-  glUseProgram(program_);
+  glUseProgram(program_.id());
   glActiveTexture(GL_TEXTURE0);
-  glBindTexture(GL_TEXTURE_CUBE_MAP, cube_);
+  glBindTexture(GL_TEXTURE_CUBE_MAP, cube_.id());
   glUniform1i(uCube_, 0);
   const double diameter = std::min(width, height);
   if (alpha != meshFor_ || 0.5 * diameter != meshRadius_) buildMesh(alpha, 0.5 * diameter);
@@ -270,7 +255,7 @@ std::expected<void, std::string> Dome::render(
               static_cast<float>(0.5 * height),
               static_cast<float>(0.5 * diameter));
   glUniform2f(uViewport_, static_cast<float>(width), static_cast<float>(height));
-  glBindVertexArray(vao_);
+  glBindVertexArray(vao_.id());
   glDrawElements(GL_TRIANGLES, meshIndices_, GL_UNSIGNED_INT, nullptr);
   glBindVertexArray(0);
   glBindTexture(GL_TEXTURE_CUBE_MAP, 0);
@@ -278,12 +263,12 @@ std::expected<void, std::string> Dome::render(
   return {};
 }
 
-void Dome::beginDirect(GLuint nodeProgram, const Camera& fisheye, int width, int height) {
-  if (nodeProgram != directProgram_) {
-    uFisheye_ = glGetUniformLocation(nodeProgram, "uFisheye");
-    uDomeRotation_ = glGetUniformLocation(nodeProgram, "uDomeRotation");
-    uDomeMap_ = glGetUniformLocation(nodeProgram, "uDomeMap");
-    directProgram_ = nodeProgram;
+void Dome::beginDirect(const GlProgram& nodeProgram, const Camera& fisheye, int width, int height) {
+  if (&nodeProgram != directProgram_) {
+    uFisheye_ = glGetUniformLocation(nodeProgram.id(), "uFisheye");
+    uDomeRotation_ = glGetUniformLocation(nodeProgram.id(), "uDomeRotation");
+    uDomeMap_ = glGetUniformLocation(nodeProgram.id(), "uDomeMap");
+    directProgram_ = &nodeProgram;
   }
   // Rows right, up, -forward (the view matrix's rotation): q = R p; GL matrices are column-major.
   const glm::dvec3 r = fisheye.right(), u = fisheye.up(), b = -fisheye.forward();
@@ -355,8 +340,8 @@ void Dome::buildMask(int width, int height) {
     point(b, true);
     point(b, false);
   }
-  glBindVertexArray(maskVao_);
-  glBindBuffer(GL_ARRAY_BUFFER, maskVbo_);
+  glBindVertexArray(maskVao_.id());
+  glBindBuffer(GL_ARRAY_BUFFER, maskVbo_.id());
   glBufferData(
       GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(v.size() * sizeof(float)), v.data(), GL_STATIC_DRAW);
   glEnableVertexAttribArray(0);
@@ -367,21 +352,24 @@ void Dome::buildMask(int width, int height) {
   maskH_ = height;
 }
 
-void Dome::endDirect(GLuint nodeProgram, GLuint target, int width, int height) {
+void Dome::endDirect(const GlProgram& nodeProgram) {
   glDisable(GL_CLIP_DISTANCE0);
-  if (nodeProgram == directProgram_) glUniform1i(uFisheye_, 0);
+  if (&nodeProgram == directProgram_) glUniform1i(uFisheye_, 0);
+}
+
+void Dome::drawMask(GLuint target, int width, int height) {
   glBindFramebuffer(GL_FRAMEBUFFER, target);
   glViewport(0, 0, width, height);
   if (width != maskW_ || height != maskH_) buildMask(width, height);
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_BLEND);
-  glUseProgram(maskProgram_);
+  glUseProgram(maskProgram_.id());
   glUniform2f(uMaskViewport_, static_cast<float>(width), static_cast<float>(height));
   glUniform3f(uMaskCircle_,
               static_cast<float>(0.5 * width),
               static_cast<float>(0.5 * height),
               static_cast<float>(0.5 * std::min(width, height)));
-  glBindVertexArray(maskVao_);
+  glBindVertexArray(maskVao_.id());
   glDrawArrays(GL_TRIANGLES, 0, maskVertices_);
   glBindVertexArray(0);
   glEnable(GL_DEPTH_TEST);

@@ -14,16 +14,18 @@
  * node shader, so faces agree. The direct method instead draws the draw list once into the
  * renderer's framebuffer with the node program's fisheye map (shaders/planet.vert, TELLUS_FISHEYE:
  * beginDirect sets its uniforms and the clip plane), then paints black what lies outside the
- * circle (endDirect: a ring from just inside the circle to the border). GL-private; used by
- * Renderer.cpp only.
+ * circle (drawMask: a ring from just inside the circle to the border). GL-private; used by
+ * SceneDraw (the draw phase) and GlobePass. GL objects owned by handles (GlObjects.hpp): main
+ * thread, context current.
  */
+
+#include "GlObjects.hpp"
+#include "ScenePass.hpp"
 
 #include <tellus/planet/Camera.hpp>
 #include <tellus/planet/Culling.hpp>
 #include <tellus/planet/DomeDirect.hpp>
 #include <tellus/planet/Quadtree.hpp>
-
-#include <epoxy/gl.h>
 
 #include <array>
 #include <expected>
@@ -32,21 +34,6 @@
 #include <string>
 
 namespace tellus::planet {
-
-/** Where Renderer::Impl::draw draws: a framebuffer of a size, the frustum whose outside nodes are
- * skipped (null: none), and whether to clear and draw the scene at all (false: only present the
- * framebuffer that the dome's warp pass filled). */
-struct DrawTarget {
-  GLuint fbo = 0;
-  int width = 0;
-  int height = 0;
-  const Frustum* frustum = nullptr;
-  bool scene = true;
-  bool draws(const Node& node) const noexcept {
-    return scene && (frustum == nullptr ||
-                     classify(*frustum, node.geometry().bounds()) != FrustumResult::Outside);
-  }
-};
 
 /** The part of a face (pixels [x0, x1) x [y0, y1), bottom-up) whose directions lie within
  * halfAngleRad of -Z, plus a margin of a few pixels for bilinear taps; empty (x0 == x1) when the
@@ -61,7 +48,6 @@ public:
    * first render(): a direct-method dome that never falls back never holds them. */
   static std::expected<std::unique_ptr<Dome>, std::string>
   create(int faceSize, const std::string& glslHeader, bool allocateFaces = true);
-  ~Dome();
   Dome(const Dome&) = delete;
   Dome& operator=(const Dome&) = delete;
 
@@ -75,7 +61,7 @@ public:
   int faceSize() const noexcept { return size_; }
   /** The cube map (RGBA8) and the faces' depth buffer (32-bit float); idempotent. */
   std::expected<void, std::string> allocateFaces();
-  bool facesAllocated() const noexcept { return cube_ != 0; }
+  bool facesAllocated() const noexcept { return cube_.created(); }
   /** GPU bytes of the faces when allocated: 6 x faceSize^2 x 4 + faceSize^2 x 4. */
   std::size_t faceBytes() const noexcept { return facesAllocated() ? bytesOfFaces(size_) : 0u; }
   static std::size_t bytesOfFaces(int faceSize) noexcept {
@@ -85,29 +71,43 @@ public:
   /** The direct method: with the node program (compiled with TELLUS_FISHEYE) current, switches
    * its vertex map to the fisheye of this camera for a width x height framebuffer (the circle of
    * diameter min(width, height), centred) and enables gl_ClipDistance[0]. */
-  void beginDirect(GLuint nodeProgram, const Camera& fisheye, int width, int height);
+  void beginDirect(const GlProgram& nodeProgram, const Camera& fisheye, int width, int height);
   /** Ends what beginDirect began (the program still current: back to its perspective, the clip
-   * plane off), then paints black everything in target outside the circle. */
-  void endDirect(GLuint nodeProgram, GLuint target, int width, int height);
+   * plane off). */
+  void endDirect(const GlProgram& nodeProgram);
+  /** The direct method's last step, after every pass: paints black everything in target
+   * (width x height) outside the circle. */
+  void drawMask(GLuint target, int width, int height);
   /** Faces drawn by the last render(). */
   int facesDrawn() const noexcept { return facesDrawn_; }
 
 private:
   Dome() = default;
   int size_ = 0;
-  GLuint cube_ = 0, depth_ = 0, program_ = 0, vao_ = 0;
-  std::array<GLuint, 6> fbos_{};
+  GlTexture cube_{NoCreate};
+  GlRenderbuffer depth_{NoCreate};
+  GlProgram program_{NoCreate};
+  GlVertexArray vao_{NoCreate};
+  std::array<GlFramebuffer, 6> fbos_{GlFramebuffer(NoCreate),
+                                     GlFramebuffer(NoCreate),
+                                     GlFramebuffer(NoCreate),
+                                     GlFramebuffer(NoCreate),
+                                     GlFramebuffer(NoCreate),
+                                     GlFramebuffer(NoCreate)};
   GLint uCube_ = -1, uCircle_ = -1, uViewport_ = -1;
-  GLuint meshVbo_ = 0, meshEbo_ = 0;
+  GlBuffer meshVbo_{NoCreate}, meshEbo_{NoCreate};
   GLsizei meshIndices_ = 0;
   double meshFor_ = -1.0; ///< (half-angle, circle radius in pixels) the warp mesh was made for
   double meshRadius_ = -1.0;
   void buildMesh(double halfAngleRad, double radiusPx);
   int facesDrawn_ = 0;
-  // The direct method's node-program uniforms (looked up for directProgram_) and the mask.
-  GLuint directProgram_ = 0;
+  // The direct method's node-program uniforms (looked up for directProgram_, which the caller
+  // owns) and the mask.
+  const GlProgram* directProgram_ = nullptr;
   GLint uFisheye_ = -1, uDomeRotation_ = -1, uDomeMap_ = -1;
-  GLuint maskProgram_ = 0, maskVao_ = 0, maskVbo_ = 0;
+  GlProgram maskProgram_{NoCreate};
+  GlVertexArray maskVao_{NoCreate};
+  GlBuffer maskVbo_{NoCreate};
   GLint uMaskViewport_ = -1, uMaskCircle_ = -1;
   GLsizei maskVertices_ = 0;
   int maskW_ = 0, maskH_ = 0;

@@ -1,60 +1,33 @@
 #pragma once
-// One GLSL shader compiled, for the renderer's programs (planet, dome): the GL's log as the error.
+/**
+ * @file GlShader.hpp
+ * @brief Compiling GLSL shaders and linking programs into owning handles (GlObjects.hpp), the GL's
+ * log as the error.
+ *
+ * Line numbers: a source is the renderer's prepended lines (#version, #defines: source string 0)
+ * followed by a file of shaders/ embedded at build time, which starts with `#line 1 K`
+ * (cmake/EmbedShaders.cmake; K numbers the file), so a driver's message such as `1:12(3): error`
+ * names the file's own line 12 in source string 1; the error ends with which file each source
+ * string number is. Main thread, context current (GlObjects.hpp).
+ */
 
-#include <epoxy/gl.h>
+#include "GlObjects.hpp"
 
+#include <expected>
 #include <string>
 
 namespace tellus::planet {
 
-/** A compiled shader, or 0 with *error = what + ": " + the compiler's log. The context must be
- * current. */
-inline GLuint
-compileShader(GLenum type, const std::string& source, const char* what, std::string* error) {
-  const GLuint s = glCreateShader(type);
-  const char* text = source.c_str();
-  glShaderSource(s, 1, &text, nullptr);
-  glCompileShader(s);
-  GLint ok = GL_FALSE;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (ok != GL_TRUE) {
-    char log[2048] = {};
-    glGetShaderInfoLog(s, sizeof log, nullptr, log);
-    *error = std::string(what) + ": " + log;
-    glDeleteShader(s);
-    return 0;
-  }
-  return s;
-}
+/** A compiled shader, or `what: <the compiler's log>` (and the source strings' files). */
+std::expected<GlShader, std::string>
+compileShader(GLenum type, const std::string& source, const char* what);
 
-/** A program from a vertex and a fragment shader; 0 with error set when either fails. */
-inline GLuint linkProgram(const std::string& vsSource,
-                          const std::string& fsSource,
-                          const char* what,
-                          std::string* error) {
-  const GLuint vs = compileShader(GL_VERTEX_SHADER, vsSource, what, error);
-  if (vs == 0) return 0;
-  const GLuint fs = compileShader(GL_FRAGMENT_SHADER, fsSource, what, error);
-  if (fs == 0) {
-    glDeleteShader(vs);
-    return 0;
-  }
-  const GLuint program = glCreateProgram();
-  glAttachShader(program, vs);
-  glAttachShader(program, fs);
-  glLinkProgram(program);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint linked = GL_FALSE;
-  glGetProgramiv(program, GL_LINK_STATUS, &linked);
-  if (linked != GL_TRUE) {
-    char log[2048] = {};
-    glGetProgramInfoLog(program, sizeof log, nullptr, log);
-    glDeleteProgram(program);
-    *error = std::string(what) + " link: " + log;
-    return 0;
-  }
-  return program;
-}
+/** A program from a vertex and a fragment shader, or `what: <log>` / `what link: <log>`. */
+std::expected<GlProgram, std::string>
+linkProgram(const std::string& vsSource, const std::string& fsSource, const char* what);
+
+/** "\n(source string K: shaders/NAME ...)" for the `#line 1 K` markers in source (K > 0) whose
+ * file cmake/EmbedShaders.cmake knows; "" when there are none. */
+std::string shaderSourceLegend(const std::string& source);
 
 } // namespace tellus::planet

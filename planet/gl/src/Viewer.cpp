@@ -115,239 +115,301 @@ struct Flight {
   }
 };
 
+/** The loop of runViewer: its state between frames, one method per kind of input. */
+class ViewerLoop {
+public:
+  ViewerLoop(Renderer& renderer, GLFWwindow* window, const ViewerOptions& options);
+  ~ViewerLoop();
+  ViewerLoop(const ViewerLoop&) = delete;
+  ViewerLoop& operator=(const ViewerLoop&) = delete;
+  std::uint64_t run();
+
+private:
+  using Clock = std::chrono::steady_clock;
+  void flyToDoubleClick();
+  void drag(double x, double y, bool pressed);
+  void zoom();
+  void turn(double dt);
+  bool layerKey(int key);
+  void printSelectedLayer() const;
+  void screenshot();
+  void updateTitle(Clock::time_point now);
+
+  static constexpr double kEarthRadius = 6371000.0;
+  Renderer& renderer_;
+  GLFWwindow* window_;
+  const ViewerOptions& options_;
+  InputState input_;
+  CameraPose pose_;
+  std::vector<std::vector<std::string>> layerTimes_; ///< follows the layers when reordered
+  std::size_t selected_ = 0;                         ///< the layer [ ] - = act on
+  std::vector<std::size_t> timeIndex_;
+  double lastX_ = 0.0, lastY_ = 0.0;
+  bool dragging_ = false;
+  Flight flight_;
+  bool screenshotHeld_ = false;
+  int screenshots_ = 0;
+  std::uint64_t frames_ = 0;
+  Clock::time_point lastTitle_ = Clock::now();
+  Clock::time_point lastFrame_ = lastTitle_;
+  std::uint64_t framesAtTitle_ = 0;
+  CameraPose drawn_;
+  int drawnW_ = 0, drawnH_ = 0;
+  Clock::time_point drawnAt_ = lastTitle_;
+};
+
+ViewerLoop::ViewerLoop(Renderer& renderer, GLFWwindow* window, const ViewerOptions& options)
+    : renderer_(renderer), window_(window), options_(options), pose_(options.start),
+      layerTimes_(options.layerTimes), selected_(renderer.layerCount() > 1 ? 1 : 0),
+      timeIndex_(renderer.layerCount(), 0), drawn_(pose_) {
+  glfwSetWindowUserPointer(window_, &input_);
+  glfwSetScrollCallback(window_, onScroll);
+  glfwSetMouseButtonCallback(window_, onMouseButton);
+  glfwSetKeyCallback(window_, onKey);
+  for (std::size_t i = 0; i < renderer_.layerCount() && i < layerTimes_.size(); ++i) {
+    const auto& times = layerTimes_[i];
+    const auto& now = renderer_.stats().layers.size() > i ? renderer_.stats().layers[i].time : "";
+    const auto it = std::find(times.begin(), times.end(), now);
+    timeIndex_[i] = it == times.end() ? 0 : static_cast<std::size_t>(it - times.begin());
+  }
+}
+
+ViewerLoop::~ViewerLoop() {
+  glfwSetScrollCallback(window_, nullptr);
+  glfwSetMouseButtonCallback(window_, nullptr);
+  glfwSetKeyCallback(window_, nullptr);
+  glfwSetWindowUserPointer(window_, nullptr);
+}
+
+// Double-click: fly to the point under the cursor, three times closer.
+void ViewerLoop::flyToDoubleClick() {
+  input_.doubleClick = false;
+  int ww = 0, wh = 0;
+  glfwGetWindowSize(window_, &ww, &wh);
+  // Window coordinates to framebuffer pixels (they differ on high-DPI screens).
+  const double sx = ww > 0 ? static_cast<double>(renderer_.width()) / ww : 1.0;
+  const double sy = wh > 0 ? static_cast<double>(renderer_.height()) / wh : 1.0;
+  const auto target = pick(renderer_.geodesy(),
+                           renderer_.camera(pose_),
+                           input_.doubleX * sx,
+                           input_.doubleY * sy,
+                           renderer_.width(),
+                           renderer_.height());
+  if (!target) return;
+  flight_ = Flight{pose_, pose_, 1.5, 0.0, true};
+  flight_.to.latDeg = target->first;
+  flight_.to.lonDeg = target->second;
+  flight_.to.altitudeM = std::max(10.0, pose_.altitudeM / 3.0);
+  std::printf("fly to %.5f, %.5f, %.0f m\n", target->first, target->second, flight_.to.altitudeM);
+  std::fflush(stdout);
+}
+
+// Drag: the ground moves with the cursor (degrees per pixel from the altitude and the field of
+// view; heading-aware).
+void ViewerLoop::drag(double x, double y, bool pressed) {
+  if (pressed) {
+    if (dragging_) {
+      if (x != lastX_ || y != lastY_) flight_.active = false; // the user takes over
+      const double metresPerPixel = std::max(1.0, pose_.altitudeM) * 2.0 *
+                                    std::tan(45.0 * M_PI / 360.0) / std::max(1, renderer_.height());
+      const double degPerPixel = metresPerPixel / kEarthRadius * 180.0 / M_PI;
+      const double h = pose_.headingDeg * M_PI / 180.0;
+      const double dx = x - lastX_, dy = y - lastY_;
+      // Screen right is east turned by the heading; screen down is south turned likewise.
+      const double north = (dy * std::cos(h) + dx * std::sin(h)) * degPerPixel;
+      const double east = (-dx * std::cos(h) + dy * std::sin(h)) * degPerPixel;
+      pose_.latDeg = std::clamp(pose_.latDeg + north, -90.0, 90.0);
+      const double c = std::max(0.01, std::cos(pose_.latDeg * M_PI / 180.0));
+      pose_.lonDeg = wrapLon(pose_.lonDeg + east / c);
+    }
+    dragging_ = true;
+  } else {
+    dragging_ = false;
+  }
+  lastX_ = x;
+  lastY_ = y;
+}
+
+// Wheel: each notch 15 % of the height above the terrain under the camera.
+void ViewerLoop::zoom() {
+  if (input_.scroll == 0.0) return;
+  const double ground = renderer_.terrainHeight(pose_.latDeg, pose_.lonDeg);
+  const double above = std::max(1.0, pose_.altitudeM - ground);
+  pose_.altitudeM = ground + std::clamp(above * std::pow(0.85, input_.scroll), 1.0, 1e9);
+  input_.scroll = 0.0;
+}
+
+// W/S tilt, A/D heading at 60 degrees a second; R back to the start.
+void ViewerLoop::turn(double dt) {
+  const double turn = 60.0 * dt;
+  if (glfwGetKey(window_, GLFW_KEY_W) == GLFW_PRESS)
+    pose_.tiltDeg = std::min(90.0, pose_.tiltDeg + turn);
+  if (glfwGetKey(window_, GLFW_KEY_S) == GLFW_PRESS)
+    pose_.tiltDeg = std::max(0.0, pose_.tiltDeg - turn);
+  if (glfwGetKey(window_, GLFW_KEY_A) == GLFW_PRESS) pose_.headingDeg -= turn;
+  if (glfwGetKey(window_, GLFW_KEY_D) == GLFW_PRESS) pose_.headingDeg += turn;
+  pose_.headingDeg = std::remainder(pose_.headingDeg, 360.0);
+  if (glfwGetKey(window_, GLFW_KEY_R) == GLFW_PRESS) {
+    pose_ = options_.start;
+    flight_.active = false;
+  }
+}
+
+// Layers: 0-9 select a layer (a digit of an overlay also shows or hides it), - and = lower and
+// raise the selected overlay's opacity, , and . move it, ; and ' its deepest level, [ and ] step
+// its time through the configured values. Whether the key changed a layer.
+bool ViewerLoop::layerKey(int key) {
+  const std::size_t n = renderer_.layerCount();
+  if (renderer_.stats().layers.size() != n) return false; // before the first frame
+  if (key >= GLFW_KEY_0 && key <= GLFW_KEY_9) {
+    const auto k = static_cast<std::size_t>(key - GLFW_KEY_0);
+    if (k >= n) return false;
+    selected_ = k;
+    if (k > 0) renderer_.setLayerVisible(k, !renderer_.stats().layers[k].visible);
+  } else if ((key == GLFW_KEY_MINUS || key == GLFW_KEY_EQUAL) && selected_ > 0) {
+    const double o = renderer_.stats().layers[selected_].opacity;
+    renderer_.setLayerOpacity(selected_,
+                              std::clamp(o + (key == GLFW_KEY_EQUAL ? 0.1 : -0.1), 0.0, 1.0));
+  } else if ((key == GLFW_KEY_COMMA || key == GLFW_KEY_PERIOD) && selected_ > 0) {
+    const std::size_t to = key == GLFW_KEY_COMMA ? std::max<std::size_t>(1, selected_ - 1)
+                                                 : std::min(n - 1, selected_ + 1);
+    if (to == selected_) return false;
+    renderer_.moveLayer(selected_, to);
+    if (selected_ < layerTimes_.size() && to < layerTimes_.size()) {
+      std::swap(layerTimes_[selected_], layerTimes_[to]);
+      std::swap(timeIndex_[selected_], timeIndex_[to]);
+    }
+    selected_ = to;
+  } else if (key == GLFW_KEY_SEMICOLON || key == GLFW_KEY_APOSTROPHE) {
+    const int levels = renderer_.stats().layers[selected_].levels;
+    const int deepest = key == GLFW_KEY_SEMICOLON ? std::max(0, levels - 2) : levels;
+    renderer_.setLayerMaxLevel(selected_, deepest);
+  } else if (key == GLFW_KEY_LEFT_BRACKET || key == GLFW_KEY_RIGHT_BRACKET) {
+    if (selected_ >= layerTimes_.size() || layerTimes_[selected_].empty()) return false;
+    const auto& times = layerTimes_[selected_];
+    std::size_t& t = timeIndex_[selected_];
+    t = key == GLFW_KEY_RIGHT_BRACKET ? (t + 1) % times.size()
+                                      : (t + times.size() - 1) % times.size();
+    renderer_.setLayerTime(selected_, times[t]);
+  } else {
+    return false;
+  }
+  return true;
+}
+
+void ViewerLoop::printSelectedLayer() const {
+  const auto& l = renderer_.stats().layers[selected_];
+  std::printf("layer %zu %s: %s, opacity %.1f, levels %d%s, time %s%s%s\n",
+              selected_,
+              l.name.c_str(),
+              l.visible ? "shown" : "hidden",
+              l.opacity,
+              l.levels,
+              l.maxLevel >= 0 ? (" (max " + std::to_string(l.maxLevel) + ")").c_str() : "",
+              l.time.empty() ? "(default)" : l.time.c_str(),
+              l.pendingTime.empty() ? "" : " -> ",
+              l.pendingTime.c_str());
+  std::fflush(stdout);
+}
+
+void ViewerLoop::screenshot() {
+  const auto file = options_.screenshotDir / ("tellus-" + std::to_string(++screenshots_) + ".png");
+  std::string err;
+  if (writePngRgb(file, renderer_.width(), renderer_.height(), renderer_.readPixels(), &err))
+    std::printf("screenshot %s\n", file.c_str());
+  else
+    std::fprintf(stderr, "screenshot: %s\n", err.c_str());
+}
+
+// The statistics line, twice a second: the window's title and the line drawn over the globe.
+void ViewerLoop::updateTitle(Clock::time_point now) {
+  const double sinceTitle = std::chrono::duration<double>(now - lastTitle_).count();
+  if (sinceTitle < 0.5) return;
+  const auto& s = renderer_.stats();
+  char title[256];
+  std::snprintf(title,
+                sizeof title,
+                "tellus  %.0f fps  %zu nodes  level %d  %zu tiles in flight  %.0f MB  "
+                "%.4f, %.4f  %.0f m  heading %.0f  tilt %.0f",
+                static_cast<double>(frames_ - framesAtTitle_) / sinceTitle,
+                s.nodesDrawn,
+                s.maxLevel,
+                s.tilesInFlight,
+                static_cast<double>(s.textureBytes) / (1 << 20),
+                pose_.latDeg,
+                pose_.lonDeg,
+                pose_.altitudeM,
+                pose_.headingDeg,
+                pose_.tiltDeg);
+  glfwSetWindowTitle(window_, title);
+  renderer_.setOverlayText(title + 7); // the same line on screen, without "tellus  "
+  lastTitle_ = now;
+  framesAtTitle_ = frames_;
+}
+
+std::uint64_t ViewerLoop::run() {
+  while (!renderer_.windowShouldClose() &&
+         (options_.maxFrames == 0 || frames_ < options_.maxFrames)) {
+    const auto now = Clock::now();
+    const double dt = std::min(0.1, std::chrono::duration<double>(now - lastFrame_).count());
+    lastFrame_ = now;
+    int fw = 0, fh = 0;
+    glfwGetFramebufferSize(window_, &fw, &fh);
+    renderer_.resize(fw, fh);
+    double x = 0.0, y = 0.0;
+    glfwGetCursorPos(window_, &x, &y);
+    const bool pressed = glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
+    if (input_.doubleClick) flyToDoubleClick();
+    drag(x, y, pressed);
+    zoom();
+    turn(dt);
+    if (flight_.active) pose_ = flight_.at(dt);
+    bool layersChanged = false;
+    for (const int key : input_.keys)
+      layersChanged = layerKey(key) || layersChanged;
+    input_.keys.clear();
+    if (layersChanged) {
+      renderer_.frame(pose_); // the stats printed show the change
+      printSelectedLayer();
+    }
+    if (glfwGetKey(window_, GLFW_KEY_ESCAPE) == GLFW_PRESS)
+      glfwSetWindowShouldClose(window_, GLFW_TRUE);
+
+    // Idle (nothing moved, nothing streaming): wait for input instead of drawing the same frame
+    // again, but draw twice a second so that retries and deferred splits still happen. An
+    // offline viewer left alone costs almost no CPU.
+    const bool moved = pose_.latDeg != drawn_.latDeg || pose_.lonDeg != drawn_.lonDeg ||
+                       pose_.altitudeM != drawn_.altitudeM ||
+                       pose_.headingDeg != drawn_.headingDeg || pose_.tiltDeg != drawn_.tiltDeg ||
+                       fw != drawnW_ || fh != drawnH_;
+    const double sinceDrawn = std::chrono::duration<double>(Clock::now() - drawnAt_).count();
+    const bool shot = glfwGetKey(window_, GLFW_KEY_P) == GLFW_PRESS;
+    if (frames_ > 0 && !moved && !renderer_.busy() && sinceDrawn < 0.5 &&
+        !(shot && !screenshotHeld_)) {
+      glfwWaitEventsTimeout(0.5 - sinceDrawn);
+      continue;
+    }
+    renderer_.frame(pose_);
+    ++frames_;
+    pose_ = renderer_.drawnPose(); // raised above the terrain when it went below (thesis 4.5.3)
+    drawn_ = pose_;
+    drawnW_ = fw;
+    drawnH_ = fh;
+    drawnAt_ = Clock::now();
+    if (shot && !screenshotHeld_) screenshot();
+    screenshotHeld_ = shot;
+    updateTitle(now);
+  }
+  return frames_;
+}
+
 } // namespace
 
 std::uint64_t runViewer(Renderer& renderer, const ViewerOptions& options) {
   auto* window = static_cast<GLFWwindow*>(renderer.nativeWindow());
   if (window == nullptr) return 0;
-  InputState input;
-  glfwSetWindowUserPointer(window, &input);
-  glfwSetScrollCallback(window, onScroll);
-  glfwSetMouseButtonCallback(window, onMouseButton);
-  glfwSetKeyCallback(window, onKey);
-  CameraPose pose = options.start;
-  auto layerTimes = options.layerTimes; // follows the layers when they are reordered
-  std::size_t selected = renderer.layerCount() > 1 ? 1 : 0; // the layer [ ] - = act on
-  std::vector<std::size_t> timeIndex(renderer.layerCount(), 0);
-  for (std::size_t i = 0; i < renderer.layerCount() && i < layerTimes.size(); ++i) {
-    const auto& times = layerTimes[i];
-    const auto& now = renderer.stats().layers.size() > i ? renderer.stats().layers[i].time : "";
-    const auto it = std::find(times.begin(), times.end(), now);
-    timeIndex[i] = it == times.end() ? 0 : static_cast<std::size_t>(it - times.begin());
-  }
-  double lastX = 0.0, lastY = 0.0;
-  bool dragging = false;
-  Flight flight;
-  bool screenshotHeld = false;
-  int screenshots = 0;
-  std::uint64_t frames = 0;
-  auto lastTitle = std::chrono::steady_clock::now();
-  auto lastFrame = lastTitle;
-  std::uint64_t framesAtTitle = 0;
-  CameraPose drawn = pose;
-  int drawnW = 0, drawnH = 0;
-  auto drawnAt = lastTitle;
-  constexpr double kEarthRadius = 6371000.0;
-  while (!renderer.windowShouldClose() && (options.maxFrames == 0 || frames < options.maxFrames)) {
-    const auto now = std::chrono::steady_clock::now();
-    const double dt = std::min(0.1, std::chrono::duration<double>(now - lastFrame).count());
-    lastFrame = now;
-    int fw = 0, fh = 0;
-    glfwGetFramebufferSize(window, &fw, &fh);
-    renderer.resize(fw, fh);
-
-    // Drag: the ground moves with the cursor (degrees per pixel from the altitude and the field
-    // of view; heading-aware).
-    double x = 0.0, y = 0.0;
-    glfwGetCursorPos(window, &x, &y);
-    const bool pressed = glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
-    // Double-click: fly to the point under the cursor, three times closer.
-    if (input.doubleClick) {
-      input.doubleClick = false;
-      int ww = 0, wh = 0;
-      glfwGetWindowSize(window, &ww, &wh);
-      // Window coordinates to framebuffer pixels (they differ on high-DPI screens).
-      const double sx = ww > 0 ? static_cast<double>(renderer.width()) / ww : 1.0;
-      const double sy = wh > 0 ? static_cast<double>(renderer.height()) / wh : 1.0;
-      if (const auto target = pick(renderer.geodesy(),
-                                   renderer.camera(pose),
-                                   input.doubleX * sx,
-                                   input.doubleY * sy,
-                                   renderer.width(),
-                                   renderer.height())) {
-        flight = Flight{pose, pose, 1.5, 0.0, true};
-        flight.to.latDeg = target->first;
-        flight.to.lonDeg = target->second;
-        flight.to.altitudeM = std::max(10.0, pose.altitudeM / 3.0);
-        std::printf(
-            "fly to %.5f, %.5f, %.0f m\n", target->first, target->second, flight.to.altitudeM);
-        std::fflush(stdout);
-      }
-    }
-    if (pressed) {
-      if (dragging) {
-        if (x != lastX || y != lastY) flight.active = false; // the user takes over
-        const double metresPerPixel = std::max(1.0, pose.altitudeM) * 2.0 *
-                                      std::tan(45.0 * M_PI / 360.0) /
-                                      std::max(1, renderer.height());
-        const double degPerPixel = metresPerPixel / kEarthRadius * 180.0 / M_PI;
-        const double h = pose.headingDeg * M_PI / 180.0;
-        const double dx = x - lastX, dy = y - lastY;
-        // Screen right is east turned by the heading; screen down is south turned likewise.
-        const double north = (dy * std::cos(h) + dx * std::sin(h)) * degPerPixel;
-        const double east = (-dx * std::cos(h) + dy * std::sin(h)) * degPerPixel;
-        pose.latDeg = std::clamp(pose.latDeg + north, -90.0, 90.0);
-        const double c = std::max(0.01, std::cos(pose.latDeg * M_PI / 180.0));
-        pose.lonDeg = wrapLon(pose.lonDeg + east / c);
-      }
-      dragging = true;
-    } else {
-      dragging = false;
-    }
-    lastX = x;
-    lastY = y;
-    // Wheel: each notch 15 % of the height above the terrain under the camera.
-    if (input.scroll != 0.0) {
-      const double ground = renderer.terrainHeight(pose.latDeg, pose.lonDeg);
-      const double above = std::max(1.0, pose.altitudeM - ground);
-      pose.altitudeM = ground + std::clamp(above * std::pow(0.85, input.scroll), 1.0, 1e9);
-      input.scroll = 0.0;
-    }
-    const double turn = 60.0 * dt;
-    if (glfwGetKey(window, GLFW_KEY_W) == GLFW_PRESS)
-      pose.tiltDeg = std::min(90.0, pose.tiltDeg + turn);
-    if (glfwGetKey(window, GLFW_KEY_S) == GLFW_PRESS)
-      pose.tiltDeg = std::max(0.0, pose.tiltDeg - turn);
-    if (glfwGetKey(window, GLFW_KEY_A) == GLFW_PRESS) pose.headingDeg -= turn;
-    if (glfwGetKey(window, GLFW_KEY_D) == GLFW_PRESS) pose.headingDeg += turn;
-    pose.headingDeg = std::remainder(pose.headingDeg, 360.0);
-    if (glfwGetKey(window, GLFW_KEY_R) == GLFW_PRESS) {
-      pose = options.start;
-      flight.active = false;
-    }
-    if (flight.active) pose = flight.at(dt);
-    // Layers: 0-9 select a layer (a digit of an overlay also shows or hides it), - and = lower and
-    // raise the selected overlay's opacity, [ and ] step its time through the configured values.
-    bool layersChanged = false;
-    for (const int key : input.keys) {
-      const std::size_t n = renderer.layerCount();
-      if (renderer.stats().layers.size() != n) continue; // before the first frame
-      if (key >= GLFW_KEY_0 && key <= GLFW_KEY_9) {
-        const auto k = static_cast<std::size_t>(key - GLFW_KEY_0);
-        if (k >= n) continue;
-        selected = k;
-        if (k > 0) renderer.setLayerVisible(k, !renderer.stats().layers[k].visible);
-      } else if ((key == GLFW_KEY_MINUS || key == GLFW_KEY_EQUAL) && selected > 0) {
-        const double o = renderer.stats().layers[selected].opacity;
-        renderer.setLayerOpacity(selected,
-                                 std::clamp(o + (key == GLFW_KEY_EQUAL ? 0.1 : -0.1), 0.0, 1.0));
-      } else if ((key == GLFW_KEY_COMMA || key == GLFW_KEY_PERIOD) && selected > 0) {
-        const std::size_t to = key == GLFW_KEY_COMMA ? std::max<std::size_t>(1, selected - 1)
-                                                     : std::min(n - 1, selected + 1);
-        if (to == selected) continue;
-        renderer.moveLayer(selected, to);
-        if (selected < layerTimes.size() && to < layerTimes.size()) {
-          std::swap(layerTimes[selected], layerTimes[to]);
-          std::swap(timeIndex[selected], timeIndex[to]);
-        }
-        selected = to;
-      } else if (key == GLFW_KEY_SEMICOLON || key == GLFW_KEY_APOSTROPHE) {
-        const int levels = renderer.stats().layers[selected].levels;
-        const int deepest = key == GLFW_KEY_SEMICOLON ? std::max(0, levels - 2) : levels;
-        renderer.setLayerMaxLevel(selected, deepest);
-      } else if (key == GLFW_KEY_LEFT_BRACKET || key == GLFW_KEY_RIGHT_BRACKET) {
-        if (selected >= layerTimes.size() || layerTimes[selected].empty()) continue;
-        const auto& times = layerTimes[selected];
-        std::size_t& t = timeIndex[selected];
-        t = key == GLFW_KEY_RIGHT_BRACKET ? (t + 1) % times.size()
-                                          : (t + times.size() - 1) % times.size();
-        renderer.setLayerTime(selected, times[t]);
-      } else {
-        continue;
-      }
-      layersChanged = true;
-    }
-    input.keys.clear();
-    if (layersChanged) {
-      renderer.frame(pose); // the stats below show the change
-      const auto& l = renderer.stats().layers[selected];
-      std::printf("layer %zu %s: %s, opacity %.1f, levels %d%s, time %s%s%s\n",
-                  selected,
-                  l.name.c_str(),
-                  l.visible ? "shown" : "hidden",
-                  l.opacity,
-                  l.levels,
-                  l.maxLevel >= 0 ? (" (max " + std::to_string(l.maxLevel) + ")").c_str() : "",
-                  l.time.empty() ? "(default)" : l.time.c_str(),
-                  l.pendingTime.empty() ? "" : " -> ",
-                  l.pendingTime.c_str());
-      std::fflush(stdout);
-    }
-    if (glfwGetKey(window, GLFW_KEY_ESCAPE) == GLFW_PRESS)
-      glfwSetWindowShouldClose(window, GLFW_TRUE);
-
-    // Idle (nothing moved, nothing streaming): wait for input instead of drawing the same frame
-    // again, but draw twice a second so that retries and deferred splits still happen. An
-    // offline viewer left alone costs almost no CPU.
-    const bool moved = pose.latDeg != drawn.latDeg || pose.lonDeg != drawn.lonDeg ||
-                       pose.altitudeM != drawn.altitudeM || pose.headingDeg != drawn.headingDeg ||
-                       pose.tiltDeg != drawn.tiltDeg || fw != drawnW || fh != drawnH;
-    const double sinceDrawn =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - drawnAt).count();
-    const bool shot = glfwGetKey(window, GLFW_KEY_P) == GLFW_PRESS;
-    if (frames > 0 && !moved && !renderer.busy() && sinceDrawn < 0.5 &&
-        !(shot && !screenshotHeld)) {
-      glfwWaitEventsTimeout(0.5 - sinceDrawn);
-      continue;
-    }
-    renderer.frame(pose);
-    ++frames;
-    pose = renderer.drawnPose(); // raised above the terrain when it went below (thesis 4.5.3)
-    drawn = pose;
-    drawnW = fw;
-    drawnH = fh;
-    drawnAt = std::chrono::steady_clock::now();
-
-    if (shot && !screenshotHeld) {
-      const auto file =
-          options.screenshotDir / ("tellus-" + std::to_string(++screenshots) + ".png");
-      std::string err;
-      if (writePngRgb(file, renderer.width(), renderer.height(), renderer.readPixels(), &err))
-        std::printf("screenshot %s\n", file.c_str());
-      else
-        std::fprintf(stderr, "screenshot: %s\n", err.c_str());
-    }
-    screenshotHeld = shot;
-
-    const double sinceTitle = std::chrono::duration<double>(now - lastTitle).count();
-    if (sinceTitle >= 0.5) {
-      const auto& s = renderer.stats();
-      char title[256];
-      std::snprintf(title,
-                    sizeof title,
-                    "tellus  %.0f fps  %zu nodes  level %d  %zu tiles in flight  %.0f MB  "
-                    "%.4f, %.4f  %.0f m  heading %.0f  tilt %.0f",
-                    static_cast<double>(frames - framesAtTitle) / sinceTitle,
-                    s.nodesDrawn,
-                    s.maxLevel,
-                    s.tilesInFlight,
-                    static_cast<double>(s.textureBytes) / (1 << 20),
-                    pose.latDeg,
-                    pose.lonDeg,
-                    pose.altitudeM,
-                    pose.headingDeg,
-                    pose.tiltDeg);
-      glfwSetWindowTitle(window, title);
-      renderer.setOverlayText(title + 7); // the same line on screen, without "tellus  "
-      lastTitle = now;
-      framesAtTitle = frames;
-    }
-  }
-  glfwSetScrollCallback(window, nullptr);
-  glfwSetMouseButtonCallback(window, nullptr);
-  glfwSetKeyCallback(window, nullptr);
-  glfwSetWindowUserPointer(window, nullptr);
-  return frames;
+  ViewerLoop loop(renderer, window, options);
+  return loop.run();
 }
 
 } // namespace tellus::planet

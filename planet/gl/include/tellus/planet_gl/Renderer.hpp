@@ -10,6 +10,11 @@
  * One Renderer drives one layer. Both a window loop (`tellus view`) and the headless loop
  * (`tellus render`) call frame(pose) once per frame; readPixels() reads the last frame back.
  * Threads: every method belongs to the thread that created the Renderer (it owns the GL context).
+ *
+ * Inside (planet/gl/src/RendererImpl.hpp), frame() is a sequence of phases, one unit each (update,
+ * intake, plan, upload, mesh, draw), and its draw phase an ordered list of scene passes
+ * (ScenePass.hpp): the place for the atmosphere, sun and stars (issue 23). The body drawn is the
+ * Geodesy given to create() (issue 26 makes it one body among several).
  */
 
 #include <tellus/cache/TileSource.hpp>

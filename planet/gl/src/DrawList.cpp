@@ -1,0 +1,122 @@
+#include "DrawList.hpp"
+
+#include <algorithm>
+
+namespace tellus::planet {
+
+std::uint32_t DrawList::passes(std::uint32_t k) const {
+  std::uint32_t most = 0;
+  for (const DrawPart& p : parts)
+    most = std::max(most, p.overlayEnd - p.overlayBegin);
+  return std::max<std::uint32_t>(1, (most + k - 1) / k);
+}
+
+UvTransform regionToNodeUv(const Node& node, const Node& region, const UvTransform& regionUv) {
+  if (&region == &node) return regionUv;
+  const Sector& s = node.sector();
+  const Sector& c = region.sector();
+  const double w = s.east - s.west, h = s.north - s.south;
+  const glm::dvec2 k{w / (c.east - c.west), h / (c.north - c.south)};
+  const glm::dvec2 o{(c.west - s.west) / w, (c.south - s.south) / h};
+  // uvRegion = (uvNode - o) * k, then the region's transform.
+  UvTransform t;
+  t.scale = k * regionUv.scale;
+  t.offset = regionUv.offset - o * k * regionUv.scale;
+  return t;
+}
+
+DrawPart partFor(const Node& node,
+                 const Node& region,
+                 const GlTexture& texture,
+                 const UvTransform& regionUv) {
+  DrawPart d{&node, &texture, regionUv, 0, 4};
+  if (&region == &node) return d;
+  const Sector& s = node.sector();
+  const Sector& c = region.sector();
+  d.uv = regionToNodeUv(node, region, regionUv);
+  const bool south = c.south == s.south;
+  const bool fullWidth = c.west == s.west && c.east == s.east;
+  if (fullWidth) {
+    d.firstQuadrant = south ? 0 : 2;
+    d.lastQuadrant = d.firstQuadrant + 2;
+  } else {
+    d.firstQuadrant = (south ? 0 : 2) + (c.west == s.west ? 0 : 1);
+    d.lastQuadrant = d.firstQuadrant + 1;
+  }
+  return d;
+}
+
+void bindOverlays(const LayerSet& layers,
+                  const Node& region,
+                  DrawPart& part,
+                  std::vector<OverlayBinding>& bindings) {
+  part.overlayBegin = static_cast<std::uint32_t>(bindings.size());
+  for (std::size_t i = 1; i < layers.size(); ++i) {
+    const LayerSlot& slot = layers[i];
+    if (!slot.opt.visible || !(slot.opt.opacity > 0.0)) continue;
+    LayerTextures& l = *slot.current;
+    for (const Node* a = &region; a != nullptr; a = a->parent()) {
+      if (a->level() >= l.grid.numLevels()) continue;
+      const auto it = l.textures.find(a->key());
+      if (it == l.textures.end()) continue;
+      l.lru.use(a->key());
+      bindings.push_back({&it->second.texture,
+                          regionToNodeUv(*part.node, region, ancestorUv(region.key(), a->key())),
+                          static_cast<float>(slot.opt.opacity)});
+      break;
+    }
+  }
+  part.overlayEnd = static_cast<std::uint32_t>(bindings.size());
+}
+
+DrawList planDraw(const LayerSet& layers, const GlTexture& global, RenderStats& stats) {
+  DrawList list;
+  layers.forEach([](LayerTextures& l) {
+    for (const auto& root : l.tree->roots())
+      if (root) l.lru.use(root->key());
+  });
+  LayerTextures& base = layers.base();
+  stats.mergedNodesDrawn = 0;
+  for (const Node* n : layers.geo().drawList()) {
+    if (n->key().span > 1) ++stats.mergedNodesDrawn;
+    const TexturePlan plan = planTexture(*n);
+    for (int i = 0; i < plan.partCount; ++i) {
+      const TexturePart& p = plan.parts[static_cast<std::size_t>(i)];
+      const GlTexture* texture = &global;
+      UvTransform uv = p.uv;
+      if (p.source != TextureSource::Global && p.texture != nullptr) {
+        if (auto it = base.textures.find(p.texture->key()); it != base.textures.end()) {
+          texture = &it->second.texture;
+          base.lru.use(p.texture->key());
+        } else {
+          uv = globalUv(p.region->sector());
+        }
+      }
+      list.parts.push_back(partFor(*n, *p.region, *texture, uv));
+      bindOverlays(layers, *p.region, list.parts.back(), list.bindings);
+    }
+  }
+  return list;
+}
+
+bool drawsWhatLodAsks(const LayerSet& layers,
+                      const FrameStats& tree,
+                      const std::function<bool(const Node&)>& heightsDone) {
+  bool complete = tree.splitsDeferred == 0;
+  for (std::size_t i = 0; i < layers.size(); ++i) {
+    const LayerSlot& slot = layers[i];
+    complete = complete && !slot.pending;
+    if (i == 0 || !slot.opt.visible) continue;
+    const LayerTextures& l = *slot.current;
+    for (const Node* n : l.tree->drawList())
+      complete = complete && l.done(*n);
+  }
+  const LayerTextures& base = layers.base();
+  for (const Node* n : layers.geo().drawList()) {
+    complete = complete && base.done(*n);
+    complete = complete && heightsDone(*n);
+  }
+  return complete;
+}
+
+} // namespace tellus::planet

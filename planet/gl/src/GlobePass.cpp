@@ -1,0 +1,153 @@
+#include "GlobePass.hpp"
+
+#include "Dome.hpp"
+#include "GlShader.hpp"
+#include "Shaders.hpp"
+
+#include <tellus/planet/GpuVertex.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+
+namespace tellus::planet {
+
+std::expected<std::unique_ptr<GlobePass>, std::string>
+GlobePass::create(const GlCapabilities& gl, const GlobePassOptions& options, NodeMeshes& meshes) {
+  std::unique_ptr<GlobePass> p(new GlobePass(meshes));
+  // Double vertex positions where the GL has them (4.0+: ARB_gpu_shader_fp64; 64-bit vertex
+  // attributes are core from 4.1), else the two-float path.
+  p->fp64_ = gl.gl45 && options.fp64;
+  std::string defines = p->fp64_ ? "#define TELLUS_FP64 1\n" : "";
+  if (options.fisheye) defines += "#define TELLUS_FISHEYE 1\n";
+  GLint units = 16;
+  glGetIntegerv(GL_MAX_TEXTURE_IMAGE_UNITS, &units);
+  p->overlaysPerPass_ = std::clamp(units - 1, 1, 8);
+  if (options.overlaysPerPass > 0)
+    p->overlaysPerPass_ = std::min(p->overlaysPerPass_, options.overlaysPerPass);
+  std::string fragDefines = "#define TELLUS_OVERLAYS " + std::to_string(p->overlaysPerPass_) +
+                            "\n#define TELLUS_OVERLAY_STEPS";
+  for (int i = 0; i < p->overlaysPerPass_; ++i)
+    fragDefines += " TELLUS_OVERLAY(" + std::to_string(i) + ")";
+  fragDefines += "\n";
+  const std::string header = gl.glslHeader();
+  auto program = linkProgram(
+      header + defines + kShader_planet_vert, header + fragDefines + kShader_planet_frag, "shader");
+  if (!program) return std::unexpected(program.error());
+  p->program_ = std::move(*program);
+  const GLuint id = p->program_.id();
+  p->uViewProj_ = glGetUniformLocation(id, "uViewProj");
+  p->uEye_ = glGetUniformLocation(id, "uEye");
+  p->uEyeHigh_ = glGetUniformLocation(id, "uEyeHigh");
+  p->uEyeLow_ = glGetUniformLocation(id, "uEyeLow");
+  p->uUv_ = glGetUniformLocation(id, "uUv");
+  p->uTexture_ = glGetUniformLocation(id, "uTexture");
+  p->uSun_ = glGetUniformLocation(id, "uSun");
+  p->uBase_ = glGetUniformLocation(id, "uBase");
+  p->uOverlayCount_ = glGetUniformLocation(id, "uOverlayCount");
+  p->uOverlayUv_ = glGetUniformLocation(id, "uOverlayUv");
+  p->uOverlayOpacity_ = glGetUniformLocation(id, "uOverlayOpacity");
+  glUseProgram(id);
+  for (int i = 0; i < p->overlaysPerPass_; ++i)
+    glUniform1i(glGetUniformLocation(id, ("uOverlay[" + std::to_string(i) + "]").c_str()), 1 + i);
+  glUseProgram(0);
+  return p;
+}
+
+void GlobePass::setFrameUniforms(const FrameContext& frame) {
+  glDisable(GL_CULL_FACE);
+  glUseProgram(program_.id());
+  glUniform1i(uTexture_, 0);
+  glActiveTexture(GL_TEXTURE0);
+  // One view-projection for every node, rotation only (the eye at the origin); positions arrive
+  // as doubles or high/low float pairs and the shader subtracts the eye's.
+  glUniformMatrix4fv(uViewProj_, 1, GL_FALSE, &frame.viewProjection[0][0]);
+  if (fp64_) {
+    glUniform3d(uEye_, frame.eye.x, frame.eye.y, frame.eye.z);
+  } else {
+    const SplitDouble x = splitDouble(frame.eye.x), y = splitDouble(frame.eye.y),
+                      z = splitDouble(frame.eye.z);
+    glUniform3f(uEyeHigh_, x.high, y.high, z.high);
+    glUniform3f(uEyeLow_, x.low, y.low, z.low);
+  }
+  if (frame.sun) {
+    glUniform4f(uSun_,
+                static_cast<float>(frame.sun->x),
+                static_cast<float>(frame.sun->y),
+                static_cast<float>(frame.sun->z),
+                1.0f);
+  } else {
+    glUniform4f(uSun_, 0.0f, 0.0f, 0.0f, 0.0f);
+  }
+}
+
+void GlobePass::draw(const FrameContext& frame) {
+  setFrameUniforms(frame);
+  if (frame.fisheye != nullptr)
+    frame.fisheye->beginDirect(
+        program_, frame.camera, frame.framebufferWidth, frame.framebufferHeight);
+  const DrawList& list = frame.drawList;
+  const auto k = static_cast<std::uint32_t>(overlaysPerPass_);
+  const std::uint32_t passes = list.passes(k);
+  frame.stats.passes = static_cast<int>(passes);
+  for (std::uint32_t pass = 0; pass < passes; ++pass) {
+    glUniform1f(uBase_, pass == 0 ? 1.0f : 0.0f);
+    if (pass == 1) {
+      glEnable(GL_BLEND);
+      glBlendFuncSeparate(GL_ONE, GL_ONE_MINUS_SRC_ALPHA, GL_ZERO, GL_ONE);
+      glDepthFunc(GL_GEQUAL);
+      glDepthMask(GL_FALSE);
+    }
+    for (const DrawPart& p : list.parts) {
+      if (!frame.target.draws(*p.node)) continue;
+      const std::uint32_t from = std::min(p.overlayEnd, p.overlayBegin + pass * k);
+      const std::uint32_t count = std::min(k, p.overlayEnd - from);
+      if (pass > 0 && count == 0) continue;
+      drawPart(p, list, from, count, frame.stats);
+    }
+  }
+  if (passes > 1) {
+    glDisable(GL_BLEND);
+    glDepthFunc(GL_GREATER);
+    glDepthMask(GL_TRUE);
+  }
+  glBindVertexArray(0);
+  if (frame.fisheye != nullptr) frame.fisheye->endDirect(program_);
+}
+
+void GlobePass::drawPart(const DrawPart& p,
+                         const DrawList& list,
+                         std::uint32_t from,
+                         std::uint32_t count,
+                         RenderStats& stats) {
+  std::array<GLfloat, 32> uvs{};
+  std::array<GLfloat, 8> opacities{};
+  const GpuMesh& m = meshes_.meshFor(*p.node, stats);
+  const std::array<float, 4> uv = uvUniform(p.uv);
+  glUniform4f(uUv_, uv[0], uv[1], uv[2], uv[3]);
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const OverlayBinding& b = list.bindings[from + i];
+    glActiveTexture(GL_TEXTURE1 + i);
+    glBindTexture(GL_TEXTURE_2D, b.texture->id());
+    const std::array<float, 4> u = uvUniform(b.uv);
+    std::copy(u.begin(), u.end(), uvs.begin() + static_cast<std::ptrdiff_t>(4 * i));
+    opacities[i] = b.opacity;
+  }
+  glUniform1i(uOverlayCount_, static_cast<GLint>(count));
+  if (count > 0) {
+    glUniform4fv(uOverlayUv_, static_cast<GLsizei>(count), uvs.data());
+    glUniform1fv(uOverlayOpacity_, static_cast<GLsizei>(count), opacities.data());
+  }
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, p.texture->id());
+  glBindVertexArray(m.vao.id());
+  const std::uint32_t first = m.quadrantStart[static_cast<std::size_t>(p.firstQuadrant)];
+  const std::uint32_t last = m.quadrantStart[static_cast<std::size_t>(p.lastQuadrant)];
+  glDrawElements(
+      GL_TRIANGLES,
+      static_cast<GLsizei>(last - first),
+      GL_UNSIGNED_INT,
+      reinterpret_cast<const void*>(static_cast<std::uintptr_t>(first) * sizeof(std::uint32_t)));
+}
+
+} // namespace tellus::planet

@@ -1,0 +1,65 @@
+#pragma once
+/**
+ * @file NodeTextures.hpp
+ * @brief Textures of nodes: how one is made (RGBA8, every mip level down to 1 x 1, immutable
+ * storage where the GL has it), the pool of a layer's free ones, and the global texture (the
+ * always-resident last fallback). Main thread, context current (GlObjects.hpp).
+ */
+
+#include "GlObjects.hpp"
+
+#include <cstddef>
+#include <filesystem>
+#include <vector>
+
+namespace tellus::planet {
+
+/** How node textures are made on this GL: glTexStorage2D (4.2 or ARB_texture_storage), and the
+ * anisotropic filtering asked for (1: off; already capped by the GL). */
+struct NodeTextureFormat {
+  bool storage = false;
+  float anisotropy = 1.0f;
+};
+
+/** The mip levels of a width x height texture: every level down to 1 x 1, as the decoder builds
+ * them. */
+int nodeTextureLevels(int width, int height) noexcept;
+
+/** A new node texture of that size with all its levels allocated, linear-mipmap filtered,
+ * clamped at its edges. Left bound to GL_TEXTURE_2D. */
+GlTexture makeNodeTexture(int width, int height, const NodeTextureFormat& format);
+
+/** A node texture and whether it is wider than its layer's tiles (a polar cap's: never pooled). */
+struct NodeTexture {
+  GlTexture texture{NoCreate};
+  bool wide = false;
+};
+
+/** The free node textures of one layer. Every node texture of a layer has its grid's tile size
+ * (but a polar cap's), so any freed one fits the next node: evicted textures wait here (up to
+ * kMaxFree) and are reused before a new one is made. */
+class TexturePool {
+public:
+  static constexpr std::size_t kMaxFree = 64;
+  /** A texture for a width x height image of a layer whose tiles are tileWidth x tileHeight: a
+   * free one when the sizes agree and one is free (then ++*reused), else a new one. */
+  NodeTexture acquire(int width,
+                      int height,
+                      int tileWidth,
+                      int tileHeight,
+                      const NodeTextureFormat& format,
+                      std::size_t* reused);
+  /** A texture no longer drawn: kept for reuse, or deleted when wide or the pool is full. */
+  void release(NodeTexture texture);
+  std::size_t size() const noexcept { return free_.size(); }
+
+private:
+  std::vector<GlTexture> free_;
+};
+
+/** The global texture from an equirectangular JPEG/PNG of the whole globe (north up, -180 at the
+ * left; CPU mip levels, wrapping east-west); a flat dark blue when the path is empty or the file
+ * unreadable. Left bound to GL_TEXTURE_2D. */
+GlTexture makeGlobalTexture(const std::filesystem::path& image);
+
+} // namespace tellus::planet

@@ -1,0 +1,120 @@
+#pragma once
+// Shared by the tests of the renderer's units (layers, update, intake, draw list, uploads): a tile
+// source of named layers that answers every request at once and records it, a LayerSet over it,
+// and cameras. GL-free: nothing here makes a GL object.
+
+#include "../../planet/gl/src/LayerSet.hpp"
+
+#include <tellus/cache/TileSource.hpp>
+#include <tellus/planet/Camera.hpp>
+#include <tellus/planet/Geodesy.hpp>
+#include <tellus/planet_gl/Renderer.hpp>
+
+#include <gtest/gtest.h>
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace tellus::planet::layertest {
+
+/** Layers by name, each with its grid and the answer to every request for it (Absent by
+ * default; Ok: a few bytes of "image/png"). Any time of a known layer exists. */
+class FakeLayerSource final : public ITileSource {
+public:
+  void add(const std::string& name, GridSpec grid, TileStatus answer = TileStatus::Absent) {
+    layers_[name] = {grid, answer};
+  }
+  std::optional<DatasetSpec> describe(std::string_view layer, std::string_view) const override {
+    const auto it = layers_.find(std::string(layer));
+    if (it == layers_.end()) return std::nullopt;
+    DatasetSpec d;
+    d.name = it->first;
+    d.grid = it->second.grid;
+    d.mimeType = "image/png";
+    return d;
+  }
+  TileRequestId request(const TileAddress& a, double, Callback done) override {
+    requests.push_back(a);
+    TileResult r;
+    r.status = layers_.at(a.layer).answer;
+    if (r.status == TileStatus::Ok) {
+      r.contentType = "image/png";
+      r.bytes = {std::byte{1}, std::byte{2}, std::byte{3}};
+    }
+    done(std::move(r));
+    return ++next_;
+  }
+  void reprioritize(TileRequestId, double) override {}
+  bool cancel(TileRequestId) override { return false; }
+
+  /** Requests for a layer at a time, in the order made. */
+  std::size_t requestsFor(const std::string& layer, const std::string& time = {}) const {
+    std::size_t n = 0;
+    for (const TileAddress& a : requests)
+      if (a.layer == layer && a.time == time) ++n;
+    return n;
+  }
+  std::vector<TileAddress> requests;
+
+private:
+  struct Layer {
+    GridSpec grid;
+    TileStatus answer = TileStatus::Absent;
+  };
+  std::map<std::string, Layer> layers_;
+  TileRequestId next_ = 0;
+};
+
+inline GridSpec grid36(int levels, int tileSize = 256) {
+  GridSpec g;
+  g.levelZeroDeltaDeg = 36.0;
+  g.tileWidth = g.tileHeight = tileSize;
+  g.numLevels = levels;
+  return g;
+}
+
+/** A LayerSet of the options' base and overlays over a source (opened; the test fails if it
+ * cannot be). */
+struct Layers {
+  Layers(FakeLayerSource& source, RendererOptions o) : opt(std::move(o)) {
+    const auto spec = source.describe(opt.layer, opt.time);
+    EXPECT_TRUE(spec.has_value());
+    set = std::make_unique<LayerSet>(source, geodesy, opt, *TileGrid::create(spec->grid));
+    const auto opened = set->open();
+    EXPECT_TRUE(opened.has_value()) << (opened ? "" : opened.error());
+  }
+  Geodesy geodesy;
+  RendererOptions opt;
+  std::unique_ptr<LayerSet> set;
+};
+
+inline RendererOptions layerOptions(const std::string& base,
+                                    const std::vector<std::string>& overlays = {}) {
+  RendererOptions o;
+  o.layer = base;
+  o.width = 640;
+  o.height = 480;
+  for (const std::string& name : overlays) {
+    LayerOptions l;
+    l.layer = name;
+    o.overlays.push_back(l);
+  }
+  return o;
+}
+
+/** The roots that are neither polar caps nor empty slots (a cap row has one root). */
+inline std::vector<Node*> plainRoots(const Quadtree& tree) {
+  std::vector<Node*> out;
+  for (const auto& r : tree.roots())
+    if (r && !r->isCap()) out.push_back(r.get());
+  return out;
+}
+
+/** A camera looking straight down from altitudeM over (lat, lon), 640 x 480. */
+inline Camera cameraAt(const Geodesy& g, double lat, double lon, double altitudeM) {
+  return Camera(g, CameraPose{lat, lon, altitudeM, 0.0, 0.0}, Viewport{640, 480});
+}
+
+} // namespace tellus::planet::layertest
