@@ -2,9 +2,9 @@
 // seeding through the tile service with one GetMap per metatile against a fake WMS that draws
 // georeferenced pixels (so every tile can be checked against where it is on the globe).
 
-#include "../../proxy/src/Codecs.hpp"
-#include "../../proxy/src/JpegCrop.hpp"
-#include "../../proxy/src/MetaTile.hpp"
+#include "../../proxy/src/codec/Codecs.hpp"
+#include "../../proxy/src/tiles/JpegCrop.hpp"
+#include "../../proxy/src/tiles/MetaTile.hpp"
 #include "../support/CacheFixtures.hpp"
 #include "../support/FakeUpstream.hpp"
 #include "../support/HttpClient.hpp"

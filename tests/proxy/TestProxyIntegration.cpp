@@ -1,7 +1,7 @@
 // tellus serve's pieces wired as the executable wires them (cache, fetcher, tile service, front
 // end, HTTP server on a loopback port), against a scriptable fake upstream and a real MapServer.
 
-#include "../../proxy/src/MapComposer.hpp"
+#include "../../proxy/src/compose/MapComposer.hpp"
 #include "../support/CacheFixtures.hpp"
 #include "../support/FakeUpstream.hpp"
 #include "../support/HttpClient.hpp"

@@ -3,7 +3,7 @@
  * @file Fetcher.hpp
  * @brief The upstream fetcher: HTTP(S) GETs over one libcurl multi handle driven by one thread,
  * with per-upstream concurrency caps, retries with jittered exponential backoff and a circuit
- * breaker per upstream. libcurl stays inside proxy/src/Fetcher.cpp.
+ * breaker per upstream. libcurl stays inside proxy/src/upstream/Fetcher.cpp.
  */
 
 #include <array>

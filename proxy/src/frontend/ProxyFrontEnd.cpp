@@ -1,4 +1,4 @@
-#include "MapComposer.hpp"
+#include "compose/MapComposer.hpp"
 
 #include <tellus/cache/TilePath.hpp>
 #include <tellus/proxy/Capabilities.hpp>

@@ -1,4 +1,4 @@
-#include "ImagingLoader.hpp"
+#include "codec/ImagingLoader.hpp"
 
 #include <tellus/proxy/ImagingModule.hpp>
 

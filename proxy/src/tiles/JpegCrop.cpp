@@ -2,9 +2,9 @@
 // splitRaw keeps no object with a destructor alive across its libjpeg calls; what it produces is
 // written into malloc()ed buffers that the caller owns (and frees, also after an error).
 
-#include "JpegCrop.hpp"
+#include "tiles/JpegCrop.hpp"
 
-#include "Codecs.hpp"
+#include "codec/Codecs.hpp"
 
 #include <csetjmp>
 #include <cstdio> // jpeglib.h needs FILE

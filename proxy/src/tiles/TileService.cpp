@@ -1,5 +1,5 @@
-#include "MetaTile.hpp"
-#include "WorkerPool.hpp"
+#include "tiles/MetaTile.hpp"
+#include "tiles/WorkerPool.hpp"
 
 #include <tellus/cache/RequestQueue.hpp>
 #include <tellus/cache/TilePath.hpp>

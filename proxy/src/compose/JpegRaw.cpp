@@ -14,7 +14,7 @@
 // which jpeg_crop_scanline sets. TestJpegRaw checks region decodes against whole decodes, so a
 // libjpeg-turbo that behaves otherwise fails the tests rather than making wrong maps.
 
-#include "JpegRaw.hpp"
+#include "compose/JpegRaw.hpp"
 
 #include <algorithm>
 #include <cmath>

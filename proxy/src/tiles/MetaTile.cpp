@@ -1,7 +1,7 @@
-#include "MetaTile.hpp"
+#include "tiles/MetaTile.hpp"
 
-#include "Codecs.hpp"
-#include "JpegCrop.hpp"
+#include "codec/Codecs.hpp"
+#include "tiles/JpegCrop.hpp"
 
 #include <algorithm>
 #include <cstring>

@@ -1,4 +1,4 @@
-#include "Quantize.hpp"
+#include "codec/Quantize.hpp"
 
 #include <algorithm>
 

@@ -1,5 +1,5 @@
-#include "Codecs.hpp"
-#include "ImagingLoader.hpp"
+#include "codec/Codecs.hpp"
+#include "codec/ImagingLoader.hpp"
 
 #include <tellus/proxy/TileValidation.hpp>
 

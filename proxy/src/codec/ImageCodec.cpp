@@ -1,6 +1,6 @@
-#include "Codecs.hpp"
-#include "ImagingLoader.hpp"
-#include "Quantize.hpp"
+#include "codec/Codecs.hpp"
+#include "codec/ImagingLoader.hpp"
+#include "codec/Quantize.hpp"
 
 #include <tellus/proxy/ImageCodec.hpp>
 

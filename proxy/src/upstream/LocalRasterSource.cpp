@@ -1,4 +1,4 @@
-#include "ImagingLoader.hpp"
+#include "codec/ImagingLoader.hpp"
 
 #include <tellus/proxy/ImageCodec.hpp>
 #include <tellus/proxy/LocalRasterSource.hpp>

@@ -1,10 +1,10 @@
-#include "MapComposer.hpp"
+#include "compose/MapComposer.hpp"
 
-#include "AdmittingLru.hpp"
-#include "Codecs.hpp"
-#include "JpegRaw.hpp"
-#include "Quantize.hpp"
-#include "WorkerPool.hpp"
+#include "codec/Codecs.hpp"
+#include "codec/Quantize.hpp"
+#include "compose/AdmittingLru.hpp"
+#include "compose/JpegRaw.hpp"
+#include "tiles/WorkerPool.hpp"
 
 #include <tellus/cache/TilePath.hpp>
 #include <tellus/proxy/Compose.hpp>

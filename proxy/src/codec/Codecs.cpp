@@ -4,7 +4,7 @@
 // that report errors by longjmp: the functions that call them keep no object with a destructor
 // alive across those calls.
 
-#include "Codecs.hpp"
+#include "codec/Codecs.hpp"
 
 #include <algorithm>
 #include <csetjmp>
