@@ -16,7 +16,7 @@ using namespace std::chrono_literals;
 namespace {
 
 /** A clock the test moves by hand. */
-struct ManualClock {
+struct BudgetClock {
   std::shared_ptr<std::atomic<std::int64_t>> ms = std::make_shared<std::atomic<std::int64_t>>(0);
   FetchBudget::Clock clock() const {
     return
@@ -28,7 +28,7 @@ struct ManualClock {
 } // namespace
 
 TEST(FetchBudget, AMinutesWorthAtOnceThenRefilledEvenly) {
-  ManualClock t;
+  BudgetClock t;
   FetchBudget b(60, t.clock()); // one a second, sixty at once
   for (int i = 0; i < 60; ++i)
     ASSERT_FALSE(b.take("10.0.0.1")) << i;
@@ -63,7 +63,7 @@ TEST(FetchBudget, ZeroIsUnlimited) {
 }
 
 TEST(FetchBudget, ConcurrentClientsNeverTakeMoreThanTheirBudget) {
-  ManualClock t;
+  BudgetClock t;
   FetchBudget b(100, t.clock());
   std::atomic<int> granted{0};
   std::vector<std::thread> threads;
