@@ -122,7 +122,7 @@ struct ProxyFrontEnd::Impl {
 
   Impl(TileService& t, FrontEndOptions o)
       : tiles(t), options(std::move(o)), metrics(layerNames(t)),
-        budget(options.fetchesPerClientPerMinute, options.clock),
+        budget(options.fetchesPerClientPerMinute, options.clock ? *options.clock : Clock::system()),
         composer(t,
                  options.composeThreads,
                  options.maxTilesPerMap,

@@ -12,15 +12,14 @@ namespace {
 constexpr std::size_t kForgetAbove = 100000;
 } // namespace
 
-FetchBudget::FetchBudget(double perMinute, Clock clock)
-    : perMinute_(std::isfinite(perMinute) && perMinute > 0 ? perMinute : 0.0),
-      clock_(clock ? std::move(clock) : Clock([] { return std::chrono::steady_clock::now(); })) {}
+FetchBudget::FetchBudget(double perMinute, const Clock& clock)
+    : perMinute_(std::isfinite(perMinute) && perMinute > 0 ? perMinute : 0.0), clock_(clock) {}
 
 std::optional<std::chrono::milliseconds> FetchBudget::take(std::string_view client) {
   if (unlimited()) return std::nullopt;
   const double capacity = std::max(1.0, perMinute_);
   const double perSecond = perMinute_ / 60.0;
-  const auto now = clock_();
+  const auto now = clock_.now();
   std::lock_guard lock(mutex_);
   if (buckets_.size() > kForgetAbove) {
     std::erase_if(buckets_, [&](const auto& kv) {

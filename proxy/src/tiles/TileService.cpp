@@ -348,10 +348,15 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     land(fk, std::move(a));
   }
 
+  /** Wall time in Unix milliseconds, by the injected clock (TileServiceOptions::clock). */
+  UnixMillis nowMillis() const {
+    return (options.clock ? *options.clock : Clock::system()).wallMillis();
+  }
+
   TileMeta freshMeta(const LayerSpec& l) const {
     TileMeta m;
     m.contentType = l.dataset.mimeType;
-    m.fetchedAt = unixMillisNow();
+    m.fetchedAt = nowMillis();
     if (l.ttl.count() > 0) m.expiresAt = m.fetchedAt + l.ttl.count();
     return m;
   }
@@ -447,7 +452,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
       return;
     }
     if (noSuchTile(resp.status)) {
-      (void)cache.putAbsent(fk.dataset, fk.key, unixMillisNow() + options.absentRetry.count());
+      (void)cache.putAbsent(fk.dataset, fk.key, nowMillis() + options.absentRetry.count());
       land(fk, absent(TileOrigin::Miss, "the upstream has no tile here"));
       return;
     }
@@ -502,7 +507,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     auto found =
         id < 0 ? std::expected<CacheLookup, CacheError>(CacheLookup{}) : cache.openTile(id, key);
     if (!found) return done(error("cache: " + std::string(toString(found.error().code))));
-    const UnixMillis now = unixMillisNow();
+    const UnixMillis now = nowMillis();
     if (found->kind == CacheLookup::Kind::Hit && !found->stale) {
       return done(tile(TileOrigin::Hit,
                        {},
@@ -587,7 +592,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
       ds = std::move(*found);
     }
     const auto& [id, folder] = ds;
-    const UnixMillis now = unixMillisNow();
+    const UnixMillis now = nowMillis();
     std::vector<TileKey> owned;
     for (const TileKey& k : keys) {
       if (k.level < 0 || k.level >= g.numLevels() || !g.isValid(k)) {
@@ -664,7 +669,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     FetchResponse& resp = *r;
     if (noSuchTile(resp.status)) {
       for (const TileKey& k : owned)
-        (void)cache.putAbsent(id, k, unixMillisNow() + options.absentRetry.count());
+        (void)cache.putAbsent(id, k, nowMillis() + options.absentRetry.count());
       landAll(absent(TileOrigin::Miss, "the upstream has no tile here"));
       return;
     }

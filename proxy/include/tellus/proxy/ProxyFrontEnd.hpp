@@ -42,7 +42,9 @@ struct FrontEndOptions {
    * once, refilled evenly); past it a request that needs a fetch gets 429 with Retry-After (an OGC
    * exception with status 429 for /wms) while cached tiles stay served. 0 = unlimited. */
   double fetchesPerClientPerMinute = 600;
-  FetchBudget::Clock clock; ///< the budget's clock; empty: std::chrono::steady_clock (tests inject)
+  /// The fetch budget's time; null: the system's (tests inject a ManualClock, which outlives the
+  /// front end).
+  const Clock* clock = nullptr;
 };
 
 class ProxyFrontEnd {
