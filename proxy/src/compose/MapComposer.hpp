@@ -62,6 +62,8 @@ struct ComposedMap {
   std::size_t fallbackPixels = 0;
 };
 
+class DecodedTileCache; // MapJob.hpp
+
 class MapComposer {
 public:
   /** `decodedCacheBytes`: decoded tiles kept between maps, a tile admitted when it is used often
@@ -94,8 +96,7 @@ private:
   std::size_t maxTiles_;
   int jpegQuality_;
   bool yccDisabled_ = false; ///< TELLUS_COMPOSE_YCC=0: JPEG maps on the RGB path (for comparisons)
-  class DecodedCache;
-  std::unique_ptr<DecodedCache> decodedCache_;
+  std::unique_ptr<DecodedTileCache> decodedCache_;
   struct Pool;
   /** Where the last tile answer of a map posts its job; null once the composer is going away. */
   struct Gate {
