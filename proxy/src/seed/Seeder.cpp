@@ -111,158 +111,84 @@ seedFromRaster(TileCache& cache,
 
 namespace tellus {
 
-std::expected<SeedReport, std::string> seedThroughService(TileService& tiles,
-                                                          TileCache& cache,
-                                                          const std::string& layerName,
-                                                          const ServiceSeedOptions& options,
-                                                          const SeedProgress& progress) {
-  using Steady = std::chrono::steady_clock;
-  const LayerSpec* layer = tiles.layer(layerName);
-  const TileGrid* grid = tiles.grid(layerName);
-  if (!layer || !grid) return std::unexpected("no layer '" + layerName + "'");
-  if (options.concurrency < 1) return std::unexpected("concurrency must be at least 1");
-  if (!(options.rate >= 0) || !std::isfinite(options.rate))
-    return std::unexpected("rate must be a finite number >= 0");
-  const auto spec = tiles.describe(layerName, options.time);
-  if (!spec) return std::unexpected("layer '" + layerName + "' has no dataset");
-  auto dataset = cache.registerDataset(*spec);
-  // A cache too full to register the dataset stops the run (below, after a dry run's count).
-  const bool noRoom = !dataset && dataset.error().code == CacheErrc::DiskFull;
-  if (!dataset && !noRoom) return std::unexpected("cache: " + dataset.error().message);
-  const Sector box = options.range.box.value_or(spec->grid.sector);
+namespace {
 
-  SeedReport report;
-  const auto started = Steady::now();
-  auto elapsed = [&] { return std::chrono::duration<double>(Steady::now() - started).count(); };
+using Steady = std::chrono::steady_clock;
 
-  // Work list: every key of the range the index does not hold yet (resumable from the index).
-  std::vector<std::vector<TileKey>> levels;
-  for (std::int32_t level = std::max(0, options.range.fromLevel);
-       level <= std::min(options.range.toLevel, grid->numLevels() - 1);
-       ++level) {
-    auto keys = grid->keysCovering(box, level);
-    if (!keys)
-      return std::unexpected("level " + std::to_string(level) +
-                             " has too many tiles to seed at once: narrow --bbox");
-    report.planned += static_cast<std::int64_t>(keys->size());
-    levels.push_back(std::move(*keys));
-  }
-  if (options.range.dryRun) {
-    report.bytes = report.planned * options.estimateBytesPerTile;
-    if (progress) progress(report, elapsed());
-    return report;
-  }
-  if (noRoom) {
-    report.stoppedBecause = dataset.error().message;
-    return report;
+/**
+ * One run of seedThroughService: the work list (every key of the range, per level), then the
+ * tiles the index does not hold yet asked of the tile service, a tile or a metatile's missing
+ * tiles per unit of work, at most `concurrency` units at once and paced by `rate`; the failed ones
+ * retried tile by tile after the pass. A tile the cache refuses for lack of space stops it.
+ */
+class ServiceSeeder {
+public:
+  ServiceSeeder(TileService& tiles,
+                TileCache& cache,
+                const std::string& layer,
+                const ServiceSeedOptions& options,
+                const SeedProgress& progress)
+      : tiles_(tiles), cache_(cache), layer_(layer), options_(options), progress_(progress),
+        started_(Steady::now()) {}
+
+  /** Every key of `box` at each level of the range, counted as planned. */
+  std::expected<std::vector<std::vector<TileKey>>, std::string> plan(const TileGrid& grid,
+                                                                     const Sector& box) {
+    std::vector<std::vector<TileKey>> levels;
+    for (std::int32_t level = std::max(0, options_.range.fromLevel);
+         level <= std::min(options_.range.toLevel, grid.numLevels() - 1);
+         ++level) {
+      auto keys = grid.keysCovering(box, level);
+      if (!keys)
+        return std::unexpected("level " + std::to_string(level) +
+                               " has too many tiles to seed at once: narrow --bbox");
+      report_.planned += static_cast<std::int64_t>(keys->size());
+      levels.push_back(std::move(*keys));
+    }
+    return levels;
   }
 
-  std::mutex mutex;
-  std::condition_variable cv;
-  int inFlight = 0;
-  const StoreStatus storeBefore = cache.storeStatus();
-  // Set (under `mutex`) once the cache refuses a tile for lack of space: nothing more is started.
-  bool stopped = false;
-  auto stop = [&](std::string why) {
-    if (stopped) return;
-    stopped = true;
-    report.stoppedBecause = std::move(why);
-  };
-  std::deque<std::pair<TileKey, int>> retryQueue; // key, attempts so far
-  std::vector<std::pair<TileKey, std::string>> lastErrors;
-  auto lastProgress = Steady::now();
+  SeedReport dryRun() {
+    report_.bytes = report_.planned * options_.estimateBytesPerTile;
+    if (progress_) progress_(report_, elapsed());
+    return report_;
+  }
 
-  const auto interval = options.rate > 0 ? std::chrono::duration<double>(1.0 / options.rate)
-                                         : std::chrono::duration<double>(0);
-  auto nextStart = Steady::now();
+  SeedReport noRoom(std::string why) {
+    report_.stoppedBecause = std::move(why);
+    return report_;
+  }
 
-  // One answer for one tile (under `mutex`).
-  auto count = [&](const TileKey& key, int attempt, const TileAnswer& a) {
-    const bool full = a.notStored && a.notStored->code == CacheErrc::DiskFull;
-    if (a.kind == TileAnswer::Kind::Tile && !a.notStored) {
-      ++report.written;
-      report.bytes += a.file ? a.file->size() : static_cast<std::int64_t>(a.bytes.size());
-      // A write-behind row the index refused (its put had returned): stop as for a refusal.
-      if (!cache.storeStatus().writable) stop(cacheFullMessage(cache));
-    } else if (a.kind == TileAnswer::Kind::Tile && full) {
-      ++report.notStored;
-      stop(a.notStored->message);
-    } else if (a.kind == TileAnswer::Kind::Absent && a.origin != TileOrigin::Offline) {
-      ++report.absent;
-    } else if (attempt < options.retries && !stopped) {
-      retryQueue.emplace_back(key, attempt + 1);
-    } else {
-      ++report.failed;
-      if (report.failures.size() < 20) {
-        const std::string why = a.notStored ? "not stored: " + a.notStored->message : a.message;
-        report.failures.push_back("L" + std::to_string(key.level) + " R" + std::to_string(key.row) +
-                                  " C" + std::to_string(key.col) + ": " + why);
-      }
+  SeedReport run(DatasetId dataset, const std::vector<std::vector<TileKey>>& levels) {
+    storeBefore_ = cache_.storeStatus();
+    lastProgress_ = Steady::now();
+    interval_ = options_.rate > 0 ? std::chrono::duration<double>(1.0 / options_.rate)
+                                  : std::chrono::duration<double>(0);
+    nextStart_ = Steady::now();
+    // Metatile order: each level's missing tiles grouped by the n x n block they belong to,
+    // blocks from the south-west, one request per block (n = 1: tile by tile, row-major).
+    const std::int32_t n = std::max<std::int32_t>(1, tiles_.metaTileSize(layer_));
+    for (const auto& keys : levels) {
+      if (isStopped()) break;
+      seedLevel(dataset, keys, n);
     }
-  };
+    retryFailed();
+    waitForAll();
+    settleWriteBehind(cache_, storeBefore_, report_);
+    if (progress_) progress_(report_, elapsed());
+    return report_;
+  }
 
-  // One unit of work: a tile, or the missing tiles of one metatile (one upstream request); the
-  // window (`concurrency`) counts units. Retries go tile by tile: an upstream that cannot answer
-  // a metatile (too large an image, a timeout) still gets its tiles asked one at a time.
-  auto start = [&](std::vector<TileKey> keys, int attempt) {
-    if (options.rate > 0) { // pace starts evenly, in tiles per second
-      std::this_thread::sleep_until(nextStart);
-      nextStart = std::max(nextStart, Steady::now()) +
-                  std::chrono::duration_cast<Steady::duration>(interval * keys.size());
-    }
-    {
-      std::unique_lock lock(mutex);
-      cv.wait(lock, [&] { return inFlight < options.concurrency; });
-      if (stopped) return; // the cache is full: fetching more would only be thrown away
-      ++inFlight;
-    }
-    if (keys.size() == 1) {
-      const TileKey key = keys.front();
-      tiles.getTile(layerName, options.time, key, [&, key, attempt](TileAnswer&& a) {
-        std::lock_guard lock(mutex);
-        count(key, attempt, a);
-        --inFlight;
-        cv.notify_all();
-      });
-    } else {
-      auto remaining = std::make_shared<std::size_t>(keys.size()); // guarded by `mutex`
-      tiles.getTiles(
-          layerName, options.time, keys, [&, remaining, attempt](const TileKey& k, TileAnswer&& a) {
-            std::lock_guard lock(mutex);
-            count(k, attempt, a);
-            if (--*remaining == 0) {
-              --inFlight;
-              cv.notify_all();
-            }
-          });
-    }
-    if (progress) {
-      std::lock_guard lock(mutex);
-      if (Steady::now() - lastProgress >= std::chrono::milliseconds(200)) {
-        lastProgress = Steady::now();
-        progress(report, elapsed());
-      }
-    }
-  };
+private:
+  double elapsed() const { return std::chrono::duration<double>(Steady::now() - started_).count(); }
 
-  // Metatile order: each level's missing tiles grouped by the n x n block they belong to, blocks
-  // from the south-west, one request per block (n = 1: tile by tile, row-major).
-  const std::int32_t n = std::max<std::int32_t>(1, tiles.metaTileSize(layerName));
-  auto isStopped = [&] {
-    std::lock_guard lock(mutex);
-    return stopped;
-  };
-  for (const auto& keys : levels) {
-    if (isStopped()) break;
+  void seedLevel(DatasetId dataset, const std::vector<TileKey>& keys, std::int32_t n) {
     std::map<std::pair<std::int64_t, std::int64_t>, std::vector<TileKey>> blocks;
     for (const TileKey& key : keys) {
       if (n == 1 && isStopped()) break;
-      const auto known = cache.peek(*dataset, key);
-      const bool have = known && known->kind != CacheLookup::Kind::Miss &&
-                        !(options.refresh && known->kind == CacheLookup::Kind::Hit && known->stale);
-      if (have) {
-        std::lock_guard lock(mutex);
-        ++report.skipped;
+      if (held(dataset, key)) {
+        std::lock_guard lock(mutex_);
+        ++report_.skipped;
         continue;
       }
       if (n == 1) {
@@ -276,32 +202,181 @@ std::expected<SeedReport, std::string> seedThroughService(TileService& tiles,
       start(std::move(missing), 0);
     }
   }
-  // Retries, after the first pass, with a pause that grows per round.
-  for (int round = 1;; ++round) {
-    std::deque<std::pair<TileKey, int>> batch;
-    {
-      std::unique_lock lock(mutex);
-      cv.wait(lock, [&] { return inFlight == 0; });
-      batch.swap(retryQueue);
-    }
-    if (batch.empty() || isStopped()) break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(250) * round);
-    for (const auto& [key, attempt] : batch) {
+
+  /** Whether the index holds the tile already (resumable without a file-system scan): a tile, or
+   * an absent marker; an expired tile too, unless `refresh`. */
+  bool held(DatasetId dataset, const TileKey& key) const {
+    const auto known = cache_.peek(dataset, key);
+    return known && known->kind != CacheLookup::Kind::Miss &&
+           !(options_.refresh && known->kind == CacheLookup::Kind::Hit && known->stale);
+  }
+
+  /** Retries, after the first pass, with a pause that grows per round. */
+  void retryFailed() {
+    for (int round = 1;; ++round) {
+      std::deque<std::pair<TileKey, int>> batch;
       {
-        std::lock_guard lock(mutex);
-        if (stopped) break;
-        ++report.retried;
+        std::unique_lock lock(mutex_);
+        cv_.wait(lock, [&] { return inFlight_ == 0; });
+        batch.swap(retryQueue_);
       }
-      start({key}, attempt);
+      if (batch.empty() || isStopped()) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(250) * round);
+      for (const auto& [key, attempt] : batch) {
+        {
+          std::lock_guard lock(mutex_);
+          if (stopped_) break;
+          ++report_.retried;
+        }
+        start({key}, attempt);
+      }
     }
   }
-  {
-    std::unique_lock lock(mutex);
-    cv.wait(lock, [&] { return inFlight == 0; });
+
+  void waitForAll() {
+    std::unique_lock lock(mutex_);
+    cv_.wait(lock, [&] { return inFlight_ == 0; });
   }
-  settleWriteBehind(cache, storeBefore, report);
-  if (progress) progress(report, elapsed());
-  return report;
+
+  /** One unit of work: a tile, or the missing tiles of one metatile (one upstream request); the
+   * window (`concurrency`) counts units. Retries go tile by tile: an upstream that cannot answer
+   * a metatile (too large an image, a timeout) still gets its tiles asked one at a time. */
+  void start(std::vector<TileKey> keys, int attempt) {
+    pace(keys.size());
+    {
+      std::unique_lock lock(mutex_);
+      cv_.wait(lock, [&] { return inFlight_ < options_.concurrency; });
+      if (stopped_) return; // the cache is full: fetching more would only be thrown away
+      ++inFlight_;
+    }
+    if (keys.size() == 1) {
+      const TileKey key = keys.front();
+      tiles_.getTile(layer_, options_.time, key, [this, key, attempt](TileAnswer&& a) {
+        std::lock_guard lock(mutex_);
+        count(key, attempt, a);
+        --inFlight_;
+        cv_.notify_all();
+      });
+    } else {
+      auto remaining = std::make_shared<std::size_t>(keys.size()); // guarded by `mutex_`
+      tiles_.getTiles(layer_,
+                      options_.time,
+                      keys,
+                      [this, remaining, attempt](const TileKey& k, TileAnswer&& a) {
+                        std::lock_guard lock(mutex_);
+                        count(k, attempt, a);
+                        if (--*remaining == 0) {
+                          --inFlight_;
+                          cv_.notify_all();
+                        }
+                      });
+    }
+    reportProgress();
+  }
+
+  /** Paces starts evenly, in tiles per second (`rate`). */
+  void pace(std::size_t tiles) {
+    if (options_.rate <= 0) return;
+    std::this_thread::sleep_until(nextStart_);
+    nextStart_ = std::max(nextStart_, Steady::now()) +
+                 std::chrono::duration_cast<Steady::duration>(interval_ * tiles);
+  }
+
+  void reportProgress() {
+    if (!progress_) return;
+    std::lock_guard lock(mutex_);
+    if (Steady::now() - lastProgress_ >= std::chrono::milliseconds(200)) {
+      lastProgress_ = Steady::now();
+      progress_(report_, elapsed());
+    }
+  }
+
+  /** One answer for one tile (under `mutex_`). */
+  void count(const TileKey& key, int attempt, const TileAnswer& a) {
+    const bool full = a.notStored && a.notStored->code == CacheErrc::DiskFull;
+    if (a.kind == TileAnswer::Kind::Tile && !a.notStored) {
+      ++report_.written;
+      report_.bytes += a.file ? a.file->size() : static_cast<std::int64_t>(a.bytes.size());
+      // A write-behind row the index refused (its put had returned): stop as for a refusal.
+      if (!cache_.storeStatus().writable) stop(cacheFullMessage(cache_));
+    } else if (a.kind == TileAnswer::Kind::Tile && full) {
+      ++report_.notStored;
+      stop(a.notStored->message);
+    } else if (a.kind == TileAnswer::Kind::Absent && a.origin != TileOrigin::Offline) {
+      ++report_.absent;
+    } else if (attempt < options_.retries && !stopped_) {
+      retryQueue_.emplace_back(key, attempt + 1);
+    } else {
+      ++report_.failed;
+      if (report_.failures.size() < 20) {
+        const std::string why = a.notStored ? "not stored: " + a.notStored->message : a.message;
+        report_.failures.push_back("L" + std::to_string(key.level) + " R" +
+                                   std::to_string(key.row) + " C" + std::to_string(key.col) + ": " +
+                                   why);
+      }
+    }
+  }
+
+  /** Nothing more is started (under `mutex_`). */
+  void stop(std::string why) {
+    if (stopped_) return;
+    stopped_ = true;
+    report_.stoppedBecause = std::move(why);
+  }
+
+  bool isStopped() {
+    std::lock_guard lock(mutex_);
+    return stopped_;
+  }
+
+  TileService& tiles_;
+  TileCache& cache_;
+  const std::string& layer_;
+  const ServiceSeedOptions& options_;
+  const SeedProgress& progress_;
+  const Steady::time_point started_;
+
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  // Guarded by mutex_.
+  SeedReport report_;
+  int inFlight_ = 0;
+  /// Set once the cache refuses a tile for lack of space: nothing more is started.
+  bool stopped_ = false;
+  std::deque<std::pair<TileKey, int>> retryQueue_; // key, attempts so far
+  Steady::time_point lastProgress_{};
+  // The calling thread's.
+  StoreStatus storeBefore_{};
+  std::chrono::duration<double> interval_{0};
+  Steady::time_point nextStart_{};
+};
+
+} // namespace
+
+std::expected<SeedReport, std::string> seedThroughService(TileService& tiles,
+                                                          TileCache& cache,
+                                                          const std::string& layerName,
+                                                          const ServiceSeedOptions& options,
+                                                          const SeedProgress& progress) {
+  const LayerSpec* layer = tiles.layer(layerName);
+  const TileGrid* grid = tiles.grid(layerName);
+  if (!layer || !grid) return std::unexpected("no layer '" + layerName + "'");
+  if (options.concurrency < 1) return std::unexpected("concurrency must be at least 1");
+  if (!(options.rate >= 0) || !std::isfinite(options.rate))
+    return std::unexpected("rate must be a finite number >= 0");
+  const auto spec = tiles.describe(layerName, options.time);
+  if (!spec) return std::unexpected("layer '" + layerName + "' has no dataset");
+  auto dataset = cache.registerDataset(*spec);
+  // A cache too full to register the dataset stops the run (below, after a dry run's count).
+  const bool noRoom = !dataset && dataset.error().code == CacheErrc::DiskFull;
+  if (!dataset && !noRoom) return std::unexpected("cache: " + dataset.error().message);
+
+  ServiceSeeder seeder(tiles, cache, layerName, options, progress);
+  const auto levels = seeder.plan(*grid, options.range.box.value_or(spec->grid.sector));
+  if (!levels) return std::unexpected(levels.error());
+  if (options.range.dryRun) return seeder.dryRun();
+  if (noRoom) return seeder.noRoom(dataset.error().message);
+  return seeder.run(*dataset, *levels);
 }
 
 } // namespace tellus
