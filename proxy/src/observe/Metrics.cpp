@@ -123,6 +123,16 @@ std::string ProxyMetrics::render(const std::vector<UpstreamMetrics>& upstreams,
                                  const std::optional<CacheHealthMetrics>& cacheHealth) const {
   std::string out;
   out.reserve(4096);
+  renderHttp(out);
+  renderTiles(out);
+  renderUpstreams(out, upstreams);
+  renderCache(out, cacheBytes, cacheHealth);
+  renderComposer(out, decodedTileCacheBytes);
+  renderBudget(out, budget);
+  return out;
+}
+
+void ProxyMetrics::renderHttp(std::string& out) const {
   header(out,
          "tellus_http_requests_total",
          "counter",
@@ -156,6 +166,9 @@ std::string ProxyMetrics::render(const std::vector<UpstreamMetrics>& upstreams,
     out += toString(static_cast<Protocol>(p));
     out += "\"} " + std::to_string(inFlight_[p].load(std::memory_order_relaxed)) + "\n";
   }
+}
+
+void ProxyMetrics::renderTiles(std::string& out) const {
   header(out,
          "tellus_tiles_total",
          "counter",
@@ -168,6 +181,10 @@ std::string ProxyMetrics::render(const std::vector<UpstreamMetrics>& upstreams,
       out += "\"} " + std::to_string(tiles_[l][o].load(std::memory_order_relaxed)) + "\n";
     }
   }
+}
+
+void ProxyMetrics::renderUpstreams(std::string& out,
+                                   const std::vector<UpstreamMetrics>& upstreams) {
   header(out,
          "tellus_upstream_requests_total",
          "counter",
@@ -223,6 +240,11 @@ std::string ProxyMetrics::render(const std::vector<UpstreamMetrics>& upstreams,
     out += "tellus_upstream_request_duration_seconds_count{upstream=\"" + label + "\"} " +
            std::to_string(u.stats.latencyCount) + "\n";
   }
+}
+
+void ProxyMetrics::renderCache(std::string& out,
+                               std::optional<std::int64_t> cacheBytes,
+                               const std::optional<CacheHealthMetrics>& cacheHealth) {
   header(out, "tellus_cache_bytes", "gauge", "Bytes of all cached tiles (from the index).");
   if (cacheBytes) out += "tellus_cache_bytes " + std::to_string(*cacheBytes) + "\n";
   if (cacheHealth) {
@@ -253,6 +275,9 @@ std::string ProxyMetrics::render(const std::vector<UpstreamMetrics>& upstreams,
       out += "tellus_cache_free_inodes " + std::to_string(*cacheHealth->freeInodes) + "\n";
     }
   }
+}
+
+void ProxyMetrics::renderComposer(std::string& out, std::uint64_t decodedTileCacheBytes) const {
   header(
       out,
       "tellus_composed_map_tiles_total",
@@ -268,6 +293,9 @@ std::string ProxyMetrics::render(const std::vector<UpstreamMetrics>& upstreams,
          "gauge",
          "Bytes of decoded tiles kept for composed GetMaps.");
   out += "tellus_decoded_tile_cache_bytes " + std::to_string(decodedTileCacheBytes) + "\n";
+}
+
+void ProxyMetrics::renderBudget(std::string& out, const FetchBudgetMetrics& budget) {
   header(out,
          "tellus_client_fetch_budget_per_minute",
          "gauge",
@@ -284,7 +312,6 @@ std::string ProxyMetrics::render(const std::vector<UpstreamMetrics>& upstreams,
          "gauge",
          "Client addresses whose fetch budget is being tracked.");
   out += "tellus_client_fetch_budget_clients " + std::to_string(budget.clients) + "\n";
-  return out;
 }
 
 } // namespace tellus
