@@ -359,10 +359,13 @@ parseBbox(std::string_view value, bool latFirst, std::string_view crs) {
   return Sector{v[0], v[1], v[2], v[3]};
 }
 
-std::expected<WmsRequest, OgcException> parseGetMap(const QueryParams& params,
-                                                    const WmsLimits& limits) {
-  GetMapRequest req;
-  if (auto e = checkConflicts(params, kGetMapParameters)) return std::unexpected(std::move(*e));
+namespace {
+
+// The steps of parseGetMap, in the order of the exceptions a request meets: each reads its
+// parameters into `req` or says what is wrong with them.
+using Step = std::expected<void, OgcException>;
+
+Step readVersion(const QueryParams& params, GetMapRequest& req) {
   const auto versionText = versionValue(params);
   if (!versionText) {
     return fail(ogc::kMissingParameterValue, "VERSION", "VERSION is required for GetMap");
@@ -377,11 +380,10 @@ std::expected<WmsRequest, OgcException> parseGetMap(const QueryParams& params,
                 "VERSION",
                 "VERSION " + quoted(*versionText) + " is not supported (1.1.1 or 1.3.0)");
   }
-  const bool v130 = req.version == WmsVersion::V130;
-  // Neither version's GetMap table has SERVICE: it may be left out, but not be another service.
-  if (auto e = checkService(params, false)) return std::unexpected(std::move(*e));
+  return {};
+}
 
-  // LAYERS and STYLES.
+Step readLayersAndStyles(const QueryParams& params, GetMapRequest& req) {
   const auto layers = nonEmpty(params, "layers");
   if (!layers) return fail(ogc::kMissingParameterValue, "LAYERS", "LAYERS is required");
   req.layers = splitCommas(*layers);
@@ -408,7 +410,12 @@ std::expected<WmsRequest, OgcException> parseGetMap(const QueryParams& params,
     }
   }
 
-  // CRS (1.3.0) / SRS (1.1.1), each accepting the other name.
+  return {};
+}
+
+/** CRS (1.3.0) / SRS (1.1.1), each accepting the other name, and the BBOX in its axis order. */
+Step readCrsAndBbox(const QueryParams& params, GetMapRequest& req) {
+  const bool v130 = req.version == WmsVersion::V130;
   std::string_view crsLocator = v130 ? "CRS" : "SRS";
   auto crs = nonEmpty(params, v130 ? "crs" : "srs");
   if (!crs) {
@@ -436,6 +443,10 @@ std::expected<WmsRequest, OgcException> parseGetMap(const QueryParams& params,
   if (!sector) return std::unexpected(std::move(sector.error()));
   req.bbox = *sector;
 
+  return {};
+}
+
+Step readSize(const QueryParams& params, const WmsLimits& limits, GetMapRequest& req) {
   const auto width = nonEmpty(params, "width");
   if (!width) return fail(ogc::kMissingParameterValue, "WIDTH", "WIDTH is required");
   const auto w = parseSize(*width, limits.maxWidth);
@@ -455,6 +466,10 @@ std::expected<WmsRequest, OgcException> parseGetMap(const QueryParams& params,
   }
   req.height = *h;
 
+  return {};
+}
+
+Step readFormat(const QueryParams& params, GetMapRequest& req) {
   const auto format = nonEmpty(params, "format");
   if (!format) return fail(ogc::kMissingParameterValue, "FORMAT", "FORMAT is required");
   const auto mapFormat = parseMapFormat(*format);
@@ -468,6 +483,12 @@ std::expected<WmsRequest, OgcException> parseGetMap(const QueryParams& params,
   req.mapFormat = *mapFormat;
   req.format = std::string(toString(*mapFormat));
 
+  return {};
+}
+
+/** TRANSPARENT, BGCOLOR, EXCEPTIONS and TIME. */
+Step readPresentation(const QueryParams& params, GetMapRequest& req) {
+  const bool v130 = req.version == WmsVersion::V130;
   const auto transparent = parseTransparent(params.get("transparent").value_or(""));
   if (!transparent) {
     return fail(ogc::kInvalidParameterValue, "TRANSPARENT", "TRANSPARENT must be TRUE or FALSE");
@@ -491,6 +512,10 @@ std::expected<WmsRequest, OgcException> parseGetMap(const QueryParams& params,
   }
   req.exceptions = *exceptions;
   req.time = std::string(params.get("time").value_or(""));
+  return {};
+}
+
+Step readOpacities(const QueryParams& params, GetMapRequest& req) {
   // OPACITIES (a vendor parameter, as MapServer's and GeoServer's per-layer opacity): one number
   // from 0 to 1 per layer, replacing the layers' configured opacities.
   if (const auto op = nonEmpty(params, "opacities")) {
@@ -511,6 +536,25 @@ std::expected<WmsRequest, OgcException> parseGetMap(const QueryParams& params,
                   "OPACITIES has " + std::to_string(req.opacities.size()) + " entries for " +
                       std::to_string(req.layers.size()) + " layers");
     }
+  }
+  return {};
+}
+
+} // namespace
+
+std::expected<WmsRequest, OgcException> parseGetMap(const QueryParams& params,
+                                                    const WmsLimits& limits) {
+  GetMapRequest req;
+  if (auto e = checkConflicts(params, kGetMapParameters)) return std::unexpected(std::move(*e));
+  if (auto v = readVersion(params, req); !v) return std::unexpected(std::move(v.error()));
+  // Neither version's GetMap table has SERVICE: it may be left out, but not be another service.
+  if (auto e = checkService(params, false)) return std::unexpected(std::move(*e));
+  for (const auto& step : {readLayersAndStyles, readCrsAndBbox}) {
+    if (auto r = step(params, req); !r) return std::unexpected(std::move(r.error()));
+  }
+  if (auto r = readSize(params, limits, req); !r) return std::unexpected(std::move(r.error()));
+  for (const auto& step : {readFormat, readPresentation, readOpacities}) {
+    if (auto r = step(params, req); !r) return std::unexpected(std::move(r.error()));
   }
   return req;
 }
