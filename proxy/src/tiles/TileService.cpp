@@ -592,6 +592,22 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
       ds = std::move(*found);
     }
     const auto& [id, folder] = ds;
+    std::vector<TileKey> owned = claimMissing(layerName, time, keys, g, id, done);
+    if (owned.empty()) return;
+    fetchBlock(std::move(owned), l, u, g, id, folder, time);
+  }
+
+  /** The keys of `keys` that are ours to fetch (missing or expired, and no flight out for them:
+   * their flights are joined with `done`); the others are answered by getTile or their flight. */
+  std::vector<TileKey> claimMissing(std::string_view layerName,
+                                    std::string_view time,
+                                    std::span<const TileKey> keys,
+                                    const TileGrid& g,
+                                    DatasetId id,
+                                    const std::shared_ptr<TilesDone>& done) {
+    auto waiter = [done](const TileKey& k) {
+      return [done, k](TileAnswer&& a) { (*done)(k, std::move(a)); };
+    };
     const UnixMillis now = nowMillis();
     std::vector<TileKey> owned;
     for (const TileKey& k : keys) {
@@ -609,7 +625,18 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
       // Missing or expired: ours to fetch unless a flight for it is already out (it answers).
       if (join(FlightKey{id, k}, waiter(k))) owned.push_back(k);
     }
-    if (owned.empty()) return;
+    return owned;
+  }
+
+  /** One GetMap of the smallest block holding `owned` (tile by tile when it is one tile or the
+   * block is too large an image); its answer is split on a worker (onBlockFetched). */
+  void fetchBlock(std::vector<TileKey> owned,
+                  const LayerSpec& l,
+                  const UpstreamSpec& u,
+                  const TileGrid& g,
+                  DatasetId id,
+                  const std::string& folder,
+                  std::string_view time) {
     const TileBlock block = boundingBlock(owned);
     const auto& spec = g.spec();
     const bool tooBig = static_cast<std::int64_t>(block.cols) * spec.tileWidth > 8192 ||
