@@ -231,6 +231,49 @@ public:
   }
 
   Result header() {
+    auto tags = readTags();
+    if (!tags) return std::unexpected(tags.error());
+    const Tags& t = *tags;
+    if (!t.width || !t.height) return malformed("TIFF", "no ImageWidth or ImageLength");
+    if (*t.width == 0 || *t.height == 0 || *t.width > INT_MAX || *t.height > INT_MAX) {
+      return malformed("TIFF",
+                       "size " + std::to_string(*t.width) + "x" + std::to_string(*t.height));
+    }
+    if (t.samples == 0 || t.samples > kMaxSamples)
+      return malformed("TIFF", std::to_string(t.samples) + " samples per pixel");
+    auto allSame = [](const std::vector<std::uint32_t>& v) {
+      for (auto x : v)
+        if (x != v.front()) return false;
+      return true;
+    };
+    // Grey or RGB (with any extra samples, which decoders keep as channels). Palette, CMYK,
+    // YCbCr, Lab, bilevel, mixed or odd sample sizes: the imaging module knows what they become.
+    if (!t.photometric || *t.photometric > 2 || (*t.photometric == 2 && t.samples < 3) ||
+        !allSame(t.bits) || !allSame(t.sampleFormat))
+      return std::optional<RasterHeader>{};
+    const auto type = sampleType(t.bits.front(), t.sampleFormat.front());
+    if (!type) return std::optional<RasterHeader>{};
+    return RasterHeader{"TIFF",
+                        static_cast<int>(*t.width),
+                        static_cast<int>(*t.height),
+                        static_cast<int>(t.samples),
+                        *type};
+  }
+
+private:
+  static constexpr std::uint32_t kMaxSamples = 1024;
+
+  /** The first IFD's tags that say what the pixels are. */
+  struct Tags {
+    std::optional<std::uint32_t> width;
+    std::optional<std::uint32_t> height;
+    std::optional<std::uint32_t> photometric;
+    std::uint32_t samples = 1;                  // TIFF defaults
+    std::vector<std::uint32_t> bits{1};         //
+    std::vector<std::uint32_t> sampleFormat{1}; //
+  };
+
+  std::expected<Tags, std::string> readTags() {
     std::array<std::uint8_t, 4> b{};
     if (!src_.read(4, b)) return truncated("TIFF", "first IFD offset");
     const std::uint32_t ifd = u32(b.data());
@@ -243,13 +286,7 @@ public:
     if (!src_.read(static_cast<std::uint64_t>(ifd) + 2, dir)) {
       return truncated("TIFF", std::to_string(entries) + " IFD entries");
     }
-    constexpr std::uint32_t kMaxSamples = 1024;
-    std::optional<std::uint32_t> width;
-    std::optional<std::uint32_t> height;
-    std::optional<std::uint32_t> photometric;
-    std::uint32_t samples = 1;                  // TIFF defaults
-    std::vector<std::uint32_t> bits{1};         //
-    std::vector<std::uint32_t> sampleFormat{1}; //
+    Tags t;
     for (std::uint32_t i = 0; i < entries; ++i) {
       const std::uint8_t* e = &dir[static_cast<std::size_t>(i) * 12];
       const std::uint32_t tag = u16(e);
@@ -259,71 +296,42 @@ public:
       if (!v) return std::unexpected(v.error());
       switch (tag) {
       case 256:
-        width = v->front();
+        t.width = v->front();
         break;
       case 257:
-        height = v->front();
+        t.height = v->front();
         break;
       case 258:
-        bits = std::move(*v);
+        t.bits = std::move(*v);
         break;
       case 262:
-        photometric = v->front();
+        t.photometric = v->front();
         break;
       case 277:
-        samples = v->front();
+        t.samples = v->front();
         break;
       default: // 339
-        sampleFormat = std::move(*v);
+        t.sampleFormat = std::move(*v);
         break;
       }
     }
-    if (!width || !height) return malformed("TIFF", "no ImageWidth or ImageLength");
-    if (*width == 0 || *height == 0 || *width > INT_MAX || *height > INT_MAX) {
-      return malformed("TIFF", "size " + std::to_string(*width) + "x" + std::to_string(*height));
-    }
-    if (samples == 0 || samples > kMaxSamples)
-      return malformed("TIFF", std::to_string(samples) + " samples per pixel");
-    auto allSame = [](const std::vector<std::uint32_t>& v) {
-      for (auto x : v)
-        if (x != v.front()) return false;
-      return true;
-    };
-    // Grey or RGB (with any extra samples, which decoders keep as channels). Palette, CMYK,
-    // YCbCr, Lab, bilevel, mixed or odd sample sizes: the imaging module knows what they become.
-    if (!photometric || *photometric > 2 || (*photometric == 2 && samples < 3) || !allSame(bits) ||
-        !allSame(sampleFormat))
-      return std::optional<RasterHeader>{};
-    const std::uint32_t bps = bits.front();
-    const std::uint32_t fmt = sampleFormat.front(); // 1 unsigned, 2 signed, 3 IEEE float
-    std::optional<SampleType> type;
-    if (bps == 8 && fmt == 1)
-      type = SampleType::UInt8;
-    else if (bps == 8 && fmt == 2)
-      type = SampleType::Int8;
-    else if (bps == 16 && fmt == 1)
-      type = SampleType::UInt16;
-    else if (bps == 16 && fmt == 2)
-      type = SampleType::Int16;
-    else if (bps == 16 && fmt == 3)
-      type = SampleType::Float16;
-    else if (bps == 32 && fmt == 1)
-      type = SampleType::UInt32;
-    else if (bps == 32 && fmt == 2)
-      type = SampleType::Int32;
-    else if (bps == 32 && fmt == 3)
-      type = SampleType::Float32;
-    else if (bps == 64 && fmt == 3)
-      type = SampleType::Float64;
-    if (!type) return std::optional<RasterHeader>{};
-    return RasterHeader{"TIFF",
-                        static_cast<int>(*width),
-                        static_cast<int>(*height),
-                        static_cast<int>(samples),
-                        *type};
+    return t;
   }
 
-private:
+  /** Bits per sample and SampleFormat (1 unsigned, 2 signed, 3 IEEE float) as a SampleType. */
+  static std::optional<SampleType> sampleType(std::uint32_t bps, std::uint32_t fmt) {
+    if (bps == 8 && fmt == 1) return SampleType::UInt8;
+    if (bps == 8 && fmt == 2) return SampleType::Int8;
+    if (bps == 16 && fmt == 1) return SampleType::UInt16;
+    if (bps == 16 && fmt == 2) return SampleType::Int16;
+    if (bps == 16 && fmt == 3) return SampleType::Float16;
+    if (bps == 32 && fmt == 1) return SampleType::UInt32;
+    if (bps == 32 && fmt == 2) return SampleType::Int32;
+    if (bps == 32 && fmt == 3) return SampleType::Float32;
+    if (bps == 64 && fmt == 3) return SampleType::Float64;
+    return std::nullopt;
+  }
+
   Source& src_;
   bool little_;
 };
