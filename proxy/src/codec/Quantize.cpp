@@ -23,39 +23,56 @@ struct Box {
   int range;
 };
 
-} // namespace
+/** A median cut of the colours of one image on a 5-bit-per-channel histogram: the box with the
+ * most pixels is split at its weighted median on its widest channel until there are as many
+ * boxes as colours; each box's colour is the mean of its pixels. */
+class MedianCut {
+public:
+  MedianCut(const std::uint8_t* pixels, int channels, std::size_t count)
+      : pixels_(pixels), channels_(channels), step_(static_cast<std::size_t>(channels)),
+        count_(count) {}
 
-PalettedImage quantize(const std::uint8_t* pixels, int channels, std::size_t count) {
-  const auto step = static_cast<std::size_t>(channels);
-  std::vector<std::uint32_t> hist(kBins, 0);
-  std::vector<std::array<std::uint64_t, 3>> sums(kBins, {0, 0, 0});
-  bool transparent = false;
-  for (std::size_t i = 0; i < count; ++i) {
-    const std::uint8_t* p = pixels + i * step;
-    if (channels == 4 && p[3] < 128) {
-      transparent = true;
-      continue;
+  PalettedImage run() {
+    histogram();
+    const std::size_t maxColours = transparent_ ? 255 : 256;
+    if (!used_.empty()) boxes_.push_back(describe(0, used_.size()));
+    while (boxes_.size() < maxColours && splitLargest()) {
     }
-    const int b = binOf(p);
-    ++hist[static_cast<std::size_t>(b)];
-    auto& s = sums[static_cast<std::size_t>(b)];
-    s[0] += p[0];
-    s[1] += p[1];
-    s[2] += p[2];
+    return paletted();
   }
-  std::vector<int> used;
-  for (int b = 0; b < kBins; ++b)
-    if (hist[static_cast<std::size_t>(b)] != 0) used.push_back(b);
 
-  const std::size_t maxColours = transparent ? 255 : 256;
-  const auto describe = [&](std::size_t begin, std::size_t end) {
+private:
+  bool isTransparent(const std::uint8_t* p) const noexcept { return channels_ == 4 && p[3] < 128; }
+
+  /** Pixels and their channel sums per bin (transparent pixels apart); the bins in use. */
+  void histogram() {
+    hist_.assign(kBins, 0);
+    sums_.assign(kBins, {0, 0, 0});
+    for (std::size_t i = 0; i < count_; ++i) {
+      const std::uint8_t* p = pixels_ + i * step_;
+      if (isTransparent(p)) {
+        transparent_ = true;
+        continue;
+      }
+      const int b = binOf(p);
+      ++hist_[static_cast<std::size_t>(b)];
+      auto& s = sums_[static_cast<std::size_t>(b)];
+      s[0] += p[0];
+      s[1] += p[1];
+      s[2] += p[2];
+    }
+    for (int b = 0; b < kBins; ++b)
+      if (hist_[static_cast<std::size_t>(b)] != 0) used_.push_back(b);
+  }
+
+  Box describe(std::size_t begin, std::size_t end) const {
     Box box{begin, end, 0, 0, -1};
     int lo[3] = {31, 31, 31}, hi[3] = {0, 0, 0};
     for (std::size_t k = begin; k < end; ++k) {
-      box.count += hist[static_cast<std::size_t>(used[k])];
+      box.count += hist_[static_cast<std::size_t>(used_[k])];
       for (int c = 0; c < 3; ++c) {
-        lo[c] = std::min(lo[c], channelOf(used[k], c));
-        hi[c] = std::max(hi[c], channelOf(used[k], c));
+        lo[c] = std::min(lo[c], channelOf(used_[k], c));
+        hi[c] = std::max(hi[c], channelOf(used_[k], c));
       }
     }
     for (int c = 0; c < 3; ++c) {
@@ -65,76 +82,101 @@ PalettedImage quantize(const std::uint8_t* pixels, int channels, std::size_t cou
       }
     }
     return box;
-  };
-  std::vector<Box> boxes;
-  if (!used.empty()) boxes.push_back(describe(0, used.size()));
-  while (boxes.size() < maxColours) {
-    // Split the box with the most pixels that can still be split.
-    std::size_t pick = boxes.size();
-    for (std::size_t k = 0; k < boxes.size(); ++k) {
-      if (boxes[k].range > 0 && (pick == boxes.size() || boxes[k].count > boxes[pick].count))
+  }
+
+  /** Splits the box with the most pixels that can still be split; false when every box is one
+   * colour. */
+  bool splitLargest() {
+    std::size_t pick = boxes_.size();
+    for (std::size_t k = 0; k < boxes_.size(); ++k) {
+      if (boxes_[k].range > 0 && (pick == boxes_.size() || boxes_[k].count > boxes_[pick].count))
         pick = k;
     }
-    if (pick == boxes.size()) break; // every box is one colour
-    const Box b = boxes[pick];
+    if (pick == boxes_.size()) return false;
+    const Box b = boxes_[pick];
+    const std::size_t cut = medianCut(b);
+    boxes_[pick] = describe(b.begin, cut);
+    boxes_.push_back(describe(cut, b.end));
+    return true;
+  }
+
+  /** Where `b` is cut: its bins sorted on its widest channel, the weighted median, kept inside
+   * the range so both halves are non-empty and never between two bins of the same value there. */
+  std::size_t medianCut(const Box& b) {
     const int c = b.longest;
-    std::sort(used.begin() + static_cast<std::ptrdiff_t>(b.begin),
-              used.begin() + static_cast<std::ptrdiff_t>(b.end),
+    std::sort(used_.begin() + static_cast<std::ptrdiff_t>(b.begin),
+              used_.begin() + static_cast<std::ptrdiff_t>(b.end),
               [c](int x, int y) { return channelOf(x, c) < channelOf(y, c); });
-    // The weighted median, kept inside the range so both halves are non-empty.
     std::uint64_t half = 0;
     std::size_t cut = b.begin + 1;
     for (std::size_t k = b.begin; k < b.end - 1; ++k) {
-      half += hist[static_cast<std::size_t>(used[k])];
+      half += hist_[static_cast<std::size_t>(used_[k])];
       cut = k + 1;
       if (half * 2 >= b.count) break;
     }
-    // Never split between two bins of the same value on the axis: move the cut to the nearest
-    // change (one exists, the box's range on this axis is not zero).
+    // Move the cut to the nearest change (one exists, the box's range on this axis is not zero).
     const auto same = [&](std::size_t k) {
-      return channelOf(used[k], c) == channelOf(used[k - 1], c);
+      return channelOf(used_[k], c) == channelOf(used_[k - 1], c);
     };
     std::size_t forward = cut;
     while (forward < b.end && same(forward))
       ++forward;
-    if (forward < b.end) {
-      cut = forward;
-    } else {
-      while (cut > b.begin + 1 && same(cut))
-        --cut;
-    }
-    boxes[pick] = describe(b.begin, cut);
-    boxes.push_back(describe(cut, b.end));
+    if (forward < b.end) return forward;
+    while (cut > b.begin + 1 && same(cut))
+      --cut;
+    return cut;
   }
 
-  PalettedImage out;
-  std::vector<std::uint8_t> indexOfBin(kBins, 0);
-  if (transparent) out.palette.push_back({0, 0, 0, 0});
-  for (const Box& b : boxes) {
+  /** The palette (transparent first when any pixel is) and each pixel's index. */
+  PalettedImage paletted() const {
+    PalettedImage out;
+    std::vector<std::uint8_t> indexOfBin(kBins, 0);
+    if (transparent_) out.palette.push_back({0, 0, 0, 0});
+    for (const Box& b : boxes_) {
+      const auto index = static_cast<std::uint8_t>(out.palette.size());
+      out.palette.push_back(meanColour(b));
+      for (std::size_t k = b.begin; k < b.end; ++k)
+        indexOfBin[static_cast<std::size_t>(used_[k])] = index;
+    }
+    if (out.palette.empty()) out.palette.push_back({0, 0, 0, 255});
+    out.indices.resize(count_);
+    for (std::size_t i = 0; i < count_; ++i) {
+      const std::uint8_t* p = pixels_ + i * step_;
+      out.indices[i] = isTransparent(p) ? 0 : indexOfBin[static_cast<std::size_t>(binOf(p))];
+    }
+    return out;
+  }
+
+  std::array<std::uint8_t, 4> meanColour(const Box& b) const {
     std::array<std::uint64_t, 3> s{0, 0, 0};
     for (std::size_t k = b.begin; k < b.end; ++k) {
-      const auto& bs = sums[static_cast<std::size_t>(used[k])];
+      const auto& bs = sums_[static_cast<std::size_t>(used_[k])];
       for (int c = 0; c < 3; ++c)
         s[static_cast<std::size_t>(c)] += bs[static_cast<std::size_t>(c)];
     }
-    const auto index = static_cast<std::uint8_t>(out.palette.size());
     std::array<std::uint8_t, 4> colour{};
     for (std::size_t c = 0; c < 3; ++c)
       colour[c] =
           static_cast<std::uint8_t>((s[c] + b.count / 2) / std::max<std::uint64_t>(b.count, 1));
     colour[3] = 255;
-    out.palette.push_back(colour);
-    for (std::size_t k = b.begin; k < b.end; ++k)
-      indexOfBin[static_cast<std::size_t>(used[k])] = index;
+    return colour;
   }
-  if (out.palette.empty()) out.palette.push_back({0, 0, 0, 255});
-  out.indices.resize(count);
-  for (std::size_t i = 0; i < count; ++i) {
-    const std::uint8_t* p = pixels + i * step;
-    out.indices[i] =
-        channels == 4 && p[3] < 128 ? 0 : indexOfBin[static_cast<std::size_t>(binOf(p))];
-  }
-  return out;
+
+  const std::uint8_t* pixels_;
+  int channels_;
+  std::size_t step_;
+  std::size_t count_;
+  bool transparent_ = false;
+  std::vector<std::uint32_t> hist_;
+  std::vector<std::array<std::uint64_t, 3>> sums_;
+  std::vector<int> used_;
+  std::vector<Box> boxes_;
+};
+
+} // namespace
+
+PalettedImage quantize(const std::uint8_t* pixels, int channels, std::size_t count) {
+  return MedianCut(pixels, channels, count).run();
 }
 
 } // namespace tellus
