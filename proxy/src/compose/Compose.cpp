@@ -662,36 +662,23 @@ void blendRows(const std::uint8_t* a,
   blendRowsLoop(a, b, wy, out, n);
 }
 
-/**
- * composeImagery for one plane (tiles and canvas of one channel, opaque). Per output row, the
- * vertical half of the filter once per tile column into one row of the texels the map samples
- * (the tile columns side by side), then the horizontal half per pixel as two loads from that row:
- * no test per pixel while every tile of the row is there. The same integer arithmetic as the RGB
- * path's (weights in 1/256, one rounding), so the same values.
- */
-ComposeStats composePlaneInto(const TileGrid& grid,
-                              const Sector& box,
-                              std::int32_t width,
-                              std::int32_t height,
-                              std::int32_t level,
-                              std::int32_t firstLevel,
-                              const TileLookup& tiles,
-                              const std::uint8_t* background,
-                              std::uint8_t* canvas) {
-  ComposeStats stats;
-  const LevelTiles t = levelTiles(grid, box, width, height, level, tiles);
-  Fallback fallback(grid, box, width, height, level, std::max(0, firstLevel), tiles);
-  const std::size_t nc = t.cols.tiles.size();
-  // Each tile column's sampled texels [lo, hi] at base[k] in the blended row.
-  std::vector<std::uint32_t> base(nc, 0);
-  std::uint32_t span = 0;
-  for (std::size_t k = 0; k < nc; ++k) {
+/** Where each tile column's sampled texels [lo, hi] start in the blended row of a plane
+ * (composePlaneInto), and (`span`) the row's length. */
+std::vector<std::uint32_t> columnBases(const Axis& cols, std::uint32_t& span) {
+  std::vector<std::uint32_t> base(cols.tiles.size(), 0);
+  span = 0;
+  for (std::size_t k = 0; k < cols.tiles.size(); ++k) {
     base[k] = span;
-    if (t.cols.hi[k] >= t.cols.lo[k])
-      span += static_cast<std::uint32_t>(t.cols.hi[k] - t.cols.lo[k] + 1);
+    if (cols.hi[k] >= cols.lo[k]) span += static_cast<std::uint32_t>(cols.hi[k] - cols.lo[k] + 1);
   }
-  const auto w = static_cast<std::size_t>(width);
-  Horizontal hz;
+  return base;
+}
+
+/** The horizontal half of a plane's filter per output column: the two texels in the blended
+ * row and their weights; and the runs of columns inside the layer [begin, end). */
+std::vector<std::pair<std::int32_t, std::int32_t>>
+horizontalTexels(const Axis& cols, const std::vector<std::uint32_t>& base, Horizontal& hz) {
+  const std::size_t w = cols.samples.size();
   hz.xa.assign(w, 0);
   hz.xb.assign(w, 0);
   hz.wa.assign(w, 0);
@@ -699,15 +686,14 @@ ComposeStats composePlaneInto(const TileGrid& grid,
   hz.lane.assign(w, 0);
   hz.weights.assign(w, 0);
   std::vector<std::uint32_t>&xa = hz.xa, &xb = hz.xb, &wa = hz.wa, &wb = hz.wb;
-  // Runs of columns inside the layer [begin, end).
   std::vector<std::pair<std::int32_t, std::int32_t>> runs;
-  for (std::int32_t i = 0; i < width; ++i) {
-    const AxisSample& c = t.cols.samples[static_cast<std::size_t>(i)];
+  for (std::int32_t i = 0; i < static_cast<std::int32_t>(w); ++i) {
+    const AxisSample& c = cols.samples[static_cast<std::size_t>(i)];
     if (c.slotA < 0) continue;
     const auto ka = static_cast<std::size_t>(c.slotA), kb = static_cast<std::size_t>(c.slotB);
     const auto ui = static_cast<std::size_t>(i);
-    xa[ui] = base[ka] + static_cast<std::uint32_t>(c.offA - t.cols.lo[ka]);
-    xb[ui] = base[kb] + static_cast<std::uint32_t>(c.offB - t.cols.lo[kb]);
+    xa[ui] = base[ka] + static_cast<std::uint32_t>(c.offA - cols.lo[ka]);
+    xb[ui] = base[kb] + static_cast<std::uint32_t>(c.offB - cols.lo[kb]);
     wb[ui] = static_cast<std::uint32_t>(c.weightB);
     if (xb[ui] == xa[ui]) wb[ui] = 0; // one texel (clamped at an edge): the same value
     wa[ui] = 256u - wb[ui];
@@ -717,12 +703,19 @@ ComposeStats composePlaneInto(const TileGrid& grid,
       runs.emplace_back(i, i + 1);
     }
   }
+  return runs;
+}
+
+/** The runs of columns cut into segments: 16 columns by AVX-512 or 8 by AVX2 where their texel
+ * pairs are neighbours close enough together, the rest scalar. */
+void planSegments(const std::vector<std::pair<std::int32_t, std::int32_t>>& runs, Horizontal& hz) {
 #ifdef TELLUS_COMPOSE_AVX2
   const bool wide = kHasAvx512;
 #else
   const bool wide = false;
 #endif
-  if (wide) hz.pairIndex.assign(2 * w, 0);
+  const std::vector<std::uint32_t>&xa = hz.xa, &xb = hz.xb, &wa = hz.wa, &wb = hz.wb;
+  if (wide) hz.pairIndex.assign(2 * xa.size(), 0);
   // Whether columns [i, i + n) can be one SIMD segment of n columns (texel pairs that are
   // neighbours within `reach` texels of the first); the first texel when they can.
   const auto fits = [&](std::uint32_t i, std::uint32_t n, std::uint32_t reach, std::uint32_t& lo) {
@@ -776,15 +769,98 @@ ComposeStats composePlaneInto(const TileGrid& grid,
     }
     if (i < e) add(i, e, 0, Horizontal::Kind::Scalar);
   }
+}
+
+/** The vertical half of one output row of a plane: each tile column's two texel rows blended
+ * into `blended` at its base; `present` says which tile columns have both tiles. True when every
+ * tile column the map samples has them. */
+bool blendPlaneRow(const LevelTiles& t,
+                   const AxisSample& r,
+                   const std::vector<std::uint32_t>& base,
+                   std::vector<std::uint16_t>& blended,
+                   std::vector<char>& present) {
+  const auto wy = static_cast<std::uint32_t>(r.weightB);
+  bool all = true;
+  for (std::size_t k = 0; k < t.cols.tiles.size(); ++k) {
+    const TileSamples* sa = t.at(r.slotA, static_cast<std::int32_t>(k));
+    const TileSamples* sb = t.at(r.slotB, static_cast<std::int32_t>(k));
+    present[k] = sa && sb && t.cols.hi[k] >= 0;
+    if (!present[k]) {
+      all = all && t.cols.hi[k] < 0;
+      continue;
+    }
+    const std::uint8_t* a =
+        sa->rgb + static_cast<std::size_t>(r.offA) * static_cast<std::size_t>(sa->width);
+    const std::uint8_t* b =
+        sb->rgb + static_cast<std::size_t>(r.offB) * static_cast<std::size_t>(sb->width);
+    const auto lo = static_cast<std::size_t>(t.cols.lo[k]);
+    const std::size_t n = static_cast<std::size_t>(t.cols.hi[k]) + 1 - lo;
+    blendRows(a + lo, b + lo, wy, blended.data() + base[k], n);
+  }
+  return all;
+}
+
+/** The horizontal half of a row of a plane where a tile is missing: pixel by pixel, the missing
+ * ones from the coarser level (or the background, or left). */
+void samplePlaneRowWithHoles(const LevelTiles& t,
+                             const Horizontal& hz,
+                             const std::uint16_t* v,
+                             const std::vector<char>& present,
+                             Fallback& fallback,
+                             std::int32_t j,
+                             const std::uint8_t* background,
+                             std::uint8_t* out,
+                             ComposeStats& stats) {
+  Quad q{};
+  for (std::int32_t i = 0; i < static_cast<std::int32_t>(t.cols.samples.size()); ++i) {
+    const AxisSample& c = t.cols.samples[static_cast<std::size_t>(i)];
+    if (c.slotA < 0) continue;
+    const auto ui = static_cast<std::size_t>(i);
+    if (present[static_cast<std::size_t>(c.slotA)] && present[static_cast<std::size_t>(c.slotB)]) {
+      out[ui] = static_cast<std::uint8_t>(
+          (v[hz.xa[ui]] * hz.wa[ui] + v[hz.xb[ui]] * hz.wb[ui] + 32768u) >> 16);
+    } else if (fallback.quad(i, j, q)) { // a tile of the four is missing at this level
+      ++stats.fallbackPixels;
+      out[ui] = sampleOne(q);
+    } else {
+      ++stats.missingPixels;
+      if (background) out[ui] = *background;
+    }
+  }
+}
+
+/**
+ * composeImagery for one plane (tiles and canvas of one channel, opaque). Per output row, the
+ * vertical half of the filter once per tile column into one row of the texels the map samples
+ * (the tile columns side by side), then the horizontal half per pixel as two loads from that row:
+ * no test per pixel while every tile of the row is there. The same integer arithmetic as the RGB
+ * path's (weights in 1/256, one rounding), so the same values.
+ */
+ComposeStats composePlaneInto(const TileGrid& grid,
+                              const Sector& box,
+                              std::int32_t width,
+                              std::int32_t height,
+                              std::int32_t level,
+                              std::int32_t firstLevel,
+                              const TileLookup& tiles,
+                              const std::uint8_t* background,
+                              std::uint8_t* canvas) {
+  ComposeStats stats;
+  const LevelTiles t = levelTiles(grid, box, width, height, level, tiles);
+  Fallback fallback(grid, box, width, height, level, std::max(0, firstLevel), tiles);
+  std::uint32_t span = 0;
+  const std::vector<std::uint32_t> base = columnBases(t.cols, span);
+  Horizontal hz;
+  planSegments(horizontalTexels(t.cols, base, hz), hz);
   // + 1: v[x + 1] of the last pair; the SIMD loads read up to 32 texels from a base <= span - 1.
   std::vector<std::uint16_t> blended(span + 1 + Horizontal::kPadding);
-  std::vector<char> present(nc);
-  Quad q{};
+  std::vector<char> present(t.cols.tiles.size());
   // With a background, the columns outside the layer are filled in each row drawn.
   const bool outsideColumns =
       background && std::any_of(t.cols.samples.begin(),
                                 t.cols.samples.end(),
                                 [](const AxisSample& c) { return c.slotA < 0; });
+  const auto w = static_cast<std::size_t>(width);
   for (std::int32_t j = 0; j < height; ++j) {
     const AxisSample& r = t.rows.samples[static_cast<std::size_t>(j)];
     std::uint8_t* out = canvas + static_cast<std::size_t>(j) * w;
@@ -792,45 +868,10 @@ ComposeStats composePlaneInto(const TileGrid& grid,
       if (background) std::memset(out, *background, w);
       if (r.slotA < 0) continue;
     }
-    const auto wy = static_cast<std::uint32_t>(r.weightB);
-    bool all = true;
-    for (std::size_t k = 0; k < nc; ++k) {
-      const TileSamples* sa = t.at(r.slotA, static_cast<std::int32_t>(k));
-      const TileSamples* sb = t.at(r.slotB, static_cast<std::int32_t>(k));
-      present[k] = sa && sb && t.cols.hi[k] >= 0;
-      if (!present[k]) {
-        all = all && t.cols.hi[k] < 0;
-        continue;
-      }
-      const std::uint8_t* a =
-          sa->rgb + static_cast<std::size_t>(r.offA) * static_cast<std::size_t>(sa->width);
-      const std::uint8_t* b =
-          sb->rgb + static_cast<std::size_t>(r.offB) * static_cast<std::size_t>(sb->width);
-      const auto lo = static_cast<std::size_t>(t.cols.lo[k]);
-      const std::size_t n = static_cast<std::size_t>(t.cols.hi[k]) + 1 - lo;
-      blendRows(a + lo, b + lo, wy, blended.data() + base[k], n);
-    }
-    const std::uint16_t* v = blended.data();
-    if (all) {
-      hz.run(v, out);
-      continue;
-    }
-    for (std::int32_t i = 0; i < width; ++i) {
-      const AxisSample& c = t.cols.samples[static_cast<std::size_t>(i)];
-      if (c.slotA < 0) continue;
-      const auto ui = static_cast<std::size_t>(i);
-      if (present[static_cast<std::size_t>(c.slotA)] &&
-          present[static_cast<std::size_t>(c.slotB)]) {
-        out[ui] =
-            static_cast<std::uint8_t>((v[xa[ui]] * wa[ui] + v[xb[ui]] * wb[ui] + 32768u) >> 16);
-      } else if (fallback.quad(i, j, q)) { // a tile of the four is missing at this level
-        ++stats.fallbackPixels;
-        out[ui] = sampleOne(q);
-      } else {
-        ++stats.missingPixels;
-        if (background) out[ui] = *background;
-      }
-    }
+    if (blendPlaneRow(t, r, base, blended, present))
+      hz.run(blended.data(), out);
+    else
+      samplePlaneRowWithHoles(t, hz, blended.data(), present, fallback, j, background, out, stats);
   }
   return stats;
 }
@@ -934,6 +975,107 @@ std::expected<std::vector<ComposeTile>, std::size_t> composeTiles(const TileGrid
   return keys;
 }
 
+namespace {
+
+/** The fast path's columns, compact: the tile column slot when both texels lie in one tile (else
+ * -1), the two texels' byte offsets in an RGB row, the second's weight. */
+struct FastColumn {
+  std::int32_t slot;
+  std::uint32_t xa, xb;
+  std::int32_t wx;
+};
+
+std::vector<FastColumn> fastColumns(const Axis& cols) {
+  std::vector<FastColumn> fast(cols.samples.size());
+  for (std::size_t i = 0; i < fast.size(); ++i) {
+    const AxisSample& c = cols.samples[i];
+    fast[i] = FastColumn{c.slotA >= 0 && c.slotA == c.slotB ? c.slotA : -1,
+                         static_cast<std::uint32_t>(std::max(c.offA, 0)) * 3u,
+                         static_cast<std::uint32_t>(std::max(c.offB, 0)) * 3u,
+                         c.weightB};
+  }
+  return fast;
+}
+
+/** The fast path's vertical half of one output row: for each tile column whose four texels lie in
+ * one opaque RGB tile, the two texel rows blended with the row's weight over the texels the row
+ * samples (a plain loop over bytes, which the compiler vectorises), at `rowBlend[k]`; null for
+ * the other tile columns (and for every one when the row is not `fastRow`). */
+void blendFastRow(const LevelTiles& t,
+                  const AxisSample& r,
+                  bool fastRow,
+                  std::size_t tileRowSamples,
+                  std::vector<std::uint16_t>& blended,
+                  std::vector<const std::uint16_t*>& rowBlend) {
+  const auto wy = static_cast<std::uint32_t>(r.weightB);
+  for (std::size_t k = 0; k < t.cols.tiles.size(); ++k) {
+    const TileSamples* s = fastRow ? t.at(r.slotA, static_cast<std::int32_t>(k)) : nullptr;
+    if (!s || s->channels != 3 || t.cols.hi[k] < 0) {
+      rowBlend[k] = nullptr;
+      continue;
+    }
+    const auto w = static_cast<std::size_t>(s->width);
+    const std::uint8_t* a = s->rgb + static_cast<std::size_t>(r.offA) * w * 3;
+    const std::uint8_t* b = s->rgb + static_cast<std::size_t>(r.offB) * w * 3;
+    std::uint16_t* out = &blended[k * tileRowSamples];
+    const std::size_t from = static_cast<std::size_t>(t.cols.lo[k]) * 3;
+    const std::size_t to = static_cast<std::size_t>(t.cols.hi[k] + 1) * 3;
+    for (std::size_t x = from; x < to; ++x)
+      out[x] = static_cast<std::uint16_t>(a[x] * (256u - wy) + b[x] * wy);
+    rowBlend[k] = out;
+  }
+}
+
+/** One output row of an imagery layer drawn over the canvas row `out`: per pixel the fast path's
+ * horizontal half, else the four texels (or the coarser level's) sampled and drawn "over" with
+ * the layer's opacity (`scale`, 1/256). */
+void drawImageryRow(const LevelTiles& t,
+                    const AxisSample& r,
+                    std::int32_t j,
+                    const std::vector<FastColumn>& fast,
+                    const std::vector<const std::uint16_t*>& rowBlend,
+                    Fallback& fallback,
+                    std::int32_t scale,
+                    int cc,
+                    std::uint8_t* out,
+                    ComposeStats& stats) {
+  Quad q{};
+  const auto width = static_cast<std::int32_t>(fast.size());
+  for (std::int32_t i = 0; i < width; ++i, out += cc) {
+    // The common case: the four texels in one opaque RGB tile, drawn at full opacity.
+    const FastColumn& f = fast[static_cast<std::size_t>(i)];
+    if (f.slot >= 0) {
+      const std::uint16_t* v = rowBlend[static_cast<std::size_t>(f.slot)];
+      if (v) {
+        const auto wx = static_cast<std::uint32_t>(f.wx);
+        for (std::uint32_t ch = 0; ch < 3; ++ch)
+          out[ch] = static_cast<std::uint8_t>(
+              (v[f.xa + ch] * (256u - wx) + v[f.xb + ch] * wx + 32768u) >> 16);
+        if (cc == 4) out[3] = 255;
+        continue;
+      }
+    }
+    const AxisSample& c = t.cols.samples[static_cast<std::size_t>(i)];
+    if (c.slotA < 0) continue;
+    bool found = quadAt(t, c, r, q);
+    if (!found) {
+      found = fallback.quad(i, j, q);
+      if (found) {
+        ++stats.fallbackPixels;
+      } else {
+        ++stats.missingPixels;
+        continue;
+      }
+    }
+    std::uint8_t px[4];
+    sampleRgba(q, px);
+    if (scale < 256) px[3] = static_cast<std::uint8_t>((px[3] * scale + 128) >> 8);
+    over(px, out, cc);
+  }
+}
+
+} // namespace
+
 ComposeStats composeImagery(const TileGrid& grid,
                             const Sector& box,
                             std::int32_t width,
@@ -957,85 +1099,20 @@ ComposeStats composeImagery(const TileGrid& grid,
   ComposeStats stats;
   const LevelTiles t = levelTiles(grid, box, width, height, level, tiles);
   Fallback fallback(grid, box, width, height, level, std::max(0, firstLevel), tiles);
-  // The fast path's columns, compact: the tile column slot when both texels lie in one tile
-  // (else -1), the two texels' byte offsets in an RGB row, the second's weight.
-  struct FastColumn {
-    std::int32_t slot;
-    std::uint32_t xa, xb;
-    std::int32_t wx;
-  };
-  const std::size_t nc = t.cols.tiles.size();
-  std::vector<FastColumn> fast(static_cast<std::size_t>(width));
-  for (std::size_t i = 0; i < fast.size(); ++i) {
-    const AxisSample& c = t.cols.samples[i];
-    fast[i] = FastColumn{c.slotA >= 0 && c.slotA == c.slotB ? c.slotA : -1,
-                         static_cast<std::uint32_t>(std::max(c.offA, 0)) * 3u,
-                         static_cast<std::uint32_t>(std::max(c.offB, 0)) * 3u,
-                         c.weightB};
-  }
-  // Per output row, the fast path's vertical half first: for each tile column whose four texels
-  // lie in one opaque RGB tile, the two texel rows blended with the row's weight over the texels
-  // the row samples (a plain loop over bytes, which the compiler vectorises); then per pixel only
-  // the horizontal half. Integer sums without intermediate rounding: the same values as blending
-  // horizontally first.
+  const std::vector<FastColumn> fast = fastColumns(t.cols);
+  // Per output row, the fast path's vertical half first, then per pixel only the horizontal
+  // half. Integer sums without intermediate rounding: the same values as blending horizontally
+  // first.
   const std::size_t tileRowSamples = static_cast<std::size_t>(grid.spec().tileWidth) * 3;
-  std::vector<std::uint16_t> blended(nc * tileRowSamples);
-  std::vector<const std::uint16_t*> rowBlend(nc);
-  Quad q{};
+  std::vector<std::uint16_t> blended(t.cols.tiles.size() * tileRowSamples);
+  std::vector<const std::uint16_t*> rowBlend(t.cols.tiles.size());
   for (std::int32_t j = 0; j < height; ++j) {
     const AxisSample& r = t.rows.samples[static_cast<std::size_t>(j)];
     if (r.slotA < 0) continue;
-    const bool fastRow = scale == 256 && r.slotA == r.slotB;
-    const auto wy = static_cast<std::uint32_t>(r.weightB);
-    for (std::size_t k = 0; k < nc; ++k) {
-      const TileSamples* s = fastRow ? t.at(r.slotA, static_cast<std::int32_t>(k)) : nullptr;
-      if (!s || s->channels != 3 || t.cols.hi[k] < 0) {
-        rowBlend[k] = nullptr;
-        continue;
-      }
-      const auto w = static_cast<std::size_t>(s->width);
-      const std::uint8_t* a = s->rgb + static_cast<std::size_t>(r.offA) * w * 3;
-      const std::uint8_t* b = s->rgb + static_cast<std::size_t>(r.offB) * w * 3;
-      std::uint16_t* out = &blended[k * tileRowSamples];
-      const std::size_t from = static_cast<std::size_t>(t.cols.lo[k]) * 3;
-      const std::size_t to = static_cast<std::size_t>(t.cols.hi[k] + 1) * 3;
-      for (std::size_t x = from; x < to; ++x)
-        out[x] = static_cast<std::uint16_t>(a[x] * (256u - wy) + b[x] * wy);
-      rowBlend[k] = out;
-    }
+    blendFastRow(t, r, scale == 256 && r.slotA == r.slotB, tileRowSamples, blended, rowBlend);
     std::uint8_t* out = &canvas[static_cast<std::size_t>(j) * static_cast<std::size_t>(width) *
                                 static_cast<std::size_t>(cc)];
-    for (std::int32_t i = 0; i < width; ++i, out += cc) {
-      // The common case: the four texels in one opaque RGB tile, drawn at full opacity.
-      const FastColumn& f = fast[static_cast<std::size_t>(i)];
-      if (f.slot >= 0) {
-        const std::uint16_t* v = rowBlend[static_cast<std::size_t>(f.slot)];
-        if (v) {
-          const auto wx = static_cast<std::uint32_t>(f.wx);
-          for (std::uint32_t ch = 0; ch < 3; ++ch)
-            out[ch] = static_cast<std::uint8_t>(
-                (v[f.xa + ch] * (256u - wx) + v[f.xb + ch] * wx + 32768u) >> 16);
-          if (cc == 4) out[3] = 255;
-          continue;
-        }
-      }
-      const AxisSample& c = t.cols.samples[static_cast<std::size_t>(i)];
-      if (c.slotA < 0) continue;
-      bool found = quadAt(t, c, r, q);
-      if (!found) {
-        found = fallback.quad(i, j, q);
-        if (found) {
-          ++stats.fallbackPixels;
-        } else {
-          ++stats.missingPixels;
-          continue;
-        }
-      }
-      std::uint8_t px[4];
-      sampleRgba(q, px);
-      if (scale < 256) px[3] = static_cast<std::uint8_t>((px[3] * scale + 128) >> 8);
-      over(px, out, cc);
-    }
+    drawImageryRow(t, r, j, fast, rowBlend, fallback, scale, cc, out, stats);
   }
   return stats;
 }
