@@ -24,6 +24,7 @@
 #include <jerror.h> // after jpeglib.h
 #include <jpeglib.h>
 #include <new>
+#include <optional>
 
 namespace tellus::codecs {
 
@@ -141,6 +142,83 @@ struct Spliced {
   int x = 0, y = 0;          ///< its top-left texel in the tile
 };
 
+/** Where a baseline JPEG's frame header (SOF0/1) and its first scan's data are, and its restart
+ * interval (0: none). */
+struct StreamLayout {
+  std::size_t sof = 0, data = 0;
+  std::uint32_t interval = 0;
+};
+
+/** The segments up to the (first) scan; nullopt for a stream this path does not take
+ * (progressive, lossless, arithmetic, not one interleaved scan, damaged). */
+std::optional<StreamLayout> readLayout(const unsigned char* p, std::size_t n) {
+  if (n < 4 || p[0] != 0xFF || p[1] != 0xD8) return std::nullopt;
+  StreamLayout l;
+  std::size_t at = 2;
+  while (at + 4 <= n) {
+    if (p[at] != 0xFF) return std::nullopt;
+    const unsigned char m = p[at + 1];
+    if (m == 0xFF) { // fill byte
+      ++at;
+      continue;
+    }
+    const std::size_t len = be16(p + at + 2);
+    if (len < 2 || at + 2 + len > n) return std::nullopt;
+    if (m == 0xC0 || m == 0xC1) {
+      if (len < 8) return std::nullopt;
+      l.sof = at;
+    } else if ((m >= 0xC2 && m <= 0xCF && m != 0xC4 && m != 0xC8 && m != 0xCC)) {
+      return std::nullopt; // progressive, lossless, arithmetic: not this path
+    } else if (m == 0xDD) {
+      if (len != 4) return std::nullopt;
+      l.interval = be16(p + at + 4);
+    } else if (m == 0xDA) {
+      if (len < 3 || p[at + 4] != 3) return std::nullopt; // not one interleaved scan
+      l.data = at + 2 + len;
+      break;
+    }
+    at += 2 + len;
+  }
+  return l;
+}
+
+/** The starts of the first `needed` segments of the scan at `data` (in `starts`, the markers
+ * found on the way checked for their order) and the end of the last; 0 when they are not all
+ * there. */
+std::size_t segmentStarts(const unsigned char* p,
+                          std::size_t n,
+                          std::size_t data,
+                          std::size_t needed,
+                          std::vector<std::uint32_t>& starts) {
+  starts.clear();
+  starts.push_back(static_cast<std::uint32_t>(data));
+  std::size_t endOfLast = 0;
+  for (std::size_t i = data; i + 1 < n;) {
+    const void* ff = std::memchr(p + i, 0xFF, n - 1 - i);
+    if (!ff) return 0;
+    i = static_cast<std::size_t>(static_cast<const unsigned char*>(ff) - p);
+    const unsigned char m = p[i + 1];
+    if (m == 0x00) {
+      i += 2;
+      continue;
+    }
+    if (m >= 0xD0 && m <= 0xD7) {
+      if (static_cast<std::size_t>(m) != 0xD0 + (starts.size() - 1) % 8)
+        return 0; // markers out of order
+      if (starts.size() == needed) {
+        endOfLast = i;
+        break;
+      }
+      starts.push_back(static_cast<std::uint32_t>(i + 2));
+      i += 2;
+      continue;
+    }
+    if (m == 0xD9 && starts.size() == needed) endOfLast = i;
+    break; // EOI (or anything else) ends the search
+  }
+  return starts.size() == needed ? endOfLast : 0;
+}
+
 /**
  * The fast path for a tile with restart markers: a baseline JPEG whose restart interval divides its
  * rows of 16 x 16 MCUs is a grid of independent segments (the DC predictions start again at each
@@ -157,33 +235,9 @@ bool spliceRegion(const unsigned char* p,
                   int height,
                   const std::array<std::int32_t, 4>& region,
                   Spliced& out) {
-  if (n < 4 || p[0] != 0xFF || p[1] != 0xD8) return false;
-  std::size_t at = 2, sof = 0, data = 0;
-  std::uint32_t interval = 0;
-  while (at + 4 <= n) { // the segments up to the (first) scan
-    if (p[at] != 0xFF) return false;
-    const unsigned char m = p[at + 1];
-    if (m == 0xFF) { // fill byte
-      ++at;
-      continue;
-    }
-    const std::size_t len = be16(p + at + 2);
-    if (len < 2 || at + 2 + len > n) return false;
-    if (m == 0xC0 || m == 0xC1) {
-      if (len < 8) return false;
-      sof = at;
-    } else if ((m >= 0xC2 && m <= 0xCF && m != 0xC4 && m != 0xC8 && m != 0xCC)) {
-      return false; // progressive, lossless, arithmetic: not this path
-    } else if (m == 0xDD) {
-      if (len != 4) return false;
-      interval = be16(p + at + 4);
-    } else if (m == 0xDA) {
-      if (len < 3 || p[at + 4] != 3) return false; // not one interleaved scan
-      data = at + 2 + len;
-      break;
-    }
-    at += 2 + len;
-  }
+  const auto layout = readLayout(p, n);
+  if (!layout) return false;
+  const auto [sof, data, interval] = *layout;
   // Three components at 4:2:0 (16 x 16 MCUs): the segments' geometry below.
   if (!sof || !data || interval == 0 || be16(p + sof + 2) < 17 || p[sof + 9] != 3 ||
       p[sof + 11] != 0x22 || p[sof + 14] != 0x11 || p[sof + 17] != 0x11)
@@ -204,39 +258,16 @@ bool spliceRegion(const unsigned char* p,
   const auto y1 = static_cast<std::uint32_t>((std::clamp(region[3], top + 1, height) + 15) / 16);
   if (x0 >= x1 || y0 >= y1 || x1 > segCols || y1 > mcuRows) return false;
   if (x0 == 0 && x1 == segCols && y0 == 0) return false; // whole rows from the top: no gain
-  // The segments' starts, up to the last row the region needs (the markers found on the way).
+  // The segments' starts, up to the last row the region needs.
   const std::size_t needed = static_cast<std::size_t>(y1) * segCols;
   thread_local std::vector<std::uint32_t> starts;
-  starts.clear();
-  starts.push_back(static_cast<std::uint32_t>(data));
-  std::size_t endOfLast = 0;
-  for (std::size_t i = data; i + 1 < n;) {
-    const void* ff = std::memchr(p + i, 0xFF, n - 1 - i);
-    if (!ff) return false;
-    i = static_cast<std::size_t>(static_cast<const unsigned char*>(ff) - p);
-    const unsigned char m = p[i + 1];
-    if (m == 0x00) {
-      i += 2;
-      continue;
-    }
-    if (m >= 0xD0 && m <= 0xD7) {
-      if (static_cast<std::size_t>(m) != 0xD0 + (starts.size() - 1) % 8)
-        return false; // markers out of order
-      if (starts.size() == needed) {
-        endOfLast = i;
-        break;
-      }
-      starts.push_back(static_cast<std::uint32_t>(i + 2));
-      i += 2;
-      continue;
-    }
-    if (m == 0xD9 && starts.size() == needed) endOfLast = i;
-    break; // EOI (or anything else) ends the search
-  }
-  if (starts.size() != needed || endOfLast == 0) return false;
+  const std::size_t endOfLast = segmentStarts(p, n, data, needed, starts);
+  if (endOfLast == 0) return false;
   const auto segEnd = [&](std::size_t s) -> std::size_t {
     return s + 1 < needed ? starts[s + 1] - 2 : endOfLast;
   };
+  // The tables as they are, the size in the SOF changed, the segments with their markers
+  // renumbered.
   out.bytes.clear();
   out.bytes.insert(out.bytes.end(), p, p + data);
   out.width = static_cast<int>((x1 - x0) * interval * 16);

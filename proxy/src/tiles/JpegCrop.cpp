@@ -78,6 +78,63 @@ extern "C" void tileDestTerm(j_compress_ptr c) {
 
 enum class Result { Ok, Invalid, NotAligned };
 
+/** Writes the tile at (tr, tc) of `src`'s coefficients into `d`: the source's quantisation
+ * tables and sampling, its blocks copied into virtual arrays of the tile's size. Called inside
+ * splitRaw's libjpeg error scope (no object with a destructor lives here). */
+void writeTile(jpeg_decompress_struct& src,
+               jvirt_barray_ptr* srcArrays,
+               jpeg_compress_struct& dst,
+               TileDest& dest,
+               int tr,
+               int tc,
+               int tileWidth,
+               int tileHeight,
+               bool optimize) {
+  TileDest* d = &dest;
+  // max_*_samp_factor are set by jpeg_read_header; the iMCU is 8 x 8 blocks of the largest factor.
+  const int mcuW = src.max_h_samp_factor * DCTSIZE;
+  const int mcuH = src.max_v_samp_factor * DCTSIZE;
+  d->pub.init_destination = tileDestInit;
+  d->pub.empty_output_buffer = tileDestEmpty;
+  d->pub.term_destination = tileDestTerm;
+  dst.dest = &d->pub;
+  jpeg_copy_critical_parameters(&src, &dst); // quantisation tables, sampling, colour space
+  dst.image_width = static_cast<JDIMENSION>(tileWidth);
+  dst.image_height = static_cast<JDIMENSION>(tileHeight);
+  dst.arith_code = FALSE;
+  dst.optimize_coding = optimize ? TRUE : FALSE;
+  dst.restart_interval = kTileRestartInterval; // the composer's region decodes use them
+  jvirt_barray_ptr dstArrays[MAX_COMPONENTS];
+  JDIMENSION blocksW[MAX_COMPONENTS];
+  JDIMENSION blocksH[MAX_COMPONENTS];
+  for (int ci = 0; ci < src.num_components; ++ci) {
+    const jpeg_component_info& comp = src.comp_info[ci];
+    // Whole iMCUs: exact block counts, already multiples of the component's factors.
+    blocksW[ci] = static_cast<JDIMENSION>(tileWidth / mcuW * comp.h_samp_factor);
+    blocksH[ci] = static_cast<JDIMENSION>(tileHeight / mcuH * comp.v_samp_factor);
+    dstArrays[ci] = (*dst.mem->request_virt_barray)(reinterpret_cast<j_common_ptr>(&dst),
+                                                    JPOOL_IMAGE,
+                                                    FALSE,
+                                                    blocksW[ci],
+                                                    blocksH[ci],
+                                                    // the encoder reads an iMCU row at once
+                                                    static_cast<JDIMENSION>(comp.v_samp_factor));
+  }
+  jpeg_write_coefficients(&dst, dstArrays); // realizes the arrays; data goes out at finish
+  for (int ci = 0; ci < src.num_components; ++ci) {
+    const JDIMENSION x0 = static_cast<JDIMENSION>(tc) * blocksW[ci];
+    const JDIMENSION y0 = static_cast<JDIMENSION>(tr) * blocksH[ci];
+    for (JDIMENSION by = 0; by < blocksH[ci]; ++by) {
+      JBLOCKARRAY from = (*src.mem->access_virt_barray)(
+          reinterpret_cast<j_common_ptr>(&src), srcArrays[ci], y0 + by, 1, FALSE);
+      JBLOCKARRAY to = (*dst.mem->access_virt_barray)(
+          reinterpret_cast<j_common_ptr>(&dst), dstArrays[ci], by, 1, TRUE);
+      std::memcpy(to[0], from[0] + x0, blocksW[ci] * sizeof(JBLOCK));
+    }
+  }
+  jpeg_finish_compress(&dst); // also releases the tile's arrays (JPOOL_IMAGE)
+}
+
 /** Reads the coefficients of `data` once, then writes each of the cols x rows tiles into
  * dests[i] (the caller allocated their first buffers). */
 Result splitRaw(const unsigned char* data,
@@ -142,49 +199,9 @@ Result splitRaw(const unsigned char* data,
     return Result::Invalid;
   }
   for (int tr = 0; tr < rows; ++tr) {
-    for (int tc = 0; tc < cols; ++tc) {
-      TileDest* d = &dests[tr * cols + tc];
-      d->pub.init_destination = tileDestInit;
-      d->pub.empty_output_buffer = tileDestEmpty;
-      d->pub.term_destination = tileDestTerm;
-      dst.dest = &d->pub;
-      jpeg_copy_critical_parameters(&src, &dst); // quantisation tables, sampling, colour space
-      dst.image_width = static_cast<JDIMENSION>(tileWidth);
-      dst.image_height = static_cast<JDIMENSION>(tileHeight);
-      dst.arith_code = FALSE;
-      dst.optimize_coding = optimize ? TRUE : FALSE;
-      dst.restart_interval = kTileRestartInterval; // the composer's region decodes use them
-      jvirt_barray_ptr dstArrays[MAX_COMPONENTS];
-      JDIMENSION blocksW[MAX_COMPONENTS];
-      JDIMENSION blocksH[MAX_COMPONENTS];
-      for (int ci = 0; ci < src.num_components; ++ci) {
-        const jpeg_component_info& comp = src.comp_info[ci];
-        // Whole iMCUs: exact block counts, already multiples of the component's factors.
-        blocksW[ci] = static_cast<JDIMENSION>(tileWidth / mcuW * comp.h_samp_factor);
-        blocksH[ci] = static_cast<JDIMENSION>(tileHeight / mcuH * comp.v_samp_factor);
-        dstArrays[ci] =
-            (*dst.mem->request_virt_barray)(reinterpret_cast<j_common_ptr>(&dst),
-                                            JPOOL_IMAGE,
-                                            FALSE,
-                                            blocksW[ci],
-                                            blocksH[ci],
-                                            // the encoder reads an iMCU row at once
-                                            static_cast<JDIMENSION>(comp.v_samp_factor));
-      }
-      jpeg_write_coefficients(&dst, dstArrays); // realizes the arrays; data goes out at finish
-      for (int ci = 0; ci < src.num_components; ++ci) {
-        const JDIMENSION x0 = static_cast<JDIMENSION>(tc) * blocksW[ci];
-        const JDIMENSION y0 = static_cast<JDIMENSION>(tr) * blocksH[ci];
-        for (JDIMENSION by = 0; by < blocksH[ci]; ++by) {
-          JBLOCKARRAY from = (*src.mem->access_virt_barray)(
-              reinterpret_cast<j_common_ptr>(&src), srcArrays[ci], y0 + by, 1, FALSE);
-          JBLOCKARRAY to = (*dst.mem->access_virt_barray)(
-              reinterpret_cast<j_common_ptr>(&dst), dstArrays[ci], by, 1, TRUE);
-          std::memcpy(to[0], from[0] + x0, blocksW[ci] * sizeof(JBLOCK));
-        }
-      }
-      jpeg_finish_compress(&dst); // also releases the tile's arrays (JPOOL_IMAGE)
-    }
+    for (int tc = 0; tc < cols; ++tc)
+      writeTile(
+          src, srcArrays, dst, dests[tr * cols + tc], tr, tc, tileWidth, tileHeight, optimize);
   }
   jpeg_finish_decompress(&src);
   const bool warned = err.warned;
