@@ -1,6 +1,5 @@
-// HTTP dates (RFC 9110 5.6.7) and If-None-Match, declared with the front end that uses them
-// (ProxyFrontEnd.hpp) and read by the Fetcher too (Retry-After).
-#include <tellus/proxy/ProxyFrontEnd.hpp>
+// HTTP dates (RFC 9110 5.6.7) and If-None-Match (HttpDates.hpp).
+#include <tellus/proxy/HttpDates.hpp>
 
 #include <ctime>
 #include <string>

@@ -1,6 +1,6 @@
 #include "upstream/FetchPolicy.hpp"
 
-#include <tellus/proxy/ProxyFrontEnd.hpp> // parseHttpDate
+#include <tellus/proxy/HttpDates.hpp>
 
 #include <algorithm>
 

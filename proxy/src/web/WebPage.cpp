@@ -1,5 +1,5 @@
 #include <tellus/cache/TilePath.hpp>
-#include <tellus/proxy/ProxyFrontEnd.hpp>
+#include <tellus/proxy/HttpDates.hpp>
 #include <tellus/proxy/WebPage.hpp>
 
 #include <algorithm>
