@@ -2,7 +2,7 @@
 // benchmark size): the sampling alone, and decode + sample + encode as tellus serve does it.
 // Side by side in one run; ratios are what to compare. Run with bench/run.sh.
 
-#include "JpegRaw.hpp"
+#include "compose/JpegRaw.hpp"
 
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/proxy/Compose.hpp>

@@ -5,8 +5,8 @@
 // 4:2:0. Side by side in one run; per-tile times (items/s) are what to compare. Run with
 // bench/run.sh.
 
-#include "../proxy/src/Codecs.hpp"
-#include "../proxy/src/JpegCrop.hpp"
+#include "../proxy/src/codec/Codecs.hpp"
+#include "../proxy/src/tiles/JpegCrop.hpp"
 
 #include <tellus/proxy/ImageCodec.hpp>
 

@@ -1,8 +1,8 @@
-// The composer's decoded-tile cache policy (proxy/src/AdmittingLru.hpp): an LRU within a byte
-// budget that keeps a value from its second use on and, when full, only if it was used more often
-// than the value it would push out.
+// The composer's decoded-tile cache policy (proxy/src/compose/AdmittingLru.hpp): an LRU within a
+// byte budget that keeps a value from its second use on and, when full, only if it was used more
+// often than the value it would push out.
 
-#include "../../proxy/src/AdmittingLru.hpp"
+#include "../../proxy/src/compose/AdmittingLru.hpp"
 
 #include <gtest/gtest.h>
 

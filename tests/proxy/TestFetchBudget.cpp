@@ -1,5 +1,6 @@
 // The per-client budget of upstream fetches: a token bucket per address on an injected clock.
 
+#include <tellus/proxy/Clock.hpp>
 #include <tellus/proxy/FetchBudget.hpp>
 
 #include <gtest/gtest.h>
@@ -13,23 +14,9 @@
 using namespace tellus;
 using namespace std::chrono_literals;
 
-namespace {
-
-/** A clock the test moves by hand. */
-struct ManualClock {
-  std::shared_ptr<std::atomic<std::int64_t>> ms = std::make_shared<std::atomic<std::int64_t>>(0);
-  FetchBudget::Clock clock() const {
-    return
-        [ms = ms] { return std::chrono::steady_clock::time_point(std::chrono::milliseconds(*ms)); };
-  }
-  void advance(std::chrono::milliseconds d) { *ms += d.count(); }
-};
-
-} // namespace
-
 TEST(FetchBudget, AMinutesWorthAtOnceThenRefilledEvenly) {
   ManualClock t;
-  FetchBudget b(60, t.clock()); // one a second, sixty at once
+  FetchBudget b(60, t); // one a second, sixty at once
   for (int i = 0; i < 60; ++i)
     ASSERT_FALSE(b.take("10.0.0.1")) << i;
   const auto wait = b.take("10.0.0.1");
@@ -64,7 +51,7 @@ TEST(FetchBudget, ZeroIsUnlimited) {
 
 TEST(FetchBudget, ConcurrentClientsNeverTakeMoreThanTheirBudget) {
   ManualClock t;
-  FetchBudget b(100, t.clock());
+  FetchBudget b(100, t);
   std::atomic<int> granted{0};
   std::vector<std::thread> threads;
   for (int k = 0; k < 4; ++k) {

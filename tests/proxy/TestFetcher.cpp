@@ -1,5 +1,6 @@
 #include "../support/FakeUpstream.hpp"
 
+#include <tellus/proxy/Clock.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 
 #include <gtest/gtest.h>
@@ -19,7 +20,7 @@ using tellus::test::FakeUpstream;
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using Steady = std::chrono::steady_clock;
 
 /** One fetch's result, handed from the fetcher thread to the test thread. */
 class Pending {
@@ -81,15 +82,6 @@ UpstreamPolicy fastPolicy() {
   p.retryBackoff = 5ms;
   p.openInterval = 300ms;
   return p;
-}
-
-bool waitUntil(const std::function<bool()>& condition, std::chrono::milliseconds limit = 3000ms) {
-  const auto until = Clock::now() + limit;
-  while (Clock::now() < until) {
-    if (condition()) return true;
-    std::this_thread::sleep_for(2ms);
-  }
-  return condition();
 }
 
 } // namespace
@@ -187,7 +179,7 @@ TEST(FetcherIntegration, FetchesATileWithItsCacheHeaders) {
   const auto s = f.stats("wms");
   EXPECT_EQ(s.requests, 1u);
   EXPECT_EQ(s.failures, 0u);
-  EXPECT_TRUE(waitUntil([&] { return f.stats("wms").inFlight == 0; }));
+  EXPECT_EQ(s.inFlight, 0u); // counted out before the callback ran
 }
 
 TEST(FetcherIntegration, ReusesTheConnection) {
@@ -203,9 +195,10 @@ TEST(FetcherIntegration, ReusesTheConnection) {
 }
 
 TEST(FetcherIntegration, CapsConcurrentTransfersPerUpstream) {
-  FakeUpstream slow([](const FakeRequest&) {
+  const auto held = std::make_shared<tellus::test::Gate>(); // the slow upstream's answers
+  FakeUpstream slow([held](const FakeRequest&) {
     auto r = FakeReply::ok("x");
-    r.delayBeforeHeaders = 40ms;
+    r.holdUntilOpen = held;
     return r;
   });
   FakeUpstream fast;
@@ -220,7 +213,9 @@ TEST(FetcherIntegration, CapsConcurrentTransfersPerUpstream) {
   // Another upstream is not held up by the first one's cap.
   auto quick = fetchNow(f, get("fast", fast.url("/quick")));
   ASSERT_TRUE(quick);
-  EXPECT_LT(slow.requests(), 10u);
+  ASSERT_TRUE(slow.waitForRequests(2));
+  EXPECT_EQ(slow.requests(), 2u); // the cap: the other eight wait in the fetcher's queue
+  held->open();
   for (auto& p : pending)
     ASSERT_TRUE(p.wait());
   EXPECT_EQ(slow.requests(), 10u);
@@ -277,9 +272,9 @@ TEST(FetcherIntegration, HangingUpstreamTimesOutWithinTheTimeout) {
   policy.retries = 1;
   f.setPolicy("twice", policy);
 
-  const auto t0 = Clock::now();
+  const auto t0 = Steady::now();
   auto r = fetchNow(f, get("once", server.url("/a")));
-  const auto took = Clock::now() - t0;
+  const auto took = Steady::now() - t0;
   ASSERT_FALSE(r);
   EXPECT_EQ(r.error().code, FetchErrc::Timeout);
   EXPECT_EQ(r.error().attempts, 1);
@@ -325,11 +320,11 @@ TEST(FetcherIntegration, DripFedBodyHitsTheTotalTimeout) {
   policy.timeout = 500ms;
   policy.retries = 0;
   f.setPolicy("u", policy);
-  const auto t0 = Clock::now();
+  const auto t0 = Steady::now();
   auto r = fetchNow(f, get("u", server.url("/drip")));
   ASSERT_FALSE(r);
   EXPECT_EQ(r.error().code, FetchErrc::Timeout);
-  EXPECT_LT(Clock::now() - t0, 1500ms);
+  EXPECT_LT(Steady::now() - t0, 1500ms);
 }
 
 TEST(FetcherIntegration, OversizedBodyIsTooLargeAndNotRetried) {
@@ -497,13 +492,16 @@ TEST(FetcherIntegration, DroppedConnectionIsAConnectFailureAndRetried) {
   EXPECT_EQ(ok->attempts, 2);
 }
 
+// libcurl against a real socket, time on a manual clock: the breaker's interval passes when the
+// test says (FetcherPolicy tests the same policies on a fake transport).
 TEST(FetcherIntegration, RefusedConnectionsOpenTheBreakerAndAProbeRetriesLater) {
   const std::uint16_t port = FakeUpstream::closedPort();
   const std::string url = "http://127.0.0.1:" + std::to_string(port) + "/t";
-  Fetcher f;
+  ManualClock clock;
+  Fetcher f(makeCurlTransport(64), clock);
   auto policy = fastPolicy();
   policy.retries = 1;
-  policy.retryBackoff = 1ms;
+  policy.retryBackoff = 0ms; // the retry is due at once: the clock does not move by itself
   policy.failureThreshold = 3;
   policy.openInterval = 300ms;
   f.setPolicy("offline", policy);
@@ -519,19 +517,21 @@ TEST(FetcherIntegration, RefusedConnectionsOpenTheBreakerAndAProbeRetriesLater) 
   const auto retriesBefore = f.stats("offline").retries;
 
   // Open: no network at all, and immediate.
-  const auto t0 = Clock::now();
+  const auto t0 = Steady::now();
   for (int i = 0; i < 20; ++i) {
     auto r = fetchNow(f, get("offline", url));
     ASSERT_FALSE(r);
     EXPECT_EQ(r.error().code, FetchErrc::CircuitOpen);
     EXPECT_EQ(r.error().attempts, 0);
   }
-  EXPECT_LT(Clock::now() - t0, 250ms);
+  EXPECT_LT(Steady::now() - t0, 250ms);
   EXPECT_EQ(f.stats("offline").retries, retriesBefore);
   EXPECT_EQ(f.stats("offline").failures, 23u);
 
   // After the interval one probe goes out (a single attempt); its failure re-opens the breaker.
-  std::this_thread::sleep_for(320ms);
+  clock.advance(299ms);
+  EXPECT_EQ(f.breaker("offline"), BreakerState::Open);
+  clock.advance(1ms);
   EXPECT_EQ(f.breaker("offline"), BreakerState::HalfOpen);
   EXPECT_TRUE(f.reachable("offline"));
   auto probe = fetchNow(f, get("offline", url));
@@ -546,13 +546,15 @@ TEST(FetcherIntegration, RefusedConnectionsOpenTheBreakerAndAProbeRetriesLater) 
 
 TEST(FetcherIntegration, HalfOpenProbeClosesTheBreakerAndOthersWaitForIt) {
   std::atomic<bool> healthy{false};
+  auto probeHeld = std::make_shared<tellus::test::Gate>();
   FakeUpstream server([&](const FakeRequest&) {
     if (!healthy) return FakeReply::withStatus(500, "down");
     auto r = FakeReply::ok("up");
-    r.delayBeforeHeaders = 100ms;
+    r.holdUntilOpen = probeHeld; // until the other fetch has been refused
     return r;
   });
-  Fetcher f;
+  ManualClock clock;
+  Fetcher f(makeCurlTransport(64), clock);
   auto policy = fastPolicy();
   policy.retries = 0;
   policy.failureThreshold = 2;
@@ -570,7 +572,7 @@ TEST(FetcherIntegration, HalfOpenProbeClosesTheBreakerAndOthersWaitForIt) {
   EXPECT_EQ(server.requests(), 2u); // the open breaker sent nothing
 
   healthy = true;
-  std::this_thread::sleep_for(270ms);
+  clock.advance(250ms);
   Pending probe;
   Pending other;
   f.fetch(get("u", server.url("/probe")), probe.callback());
@@ -578,6 +580,7 @@ TEST(FetcherIntegration, HalfOpenProbeClosesTheBreakerAndOthersWaitForIt) {
   auto o = other.wait();
   ASSERT_FALSE(o); // the probe is still out: everyone else still fails fast
   EXPECT_EQ(o.error().code, FetchErrc::CircuitOpen);
+  probeHeld->open();
   auto p = probe.wait();
   ASSERT_TRUE(p) << p.error().message;
   EXPECT_EQ(f.breaker("u"), BreakerState::Closed);
@@ -607,11 +610,12 @@ TEST(FetcherIntegration, DestructorCancelsEverythingInFlightExactlyOnce) {
     for (std::size_t i = 0; i < 5; ++i) // two running, three queued
       f.fetch(get("hang", hanging.url("/h" + std::to_string(i))), pending[i].callback());
     f.fetch(get("retry", failing.url("/r")), pending[5].callback());
-    ASSERT_TRUE(waitUntil([&] { return hanging.requests() == 2 && failing.requests() >= 1; }));
+    ASSERT_TRUE(hanging.waitForRequests(2));
+    ASSERT_TRUE(failing.waitForRequests(1));
     EXPECT_EQ(f.stats("hang").inFlight, 5u);
-    const auto t0 = Clock::now();
+    const auto t0 = Steady::now();
     fetcher.reset();
-    EXPECT_LT(Clock::now() - t0, 1s);
+    EXPECT_LT(Steady::now() - t0, 1s);
   }
   for (auto& p : pending) {
     auto r = p.wait(100ms);
@@ -728,12 +732,12 @@ TEST(FetcherIntegration, A503WithAShortRetryAfterIsRetriedNoEarlierThanAsked) {
   });
   Fetcher f;
   f.setPolicy("u", fastPolicy()); // 5 ms backoff: without Retry-After it would retry at once
-  const auto started = Clock::now();
+  const auto started = Steady::now();
   auto r = fetchNow(f, get("u", server.url("/t")));
   ASSERT_TRUE(r) << r.error().message;
   EXPECT_EQ(text(r->body), "fine");
   EXPECT_EQ(r->attempts, 2);
-  EXPECT_GE(Clock::now() - started, 950ms);
+  EXPECT_GE(Steady::now() - started, 950ms);
   EXPECT_EQ(f.stats("u").failures, 0u);
   EXPECT_EQ(f.breaker("u"), BreakerState::Closed);
 }

@@ -9,6 +9,7 @@
 
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/cache/TilePath.hpp>
+#include <tellus/proxy/Clock.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
@@ -45,11 +46,6 @@ test::FakeReply noisyTile(const test::FakeRequest& req) {
                              "image/jpeg");
 }
 
-/** A steady clock the test moves by hand (TileCache::Options::clock). */
-struct ManualClock {
-  TileCache::Clock::time_point now = TileCache::Clock::now();
-};
-
 /** tellus serve's pieces over a cache at `root`: WMS layers (36-degree grid, 256-px JPEG, 4
  * levels; "sat" by default), the HTTP server on a loopback port. */
 struct Stack {
@@ -69,7 +65,7 @@ struct Stack {
     o.fsyncTiles = false;
     o.indexWriteBehind = writeBehind;
     o.fullRecheck = 10s;
-    if (clock) o.clock = [clock] { return clock->now; };
+    if (clock) o.clock = [clock] { return clock->now(); };
     auto c = TileCache::open(o);
     EXPECT_TRUE(c) << (c ? "" : c.error().message);
     if (!c) return;
@@ -226,7 +222,7 @@ TEST(ProxyFullDiskIntegration, ServingFromAFullDiskAnswersEverythingAndStoresAga
 
     // Room again: after the recheck interval the next miss is stored.
     fs::remove(filler);
-    clock.now += 11s;
+    clock.advance(11s);
     const TileKey later{1, 1, 0};
     EXPECT_EQ(s.get(wwtile(later)).status, 200);
     EXPECT_TRUE(s.stored(later)) << "storing did not resume";

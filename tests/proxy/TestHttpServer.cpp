@@ -7,6 +7,7 @@
 #include <arpa/inet.h>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <csignal>
 #include <cstring>
 #include <fcntl.h>
@@ -63,6 +64,11 @@ public:
     }
     return got;
   }
+  /** True when a response has started to arrive within the timeout (nothing is read). */
+  bool answerStarted(std::chrono::milliseconds timeout) {
+    pollfd p{fd_, POLLIN, 0};
+    return ::poll(&p, 1, static_cast<int>(timeout.count())) > 0;
+  }
   /** True when the server closed the connection within the timeout. */
   bool closedWithin(std::chrono::milliseconds timeout) {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
@@ -116,8 +122,8 @@ int refusalStatus(HttpRefusal r) {
   return 500;
 }
 
-/** Echoes the path and query; "/slow" answers from another thread after 100 ms. A refused
- * request is answered with its status and "<refusal> <method> <target>". */
+/** Echoes the path and query. A refused request is answered with its status and
+ * "<refusal> <method> <target>". */
 HttpHandler echoHandler(std::atomic<int>* calls = nullptr, std::atomic<int>* refused = nullptr) {
   return [calls, refused](HttpRequest&& req, Responder respond) {
     if (calls) ++*calls;
@@ -130,13 +136,6 @@ HttpHandler echoHandler(std::atomic<int>* calls = nullptr, std::atomic<int>* ref
     }
     std::string body = req.method + " " + req.path + " ?" + req.query +
                        " ua=" + std::string(req.header("user-agent"));
-    if (req.path == "/slow") {
-      std::thread([respond = std::move(respond), body] {
-        std::this_thread::sleep_for(100ms);
-        respond(HttpResponse::text(200, "text/plain", body));
-      }).detach();
-      return;
-    }
     auto r = HttpResponse::text(req.path == "/missing" ? 404 : 200, "text/plain", body);
     r.setHeader("X-Test", "1");
     respond(std::move(r));
@@ -357,19 +356,18 @@ TEST(HttpServerIntegration, ConnectionLimitRefusesTheRest) {
 TEST(HttpServer, StopsWithAnAnswerStillPending) {
   Responder kept;
   std::mutex m;
+  std::condition_variable handled;
   HttpServer server(quickOptions(), [&](HttpRequest&&, Responder respond) {
     std::lock_guard lock(m);
     kept = std::move(respond); // never answered before stop()
+    handled.notify_all();
   });
   ASSERT_TRUE(server.start());
   RawClient c(server.port());
   c.send("GET /hang HTTP/1.1\r\nHost: a\r\n\r\n");
-  for (int i = 0; i < 400; ++i) {
-    {
-      std::lock_guard lock(m);
-      if (kept) break;
-    }
-    std::this_thread::sleep_for(5ms);
+  {
+    std::unique_lock lock(m);
+    handled.wait_for(lock, 2s, [&] { return static_cast<bool>(kept); });
   }
   server.stop();
   std::lock_guard lock(m);
@@ -447,6 +445,19 @@ HttpHandler fileHandler(const PatternFile& f) {
   };
 }
 
+/** Waits until the server has at most `n` connections open. A poll of the server's count: it
+ * drops a connection on its own (Asio's send timeout on a real socket, or a write into a reset
+ * one), and nothing the client can observe without reading tells when (reading would unstick a
+ * stuck client). */
+bool connectionsDropTo(const HttpServer& server, std::size_t n, std::chrono::milliseconds limit) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  while (server.connections() > n) {
+    if (std::chrono::steady_clock::now() >= deadline) return false;
+    std::this_thread::sleep_for(5ms);
+  }
+  return true;
+}
+
 std::string bodyOf(const std::string& r) {
   const auto end = r.find("\r\n\r\n");
   return end == std::string::npos ? std::string() : r.substr(end + 4);
@@ -515,15 +526,12 @@ TEST(HttpServer, AClientThatDoesNotReadAFileBodyIsCutOff) {
   {
     RawClient stuck(server.port());
     stuck.send("GET /now HTTP/1.1\r\nHost: a\r\n\r\n");
-    std::this_thread::sleep_for(100ms);
+    ASSERT_TRUE(stuck.answerStarted(2000ms)); // the server is sending it the file, which it leaves
     // Meanwhile others are served.
     RawClient other(server.port());
     other.send("GET /now HTTP/1.1\r\nHost: a\r\n\r\n");
     EXPECT_TRUE(bodyOf(other.readResponse(5000ms)) == f.bytes);
-    const auto deadline = std::chrono::steady_clock::now() + 3s;
-    while (server.connections() > 1 && std::chrono::steady_clock::now() < deadline)
-      std::this_thread::sleep_for(20ms);
-    EXPECT_LE(server.connections(), 1u) << "the stuck connection is still open";
+    EXPECT_TRUE(connectionsDropTo(server, 1, 3s)) << "the stuck connection is still open";
   }
 }
 
@@ -551,7 +559,8 @@ TEST(HttpServer, AClientResettingMidBodyDoesNotKillTheServer) {
     const linger reset{1, 0};                    // close with RST, not FIN
     ::setsockopt(s, SOL_SOCKET, SO_LINGER, &reset, sizeof reset);
     ::close(s);
-    std::this_thread::sleep_for(50ms);
+    // The server has written into the reset connection (EPIPE) and dropped it.
+    ASSERT_TRUE(connectionsDropTo(server, 0, 3s)) << i;
   }
   RawClient c(server.port());
   c.send("GET /now HTTP/1.1\r\nHost: a\r\n\r\n");

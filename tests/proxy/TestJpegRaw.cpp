@@ -1,10 +1,11 @@
-// The composer's YCbCr path (proxy/src/JpegRaw.hpp and Compose's planes): region decodes against
-// whole decodes, the chroma planes' geometry, and JPEG maps made on Y, Cb and Cr planes against
-// the same maps made on the RGB path, on tiles cut from the bundled Blue Marble and encoded as the
-// seeder encodes them (quality 90, 4:2:0, restart markers), and as an upstream may (no markers).
+// The composer's YCbCr path (proxy/src/compose/JpegRaw.hpp and Compose's planes): region decodes
+// against whole decodes, the chroma planes' geometry, and JPEG maps made on Y, Cb and Cr planes
+// against the same maps made on the RGB path, on tiles cut from the bundled Blue Marble and encoded
+// as the seeder encodes them (quality 90, 4:2:0, restart markers), and as an upstream may (no
+// markers).
 
-#include "../../proxy/src/JpegCrop.hpp"
-#include "../../proxy/src/JpegRaw.hpp"
+#include "../../proxy/src/compose/JpegRaw.hpp"
+#include "../../proxy/src/tiles/JpegCrop.hpp"
 #include "../support/JpegSampling.hpp"
 
 #include <tellus/proxy/Compose.hpp>

@@ -2,9 +2,9 @@
 // seeding through the tile service with one GetMap per metatile against a fake WMS that draws
 // georeferenced pixels (so every tile can be checked against where it is on the globe).
 
-#include "../../proxy/src/Codecs.hpp"
-#include "../../proxy/src/JpegCrop.hpp"
-#include "../../proxy/src/MetaTile.hpp"
+#include "../../proxy/src/codec/Codecs.hpp"
+#include "../../proxy/src/tiles/JpegCrop.hpp"
+#include "../../proxy/src/tiles/MetaTile.hpp"
 #include "../support/CacheFixtures.hpp"
 #include "../support/FakeUpstream.hpp"
 #include "../support/HttpClient.hpp"
@@ -22,11 +22,13 @@
 
 #include <atomic>
 #include <cmath>
+#include <condition_variable>
 #include <csetjmp>
 #include <cstdio>
 #include <cstdlib>
 #include <future>
 #include <jpeglib.h>
+#include <mutex>
 #include <thread>
 
 using namespace tellus;
@@ -499,14 +501,14 @@ TEST(MetaTileIntegration, AFailingMetaTileStoresNothingAndItsTilesAreRetriedOneB
   }
 }
 
+// The clients ask the tile service as the front end does (getTile): by the time their calls have
+// returned they wait on the metatile's flights or have started fetches of their own (which the
+// upstream would see), so the metatile's answer is held exactly until then, not for an interval.
 TEST(MetaTileIntegration, ServeRequestsForTilesOfAMetaTileInFlightWaitForIt) {
-  std::atomic<bool> metaArrived{false};
+  const auto clientsAsked = std::make_shared<test::Gate>();
   test::FakeUpstream up([&](const test::FakeRequest& r) {
     auto reply = drawMap(r);
-    if (isMetaTileRequest(r)) {
-      metaArrived = true;
-      reply.delayBeforeHeaders = 600ms; // long enough for the clients below to ask
-    }
+    if (isMetaTileRequest(r)) reply.holdUntilOpen = clientsAsked;
     return reply;
   });
   MetaProxy p(up.url("/wms"), 4);
@@ -514,18 +516,31 @@ TEST(MetaTileIntegration, ServeRequestsForTilesOfAMetaTileInFlightWaitForIt) {
     return seedThroughService(
         *p.tiles, *p.cache, "sat", seedRange(1, 1, Sector{-180, -90, -108, -18})); // 4x4 at L1
   });
-  for (int i = 0; i < 200 && !metaArrived; ++i)
-    std::this_thread::sleep_for(5ms);
-  ASSERT_TRUE(metaArrived.load());
+  ASSERT_TRUE(up.waitForRequests(1)); // the metatile's GetMap is out (and held)
+  ASSERT_TRUE(isMetaTileRequest(up.received().at(0)));
   // Three clients ask for tiles of that metatile while it is out (World Wind: X = column).
-  std::vector<std::future<test::HttpResult>> clients;
-  for (const char* t :
-       {"/wwtile?T=sat&L=1&X=0&Y=0", "/wwtile?T=sat&L=1&X=3&Y=3", "/wwtile?T=sat&L=1&X=2&Y=1"})
-    clients.push_back(std::async(std::launch::async, [&, t] { return test::httpGet(p.url(t)); }));
-  for (auto& c : clients) {
-    const auto got = c.get();
-    EXPECT_EQ(got.status, 200);
-    EXPECT_EQ(got.headers.at("content-type"), "image/jpeg");
+  std::mutex m;
+  std::condition_variable cv;
+  std::vector<TileAnswer> answers;
+  for (const TileKey key : {TileKey{1, 0, 0}, TileKey{1, 3, 3}, TileKey{1, 1, 2}}) {
+    p.tiles->getTile("sat", "", key, [&](TileAnswer&& a) {
+      std::lock_guard lock(m);
+      answers.push_back(std::move(a));
+      cv.notify_all();
+    });
+  }
+  {
+    std::lock_guard lock(m);
+    EXPECT_TRUE(answers.empty()) << "answered before the metatile came";
+  }
+  clientsAsked->open();
+  {
+    std::unique_lock lock(m);
+    ASSERT_TRUE(cv.wait_for(lock, 10s, [&] { return answers.size() == 3; }));
+    for (const TileAnswer& a : answers) {
+      EXPECT_EQ(a.kind, TileAnswer::Kind::Tile) << a.message;
+      EXPECT_EQ(a.contentType, "image/jpeg");
+    }
   }
   const auto r = seeding.get();
   ASSERT_TRUE(r) << r.error();

@@ -1,7 +1,7 @@
 // tellus serve's pieces wired as the executable wires them (cache, fetcher, tile service, front
 // end, HTTP server on a loopback port), against a scriptable fake upstream and a real MapServer.
 
-#include "../../proxy/src/MapComposer.hpp"
+#include "../../proxy/src/compose/MapComposer.hpp"
 #include "../support/CacheFixtures.hpp"
 #include "../support/FakeUpstream.hpp"
 #include "../support/HttpClient.hpp"
@@ -87,7 +87,8 @@ struct Proxy {
                  const std::string& upstreamLayer = "upsat",
                  FrontEndOptions frontOptions = {},
                  std::vector<LayerSpec> extraLayers = {},
-                 HttpServerOptions serverOptions = {}) {
+                 HttpServerOptions serverOptions = {},
+                 TileServiceOptions serviceOptions = {}) {
     cache = test::openTestCache(dir.path());
     fetcher = std::make_unique<Fetcher>();
     UpstreamSpec u;
@@ -111,7 +112,7 @@ struct Proxy {
       x.upstream = "up";
       all.push_back(std::move(x));
     }
-    auto t = TileService::create(*cache, *fetcher, {u}, std::move(all), TileServiceOptions{});
+    auto t = TileService::create(*cache, *fetcher, {u}, std::move(all), serviceOptions);
     EXPECT_TRUE(t) << (t ? "" : t.error());
     tiles = std::move(*t);
     front = std::make_unique<ProxyFrontEnd>(*tiles, std::move(frontOptions));
@@ -355,17 +356,22 @@ TEST(ProxyIntegration, ExpiredTilesAreRevalidatedOrServedStale) {
     if (mode == 2) return test::FakeReply::withStatus(503, "down");
     return tileReply(r);
   });
-  Proxy p(up.url("/wms"), UpstreamSpec::Type::Wms, 100ms);
+  // The service's clock is a day behind the cache's: every tile it fetches (TTL 100 ms) has expired
+  // by the time the cache is asked for it again, with no waiting.
+  ManualClock aDayAgo(std::chrono::steady_clock::now(), std::chrono::system_clock::now() - 24h);
+  TileServiceOptions so;
+  so.clock = &aDayAgo;
+  Proxy p(
+      up.url("/wms"), UpstreamSpec::Type::Wms, 100ms, Proxy::fastPolicy(), "upsat", {}, {}, {}, so);
   const auto first = p.get("/wwtile?T=sat&L=0&X=0&Y=0");
   ASSERT_EQ(first.status, 200);
-  std::this_thread::sleep_for(150ms);
+  EXPECT_EQ(first.header("x-cache"), "MISS");
   mode = 1;
   const auto revalidated = p.get("/wwtile?T=sat&L=0&X=0&Y=0");
   EXPECT_EQ(revalidated.status, 200);
   EXPECT_EQ(revalidated.header("x-cache"), "HIT");
   EXPECT_EQ(revalidated.body, first.body);
   EXPECT_EQ(up.received().back().header("if-none-match"), "\"v1\"");
-  std::this_thread::sleep_for(150ms);
   mode = 2;
   const auto stale = p.get("/wwtile?T=sat&L=0&X=0&Y=0");
   EXPECT_EQ(stale.status, 200);
@@ -532,10 +538,11 @@ TEST(RemoteTileSource, LayersAndTilesComeFromTheServer) {
 }
 
 TEST(RemoteTileSource, QueuedRequestsRunByPriorityAndCanBeCancelled) {
-  std::atomic<bool> slow{true};
+  // Every reply is held until the queue below has been arranged.
+  const auto arranged = std::make_shared<test::Gate>();
   test::FakeUpstream up([&](const test::FakeRequest& r) {
     auto reply = tileReply(r);
-    if (slow) reply.delayBeforeHeaders = 300ms;
+    reply.holdUntilOpen = arranged;
     return reply;
   });
   Proxy p(up.url("/wms"));
@@ -553,9 +560,10 @@ TEST(RemoteTileSource, QueuedRequestsRunByPriorityAndCanBeCancelled) {
   EXPECT_EQ(s.queued(), 4u);
   EXPECT_TRUE(s.cancel(gone));
   EXPECT_FALSE(s.cancel(gone));
-  s.reprioritize(low, 2.5);          // now between high and mid
-  std::this_thread::sleep_for(50ms); // the first request has reached the upstream (and waits)
-  slow = false;
+  s.reprioritize(low, 2.5);           // now between high and mid
+  ASSERT_TRUE(up.waitForRequests(1)); // the first request has reached the upstream (and waits)
+  EXPECT_EQ(s.queued(), 3u);
+  arranged->open();
   ASSERT_TRUE(a.waitFor(4));
   std::vector<int> order;
   for (const auto& [tag, r] : a.got) {
@@ -565,8 +573,9 @@ TEST(RemoteTileSource, QueuedRequestsRunByPriorityAndCanBeCancelled) {
   EXPECT_EQ(order, (std::vector<int>{0, 2, 1, 3}));
   (void)high;
   (void)mid;
-  std::this_thread::sleep_for(50ms);
-  EXPECT_EQ(a.got.size(), 4u); // the cancelled one never answers
+  // The cancelled one (the highest priority) would have gone second: it never went.
+  EXPECT_EQ(s.queued(), 0u);
+  EXPECT_EQ(a.got.size(), 4u);
   EXPECT_EQ(up.requests(), 4u);
 }
 
@@ -868,13 +877,21 @@ TEST(ProxyIntegration, LayerLastUpdateSurvivesRestartsAndMovesWithTheDefinition)
     EXPECT_TRUE(t) << (t ? "" : t.error());
     return t ? (*t)->layerSince("sat") : 0;
   };
+  // The time is the cache's registration time of the layer's dataset (TileCache reads its own
+  // clock): compared with the datasets' records, not by waiting for the clock to move.
   const UnixMillis first = since(l);
   EXPECT_GT(first, 0);
-  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ASSERT_EQ(cache->datasets().size(), 1u);
   EXPECT_EQ(since(l), first) << "a restart must not make World Wind Java drop its tiles";
+  EXPECT_EQ(cache->datasets().size(), 1u) << "a restart registers nothing new";
   LayerSpec changed = l;
   changed.dataset.mimeType = "image/png"; // another definition: another dataset
-  EXPECT_GT(since(changed), first);
+  const UnixMillis changedSince = since(changed);
+  const auto datasets = cache->datasets();
+  ASSERT_EQ(datasets.size(), 2u);
+  for (const auto& d : datasets)
+    EXPECT_EQ(d.createdAt, d.spec.mimeType == "image/png" ? changedSince : first) << d.folder;
+  EXPECT_GE(changedSince, first);
   EXPECT_EQ(since(l), first);
 }
 
@@ -1523,9 +1540,11 @@ TEST(ProxyIntegration, CorsPreflightGets204WithWhatTheBrowserAsked) {
 // any other request.
 TEST(ProxyIntegration, RefusedRequestsAreCountedAndLogged) {
   test::FakeUpstream up(tileReply);
+  ManualClock clock; // the rate limit's: its tokens come back when the test says
   HttpServerOptions so;
   so.requestsPerSecond = 1; // a burst of 2
   so.maxHeaderBytes = 2048;
+  so.clock = &clock;
   Proxy p(up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, Proxy::fastPolicy(), "upsat", {}, {}, so);
   const auto file = p.dir.path() / "access.log";
   std::string err;
@@ -1565,8 +1584,8 @@ TEST(ProxyIntegration, RefusedRequestsAreCountedAndLogged) {
   EXPECT_EQ(logged("status=431"), 1) << testing::PrintToString(lines);
   EXPECT_EQ(logged("target=/wms status=413"), 1) << testing::PrintToString(lines);
   EXPECT_EQ(logged("target=/nothing status=429"), limited) << testing::PrintToString(lines);
-  // The request counters: the rate limit let the metrics request through a second later.
-  std::this_thread::sleep_for(1100ms);
+  // The request counters: the rate limit lets the metrics request through a second later.
+  clock.advance(1100ms);
   const auto m = p.get("/metrics");
   ASSERT_EQ(m.status, 200) << m.body;
   EXPECT_TRUE(hasLine(m.body, "tellus_http_requests_total{protocol=\"wms\",code=\"405\"} 1"))
@@ -1695,21 +1714,6 @@ TEST(ProxyIntegration, ARedirectToAnotherOriginIsRefusedAndNeverCached) {
   EXPECT_EQ(up.received().back().header("x-api-key"), "SECRET-KEY");
 }
 
-namespace {
-
-/** A clock the test moves by hand, for the fetch budget. */
-struct ManualClock {
-  std::shared_ptr<std::atomic<std::int64_t>> ms = std::make_shared<std::atomic<std::int64_t>>(0);
-  FetchBudget::Clock clock() const {
-    return [ms = ms] {
-      return std::chrono::steady_clock::time_point(std::chrono::milliseconds(ms->load()));
-    };
-  }
-  void advance(std::chrono::milliseconds d) { *ms += d.count(); }
-};
-
-} // namespace
-
 // A client past its budget of upstream fetches gets 429 (an OGC exception with status 429 on
 // /wms) with Retry-After, while what is cached is still served, and /metrics counts it.
 TEST(ProxyIntegration, TheFetchBudgetRefusesPastItAndServesTheCache) {
@@ -1717,7 +1721,7 @@ TEST(ProxyIntegration, TheFetchBudgetRefusesPastItAndServesTheCache) {
   ManualClock t;
   FrontEndOptions fo;
   fo.fetchesPerClientPerMinute = 3; // three at once, then one every 20 s
-  fo.clock = t.clock();
+  fo.clock = &t;
   Proxy p(up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, Proxy::fastPolicy(), "upsat", fo);
   for (int x = 0; x < 3; ++x)
     ASSERT_EQ(p.get("/wwtile?T=sat&L=1&X=" + std::to_string(x) + "&Y=0").status, 200) << x;

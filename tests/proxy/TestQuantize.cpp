@@ -1,6 +1,6 @@
 // 8-bit PNG maps: the palette quantiser.
 
-#include "../../proxy/src/Quantize.hpp"
+#include "../../proxy/src/codec/Quantize.hpp"
 
 #include <gtest/gtest.h>
 

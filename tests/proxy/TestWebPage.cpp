@@ -1,5 +1,5 @@
-// The page at / (proxy/src/WebPage.cpp): the embedded files, their HTTP caching and compression,
-// and /layers.json. The page in a browser is tests/web/test_page.mjs.
+// The page at / (proxy/src/web/WebPage.cpp): the embedded files, their HTTP caching and
+// compression, and /layers.json. The page in a browser is tests/web/test_page.mjs.
 #include <tellus/proxy/WebPage.hpp>
 
 #include <gtest/gtest.h>

@@ -146,11 +146,18 @@ std::vector<FakeRequest> FakeUpstream::received() const {
   return received_;
 }
 
+bool FakeUpstream::waitForRequests(std::size_t n, std::chrono::milliseconds limit) const {
+  std::unique_lock lock(mutex_);
+  return requestArrived_.wait_for(lock, limit, [&] { return requests_ >= n; });
+}
+
 void FakeUpstream::stop() {
   {
     std::lock_guard lock(mutex_);
     if (stopped_) return;
     stopped_ = true;
+    for (const auto& gate : gates_)
+      gate->open();
   }
   const char byte = 'x';
   // The pipe is never read: once written, every poll on it reports readable.
@@ -285,6 +292,7 @@ void FakeUpstream::serve(int fd) {
       ++requests_;
       ++perTarget_[request.target];
       received_.push_back(request);
+      requestArrived_.notify_all();
       ++concurrent_;
       maxConcurrent_ = std::max(maxConcurrent_, concurrent_);
       handler = handler_;
@@ -323,6 +331,16 @@ bool FakeUpstream::answer(int fd,
     const linger hard{1, 0};
     ::setsockopt(fd, SOL_SOCKET, SO_LINGER, &hard, sizeof hard);
     return false;
+  }
+  if (reply.holdUntilOpen) {
+    {
+      std::lock_guard lock(mutex_);
+      gates_.push_back(reply.holdUntilOpen);
+      if (stopped_) reply.holdUntilOpen->open();
+    }
+    reply.holdUntilOpen->wait();
+    std::lock_guard lock(mutex_);
+    if (stopped_) return false;
   }
   if (reply.delayBeforeHeaders.count() > 0 && !pause(reply.delayBeforeHeaders)) return false;
   if (reply.hangForever) {

@@ -1,12 +1,15 @@
 #pragma once
 // A scriptable HTTP/1.1 server on 127.0.0.1 for fetcher tests: keep-alive, request counting, and
-// faults on demand (delays, drip-fed bodies, truncation, dropped and reset connections, hangs).
+// faults on demand (delays, drip-fed bodies, truncation, dropped and reset connections, hangs), and
+// replies held until the test opens a Gate, so that a test waits for events, not for intervals.
 
 #include <chrono>
+#include <condition_variable>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <string_view>
@@ -27,18 +30,38 @@ struct FakeRequest {
   }
 };
 
+/** Holds the replies that carry it until the test opens it (or the server stops). */
+class Gate {
+public:
+  void open() {
+    std::lock_guard lock(mutex_);
+    open_ = true;
+    cv_.notify_all();
+  }
+  void wait() {
+    std::unique_lock lock(mutex_);
+    cv_.wait(lock, [&] { return open_; });
+  }
+
+private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  bool open_ = false;
+};
+
 struct FakeReply {
   int status = 200;
   std::vector<std::pair<std::string, std::string>> headers;
   std::string body;
   std::chrono::milliseconds delayBeforeHeaders{0};
-  int dripBytesPerSecond = 0;        ///< > 0: the body goes out one byte at a time at this rate
-  bool truncate = false;             ///< announce Content-Length body.size(), send half, close
-  bool chunked = false;              ///< Transfer-Encoding: chunked instead of Content-Length
-  bool closeAfter = false;           ///< "Connection: close" and close after the reply
-  bool closeWithoutResponse = false; ///< read the request, then close
-  bool resetWithoutResponse = false; ///< read the request, then reset the connection (RST)
-  bool hangForever = false;          ///< read the request, then wait until the server stops
+  int dripBytesPerSecond = 0;          ///< > 0: the body goes out one byte at a time at this rate
+  bool truncate = false;               ///< announce Content-Length body.size(), send half, close
+  bool chunked = false;                ///< Transfer-Encoding: chunked instead of Content-Length
+  bool closeAfter = false;             ///< "Connection: close" and close after the reply
+  bool closeWithoutResponse = false;   ///< read the request, then close
+  bool resetWithoutResponse = false;   ///< read the request, then reset the connection (RST)
+  bool hangForever = false;            ///< read the request, then wait until the server stops
+  std::shared_ptr<Gate> holdUntilOpen; ///< set: nothing is sent before the gate opens
 
   static FakeReply ok(std::string body, std::string contentType = "application/octet-stream") {
     FakeReply r;
@@ -77,6 +100,9 @@ public:
   int concurrent() const;      ///< requests being answered now
   int maxConcurrent() const;   ///< the most requests answered at once so far
   std::vector<FakeRequest> received() const;
+  /** Waits until `n` requests have arrived (`limit` only guards against a hang). */
+  bool waitForRequests(std::size_t n,
+                       std::chrono::milliseconds limit = std::chrono::seconds(5)) const;
 
   /** Closes the listener, wakes every connection (hanging ones included) and joins all threads.
    * Idempotent. */
@@ -105,7 +131,9 @@ private:
   std::thread acceptor_;
 
   mutable std::mutex mutex_;
+  mutable std::condition_variable requestArrived_;
   FakeHandler handler_;
+  std::vector<std::shared_ptr<Gate>> gates_; ///< of replies held: opened by stop()
   std::vector<std::thread> connections_;
   std::map<std::string, std::size_t> perTarget_;
   std::vector<FakeRequest> received_;

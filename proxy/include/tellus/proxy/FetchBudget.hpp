@@ -5,12 +5,13 @@
  * at `perMinute / 60` tokens a second up to `perMinute` (a full minute's worth at once). The tile
  * service asks it once before a client's request starts an upstream fetch; cache hits, remembered
  * absences and requests that join a fetch already under way never ask. Time comes from an
- * injected clock, so tests drive it without sleeping.
+ * injected Clock, so tests drive it without sleeping.
  */
+
+#include <tellus/proxy/Clock.hpp>
 
 #include <chrono>
 #include <cstdint>
-#include <functional>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -21,10 +22,9 @@ namespace tellus {
 
 class FetchBudget {
 public:
-  using Clock = std::function<std::chrono::steady_clock::time_point()>;
-
-  /** `perMinute` <= 0 (or not finite): unlimited. `clock` empty: std::chrono::steady_clock. */
-  explicit FetchBudget(double perMinute, Clock clock = {});
+  /** `perMinute` <= 0 (or not finite): unlimited. `clock` (its steady time) outlives the
+   * budget. */
+  explicit FetchBudget(double perMinute, const Clock& clock = Clock::system());
   FetchBudget(const FetchBudget&) = delete;
   FetchBudget& operator=(const FetchBudget&) = delete;
 
@@ -51,7 +51,7 @@ private:
     }
   };
   double perMinute_;
-  Clock clock_;
+  const Clock& clock_;
   mutable std::mutex mutex_;
   std::unordered_map<std::string, Bucket, Hash, std::equal_to<>> buckets_;
   std::uint64_t refused_ = 0;

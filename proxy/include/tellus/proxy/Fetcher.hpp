@@ -1,10 +1,16 @@
 #pragma once
 /**
  * @file Fetcher.hpp
- * @brief The upstream fetcher: HTTP(S) GETs over one libcurl multi handle driven by one thread,
- * with per-upstream concurrency caps, retries with jittered exponential backoff and a circuit
- * breaker per upstream. libcurl stays inside proxy/src/Fetcher.cpp.
+ * @brief The upstream fetcher: HTTP(S) GETs on one thread, with per-upstream concurrency caps,
+ * retries with jittered exponential backoff, Retry-After, a circuit breaker per upstream and its
+ * own redirect policy. The network is an ITransport (Transport.hpp: libcurl in production, a fake
+ * in tests) and time a Clock (Clock.hpp), so that the policies are tested without sockets or
+ * sleeps. Source: proxy/src/upstream/ (Fetcher.cpp the loop, FetchAttempts.cpp one attempt,
+ * FetchPolicy.cpp the policies, CurlTransport.cpp the only user of libcurl's transfer API).
  */
+
+#include <tellus/proxy/Clock.hpp>
+#include <tellus/proxy/Transport.hpp>
 
 #include <array>
 #include <chrono>
@@ -98,24 +104,25 @@ std::optional<std::chrono::milliseconds> parseRetryAfter(std::string_view value,
 
 enum class BreakerState { Closed, Open, HalfOpen };
 
-/** "scheme://host:port" of an http(s) URL (scheme and host in lower case, the scheme's default
- * port filled in); nullopt when it cannot be parsed. Two URLs are of one origin when these agree.
- */
+/** "scheme://host:port" of a URL (scheme and host in lower case, the scheme's default port
+ * filled in; libcurl's URL parser); nullopt when it cannot be parsed. Two URLs are of one origin
+ * when these agree. */
 std::optional<std::string> urlOrigin(std::string_view url);
 
 /** A short name for logs: "timeout", "connect", "circuit-open", ... */
 const char* toString(FetchErrc code) noexcept;
 
 /**
- * @brief Fetches URLs on one background thread (libcurl multi, curl_multi_poll).
+ * @brief Fetches URLs on one background thread, which drives an ITransport (libcurl multi:
+ * curl_multi_perform and curl_multi_poll) and the retry timers.
  *
  * Thread safety: every method may be called from any thread. `done` callbacks run on the fetcher
  * thread, exactly once per fetch(), and must not block for long; they may call fetch(). An
  * exception thrown by a callback is swallowed (it never crosses into the fetcher thread's loop).
  *
  * Retries: 5xx, timeouts, connection failures and truncated bodies are retried up to
- * `retries` times after random(0, retryBackoff * 2^n) (timers on the fetcher thread, nothing
- * sleeps). 304 and 4xx are answers, not failures, and are never retried.
+ * `retries` times after random(0, retryBackoff * 2^n) (timers on the fetcher thread against the
+ * clock, nothing sleeps). 304 and 4xx are answers, not failures, and are never retried.
  *
  * Circuit breaker: `failureThreshold` consecutive failed fetches (transport failures, 5xx; after
  * retries) open it; fetches then fail at once with CircuitOpen until `openInterval` has passed;
@@ -124,9 +131,16 @@ const char* toString(FetchErrc code) noexcept;
  */
 class Fetcher {
 public:
-  /** Starts the fetcher thread. `maxTotalConnections` caps transfers over all upstreams (and sizes
-   * libcurl's connection cache). Throws std::runtime_error only if libcurl cannot initialise. */
+  /** Starts the fetcher thread on libcurl (makeCurlTransport) and the system's clocks.
+   * `maxTotalConnections` caps transfers over all upstreams (and sizes libcurl's connection
+   * cache). Throws std::runtime_error only if libcurl cannot initialise. */
   explicit Fetcher(std::size_t maxTotalConnections = 64);
+  /** Starts the fetcher thread on `transport`, reading time from `clock` (which outlives the
+   * fetcher): retry timers, the breaker's interval, Retry-After pauses, FetchResponse::elapsed
+   * and the latency histogram. */
+  Fetcher(std::unique_ptr<ITransport> transport,
+          const Clock& clock,
+          std::size_t maxTotalConnections = 64);
   /** Stops the thread; pending, waiting and running fetches complete with Cancelled. */
   ~Fetcher();
   Fetcher(const Fetcher&) = delete;

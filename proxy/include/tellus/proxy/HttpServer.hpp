@@ -13,6 +13,8 @@
  * is answered, counted and logged in one place.
  */
 
+#include <tellus/proxy/Clock.hpp>
+
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
@@ -92,6 +94,9 @@ struct HttpServerOptions {
   /// Per client address: sustained requests per second (0 = unlimited) with a burst of twice that;
   /// requests beyond it reach the handler as HttpRefusal::TooManyRequests.
   double requestsPerSecond = 0;
+  /// The rate limit's time; null: the system's (tests inject a ManualClock, which outlives the
+  /// server). Connection timeouts are Asio's timers on the real clock.
+  const Clock* clock = nullptr;
 };
 
 class HttpServer {

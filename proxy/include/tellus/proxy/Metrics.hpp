@@ -80,6 +80,16 @@ public:
       200, 204, 304, 400, 403, 404, 405, 413, 429, 431, 500, 502, 503, 504};
 
 private:
+  // The sections of render(), in order.
+  void renderHttp(std::string& out) const;
+  void renderTiles(std::string& out) const;
+  static void renderUpstreams(std::string& out, const std::vector<UpstreamMetrics>& upstreams);
+  static void renderCache(std::string& out,
+                          std::optional<std::int64_t> cacheBytes,
+                          const std::optional<CacheHealthMetrics>& cacheHealth);
+  void renderComposer(std::string& out, std::uint64_t decodedTileCacheBytes) const;
+  static void renderBudget(std::string& out, const FetchBudgetMetrics& budget);
+
   using Counter = std::atomic<std::uint64_t>;
   std::vector<std::string> layers_;
   std::array<std::array<Counter, kStatuses.size() + 1>, kProtocolCount> requests_{};

@@ -8,6 +8,7 @@
  */
 
 #include <tellus/proxy/FetchBudget.hpp>
+#include <tellus/proxy/HttpDates.hpp> // formatHttpDate, parseHttpDate, ifNoneMatchHits
 #include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/TileService.hpp>
 #include <tellus/proxy/Wms.hpp>
@@ -42,7 +43,9 @@ struct FrontEndOptions {
    * once, refilled evenly); past it a request that needs a fetch gets 429 with Retry-After (an OGC
    * exception with status 429 for /wms) while cached tiles stay served. 0 = unlimited. */
   double fetchesPerClientPerMinute = 600;
-  FetchBudget::Clock clock; ///< the budget's clock; empty: std::chrono::steady_clock (tests inject)
+  /// The fetch budget's time; null: the system's (tests inject a ManualClock, which outlives the
+  /// front end).
+  const Clock* clock = nullptr;
 };
 
 class ProxyFrontEnd {
@@ -58,12 +61,5 @@ private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
-
-/** "Sun, 06 Nov 1994 08:49:37 GMT" for a Unix time in milliseconds (whole seconds). */
-std::string formatHttpDate(std::int64_t unixMillis);
-/** Parses an IMF-fixdate (also RFC 850 and asctime forms); milliseconds since the epoch. */
-std::optional<std::int64_t> parseHttpDate(std::string_view text);
-/** RFC 9110 If-None-Match: `*`, or a list of (weak or strong) tags compared weakly with `etag`. */
-bool ifNoneMatchHits(std::string_view ifNoneMatch, std::string_view etag);
 
 } // namespace tellus

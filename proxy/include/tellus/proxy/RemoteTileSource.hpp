@@ -37,7 +37,7 @@ struct RemoteLayer {
   bool elevation = false;
 };
 
-/** Parses a tellus `/layers.json` document (the format of proxy/src/WebPage.cpp's layersJson);
+/** Parses a tellus `/layers.json` document (the format of proxy/src/web/WebPage.cpp's layersJson);
  * `server` becomes each dataset's server name. An error names what is wrong. */
 std::expected<std::vector<RemoteLayer>, std::string> parseLayersJson(std::string_view json,
                                                                      std::string_view server);

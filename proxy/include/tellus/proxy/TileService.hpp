@@ -11,6 +11,7 @@
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/cache/TileSource.hpp>
+#include <tellus/proxy/Clock.hpp>
 #include <tellus/proxy/FetchBudget.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/Metrics.hpp>
@@ -98,6 +99,9 @@ struct TileServiceOptions {
   /** Added to the workers' nice value (the planet renderer's commands: tiles made in the
    * background give the CPU up to the frame being drawn). */
   int workerNice = 0;
+  /// Wall time of fetched tiles (fetched-at, so expiry) and of absent markers' retry times; null:
+  /// the system's (tests inject a ManualClock, which outlives the service).
+  const Clock* clock = nullptr;
 };
 
 class TileService final : public ITileSource {

@@ -1,0 +1,118 @@
+// GetMap for any box, up to the moment its tiles have all answered: the layers' tiles chosen
+// (composeTiles, composeTilesYcc) and asked of the tile service in parallel; the last answer
+// posts the job to the composer's workers, where renderMap (MapRender.cpp) makes the map.
+#include "compose/MapComposer.hpp"
+
+#include "compose/MapJob.hpp"
+#include "tiles/WorkerPool.hpp"
+
+#include <tellus/proxy/Compose.hpp>
+
+#include <algorithm>
+#include <cstdlib>
+#include <mutex>
+#include <string_view>
+
+namespace tellus {
+
+struct MapComposer::Pool {
+  WorkerPool workers;
+  explicit Pool(int n) : workers(n) {}
+};
+
+MapComposer::MapComposer(TileService& tiles,
+                         int threads,
+                         std::size_t maxTiles,
+                         std::size_t decodedCacheBytes,
+                         int jpegQuality)
+    : tiles_(tiles), maxTiles_(maxTiles), jpegQuality_(jpegQuality),
+      decodedCache_(decodedCacheBytes > 0 ? std::make_unique<DecodedTileCache>(decodedCacheBytes)
+                                          : nullptr),
+      gate_(std::make_shared<Gate>()), pool_(std::make_unique<Pool>(threads)) {
+  gate_->pool = &pool_->workers;
+  if (const char* e = std::getenv("TELLUS_COMPOSE_YCC"); e && std::string_view(e) == "0")
+    yccDisabled_ = true;
+}
+
+std::size_t MapComposer::decodedCacheBytes() const {
+  return decodedCache_ ? decodedCache_->bytes() : 0;
+}
+
+MapComposer::~MapComposer() {
+  // Tile answers may still arrive (from the tile service's threads) after this: they find no
+  // pool and drop their job. Jobs already queued run now, while everything they use lives.
+  {
+    std::lock_guard lock(gate_->mutex);
+    gate_->pool = nullptr;
+  }
+  pool_.reset();
+}
+
+std::expected<void, std::string>
+MapComposer::compose(ComposeRequest request,
+                     std::function<void(const LayerSpec&, const TileAnswer&)> onTile,
+                     std::function<void(ComposedMap&&)> done) {
+  auto job = std::make_shared<Job>();
+  job->request = std::move(request);
+  job->onTile = std::move(onTile);
+  job->done = std::move(done);
+  const ComposeRequest& r = job->request;
+  job->ycc = r.format == MapFormat::Jpeg && r.layers.size() == 1 &&
+             !r.layers.front().layer->elevation && r.layers.front().opacity >= 1.0 - 1.0 / 512 &&
+             !yccDisabled_;
+  std::size_t total = 0;
+  for (const ComposeLayer& cl : r.layers) {
+    Job::Layer l;
+    l.spec = cl;
+    l.grid = tiles_.grid(cl.layer->name);
+    if (!l.grid) return std::unexpected("no layer '" + cl.layer->name + "'");
+    l.level = composeLevel(*l.grid, r.bbox, r.width, r.height, 0);
+    const std::size_t left = maxTiles_ > total ? maxTiles_ - total : 0;
+    auto keys = job->ycc ? composeTilesYcc(*l.grid, r.bbox, r.width, r.height, l.level, left)
+                         : composeTiles(*l.grid, r.bbox, r.width, r.height, l.level, left);
+    if (!keys) {
+      return std::unexpected("the map needs more than " + std::to_string(maxTiles_) +
+                             " tiles (level " + std::to_string(l.level) + " of layer '" +
+                             cl.layer->name + "'); ask for a smaller box or fewer pixels");
+    }
+    total += keys->size();
+    l.keys = std::move(*keys);
+    l.answers.resize(l.keys.size());
+    job->layers.push_back(std::move(l));
+  }
+  job->pending = total + 1; // +1: the loop below, so nothing finishes before every fetch starts
+  const auto arrived = [this, gate = gate_, job] {
+    if (job->pending.fetch_sub(1) != 1) return;
+    std::lock_guard lock(gate->mutex);
+    if (gate->pool) gate->pool->post([this, job] { finish(job); });
+  };
+  for (std::size_t li = 0; li < job->layers.size(); ++li) {
+    Job::Layer& l = job->layers[li];
+    for (std::size_t k = 0; k < l.keys.size(); ++k) {
+      tiles_.getTile(
+          l.spec.layer->name,
+          l.spec.time,
+          l.keys[k].key,
+          [job, li, k, arrived](TileAnswer&& a) {
+            job->layers[li].answers[k] = std::move(a);
+            arrived();
+          },
+          FetchGate{r.fetchBudget, r.client});
+    }
+  }
+  arrived();
+  return {};
+}
+
+void MapComposer::finish(const std::shared_ptr<Job>& job) {
+  try {
+    job->done(renderMap(*job, tiles_, decodedCache_.get(), jpegQuality_));
+  } catch (const std::exception& e) {
+    ComposedMap failedMap;
+    failedMap.kind = ComposedMap::Kind::Error;
+    failedMap.message = std::string("cannot compose the map: ") + e.what();
+    job->done(std::move(failedMap));
+  }
+}
+
+} // namespace tellus

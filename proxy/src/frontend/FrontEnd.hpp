@@ -1,0 +1,184 @@
+#pragma once
+// The front ends of `tellus serve` (ProxyFrontEnd.cpp routes to them): WMS (WmsFrontEnd.cpp), World
+// Wind and the static tile layout (TileFrontEnd.cpp), the page, /layers.json, /index.txt and
+// /metrics (PagesFrontEnd.cpp). What they share is FrontEnd: the tile service, the options, the
+// metrics, the fetch budget, the composer, and the one way each kind of answer and error is made
+// (statuses, caching headers, the redaction of every message a client sees).
+
+#include "compose/MapComposer.hpp"
+
+#include <tellus/proxy/FetchBudget.hpp>
+#include <tellus/proxy/HttpServer.hpp>
+#include <tellus/proxy/Metrics.hpp>
+#include <tellus/proxy/OgcExceptionFormat.hpp>
+#include <tellus/proxy/ProxyFrontEnd.hpp>
+#include <tellus/proxy/TileService.hpp>
+#include <tellus/proxy/Wms.hpp>
+
+#include <cstdint>
+#include <expected>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace tellus {
+
+struct CapabilitiesModel;
+
+/** The state and the answers every front end shares. */
+struct FrontEnd {
+  FrontEnd(TileService& tiles, FrontEndOptions options);
+
+  TileService& tiles;
+  FrontEndOptions options;
+  ProxyMetrics metrics;
+  std::string updateSequence;
+  std::string lastUpdate;
+  std::int64_t startedMillis;
+  FetchBudget budget;   // upstream fetches per client address
+  MapComposer composer; // last: its workers stop first
+
+  static constexpr const char* kAllowedMethods = "GET, HEAD, OPTIONS";
+
+  void countTile(const LayerSpec* l, const TileAnswer& a);
+  /** The headers of every answer (CORS). */
+  void common(HttpResponse& r) const;
+  HttpResponse plain(int status, std::string_view text) const;
+
+  /** What a client may see of an error message: the one redaction (sanitizeForClient: URLs, file
+   * paths, credentials in user:password@ and key=value form), cut to kMaxClientMessageBytes.
+   * Every error any endpoint sends goes through here: the plain-text errors (errorText) and the
+   * OGC exceptions, XML or drawn into an image (WmsFrontEnd::exception). */
+  static std::string clientMessage(std::string_view message);
+  /** A plain-text error: the status and the redacted message. */
+  HttpResponse errorText(int status, std::string_view message) const;
+
+  /** The HTTP status of a temporary failure and when to try again: the upstream is unavailable
+   * (503) or the client's fetch budget is spent (429). */
+  struct Temporary {
+    int status = 503;
+    std::int64_t retryAfterSeconds = 1;
+  };
+  static std::optional<Temporary> temporary(TileAnswer::Failure f, std::int64_t retryAfter);
+  static void markTemporary(HttpResponse& r, const Temporary& t);
+
+  /** The budget the requests of this client are charged to (none when unlimited). */
+  FetchGate gateFor(const HttpRequest& req);
+  /** The URL clients reach us at: the configured one, else Host / X-Forwarded-* (checked). */
+  std::string baseUrl(const HttpRequest& req) const;
+  static std::expected<std::string, OgcException> resolveTime(const LayerSpec& l,
+                                                              std::string_view t);
+
+  /** What a tile answer needs of the request: its validators (not a copy of the request). */
+  struct Validators {
+    std::string ifNoneMatch;
+    std::string ifModifiedSince;
+    explicit Validators(const HttpRequest& req)
+        : ifNoneMatch(req.header("if-none-match")),
+          ifModifiedSince(req.header("if-modified-since")) {}
+  };
+  /** A tile as it is cached (200, or 304 for the client's validators), with its caching headers. */
+  void sendTile(const Validators& req,
+                TileAnswer&& a,
+                const LayerSpec& l,
+                const Responder& respond) const;
+};
+
+/** GetCapabilities and GetMap (one tile as cached, or composed), their OGC exceptions. */
+class WmsFrontEnd {
+public:
+  explicit WmsFrontEnd(FrontEnd& fe) : fe_(fe) {}
+  void handle(const HttpRequest& req, const Responder& respond);
+
+private:
+  /** What a map of these layers is made of: heights (mapIsHeights) or a picture, and the
+   * no-data value of heights (the first elevation layer's, else -32768). Unknown names count as
+   * imagery. */
+  struct MapKind {
+    bool heights = false;
+    std::int16_t noData = -32768;
+  };
+  MapKind mapKind(MapFormat format, const std::vector<std::string>& names) const;
+  void capabilities(const HttpRequest& req,
+                    const GetCapabilitiesRequest& caps,
+                    const WmsErrorContext& ctx,
+                    const Responder& respond) const;
+  CapabilitiesModel capabilitiesModel(const HttpRequest& req) const;
+  void getMap(const HttpRequest& req,
+              GetMapRequest&& m,
+              const WmsErrorContext& ctx,
+              const Responder& respond);
+  /** Every layer of a GetMap, checked (known, style, time); nullopt when an exception was sent. */
+  std::optional<std::vector<ComposeLayer>>
+  mapLayers(const GetMapRequest& m, const WmsErrorContext& ctx, const Responder& respond) const;
+  /** One layer in its own format, exactly one tile: the cached file itself. False when the map
+   * is not such a tile. */
+  bool sendOneTile(const HttpRequest& req,
+                   GetMapRequest& m,
+                   const std::vector<ComposeLayer>& layers,
+                   const MapKind& kind,
+                   const WmsErrorContext& ctx,
+                   const Responder& respond);
+  void compose(const HttpRequest& req,
+               const GetMapRequest& m,
+               std::vector<ComposeLayer>&& layers,
+               const MapKind& kind,
+               const WmsErrorContext& ctx,
+               const Responder& respond);
+  /** An OGC exception in the form the request asked for: XML, or for a GetMap with
+   * EXCEPTIONS=BLANK/INIMAGE an image in its FORMAT (every format: see blankMap). */
+  void
+  exception(const WmsErrorContext& ctx, const OgcException& raw, const Responder& respond) const;
+  /** An exception for a tile or map that could not be had: a temporary failure (an upstream
+   * unavailable, the client's fetch budget spent) has its own status (503, 429) and Retry-After
+   * whatever exceptions_http_status says, so that no client keeps it; the body is what the
+   * request's EXCEPTIONS asks for. */
+  void exception(const WmsErrorContext& ctx,
+                 const OgcException& e,
+                 const Responder& respond,
+                 std::optional<FrontEnd::Temporary> temporaryFailure) const;
+  /** A GetMap where there is no tile: the empty map in the request's format. */
+  void emptyImage(const GetMapRequest& m,
+                  const MapKind& kind,
+                  std::string_view why,
+                  TileOrigin origin,
+                  const Responder& respond) const;
+
+  FrontEnd& fe_;
+};
+
+/** World Wind tiles (`/wwtile?T=&L=&X=&Y=`) and the static layout (`/tiles/...`): the cached
+ * file, or 404 when there is no tile, fast. */
+class TileFrontEnd {
+public:
+  explicit TileFrontEnd(FrontEnd& fe) : fe_(fe) {}
+  void worldWind(const HttpRequest& req, const Responder& respond);
+  void staticTile(const HttpRequest& req, const Responder& respond);
+
+private:
+  void serveTilePath(const HttpRequest& req,
+                     const std::string& layerName,
+                     const TileKey& key,
+                     const Responder& respond,
+                     const std::string* time = nullptr);
+  /** A tile that could not be had: 404 when there is no such tile, 503 or 429 with Retry-After
+   * when it may come later, 502 when the upstream's answer was not a tile. */
+  HttpResponse tileError(const TileAnswer& a) const;
+
+  FrontEnd& fe_;
+};
+
+/** The page (WebPage.hpp): `/` and its files, `/layers.json`, the plain-text index at
+ * `/index.txt` (also `/` when the page is not built in); and `/metrics`. */
+class PagesFrontEnd {
+public:
+  explicit PagesFrontEnd(FrontEnd& fe) : fe_(fe) {}
+  void index(const HttpRequest& req, const Responder& respond) const;
+  void metrics(const Responder& respond) const;
+
+private:
+  FrontEnd& fe_;
+};
+
+} // namespace tellus

@@ -1,0 +1,336 @@
+// WMS 1.1.1 and 1.3.0 (`/wms`, and `/` with a query): GetCapabilities; GetMap answered with the
+// cached file when it is exactly one tile of one layer in the layer's own format, else composed
+// (MapComposer); every error as the OGC exception the request asked for (XML, or drawn into an
+// image), a temporary failure with its own status (503, 429) and Retry-After.
+#include "frontend/FrontEnd.hpp"
+
+#include <tellus/cache/TilePath.hpp>
+#include <tellus/proxy/Capabilities.hpp>
+#include <tellus/proxy/ImageCodec.hpp>
+#include <tellus/proxy/Query.hpp>
+
+#include <algorithm>
+#include <cstdio>
+
+namespace tellus {
+
+void WmsFrontEnd::handle(const HttpRequest& req, const Responder& respond) {
+  auto params = parseQuery(req.query, fe_.options.maxParamBytes, fe_.options.maxQueryBytes);
+  if (!params) {
+    return exception(WmsErrorContext{},
+                     OgcException{std::string(ogc::kInvalidParameterValue), "", params.error()},
+                     respond);
+  }
+  const WmsErrorContext ctx = wmsErrorContext(*params, fe_.options.limits);
+  auto parsed = parseWms(*params, fe_.options.limits);
+  if (!parsed) return exception(ctx, parsed.error(), respond);
+  if (const auto* caps = std::get_if<GetCapabilitiesRequest>(&*parsed))
+    return capabilities(req, *caps, ctx, respond);
+  getMap(req, std::move(std::get<GetMapRequest>(*parsed)), ctx, respond);
+}
+
+// ---- GetCapabilities ----------------------------------------------------------------------------
+
+void WmsFrontEnd::capabilities(const HttpRequest& req,
+                               const GetCapabilitiesRequest& caps,
+                               const WmsErrorContext& ctx,
+                               const Responder& respond) const {
+  if (auto e = checkUpdateSequence(caps.updateSequence, fe_.updateSequence))
+    return exception(ctx, *e, respond);
+  const std::string xml = capabilitiesXml(caps.version, capabilitiesModel(req));
+  HttpResponse r = HttpResponse::text(
+      200, caps.version == WmsVersion::V111 ? "application/vnd.ogc.wms_xml" : "text/xml", xml);
+  fe_.common(r);
+  char etag[24];
+  std::snprintf(
+      etag, sizeof etag, "\"%016llx\"", static_cast<unsigned long long>(stableHash64(xml)));
+  r.setHeader("ETag", etag);
+  r.setHeader("Cache-Control", "public, max-age=60");
+  if (ifNoneMatchHits(req.header("if-none-match"), etag)) {
+    r.status = 304;
+    r.body.clear();
+  }
+  respond(std::move(r));
+}
+
+CapabilitiesModel WmsFrontEnd::capabilitiesModel(const HttpRequest& req) const {
+  CapabilitiesModel m;
+  m.title = fe_.options.title;
+  m.abstract = "A WMS and NASA World Wind tile cache (tellus).";
+  m.onlineResource = fe_.baseUrl(req) + "/wms?";
+  std::vector<std::string> formats;
+  const auto add = [&formats](std::string f) {
+    if (std::find(formats.begin(), formats.end(), f) == formats.end())
+      formats.push_back(std::move(f));
+  };
+  // The list is service-wide: every layer answers every format (heights as a grey picture,
+  // imagery as its luminance in heights; docs/CONFIG.md, "WMS"). The layers' own formats first
+  // (a client that takes the first one gets cached tiles as they are), then the rest.
+  for (const auto& l : fe_.tiles.layers())
+    add(l.dataset.mimeType);
+  for (const MapFormat f :
+       {MapFormat::Jpeg, MapFormat::Png, MapFormat::Png8, MapFormat::Bil16, MapFormat::Tiff})
+    add(std::string(toString(f)));
+  m.getMapFormats = formats;
+  m.updateSequence = fe_.updateSequence;
+  m.lastUpdate = fe_.lastUpdate;
+  m.maxWidth = fe_.options.limits.maxWidth;
+  m.maxHeight = fe_.options.limits.maxHeight;
+  for (const auto& l : fe_.tiles.layers()) {
+    CapabilitiesLayer c;
+    c.name = l.name;
+    c.title = l.title.empty() ? l.name : l.title;
+    c.abstract = l.abstract;
+    c.bbox = l.dataset.grid.sector;
+    if (!l.dataset.style.empty()) c.styles.push_back(l.dataset.style);
+    c.timeValues = l.timeValues;
+    c.timePeriod = l.timePeriod;
+    c.timeDefault = l.timeDefault;
+    c.opaque = l.dataset.mimeType == "image/jpeg";
+    // Since when this layer's tiles are what they are: World Wind Java drops its own cached
+    // tiles older than this, so it must not move with every restart (only with a new definition).
+    const UnixMillis since = fe_.tiles.layerSince(l.name);
+    c.lastUpdateMillis = since > 0 ? since : fe_.startedMillis;
+    m.layers.push_back(std::move(c));
+  }
+  return m;
+}
+
+// ---- GetMap -------------------------------------------------------------------------------------
+
+WmsFrontEnd::MapKind WmsFrontEnd::mapKind(MapFormat format,
+                                          const std::vector<std::string>& names) const {
+  MapKind k;
+  bool allElevation = !names.empty();
+  bool noDataSet = false;
+  for (const std::string& n : names) {
+    const LayerSpec* l = fe_.tiles.layer(n);
+    allElevation = allElevation && l && l->elevation;
+    if (l && l->elevation && !noDataSet) {
+      k.noData = l->noData;
+      noDataSet = true;
+    }
+  }
+  k.heights = mapIsHeights(format, allElevation);
+  return k;
+}
+
+void WmsFrontEnd::getMap(const HttpRequest& req,
+                         GetMapRequest&& m,
+                         const WmsErrorContext& ctx,
+                         const Responder& respond) {
+  // Every layer first: known, style, time. Imagery and heights mix: the format says what the
+  // map is (mapIsHeights), and each layer is drawn as that (MapComposer).
+  auto layers = mapLayers(m, ctx, respond);
+  if (!layers) return;
+  const MapKind kind = mapKind(m.mapFormat, m.layers);
+  if (sendOneTile(req, m, *layers, kind, ctx, respond)) return;
+  // Any other box, size, format or several layers: composed from the tiles.
+  if (static_cast<std::int64_t>(m.width) * m.height > fe_.options.maxMapPixels) {
+    return exception(ctx,
+                     OgcException{std::string(ogc::kInvalidParameterValue),
+                                  "WIDTH",
+                                  "the map has more than " +
+                                      std::to_string(fe_.options.maxMapPixels) + " pixels"},
+                     respond);
+  }
+  compose(req, m, std::move(*layers), kind, ctx, respond);
+}
+
+std::optional<std::vector<ComposeLayer>> WmsFrontEnd::mapLayers(const GetMapRequest& m,
+                                                                const WmsErrorContext& ctx,
+                                                                const Responder& respond) const {
+  std::vector<ComposeLayer> layers;
+  for (std::size_t k = 0; k < m.layers.size(); ++k) {
+    const LayerSpec* l = fe_.tiles.layer(m.layers[k]);
+    if (!l) {
+      exception(ctx,
+                OgcException{
+                    std::string(ogc::kLayerNotDefined), "LAYERS", "no layer '" + m.layers[k] + "'"},
+                respond);
+      return std::nullopt;
+    }
+    const std::string& style = m.styles[k];
+    if (!style.empty() && style != "default" && style != l->dataset.style) {
+      exception(
+          ctx,
+          OgcException{std::string(ogc::kStyleNotDefined), "STYLES", "no style '" + style + "'"},
+          respond);
+      return std::nullopt;
+    }
+    auto time = FrontEnd::resolveTime(*l, m.time);
+    if (!time) {
+      exception(ctx, time.error(), respond);
+      return std::nullopt;
+    }
+    layers.push_back(
+        ComposeLayer{l, std::move(*time), m.opacities.empty() ? l->opacity : m.opacities[k]});
+  }
+  return layers;
+}
+
+bool WmsFrontEnd::sendOneTile(const HttpRequest& req,
+                              GetMapRequest& m,
+                              const std::vector<ComposeLayer>& layers,
+                              const MapKind& kind,
+                              const WmsErrorContext& ctx,
+                              const Responder& respond) {
+  // One layer, its own format (as what it is: heights as heights), exactly one tile: the cached
+  // file itself (the fast path).
+  const LayerSpec* l = layers.front().layer;
+  if (layers.size() != 1 || m.format != l->dataset.mimeType || kind.heights != l->elevation ||
+      !(m.opacities.empty() || m.opacities.front() >= 1.0))
+    return false;
+  const TileGrid* g = fe_.tiles.grid(l->name);
+  const auto key = g->keyForBbox(m.bbox, m.width, m.height);
+  if (!key) return false;
+  const FetchGate gate = fe_.gateFor(req);
+  fe_.tiles.getTile(
+      l->name,
+      layers.front().time,
+      *key,
+      [this, v = FrontEnd::Validators(req), l, m = std::move(m), kind, ctx, respond](
+          TileAnswer&& a) {
+        fe_.countTile(l, a);
+        if (a.kind == TileAnswer::Kind::Tile) return fe_.sendTile(v, std::move(a), *l, respond);
+        if (a.kind == TileAnswer::Kind::Absent) {
+          if (a.origin == TileOrigin::Offline &&
+              fe_.options.offlineResponse == FrontEndOptions::OfflineResponse::Exception) {
+            return exception(
+                ctx, OgcException{std::string(ogc::kNoApplicableCode), "", a.message}, respond);
+          }
+          // No tile there: an empty map, not an error.
+          return emptyImage(m, kind, a.message, a.origin, respond);
+        }
+        exception(ctx,
+                  OgcException{std::string(ogc::kNoApplicableCode), "", a.message},
+                  respond,
+                  FrontEnd::temporary(a.failure, a.retryAfterSeconds));
+      },
+      gate);
+  return true;
+}
+
+void WmsFrontEnd::compose(const HttpRequest& req,
+                          const GetMapRequest& m,
+                          std::vector<ComposeLayer>&& layers,
+                          const MapKind& kind,
+                          const WmsErrorContext& ctx,
+                          const Responder& respond) {
+  ComposeRequest cr;
+  cr.layers = std::move(layers);
+  cr.bbox = m.bbox;
+  cr.width = m.width;
+  cr.height = m.height;
+  cr.format = m.mapFormat;
+  cr.heights = kind.heights;
+  cr.noData = kind.noData;
+  cr.transparent = m.transparent;
+  cr.bgcolor = m.bgcolor;
+  cr.ifNoneMatch = std::string(req.header("if-none-match"));
+  cr.fetchBudget = fe_.gateFor(req).budget;
+  cr.client = req.remoteAddress;
+  auto started = fe_.composer.compose(
+      std::move(cr),
+      [this](const LayerSpec& layer, const TileAnswer& a) { fe_.countTile(&layer, a); },
+      [this, ctx, respond](ComposedMap&& map) {
+        fe_.metrics.composedTiles(map.decodedTiles,
+                                  map.tiles > map.decodedTiles ? map.tiles - map.decodedTiles : 0);
+        if (map.kind == ComposedMap::Kind::Error) {
+          return exception(ctx,
+                           OgcException{std::string(ogc::kNoApplicableCode), "", map.message},
+                           respond,
+                           FrontEnd::temporary(map.failure, map.retryAfterSeconds));
+        }
+        HttpResponse r;
+        fe_.common(r);
+        r.setHeader("ETag", map.etag);
+        r.setHeader("Cache-Control", "public, max-age=" + std::to_string(map.maxAgeSeconds));
+        r.setHeader("X-Cache", toString(map.origin));
+        if (map.kind == ComposedMap::Kind::NotModified) {
+          r.status = 304;
+        } else {
+          r.status = 200;
+          r.setHeader("Content-Type", map.contentType);
+          r.body = std::move(map.bytes);
+        }
+        respond(std::move(r));
+      });
+  if (!started) {
+    return exception(
+        ctx,
+        OgcException{std::string(ogc::kInvalidParameterValue), "BBOX", started.error()},
+        respond);
+  }
+}
+
+// ---- exceptions ---------------------------------------------------------------------------------
+
+void WmsFrontEnd::exception(const WmsErrorContext& ctx,
+                            const OgcException& raw,
+                            const Responder& respond) const {
+  const OgcException e{
+      raw.code, FrontEnd::clientMessage(raw.locator), FrontEnd::clientMessage(raw.message)};
+  if (ctx.exceptions != GetMapRequest::Exceptions::Xml && ctx.width > 0 && ctx.height > 0) {
+    const std::string text = ctx.exceptions == GetMapRequest::Exceptions::InImage
+                                 ? sanitizeForClient(e.code + ": " + e.message)
+                                 : std::string();
+    const MapKind kind = mapKind(ctx.mapFormat, ctx.layers);
+    if (auto img = blankMap(ctx.mapFormat,
+                            kind.heights,
+                            ctx.width,
+                            ctx.height,
+                            ctx.bgcolor,
+                            ctx.transparent,
+                            text,
+                            kind.noData)) {
+      HttpResponse r;
+      fe_.common(r);
+      r.status = 200;
+      r.setHeader("Content-Type", std::string(contentTypeOf(ctx.mapFormat)));
+      r.setHeader("Cache-Control", "no-store"); // an error, drawn: never kept as the map
+      r.body = std::move(*img);
+      return respond(std::move(r));
+    }
+  }
+  const FormattedResponse f = formatWmsException(ctx.version, e, fe_.options.exceptionsHttpStatus);
+  auto r = HttpResponse::text(f.httpStatus, f.contentType, f.body);
+  fe_.common(r);
+  respond(std::move(r));
+}
+
+void WmsFrontEnd::exception(const WmsErrorContext& ctx,
+                            const OgcException& e,
+                            const Responder& respond,
+                            std::optional<FrontEnd::Temporary> temporaryFailure) const {
+  if (!temporaryFailure) return exception(ctx, e, respond);
+  // exception() answers before it returns: the references outlive the call.
+  exception(ctx, e, [&](HttpResponse&& r) {
+    FrontEnd::markTemporary(r, *temporaryFailure);
+    respond(std::move(r));
+  });
+}
+
+void WmsFrontEnd::emptyImage(const GetMapRequest& m,
+                             const MapKind& kind,
+                             std::string_view why,
+                             TileOrigin origin,
+                             const Responder& respond) const {
+  auto img = blankMap(
+      m.mapFormat, kind.heights, m.width, m.height, m.bgcolor, m.transparent, {}, kind.noData);
+  if (!img) {
+    WmsErrorContext ctx;
+    ctx.version = m.version;
+    return exception(
+        ctx, OgcException{std::string(ogc::kNoApplicableCode), "", std::string(why)}, respond);
+  }
+  HttpResponse r;
+  fe_.common(r);
+  r.setHeader("Content-Type", std::string(contentTypeOf(m.mapFormat)));
+  r.setHeader("X-Cache", toString(origin));
+  r.setHeader("Cache-Control", "public, max-age=60");
+  r.body = std::move(*img);
+  respond(std::move(r));
+}
+
+} // namespace tellus

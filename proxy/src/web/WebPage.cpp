@@ -1,0 +1,249 @@
+#include <tellus/cache/TilePath.hpp>
+#include <tellus/proxy/HttpDates.hpp>
+#include <tellus/proxy/WebPage.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <charconv>
+#include <cstdio>
+
+// The page's files, built by proxy/web/build.mjs into TELLUS_WEB_DIST (proxy/CMakeLists.txt) and
+// assembled into this object with .incbin: `tellus serve` needs no files on disk. Each file has a
+// start and an end symbol, and a gzip-compressed twin (<name>_gz). The object is recompiled when a
+// file changes (OBJECT_DEPENDS in proxy/CMakeLists.txt).
+#if TELLUS_WEB_PAGE
+#define TELLUS_WEB_INCBIN(sym, file)                                                               \
+  asm(".pushsection .rodata.tellus_web, \"a\"\n"                                                   \
+      ".balign 16\n"                                                                               \
+      ".globl " #sym "\n"                                                                          \
+      ".hidden " #sym "\n" #sym ":\n"                                                              \
+      ".incbin \"" TELLUS_WEB_DIST "/" file "\"\n"                                                 \
+      ".globl " #sym "_end\n"                                                                      \
+      ".hidden " #sym "_end\n" #sym "_end:\n"                                                      \
+      ".byte 0\n"                                                                                  \
+      ".popsection\n");                                                                            \
+  extern "C" const char sym[];                                                                     \
+  extern "C" const char sym##_end[];
+
+TELLUS_WEB_INCBIN(tellus_web_index_html, "index.html")
+TELLUS_WEB_INCBIN(tellus_web_index_html_gz, "index.html.gz")
+TELLUS_WEB_INCBIN(tellus_web_app_js, "app.js")
+TELLUS_WEB_INCBIN(tellus_web_app_js_gz, "app.js.gz")
+TELLUS_WEB_INCBIN(tellus_web_app_css, "app.css")
+TELLUS_WEB_INCBIN(tellus_web_app_css_gz, "app.css.gz")
+TELLUS_WEB_INCBIN(tellus_web_licenses_txt, "licenses.txt")
+TELLUS_WEB_INCBIN(tellus_web_licenses_txt_gz, "licenses.txt.gz")
+#endif
+
+namespace tellus {
+namespace {
+
+struct Representation {
+  std::string_view bytes;
+  std::string etag; ///< strong, quoted, of these bytes
+};
+
+struct Asset {
+  std::string_view path;
+  std::string_view contentType;
+  std::string_view cacheControl;
+  Representation identity;
+  Representation gzip;
+};
+
+std::string quotedHash(std::string_view bytes) {
+  char etag[24];
+  std::snprintf(
+      etag, sizeof etag, "\"%016llx\"", static_cast<unsigned long long>(stableHash64(bytes)));
+  return etag;
+}
+
+[[maybe_unused]] Representation representation(const char* begin, const char* end) {
+  const std::string_view bytes(begin, static_cast<std::size_t>(end - begin));
+  return {bytes, quotedHash(bytes)};
+}
+
+// index.html names app.js and app.css with their content hash (?v=...), so those may be kept.
+constexpr std::string_view kRevalidate = "no-cache";
+[[maybe_unused]] constexpr std::string_view kKeepADay = "public, max-age=86400";
+
+/** The embedded files, hashed once (thread-safe static initialisation). */
+const std::vector<Asset>& assets() {
+  static const std::vector<Asset> all = [] {
+    std::vector<Asset> a;
+#if TELLUS_WEB_PAGE
+#define TELLUS_WEB_ASSET(path, type, cache, sym)                                                   \
+  a.push_back(Asset{                                                                               \
+      path, type, cache, representation(sym, sym##_end), representation(sym##_gz, sym##_gz_end)});
+    TELLUS_WEB_ASSET("/", "text/html; charset=utf-8", kRevalidate, tellus_web_index_html)
+    TELLUS_WEB_ASSET("/app.js", "text/javascript; charset=utf-8", kKeepADay, tellus_web_app_js)
+    TELLUS_WEB_ASSET("/app.css", "text/css; charset=utf-8", kKeepADay, tellus_web_app_css)
+    TELLUS_WEB_ASSET(
+        "/licenses.txt", "text/plain; charset=utf-8", kKeepADay, tellus_web_licenses_txt)
+#undef TELLUS_WEB_ASSET
+#endif
+    return a;
+  }();
+  return all;
+}
+
+/** Accept-Encoding names gzip (or *) with a non-zero quality. */
+bool acceptsGzip(std::string_view header) {
+  std::size_t pos = 0;
+  while (pos < header.size()) {
+    const auto comma = header.find(',', pos);
+    std::string_view item =
+        header.substr(pos, comma == std::string_view::npos ? std::string_view::npos : comma - pos);
+    pos = comma == std::string_view::npos ? header.size() : comma + 1;
+    std::string_view coding = item.substr(0, item.find(';'));
+    while (!coding.empty() && (coding.front() == ' ' || coding.front() == '\t'))
+      coding.remove_prefix(1);
+    while (!coding.empty() && (coding.back() == ' ' || coding.back() == '\t'))
+      coding.remove_suffix(1);
+    std::string lower(coding);
+    std::transform(lower.begin(), lower.end(), lower.begin(), [](char c) {
+      return static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    });
+    if (lower != "gzip" && lower != "x-gzip" && lower != "*") continue;
+    // "q=0", "q=0.0", "q=0.000": refused; anything else accepted.
+    const auto q = item.find("q=");
+    if (q == std::string_view::npos) return true;
+    const std::string_view value = item.substr(q + 2);
+    const bool zero = !value.empty() && value.front() == '0' &&
+                      value.substr(1).find_first_not_of(".0 \t") == std::string_view::npos;
+    if (!zero) return true;
+  }
+  return false;
+}
+
+HttpResponse answer(const HttpRequest& request,
+                    std::string_view contentType,
+                    std::string_view cacheControl,
+                    const Representation& body,
+                    bool gzip) {
+  HttpResponse r;
+  r.setHeader("Content-Type", std::string(contentType));
+  r.setHeader("Cache-Control", std::string(cacheControl));
+  r.setHeader("ETag", body.etag);
+  r.setHeader("Vary", "Accept-Encoding");
+  if (gzip) r.setHeader("Content-Encoding", "gzip");
+  if (ifNoneMatchHits(request.header("if-none-match"), body.etag)) {
+    r.status = 304;
+    return r;
+  }
+  r.status = 200;
+  r.body.resize(body.bytes.size());
+  std::transform(body.bytes.begin(), body.bytes.end(), r.body.begin(), [](char c) {
+    return static_cast<std::byte>(c);
+  });
+  return r;
+}
+
+void appendJsonString(std::string& out, std::string_view s) {
+  out += '"';
+  for (const char c : s) {
+    const auto u = static_cast<unsigned char>(c);
+    switch (c) {
+    case '"':
+      out += "\\\"";
+      break;
+    case '\\':
+      out += "\\\\";
+      break;
+    case '\n':
+      out += "\\n";
+      break;
+    case '\r':
+      out += "\\r";
+      break;
+    case '\t':
+      out += "\\t";
+      break;
+    default:
+      if (u < 0x20 || u == 0x7f) {
+        char esc[8];
+        std::snprintf(esc, sizeof esc, "\\u%04x", u);
+        out += esc;
+      } else {
+        out += c; // UTF-8 passes through; invalid bytes are the reader's to replace
+      }
+    }
+  }
+  out += '"';
+}
+
+void appendNumber(std::string& out, double v) {
+  std::array<char, 32> buf{};
+  const auto [end, ec] = std::to_chars(buf.data(), buf.data() + buf.size(), v);
+  out.append(buf.data(), ec == std::errc() ? end : buf.data());
+}
+
+} // namespace
+
+bool isWebPagePath(std::string_view path) noexcept {
+  return path == "/" || path == "/app.js" || path == "/app.css" || path == "/licenses.txt" ||
+         path == "/layers.json" || path == "/index.txt";
+}
+
+bool webPageEmbedded() noexcept {
+  return TELLUS_WEB_PAGE != 0;
+}
+
+std::optional<HttpResponse> webAssetResponse(const HttpRequest& request) {
+  for (const Asset& a : assets()) {
+    if (a.path != request.path) continue;
+    const bool gzip = acceptsGzip(request.header("accept-encoding"));
+    return answer(request, a.contentType, a.cacheControl, gzip ? a.gzip : a.identity, gzip);
+  }
+  return std::nullopt;
+}
+
+std::string layersJson(std::string_view title, std::span<const LayerSpec> layers) {
+  std::string j = "{\"title\":";
+  appendJsonString(j, title);
+  j += ",\"layers\":[";
+  bool first = true;
+  for (const LayerSpec& l : layers) {
+    const GridSpec& g = l.dataset.grid;
+    j += first ? "\n{" : ",\n{";
+    first = false;
+    j += "\"name\":";
+    appendJsonString(j, l.name);
+    j += ",\"title\":";
+    appendJsonString(j, l.title.empty() ? l.name : l.title);
+    j += ",\"format\":";
+    appendJsonString(j, l.dataset.mimeType);
+    j += ",\"extension\":";
+    appendJsonString(j, l.dataset.extension);
+    j += ",\"elevation\":";
+    j += l.elevation ? "true" : "false";
+    j += ",\"levelZeroDelta\":";
+    appendNumber(j, g.levelZeroDeltaDeg);
+    j += ",\"tileWidth\":" + std::to_string(g.tileWidth);
+    j += ",\"tileHeight\":" + std::to_string(g.tileHeight);
+    j += ",\"levels\":" + std::to_string(g.numLevels);
+    j += ",\"firstLevel\":" + std::to_string(l.firstLevel);
+    j += ",\"sector\":{\"west\":";
+    appendNumber(j, g.sector.west);
+    j += ",\"south\":";
+    appendNumber(j, g.sector.south);
+    j += ",\"east\":";
+    appendNumber(j, g.sector.east);
+    j += ",\"north\":";
+    appendNumber(j, g.sector.north);
+    j += "}}";
+  }
+  j += "\n]}\n";
+  return j;
+}
+
+HttpResponse layersJsonResponse(const HttpRequest& request,
+                                std::string_view title,
+                                std::span<const LayerSpec> layers) {
+  const std::string json = layersJson(title, layers);
+  const Representation body{json, quotedHash(json)};
+  return answer(request, "application/json", kRevalidate, body, false);
+}
+
+} // namespace tellus
