@@ -1,4 +1,4 @@
-#include "Sqlite.hpp"
+#include "sqlite/Sqlite.hpp"
 
 #include <tellus/cache/GeoPackage.hpp>
 #include <tellus/cache/TileGrid.hpp>

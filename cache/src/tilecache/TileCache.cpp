@@ -1,7 +1,7 @@
-#include "FileIo.hpp"
+#include "../files/FileIo.hpp"
+#include "../sqlite/Schema.hpp"
+#include "../sqlite/Sqlite.hpp"
 #include "RowCache.hpp"
-#include "Schema.hpp"
-#include "Sqlite.hpp"
 
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/cache/TilePath.hpp>
