@@ -45,11 +45,6 @@ test::FakeReply noisyTile(const test::FakeRequest& req) {
                              "image/jpeg");
 }
 
-/** A steady clock the test moves by hand (TileCache::Options::clock). */
-struct ManualClock {
-  TileCache::Clock::time_point now = TileCache::Clock::now();
-};
-
 /** tellus serve's pieces over a cache at `root`: WMS layers (36-degree grid, 256-px JPEG, 4
  * levels; "sat" by default), the HTTP server on a loopback port. */
 struct Stack {
@@ -62,14 +57,14 @@ struct Stack {
   Stack(const fs::path& root,
         const std::string& upstreamUrl,
         bool writeBehind = false,
-        ManualClock* clock = nullptr,
+        std::shared_ptr<ManualClock> clock = nullptr,
         const std::vector<std::string>& layerNames = {"sat"}) {
     TileCache::Options o;
     o.root = root;
     o.fsyncTiles = false;
     o.indexWriteBehind = writeBehind;
     o.fullRecheck = 10s;
-    if (clock) o.clock = [clock] { return clock->now; };
+    o.clock = std::move(clock); // the cache's (TileCache::Options::clock); null: the system's
     auto c = TileCache::open(o);
     EXPECT_TRUE(c) << (c ? "" : c.error().message);
     if (!c) return;
@@ -196,8 +191,8 @@ TEST(ProxyFullDiskIntegration, ServingFromAFullDiskAnswersEverythingAndStoresAga
 
     // The restart on a full disk, with a layer added to the configuration ("new": its dataset
     // cannot be registered, so it is served from the upstream and nothing of it is kept).
-    ManualClock clock;
-    Stack s(root, upstream.url("/wms"), false, &clock, {"sat", "new"});
+    auto clock = std::make_shared<ManualClock>(unixMillisNow()); // moved by hand from now on
+    Stack s(root, upstream.url("/wms"), false, clock, {"sat", "new"});
     ASSERT_TRUE(s.up()) << "tellus serve must start on a full disk";
     for (const auto& k : cached) {
       const auto r = s.get(wwtile(k));
@@ -226,7 +221,7 @@ TEST(ProxyFullDiskIntegration, ServingFromAFullDiskAnswersEverythingAndStoresAga
 
     // Room again: after the recheck interval the next miss is stored.
     fs::remove(filler);
-    clock.now += 11s;
+    clock->advance(11s);
     const TileKey later{1, 1, 0};
     EXPECT_EQ(s.get(wwtile(later)).status, 200);
     EXPECT_TRUE(s.stored(later)) << "storing did not resume";
