@@ -64,52 +64,6 @@ int waitExit(pid_t pid) {
 
 } // namespace
 
-TEST(TileCacheExtremes, RejectsKeysOutsideTheGrid) {
-  test::TempDir dir("bad");
-  auto cache = openCache(dir.path());
-  const auto id = *cache->registerDataset(imagery());
-  const std::vector<std::byte> b(10, std::byte{1});
-  for (const TileKey k : {TileKey{-1, 0, 0},
-                          TileKey{12, 0, 0},
-                          TileKey{31, 0, 0},
-                          TileKey{0, -1, 0},
-                          TileKey{0, 0, -1},
-                          TileKey{0, 5, 0},
-                          TileKey{0, 0, 10},
-                          TileKey{11, 5 << 11, 0},
-                          TileKey{0, INT64_MAX, INT64_MAX},
-                          TileKey{INT32_MAX, 0, 0},
-                          TileKey{INT32_MIN, INT64_MIN, INT64_MIN}}) {
-    SCOPED_TRACE(tileRelativePath(k, "jpg"));
-    auto p = cache->put(id, k, b, {});
-    ASSERT_FALSE(p);
-    EXPECT_EQ(p.error().code, CacheErrc::InvalidArgument);
-    auto g = cache->get(id, k);
-    ASSERT_FALSE(g);
-    EXPECT_EQ(g.error().code, CacheErrc::InvalidArgument);
-  }
-  // The deepest tile of the grid is fine.
-  EXPECT_TRUE(cache->put(id, TileKey{11, (5LL << 11) - 1, (10LL << 11) - 1}, b, {}));
-  auto unknown = cache->put(id + 100, TileKey{0, 0, 0}, b, {});
-  ASSERT_FALSE(unknown);
-  EXPECT_EQ(unknown.error().code, CacheErrc::InvalidArgument);
-  EXPECT_EQ(*cache->totalBytes(), 10);
-}
-
-TEST(TileCacheExtremes, RejectsBadDatasets) {
-  test::TempDir dir("bad");
-  auto cache = openCache(dir.path());
-  auto s = imagery();
-  s.grid.levelZeroDeltaDeg = 37.0;
-  EXPECT_FALSE(cache->registerDataset(s));
-  s = imagery();
-  s.extension = "../x";
-  EXPECT_FALSE(cache->registerDataset(s));
-  s = imagery();
-  s.grid.numLevels = 40;
-  EXPECT_FALSE(cache->registerDataset(s));
-}
-
 TEST(TileCacheExtremes, FullDiskIsReportedAndLosesNothing) {
   test::TempDir dir("full");
   auto cache = openCache(dir.path());
