@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <fstream>
@@ -147,7 +148,12 @@ TEST(TileCacheIntegration, CrashMidWriteNeverLeavesACorruptTile) {
     ASSERT_TRUE(setup->registerDataset(imagery()));
   }
   for (int round = 0; round < 3; ++round) {
+    // The child says after each put that it has stored one; it is killed once it has stored a
+    // number that differs per round, in the middle of whatever it is doing then (no timing).
+    int done[2];
+    ASSERT_EQ(::pipe(done), 0);
     const pid_t child = spawn([&] {
+      ::close(done[0]);
       auto cache = openCache(dir.path(), /*fsyncTiles=*/true);
       if (!cache) return 3;
       const auto id = cache->datasets().at(0).id;
@@ -155,10 +161,23 @@ TEST(TileCacheIntegration, CrashMidWriteNeverLeavesACorruptTile) {
       for (std::int64_t i = 0;; ++i) {
         const TileKey k{8, i % 7, (i * 5) % 11};
         (void)cache->put(id, k, payload(k, 1000 + static_cast<std::size_t>(i % 3) * 40000), {});
+        const char one = 1;
+        if (::write(done[1], &one, 1) != 1) return 4;
       }
     });
-    ::usleep(static_cast<useconds_t>(150000 + round * 70000));
+    ::close(done[1]);
+    const int puts = 20 + round * 15;
+    int seen = 0;
+    char buf[64];
+    while (seen < puts) {
+      const ssize_t n =
+          ::read(done[0], buf, std::min(sizeof buf, static_cast<std::size_t>(puts - seen)));
+      if (n <= 0) break;
+      seen += static_cast<int>(n);
+    }
     ::kill(child, SIGKILL);
+    ::close(done[0]);
+    EXPECT_EQ(seen, puts) << "the writer stopped before it was killed";
     EXPECT_EQ(waitExit(child), 128 + SIGKILL);
   }
   auto cache = openCache(dir.path());
