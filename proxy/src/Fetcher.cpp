@@ -90,7 +90,6 @@ std::optional<std::string> urlOrigin(std::string_view url) {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
 
 /// What a finished fetch means to the breaker.
@@ -135,6 +134,7 @@ void globalInit() {
 } // namespace
 
 struct Fetcher::Impl {
+  using Clock = std::chrono::steady_clock; // here: tellus::Clock is the cache's injected clock
   struct Upstream;
 
   struct Job {

@@ -116,7 +116,7 @@ std::expected<SeedReport, std::string> seedThroughService(TileService& tiles,
                                                           const std::string& layerName,
                                                           const ServiceSeedOptions& options,
                                                           const SeedProgress& progress) {
-  using Clock = std::chrono::steady_clock;
+  using Steady = std::chrono::steady_clock;
   const LayerSpec* layer = tiles.layer(layerName);
   const TileGrid* grid = tiles.grid(layerName);
   if (!layer || !grid) return std::unexpected("no layer '" + layerName + "'");
@@ -132,8 +132,8 @@ std::expected<SeedReport, std::string> seedThroughService(TileService& tiles,
   const Sector box = options.range.box.value_or(spec->grid.sector);
 
   SeedReport report;
-  const auto started = Clock::now();
-  auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - started).count(); };
+  const auto started = Steady::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(Steady::now() - started).count(); };
 
   // Work list: every key of the range the index does not hold yet (resumable from the index).
   std::vector<std::vector<TileKey>> levels;
@@ -170,11 +170,11 @@ std::expected<SeedReport, std::string> seedThroughService(TileService& tiles,
   };
   std::deque<std::pair<TileKey, int>> retryQueue; // key, attempts so far
   std::vector<std::pair<TileKey, std::string>> lastErrors;
-  auto lastProgress = Clock::now();
+  auto lastProgress = Steady::now();
 
   const auto interval = options.rate > 0 ? std::chrono::duration<double>(1.0 / options.rate)
                                          : std::chrono::duration<double>(0);
-  auto nextStart = Clock::now();
+  auto nextStart = Steady::now();
 
   // One answer for one tile (under `mutex`).
   auto count = [&](const TileKey& key, int attempt, const TileAnswer& a) {
@@ -207,8 +207,8 @@ std::expected<SeedReport, std::string> seedThroughService(TileService& tiles,
   auto start = [&](std::vector<TileKey> keys, int attempt) {
     if (options.rate > 0) { // pace starts evenly, in tiles per second
       std::this_thread::sleep_until(nextStart);
-      nextStart = std::max(nextStart, Clock::now()) +
-                  std::chrono::duration_cast<Clock::duration>(interval * keys.size());
+      nextStart = std::max(nextStart, Steady::now()) +
+                  std::chrono::duration_cast<Steady::duration>(interval * keys.size());
     }
     {
       std::unique_lock lock(mutex);
@@ -238,8 +238,8 @@ std::expected<SeedReport, std::string> seedThroughService(TileService& tiles,
     }
     if (progress) {
       std::lock_guard lock(mutex);
-      if (Clock::now() - lastProgress >= std::chrono::milliseconds(200)) {
-        lastProgress = Clock::now();
+      if (Steady::now() - lastProgress >= std::chrono::milliseconds(200)) {
+        lastProgress = Steady::now();
         progress(report, elapsed());
       }
     }

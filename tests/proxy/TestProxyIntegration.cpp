@@ -1698,7 +1698,7 @@ TEST(ProxyIntegration, ARedirectToAnotherOriginIsRefusedAndNeverCached) {
 namespace {
 
 /** A clock the test moves by hand, for the fetch budget. */
-struct ManualClock {
+struct BudgetClock {
   std::shared_ptr<std::atomic<std::int64_t>> ms = std::make_shared<std::atomic<std::int64_t>>(0);
   FetchBudget::Clock clock() const {
     return [ms = ms] {
@@ -1714,7 +1714,7 @@ struct ManualClock {
 // /wms) with Retry-After, while what is cached is still served, and /metrics counts it.
 TEST(ProxyIntegration, TheFetchBudgetRefusesPastItAndServesTheCache) {
   test::FakeUpstream up(tileReply);
-  ManualClock t;
+  BudgetClock t;
   FrontEndOptions fo;
   fo.fetchesPerClientPerMinute = 3; // three at once, then one every 20 s
   fo.clock = t.clock();
