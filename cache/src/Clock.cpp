@@ -5,8 +5,12 @@ namespace tellus {
 namespace {
 
 constexpr std::int64_t kNsPerMs = 1'000'000;
-// Where a ManualClock's steady time starts: far from zero, like a real steady clock after boot.
-constexpr std::int64_t kManualSteadyStartNs = std::int64_t{3600} * 1'000'000'000;
+
+const SystemClock kSystemClock;
+
+std::int64_t nanos(std::chrono::nanoseconds d) {
+  return d.count();
+}
 
 } // namespace
 
@@ -20,18 +24,29 @@ Clock::SteadyTime SystemClock::steady() const noexcept {
   return std::chrono::steady_clock::now();
 }
 
+const Clock& Clock::system() noexcept {
+  return kSystemClock;
+}
+
 std::shared_ptr<const Clock> systemClock() {
-  static const SystemClock clock;
   // Aliasing constructor: shares nothing, owns nothing; the static outlives every user.
-  return std::shared_ptr<const Clock>(std::shared_ptr<const Clock>(), &clock);
+  return std::shared_ptr<const Clock>(std::shared_ptr<const Clock>(), &kSystemClock);
 }
 
 UnixMillis unixMillisNow() noexcept {
-  return SystemClock().now();
+  return kSystemClock.now();
 }
 
-ManualClock::ManualClock(UnixMillis start) noexcept
-    : wallNs_(start * kNsPerMs), steadyNs_(kManualSteadyStartNs) {}
+ManualClock::ManualClock() noexcept
+    : ManualClock(std::chrono::steady_clock::now(), std::chrono::system_clock::now()) {}
+
+ManualClock::ManualClock(UnixMillis wallStart) noexcept
+    : wallNs_(wallStart * kNsPerMs),
+      steadyNs_(nanos(std::chrono::steady_clock::now().time_since_epoch())) {}
+
+ManualClock::ManualClock(SteadyTime steadyStart, WallTime wallStart) noexcept
+    : wallNs_(nanos(wallStart.time_since_epoch())),
+      steadyNs_(nanos(steadyStart.time_since_epoch())) {}
 
 UnixMillis ManualClock::now() const noexcept {
   return wallNs_.load(std::memory_order_acquire) / kNsPerMs;

@@ -191,7 +191,7 @@ TEST(ProxyFullDiskIntegration, ServingFromAFullDiskAnswersEverythingAndStoresAga
 
     // The restart on a full disk, with a layer added to the configuration ("new": its dataset
     // cannot be registered, so it is served from the upstream and nothing of it is kept).
-    auto clock = std::make_shared<ManualClock>(unixMillisNow()); // moved by hand from now on
+    auto clock = std::make_shared<ManualClock>(); // from the present on, moved by hand
     Stack s(root, upstream.url("/wms"), false, clock, {"sat", "new"});
     ASSERT_TRUE(s.up()) << "tellus serve must start on a full disk";
     for (const auto& k : cached) {

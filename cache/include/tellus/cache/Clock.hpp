@@ -11,8 +11,9 @@
  *   with: re-probing a full disk, re-checking a held-open file, looking for other writers'
  *   commits, flushing access times. It never goes back.
  *
- * Implementations: SystemClock (the two real clocks; systemClock() shares one) and ManualClock
- * (tests: both times stand still until advanced). Every method may be called from any thread.
+ * Implementations: SystemClock (the two real clocks; Clock::system() and systemClock() are one)
+ * and ManualClock (tests: both times stand still until advanced). Every method may be called from
+ * any thread.
  * Waiting itself (a condition variable's timeout, a busy loop on another process's lock) is not
  * the clock's business: it still takes real time.
  */
@@ -30,12 +31,18 @@ using UnixMillis = std::int64_t;
 class Clock {
 public:
   using SteadyTime = std::chrono::steady_clock::time_point;
+  using WallTime = std::chrono::system_clock::time_point;
 
   virtual ~Clock() = default;
   /** Wall time in milliseconds since the Unix epoch. */
   virtual UnixMillis now() const noexcept = 0;
   /** Monotonic time, for intervals and deadlines. */
   virtual SteadyTime steady() const noexcept = 0;
+
+  /** now() as a system_clock time point (HTTP dates). */
+  WallTime wallNow() const noexcept { return WallTime(std::chrono::milliseconds(now())); }
+  /** The process's clocks (a SystemClock that lives as long as the program). */
+  static const Clock& system() noexcept;
 };
 
 /** std::chrono::system_clock and std::chrono::steady_clock. */
@@ -52,15 +59,18 @@ std::shared_ptr<const Clock> systemClock();
 UnixMillis unixMillisNow() noexcept;
 
 /**
- * A clock that stands still until advance() or setNow() moves it (tests). Wall time starts at
- * `start` (default 2024-01-01T00:00:00Z), steady time at an arbitrary point; advance() moves both
- * by the same amount. Reads are lock-free and safe while another thread moves it.
+ * A clock that stands still until advance() or setNow() moves it (tests). Both times start at the
+ * present unless given; advance() moves both by the same amount. Reads are lock-free and safe
+ * while another thread moves it.
  */
 class ManualClock final : public Clock {
 public:
-  static constexpr UnixMillis kDefaultStart = 1'704'067'200'000;
-
-  explicit ManualClock(UnixMillis start = kDefaultStart) noexcept;
+  /** Both times start at the present of the real clocks. */
+  ManualClock() noexcept;
+  /** Wall time starts at `wallStart` (a fixed date makes a test independent of the day it runs),
+   * steady time at the present. */
+  explicit ManualClock(UnixMillis wallStart) noexcept;
+  ManualClock(SteadyTime steadyStart, WallTime wallStart) noexcept;
   UnixMillis now() const noexcept override;
   SteadyTime steady() const noexcept override;
 
