@@ -297,8 +297,7 @@ public:
         out.push_back(fs::relative(dsDir.path(), options_.root, ec).generic_string());
       }
     }
-    std::sort(out.begin(), out.end());
-    return out;
+    return out; // in directory order, as rebuilds have always numbered them
   }
 
   void scan(std::string_view folder, const EntryVisitor& visit) override {
