@@ -55,6 +55,10 @@ DatasetRegistry::checked(DatasetId id, const TileKey& key) {
 
 std::vector<DatasetInfo> DatasetRegistry::all() {
   (void)load();
+  return known();
+}
+
+std::vector<DatasetInfo> DatasetRegistry::known() const {
   std::shared_lock lock(mutex_);
   std::vector<DatasetInfo> out;
   for (const auto& [id, d] : byId_)

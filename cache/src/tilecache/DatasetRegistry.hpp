@@ -46,6 +46,8 @@ public:
                                                                          const TileKey& key);
   /** Every dataset, reloaded from the index first (on failure: what is known). */
   std::vector<DatasetInfo> all();
+  /** Every dataset as last loaded, without asking the index. */
+  std::vector<DatasetInfo> known() const;
   /** Remembers a dataset as registered; returns its id. */
   DatasetId remember(DatasetInfo info, const TileGrid& grid);
   void setPinned(DatasetId id, bool pinned);

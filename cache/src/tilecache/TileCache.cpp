@@ -31,10 +31,10 @@ std::shared_ptr<const Clock> clockOf(const TileCache::Options& o) {
 }
 
 /** A present row as a lookup gives it, stale or not at `now`. */
-CacheLookup hitOf(const TileMeta& meta, std::int64_t size, UnixMillis now) {
+CacheLookup hitOf(TileMeta meta, std::int64_t size, UnixMillis now) {
   CacheLookup out;
   out.kind = CacheLookup::Kind::Hit;
-  out.meta = meta;
+  out.meta = std::move(meta);
   out.size = size;
   out.stale = out.meta.expiresAt && *out.meta.expiresAt <= now;
   return out;
@@ -123,7 +123,7 @@ std::expected<std::unique_ptr<TileCache>, CacheError> TileCache::open(
   if (!options.readOnly) {
     // Temp files of writers that are gone (killed mid-write): only where writers put them, no scan.
     impl->tempFilesRemoved = impl->store->removeDeadTemps("");
-    for (const auto& d : impl->datasets.all())
+    for (const auto& d : impl->datasets.known())
       impl->tempFilesRemoved += impl->store->removeDeadTemps(d.folder);
   }
   impl->rows.configure(options.rowCacheEntries, options.openFiles);
@@ -167,7 +167,7 @@ std::expected<CacheLookup, CacheError> TileCache::peek(DatasetId id, const TileK
     out.retryAfter = (*row)->retryAfter.value_or(0);
     return out;
   }
-  return hitOf((*row)->meta, (*row)->bytes, im.clock->now());
+  return hitOf(std::move((*row)->meta), (*row)->bytes, im.clock->now());
 }
 
 namespace {
