@@ -105,8 +105,10 @@ TEST(CacheTileSource, ManyClientsEveryCallbackOnce) {
   const std::vector<std::byte> bytes(64, std::byte{1});
   for (std::int64_t c = 0; c < 20; ++c)
     ASSERT_TRUE(f.cache->put(f.id, TileKey{3, 1, c}, bytes, {}));
-  std::atomic<int> calls{0};
-  std::atomic<int> ok{0};
+  std::mutex m;
+  std::condition_variable cv;
+  int calls = 0;
+  int ok = 0;
   {
     CacheTileSource src(*f.cache, 3);
     std::vector<std::thread> clients;
@@ -115,17 +117,21 @@ TEST(CacheTileSource, ManyClientsEveryCallbackOnce) {
         for (std::int64_t i = 0; i < 100; ++i) {
           src.request(
               {"bluemarble", "", {3, 1, i % 40}}, static_cast<double>(i), [&](TileResult&& r) {
+                std::lock_guard lock(m);
                 ++calls;
                 ok += r.status == TileStatus::Ok;
+                cv.notify_all();
               });
         }
       });
     }
     for (auto& c : clients)
       c.join();
-    while (src.queued() > 0)
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    // Every callback has come (the bound only keeps a broken source from hanging the suite).
+    std::unique_lock lock(m);
+    EXPECT_TRUE(cv.wait_for(lock, std::chrono::seconds(60), [&] { return calls == 400; }));
   } // destruction waits for running callbacks
-  EXPECT_EQ(calls.load(), 400);
-  EXPECT_EQ(ok.load(), 4 * 60); // columns 0..19 of i % 40 over i < 100
+  std::lock_guard lock(m);
+  EXPECT_EQ(calls, 400);
+  EXPECT_EQ(ok, 4 * 60); // columns 0..19 of i % 40 over i < 100
 }

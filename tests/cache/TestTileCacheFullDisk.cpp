@@ -30,22 +30,14 @@ std::size_t countTempFiles(const fs::path& root) {
   return n;
 }
 
-/** A steady clock the test moves by hand (TileCache::Options::clock). */
-struct ManualClock {
-  TileCache::Clock::time_point now = TileCache::Clock::now();
-  std::function<TileCache::Clock::time_point()> fn() {
-    return [this] { return now; };
-  }
-};
-
 std::unique_ptr<TileCache> openOn(const fs::path& root,
-                                  ManualClock* clock = nullptr,
+                                  std::shared_ptr<ManualClock> clock = nullptr,
                                   std::chrono::milliseconds fullRecheck = 10s) {
   TileCache::Options o;
   o.root = root;
   o.fsyncTiles = false;
   o.fullRecheck = fullRecheck;
-  if (clock) o.clock = clock->fn();
+  o.clock = std::move(clock);
   auto c = TileCache::open(o);
   EXPECT_TRUE(c) << (c ? "" : c.error().message);
   return c ? std::move(*c) : nullptr;
@@ -68,8 +60,8 @@ TEST(CacheFullDiskIntegration, ARestartOnAFullDiskServesWhatItHasAndStoresAgainW
     const fs::path filler = test::fillDisk(mnt);
 
     // The restart: open, register the same dataset (nothing to write) and read every tile.
-    ManualClock clock;
-    auto cache = openOn(root, &clock, 30s);
+    auto clock = std::make_shared<ManualClock>();
+    auto cache = openOn(root, clock, 30s);
     ASSERT_TRUE(cache) << "a cache on a full disk must open";
     const auto id = cache->registerDataset(test::imagerySpec());
     ASSERT_TRUE(id) << id.error().message;
@@ -99,7 +91,7 @@ TEST(CacheFullDiskIntegration, ARestartOnAFullDiskServesWhatItHasAndStoresAgainW
     ASSERT_FALSE(p);
     EXPECT_EQ(p.error().code, CacheErrc::DiskFull);
     EXPECT_EQ(cache->storeStatus().refused, 2u);
-    clock.now += 31s;
+    clock->advance(31s);
     p = cache->put(*id, fresh, test::payload(fresh, 20000), {});
     ASSERT_TRUE(p) << p.error().message;
     EXPECT_TRUE(cache->storeStatus().writable);

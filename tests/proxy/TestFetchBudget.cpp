@@ -1,6 +1,6 @@
 // The per-client budget of upstream fetches: a token bucket per address on an injected clock.
 
-#include <tellus/proxy/Clock.hpp>
+#include <tellus/cache/Clock.hpp>
 #include <tellus/proxy/FetchBudget.hpp>
 
 #include <gtest/gtest.h>

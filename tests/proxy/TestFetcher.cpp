@@ -1,6 +1,6 @@
 #include "../support/FakeUpstream.hpp"
 
-#include <tellus/proxy/Clock.hpp>
+#include <tellus/cache/Clock.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 
 #include <gtest/gtest.h>

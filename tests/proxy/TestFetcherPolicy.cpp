@@ -4,7 +4,7 @@
 // done all it can. The same behaviours against libcurl and a real server: TestFetcher.cpp.
 #include "../support/FakeTransport.hpp"
 
-#include <tellus/proxy/Clock.hpp>
+#include <tellus/cache/Clock.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 
 #include <gtest/gtest.h>

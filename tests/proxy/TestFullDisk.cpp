@@ -9,7 +9,7 @@
 
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/cache/TilePath.hpp>
-#include <tellus/proxy/Clock.hpp>
+#include <tellus/cache/Clock.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
@@ -58,14 +58,14 @@ struct Stack {
   Stack(const fs::path& root,
         const std::string& upstreamUrl,
         bool writeBehind = false,
-        ManualClock* clock = nullptr,
+        std::shared_ptr<ManualClock> clock = nullptr,
         const std::vector<std::string>& layerNames = {"sat"}) {
     TileCache::Options o;
     o.root = root;
     o.fsyncTiles = false;
     o.indexWriteBehind = writeBehind;
     o.fullRecheck = 10s;
-    if (clock) o.clock = [clock] { return clock->now(); };
+    o.clock = std::move(clock); // the cache's (TileCache::Options::clock); null: the system's
     auto c = TileCache::open(o);
     EXPECT_TRUE(c) << (c ? "" : c.error().message);
     if (!c) return;
@@ -192,8 +192,8 @@ TEST(ProxyFullDiskIntegration, ServingFromAFullDiskAnswersEverythingAndStoresAga
 
     // The restart on a full disk, with a layer added to the configuration ("new": its dataset
     // cannot be registered, so it is served from the upstream and nothing of it is kept).
-    ManualClock clock;
-    Stack s(root, upstream.url("/wms"), false, &clock, {"sat", "new"});
+    auto clock = std::make_shared<ManualClock>(); // from the present on, moved by hand
+    Stack s(root, upstream.url("/wms"), false, clock, {"sat", "new"});
     ASSERT_TRUE(s.up()) << "tellus serve must start on a full disk";
     for (const auto& k : cached) {
       const auto r = s.get(wwtile(k));
@@ -222,7 +222,7 @@ TEST(ProxyFullDiskIntegration, ServingFromAFullDiskAnswersEverythingAndStoresAga
 
     // Room again: after the recheck interval the next miss is stored.
     fs::remove(filler);
-    clock.advance(11s);
+    clock->advance(11s);
     const TileKey later{1, 1, 0};
     EXPECT_EQ(s.get(wwtile(later)).status, 200);
     EXPECT_TRUE(s.stored(later)) << "storing did not resume";

@@ -113,7 +113,7 @@ struct HttpServer::Impl : std::enable_shared_from_this<Impl> {
     const double rate = options.requestsPerSecond;
     if (rate <= 0) return true;
     const double burst = std::max(1.0, 2 * rate);
-    const auto now = (options.clock ? *options.clock : Clock::system()).now();
+    const auto now = (options.clock ? *options.clock : Clock::system()).steady();
     std::lock_guard lock(bucketsMutex);
     if (buckets.size() > 100000) { // forget addresses whose buckets are full again
       std::erase_if(buckets, [&](const auto& kv) {

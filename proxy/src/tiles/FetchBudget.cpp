@@ -19,7 +19,7 @@ std::optional<std::chrono::milliseconds> FetchBudget::take(std::string_view clie
   if (unlimited()) return std::nullopt;
   const double capacity = std::max(1.0, perMinute_);
   const double perSecond = perMinute_ / 60.0;
-  const auto now = clock_.now();
+  const auto now = clock_.steady();
   std::lock_guard lock(mutex_);
   if (buckets_.size() > kForgetAbove) {
     std::erase_if(buckets_, [&](const auto& kv) {

@@ -369,7 +369,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
 
   /** Wall time in Unix milliseconds, by the injected clock (TileServiceOptions::clock). */
   UnixMillis nowMillis() const {
-    return (options.clock ? *options.clock : Clock::system()).wallMillis();
+    return (options.clock ? *options.clock : Clock::system()).now();
   }
 
   TileMeta freshMeta(const LayerSpec& l) const {

@@ -19,7 +19,7 @@ void Fetcher::Impl::invoke(Job& job, FetchResult&& result) noexcept {
 }
 
 void Fetcher::Impl::complete(JobPtr job, FetchResult result) {
-  const auto now = clock_.now();
+  const auto now = clock_.steady();
   if (result) {
     result->attempts = job->attempts;
     result->elapsed = std::chrono::duration_cast<milliseconds>(now - job->start);
@@ -123,7 +123,7 @@ bool Fetcher::Impl::retryLater(JobPtr& job, fetch::Classified& c, bool breakerCl
   if (c.retryAfter) {
     const auto asked = std::min<milliseconds>(*c.retryAfter, std::chrono::hours(1));
     std::lock_guard lock(mutex_);
-    up.pausedUntil = std::max(up.pausedUntil, clock_.now() + asked);
+    up.pausedUntil = std::max(up.pausedUntil, clock_.steady() + asked);
     waitable = asked <= policy.maxRetryAfterWait;
     if (!waitable) {
       c.error.message += " (asked to retry after " +
@@ -138,7 +138,7 @@ bool Fetcher::Impl::retryLater(JobPtr& job, fetch::Classified& c, bool breakerCl
   job->lastError = std::move(c.error);
   job->url = job->request.url; // a retry starts from the URL asked, not where it was led
   job->hops = 0;
-  auto at = clock_.now() + backoff(policy.retryBackoff, job->attempts - 1);
+  auto at = clock_.steady() + backoff(policy.retryBackoff, job->attempts - 1);
   {
     std::lock_guard lock(mutex_);
     at = std::max(at, up.pausedUntil); // never earlier than the upstream asked
@@ -200,7 +200,7 @@ std::chrono::milliseconds Fetcher::Impl::backoff(milliseconds base, int retry) {
 
 bool Fetcher::Impl::recordVerdict(Upstream& up, bool probe, fetch::Verdict v) {
   std::lock_guard lock(mutex_);
-  return up.breaker.record(probe, v, clock_.now(), *up.policy);
+  return up.breaker.record(probe, v, clock_.steady(), *up.policy);
 }
 
 void Fetcher::Impl::flush(Upstream& up) {

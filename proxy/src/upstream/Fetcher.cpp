@@ -53,7 +53,7 @@ void Fetcher::Impl::fetch(FetchRequest request, std::function<void(FetchResult&&
   job->request = std::move(request);
   job->url = job->request.url;
   job->done = std::move(done);
-  job->start = clock_.now();
+  job->start = clock_.steady();
   {
     std::lock_guard lock(mutex_);
     if (!closed_) {
@@ -75,14 +75,14 @@ void Fetcher::Impl::fetch(FetchRequest request, std::function<void(FetchResult&&
 BreakerState Fetcher::Impl::breaker(const std::string& name) const {
   std::lock_guard lock(mutex_);
   const Upstream* up = findLocked(name);
-  return up ? up->breaker.observed(clock_.now()) : BreakerState::Closed;
+  return up ? up->breaker.observed(clock_.steady()) : BreakerState::Closed;
 }
 
 std::chrono::milliseconds Fetcher::Impl::unavailableFor(const std::string& name) const {
   std::lock_guard lock(mutex_);
   const Upstream* up = findLocked(name);
   if (!up) return milliseconds(0);
-  const auto now = clock_.now();
+  const auto now = clock_.steady();
   auto until = up->pausedUntil;
   if (up->breaker.state != BreakerState::Closed) until = std::max(until, up->breaker.openUntil);
   return until > now ? std::chrono::ceil<milliseconds>(until - now) : milliseconds(0);
@@ -148,7 +148,7 @@ void Fetcher::Impl::admit(JobPtr job) {
   bool paused = false;
   {
     std::lock_guard lock(mutex_);
-    const auto now = clock_.now();
+    const auto now = clock_.steady();
     reject = up.breaker.refuses(now);
     paused = now < up.pausedUntil;
   }
@@ -163,13 +163,13 @@ void Fetcher::Impl::admit(JobPtr job) {
 
 int Fetcher::Impl::pollTimeoutMs() const {
   if (timers_.empty()) return 1000;
-  const auto wait = timers_.begin()->first - clock_.now();
+  const auto wait = timers_.begin()->first - clock_.steady();
   const auto ms = std::chrono::ceil<milliseconds>(wait).count();
   return static_cast<int>(std::clamp<std::int64_t>(ms, 0, 1000));
 }
 
 void Fetcher::Impl::fireTimers() {
-  const auto now = clock_.now();
+  const auto now = clock_.steady();
   while (!timers_.empty() && timers_.begin()->first <= now) {
     JobPtr job = std::move(timers_.begin()->second);
     timers_.erase(timers_.begin());
@@ -204,7 +204,7 @@ void Fetcher::Impl::startTransfers() {
     fetch::Breaker::Gate gate = fetch::Breaker::Gate::Go;
     {
       std::lock_guard lock(mutex_);
-      gate = best->breaker.gate(clock_.now());
+      gate = best->breaker.gate(clock_.steady());
     }
     if (gate == fetch::Breaker::Gate::Refuse) {
       circuitOpen(std::move(job));

@@ -6,7 +6,7 @@
 
 #include "upstream/FetchPolicy.hpp"
 
-#include <tellus/proxy/Clock.hpp>
+#include <tellus/cache/Clock.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/Transport.hpp>
 

@@ -1,37 +1,45 @@
 #pragma once
 /**
  * @file TileCache.hpp
- * @brief The tile cache: files in a World Wind tree plus one SQLite index per cache root.
+ * @brief The tile cache: an index (TileIndex.hpp) and a tile store (TileStore.hpp) kept in step.
+ * The embedded default is one SQLite index and a World Wind file tree per cache root.
  *
  * Layout: `<root>/index.sqlite` and
  * `<root>/<server>/<name>-<hash>/<level>/<row>/<row>_<col>.<ext>`, each dataset folder holding a
- * `dataset.txt` descriptor. The index is the source of truth for what is cached; files are only
+ * `dataset.txt` descriptor. The index is the source of truth for what is cached; tiles are only
  * read through it.
  *
- * Guarantees:
- * - a tile is never visible half written: bytes go to a temp file in the dataset's `.tmp` folder,
- *   are fsynced, and are renamed into place by the writer together with its index row (one
- *   batched transaction for many writers);
- * - a tile file and its row change together: the rename and the commit of a put, and the commit and
- *   the unlink of a removal (prune, eviction, erase), run under one lock shared by every process
- *   on the cache (flock on the root), so a prune racing a put never leaves a row without its file
- *   or a file without its row;
+ * Guarantees (TileCache keeps them whatever the index and store are):
+ * - a tile is never visible half written: bytes are staged (a temp file in the dataset's `.tmp`
+ *   folder, fsynced) and put into place by the writer together with its index row (one batched
+ *   transaction for many writers);
+ * - a tile and its row change together: the install and the commit of a put, and the commit and
+ *   the removal of a tile (prune, eviction, erase), run under the store's changes lock, shared by
+ *   every process on the cache (flock on the root), so a prune racing a put never leaves a row
+ *   without its file or a file without its row;
  * - a full disk (ENOSPC, EDQUOT, EFBIG, SQLITE_FULL) is reported as CacheErrc::DiskFull with the
- *   root and its free bytes and inodes; the temp file is removed, a tile being replaced is kept
- *   (even when the commit fails after the rename) and the index is left as it was. After a refusal
- *   the cache refuses puts at once for Options::fullRecheck, then tries again (storeStatus());
+ *   root and its free bytes and inodes; the staged tile is removed, a tile being replaced is kept
+ *   (even when the commit fails after the install) and the index is left as it was. After a
+ *   refusal the cache refuses puts at once for Options::fullRecheck, then tries again
+ *   (storeStatus());
  * - temp files of writers that are gone (their pid and start time are in the name) are removed
  *   at open, from the `.tmp` folders, without a scan of the tree;
- * - many threads may read at once (pooled read connections, WAL); one writer thread per process
- *   batches writes; two processes (a server and a seeder) may share one cache without
+ * - many threads may read at once (pooled read connections, WAL); one writer per process batches
+ *   writes (WriteQueue); two processes (a server and a seeder) may share one cache without
  *   "database is locked" (WAL, BEGIN IMMEDIATE, a busy timeout);
  * - opening costs the same for an empty cache and for millions of tiles (no scan); a damaged index
- *   is detected at open, moved aside and rebuilt from the tree.
+ *   is detected at open, moved aside and rebuilt from the store.
+ *
+ * Time (fetched-at, last access, expiry, the intervals below) is read from Options::clock.
+ * Maintenance (stats, verify, rebuild, prune, eviction) is CacheMaintenance; the methods of the
+ * same names here are that, kept for callers of the whole cache.
  *
  * Thread safety: every public method may be called from any thread concurrently.
  */
 
 #include <tellus/cache/CacheError.hpp>
+#include <tellus/cache/CacheTypes.hpp>
+#include <tellus/cache/Clock.hpp>
 #include <tellus/cache/Dataset.hpp>
 #include <tellus/cache/TileFile.hpp>
 #include <tellus/cache/TileKey.hpp>
@@ -50,98 +58,12 @@
 
 namespace tellus {
 
-/** Milliseconds since the Unix epoch (the cache's clock unit). */
-using UnixMillis = std::int64_t;
-
-/** HTTP-ish metadata kept with a tile. */
-struct TileMeta {
-  std::string contentType;             ///< e.g. "image/jpeg"
-  std::string etag;                    ///< upstream ETag, "" if none
-  std::string lastModified;            ///< upstream Last-Modified, "" if none
-  std::optional<UnixMillis> expiresAt; ///< after this the tile is stale; nullopt = never
-  UnixMillis fetchedAt = 0;            ///< when it was fetched (0 = now, filled in by put)
-};
-
-/** Result of a lookup. */
-struct CacheLookup {
-  enum class Kind {
-    Miss,   ///< nothing known: fetch it
-    Absent, ///< upstream said "no tile here"; ask again after retryAfter
-    Hit,    ///< bytes are there
-  };
-  Kind kind = Kind::Miss;
-  std::vector<std::byte> bytes;         ///< Hit from get() only
-  std::shared_ptr<const TileFile> file; ///< Hit from openTile() only
-  TileMeta meta;                        ///< Hit only
-  bool stale = false;                   ///< Hit: expiresAt has passed (serve, but refresh)
-  std::int64_t size = 0;                ///< Hit: byte count recorded in the index
-  UnixMillis retryAfter = 0;            ///< Absent only
-};
-
-/** A registered dataset with its id. */
-struct DatasetInfo {
-  DatasetId id = 0;
-  DatasetSpec spec;
-  std::string folder; ///< relative to the cache root
-  /// When this dataset was first registered (its definition has not changed since: another
-  /// definition is another dataset). WMS capabilities give it as a layer's LastUpdate.
-  std::int64_t createdAt = 0;
-};
-
-/** Tiles and bytes of one dataset at one level (absent markers count as tiles of 0 bytes). */
-struct LevelStats {
-  std::int32_t level = 0;
-  std::int64_t tiles = 0;
-  std::int64_t absent = 0;
-  std::int64_t bytes = 0;
-};
-struct DatasetStats {
-  DatasetInfo dataset;
-  std::int64_t tiles = 0;
-  std::int64_t bytes = 0;
-  std::vector<LevelStats> levels;
-};
-
-/** What `verify` found. Paths are relative to the cache root. */
-struct VerifyReport {
-  std::vector<std::string> filesWithoutRows; ///< tile files the index does not know
-  std::vector<std::string> rowsWithoutFiles; ///< index rows whose file is missing
-  std::vector<std::string> sizeMismatches;   ///< index bytes != file size
-  std::vector<std::string> strayTempFiles;   ///< temp files of writers that are gone
-  std::int64_t tempFilesInUse = 0;           ///< temp files of running writers (not a problem)
-  std::string integrity;                     ///< "ok" or SQLite's quick_check message
-  bool ok() const {
-    return filesWithoutRows.empty() && rowsWithoutFiles.empty() && sizeMismatches.empty() &&
-           strayTempFiles.empty() && integrity == "ok";
-  }
-};
-
-/** Which tiles `prune` removes. */
-struct PruneOptions {
-  std::optional<std::chrono::milliseconds> olderThan; ///< fetched longer ago than this
-  std::optional<std::string> datasetName;             ///< only datasets with this name
-  bool includePinned = false;                         ///< pinned datasets are kept unless set
-};
-
-/** Whether the cache stores what it is given (see TileCache::storeStatus). */
-struct StoreStatus {
-  /// False from a put refused for lack of space until a put succeeds or tiles are removed.
-  bool writable = true;
-  std::uint64_t refused = 0; ///< puts refused for lack of space (counting write-behind drops)
-  std::uint64_t dropped = 0; ///< write-behind puts whose row could not be committed, any cause
-};
-
-/** Free space of the file system under the cache root (statvfs, as an unprivileged user sees it).
- */
-struct DiskSpace {
-  std::uint64_t freeBytes = 0;
-  std::uint64_t freeInodes = 0;
-};
+class ITileIndex;
+class ITileStore;
+class CacheMaintenance;
 
 class TileCache {
 public:
-  using Clock = std::chrono::steady_clock;
-
   struct Options {
     std::filesystem::path root;       ///< created if missing (unless readOnly)
     std::uint64_t sizeLimitBytes = 0; ///< 0 = unlimited; LRU beyond it
@@ -173,14 +95,21 @@ public:
     /// After a put refused for lack of space, further puts are refused at once (nothing is
     /// written) for this long; the first put after it tries the disk again.
     std::chrono::milliseconds fullRecheck{10000};
-    /// The clock of fullRecheck (tests inject one); empty: the steady clock.
-    std::function<Clock::time_point()> clock;
+    /// Wall time (fetched-at, last access, expiry, prune's age) and steady time (the intervals
+    /// above); null: the system clock. Tests inject a ManualClock.
+    std::shared_ptr<const Clock> clock;
   };
 
-  /** Opens (creating or migrating) the cache. A damaged index is moved aside to
-   * `index.sqlite.corrupt-<millis>` and rebuilt from the tree. Fails for an unusable root, an index
-   * of a newer schema, or an index that cannot be created. */
+  /** Opens (creating or migrating) the cache: the SQLite index and the file tree at
+   * Options::root. A damaged index is moved aside to `index.sqlite.corrupt-<millis>` and rebuilt
+   * from the tree. Fails for an unusable root, an index of a newer schema, or an index that cannot
+   * be created. */
   static std::expected<std::unique_ptr<TileCache>, CacheError> open(const Options& options);
+  /** Opens the cache on a given index and store (Options::root only names it in messages; the
+   * index's and the store's own options are theirs). An index damaged at open is rebuilt from the
+   * store. The two may be shared with another TileCache opened after this one is closed. */
+  static std::expected<std::unique_ptr<TileCache>, CacheError> open(
+      const Options& options, std::shared_ptr<ITileIndex> index, std::shared_ptr<ITileStore> store);
 
   ~TileCache();
   TileCache(const TileCache&) = delete;
@@ -231,7 +160,7 @@ public:
               std::int32_t toLevel,
               const std::function<bool(const TileKey&, std::int64_t bytes)>& visit) const;
 
-  // --- maintenance ----------------------------------------------------------------------------
+  // --- maintenance: CacheMaintenance(*this), kept here for callers of the whole cache ----------
   std::expected<std::vector<DatasetStats>, CacheError> stats() const;
   /** What prune(options) would remove now: per dataset with such tiles, their count and bytes
    * (levels left empty). Read-only; `tellus cache prune` says it before it removes anything. */
@@ -258,14 +187,13 @@ public:
   /** How many temp files of writers that are gone open() removed. */
   std::size_t tempFilesRemovedAtOpen() const noexcept;
 
+  struct Impl; ///< the composition (cache/src/tilecache/CacheCore.hpp)
+
 private:
-  struct Impl;
+  friend class CacheMaintenance;
   explicit TileCache(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
-
-/** Milliseconds since the Unix epoch, now. */
-UnixMillis unixMillisNow() noexcept;
 
 /** File extension for a MIME type ("image/jpeg" -> "jpg", "application/bil16" -> "bil"), and back.
  */

@@ -8,7 +8,7 @@
  * injected Clock, so tests drive it without sleeping.
  */
 
-#include <tellus/proxy/Clock.hpp>
+#include <tellus/cache/Clock.hpp>
 
 #include <chrono>
 #include <cstdint>

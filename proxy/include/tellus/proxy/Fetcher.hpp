@@ -9,7 +9,7 @@
  * FetchPolicy.cpp the policies, CurlTransport.cpp the only user of libcurl's transfer API).
  */
 
-#include <tellus/proxy/Clock.hpp>
+#include <tellus/cache/Clock.hpp>
 #include <tellus/proxy/Transport.hpp>
 
 #include <array>

@@ -13,7 +13,7 @@
  * is answered, counted and logged in one place.
  */
 
-#include <tellus/proxy/Clock.hpp>
+#include <tellus/cache/Clock.hpp>
 
 #include <chrono>
 #include <cstddef>

@@ -11,7 +11,7 @@
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/cache/TileSource.hpp>
-#include <tellus/proxy/Clock.hpp>
+#include <tellus/cache/Clock.hpp>
 #include <tellus/proxy/FetchBudget.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/Metrics.hpp>

@@ -9,20 +9,22 @@
  *   success, so a put followed by a get always sees the new tile;
  * - an insert is dropped when any invalidation happened since the caller read the row (the
  *   generation check), so a row read before a commit is never cached after it;
- * - other processes' writes are noticed through SQLite's `PRAGMA data_version` (TileCache polls
- *   it), which clears everything;
+ * - other processes' writes are noticed through the index (ITileIndex::changedByOthers, SQLite's
+ *   `PRAGMA data_version`; TileCache polls it), which clears everything;
  * - a file replaced or removed behind the index is noticed by a stat every `fileRecheck`.
  */
 
-#include <tellus/cache/TileCache.hpp>
+#include <tellus/cache/CacheTypes.hpp>
+#include <tellus/cache/Dataset.hpp>
 #include <tellus/cache/TileFile.hpp>
+#include <tellus/cache/TileKey.hpp>
+#include <tellus/cache/TileStore.hpp>
 
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <mutex>
-#include <sys/types.h>
 #include <unordered_map>
 
 namespace tellus::detail {
@@ -43,9 +45,8 @@ struct CachedRow {
   TileMeta meta;
   std::int64_t size = 0;
   std::shared_ptr<const TileFile> file;
-  dev_t dev = 0;
-  ino_t ino = 0;
-  mutable std::atomic<std::int64_t> checkedAtNs{0}; ///< steady clock: last time dev/ino matched
+  TileVersion version;                              ///< of the stored tile the file is
+  mutable std::atomic<std::int64_t> checkedAtNs{0}; ///< steady clock: last time the version matched
   mutable std::atomic<std::int64_t> touchedAtMs{0}; ///< last access recorded for LRU (Unix ms)
 };
 

@@ -1,0 +1,120 @@
+#pragma once
+// The cache's suite over every implementation of its index and tile store: a value-parameterised
+// fixture whose parameter is the backend (SQLite + files, memory). Each root is one cache: a folder
+// for SQLite + files, an index and a store in memory kept across reopenings for memory. Time is a
+// ManualClock shared by every cache of a test.
+
+#include "../support/CacheFixtures.hpp"
+#include "../support/MemoryTileIndex.hpp"
+#include "../support/MemoryTileStore.hpp"
+#include "../support/TempDir.hpp"
+
+#include <tellus/cache/Clock.hpp>
+#include <tellus/cache/TileCache.hpp>
+#include <tellus/cache/TileIndex.hpp>
+#include <tellus/cache/TileStore.hpp>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <sys/resource.h>
+
+namespace tellus::test {
+
+enum class Backend { SqliteFiles, Memory };
+
+inline std::string backendName(const ::testing::TestParamInfo<Backend>& info) {
+  return info.param == Backend::SqliteFiles ? "SqliteFiles" : "Memory";
+}
+
+class CacheBackendTest : public ::testing::TestWithParam<Backend> {
+protected:
+  std::shared_ptr<ManualClock> clock = std::make_shared<ManualClock>();
+  TempDir dir{"backend"};
+
+  /** Options of a cache at `root` (default: the test's folder): no fsync, the manual clock. */
+  TileCache::Options options(const std::filesystem::path& root = {}) const {
+    TileCache::Options o;
+    o.root = root.empty() ? dir.path() : root;
+    o.fsyncTiles = false;
+    o.clock = clock;
+    return o;
+  }
+
+  /** Opens (or reopens) the cache at o.root on this test's backend. */
+  std::unique_ptr<TileCache> open(const TileCache::Options& o) {
+    auto c = GetParam() == Backend::SqliteFiles
+                 ? TileCache::open(o)
+                 : TileCache::open(o, memoryAt(o.root).index, memoryAt(o.root).store);
+    EXPECT_TRUE(c) << (c ? "" : c.error().message);
+    return c ? std::move(*c) : nullptr;
+  }
+  std::unique_ptr<TileCache> open(std::uint64_t sizeLimitBytes = 0) {
+    auto o = options();
+    o.sizeLimitBytes = sizeLimitBytes;
+    return open(o);
+  }
+
+  /** The tile store under the cache at `root` (files: another view of the same tree). */
+  ITileStore& store(const std::filesystem::path& root = {}) {
+    const auto at = root.empty() ? dir.path() : root;
+    if (GetParam() == Backend::Memory) return *memoryAt(at).store;
+    auto& s = fileStores_[at.string()];
+    if (!s) s = std::move(*openFileTileStore(FileTileStoreOptions{at, false, false}));
+    return *s;
+  }
+
+  /** Where a tile of a registered dataset is stored. */
+  static TileLocation at(const DatasetInfo& d, const TileKey& key) {
+    return TileLocation{d.folder, d.spec.extension, key};
+  }
+
+  /** Makes the store refuse tiles of `tileBytes` bytes (`full`) or take them again. Files: a
+   * file-size limit below them (EFBIG, for this process); memory: its capacity. */
+  void fillStore(bool full, std::size_t tileBytes) {
+    if (GetParam() == Backend::Memory) {
+      auto& s = *memoryAt(dir.path()).store;
+      s.setCapacity(full ? std::optional(s.usedBytes() + tileBytes / 2) : std::nullopt);
+      return;
+    }
+    if (full) {
+      ::getrlimit(RLIMIT_FSIZE, &savedLimit_);
+      rlimit lim = savedLimit_;
+      lim.rlim_cur = tileBytes / 2;
+      ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &lim), 0);
+      limited_ = true;
+    } else if (limited_) {
+      ::setrlimit(RLIMIT_FSIZE, &savedLimit_);
+      limited_ = false;
+    }
+  }
+
+  void TearDown() override {
+    if (limited_) ::setrlimit(RLIMIT_FSIZE, &savedLimit_);
+  }
+
+private:
+  struct Memory {
+    std::shared_ptr<MemoryTileIndex> index;
+    std::shared_ptr<MemoryTileStore> store;
+  };
+  Memory& memoryAt(const std::filesystem::path& root) {
+    auto& m = memory_[root.string()];
+    if (!m.index) {
+      m.index = std::make_shared<MemoryTileIndex>();
+      m.store = std::make_shared<MemoryTileStore>(clock);
+    }
+    return m;
+  }
+
+  std::map<std::string, Memory> memory_;
+  std::map<std::string, std::shared_ptr<ITileStore>> fileStores_;
+  rlimit savedLimit_{};
+  bool limited_ = false;
+};
+
+} // namespace tellus::test
