@@ -7,9 +7,9 @@
 #include "../support/TempDir.hpp"
 #include "../support/Tmpfs.hpp"
 
+#include <tellus/cache/Clock.hpp>
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/cache/TilePath.hpp>
-#include <tellus/cache/Clock.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/ImageCodec.hpp>

@@ -368,9 +368,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
   }
 
   /** Wall time in Unix milliseconds, by the injected clock (TileServiceOptions::clock). */
-  UnixMillis nowMillis() const {
-    return (options.clock ? *options.clock : Clock::system()).now();
-  }
+  UnixMillis nowMillis() const { return (options.clock ? *options.clock : Clock::system()).now(); }
 
   TileMeta freshMeta(const LayerSpec& l) const {
     TileMeta m;
@@ -612,7 +610,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
       ds = std::move(*found);
     }
     const auto& [id, folder] = ds;
-    std::vector<TileKey> owned = claimMissing(layerName, time, keys, g, id, done);
+    std::vector<TileKey> owned = claimMissing(layerName, time, keys, g, id, folder, done);
     if (owned.empty()) return;
     fetchBlock(std::move(owned), l, u, g, id, folder, time);
   }
@@ -624,6 +622,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                                     std::span<const TileKey> keys,
                                     const TileGrid& g,
                                     DatasetId id,
+                                    const std::string& folder,
                                     const std::shared_ptr<TilesDone>& done) {
     auto waiter = [done](const TileKey& k) {
       return [done, k](TileAnswer&& a) { (*done)(k, std::move(a)); };

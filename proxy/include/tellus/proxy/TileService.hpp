@@ -8,10 +8,10 @@
  * It is also an ITileSource, so the planet renderer can use it in-process.
  */
 
+#include <tellus/cache/Clock.hpp>
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/cache/TileSource.hpp>
-#include <tellus/cache/Clock.hpp>
 #include <tellus/proxy/FetchBudget.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/Metrics.hpp>
