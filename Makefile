@@ -4,7 +4,7 @@ JOBS ?= 2
 TELLUS := build/tools/tellus/tellus
 CACHE ?= var/cache
 
-.PHONY: all setup build run test test-release test-sanitizers fuzz bench format clean
+.PHONY: all setup build run test test-release test-sanitizers fuzz bench format format-check clean web-page
 
 all: build
 
@@ -32,24 +32,50 @@ run: build
 	  $(TELLUS) serve --cache $(CACHE) --listen $(LISTEN); \
 	fi
 
-# Every test: Release (GL tests under xvfb-run), then the ASan+UBSan and TSan configurations, then
-# a short fuzzing run of the request parsers.
-test: test-release test-sanitizers fuzz
+# Every test: the format check first (seconds), then Release (GL tests under xvfb-run, and the
+# interop tests: GDAL, OWSLib, Chromium), then the ASan+UBSan and TSan configurations (every test
+# but gl, slow and interop: those programs are not ours to sanitize, and repeating them there only
+# timed out), then a short fuzzing run of the request parsers. The page at / is bundled once, in
+# the Release tree, and embedded from there by the others (TELLUS_WEB_DIST_FROM). Each stage says
+# how long it took, and each ctest run where its time went (tools/test-times).
+test: format-check test-release test-sanitizers fuzz
+
+format-check:
+	@git ls-files '*.cpp' '*.hpp' | xargs clang-format --dry-run --Werror || \
+	  { echo "format-check: the files above drift from .clang-format; run make format"; exit 1; }
+
+WEB_DIST := $(CURDIR)/build/proxy/web-dist
+web-page: setup build/build.ninja
+	cmake --build build -j$(JOBS) --target tellus_web_page
+
+SANITIZER_CTEST := ctest --output-on-failure -j$(JOBS) -LE 'gl|slow|interop'
 
 test-release: build
-	cd build && ctest --output-on-failure -j$(JOBS) -LE gl
-	cd build && if [ -n "$$(ctest -N -L gl | grep 'Test #')" ]; then \
-	  xvfb-run -a -s '-screen 0 1280x1024x24' ctest --output-on-failure -L gl; fi
+	@start=$$(date +%s); \
+	cd build && ctest --output-on-failure -j$(JOBS) -LE gl --output-junit test-times.xml; rc=$$?; \
+	../tools/test-times test-times.xml; [ $$rc = 0 ] || exit $$rc; \
+	if [ -n "$$(ctest -N -L gl | grep 'Test #')" ]; then \
+	  xvfb-run -a -s '-screen 0 1280x1024x24' ctest --output-on-failure -L gl \
+	    --output-junit test-times-gl.xml; rc=$$?; ../tools/test-times test-times-gl.xml; \
+	  [ $$rc = 0 ] || exit $$rc; fi; \
+	echo "test-release: tests took $$(( $$(date +%s) - start )) s"
 
-test-sanitizers: setup
-	@[ -f build-asan/build.ninja ] || cmake --preset asan-ubsan
-	cmake --build build-asan -j$(JOBS)
+test-sanitizers: web-page
+	@start=$$(date +%s); \
+	[ -f build-asan/build.ninja ] || cmake --preset asan-ubsan -DTELLUS_WEB_DIST_FROM=$(WEB_DIST); \
+	cmake --build build-asan -j$(JOBS) || exit 1; \
+	echo "test-sanitizers: ASan+UBSan tree built in $$(( $$(date +%s) - start )) s"; \
 	cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  LSAN_OPTIONS=suppressions=$(CURDIR)/tools/sanitizers/lsan.supp \
-	  ctest --output-on-failure -j$(JOBS) -LE 'gl|slow|interop'
-	@[ -f build-tsan/build.ninja ] || cmake --preset tsan
-	cmake --build build-tsan -j$(JOBS)
-	cd build-tsan && TSAN_OPTIONS="halt_on_error=1 suppressions=$(CURDIR)/tools/sanitizers/tsan.supp" ctest --output-on-failure -j$(JOBS) -LE 'gl|slow|interop'
+	  $(SANITIZER_CTEST) --output-junit test-times.xml; rc=$$?; \
+	../tools/test-times test-times.xml; [ $$rc = 0 ] || exit $$rc; cd ..; \
+	start=$$(date +%s); \
+	[ -f build-tsan/build.ninja ] || cmake --preset tsan -DTELLUS_WEB_DIST_FROM=$(WEB_DIST); \
+	cmake --build build-tsan -j$(JOBS) || exit 1; \
+	echo "test-sanitizers: TSan tree built in $$(( $$(date +%s) - start )) s"; \
+	cd build-tsan && TSAN_OPTIONS="halt_on_error=1 suppressions=$(CURDIR)/tools/sanitizers/tsan.supp" \
+	  $(SANITIZER_CTEST) --output-junit test-times.xml; rc=$$?; \
+	../tools/test-times test-times.xml; exit $$rc
 
 # libFuzzer on the request parsers (fuzz/, clang, ASan+UBSan): each target runs FUZZ_SECONDS on a
 # copy of its seeds (build-fuzz/corpus-work/<target>, which keeps what it finds between runs; the
@@ -58,8 +84,8 @@ test-sanitizers: setup
 # log in build-fuzz/<target>.log. Replay one: build-fuzz/fuzz/<target> <file>.
 FUZZ_SECONDS ?= 20
 FUZZ_TARGETS := fuzz_query fuzz_static_path fuzz_config
-fuzz: setup
-	@[ -f build-fuzz/build.ninja ] || cmake --preset fuzz
+fuzz: web-page
+	@[ -f build-fuzz/build.ninja ] || cmake --preset fuzz -DTELLUS_WEB_DIST_FROM=$(WEB_DIST)
 	cmake --build build-fuzz -j$(JOBS) --target tellus_fuzz
 	@set -e; for t in $(FUZZ_TARGETS); do \
 	  dict=fuzz/wms.dict; [ $$t != fuzz_config ] || dict=fuzz/config.dict; \
