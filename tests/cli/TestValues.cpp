@@ -66,8 +66,15 @@ TEST(Values, Durations) {
   EXPECT_EQ(parseDuration("30d"), std::chrono::milliseconds(720h));
   EXPECT_EQ(parseDuration("0s"), std::chrono::milliseconds(0));
   for (const char* bad :
-       {"", "s", "5", "30", "-1d", "1.5h", "5ms", "5w", "d5", "5 d", " 5d", "+5d"})
+       {"", "s", "5", "30", "-1d", "1.5h", "5ms", "5w", "d5", "5 d", " 5d", "+5d", "0"})
     EXPECT_FALSE(parseDuration(bad)) << bad;
+  // Past what milliseconds hold: refused, not wrapped (24 * n and n * 1000 overflowed before).
+  for (const char* huge : {"9223372036854775807d",
+                           "9223372036854775807s",
+                           "106751991167301d",
+                           "99999999999999999999999s"})
+    EXPECT_FALSE(parseDuration(huge)) << huge;
+  EXPECT_EQ(parseDuration("106751991166d"), std::chrono::milliseconds(106751991166LL * 86400000));
 }
 
 TEST(Values, Numbers) {

@@ -1,4 +1,5 @@
 #include <tellus/cli/Values.hpp>
+#include <tellus/config/Config.hpp>
 
 #include <algorithm>
 #include <charconv>
@@ -41,22 +42,9 @@ std::optional<Sector> parseBbox(const std::string& s) {
 }
 
 std::optional<std::chrono::milliseconds> parseDuration(std::string_view s) {
-  if (s.size() < 2) return std::nullopt;
-  long long n = 0;
-  const auto r = std::from_chars(s.data(), s.data() + s.size() - 1, n);
-  if (r.ec != std::errc{} || r.ptr != s.data() + s.size() - 1 || n < 0) return std::nullopt;
-  switch (s.back()) {
-  case 's':
-    return std::chrono::seconds(n);
-  case 'm':
-    return std::chrono::minutes(n);
-  case 'h':
-    return std::chrono::hours(n);
-  case 'd':
-    return std::chrono::hours(24 * n);
-  default:
-    return std::nullopt;
-  }
+  // The configuration's reader, less its bare "0" and its milliseconds (not options' units).
+  if (s.empty() || s.back() < 'a' || s.ends_with("ms")) return std::nullopt;
+  return tellus::parseDurationText(s);
 }
 
 std::optional<std::vector<double>>
