@@ -36,8 +36,9 @@ run: build
 # interop tests: GDAL, OWSLib, Chromium), then the ASan+UBSan and TSan configurations (every test
 # but gl, slow and interop: those programs are not ours to sanitize, and repeating them there only
 # timed out), then a short fuzzing run of the request parsers. The page at / is bundled once, in
-# the Release tree, and embedded from there by the others (TELLUS_WEB_DIST_FROM). Each stage says
-# how long it took, and each ctest run where its time went (tools/test-times).
+# the Release tree, and embedded from there by the sanitizer trees (TELLUS_WEB_DIST_FROM); the
+# fuzz tree builds only the parsers. Each stage says how long it took, and each ctest run where
+# its time went (tools/test-times).
 test: format-check test-release test-sanitizers fuzz
 
 format-check:
@@ -84,8 +85,8 @@ test-sanitizers: web-page
 # log in build-fuzz/<target>.log. Replay one: build-fuzz/fuzz/<target> <file>.
 FUZZ_SECONDS ?= 20
 FUZZ_TARGETS := fuzz_query fuzz_static_path fuzz_config
-fuzz: web-page
-	@[ -f build-fuzz/build.ninja ] || cmake --preset fuzz -DTELLUS_WEB_DIST_FROM=$(WEB_DIST)
+fuzz: setup
+	@[ -f build-fuzz/build.ninja ] || cmake --preset fuzz
 	cmake --build build-fuzz -j$(JOBS) --target tellus_fuzz
 	@set -e; for t in $(FUZZ_TARGETS); do \
 	  dict=fuzz/wms.dict; [ $$t != fuzz_config ] || dict=fuzz/config.dict; \
