@@ -63,7 +63,7 @@ struct LayerOptions {
   int maxLevel = -1; ///< the deepest level fetched and drawn (-1: the layer's own deepest)
 };
 
-/** How the dome is drawn (issue #7; docs/ARCHITECTURE.md, "The dome"). */
+/** How the dome is drawn (issue #7; docs/design/dome.md). */
 enum class DomeMethod {
   /** One pass: the node shader maps each vertex through the fisheye itself (straight triangle
    * edges: an approximation, DomeDirect.hpp); a frame whose estimated error exceeds
