@@ -36,7 +36,7 @@ find_package(fmt CONFIG REQUIRED)
 find_package(yaml-cpp CONFIG REQUIRED)
 # JSON (flight paths, render statistics): header-only, PRIVATE to the module that reads or writes it.
 find_package(nlohmann_json 3.11 CONFIG REQUIRED)
-# Boost.Beast + Asio (header-only) for the HTTP server; see docs/ARCHITECTURE.md.
+# Boost.Beast + Asio (header-only) for the HTTP server; see docs/design/dependencies.md.
 find_package(Boost 1.74 REQUIRED)
 pkg_check_modules(EPOXY REQUIRED IMPORTED_TARGET epoxy)
 if(TELLUS_BUILD_TESTS)

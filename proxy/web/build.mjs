@@ -2,7 +2,7 @@
 //   node build.mjs <out dir> <node_modules dir>
 // writes <out>/index.html (naming the bundle with its hash), app.js (main.js with OpenLayers, minified), app.css (ol.css and
 // style.css) and licenses.txt (the licence of every npm package in the bundle, which their BSD/MIT
-// terms ask binaries to carry), each also gzip-compressed (.gz), for proxy/src/WebPage.cpp to embed. The
+// terms ask binaries to carry), each also gzip-compressed (.gz), for proxy/src/web/WebPage.cpp to embed. The
 // node_modules come from `npm ci` in the build tree, so the source tree stays clean.
 import {createHash} from 'node:crypto';
 import {createRequire} from 'node:module';

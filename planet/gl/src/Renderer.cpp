@@ -1,5 +1,5 @@
 // The GL layer of the planet renderer: see Renderer.hpp, RendererImpl.hpp (the frame's phases and
-// where each lives) and docs/ARCHITECTURE.md ("The planet renderer"). Every GL call here runs on
+// where each lives) and docs/design/renderer.md. Every GL call here runs on
 // the thread that created the Renderer.
 
 #include "DrawList.hpp"

@@ -1,8 +1,8 @@
 #pragma once
 /**
  * @file RendererImpl.hpp
- * @brief What a Renderer holds, one member per unit of the frame (docs/ARCHITECTURE.md, "The GL
- * layer"). A frame (Renderer::frame, Renderer.cpp) runs the phases in this order:
+ * @brief What a Renderer holds, one member per unit of the frame (docs/design/renderer.md, "The
+ * GL layer"). A frame (Renderer::frame, Renderer.cpp) runs the phases in this order:
  *
  *   begin    heights delivered (TerrainState::deliver), the pose kept above the terrain, the
  *            camera, relief on or off (TerrainState::chooseRelief)

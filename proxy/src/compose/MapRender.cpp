@@ -3,8 +3,8 @@
 // anything is decoded); the canvas; per layer the tiles decoded (only the part sampled, or whole
 // and kept), the holes filled from the nearest coarser cached tile, the samples drawn (on Y, Cb and
 // Cr planes when every tile is a 4:2:0 JPEG, else on RGB(A) or heights, with the RGB path taking
-// over when a tile turns out not to be); then the map encoded. See docs/ARCHITECTURE.md, "GetMap
-// for any box".
+// over when a tile turns out not to be); then the map encoded. See
+// docs/design/composition.md.
 #include "codec/Codecs.hpp"
 #include "codec/Quantize.hpp"
 #include "compose/JpegRaw.hpp"

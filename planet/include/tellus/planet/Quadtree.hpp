@@ -17,7 +17,7 @@
  * split time allows it). The LOD test still checks both projected axes against the node texture's
  * texel counts, so a texel is never larger than the threshold in pixels along either axis; the
  * texture of a wide node is composed from its `span` tiles (at most kMaxTextureTiles of them, see
- * below). See docs/ARCHITECTURE.md, "The poles".
+ * below). See docs/design/poles.md.
  *
  * Polar caps (QuadtreeParams::polarCaps). Merged rows still leave one node per level-zero column
  * at the pole at any altitude (ten with 36-degree roots), since no node spans two roots. With caps

@@ -4,10 +4,11 @@
  * @brief The event-driven HTTP/1.1 server adapter (Boost.Beast over Asio, kept private to
  * proxy/src).
  *
- * A fixed pool of threads runs one event loop; each connection lives on its own strand. A handler
- * gets the parsed request and a Responder it may call later from any thread (the proxy answers
- * misses after an upstream fetch without ever blocking the loop). Limits: header bytes, request
- * time (slow clients are cut off), keep-alive idle time, connection count. GET, HEAD and OPTIONS
+ * A fixed set of threads, each running its own event loop (HttpServerOptions::threads); a
+ * connection lives on one loop for its whole life, so its handlers need no strand. A handler gets
+ * the parsed request and a Responder it may call later from any thread (the proxy answers misses
+ * after an upstream fetch without ever blocking the loop). Limits: header bytes, request time
+ * (slow clients are cut off), keep-alive idle time, connection count. GET, HEAD and OPTIONS
  * are served; what the server refuses (another method, a malformed request, oversized headers or
  * body, a client over its rate) reaches the handler too, flagged with an HttpRefusal, so that it
  * is answered, counted and logged in one place.

@@ -7,8 +7,9 @@
  * a per-frame byte and time budget, a reusable texture pool, the LRU). No GL type appears here: GL,
  * GLFW, libepoxy, libjpeg and libpng are private to tellus::planet_gl.
  *
- * One Renderer drives one layer. Both a window loop (`tellus view`) and the headless loop
- * (`tellus render`) call frame(pose) once per frame; readPixels() reads the last frame back.
+ * One Renderer draws a base layer and its overlays. Both a window loop (`tellus view`) and the
+ * headless loop (`tellus render`) call frame(pose) once per frame; readPixels() reads the last
+ * frame back.
  * Threads: every method belongs to the thread that created the Renderer (it owns the GL context).
  *
  * Inside (planet/gl/src/RendererImpl.hpp), frame() is a sequence of phases, one unit each (update,
@@ -63,7 +64,7 @@ struct LayerOptions {
   int maxLevel = -1; ///< the deepest level fetched and drawn (-1: the layer's own deepest)
 };
 
-/** How the dome is drawn (issue #7; docs/ARCHITECTURE.md, "The dome"). */
+/** How the dome is drawn (issue #7; docs/design/dome.md). */
 enum class DomeMethod {
   /** One pass: the node shader maps each vertex through the fisheye itself (straight triangle
    * edges: an approximation, DomeDirect.hpp); a frame whose estimated error exceeds
