@@ -162,39 +162,42 @@ const FrameStats& Quadtree::update(const Camera& camera) {
   return stats_;
 }
 
-void Quadtree::visit(Node& node, bool insideFrustum, const Camera& camera) {
-  ++stats_.visited;
+bool Quadtree::passesCulling(const Node& node, bool& insideFrustum, const Camera& camera) {
   const NodeGeometry& g = node.geometry_;
   if (isBackFacing(camera, g)) {
     ++stats_.culledBackFace;
-    return;
+    return false;
   }
   if (!insideFrustum) {
     const FrustumResult f = params_.tightFrustumCulling ? classifyNode(camera, g)
                                                         : classify(camera.frustum(), g.bounds());
     if (f == FrustumResult::Outside) {
       ++stats_.culledFrustum;
-      return;
+      return false;
     }
     insideFrustum = f == FrustumResult::Inside;
   }
   if (occluder_.isOccluded(camera.position(), g.bounds()) ||
       (node.cap_ && occluder_.isCapOccluded(camera.position(), g))) {
     ++stats_.culledHorizon;
-    return;
+    return false;
   }
-  ++stats_.visible;
-  node.lastVisible_ = frame_;
-  const LodResult lod = evaluateLod(camera, g, node.cap_ ? lodFor(node.key_) : params_.lod);
-  bool refine = lod.split;
+  return true;
+}
+
+bool Quadtree::refines(const Node& node, const LodResult& lod, const Camera& camera) const {
+  if (lod.split) return true;
   // A row widened for another camera (wider than the static rule) keeps the test it was made
   // with, each half of each east-west edge within half the limit: the whole-edge test alone
   // would let perspective enlarge its near texels further than a static node's.
-  if (!refine && node.widened_ &&
-      !fitsEastWest(*node.widened_,
-                    camera,
-                    std::clamp(camera.pose().altitudeM, g.minHeightM(), g.maxHeightM())))
-    refine = true;
+  const NodeGeometry& g = node.geometry_;
+  return node.widened_ &&
+         !fitsEastWest(*node.widened_,
+                       camera,
+                       std::clamp(camera.pose().altitudeM, g.minHeightM(), g.maxHeightM()));
+}
+
+bool Quadtree::descends(Node& node, const LodResult& lod, bool refine) {
   bool descend = refine && node.key_.level + 1 < grid_.numLevels();
   // East-west texels over the limit while the north-south ones fit: children as wide as the node
   // would keep the same east-west texels (its equatorward edge is theirs), so a merged row then
@@ -221,7 +224,17 @@ void Quadtree::visit(Node& node, bool insideFrustum, const Camera& camera) {
       descend = splitWith(node, narrow);
     }
   }
-  if (descend) {
+  return descend;
+}
+
+void Quadtree::visit(Node& node, bool insideFrustum, const Camera& camera) {
+  ++stats_.visited;
+  if (!passesCulling(node, insideFrustum, camera)) return;
+  ++stats_.visible;
+  node.lastVisible_ = frame_;
+  const LodResult lod =
+      evaluateLod(camera, node.geometry_, node.cap_ ? lodFor(node.key_) : params_.lod);
+  if (descends(node, lod, refines(node, lod, camera))) {
     for (auto& ch : node.children_)
       if (ch) visit(*ch, insideFrustum, camera);
     return;
