@@ -96,6 +96,48 @@ void readTime(Reader& r, const Map& layer, TimeDimension& t) {
   }
 }
 
+/** layers[i].elevation: how an elevation layer's samples become metres. */
+void readElevation(Reader& r, const Map& m, LayerConfig& l) {
+  if (l.kind != LayerKind::Elevation)
+    r.fail(m.keyMark("elevation"),
+           m.path("elevation"),
+           "'elevation' applies to elevation layers only (kind: elevation)");
+  const auto [en, ewhere] = m.child("elevation");
+  const Map e(r, en, m.path("elevation"), ewhere, {"encoding", "scale", "offset", "no_data"});
+  if (auto v = e.get("encoding")) {
+    switch (choice(r, *v, e.path("encoding"), {"bil16", "int16-tiff", "png16"})) {
+    case 0:
+      l.elevation.encoding = ElevationEncoding::Bil16;
+      break;
+    case 1:
+      l.elevation.encoding = ElevationEncoding::Int16Tiff;
+      break;
+    default:
+      l.elevation.encoding = ElevationEncoding::Png16;
+      break;
+    }
+  }
+  if (auto v = e.get("scale")) l.elevation.scale = number(r, *v, e.path("scale"));
+  if (auto v = e.get("offset")) l.elevation.offset = number(r, *v, e.path("offset"));
+  if (auto v = e.get("no_data")) l.elevation.noData = number(r, *v, e.path("no_data"));
+}
+
+/** layers[i].cache: ttl, pinned, max_age (whole seconds). */
+void readLayerCache(Reader& r, const Map& m, LayerConfig& l) {
+  const auto [cn, cwhere] = m.child("cache");
+  const Map cm(r, cn, m.path("cache"), cwhere, {"ttl", "pinned", "max_age"});
+  if (auto v = cm.get("ttl")) l.ttl = duration(r, *v, cm.path("ttl"));
+  if (auto v = cm.get("pinned")) l.dataset.pinned = boolean(r, *v, cm.path("pinned"));
+  if (auto v = cm.get("max_age")) {
+    const auto d = duration(r, *v, cm.path("max_age"));
+    if (d.count() % 1000 != 0)
+      r.fail(v->Mark(),
+             cm.path("max_age"),
+             "max_age must be whole seconds, got '" + v->Scalar() + "'");
+    l.maxAge = std::chrono::duration_cast<std::chrono::seconds>(d);
+  }
+}
+
 } // namespace
 
 LayerConfig readLayer(Reader& r, const YAML::Node& node, std::string path) {
@@ -146,44 +188,10 @@ LayerConfig readLayer(Reader& r, const YAML::Node& node, std::string path) {
 
   if (l.dataset.mimeType == "image/tiff") l.elevation.encoding = ElevationEncoding::Int16Tiff;
   if (l.dataset.mimeType == "image/png") l.elevation.encoding = ElevationEncoding::Png16;
-  if (m.has("elevation")) {
-    if (l.kind != LayerKind::Elevation)
-      r.fail(m.keyMark("elevation"),
-             m.path("elevation"),
-             "'elevation' applies to elevation layers only (kind: elevation)");
-    const auto [en, ewhere] = m.child("elevation");
-    const Map e(r, en, m.path("elevation"), ewhere, {"encoding", "scale", "offset", "no_data"});
-    if (auto v = e.get("encoding")) {
-      switch (choice(r, *v, e.path("encoding"), {"bil16", "int16-tiff", "png16"})) {
-      case 0:
-        l.elevation.encoding = ElevationEncoding::Bil16;
-        break;
-      case 1:
-        l.elevation.encoding = ElevationEncoding::Int16Tiff;
-        break;
-      default:
-        l.elevation.encoding = ElevationEncoding::Png16;
-        break;
-      }
-    }
-    if (auto v = e.get("scale")) l.elevation.scale = number(r, *v, e.path("scale"));
-    if (auto v = e.get("offset")) l.elevation.offset = number(r, *v, e.path("offset"));
-    if (auto v = e.get("no_data")) l.elevation.noData = number(r, *v, e.path("no_data"));
-  }
+  if (m.has("elevation")) readElevation(r, m, l);
   readTime(r, m, l.time);
 
-  const auto [cn, cwhere] = m.child("cache");
-  const Map cm(r, cn, m.path("cache"), cwhere, {"ttl", "pinned", "max_age"});
-  if (auto v = cm.get("ttl")) l.ttl = duration(r, *v, cm.path("ttl"));
-  if (auto v = cm.get("pinned")) l.dataset.pinned = boolean(r, *v, cm.path("pinned"));
-  if (auto v = cm.get("max_age")) {
-    const auto d = duration(r, *v, cm.path("max_age"));
-    if (d.count() % 1000 != 0)
-      r.fail(v->Mark(),
-             cm.path("max_age"),
-             "max_age must be whole seconds, got '" + v->Scalar() + "'");
-    l.maxAge = std::chrono::duration_cast<std::chrono::seconds>(d);
-  }
+  readLayerCache(r, m, l);
   return l;
 }
 

@@ -6,6 +6,54 @@
 
 namespace tellus::detail::yaml {
 
+namespace {
+
+/** server.limits: the sizes, timeouts and rates a client may use. */
+void readLimits(Reader& r, const Map& server, ServerLimits& lim) {
+  const auto [ln, lwhere] = server.child("limits");
+  const Map l(r,
+              ln,
+              server.path("limits"),
+              lwhere,
+              {"max_connections",
+               "max_header_bytes",
+               "max_param_bytes",
+               "max_width",
+               "max_height",
+               "request_timeout",
+               "keepalive_timeout",
+               "requests_per_second",
+               "fetches_per_client_per_minute",
+               "max_map_pixels",
+               "max_tiles_per_map",
+               "decoded_tile_cache"});
+  if (auto v = l.get("max_connections"))
+    lim.maxConnections = int32(r, *v, l.path("max_connections"));
+  if (auto v = l.get("max_header_bytes"))
+    lim.maxHeaderBytes = static_cast<std::size_t>(size(r, *v, l.path("max_header_bytes")));
+  if (auto v = l.get("max_param_bytes"))
+    lim.maxParamBytes = static_cast<std::size_t>(size(r, *v, l.path("max_param_bytes")));
+  if (auto v = l.get("max_width")) lim.maxWidth = int32(r, *v, l.path("max_width"));
+  if (auto v = l.get("max_height")) lim.maxHeight = int32(r, *v, l.path("max_height"));
+  if (auto v = l.get("request_timeout"))
+    lim.requestTimeout = duration(r, *v, l.path("request_timeout"));
+  if (auto v = l.get("keepalive_timeout"))
+    lim.keepaliveTimeout = duration(r, *v, l.path("keepalive_timeout"));
+  if (auto v = l.get("requests_per_second"))
+    lim.requestsPerSecond = number(r, *v, l.path("requests_per_second"));
+  if (auto v = l.get("fetches_per_client_per_minute"))
+    lim.fetchesPerClientPerMinute = number(r, *v, l.path("fetches_per_client_per_minute"));
+  if (auto v = l.get("max_map_pixels"))
+    lim.maxMapPixels = integer(r, *v, l.path("max_map_pixels"), 1, std::int64_t{1} << 40);
+  if (auto v = l.get("decoded_tile_cache"))
+    lim.decodedTileCache = size(r, *v, l.path("decoded_tile_cache"));
+  if (auto v = l.get("max_tiles_per_map"))
+    lim.maxTilesPerMap =
+        static_cast<std::int32_t>(integer(r, *v, l.path("max_tiles_per_map"), 1, 1 << 20));
+}
+
+} // namespace
+
 void readServer(Reader& r, const Map& root, ServerSettings& s) {
   const auto [node, where] = root.child("server");
   const Map m(r,
@@ -46,47 +94,7 @@ void readServer(Reader& r, const Map& root, ServerSettings& s) {
   if (auto v = m.get("jpeg_quality"))
     s.jpegQuality = static_cast<int>(integer(r, *v, m.path("jpeg_quality"), 1, 100));
 
-  const auto [ln, lwhere] = m.child("limits");
-  const Map l(r,
-              ln,
-              m.path("limits"),
-              lwhere,
-              {"max_connections",
-               "max_header_bytes",
-               "max_param_bytes",
-               "max_width",
-               "max_height",
-               "request_timeout",
-               "keepalive_timeout",
-               "requests_per_second",
-               "fetches_per_client_per_minute",
-               "max_map_pixels",
-               "max_tiles_per_map",
-               "decoded_tile_cache"});
-  ServerLimits& lim = s.limits;
-  if (auto v = l.get("max_connections"))
-    lim.maxConnections = int32(r, *v, l.path("max_connections"));
-  if (auto v = l.get("max_header_bytes"))
-    lim.maxHeaderBytes = static_cast<std::size_t>(size(r, *v, l.path("max_header_bytes")));
-  if (auto v = l.get("max_param_bytes"))
-    lim.maxParamBytes = static_cast<std::size_t>(size(r, *v, l.path("max_param_bytes")));
-  if (auto v = l.get("max_width")) lim.maxWidth = int32(r, *v, l.path("max_width"));
-  if (auto v = l.get("max_height")) lim.maxHeight = int32(r, *v, l.path("max_height"));
-  if (auto v = l.get("request_timeout"))
-    lim.requestTimeout = duration(r, *v, l.path("request_timeout"));
-  if (auto v = l.get("keepalive_timeout"))
-    lim.keepaliveTimeout = duration(r, *v, l.path("keepalive_timeout"));
-  if (auto v = l.get("requests_per_second"))
-    lim.requestsPerSecond = number(r, *v, l.path("requests_per_second"));
-  if (auto v = l.get("fetches_per_client_per_minute"))
-    lim.fetchesPerClientPerMinute = number(r, *v, l.path("fetches_per_client_per_minute"));
-  if (auto v = l.get("max_map_pixels"))
-    lim.maxMapPixels = integer(r, *v, l.path("max_map_pixels"), 1, std::int64_t{1} << 40);
-  if (auto v = l.get("decoded_tile_cache"))
-    lim.decodedTileCache = size(r, *v, l.path("decoded_tile_cache"));
-  if (auto v = l.get("max_tiles_per_map"))
-    lim.maxTilesPerMap =
-        static_cast<std::int32_t>(integer(r, *v, l.path("max_tiles_per_map"), 1, 1 << 20));
+  readLimits(r, m, s.limits);
 }
 
 } // namespace tellus::detail::yaml
