@@ -200,34 +200,36 @@ checkTime(const TimeDimension& t, const std::string& base, const std::string& su
   return std::nullopt;
 }
 
-std::optional<ValidationIssue>
-checkLayer(const Config& c, const UpstreamIndex& upstreams, const LayerConfig& l, std::size_t i) {
-  const std::string base = "layers[" + std::to_string(i) + "]";
-  const std::string subject = "layer '" + l.name + "'";
-  const auto issue = [&](const std::string& key, std::string message) {
-    return ValidationIssue{base + (key.empty() ? "" : "." + key), subject, std::move(message)};
-  };
-  if (!isValidName(l.name))
-    return issue("name", "the name must be non-empty and use only A-Z a-z 0-9 _ . -");
-  const auto found = upstreams.find(l.upstream);
-  const UpstreamConfig* up = found == upstreams.end() ? nullptr : found->second;
-  if (!up) {
-    std::string names;
-    for (std::size_t k = 0; k < c.upstreams.size() && k < 10; ++k)
-      names += (names.empty() ? "" : ", ") + c.upstreams[k].name;
-    if (c.upstreams.size() > 10) names += ", ...";
-    return issue("upstream",
-                 "no upstream named '" + l.upstream +
-                     "' (upstreams: " + (names.empty() ? "none" : names) + ")");
+/** Builds the issues of one layer: layers[i].<key>, about "layer '<name>'". */
+class LayerIssue {
+public:
+  LayerIssue(const LayerConfig& l, std::size_t i)
+      : base_("layers[" + std::to_string(i) + "]"), subject_("layer '" + l.name + "'") {}
+  ValidationIssue operator()(const std::string& key, std::string message) const {
+    return ValidationIssue{base_ + (key.empty() ? "" : "." + key), subject_, std::move(message)};
   }
-  if (l.dataset.name != l.name)
-    return issue("", "dataset.name '" + l.dataset.name + "' differs from the layer name");
-  if (l.dataset.server != l.upstream)
-    return issue("", "dataset.server '" + l.dataset.server + "' differs from the upstream name");
-  if (auto g = TileGrid::create(l.dataset.grid); !g) {
-    auto [key, message] = gridMessage(g.error());
-    return issue(key, message);
-  }
+  const std::string& base() const noexcept { return base_; }
+  const std::string& subject() const noexcept { return subject_; }
+
+private:
+  std::string base_;
+  std::string subject_;
+};
+
+/** "no upstream named 'x' (upstreams: a, b, ...)": the first ten names. */
+ValidationIssue unknownUpstream(const Config& c, const LayerConfig& l, const LayerIssue& issue) {
+  std::string names;
+  for (std::size_t k = 0; k < c.upstreams.size() && k < 10; ++k)
+    names += (names.empty() ? "" : ", ") + c.upstreams[k].name;
+  if (c.upstreams.size() > 10) names += ", ...";
+  return issue("upstream",
+               "no upstream named '" + l.upstream +
+                   "' (upstreams: " + (names.empty() ? "none" : names) + ")");
+}
+
+/** The format, its file suffix, the style and upstream layer names, and the kind the format
+ * allows. */
+std::optional<ValidationIssue> checkLayerFormat(const LayerConfig& l, const LayerIssue& issue) {
   const std::string& m = l.dataset.mimeType;
   const std::string_view ext = extensionOf(m);
   if (ext.empty())
@@ -242,23 +244,50 @@ checkLayer(const Config& c, const UpstreamIndex& upstreams, const LayerConfig& l
     return issue("upstream_layer", "is empty or has a control character");
   if (l.kind == LayerKind::Imagery && m == "application/bil16")
     return issue("kind", "format application/bil16 carries heights: the kind must be elevation");
+  return std::nullopt;
+}
+
+/** An elevation layer's format (lossless), encoding (fitting the format) and its numbers. */
+std::optional<ValidationIssue> checkElevation(const LayerConfig& l, const LayerIssue& issue) {
+  const std::string& m = l.dataset.mimeType;
+  if (m == "image/jpeg")
+    return issue("format", "an elevation layer needs a lossless format, not image/jpeg");
+  const auto enc = l.elevation.encoding;
+  const bool matches = (enc == ElevationEncoding::Bil16 && m == "application/bil16") ||
+                       (enc == ElevationEncoding::Int16Tiff && m == "image/tiff") ||
+                       (enc == ElevationEncoding::Png16 && m == "image/png");
+  if (!matches)
+    return issue("elevation.encoding",
+                 "the encoding does not fit format " + m +
+                     " (bil16: application/bil16, int16-tiff: image/tiff, png16: image/png)");
+  if (!std::isfinite(l.elevation.scale) || l.elevation.scale == 0.0)
+    return issue("elevation.scale", "must be a finite number other than 0");
+  if (!std::isfinite(l.elevation.offset))
+    return issue("elevation.offset", "must be a finite number");
+  if (!std::isfinite(l.elevation.noData))
+    return issue("elevation.no_data", "must be a finite number");
+  return std::nullopt;
+}
+
+std::optional<ValidationIssue>
+checkLayer(const Config& c, const UpstreamIndex& upstreams, const LayerConfig& l, std::size_t i) {
+  const LayerIssue issue(l, i);
+  if (!isValidName(l.name))
+    return issue("name", "the name must be non-empty and use only A-Z a-z 0-9 _ . -");
+  const auto found = upstreams.find(l.upstream);
+  const UpstreamConfig* up = found == upstreams.end() ? nullptr : found->second;
+  if (!up) return unknownUpstream(c, l, issue);
+  if (l.dataset.name != l.name)
+    return issue("", "dataset.name '" + l.dataset.name + "' differs from the layer name");
+  if (l.dataset.server != l.upstream)
+    return issue("", "dataset.server '" + l.dataset.server + "' differs from the upstream name");
+  if (auto g = TileGrid::create(l.dataset.grid); !g) {
+    auto [key, message] = gridMessage(g.error());
+    return issue(key, message);
+  }
+  if (auto e = checkLayerFormat(l, issue)) return e;
   if (l.kind == LayerKind::Elevation) {
-    if (m == "image/jpeg")
-      return issue("format", "an elevation layer needs a lossless format, not image/jpeg");
-    const auto enc = l.elevation.encoding;
-    const bool matches = (enc == ElevationEncoding::Bil16 && m == "application/bil16") ||
-                         (enc == ElevationEncoding::Int16Tiff && m == "image/tiff") ||
-                         (enc == ElevationEncoding::Png16 && m == "image/png");
-    if (!matches)
-      return issue("elevation.encoding",
-                   "the encoding does not fit format " + m +
-                       " (bil16: application/bil16, int16-tiff: image/tiff, png16: image/png)");
-    if (!std::isfinite(l.elevation.scale) || l.elevation.scale == 0.0)
-      return issue("elevation.scale", "must be a finite number other than 0");
-    if (!std::isfinite(l.elevation.offset))
-      return issue("elevation.offset", "must be a finite number");
-    if (!std::isfinite(l.elevation.noData))
-      return issue("elevation.no_data", "must be a finite number");
+    if (auto e = checkElevation(l, issue)) return e;
   }
   if (l.firstLevel != 0) {
     if (up->type != UpstreamConfig::Type::WorldWind)
@@ -269,7 +298,7 @@ checkLayer(const Config& c, const UpstreamIndex& upstreams, const LayerConfig& l
                        "] so that first_level + levels <= " + str(kMaxLevel + 1) + ", got " +
                        str(l.firstLevel));
   }
-  if (auto t = checkTime(l.time, base, subject)) return t;
+  if (auto t = checkTime(l.time, issue.base(), issue.subject())) return t;
   if (l.ttl.count() < 0) return issue("cache.ttl", "must not be negative");
   if (l.maxAge.count() < 0) return issue("cache.max_age", "must not be negative");
   return std::nullopt;
@@ -323,11 +352,11 @@ std::optional<ValidationIssue> checkRenderer(const RendererSettings& g) {
   return std::nullopt;
 }
 
-std::optional<ValidationIssue> findIssue(const Config& c, bool checkFiles) {
-  if (auto s = checkServer(c.server)) return s;
-  if (auto g = checkRenderer(c.renderer)) return g;
-  if (c.cache.root.empty()) return ValidationIssue{"cache.root", "cache", "is empty"};
-  UpstreamIndex upstreams;
+namespace {
+
+/** Each upstream, and its name used once; fills the index of upstreams by name. */
+std::optional<ValidationIssue>
+checkUpstreams(const Config& c, bool checkFiles, UpstreamIndex& upstreams) {
   for (std::size_t i = 0; i < c.upstreams.size(); ++i) {
     const auto& u = c.upstreams[i];
     if (auto e = checkUpstream(u, i, checkFiles)) return e;
@@ -336,6 +365,11 @@ std::optional<ValidationIssue> findIssue(const Config& c, bool checkFiles) {
                              "upstream '" + u.name + "'",
                              "the name is used twice"};
   }
+  return std::nullopt;
+}
+
+/** Each layer, and its name used once. */
+std::optional<ValidationIssue> checkLayers(const Config& c, const UpstreamIndex& upstreams) {
   std::set<std::string_view> layers;
   for (std::size_t i = 0; i < c.layers.size(); ++i) {
     const auto& l = c.layers[i];
@@ -345,92 +379,114 @@ std::optional<ValidationIssue> findIssue(const Config& c, bool checkFiles) {
                              "layer '" + l.name + "'",
                              "the name is used twice"};
   }
+  return std::nullopt;
+}
+
+/** Regional datasets share their layer's grid (a key is the same sector in each). */
+bool sameGrid(const LayerConfig& a, const LayerConfig& b) {
+  const GridSpec &x = a.dataset.grid, &y = b.dataset.grid;
+  return x.levelZeroDeltaDeg == y.levelZeroDeltaDeg && x.tileWidth == y.tileWidth &&
+         x.tileHeight == y.tileHeight;
+}
+
+/** The regional layers of a renderer entry at `at`: layers of the kind, on main's grid. */
+std::optional<ValidationIssue> checkRegional(const Config& c,
+                                             const std::vector<std::string>& names,
+                                             const LayerConfig* main,
+                                             LayerKind kind,
+                                             const std::string& at) {
+  for (std::size_t j = 0; j < names.size(); ++j) {
+    const std::string p = at + ".regional[" + std::to_string(j) + "]";
+    const auto* l = c.layer(names[j]);
+    if (l == nullptr || l->kind != kind)
+      return ValidationIssue{p,
+                             "renderer",
+                             "'" + names[j] + "' is not " +
+                                 (kind == LayerKind::Imagery ? "an imagery" : "an elevation") +
+                                 " layer"};
+    if (main != nullptr && !sameGrid(*main, *l))
+      return ValidationIssue{p,
+                             "renderer",
+                             "'" + names[j] +
+                                 "' has another grid (level_zero_delta, tile_size) "
+                                 "than '" +
+                                 main->name + "'"};
+  }
+  return std::nullopt;
+}
+
+/** renderer.terrain: its layer an elevation one, its regional ones on the grid of the elevation
+ * layer it uses (the named one, else the first). */
+std::optional<ValidationIssue> checkTerrainLayers(const Config& c) {
   if (const std::string& t = c.renderer.terrain.layer; !t.empty()) {
     const auto* l = c.layer(t);
     if (l == nullptr || l->kind != LayerKind::Elevation)
       return ValidationIssue{
           "renderer.terrain.layer", "renderer", "'" + t + "' is not an elevation layer"};
   }
-  // Regional datasets share their layer's grid (a key is the same sector in each).
-  const auto sameGrid = [](const LayerConfig& a, const LayerConfig& b) {
-    const GridSpec &x = a.dataset.grid, &y = b.dataset.grid;
-    return x.levelZeroDeltaDeg == y.levelZeroDeltaDeg && x.tileWidth == y.tileWidth &&
-           x.tileHeight == y.tileHeight;
-  };
-  const auto checkRegional = [&](const std::vector<std::string>& names,
-                                 const LayerConfig* main,
-                                 LayerKind kind,
-                                 const std::string& at) -> std::optional<ValidationIssue> {
-    for (std::size_t j = 0; j < names.size(); ++j) {
-      const std::string p = at + ".regional[" + std::to_string(j) + "]";
-      const auto* l = c.layer(names[j]);
-      if (l == nullptr || l->kind != kind)
-        return ValidationIssue{p,
-                               "renderer",
-                               "'" + names[j] + "' is not " +
-                                   (kind == LayerKind::Imagery ? "an imagery" : "an elevation") +
-                                   " layer"};
-      if (main != nullptr && !sameGrid(*main, *l))
-        return ValidationIssue{p,
-                               "renderer",
-                               "'" + names[j] +
-                                   "' has another grid (level_zero_delta, tile_size) "
-                                   "than '" +
-                                   main->name + "'"};
+  const LayerConfig* elevation = nullptr;
+  for (const auto& l : c.layers)
+    if (l.kind == LayerKind::Elevation &&
+        (c.renderer.terrain.layer.empty() || l.name == c.renderer.terrain.layer)) {
+      elevation = &l;
+      break;
     }
-    return std::nullopt;
-  };
-  {
-    const LayerConfig* elevation = nullptr;
-    for (const auto& l : c.layers)
-      if (l.kind == LayerKind::Elevation &&
-          (c.renderer.terrain.layer.empty() || l.name == c.renderer.terrain.layer)) {
-        elevation = &l;
-        break;
-      }
-    if (auto e = checkRegional(
-            c.renderer.terrain.regional, elevation, LayerKind::Elevation, "renderer.terrain"))
-      return e;
-  }
-  const LayerConfig* base = nullptr;
-  for (std::size_t i = 0; i < c.renderer.layers.size(); ++i) {
-    const RenderLayerSettings& rl = c.renderer.layers[i];
-    const std::string at = "renderer.layers[" + std::to_string(i) + "]";
-    const auto* l = c.layer(rl.layer);
-    if (l == nullptr || l->kind != LayerKind::Imagery)
-      return ValidationIssue{
-          at + ".layer", "renderer", "'" + rl.layer + "' is not an imagery layer"};
-    if (i == 0) {
-      base = l;
-      if ((rl.opacity && *rl.opacity != 1.0) || !rl.visible)
-        return ValidationIssue{at,
-                               "renderer",
-                               "the first entry is the opaque base: opacity and visible apply to "
-                               "the overlays after it"};
-    } else if (l->dataset.grid.levelZeroDeltaDeg != base->dataset.grid.levelZeroDeltaDeg) {
-      return ValidationIssue{at + ".layer",
+  return checkRegional(
+      c, c.renderer.terrain.regional, elevation, LayerKind::Elevation, "renderer.terrain");
+}
+
+/** renderer.layers[i]: an imagery layer; the first the opaque base, the others on its grid;
+ * opacity, max_level, a TIME value of the layer, its regional layers. */
+std::optional<ValidationIssue>
+checkRenderLayer(const Config& c, std::size_t i, const LayerConfig*& base) {
+  const RenderLayerSettings& rl = c.renderer.layers[i];
+  const std::string at = "renderer.layers[" + std::to_string(i) + "]";
+  const auto* l = c.layer(rl.layer);
+  if (l == nullptr || l->kind != LayerKind::Imagery)
+    return ValidationIssue{at + ".layer", "renderer", "'" + rl.layer + "' is not an imagery layer"};
+  if (i == 0) {
+    base = l;
+    if ((rl.opacity && *rl.opacity != 1.0) || !rl.visible)
+      return ValidationIssue{at,
                              "renderer",
-                             "'" + rl.layer + "' has another level_zero_delta than the base '" +
-                                 base->name + "': an overlay must share the base's grid"};
-    }
-    if (rl.opacity && !(*rl.opacity >= 0.0 && *rl.opacity <= 1.0))
-      return ValidationIssue{
-          at + ".opacity", "renderer", "must be in [0, 1], got " + num(*rl.opacity)};
-    if (rl.maxLevel < -1 || rl.maxLevel > 40)
-      return ValidationIssue{
-          at + ".max_level", "renderer", "must be in [0, 40], got " + str(rl.maxLevel)};
-    if (!rl.time.empty()) {
-      if (!l->time.enabled())
-        return ValidationIssue{
-            at + ".time", "renderer", "'" + rl.layer + "' has no TIME dimension"};
-      if (!l->time.values.empty() &&
-          std::find(l->time.values.begin(), l->time.values.end(), rl.time) == l->time.values.end())
-        return ValidationIssue{at + ".time",
-                               "renderer",
-                               "'" + rl.time + "' is not a TIME value of '" + rl.layer + "'"};
-    }
-    if (auto e = checkRegional(rl.regional, l, LayerKind::Imagery, at)) return e;
+                             "the first entry is the opaque base: opacity and visible apply to "
+                             "the overlays after it"};
+  } else if (l->dataset.grid.levelZeroDeltaDeg != base->dataset.grid.levelZeroDeltaDeg) {
+    return ValidationIssue{at + ".layer",
+                           "renderer",
+                           "'" + rl.layer + "' has another level_zero_delta than the base '" +
+                               base->name + "': an overlay must share the base's grid"};
   }
+  if (rl.opacity && !(*rl.opacity >= 0.0 && *rl.opacity <= 1.0))
+    return ValidationIssue{
+        at + ".opacity", "renderer", "must be in [0, 1], got " + num(*rl.opacity)};
+  if (rl.maxLevel < -1 || rl.maxLevel > 40)
+    return ValidationIssue{
+        at + ".max_level", "renderer", "must be in [0, 40], got " + str(rl.maxLevel)};
+  if (!rl.time.empty()) {
+    if (!l->time.enabled())
+      return ValidationIssue{at + ".time", "renderer", "'" + rl.layer + "' has no TIME dimension"};
+    if (!l->time.values.empty() &&
+        std::find(l->time.values.begin(), l->time.values.end(), rl.time) == l->time.values.end())
+      return ValidationIssue{
+          at + ".time", "renderer", "'" + rl.time + "' is not a TIME value of '" + rl.layer + "'"};
+  }
+  return checkRegional(c, rl.regional, l, LayerKind::Imagery, at);
+}
+
+} // namespace
+
+std::optional<ValidationIssue> findIssue(const Config& c, bool checkFiles) {
+  if (auto s = checkServer(c.server)) return s;
+  if (auto g = checkRenderer(c.renderer)) return g;
+  if (c.cache.root.empty()) return ValidationIssue{"cache.root", "cache", "is empty"};
+  UpstreamIndex upstreams;
+  if (auto e = checkUpstreams(c, checkFiles, upstreams)) return e;
+  if (auto e = checkLayers(c, upstreams)) return e;
+  if (auto e = checkTerrainLayers(c)) return e;
+  const LayerConfig* base = nullptr;
+  for (std::size_t i = 0; i < c.renderer.layers.size(); ++i)
+    if (auto e = checkRenderLayer(c, i, base)) return e;
   return std::nullopt;
 }
 

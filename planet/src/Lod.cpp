@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <span>
 
 namespace tellus::planet {
 
@@ -61,146 +62,45 @@ double fisheyeLength2(const Camera& camera, const glm::dvec3& p, const glm::dvec
   return k * k * (radial * radial + stretch * stretch * around2);
 }
 
-} // namespace
+/** Terrain: the points are measured at the height of the node's relief nearest the camera's (its
+ * altitude clamped to the node's height range), not on the ellipsoid: 1 m above a 1,000 m plateau
+ * the texels are as large as 1 m above the sea, not 1,000 m (issue #6/#8). */
+class Lift {
+public:
+  Lift(const Camera& camera, const NodeGeometry& node) noexcept
+      : a0_(node.equatorialRadiusM()), b0_(node.polarRadiusM()),
+        liftM_(std::clamp(camera.pose().altitudeM, node.minHeightM(), node.maxHeightM())) {}
 
-namespace {
-
-/** evaluateLod for a fisheye camera: the same corner edges and local texels, measured in the
- * fisheye's pixels (Camera::projectPx and fisheyeLength2) instead of the perspective's. */
-template <class Lift>
-LodResult evaluateLodFisheye(const Camera& camera,
-                             const NodeGeometry& node,
-                             const LodParams& params,
-                             const Lift& lift) noexcept {
-  LodResult r;
-  std::array<glm::dvec2, 4> px{};
-  for (std::size_t i = 0; i < 4; ++i)
-    if (!camera.projectPx(lift(node.corners()[i]), px[i])) {
-      r.cornerBehindCamera = true;
-      r.split = true;
-      return r;
-    }
-  const double limitW = static_cast<double>(params.tileWidthPx) * params.threshold;
-  const double limitH = static_cast<double>(params.tileHeightPx) * params.threshold;
-  struct Edge {
-    std::size_t a, b;
-    bool eastWest;
-  };
-  constexpr std::array<Edge, 4> edges{
-      {{SW, SE, true}, {NW, NE, true}, {SE, NE, false}, {SW, NW, false}}};
-  for (const Edge& e : edges) {
-    const glm::dvec2 d = px[e.b] - px[e.a];
-    const double lim = e.eastWest ? limitW : limitH;
-    const double ratio = (d.x * d.x + d.y * d.y) / (lim * lim);
-    r.worstRatioSquared = std::max(r.worstRatioSquared, ratio);
-    if (!(ratio <= 1.0)) r.split = true;
-  }
-  if (r.split || !params.perspectiveAware) return r;
-  const Sector& s = node.sector();
-  const double texLon = (s.east - s.west) / static_cast<double>(params.tileWidthPx);
-  const double texLat = (s.north - s.south) / static_cast<double>(params.tileHeightPx);
-  const double t2 = params.threshold * params.threshold;
-  double worst = 0.0;
-  auto sample = [&](const SurfaceFrame& f) {
-    const double e = fisheyeLength2(camera, f.position, f.perDegLon * texLon);
-    const double n = fisheyeLength2(camera, f.position, f.perDegLat * texLat);
-    if (!(e <= t2)) r.eastWestOver = true;
-    if (!(n <= t2)) r.northSouthOver = true;
-    const double m = std::max(e, n) / t2;
-    worst = std::isnan(m) ? 1e300 : std::max(worst, m);
-  };
-  auto lifted = [&](SurfaceFrame f) {
-    f.position = lift(f.position);
-    return f;
-  };
-  for (std::size_t i = 0; i < 4; ++i)
-    sample(lifted(node.cornerFrames()[i]));
-  const double a = node.equatorialRadiusM(), b = node.polarRadiusM();
-  // The fisheye map is not a projective one: a node's largest texel can lie inside an edge (a
-  // grazing view near the horizon, the stretch around the axis). The edges' midpoints and the
-  // centre too.
-  {
-    const double mLat = 0.5 * (s.south + s.north), mLon = 0.5 * (s.west + s.east);
-    const std::array<std::array<double, 2>, 5> mids{
-        {{s.south, mLon}, {s.north, mLon}, {mLat, s.west}, {mLat, s.east}, {mLat, mLon}}};
-    for (const auto& m : mids) {
-      const SurfaceFrame f = lifted(surfaceFrame(a, b, m[0], m[1]));
-      if (glm::length(f.position - camera.position()) >= camera.nearM()) sample(f);
-    }
-  }
-  auto inCone = [&](const glm::dvec3& p) {
-    const glm::dvec3 d = glm::normalize(p - camera.position());
-    return std::acos(std::clamp(glm::dot(d, camera.forward()), -1.0, 1.0)) <=
-           camera.fisheyeHalfAngleRad();
-  };
-  const CameraPose& pose = camera.pose();
-  const double nearLat = std::clamp(pose.latDeg, s.south, s.north);
-  const double nearLon = clampLongitude(pose.lonDeg, s.west, s.east);
-  const bool interior =
-      (nearLat != s.south && nearLat != s.north) || (nearLon != s.west && nearLon != s.east);
-  if (interior) {
-    const SurfaceFrame f = lifted(surfaceFrame(a, b, nearLat, nearLon));
-    if (glm::length(f.position - camera.position()) >= camera.nearM() && inCone(f.position))
-      sample(f);
-  }
-  if (s.east - s.west >= 360.0) { // a polar cap: its rim's nearest point (see evaluateLod)
-    const SurfaceFrame f = lifted(surfaceFrame(a, b, s.north == 90.0 ? s.south : s.north, nearLon));
-    if (glm::length(f.position - camera.position()) >= camera.nearM() && inCone(f.position))
-      sample(f);
-  }
-  for (const Camera::GroundPoint& gp : camera.domeGround()) {
-    if (!gp.hit || gp.latDeg < s.south || gp.latDeg > s.north || gp.lonDeg < s.west ||
-        gp.lonDeg > s.east)
-      continue;
-    const SurfaceFrame f = lifted(surfaceFrame(a, b, gp.latDeg, gp.lonDeg));
-    if (glm::length(f.position - camera.position()) >= camera.nearM()) sample(f);
-  }
-  r.worstTexelRatioSquared = worst;
-  if (!(worst <= 1.0)) r.split = true;
-  return r;
-}
-
-} // namespace
-
-LodResult
-evaluateLod(const Camera& camera, const NodeGeometry& node, const LodParams& params) noexcept {
-  LodResult r;
-  if (params.tileWidthPx < 1 || params.tileHeightPx < 1 || !(params.threshold > 0.0) ||
-      !std::isfinite(params.threshold))
-    return r;
-  const double halfW = 0.5 * static_cast<double>(camera.viewport().width);
-  const double halfH = 0.5 * static_cast<double>(camera.viewport().height);
-  std::array<glm::dvec2, 4> px{};
-  std::array<glm::dvec4, 4> clip{};
-  // Terrain: the points are measured at the height of the node's relief nearest the camera's
-  // (its altitude clamped to the node's height range), not on the ellipsoid: 1 m above a 1,000 m
-  // plateau the texels are as large as 1 m above the sea, not 1,000 m (issue #6/#8).
-  const double a0 = node.equatorialRadiusM(), b0 = node.polarRadiusM();
-  const double liftM = std::clamp(camera.pose().altitudeM, node.minHeightM(), node.maxHeightM());
-  auto lift = [&](const glm::dvec3& p) {
-    if (liftM == 0.0) return p;
+  glm::dvec3 operator()(const glm::dvec3& p) const noexcept {
+    if (liftM_ == 0.0) return p;
     const glm::dvec3 n =
-        glm::normalize(glm::dvec3(p.x / (a0 * a0), p.y / (a0 * a0), p.z / (b0 * b0)));
-    return p + n * liftM;
-  };
-  if (camera.isFisheye()) return evaluateLodFisheye(camera, node, params, lift);
-  for (std::size_t i = 0; i < 4; ++i) {
-    clip[i] = camera.toClip(lift(node.corners()[i]));
-    const glm::dvec4& c = clip[i];
-    // w is the distance in front of the eye; at or in front of the near plane means projectable.
-    if (!(c.w >= camera.nearM()) || !std::isfinite(c.x) || !std::isfinite(c.y)) {
-      r.cornerBehindCamera = true;
-      r.split = true;
-      r.worstRatioSquared = 0.0;
-      return r;
-    }
-    px[i] = {c.x / c.w * halfW, c.y / c.w * halfH};
+        glm::normalize(glm::dvec3(p.x / (a0_ * a0_), p.y / (a0_ * a0_), p.z / (b0_ * b0_)));
+    return p + n * liftM_;
   }
+  SurfaceFrame operator()(SurfaceFrame f) const noexcept {
+    f.position = (*this)(f.position);
+    return f;
+  }
+
+private:
+  double a0_, b0_, liftM_;
+};
+
+/** How an edge is found over its limit: by its squared length (the perspective's test) or by its
+ * ratio to the limit (the fisheye's). They can differ in the last bit of the division's rounding;
+ * each projection keeps the test it has always had. */
+enum class EdgeSplit { LengthOverLimit, RatioOverOne };
+
+/** The thesis's test on the corners' pixels: SW-SE and NW-NE run east-west, SE-NE and NW-SW
+ * north-south; a pole edge has length 0. */
+void testEdges(const std::array<glm::dvec2, 4>& px,
+               const LodParams& params,
+               EdgeSplit rule,
+               LodResult& r) noexcept {
   const double limitW = static_cast<double>(params.tileWidthPx) * params.threshold;
   const double limitH = static_cast<double>(params.tileHeightPx) * params.threshold;
   const double limitW2 = limitW * limitW;
   const double limitH2 = limitH * limitH;
-  // SW-SE and NW-NE run east-west; SE-NE and NW-SW north-south. A pole edge has length 0.
   struct Edge {
     std::size_t a, b;
     bool eastWest;
@@ -210,24 +110,118 @@ evaluateLod(const Camera& camera, const NodeGeometry& node, const LodParams& par
   for (const Edge& e : edges) {
     const glm::dvec2 d = px[e.b] - px[e.a];
     const double len2 = d.x * d.x + d.y * d.y;
-    const double ratio = len2 / (e.eastWest ? limitW2 : limitH2);
+    const double lim2 = e.eastWest ? limitW2 : limitH2;
+    const double ratio = len2 / lim2;
     if (ratio > r.worstRatioSquared) r.worstRatioSquared = ratio;
-    if (len2 > (e.eastWest ? limitW2 : limitH2)) r.split = true;
+    if (rule == EdgeSplit::LengthOverLimit ? len2 > lim2 : !(ratio <= 1.0)) r.split = true;
   }
-  if (r.split || !params.perspectiveAware) return r;
+}
 
-  // The local texel at the sample points: one texel's step east and north along the surface
-  // (metres per degree times degrees per texel), projected through the derivative of the
-  // perspective division.
+/** Which sample point of the local texel test a projection is asked about. */
+enum class Point { Corner, Midpoint, Nearest, Rim, Ground };
+
+/** The perspective's pixels: the corners through the view-projection and the perspective
+ * division; a texel through the division's derivative at its point (projectedLength2). */
+class PerspectiveProbe {
+public:
+  static constexpr bool kMidpoints = false;
+  static constexpr EdgeSplit kEdgeSplit = EdgeSplit::LengthOverLimit;
+
+  explicit PerspectiveProbe(const Camera& camera) noexcept
+      : camera_(camera), halfW_(0.5 * static_cast<double>(camera.viewport().width)),
+        halfH_(0.5 * static_cast<double>(camera.viewport().height)),
+        rows_(camera.viewProjection()) {}
+
+  bool projectCorner(std::size_t i, const glm::dvec3& p, glm::dvec2& px) noexcept {
+    clip_[i] = camera_.toClip(p);
+    const glm::dvec4& c = clip_[i];
+    // w is the distance in front of the eye; at or in front of the near plane means projectable.
+    if (!(c.w >= camera_.nearM()) || !std::isfinite(c.x) || !std::isfinite(c.y)) return false;
+    px = {c.x / c.w * halfW_, c.y / c.w * halfH_};
+    return true;
+  }
+  /** The ground seen through the viewport's border: the nearest visible points of a tilted view. */
+  std::span<const Camera::GroundPoint> ground() const noexcept { return camera_.viewportGround(); }
+  /** Whether the point counts (in front of the near plane; the point below the camera and a cap's
+   * rim point only on screen: a tilted view's nadir is out of sight, the ground points stand for
+   * what is in sight), and it becomes the point length2 measures at. */
+  bool admit(const SurfaceFrame& f, Point kind, std::size_t corner) noexcept {
+    if (kind == Point::Corner) {
+      c_ = clip_[corner];
+      return true;
+    }
+    c_ = camera_.toClip(f.position);
+    if (!(c_.w >= camera_.nearM())) return false;
+    return kind == Point::Ground || (std::abs(c_.x) <= c_.w && std::abs(c_.y) <= c_.w);
+  }
+  double length2(const glm::dvec3& v) const noexcept {
+    return projectedLength2(rows_, c_, v, halfW_, halfH_);
+  }
+
+private:
+  const Camera& camera_;
+  double halfW_, halfH_;
+  ClipRows rows_;
+  std::array<glm::dvec4, 4> clip_{};
+  glm::dvec4 c_{0.0};
+};
+
+/** A fisheye's pixels: the same corner edges and local texels, measured in the fisheye's pixels
+ * (Camera::projectPx and fisheyeLength2) instead of the perspective's. */
+class FisheyeProbe {
+public:
+  /** The fisheye map is not a projective one: a node's largest texel can lie inside an edge (a
+   * grazing view near the horizon, the stretch around the axis). The edges' midpoints and the
+   * centre count too. */
+  static constexpr bool kMidpoints = true;
+  static constexpr EdgeSplit kEdgeSplit = EdgeSplit::RatioOverOne;
+
+  explicit FisheyeProbe(const Camera& camera) noexcept : camera_(camera) {}
+
+  bool projectCorner(std::size_t, const glm::dvec3& p, glm::dvec2& px) const noexcept {
+    return camera_.projectPx(p, px);
+  }
+  std::span<const Camera::GroundPoint> ground() const noexcept { return camera_.domeGround(); }
+  /** Whether the point counts (beyond the near distance; the point below the camera and a cap's
+   * rim point only inside the fisheye's cone), and it becomes the point length2 measures at. */
+  bool admit(const SurfaceFrame& f, Point kind, std::size_t) noexcept {
+    p_ = f.position;
+    if (kind == Point::Corner) return true;
+    if (!(glm::length(p_ - camera_.position()) >= camera_.nearM())) return false;
+    return (kind != Point::Nearest && kind != Point::Rim) || inCone(p_);
+  }
+  double length2(const glm::dvec3& v) const noexcept { return fisheyeLength2(camera_, p_, v); }
+
+private:
+  bool inCone(const glm::dvec3& p) const noexcept {
+    const glm::dvec3 d = glm::normalize(p - camera_.position());
+    return std::acos(std::clamp(glm::dot(d, camera_.forward()), -1.0, 1.0)) <=
+           camera_.fisheyeHalfAngleRad();
+  }
+  const Camera& camera_;
+  glm::dvec3 p_{0.0};
+};
+
+/** The local texel test (Lod.hpp): one texel's step east and north along the surface (metres per
+ * degree times degrees per texel) in the probe's pixels at the node's sample points, in this
+ * order: the corners, the edges' midpoints and the centre (where the probe asks for them), the
+ * node's point nearest below the camera, a polar cap's rim point, the ground points. */
+template <class Probe>
+void testTexels(const Camera& camera,
+                const NodeGeometry& node,
+                const LodParams& params,
+                const Lift& lift,
+                Probe& probe,
+                LodResult& r) noexcept {
   const Sector& s = node.sector();
   const double texLon = (s.east - s.west) / static_cast<double>(params.tileWidthPx);
   const double texLat = (s.north - s.south) / static_cast<double>(params.tileHeightPx);
   const double t2 = params.threshold * params.threshold;
-  const ClipRows vp(camera.viewProjection());
   double worst = 0.0;
-  auto sample = [&](const SurfaceFrame& f, const glm::dvec4& c) {
-    const double e = projectedLength2(vp, c, f.perDegLon * texLon, halfW, halfH);
-    const double n = projectedLength2(vp, c, f.perDegLat * texLat, halfW, halfH);
+  auto sample = [&](const SurfaceFrame& f, Point kind, std::size_t corner = 0) {
+    if (!probe.admit(f, kind, corner)) return;
+    const double e = probe.length2(f.perDegLon * texLon);
+    const double n = probe.length2(f.perDegLat * texLat);
     if (!(e <= t2)) r.eastWestOver = true; // NaN (not projectable) too: refine
     if (!(n <= t2)) r.northSouthOver = true;
     const double m = std::max(e, n) / t2;
@@ -236,48 +230,70 @@ evaluateLod(const Camera& camera, const NodeGeometry& node, const LodParams& par
     else if (m > worst)
       worst = m;
   };
-  auto lifted = [&](SurfaceFrame f) {
-    f.position = lift(f.position);
-    return f;
-  };
-  for (std::size_t i = 0; i < 4; ++i)
-    sample(lifted(node.cornerFrames()[i]), clip[i]);
   const double a = node.equatorialRadiusM(), b = node.polarRadiusM();
-  auto inViewport = [](const glm::dvec4& c) {
-    return std::abs(c.x) <= c.w && std::abs(c.y) <= c.w; // ndc within [-1, 1]
-  };
+  auto at = [&](double lat, double lon) { return lift(surfaceFrame(a, b, lat, lon)); };
+  for (std::size_t i = 0; i < 4; ++i)
+    sample(lift(node.cornerFrames()[i]), Point::Corner, i);
+  if constexpr (Probe::kMidpoints) {
+    const double mLat = 0.5 * (s.south + s.north), mLon = 0.5 * (s.west + s.east);
+    const std::array<std::array<double, 2>, 5> mids{
+        {{s.south, mLon}, {s.north, mLon}, {mLat, s.west}, {mLat, s.east}, {mLat, mLon}}};
+    for (const auto& m : mids)
+      sample(at(m[0], m[1]), Point::Midpoint);
+  }
   // The node's point below the camera: where a camera above a large node's interior sees its
-  // largest texels (its corners may all be far away). Off screen it does not count (a tilted
-  // view's nadir is out of sight; the viewport's ground points stand for what is in sight).
+  // largest texels (its corners may all be far away).
   const CameraPose& pose = camera.pose();
   const double nearLat = std::clamp(pose.latDeg, s.south, s.north);
   const double nearLon = clampLongitude(pose.lonDeg, s.west, s.east);
   const bool interior =
       (nearLat != s.south && nearLat != s.north) || (nearLon != s.west && nearLon != s.east);
-  if (interior) { // else it is a corner, sampled above
-    const SurfaceFrame f = lifted(surfaceFrame(a, b, nearLat, nearLon));
-    const glm::dvec4 c = camera.toClip(f.position);
-    if (c.w >= camera.nearM() && inViewport(c)) sample(f, c);
-  }
+  if (interior) sample(at(nearLat, nearLon), Point::Nearest); // else it is a corner, sampled above
   // A polar cap (a whole top or bottom row) has its largest east-west texels along its rim, which
   // has no corner but one: its point at the camera's longitude, the nearest, counts as well.
-  if (s.east - s.west >= 360.0) {
-    const SurfaceFrame f = lifted(surfaceFrame(a, b, s.north == 90.0 ? s.south : s.north, nearLon));
-    const glm::dvec4 c = camera.toClip(f.position);
-    if (c.w >= camera.nearM() && inViewport(c)) sample(f, c);
-  }
-  // The ground seen through the viewport's border: the nearest visible points of a tilted view.
-  for (const Camera::GroundPoint& gp : camera.viewportGround()) {
+  if (s.east - s.west >= 360.0)
+    sample(at(s.north == 90.0 ? s.south : s.north, nearLon), Point::Rim);
+  for (const Camera::GroundPoint& gp : probe.ground()) {
     if (!gp.hit || gp.latDeg < s.south || gp.latDeg > s.north || gp.lonDeg < s.west ||
         gp.lonDeg > s.east)
       continue;
-    const SurfaceFrame f = lifted(surfaceFrame(a, b, gp.latDeg, gp.lonDeg));
-    const glm::dvec4 c = camera.toClip(f.position);
-    if (c.w >= camera.nearM()) sample(f, c);
+    sample(at(gp.latDeg, gp.lonDeg), Point::Ground);
   }
   r.worstTexelRatioSquared = worst;
   if (!(worst <= 1.0)) r.split = true;
+}
+
+/** The test in one projection's pixels: the corners (a corner that cannot be projected splits),
+ * the edges, then, where they fit and the params ask for it, the local texels. */
+template <class Probe>
+LodResult evaluateWith(const Camera& camera,
+                       const NodeGeometry& node,
+                       const LodParams& params,
+                       Probe probe) noexcept {
+  const Lift lift(camera, node);
+  LodResult r;
+  std::array<glm::dvec2, 4> px{};
+  for (std::size_t i = 0; i < 4; ++i)
+    if (!probe.projectCorner(i, lift(node.corners()[i]), px[i])) {
+      r.cornerBehindCamera = true;
+      r.split = true;
+      return r;
+    }
+  testEdges(px, params, Probe::kEdgeSplit, r);
+  if (r.split || !params.perspectiveAware) return r;
+  testTexels(camera, node, params, lift, probe, r);
   return r;
+}
+
+} // namespace
+
+LodResult
+evaluateLod(const Camera& camera, const NodeGeometry& node, const LodParams& params) noexcept {
+  if (params.tileWidthPx < 1 || params.tileHeightPx < 1 || !(params.threshold > 0.0) ||
+      !std::isfinite(params.threshold))
+    return LodResult{};
+  if (camera.isFisheye()) return evaluateWith(camera, node, params, FisheyeProbe(camera));
+  return evaluateWith(camera, node, params, PerspectiveProbe(camera));
 }
 
 } // namespace tellus::planet

@@ -82,6 +82,134 @@ bool OrientedBox::contains(const glm::dvec3& p) const noexcept {
   return true;
 }
 
+namespace {
+
+/** How many of the four corners are distinct points (a pole's corners are one). */
+int distinctCount(const std::array<glm::dvec3, 4>& corners) {
+  int count = 0;
+  for (std::size_t i = 0; i < 4; ++i) {
+    bool seen = false;
+    for (std::size_t j = 0; j < i; ++j)
+      seen = seen || corners[j] == corners[i];
+    if (!seen) ++count;
+  }
+  return count;
+}
+
+/** The half-angle of a cone around the centre's normal holding the node's normals: the angular
+ * distance from the middle grows monotonically towards the corners along each edge of a lat/long
+ * rectangle, so the corners bound it. */
+double normalConeOf(const glm::dvec3& centreNormal,
+                    const std::array<glm::dvec3, 4>& cornerNormals) {
+  double cone = 0.0;
+  for (const auto& n : cornerNormals)
+    cone = std::max(cone, angleBetween(centreNormal, n));
+  return cone * (1.0 + 1e-12) + 1e-12;
+}
+
+/** The node's surface sampled for its bounds: a kBoundSamples x kBoundSamples grid at both
+ * heights, in (row, col, height) order, and the samples' box. */
+struct BoundSamples {
+  std::vector<glm::dvec3> points;
+  glm::dvec3 lo{std::numeric_limits<double>::infinity()};
+  glm::dvec3 hi{-std::numeric_limits<double>::infinity()};
+};
+
+BoundSamples sampleBounds(const Geodesy& geodesy, const Sector& s, double minH, double maxH) {
+  BoundSamples b;
+  b.points.reserve(2 * kBoundSamples * kBoundSamples);
+  for (int r = 0; r < kBoundSamples; ++r) {
+    const double lat = edgeLerp(s.south, s.north, r, kBoundSamples);
+    for (int c = 0; c < kBoundSamples; ++c) {
+      const double lon = edgeLerp(s.west, s.east, c, kBoundSamples);
+      for (const double h : {minH, maxH}) {
+        const glm::dvec3 p = surfacePoint(geodesy, lat, lon, h);
+        b.points.push_back(p);
+        b.lo = glm::min(b.lo, p);
+        b.hi = glm::max(b.hi, p);
+      }
+    }
+  }
+  return b;
+}
+
+// Between samples: on a cell of the 17 x 17 grid, the patch p(lat, lon) (at a fixed height)
+// is within e = (dLat^2 max|p_lat,lat| + dLon^2 max|p_lon,lon|) / 8 of the bilinear
+// interpolant of the cell's four samples (the tensor-product linear interpolation error; the
+// interpolant is a convex combination of the samples). |p_lon,lon| is the parallel's radius,
+// (N + h) cos(lat) <= (a^2/b + |h|) cos(smallest |latitude|); |p_lat,lat| is at most
+// sqrt(M^2 + M'^2) + |h| <= 1.01 a^2/b + |h| (M the meridional radius of curvature, at most
+// a^2/b, M' below 1 % of it on WGS84). A convex volume holding the samples then holds every
+// patch point once grown by e; heights in between lie on the segment between the two sampled
+// heights. The cosine matters for wide polar nodes (36 degrees of longitude a few km from the
+// pole); e is metres where the old half-cell bound was kilometres (263 km at level zero).
+double interpolationMargin(const Geodesy& geodesy, const Sector& s, double minH, double maxH) {
+  const double a = geodesy.equatorialRadius();
+  const double b = geodesy.polarRadius();
+  const double maxAbsH = std::max(std::abs(minH), std::abs(maxH));
+  const double cells = static_cast<double>(kBoundSamples - 1);
+  const double minAbsLat =
+      (s.south <= 0.0 && s.north >= 0.0) ? 0.0 : std::min(std::abs(s.south), std::abs(s.north));
+  // cos rounded up a little (and never below 0) so the bound stays conservative.
+  const double parallelScale = std::min(1.0, std::cos(minAbsLat * kDegToRad) + 1e-15);
+  const double cellLatRad = (s.north - s.south) / cells * kDegToRad;
+  const double cellLonRad = (s.east - s.west) / cells * kDegToRad;
+  const double kLat = 1.01 * a * a / b + maxAbsH;
+  const double kLon = (a * a / b + maxAbsH) * parallelScale;
+  return (cellLatRad * cellLatRad * kLat + cellLonRad * cellLonRad * kLon) / 8.0;
+}
+
+/** Bounding sphere: the samples' box's middle as the centre, grown by the margin. */
+BoundingSphere sphereAround(const BoundSamples& samples, double margin) {
+  BoundingSphere sphere;
+  sphere.centre = 0.5 * (samples.lo + samples.hi);
+  double r2 = 0.0;
+  for (const auto& p : samples.points) {
+    const glm::dvec3 d = p - sphere.centre;
+    r2 = std::max(r2, glm::dot(d, d));
+  }
+  sphere.radius = (std::sqrt(r2) + margin) * (1.0 + 1e-12) + 1e-6;
+  return sphere;
+}
+
+// The boxes: the samples' extent along east, north and up at a middle longitude and the middle
+// latitude (an orthonormal frame built from the angles, defined at the poles too), grown by the
+// same margin (a projection on a unit axis is 1-Lipschitz). The whole node's, and one per half
+// of the columns (each patch point lies in a cell of one half, within the margin of the hull of
+// that cell's samples): for a wide polar wedge, whose arc a single box fits loosely.
+OrientedBox boxAround(const BoundSamples& samples,
+                      const glm::dvec3& centre,
+                      double midLat,
+                      double lonDeg,
+                      int firstCol,
+                      int lastCol,
+                      double margin) {
+  const double sLat = std::sin(midLat * kDegToRad), cLat = std::cos(midLat * kDegToRad);
+  const double sLon = std::sin(lonDeg * kDegToRad), cLon = std::cos(lonDeg * kDegToRad);
+  const std::array<glm::dvec3, 3> axes{glm::dvec3(-sLon, cLon, 0.0),
+                                       glm::dvec3(-sLat * cLon, -sLat * sLon, cLat),
+                                       glm::dvec3(cLat * cLon, cLat * sLon, sLat)};
+  glm::dvec3 minA(std::numeric_limits<double>::infinity());
+  glm::dvec3 maxA(-std::numeric_limits<double>::infinity());
+  for (std::size_t i = 0; i < samples.points.size(); ++i) {
+    const int col = static_cast<int>(i / 2) % kBoundSamples; // (row, col, height) order
+    if (col < firstCol || col > lastCol) continue;
+    const glm::dvec3 d = samples.points[i] - centre;
+    const glm::dvec3 t(glm::dot(d, axes[0]), glm::dot(d, axes[1]), glm::dot(d, axes[2]));
+    minA = glm::min(minA, t);
+    maxA = glm::max(maxA, t);
+  }
+  OrientedBox box;
+  box.axes = axes;
+  const glm::dvec3 mid = 0.5 * (minA + maxA);
+  box.centre = centre + mid.x * axes[0] + mid.y * axes[1] + mid.z * axes[2];
+  const glm::dvec3 half = 0.5 * (maxA - minA) + glm::dvec3(margin);
+  box.halfExtents = half * (1.0 + 1e-12) + glm::dvec3(1e-6);
+  return box;
+}
+
+} // namespace
+
 NodeGeometry::NodeGeometry(const Geodesy& geodesy,
                            const Sector& sector,
                            double minHeightM,
@@ -103,106 +231,23 @@ NodeGeometry::NodeGeometry(const Geodesy& geodesy,
         surfaceFrame(geodesy.equatorialRadius(), geodesy.polarRadius(), latLon[i][0], latLon[i][1]);
     cornerFrames_[i].position = corners_[i]; // GeographicLib's, bit-identical to the corners
   }
-  distinctCorners_ = 0;
-  for (std::size_t i = 0; i < 4; ++i) {
-    bool seen = false;
-    for (std::size_t j = 0; j < i; ++j)
-      seen = seen || corners_[j] == corners_[i];
-    if (!seen) ++distinctCorners_;
-  }
+  distinctCorners_ = distinctCount(corners_);
 
   const double midLat = 0.5 * (s.south + s.north);
   const double midLon = 0.5 * (s.west + s.east);
   centre_ = surfacePoint(geodesy, midLat, midLon, 0.0);
   centreNormal_ = normalAt(geodesy, midLat, midLon);
-  // The angular distance from the middle grows monotonically towards the corners along each edge
-  // of a lat/long rectangle, so the corners bound the normal cone.
-  double cone = 0.0;
-  for (const auto& n : cornerNormals_)
-    cone = std::max(cone, angleBetween(centreNormal_, n));
-  normalCone_ = cone * (1.0 + 1e-12) + 1e-12;
+  normalCone_ = normalConeOf(centreNormal_, cornerNormals_);
 
-  // Bounding sphere: samples at both heights, their box's middle as the centre.
-  std::vector<glm::dvec3> samples;
-  samples.reserve(2 * kBoundSamples * kBoundSamples);
-  glm::dvec3 lo(std::numeric_limits<double>::infinity());
-  glm::dvec3 hi(-std::numeric_limits<double>::infinity());
-  for (int r = 0; r < kBoundSamples; ++r) {
-    const double lat = edgeLerp(s.south, s.north, r, kBoundSamples);
-    for (int c = 0; c < kBoundSamples; ++c) {
-      const double lon = edgeLerp(s.west, s.east, c, kBoundSamples);
-      for (const double h : {minHeightM, maxHeightM}) {
-        const glm::dvec3 p = surfacePoint(geodesy, lat, lon, h);
-        samples.push_back(p);
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
-      }
-    }
-  }
-  bounds_.centre = 0.5 * (lo + hi);
-  double r2 = 0.0;
-  for (const auto& p : samples) {
-    const glm::dvec3 d = p - bounds_.centre;
-    r2 = std::max(r2, glm::dot(d, d));
-  }
-  // Between samples: on a cell of the 17 x 17 grid, the patch p(lat, lon) (at a fixed height)
-  // is within e = (dLat^2 max|p_lat,lat| + dLon^2 max|p_lon,lon|) / 8 of the bilinear
-  // interpolant of the cell's four samples (the tensor-product linear interpolation error; the
-  // interpolant is a convex combination of the samples). |p_lon,lon| is the parallel's radius,
-  // (N + h) cos(lat) <= (a^2/b + |h|) cos(smallest |latitude|); |p_lat,lat| is at most
-  // sqrt(M^2 + M'^2) + |h| <= 1.01 a^2/b + |h| (M the meridional radius of curvature, at most
-  // a^2/b, M' below 1 % of it on WGS84). A convex volume holding the samples then holds every
-  // patch point once grown by e; heights in between lie on the segment between the two sampled
-  // heights. The cosine matters for wide polar nodes (36 degrees of longitude a few km from the
-  // pole); e is metres where the old half-cell bound was kilometres (263 km at level zero).
-  const double a = geodesy.equatorialRadius();
-  const double b = geodesy.polarRadius();
-  const double maxAbsH = std::max(std::abs(minHeightM), std::abs(maxHeightM));
-  const double cells = static_cast<double>(kBoundSamples - 1);
-  const double minAbsLat =
-      (s.south <= 0.0 && s.north >= 0.0) ? 0.0 : std::min(std::abs(s.south), std::abs(s.north));
-  // cos rounded up a little (and never below 0) so the bound stays conservative.
-  const double parallelScale = std::min(1.0, std::cos(minAbsLat * kDegToRad) + 1e-15);
-  const double cellLatRad = (s.north - s.south) / cells * kDegToRad;
-  const double cellLonRad = (s.east - s.west) / cells * kDegToRad;
-  const double kLat = 1.01 * a * a / b + maxAbsH;
-  const double kLon = (a * a / b + maxAbsH) * parallelScale;
-  const double margin = (cellLatRad * cellLatRad * kLat + cellLonRad * cellLonRad * kLon) / 8.0;
-  bounds_.radius = (std::sqrt(r2) + margin) * (1.0 + 1e-12) + 1e-6;
-
-  // The boxes: the samples' extent along east, north and up at a middle longitude and the middle
-  // latitude (an orthonormal frame built from the angles, defined at the poles too), grown by the
-  // same margin (a projection on a unit axis is 1-Lipschitz). The whole node's, and one per half
-  // of the columns (each patch point lies in a cell of one half, within the margin of the hull of
-  // that cell's samples): for a wide polar wedge, whose arc a single box fits loosely.
-  const double sLat = std::sin(midLat * kDegToRad), cLat = std::cos(midLat * kDegToRad);
-  auto makeBox = [&](double lonDeg, int firstCol, int lastCol) {
-    const double sLon = std::sin(lonDeg * kDegToRad), cLon = std::cos(lonDeg * kDegToRad);
-    const std::array<glm::dvec3, 3> axes{glm::dvec3(-sLon, cLon, 0.0),
-                                         glm::dvec3(-sLat * cLon, -sLat * sLon, cLat),
-                                         glm::dvec3(cLat * cLon, cLat * sLon, sLat)};
-    glm::dvec3 minA(std::numeric_limits<double>::infinity());
-    glm::dvec3 maxA(-std::numeric_limits<double>::infinity());
-    for (std::size_t i = 0; i < samples.size(); ++i) {
-      const int col = static_cast<int>(i / 2) % kBoundSamples; // (row, col, height) order
-      if (col < firstCol || col > lastCol) continue;
-      const glm::dvec3 d = samples[i] - centre_;
-      const glm::dvec3 t(glm::dot(d, axes[0]), glm::dot(d, axes[1]), glm::dot(d, axes[2]));
-      minA = glm::min(minA, t);
-      maxA = glm::max(maxA, t);
-    }
-    OrientedBox box;
-    box.axes = axes;
-    const glm::dvec3 mid = 0.5 * (minA + maxA);
-    box.centre = centre_ + mid.x * axes[0] + mid.y * axes[1] + mid.z * axes[2];
-    const glm::dvec3 half = 0.5 * (maxA - minA) + glm::dvec3(margin);
-    box.halfExtents = half * (1.0 + 1e-12) + glm::dvec3(1e-6);
-    return box;
-  };
+  const BoundSamples samples = sampleBounds(geodesy, s, minHeightM, maxHeightM);
+  const double margin = interpolationMargin(geodesy, s, minHeightM, maxHeightM);
+  bounds_ = sphereAround(samples, margin);
   constexpr int middleCol = kBoundSamples / 2;
-  box_ = makeBox(midLon, 0, kBoundSamples - 1);
-  halfBoxes_[0] = makeBox(0.5 * (s.west + midLon), 0, middleCol);
-  halfBoxes_[1] = makeBox(0.5 * (midLon + s.east), middleCol, kBoundSamples - 1);
+  box_ = boxAround(samples, centre_, midLat, midLon, 0, kBoundSamples - 1, margin);
+  halfBoxes_[0] =
+      boxAround(samples, centre_, midLat, 0.5 * (s.west + midLon), 0, middleCol, margin);
+  halfBoxes_[1] = boxAround(
+      samples, centre_, midLat, 0.5 * (midLon + s.east), middleCol, kBoundSamples - 1, margin);
 }
 
 PatchMesh buildPatchMesh(const Geodesy& geodesy, const Sector& sector, int n) {

@@ -101,77 +101,93 @@ void TextureStreamer::want(const Node& node, double score, double nowS) {
   }
 }
 
-void TextureStreamer::update(Quadtree& tree,
-                             const Camera& camera,
-                             double nowS,
-                             const TextureLru* resident) {
-  ++frame_;
-  drain(nowS);
-  stats_.candidates = 0;
+namespace {
 
-  auto refreshState = [&](Node& n) {
-    if (resident != nullptr && resident->resident(n.key())) {
-      n.texture = TextureState::Finished;
-      return;
-    }
-    if (n.texture == TextureState::Uploading) return; // the owner's step
-    bool allAbsent = true, anyInFlight = false, allReceived = true;
-    for (std::int64_t i = 0; i < textureTileCount(n.key()); ++i) {
-      const TileFetch f = state(textureTile(n.key(), i));
-      allAbsent = allAbsent && f == TileFetch::Absent;
-      anyInFlight = anyInFlight || f == TileFetch::InFlight;
-      allReceived = allReceived && (f == TileFetch::Received || f == TileFetch::Absent);
-    }
-    n.texture = allAbsent     ? TextureState::Absent
-                : anyInFlight ? TextureState::CheckingCache
-                : allReceived ? TextureState::Decoding
-                              : TextureState::NoTexture;
-  };
-  auto needs = [](const Node& n) {
-    return n.texture == TextureState::NoTexture || n.texture == TextureState::CheckingCache ||
-           n.texture == TextureState::Fetching;
-  };
+/** Whether the node shows less than its own texture and may be asked for one. */
+bool needsTexture(const Node& n) noexcept {
+  return n.texture == TextureState::NoTexture || n.texture == TextureState::CheckingCache ||
+         n.texture == TextureState::Fetching;
+}
 
+/** The level of the coarsest texture the node shows now (-1: the global one). */
+int shownLevel(const Node& n) {
+  const TexturePlan plan = planTexture(n);
+  int shown = n.level();
+  for (int i = 0; i < plan.partCount; ++i) {
+    const TexturePart& p = plan.parts[static_cast<std::size_t>(i)];
+    const int level = p.source == TextureSource::Global ? -1 : p.texture->level();
+    shown = std::min(shown, level);
+  }
+  return shown;
+}
+
+} // namespace
+
+void TextureStreamer::refreshState(Node& n, const TextureLru* resident) const {
+  if (resident != nullptr && resident->resident(n.key())) {
+    n.texture = TextureState::Finished;
+    return;
+  }
+  if (n.texture == TextureState::Uploading) return; // the owner's step
+  bool allAbsent = true, anyInFlight = false, allReceived = true;
+  for (std::int64_t i = 0; i < textureTileCount(n.key()); ++i) {
+    const TileFetch f = state(textureTile(n.key(), i));
+    allAbsent = allAbsent && f == TileFetch::Absent;
+    anyInFlight = anyInFlight || f == TileFetch::InFlight;
+    allReceived = allReceived && (f == TileFetch::Received || f == TileFetch::Absent);
+  }
+  n.texture = allAbsent     ? TextureState::Absent
+              : anyInFlight ? TextureState::CheckingCache
+              : allReceived ? TextureState::Decoding
+                            : TextureState::NoTexture;
+}
+
+void TextureStreamer::wantCandidates(Quadtree& tree,
+                                     const Camera& camera,
+                                     double nowS,
+                                     const TextureLru* resident) {
   for (const auto& root : tree.roots()) {
     if (!root) continue;
-    refreshState(*root);
-    if (needs(*root)) {
+    refreshState(*root, resident);
+    if (needsTexture(*root)) {
       ++stats_.candidates;
       want(*root, kRootBoost, nowS);
     }
   }
   for (Node* n : tree.drawList()) {
     if (n->level() == 0) continue; // done above
-    refreshState(*n);
+    refreshState(*n, resident);
     if (n->texture == TextureState::Absent) {
-      // Nothing here (past a regional dataset's edge, below a partial dataset's deepest level):
-      // the node shows its nearest ancestor that has a texture, which the tree may have split
-      // past without ever asking for it. Ask for the nearest one not known to be absent.
-      for (Node* a = n->parent(); a != nullptr && a->level() > 0; a = a->parent()) {
-        refreshState(*a);
-        if (a->texture == TextureState::Absent) continue;
-        if (needs(*a)) {
-          ++stats_.candidates;
-          want(*a, nodeScreenArea(camera, n->geometry()), nowS);
-        }
-        break;
-      }
+      wantAncestorOf(*n, camera, nowS, resident);
       continue;
     }
-    if (!needs(*n)) continue;
+    if (!needsTexture(*n)) continue;
     ++stats_.candidates;
-    const TexturePlan plan = planTexture(*n);
-    int shown = n->level();
-    for (int i = 0; i < plan.partCount; ++i) {
-      const TexturePart& p = plan.parts[static_cast<std::size_t>(i)];
-      const int level = p.source == TextureSource::Global ? -1 : p.texture->level();
-      shown = std::min(shown, level);
-    }
+    const int shown = shownLevel(*n);
     const double area = nodeScreenArea(camera, n->geometry());
     want(*n, area * (1.0 + static_cast<double>(n->level() - shown)), nowS);
   }
+}
 
-  // Cancel what nobody wants any more; re-score what stays; collect what may be asked for.
+// Nothing here (past a regional dataset's edge, below a partial dataset's deepest level): the
+// node shows its nearest ancestor that has a texture, which the tree may have split past without
+// ever asking for it. Ask for the nearest one not known to be absent.
+void TextureStreamer::wantAncestorOf(const Node& n,
+                                     const Camera& camera,
+                                     double nowS,
+                                     const TextureLru* resident) {
+  for (Node* a = n.parent(); a != nullptr && a->level() > 0; a = a->parent()) {
+    refreshState(*a, resident);
+    if (a->texture == TextureState::Absent) continue;
+    if (needsTexture(*a)) {
+      ++stats_.candidates;
+      want(*a, nodeScreenArea(camera, n.geometry()), nowS);
+    }
+    break;
+  }
+}
+
+void TextureStreamer::settleInFlight() {
   scratch_.clear();
   for (auto& [key, e] : tiles_) {
     if (e.state == TileFetch::InFlight) {
@@ -191,6 +207,9 @@ void TextureStreamer::update(Quadtree& tree,
       scratch_.emplace_back(e.score, key);
     }
   }
+}
+
+void TextureStreamer::requestBest() {
   if (stats_.inFlight >= params_.maxInFlight || scratch_.empty()) return;
   const std::size_t room = params_.maxInFlight - stats_.inFlight;
   const std::size_t n = std::min(room, scratch_.size());
@@ -199,25 +218,40 @@ void TextureStreamer::update(Quadtree& tree,
   };
   std::partial_sort(
       scratch_.begin(), scratch_.begin() + static_cast<std::ptrdiff_t>(n), scratch_.end(), byScore);
-  for (std::size_t i = 0; i < n; ++i) {
-    const TileKey key = scratch_[i].second;
-    Entry& e = tiles_[key];
-    const std::uint64_t token = nextToken_++;
-    e.state = TileFetch::InFlight;
-    e.token = token;
-    e.sentScore = e.score;
-    byToken_.emplace(token, key);
-    ++stats_.inFlight;
-    ++stats_.requested;
-    std::weak_ptr<Inbox> weak = inbox_;
-    e.id =
-        source_.request({params_.layer, params_.time, key}, e.score, [weak, token](TileResult&& r) {
-          if (auto inbox = weak.lock()) {
-            std::lock_guard lock(inbox->mutex);
-            inbox->done.emplace_back(token, std::move(r));
-          }
-        });
-  }
+  for (std::size_t i = 0; i < n; ++i)
+    request(scratch_[i].second);
+}
+
+void TextureStreamer::request(const TileKey& key) {
+  Entry& e = tiles_[key];
+  const std::uint64_t token = nextToken_++;
+  e.state = TileFetch::InFlight;
+  e.token = token;
+  e.sentScore = e.score;
+  byToken_.emplace(token, key);
+  ++stats_.inFlight;
+  ++stats_.requested;
+  std::weak_ptr<Inbox> weak = inbox_;
+  e.id =
+      source_.request({params_.layer, params_.time, key}, e.score, [weak, token](TileResult&& r) {
+        if (auto inbox = weak.lock()) {
+          std::lock_guard lock(inbox->mutex);
+          inbox->done.emplace_back(token, std::move(r));
+        }
+      });
+}
+
+void TextureStreamer::update(Quadtree& tree,
+                             const Camera& camera,
+                             double nowS,
+                             const TextureLru* resident) {
+  ++frame_;
+  drain(nowS);
+  stats_.candidates = 0;
+  wantCandidates(tree, camera, nowS, resident);
+  // Cancel what nobody wants any more; re-score what stays; collect what may be asked for.
+  settleInFlight();
+  requestBest();
 }
 
 } // namespace tellus::planet

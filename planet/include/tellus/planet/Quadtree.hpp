@@ -313,6 +313,14 @@ private:
       if (c) forEachIn(*c, f);
   }
   void visit(Node& node, bool insideFrustum, const Camera& camera);
+  /** Back face, frustum (skipped while insideFrustum, which it updates) and horizon, in that
+   * order; false (and the culling counted) when one of them culls the node. */
+  bool passesCulling(const Node& node, bool& insideFrustum, const Camera& camera);
+  /** Whether a visible node is to be refined: its LOD test, or a widened row's half edges. */
+  bool refines(const Node& node, const LodResult& lod, const Camera& camera) const;
+  /** Whether to visit the node's children instead of drawing it: made (narrower where the LOD
+   * test asks for it) within maxSplitsPerFrame. */
+  bool descends(Node& node, const LodResult& lod, bool refine);
   void linkNeighbours(Node& node) noexcept;
   void relinkAround(const Node& node) noexcept;
   void relinkBorderingIn(Node& subtree, const Node& around, Direction side) noexcept;

@@ -103,7 +103,21 @@ private:
   };
   struct Inbox;
   void drain(double nowS);
+  /** The texture state of a node from the resident set and its tiles (see update()). */
+  void refreshState(Node& node, const TextureLru* resident) const;
+  /** Scores the roots and the drawn nodes that need a texture (or an ancestor's) and wants their
+   * tiles. */
+  void
+  wantCandidates(Quadtree& tree, const Camera& camera, double nowS, const TextureLru* resident);
+  void
+  wantAncestorOf(const Node& node, const Camera& camera, double nowS, const TextureLru* resident);
   void want(const Node& node, double score, double nowS);
+  /** Cancels the requests nobody wants any more, re-scores the others, and collects into
+   * scratch_ the tiles wanted and not asked for. */
+  void settleInFlight();
+  /** Asks for the best-scored of scratch_ while there is room in flight. */
+  void requestBest();
+  void request(const TileKey& key);
 
   ITileSource& source_;
   StreamParams params_;

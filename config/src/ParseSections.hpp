@@ -1,0 +1,25 @@
+#pragma once
+// Private to the config module: the readers of the configuration's sections, one file each
+// (ParseServer.cpp, ParseRenderer.cpp, ParseUpstreams.cpp, ParseLayers.cpp), called by
+// Parse.cpp's build() in the document's order. Each fails through Reader::fail (YamlReader.hpp).
+
+#include "YamlReader.hpp"
+
+#include <string>
+
+namespace tellus::detail::yaml {
+
+/** The server section (listen, limits, ...) into s. */
+void readServer(Reader& r, const Map& root, ServerSettings& s);
+
+/** The renderer section (LOD, terrain, layers, dome, ...) into g. */
+void readRenderer(Reader& r, const Map& root, RendererSettings& g);
+
+/** One entry of upstreams, at path; a local upstream's path resolved against dataDir. */
+UpstreamConfig
+readUpstream(Reader& r, const YAML::Node& node, std::string path, const fs::path& dataDir);
+
+/** One entry of layers, at path. */
+LayerConfig readLayer(Reader& r, const YAML::Node& node, std::string path);
+
+} // namespace tellus::detail::yaml
