@@ -6,8 +6,8 @@
 // bench/run.sh.
 
 #include "../proxy/src/codec/Codecs.hpp"
-#include "../proxy/src/tiles/JpegCrop.hpp"
 
+#include <tellus/codec/JpegSplit.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
 
 #include <benchmark/benchmark.h>
@@ -75,7 +75,7 @@ void BM_MetaTileSplitDct(benchmark::State& state) {
   const auto& f = fixture();
   std::size_t bytes = 0;
   for (auto _ : state) {
-    auto tiles = codecs::splitJpegDct(f.meta, kCols, kRows, kTile, kTile);
+    auto tiles = codec::splitJpegDct(f.meta, kCols, kRows, kTile, kTile);
     benchmark::DoNotOptimize(tiles->data());
     bytes = 0;
     for (const auto& t : *tiles)
@@ -91,7 +91,7 @@ void BM_MetaTileSplitDctOptimized(benchmark::State& state) {
   const auto& f = fixture();
   std::size_t bytes = 0;
   for (auto _ : state) {
-    auto tiles = codecs::splitJpegDct(f.meta, kCols, kRows, kTile, kTile, true);
+    auto tiles = codec::splitJpegDct(f.meta, kCols, kRows, kTile, kTile, true);
     bytes = 0;
     for (const auto& t : *tiles)
       bytes += t.size();

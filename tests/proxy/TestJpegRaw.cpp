@@ -1,13 +1,13 @@
-// The composer's YCbCr path (proxy/src/compose/JpegRaw.hpp and Compose's planes): region decodes
+// The composer's YCbCr path (tellus/codec/JpegYcc.hpp and Compose's planes): region decodes
 // against whole decodes, the chroma planes' geometry, and JPEG maps made on Y, Cb and Cr planes
 // against the same maps made on the RGB path, on tiles cut from the bundled Blue Marble and encoded
 // as the seeder encodes them (quality 90, 4:2:0, restart markers), and as an upstream may (no
 // markers).
 
-#include "../../proxy/src/compose/JpegRaw.hpp"
-#include "../../proxy/src/tiles/JpegCrop.hpp"
 #include "../support/JpegSampling.hpp"
 
+#include <tellus/codec/JpegSplit.hpp>
+#include <tellus/codec/JpegYcc.hpp>
 #include <tellus/proxy/Compose.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
 
@@ -117,10 +117,10 @@ struct Planes {
       : y(kTile * kTile, fill), cb(kTile * kTile / 4, fill), cr(kTile * kTile / 4, fill) {}
 };
 
-codecs::YccDecode
+codec::YccDecode
 decode(const std::vector<std::byte>& jpeg, const std::array<std::int32_t, 4>* region, Planes& p) {
   std::string message;
-  return codecs::decodeJpegYcc(
+  return codec::decodeJpegYcc(
       jpeg, kTile, kTile, region, p.y.data(), p.cb.data(), p.cr.data(), message);
 }
 
@@ -157,11 +157,11 @@ DecodedImage yccMap(const Sector& box, int width, int height, std::size_t* tileC
   for (const auto& k : keys) {
     auto& p = planes[{k.key.row, k.key.col}];
     p = std::make_unique<Planes>();
-    EXPECT_EQ(decode(t.at(k.key), &k.region, *p), codecs::YccDecode::Ok);
+    EXPECT_EQ(decode(t.at(k.key), &k.region, *p), codec::YccDecode::Ok);
   }
   const auto chroma = *chromaLayout(t.g, box, width, height);
   std::vector<std::uint8_t> out[3];
-  const auto white = codecs::rgbToYcc(255, 255, 255);
+  const auto white = codec::rgbToYcc(255, 255, 255);
   out[0].assign(static_cast<std::size_t>(width * height), white[0]);
   out[1].assign(static_cast<std::size_t>(chroma.width * chroma.height), white[1]);
   out[2].assign(static_cast<std::size_t>(chroma.width * chroma.height), white[2]);
@@ -192,7 +192,7 @@ DecodedImage yccMap(const Sector& box, int width, int height, std::size_t* tileC
     }
   }
   const auto jpeg =
-      codecs::encodeJpegYcc(width, height, out[0].data(), out[1].data(), out[2].data());
+      codec::encodeJpegYcc(width, height, out[0].data(), out[1].data(), out[2].data());
   EXPECT_TRUE(jpeg.has_value());
   return *decodeImagery(*jpeg, "image/jpeg", width, height);
 }
@@ -217,7 +217,7 @@ TEST(JpegRaw, RegionDecodesMatchTheWholeDecode) {
   forBothTileKinds([] {
     const auto& jpeg = tiles().at(TileKey{2, 12, 21}); // Europe, level 2
     Planes whole;
-    ASSERT_EQ(decode(jpeg, nullptr, whole), codecs::YccDecode::Ok);
+    ASSERT_EQ(decode(jpeg, nullptr, whole), codec::YccDecode::Ok);
     const std::array<std::int32_t, 4> regions[] = {
         {0, 0, 512, 512},
         {0, 0, 1, 1},
@@ -237,7 +237,7 @@ TEST(JpegRaw, RegionDecodesMatchTheWholeDecode) {
     };
     for (const auto& r : regions) {
       Planes part(0x55);
-      ASSERT_EQ(decode(jpeg, &r, part), codecs::YccDecode::Ok);
+      ASSERT_EQ(decode(jpeg, &r, part), codec::YccDecode::Ok);
       int bad = 0;
       for (int y = std::max(r[1], 0); y < std::min(r[3], kTile); ++y)
         for (int x = std::max(r[0], 0); x < std::min(r[2], kTile); ++x) {
@@ -256,7 +256,7 @@ TEST(JpegRaw, RegionDecodesMatchTheWholeDecode) {
       // Tiles with restart markers: decoded from the segments around the region unless it needs
       // every segment from the top; without markers, never.
       const bool fromTop = r[1] < 16 && r[0] < 64 && r[2] > kTile - 64;
-      EXPECT_EQ(codecs::decodesFromSegments(jpeg, kTile, kTile, r), tiles().restart && !fromTop)
+      EXPECT_EQ(codec::decodesFromSegments(jpeg, kTile, kTile, r), tiles().restart && !fromTop)
           << r[0] << "," << r[1] << " - " << r[2] << "," << r[3];
     }
     // The planes are the RGB decode's colours (JFIF) at the chroma's resolution.
@@ -264,7 +264,7 @@ TEST(JpegRaw, RegionDecodesMatchTheWholeDecode) {
     ASSERT_TRUE(decodeImageryInto(jpeg, "image/jpeg", kTile, kTile, rgb, nullptr));
     double err = 0;
     for (std::size_t k = 0; k < whole.y.size(); ++k) {
-      const auto y = codecs::rgbToYcc(rgb[k * 3], rgb[k * 3 + 1], rgb[k * 3 + 2])[0];
+      const auto y = codec::rgbToYcc(rgb[k * 3], rgb[k * 3 + 1], rgb[k * 3 + 2])[0];
       err += std::abs(int{y} - int{whole.y[k]});
     }
     EXPECT_LT(err / static_cast<double>(whole.y.size()), 1.0);
@@ -280,14 +280,14 @@ TEST(JpegRaw, SegmentDecodesOfRandomRegionsMatchTheWholeDecode) {
   for (const TileKey& key : keys) {
     const auto& jpeg = tiles().at(key);
     Planes whole;
-    ASSERT_EQ(decode(jpeg, nullptr, whole), codecs::YccDecode::Ok);
+    ASSERT_EQ(decode(jpeg, nullptr, whole), codec::YccDecode::Ok);
     for (int k = 0; k < 40; ++k) {
       int x0 = at(rng), x1 = at(rng), y0 = at(rng), y1 = at(rng);
       if (x0 > x1) std::swap(x0, x1);
       if (y0 > y1) std::swap(y0, y1);
       const std::array<std::int32_t, 4> r{x0, y0, x1 + 1, y1 + 1};
       Planes part(0x55);
-      ASSERT_EQ(decode(jpeg, &r, part), codecs::YccDecode::Ok);
+      ASSERT_EQ(decode(jpeg, &r, part), codec::YccDecode::Ok);
       int bad = 0;
       for (int y = r[1]; y < r[3]; ++y)
         for (int x = r[0]; x < r[2]; ++x) {
@@ -313,15 +313,15 @@ TEST(JpegRaw, TilesCutFromAMetatileAreDecodedFromSegments) {
     std::memcpy(&meta[y * 2 * row + row], &right[y * row], row);
   }
   const auto jpeg = *encodeImage("image/jpeg", 2 * kTile, kTile, 3, meta.data());
-  const auto cut = codecs::splitJpegDct(jpeg, 2, 1, kTile, kTile, false);
+  const auto cut = codec::splitJpegDct(jpeg, 2, 1, kTile, kTile, false);
   ASSERT_TRUE(cut.has_value());
   ASSERT_EQ(cut->size(), 2u);
   const std::array<std::int32_t, 4> r{300, 200, 420, 260};
   for (const auto& tile : *cut) {
-    EXPECT_TRUE(codecs::decodesFromSegments(tile, kTile, kTile, r));
+    EXPECT_TRUE(codec::decodesFromSegments(tile, kTile, kTile, r));
     Planes whole, part(0x55);
-    ASSERT_EQ(decode(tile, nullptr, whole), codecs::YccDecode::Ok);
-    ASSERT_EQ(decode(tile, &r, part), codecs::YccDecode::Ok);
+    ASSERT_EQ(decode(tile, nullptr, whole), codec::YccDecode::Ok);
+    ASSERT_EQ(decode(tile, &r, part), codec::YccDecode::Ok);
     int bad = 0;
     for (int y = r[1]; y < r[3]; ++y)
       for (int x = r[0]; x < r[2]; ++x)
@@ -336,12 +336,12 @@ TEST(JpegRaw, DamagedTilesWithRestartMarkersAreDecodedAsAWhole) {
   // (the damaged part grey, as on the RGB path), never spliced from the wrong segments.
   const auto& jpeg = tiles().at(TileKey{2, 12, 21});
   const std::array<std::int32_t, 4> lower{100, 400, 300, 500};
-  ASSERT_TRUE(codecs::decodesFromSegments(jpeg, kTile, kTile, lower));
+  ASSERT_TRUE(codec::decodesFromSegments(jpeg, kTile, kTile, lower));
   const std::vector<std::byte> truncated(
       jpeg.begin(), jpeg.begin() + static_cast<std::ptrdiff_t>(jpeg.size() / 2));
-  EXPECT_FALSE(codecs::decodesFromSegments(truncated, kTile, kTile, lower));
+  EXPECT_FALSE(codec::decodesFromSegments(truncated, kTile, kTile, lower));
   Planes p;
-  EXPECT_EQ(decode(truncated, &lower, p), codecs::YccDecode::Ok);
+  EXPECT_EQ(decode(truncated, &lower, p), codec::YccDecode::Ok);
   // Two restart markers swapped: out of order.
   std::vector<std::byte> swapped = jpeg;
   std::vector<std::size_t> markers;
@@ -350,35 +350,35 @@ TEST(JpegRaw, DamagedTilesWithRestartMarkersAreDecodedAsAWhole) {
       markers.push_back(i + 1);
   ASSERT_GE(markers.size(), 100u); // 8 x 32 segments of a 512-pixel tile
   std::swap(swapped[markers[10]], swapped[markers[11]]);
-  EXPECT_FALSE(codecs::decodesFromSegments(swapped, kTile, kTile, lower));
-  EXPECT_EQ(decode(swapped, &lower, p), codecs::YccDecode::Ok);
+  EXPECT_FALSE(codec::decodesFromSegments(swapped, kTile, kTile, lower));
+  EXPECT_EQ(decode(swapped, &lower, p), codec::YccDecode::Ok);
   // Not the tile's size.
-  EXPECT_FALSE(codecs::decodesFromSegments(jpeg, 256, 256, lower));
+  EXPECT_FALSE(codec::decodesFromSegments(jpeg, 256, 256, lower));
 }
 
 TEST(JpegRaw, OtherSamplingsAndShapesAreLeftToTheRgbPath) {
   const auto rgb = tileRgb(tiles().g, TileKey{1, 5, 10});
   Planes p;
   EXPECT_EQ(decode(test::jpegWithSampling(rgb, kTile, kTile, 1, 1), nullptr, p),
-            codecs::YccDecode::NotYcc420); // 4:4:4
+            codec::YccDecode::NotYcc420); // 4:4:4
   EXPECT_EQ(decode(test::jpegWithSampling(rgb, kTile, kTile, 2, 1), nullptr, p),
-            codecs::YccDecode::NotYcc420); // 4:2:2
+            codec::YccDecode::NotYcc420); // 4:2:2
   EXPECT_EQ(decode(test::jpegWithSampling(rgb, kTile, kTile, 2, 2), nullptr, p),
-            codecs::YccDecode::Ok);
+            codec::YccDecode::Ok);
   std::vector<std::uint8_t> grey(static_cast<std::size_t>(kTile * kTile), 128);
   EXPECT_EQ(decode(*encodeImage("image/jpeg", kTile, kTile, 1, grey.data()), nullptr, p),
-            codecs::YccDecode::NotYcc420);
+            codec::YccDecode::NotYcc420);
   const auto& jpeg = tiles().at(TileKey{1, 5, 10});
   std::string message;
   EXPECT_EQ(
-      codecs::decodeJpegYcc(jpeg, 256, 256, nullptr, p.y.data(), p.cb.data(), p.cr.data(), message),
-      codecs::YccDecode::NotYcc420); // not the tile size
+      codec::decodeJpegYcc(jpeg, 256, 256, nullptr, p.y.data(), p.cb.data(), p.cr.data(), message),
+      codec::YccDecode::NotYcc420); // not the tile size
   const std::vector<std::byte> garbage(jpeg.begin(), jpeg.begin() + 40);
-  EXPECT_EQ(decode(garbage, nullptr, p), codecs::YccDecode::Failed);
+  EXPECT_EQ(decode(garbage, nullptr, p), codec::YccDecode::Failed);
   // A truncated stream decodes (with grey blocks), as on the RGB path.
   const std::vector<std::byte> truncated(
       jpeg.begin(), jpeg.begin() + static_cast<std::ptrdiff_t>(jpeg.size() / 2));
-  EXPECT_EQ(decode(truncated, nullptr, p), codecs::YccDecode::Ok);
+  EXPECT_EQ(decode(truncated, nullptr, p), codec::YccDecode::Ok);
 }
 
 TEST(JpegRaw, AlignedBoxGivesTheTilePlanesExactly) {
@@ -393,7 +393,7 @@ TEST(JpegRaw, AlignedBoxGivesTheTilePlanesExactly) {
       const TileKey k{1, key.row + dr, key.col + dc};
       auto& p = planes[k];
       p = std::make_unique<Planes>();
-      ASSERT_EQ(decode(t.at(k), nullptr, *p), codecs::YccDecode::Ok);
+      ASSERT_EQ(decode(t.at(k), nullptr, *p), codec::YccDecode::Ok);
     }
   const Sector box = t.g.sectorOf(key);
   const auto chroma = *chromaLayout(t.g, box, kTile, kTile);

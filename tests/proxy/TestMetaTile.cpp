@@ -1,9 +1,8 @@
-// Metatiles: the DCT-domain split of a JPEG (JpegCrop), the block arithmetic (MetaTile), and
-// seeding through the tile service with one GetMap per metatile against a fake WMS that draws
-// georeferenced pixels (so every tile can be checked against where it is on the globe).
+// Metatiles: the DCT-domain split of a JPEG (tellus/codec/JpegSplit.hpp), the block arithmetic
+// (MetaTile), and seeding through the tile service with one GetMap per metatile against a fake WMS
+// that draws georeferenced pixels (so every tile can be checked against where it is on the globe).
 
 #include "../../proxy/src/codec/Codecs.hpp"
-#include "../../proxy/src/tiles/JpegCrop.hpp"
 #include "../../proxy/src/tiles/MetaTile.hpp"
 #include "../support/CacheFixtures.hpp"
 #include "../support/FakeUpstream.hpp"
@@ -11,6 +10,7 @@
 #include "../support/TempDir.hpp"
 
 #include <tellus/cache/TileCache.hpp>
+#include <tellus/codec/JpegSplit.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
@@ -122,7 +122,7 @@ TEST(JpegCrop, TilesHoldExactlyTheWholeImagesBlocks) {
     const int cols = 3, rows = 2, tw = 256, th = 256;
     const auto px = testPixels(cols * tw, rows * th, channels);
     const auto whole = encodeTestJpeg(cols * tw, rows * th, channels, px.data());
-    auto tiles = codecs::splitJpegDct(whole, cols, rows, tw, th);
+    auto tiles = codec::splitJpegDct(whole, cols, rows, tw, th);
     ASSERT_TRUE(tiles) << tiles.error().message;
     ASSERT_EQ(tiles->size(), 6u);
     int W = 0, H = 0, C = 0;
@@ -163,9 +163,9 @@ TEST(JpegCrop, MisalignedTilesAreDecodedOnceAndEncoded) {
   // 200 px tiles do not fall on 4:2:0's 16-px iMCUs.
   const auto px = testPixels(400, 200, 3);
   const auto whole = encodeTestJpeg(400, 200, 3, px.data());
-  auto dct = codecs::splitJpegDct(whole, 2, 1, 200, 200);
+  auto dct = codec::splitJpegDct(whole, 2, 1, 200, 200);
   ASSERT_FALSE(dct);
-  EXPECT_EQ(dct.error().code, codecs::JpegSplitErrc::NotAligned);
+  EXPECT_EQ(dct.error().code, codec::JpegSplitErrc::NotAligned);
   auto split = splitMetaTile(whole, ImageKind::Jpeg, 2, 1, 200, 200);
   ASSERT_TRUE(split) << split.error();
   EXPECT_EQ(split->how, MetaSplit::Decoded);
@@ -193,27 +193,27 @@ TEST(JpegCrop, ADamagedOrWrongSizedJpegGivesNoTile) {
   const auto px = testPixels(512, 512, 3);
   const auto whole = encodeTestJpeg(512, 512, 3, px.data());
   // Wrong size: not 2x2 tiles of 256 x 128.
-  auto wrong = codecs::splitJpegDct(whole, 2, 2, 256, 128);
+  auto wrong = codec::splitJpegDct(whole, 2, 2, 256, 128);
   ASSERT_FALSE(wrong);
-  EXPECT_EQ(wrong.error().code, codecs::JpegSplitErrc::Invalid);
+  EXPECT_EQ(wrong.error().code, codec::JpegSplitErrc::Invalid);
   EXPECT_NE(wrong.error().message.find("512x512"), std::string::npos) << wrong.error().message;
   // Truncated: the second half is gone (an end marker appended, as a broken proxy might).
   auto truncated = std::vector<std::byte>(
       whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(whole.size() / 2));
   truncated.push_back(std::byte{0xFF});
   truncated.push_back(std::byte{0xD9});
-  auto t = codecs::splitJpegDct(truncated, 2, 2, 256, 256);
+  auto t = codec::splitJpegDct(truncated, 2, 2, 256, 256);
   ASSERT_FALSE(t);
-  EXPECT_EQ(t.error().code, codecs::JpegSplitErrc::Invalid) << t.error().message;
+  EXPECT_EQ(t.error().code, codec::JpegSplitErrc::Invalid) << t.error().message;
   // Garbage in the entropy-coded data (a marker-like byte pair in the middle).
   auto corrupt = whole;
   for (std::size_t i = corrupt.size() / 2; i < corrupt.size() / 2 + 64; i += 2) {
     corrupt[i] = std::byte{0xFF};
     corrupt[i + 1] = static_cast<std::byte>(0xD0 + i % 7);
   }
-  auto c = codecs::splitJpegDct(corrupt, 2, 2, 256, 256);
+  auto c = codec::splitJpegDct(corrupt, 2, 2, 256, 256);
   ASSERT_FALSE(c);
-  EXPECT_EQ(c.error().code, codecs::JpegSplitErrc::Invalid) << c.error().message;
+  EXPECT_EQ(c.error().code, codec::JpegSplitErrc::Invalid) << c.error().message;
   // And the split of a PNG is lossless.
   const auto png = *encodeImage("image/png", 512, 256, 3, testPixels(512, 256, 3).data());
   auto p = splitMetaTile(png, ImageKind::Png, 2, 1, 256, 256);

@@ -1,7 +1,7 @@
 #include "codec/Codecs.hpp"
 #include "codec/ImagingLoader.hpp"
-#include "codec/Quantize.hpp"
 
+#include <tellus/codec/Quantize.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
 
 #include <cstring>
@@ -122,7 +122,7 @@ std::expected<std::vector<std::byte>, std::string> blankMap(MapFormat format,
     std::memcpy(px.data(), drawn.bytes.data(), px.size());
   }
   if (format == MapFormat::Png8) {
-    const PalettedImage p = quantize(px.data(), 4, n);
+    const codec::PalettedImage p = codec::quantize(px.data(), 4, n);
     return codecs::encodePngPalette(width, height, p.palette, p.indices.data());
   }
   if (!alpha) { // RGB: no alpha channel in an opaque format

@@ -1,7 +1,8 @@
 #include "tiles/MetaTile.hpp"
 
 #include "codec/Codecs.hpp"
-#include "tiles/JpegCrop.hpp"
+
+#include <tellus/codec/JpegSplit.hpp>
 
 #include <algorithm>
 #include <cstring>
@@ -120,9 +121,9 @@ std::expected<SplitTiles, std::string> splitMetaTile(std::span<const std::byte> 
       static_cast<long>(cols) * tileWidth > 16384 || static_cast<long>(rows) * tileHeight > 16384)
     return std::unexpected(std::string("metatile size out of range"));
   if (kind == ImageKind::Jpeg) {
-    auto cut = codecs::splitJpegDct(body, cols, rows, tileWidth, tileHeight);
+    auto cut = codec::splitJpegDct(body, cols, rows, tileWidth, tileHeight);
     if (cut) return SplitTiles{std::move(*cut), MetaSplit::Dct};
-    if (cut.error().code == codecs::JpegSplitErrc::Invalid)
+    if (cut.error().code == codec::JpegSplitErrc::Invalid)
       return std::unexpected(cut.error().message);
     return splitDecoded(body, kind, cols, rows, tileWidth, tileHeight);
   }

@@ -1,10 +1,9 @@
-// The DCT-domain split of a JPEG into tiles (see JpegCrop.hpp). libjpeg reports errors by longjmp:
+// The DCT-domain split of a JPEG into tiles (see JpegSplit.hpp). libjpeg reports errors by longjmp:
 // splitRaw keeps no object with a destructor alive across its libjpeg calls; what it produces is
 // written into malloc()ed buffers that the caller owns (and frees, also after an error).
 
-#include "tiles/JpegCrop.hpp"
-
-#include "codec/Codecs.hpp"
+#include <tellus/codec/Jpeg.hpp>
+#include <tellus/codec/JpegSplit.hpp>
 
 #include <csetjmp>
 #include <cstdio> // jpeglib.h needs FILE
@@ -14,7 +13,7 @@
 // after jpeglib.h: the message codes
 #include <jerror.h>
 
-namespace tellus::codecs {
+namespace tellus::codec {
 
 namespace {
 
@@ -273,4 +272,4 @@ splitJpegDct(std::span<const std::byte> jpeg,
   return tiles;
 }
 
-} // namespace tellus::codecs
+} // namespace tellus::codec

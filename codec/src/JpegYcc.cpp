@@ -11,10 +11,10 @@
 // raw mode), and jpeg_read_raw_data hands out the coefficient controller's blocks of the cropped
 // columns. That relies on how libjpeg-turbo 2.1 (Debian 12) is built inside: the coefficient
 // controller is the same in both modes and reads its columns from first_iMCU_col/last_iMCU_col,
-// which jpeg_crop_scanline sets. TestJpegRaw checks region decodes against whole decodes, so a
+// which jpeg_crop_scanline sets. TestJpegYcc checks region decodes against whole decodes, so a
 // libjpeg-turbo that behaves otherwise fails the tests rather than making wrong maps.
 
-#include "compose/JpegRaw.hpp"
+#include <tellus/codec/JpegYcc.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -26,7 +26,7 @@
 #include <new>
 #include <optional>
 
-namespace tellus::codecs {
+namespace tellus::codec {
 
 namespace {
 
@@ -499,4 +499,4 @@ std::array<std::uint8_t, 3> rgbToYcc(std::uint8_t r, std::uint8_t g, std::uint8_
           clampRound(128.0 + 0.5 * r - 0.418687589 * g - 0.081312411 * b)};
 }
 
-} // namespace tellus::codecs
+} // namespace tellus::codec
