@@ -21,6 +21,7 @@
 #include <cstdio> // jpeglib.h needs FILE
 #include <jpeglib.h>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -119,5 +120,7 @@ private:
   jpeg_destination_mgr mgr_; // first: libjpeg hands out a pointer to it
   std::vector<std::byte>* out_;
 };
+// It may live inside a run's body (one per tile of a split): nothing for a longjmp to skip.
+static_assert(std::is_trivially_destructible_v<JpegVectorDestination>);
 
 } // namespace tellus::codec::detail
