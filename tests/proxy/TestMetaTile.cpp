@@ -2,7 +2,6 @@
 // (MetaTile), and seeding through the tile service with one GetMap per metatile against a fake WMS
 // that draws georeferenced pixels (so every tile can be checked against where it is on the globe).
 
-#include "../../proxy/src/codec/Codecs.hpp"
 #include "../../proxy/src/tiles/MetaTile.hpp"
 #include "../support/CacheFixtures.hpp"
 #include "../support/FakeUpstream.hpp"
@@ -10,6 +9,7 @@
 #include "../support/TempDir.hpp"
 
 #include <tellus/cache/TileCache.hpp>
+#include <tellus/codec/Jpeg.hpp>
 #include <tellus/codec/JpegSplit.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
@@ -99,7 +99,7 @@ bool decodeBlocks(const std::vector<std::byte>& bytes,
 
 /** Encodes grey or RGB pixels with libjpeg's defaults (4:2:0 for colour) at quality 90. */
 std::vector<std::byte> encodeTestJpeg(int w, int h, int channels, const std::uint8_t* px) {
-  auto e = codecs::encodeJpeg(w, h, channels, px);
+  auto e = codec::encodeJpeg(w, h, channels, px);
   EXPECT_TRUE(e) << (e ? "" : e.error());
   return e ? *e : std::vector<std::byte>{};
 }
@@ -130,7 +130,7 @@ TEST(JpegCrop, TilesHoldExactlyTheWholeImagesBlocks) {
     ASSERT_TRUE(decodeBlocks(whole, W, H, C, all));
     // The composer's decoder (fancy upsampling) too: the tile's interior is the whole's.
     std::vector<std::uint8_t> fancyAll;
-    ASSERT_TRUE(codecs::decodeJpegInto(whole, W, H, fancyAll, nullptr));
+    ASSERT_TRUE(codec::decodeJpegInto(whole, W, H, fancyAll, nullptr));
     for (int tr = 0; tr < rows; ++tr) {
       for (int tc = 0; tc < cols; ++tc) {
         const auto& tile = (*tiles)[sz(tr * cols + tc)];
@@ -147,7 +147,7 @@ TEST(JpegCrop, TilesHoldExactlyTheWholeImagesBlocks) {
                          all[(sz(tr * th + y) * sz(W) + sz(tc * tw)) * sz(c) + sz(x)];
         EXPECT_EQ(differing, 0u) << "tile " << tr << "," << tc;
         std::vector<std::uint8_t> fancy;
-        ASSERT_TRUE(codecs::decodeJpegInto(tile, tw, th, fancy, nullptr));
+        ASSERT_TRUE(codec::decodeJpegInto(tile, tw, th, fancy, nullptr));
         differing = 0;
         for (int y = 1; y + 1 < th; ++y)
           for (int x = 3; x < (tw - 1) * 3; ++x)
@@ -171,10 +171,10 @@ TEST(JpegCrop, MisalignedTilesAreDecodedOnceAndEncoded) {
   EXPECT_EQ(split->how, MetaSplit::Decoded);
   ASSERT_EQ(split->tiles.size(), 2u);
   std::vector<std::uint8_t> all;
-  ASSERT_TRUE(codecs::decodeJpegInto(whole, 400, 200, all, nullptr));
+  ASSERT_TRUE(codec::decodeJpegInto(whole, 400, 200, all, nullptr));
   for (int t = 0; t < 2; ++t) {
     std::vector<std::uint8_t> got;
-    ASSERT_TRUE(codecs::decodeJpegInto(split->tiles[sz(t)], 200, 200, got, nullptr));
+    ASSERT_TRUE(codec::decodeJpegInto(split->tiles[sz(t)], 200, 200, got, nullptr));
     std::vector<std::uint8_t> want;
     for (int y = 0; y < 200; ++y)
       want.insert(want.end(),

@@ -5,11 +5,11 @@
 // Cr planes when every tile is a 4:2:0 JPEG, else on RGB(A) or heights, with the RGB path taking
 // over when a tile turns out not to be); then the map encoded. See docs/ARCHITECTURE.md, "GetMap
 // for any box".
-#include "codec/Codecs.hpp"
 #include "compose/MapJob.hpp"
 
 #include <tellus/cache/TilePath.hpp>
 #include <tellus/codec/JpegYcc.hpp>
+#include <tellus/codec/Png.hpp>
 #include <tellus/codec/Quantize.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
 
@@ -490,7 +490,7 @@ private:
     }
     if (png8_) {
       const codec::PalettedImage p = codec::quantize(canvas_.data(), cc_, pixels_);
-      return codecs::encodePngPalette(r_.width, r_.height, p.palette, p.indices.data());
+      return codec::encodePngPalette(r_.width, r_.height, p.palette, p.indices.data());
     }
     return encodeImage(r_.format == MapFormat::Jpeg   ? "image/jpeg"
                        : r_.format == MapFormat::Tiff ? "image/tiff"
