@@ -1,12 +1,11 @@
-// The composer's YCbCr path (tellus/codec/JpegYcc.hpp and Compose's planes): region decodes
-// against whole decodes, the chroma planes' geometry, and JPEG maps made on Y, Cb and Cr planes
-// against the same maps made on the RGB path, on tiles cut from the bundled Blue Marble and encoded
-// as the seeder encodes them (quality 90, 4:2:0, restart markers), and as an upstream may (no
-// markers).
+// The composer's YCbCr path (Compose's planes over tellus/codec/JpegYcc.hpp): the chroma planes'
+// geometry, and JPEG maps made on Y, Cb and Cr planes against the same maps made on the RGB path,
+// on tiles cut from the bundled Blue Marble and encoded as the seeder encodes them (quality 90,
+// 4:2:0, restart markers), and as an upstream may (no markers). The planes' decoding itself is
+// tested with the codec (tests/codec/TestJpegYcc.cpp).
 
-#include "../support/JpegSampling.hpp"
+#include "../support/BlueMarbleTiles.hpp"
 
-#include <tellus/codec/JpegSplit.hpp>
 #include <tellus/codec/JpegYcc.hpp>
 #include <tellus/proxy/Compose.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
@@ -28,83 +27,34 @@ using namespace tellus;
 
 namespace {
 
-std::vector<std::byte> readFile(const std::filesystem::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  const std::vector<char> c{std::istreambuf_iterator<char>(f), {}};
-  std::vector<std::byte> out(c.size());
-  std::memcpy(out.data(), c.data(), c.size());
-  return out;
-}
-
-/** The bundled 2048 x 1024 Blue Marble, decoded once. */
-const DecodedImage& world() {
-  static const DecodedImage image = [] {
-    const auto bytes = readFile(std::filesystem::path(TELLUS_TEST_DATA_DIR) / "bmng_2048x1024.jpg");
-    auto d = decodeImagery(bytes, "image/jpeg", 2048, 1024);
-    EXPECT_TRUE(d.has_value());
-    return d ? *d : DecodedImage{};
-  }();
-  return image;
-}
-
-constexpr int kTile = 512;
+constexpr int kTile = test::kBlueMarbleTile;
 
 TileGrid grid() {
   return *TileGrid::create(GridSpec{Sector{}, 36.0, kTile, kTile, 3});
 }
 
-/** A tile of `g` sampled (nearest) from the Blue Marble, as RGB. */
-std::vector<std::uint8_t> tileRgb(const TileGrid& g, const TileKey& k) {
-  const DecodedImage& w = world();
-  std::vector<std::uint8_t> px(static_cast<std::size_t>(kTile * kTile * 3));
-  const Sector s = g.sectorOf(k);
-  for (int y = 0; y < kTile; ++y)
-    for (int x = 0; x < kTile; ++x) {
-      const double lon = s.west + (x + 0.5) * (s.east - s.west) / kTile;
-      const double lat = s.north - (y + 0.5) * (s.north - s.south) / kTile;
-      const int sx = std::clamp(static_cast<int>((lon + 180.0) / 360.0 * w.width), 0, w.width - 1);
-      const int sy = std::clamp(static_cast<int>((90.0 - lat) / 180.0 * w.height), 0, w.height - 1);
-      std::memcpy(&px[static_cast<std::size_t>((y * kTile + x) * 3)],
-                  &w.pixels[static_cast<std::size_t>((sy * w.width + sx) * 3)],
-                  3);
-    }
-  return px;
-}
-
-/** The JPEG tiles of a grid, made on first use: as tellus writes its tiles (`restart`: with
- * restart markers, decoded from the segments around a region) or without markers. */
+/** The Blue Marble's JPEG tiles (tests/support/BlueMarbleTiles.hpp) and the grid the composer
+ * reads them on. */
 struct JpegTiles {
-  bool restart = true;
+  test::BlueMarbleJpegTiles& jpegs;
   TileGrid g = grid();
-  std::map<std::tuple<int, std::int64_t, std::int64_t>, std::vector<std::byte>> jpegs;
-  const std::vector<std::byte>& at(const TileKey& k) {
-    auto& j = jpegs[{k.level, k.row, k.col}];
-    if (j.empty()) {
-      const auto px = tileRgb(g, k);
-      j = *encodeImage("image/jpeg", kTile, kTile, 3, px.data(), restart);
-    }
-    return j;
-  }
+  const std::vector<std::byte>& at(const TileKey& k) { return jpegs.at(k.level, k.row, k.col); }
 };
 
 /** The tiles of the current test: tellus's (restart markers) unless a test switches. */
 JpegTiles* current = nullptr;
 JpegTiles& tiles() {
-  static JpegTiles withMarkers;
+  static JpegTiles withMarkers{test::BlueMarbleJpegTiles::withMarkers()};
   return current ? *current : withMarkers;
 }
 JpegTiles& plainTiles() {
-  static JpegTiles plain = [] {
-    JpegTiles t;
-    t.restart = false;
-    return t;
-  }();
+  static JpegTiles plain{test::BlueMarbleJpegTiles::plain()};
   return plain;
 }
 /** Runs `f` on tellus's tiles and on tiles without restart markers. */
 template <typename F> void forBothTileKinds(F&& f) {
   for (JpegTiles* t : {&tiles(), &plainTiles()}) {
-    SCOPED_TRACE(t->restart ? "tiles with restart markers" : "tiles without restart markers");
+    SCOPED_TRACE(t->jpegs.restart ? "tiles with restart markers" : "tiles without restart markers");
     current = t;
     f();
   }
@@ -213,175 +163,7 @@ std::pair<double, int> compare(const DecodedImage& a, const DecodedImage& b) {
 
 } // namespace
 
-TEST(JpegRaw, RegionDecodesMatchTheWholeDecode) {
-  forBothTileKinds([] {
-    const auto& jpeg = tiles().at(TileKey{2, 12, 21}); // Europe, level 2
-    Planes whole;
-    ASSERT_EQ(decode(jpeg, nullptr, whole), codec::YccDecode::Ok);
-    const std::array<std::int32_t, 4> regions[] = {
-        {0, 0, 512, 512},
-        {0, 0, 1, 1},
-        {511, 511, 512, 512},
-        {17, 33, 18, 34},
-        {200, 0, 512, 512},
-        {0, 300, 512, 512},
-        {100, 100, 300, 300},
-        {0, 0, 100, 512},
-        {15, 15, 17, 17},
-        {496, 0, 512, 16},
-        {63, 63, 65, 65},     // across segment corners
-        {448, 496, 512, 512}, // the last segment
-        {0, 496, 512, 512},   // the last row, all of it
-        {130, 7, 131, 500},   // one column
-        {-5, -5, 600, 3},     // clamped to the tile
-    };
-    for (const auto& r : regions) {
-      Planes part(0x55);
-      ASSERT_EQ(decode(jpeg, &r, part), codec::YccDecode::Ok);
-      int bad = 0;
-      for (int y = std::max(r[1], 0); y < std::min(r[3], kTile); ++y)
-        for (int x = std::max(r[0], 0); x < std::min(r[2], kTile); ++x) {
-          const auto k = static_cast<std::size_t>(y * kTile + x);
-          const auto kc = static_cast<std::size_t>((y / 2) * (kTile / 2) + x / 2);
-          bad += part.y[k] != whole.y[k];
-          bad += part.cb[kc] != whole.cb[kc];
-          bad += part.cr[kc] != whole.cr[kc];
-        }
-      EXPECT_EQ(bad, 0) << r[0] << "," << r[1] << " - " << r[2] << "," << r[3];
-      // Below the region's last block row nothing is decoded.
-      const int below = (r[3] + 15) / 16 * 16;
-      if (below < kTile) {
-        EXPECT_EQ(part.y[static_cast<std::size_t>(below * kTile)], 0x55);
-      }
-      // Tiles with restart markers: decoded from the segments around the region unless it needs
-      // every segment from the top; without markers, never.
-      const bool fromTop = r[1] < 16 && r[0] < 64 && r[2] > kTile - 64;
-      EXPECT_EQ(codec::decodesFromSegments(jpeg, kTile, kTile, r), tiles().restart && !fromTop)
-          << r[0] << "," << r[1] << " - " << r[2] << "," << r[3];
-    }
-    // The planes are the RGB decode's colours (JFIF) at the chroma's resolution.
-    std::vector<std::uint8_t> rgb;
-    ASSERT_TRUE(decodeImageryInto(jpeg, "image/jpeg", kTile, kTile, rgb, nullptr));
-    double err = 0;
-    for (std::size_t k = 0; k < whole.y.size(); ++k) {
-      const auto y = codec::rgbToYcc(rgb[k * 3], rgb[k * 3 + 1], rgb[k * 3 + 2])[0];
-      err += std::abs(int{y} - int{whole.y[k]});
-    }
-    EXPECT_LT(err / static_cast<double>(whole.y.size()), 1.0);
-  });
-}
-
-TEST(JpegRaw, SegmentDecodesOfRandomRegionsMatchTheWholeDecode) {
-  // Random regions of tiles with restart markers: exactly the whole decode's samples (the same
-  // blocks), with the 64 x 16 segments' edges anywhere in the region.
-  std::mt19937 rng(11);
-  std::uniform_int_distribution<int> at(0, kTile - 1);
-  const TileKey keys[] = {{2, 12, 21}, {1, 6, 12}, {0, 2, 3}, {2, 0, 5}};
-  for (const TileKey& key : keys) {
-    const auto& jpeg = tiles().at(key);
-    Planes whole;
-    ASSERT_EQ(decode(jpeg, nullptr, whole), codec::YccDecode::Ok);
-    for (int k = 0; k < 40; ++k) {
-      int x0 = at(rng), x1 = at(rng), y0 = at(rng), y1 = at(rng);
-      if (x0 > x1) std::swap(x0, x1);
-      if (y0 > y1) std::swap(y0, y1);
-      const std::array<std::int32_t, 4> r{x0, y0, x1 + 1, y1 + 1};
-      Planes part(0x55);
-      ASSERT_EQ(decode(jpeg, &r, part), codec::YccDecode::Ok);
-      int bad = 0;
-      for (int y = r[1]; y < r[3]; ++y)
-        for (int x = r[0]; x < r[2]; ++x) {
-          const auto i = static_cast<std::size_t>(y * kTile + x);
-          const auto ic = static_cast<std::size_t>((y / 2) * (kTile / 2) + x / 2);
-          bad += part.y[i] != whole.y[i];
-          bad += part.cb[ic] != whole.cb[ic];
-          bad += part.cr[ic] != whole.cr[ic];
-        }
-      EXPECT_EQ(bad, 0) << r[0] << "," << r[1] << " - " << r[2] << "," << r[3];
-    }
-  }
-}
-
-TEST(JpegRaw, TilesCutFromAMetatileAreDecodedFromSegments) {
-  // The seeder's metatile split writes its tiles with restart markers too.
-  const auto left = tileRgb(tiles().g, TileKey{2, 12, 20});
-  const auto right = tileRgb(tiles().g, TileKey{2, 12, 21});
-  std::vector<std::uint8_t> meta(static_cast<std::size_t>(2 * kTile * kTile * 3));
-  for (std::size_t y = 0; y < kTile; ++y) {
-    const std::size_t row = kTile * 3;
-    std::memcpy(&meta[y * 2 * row], &left[y * row], row);
-    std::memcpy(&meta[y * 2 * row + row], &right[y * row], row);
-  }
-  const auto jpeg = *encodeImage("image/jpeg", 2 * kTile, kTile, 3, meta.data());
-  const auto cut = codec::splitJpegDct(jpeg, 2, 1, kTile, kTile, false);
-  ASSERT_TRUE(cut.has_value());
-  ASSERT_EQ(cut->size(), 2u);
-  const std::array<std::int32_t, 4> r{300, 200, 420, 260};
-  for (const auto& tile : *cut) {
-    EXPECT_TRUE(codec::decodesFromSegments(tile, kTile, kTile, r));
-    Planes whole, part(0x55);
-    ASSERT_EQ(decode(tile, nullptr, whole), codec::YccDecode::Ok);
-    ASSERT_EQ(decode(tile, &r, part), codec::YccDecode::Ok);
-    int bad = 0;
-    for (int y = r[1]; y < r[3]; ++y)
-      for (int x = r[0]; x < r[2]; ++x)
-        bad += part.y[static_cast<std::size_t>(y * kTile + x)] !=
-               whole.y[static_cast<std::size_t>(y * kTile + x)];
-    EXPECT_EQ(bad, 0);
-  }
-}
-
-TEST(JpegRaw, DamagedTilesWithRestartMarkersAreDecodedAsAWhole) {
-  // A stream whose markers are not all there (truncated) or not in order is decoded as a whole
-  // (the damaged part grey, as on the RGB path), never spliced from the wrong segments.
-  const auto& jpeg = tiles().at(TileKey{2, 12, 21});
-  const std::array<std::int32_t, 4> lower{100, 400, 300, 500};
-  ASSERT_TRUE(codec::decodesFromSegments(jpeg, kTile, kTile, lower));
-  const std::vector<std::byte> truncated(
-      jpeg.begin(), jpeg.begin() + static_cast<std::ptrdiff_t>(jpeg.size() / 2));
-  EXPECT_FALSE(codec::decodesFromSegments(truncated, kTile, kTile, lower));
-  Planes p;
-  EXPECT_EQ(decode(truncated, &lower, p), codec::YccDecode::Ok);
-  // Two restart markers swapped: out of order.
-  std::vector<std::byte> swapped = jpeg;
-  std::vector<std::size_t> markers;
-  for (std::size_t i = 0; i + 1 < swapped.size(); ++i)
-    if (swapped[i] == std::byte{0xFF} && (std::to_integer<int>(swapped[i + 1]) & 0xF8) == 0xD0)
-      markers.push_back(i + 1);
-  ASSERT_GE(markers.size(), 100u); // 8 x 32 segments of a 512-pixel tile
-  std::swap(swapped[markers[10]], swapped[markers[11]]);
-  EXPECT_FALSE(codec::decodesFromSegments(swapped, kTile, kTile, lower));
-  EXPECT_EQ(decode(swapped, &lower, p), codec::YccDecode::Ok);
-  // Not the tile's size.
-  EXPECT_FALSE(codec::decodesFromSegments(jpeg, 256, 256, lower));
-}
-
-TEST(JpegRaw, OtherSamplingsAndShapesAreLeftToTheRgbPath) {
-  const auto rgb = tileRgb(tiles().g, TileKey{1, 5, 10});
-  Planes p;
-  EXPECT_EQ(decode(test::jpegWithSampling(rgb, kTile, kTile, 1, 1), nullptr, p),
-            codec::YccDecode::NotYcc420); // 4:4:4
-  EXPECT_EQ(decode(test::jpegWithSampling(rgb, kTile, kTile, 2, 1), nullptr, p),
-            codec::YccDecode::NotYcc420); // 4:2:2
-  EXPECT_EQ(decode(test::jpegWithSampling(rgb, kTile, kTile, 2, 2), nullptr, p),
-            codec::YccDecode::Ok);
-  std::vector<std::uint8_t> grey(static_cast<std::size_t>(kTile * kTile), 128);
-  EXPECT_EQ(decode(*encodeImage("image/jpeg", kTile, kTile, 1, grey.data()), nullptr, p),
-            codec::YccDecode::NotYcc420);
-  const auto& jpeg = tiles().at(TileKey{1, 5, 10});
-  std::string message;
-  EXPECT_EQ(
-      codec::decodeJpegYcc(jpeg, 256, 256, nullptr, p.y.data(), p.cb.data(), p.cr.data(), message),
-      codec::YccDecode::NotYcc420); // not the tile size
-  const std::vector<std::byte> garbage(jpeg.begin(), jpeg.begin() + 40);
-  EXPECT_EQ(decode(garbage, nullptr, p), codec::YccDecode::Failed);
-  // A truncated stream decodes (with grey blocks), as on the RGB path.
-  const std::vector<std::byte> truncated(
-      jpeg.begin(), jpeg.begin() + static_cast<std::ptrdiff_t>(jpeg.size() / 2));
-  EXPECT_EQ(decode(truncated, nullptr, p), codec::YccDecode::Ok);
-}
-
-TEST(JpegRaw, AlignedBoxGivesTheTilePlanesExactly) {
+TEST(ComposeYcc, AlignedBoxGivesTheTilePlanesExactly) {
   // A map that is exactly one tile at its resolution: the luma and the chroma planes (centred
   // siting, half the tile size) are the tile's own, so the chroma geometry is JPEG's.
   JpegTiles& t = tiles();
@@ -421,7 +203,7 @@ TEST(JpegRaw, AlignedBoxGivesTheTilePlanesExactly) {
   }
 }
 
-TEST(JpegRaw, YccMapsMatchTheRgbPath) {
+TEST(ComposeYcc, YccMapsMatchTheRgbPath) {
   struct Case {
     Sector box;
     int width, height;
@@ -466,7 +248,7 @@ TEST(JpegRaw, YccMapsMatchTheRgbPath) {
   });
 }
 
-TEST(JpegRaw, ChromaTilesAreFetchedWhereTheLumaDoesNotReach) {
+TEST(ComposeYcc, ChromaTilesAreFetchedWhereTheLumaDoesNotReach) {
   // A chroma sample at the map's edge may reach one texel into a tile (or a part of it) that the
   // luma does not touch: composeTilesYcc asks for the union, so every chroma sample finds its
   // tiles. Over random boxes of random sizes, some need that.
