@@ -1,4 +1,4 @@
-#include "codec/ImagingLoader.hpp"
+#include "imaging/ImagingLoader.hpp"
 
 #include <tellus/codec/Jpeg.hpp>
 #include <tellus/codec/Png.hpp>
