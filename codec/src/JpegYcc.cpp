@@ -42,6 +42,53 @@ bool is420(const jpeg_decompress_struct& c) noexcept {
          c.comp_info[2].h_samp_factor == 1 && c.comp_info[2].v_samp_factor == 1;
 }
 
+/** The rows and columns of a region decode: whole 16 x 16 blocks from (x0, top), `width`
+ * columns, down to row y1 (the whole tile without a region). */
+struct Crop {
+  JDIMENSION x0 = 0, width = 0, top = 0, y1 = 0;
+};
+
+Crop cropOf(int width, int height, const std::array<std::int32_t, 4>* region) {
+  Crop c{0, static_cast<JDIMENSION>(width), 0, static_cast<JDIMENSION>(height)};
+  if (!region) return c;
+  const auto& r = *region;
+  const auto left = std::clamp(r[0], 0, width - 1) / 16 * 16;
+  const auto right = std::clamp(r[2], left + 1, width);
+  c.top = static_cast<JDIMENSION>(std::clamp(r[1], 0, height - 1) / 16 * 16);
+  c.y1 = static_cast<JDIMENSION>(std::clamp(r[3], static_cast<int>(c.top) + 1, height));
+  c.x0 = static_cast<JDIMENSION>(left);
+  c.width = static_cast<JDIMENSION>(right - left);
+  return c;
+}
+
+/** The raw-data rows of a started decompressor (cropped and skipped to `c`) into the planes, down
+ * to c.y1; runs inside decodeRaw's run. */
+void readRawRows(jpeg_decompress_struct& d,
+                 const Crop& c,
+                 std::uint8_t* y,
+                 std::uint8_t* cb,
+                 std::uint8_t* cr,
+                 std::size_t strideY,
+                 std::size_t strideC) {
+  JSAMPROW rowsY[16], rowsCb[8], rowsCr[8];
+  JSAMPARRAY planes[3] = {rowsY, rowsCb, rowsCr};
+  while (d.output_scanline < c.y1) {
+    const std::size_t s = d.output_scanline;
+    for (std::size_t i = 0; i < 16; ++i)
+      rowsY[i] = y + (s + i) * strideY + c.x0;
+    for (std::size_t i = 0; i < 8; ++i) {
+      rowsCb[i] = cb + (s / 2 + i) * strideC + c.x0 / 2;
+      rowsCr[i] = cr + (s / 2 + i) * strideC + c.x0 / 2;
+    }
+    if (jpeg_read_raw_data(&d, planes, 16) != 16) break;
+  }
+  if (d.output_scanline < d.output_height) {
+    jpeg_abort_decompress(&d);
+  } else {
+    jpeg_finish_decompress(&d);
+  }
+}
+
 /** `strideY` and `strideC`: the samples from one row of the luma or a chroma plane to the next. */
 YccDecode decodeRaw(const unsigned char* bytes,
                     std::size_t size,
@@ -72,49 +119,20 @@ YccDecode decodeRaw(const unsigned char* bytes,
   d->out_color_space = JCS_YCbCr;
   d->do_fancy_upsampling = FALSE; // no context rows: skipping whole iMCU rows is simple
   d->do_block_smoothing = FALSE;
-  JDIMENSION x0 = 0, cropWidth = static_cast<JDIMENSION>(width);
-  JDIMENSION top = 0, y1 = static_cast<JDIMENSION>(height);
-  if (region) {
-    const auto& r = *region;
-    const auto left = std::clamp(r[0], 0, width - 1) / 16 * 16;
-    const auto right = std::clamp(r[2], left + 1, width);
-    top = static_cast<JDIMENSION>(std::clamp(r[1], 0, height - 1) / 16 * 16);
-    y1 = static_cast<JDIMENSION>(std::clamp(r[3], static_cast<int>(top) + 1, height));
-    x0 = static_cast<JDIMENSION>(left);
-    cropWidth = static_cast<JDIMENSION>(right - left);
-  }
+  Crop c = cropOf(width, height, region);
   if (!err.run([&] {
         jpeg_start_decompress(d.get());
-        if (cropWidth < static_cast<JDIMENSION>(width))
-          jpeg_crop_scanline(d.get(), &x0, &cropWidth);
-        if (top > 0) jpeg_skip_scanlines(d.get(), top);
+        if (c.width < static_cast<JDIMENSION>(width)) jpeg_crop_scanline(d.get(), &c.x0, &c.width);
+        if (c.top > 0) jpeg_skip_scanlines(d.get(), c.top);
       })) {
     message = err.message();
     return YccDecode::Failed;
   }
-  if (d->output_scanline != top || x0 % 16 != 0) // not what this code expects of libjpeg
+  if (d->output_scanline != c.top || c.x0 % 16 != 0) // not what this code expects of libjpeg
     return YccDecode::NotYcc420;
   d->raw_data_out = TRUE;
   d->global_state = kStateRawOk;
-  if (!err.run([&] {
-        JSAMPROW rowsY[16], rowsCb[8], rowsCr[8];
-        JSAMPARRAY planes[3] = {rowsY, rowsCb, rowsCr};
-        while (d->output_scanline < y1) {
-          const std::size_t s = d->output_scanline;
-          for (std::size_t i = 0; i < 16; ++i)
-            rowsY[i] = y + (s + i) * strideY + x0;
-          for (std::size_t i = 0; i < 8; ++i) {
-            rowsCb[i] = cb + (s / 2 + i) * strideC + x0 / 2;
-            rowsCr[i] = cr + (s / 2 + i) * strideC + x0 / 2;
-          }
-          if (jpeg_read_raw_data(d.get(), planes, 16) != 16) break;
-        }
-        if (d->output_scanline < d->output_height) {
-          jpeg_abort_decompress(d.get());
-        } else {
-          jpeg_finish_decompress(d.get());
-        }
-      })) {
+  if (!err.run([&] { readRawRows(*d.get(), c, y, cb, cr, strideY, strideC); })) {
     message = err.message();
     return YccDecode::Failed;
   }
