@@ -78,18 +78,20 @@ test-sanitizers: web-page
 	  $(SANITIZER_CTEST) --output-junit test-times.xml; rc=$$?; \
 	../tools/test-times test-times.xml; exit $$rc
 
-# libFuzzer on the request parsers (fuzz/, clang, ASan+UBSan): each target runs FUZZ_SECONDS on a
-# copy of its seeds (build-fuzz/corpus-work/<target>, which keeps what it finds between runs; the
-# seeds in fuzz/corpus/ are not touched). Any crash, sanitizer report, leak, slow input (-timeout)
-# or memory blow-up fails the target; the input lands in build-fuzz/artifacts/<target>/ and the
-# log in build-fuzz/<target>.log. Replay one: build-fuzz/fuzz/<target> <file>.
+# libFuzzer on the request parsers and the image decoders (fuzz/, clang, ASan+UBSan): each target
+# runs FUZZ_SECONDS on a copy of its seeds (build-fuzz/corpus-work/<target>, which keeps what it
+# finds between runs; the seeds in fuzz/corpus/ are not touched). Any crash, sanitizer report,
+# leak, slow input (-timeout) or memory blow-up fails the target; the input lands in
+# build-fuzz/artifacts/<target>/ and the log in build-fuzz/<target>.log. Replay one:
+# build-fuzz/fuzz/<target> <file>.
 FUZZ_SECONDS ?= 20
-FUZZ_TARGETS := fuzz_query fuzz_static_path fuzz_config
+FUZZ_TARGETS := fuzz_query fuzz_static_path fuzz_config fuzz_codec
 fuzz: setup
 	@[ -f build-fuzz/build.ninja ] || cmake --preset fuzz
 	cmake --build build-fuzz -j$(JOBS) --target tellus_fuzz
 	@set -e; for t in $(FUZZ_TARGETS); do \
-	  dict=fuzz/wms.dict; [ $$t != fuzz_config ] || dict=fuzz/config.dict; \
+	  case $$t in fuzz_config) dict=fuzz/config.dict;; fuzz_codec) dict=fuzz/codec.dict;; \
+	    *) dict=fuzz/wms.dict;; esac; \
 	  mkdir -p build-fuzz/corpus-work/$$t build-fuzz/artifacts/$$t; \
 	  cp fuzz/corpus/$$t/* build-fuzz/corpus-work/$$t/; \
 	  echo "fuzz: $$t for $(FUZZ_SECONDS) s (log: build-fuzz/$$t.log)"; \

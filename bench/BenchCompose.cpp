@@ -2,9 +2,8 @@
 // benchmark size): the sampling alone, and decode + sample + encode as tellus serve does it.
 // Side by side in one run; ratios are what to compare. Run with bench/run.sh.
 
-#include "compose/JpegRaw.hpp"
-
 #include <tellus/cache/TileGrid.hpp>
+#include <tellus/codec/JpegYcc.hpp>
 #include <tellus/proxy/Compose.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
 
@@ -126,14 +125,14 @@ struct YccFixture {
     for (const auto& t : keys) {
       auto& p = planes[{t.key.row, t.key.col}];
       std::string message;
-      codecs::decodeJpegYcc(jpegs[{t.key.row, t.key.col}],
-                            512,
-                            512,
-                            &t.region,
-                            p.px.data(),
-                            p.px.data() + 512 * 512,
-                            p.px.data() + 512 * 512 + 256 * 256,
-                            message);
+      codec::decodeJpegYcc(jpegs[{t.key.row, t.key.col}],
+                           512,
+                           512,
+                           &t.region,
+                           p.px.data(),
+                           p.px.data() + 512 * 512,
+                           p.px.data() + 512 * 512 + 256 * 256,
+                           message);
     }
   }
   void sample() {
@@ -159,7 +158,7 @@ struct YccFixture {
     }
   }
   std::size_t encode() {
-    const auto jpeg = codecs::encodeJpegYcc(1024, 768, out[0].data(), out[1].data(), out[2].data());
+    const auto jpeg = codec::encodeJpegYcc(1024, 768, out[0].data(), out[1].data(), out[2].data());
     benchmark::DoNotOptimize(jpeg->data());
     return jpeg->size();
   }

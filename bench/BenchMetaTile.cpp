@@ -5,9 +5,8 @@
 // 4:2:0. Side by side in one run; per-tile times (items/s) are what to compare. Run with
 // bench/run.sh.
 
-#include "../proxy/src/codec/Codecs.hpp"
-#include "../proxy/src/tiles/JpegCrop.hpp"
-
+#include <tellus/codec/Jpeg.hpp>
+#include <tellus/codec/JpegSplit.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
 
 #include <benchmark/benchmark.h>
@@ -38,7 +37,7 @@ const Fixture& fixture() {
         std::vector<std::byte>(b, b + raw.size()), "image/jpeg", kCols * kTile, kRows * kTile);
     if (!decoded) throw std::runtime_error("cannot read the Blue Marble: " + decoded.error());
     x.pixels = std::move(decoded->pixels);
-    x.meta = *codecs::encodeJpeg(kCols * kTile, kRows * kTile, 3, x.pixels.data());
+    x.meta = *codec::encodeJpeg(kCols * kTile, kRows * kTile, 3, x.pixels.data());
     std::vector<std::uint8_t> tile(static_cast<std::size_t>(kTile) * kTile * 3);
     for (int r = 0; r < kRows; ++r)
       for (int c = 0; c < kCols; ++c) {
@@ -48,7 +47,7 @@ const Fixture& fixture() {
                                  static_cast<std::size_t>(c * kTile)) *
                                 3],
                       static_cast<std::size_t>(kTile) * 3);
-        x.tiles.push_back(*codecs::encodeJpeg(kTile, kTile, 3, tile.data()));
+        x.tiles.push_back(*codec::encodeJpeg(kTile, kTile, 3, tile.data()));
       }
     return x;
   }();
@@ -61,7 +60,7 @@ void BM_PerTileValidate(benchmark::State& state) {
   std::vector<std::uint8_t> scratch;
   for (auto _ : state)
     for (const auto& t : f.tiles)
-      benchmark::DoNotOptimize(codecs::checkJpeg(t, kTile, kTile, scratch).has_value());
+      benchmark::DoNotOptimize(codec::checkJpeg(t, kTile, kTile, scratch).has_value());
   state.SetItemsProcessed(state.iterations() * kCols * kRows);
   std::size_t bytes = 0;
   for (const auto& t : f.tiles)
@@ -75,7 +74,7 @@ void BM_MetaTileSplitDct(benchmark::State& state) {
   const auto& f = fixture();
   std::size_t bytes = 0;
   for (auto _ : state) {
-    auto tiles = codecs::splitJpegDct(f.meta, kCols, kRows, kTile, kTile);
+    auto tiles = codec::splitJpegDct(f.meta, kCols, kRows, kTile, kTile);
     benchmark::DoNotOptimize(tiles->data());
     bytes = 0;
     for (const auto& t : *tiles)
@@ -91,7 +90,7 @@ void BM_MetaTileSplitDctOptimized(benchmark::State& state) {
   const auto& f = fixture();
   std::size_t bytes = 0;
   for (auto _ : state) {
-    auto tiles = codecs::splitJpegDct(f.meta, kCols, kRows, kTile, kTile, true);
+    auto tiles = codec::splitJpegDct(f.meta, kCols, kRows, kTile, kTile, true);
     bytes = 0;
     for (const auto& t : *tiles)
       bytes += t.size();
@@ -107,7 +106,7 @@ void BM_MetaTileDecodeEncode(benchmark::State& state) {
   std::vector<std::uint8_t> pixels;
   std::vector<std::uint8_t> tile(static_cast<std::size_t>(kTile) * kTile * 3);
   for (auto _ : state) {
-    (void)codecs::checkJpeg(f.meta, kCols * kTile, kRows * kTile, pixels);
+    (void)codec::checkJpeg(f.meta, kCols * kTile, kRows * kTile, pixels);
     for (int r = 0; r < kRows; ++r)
       for (int c = 0; c < kCols; ++c) {
         for (int y = 0; y < kTile; ++y)
@@ -116,7 +115,7 @@ void BM_MetaTileDecodeEncode(benchmark::State& state) {
                                static_cast<std::size_t>(c * kTile)) *
                               3],
                       static_cast<std::size_t>(kTile) * 3);
-        benchmark::DoNotOptimize(codecs::encodeJpeg(kTile, kTile, 3, tile.data())->data());
+        benchmark::DoNotOptimize(codec::encodeJpeg(kTile, kTile, 3, tile.data())->data());
       }
   }
   state.SetItemsProcessed(state.iterations() * kCols * kRows);

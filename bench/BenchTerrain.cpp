@@ -3,6 +3,7 @@
 // sides fixed (the edge fixing's own cost per mesh), the height function alone, and the geoid
 // applied to one tile (issue #8: h = H + N at each of its 22,500 samples, on the decoding worker).
 // Run: build/bench/tellus_bench_terrain (bench/RESULTS.md, "Terrain").
+#include <tellus/codec/Bil16.hpp>
 #include <tellus/planet/Geoid.hpp>
 #include <tellus/planet/Terrain.hpp>
 
@@ -30,15 +31,11 @@ double relief(double lat, double lon) {
 }
 
 std::vector<std::byte> bil16Tile(int w, int h) {
-  std::vector<std::byte> b;
+  std::vector<std::int16_t> heights;
   for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const auto v = static_cast<std::uint16_t>(
-          static_cast<std::int16_t>(std::lround(relief(y * 0.01, x * 0.01))));
-      b.push_back(static_cast<std::byte>(v & 0xFF));
-      b.push_back(static_cast<std::byte>(v >> 8));
-    }
-  return b;
+    for (int x = 0; x < w; ++x)
+      heights.push_back(static_cast<std::int16_t>(std::lround(relief(y * 0.01, x * 0.01))));
+  return codec::encodeBil16(w, h, heights.data());
 }
 
 void BM_DecodeBil16Tile150(benchmark::State& state) {

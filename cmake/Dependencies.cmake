@@ -4,9 +4,9 @@ find_package(Threads REQUIRED)
 find_package(SQLite3 REQUIRED)
 find_package(CURL REQUIRED)
 find_package(OpenImageIO CONFIG REQUIRED)
-# libjpeg-turbo and libpng (what OpenImageIO uses for JPEG and PNG), linked into the proxy itself:
-# they are small, so composing maps and rendering tiles never loads OpenImageIO, and a map decodes
-# only the part of each JPEG tile it samples (crop and skip).
+# libjpeg-turbo and libpng (what OpenImageIO uses for JPEG and PNG), PRIVATE to the codec module
+# (codec/), which the proxy and the renderer link: they are small, so composing maps and rendering
+# tiles never loads OpenImageIO, and a map decodes only the part of each JPEG tile it samples.
 find_package(JPEG REQUIRED)
 find_package(PNG REQUIRED)
 # Debian 12's OpenImageIO config lists /usr/include/opencv4 although OpenImageIO's headers never

@@ -1,6 +1,6 @@
 // The imaging module: everything tellus does with OpenImageIO, behind the C function table of
 // tellus/imaging/ImagingApi.hpp. Built as a MODULE library and dlopen()ed by the proxy on first use
-// (proxy/src/codec/ImagingLoader.cpp), so that a process that only serves cached tiles never maps
+// (proxy/src/imaging/ImagingLoader.cpp), so that a process that only serves cached tiles never maps
 // OpenImageIO.
 
 #include <tellus/imaging/ImagingApi.hpp>

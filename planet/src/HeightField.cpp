@@ -1,3 +1,4 @@
+#include <tellus/codec/Bil16.hpp>
 #include <tellus/planet/Terrain.hpp>
 
 #include <algorithm>
@@ -72,18 +73,10 @@ std::expected<HeightTile, std::string> decodeBil16(const TileKey& key,
                                                    int height,
                                                    std::span<const std::byte> bytes,
                                                    const HeightEncoding& encoding) {
-  const std::size_t count =
-      static_cast<std::size_t>(std::max(width, 0)) * static_cast<std::size_t>(std::max(height, 0));
-  if (bytes.size() != count * 2)
-    return std::unexpected("the bil16 tile has " + std::to_string(bytes.size()) + " bytes, not " +
-                           std::to_string(count * 2));
-  std::vector<double> raw(count);
-  for (std::size_t i = 0; i < count; ++i) {
-    const auto lo = static_cast<std::uint16_t>(bytes[2 * i]);
-    const auto hi = static_cast<std::uint16_t>(bytes[2 * i + 1]);
-    raw[i] =
-        static_cast<double>(static_cast<std::int16_t>(static_cast<std::uint16_t>(lo | (hi << 8))));
-  }
+  // A negative width or height is an empty tile here: heightTileFromSamples says what is wrong.
+  const auto samples = codec::decodeBil16(bytes, std::max(width, 0), std::max(height, 0));
+  if (!samples) return std::unexpected(samples.error());
+  const std::vector<double> raw(samples->begin(), samples->end());
   return heightTileFromSamples(key, width, height, raw, encoding);
 }
 

@@ -1,9 +1,7 @@
-// Metatiles: the DCT-domain split of a JPEG (JpegCrop), the block arithmetic (MetaTile), and
-// seeding through the tile service with one GetMap per metatile against a fake WMS that draws
-// georeferenced pixels (so every tile can be checked against where it is on the globe).
+// Metatiles: the DCT-domain split of a JPEG (tellus/codec/JpegSplit.hpp), the block arithmetic
+// (MetaTile), and seeding through the tile service with one GetMap per metatile against a fake WMS
+// that draws georeferenced pixels (so every tile can be checked against where it is on the globe).
 
-#include "../../proxy/src/codec/Codecs.hpp"
-#include "../../proxy/src/tiles/JpegCrop.hpp"
 #include "../../proxy/src/tiles/MetaTile.hpp"
 #include "../support/CacheFixtures.hpp"
 #include "../support/FakeUpstream.hpp"
@@ -11,6 +9,8 @@
 #include "../support/TempDir.hpp"
 
 #include <tellus/cache/TileCache.hpp>
+#include <tellus/codec/Jpeg.hpp>
+#include <tellus/codec/JpegSplit.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
@@ -23,11 +23,9 @@
 #include <atomic>
 #include <cmath>
 #include <condition_variable>
-#include <csetjmp>
 #include <cstdio>
 #include <cstdlib>
 #include <future>
-#include <jpeglib.h>
 #include <mutex>
 #include <thread>
 
@@ -56,50 +54,9 @@ std::vector<std::uint8_t> testPixels(int w, int h, int channels) {
   return px;
 }
 
-struct JpegErr {
-  jpeg_error_mgr mgr;
-  std::jmp_buf jump;
-};
-extern "C" void testJpegErrorExit(j_common_ptr c) {
-  std::longjmp(reinterpret_cast<JpegErr*>(c->err)->jump, 1);
-}
-
-/** Decodes with box (not "fancy") chroma upsampling: every output pixel then comes from its own
- * 8x8 blocks only, so equal blocks give equal pixels. Channels as stored (1 or 3). */
-bool decodeBlocks(const std::vector<std::byte>& bytes,
-                  int& w,
-                  int& h,
-                  int& channels,
-                  std::vector<std::uint8_t>& out) {
-  jpeg_decompress_struct d;
-  JpegErr err;
-  d.err = jpeg_std_error(&err.mgr);
-  err.mgr.error_exit = testJpegErrorExit;
-  if (setjmp(err.jump)) {
-    jpeg_destroy_decompress(&d);
-    return false;
-  }
-  jpeg_create_decompress(&d);
-  jpeg_mem_src(&d, reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size());
-  jpeg_read_header(&d, TRUE);
-  d.do_fancy_upsampling = FALSE;
-  jpeg_start_decompress(&d);
-  w = static_cast<int>(d.output_width);
-  h = static_cast<int>(d.output_height);
-  channels = d.output_components;
-  out.resize(sz(w) * sz(h) * sz(channels));
-  while (d.output_scanline < d.output_height) {
-    JSAMPROW row = out.data() + static_cast<std::size_t>(d.output_scanline) * sz(w) * sz(channels);
-    jpeg_read_scanlines(&d, &row, 1);
-  }
-  jpeg_finish_decompress(&d);
-  jpeg_destroy_decompress(&d);
-  return true;
-}
-
 /** Encodes grey or RGB pixels with libjpeg's defaults (4:2:0 for colour) at quality 90. */
 std::vector<std::byte> encodeTestJpeg(int w, int h, int channels, const std::uint8_t* px) {
-  auto e = codecs::encodeJpeg(w, h, channels, px);
+  auto e = codec::encodeJpeg(w, h, channels, px);
   EXPECT_TRUE(e) << (e ? "" : e.error());
   return e ? *e : std::vector<std::byte>{};
 }
@@ -114,67 +71,24 @@ double meanAbsDiff(const std::vector<std::uint8_t>& a, const std::vector<std::ui
 
 } // namespace
 
-// ------------------------------------------------------------------------------ the DCT split
+// ------------------------------------------------------------------------------ splitting
 
-TEST(JpegCrop, TilesHoldExactlyTheWholeImagesBlocks) {
-  for (const int channels : {3, 1}) {
-    SCOPED_TRACE(channels);
-    const int cols = 3, rows = 2, tw = 256, th = 256;
-    const auto px = testPixels(cols * tw, rows * th, channels);
-    const auto whole = encodeTestJpeg(cols * tw, rows * th, channels, px.data());
-    auto tiles = codecs::splitJpegDct(whole, cols, rows, tw, th);
-    ASSERT_TRUE(tiles) << tiles.error().message;
-    ASSERT_EQ(tiles->size(), 6u);
-    int W = 0, H = 0, C = 0;
-    std::vector<std::uint8_t> all;
-    ASSERT_TRUE(decodeBlocks(whole, W, H, C, all));
-    // The composer's decoder (fancy upsampling) too: the tile's interior is the whole's.
-    std::vector<std::uint8_t> fancyAll;
-    ASSERT_TRUE(codecs::decodeJpegInto(whole, W, H, fancyAll, nullptr));
-    for (int tr = 0; tr < rows; ++tr) {
-      for (int tc = 0; tc < cols; ++tc) {
-        const auto& tile = (*tiles)[sz(tr * cols + tc)];
-        int w = 0, h = 0, c = 0;
-        std::vector<std::uint8_t> got;
-        ASSERT_TRUE(decodeBlocks(tile, w, h, c, got));
-        ASSERT_EQ(w, tw);
-        ASSERT_EQ(h, th);
-        ASSERT_EQ(c, C);
-        std::size_t differing = 0;
-        for (int y = 0; y < th; ++y)
-          for (int x = 0; x < tw * c; ++x)
-            differing += got[sz(y) * sz(tw) * sz(c) + sz(x)] !=
-                         all[(sz(tr * th + y) * sz(W) + sz(tc * tw)) * sz(c) + sz(x)];
-        EXPECT_EQ(differing, 0u) << "tile " << tr << "," << tc;
-        std::vector<std::uint8_t> fancy;
-        ASSERT_TRUE(codecs::decodeJpegInto(tile, tw, th, fancy, nullptr));
-        differing = 0;
-        for (int y = 1; y + 1 < th; ++y)
-          for (int x = 3; x < (tw - 1) * 3; ++x)
-            differing += fancy[sz(y) * sz(tw) * 3 + sz(x)] !=
-                         fancyAll[(sz(tr * th + y) * sz(W) + sz(tc * tw)) * 3 + sz(x)];
-        EXPECT_EQ(differing, 0u) << "tile " << tr << "," << tc << " (interior, fancy upsampling)";
-      }
-    }
-  }
-}
-
-TEST(JpegCrop, MisalignedTilesAreDecodedOnceAndEncoded) {
+TEST(MetaTile, MisalignedJpegTilesAreDecodedOnceAndEncoded) {
   // 200 px tiles do not fall on 4:2:0's 16-px iMCUs.
   const auto px = testPixels(400, 200, 3);
   const auto whole = encodeTestJpeg(400, 200, 3, px.data());
-  auto dct = codecs::splitJpegDct(whole, 2, 1, 200, 200);
+  auto dct = codec::splitJpegDct(whole, 2, 1, 200, 200);
   ASSERT_FALSE(dct);
-  EXPECT_EQ(dct.error().code, codecs::JpegSplitErrc::NotAligned);
+  EXPECT_EQ(dct.error().code, codec::JpegSplitErrc::NotAligned);
   auto split = splitMetaTile(whole, ImageKind::Jpeg, 2, 1, 200, 200);
   ASSERT_TRUE(split) << split.error();
   EXPECT_EQ(split->how, MetaSplit::Decoded);
   ASSERT_EQ(split->tiles.size(), 2u);
   std::vector<std::uint8_t> all;
-  ASSERT_TRUE(codecs::decodeJpegInto(whole, 400, 200, all, nullptr));
+  ASSERT_TRUE(codec::decodeJpegInto(whole, 400, 200, all, nullptr));
   for (int t = 0; t < 2; ++t) {
     std::vector<std::uint8_t> got;
-    ASSERT_TRUE(codecs::decodeJpegInto(split->tiles[sz(t)], 200, 200, got, nullptr));
+    ASSERT_TRUE(codec::decodeJpegInto(split->tiles[sz(t)], 200, 200, got, nullptr));
     std::vector<std::uint8_t> want;
     for (int y = 0; y < 200; ++y)
       want.insert(want.end(),
@@ -189,32 +103,7 @@ TEST(JpegCrop, MisalignedTilesAreDecodedOnceAndEncoded) {
   EXPECT_EQ(fast->how, MetaSplit::Dct);
 }
 
-TEST(JpegCrop, ADamagedOrWrongSizedJpegGivesNoTile) {
-  const auto px = testPixels(512, 512, 3);
-  const auto whole = encodeTestJpeg(512, 512, 3, px.data());
-  // Wrong size: not 2x2 tiles of 256 x 128.
-  auto wrong = codecs::splitJpegDct(whole, 2, 2, 256, 128);
-  ASSERT_FALSE(wrong);
-  EXPECT_EQ(wrong.error().code, codecs::JpegSplitErrc::Invalid);
-  EXPECT_NE(wrong.error().message.find("512x512"), std::string::npos) << wrong.error().message;
-  // Truncated: the second half is gone (an end marker appended, as a broken proxy might).
-  auto truncated = std::vector<std::byte>(
-      whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(whole.size() / 2));
-  truncated.push_back(std::byte{0xFF});
-  truncated.push_back(std::byte{0xD9});
-  auto t = codecs::splitJpegDct(truncated, 2, 2, 256, 256);
-  ASSERT_FALSE(t);
-  EXPECT_EQ(t.error().code, codecs::JpegSplitErrc::Invalid) << t.error().message;
-  // Garbage in the entropy-coded data (a marker-like byte pair in the middle).
-  auto corrupt = whole;
-  for (std::size_t i = corrupt.size() / 2; i < corrupt.size() / 2 + 64; i += 2) {
-    corrupt[i] = std::byte{0xFF};
-    corrupt[i + 1] = static_cast<std::byte>(0xD0 + i % 7);
-  }
-  auto c = codecs::splitJpegDct(corrupt, 2, 2, 256, 256);
-  ASSERT_FALSE(c);
-  EXPECT_EQ(c.error().code, codecs::JpegSplitErrc::Invalid) << c.error().message;
-  // And the split of a PNG is lossless.
+TEST(MetaTile, APngMetaTileIsSplitLosslessly) {
   const auto png = *encodeImage("image/png", 512, 256, 3, testPixels(512, 256, 3).data());
   auto p = splitMetaTile(png, ImageKind::Png, 2, 1, 256, 256);
   ASSERT_TRUE(p) << p.error();

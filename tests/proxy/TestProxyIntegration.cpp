@@ -5,11 +5,11 @@
 #include "../support/CacheFixtures.hpp"
 #include "../support/FakeUpstream.hpp"
 #include "../support/HttpClient.hpp"
-#include "../support/JpegSampling.hpp"
 #include "../support/TempDir.hpp"
 
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/cache/TilePath.hpp>
+#include <tellus/codec/Jpeg.hpp>
 #include <tellus/proxy/Compose.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
@@ -1215,7 +1215,9 @@ std::string jpeg444For(const std::string& target, int size = 256) {
     px[i + 1] = static_cast<std::uint8_t>(h >> 8);
     px[i + 2] = static_cast<std::uint8_t>(h >> 16);
   }
-  const auto bytes = test::jpegWithSampling(px, size, size, 1, 1);
+  // 4:4:4 (luma 1 x 1), quality 75: a tile that the composer's YCbCr path leaves to the RGB path.
+  const auto bytes = *codec::encodeJpeg(
+      size, size, 3, px.data(), {.quality = 75, .lumaSamplingH = 1, .lumaSamplingV = 1});
   return std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size());
 }
 

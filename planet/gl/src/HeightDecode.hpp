@@ -1,6 +1,7 @@
 #pragma once
-// Elevation tiles to metres for the renderer's HeightStreamer: BIL16 (the planet core) and 16-bit
-// greyscale PNG (libpng, private to planet_gl). Thread safe: runs on the tile source's workers.
+// Elevation tiles to metres for the renderer's HeightStreamer: BIL16 (the planet core) and 8- or
+// 16-bit greyscale PNG (the codec module's exact samples). Thread safe: runs on the tile source's
+// workers.
 
 #include <tellus/planet/Terrain.hpp>
 

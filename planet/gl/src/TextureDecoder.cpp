@@ -49,7 +49,7 @@ namespace {
 std::expected<RgbaImage, std::string>
 decodeTile(const DecodeJob& job, std::size_t t, const ImageDecoder& other) {
   const auto& bytes = *job.tiles[t];
-  if (!other || codec::isJpegOrPng(bytes)) return codec::decode(bytes);
+  if (!other || isJpegOrPng(bytes)) return decodeJpegOrPng(bytes);
   std::string_view type; // not `cond ? str : ""`: that is a temporary std::string
   if (t < job.contentTypes.size()) type = job.contentTypes[t];
   auto img = other(bytes, type, job.tileWidth, job.tileHeight);

@@ -5,12 +5,12 @@
 // Cr planes when every tile is a 4:2:0 JPEG, else on RGB(A) or heights, with the RGB path taking
 // over when a tile turns out not to be); then the map encoded. See
 // docs/design/composition.md.
-#include "codec/Codecs.hpp"
-#include "codec/Quantize.hpp"
-#include "compose/JpegRaw.hpp"
 #include "compose/MapJob.hpp"
 
 #include <tellus/cache/TilePath.hpp>
+#include <tellus/codec/JpegYcc.hpp>
+#include <tellus/codec/Png.hpp>
+#include <tellus/codec/Quantize.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
 
 #include <algorithm>
@@ -188,7 +188,8 @@ private:
   // ---- the canvas -------------------------------------------------------------------------------
 
   /** Opaque output (JPEG, 24-bit PNG, PNG without TRANSPARENT) composes on an RGB canvas; a JPEG
-   * map of one opaque layer of 4:2:0 JPEG tiles on Y, Cb and Cr planes (see JpegRaw.hpp). */
+   * map of one opaque layer of 4:2:0 JPEG tiles on Y, Cb and Cr planes (see
+   * tellus/codec/JpegYcc.hpp). */
   void prepare() {
     png8_ = r_.format == MapFormat::Png8;
     cc_ = r_.format == MapFormat::Png32 ||
@@ -380,13 +381,13 @@ private:
     std::uint8_t* cb = y + w * h;
     std::uint8_t* cr = cb + (w / 2) * (h / 2);
     std::string message;
-    switch (codecs::decodeJpegYcc(bytes, g.tileWidth, g.tileHeight, region, y, cb, cr, message)) {
-    case codecs::YccDecode::Ok:
+    switch (codec::decodeJpegYcc(bytes, g.tileWidth, g.tileHeight, region, y, cb, cr, message)) {
+    case codec::YccDecode::Ok:
       break;
-    case codecs::YccDecode::NotYcc420:
+    case codec::YccDecode::NotYcc420:
       notYcc = true;
       return false;
-    case codecs::YccDecode::Failed:
+    case codec::YccDecode::Failed:
       return false;
     }
     d.planes = {TileSamples{g.tileWidth, g.tileHeight, 1, y, nullptr},
@@ -411,7 +412,7 @@ private:
   /** The three planes, each from the tiles' plane of the same index, each sample written (the
    * background's Y, Cb or Cr where no tile covers it). */
   void drawPlanes(const Layer& l, const DecodedTiles& decoded) {
-    const auto ycbcr = codecs::rgbToYcc(bg_[0], bg_[1], bg_[2]);
+    const auto ycbcr = codec::rgbToYcc(bg_[0], bg_[1], bg_[2]);
     ComposeStats stats;
     for (int plane = 0; plane < 3; ++plane) {
       const TileLookup lookup = [&decoded, plane](const TileKey& key) -> const TileSamples* {
@@ -484,12 +485,12 @@ private:
                            heights_.data());
     }
     if (ycc) {
-      return codecs::encodeJpegYcc(
+      return codec::encodeJpegYcc(
           r_.width, r_.height, canvas_.data(), buffers.cb.data(), buffers.cr.data(), jpegQuality_);
     }
     if (png8_) {
-      const PalettedImage p = quantize(canvas_.data(), cc_, pixels_);
-      return codecs::encodePngPalette(r_.width, r_.height, p.palette, p.indices.data());
+      const codec::PalettedImage p = codec::quantize(canvas_.data(), cc_, pixels_);
+      return codec::encodePngPalette(r_.width, r_.height, p.palette, p.indices.data());
     }
     return encodeImage(r_.format == MapFormat::Jpeg   ? "image/jpeg"
                        : r_.format == MapFormat::Tiff ? "image/tiff"

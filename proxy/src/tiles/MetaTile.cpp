@@ -1,7 +1,8 @@
 #include "tiles/MetaTile.hpp"
 
-#include "codec/Codecs.hpp"
-#include "tiles/JpegCrop.hpp"
+#include <tellus/codec/Jpeg.hpp>
+#include <tellus/codec/JpegSplit.hpp>
+#include <tellus/codec/Png.hpp>
 
 #include <algorithm>
 #include <cstring>
@@ -66,8 +67,8 @@ std::expected<SplitTiles, std::string> splitDecoded(std::span<const std::byte> b
   const int height = rows * tileHeight;
   std::vector<std::uint8_t> pixels;
   // The validation's own decoders (a warning is a failure): JPEG into RGB, PNG into RGBA.
-  auto checked = kind == ImageKind::Jpeg ? codecs::checkJpeg(body, width, height, pixels)
-                                         : codecs::checkPng(body, width, height, pixels);
+  auto checked = kind == ImageKind::Jpeg ? codec::checkJpeg(body, width, height, pixels)
+                                         : codec::checkPng(body, width, height, pixels);
   if (!checked) return std::unexpected(checked.error());
   const int channels = kind == ImageKind::Jpeg ? 3 : 4;
   SplitTiles out;
@@ -86,8 +87,11 @@ std::expected<SplitTiles, std::string> splitDecoded(std::span<const std::byte> b
         std::memcpy(tile.data() + y * rowBytes, from + y * stride, rowBytes);
       std::expected<std::vector<std::byte>, std::string> encoded;
       if (kind == ImageKind::Jpeg) {
-        encoded =
-            codecs::encodeJpeg(tileWidth, tileHeight, 3, tile.data(), codecs::kTileRestartInterval);
+        encoded = codec::encodeJpeg(tileWidth,
+                                    tileHeight,
+                                    3,
+                                    tile.data(),
+                                    {.restartInterval = codec::kTileRestartInterval});
       } else {
         bool opaque = true;
         for (std::size_t i = 3; i < tile.size() && opaque; i += 4)
@@ -99,7 +103,7 @@ std::expected<SplitTiles, std::string> splitDecoded(std::span<const std::byte> b
             tile[o + 2] = tile[i + 2];
           }
         }
-        encoded = codecs::encodePng(tileWidth, tileHeight, opaque ? 3 : 4, tile.data());
+        encoded = codec::encodePng(tileWidth, tileHeight, opaque ? 3 : 4, tile.data());
       }
       if (!encoded) return std::unexpected(encoded.error());
       out.tiles.push_back(std::move(*encoded));
@@ -120,9 +124,9 @@ std::expected<SplitTiles, std::string> splitMetaTile(std::span<const std::byte> 
       static_cast<long>(cols) * tileWidth > 16384 || static_cast<long>(rows) * tileHeight > 16384)
     return std::unexpected(std::string("metatile size out of range"));
   if (kind == ImageKind::Jpeg) {
-    auto cut = codecs::splitJpegDct(body, cols, rows, tileWidth, tileHeight);
+    auto cut = codec::splitJpegDct(body, cols, rows, tileWidth, tileHeight);
     if (cut) return SplitTiles{std::move(*cut), MetaSplit::Dct};
-    if (cut.error().code == codecs::JpegSplitErrc::Invalid)
+    if (cut.error().code == codec::JpegSplitErrc::Invalid)
       return std::unexpected(cut.error().message);
     return splitDecoded(body, kind, cols, rows, tileWidth, tileHeight);
   }

@@ -1,6 +1,7 @@
-#include "codec/Codecs.hpp"
-#include "codec/ImagingLoader.hpp"
+#include "imaging/ImagingLoader.hpp"
 
+#include <tellus/codec/Jpeg.hpp>
+#include <tellus/codec/Png.hpp>
 #include <tellus/proxy/TileValidation.hpp>
 
 #include <algorithm>
@@ -334,8 +335,8 @@ std::expected<void, std::string>
 decodeImage(std::span<const std::byte> bytes, ImageKind kind, int width, int height) {
   if (kind == ImageKind::Jpeg || kind == ImageKind::Png) {
     thread_local std::vector<std::uint8_t> scratch; // a worker validates many tiles of one size
-    auto checked = kind == ImageKind::Jpeg ? codecs::checkJpeg(bytes, width, height, scratch)
-                                           : codecs::checkPng(bytes, width, height, scratch);
+    auto checked = kind == ImageKind::Jpeg ? codec::checkJpeg(bytes, width, height, scratch)
+                                           : codec::checkPng(bytes, width, height, scratch);
     if (scratch.capacity() > (8u << 20)) scratch = {};
     if (!checked) return std::unexpected(sanitise(checked.error()));
     return {};

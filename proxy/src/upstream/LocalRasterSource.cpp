@@ -1,4 +1,4 @@
-#include "codec/ImagingLoader.hpp"
+#include "imaging/ImagingLoader.hpp"
 
 #include <tellus/proxy/ImageCodec.hpp>
 #include <tellus/proxy/LocalRasterSource.hpp>

@@ -7,7 +7,7 @@
  * Loading OpenImageIO and its ~260 libraries costs a process about 121 MiB of RSS (a 25 MiB ustring
  * table made by a static initialiser, libopenvdb, gdal, ...; bench/RESULTS.md), so `tellus serve`
  * does not link it: the proxy dlopen()s this module the first time a tile really has to be decoded
- * or encoded (proxy/src/codec/ImagingLoader.cpp). The module exports one C symbol,
+ * or encoded (proxy/src/imaging/ImagingLoader.cpp). The module exports one C symbol,
  * `tellus_imaging_table`, which returns this table.
  *
  * Rules of the boundary: plain C types only; what a function produces (bytes, pixels, error text)

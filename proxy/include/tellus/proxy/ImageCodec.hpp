@@ -21,7 +21,8 @@ namespace tellus {
 /** Encodes 8-bit pixels (channels 1, 3 or 4, row-major, top row first) as "image/jpeg" (alpha is
  * dropped), "image/png" or "image/tiff" (zip-compressed, through the imaging module). `tile`: a
  * JPEG is written as tellus's cached tiles are (with restart markers, see
- * codecs::kTileRestartInterval), for a tile rather than a map. `jpegQuality`: 1-100.
+ * tellus/codec/Jpeg.hpp's kTileRestartInterval), for a tile rather than a map. `jpegQuality`:
+ * 1-100.
  */
 std::expected<std::vector<std::byte>, std::string> encodeImage(std::string_view mimeType,
                                                                int width,

@@ -5,7 +5,7 @@
  * an offscreen framebuffer with a 32-bit float reversed-Z depth buffer, node meshes drawn with
  * camera-relative matrices, and texture streaming (decoding on worker threads, banded uploads under
  * a per-frame byte and time budget, a reusable texture pool, the LRU). No GL type appears here: GL,
- * GLFW, libepoxy, libjpeg and libpng are private to tellus::planet_gl.
+ * GLFW and libepoxy are private to tellus::planet_gl (JPEG and PNG through tellus::codec).
  *
  * One Renderer draws a base layer and its overlays. Both a window loop (`tellus view`) and the
  * headless loop (`tellus render`) call frame(pose) once per frame; readPixels() reads the last
@@ -47,7 +47,7 @@ struct RgbaImage {
 };
 
 /** Decodes an imagery tile that is neither JPEG nor PNG (the renderer reads those itself, with
- * libjpeg-turbo and libpng): its bytes, the content type the tile source gave, and the layer's
+ * the codec module): its bytes, the content type the tile source gave, and the layer's
  * tile size. Runs on the decoder threads, several at once: it must be thread safe. */
 using ImageDecoder = std::function<std::expected<RgbaImage, std::string>(
     std::span<const std::byte> bytes, std::string_view contentType, int width, int height)>;

@@ -1,6 +1,6 @@
-// The planar (4:2:0 YCbCr) JPEG paths of the composer. libjpeg reports errors by longjmp: the
-// functions that call it keep no object with a destructor alive across those calls (the storage
-// they use belongs to their callers).
+// The planar (4:2:0 YCbCr) JPEG paths of the composer. Every libjpeg call runs inside the one
+// error wrapper (JpegSession.hpp): the functions given to run() keep no object with a non-trivial
+// destructor (the storage they use belongs to their callers).
 //
 // Decoding a region: libjpeg-turbo's jpeg_crop_scanline and jpeg_skip_scanlines (which decode only
 // the iMCU columns around a region and only entropy-decode the rows above it) are refused in raw
@@ -11,42 +11,29 @@
 // raw mode), and jpeg_read_raw_data hands out the coefficient controller's blocks of the cropped
 // columns. That relies on how libjpeg-turbo 2.1 (Debian 12) is built inside: the coefficient
 // controller is the same in both modes and reads its columns from first_iMCU_col/last_iMCU_col,
-// which jpeg_crop_scanline sets. TestJpegRaw checks region decodes against whole decodes, so a
+// which jpeg_crop_scanline sets. TestJpegYcc checks region decodes against whole decodes, so a
 // libjpeg-turbo that behaves otherwise fails the tests rather than making wrong maps.
 
-#include "compose/JpegRaw.hpp"
+#include "JpegSession.hpp"
+
+#include <tellus/codec/JpegYcc.hpp>
 
 #include <algorithm>
 #include <cmath>
-#include <csetjmp>
-#include <cstdio> // jpeglib.h needs FILE
 #include <cstring>
-#include <jerror.h> // after jpeglib.h
-#include <jpeglib.h>
-#include <new>
 #include <optional>
 
-namespace tellus::codecs {
+namespace tellus::codec {
+
+using detail::JpegCompress;
+using detail::JpegDecompress;
+using detail::JpegErrors;
+using detail::JpegVectorDestination;
 
 namespace {
 
 // jpegint.h's value (not in jpeglib.h): the state jpeg_start_decompress leaves in raw data mode.
 constexpr int kStateRawOk = 206;
-
-struct RawError {
-  jpeg_error_mgr mgr; // first: libjpeg hands out a pointer to it
-  std::jmp_buf jump;
-  char message[JMSG_LENGTH_MAX];
-};
-
-extern "C" void rawErrorExit(j_common_ptr c) {
-  auto* e = reinterpret_cast<RawError*>(c->err);
-  (*c->err->format_message)(c, e->message);
-  std::longjmp(e->jump, 1);
-}
-
-// Warnings (corrupt data, a premature end) are ignored: maps are made of validated cached tiles.
-extern "C" void rawWarning(j_common_ptr, int) {}
 
 bool is420(const jpeg_decompress_struct& c) noexcept {
   return c.num_components == 3 && c.jpeg_color_space == JCS_YCbCr && !c.progressive_mode &&
@@ -55,9 +42,56 @@ bool is420(const jpeg_decompress_struct& c) noexcept {
          c.comp_info[2].h_samp_factor == 1 && c.comp_info[2].v_samp_factor == 1;
 }
 
+/** The rows and columns of a region decode: whole 16 x 16 blocks from (x0, top), `width`
+ * columns, down to row y1 (the whole tile without a region). */
+struct Crop {
+  JDIMENSION x0 = 0, width = 0, top = 0, y1 = 0;
+};
+
+Crop cropOf(int width, int height, const std::array<std::int32_t, 4>* region) {
+  Crop c{0, static_cast<JDIMENSION>(width), 0, static_cast<JDIMENSION>(height)};
+  if (!region) return c;
+  const auto& r = *region;
+  const auto left = std::clamp(r[0], 0, width - 1) / 16 * 16;
+  const auto right = std::clamp(r[2], left + 1, width);
+  c.top = static_cast<JDIMENSION>(std::clamp(r[1], 0, height - 1) / 16 * 16);
+  c.y1 = static_cast<JDIMENSION>(std::clamp(r[3], static_cast<int>(c.top) + 1, height));
+  c.x0 = static_cast<JDIMENSION>(left);
+  c.width = static_cast<JDIMENSION>(right - left);
+  return c;
+}
+
+/** The raw-data rows of a started decompressor (cropped and skipped to `c`) into the planes, down
+ * to c.y1; runs inside decodeRaw's run. */
+void readRawRows(jpeg_decompress_struct& d,
+                 const Crop& c,
+                 std::uint8_t* y,
+                 std::uint8_t* cb,
+                 std::uint8_t* cr,
+                 std::size_t strideY,
+                 std::size_t strideC) {
+  JSAMPROW rowsY[16], rowsCb[8], rowsCr[8];
+  JSAMPARRAY planes[3] = {rowsY, rowsCb, rowsCr};
+  while (d.output_scanline < c.y1) {
+    const std::size_t s = d.output_scanline;
+    for (std::size_t i = 0; i < 16; ++i)
+      rowsY[i] = y + (s + i) * strideY + c.x0;
+    for (std::size_t i = 0; i < 8; ++i) {
+      rowsCb[i] = cb + (s / 2 + i) * strideC + c.x0 / 2;
+      rowsCr[i] = cr + (s / 2 + i) * strideC + c.x0 / 2;
+    }
+    if (jpeg_read_raw_data(&d, planes, 16) != 16) break;
+  }
+  if (d.output_scanline < d.output_height) {
+    jpeg_abort_decompress(&d);
+  } else {
+    jpeg_finish_decompress(&d);
+  }
+}
+
 /** `strideY` and `strideC`: the samples from one row of the luma or a chroma plane to the next. */
 YccDecode decodeRaw(const unsigned char* bytes,
-                    unsigned long size,
+                    std::size_t size,
                     int width,
                     int height,
                     const std::array<std::int32_t, 4>* region,
@@ -66,68 +100,42 @@ YccDecode decodeRaw(const unsigned char* bytes,
                     std::uint8_t* cr,
                     std::size_t strideY,
                     std::size_t strideC,
-                    char* message) {
-  jpeg_decompress_struct cinfo;
-  RawError err;
-  cinfo.err = jpeg_std_error(&err.mgr);
-  err.mgr.error_exit = rawErrorExit;
-  err.mgr.emit_message = rawWarning;
-  err.message[0] = '\0';
-  if (setjmp(err.jump)) {
-    jpeg_destroy_decompress(&cinfo);
-    std::memcpy(message, err.message, sizeof err.message);
+                    std::string& message) {
+  JpegErrors err;
+  JpegDecompress d(err);
+  bool multipleScans = false;
+  if (!err.run([&] {
+        d.create();
+        d.source(bytes, size);
+        jpeg_read_header(d.get(), TRUE);
+        multipleScans = jpeg_has_multiple_scans(d.get()) != FALSE;
+      })) {
+    message = err.message();
     return YccDecode::Failed;
   }
-  jpeg_create_decompress(&cinfo);
-  jpeg_mem_src(&cinfo, bytes, size);
-  jpeg_read_header(&cinfo, TRUE);
-  if (static_cast<int>(cinfo.image_width) != width ||
-      static_cast<int>(cinfo.image_height) != height || !is420(cinfo) ||
-      jpeg_has_multiple_scans(&cinfo)) {
-    jpeg_destroy_decompress(&cinfo);
+  if (static_cast<int>(d->image_width) != width || static_cast<int>(d->image_height) != height ||
+      !is420(*d.get()) || multipleScans)
     return YccDecode::NotYcc420;
+  d->out_color_space = JCS_YCbCr;
+  d->do_fancy_upsampling = FALSE; // no context rows: skipping whole iMCU rows is simple
+  d->do_block_smoothing = FALSE;
+  Crop c = cropOf(width, height, region);
+  if (!err.run([&] {
+        jpeg_start_decompress(d.get());
+        if (c.width < static_cast<JDIMENSION>(width)) jpeg_crop_scanline(d.get(), &c.x0, &c.width);
+        if (c.top > 0) jpeg_skip_scanlines(d.get(), c.top);
+      })) {
+    message = err.message();
+    return YccDecode::Failed;
   }
-  cinfo.out_color_space = JCS_YCbCr;
-  cinfo.do_fancy_upsampling = FALSE; // no context rows: skipping whole iMCU rows is simple
-  cinfo.do_block_smoothing = FALSE;
-  jpeg_start_decompress(&cinfo);
-  JDIMENSION x0 = 0, cropWidth = static_cast<JDIMENSION>(width);
-  JDIMENSION top = 0, y1 = static_cast<JDIMENSION>(height);
-  if (region) {
-    const auto& r = *region;
-    const auto left = std::clamp(r[0], 0, width - 1) / 16 * 16;
-    const auto right = std::clamp(r[2], left + 1, width);
-    top = static_cast<JDIMENSION>(std::clamp(r[1], 0, height - 1) / 16 * 16);
-    y1 = static_cast<JDIMENSION>(std::clamp(r[3], static_cast<int>(top) + 1, height));
-    x0 = static_cast<JDIMENSION>(left);
-    cropWidth = static_cast<JDIMENSION>(right - left);
-    if (cropWidth < static_cast<JDIMENSION>(width)) jpeg_crop_scanline(&cinfo, &x0, &cropWidth);
-    if (top > 0) jpeg_skip_scanlines(&cinfo, top);
-  }
-  if (cinfo.output_scanline != top || x0 % 16 != 0) { // not what this code expects of libjpeg
-    jpeg_destroy_decompress(&cinfo);
+  if (d->output_scanline != c.top || c.x0 % 16 != 0) // not what this code expects of libjpeg
     return YccDecode::NotYcc420;
+  d->raw_data_out = TRUE;
+  d->global_state = kStateRawOk;
+  if (!err.run([&] { readRawRows(*d.get(), c, y, cb, cr, strideY, strideC); })) {
+    message = err.message();
+    return YccDecode::Failed;
   }
-  cinfo.raw_data_out = TRUE;
-  cinfo.global_state = kStateRawOk;
-  JSAMPROW rowsY[16], rowsCb[8], rowsCr[8];
-  JSAMPARRAY planes[3] = {rowsY, rowsCb, rowsCr};
-  while (cinfo.output_scanline < y1) {
-    const std::size_t s = cinfo.output_scanline;
-    for (std::size_t i = 0; i < 16; ++i)
-      rowsY[i] = y + (s + i) * strideY + x0;
-    for (std::size_t i = 0; i < 8; ++i) {
-      rowsCb[i] = cb + (s / 2 + i) * strideC + x0 / 2;
-      rowsCr[i] = cr + (s / 2 + i) * strideC + x0 / 2;
-    }
-    if (jpeg_read_raw_data(&cinfo, planes, 16) != 16) break;
-  }
-  if (cinfo.output_scanline < cinfo.output_height) {
-    jpeg_abort_decompress(&cinfo);
-  } else {
-    jpeg_finish_decompress(&cinfo);
-  }
-  jpeg_destroy_decompress(&cinfo);
   return YccDecode::Ok;
 }
 
@@ -295,75 +303,16 @@ bool spliceRegion(const unsigned char* p,
   return true;
 }
 
-/** A destination that grows a std::vector (no copy of the finished stream). */
-struct VectorDest {
-  jpeg_destination_mgr mgr; // first: libjpeg hands out a pointer to it
-  std::vector<std::byte>* out;
-};
-
-extern "C" void vectorInit(j_compress_ptr c) {
-  auto* d = reinterpret_cast<VectorDest*>(c->dest);
-  d->mgr.next_output_byte = reinterpret_cast<JOCTET*>(d->out->data());
-  d->mgr.free_in_buffer = d->out->size();
-}
-
-extern "C" boolean vectorEmpty(j_compress_ptr c) {
-  auto* d = reinterpret_cast<VectorDest*>(c->dest);
-  const std::size_t used = d->out->size();
-  bool grown = true;
-  try {
-    d->out->resize(used * 2);
-  } catch (const std::bad_alloc&) {
-    grown = false;
-  }
-  if (!grown) ERREXIT1(c, JERR_OUT_OF_MEMORY, 0); // outside the handler: it longjmps
-  d->mgr.next_output_byte = reinterpret_cast<JOCTET*>(d->out->data() + used);
-  d->mgr.free_in_buffer = d->out->size() - used;
-  return TRUE;
-}
-
-extern "C" void vectorTerm(j_compress_ptr c) {
-  auto* d = reinterpret_cast<VectorDest*>(c->dest);
-  d->out->resize(d->out->size() - d->mgr.free_in_buffer);
-}
-
-/** The libjpeg part of encodeJpegYcc; `scratch` holds 16 luma and 2 x 8 chroma rows of the padded
- * widths (used when the planes' widths are not whole blocks). */
-bool encodeRaw(int width,
-               int height,
-               const std::uint8_t* y,
-               const std::uint8_t* cb,
-               const std::uint8_t* cr,
-               int quality,
-               std::uint8_t* scratch,
-               std::vector<std::byte>* out,
-               char* message) {
-  jpeg_compress_struct cinfo;
-  RawError err;
-  VectorDest dest;
-  cinfo.err = jpeg_std_error(&err.mgr);
-  err.mgr.error_exit = rawErrorExit;
-  err.mgr.emit_message = rawWarning;
-  err.message[0] = '\0';
-  if (setjmp(err.jump)) {
-    jpeg_destroy_compress(&cinfo);
-    std::memcpy(message, err.message, sizeof err.message);
-    return false;
-  }
-  jpeg_create_compress(&cinfo);
-  dest.mgr.init_destination = vectorInit;
-  dest.mgr.empty_output_buffer = vectorEmpty;
-  dest.mgr.term_destination = vectorTerm;
-  dest.out = out;
-  cinfo.dest = &dest.mgr;
-  cinfo.image_width = static_cast<JDIMENSION>(width);
-  cinfo.image_height = static_cast<JDIMENSION>(height);
-  cinfo.input_components = 3;
-  cinfo.in_color_space = JCS_YCbCr;
-  jpeg_set_defaults(&cinfo); // 4:2:0 for YCbCr, as for RGB
-  jpeg_set_quality(&cinfo, std::clamp(quality, 1, 100), TRUE);
-  cinfo.raw_data_in = TRUE;
-  jpeg_start_compress(&cinfo, TRUE);
+/** Writes the planes' rows into a started raw-data compressor; `scratch` holds 16 luma and 2 x 8
+ * chroma rows of the padded widths (used when the planes' widths are not whole blocks). Runs
+ * inside encodeRaw's run. */
+void writePlanes(jpeg_compress_struct& cinfo,
+                 int width,
+                 int height,
+                 const std::uint8_t* y,
+                 const std::uint8_t* cb,
+                 const std::uint8_t* cr,
+                 std::uint8_t* scratch) {
   const auto w = static_cast<std::size_t>(width);
   const auto h = static_cast<std::size_t>(height);
   const std::size_t cw = (w + 1) / 2, ch = (h + 1) / 2;
@@ -395,9 +344,38 @@ bool encodeRaw(int width,
     }
     jpeg_write_raw_data(&cinfo, planes, 16);
   }
-  jpeg_finish_compress(&cinfo);
-  jpeg_destroy_compress(&cinfo);
-  return true;
+}
+
+/** The libjpeg part of encodeJpegYcc, into `out` (sized to a first guess). */
+bool encodeRaw(int width,
+               int height,
+               const std::uint8_t* y,
+               const std::uint8_t* cb,
+               const std::uint8_t* cr,
+               int quality,
+               std::uint8_t* scratch,
+               std::vector<std::byte>& out,
+               std::string& message) {
+  JpegErrors err;
+  JpegCompress c(err);
+  JpegVectorDestination dest(out);
+  if (err.run([&] {
+        c.create();
+        dest.attach(c.get());
+        c->image_width = static_cast<JDIMENSION>(width);
+        c->image_height = static_cast<JDIMENSION>(height);
+        c->input_components = 3;
+        c->in_color_space = JCS_YCbCr;
+        jpeg_set_defaults(c.get()); // 4:2:0 for YCbCr, as for RGB
+        jpeg_set_quality(c.get(), std::clamp(quality, 1, 100), TRUE);
+        c->raw_data_in = TRUE;
+        jpeg_start_compress(c.get(), TRUE);
+        writePlanes(*c.get(), width, height, y, cb, cr, scratch);
+        jpeg_finish_compress(c.get());
+      }))
+    return true;
+  message = err.message();
+  return false;
 }
 
 std::uint8_t clampRound(double v) noexcept {
@@ -415,7 +393,7 @@ YccDecode decodeJpegYcc(std::span<const std::byte> bytes,
                         std::uint8_t* cr,
                         std::string& message) {
   if (width <= 0 || height <= 0 || width % 16 != 0 || height % 16 != 0) return YccDecode::NotYcc420;
-  char text[JMSG_LENGTH_MAX] = {};
+  std::string text;
   const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
   const auto w = static_cast<std::size_t>(width);
   thread_local Spliced spliced;
@@ -428,7 +406,7 @@ YccDecode decodeJpegYcc(std::span<const std::byte> bytes,
     const auto sx = static_cast<std::size_t>(spliced.x);
     const auto sy = static_cast<std::size_t>(spliced.y);
     const YccDecode status = decodeRaw(spliced.bytes.data(),
-                                       static_cast<unsigned long>(spliced.bytes.size()),
+                                       spliced.bytes.size(),
                                        spliced.width,
                                        spliced.height,
                                        &inside,
@@ -444,18 +422,9 @@ YccDecode decodeJpegYcc(std::span<const std::byte> bytes,
     }
     // A stream this path misread: the whole stream's decoder says what is wrong with it.
   }
-  const YccDecode status = decodeRaw(data,
-                                     static_cast<unsigned long>(bytes.size()),
-                                     width,
-                                     height,
-                                     region,
-                                     y,
-                                     cb,
-                                     cr,
-                                     w,
-                                     w / 2,
-                                     text);
-  if (status == YccDecode::Failed) message = std::string("the JPEG does not decode: ") + text;
+  const YccDecode status =
+      decodeRaw(data, bytes.size(), width, height, region, y, cb, cr, w, w / 2, text);
+  if (status == YccDecode::Failed) message = "the JPEG does not decode: " + text;
   return status;
 }
 
@@ -487,9 +456,9 @@ std::expected<std::vector<std::byte>, std::string> encodeJpegYcc(int width,
   // A first guess of the size (a quality 90 map of imagery is about 1 bit per pixel); grown by
   // doubling.
   std::vector<std::byte> out(std::max<std::size_t>(4096, w * static_cast<std::size_t>(height) / 6));
-  char message[JMSG_LENGTH_MAX] = {};
-  if (!encodeRaw(width, height, y, cb, cr, quality, scratch.data(), &out, message))
-    return std::unexpected(std::string("cannot encode JPEG: ") + message);
+  std::string message;
+  if (!encodeRaw(width, height, y, cb, cr, quality, scratch.data(), out, message))
+    return std::unexpected("cannot encode JPEG: " + message);
   return out;
 }
 
@@ -499,4 +468,4 @@ std::array<std::uint8_t, 3> rgbToYcc(std::uint8_t r, std::uint8_t g, std::uint8_
           clampRound(128.0 + 0.5 * r - 0.418687589 * g - 0.081312411 * b)};
 }
 
-} // namespace tellus::codecs
+} // namespace tellus::codec

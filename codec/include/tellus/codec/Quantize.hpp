@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace tellus {
+namespace tellus::codec {
 
 /** At most 256 colours (RGBA) and one index per pixel. */
 struct PalettedImage {
@@ -21,4 +21,4 @@ struct PalettedImage {
  */
 PalettedImage quantize(const std::uint8_t* pixels, int channels, std::size_t count);
 
-} // namespace tellus
+} // namespace tellus::codec

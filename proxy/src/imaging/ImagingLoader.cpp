@@ -1,4 +1,4 @@
-#include "codec/ImagingLoader.hpp"
+#include "imaging/ImagingLoader.hpp"
 
 #include <tellus/proxy/ImagingModule.hpp>
 

@@ -1,15 +1,18 @@
-#include "codec/Codecs.hpp"
-#include "codec/ImagingLoader.hpp"
-#include "codec/Quantize.hpp"
+#include "imaging/ImagingLoader.hpp"
 
+#include <tellus/codec/Bil16.hpp>
+#include <tellus/codec/Jpeg.hpp>
+#include <tellus/codec/Png.hpp>
+#include <tellus/codec/Quantize.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
 
 #include <cstring>
 
 namespace tellus {
 
-// JPEG and 8-bit PNG are made and read here (libjpeg-turbo, libpng: Codecs.cpp); TIFF and 16-bit
-// PNG go through the imaging module (OpenImageIO), loaded on the first call; BIL16 is written here.
+// Formats by MIME type: JPEG, 8-bit PNG and BIL16 through the codec module (tellus::codec:
+// libjpeg-turbo, libpng); TIFF and 16-bit PNG through the imaging module (OpenImageIO), loaded on
+// the first call that needs it.
 
 std::expected<std::vector<std::byte>, std::string> encodeImage(std::string_view mimeType,
                                                                int width,
@@ -40,13 +43,13 @@ std::expected<std::vector<std::byte>, std::string> encodeImage(std::string_view 
       std::memcpy(&rgb[i * 3], &pixels[i * 4], 3);
     return encodeImage(mimeType, width, height, 3, rgb.data(), tile, jpegQuality);
   }
-  return png ? codecs::encodePng(width, height, channels, pixels)
-             : codecs::encodeJpeg(width,
-                                  height,
-                                  channels,
-                                  pixels,
-                                  tile ? codecs::kTileRestartInterval : 0,
-                                  jpegQuality);
+  if (png) return codec::encodePng(width, height, channels, pixels);
+  return codec::encodeJpeg(
+      width,
+      height,
+      channels,
+      pixels,
+      {.quality = jpegQuality, .restartInterval = tile ? codec::kTileRestartInterval : 0});
 }
 
 std::expected<std::vector<std::byte>, std::string>
@@ -74,13 +77,7 @@ encodeHeights(std::string_view mimeType, int width, int height, const std::int16
   }
   if (mimeType != "application/bil16")
     return std::unexpected("cannot encode heights as " + std::string(mimeType));
-  std::vector<std::byte> out(n * 2);
-  for (std::size_t k = 0; k < n; ++k) { // little-endian whatever the host
-    const auto u = static_cast<std::uint16_t>(heights[k]);
-    out[2 * k] = static_cast<std::byte>(u & 0xFF);
-    out[2 * k + 1] = static_cast<std::byte>(u >> 8);
-  }
-  return out;
+  return codec::encodeBil16(width, height, heights);
 }
 
 std::expected<std::vector<std::byte>, std::string> blankMap(MapFormat format,
@@ -122,8 +119,8 @@ std::expected<std::vector<std::byte>, std::string> blankMap(MapFormat format,
     std::memcpy(px.data(), drawn.bytes.data(), px.size());
   }
   if (format == MapFormat::Png8) {
-    const PalettedImage p = quantize(px.data(), 4, n);
-    return codecs::encodePngPalette(width, height, p.palette, p.indices.data());
+    const codec::PalettedImage p = codec::quantize(px.data(), 4, n);
+    return codec::encodePngPalette(width, height, p.palette, p.indices.data());
   }
   if (!alpha) { // RGB: no alpha channel in an opaque format
     for (std::size_t i = 0; i < n; ++i)
@@ -182,8 +179,8 @@ std::expected<int, std::string> decodeImageryInto(std::span<const std::byte> byt
                                                   int height,
                                                   std::vector<std::uint8_t>& pixels,
                                                   const std::array<std::int32_t, 4>* region) {
-  if (mimeType == "image/jpeg") return codecs::decodeJpegInto(bytes, width, height, pixels, region);
-  if (mimeType == "image/png") return codecs::decodePngInto(bytes, width, height, pixels);
+  if (mimeType == "image/jpeg") return codec::decodeJpegInto(bytes, width, height, pixels, region);
+  if (mimeType == "image/png") return codec::decodePngInto(bytes, width, height, pixels);
   const char* format = formatOf(mimeType);
   if (!format) return std::unexpected("cannot decode " + std::string(mimeType) + " as imagery");
   auto api = imaging::table();
@@ -212,18 +209,7 @@ std::expected<std::vector<std::int16_t>, std::string>
 decodeHeights(std::span<const std::byte> bytes, std::string_view mimeType, int width, int height) {
   if (width <= 0 || height <= 0) return std::unexpected("bad image shape");
   const auto n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-  if (mimeType == "application/bil16") {
-    if (bytes.size() != n * 2)
-      return std::unexpected("the bil16 tile has " + std::to_string(bytes.size()) + " bytes, not " +
-                             std::to_string(n * 2));
-    std::vector<std::int16_t> heights(n);
-    for (std::size_t k = 0; k < n; ++k) {
-      const auto lo = static_cast<std::uint16_t>(bytes[2 * k]);
-      const auto hi = static_cast<std::uint16_t>(bytes[2 * k + 1]);
-      heights[k] = static_cast<std::int16_t>(static_cast<std::uint16_t>(lo | (hi << 8)));
-    }
-    return heights;
-  }
+  if (mimeType == "application/bil16") return codec::decodeBil16(bytes, width, height);
   const char* format = formatOf(mimeType);
   if (!format || mimeType == "image/jpeg")
     return std::unexpected("cannot decode " + std::string(mimeType) + " as heights");

@@ -1,6 +1,6 @@
 // 8-bit PNG maps: the palette quantiser.
 
-#include "../../proxy/src/codec/Quantize.hpp"
+#include <tellus/codec/Quantize.hpp>
 
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 #include <cstdlib>
 #include <set>
 
-using namespace tellus;
+using namespace tellus::codec;
 
 TEST(Quantize, FewColoursAreKeptExactly) {
   // 200 distinct colours whose values are multiples of 8 (one 5-bit bin each).

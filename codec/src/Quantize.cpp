@@ -1,8 +1,8 @@
-#include "codec/Quantize.hpp"
+#include <tellus/codec/Quantize.hpp>
 
 #include <algorithm>
 
-namespace tellus {
+namespace tellus::codec {
 
 namespace {
 
@@ -179,4 +179,4 @@ PalettedImage quantize(const std::uint8_t* pixels, int channels, std::size_t cou
   return MedianCut(pixels, channels, count).run();
 }
 
-} // namespace tellus
+} // namespace tellus::codec

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace tellus::codecs {
+namespace tellus::codec {
 
 enum class JpegSplitErrc {
   NotAligned, ///< tile edges are not on iMCU boundaries (or 12-bit, CMYK): decode and encode
@@ -45,4 +45,4 @@ splitJpegDct(std::span<const std::byte> jpeg,
              int tileHeight,
              bool optimizeHuffman = false);
 
-} // namespace tellus::codecs
+} // namespace tellus::codec

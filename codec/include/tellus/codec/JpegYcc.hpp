@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-namespace tellus::codecs {
+namespace tellus::codec {
 
 enum class YccDecode {
   Ok,
@@ -40,9 +40,9 @@ YccDecode decodeJpegYcc(std::span<const std::byte> bytes,
 
 /**
  * Whether decodeJpegYcc decodes `region` of this JPEG from the restart segments around it alone
- * (a tile written with restart markers every few MCUs, codecs::kTileRestartInterval, and a region
- * that does not need every segment from the top); else the whole stream is entropy-decoded down to
- * the region's last row. For tests and benchmarks.
+ * (a tile written with restart markers every few MCUs, kTileRestartInterval (Jpeg.hpp), and a
+ * region that does not need every segment from the top); else the whole stream is entropy-decoded
+ * down to the region's last row. For tests and benchmarks.
  */
 bool decodesFromSegments(std::span<const std::byte> bytes,
                          int width,
@@ -64,4 +64,4 @@ std::expected<std::vector<std::byte>, std::string> encodeJpegYcc(int width,
 /** JFIF's RGB -> YCbCr of one colour (rounded, clamped): the background of a map. */
 std::array<std::uint8_t, 3> rgbToYcc(std::uint8_t r, std::uint8_t g, std::uint8_t b) noexcept;
 
-} // namespace tellus::codecs
+} // namespace tellus::codec
