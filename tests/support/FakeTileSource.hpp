@@ -21,7 +21,6 @@
 #include <map>
 #include <mutex>
 #include <optional>
-#include <set>
 #include <string>
 #include <string_view>
 #include <thread>
@@ -38,7 +37,7 @@ public:
     std::string name; ///< what describe() calls the dataset
     GridSpec grid;    ///< the lat/long grid
     std::string mimeType = "image/png";
-    Answer answer; ///< empty: every tile absent
+    Answer answer; ///< empty: the fallback answer (every tile absent unless set)
   };
 
   enum class Delivery {
