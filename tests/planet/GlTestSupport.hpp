@@ -1,9 +1,10 @@
 #pragma once
-// Shared by the rendered planet tests (label gl): the display check, tile sources that need no
-// network (absent everywhere; texels that say where they are), the embedded default's Blue Marble
-// through the proxy's tile service, and rendering until complete.
+// Shared by the rendered planet tests (label gl): the display check, layers of the tests' fake tile
+// source that need no network (absent everywhere; texels that say where they are), the embedded
+// default's Blue Marble through the proxy's tile service, and rendering until complete.
 
 #include "../support/CacheFixtures.hpp"
+#include "../support/FakeTileSource.hpp"
 #include "../support/TempDir.hpp"
 
 #include <tellus/planet/Camera.hpp>
@@ -36,79 +37,41 @@ inline bool haveDisplay() {
   return d != nullptr && *d != '\0';
 }
 
-/** Every tile absent: the renderer draws the global texture only. */
-class AbsentSource final : public ITileSource {
-public:
-  explicit AbsentSource(GridSpec grid) : grid_(grid) {}
-  std::optional<DatasetSpec> describe(std::string_view, std::string_view) const override {
-    DatasetSpec d;
-    d.name = "absent";
-    d.grid = grid_;
-    d.mimeType = "image/png";
-    return d;
-  }
-  TileRequestId request(const TileAddress&, double, Callback done) override {
-    TileResult r;
-    r.status = TileStatus::Absent;
-    done(std::move(r));
-    return ++next_;
-  }
-  void reprioritize(TileRequestId, double) override {}
-  bool cancel(TileRequestId) override { return false; }
+using tellus::test::FakeTileSource;
 
-private:
-  GridSpec grid_;
-  TileRequestId next_ = 0;
-};
+/** Every tile absent (the renderer draws the global texture only): the layer of a FakeTileSource
+ * for every name, `FakeTileSource source(absentLayer(grid))`. */
+inline FakeTileSource::Layer absentLayer(GridSpec grid) {
+  return {"absent", grid, "image/png", FakeTileSource::absent()};
+}
 
 /** Tiles whose texels say where they are: red = column in the tile, green = row, blue = level
  * times bluePerLevel (at most blueMax). Any level of the grid exists. */
-class RampSource final : public ITileSource {
-public:
-  explicit RampSource(GridSpec grid, int bluePerLevel = 10, int blueMax = 250)
-      : grid_(grid), bluePerLevel_(bluePerLevel), blueMax_(blueMax) {}
-  std::optional<DatasetSpec> describe(std::string_view, std::string_view) const override {
-    DatasetSpec d;
-    d.name = "ramp";
-    d.grid = grid_;
-    d.mimeType = "image/png";
-    return d;
-  }
-  TileRequestId request(const TileAddress& a, double, Callback done) override {
-    TileResult r;
-    r.status = TileStatus::Ok;
-    r.contentType = "image/png";
-    r.bytes = tile(a.key.level);
-    done(std::move(r));
-    return ++next_;
-  }
-  void reprioritize(TileRequestId, double) override {}
-  bool cancel(TileRequestId) override { return false; }
-
-private:
-  std::vector<std::byte> tile(int level) {
-    auto& t = tiles_[level];
+inline FakeTileSource::Answer rampTiles(GridSpec grid, int bluePerLevel = 10, int blueMax = 250) {
+  auto tiles = std::make_shared<std::map<int, std::vector<std::byte>>>(); // by level
+  return [=](const TileAddress& a) {
+    auto& t = (*tiles)[a.key.level];
     if (t.empty()) {
-      const int w = grid_.tileWidth, h = grid_.tileHeight;
+      const int w = grid.tileWidth, h = grid.tileHeight;
       std::vector<std::uint8_t> px(static_cast<std::size_t>(w * h * 4));
       for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
           auto* p = &px[static_cast<std::size_t>((y * w + x) * 4)];
           p[0] = static_cast<std::uint8_t>(x);
           p[1] = static_cast<std::uint8_t>(y);
-          p[2] = static_cast<std::uint8_t>(std::min(blueMax_, level * bluePerLevel_));
+          p[2] = static_cast<std::uint8_t>(std::min(blueMax, a.key.level * bluePerLevel));
           p[3] = 255;
         }
       t = encodePngRgba(w, h, px);
     }
-    return t;
-  }
-  GridSpec grid_;
-  int bluePerLevel_;
-  int blueMax_;
-  std::map<int, std::vector<std::byte>> tiles_;
-  TileRequestId next_ = 0;
-};
+    return FakeTileSource::result(TileStatus::Ok, t, "image/png");
+  };
+}
+
+/** rampTiles() as the layer of a FakeTileSource for every name (named "ramp"). */
+inline FakeTileSource::Layer rampLayer(GridSpec grid, int bluePerLevel = 10, int blueMax = 250) {
+  return {"ramp", grid, "image/png", rampTiles(grid, bluePerLevel, blueMax)};
+}
 
 /** The embedded default's bluemarble layer through the proxy's tile service over a cache. */
 struct BlueMarbleService {

@@ -1,9 +1,10 @@
 #pragma once
-// Shared by the tests of the renderer's units (layers, update, intake, draw list, uploads): a tile
-// source of named layers that answers every request at once and records it, a LayerSet over it,
-// and cameras. GL-free: nothing here makes a GL object.
+// Shared by the tests of the renderer's units (layers, update, intake, draw list, uploads): layers
+// of the tests' one fake tile source (answered at once, every request recorded), a LayerSet over
+// it, and cameras. GL-free: nothing here makes a GL object.
 
 #include "../../planet/gl/src/LayerSet.hpp"
+#include "../support/FakeTileSource.hpp"
 
 #include <tellus/cache/TileSource.hpp>
 #include <tellus/planet/Camera.hpp>
@@ -19,53 +20,23 @@
 
 namespace tellus::planet::layertest {
 
-/** Layers by name, each with its grid and the answer to every request for it (Absent by
- * default; Ok: a few bytes of "image/png"). Any time of a known layer exists. */
-class FakeLayerSource final : public ITileSource {
-public:
-  void add(const std::string& name, GridSpec grid, TileStatus answer = TileStatus::Absent) {
-    layers_[name] = {grid, answer};
-  }
-  std::optional<DatasetSpec> describe(std::string_view layer, std::string_view) const override {
-    const auto it = layers_.find(std::string(layer));
-    if (it == layers_.end()) return std::nullopt;
-    DatasetSpec d;
-    d.name = it->first;
-    d.grid = it->second.grid;
-    d.mimeType = "image/png";
-    return d;
-  }
-  TileRequestId request(const TileAddress& a, double, Callback done) override {
-    requests.push_back(a);
-    TileResult r;
-    r.status = layers_.at(a.layer).answer;
-    if (r.status == TileStatus::Ok) {
-      r.contentType = "image/png";
-      r.bytes = {std::byte{1}, std::byte{2}, std::byte{3}};
-    }
-    done(std::move(r));
-    return ++next_;
-  }
-  void reprioritize(TileRequestId, double) override {}
-  bool cancel(TileRequestId) override { return false; }
+using tellus::test::FakeTileSource;
 
-  /** Requests for a layer at a time, in the order made. */
-  std::size_t requestsFor(const std::string& layer, const std::string& time = {}) const {
-    std::size_t n = 0;
-    for (const TileAddress& a : requests)
-      if (a.layer == layer && a.time == time) ++n;
-    return n;
-  }
-  std::vector<TileAddress> requests;
-
-private:
-  struct Layer {
-    GridSpec grid;
-    TileStatus answer = TileStatus::Absent;
-  };
-  std::map<std::string, Layer> layers_;
-  TileRequestId next_ = 0;
-};
+/** A layer of the tests' source, answered at once: every tile Absent (the default), or Ok with a
+ * few bytes of "image/png". Any time of a known layer exists. */
+inline void addLayer(FakeTileSource& source,
+                     const std::string& name,
+                     GridSpec grid,
+                     TileStatus answer = TileStatus::Absent) {
+  source.addLayer(
+      {name,
+       grid,
+       "image/png",
+       answer == TileStatus::Ok
+           ? FakeTileSource::bytes({std::byte{1}, std::byte{2}, std::byte{3}}, "image/png")
+           : FakeTileSource::Answer(
+                 [answer](const TileAddress&) { return FakeTileSource::result(answer); })});
+}
 
 inline GridSpec grid36(int levels, int tileSize = 256) {
   GridSpec g;
@@ -78,7 +49,7 @@ inline GridSpec grid36(int levels, int tileSize = 256) {
 /** A LayerSet of the options' base and overlays over a source (opened; the test fails if it
  * cannot be). */
 struct Layers {
-  Layers(FakeLayerSource& source, RendererOptions o) : opt(std::move(o)) {
+  Layers(FakeTileSource& source, RendererOptions o) : opt(std::move(o)) {
     const auto spec = source.describe(opt.layer, opt.time);
     EXPECT_TRUE(spec.has_value());
     set = std::make_unique<LayerSet>(source, geodesy, opt, *TileGrid::create(spec->grid));

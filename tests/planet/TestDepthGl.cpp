@@ -174,7 +174,7 @@ std::string describe(const Wrong& w) {
 
 TEST(DepthExtremesGl, DepthResolvesOneInAHundredThousandFromATenthOfAMetreToABillionMetres) {
   const Geodesy geodesy;
-  RampSource ramp(GridSpec{Sector{}, 36.0, 256, 256, 4}, 8, 248);
+  FakeTileSource ramp(rampLayer(GridSpec{Sector{}, 36.0, 256, 256, 4}, 8, 248));
   OPEN_RENDERER(r, ramp, geodesy, options("ramp", 32, 32)); // for its GL context
   ASSERT_TRUE(r.stats().reversedZ) << "no glClipControl: the renderer's depth is not reversed-Z";
   // The near plane the renderer uses 0.1 m above the ground (a 45-degree view): 0.1 m is in front.

@@ -25,42 +25,20 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-/** Every tile the same colour, at any level. */
-class SolidSource final : public ITileSource {
-public:
-  SolidSource(GridSpec grid, std::array<std::uint8_t, 3> rgb) : grid_(grid) {
-    std::vector<std::uint8_t> px(static_cast<std::size_t>(grid.tileWidth * grid.tileHeight) * 4);
-    for (std::size_t i = 0; i < px.size(); i += 4) {
-      px[i] = rgb[0];
-      px[i + 1] = rgb[1];
-      px[i + 2] = rgb[2];
-      px[i + 3] = 255;
-    }
-    tile_ = encodePngRgba(grid.tileWidth, grid.tileHeight, px);
+/** Every tile the same colour, at any level: the layer of a FakeTileSource for every name. */
+FakeTileSource::Layer solidLayer(GridSpec grid, std::array<std::uint8_t, 3> rgb) {
+  std::vector<std::uint8_t> px(static_cast<std::size_t>(grid.tileWidth * grid.tileHeight) * 4);
+  for (std::size_t i = 0; i < px.size(); i += 4) {
+    px[i] = rgb[0];
+    px[i + 1] = rgb[1];
+    px[i + 2] = rgb[2];
+    px[i + 3] = 255;
   }
-  std::optional<DatasetSpec> describe(std::string_view, std::string_view) const override {
-    DatasetSpec d;
-    d.name = "solid";
-    d.grid = grid_;
-    d.mimeType = "image/png";
-    return d;
-  }
-  TileRequestId request(const TileAddress&, double, Callback done) override {
-    TileResult r;
-    r.status = TileStatus::Ok;
-    r.contentType = "image/png";
-    r.bytes = tile_;
-    done(std::move(r));
-    return ++next_;
-  }
-  void reprioritize(TileRequestId, double) override {}
-  bool cancel(TileRequestId) override { return false; }
-
-private:
-  GridSpec grid_;
-  std::vector<std::byte> tile_;
-  TileRequestId next_ = 0;
-};
+  return {"solid",
+          grid,
+          "image/png",
+          FakeTileSource::bytes(encodePngRgba(grid.tileWidth, grid.tileHeight, px), "image/png")};
+}
 
 constexpr std::array<std::uint8_t, 3> kSolid{200, 120, 40};
 constexpr std::array<std::uint8_t, 3> kSky{255, 0, 255};
@@ -124,7 +102,7 @@ class DomeGl : public ::testing::TestWithParam<DomeMethod> {};
 
 TEST_P(DomeGl, CircleCornersAndTheLimbWhereTheAltitudePutsIt) {
   const Geodesy g(EarthModel::Sphere);
-  SolidSource source(solidGrid(), kSolid);
+  FakeTileSource source(solidLayer(solidGrid(), kSolid));
   const int n = 400;
   for (const double fov : {180.0, 220.0}) {
     OPEN_RENDERER(r, source, g, domeOptions(n, fov, GetParam()));
@@ -189,7 +167,7 @@ TEST_P(DomeGl, CircleCornersAndTheLimbWhereTheAltitudePutsIt) {
 // from the axis, the back face of a 220-degree dome looking at the horizon).
 TEST_P(DomeGl, FlatColourShowsNoSeams) {
   const Geodesy g(EarthModel::Sphere);
-  SolidSource source(solidGrid(), kSolid);
+  FakeTileSource source(solidLayer(solidGrid(), kSolid));
   const int n = 320;
   struct View {
     double fov, tiltDeg;
@@ -322,8 +300,8 @@ TEST(DomeMethodsGl, DirectMatchesCubeOnBlueMarble) {
 // renderer draws. Over a deep dataset at the same place it stays direct.
 TEST(DomeMethodsGl, DirectFallsBackToTheCubeWhereTrianglesAreLarge) {
   const Geodesy g(EarthModel::Sphere);
-  SolidSource shallow(GridSpec{Sector{}, 36.0, 256, 256, 3}, kSolid);
-  SolidSource deep(solidGrid(), kSolid);
+  FakeTileSource shallow(solidLayer(GridSpec{Sector{}, 36.0, 256, 256, 3}, kSolid));
+  FakeTileSource deep(solidLayer(solidGrid(), kSolid));
   const int n = 256;
   const CameraPose pose{30.0, 40.0, 30.0, 20.0, 80.0};
   std::vector<std::uint8_t> images[2];
@@ -356,7 +334,7 @@ TEST(DomeMethodsGl, DirectFallsBackToTheCubeWhereTrianglesAreLarge) {
 // two-float path (OpenGL 3.3's, or fp64Vertices off) draws the same dome as the double one.
 TEST(DomeMethodsGl, DirectOnTheTwoFloatPathDrawsTheSameDome) {
   const Geodesy g(EarthModel::Sphere);
-  SolidSource source(solidGrid(), kSolid);
+  FakeTileSource source(solidLayer(solidGrid(), kSolid));
   const int n = 256;
   std::vector<std::uint8_t> images[2];
   for (const bool fp64 : {true, false}) {
@@ -382,7 +360,7 @@ TEST(DomeMethodsGl, DirectOnTheTwoFloatPathDrawsTheSameDome) {
 // the same pixels inside as the cube method's.
 TEST(DomeMethodsGl, AWideFramebufferKeepsTheCircleInTheMiddle) {
   const Geodesy g(EarthModel::Sphere);
-  SolidSource source(solidGrid(), kSolid);
+  FakeTileSource source(solidLayer(solidGrid(), kSolid));
   const int w = 300, h = 200;
   std::vector<std::uint8_t> images[2];
   for (const DomeMethod m : {DomeMethod::Direct, DomeMethod::Cube}) {

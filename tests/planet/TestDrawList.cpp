@@ -40,8 +40,8 @@ TEST(DrawList, PassesNeededForOverlaysPerPass) {
 }
 
 TEST(DrawList, APartUnderAChildDrawsItsQuadrantThroughTheChildsTransform) {
-  FakeLayerSource source;
-  source.add("base", grid36(3));
+  FakeTileSource source;
+  addLayer(source, "base", grid36(3));
   Layers l(source, layerOptions("base"));
   Quadtree& tree = *l.set->base().tree;
   Node& node = firstPlainRoot(tree);
@@ -72,8 +72,8 @@ TEST(DrawList, APartUnderAChildDrawsItsQuadrantThroughTheChildsTransform) {
 }
 
 TEST(DrawList, NodesWithoutTexturesDrawTheGlobalOneAndResidentOnesTheirOwn) {
-  FakeLayerSource source;
-  source.add("base", grid36(3));
+  FakeTileSource source;
+  addLayer(source, "base", grid36(3));
   Layers l(source, layerOptions("base"));
   LayerSet& set = *l.set;
   updateLayers(set, cameraAt(l.geodesy, 20.0, 10.0, 2e7), 0.0);
@@ -103,11 +103,11 @@ TEST(DrawList, NodesWithoutTexturesDrawTheGlobalOneAndResidentOnesTheirOwn) {
 }
 
 TEST(DrawList, OverlaysBindTheirNearestTextureInOrderSkippingHiddenOnes) {
-  FakeLayerSource source;
-  source.add("base", grid36(3));
-  source.add("a", grid36(3));
-  source.add("b", grid36(3));
-  source.add("c", grid36(1));
+  FakeTileSource source;
+  addLayer(source, "base", grid36(3));
+  addLayer(source, "a", grid36(3));
+  addLayer(source, "b", grid36(3));
+  addLayer(source, "c", grid36(1));
   Layers l(source, layerOptions("base", {"a", "b", "c"}));
   LayerSet& set = *l.set;
   Quadtree& tree = set.geo();
@@ -141,9 +141,9 @@ TEST(DrawList, OverlaysBindTheirNearestTextureInOrderSkippingHiddenOnes) {
 }
 
 TEST(DrawList, TheFrameIsCompleteOnlyWhenItShowsWhatItsLodAsksFor) {
-  FakeLayerSource source;
-  source.add("base", grid36(2));
-  source.add("a", grid36(2));
+  FakeTileSource source;
+  addLayer(source, "base", grid36(2));
+  addLayer(source, "a", grid36(2));
   Layers l(source, layerOptions("base", {"a"}));
   LayerSet& set = *l.set;
   const Camera cam = cameraAt(l.geodesy, 0.0, 0.0, 2e7);

@@ -196,7 +196,7 @@ namespace {
  * every pixel drawn. */
 void expectNoHolesInLowViews(double alt, bool fp64Vertices = true) {
   const Geodesy geodesy;
-  RampSource ramp(deepGrid(), 8, 248);
+  FakeTileSource ramp(rampLayer(deepGrid(), 8, 248));
   auto o = extremesOptions("ramp", 128, 128);
   o.fp64Vertices = fp64Vertices;
   OPEN_RENDERER(r, ramp, geodesy, o);
@@ -319,7 +319,7 @@ TEST(RenderExtremesGl, BillionMetresOutTheEarthIsADiscOfThePredictedRadius) {
 namespace {
 void expectOneMillimetreStepMovesTheImage(bool fp64Vertices) {
   const Geodesy geodesy;
-  RampSource ramp(deepGrid(), 8, 248);
+  FakeTileSource ramp(rampLayer(deepGrid(), 8, 248));
   const int size = 256;
   auto o = extremesOptions("ramp", size, size);
   o.fp64Vertices = fp64Vertices;
@@ -387,7 +387,7 @@ TEST(RenderExtremesGl, SphereModelHasNoHolesAtTheExtremes) {
   const Geodesy sphere(EarthModel::Sphere);
   BlueMarbleService bm{"render-extremes-gl"};
   ASSERT_TRUE(bm.service);
-  RampSource ramp(deepGrid(), 8, 248);
+  FakeTileSource ramp(rampLayer(deepGrid(), 8, 248));
   for (int source = 0; source < 2; ++source) {
     auto o = extremesOptions(source == 0 ? "bluemarble" : "ramp", 128, 128);
     ITileSource& s =
@@ -421,44 +421,21 @@ TEST(RenderExtremesGl, SphereModelHasNoHolesAtTheExtremes) {
 
 namespace {
 
-/** The ramp imagery of deepGrid() and, as layer "heights", a flat plateau `plateauM` above the
- * ellipsoid (BIL16 tiles of one value at every level): the camera's height above the terrain is
- * known exactly. */
-class RampOnPlateauSource final : public ITileSource {
-public:
-  explicit RampOnPlateauSource(std::int16_t plateauM) : ramp_(deepGrid()) {
-    heights_.resize(16 * 16 * 2);
-    for (std::size_t i = 0; i < 16 * 16; ++i) {
-      const auto v = static_cast<std::uint16_t>(plateauM);
-      heights_[2 * i] = static_cast<std::byte>(v & 0xff);
-      heights_[2 * i + 1] = static_cast<std::byte>(v >> 8);
-    }
+/** Layer "heights": a flat plateau `plateauM` above the ellipsoid (BIL16 tiles of one value at
+ * every level); over the ramp imagery of deepGrid() the camera's height above the terrain is known
+ * exactly. */
+FakeTileSource::Layer plateauLayer(std::int16_t plateauM) {
+  std::vector<std::byte> heights(16 * 16 * 2);
+  for (std::size_t i = 0; i < 16 * 16; ++i) {
+    const auto v = static_cast<std::uint16_t>(plateauM);
+    heights[2 * i] = static_cast<std::byte>(v & 0xff);
+    heights[2 * i + 1] = static_cast<std::byte>(v >> 8);
   }
-  std::optional<DatasetSpec> describe(std::string_view layer, std::string_view t) const override {
-    if (layer != "heights") return ramp_.describe(layer, t);
-    DatasetSpec d;
-    d.name = "heights";
-    d.grid = GridSpec{Sector{}, 36.0, 16, 16, 16};
-    d.mimeType = "application/bil16";
-    return d;
-  }
-  TileRequestId request(const TileAddress& a, double p, Callback done) override {
-    if (a.layer != "heights") return ramp_.request(a, p, std::move(done));
-    TileResult r;
-    r.status = TileStatus::Ok;
-    r.contentType = "application/bil16";
-    r.bytes = heights_;
-    done(std::move(r));
-    return ++next_ + (TileRequestId{1} << 40);
-  }
-  void reprioritize(TileRequestId, double) override {}
-  bool cancel(TileRequestId) override { return false; }
-
-private:
-  RampSource ramp_;
-  std::vector<std::byte> heights_;
-  TileRequestId next_ = 0;
-};
+  return {"heights",
+          GridSpec{Sector{}, 36.0, 16, 16, 16},
+          "application/bil16",
+          FakeTileSource::bytes(std::move(heights), "application/bil16")};
+}
 
 } // namespace
 
@@ -468,7 +445,8 @@ namespace {
  * the bare ellipsoid at the same height above the ground. */
 void expectNoHolesAboveThePlateau(const std::vector<CameraPose>& poses, bool checkLevel) {
   const Geodesy geodesy;
-  RampOnPlateauSource source(1000);
+  FakeTileSource source(rampLayer(deepGrid()));
+  source.addLayer(plateauLayer(1000));
   auto o = extremesOptions("ramp", 128, 128);
   o.elevationLayer = "heights";
   o.terrainClearanceM = 0.05; // let the camera down to 0.1 m above the terrain

@@ -11,10 +11,10 @@ using namespace tellus::planet;
 using namespace tellus::planet::layertest;
 
 TEST(FrameUpdate, TheBaseAndVisibleOverlaysStreamAndAHiddenOverlayAsksForNothing) {
-  FakeLayerSource source;
-  source.add("base", grid36(3));
-  source.add("clouds", grid36(3));
-  source.add("sst", grid36(3));
+  FakeTileSource source;
+  addLayer(source, "base", grid36(3));
+  addLayer(source, "clouds", grid36(3));
+  addLayer(source, "sst", grid36(3));
   Layers l(source, layerOptions("base", {"clouds", "sst"}));
   LayerSet& set = *l.set;
   set.setVisible(2, false);
@@ -36,9 +36,9 @@ TEST(FrameUpdate, TheBaseAndVisibleOverlaysStreamAndAHiddenOverlayAsksForNothing
 }
 
 TEST(FrameUpdate, ALayerSwitchingTimeStreamsOnlyTheNewTime) {
-  FakeLayerSource source;
-  source.add("base", grid36(3));
-  source.add("clouds", grid36(3));
+  FakeTileSource source;
+  addLayer(source, "base", grid36(3));
+  addLayer(source, "clouds", grid36(3));
   Layers l(source, layerOptions("base", {"clouds"}));
   LayerSet& set = *l.set;
   const Camera cam = cameraAt(l.geodesy, 30.0, 60.0, 1e7);
@@ -46,7 +46,7 @@ TEST(FrameUpdate, ALayerSwitchingTimeStreamsOnlyTheNewTime) {
   const std::size_t before = source.requestsFor("clouds", "");
   set.setTime(1, "t1");
   set.setTime(0, "t1"); // the base too: its old tree is still what is drawn
-  source.requests.clear();
+  source.forgetRequests();
   updateLayers(set, cam, 0.1);
   EXPECT_FALSE(set[1].current->updated);
   EXPECT_TRUE(set[1].pending->updated);

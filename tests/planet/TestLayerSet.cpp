@@ -16,15 +16,13 @@ using namespace tellus::planet::layertest;
 
 namespace {
 
-FakeLayerSource threeLayers() {
-  FakeLayerSource s;
-  s.add("base", grid36(3));
-  s.add("clouds", grid36(2));
-  s.add("sst", grid36(4));
+void threeLayers(FakeTileSource& s) {
+  addLayer(s, "base", grid36(3));
+  addLayer(s, "clouds", grid36(2));
+  addLayer(s, "sst", grid36(4));
   GridSpec other = grid36(3);
   other.levelZeroDeltaDeg = 45.0;
-  s.add("other-grid", other);
-  return s;
+  addLayer(s, "other-grid", other);
 }
 
 /** Frames until the set swaps a pending time in (at most 20): the number of frames taken. */
@@ -41,7 +39,8 @@ int framesUntilSwapped(LayerSet& set, const Camera& cam, std::size_t layer) {
 } // namespace
 
 TEST(LayerSet, OpensTheBaseAndTheOverlaysInDrawingOrderEachWithItsOwnTag) {
-  FakeLayerSource source = threeLayers();
+  FakeTileSource source;
+  threeLayers(source);
   Layers l(source, layerOptions("base", {"clouds", "sst"}));
   LayerSet& set = *l.set;
   ASSERT_EQ(set.size(), 3u);
@@ -67,7 +66,8 @@ TEST(LayerSet, OpensTheBaseAndTheOverlaysInDrawingOrderEachWithItsOwnTag) {
 }
 
 TEST(LayerSet, RefusesAnUnknownLayerAndAnOverlayOnAnotherGrid) {
-  FakeLayerSource source = threeLayers();
+  FakeTileSource source;
+  threeLayers(source);
   const Geodesy geodesy;
   RendererOptions o = layerOptions("base", {"nowhere"});
   LayerSet unknown(source, geodesy, o, *TileGrid::create(grid36(3)));
@@ -82,7 +82,8 @@ TEST(LayerSet, RefusesAnUnknownLayerAndAnOverlayOnAnotherGrid) {
 }
 
 TEST(LayerSet, ATimeChangeWaitsAsPendingAndGoingBackToTheCurrentTimeCancelsIt) {
-  FakeLayerSource source = threeLayers();
+  FakeTileSource source;
+  threeLayers(source);
   Layers l(source, layerOptions("base", {"clouds"}));
   LayerSet& set = *l.set;
   set.setTime(1, "2024-01-01");
@@ -102,7 +103,8 @@ TEST(LayerSet, ATimeChangeWaitsAsPendingAndGoingBackToTheCurrentTimeCancelsIt) {
 }
 
 TEST(LayerSet, APendingTimeSwapsInWhenEveryNodeItDrawsIsSettled) {
-  FakeLayerSource source = threeLayers(); // every tile absent: settled once the answers are in
+  FakeTileSource source; // every tile absent: settled once the answers are in
+  threeLayers(source);
   Layers l(source, layerOptions("base", {"clouds"}));
   LayerSet& set = *l.set;
   const Camera cam = cameraAt(l.geodesy, 45.0, 7.0, 2e7);
@@ -125,12 +127,13 @@ TEST(LayerSet, APendingTimeSwapsInWhenEveryNodeItDrawsIsSettled) {
   EXPECT_EQ(stats.layers[1].swaps, 1u);
   EXPECT_EQ(stats.layers[1].tilesRequested,
             source.requestsFor("clouds", "") + source.requestsFor("clouds", "2024-01-01"));
-  EXPECT_EQ(totals.stream.requested, source.requests.size());
+  EXPECT_EQ(totals.stream.requested, source.requestCount());
   EXPECT_TRUE(totals.idle);
 }
 
 TEST(LayerSet, ALevelLimitIsSwappedInLikeATimeAndOnePastTheLayersOwnChangesNothing) {
-  FakeLayerSource source = threeLayers();
+  FakeTileSource source;
+  threeLayers(source);
   Layers l(source, layerOptions("base", {"sst"}));
   LayerSet& set = *l.set;
   set.setMaxLevel(1, 10); // sst has 4 levels: the same layer
@@ -148,7 +151,8 @@ TEST(LayerSet, ALevelLimitIsSwappedInLikeATimeAndOnePastTheLayersOwnChangesNothi
 }
 
 TEST(LayerSet, OnlyOverlaysMoveHaveAnOpacityOrHide) {
-  FakeLayerSource source = threeLayers();
+  FakeTileSource source;
+  threeLayers(source);
   Layers l(source, layerOptions("base", {"clouds", "sst", "clouds"}));
   LayerSet& set = *l.set;
   set.move(1, 3);
@@ -170,7 +174,8 @@ TEST(LayerSet, OnlyOverlaysMoveHaveAnOpacityOrHide) {
 }
 
 TEST(LayerSet, EvictedTexturesGoBackToThePoolAndTheirNodesFallBack) {
-  FakeLayerSource source = threeLayers();
+  FakeTileSource source;
+  threeLayers(source);
   RendererOptions o = layerOptions("base");
   o.textureBudgetBytes = 100;
   Layers l(source, o);
@@ -196,7 +201,8 @@ TEST(LayerSet, EvictedTexturesGoBackToThePoolAndTheirNodesFallBack) {
 }
 
 TEST(LayerSet, ANodeIsDoneWithItsOwnTextureOrWhenNoneExists) {
-  FakeLayerSource source = threeLayers();
+  FakeTileSource source;
+  threeLayers(source);
   Layers l(source, layerOptions("base"));
   LayerTextures& base = l.set->base();
   Quadtree& tree = *base.tree;

@@ -2,6 +2,7 @@
 // opacity and visibility, a layer's maximum level, time changes that swap a layer all at once, and
 // regional datasets inside one layer (the smallest covering dataset wins).
 
+#include "../support/FakeTileSource.hpp"
 #include "GlTestSupport.hpp"
 
 #include <tellus/cache/TileGrid.hpp>
@@ -38,94 +39,25 @@ std::vector<std::byte> solidPng(int w, int h, Rgba c) {
   return encodePngRgba(w, h, px);
 }
 
-/** Layers of one colour each (a colour per layer and time), on a 36-degree grid of 32-px tiles.
- * Requests of times listed in `held` wait until release(); the others are answered at once.
- * Records the deepest level asked of each layer. */
-class ColourWorld final : public ITileSource {
-public:
-  std::map<std::string, GridSpec> grids;
+/** Layers of one colour each (a colour per layer and time) through the tests' fake tile source.
+ * Requests of times listed in `held` wait until source.release(); the others are answered at once.
+ * A (layer, time) without a colour is absent. */
+struct ColourWorld {
+  ColourWorld() {
+    source.holdIf([this](const TileAddress& a) { return held.contains(a.time); });
+  }
+  void add(const std::string& layer, GridSpec grid) {
+    source.addLayer(
+        {layer, grid, "image/png", [this, grid](const TileAddress& a) {
+           const auto c = colours.find({a.layer, a.time});
+           if (c == colours.end()) return test::FakeTileSource::result(TileStatus::Absent);
+           return test::FakeTileSource::result(
+               TileStatus::Ok, solidPng(grid.tileWidth, grid.tileHeight, c->second), "image/png");
+         }});
+  }
   std::map<std::pair<std::string, std::string>, Rgba> colours; ///< (layer, time) -> colour
   std::set<std::string> held;
-
-  std::optional<DatasetSpec> describe(std::string_view layer,
-                                      std::string_view time) const override {
-    const auto it = grids.find(std::string(layer));
-    if (it == grids.end()) return std::nullopt;
-    DatasetSpec d;
-    d.name = it->first;
-    d.grid = it->second;
-    d.time = std::string(time);
-    d.mimeType = "image/png";
-    return d;
-  }
-  TileRequestId request(const TileAddress& a, double, Callback done) override {
-    std::unique_lock lock(mutex_);
-    deepest_[a.layer] = std::max(deepest_[a.layer], a.key.level);
-    const TileRequestId id = ++next_;
-    if (held.contains(a.time)) {
-      waiting_.push_back({id, a, std::move(done)});
-      return id;
-    }
-    lock.unlock();
-    done(answer(a));
-    return id;
-  }
-  void reprioritize(TileRequestId, double) override {}
-  bool cancel(TileRequestId id) override {
-    std::lock_guard lock(mutex_);
-    const auto it = std::find_if(
-        waiting_.begin(), waiting_.end(), [&](const Waiting& w) { return w.id == id; });
-    if (it == waiting_.end()) return false;
-    waiting_.erase(it);
-    return true;
-  }
-  /** Answers up to n held requests (all when n < 0); how many it answered. */
-  int release(int n = -1) {
-    std::vector<Waiting> go;
-    {
-      std::lock_guard lock(mutex_);
-      while (!waiting_.empty() && (n < 0 || static_cast<int>(go.size()) < n)) {
-        go.push_back(std::move(waiting_.front()));
-        waiting_.pop_front();
-      }
-    }
-    for (Waiting& w : go)
-      w.done(answer(w.address));
-    return static_cast<int>(go.size());
-  }
-  std::size_t waiting() const {
-    std::lock_guard lock(mutex_);
-    return waiting_.size();
-  }
-  int deepest(const std::string& layer) const {
-    std::lock_guard lock(mutex_);
-    const auto it = deepest_.find(layer);
-    return it == deepest_.end() ? -1 : it->second;
-  }
-
-private:
-  struct Waiting {
-    TileRequestId id;
-    TileAddress address;
-    Callback done;
-  };
-  TileResult answer(const TileAddress& a) const {
-    TileResult r;
-    const auto c = colours.find({a.layer, a.time});
-    if (c == colours.end()) {
-      r.status = TileStatus::Absent;
-      return r;
-    }
-    const GridSpec& g = grids.at(a.layer);
-    r.status = TileStatus::Ok;
-    r.contentType = "image/png";
-    r.bytes = solidPng(g.tileWidth, g.tileHeight, c->second);
-    return r;
-  }
-  mutable std::mutex mutex_;
-  std::deque<Waiting> waiting_;
-  std::map<std::string, int> deepest_;
-  TileRequestId next_ = 0;
+  test::FakeTileSource source; ///< last: gone before what its answers read
 };
 
 constexpr GridSpec kGrid{Sector{}, 36.0, 32, 32, 6};
@@ -134,10 +66,10 @@ constexpr Rgba kBlue{20, 60, 220, 255};
 constexpr Rgba kGreenHalf{0, 255, 0, 128}; ///< a texel that is itself half transparent
 
 void fill(ColourWorld& w) {
-  w.grids["base"] = kGrid;
-  w.grids["blue"] = kGrid;
-  w.grids["green"] = kGrid;
-  w.grids["empty"] = kGrid; // every tile absent: must show what lies under it
+  w.add("base", kGrid);
+  w.add("blue", kGrid);
+  w.add("green", kGrid);
+  w.add("empty", kGrid); // every tile absent: must show what lies under it
   w.colours[{"base", ""}] = kBase;
   w.colours[{"blue", ""}] = kBlue;
   w.colours[{"green", ""}] = kGreenHalf;
@@ -188,7 +120,7 @@ TEST(LayersGl, HalfOverlayOverAKnownColourGivesTheMix) {
   ColourWorld w;
   fill(w);
   const Geodesy wgs;
-  OPEN_RENDERER(r, w, wgs, opts({{"blue", "", 0.5, true, -1}}));
+  OPEN_RENDERER(r, w.source, wgs, opts({{"blue", "", 0.5, true, -1}}));
   const auto done = gltest::renderComplete(r, kView);
   ASSERT_TRUE(done.complete);
   const auto want = over(kBaseRgb, kBlue, 0.5); // (110, 50, 130)
@@ -211,7 +143,7 @@ TEST(LayersGl, OnePassAndSeveralPassesGiveTheSameImage) {
       {"blue", "", 0.5, true, -1}, {"empty", "", 1.0, true, -1}, {"green", "", 0.8, true, -1}};
   std::vector<std::uint8_t> one, several;
   {
-    OPEN_RENDERER(r, w, wgs, opts(layers));
+    OPEN_RENDERER(r, w.source, wgs, opts(layers));
     const auto done = gltest::renderComplete(r, kView);
     ASSERT_TRUE(done.complete);
     ASSERT_GE(done.stats.overlaysPerPass, 3);
@@ -221,7 +153,7 @@ TEST(LayersGl, OnePassAndSeveralPassesGiveTheSameImage) {
     EXPECT_LE(worstOff(r, one, want), 2);
   }
   {
-    OPEN_RENDERER(r, w, wgs, opts(layers, 1));
+    OPEN_RENDERER(r, w.source, wgs, opts(layers, 1));
     const auto done = gltest::renderComplete(r, kView);
     ASSERT_TRUE(done.complete);
     EXPECT_EQ(done.stats.overlaysPerPass, 1);
@@ -250,7 +182,7 @@ TEST(LayersGl, DirectDomeOnePassAndSeveralPassesGiveTheSameImage) {
     o.width = o.height = 192; // the globe 28 px around the centre: the middle 20 x 20 is ground
     o.dome = DomeOptions{180.0, 0.0, 0.64};
     o.dome->method = DomeMethod::Direct;
-    OPEN_RENDERER(r, w, wgs, o);
+    OPEN_RENDERER(r, w.source, wgs, o);
     const auto done = gltest::renderComplete(r, kView);
     ASSERT_TRUE(done.complete);
     EXPECT_EQ(done.stats.domeMethod, "direct");
@@ -271,11 +203,11 @@ TEST(LayersGl, OpacityVisibilityAndMaximumLevelChangeAtRunTime) {
   const Geodesy wgs;
   // Close enough that the base goes deeper than level 1.
   const CameraPose low{10.0, 20.0, 3.0e5, 0.0, 0.0};
-  OPEN_RENDERER(r, w, wgs, opts({{"blue", "", 1.0, true, 1}}));
+  OPEN_RENDERER(r, w.source, wgs, opts({{"blue", "", 1.0, true, 1}}));
   auto done = gltest::renderComplete(r, low);
   ASSERT_TRUE(done.complete);
   EXPECT_GT(done.stats.maxLevel, 1);
-  EXPECT_LE(w.deepest("blue"), 1);                       // never asked past its maximum level
+  EXPECT_LE(w.source.deepestLevel("blue"), 1);           // never asked past its maximum level
   EXPECT_LE(worstOff(r, done.pixels, {20, 60, 220}), 2); // drawn from its level-1 tiles
   r.setLayerOpacity(1, 0.25);
   done = gltest::renderComplete(r, low);
@@ -293,7 +225,8 @@ TEST(LayersGl, OrderAndMaximumLevelChangeAtRunTime) {
   fill(w);
   const Geodesy wgs;
   const CameraPose low{10.0, 20.0, 3.0e5, 0.0, 0.0};
-  OPEN_RENDERER(r, w, wgs, opts({{"green", "", 1.0, true, -1}, {"blue", "", 1.0, true, -1}}));
+  OPEN_RENDERER(
+      r, w.source, wgs, opts({{"green", "", 1.0, true, -1}, {"blue", "", 1.0, true, -1}}));
   auto done = gltest::renderComplete(r, low);
   ASSERT_TRUE(done.complete);
   EXPECT_LE(worstOff(r, done.pixels, {20, 60, 220}), 2); // opaque blue on top
@@ -323,7 +256,7 @@ TEST(LayersGl, TimeChangeSwapsTheLayerAllAtOnce) {
   w.colours[{"blue", "2020-01-02"}] = Rgba{250, 250, 20, 255};
   w.held = {"2020-01-02"};
   const Geodesy wgs;
-  OPEN_RENDERER(r, w, wgs, opts({{"blue", "2020-01-01", 1.0, true, -1}}));
+  OPEN_RENDERER(r, w.source, wgs, opts({{"blue", "2020-01-01", 1.0, true, -1}}));
   auto done = gltest::renderComplete(r, kView);
   ASSERT_TRUE(done.complete);
   EXPECT_LE(worstOff(r, done.pixels, {20, 60, 220}), 2);
@@ -338,7 +271,7 @@ TEST(LayersGl, TimeChangeSwapsTheLayerAllAtOnce) {
     EXPECT_EQ(r.stats().layers[1].time, "2020-01-01");
     ASSERT_LE(worstOff(r, px, {20, 60, 220}), 2) << "a tile of the new time showed before the swap";
     EXPECT_FALSE(r.complete());
-    w.release(1);
+    w.source.release(1);
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
   EXPECT_GT(frames, 5) << "the new time's tiles came in over several frames";
@@ -366,14 +299,14 @@ TEST(LayersGl, TheBaseLayerSwapsTimeAllAtOnceToo) {
   const Geodesy wgs;
   RendererOptions o = opts({});
   o.time = "d1";
-  OPEN_RENDERER(r, w, wgs, o);
+  OPEN_RENDERER(r, w.source, wgs, o);
   ASSERT_TRUE(gltest::renderComplete(r, kView).complete);
   r.setLayerTime(0, "d2");
   for (int i = 0; i < 400; ++i) {
     r.frame(kView);
     if (r.stats().layers[0].pendingTime.empty()) break; // swapped
     ASSERT_LE(worstOff(r, r.readPixels(), kBaseRgb), 2) << "a tile of d2 showed before the swap";
-    w.release(1);
+    w.source.release(1);
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
   const auto done = gltest::renderComplete(r, kView);
@@ -387,11 +320,11 @@ TEST(LayersGl, TheBaseLayerSwapsTimeAllAtOnceToo) {
 // (deeper levels there are absent and fall back to the global dataset's level 2).
 TEST(LayersGl, TheSmallestCoveringDatasetWins) {
   ColourWorld w;
-  w.grids["global"] = GridSpec{Sector{}, 36.0, 32, 32, 3};
-  w.grids["region"] = GridSpec{Sector{9.0, 0.0, 27.0, 18.0}, 36.0, 32, 32, 6};
+  w.add("global", GridSpec{Sector{}, 36.0, 32, 32, 3});
+  w.add("region", GridSpec{Sector{9.0, 0.0, 27.0, 18.0}, 36.0, 32, 32, 6});
   w.colours[{"global", ""}] = kBase;
   w.colours[{"region", ""}] = kBlue;
-  auto regional = RegionalTileSource::create(w, {{"imagery", {"global", "region"}}});
+  auto regional = RegionalTileSource::create(w.source, {{"imagery", {"global", "region"}}});
   ASSERT_TRUE(regional.has_value()) << regional.error();
   const Geodesy wgs;
   RendererOptions o = opts({});
@@ -406,22 +339,22 @@ TEST(LayersGl, TheSmallestCoveringDatasetWins) {
   done = gltest::renderComplete(r, {-30.0, -60.0, 4.0e5, 0.0, 0.0});
   ASSERT_TRUE(done.complete);
   EXPECT_LE(worstOff(r, done.pixels, kBaseRgb), 2);
-  EXPECT_EQ(w.deepest("global"), 2);
-  EXPECT_GT(w.deepest("region"), 2);
+  EXPECT_EQ(w.source.deepestLevel("global"), 2);
+  EXPECT_GT(w.source.deepestLevel("region"), 2);
 }
 
 TEST(LayersGl, AnOverlayOnAnotherGridIsRefusedWithAReason) {
   ColourWorld w;
   fill(w);
-  w.grids["coarse"] = GridSpec{Sector{}, 20.0, 32, 32, 3};
+  w.add("coarse", GridSpec{Sector{}, 20.0, 32, 32, 3});
   const Geodesy wgs;
   if (!haveDisplay()) GTEST_SKIP() << "no DISPLAY";
-  auto made = Renderer::create(w, wgs, opts({{"coarse", "", 1.0, true, -1}}));
+  auto made = Renderer::create(w.source, wgs, opts({{"coarse", "", 1.0, true, -1}}));
   ASSERT_FALSE(made.has_value());
   EXPECT_NE(made.error().find("grid"), std::string::npos) << made.error();
-  made = Renderer::create(w, wgs, opts({{"nope", "", 1.0, true, -1}}));
+  made = Renderer::create(w.source, wgs, opts({{"nope", "", 1.0, true, -1}}));
   ASSERT_FALSE(made.has_value());
-  made = Renderer::create(w, wgs, opts({{"blue", "", 2.0, true, -1}}));
+  made = Renderer::create(w.source, wgs, opts({{"blue", "", 2.0, true, -1}}));
   ASSERT_FALSE(made.has_value());
 }
 

@@ -52,8 +52,8 @@ TEST(NodeMeshes, ACapsSeamColumnsAreMadeBitIdentical) {
 }
 
 TEST(NodeMeshes, OnlySidesBorderedByACoarserDrawnNodeAdapt) {
-  FakeLayerSource source;
-  source.add("base", grid36(10));
+  FakeTileSource source;
+  addLayer(source, "base", grid36(10));
   Layers l(source, layerOptions("base"));
   Quadtree& tree = l.set->geo();
   const Camera cam(l.geodesy, CameraPose{46.0, 8.0, 20000.0, 0.0, 60.0}, Viewport{640, 480});
@@ -89,8 +89,8 @@ TEST(NodeMeshes, OnlySidesBorderedByACoarserDrawnNodeAdapt) {
 
 TEST(NodeMeshesGl, AMeshIsBuiltOnceKeptWhileUsedAndDroppedAfter120Frames) {
   OPEN_GL_CONTEXT(context);
-  FakeLayerSource source;
-  source.add("base", grid36(3));
+  FakeTileSource source;
+  addLayer(source, "base", grid36(3));
   Layers l(source, layerOptions("base"));
   TerrainState terrain(l.opt);
   NodeMeshes meshes(l.geodesy, terrain, 9, true, context.capabilities().gl45);

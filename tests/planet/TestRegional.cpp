@@ -1,6 +1,8 @@
 // Several datasets as one layer (issue #7, thesis 4.6.3): the smallest covering dataset serves
 // each tile; elsewhere the tile is absent, so the number of levels differs by region.
 
+#include "../support/FakeTileSource.hpp"
+
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/planet/RegionalSource.hpp>
 
@@ -13,51 +15,24 @@
 namespace tellus::planet {
 namespace {
 
-/** Layers with fixed grids; records which layer each request went to and answers Ok at once. */
-class Datasets final : public ITileSource {
-public:
-  std::map<std::string, GridSpec> grids;
-  std::vector<TileAddress> asked;
-  std::vector<TileRequestId> cancelled;
-  std::optional<DatasetSpec> describe(std::string_view layer,
-                                      std::string_view time) const override {
-    const auto it = grids.find(std::string(layer));
-    if (it == grids.end()) return std::nullopt;
-    DatasetSpec d;
-    d.name = it->first;
-    d.grid = it->second;
-    d.time = std::string(time);
-    d.mimeType = "image/png";
-    return d;
-  }
-  TileRequestId request(const TileAddress& a, double, Callback done) override {
-    asked.push_back(a);
-    TileResult r;
-    r.status = TileStatus::Ok;
-    r.bytes = {std::byte{1}};
-    done(std::move(r));
-    return asked.size();
-  }
-  void reprioritize(TileRequestId, double) override {}
-  bool cancel(TileRequestId id) override {
-    cancelled.push_back(id);
-    return true;
-  }
-};
+using tellus::test::FakeTileSource;
 
-Datasets world() {
-  Datasets d;
-  d.grids["global"] = GridSpec{Sector{}, 36.0, 512, 512, 3};
+/** Datasets with fixed grids, every tile a byte of "image/png" (Ok). */
+void world(FakeTileSource& d) {
+  const auto layer = [&](const std::string& name, GridSpec grid) {
+    d.addLayer({name, grid, "image/png", FakeTileSource::bytes({std::byte{1}}, "image/png")});
+  };
+  layer("global", GridSpec{Sector{}, 36.0, 512, 512, 3});
   // A regional dataset over the Alps (inside one level-1 tile), levels 0-7, and a smaller one
   // inside it with levels 0-9.
-  d.grids["alps"] = GridSpec{Sector{4.5, 43.2, 16.2, 48.6}, 36.0, 512, 512, 8};
-  d.grids["valley"] = GridSpec{Sector{7.0, 45.5, 8.0, 46.2}, 36.0, 512, 512, 10};
-  d.grids["other-grid"] = GridSpec{Sector{}, 20.0, 150, 150, 5};
-  return d;
+  layer("alps", GridSpec{Sector{4.5, 43.2, 16.2, 48.6}, 36.0, 512, 512, 8});
+  layer("valley", GridSpec{Sector{7.0, 45.5, 8.0, 46.2}, 36.0, 512, 512, 10});
+  layer("other-grid", GridSpec{Sector{}, 20.0, 150, 150, 5});
 }
 
 TEST(RegionalSource, SmallestCoveringDatasetWinsAndLevelsDifferByRegion) {
-  Datasets inner = world();
+  FakeTileSource inner;
+  world(inner);
   auto made = RegionalTileSource::create(inner, {{"imagery", {"global", "alps", "valley"}}});
   ASSERT_TRUE(made.has_value()) << made.error();
   RegionalTileSource& src = **made;
@@ -88,7 +63,9 @@ TEST(RegionalSource, SmallestCoveringDatasetWinsAndLevelsDifferByRegion) {
 }
 
 TEST(RegionalSource, RequestsGoToTheWinnerAndUncoveredTilesAreAbsentAtOnce) {
-  Datasets inner = world();
+  FakeTileSource inner;
+  world(inner);
+  inner.setDelivery(FakeTileSource::Delivery::Held); // answered below, or cancelled
   auto src = std::move(*RegionalTileSource::create(inner, {{"imagery", {"global", "alps"}}}));
   const TileGrid grid = *TileGrid::create(
       *src->describe("imagery").transform([](const DatasetSpec& d) { return d.grid; }));
@@ -97,24 +74,32 @@ TEST(RegionalSource, RequestsGoToTheWinnerAndUncoveredTilesAreAbsentAtOnce) {
     return src->request({"imagery", "t", k}, 1.0, [&](TileResult&& r) { got.push_back(r.status); });
   };
   const TileRequestId a = ask(*grid.keyAt(47.0, 12.0, 6));
-  ASSERT_EQ(inner.asked.size(), 1u);
-  EXPECT_EQ(inner.asked[0].layer, "alps");
-  EXPECT_EQ(inner.asked[0].time, "t");
+  auto asked = inner.requests();
+  ASSERT_EQ(asked.size(), 1u);
+  EXPECT_EQ(asked[0].address.layer, "alps");
+  EXPECT_EQ(asked[0].address.time, "t");
   const TileRequestId b = ask(*grid.keyAt(0.0, 0.0, 6));
-  EXPECT_EQ(inner.asked.size(), 1u); // not forwarded
-  ASSERT_EQ(got.size(), 2u);
-  EXPECT_EQ(got[0], TileStatus::Ok);
-  EXPECT_EQ(got[1], TileStatus::Absent);
+  EXPECT_EQ(inner.requestCount(), 1u); // not forwarded
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0], TileStatus::Absent);
   // Cancelling reaches the inner request; the absent answer cannot be cancelled (it was called).
   EXPECT_TRUE(src->cancel(a));
-  ASSERT_EQ(inner.cancelled.size(), 1u);
-  EXPECT_EQ(inner.cancelled[0], 1u);
+  ASSERT_EQ(inner.cancelled().size(), 1u);
+  EXPECT_EQ(inner.cancelled()[0], 1u);
   EXPECT_FALSE(src->cancel(b));
-  EXPECT_EQ(inner.cancelled.size(), 1u);
+  EXPECT_EQ(inner.cancelled().size(), 1u);
+  // The inner source's answer reaches the caller; answered, it cannot be cancelled.
+  const TileRequestId c = ask(*grid.keyAt(47.0, 12.0, 6));
+  EXPECT_EQ(inner.release(), 1u);
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[1], TileStatus::Ok);
+  EXPECT_FALSE(src->cancel(c));
+  EXPECT_EQ(inner.cancelled().size(), 1u);
 }
 
 TEST(RegionalSource, RefusesBadCombinations) {
-  Datasets inner = world();
+  FakeTileSource inner;
+  world(inner);
   EXPECT_FALSE(RegionalTileSource::create(inner, {{"x", {}}}).has_value());
   EXPECT_FALSE(RegionalTileSource::create(inner, {{"x", {"nope"}}}).has_value());
   const auto grids = RegionalTileSource::create(inner, {{"x", {"global", "other-grid"}}});

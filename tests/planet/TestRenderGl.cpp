@@ -102,7 +102,7 @@ TEST(RenderGl, GlobeFrom20000kmIsADiscOfTheExpectedRadiusWithTheBundledColours) 
   const Geodesy geodesy;
   BlueMarbleService bm;
   ASSERT_TRUE(bm.service);
-  AbsentSource absent(GridSpec{Sector{}, 36.0, 512, 512, 3});
+  FakeTileSource absent(absentLayer(GridSpec{Sector{}, 36.0, 512, 512, 3}));
   const auto image = readImageFile(kBlueMarble);
   ASSERT_TRUE(image.has_value()) << image.error();
   for (int variant = 0; variant < 2; ++variant) {
@@ -287,7 +287,7 @@ TEST(RenderGl, PolesAndAntimeridianHaveNoHoles) {
 // views, many level changes on screen; the poles' merged rows meet unmerged ones too.
 TEST(RenderGl, NoCracksWhereLevelsMeet) {
   const Geodesy geodesy;
-  RampSource ramp(GridSpec{Sector{}, 36.0, 256, 256, 24});
+  FakeTileSource ramp(rampLayer(GridSpec{Sector{}, 36.0, 256, 256, 24}));
   auto o = options("ramp", 320, 240);
   o.background = {1.0, 0.0, 1.0};
   OPEN_RENDERER(r, ramp, geodesy, o);
@@ -328,7 +328,7 @@ TEST(RenderGl, NoCracksWhereLevelsMeet) {
 // T pixels (and a coarser level would have broken that, so not much smaller than T / 2).
 TEST(RenderGl, TexelToPixelRatioIsKeptNearTheThreshold) {
   const Geodesy geodesy;
-  RampSource ramp(GridSpec{Sector{}, 36.0, 256, 256, 24});
+  FakeTileSource ramp(rampLayer(GridSpec{Sector{}, 36.0, 256, 256, 24}));
   for (const double threshold : {1.0, 2.0}) {
     auto o = options("ramp", 320, 240);
     o.lodThreshold = threshold;
@@ -384,7 +384,7 @@ TEST(RenderGl, TexelToPixelRatioIsKeptNearTheThreshold) {
 // it on the geometry: at most 0.95 px.)
 TEST(RenderGl, TexelToPixelRatioIsKeptAtThePoles) {
   const Geodesy geodesy;
-  RampSource ramp(GridSpec{Sector{}, 36.0, 256, 256, 24});
+  FakeTileSource ramp(rampLayer(GridSpec{Sector{}, 36.0, 256, 256, 24}));
   for (const double threshold : {1.0, 2.0}) {
     auto o = options("ramp", 320, 240);
     o.lodThreshold = threshold;
@@ -433,7 +433,7 @@ TEST(RenderGl, TexelToPixelRatioIsKeptAtThePoles) {
 // of the way into a tile at every level, so the centre stays far from a tile edge.
 TEST(RenderGl, NoJitterOneMetreAboveTheGround) {
   const Geodesy geodesy;
-  RampSource ramp(GridSpec{Sector{}, 36.0, 256, 256, 24});
+  FakeTileSource ramp(rampLayer(GridSpec{Sector{}, 36.0, 256, 256, 24}));
   auto o = options("ramp", 160, 120);
   OPEN_RENDERER(r, ramp, geodesy, o);
   const double lat = -6.0, lon0 = 12.0, alt = 1.0;

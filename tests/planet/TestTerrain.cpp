@@ -1,6 +1,7 @@
 // Heights on the quadtree (issue #6): the height function over held elevation tiles, and node
 // meshes whose edges meet exactly (same level) or lie on the coarser neighbour's chords (levels
 // apart), with the zero-area triangles that close the T-junctions.
+#include "../support/FakeTileSource.hpp"
 #include "PlanetTestSupport.hpp"
 
 #include <tellus/planet/Geoid.hpp>
@@ -324,52 +325,18 @@ TEST(TerrainMeshExtremes, DeepestLevelCornersDistinct) {
 namespace tellus::planet {
 namespace {
 
-/** Queues requests; the test answers them (on its own thread of control) in any order. */
-class ManualSource final : public ITileSource {
-public:
-  explicit ManualSource(GridSpec g) : grid(g) {}
-  std::optional<DatasetSpec> describe(std::string_view, std::string_view) const override {
-    DatasetSpec d;
-    d.grid = grid;
-    d.mimeType = "application/bil16";
-    return d;
-  }
-  TileRequestId request(const TileAddress& a, double priority, Callback done) override {
-    queued.push_back({++next, a.key, priority, std::move(done)});
-    return next;
-  }
-  void reprioritize(TileRequestId, double) override {}
-  bool cancel(TileRequestId id) override {
-    const auto it =
-        std::find_if(queued.begin(), queued.end(), [&](const Req& r) { return r.id == id; });
-    if (it == queued.end()) return false;
-    queued.erase(it);
-    ++cancelled;
-    return true;
-  }
-  void answer(const TileKey& k, TileStatus status, std::size_t bytes = 0) {
-    const auto it =
-        std::find_if(queued.begin(), queued.end(), [&](const Req& r) { return r.key == k; });
-    ASSERT_NE(it, queued.end());
-    TileResult r;
-    r.status = status;
-    r.contentType = "application/bil16";
-    r.bytes.assign(bytes, std::byte{0});
-    auto done = std::move(it->done);
-    queued.erase(it);
-    done(std::move(r));
-  }
-  struct Req {
-    TileRequestId id;
-    TileKey key;
-    double priority;
-    Callback done;
-  };
-  GridSpec grid;
-  std::vector<Req> queued;
-  int cancelled = 0;
-  TileRequestId next = 0;
-};
+using tellus::test::FakeTileSource;
+
+/** Height tiles of a grid, held until the test answers them (in any order). */
+void heldHeights(FakeTileSource& src, GridSpec grid) {
+  src.addLayer({"h", grid, "application/bil16", {}});
+  src.setDelivery(FakeTileSource::Delivery::Held);
+}
+
+/** A BIL16 answer of `bytes` zero bytes. */
+TileResult bil16(TileStatus status, std::size_t bytes = 0) {
+  return FakeTileSource::result(status, std::vector<std::byte>(bytes), "application/bil16");
+}
 
 TEST(HeightStreamer, RequestsInOrderWithinTheWindowCancelsAndRetries) {
   GridSpec spec;
@@ -377,7 +344,8 @@ TEST(HeightStreamer, RequestsInOrderWithinTheWindowCancelsAndRetries) {
   spec.tileWidth = spec.tileHeight = 4;
   spec.numLevels = 4;
   const TileGrid grid = *TileGrid::create(spec);
-  ManualSource src(spec);
+  FakeTileSource src;
+  heldHeights(src, spec);
   HeightStreamParams p;
   p.layer = "h";
   p.maxInFlight = 3;
@@ -386,22 +354,24 @@ TEST(HeightStreamer, RequestsInOrderWithinTheWindowCancelsAndRetries) {
   HeightField field(grid);
   const std::vector<TileKey> wish{{0, 4, 9}, {1, 9, 18}, {2, 18, 36}, {3, 36, 72}, {0, 4, 10}};
   hs.want(wish, field, 0.0);
-  ASSERT_EQ(src.queued.size(), 3u); // the window
-  EXPECT_EQ(src.queued[0].key, wish[0]);
-  EXPECT_GT(src.queued[0].priority, src.queued[1].priority); // most important first
-  EXPECT_GT(src.queued[1].priority, src.queued[2].priority);
+  auto queued = src.openRequests();
+  ASSERT_EQ(queued.size(), 3u); // the window
+  EXPECT_EQ(queued[0].address.key, wish[0]);
+  EXPECT_GT(queued[0].priority, queued[1].priority); // most important first
+  EXPECT_GT(queued[1].priority, queued[2].priority);
   // One tile arrives, one is absent, one fails.
-  src.answer(wish[0], TileStatus::Ok, 4 * 4 * 2);
-  src.answer(wish[1], TileStatus::Absent);
-  src.answer(wish[2], TileStatus::Failed);
+  ASSERT_TRUE(src.answer(wish[0], bil16(TileStatus::Ok, 4 * 4 * 2)));
+  ASSERT_TRUE(src.answer(wish[1], bil16(TileStatus::Absent)));
+  ASSERT_TRUE(src.answer(wish[2], bil16(TileStatus::Failed)));
   hs.want(wish, field, 1.0);
   EXPECT_EQ(hs.stats().received, 1u);
   EXPECT_EQ(hs.stats().absent, 1u);
   EXPECT_EQ(hs.stats().failed, 1u);
   // The window refills with what is left: not the absent one, not the failed one before its retry.
-  ASSERT_EQ(src.queued.size(), 2u);
-  EXPECT_EQ(src.queued[0].key, wish[3]);
-  EXPECT_EQ(src.queued[1].key, wish[4]);
+  queued = src.openRequests();
+  ASSERT_EQ(queued.size(), 2u);
+  EXPECT_EQ(queued[0].address.key, wish[3]);
+  EXPECT_EQ(queued[1].address.key, wish[4]);
   EXPECT_TRUE(hs.settled(wish[1], field));
   EXPECT_TRUE(hs.settled(wish[2], field)); // failed: settled until its retry
   // Delivery into the field, at most as many as asked.
@@ -411,15 +381,15 @@ TEST(HeightStreamer, RequestsInOrderWithinTheWindowCancelsAndRetries) {
   EXPECT_TRUE(field.contains(wish[0]));
   // No longer wished: queued requests are cancelled.
   hs.want(std::vector<TileKey>{wish[3]}, field, 2.0);
-  EXPECT_EQ(src.cancelled, 1);
-  ASSERT_EQ(src.queued.size(), 1u);
+  EXPECT_EQ(src.cancelled().size(), 1u);
+  ASSERT_EQ(src.openCount(), 1u);
   // After retryAfterS the failed tile is asked again; the absent one never.
-  src.answer(wish[3], TileStatus::Ok, 4 * 4 * 2);
+  ASSERT_TRUE(src.answer(wish[3], bil16(TileStatus::Ok, 4 * 4 * 2)));
   hs.want(wish, field, 7.0);
   bool retried = false, absentAgain = false;
-  for (const auto& r : src.queued) {
-    retried = retried || r.key == wish[2];
-    absentAgain = absentAgain || r.key == wish[1];
+  for (const auto& r : src.openRequests()) {
+    retried = retried || r.address.key == wish[2];
+    absentAgain = absentAgain || r.address.key == wish[1];
   }
   EXPECT_TRUE(retried);
   EXPECT_FALSE(absentAgain);
@@ -431,15 +401,16 @@ TEST(HeightStreamer, UndecodableBytesAreCountedAndNotAskedAgain) {
   spec.tileWidth = spec.tileHeight = 4;
   spec.numLevels = 2;
   const TileGrid grid = *TileGrid::create(spec);
-  ManualSource src(spec);
+  FakeTileSource src;
+  heldHeights(src, spec);
   HeightStreamer hs(src, grid, HeightStreamParams{"h", "", 4, {}, 5.0});
   HeightField field(grid);
   const std::vector<TileKey> wish{{0, 1, 1}};
   hs.want(wish, field, 0.0);
-  src.answer(wish[0], TileStatus::Ok, 7); // not 4 x 4 x 2 bytes
+  ASSERT_TRUE(src.answer(wish[0], bil16(TileStatus::Ok, 7))); // not 4 x 4 x 2 bytes
   hs.want(wish, field, 10.0);
   EXPECT_EQ(hs.stats().decodeErrors, 1u);
-  EXPECT_TRUE(src.queued.empty());
+  EXPECT_EQ(src.openCount(), 0u);
   EXPECT_TRUE(hs.settled(wish[0], field));
   EXPECT_FALSE(hs.busy());
 }
@@ -533,14 +504,15 @@ TEST(GeoidTerrain, TheStreamerMovesTilesOntoTheEllipsoidOnTheWorkerThread) {
   const TileGrid grid = *TileGrid::create(spec);
   const auto geoid = bundledGeoid();
   for (const bool on : {false, true}) {
-    ManualSource src(spec);
+    FakeTileSource src;
+    heldHeights(src, spec);
     HeightStreamParams p{"h", "", 4, {}, 5.0};
     if (on) p.datum = VerticalDatum(geoid);
     HeightStreamer hs(src, grid, p);
     HeightField field(grid);
     const TileKey key{0, 4, 16}; // New Guinea, N about +60 to +85 m
     hs.want(std::vector<TileKey>{key}, field, 0.0);
-    src.answer(key, TileStatus::Ok, 4 * 4 * 2); // all zeros: sea level
+    ASSERT_TRUE(src.answer(key, bil16(TileStatus::Ok, 4 * 4 * 2))); // all zeros: sea level
     hs.want(std::vector<TileKey>{key}, field, 1.0);
     ASSERT_EQ(hs.deliver(field, 4), 1u);
     const Sector s = grid.sectorOf(key);

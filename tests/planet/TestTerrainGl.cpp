@@ -1,9 +1,9 @@
 // Terrain, rendered (issue #6, label gl): no holes, ever. A synthetic world (rugged relief at every
-// level, answered asynchronously like an upstream) is rendered on a magenta background from many
-// views: oblique mountains, along a valley, the poles, the antimeridian, a few metres above the
-// ground, and frames taken while tiles are still loading. Every pixel whose ray hits an ellipsoid
-// below the lowest terrain must be covered by the globe. The same views without edge fixing show
-// the cracks the test is there to catch.
+// level, answered asynchronously like an upstream, on the fake tile source's own thread) is
+// rendered on a magenta background from many views: oblique mountains, along a valley, the poles,
+// the antimeridian, a few metres above the ground, and frames taken while tiles are still loading.
+// Every pixel whose ray hits an ellipsoid below the lowest terrain must be covered by the globe.
+// The same views without edge fixing show the cracks the test is there to catch.
 
 #include "../support/CacheFixtures.hpp"
 #include "GlTestSupport.hpp"
@@ -19,12 +19,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
-#include <deque>
 #include <filesystem>
-#include <mutex>
 #include <ostream>
 #include <thread>
 
@@ -46,118 +43,61 @@ double relief(double lat, double lon) {
   return h;
 }
 
-/** Layers answered on a worker thread after a short delay: "imagery" (grey tiles with a
- * level-coloured border, any level), "heights" (BIL16 of relief()), and two overlays on the
- * imagery's grid: "clouds" (white, alpha from 0 to 200 in stripes) and "sst" (opaque blue). */
-class TerrainWorld final : public ITileSource {
-public:
-  TerrainWorld() : worker_([this] { run(); }) {}
-  ~TerrainWorld() override {
-    {
-      std::lock_guard lock(mutex_);
-      stop_ = true;
-    }
-    wake_.notify_all();
-    worker_.join();
-  }
-  static constexpr GridSpec kImagery{Sector{}, 36.0, 64, 64, 22};
-  static constexpr GridSpec kHeights{Sector{}, 20.0, 48, 48, 12};
-  std::optional<DatasetSpec> describe(std::string_view layer, std::string_view) const override {
-    DatasetSpec d;
-    d.name = std::string(layer);
-    if (layer == "imagery" || layer == "clouds" || layer == "sst") {
-      d.grid = kImagery;
-      d.mimeType = "image/png";
-    } else if (layer == "heights") {
-      d.grid = kHeights;
-      d.mimeType = "application/bil16";
-    } else {
-      return std::nullopt;
-    }
-    return d;
-  }
-  TileRequestId request(const TileAddress& a, double, Callback done) override {
-    std::lock_guard lock(mutex_);
-    queue_.push_back({++next_, a, std::move(done)});
-    wake_.notify_one();
-    return next_;
-  }
-  void reprioritize(TileRequestId, double) override {}
-  bool cancel(TileRequestId id) override {
-    std::lock_guard lock(mutex_);
-    for (auto it = queue_.begin(); it != queue_.end(); ++it)
-      if (it->id == id) {
-        queue_.erase(it);
-        return true;
-      }
-    return false;
-  }
+using tellus::test::FakeTileSource;
 
-private:
-  struct Job {
-    TileRequestId id;
-    TileAddress address;
-    Callback done;
-  };
-  void run() {
-    for (;;) {
-      Job job;
-      {
-        std::unique_lock lock(mutex_);
-        wake_.wait(lock, [&] { return stop_ || !queue_.empty(); });
-        if (stop_) return;
-        job = std::move(queue_.front());
-        queue_.pop_front();
-      }
-      std::this_thread::sleep_for(std::chrono::microseconds(300));
-      TileResult r;
-      r.status = TileStatus::Ok;
-      if (job.address.layer == "heights") {
-        r.contentType = "application/bil16";
-        const TileGrid g = *TileGrid::create(kHeights);
-        const Sector s = g.sectorOf(job.address.key);
-        for (int y = 0; y < kHeights.tileHeight; ++y)
-          for (int x = 0; x < kHeights.tileWidth; ++x) {
-            const double lat = s.north - (y + 0.5) * (s.north - s.south) / kHeights.tileHeight;
-            const double lon = s.west + (x + 0.5) * (s.east - s.west) / kHeights.tileWidth;
-            const auto v = static_cast<std::uint16_t>(
-                static_cast<std::int16_t>(std::lround(relief(lat, lon))));
-            r.bytes.push_back(static_cast<std::byte>(v & 0xFF));
-            r.bytes.push_back(static_cast<std::byte>(v >> 8));
-          }
-      } else {
-        r.contentType = "image/png";
-        const int w = kImagery.tileWidth, h = kImagery.tileHeight, level = job.address.key.level;
-        std::vector<std::uint8_t> px(static_cast<std::size_t>(w * h * 4));
-        for (int y = 0; y < h; ++y)
-          for (int x = 0; x < w; ++x) {
-            auto* p = &px[static_cast<std::size_t>((y * w + x) * 4)];
-            const bool border = x == 0 || y == 0 || x == w - 1 || y == h - 1;
-            p[0] = static_cast<std::uint8_t>(border ? 40 + 9 * level : 120);
-            p[1] = 128;
-            p[2] = static_cast<std::uint8_t>(border ? 40 : 110);
-            p[3] = 255;
-            if (job.address.layer == "clouds") {
-              p[0] = p[1] = p[2] = 255;
-              p[3] = static_cast<std::uint8_t>((x / 8) % 3 * 100);
-            } else if (job.address.layer == "sst") {
-              p[0] = 20;
-              p[1] = 40;
-              p[2] = 220;
-            }
-          }
-        r.bytes = encodePngRgba(w, h, px);
-      }
-      job.done(std::move(r));
+constexpr GridSpec kImagery{Sector{}, 36.0, 64, 64, 22};
+constexpr GridSpec kHeights{Sector{}, 20.0, 48, 48, 12};
+
+/** "heights": BIL16 of relief(). */
+TileResult reliefTile(const TileAddress& a) {
+  TileResult r = FakeTileSource::result(TileStatus::Ok, {}, "application/bil16");
+  const TileGrid g = *TileGrid::create(kHeights);
+  const Sector s = g.sectorOf(a.key);
+  for (int y = 0; y < kHeights.tileHeight; ++y)
+    for (int x = 0; x < kHeights.tileWidth; ++x) {
+      const double lat = s.north - (y + 0.5) * (s.north - s.south) / kHeights.tileHeight;
+      const double lon = s.west + (x + 0.5) * (s.east - s.west) / kHeights.tileWidth;
+      const auto v =
+          static_cast<std::uint16_t>(static_cast<std::int16_t>(std::lround(relief(lat, lon))));
+      r.bytes.push_back(static_cast<std::byte>(v & 0xFF));
+      r.bytes.push_back(static_cast<std::byte>(v >> 8));
     }
-  }
-  std::mutex mutex_;
-  std::condition_variable wake_;
-  std::deque<Job> queue_;
-  bool stop_ = false;
-  TileRequestId next_ = 0;
-  std::thread worker_;
-};
+  return r;
+}
+
+/** "imagery" (grey tiles with a level-coloured border, any level) and two overlays on its grid:
+ * "clouds" (white, alpha from 0 to 200 in stripes) and "sst" (opaque blue). */
+TileResult imageryTile(const TileAddress& a) {
+  const int w = kImagery.tileWidth, h = kImagery.tileHeight, level = a.key.level;
+  std::vector<std::uint8_t> px(static_cast<std::size_t>(w * h * 4));
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      auto* p = &px[static_cast<std::size_t>((y * w + x) * 4)];
+      const bool border = x == 0 || y == 0 || x == w - 1 || y == h - 1;
+      p[0] = static_cast<std::uint8_t>(border ? 40 + 9 * level : 120);
+      p[1] = 128;
+      p[2] = static_cast<std::uint8_t>(border ? 40 : 110);
+      p[3] = 255;
+      if (a.layer == "clouds") {
+        p[0] = p[1] = p[2] = 255;
+        p[3] = static_cast<std::uint8_t>((x / 8) % 3 * 100);
+      } else if (a.layer == "sst") {
+        p[0] = 20;
+        p[1] = 40;
+        p[2] = 220;
+      }
+    }
+  return FakeTileSource::result(TileStatus::Ok, encodePngRgba(w, h, px), "image/png");
+}
+
+/** The synthetic world: imagery, its two overlays and heights, answered on the fake's own thread
+ * (asynchronously, like an upstream). */
+void terrainWorld(FakeTileSource& world) {
+  for (const char* layer : {"imagery", "clouds", "sst"})
+    world.addLayer({layer, kImagery, "image/png", imageryTile});
+  world.addLayer({"heights", kHeights, "application/bil16", reliefTile});
+  world.setDelivery(FakeTileSource::Delivery::Worker);
+}
 
 /** Pixels whose ray meets the ellipsoid `depthM` below the surface and that show the background. */
 int holes(const Renderer& r,
@@ -204,24 +144,7 @@ public:
 private:
   const Geodesy geodesy_;
   std::unique_ptr<Renderer> keeper_;
-  class Flat final : public ITileSource {
-  public:
-    std::optional<DatasetSpec> describe(std::string_view, std::string_view) const override {
-      DatasetSpec d;
-      d.name = "imagery";
-      d.grid = GridSpec{Sector{}, 36.0, 8, 8, 1};
-      d.mimeType = "image/png";
-      return d;
-    }
-    TileRequestId request(const TileAddress&, double, Callback done) override {
-      TileResult r;
-      r.status = TileStatus::Absent;
-      done(std::move(r));
-      return 1;
-    }
-    void reprioritize(TileRequestId, double) override {}
-    bool cancel(TileRequestId) override { return false; }
-  } world_;
+  FakeTileSource world_{{"imagery", GridSpec{Sector{}, 36.0, 8, 8, 1}, "image/png", {}}};
 };
 [[maybe_unused]] auto* const kKeepDisplayOpen =
     ::testing::AddGlobalTestEnvironment(new KeepDisplayOpen);
@@ -267,7 +190,7 @@ void savePng(const Renderer& r, const std::vector<std::uint8_t>& px, const std::
 
 /** overlays: "clouds" and "sst" (half opacity) blended over the imagery, one pass each (the
  * second pass draws the same meshes again with depth equal). */
-Outcome renderView(TerrainWorld& world, const View& v, bool fixEdges, bool overlays = false) {
+Outcome renderView(FakeTileSource& world, const View& v, bool fixEdges, bool overlays = false) {
   Outcome out;
   const Geodesy wgs;
   RendererOptions o;
@@ -319,7 +242,8 @@ class TerrainViewGl : public ::testing::TestWithParam<View> {};
 
 TEST_P(TerrainViewGl, NoHolesEvenWhileLoading) {
   if (!haveDisplay()) GTEST_SKIP() << "no DISPLAY: run the gl label under xvfb-run";
-  TerrainWorld world;
+  FakeTileSource world;
+  terrainWorld(world);
   const Outcome o = renderView(world, GetParam(), true);
   EXPECT_TRUE(o.complete);
   EXPECT_EQ(o.holes, 0)
@@ -339,7 +263,8 @@ class TerrainLayersViewGl : public ::testing::TestWithParam<View> {};
 
 TEST_P(TerrainLayersViewGl, NoHolesWithTwoLayersBlended) {
   if (!haveDisplay()) GTEST_SKIP() << "no DISPLAY: run the gl label under xvfb-run";
-  TerrainWorld world;
+  FakeTileSource world;
+  terrainWorld(world);
   const Outcome o = renderView(world, GetParam(), true, true);
   EXPECT_TRUE(o.complete);
   EXPECT_EQ(o.passes, 2); // the base and clouds, then sst
@@ -359,7 +284,8 @@ INSTANTIATE_TEST_SUITE_P(Views,
 
 TEST(TerrainGl, LevelsMeetAndEdgesAreFixed) {
   if (!haveDisplay()) GTEST_SKIP() << "no DISPLAY: run the gl label under xvfb-run";
-  TerrainWorld world;
+  FakeTileSource world;
+  terrainWorld(world);
   const Outcome o = renderView(world, kViews[0], true);
   EXPECT_GT(o.zeroArea, 0u);
   EXPECT_GT(o.fixedEdges, 0u);
@@ -369,7 +295,8 @@ TEST(TerrainGl, LevelsMeetAndEdgesAreFixed) {
 // of kilometres a frame at ground level), the camera drawn is above the terrain plus the clearance.
 TEST(TerrainGl, CameraNeverBelowTheTerrainAtAnySpeed) {
   if (!haveDisplay()) GTEST_SKIP() << "no DISPLAY: run the gl label under xvfb-run";
-  TerrainWorld world;
+  FakeTileSource world;
+  terrainWorld(world);
   const Geodesy wgs;
   RendererOptions o;
   o.layer = "imagery";
@@ -399,7 +326,8 @@ TEST(TerrainGl, CameraNeverBelowTheTerrainAtAnySpeed) {
 // The control: without edge fixing the same kind of view shows cracks, so the tests above can fail.
 TEST(TerrainGl, WithoutEdgeFixingCracksShow) {
   if (!haveDisplay()) GTEST_SKIP() << "no DISPLAY: run the gl label under xvfb-run";
-  TerrainWorld world;
+  FakeTileSource world;
+  terrainWorld(world);
   int holes = 0;
   for (const View& v : kViews) {
     const Outcome o = renderView(world, v, false);
@@ -448,7 +376,8 @@ TEST(TerrainGl, FarViewsSkipSubPixelRelief) {
   if (!haveDisplay()) GTEST_SKIP() << "no DISPLAY: run the gl label under xvfb-run";
   const Geodesy wgs;
   const auto run = [&](double minReliefPx, const CameraPose& pose) {
-    TerrainWorld world;
+    FakeTileSource world;
+    terrainWorld(world);
     RendererOptions o;
     o.layer = "imagery";
     o.elevationLayer = "heights";

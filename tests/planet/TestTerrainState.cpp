@@ -48,8 +48,8 @@ TEST(TerrainState, WithoutAnElevationLayerHeightsAreZeroAndEveryNodeComplete) {
   EXPECT_FALSE(t.enabled());
   EXPECT_EQ(t.heightAt(46.0, 8.0), 0.0);
   EXPECT_FALSE(t.busy());
-  FakeLayerSource source;
-  source.add("base", grid36(3));
+  FakeTileSource source;
+  addLayer(source, "base", grid36(3));
   Layers l(source, layerOptions("base"));
   updateLayers(*l.set, cameraAt(l.geodesy, 0.0, 0.0, 2e7), 0.0);
   RenderStats stats;
@@ -59,8 +59,8 @@ TEST(TerrainState, WithoutAnElevationLayerHeightsAreZeroAndEveryNodeComplete) {
 }
 
 TEST(TerrainState, RefusesAnUnknownElevationLayerAndABadExaggeration) {
-  FakeLayerSource source;
-  source.add("heights", elevationGrid());
+  FakeTileSource source;
+  addLayer(source, "heights", elevationGrid());
   RendererOptions o;
   o.elevationLayer = "nowhere";
   TerrainState unknown(o);
@@ -79,9 +79,9 @@ TEST(TerrainState, RefusesAnUnknownElevationLayerAndABadExaggeration) {
 }
 
 TEST(TerrainState, FarAwayTheReliefIsOffAndNoHeightsAreAskedFor) {
-  FakeLayerSource source;
-  source.add("base", grid36(6));
-  source.add("heights", elevationGrid());
+  FakeTileSource source;
+  addLayer(source, "base", grid36(6));
+  addLayer(source, "heights", elevationGrid());
   RendererOptions o = layerOptions("base");
   o.elevationLayer = "heights";
   Layers l(source, o);
@@ -110,17 +110,17 @@ TEST(TerrainState, FarAwayTheReliefIsOffAndNoHeightsAreAskedFor) {
   EXPECT_EQ(stats.heightTilesRequested, source.requestsFor("heights"));
   // Coarse levels first: no request of a level follows one of a deeper level.
   int deepest = 0;
-  for (const TileAddress& a : source.requests)
-    if (a.layer == "heights") {
-      EXPECT_GE(a.key.level, deepest);
-      deepest = std::max(deepest, a.key.level);
+  for (const auto& r : source.requests())
+    if (r.address.layer == "heights") {
+      EXPECT_GE(r.address.key.level, deepest);
+      deepest = std::max(deepest, r.address.key.level);
     }
 }
 
 TEST(TerrainState, ANodesMeshNeedsTheElevationLevelAsFineAsItsGrid) {
-  FakeLayerSource source;
-  source.add("base", grid36(12));
-  source.add("heights", elevationGrid());
+  FakeTileSource source;
+  addLayer(source, "base", grid36(12));
+  addLayer(source, "heights", elevationGrid());
   RendererOptions o = layerOptions("base");
   o.elevationLayer = "heights";
   Layers l(source, o);

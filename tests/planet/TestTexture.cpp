@@ -1,4 +1,5 @@
 // Texture fallback, screen area, the GPU memory LRU and the stream scheduler (GL-free).
+#include "../support/FakeTileSource.hpp"
 #include "PlanetTestSupport.hpp"
 
 #include <tellus/planet/Quadtree.hpp>
@@ -39,55 +40,23 @@ Node* deepest(const Quadtree& tree) {
   return best;
 }
 
-/** A test double of ITileSource: records requests, reprioritizations and cancels; completes on
- * demand (or at once, with a fixed status). */
-class FakeSource : public ITileSource {
-public:
-  struct Req {
-    TileRequestId id;
-    TileAddress address;
-    double priority;
-    Callback done;
-    bool open = true;
-  };
-  std::optional<TileStatus> autoComplete; // complete inside request() with this status
-  std::vector<Req> requests;
-  std::vector<TileRequestId> cancels;
-  std::size_t reprioritized = 0;
+using tellus::test::FakeTileSource;
 
-  std::optional<DatasetSpec> describe(std::string_view, std::string_view) const override {
-    return std::nullopt;
-  }
-  TileRequestId request(const TileAddress& a, double priority, Callback done) override {
-    const TileRequestId id = requests.size() + 1;
-    requests.push_back({id, a, priority, std::move(done)});
-    if (autoComplete) complete(id, *autoComplete);
-    return id;
-  }
-  void reprioritize(TileRequestId, double) override { ++reprioritized; }
-  bool cancel(TileRequestId id) override {
-    Req& r = requests[id - 1];
-    if (!r.open) return false;
-    r.open = false;
-    cancels.push_back(id);
-    return true;
-  }
-  void complete(TileRequestId id, TileStatus status) {
-    Req& r = requests[id - 1];
-    if (!r.open) return;
-    r.open = false;
-    TileResult res;
-    res.status = status;
-    if (status == TileStatus::Ok) res.bytes.resize(16);
-    r.done(std::move(res));
-  }
-  std::size_t open() const {
-    std::size_t n = 0;
-    for (const Req& r : requests)
-      n += r.open ? 1 : 0;
-    return n;
-  }
-};
+/** The streamer's tiles: 16 bytes when Ok. */
+TileResult tile(TileStatus status) {
+  return FakeTileSource::result(
+      status, status == TileStatus::Ok ? std::vector<std::byte>(16) : std::vector<std::byte>{});
+}
+
+/** A source that holds every request until the test answers it. */
+void holdAll(FakeTileSource& src) {
+  src.setDelivery(FakeTileSource::Delivery::Held);
+}
+
+/** A source that answers every request at once with this status. */
+void answerAll(FakeTileSource& src, TileStatus status) {
+  src.setFallbackAnswer([status](const TileAddress&) { return tile(status); });
+}
 
 constexpr std::size_t kTileBytes = 512 * 512 * 4 * 4 / 3; // RGBA8 with mipmaps
 
@@ -104,7 +73,7 @@ TEST(TextureFallback, AncestorUvMatchesTheThesisExample) {
 }
 
 TEST(TextureFallback, AncestorUvIsExactManyLevelsUp) {
-  const TileGrid grid = test::globalGrid();
+  const TileGrid grid = planet::test::globalGrid();
   std::mt19937_64 rng(3);
   for (int up : {1, 3, 5, 8, 12, 20, 24})
     for (int level : {up, up + 1, 24}) {
@@ -138,7 +107,7 @@ TEST(TextureFallback, AncestorUvIsExactManyLevelsUp) {
 
 TEST(TextureFallback, ThesisOrderChildrenAncestorGlobal) {
   const Geodesy g;
-  Quadtree tree(g, test::globalGrid(), treeParams());
+  Quadtree tree(g, planet::test::globalGrid(), treeParams());
   converge(tree, Camera(g, {46.5, 8.0, 50000.0, 0.0, 0.0}, {1024, 768}));
   Node* leaf = deepest(tree);
   ASSERT_NE(leaf, nullptr);
@@ -253,7 +222,7 @@ TEST(TextureLru, EvictsLeastRecentlyUsedButNeverThisFrame) {
 
 TEST(TextureLru, BudgetHoldsOverRandomCameraPaths) {
   const Geodesy g;
-  Quadtree tree(g, test::globalGrid(), treeParams());
+  Quadtree tree(g, planet::test::globalGrid(), treeParams());
   TextureLru lru(300 * kTileBytes);
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> lat(-90.0, 90.0), lon(-180.0, 180.0), alt(2.0, 7.3),
@@ -295,71 +264,75 @@ TEST(TextureLru, BudgetHoldsOverRandomCameraPaths) {
 
 TEST(TextureStreamer, RootsFirstThenByScoreWithinTheWindow) {
   const Geodesy g;
-  Quadtree tree(g, test::globalGrid(), treeParams());
-  FakeSource src;
+  Quadtree tree(g, planet::test::globalGrid(), treeParams());
+  FakeTileSource src;
+  holdAll(src);
   TextureStreamer streamer(src, {"layer", "", 8, 1.0, 120.0});
   const Camera cam(g, {46.5, 8.0, 3e5, 0.0, 30.0}, {1024, 768});
   double now = 0.0;
   for (int frame = 0; frame < 200; ++frame, now += 1.0 / 60.0) {
     tree.update(cam);
     streamer.update(tree, cam, now, nullptr);
-    EXPECT_LE(src.open(), 8u); // the window
+    EXPECT_LE(src.openCount(), 8u); // the window
     // The source finishes the oldest open request each frame.
-    for (auto& r : src.requests)
+    for (const auto& r : src.requests())
       if (r.open) {
-        src.complete(r.id, TileStatus::Ok);
+        src.answer(r.id, tile(TileStatus::Ok));
         break;
       }
   }
-  ASSERT_GT(src.requests.size(), 60u);
+  const auto requests = src.requests();
+  ASSERT_GT(requests.size(), 60u);
   for (std::size_t i = 0; i < 50; ++i)
-    EXPECT_EQ(src.requests[i].address.key.level, 0) << i; // the whole globe first
-  for (std::size_t i = 50; i < src.requests.size(); ++i)
-    EXPECT_GT(src.requests[i].address.key.level, 0);
-  EXPECT_EQ(src.requests[0].address.layer, "layer");
+    EXPECT_EQ(requests[i].address.key.level, 0) << i; // the whole globe first
+  for (std::size_t i = 50; i < requests.size(); ++i)
+    EXPECT_GT(requests[i].address.key.level, 0);
+  EXPECT_EQ(requests[0].address.layer, "layer");
   // After the roots, the first requests are the nadir's biggest on screen: their scores do not
   // grow within a frame's batch, and each is a drawn node's tile.
-  EXPECT_GE(src.requests[50].priority, src.requests[51].priority);
+  EXPECT_GE(requests[50].priority, requests[51].priority);
 }
 
 TEST(TextureStreamer, CancelsWhatTheCameraLeftAndReprioritizes) {
   const Geodesy g;
-  Quadtree tree(g, test::globalGrid(), treeParams());
-  FakeSource src;
+  Quadtree tree(g, planet::test::globalGrid(), treeParams());
+  FakeTileSource src;
+  holdAll(src);
   TextureStreamer streamer(src, {"l", "", 6, 1.0, 120.0});
   const Camera alps(g, {46.5, 8.0, 2e4, 0.0, 0.0}, {1024, 768});
   // Roots are fetched first; the source answers those only.
   for (int i = 0; i < 20; ++i) {
     tree.update(alps);
     streamer.update(tree, alps, i * 0.016, nullptr);
-    for (auto& r : src.requests)
-      if (r.open && r.address.key.level == 0) src.complete(r.id, TileStatus::Ok);
+    for (const auto& r : src.requests())
+      if (r.open && r.address.key.level == 0) src.answer(r.id, tile(TileStatus::Ok));
   }
   for (int i = 0; i < 3; ++i) {
     tree.update(alps);
     streamer.update(tree, alps, 1.0 + i * 0.016, nullptr);
   }
-  ASSERT_EQ(src.open(), 6u);
+  ASSERT_EQ(src.openCount(), 6u);
   std::set<TileRequestId> alpsOpen;
-  for (auto& r : src.requests)
-    if (r.open) alpsOpen.insert(r.id);
+  for (const auto& r : src.openRequests())
+    alpsOpen.insert(r.id);
   // Tilt a little: same tiles, new scores.
   const Camera tilted(g, {46.5, 8.0, 2e4, 0.0, 20.0}, {1024, 768});
   tree.update(tilted);
   streamer.update(tree, tilted, 1.1, nullptr);
-  EXPECT_GT(src.reprioritized, 0u);
+  EXPECT_GT(src.reprioritizations(), 0u);
   // Move away: every Alps request is cancelled, the window refills with Andes tiles.
   const Camera andes(g, {-33.0, -70.0, 2e4, 0.0, 0.0}, {1024, 768});
   for (int i = 0; i < 3; ++i) {
     tree.update(andes);
     streamer.update(tree, andes, 1.2 + i * 0.016, nullptr);
   }
+  const std::vector<TileRequestId> cancels = src.cancelled();
   for (TileRequestId id : alpsOpen)
-    EXPECT_TRUE(std::find(src.cancels.begin(), src.cancels.end(), id) != src.cancels.end());
-  EXPECT_EQ(src.open(), 6u);
-  for (auto& r : src.requests)
+    EXPECT_TRUE(std::find(cancels.begin(), cancels.end(), id) != cancels.end());
+  EXPECT_EQ(src.openCount(), 6u);
+  for (const auto& r : src.requests())
     if (r.open) {
-      const Sector s = test::globalGrid().sectorOf(r.address.key);
+      const Sector s = planet::test::globalGrid().sectorOf(r.address.key);
       EXPECT_LT(s.south, -20.0);
       EXPECT_LT(s.west, -50.0);
     }
@@ -369,9 +342,9 @@ TEST(TextureStreamer, CancelsWhatTheCameraLeftAndReprioritizes) {
 TEST(TextureStreamer, NoRequestStormWhenEverythingFailsOrIsAbsent) {
   const Geodesy g;
   for (TileStatus status : {TileStatus::Failed, TileStatus::Absent}) {
-    Quadtree tree(g, test::globalGrid(), treeParams());
-    FakeSource src;
-    src.autoComplete = status;
+    Quadtree tree(g, planet::test::globalGrid(), treeParams());
+    FakeTileSource src;
+    answerAll(src, status);
     TextureStreamer streamer(src, {"l", "", 16, 1.0, 30.0});
     const Camera cam(g, {10.0, 20.0, 1e5, 0.0, 0.0}, {1024, 768});
     // Ten minutes at 60 frames a second, offline.
@@ -381,7 +354,7 @@ TEST(TextureStreamer, NoRequestStormWhenEverythingFailsOrIsAbsent) {
       streamer.update(tree, cam, now, nullptr);
     }
     std::map<TileKey, int> perTile;
-    for (auto& r : src.requests)
+    for (const auto& r : src.requests())
       ++perTile[r.address.key];
     int worst = 0;
     for (auto& [k, n] : perTile)
@@ -405,19 +378,20 @@ TEST(TextureStreamer, StatesFollowTheTiles) {
   const Geodesy g;
   QuadtreeParams p = treeParams();
   p.polarCaps = false; // the roots one tile each: the first request is the first root's
-  Quadtree tree(g, test::globalGrid(), p);
-  FakeSource src;
+  Quadtree tree(g, planet::test::globalGrid(), p);
+  FakeTileSource src;
+  holdAll(src);
   TextureStreamer streamer(src, {"l", "", 100, 1.0, 120.0});
   TextureLru lru(1000 * kTileBytes);
   const Camera cam(g, {0.0, 0.0, 2e7, 0.0, 0.0}, {1024, 768});
   tree.update(cam);
   streamer.update(tree, cam, 0.0, &lru);
-  ASSERT_EQ(src.requests.size(), 50u); // the roots
+  ASSERT_EQ(src.requestCount(), 50u); // the roots
   const Node& root = *tree.roots()[0];
   tree.update(cam);
   streamer.update(tree, cam, 0.1, &lru);
   EXPECT_EQ(root.texture, TextureState::CheckingCache);
-  src.complete(1, TileStatus::Ok);
+  src.answer(1, tile(TileStatus::Ok));
   tree.update(cam);
   streamer.update(tree, cam, 0.2, &lru);
   EXPECT_EQ(root.texture, TextureState::Decoding);
@@ -431,10 +405,10 @@ TEST(TextureStreamer, StatesFollowTheTiles) {
   // Evicted and forgotten: asked for again.
   lru.erase(root.key());
   streamer.forget(root.key());
-  const std::size_t before = src.requests.size();
+  const std::size_t before = src.requestCount();
   tree.update(cam);
   streamer.update(tree, cam, 0.4, &lru);
-  EXPECT_EQ(src.requests.size(), before + 1);
+  EXPECT_EQ(src.requestCount(), before + 1);
 }
 
 TEST(TextureStreamer, AVeryWidePolarNodeAsksForAtMostSixteenTiles) {
@@ -454,9 +428,9 @@ TEST(TextureStreamer, AVeryWidePolarNodeAsksForAtMostSixteenTiles) {
   // Near the pole at low altitude over a 25-level grid, merged rows get far wider than 16
   // columns; the streamer asks for at most 16 tiles for each, never for all of their columns.
   const Geodesy g;
-  Quadtree tree(g, test::globalGrid(), treeParams());
-  FakeSource src;
-  src.autoComplete = TileStatus::Ok;
+  Quadtree tree(g, planet::test::globalGrid(), treeParams());
+  FakeTileSource src;
+  answerAll(src, TileStatus::Ok);
   TextureStreamer streamer(src, {"l", "", 1000000, 1.0, 120.0});
   TextureLru lru(std::size_t{1} << 40);
   const Camera cam(g, {89.99, 0.0, 300.0, 0.0, 0.0}, {1024, 768});
@@ -469,8 +443,8 @@ TEST(TextureStreamer, AVeryWidePolarNodeAsksForAtMostSixteenTiles) {
     wanted += static_cast<std::size_t>(textureTileCount(n->key()));
   }
   EXPECT_GT(widest, kMaxTextureTiles) << "the view should draw a merged row wider than 16";
-  EXPECT_LE(src.requests.size(), wanted + 50); // the drawn nodes' tiles and the roots
-  EXPECT_LT(src.requests.size(), 5000u);
+  EXPECT_LE(src.requestCount(), wanted + 50); // the drawn nodes' tiles and the roots
+  EXPECT_LT(src.requestCount(), 5000u);
 }
 
 // A polar cap spans every column of its level (ten root columns times 2^level): its texture is
@@ -504,8 +478,8 @@ TEST(ScreenArea, PolarCapIsItsDisc) {
   const NodeGeometry cap(g, {-180.0, 72.0, 180.0, 90.0});
   EXPECT_NEAR(clippedScreenArea(cam, cap.corners()), 0.0, 1e-6);
   glm::dvec2 rim, pole;
-  ASSERT_TRUE(cam.projectPx(test::vec(g.toEcef(72.0, 0.0, 0.0)), rim));
-  ASSERT_TRUE(cam.projectPx(test::vec(g.toEcef(90.0, 0.0, 0.0)), pole));
+  ASSERT_TRUE(cam.projectPx(planet::test::vec(g.toEcef(72.0, 0.0, 0.0)), rim));
+  ASSERT_TRUE(cam.projectPx(planet::test::vec(g.toEcef(90.0, 0.0, 0.0)), pole));
   const double r = glm::length(rim - pole);
   const double disc = std::numbers::pi * r * r;
   const double area = nodeScreenArea(cam, cap);
@@ -523,7 +497,7 @@ TEST(ScreenArea, PolarCapIsItsDisc) {
 // children's: the next cap and the ring are not the quadrants the GL layer can draw in parts.
 TEST(TextureFallback, APolarCapIsNeverDrawnInParts) {
   const Geodesy g;
-  Quadtree tree(g, test::globalGrid(), treeParams());
+  Quadtree tree(g, planet::test::globalGrid(), treeParams());
   Node& root = *tree.roots()[4 * 10];
   ASSERT_TRUE(root.isCap());
   ASSERT_TRUE(tree.split(root));

@@ -28,9 +28,9 @@ StoredTile tileBytes(std::uint64_t frame) {
 } // namespace
 
 TEST(TextureIntake, ADecodingNodeTakesItsReceivedTilesIntoOneJob) {
-  FakeLayerSource source;
-  source.add("base", grid36(3, 128));
-  source.add("clouds", grid36(3, 64));
+  FakeTileSource source;
+  addLayer(source, "base", grid36(3, 128));
+  addLayer(source, "clouds", grid36(3, 64));
   Layers l(source, layerOptions("base", {"clouds"}));
   LayerTextures& clouds = *(*l.set)[1].current;
   Node& node = firstPlainRoot(*clouds.tree);
@@ -53,8 +53,8 @@ TEST(TextureIntake, ADecodingNodeTakesItsReceivedTilesIntoOneJob) {
 }
 
 TEST(TextureIntake, NoJobForANodeUploadingUndecodableResidentOrMissingItsBytes) {
-  FakeLayerSource source;
-  source.add("base", grid36(3, 128), TileStatus::Ok);
+  FakeTileSource source;
+  addLayer(source, "base", grid36(3, 128), TileStatus::Ok);
   Layers l(source, layerOptions("base"));
   LayerTextures& base = l.set->base();
   Node& node = firstPlainRoot(*base.tree);
@@ -90,8 +90,8 @@ TEST(TextureIntake, NoJobForANodeUploadingUndecodableResidentOrMissingItsBytes) 
 }
 
 TEST(TextureIntake, ReceivedTilesAreKeptCountedAndDroppedWhenStale) {
-  FakeLayerSource source;
-  source.add("base", grid36(2, 128), TileStatus::Ok);
+  FakeTileSource source;
+  addLayer(source, "base", grid36(2, 128), TileStatus::Ok);
   Layers l(source, layerOptions("base"));
   LayerTextures& base = l.set->base();
   const Camera cam = cameraAt(l.geodesy, 10.0, 20.0, 2e7);
@@ -109,8 +109,8 @@ TEST(TextureIntake, ReceivedTilesAreKeptCountedAndDroppedWhenStale) {
 }
 
 TEST(TextureIntake, DecodedTexturesWaitForUploadOrMakeTheirNodeUndecodable) {
-  FakeLayerSource source;
-  source.add("base", grid36(3, 128));
+  FakeTileSource source;
+  addLayer(source, "base", grid36(3, 128));
   Layers l(source, layerOptions("base"));
   LayerTextures& base = l.set->base();
   const std::vector<Node*> roots = plainRoots(*base.tree);

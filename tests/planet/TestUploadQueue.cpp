@@ -53,8 +53,8 @@ TEST(UploadQueue, ABandCarriesTheRowsThatFitAtLeastOneAndNoMoreThanAreLeft) {
 
 TEST(UploadQueueGl, ATextureArrivesWholeAfterItsBandsAndIsDrawableThen) {
   OPEN_GL_CONTEXT(context);
-  FakeLayerSource source;
-  source.add("base", grid36(3, 64));
+  FakeTileSource source;
+  addLayer(source, "base", grid36(3, 64));
   Layers l(source, layerOptions("base"));
   LayerTextures& base = l.set->base();
   const NodeKey key = plainRoots(*base.tree)[2]->key();
@@ -87,9 +87,9 @@ TEST(UploadQueueGl, ATextureArrivesWholeAfterItsBandsAndIsDrawableThen) {
 
 TEST(UploadQueueGl, AnUploadForALayerSwappedOutIsDropped) {
   OPEN_GL_CONTEXT(context);
-  FakeLayerSource source;
-  source.add("base", grid36(3, 64));
-  source.add("clouds", grid36(3, 64));
+  FakeTileSource source;
+  addLayer(source, "base", grid36(3, 64));
+  addLayer(source, "clouds", grid36(3, 64));
   Layers l(source, layerOptions("base", {"clouds"}));
   l.set->setTime(1, "t1");
   const int tag = (*l.set)[1].pending->tag;

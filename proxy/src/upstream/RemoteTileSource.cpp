@@ -3,231 +3,90 @@
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/RemoteTileSource.hpp>
 
+#include <nlohmann/json.hpp>
+
 #include <cctype>
-#include <charconv>
 #include <cmath>
 #include <condition_variable>
-#include <cstdio>
 #include <deque>
 #include <future>
-#include <map>
 #include <mutex>
+#include <optional>
+#include <string>
 #include <thread>
 #include <utility>
-#include <variant>
 
 namespace tellus {
 
 // ------------------------------------------------------------------------------------ JSON
-// Just enough JSON for /layers.json: objects, arrays, strings (with escapes), numbers, booleans,
-// null. Depth-limited; any syntax error is reported with its offset.
+// /layers.json through nlohmann-json, without exceptions: a first pass with its SAX parser refuses
+// what is not JSON (saying where) and nesting deeper than a tellus server writes before anything
+// is built; then the document, and the members each layer needs.
 namespace {
 
-struct JsonValue;
-using JsonObject = std::map<std::string, JsonValue, std::less<>>;
-using JsonArray = std::vector<JsonValue>;
-struct JsonValue {
-  std::variant<std::nullptr_t, bool, double, std::string, JsonArray, JsonObject> v;
-};
+using Json = nlohmann::json;
 
-class JsonParser {
+constexpr int kMaxDepth = 32; ///< /layers.json is three deep
+
+class JsonCheck final : public nlohmann::json_sax<Json> {
 public:
-  explicit JsonParser(std::string_view s) : s_(s) {}
+  std::string error; ///< empty: the text is JSON nested at most kMaxDepth deep
 
-  std::expected<JsonValue, std::string> parseDocument() {
-    auto v = value(0);
-    if (!v) return v;
-    ws();
-    if (p_ != s_.size()) return fail("trailing characters");
-    return v;
+  bool null() override { return true; }
+  bool boolean(bool) override { return true; }
+  bool number_integer(number_integer_t) override { return true; }
+  bool number_unsigned(number_unsigned_t) override { return true; }
+  bool number_float(number_float_t, const string_t&) override { return true; }
+  bool string(string_t&) override { return true; }
+  bool binary(binary_t&) override { return true; }
+  bool key(string_t&) override { return true; }
+  bool start_object(std::size_t) override { return enter(); }
+  bool end_object() override { return leave(); }
+  bool start_array(std::size_t) override { return enter(); }
+  bool end_array() override { return leave(); }
+  bool parse_error(std::size_t position,
+                   const std::string&,
+                   const nlohmann::detail::exception& e) override {
+    // "[json.exception.parse_error.101] parse error at line 1, column 5: why": only the why,
+    // and the offset of the byte it stopped at.
+    std::string why = e.what();
+    if (const auto colon = why.find(": "); colon != std::string::npos) why.erase(0, colon + 2);
+    error = "JSON: " + why + " at offset " + std::to_string(position > 0 ? position - 1 : 0);
+    return false;
   }
 
 private:
-  std::unexpected<std::string> fail(std::string_view what) const {
-    return std::unexpected("JSON: " + std::string(what) + " at offset " + std::to_string(p_));
+  bool enter() {
+    if (++depth_ <= kMaxDepth) return true;
+    error = "JSON: nested more than " + std::to_string(kMaxDepth) + " deep";
+    return false;
   }
-  void ws() {
-    while (p_ < s_.size() && (s_[p_] == ' ' || s_[p_] == '\n' || s_[p_] == '\r' || s_[p_] == '\t'))
-      ++p_;
-  }
-  bool literal(std::string_view word) {
-    if (s_.substr(p_, word.size()) != word) return false;
-    p_ += word.size();
+  bool leave() {
+    --depth_;
     return true;
   }
-  std::expected<JsonValue, std::string> value(int depth) {
-    if (depth > 32) return fail("nested too deeply");
-    ws();
-    if (p_ >= s_.size()) return fail("unexpected end");
-    const char c = s_[p_];
-    if (c == '{') return object(depth);
-    if (c == '[') return array(depth);
-    if (c == '"') {
-      auto str = string();
-      if (!str) return std::unexpected(str.error());
-      return JsonValue{std::move(*str)};
-    }
-    if (literal("true")) return JsonValue{true};
-    if (literal("false")) return JsonValue{false};
-    if (literal("null")) return JsonValue{nullptr};
-    return number();
-  }
-  std::expected<JsonValue, std::string> number() {
-    const std::size_t start = p_;
-    while (p_ < s_.size() && (std::isdigit(static_cast<unsigned char>(s_[p_])) || s_[p_] == '-' ||
-                              s_[p_] == '+' || s_[p_] == '.' || s_[p_] == 'e' || s_[p_] == 'E'))
-      ++p_;
-    double d = 0;
-    const auto r = std::from_chars(s_.data() + start, s_.data() + p_, d);
-    if (start == p_ || r.ec != std::errc() || r.ptr != s_.data() + p_ || !std::isfinite(d)) {
-      p_ = start;
-      return fail("not a value");
-    }
-    return JsonValue{d};
-  }
-  std::expected<std::string, std::string> string() {
-    ++p_; // opening quote
-    std::string out;
-    while (p_ < s_.size()) {
-      const char c = s_[p_++];
-      if (c == '"') return out;
-      if (static_cast<unsigned char>(c) < 0x20) return fail("control character in a string");
-      if (c != '\\') {
-        out += c;
-        continue;
-      }
-      if (p_ >= s_.size()) break;
-      const char e = s_[p_++];
-      switch (e) {
-      case '"':
-        out += '"';
-        break;
-      case '\\':
-        out += '\\';
-        break;
-      case '/':
-        out += '/';
-        break;
-      case 'b':
-        out += '\b';
-        break;
-      case 'f':
-        out += '\f';
-        break;
-      case 'n':
-        out += '\n';
-        break;
-      case 'r':
-        out += '\r';
-        break;
-      case 't':
-        out += '\t';
-        break;
-      case 'u': {
-        unsigned cp = 0;
-        if (p_ + 4 > s_.size() ||
-            std::from_chars(s_.data() + p_, s_.data() + p_ + 4, cp, 16).ptr != s_.data() + p_ + 4)
-          return fail("bad \\u escape");
-        p_ += 4;
-        if (cp >= 0xD800 && cp <= 0xDBFF && s_.substr(p_, 2) == "\\u") {
-          unsigned lo = 0;
-          if (p_ + 6 <= s_.size() &&
-              std::from_chars(s_.data() + p_ + 2, s_.data() + p_ + 6, lo, 16).ptr ==
-                  s_.data() + p_ + 6 &&
-              lo >= 0xDC00 && lo <= 0xDFFF) {
-            cp = 0x10000 + ((cp - 0xD800) << 10) + (lo - 0xDC00);
-            p_ += 6;
-          }
-        }
-        if (cp < 0x80) {
-          out += static_cast<char>(cp);
-        } else if (cp < 0x800) {
-          out += static_cast<char>(0xC0 | (cp >> 6));
-          out += static_cast<char>(0x80 | (cp & 0x3F));
-        } else if (cp < 0x10000) {
-          out += static_cast<char>(0xE0 | (cp >> 12));
-          out += static_cast<char>(0x80 | ((cp >> 6) & 0x3F));
-          out += static_cast<char>(0x80 | (cp & 0x3F));
-        } else {
-          out += static_cast<char>(0xF0 | (cp >> 18));
-          out += static_cast<char>(0x80 | ((cp >> 12) & 0x3F));
-          out += static_cast<char>(0x80 | ((cp >> 6) & 0x3F));
-          out += static_cast<char>(0x80 | (cp & 0x3F));
-        }
-        break;
-      }
-      default:
-        return fail("bad escape");
-      }
-    }
-    return fail("unterminated string");
-  }
-  std::expected<JsonValue, std::string> array(int depth) {
-    ++p_;
-    JsonArray a;
-    ws();
-    if (p_ < s_.size() && s_[p_] == ']') {
-      ++p_;
-      return JsonValue{std::move(a)};
-    }
-    for (;;) {
-      auto v = value(depth + 1);
-      if (!v) return v;
-      a.push_back(std::move(*v));
-      ws();
-      if (p_ < s_.size() && s_[p_] == ',') {
-        ++p_;
-        continue;
-      }
-      if (p_ < s_.size() && s_[p_] == ']') {
-        ++p_;
-        return JsonValue{std::move(a)};
-      }
-      return fail("expected , or ]");
-    }
-  }
-  std::expected<JsonValue, std::string> object(int depth) {
-    ++p_;
-    JsonObject o;
-    ws();
-    if (p_ < s_.size() && s_[p_] == '}') {
-      ++p_;
-      return JsonValue{std::move(o)};
-    }
-    for (;;) {
-      ws();
-      if (p_ >= s_.size() || s_[p_] != '"') return fail("expected a member name");
-      auto key = string();
-      if (!key) return std::unexpected(key.error());
-      ws();
-      if (p_ >= s_.size() || s_[p_] != ':') return fail("expected :");
-      ++p_;
-      auto v = value(depth + 1);
-      if (!v) return v;
-      o.insert_or_assign(std::move(*key), std::move(*v));
-      ws();
-      if (p_ < s_.size() && s_[p_] == ',') {
-        ++p_;
-        continue;
-      }
-      if (p_ < s_.size() && s_[p_] == '}') {
-        ++p_;
-        return JsonValue{std::move(o)};
-      }
-      return fail("expected , or }");
-    }
-  }
-
-  std::string_view s_;
-  std::size_t p_ = 0;
+  int depth_ = 0;
 };
 
-template <class T> const T* member(const JsonObject& o, std::string_view name) {
-  const auto it = o.find(name);
-  return it == o.end() ? nullptr : std::get_if<T>(&it->second.v);
+const Json* member(const Json& object, const char* name) {
+  const auto it = object.find(name);
+  return it == object.end() ? nullptr : &*it;
 }
 
-bool wholeNumber(const double* d, std::int64_t lo, std::int64_t hi) {
+const std::string* text(const Json& object, const char* name) {
+  const Json* v = member(object, name);
+  return v && v->is_string() ? v->get_ptr<const std::string*>() : nullptr;
+}
+
+/** A finite number (JSON's integers and floats alike). */
+std::optional<double> number(const Json& object, const char* name) {
+  const Json* v = member(object, name);
+  if (!v || !v->is_number()) return std::nullopt;
+  const double d = v->get<double>();
+  return std::isfinite(d) ? std::optional<double>(d) : std::nullopt;
+}
+
+bool wholeNumber(std::optional<double> d, std::int64_t lo, std::int64_t hi) {
   return d && std::floor(*d) == *d && *d >= static_cast<double>(lo) &&
          *d <= static_cast<double>(hi);
 }
@@ -251,53 +110,65 @@ std::string urlEncode(std::string_view s) {
 
 } // namespace
 
+namespace {
+
+/** One member of "layers": what describe() needs, or what is wrong with it. */
+std::expected<RemoteLayer, std::string> readLayer(const Json& o, std::string_view server) {
+  if (!o.is_object()) return std::unexpected("not an object");
+  const auto* name = text(o, "name");
+  const auto* format = text(o, "format");
+  const auto* ext = text(o, "extension");
+  const auto delta = number(o, "levelZeroDelta");
+  const Json* sector = member(o, "sector");
+  if (!name || name->empty() || !format || !ext || !delta || !sector || !sector->is_object())
+    return std::unexpected("name, format, extension, levelZeroDelta and sector are required");
+  const auto tw = number(o, "tileWidth");
+  const auto th = number(o, "tileHeight");
+  const auto levels = number(o, "levels");
+  if (!wholeNumber(tw, 1, 65536) || !wholeNumber(th, 1, 65536) ||
+      !wholeNumber(levels, 1, kMaxLevel + 1))
+    return std::unexpected("tileWidth, tileHeight or levels out of range");
+  const auto w = number(*sector, "west");
+  const auto s = number(*sector, "south");
+  const auto e = number(*sector, "east");
+  const auto n = number(*sector, "north");
+  if (!w || !s || !e || !n) return std::unexpected("sector needs west, south, east, north");
+  RemoteLayer l;
+  l.name = *name;
+  l.dataset.server = std::string(server);
+  l.dataset.name = *name;
+  l.dataset.mimeType = *format;
+  l.dataset.extension = *ext;
+  l.dataset.grid = GridSpec{Sector{*w, *s, *e, *n},
+                            *delta,
+                            static_cast<std::int32_t>(*tw),
+                            static_cast<std::int32_t>(*th),
+                            static_cast<std::int32_t>(*levels)};
+  if (auto g = TileGrid::create(l.dataset.grid); !g) return std::unexpected(g.error());
+  if (const Json* el = member(o, "elevation"); el && el->is_boolean())
+    l.elevation = el->get<bool>();
+  return l;
+}
+
+} // namespace
+
 std::expected<std::vector<RemoteLayer>, std::string> parseLayersJson(std::string_view json,
                                                                      std::string_view server) {
-  auto doc = JsonParser(json).parseDocument();
-  if (!doc) return std::unexpected(doc.error());
-  const auto* root = std::get_if<JsonObject>(&doc->v);
-  if (!root) return std::unexpected("layers.json: the document is not an object");
-  const auto* list = member<JsonArray>(*root, "layers");
-  if (!list) return std::unexpected("layers.json: no \"layers\" array");
+  // nlohmann-json reads a NUL byte as the end of the input: whatever followed would be ignored.
+  if (const auto nul = json.find('\0'); nul != std::string_view::npos)
+    return std::unexpected("JSON: a NUL byte at offset " + std::to_string(nul));
+  JsonCheck check;
+  if (!Json::sax_parse(json, &check)) return std::unexpected(check.error);
+  const Json doc = Json::parse(json, nullptr, /*allow_exceptions=*/false);
+  if (doc.is_discarded()) return std::unexpected("JSON: not valid"); // the check said it was
+  if (!doc.is_object()) return std::unexpected("layers.json: the document is not an object");
+  const Json* list = member(doc, "layers");
+  if (!list || !list->is_array()) return std::unexpected("layers.json: no \"layers\" array");
   std::vector<RemoteLayer> out;
   for (std::size_t i = 0; i < list->size(); ++i) {
-    const auto where = "layers.json: layer " + std::to_string(i) + ": ";
-    const auto* o = std::get_if<JsonObject>(&(*list)[i].v);
-    if (!o) return std::unexpected(where + "not an object");
-    const auto* name = member<std::string>(*o, "name");
-    const auto* format = member<std::string>(*o, "format");
-    const auto* ext = member<std::string>(*o, "extension");
-    const auto* delta = member<double>(*o, "levelZeroDelta");
-    const auto* tw = member<double>(*o, "tileWidth");
-    const auto* th = member<double>(*o, "tileHeight");
-    const auto* levels = member<double>(*o, "levels");
-    const auto* sector = member<JsonObject>(*o, "sector");
-    if (!name || name->empty() || !format || !ext || !delta || !sector)
-      return std::unexpected(where +
-                             "name, format, extension, levelZeroDelta and sector are required");
-    if (!wholeNumber(tw, 1, 65536) || !wholeNumber(th, 1, 65536) ||
-        !wholeNumber(levels, 1, kMaxLevel + 1))
-      return std::unexpected(where + "tileWidth, tileHeight or levels out of range");
-    const auto* w = member<double>(*sector, "west");
-    const auto* s = member<double>(*sector, "south");
-    const auto* e = member<double>(*sector, "east");
-    const auto* n = member<double>(*sector, "north");
-    if (!w || !s || !e || !n)
-      return std::unexpected(where + "sector needs west, south, east, north");
-    RemoteLayer l;
-    l.name = *name;
-    l.dataset.server = std::string(server);
-    l.dataset.name = *name;
-    l.dataset.mimeType = *format;
-    l.dataset.extension = *ext;
-    l.dataset.grid = GridSpec{Sector{*w, *s, *e, *n},
-                              *delta,
-                              static_cast<std::int32_t>(*tw),
-                              static_cast<std::int32_t>(*th),
-                              static_cast<std::int32_t>(*levels)};
-    if (auto g = TileGrid::create(l.dataset.grid); !g) return std::unexpected(where + g.error());
-    if (const auto* el = member<bool>(*o, "elevation")) l.elevation = *el;
-    out.push_back(std::move(l));
+    auto l = readLayer((*list)[i], server);
+    if (!l) return std::unexpected("layers.json: layer " + std::to_string(i) + ": " + l.error());
+    out.push_back(std::move(*l));
   }
   return out;
 }

@@ -2,11 +2,15 @@
 #include <tellus/proxy/HttpDates.hpp>
 #include <tellus/proxy/WebPage.hpp>
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <array>
 #include <cctype>
 #include <charconv>
 #include <cstdio>
+#include <initializer_list>
+#include <utility>
 
 // The page's files, built by proxy/web/build.mjs into TELLUS_WEB_DIST (proxy/CMakeLists.txt) and
 // assembled into this object with .incbin: `tellus serve` needs no files on disk. Each file has a
@@ -140,43 +144,45 @@ HttpResponse answer(const HttpRequest& request,
   return r;
 }
 
-void appendJsonString(std::string& out, std::string_view s) {
-  out += '"';
-  for (const char c : s) {
-    const auto u = static_cast<unsigned char>(c);
-    switch (c) {
-    case '"':
-      out += "\\\"";
-      break;
-    case '\\':
-      out += "\\\\";
-      break;
-    case '\n':
-      out += "\\n";
-      break;
-    case '\r':
-      out += "\\r";
-      break;
-    case '\t':
-      out += "\\t";
-      break;
-    default:
-      if (u < 0x20 || u == 0x7f) {
-        char esc[8];
-        std::snprintf(esc, sizeof esc, "\\u%04x", u);
-        out += esc;
-      } else {
-        out += c; // UTF-8 passes through; invalid bytes are the reader's to replace
-      }
-    }
-  }
-  out += '"';
+/** A JSON string, escaped by nlohmann-json; invalid UTF-8 replaced (U+FFFD), not thrown at. */
+std::string jsonString(std::string_view s) {
+  return nlohmann::json(std::string(s))
+      .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
-void appendNumber(std::string& out, double v) {
+/** Shortest round-trip (std::to_chars): "36", "22.5", "5e-04", as /layers.json has always had them
+ * (nlohmann-json writes "36.0", "0.0005" and, for some doubles, 17 digits where 16 do). */
+std::string jsonNumber(double v) {
   std::array<char, 32> buf{};
   const auto [end, ec] = std::to_chars(buf.data(), buf.data() + buf.size(), v);
-  out.append(buf.data(), ec == std::errc() ? end : buf.data());
+  return std::string(buf.data(), ec == std::errc() ? end : buf.data());
+}
+
+/** {"key":value,...} without spaces; the values are JSON already. */
+std::string jsonObject(std::initializer_list<std::pair<std::string_view, std::string>> members) {
+  std::string out = "{";
+  for (const auto& [key, value] : members)
+    out += (out.size() > 1 ? "," : "") + jsonString(key) + ":" + value;
+  return out + "}";
+}
+
+std::string layerJson(const LayerSpec& l) {
+  const GridSpec& g = l.dataset.grid;
+  return jsonObject({{"name", jsonString(l.name)},
+                     {"title", jsonString(l.title.empty() ? l.name : l.title)},
+                     {"format", jsonString(l.dataset.mimeType)},
+                     {"extension", jsonString(l.dataset.extension)},
+                     {"elevation", l.elevation ? "true" : "false"},
+                     {"levelZeroDelta", jsonNumber(g.levelZeroDeltaDeg)},
+                     {"tileWidth", std::to_string(g.tileWidth)},
+                     {"tileHeight", std::to_string(g.tileHeight)},
+                     {"levels", std::to_string(g.numLevels)},
+                     {"firstLevel", std::to_string(l.firstLevel)},
+                     {"sector",
+                      jsonObject({{"west", jsonNumber(g.sector.west)},
+                                  {"south", jsonNumber(g.sector.south)},
+                                  {"east", jsonNumber(g.sector.east)},
+                                  {"north", jsonNumber(g.sector.north)}})}});
 }
 
 } // namespace
@@ -200,42 +206,11 @@ std::optional<HttpResponse> webAssetResponse(const HttpRequest& request) {
 }
 
 std::string layersJson(std::string_view title, std::span<const LayerSpec> layers) {
-  std::string j = "{\"title\":";
-  appendJsonString(j, title);
-  j += ",\"layers\":[";
-  bool first = true;
-  for (const LayerSpec& l : layers) {
-    const GridSpec& g = l.dataset.grid;
-    j += first ? "\n{" : ",\n{";
-    first = false;
-    j += "\"name\":";
-    appendJsonString(j, l.name);
-    j += ",\"title\":";
-    appendJsonString(j, l.title.empty() ? l.name : l.title);
-    j += ",\"format\":";
-    appendJsonString(j, l.dataset.mimeType);
-    j += ",\"extension\":";
-    appendJsonString(j, l.dataset.extension);
-    j += ",\"elevation\":";
-    j += l.elevation ? "true" : "false";
-    j += ",\"levelZeroDelta\":";
-    appendNumber(j, g.levelZeroDeltaDeg);
-    j += ",\"tileWidth\":" + std::to_string(g.tileWidth);
-    j += ",\"tileHeight\":" + std::to_string(g.tileHeight);
-    j += ",\"levels\":" + std::to_string(g.numLevels);
-    j += ",\"firstLevel\":" + std::to_string(l.firstLevel);
-    j += ",\"sector\":{\"west\":";
-    appendNumber(j, g.sector.west);
-    j += ",\"south\":";
-    appendNumber(j, g.sector.south);
-    j += ",\"east\":";
-    appendNumber(j, g.sector.east);
-    j += ",\"north\":";
-    appendNumber(j, g.sector.north);
-    j += "}}";
-  }
-  j += "\n]}\n";
-  return j;
+  // One layer a line, as the page has always been served (and its ETag computed).
+  std::string j = "{\"title\":" + jsonString(title) + ",\"layers\":[";
+  for (std::size_t i = 0; i < layers.size(); ++i)
+    j += (i == 0 ? "\n" : ",\n") + layerJson(layers[i]);
+  return j + "\n]}\n";
 }
 
 HttpResponse layersJsonResponse(const HttpRequest& request,

@@ -4,6 +4,7 @@
 #include "Context.hpp"
 
 #include <tellus/cache/GeoPackage.hpp>
+#include <tellus/cli/StatsJson.hpp>
 #include <tellus/cli/Values.hpp>
 
 #include <algorithm>
@@ -20,23 +21,6 @@ namespace tellus::commands {
 namespace {
 
 using cli::humanBytes;
-
-std::string jsonString(std::string_view s) {
-  std::string o = "\"";
-  for (const char c : s) {
-    if (c == '"' || c == '\\') {
-      o += '\\';
-      o += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      o += buf;
-    } else {
-      o += c;
-    }
-  }
-  return o + "\"";
-}
 
 /** `cache <subcommand>`: the subcommand is known and every option given is one of its own (a
  * `--json` on prune is a mistake, not something to ignore). The error text, or nothing. */
@@ -65,43 +49,6 @@ std::optional<std::string> checkSubcommand(const cli::Args& a) {
       return "--" + k + " is not an option of cache " + sub->first;
   }
   return std::nullopt;
-}
-
-void printStatsJson(const TileCache& cache,
-                    const std::vector<DatasetStats>& st,
-                    std::int64_t totalTiles,
-                    std::int64_t totalBytes) {
-  std::printf("{\"root\":%s,\"tiles\":%lld,\"bytes\":%lld,\"datasets\":[",
-              jsonString(cache.root().string()).c_str(),
-              static_cast<long long>(totalTiles),
-              static_cast<long long>(totalBytes));
-  for (std::size_t i = 0; i < st.size(); ++i) {
-    const auto& d = st[i];
-    std::printf("%s{\"id\":%lld,\"server\":%s,\"name\":%s,\"folder\":%s,\"format\":%s,\"time\":%"
-                "s,\"pinned\":%s,"
-                "\"tiles\":%lld,\"bytes\":%lld,\"levels\":[",
-                i ? "," : "",
-                static_cast<long long>(d.dataset.id),
-                jsonString(d.dataset.spec.server).c_str(),
-                jsonString(d.dataset.spec.name).c_str(),
-                jsonString(d.dataset.folder).c_str(),
-                jsonString(d.dataset.spec.mimeType).c_str(),
-                jsonString(d.dataset.spec.time).c_str(),
-                d.dataset.spec.pinned ? "true" : "false",
-                static_cast<long long>(d.tiles),
-                static_cast<long long>(d.bytes));
-    for (std::size_t j = 0; j < d.levels.size(); ++j) {
-      const auto& l = d.levels[j];
-      std::printf("%s{\"level\":%d,\"tiles\":%lld,\"absent\":%lld,\"bytes\":%lld}",
-                  j ? "," : "",
-                  l.level,
-                  static_cast<long long>(l.tiles),
-                  static_cast<long long>(l.absent),
-                  static_cast<long long>(l.bytes));
-    }
-    std::printf("]}");
-  }
-  std::printf("]}\n");
 }
 
 void printStatsText(const TileCache& cache,
@@ -144,7 +91,7 @@ int stats(Context& ctx, bool json) {
     totalBytes += d.bytes;
   }
   if (json)
-    printStatsJson(*ctx.cache, *st, totalTiles, totalBytes);
+    std::fputs(cli::cacheStatsJson(ctx.cache->root().string(), *st).c_str(), stdout);
   else
     printStatsText(*ctx.cache, *st, totalTiles, totalBytes);
   return kExitOk;

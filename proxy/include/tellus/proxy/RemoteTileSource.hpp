@@ -38,7 +38,9 @@ struct RemoteLayer {
 };
 
 /** Parses a tellus `/layers.json` document (the format of proxy/src/web/WebPage.cpp's layersJson);
- * `server` becomes each dataset's server name. An error names what is wrong. */
+ * `server` becomes each dataset's server name. Strict JSON (nlohmann-json: UTF-8, no NUL byte,
+ * nested at most 32 deep); unknown members are ignored. An error names what is wrong, and for text
+ * that is not JSON the offset where it stops being JSON. */
 std::expected<std::vector<RemoteLayer>, std::string> parseLayersJson(std::string_view json,
                                                                      std::string_view server);
 
