@@ -187,12 +187,20 @@ void MemoryTileStore::remove(const TileLocation& at) {
 // ---------------------------------------------------------------------------------- lock, space
 
 MemoryTileStore::Result MemoryTileStore::lockChanges(std::chrono::milliseconds timeout) {
-  if (changes_.try_lock_for(timeout)) return {};
+  std::unique_lock lock(changesMutex_);
+  if (changesFree_.wait_for(lock, timeout, [this] { return !changesHeld_; })) {
+    changesHeld_ = true;
+    return {};
+  }
   return std::unexpected(CacheError{CacheErrc::Io, "the memory store's changes lock is held"});
 }
 
 void MemoryTileStore::unlockChanges() {
-  changes_.unlock();
+  {
+    std::lock_guard lock(changesMutex_);
+    changesHeld_ = false;
+  }
+  changesFree_.notify_one();
 }
 
 std::optional<DiskSpace> MemoryTileStore::freeSpace() const {

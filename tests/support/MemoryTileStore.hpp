@@ -16,6 +16,7 @@
 #include <tellus/cache/Clock.hpp>
 #include <tellus/cache/TileStore.hpp>
 
+#include <condition_variable>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -76,7 +77,11 @@ public:
 
 private:
   std::shared_ptr<State> state_;
-  std::timed_mutex changes_;
+  // The changes lock as a flag under a mutex, not a std::timed_mutex: GCC 12's TSan does not see
+  // try_lock_for (pthread_mutex_clocklock) and reports the unlock as of an unlocked mutex.
+  std::mutex changesMutex_;
+  std::condition_variable changesFree_;
+  bool changesHeld_ = false;
 };
 
 } // namespace tellus::test
