@@ -2,6 +2,7 @@
 
 #include "Depth.hpp"
 
+#include <tellus/planet/Astronomy.hpp>
 #include <tellus/planet/DomeDirect.hpp>
 
 #include <algorithm>
@@ -120,7 +121,12 @@ void SceneDraw::drawScene(const Camera& camera,
                1.0f);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   std::optional<Ecef> sun;
-  if (opt_.sunLatLon) sun = geodesy_.surfaceNormal((*opt_.sunLatLon)[0], (*opt_.sunLatLon)[1]);
+  if (opt_.sunLatLon) {
+    sun = geodesy_.surfaceNormal((*opt_.sunLatLon)[0], (*opt_.sunLatLon)[1]);
+  } else if (opt_.timeUnixSeconds) {
+    const glm::dvec3 s = astro::sunDirectionEcef(*opt_.timeUnixSeconds);
+    sun = Ecef{s.x, s.y, s.z};
+  }
   const FrameContext frame{.camera = camera,
                            .target = target,
                            .body = geodesy_,
@@ -128,6 +134,7 @@ void SceneDraw::drawScene(const Camera& camera,
                            .viewProjection = eyeCentredViewProjection(camera),
                            .eye = camera.position(),
                            .sun = sun,
+                           .timeUnixSeconds = opt_.timeUnixSeconds,
                            .fisheye = direct ? dome_.get() : nullptr,
                            .framebufferWidth = framebuffer_.width(),
                            .framebufferHeight = framebuffer_.height(),

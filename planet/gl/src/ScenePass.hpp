@@ -73,6 +73,9 @@ struct FrameContext {
   glm::dvec3 eye;           ///< the eye's ECEF position, metres
   /** Unit direction to the sun (ECEF) when the scene is lit (RendererOptions::sunLatLon). */
   std::optional<Ecef> sun;
+  /** The scene's time (UTC, POSIX seconds; RendererOptions::timeUnixSeconds): with
+   * astro::celestialToEcef it places the sky. */
+  std::optional<double> timeUnixSeconds;
   /** The direct dome method is drawing this scene (null otherwise): the fisheye map. */
   Dome* fisheye = nullptr;
   int framebufferWidth = 0; ///< the renderer's framebuffer (the fisheye map's circle)

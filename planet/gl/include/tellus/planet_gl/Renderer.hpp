@@ -152,6 +152,10 @@ struct RendererOptions {
   /** Diffuse lighting from the terrain's normals with the sun overhead at this latitude and
    * longitude (degrees); nullopt: unlit (the imagery's own colours). */
   std::optional<std::array<double, 2>> sunLatLon;
+  /** The scene's time, UTC as POSIX seconds (planet/Astronomy.hpp): the sun's direction (when
+   * sunLatLon is not given) and the sky's rotation; nullopt: no time (unlit unless sunLatLon,
+   * the sky unrotated). */
+  std::optional<double> timeUnixSeconds;
   /** Added to the decoding threads' nice value: decoding in the background gives the CPU up to
    * the frame (on llvmpipe drawing is CPU work too, and competing decoders made frames 2-5x
    * longer). 0: the process's priority. */
