@@ -1,4 +1,5 @@
 #include <tellus/planet/FlightPath.hpp>
+#include <tellus/planet/SceneTime.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -76,6 +77,18 @@ std::expected<Keyframe, std::string> readKeyframe(const Json& object, std::size_
                                          &k.pose.tiltDeg};
   std::array<bool, 6> seen{};
   for (const auto& [key, value] : object.items()) {
+    if (key == "utc") {
+      if (value.is_number()) {
+        k.sceneTimeUnixSeconds = value.get<double>();
+      } else if (value.is_string() && value.get<std::string>() != "now") {
+        auto t = parseSceneTime(value.get<std::string>(), 0.0);
+        if (!t) return keyframeError(index, "\"utc\": " + t.error());
+        k.sceneTimeUnixSeconds = *t;
+      } else {
+        return keyframeError(index, "expected \"utc\": an ISO 8601 UTC time or POSIX seconds");
+      }
+      continue;
+    }
     if (key == "times") {
       if (!readLayerTimes(value, k.layerTimes))
         return keyframeError(index, "expected \"times\": {\"layer\": \"TIME\", ...}");
@@ -102,6 +115,8 @@ std::expected<FlightPath, std::string> FlightPath::create(std::vector<Keyframe> 
     const CameraPose& p = k.pose;
     for (const double v : {k.timeS, p.latDeg, p.lonDeg, p.altitudeM, p.headingDeg, p.tiltDeg})
       if (!std::isfinite(v)) return keyframeError(i, "every number must be finite");
+    if (k.sceneTimeUnixSeconds && !std::isfinite(*k.sceneTimeUnixSeconds))
+      return keyframeError(i, "every number must be finite");
     if (p.latDeg < -90.0 || p.latDeg > 90.0 || p.altitudeM < -11000.0 || p.altitudeM > 1e10 ||
         p.tiltDeg < 0.0 || p.tiltDeg > 180.0)
       return keyframeError(i, "out of range (lat [-90, 90], alt [-11000, 1e10], tilt [0, 180])");
@@ -175,6 +190,26 @@ std::map<std::string, std::string> FlightPath::layerTimesAt(double timeS) const 
       for (const auto& [name, value] : k.layerTimes)
         now[name] = value;
   return now;
+}
+
+std::optional<double> FlightPath::sceneTimeAt(double timeS) const {
+  const Keyframe* before = nullptr; // the last keyframe with a scene time at or before timeS
+  const Keyframe* after = nullptr;  // the first one after it
+  for (const Keyframe& k : keys_) {
+    if (!k.sceneTimeUnixSeconds) continue;
+    if (k.timeS <= timeS) {
+      before = &k;
+    } else {
+      after = &k;
+      break;
+    }
+  }
+  if (before == nullptr && after == nullptr) return std::nullopt;
+  if (before == nullptr) return after->sceneTimeUnixSeconds;
+  if (after == nullptr) return before->sceneTimeUnixSeconds;
+  const double u = (timeS - before->timeS) / (after->timeS - before->timeS);
+  const double a = *before->sceneTimeUnixSeconds, b = *after->sceneTimeUnixSeconds;
+  return a + (b - a) * u;
 }
 
 std::int64_t FlightPath::frameCount(double fps) const {

@@ -27,7 +27,7 @@ FlightPath path(const std::string& json) {
 }
 
 Keyframe key(double t, double lat, double lon, double alt, double heading = 0, double tilt = 0) {
-  return {t, {lat, lon, alt, heading, tilt}, {}};
+  return {t, {lat, lon, alt, heading, tilt}, {}, std::nullopt};
 }
 
 FlightPath flight(std::vector<Keyframe> keys) {
@@ -291,6 +291,49 @@ TEST(FlightPathExtremes, AltitudeFromOneMetreToABillionMetresIsGeometric) {
   EXPECT_DOUBLE_EQ(toSea.poseAt(0.5).altitudeM, 5e8);
   const FlightPath underwater = flight({key(0, 0, 0, -11000), key(1, 0, 0, 1e10)});
   EXPECT_DOUBLE_EQ(underwater.poseAt(0.5).altitudeM, (1e10 - 11000) / 2);
+}
+
+} // namespace
+} // namespace tellus::planet
+
+namespace tellus::planet {
+namespace {
+
+TEST(FlightPath, SceneTimeIsInterpolatedBetweenTheKeyframesThatHaveOne) {
+  const FlightPath p = path(R"([
+    {"time": 0, "lat": 0, "lon": 0, "alt": 1, "utc": "2024-06-20T12:00:00Z"},
+    {"time": 2, "lat": 0, "lon": 0, "alt": 1},
+    {"time": 4, "lat": 0, "lon": 0, "alt": 1, "utc": 1718971200},
+    {"time": 6, "lat": 0, "lon": 0, "alt": 1}])");
+  EXPECT_EQ(p.keyframes()[0].sceneTimeUnixSeconds, 1718884800.0);
+  EXPECT_EQ(p.keyframes()[1].sceneTimeUnixSeconds, std::nullopt);
+  EXPECT_EQ(p.sceneTimeAt(-5.0), 1718884800.0) << "held before the first";
+  EXPECT_EQ(p.sceneTimeAt(0.0), 1718884800.0);
+  EXPECT_DOUBLE_EQ(*p.sceneTimeAt(1.0), 1718884800.0 + 21600.0) << "a quarter of a day";
+  EXPECT_DOUBLE_EQ(*p.sceneTimeAt(3.0), 1718884800.0 + 64800.0) << "across a keyframe without";
+  EXPECT_EQ(p.sceneTimeAt(4.0), 1718971200.0);
+  EXPECT_EQ(p.sceneTimeAt(6.0), 1718971200.0) << "held after the last";
+  EXPECT_EQ(path(R"([{"time":0,"lat":0,"lon":0,"alt":1}])").sceneTimeAt(0.0), std::nullopt);
+}
+
+TEST(FlightPath, SceneTimeCanRunBackwardsAndBeforeTheUnixEpoch) {
+  const FlightPath p = path(R"([
+    {"time": 0, "lat": 0, "lon": 0, "alt": 1, "utc": "1969-12-31T00:00:00Z"},
+    {"time": 10, "lat": 0, "lon": 0, "alt": 1, "utc": "1900-01-01"}])");
+  EXPECT_EQ(p.sceneTimeAt(0.0), -86400.0);
+  EXPECT_LT(*p.sceneTimeAt(5.0), -86400.0);
+  EXPECT_EQ(p.sceneTimeAt(10.0), -2208988800.0);
+}
+
+TEST(FlightPath, RefusesABadSceneTime) {
+  for (const char* bad : {R"([{"time":0,"lat":0,"lon":0,"alt":1,"utc":"now"}])",
+                          R"([{"time":0,"lat":0,"lon":0,"alt":1,"utc":"2024-02-30"}])",
+                          R"([{"time":0,"lat":0,"lon":0,"alt":1,"utc":true}])"}) {
+    const auto p = FlightPath::parse(bad);
+    ASSERT_FALSE(p.has_value()) << bad;
+    EXPECT_NE(p.error().find("keyframe 0"), std::string::npos) << p.error();
+    EXPECT_NE(p.error().find("utc"), std::string::npos) << p.error();
+  }
 }
 
 } // namespace

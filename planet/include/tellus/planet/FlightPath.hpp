@@ -8,10 +8,13 @@
  * PATH.json is an array of keyframe objects, or an object {"keyframes": [...]}:
  *
  *     [{"time": 0, "lat": 46.5, "lon": 7.5, "alt": 2e6, "heading": 0, "tilt": 0,
- *       "times": {"LAYER": "TIME"}}, ...]
+ *       "utc": "2024-06-20T18:00:00Z", "times": {"LAYER": "TIME"}}, ...]
  *
  * time (seconds), lat, lon (degrees) and alt (metres above the model's surface) are required;
- * heading and tilt (degrees) are 0 when left out; "times" is optional. Any other key is an error,
+ * heading and tilt (degrees) are 0 when left out; "times" and "utc" are optional. "utc" is the
+ * scene's time (issue 23: the sun, the stars) at that keyframe, an ISO 8601 UTC string
+ * (SceneTime.hpp; not "now": a flight is reproducible) or POSIX seconds; "time" is already the
+ * flight's own clock, hence the other name. Any other key is an error,
  * as is a value out of range (lat [-90, 90], alt [-11000, 1e10], tilt [0, 180]) or a time that
  * does not increase.
  *
@@ -21,7 +24,9 @@
  * altitudes are positive (a descent from 1e9 m to 1 m slows down as it nears the ground), else
  * linearly. Latitude is not a great circle: a flight between two points beyond a pole goes round
  * the pole along the parallels between them, never over it; a keyframe at the pole itself is
- * flown through.
+ * flown through. The scene's time is interpolated linearly between the keyframes that have one
+ * (a day in a few seconds of flight runs the sun round the globe), held before the first and after
+ * the last; a path without any leaves the scene's time to --time.
  */
 
 #include <tellus/planet/Camera.hpp>
@@ -30,6 +35,7 @@
 #include <expected>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -43,6 +49,8 @@ struct Keyframe {
   /** "times": {"layer": "TIME", ...}: from this keyframe on, the layer shows that time (it swaps
    * once the new time's tiles are all there; with --wait-complete every frame waits for it). */
   std::map<std::string, std::string> layerTimes;
+  /** "utc": the scene's time at this keyframe, UTC as POSIX seconds; nullopt: none given. */
+  std::optional<double> sceneTimeUnixSeconds;
 };
 
 class FlightPath {
@@ -66,6 +74,9 @@ public:
   /** The time each layer named by a keyframe at or before `timeS` (within 1e-9 s) shows: the
    * latest such keyframe's; layers no keyframe names so far are not in the map. */
   std::map<std::string, std::string> layerTimesAt(double timeS) const;
+  /** The scene's time (UTC, POSIX seconds) at `timeS` (see the file comment); nullopt when no
+   * keyframe has "utc". */
+  std::optional<double> sceneTimeAt(double timeS) const;
   /** Frames of the flight at `fps` (> 0): one at the start and one every 1 / fps seconds up to
    * the end (within 1e-9 of a frame): floor(duration x fps) + 1, 1 for a single keyframe. */
   std::int64_t frameCount(double fps) const;
