@@ -1,6 +1,5 @@
 // The node's texture (or its fallback) through the uv transform, then the overlay layers over it
-// in order (issue #7); with a sun (uSun.w = 1), diffuse lighting from the terrain's normals in
-// world space (ECEF), with some ambient light.
+// in order (issue #7); with a sun (uSun.w = 1), sunlight and the night side (issue 23).
 //
 // Textures hold premultiplied alpha (the decoder premultiplies), so each overlay composites as
 // colour = colour * (1 - a) + rgb, with its opacity scaling all four channels. A first pass
@@ -10,9 +9,24 @@
 // factor on colour, so it distributes over the blend). The renderer prepends #version and the
 // defines TELLUS_OVERLAYS (texture units for overlays, >= 1) and TELLUS_OVERLAY_STEPS (one
 // TELLUS_OVERLAY(i) per unit: sampler arrays take constant indices only in GLSL 3.30).
+//
+// Sunlight: the sun's elevation at the point is measured from the ellipsoid's normal (vUp):
+// sinElev = dot(up, sun). The surface takes kAmbient (light from the sky and the Earth's
+// neighbourhood: the night side is dark, the continents still faintly there) plus diffuse light
+// from the relief's own normal (vNormal: a slope facing the sun is brighter than the plain),
+// times `day`, a smoothstep of sinElev over +-0.05 (+-2.9 degrees: the sun's disc, refraction and
+// twilight soften the terminator; a peak beyond it catches light a little longer than the plain).
+//
+// Night layers (uOverlayNight[i] = 1, RendererOptions' LayerOptions::night): light, not a
+// surface: added after the lighting with the weight 1 - smoothstep(-0.105, 0, sinElev) (none
+// while the sun is up, full from civil dusk, the sun 6 degrees below the horizon, on). Their alpha
+// covers nothing; the surface overlays drawn after one cover its light by their own alpha. A
+// later pass writes its light with alpha 0, which (ONE, ONE_MINUS_SRC_ALPHA) adds. Unlit (uSun.w
+// = 0): night layers show nothing.
 in vec2 vUv;
 in vec2 vUvNode;
 in vec3 vNormal;
+in vec3 vUp;
 
 uniform sampler2D uTexture;
 uniform vec4 uSun;   // xyz: unit direction to the sun (ECEF); w: 1 = lit, 0 = unlit
@@ -21,14 +35,21 @@ uniform int uOverlayCount;
 uniform sampler2D uOverlay[TELLUS_OVERLAYS];
 uniform vec4 uOverlayUv[TELLUS_OVERLAYS]; // uvOverlay = uvNode * xy + zw
 uniform float uOverlayOpacity[TELLUS_OVERLAYS];
+uniform float uOverlayNight[TELLUS_OVERLAYS]; // 1: a night layer (light on the dark side)
 
 out vec4 fragColor;
 
-#define TELLUS_OVERLAY(i) if (uOverlayCount > i) { vec4 o = texture(uOverlay[i], vUvNode * uOverlayUv[i].xy + uOverlayUv[i].zw) * uOverlayOpacity[i]; colour = colour * (1.0 - o.a) + o.rgb; alpha = alpha * (1.0 - o.a) + o.a; }
+const float kAmbient = 0.04;
+
+#define TELLUS_OVERLAY(i) if (uOverlayCount > i) { vec4 o = texture(uOverlay[i], vUvNode * uOverlayUv[i].xy + uOverlayUv[i].zw) * uOverlayOpacity[i]; if (uOverlayNight[i] > 0.5) { light += o.rgb * night; } else { colour = colour * (1.0 - o.a) + o.rgb; alpha = alpha * (1.0 - o.a) + o.a; light *= 1.0 - o.a; } }
 
 void main() {
   vec3 colour = vec3(0.0);
   float alpha = 0.0;
+  vec3 light = vec3(0.0); // emitted: the night layers' light, not lit by the sun
+  float sinElev = 1.0;
+  if (uSun.w > 0.5) sinElev = dot(normalize(vUp), uSun.xyz);
+  float night = uSun.w > 0.5 ? 1.0 - smoothstep(-0.105, 0.0, sinElev) : 0.0;
   if (uBase > 0.5) {
     colour = texture(uTexture, vUv).rgb;
     alpha = 1.0;
@@ -36,7 +57,8 @@ void main() {
   TELLUS_OVERLAY_STEPS
   if (uSun.w > 0.5) {
     float diffuse = max(dot(normalize(vNormal), uSun.xyz), 0.0);
-    colour *= 0.25 + 0.75 * diffuse;
+    float day = smoothstep(-0.05, 0.05, sinElev);
+    colour *= kAmbient + (1.0 - kAmbient) * diffuse * day;
   }
-  fragColor = vec4(colour, alpha);
+  fragColor = vec4(colour + light, alpha);
 }

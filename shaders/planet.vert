@@ -49,6 +49,13 @@ out float gl_ClipDistance[1];
 out vec2 vUv;
 out vec2 vUvNode; // the node's own coordinates (overlays have transforms of their own)
 out vec3 vNormal;
+// The ellipsoid's outward normal at the vertex (ECEF, not normalised): the "up" the sun's
+// elevation is measured from (planet.frag), the same on a mountain as on the plain below it.
+// uPolarScale = (a / b)^2 of the body (1 for a sphere): the gradient of x^2/a^2 + y^2/a^2 +
+// z^2/b^2 is (x, y, z (a/b)^2) / a^2. From the float position: an Earth-sized coordinate to
+// 0.5 m, a direction to 1e-7 radian.
+out vec3 vUp;
+uniform float uPolarScale;
 // Later passes (overlays past the texture units) draw the same mesh with depth test EQUAL-or-
 // nearer: the position must come out bit for bit the same in every pass.
 invariant gl_Position;
@@ -57,6 +64,12 @@ void main() {
   vUv = aUvNode * uUv.xy + uUv.zw;
   vUvNode = aUvNode;
   vNormal = aNormal;
+#ifdef TELLUS_FP64
+  vec3 world = vec3(aPosition);
+#else
+  vec3 world = aHigh;
+#endif
+  vUp = vec3(world.xy, world.z * uPolarScale);
 #ifdef TELLUS_FP64
   vec3 p = vec3(aPosition - uEye);
 #else

@@ -47,8 +47,11 @@ void readTerrain(Reader& r, const Map& renderer, TerrainSettings& ts) {
 
 /** One entry of renderer.layers, at path ip. */
 RenderLayerSettings readRenderLayer(Reader& r, const YAML::Node& item, const std::string& ip) {
-  const Map e(
-      r, item, ip, item.Mark(), {"layer", "regional", "opacity", "visible", "max_level", "time"});
+  const Map e(r,
+              item,
+              ip,
+              item.Mark(),
+              {"layer", "regional", "opacity", "visible", "max_level", "time", "night"});
   RenderLayerSettings l;
   if (auto x = e.get("layer"))
     l.layer = text(r, *x, e.path("layer"));
@@ -59,6 +62,7 @@ RenderLayerSettings readRenderLayer(Reader& r, const YAML::Node& item, const std
   if (auto x = e.get("visible")) l.visible = boolean(r, *x, e.path("visible"));
   if (auto x = e.get("max_level")) l.maxLevel = int32(r, *x, e.path("max_level"));
   if (auto x = e.get("time")) l.time = text(r, *x, e.path("time"));
+  if (auto x = e.get("night")) l.night = boolean(r, *x, e.path("night"));
   return l;
 }
 
@@ -103,7 +107,10 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
                "earth",
                "geoid",
                "layers",
-               "overlays_per_pass"});
+               "overlays_per_pass",
+               "time",
+               "sunlight",
+               "night"});
   if (auto v = m.get("lod_threshold")) g.lodThreshold = number(r, *v, m.path("lod_threshold"));
   if (auto v = m.get("mesh_size")) g.meshSize = int32(r, *v, m.path("mesh_size"));
   if (auto v = m.get("fov")) g.fovDeg = number(r, *v, m.path("fov"));
@@ -128,6 +135,9 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
   if (auto v = m.get("geoid")) g.geoid = boolean(r, *v, m.path("geoid"));
   if (auto v = m.get("overlays_per_pass"))
     g.overlaysPerPass = int32(r, *v, m.path("overlays_per_pass"));
+  if (auto v = m.get("time")) g.time = text(r, *v, m.path("time"));
+  if (auto v = m.get("sunlight")) g.sunlight = boolean(r, *v, m.path("sunlight"));
+  if (auto v = m.get("night")) g.night = boolean(r, *v, m.path("night"));
 }
 
 } // namespace tellus::detail::yaml

@@ -349,6 +349,9 @@ std::optional<ValidationIssue> checkRenderer(const RendererSettings& g) {
                  "must be in [0, 8] (0: as the GPU allows), got " + str(g.overlaysPerPass));
   if (g.earth != EarthShape::Wgs84 && g.earth != EarthShape::Sphere)
     return issue("earth", "must be wgs84 or sphere");
+  if (!g.time.empty() && g.time != "now" && !parseIsoInstant(g.time))
+    return issue(
+        "time", "must be an ISO 8601 UTC time (2024-06-20T12:00:00Z) or now, got '" + g.time + "'");
   return std::nullopt;
 }
 
@@ -446,11 +449,11 @@ checkRenderLayer(const Config& c, std::size_t i, const LayerConfig*& base) {
     return ValidationIssue{at + ".layer", "renderer", "'" + rl.layer + "' is not an imagery layer"};
   if (i == 0) {
     base = l;
-    if ((rl.opacity && *rl.opacity != 1.0) || !rl.visible)
+    if ((rl.opacity && *rl.opacity != 1.0) || !rl.visible || rl.night)
       return ValidationIssue{at,
                              "renderer",
-                             "the first entry is the opaque base: opacity and visible apply to "
-                             "the overlays after it"};
+                             "the first entry is the opaque base: opacity, visible and night "
+                             "apply to the overlays after it"};
   } else if (l->dataset.grid.levelZeroDeltaDeg != base->dataset.grid.levelZeroDeltaDeg) {
     return ValidationIssue{at + ".layer",
                            "renderer",

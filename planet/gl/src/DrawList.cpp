@@ -62,7 +62,8 @@ void bindOverlays(const LayerSet& layers,
       l.lru.use(a->key());
       bindings.push_back({&it->second.texture,
                           regionToNodeUv(*part.node, region, ancestorUv(region.key(), a->key())),
-                          static_cast<float>(slot.opt.opacity)});
+                          static_cast<float>(slot.opt.opacity),
+                          slot.opt.night});
       break;
     }
   }

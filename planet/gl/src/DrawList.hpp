@@ -36,11 +36,13 @@ struct DrawPart {
 };
 
 /** One overlay's texture on a drawn part: the texture, the transform of the node's coordinates
- * into it, and the layer's opacity. */
+ * into it, the layer's opacity, and whether it is a night layer (LayerOptions::night: shown on
+ * the dark side only, as light). */
 struct OverlayBinding {
   const GlTexture* texture = nullptr;
   UvTransform uv;
   float opacity = 0.0f;
+  bool night = false;
 };
 
 struct DrawList {

@@ -47,6 +47,8 @@ GlobePass::create(const GlCapabilities& gl, const GlobePassOptions& options, Nod
   p->uOverlayCount_ = glGetUniformLocation(id, "uOverlayCount");
   p->uOverlayUv_ = glGetUniformLocation(id, "uOverlayUv");
   p->uOverlayOpacity_ = glGetUniformLocation(id, "uOverlayOpacity");
+  p->uOverlayNight_ = glGetUniformLocation(id, "uOverlayNight");
+  p->uPolarScale_ = glGetUniformLocation(id, "uPolarScale");
   glUseProgram(id);
   for (int i = 0; i < p->overlaysPerPass_; ++i)
     glUniform1i(glGetUniformLocation(id, ("uOverlay[" + std::to_string(i) + "]").c_str()), 1 + i);
@@ -70,7 +72,9 @@ void GlobePass::setFrameUniforms(const FrameContext& frame) {
     glUniform3f(uEyeHigh_, x.high, y.high, z.high);
     glUniform3f(uEyeLow_, x.low, y.low, z.low);
   }
-  if (frame.sun) {
+  const double ab = frame.body.equatorialRadius() / frame.body.polarRadius();
+  glUniform1f(uPolarScale_, static_cast<float>(ab * ab));
+  if (frame.sun && frame.sunlight) {
     glUniform4f(uSun_,
                 static_cast<float>(frame.sun->x),
                 static_cast<float>(frame.sun->y),
@@ -122,6 +126,7 @@ void GlobePass::drawPart(const DrawPart& p,
                          RenderStats& stats) {
   std::array<GLfloat, 32> uvs{};
   std::array<GLfloat, 8> opacities{};
+  std::array<GLfloat, 8> night{};
   const GpuMesh& m = meshes_.meshFor(*p.node, stats);
   const std::array<float, 4> uv = uvUniform(p.uv);
   glUniform4f(uUv_, uv[0], uv[1], uv[2], uv[3]);
@@ -132,11 +137,13 @@ void GlobePass::drawPart(const DrawPart& p,
     const std::array<float, 4> u = uvUniform(b.uv);
     std::copy(u.begin(), u.end(), uvs.begin() + static_cast<std::ptrdiff_t>(4 * i));
     opacities[i] = b.opacity;
+    night[i] = b.night ? 1.0f : 0.0f;
   }
   glUniform1i(uOverlayCount_, static_cast<GLint>(count));
   if (count > 0) {
     glUniform4fv(uOverlayUv_, static_cast<GLsizei>(count), uvs.data());
     glUniform1fv(uOverlayOpacity_, static_cast<GLsizei>(count), opacities.data());
+    glUniform1fv(uOverlayNight_, static_cast<GLsizei>(count), night.data());
   }
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, p.texture->id());

@@ -10,8 +10,9 @@
  * base texture and the first overlaysPerPass overlays of each part; pass j > 0 the parts with more
  * overlays again with the next ones, blended over (same mesh, depth equal, nothing written to
  * depth). Vertex positions are doubles on OpenGL 4.x (fp64), made eye-relative by one double
- * subtraction, else high/low float pairs (GpuVertex.hpp). With a sun, diffuse lighting from the
- * terrain's normals in world space.
+ * subtraction, else high/low float pairs (GpuVertex.hpp). Lit by the sun (FrameContext::sunlight:
+ * issue 23): the day side by the relief's normals, the night side dark with the night layers'
+ * light, a soft terminator by the sun's elevation over the ellipsoid (shaders/planet.frag).
  *
  * Main thread, context current.
  */
@@ -61,6 +62,7 @@ private:
   int overlaysPerPass_ = 1;
   GLint uViewProj_ = -1, uEye_ = -1, uEyeHigh_ = -1, uEyeLow_ = -1, uUv_ = -1, uTexture_ = -1;
   GLint uSun_ = -1, uBase_ = -1, uOverlayCount_ = -1, uOverlayUv_ = -1, uOverlayOpacity_ = -1;
+  GLint uOverlayNight_ = -1, uPolarScale_ = -1;
 };
 
 } // namespace tellus::planet

@@ -232,6 +232,7 @@ LayerTotals LayerSet::collectStats(RenderStats& stats) const {
     ls.opacity = slot.opt.opacity;
     ls.visible = slot.opt.visible;
     ls.maxLevel = slot.opt.maxLevel;
+    ls.night = slot.opt.night;
     ls.levels = slot.current->grid.numLevels();
     ls.swaps = slot.swaps;
     ls.tilesRequested = slot.retiredRequested;

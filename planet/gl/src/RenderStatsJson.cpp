@@ -1,3 +1,4 @@
+#include <tellus/planet/SceneTime.hpp>
 #include <tellus/planet_gl/RenderStatsJson.hpp>
 
 #include <nlohmann/json.hpp>
@@ -130,6 +131,12 @@ void addDomeAndLayers(Document& doc, const RenderStats& s) {
            {"dome_face_bytes", number(s.domeFaceBytes)},
            {"dome_error", jsonString(s.domeError)},
            {"passes", std::to_string(s.passes)},
+           {"scene_time",
+            s.sceneTimeUnixSeconds ? jsonString(formatSceneTime(*s.sceneTimeUnixSeconds))
+                                   : std::string("null")},
+           {"scene_time_unix",
+            s.sceneTimeUnixSeconds ? fixed3(*s.sceneTimeUnixSeconds) : std::string("null")},
+           {"sunlight", boolean(s.sunlight)},
            {"overlays_per_pass", std::to_string(s.overlaysPerPass)}});
   std::string layers = "[";
   for (std::size_t i = 0; i < s.layers.size(); ++i) {
@@ -140,6 +147,7 @@ void addDomeAndLayers(Document& doc, const RenderStats& s) {
                             {"pending_time", jsonString(l.pendingTime)},
                             {"opacity", fixed3(l.opacity)},
                             {"visible", boolean(l.visible)},
+                            {"night", boolean(l.night)},
                             {"tiles_requested", number(l.tilesRequested)},
                             {"tiles_received", number(l.tilesReceived)},
                             {"textures_resident", number(l.texturesResident)},

@@ -143,7 +143,7 @@ void Renderer::Impl::warmUp() {
   if (layers.size() > 1) { // the program with overlays, and a second pass
     const auto n = static_cast<std::uint32_t>(stats.overlaysPerPass + 1);
     for (std::uint32_t i = 0; i < n; ++i)
-      list.bindings.push_back({&texture, UvTransform{}, 0.0f});
+      list.bindings.push_back({&texture, UvTransform{}, 0.0f, false});
     list.parts.back().overlayEnd = n;
   }
   const Camera cam(geodesy, CameraPose{}, {opt.width, opt.height}, opt.verticalFovDeg);
@@ -263,6 +263,8 @@ void Renderer::Impl::endFrame(const FrameStats& tree,
   s.tilesInFlight = totals.stream.inFlight;
   s.decodesPending = decoder.pending();
   s.uploadsPending = uploads.size();
+  s.sceneTimeUnixSeconds = opt.timeUnixSeconds;
+  s.sunlight = opt.sunLatLon.has_value() || (opt.sunlight && opt.timeUnixSeconds.has_value());
   s.frameMs = msSince(t0);
   phases.total = s.frameMs;
   s.phases = phases;
@@ -352,6 +354,13 @@ void* Renderer::nativeWindow() const noexcept {
 }
 void Renderer::setOverlayText(std::string text) {
   impl_->presenter.setText(std::move(text));
+}
+
+void Renderer::setTime(std::optional<double> unixSeconds) {
+  impl_->opt.timeUnixSeconds = unixSeconds;
+}
+std::optional<double> Renderer::time() const noexcept {
+  return impl_->stats.sceneTimeUnixSeconds;
 }
 
 void Renderer::resize(int width, int height) {

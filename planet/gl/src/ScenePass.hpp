@@ -71,8 +71,12 @@ struct FrameContext {
   const DrawList& drawList; ///< what the globe draws this frame (DrawList.hpp)
   glm::mat4 viewProjection; ///< rotation and projection only: the eye at the origin
   glm::dvec3 eye;           ///< the eye's ECEF position, metres
-  /** Unit direction to the sun (ECEF) when the scene is lit (RendererOptions::sunLatLon). */
+  /** Unit direction to the sun (ECEF) when it is known: RendererOptions::sunLatLon, else the
+   * sun at timeUnixSeconds (astro::sunDirectionEcef). The sky and the atmosphere use it. */
   std::optional<Ecef> sun;
+  /** The globe is lit by `sun` (RendererOptions::sunlight with a sun, or sunLatLon): the day
+   * side, the terminator and the night layers (GlobePass, shaders/planet.frag). */
+  bool sunlight = false;
   /** The scene's time (UTC, POSIX seconds; RendererOptions::timeUnixSeconds): with
    * astro::celestialToEcef it places the sky. */
   std::optional<double> timeUnixSeconds;

@@ -1,3 +1,4 @@
+#include <tellus/planet/SceneTime.hpp>
 #include <tellus/planet_gl/Viewer.hpp>
 
 #define GLFW_INCLUDE_NONE
@@ -8,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <optional>
 #include <string>
 #include <utility>
@@ -131,6 +133,8 @@ private:
   void zoom();
   void turn(double dt);
   bool layerKey(int key);
+  bool timeKey(int key);
+  double wallSeconds() const;
   void printSelectedLayer() const;
   void screenshot();
   void updateTitle(Clock::time_point now);
@@ -156,12 +160,19 @@ private:
   CameraPose drawn_;
   int drawnW_ = 0, drawnH_ = 0;
   Clock::time_point drawnAt_ = lastTitle_;
+  const tellus::Clock& clock_;
+  std::optional<SceneClock> sceneClock_; ///< the scene's time, when the viewer has one
 };
 
 ViewerLoop::ViewerLoop(Renderer& renderer, GLFWwindow* window, const ViewerOptions& options)
     : renderer_(renderer), window_(window), options_(options), pose_(options.start),
       layerTimes_(options.layerTimes), selected_(renderer.layerCount() > 1 ? 1 : 0),
-      timeIndex_(renderer.layerCount(), 0), drawn_(pose_) {
+      timeIndex_(renderer.layerCount(), 0), drawn_(pose_),
+      clock_(options.clock ? *options.clock : tellus::Clock::system()) {
+  if (options.sceneTime) {
+    sceneClock_.emplace(*options.sceneTime, wallSeconds());
+    renderer_.setTime(*options.sceneTime);
+  }
   glfwSetWindowUserPointer(window_, &input_);
   glfwSetScrollCallback(window_, onScroll);
   glfwSetMouseButtonCallback(window_, onMouseButton);
@@ -321,6 +332,37 @@ void ViewerLoop::screenshot() {
     std::fprintf(stderr, "screenshot: %s\n", err.c_str());
 }
 
+double ViewerLoop::wallSeconds() const {
+  return std::chrono::duration<double>(clock_.steady().time_since_epoch()).count();
+}
+
+// L faster, H slower, J backwards/forwards, K pause, N now at real time (Viewer.hpp). Whether the
+// key was one of them.
+bool ViewerLoop::timeKey(int key) {
+  if (!sceneClock_) return false;
+  SceneClock& c = *sceneClock_;
+  c.advance(wallSeconds()); // the pace changes from now on
+  if (key == GLFW_KEY_L) {
+    c.faster();
+  } else if (key == GLFW_KEY_H) {
+    c.slower();
+  } else if (key == GLFW_KEY_J) {
+    c.reverse();
+  } else if (key == GLFW_KEY_K) {
+    c.togglePause();
+  } else if (key == GLFW_KEY_N) {
+    c = SceneClock(static_cast<double>(clock_.now()) / 1000.0, wallSeconds());
+  } else {
+    return false;
+  }
+  std::printf("time %s, x%g%s\n",
+              formatSceneTime(c.time()).c_str(),
+              c.paused() ? 0.0 : c.rate(),
+              c.paused() ? " (paused)" : "");
+  std::fflush(stdout);
+  return true;
+}
+
 // The statistics line, twice a second: the window's title and the line drawn over the globe.
 void ViewerLoop::updateTitle(Clock::time_point now) {
   const double sinceTitle = std::chrono::duration<double>(now - lastTitle_).count();
@@ -341,6 +383,11 @@ void ViewerLoop::updateTitle(Clock::time_point now) {
                 pose_.altitudeM,
                 pose_.headingDeg,
                 pose_.tiltDeg);
+  if (sceneClock_) {
+    const std::string t = formatSceneTime(sceneClock_->time());
+    const std::size_t used = std::strlen(title);
+    std::snprintf(title + used, sizeof title - used, "  %s x%g", t.c_str(), sceneClock_->rate());
+  }
   glfwSetWindowTitle(window_, title);
   renderer_.setOverlayText(title + 7); // the same line on screen, without "tellus  "
   lastTitle_ = now;
@@ -366,8 +413,12 @@ std::uint64_t ViewerLoop::run() {
     if (flight_.active) pose_ = flight_.at(dt);
     bool layersChanged = false;
     for (const int key : input_.keys)
-      layersChanged = layerKey(key) || layersChanged;
+      if (!timeKey(key)) layersChanged = layerKey(key) || layersChanged;
     input_.keys.clear();
+    // The scene's time with the wall clock; at more than 10x real time the sun moves visibly:
+    // every frame is drawn, not twice a second.
+    const bool timeRuns = sceneClock_ && std::abs(sceneClock_->rate()) > 1.0;
+    if (sceneClock_) renderer_.setTime(sceneClock_->advance(wallSeconds()));
     if (layersChanged) {
       renderer_.frame(pose_); // the stats printed show the change
       printSelectedLayer();
@@ -381,7 +432,7 @@ std::uint64_t ViewerLoop::run() {
     const bool moved = pose_.latDeg != drawn_.latDeg || pose_.lonDeg != drawn_.lonDeg ||
                        pose_.altitudeM != drawn_.altitudeM ||
                        pose_.headingDeg != drawn_.headingDeg || pose_.tiltDeg != drawn_.tiltDeg ||
-                       fw != drawnW_ || fh != drawnH_;
+                       fw != drawnW_ || fh != drawnH_ || timeRuns;
     const double sinceDrawn = std::chrono::duration<double>(Clock::now() - drawnAt_).count();
     const bool shot = glfwGetKey(window_, GLFW_KEY_P) == GLFW_PRESS;
     if (frames_ > 0 && !moved && !renderer_.busy() && sinceDrawn < 0.5 &&

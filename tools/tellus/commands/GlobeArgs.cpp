@@ -2,8 +2,10 @@
 
 #include "Context.hpp"
 
+#include <tellus/cache/Clock.hpp>
 #include <tellus/cli/Values.hpp>
 #include <tellus/planet/Geoid.hpp>
+#include <tellus/planet/SceneTime.hpp>
 
 #include <algorithm>
 #include <array>
@@ -30,7 +32,10 @@ std::vector<cli::OptionSpec> globeOptions() {
           {"overlay", K::Value, true},
           {"dome", K::OptionalValue},
           {"dome-tilt", K::Value},
-          {"dome-method", K::Value}};
+          {"dome-method", K::Value},
+          {"time", K::Value},
+          {"no-sun", K::Flag},
+          {"no-night", K::Flag}};
 }
 
 std::expected<std::optional<EarthModel>, std::string> earthArg(const cli::Args& a) {
@@ -87,6 +92,7 @@ void applyRendererSettings(const RendererSettings& g,
   ro.terrainClearanceM = g.terrain.clearanceM;
   ro.terrainMinReliefPx = g.terrain.minReliefPx;
   ro.sunLatLon = g.terrain.sun;
+  ro.sunlight = g.sunlight && !a.flag("no-sun");
   if (const auto d = domeArgs(a); d && (d->on || g.dome.enabled)) {
     ro.dome = planet::DomeOptions{
         d->fovDeg.value_or(g.dome.fovDeg), d->tiltDeg.value_or(g.dome.tiltDeg), g.dome.faceScale};
@@ -154,6 +160,27 @@ std::optional<std::string> applyTerrainArgs(const cli::Args& a, planet::Renderer
     ro.sunLatLon = std::array<double, 2>{(*v)[0], (*v)[1]};
   }
   return std::nullopt;
+}
+
+std::optional<std::string> applySceneTime(const cli::Args& a,
+                                          const std::string& configured,
+                                          std::string_view fallback,
+                                          planet::RendererOptions& ro) {
+  const bool given = a.get("time").has_value();
+  const std::string text = given                ? *a.get("time")
+                           : configured.empty() ? std::string(fallback)
+                                                : configured;
+  const double now = static_cast<double>(unixMillisNow()) / 1000.0;
+  const auto t = planet::parseSceneTime(text, now);
+  if (!t) return (given ? "--time: " : "renderer.time: ") + t.error();
+  ro.timeUnixSeconds = *t;
+  return std::nullopt;
+}
+
+void hideNightLayers(const cli::Args& a, bool configured, planet::RendererOptions& ro) {
+  if (configured && !a.flag("no-night")) return;
+  for (planet::LayerOptions& o : ro.overlays)
+    if (o.night) o.visible = false;
 }
 
 std::optional<std::string>

@@ -13,6 +13,7 @@
 #include <expected>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace tellus::commands {
@@ -45,6 +46,25 @@ void applyRendererSettings(const RendererSettings& g,
 /** --exaggeration, --min-relief-px, --edge-fixing, --geoid (checked only), --mesh-size,
  * --upload-per-frame, --vertices and --sun over the configuration's; the usage error, if any. */
 std::optional<std::string> applyTerrainArgs(const cli::Args& a, planet::RendererOptions& ro);
+
+/** The render's scene time when neither --time nor renderer.time gives one: the March equinox
+ * of 2024 at noon UTC. Fixed, so that a render is reproducible (its --stats JSON records the
+ * time as "scene_time"); at an equinox both hemispheres are lit alike (no polar night hides a
+ * pole), and at noon UTC the day side is centred near Greenwich, the terminator near 90 E and
+ * 90 W. `view` starts at now instead. */
+inline constexpr const char* kDefaultRenderTime = "2024-03-20T12:00:00Z";
+
+/** The scene's time (issue 23): --time, else `renderer.time` (configured), else `fallback`
+ * ("now" for view, kDefaultRenderTime for render), parsed (ISO 8601 UTC or now, the system clock's
+ * now) into ro.timeUnixSeconds. The error text for a bad value. */
+std::optional<std::string> applySceneTime(const cli::Args& a,
+                                          const std::string& configured,
+                                          std::string_view fallback,
+                                          planet::RendererOptions& ro);
+
+/** --no-night, or `renderer.night: false` (configured false): the night layers
+ * (LayerOptions::night) hidden. */
+void hideNightLayers(const cli::Args& a, bool configured, planet::RendererOptions& ro);
 
 /** `renderer.geoid` (the configuration's, or --geoid on|off): the elevation layer's
  * mean-sea-level heights onto the ellipsoid with the bundled EGM96 grid of the data directory.

@@ -40,6 +40,7 @@ public:
       o.opacity = l.opacity.value_or(lc != nullptr ? lc->opacity : 1.0);
       o.visible = l.visible;
       o.maxLevel = l.maxLevel;
+      o.night = l.night;
       ro_.overlays.push_back(o);
       combine(l.layer, l.regional);
     }
@@ -220,6 +221,8 @@ std::expected<PlanetTiles, int> openRemote(const cli::Args& a,
     }
     applyRendererSettings(loaded->renderer, a, ro, t.earth);
     terrain = terrain && loaded->renderer.terrain.enabled;
+    t.sceneTime = loaded->renderer.time;
+    t.night = loaded->renderer.night;
     settings = loaded->renderer;
   }
   if (!a.get("layer") && !settings.layers.empty()) ro.layer = settings.layers.front().layer;
@@ -297,6 +300,8 @@ openLocal(const cli::Args& a, const char* cmd, planet::RendererOptions& ro) {
   if (!t.ctx) return std::unexpected(kExitError);
   const Config& config = t.ctx->config;
   applyRendererSettings(config.renderer, a, ro, t.earth);
+  t.sceneTime = config.renderer.time;
+  t.night = config.renderer.night;
   if (auto bad = applyTerrainArgs(a, ro)) {
     std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());
     return std::unexpected(kExitUsage);

@@ -37,6 +37,9 @@ struct PlanetTiles {
   EarthModel earth = EarthModel::Wgs84;                 ///< the configuration's renderer.earth
   /** Per renderer layer (base, overlays): the TIME values `view` steps through ([ and ]). */
   std::vector<std::vector<std::string>> layerTimes;
+  /** The configuration's `renderer.time` ("" = none) and `renderer.night` (issue 23). */
+  std::string sceneTime;
+  bool night = true;
 };
 
 /** The tile source and the layers for command `cmd` ("render", "view", "height"), filling `ro`

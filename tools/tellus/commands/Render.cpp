@@ -289,6 +289,7 @@ int renderFlight(const RenderArgs& ra,
     for (const auto& [name, value] : flight.layerTimesAt(at))
       for (std::size_t i = 0; i < drawn.size(); ++i)
         if (drawn[i] == name) r.setLayerTime(i, value);
+    if (const auto sceneTime = flight.sceneTimeAt(at)) r.setTime(*sceneTime);
     const bool complete = session.renderOne(flight.poseAt(at), ra.waitSeconds, !ra.waitComplete);
     allComplete = allComplete && complete;
     if (ra.waitComplete && !complete) {
@@ -340,6 +341,11 @@ int runRender(const cli::Args& a) {
   if (ra->waitComplete || !ra->flight) ro.decodeNice = 0;
   auto tiles = openPlanetTiles(a, "render", ro);
   if (!tiles) return tiles.error();
+  if (auto bad = applySceneTime(a, tiles->sceneTime, kDefaultRenderTime, ro)) {
+    std::fprintf(stderr, "tellus render: %s\n", bad->c_str());
+    return kExitUsage;
+  }
+  hideNightLayers(a, tiles->night, ro);
   const Geodesy geodesy(ra->earth.value_or(tiles->earth));
   // The always-resident global texture: the bundled Blue Marble.
   if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg"; fs::exists(global))

@@ -73,6 +73,11 @@ int runView(const cli::Args& a) {
   if (!earth) return usage("--earth must be wgs84 or sphere", earth.error());
   auto tiles = openPlanetTiles(a, "view", ro);
   if (!tiles) return tiles.error();
+  if (auto bad = applySceneTime(a, tiles->sceneTime, "now", ro)) {
+    std::fprintf(stderr, "tellus view: %s\n", bad->c_str());
+    return kExitUsage;
+  }
+  hideNightLayers(a, tiles->night, ro);
   if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg"; fs::exists(global))
     ro.globalImage = global;
   const Geodesy geodesy(earth->value_or(tiles->earth));
@@ -83,8 +88,9 @@ int runView(const cli::Args& a) {
   }
   vo.start = pose;
   vo.layerTimes = tiles->layerTimes;
+  vo.sceneTime = ro.timeUnixSeconds;
   std::printf("tellus view: drag to move, wheel to zoom, W/S tilt, A/D heading, R reset, "
-              "P screenshot, Esc quits%s\n",
+              "P screenshot, Esc quits; time: L faster, H slower, J backwards, K pause, N now%s\n",
               ro.overlays.empty() ? ""
                                   : "; layers: 0-9 select (1-9 show/hide), - = opacity, [ ] time");
   std::fflush(stdout);

@@ -106,6 +106,9 @@ struct RenderLayerSettings {
   bool visible = true;           ///< overlays: drawn at start
   int maxLevel = -1;             ///< the deepest level fetched and drawn; -1: the layer's own
   std::string time;              ///< a value of the layer's TIME dimension; "" = its default
+  /** Overlays: a night layer (issue 23), shown on the dark side only, as light, blended across
+   * the terminator by the sun's elevation (planet::LayerOptions::night). */
+  bool night = false;
 };
 
 /** YAML `renderer.dome` (issue #7): the angular fisheye domemaster of `--dome`. */
@@ -143,6 +146,15 @@ struct RendererSettings {
   /** Heights of mean-sea-level datasets moved onto the ellipsoid with the EGM96 geoid (h = H + N,
    * the bundled data/egm96-30.pgm); false: taken as ellipsoid heights. Used by terrain. */
   bool geoid = true;
+  /** YAML `renderer.time` (issue 23): the scene's time, an ISO 8601 UTC instant
+   * ("2024-06-20T12:00:00Z", "2024-06-20") or "now"; "" = the command's default (view: now;
+   * render: kDefaultRenderTime, so that renders are reproducible). --time overrides it. */
+  std::string time;
+  /** YAML `renderer.sunlight`: the globe lit by the sun of the scene's time (--no-sun: off). */
+  bool sunlight = true;
+  /** YAML `renderer.night`: the night layers (renderer.layers[i].night) shown (--no-night: off,
+   * they are hidden). */
+  bool night = true;
 };
 
 /** YAML `cache`. */

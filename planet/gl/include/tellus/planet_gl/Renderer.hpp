@@ -62,6 +62,12 @@ struct LayerOptions {
   double opacity = 1.0; ///< [0, 1], times the texels' own alpha
   bool visible = true;
   int maxLevel = -1; ///< the deepest level fetched and drawn (-1: the layer's own deepest)
+  /** A night layer (issue 23, `renderer.layers[i].night`): shown on the dark side only, added
+   * as light (it is not lit by the sun) with a weight that goes from 0 with the sun at the
+   * horizon to 1 with the sun 6 degrees below it (civil dusk), by the sun's elevation over the
+   * ellipsoid at the point, as Uniview and OpenSpace blend their night textures. Hidden when the
+   * globe is unlit (no sunlight, no sunLatLon). */
+  bool night = false;
 };
 
 /** How the dome is drawn (issue #7; docs/design/dome.md). */
@@ -154,8 +160,14 @@ struct RendererOptions {
   std::optional<std::array<double, 2>> sunLatLon;
   /** The scene's time, UTC as POSIX seconds (planet/Astronomy.hpp): the sun's direction (when
    * sunLatLon is not given) and the sky's rotation; nullopt: no time (unlit unless sunLatLon,
-   * the sky unrotated). */
+   * the sky unrotated). Renderer::setTime changes it from frame to frame. */
   std::optional<double> timeUnixSeconds;
+  /** Sunlight on the globe (issue 23): the day side lit by the sun of timeUnixSeconds (or
+   * sunLatLon) over the relief's normals, the night side dark (a little ambient light, and the
+   * night layers), a soft terminator by the sun's elevation (shaders/planet.frag). Off: the
+   * imagery's own colours, unless sunLatLon is given (then lit as before). The configuration
+   * turns it on (`renderer.sun.enabled`, `--no-sun` off). */
+  bool sunlight = false;
   /** Added to the decoding threads' nice value: decoding in the background gives the CPU up to
    * the frame (on llvmpipe drawing is CPU work too, and competing decoders made frames 2-5x
    * longer). 0: the process's priority. */
@@ -236,6 +248,7 @@ struct RenderStats {
     double opacity = 1.0;
     bool visible = true;
     int maxLevel = -1;              ///< as set (-1: the layer's own deepest)
+    bool night = false;             ///< a night layer (LayerOptions::night)
     int levels = 0;                 ///< levels drawn now (its own, or up to maxLevel)
     std::size_t tilesRequested = 0; ///< totals, of every time
     std::size_t tilesReceived = 0;
@@ -256,6 +269,10 @@ struct RenderStats {
    * direct renderer until a frame first falls back to the cube. */
   std::size_t domeFaceBytes = 0;
   std::string domeError; ///< why the cube faces could not be made ("" when they could)
+  /** The scene's time of the last frame (UTC, POSIX seconds; nullopt: none) and whether the globe
+   * was lit by the sun (RendererOptions::sunlight or sunLatLon): what a render was drawn at. */
+  std::optional<double> sceneTimeUnixSeconds;
+  bool sunlight = false;
 };
 
 class Renderer {
@@ -321,6 +338,11 @@ public:
   void moveLayer(std::size_t from, std::size_t to);
   /** Resizes the framebuffer (window resize). */
   void resize(int width, int height);
+  /** The scene's time from the next frame on (UTC, POSIX seconds; nullopt: none), as
+   * RendererOptions::timeUnixSeconds: the sun and the sky follow it. */
+  void setTime(std::optional<double> unixSeconds);
+  /** The scene's time the last frame was drawn at (nullopt: none). */
+  std::optional<double> time() const noexcept;
 
 private:
   struct Impl;

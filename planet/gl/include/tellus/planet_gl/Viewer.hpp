@@ -12,15 +12,22 @@
  * overlay's digit also shows or hides it), - and = lower and raise the selected overlay's opacity
  * by 0.1, , and . move it down and up the drawing order, ; and ' lower and raise the deepest
  * level drawn of the selected layer, [ and ] step the selected layer's time through its configured
- * values (the layer swaps when the new time's tiles are all there). The statistics line (fps, nodes
- * drawn, tiles in flight, texture MB, camera) is drawn at the top left of the window (its own 5 x 7
- * font, TextOverlay.cpp) and is the window title, refreshed twice a second.
+ * values (the layer swaps when the new time's tiles are all there). The scene's time (issue 23;
+ * the sun, the night side, the sky) runs with the wall clock from ViewerOptions::sceneTime: L runs
+ * it faster and H slower (x1, x10, x60, x600, x3600, x86400 its pace, real time the slowest), J
+ * turns it backwards (or forwards again), K pauses and resumes it, N goes back to now at real
+ * time (SceneClock, planet/SceneTime.hpp). The statistics line (fps, nodes drawn, tiles in flight,
+ * texture MB, camera, the scene's time and its pace) is drawn at the top left of the window (its
+ * own 5 x 7 font, TextOverlay.cpp) and is the window title, refreshed twice a second.
  */
 
+#include <tellus/cache/Clock.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -33,6 +40,12 @@ struct ViewerOptions {
   std::uint64_t maxFrames = 0;
   /** Per layer (0 the base, then the overlays): the times [ and ] step through; empty: none. */
   std::vector<std::vector<std::string>> layerTimes;
+  /** The scene's time at the start (UTC, POSIX seconds; `tellus view` gives --time or now);
+   * nullopt: the renderer's own, and the time keys do nothing. */
+  std::optional<double> sceneTime;
+  /** The clock the scene's time runs with (steady() paces it, now() is N's "now"); null: the
+   * system's. Tests pass a ManualClock. */
+  std::shared_ptr<const Clock> clock;
 };
 
 /** Runs until the window closes (or maxFrames). Returns the number of frames drawn. */
