@@ -161,6 +161,8 @@ TEST(Config, RendererSettingsAreValidated) {
   fails([](RendererSettings& g) { g.maxSplitsPerFrame = 0; }, "max_splits_per_frame");
   fails([](RendererSettings& g) { g.decodeThreads = 0; }, "decode_threads");
   fails([](RendererSettings& g) { g.earth = static_cast<EarthShape>(7); }, "earth");
+  fails([](RendererSettings& g) { g.time = "yesterday"; }, "time");
+  fails([](RendererSettings& g) { g.time = "2024-02-30"; }, "time");
   fails([](RendererSettings& g) { g.overlaysPerPass = 9; }, "overlays_per_pass");
   fails([](RendererSettings& g) { g.overlaysPerPass = -1; }, "overlays_per_pass");
   fails([](RendererSettings& g) { g.dome.directMaxErrorPx = -1.0; }, "dome.direct_max_error");
@@ -231,4 +233,26 @@ TEST(Config, ErrorTextNamesFileLineColumnAndKey) {
   e.line = 0;
   e.key.clear();
   EXPECT_EQ(e.toString(), "a.yaml: must be in [1, 31]");
+}
+
+TEST(Config, EmbeddedDefaultLightsTheDaySideAndShowsTheNightLights) {
+  const Config c = embeddedDefault(kData, "/tmp/cache");
+  ASSERT_TRUE(validate(c));
+  EXPECT_TRUE(c.renderer.sunlight);
+  EXPECT_TRUE(c.renderer.night);
+  EXPECT_EQ(c.renderer.time, "") << "the command's default: render's fixed time, view's now";
+  ASSERT_EQ(c.renderer.layers.size(), 2u);
+  EXPECT_EQ(c.renderer.layers[0].layer, "bluemarble");
+  EXPECT_FALSE(c.renderer.layers[0].night);
+  EXPECT_EQ(c.renderer.layers[1].layer, "nightlights");
+  EXPECT_TRUE(c.renderer.layers[1].night);
+  Config base = c;
+  base.renderer.layers[0].night = true;
+  ASSERT_FALSE(validate(base)) << "the opaque base cannot be a night layer";
+  EXPECT_NE(validate(base).error().find("night"), std::string::npos);
+  Config timed = c;
+  for (const char* t : {"now", "2024-06-20", "2024-06-20T12:00:00Z", "1900-01-01T00:00"}) {
+    timed.renderer.time = t;
+    EXPECT_TRUE(validate(timed)) << t;
+  }
 }

@@ -235,6 +235,9 @@ renderer:
   earth: sphere
   geoid: false
   overlays_per_pass: 2
+  time: 2024-06-20T18:30:00Z
+  sunlight: false
+  night: false
   dome: {enabled: true, fov: 210, tilt: 30, face_scale: 0.8, method: cube, direct_max_error: 2}
 upstreams:
   - name: ww
@@ -333,6 +336,9 @@ layers:
   EXPECT_EQ(c->renderer.earth, EarthShape::Sphere);
   EXPECT_FALSE(c->renderer.geoid);
   EXPECT_EQ(c->renderer.overlaysPerPass, 2);
+  EXPECT_EQ(c->renderer.time, "2024-06-20T18:30:00Z");
+  EXPECT_FALSE(c->renderer.sunlight);
+  EXPECT_FALSE(c->renderer.night);
 
   const UpstreamConfig& ww = c->upstreams.at(0);
   EXPECT_EQ(ww.type, UpstreamConfig::Type::WorldWind);
@@ -555,6 +561,12 @@ layers:
   EXPECT_EQ(method.key, "renderer.dome.method");
   EXPECT_EQ(method.line, 2);
   EXPECT_EQ(method.message, "'sphere' is not one of direct, cube");
+
+  const ConfigError sunlight = errorOf("renderer: {sunlight: maybe}\n" + std::string(kMinimal));
+  EXPECT_EQ(sunlight.key, "renderer.sunlight");
+  const ConfigError night =
+      errorOf("renderer:\n  layers: [{layer: a, night: 2}]\n" + std::string(kMinimal));
+  EXPECT_EQ(night.key, "renderer.layers[0].night");
 
   const ConfigError geoid = errorOf("renderer: {geoid: egm96}\n" + std::string(kMinimal));
   EXPECT_EQ(geoid.key, "renderer.geoid");
@@ -991,6 +1003,7 @@ renderer:
     - layer: sst
       opacity: 0.25
       visible: false
+      night: true
 )";
 
 } // namespace
@@ -1008,6 +1021,8 @@ TEST(ConfigYaml, RendererLayersAreRead) {
   EXPECT_EQ(l[1].maxLevel, 1);
   EXPECT_TRUE(l[1].visible);
   EXPECT_EQ(l[2].opacity, 0.25);
+  EXPECT_TRUE(l[2].night);
+  EXPECT_FALSE(l[1].night);
   EXPECT_FALSE(l[2].visible);
   EXPECT_EQ(l[2].maxLevel, -1);
   EXPECT_EQ(c->renderer.terrain.regional, std::vector<std::string>{"dem-alps"});
