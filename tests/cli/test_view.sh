@@ -12,7 +12,9 @@ trap cleanup EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
 cd "$work"
-"$tellus" view --cache "$work/cache" --size 320x200 --camera 0,0,2e7 >"$work/out.txt" 2>&1 &
+# A fixed scene time (the default is now): the camera over the day side whenever the test runs.
+"$tellus" view --cache "$work/cache" --size 320x200 --camera 0,0,2e7 --time 2024-03-20T12:00:00Z \
+  >"$work/out.txt" 2>&1 &
 pid=$!
 win=$(timeout 30 xdotool search --sync --pid "$pid" --name '^tellus') || fail "no window: $(cat "$work/out.txt")"
 win=$(echo "$win" | head -1)
@@ -50,6 +52,19 @@ sleep 3
 lon1=$(title_num 2); alt1=$(title_num 3)
 python3 -c "import sys; l0,l1,a0,a1=map(float,sys.argv[1:]); sys.exit(0 if l1>l0 and a1<a0/2 else 1)" \
   "$lon0" "$lon1" "$alt0" "$alt1" || fail "fly-to: lon $lon0 -> $lon1, altitude $alt0 -> $alt1"
+# The scene's time (issue 23): L runs it ten times faster, J backwards, K pauses; each says so,
+# and the title carries the time and its pace.
+hold l
+for _ in $(seq 30); do grep -q "^time 2024-03-20T12:.*, x10$" "$work/out.txt" && break; sleep 0.1; done
+grep -q "^time 2024-03-20T12:.*, x10$" "$work/out.txt" || fail "L: $(cat "$work/out.txt")"
+hold j
+for _ in $(seq 30); do grep -q ", x-10$" "$work/out.txt" && break; sleep 0.1; done
+grep -q ", x-10$" "$work/out.txt" || fail "J: $(cat "$work/out.txt")"
+hold k
+for _ in $(seq 30); do grep -q "(paused)" "$work/out.txt" && break; sleep 0.1; done
+grep -q "(paused)" "$work/out.txt" || fail "K: $(cat "$work/out.txt")"
+sleep 1
+xdotool getwindowname "$win" | grep -q "2024-03-20T1[12]:[0-9:]*Z x0" || fail "title: $(xdotool getwindowname "$win")"
 hold Escape
 for _ in $(seq 100); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
 kill -0 "$pid" 2>/dev/null && fail "Esc did not quit"
@@ -77,6 +92,19 @@ win=$(echo "$win" | head -1)
 xdotool windowfocus --sync "$win" || true
 sleep 2
 for k in 1 1 minus semicolon; do xdotool key --window "$win" "$k"; sleep 0.5; done
+# The scene's time (issue 23): L runs it ten times faster, J backwards, K pauses; each says so,
+# and the title carries the time and its pace.
+hold l
+for _ in $(seq 30); do grep -q "^time 2024-03-20T12:.*, x10$" "$work/out.txt" && break; sleep 0.1; done
+grep -q "^time 2024-03-20T12:.*, x10$" "$work/out.txt" || fail "L: $(cat "$work/out.txt")"
+hold j
+for _ in $(seq 30); do grep -q ", x-10$" "$work/out.txt" && break; sleep 0.1; done
+grep -q ", x-10$" "$work/out.txt" || fail "J: $(cat "$work/out.txt")"
+hold k
+for _ in $(seq 30); do grep -q "(paused)" "$work/out.txt" && break; sleep 0.1; done
+grep -q "(paused)" "$work/out.txt" || fail "K: $(cat "$work/out.txt")"
+sleep 1
+xdotool getwindowname "$win" | grep -q "2024-03-20T1[12]:[0-9:]*Z x0" || fail "title: $(xdotool getwindowname "$win")"
 hold Escape
 for _ in $(seq 100); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
 wait "$pid" || fail "tellus view with an overlay exited with $?: $(cat "$work/layers.txt")"

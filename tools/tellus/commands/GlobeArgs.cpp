@@ -178,7 +178,8 @@ std::optional<std::string> applySceneTime(const cli::Args& a,
 }
 
 void hideNightLayers(const cli::Args& a, bool configured, planet::RendererOptions& ro) {
-  if (configured && !a.flag("no-night")) return;
+  // Without sunlight there is no night side to show them on: hidden, they are not even fetched.
+  if (configured && !a.flag("no-night") && (ro.sunlight || ro.sunLatLon)) return;
   for (planet::LayerOptions& o : ro.overlays)
     if (o.night) o.visible = false;
 }

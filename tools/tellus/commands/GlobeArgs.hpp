@@ -62,8 +62,9 @@ std::optional<std::string> applySceneTime(const cli::Args& a,
                                           std::string_view fallback,
                                           planet::RendererOptions& ro);
 
-/** --no-night, or `renderer.night: false` (configured false): the night layers
- * (LayerOptions::night) hidden. */
+/** --no-night, `renderer.night: false` (configured false), or no sunlight (--no-sun,
+ * `renderer.sunlight: false`, and no --sun): the night layers (LayerOptions::night) hidden, so
+ * that they are not fetched either. */
 void hideNightLayers(const cli::Args& a, bool configured, planet::RendererOptions& ro);
 
 /** `renderer.geoid` (the configuration's, or --geoid on|off): the elevation layer's

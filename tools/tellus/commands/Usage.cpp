@@ -33,15 +33,21 @@ commands:
              or a flight: --path PATH.json --frames DIR [--fps N] [--repeat N] instead of
              --camera/--out
              (PATH.json: [{"time":0,"lat":..,"lon":..,"alt":..,"heading":..,"tilt":..,
-              "times":{"LAYER":"TIME"}}, ...]: a layer's time from that keyframe on)
+              "times":{"LAYER":"TIME"},"utc":"2024-06-20T18:00:00Z"}, ...]: a layer's time
+              from that keyframe on; "utc" the scene's time, interpolated between keyframes)
   view     the interactive globe (a GLFW window)
              [--camera LAT,LON,ALT[,HEADING,TILT]] [--size WxH] [--layer NAME] [--threshold T]
              [--earth wgs84|sphere] [--offline | --server URL] [--dome [FOV]] [--dome-tilt DEG] [--dome-method direct|cube]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc
-             render and view: [--no-terrain] [--exaggeration X] [--sun LAT,LON]
+             render and view: [--time ISO8601|now] the scene's time, UTC (renderer.time;
+                                      default: render 2024-03-20T12:00:00Z, view now)
+             [--no-sun] unlit imagery (renderer.sunlight) [--no-night] no night layers
+                                      (renderer.night; renderer.layers[].night: true)
+             [--no-terrain] [--exaggeration X] [--sun LAT,LON]
              [--min-relief-px PX] (renderer.terrain.min_relief_px: heights only where relief shows)
              [--overlay NAME[,OPACITY]]... (imagery over the base; also renderer.layers);
              view: 0-9 select a layer (1-9 also show/hide it), - = opacity, , . order,
-             ; ' deepest level, [ ] its time
+             ; ' deepest level, [ ] its time; the scene's time: L faster, H slower,
+             J backwards, K pause, N now
              render: [--edge-fixing on|off] (off shows the cracks it closes; for comparisons)
              render, view and height: [--geoid on|off] (renderer.geoid: mean-sea-level heights
              onto the ellipsoid, h = H + N)
