@@ -70,6 +70,8 @@ RenderStats sampleStats() {
   s.domeFaceBytes = 0;
   s.passes = 2;
   s.overlaysPerPass = 4;
+  s.sceneTimeUnixSeconds = 1710957600.25; // 2024-03-20T18:00:00.25Z
+  s.sunlight = true;
   RenderStats::Layer base;
   base.name = "bluemarble";
   base.tilesRequested = 51;
@@ -82,6 +84,7 @@ RenderStats sampleStats() {
   sst.opacity = 0.5;
   sst.visible = false;
   sst.swaps = 1;
+  sst.night = true;
   s.layers = {base, sst};
   return s;
 }
@@ -136,9 +139,12 @@ TEST(RenderStatsJson, TheDocumentToTheByte) {
   "dome_error": "",
   "passes": 2,
   "overlays_per_pass": 4,
+  "scene_time": "2024-03-20T18:00:00Z",
+  "scene_time_unix": 1710957600.250,
+  "sunlight": true,
   "layers": [
-    {"name": "bluemarble", "time": "", "pending_time": "", "opacity": 1.000, "visible": true, "tiles_requested": 51, "tiles_received": 52, "textures_resident": 53, "swaps": 0},
-    {"name": "sst", "time": "2024-01-01", "pending_time": "2024-01-02", "opacity": 0.500, "visible": false, "tiles_requested": 0, "tiles_received": 0, "textures_resident": 0, "swaps": 1}
+    {"name": "bluemarble", "time": "", "pending_time": "", "opacity": 1.000, "visible": true, "night": false, "tiles_requested": 51, "tiles_received": 52, "textures_resident": 53, "swaps": 0},
+    {"name": "sst", "time": "2024-01-01", "pending_time": "2024-01-02", "opacity": 0.500, "visible": false, "night": true, "tiles_requested": 0, "tiles_received": 0, "textures_resident": 0, "swaps": 1}
   ],
   "median_frame_ms": 5.000,
   "p95_frame_ms": 7.250,
@@ -168,7 +174,9 @@ TEST(RenderStatsJson, ReadsBackAsJson) {
   EXPECT_EQ(j["frame_times_ms"], Json::array({5.0, 7.25}));
   EXPECT_EQ(j["frame_cpu_ms"], Json::array({1.0, 2.0}));
   EXPECT_EQ(j["longest_frame"]["index"], 1);
-  EXPECT_EQ(j.size(), 55u); // every member, none twice
+  EXPECT_EQ(j["scene_time"], "2024-03-20T18:00:00Z");
+  EXPECT_EQ(j["layers"][1]["night"], true);
+  EXPECT_EQ(j.size(), 58u); // every member, none twice
 }
 
 TEST(RenderStatsJson, StringsAreEscapedAndInvalidUtf8Replaced) {
@@ -182,6 +190,8 @@ TEST(RenderStatsJson, StringsAreEscapedAndInvalidUtf8Replaced) {
   EXPECT_EQ(j["gl"], "say \"hi\"\\ \n\t\x01 caf\xc3\xa9 \xef\xbf\xbd");
   EXPECT_EQ(j["dome_error"], "cube faces: GL_OUT_OF_MEMORY");
   EXPECT_EQ(j["layers"][0]["name"], "a\"b");
+  EXPECT_TRUE(j["scene_time"].is_null()) << "no time: null, not a made-up one";
+  EXPECT_TRUE(j["scene_time_unix"].is_null());
 }
 
 TEST(RenderStatsJson, DomeErrorHasFourDigitsAndIsNullWhenInfinite) {

@@ -50,8 +50,9 @@ try {
   }));
   if (state.error) fail(`the page says: ${state.error}`);
   if (state.layer !== 'bluemarble') fail(`the map shows '${state.layer}', not bluemarble`);
-  if (JSON.stringify(state.radios) !== '["bluemarble"]')
-    fail(`layer switcher offers ${JSON.stringify(state.radios)}, not the one imagery layer`);
+  // The embedded default's imagery: the Blue Marble and the night lights (issue 23).
+  if (JSON.stringify(state.radios) !== '["bluemarble","nightlights"]')
+    fail(`layer switcher offers ${JSON.stringify(state.radios)}, not the two imagery layers`);
   if (!state.elevation.includes('etopo')) fail(`elevation list: '${state.elevation}'`);
   if (state.failed !== 0) fail(`${state.failed} tiles failed to load`);
 

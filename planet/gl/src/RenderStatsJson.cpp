@@ -131,13 +131,14 @@ void addDomeAndLayers(Document& doc, const RenderStats& s) {
            {"dome_face_bytes", number(s.domeFaceBytes)},
            {"dome_error", jsonString(s.domeError)},
            {"passes", std::to_string(s.passes)},
+           {"overlays_per_pass", std::to_string(s.overlaysPerPass)},
+           // The scene's time the last frame was drawn at (issue 23): null when none.
            {"scene_time",
             s.sceneTimeUnixSeconds ? jsonString(formatSceneTime(*s.sceneTimeUnixSeconds))
                                    : std::string("null")},
            {"scene_time_unix",
             s.sceneTimeUnixSeconds ? fixed3(*s.sceneTimeUnixSeconds) : std::string("null")},
-           {"sunlight", boolean(s.sunlight)},
-           {"overlays_per_pass", std::to_string(s.overlaysPerPass)}});
+           {"sunlight", boolean(s.sunlight)}});
   std::string layers = "[";
   for (std::size_t i = 0; i < s.layers.size(); ++i) {
     const RenderStats::Layer& l = s.layers[i];

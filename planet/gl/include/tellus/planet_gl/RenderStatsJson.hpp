@@ -21,6 +21,9 @@
  *       ...
  *     }
  *
+ * "scene_time" is the scene's time of the last frame (issue 23) as ISO 8601 UTC
+ * ("2024-03-20T12:00:00Z", whole seconds; "scene_time_unix" the POSIX seconds with three decimals),
+ * null for none; "sunlight" whether the globe was lit; each layer says whether it is "night".
  * Times are milliseconds with three decimals (seconds for "seconds"), "dome_error_px" four
  * significant digits or null when infinite (an edge the direct method cannot map), counts are
  * integers. Strings are JSON strings (escaped; invalid UTF-8 replaced by U+FFFD).

@@ -155,8 +155,9 @@ struct RendererOptions {
    * pair subtracted in float (GpuVertex.hpp; as precise as doubles at the views measured,
    * docs/ACCURACY.md "The trade"). */
   bool fp64Vertices = true;
-  /** Diffuse lighting from the terrain's normals with the sun overhead at this latitude and
-   * longitude (degrees); nullopt: unlit (the imagery's own colours). */
+  /** Sunlight (as `sunlight` below) with the sun overhead at this latitude and longitude
+   * (degrees), whatever the time and `sunlight` say; nullopt: the sun of timeUnixSeconds when
+   * `sunlight`, else unlit (the imagery's own colours). */
   std::optional<std::array<double, 2>> sunLatLon;
   /** The scene's time, UTC as POSIX seconds (planet/Astronomy.hpp): the sun's direction (when
    * sunLatLon is not given) and the sky's rotation; nullopt: no time (unlit unless sunLatLon,
