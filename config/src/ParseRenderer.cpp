@@ -1,4 +1,4 @@
-// The renderer section of the configuration: LOD, terrain, layers, dome (ParseSections.hpp).
+// The renderer section of the configuration: LOD, terrain, layers, dome, stars (ParseSections.hpp).
 
 #include "ParseSections.hpp"
 
@@ -86,6 +86,17 @@ void readDome(Reader& r, const Map& renderer, DomeSettings& dome) {
     dome.directMaxErrorPx = number(r, *v, d.path("direct_max_error"));
 }
 
+/** renderer.stars: the star background. */
+void readStars(Reader& r, const Map& renderer, StarsSettings& stars) {
+  const auto [snode, swhere] = renderer.child("stars");
+  const Map s(
+      r, snode, renderer.path("stars"), swhere, {"enabled", "magnitude_limit", "brightness"});
+  if (auto v = s.get("enabled")) stars.enabled = boolean(r, *v, s.path("enabled"));
+  if (auto v = s.get("magnitude_limit"))
+    stars.magnitudeLimit = number(r, *v, s.path("magnitude_limit"));
+  if (auto v = s.get("brightness")) stars.brightness = number(r, *v, s.path("brightness"));
+}
+
 } // namespace
 
 void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
@@ -104,6 +115,7 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
                "decode_threads",
                "terrain",
                "dome",
+               "stars",
                "earth",
                "geoid",
                "layers",
@@ -129,6 +141,7 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
       g.layers.push_back(readRenderLayer(r, items[i], indexPath(lp, i)));
   }
   readDome(r, m, g.dome);
+  readStars(r, m, g.stars);
   if (auto v = m.get("earth"))
     g.earth = choice(r, *v, m.path("earth"), {"wgs84", "sphere"}) == 0 ? EarthShape::Wgs84
                                                                        : EarthShape::Sphere;

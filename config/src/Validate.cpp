@@ -335,6 +335,11 @@ std::optional<ValidationIssue> checkRenderer(const RendererSettings& g) {
   if (!(g.dome.directMaxErrorPx >= 0.0 && g.dome.directMaxErrorPx <= 1e9))
     return issue("dome.direct_max_error",
                  "must be in [0, 1e9] pixels, got " + num(g.dome.directMaxErrorPx));
+  if (!(g.stars.magnitudeLimit >= -2.0 && g.stars.magnitudeLimit <= 25.0))
+    return issue("stars.magnitude_limit",
+                 "must be in [-2, 25], got " + num(g.stars.magnitudeLimit));
+  if (!(g.stars.brightness >= 0.0 && g.stars.brightness <= 100.0))
+    return issue("stars.brightness", "must be in [0, 100], got " + num(g.stars.brightness));
   const TerrainSettings& t = g.terrain;
   if (!(t.exaggeration > 0.0 && t.exaggeration <= 100.0))
     return issue("terrain.exaggeration", "must be in (0, 100], got " + num(t.exaggeration));

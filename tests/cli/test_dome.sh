@@ -30,7 +30,9 @@ for y in range(h):
 PY
 }
 
-out=$("$tellus" render --no-sun --cache "$cache" --dome --size 96 --camera 45,7,5e5,0,90 \
+# --no-stars here and in the methods' comparison below: the cube method resamples the stars'
+# footprints (which the PSNR bound was not set for; tests/planet/TestStarsGl.cpp checks them).
+out=$("$tellus" render --no-sun --cache "$cache" --dome --size 96 --camera 45,7,5e5,0,90 --no-stars \
       --background 40,60,120 --out "$work/d.png" --wait-complete --stats "$work/d.json")
 echo "$out" | grep -q "96x96, complete" || fail "dome: $out"
 check "$work/d.png" 96x96
@@ -44,7 +46,7 @@ cmp -s "$work/d.png" "$work/e.png" && fail "--dome 220 --dome-tilt 30 drew the s
 # and --stats says which method drew the last frame.
 for m in direct cube; do
   "$tellus" render --no-sun --cache "$cache" --dome --dome-method "$m" --size 96 --camera 45,7,5e5,0,90 \
-    --background 40,60,120 --out "$work/m-$m.png" --wait-complete --stats "$work/m-$m.json" >/dev/null ||
+    --no-stars --background 40,60,120 --out "$work/m-$m.png" --wait-complete --stats "$work/m-$m.json" >/dev/null ||
     fail "--dome-method $m"
   check "$work/m-$m.png" 96x96
   grep -q "\"dome_method\": \"$m\"" "$work/m-$m.json" || fail "--dome-method $m: $(grep dome_ "$work/m-$m.json")"

@@ -172,6 +172,11 @@ TEST(Config, RendererSettingsAreValidated) {
   fails([](RendererSettings& g) { g.dome.fovDeg = 0.0; }, "dome.fov");
   fails([](RendererSettings& g) { g.dome.tiltDeg = std::nan(""); }, "dome.tilt");
   fails([](RendererSettings& g) { g.dome.faceScale = 0.05; }, "dome.face_scale");
+  fails([](RendererSettings& g) { g.stars.magnitudeLimit = std::nan(""); },
+        "stars.magnitude_limit");
+  fails([](RendererSettings& g) { g.stars.magnitudeLimit = 30.0; }, "stars.magnitude_limit");
+  fails([](RendererSettings& g) { g.stars.brightness = -0.1; }, "stars.brightness");
+  fails([](RendererSettings& g) { g.stars.brightness = INFINITY; }, "stars.brightness");
   fails([](RendererSettings& g) { g.terrain.minReliefPx = -1.0; }, "terrain.min_relief_px");
   fails([](RendererSettings& g) { g.terrain.minReliefPx = std::nan(""); }, "terrain.min_relief_px");
   EXPECT_EQ(c.renderer.earth, EarthShape::Wgs84);

@@ -155,6 +155,9 @@ TEST(ConfigYaml, DefaultsAreApplied) {
   EXPECT_FALSE(c->renderer.dome.enabled);
   EXPECT_EQ(c->renderer.dome.fovDeg, 180.0);
   EXPECT_EQ(c->renderer.dome.method, DomeSettings::Method::Direct);
+  EXPECT_TRUE(c->renderer.stars.enabled); // the stars are on by default (issue 23)
+  EXPECT_EQ(c->renderer.stars.magnitudeLimit, 6.5);
+  EXPECT_EQ(c->renderer.stars.brightness, 1.0);
   EXPECT_EQ(c->server.limits.maxConnections, 4096);
   EXPECT_EQ(c->server.limits.maxHeaderBytes, 16384U);
   EXPECT_EQ(c->server.limits.maxParamBytes, 2048U);
@@ -239,6 +242,7 @@ renderer:
   sunlight: false
   night: false
   dome: {enabled: true, fov: 210, tilt: 30, face_scale: 0.8, method: cube, direct_max_error: 2}
+  stars: {enabled: false, magnitude_limit: 5, brightness: 2.5}
 upstreams:
   - name: ww
     type: worldwind
@@ -332,6 +336,9 @@ layers:
   EXPECT_EQ(c->renderer.dome.faceScale, 0.8);
   EXPECT_EQ(c->renderer.dome.method, DomeSettings::Method::Cube);
   EXPECT_EQ(c->renderer.dome.directMaxErrorPx, 2.0);
+  EXPECT_FALSE(c->renderer.stars.enabled);
+  EXPECT_EQ(c->renderer.stars.magnitudeLimit, 5.0);
+  EXPECT_EQ(c->renderer.stars.brightness, 2.5);
   EXPECT_EQ(c->renderer.decodeThreads, 3);
   EXPECT_EQ(c->renderer.earth, EarthShape::Sphere);
   EXPECT_FALSE(c->renderer.geoid);
@@ -571,6 +578,11 @@ layers:
   const ConfigError geoid = errorOf("renderer: {geoid: egm96}\n" + std::string(kMinimal));
   EXPECT_EQ(geoid.key, "renderer.geoid");
   EXPECT_EQ(geoid.message, "expected true or false, got 'egm96'");
+
+  const ConfigError stars =
+      errorOf("renderer:\n  stars: {enabled: true, twinkle: 1}\n" + std::string(kMinimal));
+  EXPECT_EQ(stars.key, "renderer.stars.twinkle");
+  EXPECT_EQ(stars.line, 2);
 }
 
 TEST(ConfigYaml, BadDurationAndSize) {

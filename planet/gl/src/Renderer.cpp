@@ -6,6 +6,7 @@
 #include "FrameUpdate.hpp"
 #include "GlobePass.hpp"
 #include "RendererImpl.hpp"
+#include "StarsPass.hpp"
 #include "TextureIntake.hpp"
 
 #include <tellus/planet/TextureFallback.hpp>
@@ -51,6 +52,10 @@ std::optional<std::string> invalidOptions(const RendererOptions& o) {
   const int n = o.meshSize;
   if (n < 3 || n > 1025 || ((n - 1) & (n - 2)) != 0)
     return "the mesh size must be 2^k + 1 (3 to 1025)";
+  if (!std::isfinite(o.starMagnitudeLimit))
+    return "the stars' magnitude limit must be a finite number";
+  if (!(o.starBrightness >= 0.0) || !std::isfinite(o.starBrightness))
+    return "the stars' brightness must be a finite number >= 0";
   return std::nullopt;
 }
 
@@ -91,6 +96,15 @@ std::string Renderer::Impl::openGl() {
   if (!globe) return globe.error();
   stats.overlaysPerPass = (*globe)->overlaysPerPass();
   scene = std::make_unique<SceneDraw>(opt, geodesy, gl);
+  if (opt.stars) { // behind everything: before the globe (ScenePass.hpp)
+    auto stars = StarsPass::create(gl,
+                                   *opt.stars,
+                                   {.fisheye = opt.dome && opt.dome->method == DomeMethod::Direct,
+                                    .magnitudeLimit = opt.starMagnitudeLimit,
+                                    .brightness = opt.starBrightness});
+    if (!stars) return stars.error();
+    scene->addPass(std::move(*stars));
+  }
   scene->addPass(std::move(*globe));
   globalTexture = makeGlobalTexture(opt.globalImage);
   if (glGetError() != GL_NO_ERROR) return "OpenGL error while setting up";

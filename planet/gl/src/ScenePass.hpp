@@ -7,8 +7,9 @@
  * A scene is drawn into one target (the renderer's framebuffer, or a cube face of the dome): the
  * target is bound, its viewport set, the depth conventions of Depth.hpp begun (32-bit float,
  * reversed Z, cleared to 0 = infinity, GL_GREATER) and colour and depth cleared to the
- * background; then each pass of SceneDraw's list draws, in order. Today the list is the globe
- * (GlobePass: the node meshes with their textures and overlays). The next passes go into the same
+ * background; then each pass of SceneDraw's list draws, in order. Today the list is the stars
+ * (StarsPass.hpp, when RendererOptions::stars is set) and the globe (GlobePass: the node meshes
+ * with their textures and overlays). The next passes go into the same
  * list (SceneDraw::addPass), each in its own file with its own program:
  *
  * - issue 23, the planetarium look: a stars pass before the globe (depth test off, nothing written

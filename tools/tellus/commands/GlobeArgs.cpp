@@ -6,6 +6,7 @@
 #include <tellus/cli/Values.hpp>
 #include <tellus/planet/Geoid.hpp>
 #include <tellus/planet/SceneTime.hpp>
+#include <tellus/planet/StarCatalogue.hpp>
 
 #include <algorithm>
 #include <array>
@@ -26,6 +27,7 @@ std::vector<cli::OptionSpec> globeOptions() {
           {"threshold", K::Value},
           {"earth", K::Value},
           {"no-terrain", K::Flag},
+          {"no-stars", K::Flag},
           {"exaggeration", K::Value},
           {"min-relief-px", K::Value},
           {"sun", K::Value},
@@ -93,6 +95,8 @@ void applyRendererSettings(const RendererSettings& g,
   ro.terrainMinReliefPx = g.terrain.minReliefPx;
   ro.sunLatLon = g.terrain.sun;
   ro.sunlight = g.sunlight && !a.flag("no-sun");
+  ro.starMagnitudeLimit = g.stars.magnitudeLimit;
+  ro.starBrightness = g.stars.brightness;
   if (const auto d = domeArgs(a); d && (d->on || g.dome.enabled)) {
     ro.dome = planet::DomeOptions{
         d->fovDeg.value_or(g.dome.fovDeg), d->tiltDeg.value_or(g.dome.tiltDeg), g.dome.faceScale};
@@ -193,6 +197,18 @@ applyGeoid(const cli::Args& a, bool configured, planet::RendererOptions& ro) {
   auto geoid = Geoid::open(dataDir(a) / kGeoidFileName);
   if (!geoid) return geoid.error() + " (renderer.geoid: false or --geoid off draws without it)";
   ro.verticalDatum = VerticalDatum(std::make_shared<const Geoid>(std::move(*geoid)));
+  return std::nullopt;
+}
+
+std::optional<std::string>
+applyStars(const cli::Args& a, const StarsSettings& configured, planet::RendererOptions& ro) {
+  using namespace planet;
+  ro.stars.reset();
+  if (!configured.enabled || a.flag("no-stars")) return std::nullopt;
+  auto catalogue = StarCatalogue::open(dataDir(a) / kStarCatalogueFileName);
+  if (!catalogue)
+    return catalogue.error() + " (renderer.stars.enabled: false or --no-stars draws without stars)";
+  ro.stars = std::make_shared<const StarCatalogue>(std::move(*catalogue));
   return std::nullopt;
 }
 

@@ -73,4 +73,10 @@ void hideNightLayers(const cli::Args& a, bool configured, planet::RendererOption
 std::optional<std::string>
 applyGeoid(const cli::Args& a, bool configured, planet::RendererOptions& ro);
 
+/** `renderer.stars` (the configuration's, or off with --no-stars): the star background from the
+ * bundled catalogue of the data directory (data/stars-hip-6.5.txt). An error text when it is on
+ * and the catalogue cannot be read. */
+std::optional<std::string>
+applyStars(const cli::Args& a, const StarsSettings& configured, planet::RendererOptions& ro);
+
 } // namespace tellus::commands

@@ -15,6 +15,11 @@
 namespace tellus::commands {
 namespace {
 
+/** render and view draw the sky; height (which shares the tile sources) needs no stars. */
+bool drawsStars(const char* cmd) {
+  return std::string_view(cmd) != "height";
+}
+
 /** The layers drawn over the base chosen before (issue #7): renderer.layers[1..] of the
  * configuration, then each --overlay NAME[,OPACITY]; the base's time from renderer.layers[0] when
  * it is the base. Regional datasets (renderer.layers[].regional, renderer.terrain.regional) make
@@ -241,6 +246,10 @@ std::expected<PlanetTiles, int> openRemote(const cli::Args& a,
     std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());
     return std::unexpected(kExitError);
   }
+  if (auto bad = drawsStars(cmd) ? applyStars(a, settings.stars, ro) : std::nullopt) {
+    std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());
+    return std::unexpected(kExitError);
+  }
   t.remote = std::move(*remote);
   t.source = t.remote.get();
   if (!applyRenderLayers(settings, nullptr, a, ro, t, cmd)) return std::unexpected(kExitUsage);
@@ -309,6 +318,10 @@ openLocal(const cli::Args& a, const char* cmd, planet::RendererOptions& ro) {
   ro.imageDecoder = &decodeImageryAsRgba;
   chooseElevation(config, a, ro);
   if (auto bad = applyGeoid(a, config.renderer.geoid, ro)) {
+    std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());
+    return std::unexpected(kExitError);
+  }
+  if (auto bad = drawsStars(cmd) ? applyStars(a, config.renderer.stars, ro) : std::nullopt) {
     std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());
     return std::unexpected(kExitError);
   }

@@ -125,6 +125,15 @@ struct DomeSettings {
   double directMaxErrorPx = 0.5;
 };
 
+/** YAML `renderer.stars` (issue 23): the star background from the bundled catalogue
+ * (data/stars-hip-6.5.txt in the data directory). */
+struct StarsSettings {
+  bool enabled = true;         ///< false (or --no-stars): no stars
+  double magnitudeLimit = 6.5; ///< `magnitude_limit`: fainter stars (larger V) left out, [-2, 25]
+  /** Multiplies every star's energy (1: Sirius peaks at 0.92 of a full pixel), [0, 100]. */
+  double brightness = 1.0;
+};
+
 struct RendererSettings {
   double lodThreshold = 1.0;                  ///< texel-to-pixel threshold, 0.05 - 64
   int meshSize = 33;                          ///< vertices along a node's edge, 2^n + 1 in [3, 257]
@@ -142,6 +151,7 @@ struct RendererSettings {
    * force extra passes, for comparisons (bench/layers.sh). */
   int overlaysPerPass = 0;
   DomeSettings dome;                    ///< YAML `renderer.dome`
+  StarsSettings stars;                  ///< YAML `renderer.stars`
   EarthShape earth = EarthShape::Wgs84; ///< wgs84 | sphere
   /** Heights of mean-sea-level datasets moved onto the ellipsoid with the EGM96 geoid (h = H + N,
    * the bundled data/egm96-30.pgm); false: taken as ellipsoid heights. Used by terrain. */

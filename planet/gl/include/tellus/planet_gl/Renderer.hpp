@@ -22,6 +22,7 @@
 #include <tellus/planet/Camera.hpp>
 #include <tellus/planet/Geodesy.hpp>
 #include <tellus/planet/HeightStreamer.hpp>
+#include <tellus/planet/StarCatalogue.hpp>
 #include <tellus/planet/Terrain.hpp>
 
 #include <array>
@@ -169,6 +170,15 @@ struct RendererOptions {
    * imagery's own colours, unless sunLatLon is given (then lit as before). The configuration
    * turns it on (`renderer.sun.enabled`, `--no-sun` off). */
   bool sunlight = false;
+  /** The star background (issue 23; StarCatalogue.hpp, drawn by planet/gl/src/StarsPass.hpp
+   * before the globe, placed by timeUnixSeconds, J2000.0 without one): null = no stars, the
+   * library's default (`tellus` reads the bundled data/stars-hip-6.5.txt when
+   * `renderer.stars.enabled`). Stars fainter than starMagnitudeLimit (V) are left out;
+   * starBrightness (>= 0) multiplies every star's energy (starEnergy: 1 = Sirius peaks at 0.92 of
+   * a full pixel). */
+  std::shared_ptr<const StarCatalogue> stars;
+  double starMagnitudeLimit = 6.5;
+  double starBrightness = 1.0;
   /** Added to the decoding threads' nice value: decoding in the background gives the CPU up to
    * the frame (on llvmpipe drawing is CPU work too, and competing decoders made frames 2-5x
    * longer). 0: the process's priority. */
