@@ -155,6 +155,8 @@ TEST(ConfigYaml, DefaultsAreApplied) {
   EXPECT_FALSE(c->renderer.dome.enabled);
   EXPECT_EQ(c->renderer.dome.fovDeg, 180.0);
   EXPECT_EQ(c->renderer.dome.method, DomeSettings::Method::Direct);
+  EXPECT_TRUE(c->renderer.atmosphere.enabled);
+  EXPECT_EQ(c->renderer.atmosphere.topAltitude, 60000.0);
   EXPECT_EQ(c->server.limits.maxConnections, 4096);
   EXPECT_EQ(c->server.limits.maxHeaderBytes, 16384U);
   EXPECT_EQ(c->server.limits.maxParamBytes, 2048U);
@@ -236,6 +238,8 @@ renderer:
   geoid: false
   overlays_per_pass: 2
   dome: {enabled: true, fov: 210, tilt: 30, face_scale: 0.8, method: cube, direct_max_error: 2}
+  atmosphere: {enabled: false, exposure: 4, top_altitude: 80000, mie_g: 0.7,
+               rayleigh_scattering: [1e-6, 2e-6, 3e-6], ground_albedo: [0.3, 0.3, 0.3]}
 upstreams:
   - name: ww
     type: worldwind
@@ -329,6 +333,12 @@ layers:
   EXPECT_EQ(c->renderer.dome.faceScale, 0.8);
   EXPECT_EQ(c->renderer.dome.method, DomeSettings::Method::Cube);
   EXPECT_EQ(c->renderer.dome.directMaxErrorPx, 2.0);
+  EXPECT_FALSE(c->renderer.atmosphere.enabled);
+  EXPECT_EQ(c->renderer.atmosphere.exposure, 4.0);
+  EXPECT_EQ(c->renderer.atmosphere.topAltitude, 80000.0);
+  EXPECT_EQ(c->renderer.atmosphere.mieG, 0.7);
+  EXPECT_EQ(c->renderer.atmosphere.rayleighScattering[2], 3e-6);
+  EXPECT_EQ(c->renderer.atmosphere.groundAlbedo[0], 0.3);
   EXPECT_EQ(c->renderer.decodeThreads, 3);
   EXPECT_EQ(c->renderer.earth, EarthShape::Sphere);
   EXPECT_FALSE(c->renderer.geoid);
@@ -555,6 +565,14 @@ layers:
   EXPECT_EQ(method.key, "renderer.dome.method");
   EXPECT_EQ(method.line, 2);
   EXPECT_EQ(method.message, "'sphere' is not one of direct, cube");
+
+  const ConfigError air =
+      errorOf("renderer:\n  atmosphere: {ozone_absorption: [1, 2]}\n" + std::string(kMinimal));
+  EXPECT_EQ(air.key, "renderer.atmosphere.ozone_absorption");
+  EXPECT_EQ(air.message, "expected 3 numbers [r, g, b], got 2");
+  const ConfigError airKey =
+      errorOf("renderer:\n  atmosphere: {haze: 1}\n" + std::string(kMinimal));
+  EXPECT_EQ(airKey.key, "renderer.atmosphere.haze");
 
   const ConfigError geoid = errorOf("renderer: {geoid: egm96}\n" + std::string(kMinimal));
   EXPECT_EQ(geoid.key, "renderer.geoid");

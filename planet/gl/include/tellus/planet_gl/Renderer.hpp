@@ -163,7 +163,7 @@ struct RendererOptions {
   struct Atmosphere {
     AtmosphereParameters parameters; ///< bottomRadiusM <= 0: the body's equatorial radius
     /** The display's scale of radiance (solar units): shown = 1 - exp(-exposure L), gamma 2.2. */
-    double exposure = 10.0;
+    double exposure = 2.5;
   };
   std::optional<Atmosphere> atmosphere;
   /** Added to the decoding threads' nice value: decoding in the background gives the CPU up to
