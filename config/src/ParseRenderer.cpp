@@ -97,6 +97,66 @@ void readStars(Reader& r, const Map& renderer, StarsSettings& stars) {
   if (auto v = s.get("brightness")) stars.brightness = number(r, *v, s.path("brightness"));
 }
 
+/** Three numbers (R, G, B) at path. */
+std::array<double, 3> triple(Reader& r, const YAML::Node& v, const std::string& path) {
+  const auto items = list(r, v, path);
+  if (items.size() != 3)
+    r.fail(v.Mark(), path, "expected 3 numbers [r, g, b], got " + std::to_string(items.size()));
+  std::array<double, 3> out{};
+  for (std::size_t i = 0; i < 3 && i < items.size(); ++i)
+    out[i] = number(r, items[i], indexPath(path, i));
+  return out;
+}
+
+/** renderer.atmosphere: on or off, the exposure, the physical parameters. */
+void readAtmosphere(Reader& r, const Map& renderer, AtmosphereSettings& a) {
+  const auto [anode, awhere] = renderer.child("atmosphere");
+  const Map m(r,
+              anode,
+              renderer.path("atmosphere"),
+              awhere,
+              {"enabled",
+               "exposure",
+               "bottom_radius",
+               "top_altitude",
+               "rayleigh_scattering",
+               "rayleigh_scale_height",
+               "mie_scattering",
+               "mie_extinction",
+               "mie_scale_height",
+               "mie_g",
+               "ozone_absorption",
+               "ozone_centre",
+               "ozone_half_width",
+               "sun_angular_radius",
+               "solar_irradiance",
+               "ground_albedo",
+               "min_sun_cosine"});
+  const auto num = [&](const char* key, double& out) {
+    if (auto v = m.get(key)) out = number(r, *v, m.path(key));
+  };
+  const auto rgb = [&](const char* key, std::array<double, 3>& out) {
+    if (auto v = m.get(key)) out = triple(r, *v, m.path(key));
+  };
+  if (auto v = m.get("enabled")) a.enabled = boolean(r, *v, m.path("enabled"));
+  num("exposure", a.exposure);
+  num("bottom_radius", a.bottomRadius);
+  num("top_altitude", a.topAltitude);
+  rgb("rayleigh_scattering", a.rayleighScattering);
+  num("rayleigh_scale_height", a.rayleighScaleHeight);
+  num("mie_scattering", a.mieScattering);
+  num("mie_extinction", a.mieExtinction);
+  num("mie_scale_height", a.mieScaleHeight);
+  num("mie_g", a.mieG);
+  rgb("ozone_absorption", a.ozoneAbsorption);
+  num("ozone_centre", a.ozoneCentre);
+  num("ozone_half_width", a.ozoneHalfWidth);
+  num("sun_angular_radius", a.sunAngularRadius);
+  rgb("solar_irradiance", a.solarIrradiance);
+  rgb("ground_albedo", a.groundAlbedo);
+  num("min_sun_cosine", a.minSunCosine);
+}
+
 } // namespace
 
 void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
@@ -116,6 +176,7 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
                "terrain",
                "dome",
                "stars",
+               "atmosphere",
                "earth",
                "geoid",
                "layers",
@@ -142,6 +203,7 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
   }
   readDome(r, m, g.dome);
   readStars(r, m, g.stars);
+  readAtmosphere(r, m, g.atmosphere);
   if (auto v = m.get("earth"))
     g.earth = choice(r, *v, m.path("earth"), {"wgs84", "sphere"}) == 0 ? EarthShape::Wgs84
                                                                        : EarthShape::Sphere;

@@ -304,6 +304,40 @@ checkLayer(const Config& c, const UpstreamIndex& upstreams, const LayerConfig& l
   return std::nullopt;
 }
 
+/** renderer.atmosphere: (key, message) of the first bad value. */
+std::optional<std::pair<std::string, std::string>> checkAtmosphere(const AtmosphereSettings& a) {
+  using Bad = std::pair<std::string, std::string>;
+  const auto in = [](double v, double lo, double hi) { return v > lo && v <= hi; };
+  const auto rgb = [](const std::array<double, 3>& v, double hi) {
+    return std::ranges::all_of(v, [hi](double x) { return x >= 0.0 && x <= hi; });
+  };
+  if (!in(a.exposure, 0.0, 1e6)) return Bad{"atmosphere.exposure", "must be in (0, 1e6]"};
+  if (!(a.bottomRadius == 0.0 || in(a.bottomRadius, 1e3, 1e9)))
+    return Bad{"atmosphere.bottom_radius", "must be 0 (the body's) or in (1e3, 1e9] metres"};
+  if (!in(a.topAltitude, 0.0, 1e6))
+    return Bad{"atmosphere.top_altitude", "must be in (0, 1e6] metres"};
+  if (!rgb(a.rayleighScattering, 1.0) || !rgb(a.ozoneAbsorption, 1.0))
+    return Bad{"atmosphere.rayleigh_scattering",
+               "and ozone_absorption must be three numbers in [0, 1] per metre"};
+  if (!rgb(a.solarIrradiance, 1e6))
+    return Bad{"atmosphere.solar_irradiance", "must be three numbers in [0, 1e6]"};
+  if (!rgb(a.groundAlbedo, 1.0))
+    return Bad{"atmosphere.ground_albedo", "must be three numbers in [0, 1]"};
+  if (!in(a.rayleighScaleHeight, 0.0, 1e6) || !in(a.mieScaleHeight, 0.0, 1e6) ||
+      !in(a.ozoneHalfWidth, 0.0, 1e6) || !(std::abs(a.ozoneCentre) <= 1e6))
+    return Bad{"atmosphere.rayleigh_scale_height",
+               "scale heights and the ozone layer's half width must be in (0, 1e6] metres, its "
+               "centre in [-1e6, 1e6]"};
+  if (!(a.mieScattering >= 0.0 && a.mieExtinction >= a.mieScattering && a.mieExtinction <= 1.0))
+    return Bad{"atmosphere.mie_extinction", "must be >= mie_scattering >= 0 and <= 1 per metre"};
+  if (!(a.mieG > -1.0 && a.mieG < 1.0)) return Bad{"atmosphere.mie_g", "must be in (-1, 1)"};
+  if (!(a.sunAngularRadius > 0.0 && a.sunAngularRadius < 0.1))
+    return Bad{"atmosphere.sun_angular_radius", "must be in (0, 0.1) radians"};
+  if (!(a.minSunCosine > -1.0 && a.minSunCosine < 0.0))
+    return Bad{"atmosphere.min_sun_cosine", "must be in (-1, 0)"};
+  return std::nullopt;
+}
+
 } // namespace
 
 std::optional<ValidationIssue> checkRenderer(const RendererSettings& g) {
@@ -340,6 +374,7 @@ std::optional<ValidationIssue> checkRenderer(const RendererSettings& g) {
                  "must be in [-2, 25], got " + num(g.stars.magnitudeLimit));
   if (!(g.stars.brightness >= 0.0 && g.stars.brightness <= 100.0))
     return issue("stars.brightness", "must be in [0, 100], got " + num(g.stars.brightness));
+  if (auto a = checkAtmosphere(g.atmosphere)) return issue(a->first, a->second);
   const TerrainSettings& t = g.terrain;
   if (!(t.exaggeration > 0.0 && t.exaggeration <= 100.0))
     return issue("terrain.exaggeration", "must be in (0, 100], got " + num(t.exaggeration));

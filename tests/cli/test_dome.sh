@@ -32,12 +32,12 @@ PY
 
 # --no-stars here and in the methods' comparison below: the cube method resamples the stars'
 # footprints (which the PSNR bound was not set for; tests/planet/TestStarsGl.cpp checks them).
-out=$("$tellus" render --no-sun --cache "$cache" --dome --size 96 --camera 45,7,5e5,0,90 --no-stars \
+out=$("$tellus" render --no-sun --no-atmosphere --cache "$cache" --dome --size 96 --camera 45,7,5e5,0,90 --no-stars \
       --background 40,60,120 --out "$work/d.png" --wait-complete --stats "$work/d.json")
 echo "$out" | grep -q "96x96, complete" || fail "dome: $out"
 check "$work/d.png" 96x96
 # The FOV as the value after --dome, and a tilt: another image.
-"$tellus" render --no-sun --cache "$cache" --dome 220 --dome-tilt 30 --size 96x96 --camera 45,7,5e5,0,60 \
+"$tellus" render --no-sun --no-atmosphere --cache "$cache" --dome 220 --dome-tilt 30 --size 96x96 --camera 45,7,5e5,0,60 \
   --background 40,60,120 --out "$work/e.png" --wait-complete >/dev/null || fail "--dome 220 --dome-tilt 30"
 check "$work/e.png" 96x96
 cmp -s "$work/d.png" "$work/e.png" && fail "--dome 220 --dome-tilt 30 drew the same image"
@@ -45,7 +45,7 @@ cmp -s "$work/d.png" "$work/e.png" && fail "--dome 220 --dome-tilt 30 drew the s
 # picture (PSNR inside the circle over 30 dB: 96 px of Blue Marble, the cube's faces resampled),
 # and --stats says which method drew the last frame.
 for m in direct cube; do
-  "$tellus" render --no-sun --cache "$cache" --dome --dome-method "$m" --size 96 --camera 45,7,5e5,0,90 \
+  "$tellus" render --no-sun --no-atmosphere --cache "$cache" --dome --dome-method "$m" --size 96 --camera 45,7,5e5,0,90 \
     --no-stars --background 40,60,120 --out "$work/m-$m.png" --wait-complete --stats "$work/m-$m.json" >/dev/null ||
     fail "--dome-method $m"
   check "$work/m-$m.png" 96x96
@@ -84,19 +84,19 @@ YAML
 }
 base >"$work/base.yaml"
 { base; printf 'renderer:\n  dome: {enabled: true, fov: 220, tilt: 30}\n'; } >"$work/dome.yaml"
-"$tellus" render --no-sun --config "$work/base.yaml" --dome 220 --dome-tilt 30 --size 96 \
+"$tellus" render --no-sun --no-atmosphere --config "$work/base.yaml" --dome 220 --dome-tilt 30 --size 96 \
   --camera 45,7,5e5,0,60 --background 40,60,120 --out "$work/e2.png" --wait-complete >/dev/null 2>"$work/err.txt" ||
   fail "--config base.yaml --dome: $(cat "$work/err.txt")"
-"$tellus" render --no-sun --config "$work/dome.yaml" --size 96x96 --camera 45,7,5e5,0,60 --background 40,60,120 \
+"$tellus" render --no-sun --no-atmosphere --config "$work/dome.yaml" --size 96x96 --camera 45,7,5e5,0,60 --background 40,60,120 \
   --out "$work/f.png" --wait-complete >/dev/null 2>"$work/err.txt" ||
   fail "renderer.dome: $(cat "$work/err.txt")"
 check "$work/f.png" 96x96
 cmp -s "$work/e2.png" "$work/f.png" || fail "renderer.dome did not draw what --dome 220 --dome-tilt 30 draws"
 # renderer.dome.method: cube draws what --dome-method cube draws.
 { base; printf 'renderer:\n  dome: {method: cube}\n'; } >"$work/cube.yaml"
-"$tellus" render --no-sun --config "$work/cube.yaml" --dome --size 96 --camera 45,7,5e5,0,90 --background 40,60,120 \
+"$tellus" render --no-sun --no-atmosphere --config "$work/cube.yaml" --dome --size 96 --camera 45,7,5e5,0,90 --background 40,60,120 \
   --out "$work/g.png" --wait-complete >/dev/null 2>"$work/err.txt" || fail "renderer.dome.method: $(cat "$work/err.txt")"
-"$tellus" render --no-sun --config "$work/base.yaml" --dome --dome-method cube --size 96 --camera 45,7,5e5,0,90 \
+"$tellus" render --no-sun --no-atmosphere --config "$work/base.yaml" --dome --dome-method cube --size 96 --camera 45,7,5e5,0,90 \
   --background 40,60,120 --out "$work/g2.png" --wait-complete >/dev/null 2>"$work/err.txt" ||
   fail "--config base.yaml --dome-method cube: $(cat "$work/err.txt")"
 cmp -s "$work/g.png" "$work/g2.png" || fail "renderer.dome.method: cube did not draw what --dome-method cube draws"
@@ -106,7 +106,7 @@ cat >"$work/path.json" <<'JSON'
 [{"time": 0, "lat": 45, "lon": 7, "alt": 8e5, "heading": 0, "tilt": 90},
  {"time": 1, "lat": 46, "lon": 8, "alt": 4e5, "heading": 30, "tilt": 80}]
 JSON
-out=$("$tellus" render --no-sun --cache "$cache" --dome --size 64 --background 40,60,120 --path "$work/path.json" \
+out=$("$tellus" render --no-sun --no-atmosphere --cache "$cache" --dome --size 64 --background 40,60,120 --path "$work/path.json" \
       --frames "$work/frames" --fps 2 --wait-complete)
 echo "$out" | grep -q "3 frames.*every frame complete" || fail "dome flight: $out"
 for n in 0 1 2; do check "$work/frames/frame_0000$n.png" 64x64; done
@@ -115,7 +115,7 @@ usage() {
   local want=$1
   shift
   set +e
-  "$tellus" render --no-sun --cache "$cache" --camera 0,0,1e7 "$@" --out "$work/bad.png" 2>"$work/err.txt" >/dev/null
+  "$tellus" render --no-sun --no-atmosphere --cache "$cache" --camera 0,0,1e7 "$@" --out "$work/bad.png" 2>"$work/err.txt" >/dev/null
   local rc=$?
   set -e
   [ $rc -eq 2 ] || fail "exit $rc (want 2) for: $* ($(cat "$work/err.txt"))"

@@ -58,7 +58,7 @@ renderer:
 YAML
 
 # Over the regional dataset, inside the band: green under half red.
-"$tellus" render --no-sun --config "$work/layers.yaml" --camera 45,9,8e5 --size 160x120 \
+"$tellus" render --no-sun --no-atmosphere --config "$work/layers.yaml" --camera 45,9,8e5 --size 160x120 \
   --out "$work/alps.png" --wait-complete --stats "$work/alps.json" >/dev/null || fail "render"
 read -r r g b < <(pixel "$work/alps.png" 80 60)
 near "$r" "$g" "$b" 128 100 0 4 || fail "regional green under half red: $r $g $b"
@@ -75,12 +75,12 @@ PY
 
 # Outside the regional dataset and south of the band: the Blue Marble alone. The same view
 # without the overlay (--config with no renderer.layers, then --overlay band,1): opaque red.
-"$tellus" render --no-sun --config "$work/layers.yaml" --camera 10,-30,8e5 --size 160x120 \
+"$tellus" render --no-sun --no-atmosphere --config "$work/layers.yaml" --camera 10,-30,8e5 --size 160x120 \
   --out "$work/ocean.png" --wait-complete >/dev/null || fail "render outside"
 read -r r g b < <(pixel "$work/ocean.png" 80 60)
 [ "$b" -gt "$r" ] || fail "the Atlantic under no overlay should be blue: $r $g $b"
 sed '/^renderer:/,$d' "$work/layers.yaml" >"$work/plain.yaml"
-"$tellus" render --no-sun --config "$work/plain.yaml" --overlay band,1 --camera 45,-100,8e5 \
+"$tellus" render --no-sun --no-atmosphere --config "$work/plain.yaml" --overlay band,1 --camera 45,-100,8e5 \
   --size 160x120 --out "$work/red.png" --wait-complete >/dev/null || fail "--overlay"
 read -r r g b < <(pixel "$work/red.png" 80 60)
 near "$r" "$g" "$b" 255 0 0 2 || fail "--overlay band,1 should be opaque red: $r $g $b"
@@ -125,7 +125,7 @@ cat >"$work/timed.json" <<'JSON'
  {"time": 0.04, "lat": 45, "lon": 9, "alt": 8e5, "times": {"band": "2020-02-01"}},
  {"time": 0.08, "lat": 45, "lon": 9, "alt": 8e5}]
 JSON
-"$tellus" render --no-sun --config "$work/timed.yaml" --path "$work/timed.json" --frames "$work/frames" \
+"$tellus" render --no-sun --no-atmosphere --config "$work/timed.yaml" --path "$work/timed.json" --frames "$work/frames" \
   --size 64x48 --wait-complete --stats "$work/timed-stats.json" >"$work/timed.txt" ||
   fail "timed flight: $(cat "$work/timed.txt")"
 grep -q "every frame complete" "$work/timed.txt" || fail "$(cat "$work/timed.txt")"
@@ -142,7 +142,7 @@ cat >"$work/path.json" <<'JSON'
  {"time": 0.04, "lat": 45, "lon": 9, "alt": 8e5}]
 JSON
 set +e
-"$tellus" render --no-sun --config "$work/layers.yaml" --path "$work/path.json" --frames "$work/f" \
+"$tellus" render --no-sun --no-atmosphere --config "$work/layers.yaml" --path "$work/path.json" --frames "$work/f" \
   --size 64x48 >"$work/bad.txt" 2>&1
 code=$?
 set -e
@@ -151,7 +151,7 @@ grep -q "not drawn" "$work/bad.txt" || fail "$(cat "$work/bad.txt")"
 
 # Bad settings are refused with the reason.
 set +e
-"$tellus" render --no-sun --config "$work/plain.yaml" --overlay band,1.5 --camera 0,0,1e7 \
+"$tellus" render --no-sun --no-atmosphere --config "$work/plain.yaml" --overlay band,1.5 --camera 0,0,1e7 \
   --out "$work/x.png" >"$work/bad.txt" 2>&1
 code=$?
 set -e
@@ -159,7 +159,7 @@ set -e
 sed 's/regional: \[alps\]/regional: [band, alps]/; s/tile_size: 512, levels: 2}/tile_size: 256, levels: 2}/' \
   "$work/layers.yaml" >"$work/badgrid.yaml"
 set +e
-"$tellus" render --no-sun --config "$work/badgrid.yaml" --camera 0,0,1e7 --out "$work/x.png" \
+"$tellus" render --no-sun --no-atmosphere --config "$work/badgrid.yaml" --camera 0,0,1e7 --out "$work/x.png" \
   >"$work/bad.txt" 2>&1
 code=$?
 set -e

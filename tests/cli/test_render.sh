@@ -13,7 +13,7 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 # PNG size from the IHDR chunk (bytes 16-23).
 png_size() { python3 -c "import struct,sys; d=open(sys.argv[1],'rb').read(24); assert d[:8]==b'\x89PNG\r\n\x1a\n'; print('%dx%d' % struct.unpack('>II', d[16:24]))" "$1"; }
 
-out=$("$tellus" render --no-sun --cache "$cache" --camera 0,0,2e7 --size 320x240 --out "$work/a.png" \
+out=$("$tellus" render --no-sun --no-atmosphere --cache "$cache" --camera 0,0,2e7 --size 320x240 --out "$work/a.png" \
       --wait-complete --stats "$work/a.json")
 echo "$out" | grep -q "complete after" || fail "render: $out"
 [ "$(png_size "$work/a.png")" = "320x240" ] || fail "PNG size $(png_size "$work/a.png")"
@@ -40,9 +40,29 @@ assert 0 <= phases <= s["longest_frame_ms"] + 0.01, s
 PY
 
 # Deterministic: the same view again (now from the cache) gives the same bytes.
-"$tellus" render --no-sun --cache "$cache" --camera 0,0,2e7 --size 320x240 --out "$work/b.png" \
+"$tellus" render --no-sun --no-atmosphere --cache "$cache" --camera 0,0,2e7 --size 320x240 --out "$work/b.png" \
   --wait-complete=30 >/dev/null
 cmp -s "$work/a.png" "$work/b.png" || fail "two complete renders differ"
+
+# The atmosphere, on by default (renderer.atmosphere.enabled; every other render here passes
+# --no-atmosphere to keep its pixels): a blue haze over the disc's centre and a glow just outside
+# its edge (the globe's radius there: 72.2 px, the 60 km shell's 72.9 px), black space beyond.
+"$tellus" render --no-stars --cache "$cache" --camera 0,0,2e7 --size 320x240 --out "$work/air.png" \
+  --wait-complete=30 --stats "$work/air.json" >/dev/null || fail "render with the atmosphere"
+python3 - "$work/a.png" "$work/air.png" "$work/air.json" "$here" <<'PY' || fail "the atmosphere's look"
+import json, sys
+sys.path.insert(0, sys.argv[4])
+from png_pixels import pixels
+w, h, bare, n = pixels(sys.argv[1])
+_, _, air, _ = pixels(sys.argv[2])
+px = lambda rows, x, y: tuple(rows[y][x * n:x * n + 3])
+assert json.load(open(sys.argv[3]))["atmosphere_precompute_ms"] > 0
+c0, c1 = px(bare, 160, 120), px(air, 160, 120)
+assert c1[2] > c0[2] + 10, (c0, c1)                       # bluer at the centre
+glow = max(px(air, 160 + 72, 120)[2], px(air, 160 - 73, 120)[2])
+assert glow > 40 and px(bare, 160 + 74, 120) == (0, 0, 0), glow
+assert px(air, 160 + 76, 120)[2] < 8 and px(air, 5, 5) == (0, 0, 0), px(air, 160 + 76, 120)
+PY
 
 # Tiles over HTTP from a remote `tellus serve` (--server): the same cache behind a server on any
 # free port gives the same complete image, byte for byte; a dead server is a clear error.
@@ -51,13 +71,13 @@ server=$!
 for _ in $(seq 50); do grep -q "listening on" "$work/serve.txt" && break; sleep 0.1; done
 port=$(grep -o "127.0.0.1:[0-9]*" "$work/serve.txt" | head -n 1 | cut -d: -f2)
 [ -n "$port" ] || fail "serve did not say where it listens: $(cat "$work/serve.txt")"
-"$tellus" render --no-sun --server "http://127.0.0.1:$port" --camera 0,0,2e7 --size 320x240 \
+"$tellus" render --no-sun --no-atmosphere --server "http://127.0.0.1:$port" --camera 0,0,2e7 --size 320x240 \
   --out "$work/remote.png" --wait-complete --stats "$work/remote.json" >/dev/null || fail "--server"
 kill "$server"; wait "$server" || true
 cmp -s "$work/a.png" "$work/remote.png" || fail "the image through --server differs"
 grep -q '"tiles_received": 50' "$work/remote.json" || fail "remote: $(cat "$work/remote.json")"
 set +e
-"$tellus" render --no-sun --server "http://127.0.0.1:$port" --camera 0,0,2e7 --out "$work/dead.png" \
+"$tellus" render --no-sun --no-atmosphere --server "http://127.0.0.1:$port" --camera 0,0,2e7 --out "$work/dead.png" \
   >"$work/dead.txt" 2>&1
 rc=$?
 set -e
@@ -102,10 +122,10 @@ layers:
     kind: imagery
     grid: {level_zero_delta: 36, tile_size: 64, levels: 1}
 YAML
-"$tellus" render --no-sun --config "$work/tiff.yaml" --cache "$work/tiff-cache" --layer tiffy \
+"$tellus" render --no-sun --no-atmosphere --config "$work/tiff.yaml" --cache "$work/tiff-cache" --layer tiffy \
   --camera 0,-90,2e7 --size 64x64 --out "$work/tiff-west.png" --wait-complete=30 \
   --stats "$work/tiff.json" >/dev/null 2>"$work/tiff.txt" || fail "TIFF layer: $(cat "$work/tiff.txt")"
-"$tellus" render --no-sun --config "$work/tiff.yaml" --cache "$work/tiff-cache" --layer tiffy \
+"$tellus" render --no-sun --no-atmosphere --config "$work/tiff.yaml" --cache "$work/tiff-cache" --layer tiffy \
   --camera 0,90,2e7 --size 64x64 --out "$work/tiff-east.png" --wait-complete=30 >/dev/null ||
   fail "TIFF layer, east"
 kill "$tiffs"; wait "$tiffs" || true
@@ -128,11 +148,11 @@ sed "s|^data_dir: .*|data_dir: $src/data|" "$src/config/examples/default.yaml" >
 # (the embedded default has a renderer section already: the keys go into it)
 sed -i 's|^renderer:|renderer:\n  lod_threshold: 8\n  texture_budget: 64MiB|' "$work/coarse.yaml"
 level_of() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['max_level'])" "$1"; }
-"$tellus" render --no-sun --cache "$cache" --camera 46,8,2e6 --size 1024x768 --out "$work/fine.png" \
+"$tellus" render --no-sun --no-atmosphere --cache "$cache" --camera 46,8,2e6 --size 1024x768 --out "$work/fine.png" \
   --wait-complete --stats "$work/fine.json" >/dev/null || fail "render at 2,000 km"
-"$tellus" render --no-sun --config "$work/coarse.yaml" --cache "$cache" --camera 46,8,2e6 --size 1024x768 \
+"$tellus" render --no-sun --no-atmosphere --config "$work/coarse.yaml" --cache "$cache" --camera 46,8,2e6 --size 1024x768 \
   --out "$work/coarse.png" --wait-complete --stats "$work/coarse.json" >/dev/null || fail "coarse"
-"$tellus" render --no-sun --config "$work/coarse.yaml" --threshold 1 --cache "$cache" --camera 46,8,2e6 \
+"$tellus" render --no-sun --no-atmosphere --config "$work/coarse.yaml" --threshold 1 --cache "$cache" --camera 46,8,2e6 \
   --size 1024x768 --out "$work/over.png" --wait-complete --stats "$work/over.json" >/dev/null ||
   fail "--threshold over the config"
 [ "$(level_of "$work/fine.json")" -gt "$(level_of "$work/coarse.json")" ] ||
@@ -141,15 +161,15 @@ cmp -s "$work/fine.png" "$work/over.png" || fail "--threshold 1 did not override
 
 # The Earth model (renderer.earth, --earth): the sphere draws another image than WGS84; the
 # configuration's sphere and --earth sphere draw the same one; --earth wgs84 wins over the config.
-"$tellus" render --no-sun --cache "$cache" --camera 0,0,2e7 --size 320x240 --out "$work/sphere.png" \
+"$tellus" render --no-sun --no-atmosphere --cache "$cache" --camera 0,0,2e7 --size 320x240 --out "$work/sphere.png" \
   --wait-complete --earth sphere >/dev/null || fail "--earth sphere"
 cmp -s "$work/a.png" "$work/sphere.png" && fail "--earth sphere drew the WGS84 image"
 sed "s|^data_dir: .*|data_dir: $src/data|" "$src/config/examples/default.yaml" >"$work/sphere.yaml"
 sed -i 's|^renderer:|renderer:\n  earth: sphere|' "$work/sphere.yaml"
-"$tellus" render --no-sun --config "$work/sphere.yaml" --cache "$cache" --camera 0,0,2e7 --size 320x240 \
+"$tellus" render --no-sun --no-atmosphere --config "$work/sphere.yaml" --cache "$cache" --camera 0,0,2e7 --size 320x240 \
   --out "$work/sphere-config.png" --wait-complete >/dev/null || fail "renderer.earth: sphere"
 cmp -s "$work/sphere.png" "$work/sphere-config.png" || fail "renderer.earth: sphere differs"
-"$tellus" render --no-sun --config "$work/sphere.yaml" --earth wgs84 --cache "$cache" --camera 0,0,2e7 \
+"$tellus" render --no-sun --no-atmosphere --config "$work/sphere.yaml" --earth wgs84 --cache "$cache" --camera 0,0,2e7 \
   --size 320x240 --out "$work/wgs84-over.png" --wait-complete >/dev/null || fail "--earth wgs84"
 cmp -s "$work/a.png" "$work/wgs84-over.png" || fail "--earth wgs84 did not override the config"
 
@@ -157,30 +177,30 @@ cmp -s "$work/a.png" "$work/wgs84-over.png" || fail "--earth wgs84 did not overr
 # the ellipsoid draws another image than without; the configuration's geoid: false draws the
 # --geoid off one; --geoid on wins over the config. Bad values exit 2.
 for g in on off; do
-  "$tellus" render --no-sun --cache "$cache" --camera 46,8,2e4,0,40 --size 160x120 --out "$work/geoid-$g.png" \
+  "$tellus" render --no-sun --no-atmosphere --cache "$cache" --camera 46,8,2e4,0,40 --size 160x120 --out "$work/geoid-$g.png" \
     --wait-complete --geoid "$g" >/dev/null || fail "--geoid $g"
 done
 cmp -s "$work/geoid-on.png" "$work/geoid-off.png" && fail "--geoid off drew the same image as on"
 sed "s|^data_dir: .*|data_dir: $src/data|" "$src/config/examples/default.yaml" >"$work/nogeoid.yaml"
 sed -i 's|^renderer:|renderer:\n  geoid: false|' "$work/nogeoid.yaml"
-"$tellus" render --no-sun --config "$work/nogeoid.yaml" --cache "$cache" --camera 46,8,2e4,0,40 --size 160x120 \
+"$tellus" render --no-sun --no-atmosphere --config "$work/nogeoid.yaml" --cache "$cache" --camera 46,8,2e4,0,40 --size 160x120 \
   --out "$work/geoid-config.png" --wait-complete >/dev/null || fail "renderer.geoid: false"
 cmp -s "$work/geoid-off.png" "$work/geoid-config.png" || fail "renderer.geoid: false differs from --geoid off"
-"$tellus" render --no-sun --config "$work/nogeoid.yaml" --cache "$cache" --camera 46,8,2e4,0,40 --size 160x120 \
+"$tellus" render --no-sun --no-atmosphere --config "$work/nogeoid.yaml" --cache "$cache" --camera 46,8,2e4,0,40 --size 160x120 \
   --out "$work/geoid-over.png" --wait-complete --geoid on >/dev/null || fail "--geoid on over the config"
 cmp -s "$work/geoid-on.png" "$work/geoid-over.png" || fail "--geoid on did not override the config"
 set +e
-"$tellus" render --no-sun --cache "$cache" --camera 0,0,2e7 --out "$work/x.png" --geoid maybe 2>/dev/null
+"$tellus" render --no-sun --no-atmosphere --cache "$cache" --camera 0,0,2e7 --out "$work/x.png" --geoid maybe 2>/dev/null
 [ $? -eq 2 ] || fail "--geoid maybe: not a usage error"
-"$tellus" render --no-sun --cache "$cache" --camera 0,0,2e7 --out "$work/x.png" --mesh-size 31 2>/dev/null
+"$tellus" render --no-sun --no-atmosphere --cache "$cache" --camera 0,0,2e7 --out "$work/x.png" --mesh-size 31 2>/dev/null
 [ $? -eq 2 ] || fail "--mesh-size 31: not a usage error"
-"$tellus" render --no-sun --cache "$cache" --camera 0,0,2e7 --out "$work/x.png" --vertices half 2>/dev/null
+"$tellus" render --no-sun --no-atmosphere --cache "$cache" --camera 0,0,2e7 --out "$work/x.png" --vertices half 2>/dev/null
 [ $? -eq 2 ] || fail "--vertices half: not a usage error"
 set -e
 
 # The OpenGL 3.3 core fallback (Mesa told to offer no more): the same image; and without
 # glClipControl the same projection still draws (reversed Z in [-1, 1] depth, less precise).
-MESA_GL_VERSION_OVERRIDE=3.3 "$tellus" render --no-sun --cache "$cache" --camera 0,0,2e7 --size 320x240 \
+MESA_GL_VERSION_OVERRIDE=3.3 "$tellus" render --no-sun --no-atmosphere --cache "$cache" --camera 0,0,2e7 --size 320x240 \
   --out "$work/gl33.png" --wait-complete --stats "$work/gl33.json" >/dev/null || fail "GL 3.3"
 grep -q '"gl": "3.3' "$work/gl33.json" || fail "not a 3.3 context: $(grep '"gl"' "$work/gl33.json")"
 # 4.x draws with double vertex positions, 3.3 with two floats per coordinate: the same image up to
@@ -197,14 +217,14 @@ differ = sum(1 for ra, rb in zip(a, b) for x in range(0, w * 3, 3) if ra[x:x + 3
 print(f"GL 3.3 against 4.x: {differ} of {w * h} pixels differ, by at most {worst}")
 sys.exit(0 if differ <= w * h // 1000 and worst <= 2 else 1)
 PY
-MESA_GL_VERSION_OVERRIDE=3.3 MESA_EXTENSION_OVERRIDE=-GL_ARB_clip_control "$tellus" render --no-sun \
+MESA_GL_VERSION_OVERRIDE=3.3 MESA_EXTENSION_OVERRIDE=-GL_ARB_clip_control "$tellus" render --no-sun --no-atmosphere \
   --cache "$cache" --camera 0,0,2e7 --size 320x240 --out "$work/noclip.png" --wait-complete \
   --stats "$work/noclip.json" >/dev/null 2>&1 || fail "GL 3.3 without clip control"
 grep -q '"reversed_z": false' "$work/noclip.json" || fail "clip control still used"
 
 # Offline on an empty cache: every tile is absent, the view is complete at once with the global
 # texture (the bundled image), and nothing is asked for twice.
-"$tellus" render --no-sun --offline --cache "$work/empty" --camera 0,0,2e7 --size 320x240 \
+"$tellus" render --no-sun --no-atmosphere --offline --cache "$work/empty" --camera 0,0,2e7 --size 320x240 \
   --out "$work/offline.png" --wait-complete --stats "$work/offline.json" >/dev/null || fail "offline"
 python3 - "$work/offline.json" <<'PY'
 import json, sys
@@ -215,7 +235,7 @@ PY
 cmp -s "$work/a.png" "$work/offline.png" && fail "the offline image (global texture) equals the tiled one?"
 
 # A tilted view near the pole with a background colour and a layer named.
-"$tellus" render --no-sun --cache "$cache" --camera 89.9999,0,3e5,0,60 --size 160x120 --layer bluemarble \
+"$tellus" render --no-sun --no-atmosphere --cache "$cache" --camera 89.9999,0,3e5,0,60 --size 160x120 --layer bluemarble \
   --background 255,0,255 --out "$work/pole.png" --wait-complete >/dev/null || fail "pole view"
 [ "$(png_size "$work/pole.png")" = "160x120" ] || fail "pole PNG size"
 
@@ -224,7 +244,7 @@ cat >"$work/path.json" <<'JSON'
 {"keyframes": [ {"time": 0, "lat": 20, "lon": 170, "alt": 2e7},
                 {"time": 1, "lat": 46, "lon": -170, "alt": 1e6, "heading": 20, "tilt": 40} ]}
 JSON
-out=$("$tellus" render --no-sun --cache "$cache" --path "$work/path.json" --frames "$work/frames" --fps 2 \
+out=$("$tellus" render --no-sun --no-atmosphere --cache "$cache" --path "$work/path.json" --frames "$work/frames" --fps 2 \
       --size 96x64 --wait-complete --stats "$work/path-stats.json")
 echo "$out" | grep -q "3 frames" || fail "path: $out"
 for n in 0 1 2; do
@@ -234,7 +254,7 @@ cmp -s "$work/frames/frame_00000.png" "$work/frames/frame_00002.png" && fail "fr
 python3 -c "import json,sys; s=json.load(open(sys.argv[1])); assert s['complete'] and s['longest_frame_ms'] >= s['median_frame_ms'] > 0, s" "$work/path-stats.json"
 # --repeat 2: the same flight twice in one renderer; the same three images (each frame complete),
 # and the statistics count both passes.
-out=$("$tellus" render --no-sun --cache "$cache" --path "$work/path.json" --frames "$work/frames2" --fps 2 \
+out=$("$tellus" render --no-sun --no-atmosphere --cache "$cache" --path "$work/path.json" --frames "$work/frames2" --fps 2 \
       --size 96x64 --wait-complete --repeat 2 --stats "$work/repeat-stats.json")
 echo "$out" | grep -q "3 frames" || fail "repeat: $out"
 for n in 0 1 2; do
@@ -242,13 +262,13 @@ for n in 0 1 2; do
 done
 python3 -c "import json,sys; s=json.load(open(sys.argv[1])); assert s['complete'] and s['frames'] >= 6 and len(s['frame_times_ms']) == s['frames'], s" "$work/repeat-stats.json"
 set +e
-"$tellus" render --no-sun --cache "$cache" --camera 0,0,2e7 --out "$work/bad.png" --repeat 2 2>"$work/err.txt"
+"$tellus" render --no-sun --no-atmosphere --cache "$cache" --camera 0,0,2e7 --out "$work/bad.png" --repeat 2 2>"$work/err.txt"
 rc=$?
 set -e
 [ $rc -eq 2 ] && grep -q "repeat" "$work/err.txt" && [ ! -e "$work/bad.png" ] || fail "--repeat without --path: $rc"
 echo '[{"time": 0, "lat": 0, "lon": 0, "alt": 1e6}, {"time": 0, "lat": 1, "lon": 0, "alt": 1e6}]' >"$work/bad.json"
 set +e
-"$tellus" render --no-sun --cache "$cache" --path "$work/bad.json" --frames "$work/bad" 2>"$work/err.txt"
+"$tellus" render --no-sun --no-atmosphere --cache "$cache" --path "$work/bad.json" --frames "$work/bad" 2>"$work/err.txt"
 rc=$?
 set -e
 [ $rc -eq 2 ] && grep -q "times must increase" "$work/err.txt" || fail "bad path: $rc $(cat "$work/err.txt")"
@@ -258,7 +278,7 @@ usage() {
   local want=$1
   shift
   set +e
-  "$tellus" render --no-sun --cache "$cache" "$@" --out "$work/bad.png" 2>"$work/err.txt" >/dev/null
+  "$tellus" render --no-sun --no-atmosphere --cache "$cache" "$@" --out "$work/bad.png" 2>"$work/err.txt" >/dev/null
   local rc=$?
   set -e
   [ $rc -eq 2 ] || fail "exit $rc (want 2) for: $* ($(cat "$work/err.txt"))"
@@ -285,7 +305,7 @@ usage "exclude each other" --camera 0,0,1e6 --offline --server http://127.0.0.1:
 
 # Given up on: a view that cannot be complete in a millisecond is an error, not a partial image.
 set +e
-"$tellus" render --no-sun --cache "$work/cold" --camera 45,7,1e5 --size 320x240 --out "$work/late.png" \
+"$tellus" render --no-sun --no-atmosphere --cache "$work/cold" --camera 45,7,1e5 --size 320x240 --out "$work/late.png" \
   --wait-complete=0.001 2>"$work/err.txt" >/dev/null
 rc=$?
 set -e
@@ -295,7 +315,7 @@ grep -q "not complete after" "$work/err.txt" || fail "incomplete message: $(cat 
 
 # No display: said so, exit 1.
 set +e
-env -u DISPLAY -u WAYLAND_DISPLAY "$tellus" render --no-sun --cache "$cache" --camera 0,0,2e7 \
+env -u DISPLAY -u WAYLAND_DISPLAY "$tellus" render --no-sun --no-atmosphere --cache "$cache" --camera 0,0,2e7 \
   --out "$work/nodisplay.png" 2>"$work/err.txt" >/dev/null
 rc=$?
 set -e

@@ -169,6 +169,14 @@ TEST(Config, RendererSettingsAreValidated) {
   fails([](RendererSettings& g) { g.dome.directMaxErrorPx = std::nan(""); },
         "dome.direct_max_error");
   fails([](RendererSettings& g) { g.dome.fovDeg = 221.0; }, "dome.fov");
+  fails([](RendererSettings& g) { g.atmosphere.exposure = 0.0; }, "atmosphere.exposure");
+  fails([](RendererSettings& g) { g.atmosphere.mieG = 1.0; }, "atmosphere.mie_g");
+  fails([](RendererSettings& g) { g.atmosphere.topAltitude = std::nan(""); },
+        "atmosphere.top_altitude");
+  fails([](RendererSettings& g) { g.atmosphere.mieExtinction = 1e-6; },
+        "atmosphere.mie_extinction");
+  fails([](RendererSettings& g) { g.atmosphere.groundAlbedo[1] = 2.0; },
+        "atmosphere.ground_albedo");
   fails([](RendererSettings& g) { g.dome.fovDeg = 0.0; }, "dome.fov");
   fails([](RendererSettings& g) { g.dome.tiltDeg = std::nan(""); }, "dome.tilt");
   fails([](RendererSettings& g) { g.dome.faceScale = 0.05; }, "dome.face_scale");

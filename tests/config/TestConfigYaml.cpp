@@ -158,6 +158,8 @@ TEST(ConfigYaml, DefaultsAreApplied) {
   EXPECT_TRUE(c->renderer.stars.enabled); // the stars are on by default (issue 23)
   EXPECT_EQ(c->renderer.stars.magnitudeLimit, 6.5);
   EXPECT_EQ(c->renderer.stars.brightness, 1.0);
+  EXPECT_TRUE(c->renderer.atmosphere.enabled);
+  EXPECT_EQ(c->renderer.atmosphere.topAltitude, 60000.0);
   EXPECT_EQ(c->server.limits.maxConnections, 4096);
   EXPECT_EQ(c->server.limits.maxHeaderBytes, 16384U);
   EXPECT_EQ(c->server.limits.maxParamBytes, 2048U);
@@ -243,6 +245,8 @@ renderer:
   night: false
   dome: {enabled: true, fov: 210, tilt: 30, face_scale: 0.8, method: cube, direct_max_error: 2}
   stars: {enabled: false, magnitude_limit: 5, brightness: 2.5}
+  atmosphere: {enabled: false, exposure: 4, top_altitude: 80000, mie_g: 0.7,
+               rayleigh_scattering: [1e-6, 2e-6, 3e-6], ground_albedo: [0.3, 0.3, 0.3]}
 upstreams:
   - name: ww
     type: worldwind
@@ -339,6 +343,12 @@ layers:
   EXPECT_FALSE(c->renderer.stars.enabled);
   EXPECT_EQ(c->renderer.stars.magnitudeLimit, 5.0);
   EXPECT_EQ(c->renderer.stars.brightness, 2.5);
+  EXPECT_FALSE(c->renderer.atmosphere.enabled);
+  EXPECT_EQ(c->renderer.atmosphere.exposure, 4.0);
+  EXPECT_EQ(c->renderer.atmosphere.topAltitude, 80000.0);
+  EXPECT_EQ(c->renderer.atmosphere.mieG, 0.7);
+  EXPECT_EQ(c->renderer.atmosphere.rayleighScattering[2], 3e-6);
+  EXPECT_EQ(c->renderer.atmosphere.groundAlbedo[0], 0.3);
   EXPECT_EQ(c->renderer.decodeThreads, 3);
   EXPECT_EQ(c->renderer.earth, EarthShape::Sphere);
   EXPECT_FALSE(c->renderer.geoid);
@@ -574,6 +584,13 @@ layers:
   const ConfigError night =
       errorOf("renderer:\n  layers: [{layer: a, night: 2}]\n" + std::string(kMinimal));
   EXPECT_EQ(night.key, "renderer.layers[0].night");
+  const ConfigError air =
+      errorOf("renderer:\n  atmosphere: {ozone_absorption: [1, 2]}\n" + std::string(kMinimal));
+  EXPECT_EQ(air.key, "renderer.atmosphere.ozone_absorption");
+  EXPECT_EQ(air.message, "expected 3 numbers [r, g, b], got 2");
+  const ConfigError airKey =
+      errorOf("renderer:\n  atmosphere: {haze: 1}\n" + std::string(kMinimal));
+  EXPECT_EQ(airKey.key, "renderer.atmosphere.haze");
 
   const ConfigError geoid = errorOf("renderer: {geoid: egm96}\n" + std::string(kMinimal));
   EXPECT_EQ(geoid.key, "renderer.geoid");

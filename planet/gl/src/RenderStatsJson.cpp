@@ -100,6 +100,8 @@ void addCounters(Document& doc, const RenderStats& s, const RenderRun& run) {
            {"frame_ms", fixed3(s.frameMs)},
            {"reversed_z", boolean(s.reversedZ)},
            {"gl", jsonString(s.glVersion)}});
+  if (s.atmospherePrecomputeMs > 0.0)
+    doc.add({{"atmosphere_precompute_ms", fixed3(s.atmospherePrecomputeMs)}});
 }
 
 void addTerrain(Document& doc, const RenderStats& s) {

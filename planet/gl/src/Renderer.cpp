@@ -2,6 +2,7 @@
 // where each lives) and docs/design/renderer.md. Every GL call here runs on
 // the thread that created the Renderer.
 
+#include "AtmospherePass.hpp"
 #include "DrawList.hpp"
 #include "FrameUpdate.hpp"
 #include "GlobePass.hpp"
@@ -106,6 +107,13 @@ std::string Renderer::Impl::openGl() {
     scene->addPass(std::move(*stars));
   }
   scene->addPass(std::move(*globe));
+  if (opt.atmosphere) {
+    auto air =
+        AtmospherePass::create(gl, opt.atmosphere->parameters, opt.atmosphere->exposure, geodesy);
+    if (!air) return air.error();
+    stats.atmospherePrecomputeMs = (*air)->precomputeSeconds() * 1000.0;
+    scene->addPass(std::move(*air));
+  }
   globalTexture = makeGlobalTexture(opt.globalImage);
   if (glGetError() != GL_NO_ERROR) return "OpenGL error while setting up";
   return {};

@@ -28,6 +28,7 @@ std::vector<cli::OptionSpec> globeOptions() {
           {"earth", K::Value},
           {"no-terrain", K::Flag},
           {"no-stars", K::Flag},
+          {"no-atmosphere", K::Flag},
           {"exaggeration", K::Value},
           {"min-relief-px", K::Value},
           {"sun", K::Value},
@@ -76,6 +77,30 @@ std::expected<DomeArgs, std::string> domeArgs(const cli::Args& a) {
   return d;
 }
 
+std::optional<planet::RendererOptions::Atmosphere> atmosphereOptions(const AtmosphereSettings& s) {
+  if (!s.enabled) return std::nullopt;
+  planet::RendererOptions::Atmosphere a;
+  auto& p = a.parameters;
+  const auto vec = [](const std::array<double, 3>& v) { return glm::dvec3(v[0], v[1], v[2]); };
+  a.exposure = s.exposure;
+  p.bottomRadiusM = s.bottomRadius; // 0: the body's (AtmospherePass)
+  p.topAltitudeM = s.topAltitude;
+  p.rayleighScattering = vec(s.rayleighScattering);
+  p.rayleighScaleHeightM = s.rayleighScaleHeight;
+  p.mieScattering = s.mieScattering;
+  p.mieExtinction = s.mieExtinction;
+  p.mieScaleHeightM = s.mieScaleHeight;
+  p.miePhaseG = s.mieG;
+  p.ozoneAbsorption = vec(s.ozoneAbsorption);
+  p.ozoneCentreM = s.ozoneCentre;
+  p.ozoneHalfWidthM = s.ozoneHalfWidth;
+  p.sunAngularRadiusRad = s.sunAngularRadius;
+  p.solarIrradiance = vec(s.solarIrradiance);
+  p.groundAlbedo = vec(s.groundAlbedo);
+  p.muSMin = s.minSunCosine;
+  return a;
+}
+
 void applyRendererSettings(const RendererSettings& g,
                            const cli::Args& a,
                            planet::RendererOptions& ro,
@@ -97,6 +122,7 @@ void applyRendererSettings(const RendererSettings& g,
   ro.sunlight = g.sunlight && !a.flag("no-sun");
   ro.starMagnitudeLimit = g.stars.magnitudeLimit;
   ro.starBrightness = g.stars.brightness;
+  ro.atmosphere = atmosphereOptions(g.atmosphere);
   if (const auto d = domeArgs(a); d && (d->on || g.dome.enabled)) {
     ro.dome = planet::DomeOptions{
         d->fovDeg.value_or(g.dome.fovDeg), d->tiltDeg.value_or(g.dome.tiltDeg), g.dome.faceScale};
@@ -157,6 +183,7 @@ std::optional<std::string> applyTerrainArgs(const cli::Args& a, planet::Renderer
   if (auto e = a.get("geoid"); e && *e != "on" && *e != "off")
     return "--geoid must be on or off, got '" + *e + "'";
   if (auto bad = applyTradeArgs(a, ro)) return bad;
+  if (a.flag("no-atmosphere")) ro.atmosphere.reset();
   if (auto e = a.get("sun")) {
     const auto v = cli::parseNumbers(*e, 2, 2);
     if (!v || (*v)[0] < -90.0 || (*v)[0] > 90.0)

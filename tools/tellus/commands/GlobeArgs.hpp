@@ -36,6 +36,9 @@ struct DomeArgs {
 };
 std::expected<DomeArgs, std::string> domeArgs(const cli::Args& a);
 
+/** renderer.atmosphere as the renderer's options (nullopt when disabled). */
+std::optional<planet::RendererOptions::Atmosphere> atmosphereOptions(const AtmosphereSettings& s);
+
 /** The configuration's `renderer` settings into `ro` and `earth`; what the command line gave
  * (--threshold, --dome, --dome-tilt, --dome-method) wins (the caller applies --earth). */
 void applyRendererSettings(const RendererSettings& g,

@@ -230,6 +230,7 @@ std::expected<PlanetTiles, int> openRemote(const cli::Args& a,
     t.night = loaded->renderer.night;
     settings = loaded->renderer;
   }
+  ro.atmosphere = atmosphereOptions(settings.atmosphere); // the configuration's default: on
   if (!a.get("layer") && !settings.layers.empty()) ro.layer = settings.layers.front().layer;
   if (auto bad = applyTerrainArgs(a, ro)) {
     std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());

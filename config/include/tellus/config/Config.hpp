@@ -134,6 +134,28 @@ struct StarsSettings {
   double brightness = 1.0;
 };
 
+/** YAML `renderer.atmosphere` (issue 23): the physically based sky and aerial perspective; the
+ * physical parameters of planet/Atmosphere.hpp (defaults: the Earth, Bruneton 2017), SI units. */
+struct AtmosphereSettings {
+  bool enabled = true;          ///< on by default in the configuration (`--no-atmosphere`: off)
+  double exposure = 2.5;        ///< display = 1 - exp(-exposure x radiance), (0, 1e6]
+  double bottomRadius = 0.0;    ///< `bottom_radius` metres; 0: the body's equatorial radius
+  double topAltitude = 60000.0; ///< `top_altitude` metres above the bottom, (0, 1e6]
+  std::array<double, 3> rayleighScattering{5.802e-6, 13.558e-6, 33.1e-6}; ///< 1/m, R G B
+  double rayleighScaleHeight = 8000.0;                                    ///< metres
+  double mieScattering = 3.996e-6;                                        ///< 1/m
+  double mieExtinction = 4.44e-6; ///< 1/m, >= mie_scattering
+  double mieScaleHeight = 1200.0; ///< metres
+  double mieG = 0.8;              ///< `mie_g`: the phase function's asymmetry, (-1, 1)
+  std::array<double, 3> ozoneAbsorption{0.650e-6, 1.881e-6, 0.085e-6}; ///< 1/m at the peak
+  double ozoneCentre = 25000.0;                                  ///< metres: the tent layer's peak
+  double ozoneHalfWidth = 15000.0;                               ///< metres: the tent's half width
+  double sunAngularRadius = 0.004675;                            ///< radians, (0, 0.1)
+  std::array<double, 3> solarIrradiance{1.474, 1.8504, 1.91198}; ///< at the top, per channel
+  std::array<double, 3> groundAlbedo{0.1, 0.1, 0.1};             ///< [0, 1]
+  double minSunCosine = -0.2; ///< `min_sun_cosine`: below it the sky is black, (-1, 0)
+};
+
 struct RendererSettings {
   double lodThreshold = 1.0;                  ///< texel-to-pixel threshold, 0.05 - 64
   int meshSize = 33;                          ///< vertices along a node's edge, 2^n + 1 in [3, 257]
@@ -152,6 +174,7 @@ struct RendererSettings {
   int overlaysPerPass = 0;
   DomeSettings dome;                    ///< YAML `renderer.dome`
   StarsSettings stars;                  ///< YAML `renderer.stars`
+  AtmosphereSettings atmosphere;        ///< YAML `renderer.atmosphere`
   EarthShape earth = EarthShape::Wgs84; ///< wgs84 | sphere
   /** Heights of mean-sea-level datasets moved onto the ellipsoid with the EGM96 geoid (h = H + N,
    * the bundled data/egm96-30.pgm); false: taken as ellipsoid heights. Used by terrain. */

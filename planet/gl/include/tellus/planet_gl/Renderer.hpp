@@ -19,6 +19,7 @@
  */
 
 #include <tellus/cache/TileSource.hpp>
+#include <tellus/planet/Atmosphere.hpp>
 #include <tellus/planet/Camera.hpp>
 #include <tellus/planet/Geodesy.hpp>
 #include <tellus/planet/HeightStreamer.hpp>
@@ -179,6 +180,15 @@ struct RendererOptions {
   std::shared_ptr<const StarCatalogue> stars;
   double starMagnitudeLimit = 6.5;
   double starBrightness = 1.0;
+  /** The atmosphere (issue 23; planet/Atmosphere.hpp, planet/gl/src/AtmospherePass.hpp): the sky
+   * and the aerial perspective, drawn after the globe; nullopt: none (the library's default, so
+   * that renderer tests keep their pixels; the configuration turns it on). */
+  struct Atmosphere {
+    AtmosphereParameters parameters; ///< bottomRadiusM <= 0: the body's equatorial radius
+    /** The display's scale of radiance (solar units): shown = 1 - exp(-exposure L), gamma 2.2. */
+    double exposure = 2.5;
+  };
+  std::optional<Atmosphere> atmosphere;
   /** Added to the decoding threads' nice value: decoding in the background gives the CPU up to
    * the frame (on llvmpipe drawing is CPU work too, and competing decoders made frames 2-5x
    * longer). 0: the process's priority. */
@@ -271,6 +281,9 @@ struct RenderStats {
   int passes = 0;          ///< last frame: draw passes (1 + those the overlays needed)
   std::string glVersion;   ///< GL_VERSION and GL_RENDERER
   bool reversedZ = false;  ///< glClipControl available (4.5 or ARB_clip_control)
+  /** The atmosphere's tables: milliseconds their computation took when the renderer was made
+   * (0: no atmosphere). */
+  double atmospherePrecomputeMs = 0.0;
   /** The dome's last frame: "direct" or "cube" (a direct renderer's frame whose estimated
    * straight-edge error exceeded DomeOptions::directMaxErrorPx is "cube"); "" without a dome.
    * domeErrorPx: that estimate (0 for the cube method's renderers). */

@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# The atmosphere's cost (issue 23): frame time with and without it (--no-atmosphere), side by
+# side in one run, on the scripted flights of bench/paths/ (the descent, 20,000 km to 20 km, and
+# the level pass at 2,000 km), flat 1024x768 and a 2048 domemaster (direct method), each flight
+# flown twice in one renderer (--repeat 2: the second pass, everything resident, gives each
+# view's cost without streaming; its median is the figure), the two configurations alternated in
+# each round; then the tables' precomputation time (--stats atmosphere_precompute_ms) of each
+# run. Mesa llvmpipe under Xvfb renders on the CPU: every figure is a CPU figure; read the ratios.
+# Usage: bench/atmosphere.sh [path/to/tellus]   (ROUNDS=2, FPS=25 by default; FPS=5 flies each
+# 4-second flight in 21 frames instead of 101)
+set -euo pipefail
+tellus=${1:-build/tools/tellus/tellus}
+rounds=${ROUNDS:-2}
+fps=${FPS:-25}
+work=$(mktemp -d "${TMPDIR:-/tmp}/tellus-atmosphere-bench.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+paths="$(dirname "$0")/paths"
+run() { # flight, view name, configuration name, arguments...
+  local flight=$1 view=$2 name=$3
+  shift 3
+  xvfb-run -a -s '-screen 0 1280x1024x24' "$tellus" render --cache "$work/cache" \
+    --path "$paths/$flight.json" --frames "$work/frames" --fps "$fps" --repeat 2 \
+    --stats "$work/s.json" "$@" >/dev/null
+  python3 - "$flight" "$view" "$name" "$work/s.json" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[4]))
+t = s["frame_times_ms"][len(s["frame_times_ms"]) // 2:]  # the settled second pass
+t.sort()
+print("%s %s %s %.2f %.1f" % (sys.argv[1], sys.argv[2], sys.argv[3], t[len(t) // 2],
+                              s.get("atmosphere_precompute_ms", 0.0)))
+PY
+}
+for flight in descent level; do # warm the cache
+  run "$flight" flat warm --size 1024x768 --no-atmosphere >/dev/null
+done
+for r in $(seq "$rounds"); do
+  for flight in descent level; do
+    run "$flight" flat on --size 1024x768
+    run "$flight" flat off --size 1024x768 --no-atmosphere
+    run "$flight" dome on --dome --size 2048
+    run "$flight" dome off --dome --size 2048 --no-atmosphere
+  done
+done >"$work/results.txt"
+cat "$work/results.txt"
+echo
+echo "| flight | view | with atmosphere: median frame ms per round | without | with / without per round | with / without (median of rounds) | precomputation ms per run (median) |"
+echo "|---|---|---|---|---|---|---|"
+python3 - "$work/results.txt" <<'PY'
+import sys, collections
+rows = collections.defaultdict(lambda: collections.defaultdict(list))
+pre = []
+for line in open(sys.argv[1]):
+    flight, view, name, ms, p = line.split()
+    rows[(flight, view)][name].append(float(ms))
+    if name == "on":
+        pre.append(float(p))
+pre.sort()
+for (flight, view), d in rows.items():
+    ratios = sorted(a / b for a, b in zip(d["on"], d["off"]))
+    print("| %s | %s | %s | %s | %s | %.2f | %.0f |" % (
+        flight, "1024x768" if view == "flat" else "dome 2048 direct",
+        ", ".join("%.1f" % x for x in d["on"]), ", ".join("%.1f" % x for x in d["off"]),
+        ", ".join("%.2f" % x for x in ratios), ratios[len(ratios) // 2], pre[len(pre) // 2]))
+PY
