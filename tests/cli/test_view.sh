@@ -13,7 +13,7 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 
 cd "$work"
 # A fixed scene time (the default is now): the camera over the day side whenever the test runs.
-"$tellus" view --cache "$work/cache" --size 320x200 --camera 0,0,2e7 --time 2024-03-20T12:00:00Z \
+"$tellus" view --no-atmosphere --cache "$work/cache" --size 320x200 --camera 0,0,2e7 --time 2024-03-20T12:00:00Z \
   >"$work/out.txt" 2>&1 &
 pid=$!
 win=$(timeout 30 xdotool search --sync --pid "$pid" --name '^tellus') || fail "no window: $(cat "$work/out.txt")"
@@ -74,17 +74,17 @@ grep -q "frames" "$work/out.txt" || fail "output: $(cat "$work/out.txt")"
 
 # --earth: an unknown model is a usage error (exit 2); the sphere opens and draws.
 set +e
-"$tellus" view --cache "$work/cache" --earth flat >"$work/earth.txt" 2>&1
+"$tellus" view --no-atmosphere --cache "$work/cache" --earth flat >"$work/earth.txt" 2>&1
 rc=$?
 set -e
 [ $rc -eq 2 ] && grep -q "wgs84 or sphere" "$work/earth.txt" ||
   fail "--earth flat: exit $rc, $(cat "$work/earth.txt")"
-"$tellus" view --cache "$work/cache" --size 160x100 --earth sphere --exit-after 3 \
+"$tellus" view --no-atmosphere --cache "$work/cache" --size 160x100 --earth sphere --exit-after 3 \
   >"$work/sphere.txt" 2>&1 || fail "--earth sphere: $(cat "$work/sphere.txt")"
 grep -q "3 frames" "$work/sphere.txt" || fail "--earth sphere: $(cat "$work/sphere.txt")"
 # Layer keys (issue #7): with an overlay, its digit hides it and shows it again, - lowers its opacity,
 # ; lowers its deepest level.
-"$tellus" view --cache "$work/cache" --size 160x100 --camera 0,0,2e7 --overlay bluemarble,0.5 \
+"$tellus" view --no-atmosphere --cache "$work/cache" --size 160x100 --camera 0,0,2e7 --overlay bluemarble,0.5 \
   >"$work/layers.txt" 2>&1 &
 pid=$!
 win=$(timeout 30 xdotool search --sync --pid "$pid" --name '^tellus') || fail "no window: $(cat "$work/layers.txt")"
