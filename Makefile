@@ -32,13 +32,16 @@ run: build
 	  $(TELLUS) serve --cache $(CACHE) --listen $(LISTEN); \
 	fi
 
-# Every test: the format check first (seconds), then Release (GL tests under xvfb-run, and the
-# interop tests: GDAL, OWSLib, Chromium), then the ASan+UBSan and TSan configurations (every test
-# but gl, slow and interop: those programs are not ours to sanitize, and repeating them there only
-# timed out), then a short fuzzing run of the request parsers. The page at / is bundled once, in
-# the Release tree, and embedded from there by the sanitizer trees (TELLUS_WEB_DIST_FROM); the
-# fuzz tree builds only the parsers. Each stage says how long it took, and each ctest run where
-# its time went (tools/test-times).
+# Every test: the format check first (seconds), then Release (every test; GL tests under
+# xvfb-run, one at a time: the TerrainViewGl tests give their loading 60 s of wall clock and ran
+# out of it at -j2 on a loaded 2-core machine; the interop tests: GDAL, OWSLib, Chromium), then the
+# ASan+UBSan configuration (every test but gl, slow and interop: those programs are not ours to
+# sanitize, and repeating them there only timed out) and the TSan one (of those, the tests whose
+# code runs threads: TELLUS_THREAD_TESTS_ONLY in its preset, tests/CMakeLists.txt), then a short
+# fuzzing run of the request parsers. The page at / is bundled once, in the Release tree, and
+# embedded from there by the sanitizer trees (TELLUS_WEB_DIST_FROM); the fuzz tree builds only
+# the parsers. Each stage says how long it took, and each ctest run where its time went
+# (tools/test-times).
 test: format-check test-release test-sanitizers fuzz
 
 format-check:
