@@ -103,7 +103,9 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
                "earth",
                "geoid",
                "layers",
-               "overlays_per_pass"});
+               "overlays_per_pass",
+               "fade_in",
+               "geomorph"});
   if (auto v = m.get("lod_threshold")) g.lodThreshold = number(r, *v, m.path("lod_threshold"));
   if (auto v = m.get("mesh_size")) g.meshSize = int32(r, *v, m.path("mesh_size"));
   if (auto v = m.get("fov")) g.fovDeg = number(r, *v, m.path("fov"));
@@ -128,6 +130,8 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
   if (auto v = m.get("geoid")) g.geoid = boolean(r, *v, m.path("geoid"));
   if (auto v = m.get("overlays_per_pass"))
     g.overlaysPerPass = int32(r, *v, m.path("overlays_per_pass"));
+  if (auto v = m.get("fade_in")) g.fadeInS = number(r, *v, m.path("fade_in"));
+  if (auto v = m.get("geomorph")) g.geomorph = boolean(r, *v, m.path("geomorph"));
 }
 
 } // namespace tellus::detail::yaml

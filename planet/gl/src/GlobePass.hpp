@@ -49,6 +49,8 @@ public:
 private:
   explicit GlobePass(NodeMeshes& meshes) : meshes_(meshes) {}
   void setFrameUniforms(const FrameContext& frame);
+  void initFade();
+  void setFade(const DrawPart& part); ///< the part's fade-in (DrawPart::fade) uniforms
   void drawPart(const DrawPart& part,
                 const DrawList& list,
                 std::uint32_t from,
@@ -61,6 +63,7 @@ private:
   int overlaysPerPass_ = 1;
   GLint uViewProj_ = -1, uEye_ = -1, uEyeHigh_ = -1, uEyeLow_ = -1, uUv_ = -1, uTexture_ = -1;
   GLint uSun_ = -1, uBase_ = -1, uOverlayCount_ = -1, uOverlayUv_ = -1, uOverlayOpacity_ = -1;
+  GLint uFadeFrom_ = -1, uFadeUv_ = -1, uFade_ = -1;
 };
 
 } // namespace tellus::planet

@@ -286,8 +286,11 @@ void Renderer::frame(const CameraPose& pose) {
   intakeTextures(m.layers, m.decoder, m.uploads, m.stats);
   ph.intake = lap();
   // What this frame draws, and the LRU told so before anything new is inserted.
-  const DrawList list = planDraw(m.layers, m.globalTexture, m.stats);
+  const double frameS = m.opt.frameClock ? m.opt.frameClock() : nowS; // fades' time
+  const DrawList list = planDraw(m.layers, m.globalTexture, m.stats, frameS, m.opt.fadeInSeconds);
+  // A fade in progress is not the settled image (RendererOptions::fadeInSeconds).
   const bool complete =
+      !list.fading &&
       drawsWhatLodAsks(m.layers, tree, [&m](const Node& n) { return m.terrain.complete(n); });
   (void)lap();
   const std::size_t uploadedBefore = m.stats.bytesUploaded;

@@ -24,6 +24,8 @@ std::vector<cli::OptionSpec> globeOptions() {
           {"threshold", K::Value},
           {"earth", K::Value},
           {"no-terrain", K::Flag},
+          {"no-fade-in", K::Flag},
+          {"no-geomorph", K::Flag},
           {"exaggeration", K::Value},
           {"min-relief-px", K::Value},
           {"sun", K::Value},
@@ -87,6 +89,8 @@ void applyRendererSettings(const RendererSettings& g,
   ro.terrainClearanceM = g.terrain.clearanceM;
   ro.terrainMinReliefPx = g.terrain.minReliefPx;
   ro.sunLatLon = g.terrain.sun;
+  ro.fadeInSeconds = a.flag("no-fade-in") ? 0.0 : g.fadeInS;
+  ro.geomorph = g.geomorph && !a.flag("no-geomorph");
   if (const auto d = domeArgs(a); d && (d->on || g.dome.enabled)) {
     ro.dome = planet::DomeOptions{
         d->fovDeg.value_or(g.dome.fovDeg), d->tiltDeg.value_or(g.dome.tiltDeg), g.dome.faceScale};

@@ -38,6 +38,7 @@ commands:
              [--camera LAT,LON,ALT[,HEADING,TILT]] [--size WxH] [--layer NAME] [--threshold T]
              [--earth wgs84|sphere] [--offline | --server URL] [--dome [FOV]] [--dome-tilt DEG] [--dome-method direct|cube]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc
              render and view: [--no-terrain] [--exaggeration X] [--sun LAT,LON]
+             [--no-fade-in] [--no-geomorph] (renderer.fade_in, renderer.geomorph: no popping)
              [--min-relief-px PX] (renderer.terrain.min_relief_px: heights only where relief shows)
              [--overlay NAME[,OPACITY]]... (imagery over the base; also renderer.layers);
              view: 0-9 select a layer (1-9 also show/hide it), - = opacity, , . order,

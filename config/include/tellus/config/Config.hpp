@@ -143,6 +143,10 @@ struct RendererSettings {
   /** Heights of mean-sea-level datasets moved onto the ellipsoid with the EGM96 geoid (h = H + N,
    * the bundled data/egm96-30.pgm); false: taken as ellipsoid heights. Used by terrain. */
   bool geoid = true;
+  /** No popping (issue 23): seconds over which an arriving texture fades in (0 = off), [0, 10]. */
+  double fadeInS = 0.3;
+  /** No popping (issue 23): geomorphing of node heights between levels (thesis 6.2.2). */
+  bool geomorph = true;
 };
 
 /** YAML `cache`. */
