@@ -61,6 +61,7 @@ void GlobePass::initFade() {
   uFadeFrom_ = glGetUniformLocation(id, "uFadeFrom");
   uFadeUv_ = glGetUniformLocation(id, "uFadeUv");
   uFade_ = glGetUniformLocation(id, "uFade");
+  uMorph_ = glGetUniformLocation(id, "uMorph");
   glUniform1i(uFadeFrom_, 1 + overlaysPerPass_);
 }
 
@@ -81,6 +82,7 @@ void GlobePass::setFrameUniforms(const FrameContext& frame) {
   // One view-projection for every node, rotation only (the eye at the origin); positions arrive
   // as doubles or high/low float pairs and the shader subtracts the eye's.
   glUniformMatrix4fv(uViewProj_, 1, GL_FALSE, &frame.viewProjection[0][0]);
+  glUniform2f(uMorph_, static_cast<float>(morphScale_), morphScale_ > 0.0 ? 1.0f : 0.0f);
   if (fp64_) {
     glUniform3d(uEye_, frame.eye.x, frame.eye.y, frame.eye.z);
   } else {

@@ -9,8 +9,8 @@
 #include "GlObjects.hpp"
 
 #include <cstddef>
-#include <limits>
 #include <filesystem>
+#include <limits>
 #include <vector>
 
 namespace tellus::planet {

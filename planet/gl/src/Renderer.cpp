@@ -8,6 +8,7 @@
 #include "RendererImpl.hpp"
 #include "TextureIntake.hpp"
 
+#include <tellus/planet/Morph.hpp>
 #include <tellus/planet/TextureFallback.hpp>
 
 #include <epoxy/gl.h>
@@ -17,6 +18,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <utility>
 
 namespace tellus::planet {
@@ -82,7 +84,7 @@ std::string Renderer::Impl::openGl() {
   if (opt.anisotropy > 1.0)
     textureFormat.anisotropy = std::min(static_cast<float>(opt.anisotropy), gl.maxAnisotropy);
   meshes = std::make_unique<NodeMeshes>(
-      geodesy, terrain, opt.meshSize, opt.fixEdges, gl.gl45 && opt.fp64Vertices);
+      geodesy, terrain, opt.meshSize, opt.fixEdges, gl.gl45 && opt.fp64Vertices, opt.geomorph);
   auto globe = GlobePass::create(gl,
                                  {.fp64 = opt.fp64Vertices,
                                   .fisheye = opt.dome && opt.dome->method == DomeMethod::Direct,
@@ -90,6 +92,7 @@ std::string Renderer::Impl::openGl() {
                                  *meshes);
   if (!globe) return globe.error();
   stats.overlaysPerPass = (*globe)->overlaysPerPass();
+  globePass = globe->get();
   scene = std::make_unique<SceneDraw>(opt, geodesy, gl);
   scene->addPass(std::move(*globe));
   globalTexture = makeGlobalTexture(opt.globalImage);
@@ -222,6 +225,13 @@ void Renderer::Impl::buildMeshes(View& view) {
 
 void Renderer::Impl::draw(const Camera& camera, const DrawList& list) {
   const Quadtree& geo = layers.geo();
+  if (opt.geomorph) { // the LOD's camera: the morph is the same on every cube face of a dome
+    const double focalPx =
+        camera.isFisheye() ? camera.pixelsPerRadian()
+                           : 0.5 * static_cast<double>(camera.viewport().height) /
+                                 std::tan(0.5 * camera.verticalFovDeg() * std::numbers::pi / 180.0);
+    globePass->setMorphScale(morphScale(focalPx, opt.lodThreshold, layers.base().texHeight));
+  }
   scene->drawFrame(camera,
                    list,
                    geo.drawList(),
@@ -289,9 +299,9 @@ void Renderer::frame(const CameraPose& pose) {
   const double frameS = m.opt.frameClock ? m.opt.frameClock() : nowS; // fades' time
   const DrawList list = planDraw(m.layers, m.globalTexture, m.stats, frameS, m.opt.fadeInSeconds);
   // A fade in progress is not the settled image (RendererOptions::fadeInSeconds).
-  const bool complete =
-      !list.fading &&
-      drawsWhatLodAsks(m.layers, tree, [&m](const Node& n) { return m.terrain.complete(n); });
+  const bool complete = !list.fading && drawsWhatLodAsks(m.layers, tree, [&m](const Node& n) {
+    return m.terrain.complete(n);
+  });
   (void)lap();
   const std::size_t uploadedBefore = m.stats.bytesUploaded;
   m.uploads.step(m.layers, m.pacer, m.textureFormat, m.stats);
