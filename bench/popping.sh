@@ -17,10 +17,11 @@ size=${SIZE:-512x384}
 fps=${FPS:-12}
 here=$(cd "$(dirname "$0")" && pwd)
 work=$(mktemp -d "${TMPDIR:-/tmp}/tellus-popping.XXXXXX")
-trap 'rm -rf "$work"' EXIT
+[ -n "${KEEP:-}" ] || trap 'rm -rf "$work"' EXIT # KEEP=1: the frames stay (the path is printed)
+[ -z "${KEEP:-}" ] || echo "frames in $work"
 run() { xvfb-run -a -s '-screen 0 1280x1024x24' "$tellus" render "$@" >/dev/null; }
-echo "| configuration | frames | popping max | worst frame p99.9 | worst frame p99 | mean p99.9 | settled s / frame | one view to complete s |"
-echo "|---|---|---|---|---|---|---|---|"
+echo "| configuration | frames | popping max | worst frame p99.9 | worst frame p99 | mean p99.9 | 8x8 blocks max | settled s / frame | one view to complete s |"
+echo "|---|---|---|---|---|---|---|---|---|"
 for c in "${configs[@]}"; do
   name=${c%%:*}
   read -r -a args <<<"${c#*:}"
@@ -40,7 +41,7 @@ from popping import popping
 name, d, t0, t1 = sys.argv[1], sys.argv[2], float(sys.argv[3]), float(sys.argv[4])
 p = popping(d + "/s", d + "/c")
 v = json.load(open(d + "/v.json"))
-print("| %s | %d | %d | %.1f | %.1f | %.2f | %.3f | %.2f |" % (name, p["frames"], p["max"], p["p999_worst"],
-      p["p99_worst"], p["p999_mean"], (t1 - t0) / p["frames"], v["seconds"]))
+print("| %s | %d | %d | %.1f | %.1f | %.2f | %.1f | %.3f | %.2f |" % (name, p["frames"], p["max"], p["p999_worst"],
+      p["p99_worst"], p["p999_mean"], p["block8_max"], (t1 - t0) / p["frames"], v["seconds"]))
 PY
 done
