@@ -13,6 +13,9 @@ subtraction, Pb_k = max(0, mean8(dS_k) - mean8(dC_k)), its largest value over bl
 a texture or a height that pops changes whole blocks, while the residue of motion over different
 detail (the streamed frames show coarser textures than the settled ones, so the same motion
 changes other pixels) is thin lines that the block mean dilutes.
+Held frames (hold): the frames k whose settled frames do not change at all (dC_k = 0 everywhere:
+the camera holds still, as at the end of bench/paths/descent_low.json), where every change of the
+streamed frames is popping: the largest P_k and the worst frame's 99.9th percentile over them.
 Usage: popping.py STREAMED_DIR SETTLED_DIR [label]; prints one JSON object."""
 import glob
 import json
@@ -43,10 +46,13 @@ def popping(streamed, settled):
         raise SystemExit("popping.py: %d streamed and %d settled frames" % (len(s), len(c)))
     per = []
     blocks = 0.0
+    held = []
     for k in range(1, len(s)):
         ds, dc = change(s[k], s[k - 1]), change(c[k], c[k - 1])
         p = np.maximum(0, ds - dc)
         per.append((int(p.max()), float(np.percentile(p, 99.9)), float(np.percentile(p, 99))))
+        if dc.max() == 0:
+            held.append(per[-1])
         blocks = max(blocks, float(np.maximum(0.0, block8(ds.astype(float)) - block8(dc.astype(float))).max()))
     worst = max(range(len(per)), key=lambda k: per[k][1])
     return {
@@ -57,6 +63,9 @@ def popping(streamed, settled):
         "p999_mean": sum(x[1] for x in per) / len(per),
         "worst_frame": worst + 1,
         "block8_max": blocks,
+        "held_frames": len(held),
+        "held_max": max((x[0] for x in held), default=0),
+        "held_p999_worst": max((x[1] for x in held), default=0.0),
     }
 
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 
 namespace tellus::planet {
@@ -20,6 +21,16 @@ double morphFactor(double distanceM, double extentM, double scale) noexcept {
 double morphExtentOf(const Geodesy& geodesy, const Sector& sector) noexcept {
   return 2.0 * (sector.north - sector.south) * (std::numbers::pi / 180.0) *
          geodesy.equatorialRadius();
+}
+
+void pinMorphBoundary(TerrainMesh& mesh) {
+  const int n = mesh.n, rows = mesh.rows;
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const auto k = static_cast<std::int64_t>(i);
+    const std::int64_t r = k / n, c = k % n;
+    if (r >= rows || r == 0 || r == rows - 1 || c == 0 || c == n - 1)
+      mesh.vertices[i].morphDelta = glm::dvec3(0.0);
+  }
 }
 
 void setGridMorph(TerrainMesh& mesh, double extentM) {

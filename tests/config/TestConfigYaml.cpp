@@ -152,6 +152,8 @@ TEST(ConfigYaml, DefaultsAreApplied) {
   EXPECT_FALSE(c->server.offline);
   EXPECT_EQ(c->renderer.earth, EarthShape::Wgs84);
   EXPECT_TRUE(c->renderer.geoid);
+  EXPECT_EQ(c->renderer.fadeInS, 0.3); // no popping (issue 23): on by default
+  EXPECT_TRUE(c->renderer.geomorph);
   EXPECT_FALSE(c->renderer.dome.enabled);
   EXPECT_EQ(c->renderer.dome.fovDeg, 180.0);
   EXPECT_EQ(c->renderer.dome.method, DomeSettings::Method::Direct);
@@ -235,6 +237,8 @@ renderer:
   earth: sphere
   geoid: false
   overlays_per_pass: 2
+  fade_in: 0.5
+  geomorph: false
   dome: {enabled: true, fov: 210, tilt: 30, face_scale: 0.8, method: cube, direct_max_error: 2}
 upstreams:
   - name: ww
@@ -333,6 +337,8 @@ layers:
   EXPECT_EQ(c->renderer.earth, EarthShape::Sphere);
   EXPECT_FALSE(c->renderer.geoid);
   EXPECT_EQ(c->renderer.overlaysPerPass, 2);
+  EXPECT_EQ(c->renderer.fadeInS, 0.5);
+  EXPECT_FALSE(c->renderer.geomorph);
 
   const UpstreamConfig& ww = c->upstreams.at(0);
   EXPECT_EQ(ww.type, UpstreamConfig::Type::WorldWind);

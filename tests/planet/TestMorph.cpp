@@ -197,5 +197,28 @@ TEST(MorphTargets, AnAdaptedSideFollowsTheCoarseNodesMorph) {
   }
 }
 
+/** The renderer's meshes morph inside only: every boundary vertex, and every vertex past the grid
+ * (the zero-area triangles' copies of coarse vertices), keeps its position; the interior keeps its
+ * targets. */
+TEST(MorphTargets, PinnedBoundaryKeepsEdgesAndTheInteriorsTargets) {
+  const TileGrid g = test::globalGrid();
+  const int n = 9;
+  const Sector coarse = g.sectorOf({6, 140, 300});
+  const Sector fine = g.sectorOf({10, 2245, 4816}); // 1/16 of its edge: coarse ends beyond
+  std::array<EdgeAdapt, 4> edges{};
+  edges[static_cast<std::size_t>(Direction::West)] = {true, coarse, {}, {}};
+  auto m = buildTerrainMesh(wgs84(), fine, n, bumpy, edges, 0, morphExtentOf(wgs84(), fine));
+  const TerrainMesh before = m;
+  pinMorphBoundary(m);
+  ASSERT_GT(m.vertices.size(), static_cast<std::size_t>(n * n)); // the fans' extra vertices
+  for (std::size_t i = 0; i < m.vertices.size(); ++i) {
+    const int r = static_cast<int>(i) / n, c = static_cast<int>(i) % n;
+    const bool boundary = r >= n || r == 0 || c == 0 || r == n - 1 || c == n - 1;
+    EXPECT_EQ(m.vertices[i].position, before.vertices[i].position);
+    EXPECT_EQ(m.vertices[i].morphDelta, boundary ? glm::dvec3(0.0) : before.vertices[i].morphDelta)
+        << r << " " << c;
+  }
+}
+
 } // namespace
 } // namespace tellus::planet

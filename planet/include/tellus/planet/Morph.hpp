@@ -23,7 +23,8 @@
  * vertex's distance d from the eye: f = clamp(2 d / D - 1, 0, 1). A function of the vertex's
  * position, its extent and the camera only, so every node holding a vertex (its neighbours, a
  * finer node's copy of a coarse vertex in its zero-area triangles) morphs it identically and edges
- * stay watertight. The drawn position is position + f x morphDelta.
+ * stay watertight. The drawn position is position + f x morphDelta. The renderer pins every
+ * node's boundary (pinMorphBoundary): the interior morphs, edges are drawn as without morphing.
  */
 
 #include <tellus/planet/Geodesy.hpp>
@@ -46,6 +47,15 @@ double morphFactor(double distanceM, double extentM, double scale) noexcept;
 /** The parent's north-south extent in metres of a node of this sector (twice its latitude span,
  * along a meridian of the equatorial radius: a function of the level alone). */
 double morphExtentOf(const Geodesy& geodesy, const Sector& sector) noexcept;
+
+/** Zeroes the morph offset of every vertex on the grid's boundary and of the vertices past the
+ * grid (the zero-area triangles' coarse vertices): only a node's interior morphs, so every edge is
+ * drawn exactly as without geomorphing and stays watertight with the edge fixing alone. Why: two
+ * nodes of different levels can share an edge at the same resolution (merged polar rows: a level
+ * L + 1 node two columns wide beside a level-L one), where the same vertex would get two parents'
+ * extents, two factors and a crack (seen near the poles in TerrainMorphViewGl); an edge vertex
+ * also pops less than an interior one (it lies on both nodes' chords along the edge). */
+void pinMorphBoundary(TerrainMesh& mesh);
 
 /** The morph targets of a square grid (mesh.rows == mesh.n; the first n x n vertices), see the
  * file comment; every grid vertex's morphExtentM set to extentM. Precondition: n odd (2^k + 1). */
