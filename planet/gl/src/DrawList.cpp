@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace tellus::planet {
 
@@ -113,6 +114,18 @@ void planFade(LayerTextures& base,
   list.fading = true;
 }
 
+/** The nearest ancestor of `from` with a resident texture (null: none), and that texture. */
+std::pair<const Node*, NodeTexture*> residentAncestor(LayerTextures& base, const Node& from) {
+  for (const Node* a = from.parent(); a != nullptr; a = a->parent())
+    if (const auto it = base.textures.find(a->key()); it != base.textures.end())
+      return {a, &it->second};
+  return {nullptr, nullptr};
+}
+
+bool stillFading(const NodeTexture& t, double nowS, double fadeInS) {
+  return std::isnan(t.shownSinceS) || nowS - t.shownSinceS < fadeInS;
+}
+
 } // namespace
 
 DrawList planDraw(const LayerSet& layers,
@@ -135,6 +148,7 @@ DrawList planDraw(const LayerSet& layers,
       const GlTexture* texture = &global;
       NodeTexture* own = nullptr;
       UvTransform uv = p.uv;
+      const Node* from = p.texture;
       if (p.source != TextureSource::Global && p.texture != nullptr) {
         if (auto it = base.textures.find(p.texture->key()); it != base.textures.end()) {
           own = &it->second;
@@ -144,8 +158,20 @@ DrawList planDraw(const LayerSet& layers,
           uv = globalUv(p.region->sector());
         }
       }
+      // A texture not shown yet waits while what it would fade from is itself fading in: the part
+      // keeps drawing that ancestor's fade, so a fade always starts from what was on screen.
+      if (own != nullptr && fadeInS > 0.0 && std::isnan(own->shownSinceS)) {
+        const auto [a, at] = residentAncestor(base, *from);
+        if (a != nullptr && stillFading(*at, nowS, fadeInS)) {
+          from = a;
+          own = at;
+          texture = &at->texture;
+          uv = ancestorUv(p.region->key(), a->key());
+          base.lru.use(a->key());
+        }
+      }
       list.parts.push_back(partFor(*n, *p.region, *texture, uv));
-      if (own != nullptr) planFade(base, global, *own, *p.texture, *p.region, nowS, fadeInS, list);
+      if (own != nullptr) planFade(base, global, *own, *from, *p.region, nowS, fadeInS, list);
       bindOverlays(layers, *p.region, list.parts.back(), list.bindings);
     }
   }

@@ -83,7 +83,8 @@ void bindOverlays(const LayerSet& layers,
  * Fading (fadeInS > 0): a base texture first drawn at frame time t0 (set now, when first drawn)
  * is drawn with fade = (nowS - t0) / fadeInS (clamped to [0, 1]) over what the part showed
  * before: the nearest ancestor of its texture's node with a resident texture (marked used), or the
- * global texture. */
+ * global texture. A texture not yet shown waits (the part draws that ancestor's fade) while the
+ * ancestor it would fade from is itself fading in, so every fade starts from what was on screen. */
 DrawList planDraw(const LayerSet& layers,
                   const GlTexture& global,
                   RenderStats& stats,
