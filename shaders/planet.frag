@@ -39,6 +39,19 @@ uniform float uOverlayNight[TELLUS_OVERLAYS]; // 1: a night layer (light on the 
 
 out vec4 fragColor;
 
+// Fade-in (issue 23, no popping; DrawList.hpp planDraw): a texture that arrived less than the
+// fade time ago is mixed over what the part showed before it (an ancestor's texture or the global
+// one, through its own transform of the node's coordinates) by uFade in [0, 1]; uFade = 1 returns
+// the colour unchanged (no mix: a settled frame is bit for bit what it is without fading).
+uniform sampler2D uFadeFrom;
+uniform vec4 uFadeUv; // uvFadeFrom = uvNode * xy + zw
+uniform float uFade;
+
+vec3 fadeIn(vec3 colour) {
+  if (uFade >= 1.0) return colour;
+  return mix(texture(uFadeFrom, vUvNode * uFadeUv.xy + uFadeUv.zw).rgb, colour, uFade);
+}
+
 const float kAmbient = 0.04;
 
 #define TELLUS_OVERLAY(i) if (uOverlayCount > i) { vec4 o = texture(uOverlay[i], vUvNode * uOverlayUv[i].xy + uOverlayUv[i].zw) * uOverlayOpacity[i]; if (uOverlayNight[i] > 0.5) { light += o.rgb * night; } else { colour = colour * (1.0 - o.a) + o.rgb; alpha = alpha * (1.0 - o.a) + o.a; light *= 1.0 - o.a; } }
@@ -51,7 +64,7 @@ void main() {
   if (uSun.w > 0.5) sinElev = dot(normalize(vUp), uSun.xyz);
   float night = uSun.w > 0.5 ? 1.0 - smoothstep(-0.105, 0.0, sinElev) : 0.0;
   if (uBase > 0.5) {
-    colour = texture(uTexture, vUv).rgb;
+    colour = fadeIn(texture(uTexture, vUv).rgb);
     alpha = 1.0;
   }
   TELLUS_OVERLAY_STEPS

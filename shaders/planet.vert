@@ -26,6 +26,21 @@ uniform vec3 uEyeLow;
 #endif
 layout(location = 2) in vec3 aNormal;
 layout(location = 3) in vec2 aUvNode;
+// Geomorphing (issue 23, planet/Morph.hpp): xyz the offset (m) to where the parent's coarser mesh
+// puts this vertex, w that parent's north-south extent (m). uMorph.x: the scale of
+// planet::morphScale (focal px / (threshold x tile px)); uMorph.y: 1 = morph, 0 = off. The
+// factor f = clamp(2 d / (w x scale) - 1, 0, 1) of the vertex's distance d from the eye (the
+// parent's position at the parent's split distance, its own at half of it), the same for every
+// node holding the vertex (the same inputs, bit for bit), so edges stay watertight.
+layout(location = 4) in vec4 aMorph;
+uniform vec2 uMorph;
+
+vec3 morphed(vec3 p) {
+  if (uMorph.y < 0.5) return p;
+  float range = aMorph.w * uMorph.x;
+  float f = range > 0.0 ? clamp(2.0 * length(p) / range - 1.0, 0.0, 1.0) : 0.0;
+  return p + f * aMorph.xyz;
+}
 
 uniform mat4 uViewProj; // projection * view rotation (the eye at the origin)
 // uvTexture = uvNode * uUv.xy + uUv.zw (own texture, a child's or an ancestor's part, or global)
@@ -71,11 +86,12 @@ void main() {
 #endif
   vUp = vec3(world.xy, world.z * uPolarScale);
 #ifdef TELLUS_FP64
-  vec3 p = vec3(aPosition - uEye);
+  vec3 p = morphed(vec3(aPosition - uEye));
 #else
   PRECISE vec3 highDiff = aHigh - uEyeHigh;
   PRECISE vec3 lowDiff = aLow - uEyeLow;
-  PRECISE vec3 p = highDiff + lowDiff;
+  PRECISE vec3 pOwn = highDiff + lowDiff;
+  vec3 p = morphed(pOwn);
 #endif
 #ifdef TELLUS_FISHEYE
   if (uFisheye != 0) {

@@ -183,7 +183,9 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
                "overlays_per_pass",
                "time",
                "sunlight",
-               "night"});
+               "night",
+               "fade_in",
+               "geomorph"});
   if (auto v = m.get("lod_threshold")) g.lodThreshold = number(r, *v, m.path("lod_threshold"));
   if (auto v = m.get("mesh_size")) g.meshSize = int32(r, *v, m.path("mesh_size"));
   if (auto v = m.get("fov")) g.fovDeg = number(r, *v, m.path("fov"));
@@ -213,6 +215,8 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
   if (auto v = m.get("time")) g.time = text(r, *v, m.path("time"));
   if (auto v = m.get("sunlight")) g.sunlight = boolean(r, *v, m.path("sunlight"));
   if (auto v = m.get("night")) g.night = boolean(r, *v, m.path("night"));
+  if (auto v = m.get("fade_in")) g.fadeInS = number(r, *v, m.path("fade_in"));
+  if (auto v = m.get("geomorph")) g.geomorph = boolean(r, *v, m.path("geomorph"));
 }
 
 } // namespace tellus::detail::yaml

@@ -360,6 +360,8 @@ std::optional<ValidationIssue> checkRenderer(const RendererSettings& g) {
     return issue("max_splits_per_frame", "must be in [1, 100000], got " + str(g.maxSplitsPerFrame));
   if (g.decodeThreads < 1 || g.decodeThreads > 64)
     return issue("decode_threads", "must be in [1, 64], got " + str(g.decodeThreads));
+  if (!(g.fadeInS >= 0.0 && g.fadeInS <= 10.0))
+    return issue("fade_in", "must be in [0, 10] seconds, got " + num(g.fadeInS));
   if (!(g.dome.fovDeg > 0.0 && g.dome.fovDeg <= 220.0))
     return issue("dome.fov", "must be in (0, 220] degrees, got " + num(g.dome.fovDeg));
   if (!(g.dome.tiltDeg >= -180.0 && g.dome.tiltDeg <= 180.0))

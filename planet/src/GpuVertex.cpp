@@ -26,6 +26,8 @@ void packVertices(std::span<const TerrainVertex> vertices,
     assert(std::isfinite(p.normal.x) && std::isfinite(p.normal.y) && std::isfinite(p.normal.z));
     assert(std::abs(glm::length(glm::dvec3(p.normal)) - 1.0) < 1e-3);
     assert(p.uvNode.x >= 0.0 && p.uvNode.x <= 1.0 && p.uvNode.y >= 0.0 && p.uvNode.y <= 1.0);
+    assert(std::isfinite(p.morphDelta.x) && std::isfinite(p.morphDelta.y) &&
+           std::isfinite(p.morphDelta.z) && std::isfinite(p.morphExtentM));
     float pos[6];
     if (mode == VertexPositions::Doubles) {
       static_assert(sizeof(pos) == 3 * sizeof(double));
@@ -53,7 +55,11 @@ void packVertices(std::span<const TerrainVertex> vertices,
                 p.normal.y,
                 p.normal.z,
                 static_cast<float>(p.uvNode.x),
-                static_cast<float>(p.uvNode.y)});
+                static_cast<float>(p.uvNode.y),
+                static_cast<float>(p.morphDelta.x),
+                static_cast<float>(p.morphDelta.y),
+                static_cast<float>(p.morphDelta.z),
+                static_cast<float>(p.morphExtentM)});
   }
 }
 

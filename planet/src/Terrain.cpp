@@ -1,3 +1,4 @@
+#include <tellus/planet/Morph.hpp>
 #include <tellus/planet/Terrain.hpp>
 
 #include <glm/geometric.hpp>
@@ -99,12 +100,17 @@ class ExtraVertices {
 public:
   explicit ExtraVertices(std::size_t coarseCount) : slots_(coarseCount, UINT32_MAX) {}
 
-  std::uint32_t
-  at(TerrainMesh& mesh, std::int64_t j, std::uint32_t nearFine, const glm::dvec3& position) {
+  std::uint32_t at(TerrainMesh& mesh,
+                   std::int64_t j,
+                   std::uint32_t nearFine,
+                   const glm::dvec3& position,
+                   const glm::dvec4& morph = glm::dvec4(0.0)) {
     auto& slot = slots_[static_cast<std::size_t>(j)];
     if (slot == UINT32_MAX) {
       TerrainVertex v = mesh.vertices[nearFine];
       v.position = position;
+      v.morphDelta = glm::dvec3(morph);
+      v.morphExtentM = morph.w;
       slot = static_cast<std::uint32_t>(mesh.vertices.size());
       mesh.vertices.push_back(v);
     }
@@ -170,6 +176,8 @@ void fixOntoPolyline(TerrainMesh& mesh,
   const int n = side.n;
   const double segments = static_cast<double>(static_cast<std::int64_t>(cpos.size()) - 1);
   const auto [t, on] = snapOntoPolyline(mesh, side, ma, mb, ca, cb, cpos);
+  for (int i = 0; i < n; ++i) // a cap's rim does not morph: neither do our vertices on it
+    mesh.vertices[side.vertex(i)].morphDelta = glm::dvec3(0.0);
   ExtraVertices extra(cpos.size());
   auto coarseIndex = [&](std::int64_t j, int nearFine) {
     for (int i = 0; i < n; ++i)
@@ -260,19 +268,43 @@ void snapOntoChords(TerrainMesh& mesh,
                     const Side& side,
                     std::int64_t u0,
                     std::int64_t bigR,
-                    const std::vector<glm::dvec3>& cpos) {
+                    const std::vector<glm::dvec3>& cpos,
+                    const std::vector<glm::dvec4>& cmorph) {
   for (int i = 0; i < side.n; ++i) {
     const std::int64_t u = u0 + i;
     const std::int64_t j = u / bigR, r = u % bigR;
     TerrainVertex& v = mesh.vertices[side.vertex(i)];
+    const auto jj = static_cast<std::size_t>(j);
     if (r == 0) {
-      v.position = cpos[static_cast<std::size_t>(j)];
+      v.position = cpos[jj];
+      v.morphDelta = glm::dvec3(cmorph[jj]);
+      v.morphExtentM = cmorph[jj].w;
     } else {
       const double t = static_cast<double>(r) / static_cast<double>(bigR);
-      const glm::dvec3& a = cpos[static_cast<std::size_t>(j)];
-      v.position = a + (cpos[static_cast<std::size_t>(j + 1)] - a) * t;
+      const glm::dvec3& a = cpos[jj];
+      v.position = a + (cpos[jj + 1] - a) * t;
+      // On the coarse chord as it morphs: the ends' offsets interpolated alike.
+      const glm::dvec3 ma(cmorph[jj]), mb(cmorph[jj + 1]);
+      v.morphDelta = ma + (mb - ma) * t;
+      v.morphExtentM = std::max(cmorph[jj].w, cmorph[jj + 1].w);
     }
   }
+}
+
+/** The coarse side's morph (EdgeAdapt::coarseMorph): given, or from its vertices (even ones
+ * stay, odd ones onto their neighbours' chord) with extentM; zeros when extentM is 0. */
+std::vector<glm::dvec4>
+coarseSideMorph(const EdgeAdapt& ad, const std::vector<glm::dvec3>& cpos, double extentM) {
+  if (ad.coarseMorph.size() == cpos.size()) return ad.coarseMorph;
+  std::vector<glm::dvec4> m(cpos.size(), glm::dvec4(0.0));
+  if (!(extentM > 0.0)) return m;
+  for (std::size_t j = 0; j < cpos.size(); ++j) {
+    const glm::dvec3 d = (j & 1U) != 0 && j + 1 < cpos.size()
+                             ? 0.5 * (cpos[j - 1] + cpos[j + 1]) - cpos[j]
+                             : glm::dvec3(0.0);
+    m[j] = glm::dvec4(d, extentM);
+  }
+  return m;
 }
 
 /** Fans (thesis figure 21): for each coarse segment j our edge touches, the triangles from its
@@ -283,14 +315,19 @@ void addChordFans(TerrainMesh& mesh,
                   const Side& side,
                   std::int64_t u0,
                   std::int64_t bigR,
-                  const std::vector<glm::dvec3>& cpos) {
+                  const std::vector<glm::dvec3>& cpos,
+                  const std::vector<glm::dvec4>& cmorph) {
   const int n = side.n;
   ExtraVertices extra(static_cast<std::size_t>(n));
   auto coarseIndex = [&](std::int64_t j, int nearFine) {
     const std::int64_t u = j * bigR - u0;
     if (u >= 0 && u < n) return side.vertex(static_cast<int>(u));
     // beyond this node's edge: an extra vertex
-    return extra.at(mesh, j, side.vertex(nearFine), cpos[static_cast<std::size_t>(j)]);
+    return extra.at(mesh,
+                    j,
+                    side.vertex(nearFine),
+                    cpos[static_cast<std::size_t>(j)],
+                    cmorph[static_cast<std::size_t>(j)]);
   };
   const std::int64_t jFirst = u0 / bigR, jLast = (u0 + n - 2) / bigR;
   for (std::int64_t j = jFirst; j <= jLast; ++j) {
@@ -317,7 +354,8 @@ void fixSide(TerrainMesh& mesh,
              const Sector& s,
              const Side& side,
              const EdgeAdapt& ad,
-             const Surface& surface) {
+             const Surface& surface,
+             double morphExtentM) {
   const bool alongLon = side.d == Direction::North || side.d == Direction::South;
   const Sector& c = ad.coarse;
   const double ca = alongLon ? c.west : c.south, cb = alongLon ? c.east : c.north;
@@ -340,8 +378,11 @@ void fixSide(TerrainMesh& mesh,
   if (q < 0 || q >= bigR) return;
   const std::vector<glm::dvec3> cpos = coarseSideVertices(ad, s, side, ca, cb, surface);
   const std::int64_t u0 = q * (side.n - 1);
-  snapOntoChords(mesh, side, u0, bigR, cpos);
-  addChordFans(mesh, quad, side, u0, bigR, cpos);
+  // The coarse node's extent: ours times its latitude span over ours (a power of two).
+  const std::vector<glm::dvec4> cmorph =
+      coarseSideMorph(ad, cpos, morphExtentM * ((c.north - c.south) / (s.north - s.south)));
+  snapOntoChords(mesh, side, u0, bigR, cpos, cmorph);
+  addChordFans(mesh, quad, side, u0, bigR, cpos, cmorph);
 }
 
 void checkMeshArguments(const Sector& s, int n, int rows, const std::array<EdgeAdapt, 4>& edges) {
@@ -460,7 +501,8 @@ TerrainMesh buildTerrainMesh(const Geodesy& geodesy,
                              int n,
                              const HeightFunction& height,
                              const std::array<EdgeAdapt, 4>& edges,
-                             int rows) {
+                             int rows,
+                             double morphExtentM) {
   if (rows == 0) rows = n;
   checkMeshArguments(sector, n, rows, edges);
   const Surface surface{geodesy, height};
@@ -471,11 +513,13 @@ TerrainMesh buildTerrainMesh(const Geodesy& geodesy,
   mesh.minHeightM = ring.lo;
   mesh.maxHeightM = ring.hi;
   setGridVertices(mesh, ring, geodesy);
+  if (morphExtentM > 0.0 && rows == n) setGridMorph(mesh, morphExtentM);
   // Triangles per quadrant: cells, then the zero-area fans of its adapted outer edges.
   Quadrants quad = gridCells(n, rows);
   for (int side = 0; side < 4; ++side) {
     const EdgeAdapt& ad = edges[static_cast<std::size_t>(side)];
-    if (ad.active) fixSide(mesh, quad, sector, Side{n, static_cast<Direction>(side)}, ad, surface);
+    if (ad.active)
+      fixSide(mesh, quad, sector, Side{n, static_cast<Direction>(side)}, ad, surface, morphExtentM);
   }
   for (int qd = 0; qd < 4; ++qd) {
     mesh.quadrantStart[static_cast<std::size_t>(qd)] =

@@ -165,6 +165,9 @@ TEST(Config, RendererSettingsAreValidated) {
   fails([](RendererSettings& g) { g.time = "2024-02-30"; }, "time");
   fails([](RendererSettings& g) { g.overlaysPerPass = 9; }, "overlays_per_pass");
   fails([](RendererSettings& g) { g.overlaysPerPass = -1; }, "overlays_per_pass");
+  fails([](RendererSettings& g) { g.fadeInS = -0.1; }, "fade_in");
+  fails([](RendererSettings& g) { g.fadeInS = 11.0; }, "fade_in");
+  fails([](RendererSettings& g) { g.fadeInS = std::nan(""); }, "fade_in");
   fails([](RendererSettings& g) { g.dome.directMaxErrorPx = -1.0; }, "dome.direct_max_error");
   fails([](RendererSettings& g) { g.dome.directMaxErrorPx = std::nan(""); },
         "dome.direct_max_error");

@@ -152,6 +152,8 @@ TEST(ConfigYaml, DefaultsAreApplied) {
   EXPECT_FALSE(c->server.offline);
   EXPECT_EQ(c->renderer.earth, EarthShape::Wgs84);
   EXPECT_TRUE(c->renderer.geoid);
+  EXPECT_EQ(c->renderer.fadeInS, 0.3); // no popping (issue 23): on by default
+  EXPECT_TRUE(c->renderer.geomorph);
   EXPECT_FALSE(c->renderer.dome.enabled);
   EXPECT_EQ(c->renderer.dome.fovDeg, 180.0);
   EXPECT_EQ(c->renderer.dome.method, DomeSettings::Method::Direct);
@@ -243,6 +245,8 @@ renderer:
   time: 2024-06-20T18:30:00Z
   sunlight: false
   night: false
+  fade_in: 0.5
+  geomorph: false
   dome: {enabled: true, fov: 210, tilt: 30, face_scale: 0.8, method: cube, direct_max_error: 2}
   stars: {enabled: false, magnitude_limit: 5, brightness: 2.5}
   atmosphere: {enabled: false, exposure: 4, top_altitude: 80000, mie_g: 0.7,
@@ -356,6 +360,8 @@ layers:
   EXPECT_EQ(c->renderer.time, "2024-06-20T18:30:00Z");
   EXPECT_FALSE(c->renderer.sunlight);
   EXPECT_FALSE(c->renderer.night);
+  EXPECT_EQ(c->renderer.fadeInS, 0.5);
+  EXPECT_FALSE(c->renderer.geomorph);
 
   const UpstreamConfig& ww = c->upstreams.at(0);
   EXPECT_EQ(ww.type, UpstreamConfig::Type::WorldWind);

@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <ostream>
 #include <thread>
+#include <tuple>
 
 using namespace tellus;
 using namespace tellus::planet;
@@ -189,8 +190,14 @@ void savePng(const Renderer& r, const std::vector<std::uint8_t>& px, const std::
 }
 
 /** overlays: "clouds" and "sst" (half opacity) blended over the imagery, one pass each (the
- * second pass draws the same meshes again with depth equal). */
-Outcome renderView(FakeTileSource& world, const View& v, bool fixEdges, bool overlays = false) {
+ * second pass draws the same meshes again with depth equal). geomorph: heights morph between
+ * levels (issue 23); fp64: double vertex positions (else the high/low float pairs). */
+Outcome renderView(FakeTileSource& world,
+                   const View& v,
+                   bool fixEdges,
+                   bool overlays = false,
+                   bool geomorph = false,
+                   bool fp64 = true) {
   Outcome out;
   const Geodesy wgs;
   RendererOptions o;
@@ -201,6 +208,8 @@ Outcome renderView(FakeTileSource& world, const View& v, bool fixEdges, bool ove
   o.background = {1.0, 0.0, 1.0};
   o.fixEdges = fixEdges;
   o.maxSplitsPerFrame = 16; // several levels meet while the tree grows
+  o.geomorph = geomorph;
+  o.fp64Vertices = fp64;
   if (overlays) {
     o.overlays = {{"clouds", "", 1.0, true, -1}, {"sst", "", 0.5, true, -1}};
     o.overlaysPerPass = 1;
@@ -209,8 +218,9 @@ Outcome renderView(FakeTileSource& world, const View& v, bool fixEdges, bool ove
   EXPECT_TRUE(made.has_value()) << made.error();
   if (!made) return out;
   Renderer& r = **made;
-  const std::string tag =
-      std::string(fixEdges ? "fixed-" : "unfixed-") + (overlays ? "layers-" : "") + v.name;
+  const std::string tag = std::string(fixEdges ? "fixed-" : "unfixed-") +
+                          (overlays ? "layers-" : "") + (geomorph ? "morph-" : "") +
+                          (fp64 ? "" : "float-") + v.name;
   CameraPose pose = v.pose;
   const auto start = std::chrono::steady_clock::now();
   for (int frame = 0;; ++frame) {
@@ -280,6 +290,31 @@ INSTANTIATE_TEST_SUITE_P(Views,
                            std::string n = p.param.name;
                            std::replace(n.begin(), n.end(), '-', '_');
                            return n;
+                         });
+
+// Geomorphing (issue 23): the same views with every node's heights morphing between its level and
+// its parent's, with double and with float-pair vertex positions: still no hole, complete or not.
+class TerrainMorphViewGl : public ::testing::TestWithParam<std::tuple<View, bool>> {};
+
+TEST_P(TerrainMorphViewGl, NoHolesEvenWhileLoading) {
+  if (!haveDisplay()) GTEST_SKIP() << "no DISPLAY: run the gl label under xvfb-run";
+  FakeTileSource world;
+  terrainWorld(world);
+  const auto& [view, fp64] = GetParam();
+  const Outcome o = renderView(world, view, true, false, true, fp64);
+  EXPECT_TRUE(o.complete);
+  EXPECT_EQ(o.holes, 0)
+      << "background pixels inside the globe (build/test-tmp/terrain-fixed-morph-*.png)";
+  EXPECT_EQ(o.holesWhileLoading, 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Views,
+                         TerrainMorphViewGl,
+                         ::testing::Combine(::testing::ValuesIn(kViews), ::testing::Bool()),
+                         [](const auto& p) {
+                           std::string n = std::get<0>(p.param).name;
+                           std::replace(n.begin(), n.end(), '-', '_');
+                           return n + (std::get<1>(p.param) ? "_fp64" : "_float_pairs");
                          });
 
 TEST(TerrainGl, LevelsMeetAndEdgesAreFixed) {

@@ -1,6 +1,8 @@
 #include "DrawList.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <utility>
 
 namespace tellus::planet {
 
@@ -70,7 +72,68 @@ void bindOverlays(const LayerSet& layers,
   part.overlayEnd = static_cast<std::uint32_t>(bindings.size());
 }
 
-DrawList planDraw(const LayerSet& layers, const GlTexture& global, RenderStats& stats) {
+namespace {
+
+/** What a part showed before its texture (of node `from`) arrived: the nearest ancestor of `from`
+ * with a resident texture (marked used), else the global texture; its uv transform for the
+ * region's coordinates in `uv`. */
+const GlTexture* fadeSource(LayerTextures& base,
+                            const GlTexture& global,
+                            const Node& from,
+                            const Node& region,
+                            UvTransform& uv) {
+  for (const Node* a = from.parent(); a != nullptr; a = a->parent()) {
+    const auto it = base.textures.find(a->key());
+    if (it == base.textures.end()) continue;
+    base.lru.use(a->key());
+    uv = ancestorUv(region.key(), a->key());
+    return &it->second.texture;
+  }
+  uv = globalUv(region.sector());
+  return &global;
+}
+
+/** The fade of a part drawn with `texture` (of node `from`): its weight at nowS, and what it
+ * fades from while that is below 1 (fadeSource). */
+void planFade(LayerTextures& base,
+              const GlTexture& global,
+              NodeTexture& texture,
+              const Node& from,
+              const Node& region,
+              double nowS,
+              double fadeInS,
+              DrawList& list) {
+  if (!(fadeInS > 0.0)) return;
+  if (std::isnan(texture.shownSinceS)) texture.shownSinceS = nowS;
+  const double f = (nowS - texture.shownSinceS) / fadeInS;
+  if (f >= 1.0) return;
+  DrawPart& part = list.parts.back();
+  part.fade = static_cast<float>(std::clamp(f, 0.0, 1.0));
+  UvTransform uv;
+  part.fadeFrom = fadeSource(base, global, from, region, uv);
+  part.fadeUv = regionToNodeUv(*part.node, region, uv);
+  list.fading = true;
+}
+
+/** The nearest ancestor of `from` with a resident texture (null: none), and that texture. */
+std::pair<const Node*, NodeTexture*> residentAncestor(LayerTextures& base, const Node& from) {
+  for (const Node* a = from.parent(); a != nullptr; a = a->parent())
+    if (const auto it = base.textures.find(a->key()); it != base.textures.end())
+      return {a, &it->second};
+  return {nullptr, nullptr};
+}
+
+bool stillFading(const NodeTexture& t, double nowS, double fadeInS) {
+  return std::isnan(t.shownSinceS) || nowS - t.shownSinceS < fadeInS;
+}
+
+} // namespace
+
+DrawList planDraw(const LayerSet& layers,
+                  const GlTexture& global,
+                  RenderStats& stats,
+                  double nowS,
+                  double fadeInS) {
   DrawList list;
   layers.forEach([](LayerTextures& l) {
     for (const auto& root : l.tree->roots())
@@ -84,16 +147,32 @@ DrawList planDraw(const LayerSet& layers, const GlTexture& global, RenderStats& 
     for (int i = 0; i < plan.partCount; ++i) {
       const TexturePart& p = plan.parts[static_cast<std::size_t>(i)];
       const GlTexture* texture = &global;
+      NodeTexture* own = nullptr;
       UvTransform uv = p.uv;
+      const Node* from = p.texture;
       if (p.source != TextureSource::Global && p.texture != nullptr) {
         if (auto it = base.textures.find(p.texture->key()); it != base.textures.end()) {
+          own = &it->second;
           texture = &it->second.texture;
           base.lru.use(p.texture->key());
         } else {
           uv = globalUv(p.region->sector());
         }
       }
+      // A texture not shown yet waits while what it would fade from is itself fading in: the part
+      // keeps drawing that ancestor's fade, so a fade always starts from what was on screen.
+      if (own != nullptr && fadeInS > 0.0 && std::isnan(own->shownSinceS)) {
+        const auto [a, at] = residentAncestor(base, *from);
+        if (a != nullptr && stillFading(*at, nowS, fadeInS)) {
+          from = a;
+          own = at;
+          texture = &at->texture;
+          uv = ancestorUv(p.region->key(), a->key());
+          base.lru.use(a->key());
+        }
+      }
       list.parts.push_back(partFor(*n, *p.region, *texture, uv));
+      if (own != nullptr) planFade(base, global, *own, *from, *p.region, nowS, fadeInS, list);
       bindOverlays(layers, *p.region, list.parts.back(), list.bindings);
     }
   }

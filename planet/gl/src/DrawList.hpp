@@ -33,6 +33,11 @@ struct DrawPart {
   int lastQuadrant = 4;
   std::uint32_t overlayBegin = 0; ///< its overlays: DrawList::bindings[overlayBegin, overlayEnd)
   std::uint32_t overlayEnd = 0;
+  /** Fade-in (RendererOptions::fadeInSeconds): the base colour is mix(fadeFrom through fadeUv,
+   * texture through uv, fade); fade = 1 (no fadeFrom) draws the texture alone. */
+  float fade = 1.0f;
+  const GlTexture* fadeFrom = nullptr;
+  UvTransform fadeUv{};
 };
 
 /** One overlay's texture on a drawn part: the texture, the transform of the node's coordinates
@@ -48,6 +53,7 @@ struct OverlayBinding {
 struct DrawList {
   std::vector<DrawPart> parts;
   std::vector<OverlayBinding> bindings;
+  bool fading = false; ///< some part's fade is below 1: the frame is not complete
   /** Draw passes the parts need with k overlay textures a pass: pass 0 the base and the first k
    * overlays of each part, pass j the parts with more, the next k (at least 1). */
   std::uint32_t passes(std::uint32_t k) const;
@@ -75,8 +81,17 @@ void bindOverlays(const LayerSet& layers,
 /** The frame's draw list (see the file comment): every layer's roots marked used (they stay
  * resident like the global texture: the streamer wants them until they are, so evicting one would
  * only fetch it again), then each drawn node's parts with the base layer's textures (marked
- * used) or the global one, and their overlays. Counts stats.mergedNodesDrawn. */
-DrawList planDraw(const LayerSet& layers, const GlTexture& global, RenderStats& stats);
+ * used) or the global one, and their overlays. Counts stats.mergedNodesDrawn.
+ * Fading (fadeInS > 0): a base texture first drawn at frame time t0 (set now, when first drawn)
+ * is drawn with fade = (nowS - t0) / fadeInS (clamped to [0, 1]) over what the part showed
+ * before: the nearest ancestor of its texture's node with a resident texture (marked used), or the
+ * global texture. A texture not yet shown waits (the part draws that ancestor's fade) while the
+ * ancestor it would fade from is itself fading in, so every fade starts from what was on screen. */
+DrawList planDraw(const LayerSet& layers,
+                  const GlTexture& global,
+                  RenderStats& stats,
+                  double nowS = 0.0,
+                  double fadeInS = 0.0);
 
 /** The frame shows what its LOD asks for: no split deferred, no layer switching time, every
  * visible overlay's and the base layer's drawn nodes done (LayerTextures::done), and the heights

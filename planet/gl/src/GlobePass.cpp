@@ -22,7 +22,7 @@ GlobePass::create(const GlCapabilities& gl, const GlobePassOptions& options, Nod
   if (options.fisheye) defines += "#define TELLUS_FISHEYE 1\n";
   GLint units = 16;
   glGetIntegerv(GL_MAX_TEXTURE_IMAGE_UNITS, &units);
-  p->overlaysPerPass_ = std::clamp(units - 1, 1, 8);
+  p->overlaysPerPass_ = std::clamp(units - 2, 1, 8); // unit 0 the base, the last the fade's
   if (options.overlaysPerPass > 0)
     p->overlaysPerPass_ = std::min(p->overlaysPerPass_, options.overlaysPerPass);
   std::string fragDefines = "#define TELLUS_OVERLAYS " + std::to_string(p->overlaysPerPass_) +
@@ -52,8 +52,28 @@ GlobePass::create(const GlCapabilities& gl, const GlobePassOptions& options, Nod
   glUseProgram(id);
   for (int i = 0; i < p->overlaysPerPass_; ++i)
     glUniform1i(glGetUniformLocation(id, ("uOverlay[" + std::to_string(i) + "]").c_str()), 1 + i);
+  p->initFade();
   glUseProgram(0);
   return p;
+}
+
+// Fade-in (issue 23): the part's previous texture on the unit after the overlays'.
+void GlobePass::initFade() {
+  const GLuint id = program_.id();
+  uFadeFrom_ = glGetUniformLocation(id, "uFadeFrom");
+  uFadeUv_ = glGetUniformLocation(id, "uFadeUv");
+  uFade_ = glGetUniformLocation(id, "uFade");
+  uMorph_ = glGetUniformLocation(id, "uMorph");
+  glUniform1i(uFadeFrom_, 1 + overlaysPerPass_);
+}
+
+void GlobePass::setFade(const DrawPart& p) {
+  glUniform1f(uFade_, p.fadeFrom != nullptr ? p.fade : 1.0f);
+  if (p.fadeFrom == nullptr) return;
+  const std::array<float, 4> uv = uvUniform(p.fadeUv);
+  glUniform4f(uFadeUv_, uv[0], uv[1], uv[2], uv[3]);
+  glActiveTexture(GL_TEXTURE1 + static_cast<GLenum>(overlaysPerPass_));
+  glBindTexture(GL_TEXTURE_2D, p.fadeFrom->id());
 }
 
 void GlobePass::setFrameUniforms(const FrameContext& frame) {
@@ -64,6 +84,7 @@ void GlobePass::setFrameUniforms(const FrameContext& frame) {
   // One view-projection for every node, rotation only (the eye at the origin); positions arrive
   // as doubles or high/low float pairs and the shader subtracts the eye's.
   glUniformMatrix4fv(uViewProj_, 1, GL_FALSE, &frame.viewProjection[0][0]);
+  glUniform2f(uMorph_, static_cast<float>(morphScale_), morphScale_ > 0.0 ? 1.0f : 0.0f);
   if (fp64_) {
     glUniform3d(uEye_, frame.eye.x, frame.eye.y, frame.eye.z);
   } else {
@@ -139,6 +160,7 @@ void GlobePass::drawPart(const DrawPart& p,
     opacities[i] = b.opacity;
     night[i] = b.night ? 1.0f : 0.0f;
   }
+  setFade(p);
   glUniform1i(uOverlayCount_, static_cast<GLint>(count));
   if (count > 0) {
     glUniform4fv(uOverlayUv_, static_cast<GLsizei>(count), uvs.data());

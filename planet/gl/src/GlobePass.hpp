@@ -46,10 +46,14 @@ public:
   /** Overlay textures one pass blends (texture units 1..). */
   int overlaysPerPass() const noexcept { return overlaysPerPass_; }
   bool fp64() const noexcept { return fp64_; }
+  /** Geomorphing (Morph.hpp): the next frames' morph scale (morphScale); 0: no morph. */
+  void setMorphScale(double scale) noexcept { morphScale_ = scale; }
 
 private:
   explicit GlobePass(NodeMeshes& meshes) : meshes_(meshes) {}
   void setFrameUniforms(const FrameContext& frame);
+  void initFade();
+  void setFade(const DrawPart& part); ///< the part's fade-in (DrawPart::fade) uniforms
   void drawPart(const DrawPart& part,
                 const DrawList& list,
                 std::uint32_t from,
@@ -63,6 +67,8 @@ private:
   GLint uViewProj_ = -1, uEye_ = -1, uEyeHigh_ = -1, uEyeLow_ = -1, uUv_ = -1, uTexture_ = -1;
   GLint uSun_ = -1, uBase_ = -1, uOverlayCount_ = -1, uOverlayUv_ = -1, uOverlayOpacity_ = -1;
   GLint uOverlayNight_ = -1, uPolarScale_ = -1;
+  GLint uFadeFrom_ = -1, uFadeUv_ = -1, uFade_ = -1, uMorph_ = -1;
+  double morphScale_ = 0.0;
 };
 
 } // namespace tellus::planet

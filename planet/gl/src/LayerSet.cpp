@@ -1,6 +1,7 @@
 #include "LayerSet.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 
@@ -23,6 +24,7 @@ bool LayerTextures::done(const Node& n) const {
 
 void LayerTextures::install(const NodeKey& key, NodeTexture texture, std::size_t bytes) {
   if (auto old = textures.find(key); old != textures.end()) pool.release(std::move(old->second));
+  texture.shownSinceS = std::numeric_limits<double>::quiet_NaN(); // fades in when first drawn
   textures[key] = std::move(texture);
   lru.insert(key, bytes);
   uploading.erase(key);
@@ -207,6 +209,9 @@ void LayerSet::swapReady() {
     slot.retiredRequested += slot.current->streamer->stats().requested;
     slot.retiredReceived += slot.current->streamer->stats().received;
     slot.current = std::move(slot.pending);
+    // A time swaps in all at once (setLayerTime): no texture of it fades in.
+    for (auto& [key, texture] : slot.current->textures)
+      texture.shownSinceS = -std::numeric_limits<double>::infinity();
     ++slot.swaps;
   }
 }

@@ -1,6 +1,7 @@
 #include "NodeMeshes.hpp"
 
 #include <tellus/planet/GpuVertex.hpp>
+#include <tellus/planet/Morph.hpp>
 #include <tellus/planet/Patch.hpp>
 
 #include <algorithm>
@@ -40,6 +41,35 @@ const Node* drawnAcross(const Node* nb, Direction dir, const Sector& s, std::uin
 
 } // namespace
 
+namespace {
+
+/** The vertex index of the i-th vertex of side d (west to east, south to north). */
+std::size_t sideIndex(const TerrainMesh& mesh, int d, int i) {
+  const int n = mesh.n, rows = mesh.rows;
+  const int r = d == static_cast<int>(Direction::North)   ? rows - 1
+                : d == static_cast<int>(Direction::South) ? 0
+                                                          : i;
+  const int c = d == static_cast<int>(Direction::East)   ? n - 1
+                : d == static_cast<int>(Direction::West) ? 0
+                                                         : i;
+  return static_cast<std::size_t>(r * n + c);
+}
+
+} // namespace
+
+std::array<std::vector<glm::dvec4>, 4> sideMorphsOf(const TerrainMesh& mesh) {
+  std::array<std::vector<glm::dvec4>, 4> sides;
+  for (int d = 0; d < 4; ++d) {
+    auto& side = sides[static_cast<std::size_t>(d)];
+    side.resize(static_cast<std::size_t>(alongLongitude(d) ? mesh.n : mesh.rows));
+    for (int i = 0; i < static_cast<int>(side.size()); ++i) {
+      const TerrainVertex& v = mesh.vertices[sideIndex(mesh, d, i)];
+      side[static_cast<std::size_t>(i)] = glm::dvec4(v.morphDelta, v.morphExtentM);
+    }
+  }
+  return sides;
+}
+
 std::array<std::vector<glm::dvec3>, 4> sideVerticesOf(const TerrainMesh& mesh) {
   std::array<std::vector<glm::dvec3>, 4> sides;
   const int n = mesh.n, rows = mesh.rows;
@@ -68,8 +98,10 @@ void closeCap(TerrainMesh& mesh) {
   }
 }
 
-std::array<EdgeAdapt, 4>
-adaptedEdges(const Node& node, std::uint64_t drawnFrame, const SideLookup& sides) {
+std::array<EdgeAdapt, 4> adaptedEdges(const Node& node,
+                                      std::uint64_t drawnFrame,
+                                      const SideLookup& sides,
+                                      const SideMorphLookup& morphs) {
   std::array<EdgeAdapt, 4> e{};
   const Sector& s = node.sector();
   for (int d = 0; d < 4; ++d) {
@@ -87,16 +119,25 @@ adaptedEdges(const Node& node, std::uint64_t drawnFrame, const SideLookup& sides
     // Its side facing us, as it draws it (meshes are built coarse first: NodeMeshes::buildFor).
     const auto opposite = static_cast<std::size_t>((d + 2) % 4);
     if (const auto* theirSides = sides(nb->key())) a.coarseVertices = (*theirSides)[opposite];
+    if (morphs)
+      if (const auto* theirMorphs = morphs(nb->key())) a.coarseMorph = (*theirMorphs)[opposite];
   }
   return e;
 }
 
 std::array<EdgeAdapt, 4> NodeMeshes::edgesOf(const Node& node) const {
   if (!fixEdges_) return {};
-  return adaptedEdges(node, drawnFrame_, [this](const NodeKey& k) {
-    const GpuMesh* m = find(k);
-    return m != nullptr ? &m->sideVertices : nullptr;
-  });
+  return adaptedEdges(
+      node,
+      drawnFrame_,
+      [this](const NodeKey& k) {
+        const GpuMesh* m = find(k);
+        return m != nullptr ? &m->sideVertices : nullptr;
+      },
+      [this](const NodeKey& k) {
+        const GpuMesh* m = find(k);
+        return m != nullptr && geomorph_ ? &m->sideMorphs : nullptr;
+      });
 }
 
 const GpuMesh* NodeMeshes::find(const NodeKey& key) const {
@@ -124,8 +165,11 @@ const GpuMesh& NodeMeshes::meshFor(const Node& node, RenderStats& stats) {
       node.meshSize(meshSize_),
       [this](double lat, double lon) { return terrain_.heightAt(lat, lon); },
       edges,
-      meshSize_);
+      meshSize_,
+      geomorph_ && node.level() > 0 && !node.isCap() ? morphExtentOf(geodesy_, node.sector())
+                                                     : 0.0);
   if (node.isCap()) closeCap(mesh);
+  pinMorphBoundary(mesh); // edges never morph: watertight as without geomorphing (Morph.hpp)
   m.edges = edges;
   m.reliefOff = terrain_.reliefOff();
   m.heightGeneration = field ? field->generation() : 0;
@@ -133,6 +177,7 @@ const GpuMesh& NodeMeshes::meshFor(const Node& node, RenderStats& stats) {
   m.zeroAreaTriangles = mesh.zeroAreaTriangles;
   m.fixed = std::any_of(edges.begin(), edges.end(), [](const EdgeAdapt& a) { return a.active; });
   m.sideVertices = sideVerticesOf(mesh);
+  m.sideMorphs = sideMorphsOf(mesh);
   upload(m, mesh);
   ++stats.meshesBuilt;
   ++stats.meshesBuiltLast;
@@ -158,7 +203,7 @@ void NodeMeshes::upload(GpuMesh& m, const TerrainMesh& mesh) const {
   glBindBuffer(GL_ARRAY_BUFFER, m.vbo.id());
   glBufferData(
       GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(v.size() * sizeof(float)), v.data(), GL_STATIC_DRAW);
-  constexpr GLsizei stride = 11 * sizeof(float);
+  constexpr auto stride = static_cast<GLsizei>(kFloatsPerVertex * sizeof(float));
   const auto at = [](std::size_t floats) {
     return reinterpret_cast<const void*>(floats * sizeof(float));
   };
@@ -175,6 +220,8 @@ void NodeMeshes::upload(GpuMesh& m, const TerrainMesh& mesh) const {
   glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, stride, at(6));
   glEnableVertexAttribArray(3);
   glVertexAttribPointer(3, 2, GL_FLOAT, GL_FALSE, stride, at(9));
+  glEnableVertexAttribArray(4); // geomorphing: offset to the parent's position, its extent
+  glVertexAttribPointer(4, 4, GL_FLOAT, GL_FALSE, stride, at(11));
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.ebo.id());
   glBufferData(GL_ELEMENT_ARRAY_BUFFER,
                static_cast<GLsizeiptr>(mesh.indices.size() * sizeof(std::uint32_t)),

@@ -50,11 +50,15 @@ struct GpuMesh {
   bool fixed = false; ///< some side adapted
   /** The vertices along each side (Direction order) as drawn: what finer neighbours adapt to. */
   std::array<std::vector<glm::dvec3>, 4> sideVertices;
+  /** Their morph (delta, extent; Morph.hpp), likewise. */
+  std::array<std::vector<glm::dvec4>, 4> sideMorphs;
 };
 
 /** The vertices along each side of a mesh (Direction order: n along north and south, its rows
  * along east and west; west to east, south to north). */
 std::array<std::vector<glm::dvec3>, 4> sideVerticesOf(const TerrainMesh& mesh);
+/** The same vertices' morph: (morphDelta, morphExtentM). */
+std::array<std::vector<glm::dvec4>, 4> sideMorphsOf(const TerrainMesh& mesh);
 
 /** A cap's mesh made whole: its two seam columns (longitude -180 and 180) bit-identical. (The
  * ring's nodes put their edges onto its rim's chords: buildTerrainMesh.) */
@@ -62,6 +66,9 @@ void closeCap(TerrainMesh& mesh);
 
 /** The side vertices a drawn node's mesh has (null: no mesh yet). */
 using SideLookup = std::function<const std::array<std::vector<glm::dvec3>, 4>*(const NodeKey& key)>;
+/** The side vertices' morph (EdgeAdapt::coarseMorph) a drawn node's mesh has (null: none). */
+using SideMorphLookup =
+    std::function<const std::array<std::vector<glm::dvec4>, 4>*(const NodeKey& key)>;
 
 /** The drawn node across each side whose edge is coarser than ours along it (drawnFrame: the
  * tree's frame): that side adapts. Along east/west sides a node's extent is its latitude span,
@@ -69,16 +76,22 @@ using SideLookup = std::function<const std::array<std::vector<glm::dvec3>, 4>*(c
  * or coarser whose edge contains ours; when it is not drawn, the drawn node across is found among
  * its descendants whose edge still contains ours: near the poles a finer node of a merged row can
  * be wider than we are, i.e. coarser along the shared edge. GL-free. */
-std::array<EdgeAdapt, 4>
-adaptedEdges(const Node& node, std::uint64_t drawnFrame, const SideLookup& sides);
+std::array<EdgeAdapt, 4> adaptedEdges(const Node& node,
+                                      std::uint64_t drawnFrame,
+                                      const SideLookup& sides,
+                                      const SideMorphLookup& morphs = {});
 
 class NodeMeshes {
 public:
   /** geodesy and terrain must outlive the meshes. fp64: positions as doubles (GpuVertex.hpp). */
-  NodeMeshes(
-      const Geodesy& geodesy, const TerrainState& terrain, int meshSize, bool fixEdges, bool fp64)
-      : geodesy_(geodesy), terrain_(terrain), meshSize_(meshSize), fixEdges_(fixEdges),
-        fp64_(fp64) {}
+  NodeMeshes(const Geodesy& geodesy,
+             const TerrainState& terrain,
+             int meshSize,
+             bool fixEdges,
+             bool fp64,
+             bool geomorph = false)
+      : geodesy_(geodesy), terrain_(terrain), meshSize_(meshSize), fixEdges_(fixEdges), fp64_(fp64),
+        geomorph_(geomorph) {}
 
   /** The frame meshes are used in: drawnFrame is the base tree's (which nodes are drawn), frame
    * the renderer's (RenderStats::frames; a mesh unused for 120 of them goes). */
@@ -112,6 +125,7 @@ private:
   int meshSize_;
   bool fixEdges_;
   bool fp64_;
+  bool geomorph_; ///< meshes carry morph targets (Morph.hpp; below level 1 and for caps none)
   std::uint64_t drawnFrame_ = 0;
   std::uint64_t frame_ = 0;
   std::unordered_map<NodeKey, GpuMesh, NodeKeyHash> meshes_;

@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <limits>
 #include <vector>
 
 namespace tellus::planet {
@@ -33,6 +34,9 @@ GlTexture makeNodeTexture(int width, int height, const NodeTextureFormat& format
 struct NodeTexture {
   GlTexture texture{NoCreate};
   bool wide = false;
+  /** The frame time (RendererOptions::frameClock, s) it was first drawn at, for its fade-in; NaN:
+   * not drawn yet; -infinity: shown at once (no fade: a layer time swapped in whole). */
+  double shownSinceS = std::numeric_limits<double>::quiet_NaN();
 };
 
 /** The free node textures of one layer. Every node texture of a layer has its grid's tile size

@@ -10,6 +10,7 @@
 #include "StarsPass.hpp"
 #include "TextureIntake.hpp"
 
+#include <tellus/planet/Morph.hpp>
 #include <tellus/planet/TextureFallback.hpp>
 
 #include <epoxy/gl.h>
@@ -19,6 +20,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <utility>
 
 namespace tellus::planet {
@@ -88,7 +90,7 @@ std::string Renderer::Impl::openGl() {
   if (opt.anisotropy > 1.0)
     textureFormat.anisotropy = std::min(static_cast<float>(opt.anisotropy), gl.maxAnisotropy);
   meshes = std::make_unique<NodeMeshes>(
-      geodesy, terrain, opt.meshSize, opt.fixEdges, gl.gl45 && opt.fp64Vertices);
+      geodesy, terrain, opt.meshSize, opt.fixEdges, gl.gl45 && opt.fp64Vertices, opt.geomorph);
   auto globe = GlobePass::create(gl,
                                  {.fp64 = opt.fp64Vertices,
                                   .fisheye = opt.dome && opt.dome->method == DomeMethod::Direct,
@@ -96,6 +98,7 @@ std::string Renderer::Impl::openGl() {
                                  *meshes);
   if (!globe) return globe.error();
   stats.overlaysPerPass = (*globe)->overlaysPerPass();
+  globePass = globe->get();
   scene = std::make_unique<SceneDraw>(opt, geodesy, gl);
   if (opt.stars) { // behind everything: before the globe (ScenePass.hpp)
     auto stars = StarsPass::create(gl,
@@ -244,6 +247,13 @@ void Renderer::Impl::buildMeshes(View& view) {
 
 void Renderer::Impl::draw(const Camera& camera, const DrawList& list) {
   const Quadtree& geo = layers.geo();
+  if (opt.geomorph) { // the LOD's camera: the morph is the same on every cube face of a dome
+    const double focalPx =
+        camera.isFisheye() ? camera.pixelsPerRadian()
+                           : 0.5 * static_cast<double>(camera.viewport().height) /
+                                 std::tan(0.5 * camera.verticalFovDeg() * std::numbers::pi / 180.0);
+    globePass->setMorphScale(morphScale(focalPx, opt.lodThreshold, layers.base().texHeight));
+  }
   scene->drawFrame(camera,
                    list,
                    geo.drawList(),
@@ -310,9 +320,12 @@ void Renderer::frame(const CameraPose& pose) {
   intakeTextures(m.layers, m.decoder, m.uploads, m.stats);
   ph.intake = lap();
   // What this frame draws, and the LRU told so before anything new is inserted.
-  const DrawList list = planDraw(m.layers, m.globalTexture, m.stats);
-  const bool complete =
-      drawsWhatLodAsks(m.layers, tree, [&m](const Node& n) { return m.terrain.complete(n); });
+  const double frameS = m.opt.frameClock ? m.opt.frameClock() : nowS; // fades' time
+  const DrawList list = planDraw(m.layers, m.globalTexture, m.stats, frameS, m.opt.fadeInSeconds);
+  // A fade in progress is not the settled image (RendererOptions::fadeInSeconds).
+  const bool complete = !list.fading && drawsWhatLodAsks(m.layers, tree, [&m](const Node& n) {
+    return m.terrain.complete(n);
+  });
   (void)lap();
   const std::size_t uploadedBefore = m.stats.bytesUploaded;
   m.uploads.step(m.layers, m.pacer, m.textureFormat, m.stats);

@@ -40,6 +40,8 @@
 
 namespace tellus::planet {
 
+class GlobePass;
+
 struct Renderer::Impl {
   using Clock = std::chrono::steady_clock;
 
@@ -87,6 +89,7 @@ struct Renderer::Impl {
   std::unique_ptr<NodeMeshes> meshes;
   GlTexture globalTexture{NoCreate}; ///< always resident: the last fallback
   std::unique_ptr<SceneDraw> scene;
+  GlobePass* globePass = nullptr; ///< the scene's globe pass (owned by scene): its morph scale
   WindowPresenter presenter;
   RenderStats stats;
   bool lastComplete = false;

@@ -29,6 +29,8 @@ std::vector<cli::OptionSpec> globeOptions() {
           {"no-terrain", K::Flag},
           {"no-stars", K::Flag},
           {"no-atmosphere", K::Flag},
+          {"no-fade-in", K::Flag},
+          {"no-geomorph", K::Flag},
           {"exaggeration", K::Value},
           {"min-relief-px", K::Value},
           {"sun", K::Value},
@@ -123,6 +125,8 @@ void applyRendererSettings(const RendererSettings& g,
   ro.starMagnitudeLimit = g.stars.magnitudeLimit;
   ro.starBrightness = g.stars.brightness;
   ro.atmosphere = atmosphereOptions(g.atmosphere);
+  ro.fadeInSeconds = a.flag("no-fade-in") ? 0.0 : g.fadeInS;
+  ro.geomorph = g.geomorph && !a.flag("no-geomorph");
   if (const auto d = domeArgs(a); d && (d->on || g.dome.enabled)) {
     ro.dome = planet::DomeOptions{
         d->fovDeg.value_or(g.dome.fovDeg), d->tiltDeg.value_or(g.dome.tiltDeg), g.dome.faceScale};

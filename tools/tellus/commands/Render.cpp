@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -49,6 +50,10 @@ struct RenderArgs {
   bool waitComplete = false;
   double waitSeconds = 0.0; ///< --wait-complete[=SECONDS]: 60 s unless given
   std::optional<EarthModel> earth;
+  /** The renderer's frame time for fades (RendererOptions::frameClock) in a flight as streamed:
+   * the flight's own time, frame n at n / fps, so a fade spans the same frames however long each
+   * takes to draw (what a viewer at --fps would see). */
+  std::shared_ptr<double> flightClockS = std::make_shared<double>(0.0);
 };
 
 /** --camera LAT,LON,ALT[,HEADING,TILT] and --out, or --path and --frames. */
@@ -286,6 +291,7 @@ int renderFlight(const RenderArgs& ra,
   // the later passes' frame times are the views' cost without streaming).
   for (std::int64_t n = 0; n < count * ra.repeat; ++n) {
     const double at = flight.frameTimeS(n % count, ra.fps);
+    *ra.flightClockS = static_cast<double>(n) / ra.fps;
     for (const auto& [name, value] : flight.layerTimesAt(at))
       for (std::size_t i = 0; i < drawn.size(); ++i)
         if (drawn[i] == name) r.setLayerTime(i, value);
@@ -346,6 +352,12 @@ int runRender(const cli::Args& a) {
     return kExitUsage;
   }
   hideNightLayers(a, tiles->night, ro);
+  // Fading (renderer.fade_in) is for frames a viewer watches: --wait-complete writes only settled
+  // images, which a fade would only delay (the image is the same: a fade ends before a frame is
+  // complete). A flight as streamed fades on the flight's time.
+  if (ra->waitComplete) ro.fadeInSeconds = 0.0;
+  if (ra->flight && !ra->waitComplete)
+    ro.frameClock = [clock = ra->flightClockS] { return *clock; };
   const Geodesy geodesy(ra->earth.value_or(tiles->earth));
   // The always-resident global texture: the bundled Blue Marble.
   if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg"; fs::exists(global))

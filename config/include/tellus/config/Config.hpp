@@ -188,6 +188,10 @@ struct RendererSettings {
   /** YAML `renderer.night`: the night layers (renderer.layers[i].night) shown (--no-night: off,
    * they are hidden). */
   bool night = true;
+  /** No popping (issue 23): seconds over which an arriving texture fades in (0 = off), [0, 10]. */
+  double fadeInS = 0.3;
+  /** No popping (issue 23): geomorphing of node heights between levels (thesis 6.2.2). */
+  bool geomorph = true;
 };
 
 /** YAML `cache`. */

@@ -4,10 +4,12 @@
  * @brief The vertex format the GL layer uploads, built on the CPU (issue #8: no NaN or inf
  * anywhere in positions, normals or texture coordinates, asserted in debug builds).
  *
- * 11 floats (44 bytes) a vertex: the ECEF position as three doubles (six floats' worth of bytes,
+ * 15 floats (60 bytes) a vertex: the ECEF position as three doubles (six floats' worth of bytes,
  * OpenGL 4.x, `dvec3`) or as a high and a low float per coordinate (OpenGL 3.3: the shader
  * computes (high - eyeHigh) + (low - eyeLow)), then the unit normal and the node's texture
- * coordinates as floats. Pure functions; no GL.
+ * coordinates as floats, then geomorphing's offset to the parent's position (metres, small: a
+ * float is exact to 1e-7 of it, added camera-relative) and the parent's extent (Morph.hpp).
+ * Pure functions; no GL.
  */
 
 #include <tellus/planet/Terrain.hpp>
@@ -22,7 +24,7 @@
 
 namespace tellus::planet {
 
-inline constexpr std::size_t kFloatsPerVertex = 11;
+inline constexpr std::size_t kFloatsPerVertex = 15;
 
 /** A double as two floats: high = float(v), low = float(v - high). |v - (high + low)| is at most
  * half a float ulp of the low part (about 3e-9 m at the Earth's radius, where high's ulp is 0.5 m).

@@ -24,6 +24,7 @@
 
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 
 #include <array>
 #include <cstddef>
@@ -147,6 +148,10 @@ struct EdgeAdapt {
    * included: a corner of it may lie on an even coarser node's chord), west to east or south to
    * north. Empty: computed from the height function at its grid points. */
   std::vector<glm::dvec3> coarseVertices;
+  /** Geomorphing (Morph.hpp): the coarser node's morph of those vertices as it draws them, xyz its
+   * morphDelta and w its morphExtentM. Empty: from coarseVertices (even ones 0, odd ones onto the
+   * chord of their neighbours) with the coarse node's extent, when the mesh morphs at all. */
+  std::vector<glm::dvec4> coarseMorph{};
   friend bool operator==(const EdgeAdapt&, const EdgeAdapt&) = default;
 };
 
@@ -157,6 +162,10 @@ struct TerrainVertex {
   glm::dvec3 position{0.0}; ///< ECEF, metres (the GL layer splits it into two floats)
   glm::vec3 normal{0.0f};   ///< unit normal of the displaced surface
   glm::dvec2 uvNode{0.0};   ///< 0..1 across the node (u east, v north)
+  /** Geomorphing (Morph.hpp): where the parent's coarser mesh puts this vertex, less its
+   * position (ECEF metres), and that parent's north-south extent (metres; 0: no morph). */
+  glm::dvec3 morphDelta{0.0};
+  double morphExtentM = 0.0;
 };
 
 /**
@@ -188,12 +197,18 @@ struct TerrainMesh {
  * rows: the grid's rows when they differ from n (2^k + 1, 3..1025; 0 = n): a polar cap draws its
  * rim, a whole parallel, with n = 4 x 32 + 1 columns but its latitude span with the 33 rows every
  * node of its level has. Edge fixing needs a square grid (rows == n); a cap has no neighbour.
+ * morphExtentM > 0 (a square grid): geomorphing's targets (Morph.hpp, setGridMorph) with that
+ * extent; an adapted side's vertices then take the coarse node's morph (EdgeAdapt::coarseMorph)
+ * like their positions: a coarse vertex its own, one between two its chord's (the odd end's
+ * extent); onto a polar cap's rim none. 0: no morph (deltas 0), but adapted sides still follow a
+ * coarse node's given coarseMorph.
  */
 TerrainMesh buildTerrainMesh(const Geodesy& geodesy,
                              const Sector& sector,
                              int n,
                              const HeightFunction& height,
                              const std::array<EdgeAdapt, 4>& edges,
-                             int rows = 0);
+                             int rows = 0,
+                             double morphExtentM = 0.0);
 
 } // namespace tellus::planet

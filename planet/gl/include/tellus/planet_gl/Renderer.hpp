@@ -197,6 +197,20 @@ struct RendererOptions {
    * directly or as cube faces and a warp (DomeOptions::method), with the LOD and culling of the
    * fisheye; nullopt: a perspective. */
   std::optional<DomeOptions> dome;
+  /** No popping (issue 23): a base-layer texture that arrives fades in over this many seconds of
+   * frameClock from what was drawn before it (its nearest resident ancestor's texture, else the
+   * global one) instead of appearing at once; the frame is not complete() while a fade runs, so a
+   * settled image is the same as without fading. 0: off (the library's default; `renderer.fade_in`
+   * defaults to 0.3 s). A fade starts at the frame the texture is first drawn (weight 0). */
+  double fadeInSeconds = 0.0;
+  /** The renderer's frame time in seconds (any origin, never decreasing) for fades; empty: the
+   * steady clock. Tests and `tellus render`'s flights inject their own (a flight's time). */
+  std::function<double()> frameClock;
+  /** Geomorphing (issue 23, thesis 6.2.2): each vertex blends between its position in its own
+   * mesh and where its parent's coarser mesh puts it, by a morph factor from the camera
+   * (planet/Morph.hpp), so that a split or a merge moves heights continuously. Off by default in
+   * the library (`renderer.geomorph` defaults to on). */
+  bool geomorph = false;
   bool visibleWindow = false; ///< a window the user sees (`tellus view`); else hidden
   std::string windowTitle = "tellus";
 };
