@@ -21,26 +21,13 @@ std::vector<cli::OptionSpec> tileSourceOptions() {
 
 std::vector<cli::OptionSpec> globeOptions() {
   using K = cli::OptionKind;
-  return {{"camera", K::Value},
-          {"size", K::Value},
-          {"layer", K::Value},
-          {"threshold", K::Value},
-          {"earth", K::Value},
-          {"no-terrain", K::Flag},
-          {"no-stars", K::Flag},
-          {"no-atmosphere", K::Flag},
-          {"no-fade-in", K::Flag},
-          {"no-geomorph", K::Flag},
-          {"exaggeration", K::Value},
-          {"min-relief-px", K::Value},
-          {"sun", K::Value},
-          {"overlay", K::Value, true},
-          {"dome", K::OptionalValue},
-          {"dome-tilt", K::Value},
-          {"dome-method", K::Value},
-          {"time", K::Value},
-          {"no-sun", K::Flag},
-          {"no-night", K::Flag}};
+  return {{"camera", K::Value},     {"size", K::Value},          {"layer", K::Value},
+          {"threshold", K::Value},  {"earth", K::Value},         {"no-terrain", K::Flag},
+          {"no-stars", K::Flag},    {"no-atmosphere", K::Flag},  {"no-fade-in", K::Flag},
+          {"no-geomorph", K::Flag}, {"exaggeration", K::Value},  {"min-relief-px", K::Value},
+          {"sun", K::Value},        {"overlay", K::Value, true}, {"dome", K::OptionalValue},
+          {"dome-tilt", K::Value},  {"dome-method", K::Value},   {"time", K::Value},
+          {"no-sun", K::Flag},      {"no-night", K::Flag}};
 }
 
 std::expected<std::optional<EarthModel>, std::string> earthArg(const cli::Args& a) {
