@@ -104,7 +104,9 @@ head -c 3 "$work/miss.jpg" | od -An -tx1 | grep -q "ff d8 ff" || fail "the miss 
 imaging_mapped || fail "a miss rendered without loading the imaging module?"
 code=$(curl -s -o /dev/null -w "%{http_code}" "http://127.0.0.1:$port/wwtile?T=bluemarble&L=0&X=99&Y=2")
 [ "$code" = 404 ] || fail "outside the grid answered $code"
-curl -s "http://127.0.0.1:$port/wms?SERVICE=WMS&REQUEST=GetCapabilities" | grep -q "<Name>etopo</Name>" \
+# Into a file first: grep -q leaving early would break curl's pipe (pipefail) on a long document.
+curl -s -o "$work/caps.xml" "http://127.0.0.1:$port/wms?SERVICE=WMS&REQUEST=GetCapabilities"
+grep -q "<Name>etopo</Name>" "$work/caps.xml" \
   || fail "capabilities without the etopo layer"
 kill -TERM $server
 wait $server || fail "serve did not stop cleanly on SIGTERM"
