@@ -7,11 +7,15 @@
 # each round; then the tables' precomputation time (--stats atmosphere_precompute_ms) of each
 # run. Mesa llvmpipe under Xvfb renders on the CPU: every figure is a CPU figure; read the ratios.
 # Usage: bench/atmosphere.sh [path/to/tellus]   (ROUNDS=2, FPS=25 by default; FPS=5 flies each
-# 4-second flight in 21 frames instead of 101)
+# 4-second flight in 21 frames instead of 101; VIEWS="flat" leaves the dome out). OFF="..." sets
+# what "without" turns off: the whole look of issue 23 against none of it is
+# OFF="--no-atmosphere --no-stars --no-sun --no-night --no-fade-in --no-geomorph".
 set -euo pipefail
 tellus=${1:-build/tools/tellus/tellus}
 rounds=${ROUNDS:-2}
 fps=${FPS:-25}
+views=${VIEWS:-flat dome}
+read -r -a off <<<"${OFF:---no-atmosphere}"
 work=$(mktemp -d "${TMPDIR:-/tmp}/tellus-atmosphere-bench.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 paths="$(dirname "$0")/paths"
@@ -31,14 +35,16 @@ print("%s %s %s %.2f %.1f" % (sys.argv[1], sys.argv[2], sys.argv[3], t[len(t) //
 PY
 }
 for flight in descent level; do # warm the cache
-  run "$flight" flat warm --size 1024x768 --no-atmosphere >/dev/null
+  run "$flight" flat warm --size 1024x768 "${off[@]}" >/dev/null
 done
 for r in $(seq "$rounds"); do
   for flight in descent level; do
-    run "$flight" flat on --size 1024x768
-    run "$flight" flat off --size 1024x768 --no-atmosphere
-    run "$flight" dome on --dome --size 2048
-    run "$flight" dome off --dome --size 2048 --no-atmosphere
+    for v in $views; do
+      size=(--size 1024x768)
+      [ "$v" = dome ] && size=(--dome --size 2048)
+      run "$flight" "$v" on "${size[@]}"
+      run "$flight" "$v" off "${size[@]}" "${off[@]}"
+    done
   done
 done >"$work/results.txt"
 cat "$work/results.txt"
