@@ -2,6 +2,7 @@
 // Private to the config module: value syntax helpers (Values.cpp) and the validation that both
 // validate() and the YAML parser use (Validate.cpp).
 
+#include <tellus/cache/IsoTime.hpp>
 #include <tellus/config/Config.hpp>
 
 #include <cstdint>
@@ -53,18 +54,11 @@ bool isHttpToken(std::string_view s) noexcept;
 std::expected<std::pair<std::string, std::uint16_t>, std::string>
 parseListenAddress(std::string_view text);
 
-/** An ISO 8601 instant "YYYY-MM-DD" or "YYYY-MM-DDThh:mm[:ss]Z" (UTC; the Z may be left out). */
-struct IsoInstant {
-  std::int64_t seconds = 0; ///< since 1970-01-01T00:00:00Z
-  bool dateOnly = false;
-};
-std::optional<IsoInstant> parseIsoInstant(std::string_view text) noexcept;
-
 /** An ISO 8601 "start/end/period" (e.g. 2024-01-01/2024-12-31/P1D). expanded: the values when
  * there are at most maxValues of them, else empty. */
 struct TimePeriod {
-  IsoInstant start;
-  IsoInstant end;
+  iso8601::Instant start; ///< cache/IsoTime.hpp: the one ISO 8601 reader
+  iso8601::Instant end;
   std::vector<std::string> expanded;
   std::size_t count = 0; ///< values, or maxValues + 1 when there are more
 };

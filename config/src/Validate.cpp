@@ -192,7 +192,7 @@ checkTime(const TimeDimension& t, const std::string& base, const std::string& su
     if (!seen.contains(t.defaultValue))
       return issue("default", "the default '" + t.defaultValue + "' is not one of the values");
   } else if (period) {
-    const auto d = parseIsoInstant(t.defaultValue);
+    const auto d = iso8601::parseInstant(t.defaultValue);
     if (!d || d->seconds < period->start.seconds || d->seconds > period->end.seconds)
       return issue("default",
                    "the default '" + t.defaultValue + "' is not a time inside the period");
@@ -391,7 +391,7 @@ std::optional<ValidationIssue> checkRenderer(const RendererSettings& g) {
                  "must be in [0, 8] (0: as the GPU allows), got " + str(g.overlaysPerPass));
   if (g.earth != EarthShape::Wgs84 && g.earth != EarthShape::Sphere)
     return issue("earth", "must be wgs84 or sphere");
-  if (!g.time.empty() && g.time != "now" && !parseIsoInstant(g.time))
+  if (!g.time.empty() && g.time != "now" && !iso8601::parseInstant(g.time))
     return issue(
         "time", "must be an ISO 8601 UTC time (2024-06-20T12:00:00Z) or now, got '" + g.time + "'");
   return std::nullopt;

@@ -3,6 +3,8 @@
 
 #include "ConfigInternal.hpp"
 
+#include <tellus/cache/IsoTime.hpp>
+
 #include <algorithm>
 #include <charconv>
 #include <chrono>
@@ -219,177 +221,6 @@ parseListenAddress(std::string_view text) {
   return std::pair{std::string(host), *p};
 }
 
-namespace {
-
-using std::chrono::day;
-using std::chrono::days;
-using std::chrono::month;
-using std::chrono::sys_days;
-using std::chrono::year;
-using std::chrono::year_month_day;
-
-constexpr std::int64_t kDay = 86'400;
-
-std::optional<int> fixedDigits(std::string_view s, std::size_t pos, std::size_t n) noexcept {
-  if (pos + n > s.size()) return std::nullopt;
-  int v = 0;
-  for (std::size_t i = pos; i < pos + n; ++i) {
-    if (s[i] < '0' || s[i] > '9') return std::nullopt;
-    v = v * 10 + (s[i] - '0');
-  }
-  return v;
-}
-
-std::int64_t floorDiv(std::int64_t a, std::int64_t b) noexcept {
-  std::int64_t q = a / b;
-  if ((a % b != 0) && ((a < 0) != (b < 0))) --q;
-  return q;
-}
-
-struct Civil {
-  int y = 1970;
-  unsigned m = 1;
-  unsigned d = 1;
-  std::int64_t secondsOfDay = 0;
-};
-
-Civil toCivil(std::int64_t seconds) noexcept {
-  const std::int64_t dayCount = floorDiv(seconds, kDay);
-  const year_month_day ymd{sys_days{days{dayCount}}};
-  return {static_cast<int>(ymd.year()),
-          static_cast<unsigned>(ymd.month()),
-          static_cast<unsigned>(ymd.day()),
-          seconds - dayCount * kDay};
-}
-
-std::int64_t fromCivil(int y, unsigned m, unsigned d, std::int64_t secondsOfDay) noexcept {
-  const sys_days sd{year_month_day{year{y}, month{m}, day{d}}};
-  return static_cast<std::int64_t>(sd.time_since_epoch().count()) * kDay + secondsOfDay;
-}
-
-std::string formatInstant(std::int64_t seconds, bool dateOnly) {
-  const Civil c = toCivil(seconds);
-  char buf[40];
-  if (dateOnly) {
-    std::snprintf(buf, sizeof buf, "%04d-%02u-%02u", c.y, c.m, c.d);
-  } else {
-    const auto s = static_cast<int>(c.secondsOfDay);
-    std::snprintf(buf,
-                  sizeof buf,
-                  "%04d-%02u-%02uT%02d:%02d:%02dZ",
-                  c.y,
-                  c.m,
-                  c.d,
-                  s / 3600,
-                  s / 60 % 60,
-                  s % 60);
-  }
-  return buf;
-}
-
-struct IsoDuration {
-  std::int64_t months = 0;
-  std::int64_t days = 0;
-  std::int64_t seconds = 0;
-};
-
-std::optional<IsoDuration> parseIsoDuration(std::string_view s) noexcept {
-  if (s.size() < 3 || s.front() != 'P') return std::nullopt;
-  s.remove_prefix(1);
-  IsoDuration d;
-  bool inTime = false;
-  bool any = false;
-  bool anyInTime = false;
-  constexpr std::uint64_t kMaxComponent = 1'000'000;
-  while (!s.empty()) {
-    if (s.front() == 'T') {
-      if (inTime) return std::nullopt;
-      inTime = true;
-      s.remove_prefix(1);
-      continue;
-    }
-    const auto n = takeDigits(s);
-    if (!n || *n > kMaxComponent || s.empty()) return std::nullopt;
-    const auto v = static_cast<std::int64_t>(*n);
-    const char unit = s.front();
-    s.remove_prefix(1);
-    if (!inTime && unit == 'Y') {
-      d.months += 12 * v;
-    } else if (!inTime && unit == 'M') {
-      d.months += v;
-    } else if (!inTime && unit == 'W') {
-      d.days += 7 * v;
-    } else if (!inTime && unit == 'D') {
-      d.days += v;
-    } else if (inTime && unit == 'H') {
-      d.seconds += 3600 * v;
-    } else if (inTime && unit == 'M') {
-      d.seconds += 60 * v;
-    } else if (inTime && unit == 'S') {
-      d.seconds += v;
-    } else {
-      return std::nullopt;
-    }
-    any = true;
-    anyInTime = anyInTime || inTime;
-  }
-  if (!any || (inTime && !anyInTime)) return std::nullopt;
-  return d;
-}
-
-/** start + k * period, with months added on the calendar (the day clamped to the month's end). */
-std::int64_t addPeriod(const IsoInstant& start, const IsoDuration& p, std::int64_t k) noexcept {
-  Civil c = toCivil(start.seconds);
-  if (p.months != 0) {
-    const std::int64_t total = static_cast<std::int64_t>(c.y) * 12 + (c.m - 1) + p.months * k;
-    const std::int64_t y = floorDiv(total, 12);
-    if (y > 9999) return std::numeric_limits<std::int64_t>::max();
-    c.y = static_cast<int>(y);
-    c.m = static_cast<unsigned>(total - y * 12 + 1);
-    const unsigned last = static_cast<unsigned>(
-        std::chrono::year_month_day_last{year{c.y}, std::chrono::month_day_last{month{c.m}}}.day());
-    c.d = std::min(c.d, last);
-  }
-  return fromCivil(c.y, c.m, c.d, c.secondsOfDay) + (p.days * kDay + p.seconds) * k;
-}
-
-} // namespace
-
-std::optional<IsoInstant> parseIsoInstant(std::string_view s) noexcept {
-  const auto y = fixedDigits(s, 0, 4);
-  const auto mo = fixedDigits(s, 5, 2);
-  const auto d = fixedDigits(s, 8, 2);
-  if (!y || !mo || !d || s[4] != '-' || s[7] != '-') return std::nullopt;
-  const year_month_day ymd{
-      year{*y}, month{static_cast<unsigned>(*mo)}, day{static_cast<unsigned>(*d)}};
-  if (!ymd.ok()) return std::nullopt;
-  IsoInstant r;
-  if (s.size() == 10) {
-    r.dateOnly = true;
-    r.seconds = fromCivil(*y, static_cast<unsigned>(*mo), static_cast<unsigned>(*d), 0);
-    return r;
-  }
-  if (s[10] != 'T') return std::nullopt;
-  std::string_view t = s.substr(11);
-  if (t.ends_with('Z')) t.remove_suffix(1);
-  const auto hh = fixedDigits(t, 0, 2);
-  const auto mm = fixedDigits(t, 3, 2);
-  if (!hh || !mm || t.size() < 5 || t[2] != ':' || *hh > 23 || *mm > 59) return std::nullopt;
-  int ss = 0;
-  if (t.size() == 8) {
-    const auto sec = fixedDigits(t, 6, 2);
-    if (t[5] != ':' || !sec || *sec > 59) return std::nullopt;
-    ss = *sec;
-  } else if (t.size() != 5) {
-    return std::nullopt;
-  }
-  r.seconds = fromCivil(*y,
-                        static_cast<unsigned>(*mo),
-                        static_cast<unsigned>(*d),
-                        std::int64_t{*hh} * 3600 + std::int64_t{*mm} * 60 + ss);
-  return r;
-}
-
 std::expected<TimePeriod, std::string> parseTimePeriod(std::string_view text,
                                                        std::size_t maxValues) {
   const auto bad = [&](std::string why) {
@@ -400,26 +231,28 @@ std::expected<TimePeriod, std::string> parseTimePeriod(std::string_view text,
   const auto s2 = s1 == std::string_view::npos ? s1 : text.find('/', s1 + 1);
   if (s2 == std::string_view::npos || text.find('/', s2 + 1) != std::string_view::npos)
     return bad("is not start/end/period");
-  const auto start = parseIsoInstant(text.substr(0, s1));
-  const auto end = parseIsoInstant(text.substr(s1 + 1, s2 - s1 - 1));
-  const auto step = parseIsoDuration(text.substr(s2 + 1));
+  const auto start = iso8601::parseInstant(text.substr(0, s1));
+  const auto end = iso8601::parseInstant(text.substr(s1 + 1, s2 - s1 - 1));
+  const auto step = iso8601::parseDuration(text.substr(s2 + 1));
   if (!start) return bad("has a bad start (YYYY-MM-DD or YYYY-MM-DDThh:mm:ssZ)");
   if (!end) return bad("has a bad end (YYYY-MM-DD or YYYY-MM-DDThh:mm:ssZ)");
+  if (start->fraction != 0.0 || end->fraction != 0.0)
+    return bad("has a fraction of a second (a period's times are whole seconds)");
   if (!step) return bad("has a bad ISO 8601 duration (e.g. P1D, P1M, PT6H)");
-  if (step->months == 0 && step->days == 0 && step->seconds == 0)
-    return bad("has a period of zero length");
+  if (step->zero()) return bad("has a period of zero length");
   if (end->seconds < start->seconds) return bad("ends before it starts");
-  const bool dateOnly = start->dateOnly && end->dateOnly && step->seconds == 0;
+  const bool dateOnly = start->shape.dateOnly && end->shape.dateOnly && step->seconds == 0;
+  const iso8601::Shape shape{dateOnly, true, true};
   TimePeriod r{*start, *end, {}, 0};
   for (std::int64_t k = 0;; ++k) {
-    const std::int64_t t = addPeriod(*start, *step, k);
+    const std::int64_t t = iso8601::addDuration(start->seconds, *step, k);
     if (t > end->seconds) break;
     if (r.count >= maxValues) {
       r.count = maxValues + 1;
       r.expanded.clear();
       break;
     }
-    r.expanded.push_back(formatInstant(t, dateOnly));
+    r.expanded.push_back(iso8601::formatInstant(t, shape));
     ++r.count;
   }
   return r;

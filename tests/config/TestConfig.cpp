@@ -267,7 +267,13 @@ TEST(Config, EmbeddedDefaultLightsTheDaySideAndShowsTheNightLights) {
   ASSERT_FALSE(validate(base)) << "the opaque base cannot be a night layer";
   EXPECT_NE(validate(base).error().find("night"), std::string::npos);
   Config timed = c;
-  for (const char* t : {"now", "2024-06-20", "2024-06-20T12:00:00Z", "1900-01-01T00:00"}) {
+  // Every form `--time` takes (one ISO 8601 reader, cache/IsoTime.hpp): a fraction, an offset.
+  for (const char* t : {"now",
+                        "2024-06-20",
+                        "2024-06-20T12:00:00Z",
+                        "1900-01-01T00:00",
+                        "2024-06-20T12:00:00.5Z",
+                        "2024-06-20T14:00+02:00"}) {
     timed.renderer.time = t;
     EXPECT_TRUE(validate(timed)) << t;
   }

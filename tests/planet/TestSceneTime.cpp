@@ -16,6 +16,9 @@ TEST(SceneTime, ParsesIso8601UtcForms) {
   EXPECT_EQ(parseSceneTime("1970-01-01T00:00:00Z", 0.0).value(), 0.0);
   EXPECT_DOUBLE_EQ(parseSceneTime("2024-06-20T12:00:00.25Z", 0.0).value(), 1718884800.25);
   EXPECT_EQ(parseSceneTime("now", 1234.5).value(), 1234.5);
+  // The configuration's renderer.time and a layer's TIME read the same grammar (cache/IsoTime).
+  EXPECT_EQ(parseSceneTime("2024-06-20T14:00+02:00", 0.0).value(), 1718884800.0);
+  EXPECT_EQ(parseSceneTime("0000-01-01", 0.0).value(), -62167219200.0);
 }
 
 TEST(SceneTime, RefusesWhatIsNotAUtcInstant) {
@@ -26,10 +29,8 @@ TEST(SceneTime, RefusesWhatIsNotAUtcInstant) {
                           "2024-06-20T24:00Z",
                           "2024-06-20T12:60Z",
                           "2024-06-20T12:00:61Z",
-                          "2024-06-20T12:00+02:00",
                           "2024-06-20T12:00:00.Z",
                           "2024-6-20",
-                          "0000-01-01",
                           "NOW"}) {
     const auto t = parseSceneTime(bad, 0.0);
     EXPECT_FALSE(t.has_value()) << bad;

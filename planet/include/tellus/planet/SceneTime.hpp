@@ -7,10 +7,11 @@
  *
  * Times are UTC as POSIX seconds (double; leap seconds not counted), the unit of Astronomy.hpp.
  *
- * Accepted forms (parseSceneTime): "YYYY-MM-DDThh:mm[:ss[.fff]]Z" (the Z may be left out: UTC is
- * meant anyway; a space may stand for the T), "YYYY-MM-DD" (00:00 UTC), years 0001-9999 in the
- * proleptic Gregorian calendar, and "now" (the wall clock's now, given by the caller so that
- * tests fix it). Offsets other than Z are refused: the scene's time is UTC.
+ * Accepted forms (parseSceneTime): every ISO 8601 instant cache/IsoTime.hpp reads (the one
+ * reader of the configuration, the WMS TIME dimension and the scene: "YYYY-MM-DDThh:mm[:ss[.fff]]"
+ * with 'Z', an offset such as +02:00 (converted to UTC) or no zone (UTC), "YYYY-MM-DD" (00:00
+ * UTC), years 0000-9999 in the proleptic Gregorian calendar), and "now" (the wall clock's now,
+ * given by the caller so that tests fix it).
  *
  * Pure functions; SceneClock is a value, used from one thread.
  */
