@@ -9,6 +9,8 @@ find_package(OpenImageIO CONFIG REQUIRED)
 # tiles never loads OpenImageIO, and a map decodes only the part of each JPEG tile it samples.
 find_package(JPEG REQUIRED)
 find_package(PNG REQUIRED)
+# zlib: the values module inflates Deflate TIFFs itself (libpng needs it anyway).
+find_package(ZLIB REQUIRED)
 # Debian 12's OpenImageIO config lists /usr/include/opencv4 although OpenImageIO's headers never
 # need it; drop include directories that do not exist rather than pull in all of OpenCV.
 foreach(_oiio_target OpenImageIO::OpenImageIO OpenImageIO::OpenImageIO_Util)

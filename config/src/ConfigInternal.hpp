@@ -68,4 +68,8 @@ std::expected<TimePeriod, std::string> parseTimePeriod(std::string_view text,
 /** The closest of the candidates to a misspelt key, or "" when none is close. */
 std::string closestKey(std::string_view key, std::span<const std::string_view> candidates);
 
+/** A value layer's `values` (ValidateValues.cpp): {key under values, message} of the first
+ * problem, or nullopt. The key is relative to the layer ("values.range", "format"). */
+std::optional<std::pair<std::string, std::string>> checkValueSettings(const LayerConfig& layer);
+
 } // namespace tellus::detail

@@ -155,6 +155,7 @@ LayerConfig readLayer(Reader& r, const YAML::Node& node, std::string path) {
                "kind",
                "grid",
                "elevation",
+               "values",
                "time",
                "cache",
                "opacity"});
@@ -181,14 +182,16 @@ LayerConfig readLayer(Reader& r, const YAML::Node& node, std::string path) {
   const bool heights =
       l.dataset.mimeType == "application/bil16" || l.dataset.mimeType == "image/tiff";
   l.kind = heights ? LayerKind::Elevation : LayerKind::Imagery;
-  if (auto v = m.get("kind"))
-    l.kind = choice(r, *v, m.path("kind"), {"imagery", "elevation"}) == 0 ? LayerKind::Imagery
-                                                                          : LayerKind::Elevation;
+  if (auto v = m.get("kind")) {
+    constexpr LayerKind kKinds[] = {LayerKind::Imagery, LayerKind::Elevation, LayerKind::Values};
+    l.kind = kKinds[choice(r, *v, m.path("kind"), {"imagery", "elevation", "values"})];
+  }
   readGrid(r, m, l);
 
   if (l.dataset.mimeType == "image/tiff") l.elevation.encoding = ElevationEncoding::Int16Tiff;
   if (l.dataset.mimeType == "image/png") l.elevation.encoding = ElevationEncoding::Png16;
   if (m.has("elevation")) readElevation(r, m, l);
+  readValues(r, m, l);
   readTime(r, m, l.time);
 
   readLayerCache(r, m, l);

@@ -19,6 +19,9 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g);
 UpstreamConfig
 readUpstream(Reader& r, const YAML::Node& node, std::string path, const fs::path& dataDir);
 
+/** layers[i].values (ParseValues.cpp), after the layer's kind, format and elevation are read. */
+void readValues(Reader& r, const Map& layer, LayerConfig& l);
+
 /** One entry of layers, at path. */
 LayerConfig readLayer(Reader& r, const YAML::Node& node, std::string path);
 

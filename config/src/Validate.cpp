@@ -289,6 +289,9 @@ checkLayer(const Config& c, const UpstreamIndex& upstreams, const LayerConfig& l
   if (l.kind == LayerKind::Elevation) {
     if (auto e = checkElevation(l, issue)) return e;
   }
+  if (l.isValueLayer()) {
+    if (auto e = checkValueSettings(l)) return issue(e->first, e->second);
+  }
   if (l.firstLevel != 0) {
     if (up->type != UpstreamConfig::Type::WorldWind)
       return issue("grid.first_level", "applies to worldwind upstreams only");

@@ -882,7 +882,7 @@ TEST(ConfigYaml, FormatsKindsAndEncodings) {
   EXPECT_EQ(scale.key, "layers[0].elevation.scale");
   const ConfigError kind = errorOf(withFormat("image/png", "    kind: terrain\n"));
   EXPECT_EQ(kind.key, "layers[0].kind");
-  EXPECT_EQ(kind.message, "'terrain' is not one of imagery, elevation");
+  EXPECT_EQ(kind.message, "'terrain' is not one of imagery, elevation, values");
 }
 
 TEST(ConfigYaml, BadUrlsAndAddresses) {

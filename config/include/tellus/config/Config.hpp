@@ -12,6 +12,8 @@
  */
 
 #include <tellus/cache/Dataset.hpp>
+#include <tellus/values/ColourScale.hpp>
+#include <tellus/values/ValueFormat.hpp>
 
 #include <array>
 #include <chrono>
@@ -235,7 +237,10 @@ struct UpstreamConfig {
   RedirectPolicy redirects = RedirectPolicy::SameOrigin;    ///< redirects followed (at most 5 hops)
 };
 
-enum class LayerKind { Imagery, Elevation };
+/** Imagery: pictures served as sent. Elevation: heights (metres) for the renderer's terrain.
+ * Values: measured numbers that tellus colours itself (issue 24; YAML `kind: values`).
+ * Elevation layers are value layers too (`isValueLayer`). */
+enum class LayerKind { Imagery, Elevation, Values };
 
 /** How the raw samples of an elevation layer become metres. */
 enum class ElevationEncoding {
@@ -250,6 +255,26 @@ struct ElevationSettings {
   double scale = 1.0;
   double offset = 0.0;
   double noData = -32768.0; ///< raw value that means "no data"
+};
+
+/** YAML `layers[].values`: what a value layer's samples mean and how they are coloured (the
+ * values module: tellus/values/). For kind: values every key applies; for an elevation layer
+ * only the colouring keys do, and `format` is filled from its `elevation` block (unit "m").
+ * The colour map named by `colourMap` is the layer's default WMS style; `styles` are the maps it
+ * offers (the default among them). */
+struct ValueSettings {
+  /** container (from the layer's format), encoding, byte order (BIL only), scale, offset,
+   * no_data (raw), unit. */
+  values::ValueFormat format;
+  std::string colourMap{values::kDefaultColourMap};
+  std::vector<std::string> styles; ///< colour map names; all of values::colourMaps() by default
+  bool rangeFromData = false;      ///< YAML `range: data`: from the values (percentiles below)
+  double min = 0.0;                ///< the fixed range (YAML `range: [min, max]`)
+  double max = 1.0;
+  double lowPercent = 0.0;    ///< YAML `percentiles: [low, high]`, with `range: data` only
+  double highPercent = 100.0; ///< (0 and 100: the values' min and max)
+  values::Scaling scaling = values::Scaling::Linear;
+  values::OutOfRange outOfRange = values::OutOfRange::Clamp;
 };
 
 /** YAML `layers[].time`: the WMS TIME dimension. Empty (no values, no period) = no dimension. */
@@ -282,10 +307,14 @@ struct LayerConfig {
    * (YAML `cache.pinned`). time stays "": one dataset per TIME value is made by the proxy. */
   DatasetSpec dataset;
   ElevationSettings elevation; ///< meaningful for kind == Elevation
+  ValueSettings values;        ///< meaningful for value layers (isValueLayer())
   TimeDimension time;
   std::chrono::milliseconds ttl{0};    ///< after this a tile is stale and revalidated; 0 = never
   std::chrono::seconds maxAge{86'400}; ///< Cache-Control max-age sent to clients
   double opacity = 1.0; ///< drawn with this opacity when composed over other layers (0..1)
+
+  /** Values (kind: values) and elevation layers: queryable, with colour-map styles. */
+  bool isValueLayer() const noexcept { return kind != LayerKind::Imagery; }
 };
 
 struct Config {

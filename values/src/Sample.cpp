@@ -1,0 +1,88 @@
+#include <tellus/values/ValueFormat.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+namespace tellus::values {
+
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+bool startsWithNoCase(std::string_view text, std::string_view prefix) noexcept {
+  if (text.size() < prefix.size()) return false;
+  for (std::size_t i = 0; i < prefix.size(); ++i) {
+    const char c = text[i];
+    const char lower = c >= 'A' && c <= 'Z' ? static_cast<char>(c - 'A' + 'a') : c;
+    if (lower != prefix[i]) return false;
+  }
+  return true;
+}
+
+} // namespace
+
+float sample(const ValueRaster& raster, double x, double y) noexcept {
+  const int w = raster.width, h = raster.height;
+  if (w <= 0 || h <= 0 || !(x >= 0.0 && x <= w && y >= 0.0 && y <= h)) return kNaN;
+  // The nearest pixel, and the four centres around (x, y) clamped to the raster.
+  const int nx = std::min(static_cast<int>(x), w - 1), ny = std::min(static_cast<int>(y), h - 1);
+  const double fx = std::clamp(x - 0.5, 0.0, static_cast<double>(w - 1));
+  const double fy = std::clamp(y - 0.5, 0.0, static_cast<double>(h - 1));
+  const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
+  const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
+  const double ax = fx - x0, ay = fy - y0;
+  const std::array<double, 4> v{
+      raster.at(x0, y0), raster.at(x1, y0), raster.at(x0, y1), raster.at(x1, y1)};
+  if (std::any_of(v.begin(), v.end(), [](double s) { return std::isnan(s); }))
+    return raster.at(nx, ny);
+  const double top = v[0] * (1.0 - ax) + v[1] * ax;
+  const double bottom = v[2] * (1.0 - ax) + v[3] * ax;
+  return static_cast<float>(top * (1.0 - ay) + bottom * ay);
+}
+
+std::string_view encodingName(Encoding encoding) noexcept {
+  switch (encoding) {
+  case Encoding::Int16:
+    return "int16";
+  case Encoding::UInt16:
+    return "uint16";
+  case Encoding::Float32:
+    return "float32";
+  }
+  return "";
+}
+
+std::optional<Encoding> parseEncoding(std::string_view name) noexcept {
+  for (Encoding e : {Encoding::Int16, Encoding::UInt16, Encoding::Float32})
+    if (encodingName(e) == name) return e;
+  return std::nullopt;
+}
+
+std::string_view containerName(Container container) noexcept {
+  switch (container) {
+  case Container::Bil:
+    return "bil";
+  case Container::Tiff:
+    return "tiff";
+  case Container::Png:
+    return "png";
+  }
+  return "";
+}
+
+std::optional<Container> parseContainer(std::string_view name) noexcept {
+  for (Container c : {Container::Bil, Container::Tiff, Container::Png})
+    if (containerName(c) == name) return c;
+  return std::nullopt;
+}
+
+std::optional<Container> containerForMimeType(std::string_view mimeType) noexcept {
+  if (startsWithNoCase(mimeType, "application/bil")) return Container::Bil;
+  if (startsWithNoCase(mimeType, "image/tiff")) return Container::Tiff;
+  if (startsWithNoCase(mimeType, "image/png")) return Container::Png;
+  return std::nullopt;
+}
+
+} // namespace tellus::values
