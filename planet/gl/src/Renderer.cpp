@@ -321,7 +321,7 @@ void Renderer::frame(const CameraPose& pose) {
   ph.intake = lap();
   // What this frame draws, and the LRU told so before anything new is inserted.
   const double frameS = m.opt.frameClock ? m.opt.frameClock() : nowS; // fades' time
-  const DrawList list = planDraw(m.layers, m.globalTexture, m.stats, frameS, m.opt.fadeInSeconds);
+  DrawList list = planDraw(m.layers, m.globalTexture, m.stats, frameS, m.opt.fadeInSeconds);
   // A fade in progress is not the settled image (RendererOptions::fadeInSeconds).
   const bool complete = !list.fading && drawsWhatLodAsks(m.layers, tree, [&m](const Node& n) {
     return m.terrain.complete(n);
@@ -343,7 +343,27 @@ void Renderer::frame(const CameraPose& pose) {
   (void)lap();
   glFinish();
   ph.finish = lap();
+  std::size_t swaps = 0;
+  for (std::size_t i = 0; i < m.layers.size(); ++i)
+    swaps += m.layers[i].swaps;
   m.endFrame(tree, complete, ph, t0);
+  std::size_t swapsAfter = 0;
+  for (std::size_t i = 0; i < m.layers.size(); ++i)
+    swapsAfter += m.layers[i].swaps;
+  if (swapsAfter == swaps)
+    m.lastList = std::move(list);
+  else
+    m.lastList.reset(); // a tree swapped out: the list points into it
+}
+
+// Nothing of the state changes: no terrain delivery, update, intake, upload or mesh build.
+void Renderer::redrawLast(const CameraPose& pose) {
+  Impl& m = *impl_;
+  if (!m.lastList) return;
+  m.context->makeCurrent();
+  const Camera camera = m.cameraFor(m.clampToTerrain(pose));
+  m.draw(camera, *m.lastList);
+  glFinish();
 }
 
 CameraPose Renderer::clampToTerrain(const CameraPose& pose) const {
