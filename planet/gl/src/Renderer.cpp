@@ -307,8 +307,10 @@ void Renderer::Impl::endFrame(const FrameStats& tree,
 void Renderer::frame(const CameraPose& pose) {
   Impl& m = *impl_;
   const auto t0 = Clock::now();
-  Impl::View view = m.beginFrame(pose);
   const double nowS = std::chrono::duration<double>(t0 - m.start).count();
+  const double frameS = m.opt.frameClock ? m.opt.frameClock() : nowS; // fades' time
+  m.terrain.setTime(frameS); // before the heights delivered this frame (beginFrame) arrive
+  Impl::View view = m.beginFrame(pose);
   // A copy: the tree it comes from may be swapped out at the end of this frame (a time change).
   const FrameStats tree = updateLayers(m.layers, view.camera, nowS);
   m.terrain.want(m.layers.geo(), nowS, m.stats);
@@ -320,7 +322,6 @@ void Renderer::frame(const CameraPose& pose) {
   intakeTextures(m.layers, m.decoder, m.uploads, m.stats);
   ph.intake = lap();
   // What this frame draws, and the LRU told so before anything new is inserted.
-  const double frameS = m.opt.frameClock ? m.opt.frameClock() : nowS; // fades' time
   DrawList list = planDraw(m.layers, m.globalTexture, m.stats, frameS, m.opt.fadeInSeconds);
   // A fade in progress is not the settled image (RendererOptions::fadeInSeconds).
   const bool complete = !list.fading && drawsWhatLodAsks(m.layers, tree, [&m](const Node& n) {
