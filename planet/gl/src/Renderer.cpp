@@ -363,7 +363,10 @@ void Renderer::redrawLast(const CameraPose& pose) {
   if (!m.lastList) return;
   m.context->makeCurrent();
   const Camera camera = m.cameraFor(m.clampToTerrain(pose));
+  m.globePass->setCullBackFaces(true); // what the last frame culled stays background
   m.draw(camera, *m.lastList);
+  m.globePass->setCullBackFaces(false);
+  glDisable(GL_CULL_FACE);
   glFinish();
 }
 
