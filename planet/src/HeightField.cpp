@@ -126,17 +126,48 @@ bool HeightField::insert(HeightTile tile) {
     ++perLevel_[static_cast<std::size_t>(key.level)];
     deepest_ = std::max(deepest_, key.level);
   }
-  ++generation_;
+  if (fadeS_ > 0.0) fading_.insert_or_assign(key, nowS_);
+  recordChange(reachOf(key));
+  return true;
+}
+
+Sector HeightField::reachOf(const TileKey& key) const {
   const double d = grid_.deltaDeg(key.level);
-  const Sector s = grid_.sectorOf(key);
-  history_.push_back(
-      {generation_, grown(s, d / grid_.spec().tileHeight, d / grid_.spec().tileWidth)});
+  return grown(grid_.sectorOf(key), d / grid_.spec().tileHeight, d / grid_.spec().tileWidth);
+}
+
+void HeightField::recordChange(const Sector& sector) {
+  ++generation_;
+  history_.push_back({generation_, sector});
   if (history_.size() > kHistoryLimit) {
     const std::size_t drop = history_.size() / 2;
     historyFloor_ = history_[drop - 1].generation;
     history_.erase(history_.begin(), history_.begin() + static_cast<std::ptrdiff_t>(drop));
   }
-  return true;
+}
+
+void HeightField::setTime(double nowS) {
+  if (!(nowS > nowS_)) return; // the same frame (or a clock that went back): nothing moves
+  nowS_ = nowS;
+  for (auto it = fading_.begin(); it != fading_.end();) {
+    recordChange(reachOf(it->first)); // its weight moved since the last time
+    if (!(fadeS_ > 0.0) || nowS_ - it->second >= fadeS_)
+      it = fading_.erase(it);
+    else
+      ++it;
+  }
+}
+
+bool HeightField::fadingOver(const Sector& sector) const noexcept {
+  for (const auto& [key, since] : fading_)
+    if (intersectsWrapped(reachOf(key), sector)) return true;
+  return false;
+}
+
+double HeightField::weight(const TileKey& key) const noexcept {
+  const auto it = fading_.find(key);
+  if (it == fading_.end() || !(fadeS_ > 0.0)) return 1.0;
+  return std::clamp((nowS_ - it->second) / fadeS_, 0.0, 1.0);
 }
 
 bool HeightField::changedSince(std::uint64_t g, const Sector& sector) const noexcept {
@@ -160,13 +191,17 @@ int HeightField::levelForSpacing(double spacingDeg) const noexcept {
 // The one reading of a point both queries share: latitude clamped, a pole one point, longitude
 // wrapped with -180 and 180 one meridian and -0.0 as 0; then the deepest level holding a tile
 // there.
-const HeightTile* HeightField::deepestAt(double& latDeg, double& lonDeg) const noexcept {
+void HeightField::normalise(double& latDeg, double& lonDeg) const noexcept {
   latDeg = std::clamp(latDeg, -90.0, 90.0);
   if (latDeg == 90.0 || latDeg == -90.0) lonDeg = 0.0;
   lonDeg = std::remainder(lonDeg, 360.0); // [-180, 180]
   if (globalLongitudes_ && lonDeg == 180.0) lonDeg = -180.0;
   if (lonDeg == 0.0) lonDeg = 0.0; // -0.0
-  for (int l = deepest_; l >= 0; --l) {
+}
+
+const HeightTile*
+HeightField::deepestAt(double latDeg, double lonDeg, int maxLevel) const noexcept {
+  for (int l = std::min(deepest_, maxLevel); l >= 0; --l) {
     if (perLevel_[static_cast<std::size_t>(l)] == 0) continue;
     const auto key = grid_.keyAt(latDeg, lonDeg, l);
     if (!key) continue;
@@ -177,15 +212,29 @@ const HeightTile* HeightField::deepestAt(double& latDeg, double& lonDeg) const n
 
 int HeightField::levelAt(double latDeg, double lonDeg) const noexcept {
   if (!std::isfinite(latDeg) || !std::isfinite(lonDeg)) return -1;
-  const HeightTile* t = deepestAt(latDeg, lonDeg);
+  normalise(latDeg, lonDeg);
+  const HeightTile* t = deepestAt(latDeg, lonDeg, deepest_);
   return t != nullptr ? t->key.level : -1;
 }
 
 double HeightField::heightAt(double latDeg, double lonDeg) const noexcept {
   if (!std::isfinite(latDeg) || !std::isfinite(lonDeg))
     return std::numeric_limits<double>::quiet_NaN();
-  const HeightTile* t = deepestAt(latDeg, lonDeg);
-  return t != nullptr ? sample(*t, latDeg, lonDeg) : 0.0;
+  normalise(latDeg, lonDeg);
+  return blendedAt(latDeg, lonDeg, deepest_);
+}
+
+// Without fades: the deepest tile's sample. A fading tile blends over what the coarser levels
+// give (at most one step per level: the recursion ends at level 0).
+double HeightField::blendedAt(double latDeg, double lonDeg, int maxLevel) const noexcept {
+  const HeightTile* t = deepestAt(latDeg, lonDeg, maxLevel);
+  if (t == nullptr) return 0.0;
+  const double h = sample(*t, latDeg, lonDeg);
+  if (fading_.empty()) return h;
+  const double w = weight(t->key);
+  if (w >= 1.0) return h;
+  const double below = blendedAt(latDeg, lonDeg, t->key.level - 1);
+  return below + w * (h - below);
 }
 
 // Bilinear over the level's mosaic: texel centres at half-texel offsets; a tap outside the tile
@@ -271,6 +320,8 @@ std::pair<double, double> HeightField::rangeOver(const Sector& sector) const {
       lv.lo = std::min(lv.lo, static_cast<double>(it->second.minM));
       lv.hi = std::max(lv.hi, static_cast<double>(it->second.maxM));
       lv.any = true;
+      // A fading tile blends over the coarser levels: they still count.
+      if (fading_.contains(k) && intersects(grid_.sectorOf(k), sector)) all = false;
     }
     if (all) {
       fullLevel = l;

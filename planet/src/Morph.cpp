@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <numbers>
 
 namespace tellus::planet {
@@ -23,17 +22,12 @@ double morphExtentOf(const Geodesy& geodesy, const Sector& sector) noexcept {
          geodesy.equatorialRadius();
 }
 
-void pinMorphBoundary(TerrainMesh& mesh) {
-  const int n = mesh.n, rows = mesh.rows;
-  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
-    const auto k = static_cast<std::int64_t>(i);
-    const std::int64_t r = k / n, c = k % n;
-    if (r >= rows || r == 0 || r == rows - 1 || c == 0 || c == n - 1)
-      mesh.vertices[i].morphDelta = glm::dvec3(0.0);
-  }
+double morphEdgeExtent(double extentM, const Sector& node, bool alongParallel) noexcept {
+  if (!alongParallel) return extentM;
+  return extentM * ((node.east - node.west) / (node.north - node.south));
 }
 
-void setGridMorph(TerrainMesh& mesh, double extentM) {
+void setGridMorph(TerrainMesh& mesh, double extentM, double rowEdgeExtentM) {
   const int n = mesh.n;
   auto at = [&](int r, int c) -> TerrainVertex& {
     return mesh.vertices[static_cast<std::size_t>(r * n + c)];
@@ -41,7 +35,7 @@ void setGridMorph(TerrainMesh& mesh, double extentM) {
   for (int r = 0; r < n; ++r)
     for (int c = 0; c < n; ++c) {
       TerrainVertex& v = at(r, c);
-      v.morphExtentM = extentM;
+      v.morphExtentM = r == 0 || r == n - 1 ? rowEdgeExtentM : extentM;
       const bool oddR = (r & 1) != 0, oddC = (c & 1) != 0;
       glm::dvec3 target = v.position;
       if (oddR && oddC) // the parent cell's south-west to north-east diagonal

@@ -378,9 +378,10 @@ void fixSide(TerrainMesh& mesh,
   if (q < 0 || q >= bigR) return;
   const std::vector<glm::dvec3> cpos = coarseSideVertices(ad, s, side, ca, cb, surface);
   const std::int64_t u0 = q * (side.n - 1);
-  // The coarse node's extent: ours times its latitude span over ours (a power of two).
+  // The coarse side's extent (morphEdgeExtent): ours times its span along the side over our
+  // latitude span.
   const std::vector<glm::dvec4> cmorph =
-      coarseSideMorph(ad, cpos, morphExtentM * ((c.north - c.south) / (s.north - s.south)));
+      coarseSideMorph(ad, cpos, morphExtentM * ((cb - ca) / (s.north - s.south)));
   snapOntoChords(mesh, side, u0, bigR, cpos, cmorph);
   addChordFans(mesh, quad, side, u0, bigR, cpos, cmorph);
 }
@@ -513,7 +514,8 @@ TerrainMesh buildTerrainMesh(const Geodesy& geodesy,
   mesh.minHeightM = ring.lo;
   mesh.maxHeightM = ring.hi;
   setGridVertices(mesh, ring, geodesy);
-  if (morphExtentM > 0.0 && rows == n) setGridMorph(mesh, morphExtentM);
+  if (morphExtentM > 0.0 && rows == n)
+    setGridMorph(mesh, morphExtentM, morphEdgeExtent(morphExtentM, sector, true));
   // Triangles per quadrant: cells, then the zero-area fans of its adapted outer edges.
   Quadrants quad = gridCells(n, rows);
   for (int side = 0; side < 4; ++side) {

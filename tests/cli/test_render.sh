@@ -273,6 +273,19 @@ rc=$?
 set -e
 [ $rc -eq 2 ] && grep -q "times must increase" "$work/err.txt" || fail "bad path: $rc $(cat "$work/err.txt")"
 
+# --probe-frames (bench/popping.sh): a flight as streamed writes, for every frame but the first,
+# the last frame's state drawn from its pose; it needs a flight as streamed.
+"$tellus" render --no-sun --no-atmosphere --cache "$cache" --path "$work/path.json" --frames "$work/sf" --fps 2 \
+  --size 96x64 --probe-frames "$work/qf" >/dev/null || fail "probe frames"
+[ -f "$work/sf/frame_00002.png" ] && [ -f "$work/qf/frame_00001.png" ] && [ -f "$work/qf/frame_00002.png" ] &&
+  [ ! -e "$work/qf/frame_00000.png" ] || fail "probe frames: $(ls "$work/sf" "$work/qf")"
+set +e
+"$tellus" render --no-sun --no-atmosphere --cache "$cache" --path "$work/path.json" --frames "$work/sf2" \
+  --wait-complete --probe-frames "$work/qf2" 2>"$work/err.txt" >/dev/null
+rc=$?
+set -e
+[ $rc -eq 2 ] && grep -q "probe-frames" "$work/err.txt" || fail "probe with --wait-complete: $rc"
+
 # Usage errors: exit 2 and a message naming the problem; no image written.
 usage() {
   local want=$1
@@ -286,6 +299,7 @@ usage() {
   [ ! -e "$work/bad.png" ] || fail "an image was written for: $*"
 }
 usage "--camera" --size 10x10
+usage "--probe-frames" --camera 0,0,1e6 --probe-frames "$work/q"
 usage "latitude" --camera 91,0,1e6
 usage "LAT,LON,ALT" --camera nan,0,1e6
 usage "LAT,LON,ALT" --camera 0,0,inf

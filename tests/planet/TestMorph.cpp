@@ -197,26 +197,82 @@ TEST(MorphTargets, AnAdaptedSideFollowsTheCoarseNodesMorph) {
   }
 }
 
-/** The renderer's meshes morph inside only: every boundary vertex, and every vertex past the grid
- * (the zero-area triangles' copies of coarse vertices), keeps its position; the interior keeps its
- * targets. */
-TEST(MorphTargets, PinnedBoundaryKeepsEdgesAndTheInteriorsTargets) {
+/** Edges morph (Morph.hpp): a fine side adapted to a coarse one 16 times its length, whose coarse
+ * ends lie beyond the fine edge, carries the coarse side's morph as the coarse mesh draws it, in
+ * its own edge vertices and in the fans' extra vertices (copies of the coarse vertices): at any
+ * factor the fans' outer edge is the coarse node's morphed edge, so they stay closed. */
+TEST(MorphEdges, TheFansExtraVerticesCarryTheCoarseMorph) {
   const TileGrid g = test::globalGrid();
   const int n = 9;
   const Sector coarse = g.sectorOf({6, 140, 300});
-  const Sector fine = g.sectorOf({10, 2245, 4816}); // 1/16 of its edge: coarse ends beyond
+  const auto cm =
+      buildTerrainMesh(wgs84(), coarse, n, bumpy, {}, 0, morphExtentOf(wgs84(), coarse));
+  std::vector<glm::dvec3> cpos;
+  std::vector<glm::dvec4> cmorph;
+  for (int i = 0; i < n; ++i) {
+    const TerrainVertex& v = at(cm, i, n - 1); // its east side
+    cpos.push_back(v.position);
+    cmorph.push_back(glm::dvec4(v.morphDelta, v.morphExtentM));
+  }
+  // East of it, 1/16 of its edge, the 5th (q = 4): its south end on coarse vertex 2, its north
+  // end inside the segment to vertex 3 (odd), which the fans copy as an extra vertex.
+  const Sector fine = g.sectorOf({10, 2244, 4816});
   std::array<EdgeAdapt, 4> edges{};
-  edges[static_cast<std::size_t>(Direction::West)] = {true, coarse, {}, {}};
-  auto m = buildTerrainMesh(wgs84(), fine, n, bumpy, edges, 0, morphExtentOf(wgs84(), fine));
-  const TerrainMesh before = m;
-  pinMorphBoundary(m);
-  ASSERT_GT(m.vertices.size(), static_cast<std::size_t>(n * n)); // the fans' extra vertices
-  for (std::size_t i = 0; i < m.vertices.size(); ++i) {
-    const int r = static_cast<int>(i) / n, c = static_cast<int>(i) % n;
-    const bool boundary = r >= n || r == 0 || c == 0 || r == n - 1 || c == n - 1;
-    EXPECT_EQ(m.vertices[i].position, before.vertices[i].position);
-    EXPECT_EQ(m.vertices[i].morphDelta, boundary ? glm::dvec3(0.0) : before.vertices[i].morphDelta)
-        << r << " " << c;
+  edges[static_cast<std::size_t>(Direction::West)] = {true, coarse, cpos, cmorph};
+  const auto m = buildTerrainMesh(wgs84(), fine, n, bumpy, edges, 0, morphExtentOf(wgs84(), fine));
+  ASSERT_GT(m.vertices.size(), static_cast<std::size_t>(n * n));
+  int odd = 0;
+  for (std::size_t i = static_cast<std::size_t>(n * n); i < m.vertices.size(); ++i) {
+    const TerrainVertex& v = m.vertices[i];
+    std::size_t j = 0;
+    while (j < cpos.size() && cpos[j] != v.position)
+      ++j;
+    ASSERT_LT(j, cpos.size()) << "an extra vertex that is no coarse vertex";
+    EXPECT_EQ(v.morphDelta, glm::dvec3(cmorph[j]));
+    EXPECT_EQ(v.morphExtentM, cmorph[j].w);
+    odd += (j & 1U) != 0 ? 1 : 0;
+  }
+  EXPECT_GT(odd, 0); // an odd coarse vertex among them: a real offset, not only zeros
+  // The coarse side's odd vertices morph (edges are no longer pinned).
+  EXPECT_GT(glm::length(glm::dvec3(cmorph[1])), 0.0);
+}
+
+/** Near the poles a row of nodes merged across longitudes (span 2: level L + 1, twice as wide as
+ * tall) borders level-L nodes of the same width at the same resolution along the side. Both give
+ * the shared vertices the same position, offset and extent (the side's span, not the level:
+ * morphEdgeExtent), so the same factor at any camera: no crack where the edge morphs. */
+TEST(MorphEdgesExtremes, AMergedRowsSideMorphsLikeItsNeighbourOneLevelCoarser) {
+  const TileGrid g = test::globalGrid();
+  const int n = 9;
+  const std::int64_t rows = g.rowCount(4);
+  for (const TileKey k : {TileKey{4, rows - 2, 0}, TileKey{4, rows - 2, g.colCount(4) - 1}}) {
+    const Sector below = g.sectorOf(k); // level L, south of the merged row
+    const double h = 0.5 * (below.north - below.south);
+    const Sector merged{below.west, below.north, below.east, below.north + h};
+    const auto mb =
+        buildTerrainMesh(wgs84(), below, n, bumpy, {}, 0, morphExtentOf(wgs84(), below));
+    const auto mm =
+        buildTerrainMesh(wgs84(), merged, n, bumpy, {}, 0, morphExtentOf(wgs84(), merged));
+    EXPECT_EQ(morphEdgeExtent(morphExtentOf(wgs84(), merged), merged, true),
+              morphExtentOf(wgs84(), below));
+    for (int i = 0; i < n; ++i) {
+      const TerrainVertex& a = at(mb, n - 1, i); // its north side
+      const TerrainVertex& b = at(mm, 0, i);     // the merged node's south side
+      EXPECT_EQ(a.position, b.position) << i;
+      EXPECT_EQ(a.morphDelta, b.morphDelta) << i;
+      EXPECT_EQ(a.morphExtentM, b.morphExtentM) << i;
+      if (i % 2 == 1) {
+        EXPECT_GT(glm::length(a.morphDelta), 0.0) << i;
+      }
+      const double scale = morphScale(665.0, 1.0, 512);
+      for (const double far : {1.0001, 1.01, 1.5}) {
+        const glm::dvec3 eye = a.position * far;
+        EXPECT_EQ(morphFactor(glm::length(a.position - eye), a.morphExtentM, scale),
+                  morphFactor(glm::length(b.position - eye), b.morphExtentM, scale));
+      }
+    }
+    // The merged node's west and east sides (neighbours in its own row) keep its level's extent.
+    EXPECT_EQ(at(mm, 3, 0).morphExtentM, morphExtentOf(wgs84(), merged));
   }
 }
 

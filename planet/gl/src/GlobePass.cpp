@@ -77,7 +77,12 @@ void GlobePass::setFade(const DrawPart& p) {
 }
 
 void GlobePass::setFrameUniforms(const FrameContext& frame) {
-  glDisable(GL_CULL_FACE);
+  if (cullBack_) { // node meshes wind counter-clockwise seen from outside
+    glEnable(GL_CULL_FACE);
+    glCullFace(GL_BACK);
+  } else {
+    glDisable(GL_CULL_FACE);
+  }
   glUseProgram(program_.id());
   glUniform1i(uTexture_, 0);
   glActiveTexture(GL_TEXTURE0);

@@ -48,6 +48,9 @@ public:
   bool fp64() const noexcept { return fp64_; }
   /** Geomorphing (Morph.hpp): the next frames' morph scale (morphScale); 0: no morph. */
   void setMorphScale(double scale) noexcept { morphScale_ = scale; }
+  /** Back faces culled (Renderer::redrawLast: the inside of the globe never shows through the
+   * part of the view the last frame culled; off for every frame). */
+  void setCullBackFaces(bool cull) noexcept { cullBack_ = cull; }
 
 private:
   explicit GlobePass(NodeMeshes& meshes) : meshes_(meshes) {}
@@ -63,6 +66,7 @@ private:
   NodeMeshes& meshes_;
   GlProgram program_{NoCreate};
   bool fp64_ = false;
+  bool cullBack_ = false;
   int overlaysPerPass_ = 1;
   GLint uViewProj_ = -1, uEye_ = -1, uEyeHigh_ = -1, uEyeLow_ = -1, uUv_ = -1, uTexture_ = -1;
   GLint uSun_ = -1, uBase_ = -1, uOverlayCount_ = -1, uOverlayUv_ = -1, uOverlayOpacity_ = -1;

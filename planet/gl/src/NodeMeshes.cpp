@@ -169,7 +169,6 @@ const GpuMesh& NodeMeshes::meshFor(const Node& node, RenderStats& stats) {
       geomorph_ && node.level() > 0 && !node.isCap() ? morphExtentOf(geodesy_, node.sector())
                                                      : 0.0);
   if (node.isCap()) closeCap(mesh);
-  pinMorphBoundary(mesh); // edges never morph: watertight as without geomorphing (Morph.hpp)
   m.edges = edges;
   m.reliefOff = terrain_.reliefOff();
   m.heightGeneration = field ? field->generation() : 0;

@@ -307,8 +307,10 @@ void Renderer::Impl::endFrame(const FrameStats& tree,
 void Renderer::frame(const CameraPose& pose) {
   Impl& m = *impl_;
   const auto t0 = Clock::now();
-  Impl::View view = m.beginFrame(pose);
   const double nowS = std::chrono::duration<double>(t0 - m.start).count();
+  const double frameS = m.opt.frameClock ? m.opt.frameClock() : nowS; // fades' time
+  m.terrain.setTime(frameS); // before the heights delivered this frame (beginFrame) arrive
+  Impl::View view = m.beginFrame(pose);
   // A copy: the tree it comes from may be swapped out at the end of this frame (a time change).
   const FrameStats tree = updateLayers(m.layers, view.camera, nowS);
   m.terrain.want(m.layers.geo(), nowS, m.stats);
@@ -320,8 +322,7 @@ void Renderer::frame(const CameraPose& pose) {
   intakeTextures(m.layers, m.decoder, m.uploads, m.stats);
   ph.intake = lap();
   // What this frame draws, and the LRU told so before anything new is inserted.
-  const double frameS = m.opt.frameClock ? m.opt.frameClock() : nowS; // fades' time
-  const DrawList list = planDraw(m.layers, m.globalTexture, m.stats, frameS, m.opt.fadeInSeconds);
+  DrawList list = planDraw(m.layers, m.globalTexture, m.stats, frameS, m.opt.fadeInSeconds);
   // A fade in progress is not the settled image (RendererOptions::fadeInSeconds).
   const bool complete = !list.fading && drawsWhatLodAsks(m.layers, tree, [&m](const Node& n) {
     return m.terrain.complete(n);
@@ -343,7 +344,30 @@ void Renderer::frame(const CameraPose& pose) {
   (void)lap();
   glFinish();
   ph.finish = lap();
+  std::size_t swaps = 0;
+  for (std::size_t i = 0; i < m.layers.size(); ++i)
+    swaps += m.layers[i].swaps;
   m.endFrame(tree, complete, ph, t0);
+  std::size_t swapsAfter = 0;
+  for (std::size_t i = 0; i < m.layers.size(); ++i)
+    swapsAfter += m.layers[i].swaps;
+  if (swapsAfter == swaps)
+    m.lastList = std::move(list);
+  else
+    m.lastList.reset(); // a tree swapped out: the list points into it
+}
+
+// Nothing of the state changes: no terrain delivery, update, intake, upload or mesh build.
+void Renderer::redrawLast(const CameraPose& pose) {
+  Impl& m = *impl_;
+  if (!m.lastList) return;
+  m.context->makeCurrent();
+  const Camera camera = m.cameraFor(m.clampToTerrain(pose));
+  m.globePass->setCullBackFaces(true); // what the last frame culled stays background
+  m.draw(camera, *m.lastList);
+  m.globePass->setCullBackFaces(false);
+  glDisable(GL_CULL_FACE);
+  glFinish();
 }
 
 CameraPose Renderer::clampToTerrain(const CameraPose& pose) const {

@@ -36,6 +36,7 @@
 
 #include <chrono>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace tellus::planet {
@@ -93,6 +94,9 @@ struct Renderer::Impl {
   WindowPresenter presenter;
   RenderStats stats;
   bool lastComplete = false;
+  /** The last frame's draw list (Renderer::redrawLast), while what it points to lives: reset when
+   * a layer time swaps a tree out. */
+  std::optional<DrawList> lastList;
   Clock::time_point start = Clock::now();
   CameraPose drawnPose{};
 };

@@ -28,6 +28,7 @@ std::expected<void, std::string> TerrainState::open(ITileSource& source) {
   auto egrid = TileGrid::create(espec->grid);
   if (!egrid) return std::unexpected("layer '" + opt_.elevationLayer + "': " + egrid.error());
   field_ = std::make_unique<HeightField>(*egrid);
+  field_->setFade(opt_.fadeInSeconds); // heights that arrive fade in as textures do (issue 23)
   HeightStreamParams hp;
   hp.layer = opt_.elevationLayer;
   hp.time = opt_.elevationTime;
@@ -120,6 +121,7 @@ int TerrainState::heightLevelFor(const Node& node) const {
 
 bool TerrainState::complete(const Node& node) const {
   if (!field_ || reliefOff_) return true;
+  if (field_->fadingOver(node.sector())) return false; // a height tile still fading in
   const auto keys = field_->grid().keysCovering(
       node.sector(), heightLevelFor(node), node.isCap() ? kCapHeightKeys : 16);
   if (!keys) return true;

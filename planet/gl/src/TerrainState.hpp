@@ -73,12 +73,18 @@ public:
   /** Switches the relief on or off for this camera (reliefCouldShow with the data's bound) and
    * re-applies the heights to every layer's tree when it changes. */
   void chooseRelief(const Camera& camera, double altitudeM, LayerSet& layers);
+  /** The frame's time (RendererOptions::frameClock, s) for the height tiles' fade-in
+   * (HeightField::setFade: RendererOptions::fadeInSeconds, as textures). */
+  void setTime(double nowS) {
+    if (field_) field_->setTime(nowS);
+  }
   /** A few decoded height tiles into the field; every layer's tree refreshed where they changed. */
   void deliver(LayerSet& layers);
   /** The update phase's heights: what the drawn nodes need, to the streamer (RenderStats'
    * height figures and nodesWithoutHeights). */
   void want(const Quadtree& geo, double nowS, RenderStats& stats);
-  /** Every height tile the node's mesh needs is settled (or heights are off). */
+  /** Every height tile the node's mesh needs is settled and none over it still fades in (or
+   * heights are off). */
   bool complete(const Node& node) const;
   bool busy() const { return heights_ && heights_->busy(); }
 

@@ -45,6 +45,9 @@ struct RenderArgs {
   planet::CameraPose pose;                  ///< --camera, or the flight's first pose
   std::string out;                          ///< --out FILE.png of one view
   std::string frames;                       ///< --frames DIR of a flight
+  /** --probe-frames DIR of a flight as streamed: before frame n >= 1, frame n - 1's state drawn
+   * from frame n's pose (Renderer::redrawLast), the reference of bench/popping.sh. */
+  std::string probeFrames;
   double fps = 25.0;
   int repeat = 1;
   bool waitComplete = false;
@@ -71,8 +74,14 @@ int parseViewOrFlight(const cli::Args& a, RenderArgs& r) {
     r.flight = std::move(*read);
     r.pose = r.flight->keyframes().front().pose;
     r.frames = *framesArg;
+    if (const auto probe = a.get("probe-frames")) {
+      if (probe->empty() || a.flag("wait-complete"))
+        return usage("--probe-frames DIR needs a flight as streamed (no --wait-complete)", *probe);
+      r.probeFrames = *probe;
+    }
     return kExitOk;
   }
+  if (a.get("probe-frames")) return usage("--probe-frames DIR needs --path and --frames", "");
   if (!cameraArg) return usage("--camera LAT,LON,ALT[,HEADING,TILT] is required", "");
   const auto cam = cli::parseNumbers(*cameraArg, 3, 5);
   if (!cam)
@@ -272,6 +281,7 @@ int renderFlight(const RenderArgs& ra,
   const planet::FlightPath& flight = *ra.flight;
   std::error_code ec;
   fs::create_directories(ra.frames, ec);
+  if (!ec && !ra.probeFrames.empty()) fs::create_directories(ra.probeFrames, ec);
   if (ec) {
     std::fprintf(stderr, "tellus render: %s: %s\n", ra.frames.c_str(), ec.message().c_str());
     return kExitError;
@@ -296,14 +306,18 @@ int renderFlight(const RenderArgs& ra,
       for (std::size_t i = 0; i < drawn.size(); ++i)
         if (drawn[i] == name) r.setLayerTime(i, value);
     if (const auto sceneTime = flight.sceneTimeAt(at)) r.setTime(*sceneTime);
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05lld.png", static_cast<long long>(n % count));
+    if (!ra.probeFrames.empty() && n > 0 && n < count) { // before the frame changes anything
+      r.redrawLast(flight.poseAt(at));
+      if (!writePng(fs::path(ra.probeFrames) / name, r)) return kExitError;
+    }
     const bool complete = session.renderOne(flight.poseAt(at), ra.waitSeconds, !ra.waitComplete);
     allComplete = allComplete && complete;
     if (ra.waitComplete && !complete) {
       session.writeStats(session.secondsSince(), false);
       return session.notComplete(("frame " + std::to_string(n % count)).c_str());
     }
-    char name[32];
-    std::snprintf(name, sizeof name, "frame_%05lld.png", static_cast<long long>(n % count));
     if (!writePng(fs::path(ra.frames) / name, r)) return kExitError;
   }
   if (!session.writeStats(session.secondsSince(), allComplete)) return kExitError;
@@ -386,6 +400,7 @@ Command renderCommand() {
                     {"stats", K::Value},
                     {"path", K::Value},
                     {"frames", K::Value},
+                    {"probe-frames", K::Value},
                     {"fps", K::Value},
                     {"repeat", K::Value},
                     {"edge-fixing", K::Value},

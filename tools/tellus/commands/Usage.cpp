@@ -31,7 +31,8 @@ commands:
              [--dome-method direct|cube]  one pass through the fisheye (default) or cube
                                       faces and a warp (renderer.dome.method)
              or a flight: --path PATH.json --frames DIR [--fps N] [--repeat N] instead of
-             --camera/--out
+             --camera/--out; [--probe-frames DIR] (as streamed) before each frame the last
+                                      frame's state drawn from its pose (bench/popping.sh)
              (PATH.json: [{"time":0,"lat":..,"lon":..,"alt":..,"heading":..,"tilt":..,
               "times":{"LAYER":"TIME"},"utc":"2024-06-20T18:00:00Z"}, ...]: a layer's time
               from that keyframe on; "utc" the scene's time, interpolated between keyframes)

@@ -23,8 +23,20 @@
  * vertex's distance d from the eye: f = clamp(2 d / D - 1, 0, 1). A function of the vertex's
  * position, its extent and the camera only, so every node holding a vertex (its neighbours, a
  * finer node's copy of a coarse vertex in its zero-area triangles) morphs it identically and edges
- * stay watertight. The drawn position is position + f x morphDelta. The renderer pins every
- * node's boundary (pinMorphBoundary): the interior morphs, edges are drawn as without morphing.
+ * stay watertight. The drawn position is position + f x morphDelta.
+ *
+ * Edges morph too, and stay watertight because a shared vertex gets the same morph on both sides:
+ *  - two same-level neighbours: the same position, the same chord along the side (the offset),
+ *    and the same extent, bit for bit;
+ *  - a side whose neighbour is coarser along it (edge fixing, Terrain.hpp): the finer side's
+ *    vertices take the coarse node's morph as it draws it (EdgeAdapt::coarseMorph; between two
+ *    coarse vertices the chord's, interpolated), and the zero-area triangles' copies of coarse
+ *    vertices theirs, so the fans stay closed whatever the factors;
+ *  - two nodes one level apart at the same resolution along a side (near the poles a row of nodes
+ *    merged across longitudes, span 2 at level L + 1, beside level-L nodes of the same width): a
+ *    side's vertices take the extent of the side's own span along it (morphEdgeExtent), not the
+ *    node's level, so both give it the level-L extent. Chord and position agree already.
+ * A polar cap does not morph, nor a node's vertices on a cap's rim (Terrain.cpp).
  */
 
 #include <tellus/planet/Geodesy.hpp>
@@ -48,17 +60,16 @@ double morphFactor(double distanceM, double extentM, double scale) noexcept;
  * along a meridian of the equatorial radius: a function of the level alone). */
 double morphExtentOf(const Geodesy& geodesy, const Sector& sector) noexcept;
 
-/** Zeroes the morph offset of every vertex on the grid's boundary and of the vertices past the
- * grid (the zero-area triangles' coarse vertices): only a node's interior morphs, so every edge is
- * drawn exactly as without geomorphing and stays watertight with the edge fixing alone. Why: two
- * nodes of different levels can share an edge at the same resolution (merged polar rows: a level
- * L + 1 node two columns wide beside a level-L one), where the same vertex would get two parents'
- * extents, two factors and a crack (seen near the poles in TerrainMorphViewGl); an edge vertex
- * also pops less than an interior one (it lies on both nodes' chords along the edge). */
-void pinMorphBoundary(TerrainMesh& mesh);
-
 /** The morph targets of a square grid (mesh.rows == mesh.n; the first n x n vertices), see the
- * file comment; every grid vertex's morphExtentM set to extentM. Precondition: n odd (2^k + 1). */
-void setGridMorph(TerrainMesh& mesh, double extentM);
+ * file comment; every grid vertex's morphExtentM set to extentM, except on the south and north
+ * rows (the sides along a parallel): rowEdgeExtentM, the extent of the span along them
+ * (morphEdgeExtent). Precondition: n odd (2^k + 1). */
+void setGridMorph(TerrainMesh& mesh, double extentM, double rowEdgeExtentM);
+
+/** The extent a side's vertices morph with: extentM (the node's, from its latitude span) times
+ * the side's span along it over the node's latitude span, so a function of the side alone (its
+ * span and the level's vertex count): a west or east side (along a meridian) keeps extentM, a
+ * south or north side of a node merged across longitudes (span k) gets k x extentM. 0 stays 0. */
+double morphEdgeExtent(double extentM, const Sector& node, bool alongParallel) noexcept;
 
 } // namespace tellus::planet

@@ -99,8 +99,27 @@ public:
   bool insert(HeightTile tile);
   bool contains(const TileKey& key) const noexcept { return tiles_.contains(key); }
   std::size_t size() const noexcept { return tiles_.size(); }
-  /** Bumped by every insert. */
+  /** Bumped by every insert, and by every setTime while a tile fades in. */
   std::uint64_t generation() const noexcept { return generation_; }
+
+  /**
+   * Fading in (issue 23, "No popping"; docs/design/popping.md): with fadeSeconds > 0 a tile
+   * inserted at time t (the last setTime) blends in over [t, t + fadeSeconds]: where it is the
+   * deepest level held, heightAt is h_below + w (h_tile - h_below), w = (now - t) / fadeSeconds
+   * clamped to [0, 1] and h_below what the next coarser levels held give there (fading alike), so
+   * a height tile that arrives moves the surface continuously instead of at once. Heights stay a
+   * pure function of the tiles held and the time: two nodes that evaluate a point still agree.
+   * 0 (the default): a tile shows at once.
+   */
+  void setFade(double fadeSeconds) noexcept { fadeS_ = fadeSeconds > 0.0 ? fadeSeconds : 0.0; }
+  /** The time (seconds, any origin, not decreasing) of the next inserts and of heightAt; every
+   * fading tile's sector counts as changed (changedSince) when the time moves, and a tile whose
+   * fade has ended stops fading. */
+  void setTime(double nowS);
+  /** Some tile is fading in. */
+  bool fading() const noexcept { return !fading_.empty(); }
+  /** Some fading tile reaches the sector (its bilinear reach included). */
+  bool fadingOver(const Sector& sector) const noexcept;
 
   /**
    * Height in metres at a point; 0 where no level holds a tile. NaN or infinite input gives NaN.
@@ -124,7 +143,17 @@ public:
 
 private:
   double sample(const HeightTile& tile, double latDeg, double lonDeg) const noexcept;
-  const HeightTile* deepestAt(double& latDeg, double& lonDeg) const noexcept;
+  /** The point normalised (latitude clamped, a pole one point, longitude wrapped). */
+  void normalise(double& latDeg, double& lonDeg) const noexcept;
+  /** The deepest tile held at a normalised point of a level at most maxLevel (null: none). */
+  const HeightTile* deepestAt(double latDeg, double lonDeg, int maxLevel) const noexcept;
+  /** heightAt at a normalised point from the levels up to maxLevel, fades applied. */
+  double blendedAt(double latDeg, double lonDeg, int maxLevel) const noexcept;
+  /** A tile's fade weight at the current time: 1 unless it is fading in. */
+  double weight(const TileKey& key) const noexcept;
+  /** The sector a tile's values reach (one sample beyond its own: the bilinear taps). */
+  Sector reachOf(const TileKey& key) const;
+  void recordChange(const Sector& sector);
   TileGrid grid_;
   bool globalLongitudes_ = false;
   std::unordered_map<TileKey, HeightTile, TileKeyHash> tiles_;
@@ -138,6 +167,9 @@ private:
   };
   std::vector<Change> history_;
   std::uint64_t historyFloor_ = 0; // generations at or below this were compacted away
+  double fadeS_ = 0.0;
+  double nowS_ = 0.0;
+  std::unordered_map<TileKey, double, TileKeyHash> fading_; ///< key -> the time it arrived
 };
 
 /** The node across one side whose edge is coarser than ours (the finer side adapts). */

@@ -340,6 +340,13 @@ public:
   /** One frame: quadtree and streamer update, decoded textures to upload, uploads within the
    * budget, draw into the framebuffer (and the window when visible). */
   void frame(const CameraPose& pose);
+  /** The last frame's state (its quadtree, draw list, textures, meshes, fades' weights and
+   * heights) drawn again from another pose, changing nothing: no update, intake, upload or mesh
+   * build, no frame counted, no stats. What popping is measured against (bench/popping.sh,
+   * docs/design/popping.md): the next frame from the same pose differs from this image only by
+   * what its streaming and LOD change. Parts of the view the last frame culled stay background.
+   * No-op before the first frame. */
+  void redrawLast(const CameraPose& pose);
   /** The last frame shows what its LOD asks for: every drawn node has its own texture or its
    * tiles are absent (or undecodable), no split was deferred, and nothing is in flight, decoding
    * or uploading. A frame drawn when this holds is deterministic. */
