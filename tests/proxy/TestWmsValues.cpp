@@ -9,6 +9,7 @@
 #include "../support/HttpClient.hpp"
 #include "../support/TempDir.hpp"
 #include "../support/WmsSchemas.hpp"
+#include "../values/TiffBuilder.hpp"
 
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/codec/Png.hpp>
@@ -22,6 +23,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <bit>
 #include <cmath>
 #include <span>
 #include <string>
@@ -43,14 +45,30 @@ std::string paramOf(const std::string& target, const std::string& name) {
                        end == std::string::npos ? std::string::npos : end - at - name.size() - 1);
 }
 
-/** "upsst": BIL16 whose raw sample is round(100 * the texel centre's longitude) (the value, with
- * scale 0.01, is the longitude in degrees), no data (-32768) north of 60 N. "upsat": a JPEG. */
+/** "upchl": a Float32 TIFF (Deflate, strips), 10^(column / width * 4 - 2): 0.01 at the west
+ * edge of a tile to 100 at its east edge. */
+test::FakeReply chlTile(int w, int h) {
+  std::vector<std::uint32_t> bits;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      bits.push_back(std::bit_cast<std::uint32_t>(
+          static_cast<float>(std::pow(10.0, (x + 0.5) / w * 4.0 - 2.0))));
+  values::test::TiffSpec spec{
+      .width = w, .height = h, .bits = 32, .sampleFormat = 3, .compression = 8, .rowsPerStrip = 8};
+  const auto tiff = values::test::TiffBuilder(spec).build(bits);
+  return test::FakeReply::ok(bytesOf(tiff), "image/tiff");
+}
+
+/** "upsst" and "updem": BIL16 whose raw sample is round(100 * the texel centre's longitude) (the
+ * value, with scale 0.01, is the longitude in degrees), no data (-32768) north of 60 N. "upsat": a
+ * JPEG. */
 test::FakeReply upstreamTile(const test::FakeRequest& req) {
   const int w = std::atoi(paramOf(req.target, "WIDTH").c_str());
   const int h = std::atoi(paramOf(req.target, "HEIGHT").c_str());
   if (w <= 0 || h <= 0 || w > 1024 || h > 1024) return test::FakeReply::withStatus(400, "size");
   const auto n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
-  if (paramOf(req.target, "LAYERS") != "upsst") {
+  if (paramOf(req.target, "LAYERS") == "upchl") return chlTile(w, h);
+  if (paramOf(req.target, "LAYERS") != "upsst" && paramOf(req.target, "LAYERS") != "updem") {
     std::vector<std::uint8_t> px(n * 3, 90);
     return test::FakeReply::ok(bytesOf(*encodeImage("image/jpeg", w, h, 3, px.data())),
                                "image/jpeg");
@@ -91,6 +109,35 @@ LayerSpec sst() {
   return l;
 }
 
+/** An elevation layer (the same samples): its default style is the grey ramp, its colour maps
+ * are offered by name. */
+LayerSpec dem() {
+  LayerSpec l = sst();
+  l.name = "dem";
+  l.upstreamLayer = "updem";
+  l.elevation = true;
+  l.values->defaultStyle = "";
+  l.values->styles = {"terrain", "viridis"};
+  l.values->format.unit = "m";
+  return l;
+}
+
+/** A Float32 TIFF layer on a log scale with its range from each map's data. */
+LayerSpec chl() {
+  LayerSpec l = sst();
+  l.name = "chl";
+  l.upstreamLayer = "upchl";
+  l.dataset.mimeType = "image/tiff";
+  l.values->format = values::ValueFormat{};
+  l.values->format.container = values::Container::Tiff;
+  l.values->format.unit = "mg/m³";
+  l.values->defaultStyle = "viridis";
+  l.values->styles = {"viridis"};
+  l.values->rangeFromData = true;
+  l.values->scaling = values::Scaling::Log;
+  return l;
+}
+
 LayerSpec sat() {
   LayerSpec l;
   l.name = "sat";
@@ -122,7 +169,8 @@ struct Server {
     u.crs = "EPSG:4326";
     u.policy.timeout = 2000ms;
     u.policy.retries = 0;
-    auto t = TileService::create(*cache, *fetcher, {u}, {sst(), sat()}, TileServiceOptions{});
+    auto t = TileService::create(
+        *cache, *fetcher, {u}, {sst(), sat(), dem(), chl()}, TileServiceOptions{});
     EXPECT_TRUE(t) << (t ? "" : t.error());
     tiles = std::move(*t);
     FrontEndOptions options;
@@ -148,6 +196,13 @@ struct Server {
 
 std::span<const std::byte> span(const std::string& s) {
   return {reinterpret_cast<const std::byte*>(s.data()), s.size()};
+}
+
+/** The number after `prefix` in `body` (NaN when absent). */
+double valueIn(const std::string& body, const std::string& prefix) {
+  const auto at = body.find(prefix);
+  if (at == std::string::npos) return std::nan("");
+  return std::strtod(body.c_str() + at + prefix.size(), nullptr);
 }
 
 /** The map's RGBA pixel (x, y). */
@@ -183,6 +238,49 @@ TEST(WmsValuesIntegration, StyledGetMapColoursEachPixelByTheScale) {
     // North of 60 N: no data, transparent.
     EXPECT_EQ(pixel(*im, 100, 10)[3], 0);
   }
+}
+
+// An elevation layer: STYLES= stays the grey ramp, a named colour map colours it.
+TEST(WmsValuesIntegration, ElevationLayersKeepTheirDefaultAndOfferColourMaps) {
+  Server s;
+  const std::string q = "SERVICE=WMS&VERSION=1.3.0&REQUEST=GetMap&LAYERS=dem&CRS=CRS:84"
+                        "&BBOX=-180,-90,180,90&WIDTH=360&HEIGHT=180&FORMAT=image/png";
+  auto grey = codec::decodePng(span(s.get(q + "&STYLES=").body));
+  ASSERT_TRUE(grey);
+  const auto g = pixel(*grey, 250, 100);
+  EXPECT_TRUE(g[0] == g[1] && g[1] == g[2]);
+  auto terrain = codec::decodePng(span(s.get(q + "&STYLES=terrain").body));
+  ASSERT_TRUE(terrain);
+  const auto c = values::colourOf({values::findColourMap("terrain"), -180.0, 180.0}, 70.5f);
+  EXPECT_EQ(pixel(*terrain, 250, 100), (std::array<std::uint8_t, 4>{c[0], c[1], c[2], 255}));
+  const auto legend = s.get("SERVICE=WMS&REQUEST=GetLegendGraphic&FORMAT=image/png&LAYER=dem");
+  EXPECT_NE(legend.body.find("StyleNotDefined"), std::string::npos) << legend.body;
+  EXPECT_EQ(s.get("SERVICE=WMS&REQUEST=GetLegendGraphic&FORMAT=image/png&LAYER=dem&STYLE=terrain")
+                .header("content-type"),
+            "image/png");
+}
+
+// A Float32 TIFF layer, log scale, range from the map's data: west edges of tiles low, east high.
+TEST(WmsValuesIntegration, Float32TiffOnALogScaleWithARangeFromTheData) {
+  Server s;
+  const auto r = s.get("SERVICE=WMS&VERSION=1.3.0&REQUEST=GetMap&LAYERS=chl&STYLES=&CRS=CRS:84"
+                       "&BBOX=0,-36,36,0&WIDTH=64&HEIGHT=64&FORMAT=image/png");
+  ASSERT_EQ(r.header("content-type"), "image/png") << r.body.substr(0, 500);
+  auto im = codec::decodePng(span(r.body));
+  ASSERT_TRUE(im);
+  const auto& table = *values::findColourMap("viridis")->table;
+  const auto west = pixel(*im, 0, 30), east = pixel(*im, 63, 30);
+  // The range is the map's own: its ends get (nearly) the table's ends.
+  EXPECT_LE(std::abs(int(west[0]) - table[0][0]) + std::abs(int(west[2]) - table[0][2]), 12);
+  EXPECT_LE(std::abs(int(east[0]) - table[255][0]) + std::abs(int(east[2]) - table[255][2]), 12);
+  const auto info = s.get("SERVICE=WMS&VERSION=1.3.0&REQUEST=GetFeatureInfo&LAYERS=chl&CRS=CRS:84"
+                          "&BBOX=0,-36,36,0&WIDTH=64&HEIGHT=64&QUERY_LAYERS=chl"
+                          "&INFO_FORMAT=text/plain&I=32&J=32");
+  // The pixel centre lies on texel 32.5 of the level-0 tile: 10^(32.5 / 64 * 4 - 2).
+  EXPECT_NEAR(valueIn(info.body, "value = "), std::pow(10.0, 32.5 / 64 * 4 - 2), 1e-3) << info.body;
+  EXPECT_NE(info.body.find("mg/m³"), std::string::npos);
+  const auto legend = s.get("SERVICE=WMS&REQUEST=GetLegendGraphic&FORMAT=image/png&LAYER=chl");
+  EXPECT_EQ(legend.header("content-type"), "image/png") << legend.body;
 }
 
 TEST(WmsValuesIntegration, UnknownStyleIsStyleNotDefined) {
@@ -257,13 +355,6 @@ TEST(WmsValuesIntegration, GetLegendGraphicIsAPng) {
       s.get("SERVICE=WMS&REQUEST=GetLegendGraphic&VERSION=1.3.0&FORMAT=image/png&LAYER=sat");
   EXPECT_NE(imagery.body.find("no value layer"), std::string::npos) << imagery.body;
   EXPECT_TRUE(test::validateWms(imagery.body, test::WmsDocument::Exception130).valid);
-}
-
-/** The number after `prefix` in `body` (NaN when absent). */
-double valueIn(const std::string& body, const std::string& prefix) {
-  const auto at = body.find(prefix);
-  if (at == std::string::npos) return std::nan("");
-  return std::strtod(body.c_str() + at + prefix.size(), nullptr);
 }
 
 const std::string kInfo130 = "SERVICE=WMS&VERSION=1.3.0&REQUEST=GetFeatureInfo&LAYERS=sst"

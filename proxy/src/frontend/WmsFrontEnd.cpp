@@ -137,7 +137,12 @@ void WmsFrontEnd::getMap(const HttpRequest& req,
   // map is (mapIsHeights), and each layer is drawn as that (MapComposer).
   auto layers = mapLayers(m, ctx, respond);
   if (!layers) return;
-  const MapKind kind = mapKind(m.mapFormat, m.layers);
+  MapKind kind = mapKind(m.mapFormat, m.layers);
+  // A layer drawn with a colour map is a picture: the map is heights only when no layer is.
+  if (std::any_of(layers->begin(), layers->end(), [](const ComposeLayer& l) {
+        return l.colourMap != nullptr;
+      }))
+    kind.heights = false;
   if (sendOneTile(req, m, *layers, kind, ctx, respond)) return;
   // Any other box, size, format or several layers: composed from the tiles.
   if (static_cast<std::int64_t>(m.width) * m.height > fe_.options.maxMapPixels) {
