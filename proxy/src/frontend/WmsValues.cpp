@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <mutex>
 
 namespace tellus {
@@ -51,14 +52,73 @@ std::optional<float> valueInTile(const TileAnswer& a,
   return v;
 }
 
-/** The answers of one GetFeatureInfo as its tiles arrive (on any thread). */
+/** The answers of one GetFeatureInfo as its tiles arrive (on any thread); `finish` answers
+ * once the last one is in. */
 struct FeatureInfoGather {
   std::mutex mutex;
   std::vector<FeatureInfoValue> values;
   std::size_t pending = 1; // the launching loop holds one until it is done
   std::optional<OgcException> failure;
   std::optional<FrontEnd::Temporary> temporary;
+  std::function<void()> finish;
+
+  void start() {
+    const std::lock_guard lock(mutex);
+    ++pending;
+  }
+  /** One answer in: the value of layer k (and the failure of its tile, if any). */
+  void arrive(std::size_t k, std::optional<float> v, const TileAnswer& a) {
+    {
+      const std::lock_guard lock(mutex);
+      values[k].value = v;
+      if (a.kind == TileAnswer::Kind::Error && !failure) {
+        failure = ogcError(ogc::kNoApplicableCode, "", a.message);
+        temporary = FrontEnd::temporary(a.failure, a.retryAfterSeconds);
+      }
+    }
+    done();
+  }
+  void done() {
+    bool last = false;
+    {
+      const std::lock_guard lock(mutex);
+      last = --pending == 0;
+    }
+    if (last) finish();
+  }
 };
+
+/** Asks for the tile of queried layer k under the pixel (the level the map is drawn from) and
+ * hands its value to `gather`; a pixel outside the layer is no data without asking. */
+void fetchValue(FrontEnd& fe,
+                const ComposeLayer& cl,
+                const GetFeatureInfoRequest& f,
+                std::size_t k,
+                const std::shared_ptr<FeatureInfoGather>& gather,
+                const FetchGate& gate) {
+  const LayerSpec& l = *cl.layer;
+  const TileGrid* grid = fe.tiles.grid(l.name);
+  const auto [lon, lat] = pixelCentre(f.map, f.i, f.j);
+  const Sector& sector = l.dataset.grid.sector;
+  const bool global = sector.west <= -180.0 && sector.east >= 180.0;
+  const double plon = global ? std::remainder(lon, 360.0) : lon;
+  gather->values[k] = FeatureInfoValue{l.name, plon, lat, std::nullopt, l.values->format.unit};
+  const std::int32_t level = composeLevel(*grid, f.map.bbox, f.map.width, f.map.height, 0);
+  const auto key = grid->keyAt(lat, plon == 180.0 ? -180.0 : plon, level);
+  if (!key) return;
+  gather->start();
+  fe.tiles.getTile(
+      l.name,
+      cl.time,
+      *key,
+      [&fe, gather, k, &l, grid, key = *key, plon, lat](TileAnswer&& a) {
+        fe.countTile(&l, a);
+        std::optional<float> v;
+        if (a.kind == TileAnswer::Kind::Tile) v = valueInTile(a, *l.values, *grid, key, plon, lat);
+        gather->arrive(k, v, a);
+      },
+      gate);
+}
 
 } // namespace
 
@@ -172,10 +232,9 @@ void WmsFrontEnd::featureInfo(const HttpRequest& req,
                        respond);
     if (std::find(queried.begin(), queried.end(), &*it) == queried.end()) queried.push_back(&*it);
   }
-  const auto [lon, lat] = pixelCentre(f.map, f.i, f.j);
   auto gather = std::make_shared<FeatureInfoGather>();
   gather->values.resize(queried.size());
-  const auto finish = [this, gather, format = f.infoFormat, c, respond]() {
+  gather->finish = [this, gather, format = f.infoFormat, c, respond]() {
     if (gather->failure) return exception(c, *gather->failure, respond, gather->temporary);
     auto r = HttpResponse::text(
         200, featureInfoContentType(format), featureInfoBody(format, gather->values));
@@ -184,48 +243,9 @@ void WmsFrontEnd::featureInfo(const HttpRequest& req,
     respond(std::move(r));
   };
   const FetchGate gate = fe_.gateFor(req);
-  for (std::size_t k = 0; k < queried.size(); ++k) {
-    const LayerSpec& l = *queried[k]->layer;
-    const TileGrid* grid = fe_.tiles.grid(l.name);
-    const bool global = l.dataset.grid.sector.west <= -180.0 && l.dataset.grid.sector.east >= 180.0;
-    const double plon = global ? std::remainder(lon, 360.0) : lon;
-    gather->values[k] = FeatureInfoValue{l.name, plon, lat, std::nullopt, l.values->format.unit};
-    const std::int32_t level = composeLevel(*grid, f.map.bbox, f.map.width, f.map.height, 0);
-    const auto key = grid->keyAt(lat, plon == 180.0 ? -180.0 : plon, level);
-    if (!key) continue; // outside the layer: no data
-    {
-      const std::lock_guard lock(gather->mutex);
-      ++gather->pending;
-    }
-    fe_.tiles.getTile(
-        l.name,
-        queried[k]->time,
-        *key,
-        [this, gather, k, &l, grid, key = *key, plon, lat, finish](TileAnswer&& a) {
-          fe_.countTile(&l, a);
-          std::optional<float> v;
-          if (a.kind == TileAnswer::Kind::Tile)
-            v = valueInTile(a, *l.values, *grid, key, plon, lat);
-          bool last = false;
-          {
-            const std::lock_guard lock(gather->mutex);
-            gather->values[k].value = v;
-            if (a.kind == TileAnswer::Kind::Error && !gather->failure) {
-              gather->failure = ogcError(ogc::kNoApplicableCode, "", a.message);
-              gather->temporary = FrontEnd::temporary(a.failure, a.retryAfterSeconds);
-            }
-            last = --gather->pending == 0;
-          }
-          if (last) finish();
-        },
-        gate);
-  }
-  bool last = false;
-  {
-    const std::lock_guard lock(gather->mutex);
-    last = --gather->pending == 0;
-  }
-  if (last) finish();
+  for (std::size_t k = 0; k < queried.size(); ++k)
+    fetchValue(fe_, *queried[k], f, k, gather, gate);
+  gather->done(); // the launching loop's share
 }
 
 } // namespace tellus
