@@ -60,7 +60,8 @@ struct FeatureInfoGather {
   std::size_t pending = 1; // the launching loop holds one until it is done
   std::optional<OgcException> failure;
   std::optional<FrontEnd::Temporary> temporary;
-  std::function<void()> finish;
+  /** Answers; given the gather (not holding it: no cycle that would keep it alive). */
+  std::function<void(const FeatureInfoGather&)> finish;
 
   void start() {
     const std::lock_guard lock(mutex);
@@ -84,7 +85,7 @@ struct FeatureInfoGather {
       const std::lock_guard lock(mutex);
       last = --pending == 0;
     }
-    if (last) finish();
+    if (last) finish(*this);
   }
 };
 
@@ -234,10 +235,10 @@ void WmsFrontEnd::featureInfo(const HttpRequest& req,
   }
   auto gather = std::make_shared<FeatureInfoGather>();
   gather->values.resize(queried.size());
-  gather->finish = [this, gather, format = f.infoFormat, c, respond]() {
-    if (gather->failure) return exception(c, *gather->failure, respond, gather->temporary);
-    auto r = HttpResponse::text(
-        200, featureInfoContentType(format), featureInfoBody(format, gather->values));
+  gather->finish = [this, format = f.infoFormat, c, respond](const FeatureInfoGather& g) {
+    if (g.failure) return exception(c, *g.failure, respond, g.temporary);
+    auto r =
+        HttpResponse::text(200, featureInfoContentType(format), featureInfoBody(format, g.values));
     fe_.common(r);
     r.setHeader("Cache-Control", "no-cache");
     respond(std::move(r));
