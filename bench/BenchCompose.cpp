@@ -6,10 +6,12 @@
 #include <tellus/codec/JpegYcc.hpp>
 #include <tellus/proxy/Compose.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
+#include <tellus/values/ValueFormat.hpp>
 
 #include <benchmark/benchmark.h>
 
 #include <array>
+#include <limits>
 #include <map>
 #include <memory>
 #include <tuple>
@@ -214,5 +216,124 @@ void BM_YccDecodeSampleEncodeJpeg(benchmark::State& state) {
 BENCHMARK(BM_YccDecodeSampleEncodeJpeg)->Unit(benchmark::kMillisecond);
 
 } // namespace
+
+// ---- value layers (issue 24): the same map from value tiles, coloured per pixel ---------------
+
+/** BIL16 value tiles of the same smooth field (hundredths of a unit, as a scale of 0.01 reads). */
+std::vector<std::int16_t> tileValues(const TileKey& k) {
+  std::vector<std::int16_t> v(512 * 512);
+  for (int y = 0; y < 512; ++y)
+    for (int x = 0; x < 512; ++x)
+      v[static_cast<std::size_t>(y * 512 + x)] =
+          static_cast<std::int16_t>((x + k.col * 37) * 10 - (y + k.row * 53) * 7);
+  return v;
+}
+
+const values::ValueFormat kBil16{values::Container::Bil,
+                                 values::Encoding::Int16,
+                                 values::ByteOrder::Little,
+                                 0.01,
+                                 0.0,
+                                 -32768.0,
+                                 "K"};
+
+/** The same map as BM_SampleOnly from value tiles: values sampled, then coloured (turbo). */
+void BM_ValuesSampleColour(benchmark::State& state) {
+  const TileGrid g = grid();
+  const int level = composeLevel(g, kBox, 1024, 768, 0);
+  const auto keys = *composeTiles(g, kBox, 1024, 768, level, 256);
+  std::map<std::tuple<std::int64_t, std::int64_t>, std::vector<float>> tiles;
+  std::map<std::tuple<std::int64_t, std::int64_t>, TileSamples> views;
+  for (const auto& t : keys) {
+    const auto raw = tileValues(t.key);
+    auto& v = tiles[{t.key.row, t.key.col}];
+    for (const std::int16_t r : raw)
+      v.push_back(static_cast<float>(r * 0.01));
+    views[{t.key.row, t.key.col}] = TileSamples{512, 512, 1, nullptr, nullptr, v.data()};
+  }
+  const TileLookup lookup = [&](const TileKey& k) -> const TileSamples* {
+    const auto it = views.find({k.row, k.col});
+    return k.level == level && it != views.end() ? &it->second : nullptr;
+  };
+  const values::ColourScale scale{values::findColourMap("turbo"), -30.0, 60.0};
+  std::vector<std::uint8_t> canvas(1024 * 768 * 3);
+  std::vector<float> sampled;
+  for (auto _ : state) {
+    sampled.assign(1024 * 768, std::numeric_limits<float>::quiet_NaN());
+    composeValues(g, kBox, 1024, 768, level, 0, lookup, sampled);
+    drawValuesAsColours(sampled, scale, 1.0, canvas, 3);
+    benchmark::DoNotOptimize(canvas.data());
+  }
+  state.counters["tiles"] = static_cast<double>(keys.size());
+}
+BENCHMARK(BM_ValuesSampleColour)->Unit(benchmark::kMillisecond);
+
+/** A picture layer's whole map in PNG: PNG tiles decoded, sampled, the map encoded as PNG. */
+void BM_DecodeSampleEncodePng(benchmark::State& state) {
+  const TileGrid g = grid();
+  const int level = composeLevel(g, kBox, 1024, 768, 0);
+  const auto keys = *composeTiles(g, kBox, 1024, 768, level, 256);
+  std::map<std::tuple<std::int64_t, std::int64_t>, std::vector<std::byte>> pngs;
+  for (const auto& t : keys) {
+    const auto px = tilePixels(t.key);
+    pngs[{t.key.row, t.key.col}] = *encodeImage("image/png", 512, 512, 3, px.data());
+  }
+  std::vector<std::uint8_t> canvas(1024 * 768 * 3);
+  for (auto _ : state) {
+    std::map<std::tuple<std::int64_t, std::int64_t>,
+             std::pair<std::vector<std::uint8_t>, TileSamples>>
+        decoded;
+    for (const auto& [rc, png] : pngs) {
+      auto& [px, view] = decoded[rc];
+      const auto ch = decodeImageryInto(png, "image/png", 512, 512, px, nullptr);
+      view = TileSamples{512, 512, *ch, px.data(), nullptr};
+    }
+    const TileLookup lookup = [&](const TileKey& k) -> const TileSamples* {
+      const auto it = decoded.find({k.row, k.col});
+      return k.level == level && it != decoded.end() ? &it->second.second : nullptr;
+    };
+    composeImagery(g, kBox, 1024, 768, level, 0, lookup, 1.0, canvas, 3);
+    const auto out = encodeImage("image/png", 1024, 768, 3, canvas.data());
+    benchmark::DoNotOptimize(out->data());
+  }
+}
+BENCHMARK(BM_DecodeSampleEncodePng)->Unit(benchmark::kMillisecond);
+
+/** The value layer's whole map in PNG: BIL16 tiles decoded to values, sampled, coloured, encoded
+ * (what GetMap with a STYLES colour map does). Against BM_DecodeSampleEncodePng: the issue's
+ * goal is at most 1.1x. */
+void BM_ValuesDecodeSampleColourEncodePng(benchmark::State& state) {
+  const TileGrid g = grid();
+  const int level = composeLevel(g, kBox, 1024, 768, 0);
+  const auto keys = *composeTiles(g, kBox, 1024, 768, level, 256);
+  std::map<std::tuple<std::int64_t, std::int64_t>, std::vector<std::byte>> bils;
+  for (const auto& t : keys) {
+    const auto v = tileValues(t.key);
+    bils[{t.key.row, t.key.col}] = *encodeHeights("application/bil16", 512, 512, v.data());
+  }
+  const values::ColourScale scale{values::findColourMap("turbo"), -30.0, 60.0};
+  std::vector<std::uint8_t> canvas(1024 * 768 * 3);
+  std::vector<float> sampled;
+  for (auto _ : state) {
+    std::map<std::tuple<std::int64_t, std::int64_t>, std::pair<values::ValueRaster, TileSamples>>
+        decoded;
+    for (const auto& [rc, bil] : bils) {
+      auto& [raster, view] = decoded[rc];
+      raster = *values::decode(bil, kBil16, 512, 512);
+      view = TileSamples{512, 512, 1, nullptr, nullptr, raster.values.data()};
+    }
+    const TileLookup lookup = [&](const TileKey& k) -> const TileSamples* {
+      const auto it = decoded.find({k.row, k.col});
+      return k.level == level && it != decoded.end() ? &it->second.second : nullptr;
+    };
+    sampled.assign(1024 * 768, std::numeric_limits<float>::quiet_NaN());
+    composeValues(g, kBox, 1024, 768, level, 0, lookup, sampled);
+    std::fill(canvas.begin(), canvas.end(), std::uint8_t{255});
+    drawValuesAsColours(sampled, scale, 1.0, canvas, 3);
+    const auto out = encodeImage("image/png", 1024, 768, 3, canvas.data());
+    benchmark::DoNotOptimize(out->data());
+  }
+}
+BENCHMARK(BM_ValuesDecodeSampleColourEncodePng)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

@@ -8,6 +8,7 @@
 #include <tellus/proxy/Query.hpp>
 #include <tellus/proxy/Wms.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -180,6 +181,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                           ctx.height == m->height && ctx.transparent == m->transparent &&
                           ctx.bgcolor == m->bgcolor);
       }
+    } else if (const auto* f = std::get_if<GetFeatureInfoRequest>(&*request)) {
+      // GetFeatureInfo (issue 24): its map is a GetMap that parses, the point lies on it.
+      checkGetMap(f->map, limits);
+      TELLUS_FUZZ_CHECK(f->i >= 0 && f->i < f->map.width && f->j >= 0 && f->j < f->map.height);
+      TELLUS_FUZZ_CHECK(!f->queryLayers.empty() && f->featureCount >= 1);
+      for (const std::string& q : f->queryLayers)
+        TELLUS_FUZZ_CHECK(std::find(f->map.layers.begin(), f->map.layers.end(), q) !=
+                          f->map.layers.end());
+    } else if (const auto* g = std::get_if<GetLegendGraphicRequest>(&*request)) {
+      TELLUS_FUZZ_CHECK(!g->layer.empty());
+      TELLUS_FUZZ_CHECK(g->width == 0 || (g->width >= 32 && g->width <= 4096));
+      TELLUS_FUZZ_CHECK(g->height == 0 || (g->height >= 32 && g->height <= 4096));
     } else {
       const auto& caps = std::get<GetCapabilitiesRequest>(*request);
       const auto e = checkUpdateSequence(caps.updateSequence, "2024-06-01T00:00:00Z");

@@ -114,10 +114,17 @@ void readColouring(Reader& r, const Map& m, ValueSettings& v, bool rangeRequired
 /** An elevation layer's samples as the values module reads them (its `elevation` block). */
 void elevationFormat(LayerConfig& l) {
   values::ValueFormat& f = l.values.format;
-  f.encoding = values::Encoding::Int16; // bil16, int16-tiff and png16 (as signed) alike
+  f.encoding = values::Encoding::Int16; // bil16 and int16-tiff
   f.scale = l.elevation.scale;
   f.offset = l.elevation.offset;
   f.noData = l.elevation.noData;
+  if (f.container == values::Container::Png) {
+    // tellus's 16-bit PNG heights hold height + 32768 (the proxy's encodeHeights, the planet's
+    // HeightDecode): unsigned samples, the shift folded into the offset and no-data.
+    f.encoding = values::Encoding::UInt16;
+    f.offset -= 32768.0 * f.scale;
+    f.noData = *f.noData + 32768.0;
+  }
   f.unit = "m";
   l.values.colourMap = "terrain";
   l.values.min = -8000.0; // the terrain map has sea level at its middle

@@ -134,6 +134,44 @@ TEST(ProxyFromConfig, ElevationNoDataIsClampedIntoSixteenBits) {
   EXPECT_EQ(noData(-9999.9), -9999); // toward zero, as a cast does
 }
 
+// Value layers (issue 24): a value layer's default style is its colour map; an elevation
+// layer's stays the uncoloured one; the styles default to every colour map; imagery has none.
+TEST(ProxyFromConfig, ValueLayersCarryTheirFormatStylesAndScale) {
+  LayerConfig l;
+  l.kind = LayerKind::Values;
+  l.values.format.container = values::Container::Tiff;
+  l.values.format.encoding = values::Encoding::Float32;
+  l.values.format.unit = "K";
+  l.values.colourMap = "magma";
+  l.values.styles = {"magma", "cividis"};
+  l.values.rangeFromData = true;
+  l.values.lowPercent = 2;
+  l.values.highPercent = 98;
+  l.values.scaling = values::Scaling::Log;
+  l.values.outOfRange = values::OutOfRange::Transparent;
+  const LayerSpec s = layerSpec(l);
+  ASSERT_TRUE(s.values);
+  EXPECT_FALSE(s.elevation);
+  EXPECT_EQ(s.values->format.container, values::Container::Tiff);
+  EXPECT_EQ(s.values->format.unit, "K");
+  EXPECT_EQ(s.values->defaultStyle, "magma");
+  EXPECT_EQ(s.values->styles, (std::vector<std::string>{"magma", "cividis"}));
+  EXPECT_TRUE(s.values->rangeFromData);
+  EXPECT_EQ(s.values->lowPercent, 2);
+  EXPECT_EQ(s.values->highPercent, 98);
+  EXPECT_EQ(s.values->scaling, values::Scaling::Log);
+  EXPECT_EQ(s.values->outOfRange, values::OutOfRange::Transparent);
+
+  LayerConfig e;
+  e.kind = LayerKind::Elevation;
+  const LayerSpec es = layerSpec(e);
+  ASSERT_TRUE(es.values);
+  EXPECT_EQ(es.values->defaultStyle, "");
+  EXPECT_EQ(es.values->styles.size(), values::colourMaps().size());
+
+  EXPECT_FALSE(layerSpec(LayerConfig{}).values);
+}
+
 TEST(ProxyFromConfig, TheEmbeddedDefaultInOrder) {
   const Config c = embeddedDefault(TELLUS_TEST_DATA_DIR, TELLUS_TEST_TMP_DIR);
   ASSERT_TRUE(validate(c));

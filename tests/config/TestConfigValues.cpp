@@ -101,7 +101,12 @@ TEST(ConfigValues, ElevationLayersAreValueLayersInMetres) {
       parse(layer("image/png", "elevation", "      colour_map: cividis\n      range: [0, 5000]\n"));
   ASSERT_TRUE(styled) << styled.error().toString();
   EXPECT_EQ(styled->layers[0].values.colourMap, "cividis");
-  EXPECT_EQ(styled->layers[0].values.format.container, values::Container::Png);
+  const values::ValueFormat& png = styled->layers[0].values.format;
+  EXPECT_EQ(png.container, values::Container::Png);
+  // tellus's 16-bit PNG heights are height + 32768.
+  EXPECT_EQ(png.encoding, values::Encoding::UInt16);
+  EXPECT_EQ(png.offset, -32768.0);
+  EXPECT_EQ(png.noData, 0.0);
   EXPECT_EQ(styled->layers[0].values.max, 5000.0);
 }
 

@@ -119,4 +119,30 @@ info=$(gdalinfo "$work/picture.tif")
 [ "$(echo "$info" | grep -c '^Band .* Type=Byte')" = 4 ] || fail "imagery as TIFF: not 4 Byte bands: $info"
 echo "$info" | grep -q "ColorInterp=Alpha" || fail "imagery as TIFF with TRANSPARENT: no alpha band: $info"
 
+# A value layer's style (issue 24): the elevation layer coloured by the terrain map (cmocean
+# topo: blues below sea level, land colours above), read by GDAL's WMS driver. The "WMS:" URL
+# syntax drops STYLES, so a service description names it (<Styles>).
+cat >"$work/terrain.xml" <<XML
+<GDAL_WMS>
+  <Service name="WMS"><Version>1.1.1</Version><ServerUrl>$base/wms?</ServerUrl><SRS>EPSG:4326</SRS>
+    <ImageFormat>image/png</ImageFormat><Layers>etopo</Layers><Styles>terrain</Styles></Service>
+  <DataWindow><UpperLeftX>-180</UpperLeftX><UpperLeftY>90</UpperLeftY><LowerRightX>180</LowerRightX>
+    <LowerRightY>-90</LowerRightY><SizeX>1024</SizeX><SizeY>512</SizeY></DataWindow>
+  <BandsCount>3</BandsCount>
+</GDAL_WMS>
+XML
+gdal_translate -q -of GTiff -outsize 360 180 "$work/terrain.xml" "$work/etopo-terrain.tif" \
+  || fail "GDAL could not read the styled GetMap (STYLES=terrain)"
+colour() {
+  # shellcheck disable=SC2086
+  gdallocationinfo -valonly -wgs84 "$work/etopo-terrain.tif" $1 | tr '\n' ' '
+}
+python3 - "$(colour "86.9 28.0")" "$(colour "-150 0")" <<'PY' \
+  || fail "STYLES=terrain: Himalaya '$(colour "86.9 28.0")', Pacific '$(colour "-150 0")'"
+import sys
+land = [int(v) for v in sys.argv[1].split()]
+sea = [int(v) for v in sys.argv[2].split()]
+sys.exit(0 if len(land) >= 3 and len(sea) >= 3 and sea[2] > sea[0] and land[0] > land[2] else 1)
+PY
+
 echo "gdal interop: all checks passed"

@@ -1,10 +1,12 @@
 #!/usr/bin/python3
 """Interoperability: OWSLib (Debian's python3-owslib) reads tellus serve's capabilities in WMS
 1.1.1 and 1.3.0 and fetches tile-aligned maps through its GetMap, as a Python user would; every
-advertised format for every layer, and EXCEPTIONS=BLANK in 8-bit PNG.
+advertised format for every layer, and EXCEPTIONS=BLANK in 8-bit PNG; the elevation layer as a
+value layer: its styles' legends (GetLegendGraphic) and GetFeatureInfo.
 
 Usage: test_owslib.py path/to/tellus
 """
+import json
 import os
 import re
 import shutil
@@ -13,6 +15,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import urllib.request
 
 from owslib.wms import WebMapService
 
@@ -20,6 +23,43 @@ from owslib.wms import WebMapService
 def fail(message):
     print("FAIL: " + message, file=sys.stderr)
     sys.exit(1)
+
+
+def check_value_layer(wms, version):
+    """The elevation layer is a value layer (issue 24): queryable, its colour maps as styles with
+    legends (GetLegendGraphic PNGs), and GetFeatureInfo answers its height in metres."""
+    etopo = wms["etopo"]
+    if not int(etopo.queryable) or wms["bluemarble"].queryable and int(wms["bluemarble"].queryable):
+        fail("%s: queryable etopo %r, bluemarble %r" % (version, etopo.queryable,
+                                                         wms["bluemarble"].queryable))
+    if "terrain" not in etopo.styles or "viridis" not in etopo.styles:
+        fail("%s: etopo styles %s" % (version, sorted(etopo.styles)))
+    legend = etopo.styles["terrain"].get("legend")
+    if not legend or "GetLegendGraphic" not in legend:
+        fail("%s: terrain's legend URL %r" % (version, legend))
+    body = urllib.request.urlopen(legend, timeout=10).read()
+    if body[:8] != b"\x89PNG\r\n\x1a\n" or struct.unpack(">II", body[16:24]) != (256, 56):
+        fail("%s: the legend is no 256x56 PNG: %r" % (version, body[:100]))
+    if "application/json" not in wms.getOperationByName("GetFeatureInfo").formatOptions:
+        fail("%s: GetFeatureInfo formats" % version)
+    # The Himalaya (86.9 E, 28 N) and the Pacific (150 W, 0) in maps of 1 pixel per degree.
+    heights = []
+    for bbox, xy in (((60, 10, 100, 40), (26, 12)), ((-170, -20, -130, 10), (20, 10))):
+        answer = wms.getfeatureinfo(layers=["etopo"], styles=[""], srs="EPSG:4326", bbox=bbox,
+                                    size=(40, 30), format="image/png", query_layers=["etopo"],
+                                    info_format="application/json", xy=xy).read()
+        feature = json.loads(answer)["features"][0]
+        if feature["properties"]["unit"] != "m":
+            fail("%s: GetFeatureInfo unit %r" % (version, feature))
+        heights.append(feature["properties"]["value"])
+    if not (heights[0] > 2000 and heights[1] < -3000):
+        fail("%s: GetFeatureInfo heights, Himalaya and Pacific: %s" % (version, heights))
+    text = wms.getfeatureinfo(layers=["etopo"], styles=[""], srs="EPSG:4326",
+                              bbox=(60, 10, 100, 40), size=(40, 30), format="image/png",
+                              query_layers=["etopo"], info_format="text/plain",
+                              xy=(26, 12)).read().decode()
+    if "Layer 'etopo'" not in text or " m\n" not in text:
+        fail("%s: GetFeatureInfo text/plain: %r" % (version, text))
 
 
 def main():
@@ -111,6 +151,7 @@ def main():
                               transparent=True, exceptions=blank).read()
             if body[:8] != b"\x89PNG\r\n\x1a\n" or body[25] != 3:
                 fail("%s: BLANK in image/png; mode=8bit: %r" % (version, body[:300]))
+            check_value_layer(wms, version)
         cached = [os.path.join(root, f) for root, _, files in os.walk(cache) for f in files
                   if f == "2_5.jpg"]
         if not cached or open(cached[0], "rb").read() != tile:

@@ -244,6 +244,11 @@ TEST(TileValidation, Bil16MustHaveExactlyTwoBytesPerSample) {
   ASSERT_FALSE(shorter);
   EXPECT_NE(shorter.error().find("45000"), std::string::npos) << shorter.error();
   EXPECT_FALSE(validateTile(response(good, "image/png"), "application/bil16", 150, 150));
+  // A first sample of 60 ('<' then 0) is no markup when it comes as BIL (issue 24).
+  std::vector<std::byte> lt(150 * 150 * 2, std::byte{0});
+  lt[0] = std::byte{'<'};
+  EXPECT_TRUE(valid(response(lt, "application/bil16"), "application/bil16", 150, 150));
+  EXPECT_FALSE(valid(response(lt, "text/xml"), "application/bil16", 150, 150));
   EXPECT_FALSE(validateTile(
       response(bytes(kServiceException), "application/bil16"), "application/bil16", 150, 150));
 }

@@ -182,11 +182,13 @@ TEST(Wms, UpdateSequenceComparesNumbersInAnySpelling) {
 TEST(Wms, RequestMissingOrUnsupported) {
   expectError("SERVICE=WMS&VERSION=1.3.0", ogc::kMissingParameterValue, "REQUEST");
   expectError("SERVICE=WMS&REQUEST=", ogc::kMissingParameterValue, "REQUEST");
+  // Served since issue 24 (value layers): their own parameters are checked.
   expectError(
-      "SERVICE=WMS&VERSION=1.3.0&REQUEST=GetFeatureInfo", ogc::kOperationNotSupported, "REQUEST");
+      "SERVICE=WMS&VERSION=1.3.0&REQUEST=GetFeatureInfo", ogc::kMissingParameterValue, "LAYERS");
   expectError("SERVICE=WMS&VERSION=1.1.1&REQUEST=GetLegendGraphic&LAYER=bmng",
-              ogc::kOperationNotSupported,
-              "REQUEST");
+              ogc::kMissingParameterValue,
+              "FORMAT");
+  expectError("SERVICE=WMS&REQUEST=GetStyles", ogc::kOperationNotSupported, "REQUEST");
   expectError("SERVICE=WMS&REQUEST=DescribeLayer", ogc::kOperationNotSupported, "REQUEST");
   expectError("SERVICE=WMS&REQUEST=Frobnicate", ogc::kOperationNotSupported, "REQUEST");
 }

@@ -436,18 +436,22 @@ TEST(WmsConformanceIntegration, GetCapabilitiesParameterTable) {
 }
 
 // What tellus answers for the operations it does not serve (its capabilities list none of them).
+// GetFeatureInfo and GetLegendGraphic are served for value layers (TestWmsValues.cpp); on an
+// imagery layer they are LayerNotQueryable and InvalidParameterValue (below).
 TEST(WmsConformanceIntegration, UnservedOperationsAreOperationNotSupported) {
   for (const bool statusCodes : {false, true}) {
     Server s({sat()}, statusCodes);
     for (const WmsVersion v : {WmsVersion::V111, WmsVersion::V130}) {
       const std::string version(toString(v));
+      const auto info = s.get("REQUEST=GetFeatureInfo&VERSION=" + version + "&" +
+                              join(without(getMap(v), "REQUEST")) +
+                              "&QUERY_LAYERS=sat&INFO_FORMAT=text/plain&I=1&J=1&X=1&Y=1");
+      EXPECT_EQ(checkException(info, v, ogc::kLayerNotQueryable, statusCodes), "");
+      const auto legend = s.get("SERVICE=WMS&REQUEST=GetLegendGraphic&VERSION=" + version +
+                                "&LAYER=sat&FORMAT=image/png");
+      EXPECT_EQ(checkException(legend, v, ogc::kInvalidParameterValue, statusCodes), "");
       for (const std::string& q :
-           {"REQUEST=GetFeatureInfo&VERSION=" + version + "&" +
-                join(without(getMap(v), "REQUEST")) +
-                "&QUERY_LAYERS=sat&INFO_FORMAT=text/plain&I=1&J=1&X=1&Y=1",
-            "SERVICE=WMS&REQUEST=GetLegendGraphic&VERSION=" + version +
-                "&LAYER=sat&FORMAT=image/png",
-            "SERVICE=WMS&REQUEST=DescribeLayer&VERSION=" + version + "&LAYERS=sat",
+           {"SERVICE=WMS&REQUEST=DescribeLayer&VERSION=" + version + "&LAYERS=sat",
             "SERVICE=WMS&REQUEST=GetStyles&VERSION=" + version + "&LAYERS=sat",
             "SERVICE=WMS&REQUEST=Frobnicate&VERSION=" + version}) {
         SCOPED_TRACE(q);

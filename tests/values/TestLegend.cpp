@@ -115,6 +115,22 @@ TEST(Legend, VerticalBarRunsUpAndUpscales) {
   EXPECT_EQ(pixel(*im, 30, 300), pixel(*im, 32, 302));
 }
 
+TEST(Legend, WithoutLabelsOnlyTheTitleAndBar) {
+  const ColourScale s{findColourMap("viridis"), 0, 1, Scaling::Linear, OutOfRange::Clamp};
+  auto with = renderLegend(s, "", "");
+  auto without = renderLegend(s, "", "", LegendOptions{.labels = false});
+  ASSERT_TRUE(with && without);
+  auto darkBelowBar = [](const codec::Image& im) {
+    int n = 0;
+    for (int y = 40; y < im.height; ++y)
+      for (int x = 0; x < im.width; ++x)
+        n += pixel(im, x, y)[0] == 0;
+    return n;
+  };
+  EXPECT_GT(darkBelowBar(*with), 20);
+  EXPECT_EQ(darkBelowBar(*without), 0);
+}
+
 TEST(LegendExtremes, BadSizesAndScalesAreRefused) {
   const ColourScale s{findColourMap("viridis"), 0, 1, Scaling::Linear, OutOfRange::Clamp};
   EXPECT_FALSE(renderLegend(s, "", "", LegendOptions{.width = 8}));

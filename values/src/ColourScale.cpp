@@ -25,7 +25,7 @@ std::expected<void, std::string> checkScale(const ColourScale& scale) {
 
 double scalePosition(const ColourScale& scale, float v) noexcept {
   if (std::isnan(v)) return std::numeric_limits<double>::quiet_NaN();
-  const double value = v;
+  const double value = static_cast<double>(v);
   if (scale.scaling == Scaling::Log && value <= 0.0) return -kInf;
   if (std::isinf(value)) return value;
   if (scale.min == scale.max) return value < scale.min ? -kInf : value > scale.max ? kInf : 0.5;

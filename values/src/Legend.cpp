@@ -175,7 +175,7 @@ std::expected<codec::Image, std::string> renderLegend(const ColourScale& scale,
     return std::unexpected("the legend of " + std::to_string(w) + " x " + std::to_string(h) +
                            " pixels has no room for its bar");
   drawBar(image, bar, scale, options.foreground);
-  drawTicks(image, bar, scale, options.foreground);
+  if (options.labels) drawTicks(image, bar, scale, options.foreground);
   return upscale(image, f);
 }
 

@@ -33,8 +33,10 @@ float sample(const ValueRaster& raster, double x, double y) noexcept {
   const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
   const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
   const double ax = fx - x0, ay = fy - y0;
-  const std::array<double, 4> v{
-      raster.at(x0, y0), raster.at(x1, y0), raster.at(x0, y1), raster.at(x1, y1)};
+  const std::array<double, 4> v{static_cast<double>(raster.at(x0, y0)),
+                                static_cast<double>(raster.at(x1, y0)),
+                                static_cast<double>(raster.at(x0, y1)),
+                                static_cast<double>(raster.at(x1, y1))};
   if (std::any_of(v.begin(), v.end(), [](double s) { return std::isnan(s); }))
     return raster.at(nx, ny);
   const double top = v[0] * (1.0 - ax) + v[1] * ax;

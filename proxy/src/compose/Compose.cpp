@@ -1148,6 +1148,63 @@ ComposeStats composeHeights(const TileGrid& grid,
       });
 }
 
+namespace {
+
+/** Bilinear value of a quad of value tiles; the largest weight's texel where one is NaN. */
+float sampleValue(const Quad& q) noexcept {
+  double v[4];
+  bool any = false;
+  for (int k = 0; k < 4; ++k) {
+    v[k] = static_cast<double>(q.t[k]->values[q.index[k]]);
+    any = any || std::isnan(v[k]);
+  }
+  if (any) {
+    const double w[4] = {
+        (1 - q.fx) * (1 - q.fy), q.fx * (1 - q.fy), (1 - q.fx) * q.fy, q.fx * q.fy};
+    int best = 0;
+    for (int k = 1; k < 4; ++k)
+      if (w[k] > w[best]) best = k;
+    return static_cast<float>(v[best]);
+  }
+  const double top = v[0] * (1.0 - q.fx) + v[1] * q.fx;
+  const double bottom = v[2] * (1.0 - q.fx) + v[3] * q.fx;
+  return static_cast<float>(top * (1.0 - q.fy) + bottom * q.fy);
+}
+
+} // namespace
+
+ComposeStats composeValues(const TileGrid& grid,
+                           const Sector& box,
+                           std::int32_t width,
+                           std::int32_t height,
+                           std::int32_t level,
+                           std::int32_t firstLevel,
+                           const TileLookup& tiles,
+                           std::vector<float>& values) {
+  values.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height),
+                std::numeric_limits<float>::quiet_NaN());
+  return forEachPixel(
+      grid, box, width, height, level, firstLevel, tiles, [&](std::size_t pixel, const Quad& q) {
+        const float v = sampleValue(q);
+        if (!std::isnan(v)) values[pixel] = v;
+      });
+}
+
+void drawValuesAsColours(const std::vector<float>& values,
+                         const values::ColourScale& scale,
+                         double opacity,
+                         std::vector<std::uint8_t>& canvas,
+                         std::int32_t canvasChannels) {
+  const double alpha = std::clamp(opacity, 0.0, 1.0);
+  const auto channels = static_cast<std::size_t>(canvasChannels);
+  for (std::size_t p = 0; p < values.size() && (p + 1) * channels <= canvas.size(); ++p) {
+    values::Rgba8 c = values::colourOf(scale, values[p]);
+    if (c[3] == 0) continue;
+    c[3] = static_cast<std::uint8_t>(std::lround(alpha * 255.0));
+    over(c.data(), &canvas[p * channels], canvasChannels);
+  }
+}
+
 std::uint8_t heightToGrey(std::int16_t raw) noexcept {
   const std::int32_t span = kGreyRampHigh - kGreyRampLow;
   const std::int32_t v = std::clamp<std::int32_t>(raw, kGreyRampLow, kGreyRampHigh) - kGreyRampLow;

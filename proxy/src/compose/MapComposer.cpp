@@ -58,8 +58,8 @@ MapComposer::compose(ComposeRequest request,
   job->done = std::move(done);
   const ComposeRequest& r = job->request;
   job->ycc = r.format == MapFormat::Jpeg && r.layers.size() == 1 &&
-             !r.layers.front().layer->elevation && r.layers.front().opacity >= 1.0 - 1.0 / 512 &&
-             !yccDisabled_;
+             !r.layers.front().layer->elevation && r.layers.front().colourMap == nullptr &&
+             r.layers.front().opacity >= 1.0 - 1.0 / 512 && !yccDisabled_;
   std::size_t total = 0;
   for (const ComposeLayer& cl : r.layers) {
     Job::Layer l;

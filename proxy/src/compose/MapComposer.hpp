@@ -23,6 +23,9 @@ struct ComposeLayer {
   const LayerSpec* layer = nullptr;
   std::string time; ///< validated ("" = none)
   double opacity = 1.0;
+  /** A value layer drawn coloured (its WMS style): values decoded, sampled and coloured by the
+   * layer's scale (ValueLayer.hpp); nullptr = drawn as before (imagery, heights). */
+  const values::ColourMap* colourMap = nullptr;
 };
 
 struct ComposeRequest {

@@ -22,6 +22,7 @@ struct DecodedTile {
   std::array<TileSamples, 3> planes{};
   std::vector<std::uint8_t> rgb;
   std::vector<std::int16_t> heights;
+  std::vector<float> values; ///< a value layer's tile drawn coloured (NaN = no data)
   DecodedTile() = default;
   DecodedTile(const DecodedTile&) = delete;
   DecodedTile& operator=(const DecodedTile&) = delete;

@@ -12,10 +12,12 @@
 #include <tellus/codec/Png.hpp>
 #include <tellus/codec/Quantize.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
+#include <tellus/values/ValueFormat.hpp>
 
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -154,6 +156,7 @@ private:
     for (const auto& l : job_.layers) {
       validators_ +=
           "|" + l.spec.layer->name + "@" + l.spec.time + "#" + std::to_string(l.spec.opacity);
+      if (l.spec.colourMap) validators_ += "~" + std::string(l.spec.colourMap->name);
       map_.maxAgeSeconds = std::min<std::int64_t>(map_.maxAgeSeconds, l.spec.layer->maxAge.count());
       for (const TileAnswer& a : l.answers)
         summarise(*l.spec.layer, a);
@@ -321,8 +324,9 @@ private:
     const LayerSpec& spec = *l.spec.layer;
     const GridSpec& g = l.grid->spec();
     // Decoded tiles are kept (whole) in an LRU by their ETag, which names their bytes.
-    const std::string cacheKey =
-        spec.name + '\n' + l.spec.time + '\n' + a.etag + (ycc ? "\nycc" : "");
+    const bool valued = l.spec.colourMap != nullptr && spec.values.has_value();
+    const std::string cacheKey = spec.name + '\n' + l.spec.time + '\n' + a.etag +
+                                 (ycc ? "\nycc" : "") + (valued ? "\nvalues" : "");
     bool keep = false;
     if (cache_ && !a.etag.empty()) {
       if (auto hit = cache_->get(cacheKey)) return hit;
@@ -331,9 +335,10 @@ private:
       const auto texels =
           static_cast<std::size_t>(g.tileWidth) * static_cast<std::size_t>(g.tileHeight);
       keep = cache_->admits(cacheKey,
-                            spec.elevation ? texels * 2
-                            : ycc          ? texels * 3 / 2
-                                           : texels * 3);
+                            valued           ? texels * 4
+                            : spec.elevation ? texels * 2
+                            : ycc            ? texels * 3 / 2
+                                             : texels * 3);
       if (keep) region = nullptr;
     }
     const std::string_view type =
@@ -346,13 +351,17 @@ private:
     if (!bytes) return nullptr;
     ++map_.decodedTiles;
     auto d = std::make_shared<DecodedTile>();
-    const bool ok = spec.elevation ? decodeHeightsInto(*d, *bytes, spec, g)
-                    : ycc          ? decodePlanesInto(*d, *bytes, g, region, keep, notYcc)
-                                   : decodeRgbInto(*d, *bytes, type, g, region, keep);
+    const bool ok = valued           ? decodeValuesInto(*d, *bytes, *spec.values, g)
+                    : spec.elevation ? decodeHeightsInto(*d, *bytes, spec, g)
+                    : ycc            ? decodePlanesInto(*d, *bytes, g, region, keep, notYcc)
+                                     : decodeRgbInto(*d, *bytes, type, g, region, keep);
     if (!ok) return nullptr;
     // Counted by what they hold (storage of their own size, not a reused larger buffer).
     if (keep)
-      cache_->put(cacheKey, d, d->rgb.capacity() + d->heights.capacity() * sizeof(std::int16_t));
+      cache_->put(cacheKey,
+                  d,
+                  d->rgb.capacity() + d->heights.capacity() * sizeof(std::int16_t) +
+                      d->values.capacity() * sizeof(float));
     return d;
   }
 
@@ -364,6 +373,18 @@ private:
     if (!h) return false;
     d.heights = std::move(*h);
     d.view = TileSamples{g.tileWidth, g.tileHeight, 1, nullptr, d.heights.data()};
+    return true;
+  }
+
+  /** A value layer's tile as values (tellus::values; the whole tile: values are few). */
+  static bool decodeValuesInto(DecodedTile& d,
+                               std::span<const std::byte> bytes,
+                               const ValueLayerSpec& spec,
+                               const GridSpec& g) {
+    auto v = values::decode(bytes, spec.format, g.tileWidth, g.tileHeight);
+    if (!v) return false;
+    d.values = std::move(v->values);
+    d.view = TileSamples{g.tileWidth, g.tileHeight, 1, nullptr, nullptr, d.values.data()};
     return true;
   }
 
@@ -451,7 +472,9 @@ private:
     };
     // Every level of the grid is served (firstLevel is an upstream offset): first level 0.
     const TileGrid& grid = *l.grid;
-    if (spec.elevation && r_.heights) {
+    if (l.spec.colourMap && spec.values) {
+      drawValueLayer(l, lookup);
+    } else if (spec.elevation && r_.heights) {
       count(composeHeights(
           grid, r_.bbox, r_.width, r_.height, l.level, 0, lookup, spec.noData, heights_));
     } else if (spec.elevation) { // heights in a picture: grey over the canvas
@@ -468,6 +491,22 @@ private:
       count(composeImagery(
           grid, r_.bbox, r_.width, r_.height, l.level, 0, lookup, l.spec.opacity, canvas_, cc_));
     }
+  }
+
+  /** A value layer coloured by its style: values sampled per pixel, then coloured (the range
+   * from this map's values when the layer says so); in a heights map, the colours' luminance. */
+  void drawValueLayer(const Layer& l, const TileLookup& lookup) {
+    const ValueLayerSpec& spec = *l.spec.layer->values;
+    layerValues_.assign(pixels_, std::numeric_limits<float>::quiet_NaN());
+    count(composeValues(*l.grid, r_.bbox, r_.width, r_.height, l.level, 0, lookup, layerValues_));
+    const values::ColourScale scale = spec.scale(*l.spec.colourMap, layerValues_);
+    if (r_.heights) {
+      layerPicture_.assign(pixels_ * 4, 0);
+      drawValuesAsColours(layerValues_, scale, 1.0, layerPicture_, 4);
+      drawLuminanceAsHeights(layerPicture_, heights_);
+      return;
+    }
+    drawValuesAsColours(layerValues_, scale, l.spec.opacity, canvas_, cc_);
   }
 
   void count(const ComposeStats& s) {
@@ -526,6 +565,7 @@ private:
   // ComposeRequest::layers).
   std::vector<std::int16_t> layerHeights_;
   std::vector<std::uint8_t> layerPicture_;
+  std::vector<float> layerValues_;
   std::size_t missing_ = 0; ///< pixels no tile covers
 };
 

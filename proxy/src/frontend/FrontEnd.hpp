@@ -7,6 +7,7 @@
 
 #include "compose/MapComposer.hpp"
 
+#include <tellus/proxy/Capabilities.hpp>
 #include <tellus/proxy/FetchBudget.hpp>
 #include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/Metrics.hpp>
@@ -138,6 +139,23 @@ private:
                  const OgcException& e,
                  const Responder& respond,
                  std::optional<FrontEnd::Temporary> temporaryFailure) const;
+  /** The colour map of a layer's STYLES entry: nullptr for a layer drawn as before (imagery,
+   * an elevation layer's default), the map for a value layer's default or named style; an
+   * exception (StyleNotDefined) for a style the layer does not offer. */
+  std::expected<const values::ColourMap*, OgcException> styleOf(const LayerSpec& l,
+                                                                std::string_view style) const;
+  /** The capabilities' styles of a layer: its upstream style, or a value layer's colour maps,
+   * each with the LegendURL of its GetLegendGraphic (WmsValues.cpp). */
+  void describeStyles(const LayerSpec& l, const std::string& base, CapabilitiesLayer& c) const;
+  /** GetLegendGraphic: the PNG legend of a value layer's style (WmsValues.cpp). */
+  void legend(const GetLegendGraphicRequest& g,
+              const WmsErrorContext& ctx,
+              const Responder& respond) const;
+  /** GetFeatureInfo: the value of each queried value layer at the pixel (WmsValues.cpp). */
+  void featureInfo(const HttpRequest& req,
+                   const GetFeatureInfoRequest& f,
+                   const WmsErrorContext& ctx,
+                   const Responder& respond);
   /** A GetMap where there is no tile: the empty map in the request's format. */
   void emptyImage(const GetMapRequest& m,
                   const MapKind& kind,

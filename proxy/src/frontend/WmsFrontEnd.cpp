@@ -26,6 +26,10 @@ void WmsFrontEnd::handle(const HttpRequest& req, const Responder& respond) {
   if (!parsed) return exception(ctx, parsed.error(), respond);
   if (const auto* caps = std::get_if<GetCapabilitiesRequest>(&*parsed))
     return capabilities(req, *caps, ctx, respond);
+  if (const auto* g = std::get_if<GetLegendGraphicRequest>(&*parsed))
+    return legend(*g, ctx, respond);
+  if (const auto* f = std::get_if<GetFeatureInfoRequest>(&*parsed))
+    return featureInfo(req, *f, ctx, respond);
   getMap(req, std::move(std::get<GetMapRequest>(*parsed)), ctx, respond);
 }
 
@@ -72,6 +76,15 @@ CapabilitiesModel WmsFrontEnd::capabilitiesModel(const HttpRequest& req) const {
        {MapFormat::Jpeg, MapFormat::Png, MapFormat::Png8, MapFormat::Bil16, MapFormat::Tiff})
     add(std::string(toString(f)));
   m.getMapFormats = formats;
+  // GetFeatureInfo is offered when a layer is queryable (a value or elevation layer).
+  const auto& all = fe_.tiles.layers();
+  if (std::any_of(all.begin(), all.end(), [](const LayerSpec& l) { return l.values.has_value(); }))
+    for (const InfoFormat f : {InfoFormat::Text,
+                               InfoFormat::Html,
+                               InfoFormat::Json,
+                               InfoFormat::Gml,
+                               InfoFormat::GmlXml})
+      m.getFeatureInfoFormats.emplace_back(toString(f));
   m.updateSequence = fe_.updateSequence;
   m.lastUpdate = fe_.lastUpdate;
   m.maxWidth = fe_.options.limits.maxWidth;
@@ -82,7 +95,8 @@ CapabilitiesModel WmsFrontEnd::capabilitiesModel(const HttpRequest& req) const {
     c.title = l.title.empty() ? l.name : l.title;
     c.abstract = l.abstract;
     c.bbox = l.dataset.grid.sector;
-    if (!l.dataset.style.empty()) c.styles.push_back(l.dataset.style);
+    describeStyles(l, m.onlineResource, c);
+    c.queryable = l.values.has_value();
     c.timeValues = l.timeValues;
     c.timePeriod = l.timePeriod;
     c.timeDefault = l.timeDefault;
@@ -123,7 +137,12 @@ void WmsFrontEnd::getMap(const HttpRequest& req,
   // map is (mapIsHeights), and each layer is drawn as that (MapComposer).
   auto layers = mapLayers(m, ctx, respond);
   if (!layers) return;
-  const MapKind kind = mapKind(m.mapFormat, m.layers);
+  MapKind kind = mapKind(m.mapFormat, m.layers);
+  // A layer drawn with a colour map is a picture: the map is heights only when no layer is.
+  if (std::any_of(layers->begin(), layers->end(), [](const ComposeLayer& l) {
+        return l.colourMap != nullptr;
+      }))
+    kind.heights = false;
   if (sendOneTile(req, m, *layers, kind, ctx, respond)) return;
   // Any other box, size, format or several layers: composed from the tiles.
   if (static_cast<std::int64_t>(m.width) * m.height > fe_.options.maxMapPixels) {
@@ -150,12 +169,9 @@ std::optional<std::vector<ComposeLayer>> WmsFrontEnd::mapLayers(const GetMapRequ
                 respond);
       return std::nullopt;
     }
-    const std::string& style = m.styles[k];
-    if (!style.empty() && style != "default" && style != l->dataset.style) {
-      exception(
-          ctx,
-          OgcException{std::string(ogc::kStyleNotDefined), "STYLES", "no style '" + style + "'"},
-          respond);
+    const auto colourMap = styleOf(*l, m.styles[k]);
+    if (!colourMap) {
+      exception(ctx, colourMap.error(), respond);
       return std::nullopt;
     }
     auto time = FrontEnd::resolveTime(*l, m.time);
@@ -163,8 +179,8 @@ std::optional<std::vector<ComposeLayer>> WmsFrontEnd::mapLayers(const GetMapRequ
       exception(ctx, time.error(), respond);
       return std::nullopt;
     }
-    layers.push_back(
-        ComposeLayer{l, std::move(*time), m.opacities.empty() ? l->opacity : m.opacities[k]});
+    layers.push_back(ComposeLayer{
+        l, std::move(*time), m.opacities.empty() ? l->opacity : m.opacities[k], *colourMap});
   }
   return layers;
 }
@@ -178,7 +194,8 @@ bool WmsFrontEnd::sendOneTile(const HttpRequest& req,
   // One layer, its own format (as what it is: heights as heights), exactly one tile: the cached
   // file itself (the fast path).
   const LayerSpec* l = layers.front().layer;
-  if (layers.size() != 1 || m.format != l->dataset.mimeType || kind.heights != l->elevation ||
+  if (layers.size() != 1 || layers.front().colourMap != nullptr ||
+      m.format != l->dataset.mimeType || kind.heights != l->elevation ||
       !(m.opacities.empty() || m.opacities.front() >= 1.0))
     return false;
   const TileGrid* g = fe_.tiles.grid(l->name);

@@ -129,6 +129,13 @@ void writeRequest(XmlWriter& w,
     w.element(4, "Format", f);
   writeDcpType(w, 4, m.onlineResource, declareXlink);
   w.line(3, "</GetMap>");
+  if (!m.getFeatureInfoFormats.empty()) {
+    w.line(3, "<GetFeatureInfo>");
+    for (const std::string& f : m.getFeatureInfoFormats)
+      w.element(4, "Format", f);
+    writeDcpType(w, 4, m.onlineResource, declareXlink);
+    w.line(3, "</GetFeatureInfo>");
+  }
   w.line(2, "</Request>");
 }
 
@@ -146,18 +153,32 @@ void writeLayerKeywords(XmlWriter& w, int depth, const CapabilitiesLayer& layer)
   w.line(depth, "</KeywordList>");
 }
 
-void writeStyles(XmlWriter& w, int depth, const CapabilitiesLayer& layer) {
+void writeStyles(XmlWriter& w, int depth, const CapabilitiesLayer& layer, bool declareXlink) {
   for (const std::string& s : layer.styles) {
     w.line(depth, "<Style>");
     w.element(depth + 1, "Name", s);
     w.element(depth + 1, "Title", s);
     w.line(depth, "</Style>");
   }
+  for (const CapabilitiesStyle& s : layer.legendStyles) {
+    w.line(depth, "<Style>");
+    w.element(depth + 1, "Name", s.name);
+    w.element(depth + 1, "Title", s.title);
+    if (!s.legendUrl.empty()) {
+      w.line(depth + 1,
+             "<LegendURL" + attr("width", std::to_string(s.legendWidth)) +
+                 attr("height", std::to_string(s.legendHeight)) + ">");
+      w.element(depth + 2, "Format", "image/png");
+      w.line(depth + 2, onlineResource(s.legendUrl, declareXlink));
+      w.line(depth + 1, "</LegendURL>");
+    }
+    w.line(depth, "</Style>");
+  }
 }
 
 std::string layerOpen(const CapabilitiesLayer& layer) {
-  return std::string("<Layer") + attr("queryable", "0") + attr("opaque", layer.opaque ? "1" : "0") +
-         ">";
+  return std::string("<Layer") + attr("queryable", layer.queryable ? "1" : "0") +
+         attr("opaque", layer.opaque ? "1" : "0") + ">";
 }
 
 // ---- 1.1.1 -----------------------------------------------------------------------------------
@@ -208,7 +229,7 @@ std::string capabilities111(const CapabilitiesModel& m) {
       extent += ">" + xmlEscape(timeExtent(layer)) + "</Extent>";
       w.line(4, extent);
     }
-    writeStyles(w, 4, layer);
+    writeStyles(w, 4, layer, true);
     w.line(3, "</Layer>");
   }
   w.line(2, "</Layer>");
@@ -274,7 +295,7 @@ std::string capabilities130(const CapabilitiesModel& m) {
       dim += ">" + xmlEscape(timeExtent(layer)) + "</Dimension>";
       w.line(4, dim);
     }
-    writeStyles(w, 4, layer);
+    writeStyles(w, 4, layer, false);
     w.line(3, "</Layer>");
   }
   w.line(2, "</Layer>");

@@ -643,8 +643,10 @@ std::expected<WmsRequest, OgcException> parseWms(const QueryParams& params,
     return parseGetCapabilities(params);
   }
   if (isGetMapName(*request)) return parseGetMap(params, limits);
-  for (const std::string_view known :
-       {"GetFeatureInfo", "GetLegendGraphic", "DescribeLayer", "GetStyles", "PutStyles"}) {
+  if (iequals(*request, "GetFeatureInfo") || iequals(*request, "feature_info"))
+    return parseGetFeatureInfo(params, limits);
+  if (iequals(*request, "GetLegendGraphic")) return parseGetLegendGraphic(params);
+  for (const std::string_view known : {"DescribeLayer", "GetStyles", "PutStyles"}) {
     if (iequals(*request, known)) {
       return fail(ogc::kOperationNotSupported,
                   "REQUEST",

@@ -439,10 +439,16 @@ std::expected<ImageKind, std::string> validateImageResponse(const FetchResponse&
   if (body.empty()) return std::unexpected(std::string("empty body"));
 
   const ImageKind kind = sniff(body);
+  // BIL has no magic number: a tile whose first sample's low byte is '<' (a height of 60 m)
+  // sniffs as markup. Sent as BIL where BIL is expected and holding no service exception, it is
+  // taken as the samples it says it is.
+  const bool bilAsBil = isBilType(canonicalImageType(mediaType(expectedMime))) &&
+                        isBilType(canonicalImageType(mediaType(response.contentType)));
   if (kind == ImageKind::Xml || kind == ImageKind::Html) {
     const std::string text = serviceExceptionText(body);
     if (!text.empty()) return std::unexpected("upstream ServiceException: " + text);
-    return std::unexpected(std::string("upstream sent ") + toString(kind) + " instead of a tile");
+    if (!bilAsBil)
+      return std::unexpected(std::string("upstream sent ") + toString(kind) + " instead of a tile");
   }
 
   const std::string got = canonicalImageType(mediaType(response.contentType));

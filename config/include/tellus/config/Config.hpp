@@ -259,7 +259,8 @@ struct ElevationSettings {
 
 /** YAML `layers[].values`: what a value layer's samples mean and how they are coloured (the
  * values module: tellus/values/). For kind: values every key applies; for an elevation layer
- * only the colouring keys do, and `format` is filled from its `elevation` block (unit "m").
+ * only the colouring keys do, and `format` is filled from its `elevation` block (unit "m"; a
+ * png16 layer as UInt16 samples of height + 32768, tellus's 16-bit PNG height convention).
  * The colour map named by `colourMap` is the layer's default WMS style; `styles` are the maps it
  * offers (the default among them). */
 struct ValueSettings {

@@ -16,6 +16,17 @@
 
 namespace tellus {
 
+/** A style with its legend (LegendURL: a GetLegendGraphic URL, width x height pixels). */
+struct CapabilitiesStyle {
+  std::string name;
+  std::string title;
+  std::string legendUrl; ///< omitted when empty
+  std::int32_t legendWidth = 0;
+  std::int32_t legendHeight = 0;
+
+  friend bool operator==(const CapabilitiesStyle&, const CapabilitiesStyle&) = default;
+};
+
 /** One named layer. */
 struct CapabilitiesLayer {
   std::string name;
@@ -23,6 +34,9 @@ struct CapabilitiesLayer {
   std::string abstract;            ///< omitted when empty
   Sector bbox{};                   ///< lon/lat (west, south, east, north)
   std::vector<std::string> styles; ///< style names; none means only the default style
+  /** Styles with a title and a legend (value layers' colour maps), written after `styles`. */
+  std::vector<CapabilitiesStyle> legendStyles;
+  bool queryable = false; ///< queryable="1": GetFeatureInfo answers for it
   /** TIME dimension: explicit values and/or a period "start/end/resolution", written comma-joined
    * (values first). No Dimension is written when both are empty. */
   std::vector<std::string> timeValues;
@@ -42,6 +56,8 @@ struct CapabilitiesModel {
   std::string abstract;       ///< omitted when empty
   std::string onlineResource; ///< base URL as clients reach it, e.g. "http://host:port/wms?"
   std::vector<std::string> getMapFormats;
+  /** GetFeatureInfo's INFO_FORMATs; the operation is declared only when there are some. */
+  std::vector<std::string> getFeatureInfoFormats;
   std::string updateSequence; ///< root updateSequence attribute, omitted when empty
   /** ISO 8601 UTC (e.g. 2026-11-23T00:00:00Z); written as the Service keyword
    * "LastUpdate=<value>", omitted when empty. */

@@ -24,6 +24,7 @@
 
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/cache/TileKey.hpp>
+#include <tellus/values/ColourScale.hpp>
 
 #include <array>
 #include <cstddef>
@@ -97,6 +98,7 @@ struct TileSamples {
   std::int32_t channels = 0;         ///< imagery 3 (RGB) or 4 (RGBA); heights 1
   const std::uint8_t* rgb = nullptr; ///< imagery
   const std::int16_t* heights = nullptr;
+  const float* values = nullptr; ///< value layers decoded by tellus::values (NaN = no data)
 };
 
 /** The decoded tiles at hand: nullptr for a tile that is not there (any level). */
@@ -154,6 +156,27 @@ ComposeStats composeHeights(const TileGrid& grid,
                             const TileLookup& tiles,
                             std::int16_t noData,
                             std::vector<std::int16_t>& heights);
+
+/** Draws one value layer into `values` (width * height floats, NaN = no data): bilinear between
+ * texel centres in double; where one of the four texels is NaN, the texel of the largest weight
+ * (NaN when that one is), the rule of values::sample. Pixels with a value replace what is there. */
+ComposeStats composeValues(const TileGrid& grid,
+                           const Sector& box,
+                           std::int32_t width,
+                           std::int32_t height,
+                           std::int32_t level,
+                           std::int32_t firstLevel,
+                           const TileLookup& tiles,
+                           std::vector<float>& values);
+
+/** Draws `values` (one layer composed with composeValues) over `canvas` coloured by `scale`
+ * (values::colourOf: the exact index rule, no data and transparent out-of-range left as they
+ * are), each pixel "over" with `opacity` as composeImagery draws a layer. */
+void drawValuesAsColours(const std::vector<float>& values,
+                         const values::ColourScale& scale,
+                         double opacity,
+                         std::vector<std::uint8_t>& canvas,
+                         std::int32_t canvasChannels);
 
 /**
  * Heights as a picture (a heights layer in a JPEG or 8-bit PNG map): one fixed, linear grey ramp

@@ -15,6 +15,7 @@
 #include <tellus/proxy/FetchBudget.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/Metrics.hpp>
+#include <tellus/proxy/ValueLayer.hpp>
 
 #include <chrono>
 #include <cstdint>
@@ -62,6 +63,8 @@ struct LayerSpec {
   std::vector<std::string> timeValues; ///< empty: no TIME dimension (or a period, see timePeriod)
   std::string timePeriod;
   std::string timeDefault;
+  /** Value and elevation layers: samples, colour-map styles, queryable (ValueLayer.hpp). */
+  std::optional<ValueLayerSpec> values;
 };
 
 /** Where an answer came from (the X-Cache header). */

@@ -123,7 +123,55 @@ struct GetMapRequest {
   friend bool operator==(const GetMapRequest&, const GetMapRequest&) = default;
 };
 
-using WmsRequest = std::variant<GetCapabilitiesRequest, GetMapRequest>;
+/** GetLegendGraphic (the SLD 1.1 profile of WMS, as MapServer and GeoServer serve it):
+ * SERVICE=WMS, REQUEST=GetLegendGraphic, LAYER, FORMAT (image/png), optional STYLE, WIDTH,
+ * HEIGHT, SLD_VERSION (1.1.0) and VERSION. */
+struct GetLegendGraphicRequest {
+  WmsVersion version = WmsVersion::V130; ///< VERSION when given (for the exception's format)
+  std::string layer;
+  std::string style;       ///< "" = the layer's default style
+  std::int32_t width = 0;  ///< 0 = the default size; else 32 .. 4096
+  std::int32_t height = 0; ///< 0 = the default size; else 32 .. 4096
+
+  friend bool operator==(const GetLegendGraphicRequest&, const GetLegendGraphicRequest&) = default;
+};
+
+/** What GetFeatureInfo answers in (INFO_FORMAT, canonical). */
+enum class InfoFormat { Text, Html, Json, Gml, GmlXml };
+
+/** "text/plain", "text/html", "application/json", "application/vnd.ogc.gml", "text/xml". */
+std::string_view toString(InfoFormat format) noexcept;
+
+/** GetFeatureInfo (WMS 1.3.0 7.4, 1.1.1 7.3): the map request part (a GetMap without REQUEST;
+ * FORMAT may be left out), QUERY_LAYERS, INFO_FORMAT (required in 1.3.0; text/plain when absent
+ * in 1.1.1), the pixel I/J (1.3.0) or X/Y (1.1.1), FEATURE_COUNT. */
+struct GetFeatureInfoRequest {
+  GetMapRequest map;
+  std::vector<std::string> queryLayers; ///< each one of map.layers
+  InfoFormat infoFormat = InfoFormat::Text;
+  std::int32_t i = 0; ///< column, 0 .. map.width - 1
+  std::int32_t j = 0; ///< row from the top, 0 .. map.height - 1
+  std::int32_t featureCount = 1;
+
+  friend bool operator==(const GetFeatureInfoRequest&, const GetFeatureInfoRequest&) = default;
+};
+
+using WmsRequest = std::
+    variant<GetCapabilitiesRequest, GetMapRequest, GetLegendGraphicRequest, GetFeatureInfoRequest>;
+
+/** GetLegendGraphic's parameters (called by parseWms): LAYER and FORMAT required
+ * (MissingParameterValue), FORMAT other than image/png -> InvalidFormat, SERVICE other than WMS
+ * -> InvalidParameterValue, WIDTH/HEIGHT outside 32 .. 4096 or SLD_VERSION other than 1.1.0 ->
+ * InvalidParameterValue. */
+std::expected<WmsRequest, OgcException> parseGetLegendGraphic(const QueryParams& params);
+
+/** GetFeatureInfo's parameters (called by parseWms): the map part as parseWms reads a GetMap
+ * (its errors as GetMap's), then QUERY_LAYERS (required; a name not in LAYERS ->
+ * LayerNotDefined), INFO_FORMAT (unknown -> InvalidFormat), I/J or X/Y (required; not a whole
+ * number -> InvalidParameterValue; outside the map -> InvalidPoint in 1.3.0,
+ * InvalidParameterValue in 1.1.1), FEATURE_COUNT (a whole number >= 1). */
+std::expected<WmsRequest, OgcException> parseGetFeatureInfo(const QueryParams& params,
+                                                            const WmsLimits& limits);
 
 /**
  * @brief Parses a WMS request (keys as parseQuery stores them).
@@ -133,8 +181,9 @@ using WmsRequest = std::variant<GetCapabilitiesRequest, GetMapRequest>;
  * case-sensitive except REQUEST, SERVICE, CRS/SRS, FORMAT (a MIME type), TRANSPARENT and
  * EXCEPTIONS, which clients spell in any case.
  * - REQUEST missing -> MissingParameterValue (locator REQUEST); GetCapabilities (also WMS 1.0's
- *   "capabilities") and GetMap ("map") are served; GetFeatureInfo, GetLegendGraphic and anything
- *   else -> OperationNotSupported (locator REQUEST).
+ *   "capabilities"), GetMap ("map"), GetFeatureInfo ("feature_info") and GetLegendGraphic are
+ *   served (the last two: parseGetFeatureInfo, parseGetLegendGraphic); anything else ->
+ *   OperationNotSupported (locator REQUEST).
  * - SERVICE=WMS is required for GetCapabilities only; GetMap's tables have no SERVICE (either
  *   version), so it may be absent or empty. A SERVICE other than WMS -> InvalidParameterValue.
  * - A parameter of the request's table given twice with different values -> InvalidParameterValue

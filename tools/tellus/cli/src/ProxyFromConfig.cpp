@@ -55,6 +55,34 @@ UpstreamSpec upstreamSpec(const UpstreamConfig& u) {
   return s;
 }
 
+namespace {
+
+/** A value or elevation layer's values (ValueLayer.hpp): a value layer's default style is its
+ * colour map; an elevation layer's stays as before (heights, or the grey ramp), its colour maps
+ * offered by name. */
+ValueLayerSpec valueLayerSpec(const LayerConfig& l) {
+  const ValueSettings& v = l.values;
+  ValueLayerSpec s;
+  s.format = v.format;
+  s.defaultStyle = l.kind == LayerKind::Values ? v.colourMap : std::string();
+  if (v.styles.empty()) {
+    for (const values::ColourMap& m : values::colourMaps())
+      s.styles.emplace_back(m.name);
+  } else {
+    s.styles = v.styles;
+  }
+  s.rangeFromData = v.rangeFromData;
+  s.min = v.min;
+  s.max = v.max;
+  s.lowPercent = v.lowPercent;
+  s.highPercent = v.highPercent;
+  s.scaling = v.scaling;
+  s.outOfRange = v.outOfRange;
+  return s;
+}
+
+} // namespace
+
 LayerSpec layerSpec(const LayerConfig& l) {
   LayerSpec s;
   s.name = l.name;
@@ -72,6 +100,7 @@ LayerSpec layerSpec(const LayerConfig& l) {
   s.timeValues = l.time.values;
   s.timePeriod = l.time.period;
   s.timeDefault = l.time.defaultValue;
+  if (l.isValueLayer()) s.values = valueLayerSpec(l);
   return s;
 }
 

@@ -36,6 +36,9 @@ struct LegendOptions {
   int scaleFactor = 1; ///< integer upscaling, 1..16 (the image is width*f x height*f)
   Rgba8 background{255, 255, 255, 255}; ///< e.g. {0, 0, 0, 160} for semi-transparent over a globe
   Rgba8 foreground{0, 0, 0, 255};       ///< text, ticks and the bar's outline
+  /** false: the bar and title only, no ticks or numbers (a range taken from each map's data,
+   * which a legend cannot know). */
+  bool labels = true;
 };
 
 /** The legend of `scale` (which must pass checkScale) titled "title [unit]" ("title" when unit
