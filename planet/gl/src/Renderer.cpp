@@ -168,7 +168,7 @@ void Renderer::Impl::warmUp() {
   if (layers.size() > 1) { // the program with overlays, and a second pass
     const auto n = static_cast<std::uint32_t>(stats.overlaysPerPass + 1);
     for (std::uint32_t i = 0; i < n; ++i)
-      list.bindings.push_back({&texture, UvTransform{}, 0.0f, false});
+      list.bindings.push_back({&texture, UvTransform{}, 0.0f, false, std::nullopt});
     list.parts.back().overlayEnd = n;
   }
   const Camera cam(geodesy, CameraPose{}, {opt.width, opt.height}, opt.verticalFovDeg);
@@ -321,6 +321,7 @@ void Renderer::frame(const CameraPose& pose) {
   ph.intake = lap();
   // What this frame draws, and the LRU told so before anything new is inserted.
   const double frameS = m.opt.frameClock ? m.opt.frameClock() : nowS; // fades' time
+  updateDataRanges(m.layers); // `range: data` of layers of values (issue 24)
   const DrawList list = planDraw(m.layers, m.globalTexture, m.stats, frameS, m.opt.fadeInSeconds);
   // A fade in progress is not the settled image (RendererOptions::fadeInSeconds).
   const bool complete = !list.fading && drawsWhatLodAsks(m.layers, tree, [&m](const Node& n) {

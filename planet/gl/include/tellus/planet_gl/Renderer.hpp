@@ -25,6 +25,8 @@
 #include <tellus/planet/HeightStreamer.hpp>
 #include <tellus/planet/StarCatalogue.hpp>
 #include <tellus/planet/Terrain.hpp>
+#include <tellus/values/ColourScale.hpp>
+#include <tellus/values/ValueFormat.hpp>
 
 #include <array>
 #include <cstddef>
@@ -54,6 +56,32 @@ struct RgbaImage {
 using ImageDecoder = std::function<std::expected<RgbaImage, std::string>(
     std::span<const std::byte> bytes, std::string_view contentType, int width, int height)>;
 
+/** A layer of values (issue 24): its tiles are raw samples (values::decode: BIL, TIFF, 16-bit
+ * PNG) that the renderer keeps as one float per texel (an R32F texture, exact: no rounding of the
+ * values on the GPU) and colours in the shader with the EXACT rule of values/ColourScale.hpp
+ * (t in float, index = clamp(floor(t * 256), 0, 255), the map's entry; no data and, with
+ * OutOfRange::Transparent, values outside the range transparent: the layers below show).
+ * Sampling is the nearest texel (no filtering of values, no mip levels): each texel keeps its
+ * own value's colour, as in the proxy's GetMap of the same tile, so a render and a map agree
+ * texel for texel (a bilinear mix of values would colour values no sample has, and a NaN
+ * neighbour has no mix). */
+struct ValueLayerOptions {
+  values::ValueFormat format; ///< how the tiles' raw samples become values (unit included)
+  std::string colourMap{values::kDefaultColourMap}; ///< a values::colourMaps() name
+  double min = 0.0; ///< the range (a fixed one, or the fallback of rangeFromData)
+  double max = 1.0;
+  values::Scaling scaling = values::Scaling::Linear;
+  values::OutOfRange outOfRange = values::OutOfRange::Clamp;
+  /** The range from the values drawn (`range: data`): the lowPercent and highPercent
+   * percentiles of a bounded sample (at most kDataRangeSample values a texture) of the textures
+   * the layer's visible nodes show, recomputed each frame; min/max until a texture is there. */
+  bool rangeFromData = false;
+  double lowPercent = 0.0;
+  double highPercent = 100.0;
+  std::string title; ///< for the legend ("" = the layer's name)
+  static constexpr std::size_t kDataRangeSample = 256;
+};
+
 /** An imagery layer drawn over the base imagery (issue #7): sea-surface temperature, night lights,
  * clouds. Its tiles must share the base layer's level-zero tile size (a key is the same sector in
  * both); their pixel size may differ. Transparent texels (PNG alpha) and absent tiles show what
@@ -70,6 +98,9 @@ struct LayerOptions {
    * ellipsoid at the point, as Uniview and OpenSpace blend their night textures. Hidden when the
    * globe is unlit (no sunlight, no sunLatLon). */
   bool night = false;
+  /** A layer of values coloured by the renderer (ValueLayerOptions); nullopt: imagery. An
+   * overlay only (the base is opaque imagery). */
+  std::optional<ValueLayerOptions> values{};
 };
 
 /** How the dome is drawn (issue #7; docs/design/dome.md). */
