@@ -51,7 +51,15 @@ RenderLayerSettings readRenderLayer(Reader& r, const YAML::Node& item, const std
               item,
               ip,
               item.Mark(),
-              {"layer", "regional", "opacity", "visible", "max_level", "time", "night"});
+              {"layer",
+               "regional",
+               "opacity",
+               "visible",
+               "max_level",
+               "time",
+               "night",
+               "colour_map",
+               "range"});
   RenderLayerSettings l;
   if (auto x = e.get("layer"))
     l.layer = text(r, *x, e.path("layer"));
@@ -63,6 +71,17 @@ RenderLayerSettings readRenderLayer(Reader& r, const YAML::Node& item, const std
   if (auto x = e.get("max_level")) l.maxLevel = int32(r, *x, e.path("max_level"));
   if (auto x = e.get("time")) l.time = text(r, *x, e.path("time"));
   if (auto x = e.get("night")) l.night = boolean(r, *x, e.path("night"));
+  if (auto x = e.get("colour_map")) l.colourMap = text(r, *x, e.path("colour_map"));
+  if (auto x = e.get("range")) {
+    const auto items = list(r, *x, e.path("range"));
+    if (items.size() != 2)
+      r.fail(x->Mark(),
+             e.path("range"),
+             "expected [min, max], got " + std::to_string(items.size()) + " items");
+    else
+      l.range = std::array<double, 2>{number(r, items[0], indexPath(e.path("range"), 0)),
+                                      number(r, items[1], indexPath(e.path("range"), 1))};
+  }
   return l;
 }
 

@@ -47,7 +47,8 @@ commands:
              [--no-fade-in] [--no-geomorph] (renderer.fade_in, renderer.geomorph: no popping)
              [--no-terrain] [--exaggeration X] [--sun LAT,LON]
              [--min-relief-px PX] (renderer.terrain.min_relief_px: heights only where relief shows)
-             [--overlay NAME[,OPACITY]]... (imagery over the base; also renderer.layers);
+             [--overlay NAME[,OPACITY]]... (imagery or value layers over the base, a value
+             layer coloured by its colour map; also renderer.layers);
              view: 0-9 select a layer (1-9 also show/hide it), - = opacity, , . order,
              ; ' deepest level, [ ] its time; the scene's time: L faster, H slower,
              J backwards, K pause, N now
