@@ -8,6 +8,7 @@
 // the documented one-bin difference where the CPU's t * 256 lies within 1e-4 of an integer.
 
 #include "GlTestSupport.hpp"
+#include "LegendOverlay.hpp"
 #include "ValueWorld.hpp"
 
 #include <tellus/planet/Pick.hpp>
@@ -177,6 +178,75 @@ TEST(ValuesGl, OpacityMixesTheColourOverTheBase) {
   const Tally t = compare(r, w, v, 0.5, 1);
   EXPECT_GT(t.compared, 8000);
   EXPECT_EQ(t.wrong, 0) << t.firstWrong;
+}
+
+// The legend (RendererOptions::legend): the picture values::renderLegend makes of the layer's
+// scale, at its place (bottom left), exactly (it is copied, not drawn): every pixel of it, the
+// colour bar with them. Off: that corner is the globe's background or the globe.
+TEST(ValuesGl, TheLegendIsInTheFrameAtItsPlace) {
+  ValueWorld w;
+  const Geodesy wgs;
+  ValueLayerOptions v;
+  v.colourMap = "turbo";
+  v.min = 0.0;
+  v.max = 100.0;
+  v.title = "ramp";
+  RendererOptions o = valueOptions(v);
+  o.width = 320;
+  o.height = 240;
+  o.legend = true;
+  OPEN_RENDERER(r, w.source, wgs, o);
+  const auto done = gltest::renderComplete(r, CameraPose{10.0, 20.0, 2.0e7, 0.0, 0.0});
+  ASSERT_TRUE(done.complete);
+  const auto img = legendImage({scaleOf(v), "K", "ramp"}, 1);
+  ASSERT_TRUE(img);
+  const auto rects = legendPlacement(320, 240, false, img->width, img->height, kLegendMargin, 1);
+  ASSERT_EQ(rects.size(), 1u);
+  int off = 0, barPixels = 0;
+  const auto* turbo = values::findColourMap("turbo")->table;
+  for (int y = 0; y < img->height; ++y)
+    for (int x = 0; x < img->width; ++x) {
+      const int fy = 240 - 1 - (rects[0].y + (img->height - 1 - y)); // frame row from the top
+      const auto f = static_cast<std::size_t>((fy * 320 + rects[0].x + x) * 4);
+      const auto l = static_cast<std::size_t>((y * img->width + x) * 4);
+      for (std::size_t c = 0; c < 3; ++c)
+        off += done.pixels[f + c] != img->pixels[l + c] ? 1 : 0;
+      for (const auto& e : *turbo)
+        if (done.pixels[f] == e[0] && done.pixels[f + 1] == e[1] && done.pixels[f + 2] == e[2]) {
+          ++barPixels;
+          break;
+        }
+    }
+  EXPECT_EQ(off, 0);
+  EXPECT_GT(barPixels, 256 * 8); // the bar: the table in order, several rows of it
+  r.setLegend(false);
+  const auto without = gltest::renderComplete(r, CameraPose{10.0, 20.0, 2.0e7, 0.0, 0.0});
+  const auto f = static_cast<std::size_t>(((240 - 1 - rects[0].y - 5) * 320 + rects[0].x + 5) * 4);
+  EXPECT_EQ(without.pixels[f], 0); // the black background where the legend was
+}
+
+// The value under the cursor: what the renderer holds at a picked point is the texel's value.
+TEST(ValuesGl, TheValueUnderAPixelIsTheTexelsValue) {
+  ValueWorld w;
+  const Geodesy wgs;
+  ValueLayerOptions v;
+  OPEN_RENDERER(r, w.source, wgs, valueOptions(v));
+  const auto done = gltest::renderComplete(r, kView);
+  ASSERT_TRUE(done.complete);
+  // The point under the image's centre holds a value (or is no data) once its texture is there.
+  const auto g = pickGlobe(r.camera(r.drawnPose()), wgs, 0.0, 0.0);
+  ASSERT_TRUE(g);
+  EXPECT_TRUE(r.layerValueAt(1, g->latDeg, g->lonDeg));
+  // Exactly the texel's value at its centre (the bilinear weights are 1 there).
+  // Texel (20, 10) of tile row 2 (-18 .. 18 degrees), column 5 (0 .. 36), under the view.
+  const double lat = 18.0 - 36.0 * (10.5 / 32.0), lon = 36.0 * (20.5 / 32.0);
+  const auto texel = ValueWorld::texelAt(lat, lon);
+  const auto got = r.layerValueAt(1, lat, lon);
+  ASSERT_TRUE(got);
+  EXPECT_EQ(texel.x, 20);
+  EXPECT_EQ(texel.y, 10);
+  EXPECT_FLOAT_EQ(*got, ValueWorld::valueOf(texel));
+  EXPECT_FALSE(r.layerValueAt(0, lat, lon)); // the base is imagery
 }
 
 } // namespace

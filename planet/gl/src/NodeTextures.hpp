@@ -9,6 +9,7 @@
 #include "GlObjects.hpp"
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
 #include <vector>
@@ -39,8 +40,12 @@ struct NodeTexture {
   /** The frame time (RendererOptions::frameClock, s) it was first drawn at, for its fade-in; NaN:
    * not drawn yet; -infinity: shown at once (no fade: a layer time swapped in whole). */
   double shownSinceS = std::numeric_limits<double>::quiet_NaN();
-  /** A layer of values: a bounded sample of its finite values (`range: data`). */
+  /** A layer of values: a bounded sample of its finite values (`range: data`), and the texture's
+   * floats kept on the CPU (rows from the south, 4 bytes each; width x height) for the value
+   * under the cursor (Renderer::layerValueAt). */
   std::vector<float> sample{};
+  std::vector<std::uint8_t> values{};
+  int width = 0, height = 0;
 };
 
 /** The free node textures of one layer. Every node texture of a layer has its grid's tile size

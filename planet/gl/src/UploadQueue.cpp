@@ -69,6 +69,11 @@ void UploadQueue::step(LayerSet& layers,
     if (++u.level < u.texture.levels.size()) continue;
     // Complete: drawable from the next frame on.
     u.gl.sample = std::move(u.texture.sample);
+    if (u.texture.values) { // kept for the value under the cursor (ValueTexture.hpp)
+      u.gl.width = u.texture.levels.front().width;
+      u.gl.height = u.texture.levels.front().height;
+      u.gl.values = std::move(u.texture.levels.front().rgba);
+    }
     l->install(u.texture.key, std::move(u.gl), u.texture.bytes);
     ++stats.texturesUploaded;
     queue_.pop_front();

@@ -77,6 +77,47 @@ DecodedTexture decodeValueTexture(const DecodeJob& job) {
   return out;
 }
 
+float sampleValueTexture(const Sector& sector,
+                         int width,
+                         int height,
+                         std::span<const std::uint8_t> floats,
+                         double latDeg,
+                         double lonDeg) {
+  const auto n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  if (width <= 0 || height <= 0 || floats.size() != n * 4)
+    return std::numeric_limits<float>::quiet_NaN();
+  const double w = sector.east - sector.west, h = sector.north - sector.south;
+  const double u = (lonDeg - sector.west) / w, v = (sector.north - latDeg) / h; // v from the north
+  if (!(u >= 0.0 && u <= 1.0 && v >= 0.0 && v <= 1.0))
+    return std::numeric_limits<float>::quiet_NaN();
+  values::ValueRaster r; // rows from the north, as values::sample reads them
+  r.width = width;
+  r.height = height;
+  r.values.resize(n);
+  for (int y = 0; y < height; ++y)
+    std::memcpy(r.values.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(width),
+                floats.data() +
+                    static_cast<std::size_t>(height - 1 - y) * static_cast<std::size_t>(width) * 4,
+                static_cast<std::size_t>(width) * 4);
+  return values::sample(r, u * width, v * height);
+}
+
+float valueAtPoint(const LayerTextures& l, double latDeg, double lonDeg) {
+  const NodeTexture* best = nullptr;
+  Sector where{};
+  std::int32_t level = -1;
+  for (const auto& [key, t] : l.textures) {
+    if (t.values.empty() || key.level <= level) continue;
+    const Sector s = l.tree->sectorOf(key);
+    if (latDeg < s.south || latDeg > s.north || lonDeg < s.west || lonDeg > s.east) continue;
+    best = &t;
+    where = s;
+    level = key.level;
+  }
+  if (best == nullptr) return std::numeric_limits<float>::quiet_NaN();
+  return sampleValueTexture(where, best->width, best->height, best->values, latDeg, lonDeg);
+}
+
 values::ColourScale colourScaleFor(const ValueLayerOptions& o,
                                    const std::optional<values::ValueRange>& dataRange) {
   values::ColourScale s;

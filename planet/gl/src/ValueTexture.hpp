@@ -18,6 +18,7 @@
  * the layer's drawn nodes show (a bounded sample each: kDataRangeSample values).
  */
 
+#include "LayerSet.hpp"
 #include "TextureDecoder.hpp"
 
 #include <tellus/planet_gl/Renderer.hpp>
@@ -34,6 +35,22 @@ DecodedTexture decodeValueTexture(const DecodeJob& job);
 
 /** Up to `count` finite values of `values`, taken at an even stride (the whole set when fewer). */
 std::vector<float> finiteSample(std::span<const float> values, std::size_t count);
+
+/** The value at (latDeg, lonDeg) in a value texture covering `sector` (width x height floats,
+ * rows from the south, 4 bytes each as DecodedTexture keeps them): values::sample at the point's
+ * pixel coordinates (bilinear between texel centres; the nearest texel where a neighbour is no
+ * data). NaN outside the sector or for a malformed texture. */
+float sampleValueTexture(const Sector& sector,
+                         int width,
+                         int height,
+                         std::span<const std::uint8_t> floats,
+                         double latDeg,
+                         double lonDeg);
+
+/** The value a layer of values holds at a point: the deepest of its resident textures whose
+ * node contains it, sampled by sampleValueTexture (the value under `view`'s cursor). NaN when
+ * none is resident there, or no data. */
+float valueAtPoint(const LayerTextures& layer, double latDeg, double lonDeg);
 
 /** What planet.frag needs of a layer's scale (uOverlayValues, uOverlayRange). */
 struct ValueScaleUniform {

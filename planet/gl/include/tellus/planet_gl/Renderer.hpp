@@ -242,6 +242,10 @@ struct RendererOptions {
    * (planet/Morph.hpp), so that a split or a merge moves heights continuously. Off by default in
    * the library (`renderer.geomorph` defaults to on). */
   bool geomorph = false;
+  /** The legend of each visible layer of values (issue 24; planet/gl/src/LegendOverlay.hpp):
+   * drawn into the frame after the scene (readPixels has it), bottom left or inside a dome's
+   * circle, scaled by an integer factor of the frame's size. Off in the library. */
+  bool legend = false;
   bool visibleWindow = false; ///< a window the user sees (`tellus view`); else hidden
   std::string windowTitle = "tellus";
 };
@@ -403,6 +407,18 @@ public:
   /** The deepest level of a layer fetched and drawn (-1: the layer's own deepest). Swapped in like
    * a time change: the textures the new limit needs first, then all at once. */
   void setLayerMaxLevel(std::size_t layer, int maxLevel);
+  /** Layers of values (issue 24): the options a layer is drawn with now (nullopt for imagery or
+   * an index past the layers), and new ones (the same layer's format; its colour map and range
+   * changed: `view`'s keys). Refused with std::invalid_argument for an imagery layer, an unknown
+   * colour map or a range that is not min < max (log: > 0). */
+  std::optional<ValueLayerOptions> layerValues(std::size_t layer) const;
+  void setLayerValues(std::size_t layer, const ValueLayerOptions& values);
+  /** The value a layer of values holds at a point (its nearest texel of the deepest resident
+   * texture there; values::sample's bilinear rule within it would need the raw tile): NaN for no
+   * data or nothing resident; nullopt for an imagery layer. */
+  std::optional<float> layerValueAt(std::size_t layer, double latDeg, double lonDeg) const;
+  /** Shows or hides the legends (RendererOptions::legend) from the next frame on. */
+  void setLegend(bool on);
   /** Moves an overlay to another place in the drawing order (both indices 1..). */
   void moveLayer(std::size_t from, std::size_t to);
   /** Resizes the framebuffer (window resize). */
