@@ -204,7 +204,8 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
                "sunlight",
                "night",
                "fade_in",
-               "geomorph"});
+               "geomorph",
+               "legend"});
   if (auto v = m.get("lod_threshold")) g.lodThreshold = number(r, *v, m.path("lod_threshold"));
   if (auto v = m.get("mesh_size")) g.meshSize = int32(r, *v, m.path("mesh_size"));
   if (auto v = m.get("fov")) g.fovDeg = number(r, *v, m.path("fov"));
@@ -236,6 +237,7 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
   if (auto v = m.get("night")) g.night = boolean(r, *v, m.path("night"));
   if (auto v = m.get("fade_in")) g.fadeInS = number(r, *v, m.path("fade_in"));
   if (auto v = m.get("geomorph")) g.geomorph = boolean(r, *v, m.path("geomorph"));
+  if (auto v = m.get("legend")) g.legend = boolean(r, *v, m.path("legend"));
 }
 
 } // namespace tellus::detail::yaml

@@ -5,6 +5,7 @@
 
 #include "LegendOverlay.hpp"
 #include "ValueTexture.hpp"
+#include "ViewerValues.hpp"
 
 #include <tellus/planet/Pick.hpp>
 
@@ -84,6 +85,36 @@ TEST(ValueUnderCursor, PickAndSample) {
         sampleValueTexture(s, 100, 100, b, g->latDeg, g->lonDeg), 10.0 * g->lonDeg - 0.5, 1e-3);
   }
   EXPECT_FALSE(pickGlobe(Camera(wgs, {5.0, 5.0, 1.0e6, 0.0, 90.0}, {200, 100}), wgs, 0.0, 49.0));
+}
+
+// `view`'s keys on a value layer's scale: C the next map (round), Z/X narrow/widen about the
+// middle, Q/E shift by a tenth of the width; log ranges in decades, always above 0.
+TEST(ViewerValueKeys, MapCycleAndRangeNarrowWidenShift) {
+  ValueLayerOptions o;
+  o.colourMap = "terrain"; // the last map: the next is the first
+  o.min = 0.0;
+  o.max = 100.0;
+  o.rangeFromData = true;
+  EXPECT_EQ(adjustedScale(o, ScaleKey::NextMap).colourMap, "viridis");
+  EXPECT_EQ(adjustedScale(adjustedScale(o, ScaleKey::NextMap), ScaleKey::NextMap).colourMap,
+            "magma");
+  const auto n = adjustedScale(o, ScaleKey::Narrow);
+  EXPECT_DOUBLE_EQ(n.min, 10.0);
+  EXPECT_DOUBLE_EQ(n.max, 90.0);
+  EXPECT_FALSE(n.rangeFromData); // a key's range replaces range: data
+  const auto w = adjustedScale(o, ScaleKey::Widen);
+  EXPECT_DOUBLE_EQ(w.min, -12.5);
+  EXPECT_DOUBLE_EQ(w.max, 112.5);
+  const auto up = adjustedScale(o, ScaleKey::ShiftUp);
+  EXPECT_DOUBLE_EQ(up.min, 10.0);
+  EXPECT_DOUBLE_EQ(up.max, 110.0);
+  EXPECT_DOUBLE_EQ(adjustedScale(o, ScaleKey::ShiftDown).min, -10.0);
+  o.scaling = values::Scaling::Log;
+  o.min = 1.0;
+  o.max = 1.0e4;
+  const auto lg = adjustedScale(o, ScaleKey::ShiftDown);
+  EXPECT_NEAR(lg.min, std::pow(10.0, -0.4), 1e-12);
+  EXPECT_GT(adjustedScale(lg, ScaleKey::Widen).min, 0.0);
 }
 
 } // namespace

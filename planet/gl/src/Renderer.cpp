@@ -463,6 +463,9 @@ std::optional<float> Renderer::layerValueAt(std::size_t layer, double latDeg, do
 void Renderer::setLegend(bool on) {
   impl_->opt.legend = on;
 }
+bool Renderer::legend() const noexcept {
+  return impl_->opt.legend;
+}
 
 void Renderer::moveLayer(std::size_t from, std::size_t to) {
   impl_->layers.move(from, to);

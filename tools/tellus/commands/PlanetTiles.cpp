@@ -261,6 +261,7 @@ std::expected<PlanetTiles, int> openRemote(const cli::Args& a,
     terrain = terrain && loaded->renderer.terrain.enabled;
     t.sceneTime = loaded->renderer.time;
     t.night = loaded->renderer.night;
+    t.legend = loaded->renderer.legend;
     settings = loaded->renderer;
   }
   ro.atmosphere = atmosphereOptions(settings.atmosphere); // the configuration's default: on
@@ -345,6 +346,7 @@ openLocal(const cli::Args& a, const char* cmd, planet::RendererOptions& ro) {
   applyRendererSettings(config.renderer, a, ro, t.earth);
   t.sceneTime = config.renderer.time;
   t.night = config.renderer.night;
+  t.legend = config.renderer.legend;
   if (auto bad = applyTerrainArgs(a, ro)) {
     std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());
     return std::unexpected(kExitUsage);

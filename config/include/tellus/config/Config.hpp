@@ -199,6 +199,9 @@ struct RendererSettings {
   double fadeInS = 0.3;
   /** No popping (issue 23): geomorphing of node heights between levels (thesis 6.2.2). */
   bool geomorph = true;
+  /** YAML `renderer.legend` (issue 24): the legends of visible value layers; nullopt: the
+   * command's default (view: shown, render: not; --legend, --no-legend override). */
+  std::optional<bool> legend;
 };
 
 /** YAML `cache`. */

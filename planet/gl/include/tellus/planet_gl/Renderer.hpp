@@ -419,6 +419,7 @@ public:
   std::optional<float> layerValueAt(std::size_t layer, double latDeg, double lonDeg) const;
   /** Shows or hides the legends (RendererOptions::legend) from the next frame on. */
   void setLegend(bool on);
+  bool legend() const noexcept;
   /** Moves an overlay to another place in the drawing order (both indices 1..). */
   void moveLayer(std::size_t from, std::size_t to);
   /** Resizes the framebuffer (window resize). */
