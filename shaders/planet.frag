@@ -23,6 +23,13 @@
 // covers nothing; the surface overlays drawn after one cover its light by their own alpha. A
 // later pass writes its light with alpha 0, which (ONE, ONE_MINUS_SRC_ALPHA) adds. Unlit (uSun.w
 // = 0): night layers show nothing.
+//
+// Layers of values (issue 24; uOverlayValues[i].x = 1): the overlay's texture holds one float a
+// texel (R32F, NaN = no data), read at the nearest texel (texelFetch: never filtered) and
+// coloured by values/ColourScale.hpp's rule in float: t = (v - low) / (high - low) (log: of
+// log10 v, low and high already log10; v <= 0 below the range), out of the range transparent
+// (uOverlayValues[i].w = 1) or clamped, index = clamp(floor(t * 256), 0, 255) into row
+// uOverlayValues[i].y of uColourMaps (one 256-entry map a row), opaque; no data transparent.
 in vec2 vUv;
 in vec2 vUvNode;
 in vec3 vNormal;
@@ -36,6 +43,9 @@ uniform sampler2D uOverlay[TELLUS_OVERLAYS];
 uniform vec4 uOverlayUv[TELLUS_OVERLAYS]; // uvOverlay = uvNode * xy + zw
 uniform float uOverlayOpacity[TELLUS_OVERLAYS];
 uniform float uOverlayNight[TELLUS_OVERLAYS]; // 1: a night layer (light on the dark side)
+uniform vec4 uOverlayValues[TELLUS_OVERLAYS]; // x: 1 = values; y: map row; z: 1 = log; w: 1 = cut
+uniform vec2 uOverlayRange[TELLUS_OVERLAYS];  // the range's low and high (log: their log10)
+uniform sampler2D uColourMaps;
 
 out vec4 fragColor;
 
@@ -54,7 +64,27 @@ vec3 fadeIn(vec3 colour) {
 
 const float kAmbient = 0.04;
 
-#define TELLUS_OVERLAY(i) if (uOverlayCount > i) { vec4 o = texture(uOverlay[i], vUvNode * uOverlayUv[i].xy + uOverlayUv[i].zw) * uOverlayOpacity[i]; if (uOverlayNight[i] > 0.5) { light += o.rgb * night; } else { colour = colour * (1.0 - o.a) + o.rgb; alpha = alpha * (1.0 - o.a) + o.a; light *= 1.0 - o.a; } }
+vec4 valueColour(sampler2D values, vec2 uv, vec4 scale, vec2 range) {
+  ivec2 size = textureSize(values, 0);
+  float v = texelFetch(values, clamp(ivec2(floor(uv * vec2(size))), ivec2(0), size - 1), 0).r;
+  if (isnan(v)) return vec4(0.0);
+  float t;
+  if (scale.z > 0.5 && v <= 0.0) t = -1.0;
+  else {
+    float x = scale.z > 0.5 ? log2(v) * 0.30102999566398120 : v;
+    t = range.y > range.x ? (x - range.x) / (range.y - range.x) : (x < range.x ? -1.0 : x > range.x ? 2.0 : 0.5);
+  }
+  if ((t < 0.0 || t > 1.0) && scale.w > 0.5) return vec4(0.0);
+  int index = int(clamp(floor(t * 256.0), 0.0, 255.0));
+  return vec4(texelFetch(uColourMaps, ivec2(index, int(scale.y)), 0).rgb, 1.0);
+}
+
+vec4 overlayTexel(sampler2D s, int i) {
+  vec2 uv = vUvNode * uOverlayUv[i].xy + uOverlayUv[i].zw;
+  return uOverlayValues[i].x > 0.5 ? valueColour(s, uv, uOverlayValues[i], uOverlayRange[i]) : texture(s, uv);
+}
+
+#define TELLUS_OVERLAY(i) if (uOverlayCount > i) { vec4 o = overlayTexel(uOverlay[i], i) * uOverlayOpacity[i]; if (uOverlayNight[i] > 0.5) { light += o.rgb * night; } else { colour = colour * (1.0 - o.a) + o.rgb; alpha = alpha * (1.0 - o.a) + o.a; light *= 1.0 - o.a; } }
 
 void main() {
   vec3 colour = vec3(0.0);

@@ -51,7 +51,15 @@ RenderLayerSettings readRenderLayer(Reader& r, const YAML::Node& item, const std
               item,
               ip,
               item.Mark(),
-              {"layer", "regional", "opacity", "visible", "max_level", "time", "night"});
+              {"layer",
+               "regional",
+               "opacity",
+               "visible",
+               "max_level",
+               "time",
+               "night",
+               "colour_map",
+               "range"});
   RenderLayerSettings l;
   if (auto x = e.get("layer"))
     l.layer = text(r, *x, e.path("layer"));
@@ -63,6 +71,17 @@ RenderLayerSettings readRenderLayer(Reader& r, const YAML::Node& item, const std
   if (auto x = e.get("max_level")) l.maxLevel = int32(r, *x, e.path("max_level"));
   if (auto x = e.get("time")) l.time = text(r, *x, e.path("time"));
   if (auto x = e.get("night")) l.night = boolean(r, *x, e.path("night"));
+  if (auto x = e.get("colour_map")) l.colourMap = text(r, *x, e.path("colour_map"));
+  if (auto x = e.get("range")) {
+    const auto items = list(r, *x, e.path("range"));
+    if (items.size() != 2)
+      r.fail(x->Mark(),
+             e.path("range"),
+             "expected [min, max], got " + std::to_string(items.size()) + " items");
+    else
+      l.range = std::array<double, 2>{number(r, items[0], indexPath(e.path("range"), 0)),
+                                      number(r, items[1], indexPath(e.path("range"), 1))};
+  }
   return l;
 }
 
@@ -185,7 +204,8 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
                "sunlight",
                "night",
                "fade_in",
-               "geomorph"});
+               "geomorph",
+               "legend"});
   if (auto v = m.get("lod_threshold")) g.lodThreshold = number(r, *v, m.path("lod_threshold"));
   if (auto v = m.get("mesh_size")) g.meshSize = int32(r, *v, m.path("mesh_size"));
   if (auto v = m.get("fov")) g.fovDeg = number(r, *v, m.path("fov"));
@@ -217,6 +237,7 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
   if (auto v = m.get("night")) g.night = boolean(r, *v, m.path("night"));
   if (auto v = m.get("fade_in")) g.fadeInS = number(r, *v, m.path("fade_in"));
   if (auto v = m.get("geomorph")) g.geomorph = boolean(r, *v, m.path("geomorph"));
+  if (auto v = m.get("legend")) g.legend = boolean(r, *v, m.path("legend"));
 }
 
 } // namespace tellus::detail::yaml

@@ -4,6 +4,8 @@
 
 #include "ConfigInternal.hpp"
 
+#include <tellus/values/ColourMap.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -450,7 +452,9 @@ std::optional<ValidationIssue> checkRegional(const Config& c,
       return ValidationIssue{p,
                              "renderer",
                              "'" + names[j] + "' is not " +
-                                 (kind == LayerKind::Imagery ? "an imagery" : "an elevation") +
+                                 (kind == LayerKind::Imagery  ? "an imagery"
+                                  : kind == LayerKind::Values ? "a value"
+                                                              : "an elevation") +
                                  " layer"};
     if (main != nullptr && !sameGrid(*main, *l))
       return ValidationIssue{p,
@@ -483,15 +487,35 @@ std::optional<ValidationIssue> checkTerrainLayers(const Config& c) {
       c, c.renderer.terrain.regional, elevation, LayerKind::Elevation, "renderer.terrain");
 }
 
-/** renderer.layers[i]: an imagery layer; the first the opaque base, the others on its grid;
- * opacity, max_level, a TIME value of the layer, its regional layers. */
+/** renderer.layers[i] over the base drawn as colours (issue 24): colour_map a known map, range
+ * min < max (log: above 0); both only for value layers. */
+std::optional<ValidationIssue>
+checkRenderValues(const RenderLayerSettings& rl, const LayerConfig& l, const std::string& at) {
+  if (!l.isValueLayer() && (!rl.colourMap.empty() || rl.range))
+    return ValidationIssue{at, "renderer", "colour_map and range apply to value layers only"};
+  if (!rl.colourMap.empty() && values::findColourMap(rl.colourMap) == nullptr)
+    return ValidationIssue{
+        at + ".colour_map", "renderer", "'" + rl.colourMap + "' is not a colour map"};
+  if (rl.range) {
+    const auto [lo, hi] = *rl.range;
+    if (!(std::isfinite(lo) && std::isfinite(hi) && lo < hi))
+      return ValidationIssue{at + ".range", "renderer", "must be [min, max] with min < max"};
+    if (l.values.scaling == values::Scaling::Log && !(lo > 0.0))
+      return ValidationIssue{at + ".range", "renderer", "a log scale's range must be above 0"};
+  }
+  return std::nullopt;
+}
+
+/** renderer.layers[i]: an imagery layer first (the opaque base), then imagery or value layers
+ * on its grid; opacity, max_level, a TIME value of the layer, its regional layers. */
 std::optional<ValidationIssue>
 checkRenderLayer(const Config& c, std::size_t i, const LayerConfig*& base) {
   const RenderLayerSettings& rl = c.renderer.layers[i];
   const std::string at = "renderer.layers[" + std::to_string(i) + "]";
   const auto* l = c.layer(rl.layer);
-  if (l == nullptr || l->kind != LayerKind::Imagery)
+  if (l == nullptr || (i == 0 && l->kind != LayerKind::Imagery))
     return ValidationIssue{at + ".layer", "renderer", "'" + rl.layer + "' is not an imagery layer"};
+  if (auto e = checkRenderValues(rl, *l, at)) return e;
   if (i == 0) {
     base = l;
     if ((rl.opacity && *rl.opacity != 1.0) || !rl.visible || rl.night)
@@ -519,7 +543,7 @@ checkRenderLayer(const Config& c, std::size_t i, const LayerConfig*& base) {
       return ValidationIssue{
           at + ".time", "renderer", "'" + rl.time + "' is not a TIME value of '" + rl.layer + "'"};
   }
-  return checkRegional(c, rl.regional, l, LayerKind::Imagery, at);
+  return checkRegional(c, rl.regional, l, l->kind, at);
 }
 
 } // namespace

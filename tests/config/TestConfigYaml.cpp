@@ -65,13 +65,52 @@ void writeFile(const fs::path& p, std::string_view text) {
 // ---- examples and defaults ---------------------------------------------------------------------
 
 TEST(ConfigYaml, EveryExampleParses) {
-  for (const char* name : {"default.yaml", "mapserver.yaml", "public.yaml"}) {
+  for (const char* name : {"default.yaml", "mapserver.yaml", "public.yaml", "heights.yaml"}) {
     const auto c = loadConfig(kExamples / name);
     ASSERT_TRUE(c) << c.error().toString();
     EXPECT_EQ(c->sourceFile, kExamples / name);
     EXPECT_FALSE(c->layers.empty()) << name;
     EXPECT_TRUE(validate(*c)) << name;
   }
+}
+
+// The thesis's figure 25 (issue 24): heights as a value layer over the Blue Marble.
+TEST(ConfigYaml, HeightsExample) {
+  const auto c = loadConfig(kExamples / "heights.yaml");
+  ASSERT_TRUE(c) << c.error().toString();
+  const LayerConfig* h = c->layer("heights");
+  ASSERT_NE(h, nullptr);
+  EXPECT_EQ(h->kind, LayerKind::Values);
+  EXPECT_EQ(h->values.colourMap, "terrain");
+  EXPECT_EQ(h->values.min, -8000.0);
+  ASSERT_EQ(c->renderer.layers.size(), 2u);
+  EXPECT_EQ(c->renderer.layers[1].layer, "heights");
+  EXPECT_EQ(c->renderer.layers[1].opacity, 0.5);
+}
+
+// renderer.layers[i].colour_map and range: value layers only, known maps, min < max.
+TEST(ConfigYaml, RendererValueOverrides) {
+  const auto c = loadConfig(kExamples / "heights.yaml");
+  ASSERT_TRUE(c);
+  Config ok = *c;
+  ok.renderer.layers[1].colourMap = "viridis";
+  ok.renderer.layers[1].range = std::array<double, 2>{-100.0, 100.0};
+  EXPECT_TRUE(validate(ok));
+  Config badMap = *c;
+  badMap.renderer.layers[1].colourMap = "nope";
+  ASSERT_FALSE(validate(badMap));
+  EXPECT_NE(validate(badMap).error().find("layers[1].colour_map"), std::string::npos);
+  Config badRange = *c;
+  badRange.renderer.layers[1].range = std::array<double, 2>{5.0, 5.0};
+  ASSERT_FALSE(validate(badRange));
+  EXPECT_NE(validate(badRange).error().find("layers[1].range"), std::string::npos);
+  Config onImagery = *c;
+  onImagery.renderer.layers[0].colourMap = "viridis";
+  EXPECT_FALSE(validate(onImagery));
+  Config valueBase = *c;
+  std::swap(valueBase.renderer.layers[0], valueBase.renderer.layers[1]);
+  valueBase.renderer.layers[0].opacity.reset();
+  EXPECT_FALSE(validate(valueBase)); // the base is imagery
 }
 
 TEST(ConfigYaml, MapserverExample) {

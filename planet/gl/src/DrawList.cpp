@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_set>
 #include <utility>
 
 namespace tellus::planet {
@@ -48,10 +49,40 @@ DrawPart partFor(const Node& node,
   return d;
 }
 
+std::vector<std::optional<ValueScaleUniform>> valueScales(const LayerSet& layers) {
+  std::vector<std::optional<ValueScaleUniform>> out(layers.size());
+  for (std::size_t i = 0; i < layers.size(); ++i)
+    if (const auto& v = layers[i].opt.values)
+      out[i] = valueScaleUniform(colourScaleFor(*v, layers[i].dataRange));
+  return out;
+}
+
+void updateDataRanges(LayerSet& layers) {
+  for (LayerSlot& slot : layers.slots()) {
+    if (!slot.opt.values || !slot.opt.values->rangeFromData) continue;
+    const ValueLayerOptions& v = *slot.opt.values;
+    LayerTextures& l = *slot.current;
+    std::vector<float> samples;
+    std::unordered_set<NodeKey, NodeKeyHash> seen;
+    for (const Node* n : l.tree->drawList())
+      for (const Node* a = n; a != nullptr; a = a->parent()) {
+        const auto it = l.textures.find(a->key());
+        if (it == l.textures.end()) continue;
+        if (seen.insert(a->key()).second)
+          samples.insert(samples.end(), it->second.sample.begin(), it->second.sample.end());
+        break;
+      }
+    if (auto r = values::rangeFromData(
+            samples, v.lowPercent, v.highPercent, v.scaling == values::Scaling::Log))
+      slot.dataRange = r;
+  }
+}
+
 void bindOverlays(const LayerSet& layers,
                   const Node& region,
                   DrawPart& part,
-                  std::vector<OverlayBinding>& bindings) {
+                  std::vector<OverlayBinding>& bindings,
+                  const std::vector<std::optional<ValueScaleUniform>>& scales) {
   part.overlayBegin = static_cast<std::uint32_t>(bindings.size());
   for (std::size_t i = 1; i < layers.size(); ++i) {
     const LayerSlot& slot = layers[i];
@@ -65,7 +96,8 @@ void bindOverlays(const LayerSet& layers,
       bindings.push_back({&it->second.texture,
                           regionToNodeUv(*part.node, region, ancestorUv(region.key(), a->key())),
                           static_cast<float>(slot.opt.opacity),
-                          slot.opt.night});
+                          slot.opt.night,
+                          i < scales.size() ? scales[i] : std::nullopt});
       break;
     }
   }
@@ -140,6 +172,7 @@ DrawList planDraw(const LayerSet& layers,
       if (root) l.lru.use(root->key());
   });
   LayerTextures& base = layers.base();
+  const auto scales = valueScales(layers);
   stats.mergedNodesDrawn = 0;
   for (const Node* n : layers.geo().drawList()) {
     if (n->key().span > 1) ++stats.mergedNodesDrawn;
@@ -173,7 +206,7 @@ DrawList planDraw(const LayerSet& layers,
       }
       list.parts.push_back(partFor(*n, *p.region, *texture, uv));
       if (own != nullptr) planFade(base, global, *own, *from, *p.region, nowS, fadeInS, list);
-      bindOverlays(layers, *p.region, list.parts.back(), list.bindings);
+      bindOverlays(layers, *p.region, list.parts.back(), list.bindings, scales);
     }
   }
   return list;

@@ -12,6 +12,7 @@
 
 #include "GlObjects.hpp"
 #include "LayerSet.hpp"
+#include "ValueTexture.hpp"
 
 #include <tellus/planet/Quadtree.hpp>
 #include <tellus/planet/TextureFallback.hpp>
@@ -41,14 +42,25 @@ struct DrawPart {
 };
 
 /** One overlay's texture on a drawn part: the texture, the transform of the node's coordinates
- * into it, the layer's opacity, and whether it is a night layer (LayerOptions::night: shown on
- * the dark side only, as light). */
+ * into it, the layer's opacity, whether it is a night layer (LayerOptions::night: shown on
+ * the dark side only, as light), and for a layer of values its colour scale (issue 24). */
 struct OverlayBinding {
   const GlTexture* texture = nullptr;
   UvTransform uv;
   float opacity = 0.0f;
   bool night = false;
+  std::optional<ValueScaleUniform> values; ///< a layer of values: texture holds floats
 };
+
+/** The colour scale of each layer of values at this frame (by slot; nullopt for imagery): its
+ * options and, for `range: data`, slot.dataRange. */
+std::vector<std::optional<ValueScaleUniform>> valueScales(const LayerSet& layers);
+
+/** `range: data` (ValueLayerOptions::rangeFromData): each such layer's dataRange from the
+ * samples of the textures its drawn nodes show (the node's own, else its nearest resident
+ * ancestor's; each texture once): bounded by the draw list's size times kDataRangeSample. A
+ * layer with nothing resident keeps the range it had. */
+void updateDataRanges(LayerSet& layers);
 
 struct DrawList {
   std::vector<DrawPart> parts;
@@ -76,7 +88,8 @@ DrawPart partFor(const Node& node,
 void bindOverlays(const LayerSet& layers,
                   const Node& region,
                   DrawPart& part,
-                  std::vector<OverlayBinding>& bindings);
+                  std::vector<OverlayBinding>& bindings,
+                  const std::vector<std::optional<ValueScaleUniform>>& scales = {});
 
 /** The frame's draw list (see the file comment): every layer's roots marked used (they stay
  * resident like the global texture: the streamer wants them until they are, so evicting one would

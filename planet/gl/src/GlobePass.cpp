@@ -5,10 +5,12 @@
 #include "Shaders.hpp"
 
 #include <tellus/planet/GpuVertex.hpp>
+#include <tellus/values/ColourMap.hpp>
 
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <vector>
 
 namespace tellus::planet {
 
@@ -22,7 +24,8 @@ GlobePass::create(const GlCapabilities& gl, const GlobePassOptions& options, Nod
   if (options.fisheye) defines += "#define TELLUS_FISHEYE 1\n";
   GLint units = 16;
   glGetIntegerv(GL_MAX_TEXTURE_IMAGE_UNITS, &units);
-  p->overlaysPerPass_ = std::clamp(units - 2, 1, 8); // unit 0 the base, the last the fade's
+  // Unit 0 the base, then the overlays, the fade's, the colour maps'.
+  p->overlaysPerPass_ = std::clamp(units - 3, 1, 8);
   if (options.overlaysPerPass > 0)
     p->overlaysPerPass_ = std::min(p->overlaysPerPass_, options.overlaysPerPass);
   std::string fragDefines = "#define TELLUS_OVERLAYS " + std::to_string(p->overlaysPerPass_) +
@@ -53,6 +56,7 @@ GlobePass::create(const GlCapabilities& gl, const GlobePassOptions& options, Nod
   for (int i = 0; i < p->overlaysPerPass_; ++i)
     glUniform1i(glGetUniformLocation(id, ("uOverlay[" + std::to_string(i) + "]").c_str()), 1 + i);
   p->initFade();
+  p->initColourMaps();
   glUseProgram(0);
   return p;
 }
@@ -65,6 +69,35 @@ void GlobePass::initFade() {
   uFade_ = glGetUniformLocation(id, "uFade");
   uMorph_ = glGetUniformLocation(id, "uMorph");
   glUniform1i(uFadeFrom_, 1 + overlaysPerPass_);
+}
+
+void GlobePass::initColourMaps() {
+  const GLuint id = program_.id();
+  uOverlayValues_ = glGetUniformLocation(id, "uOverlayValues");
+  uOverlayRange_ = glGetUniformLocation(id, "uOverlayRange");
+  glUniform1i(glGetUniformLocation(id, "uColourMaps"), 2 + overlaysPerPass_);
+  const auto maps = values::colourMaps();
+  std::vector<std::uint8_t> rgba;
+  for (const values::ColourMap& m : maps)
+    for (const values::Rgb8& c : *m.table)
+      rgba.insert(rgba.end(), {c[0], c[1], c[2], 255});
+  colourMaps_ = GlTexture();
+  glActiveTexture(GL_TEXTURE2 + static_cast<GLenum>(overlaysPerPass_));
+  glBindTexture(GL_TEXTURE_2D, colourMaps_.id());
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  glTexImage2D(GL_TEXTURE_2D,
+               0,
+               GL_RGBA8,
+               256,
+               static_cast<GLsizei>(maps.size()),
+               0,
+               GL_RGBA,
+               GL_UNSIGNED_BYTE,
+               rgba.data());
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glActiveTexture(GL_TEXTURE0);
 }
 
 void GlobePass::setFade(const DrawPart& p) {
@@ -85,6 +118,8 @@ void GlobePass::setFrameUniforms(const FrameContext& frame) {
   }
   glUseProgram(program_.id());
   glUniform1i(uTexture_, 0);
+  glActiveTexture(GL_TEXTURE2 + static_cast<GLenum>(overlaysPerPass_));
+  glBindTexture(GL_TEXTURE_2D, colourMaps_.id());
   glActiveTexture(GL_TEXTURE0);
   // One view-projection for every node, rotation only (the eye at the origin); positions arrive
   // as doubles or high/low float pairs and the shader subtracts the eye's.
@@ -153,6 +188,8 @@ void GlobePass::drawPart(const DrawPart& p,
   std::array<GLfloat, 32> uvs{};
   std::array<GLfloat, 8> opacities{};
   std::array<GLfloat, 8> night{};
+  std::array<GLfloat, 32> valueInfo{}; // per overlay: values?, map row, log?, transparent out?
+  std::array<GLfloat, 16> ranges{};    // per overlay: low, high (log: log10)
   const GpuMesh& m = meshes_.meshFor(*p.node, stats);
   const std::array<float, 4> uv = uvUniform(p.uv);
   glUniform4f(uUv_, uv[0], uv[1], uv[2], uv[3]);
@@ -164,6 +201,14 @@ void GlobePass::drawPart(const DrawPart& p,
     std::copy(u.begin(), u.end(), uvs.begin() + static_cast<std::ptrdiff_t>(4 * i));
     opacities[i] = b.opacity;
     night[i] = b.night ? 1.0f : 0.0f;
+    if (b.values) {
+      valueInfo[4 * i] = 1.0f;
+      valueInfo[4 * i + 1] = static_cast<GLfloat>(b.values->mapRow);
+      valueInfo[4 * i + 2] = b.values->log ? 1.0f : 0.0f;
+      valueInfo[4 * i + 3] = b.values->transparentOut ? 1.0f : 0.0f;
+      ranges[2 * i] = static_cast<GLfloat>(b.values->low);
+      ranges[2 * i + 1] = static_cast<GLfloat>(b.values->high);
+    }
   }
   setFade(p);
   glUniform1i(uOverlayCount_, static_cast<GLint>(count));
@@ -171,6 +216,8 @@ void GlobePass::drawPart(const DrawPart& p,
     glUniform4fv(uOverlayUv_, static_cast<GLsizei>(count), uvs.data());
     glUniform1fv(uOverlayOpacity_, static_cast<GLsizei>(count), opacities.data());
     glUniform1fv(uOverlayNight_, static_cast<GLsizei>(count), night.data());
+    glUniform4fv(uOverlayValues_, static_cast<GLsizei>(count), valueInfo.data());
+    glUniform2fv(uOverlayRange_, static_cast<GLsizei>(count), ranges.data());
   }
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, p.texture->id());

@@ -13,6 +13,8 @@
  * subtraction, else high/low float pairs (GpuVertex.hpp). Lit by the sun (FrameContext::sunlight:
  * issue 23): the day side by the relief's normals, the night side dark with the night layers'
  * light, a soft terminator by the sun's elevation over the ellipsoid (shaders/planet.frag).
+ * Layers of values (issue 24): their float textures on the overlays' units, coloured in the
+ * shader through the colour maps' texture (one unit, after the fade's) by ColourScale.hpp's rule.
  *
  * Main thread, context current.
  */
@@ -57,6 +59,7 @@ private:
   void setFrameUniforms(const FrameContext& frame);
   void initFade();
   void setFade(const DrawPart& part); ///< the part's fade-in (DrawPart::fade) uniforms
+  void initColourMaps();              ///< the colour maps' texture (layers of values, issue 24)
   void drawPart(const DrawPart& part,
                 const DrawList& list,
                 std::uint32_t from,
@@ -72,6 +75,10 @@ private:
   GLint uSun_ = -1, uBase_ = -1, uOverlayCount_ = -1, uOverlayUv_ = -1, uOverlayOpacity_ = -1;
   GLint uOverlayNight_ = -1, uPolarScale_ = -1;
   GLint uFadeFrom_ = -1, uFadeUv_ = -1, uFade_ = -1, uMorph_ = -1;
+  GLint uOverlayValues_ = -1, uOverlayRange_ = -1;
+  /** Every values::colourMaps() table, one row each (256 x maps, RGBA8), on the unit after the
+   * fade's: what planet.frag colours layers of values with. */
+  GlTexture colourMaps_{NoCreate};
   double morphScale_ = 0.0;
 };
 

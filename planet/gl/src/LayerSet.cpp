@@ -82,14 +82,14 @@ std::expected<void, std::string> LayerSet::open() {
   LayerSlot base;
   base.opt.layer = options_.layer;
   base.opt.time = options_.time;
-  auto made = make(base.opt.layer, base.opt.time, false, -1);
+  auto made = makeFor(base, base.opt.time, false, -1);
   if (!made) return std::unexpected(made.error());
   base.current = std::move(*made);
   slots_.push_back(std::move(base));
   for (const LayerOptions& o : options_.overlays) {
     LayerSlot slot;
     slot.opt = o;
-    auto l = make(o.layer, o.time, true, o.maxLevel);
+    auto l = makeFor(slot, o.time, true, o.maxLevel);
     if (!l) return std::unexpected(l.error());
     slot.current = std::move(*l);
     slots_.push_back(std::move(slot));
@@ -135,6 +135,13 @@ LayerSet::make(const std::string& name, const std::string& time, bool overlay, i
   return l;
 }
 
+std::expected<std::unique_ptr<LayerTextures>, std::string>
+LayerSet::makeFor(const LayerSlot& slot, const std::string& time, bool overlay, int maxLevel) {
+  auto l = make(slot.opt.layer, time, overlay, maxLevel);
+  if (l && slot.opt.values) (*l)->valueFormat = slot.opt.values->format;
+  return l;
+}
+
 LayerTextures* LayerSet::byTag(int tag) const {
   for (const LayerSlot& l : slots_) {
     if (l.current && l.current->tag == tag) return l.current.get();
@@ -173,7 +180,7 @@ void LayerSet::setMaxLevel(std::size_t layer, int maxLevel) {
   slot.opt.maxLevel = maxLevel;
   const std::string time = slot.pending ? slot.pending->time : slot.current->time;
   slot.dropPending();
-  auto l = make(slot.opt.layer, time, layer > 0, maxLevel);
+  auto l = makeFor(slot, time, layer > 0, maxLevel);
   if (!l) throw std::invalid_argument(l.error());
   // The same levels (the limit lies past the layer's own) at the same time: nothing to swap.
   if ((*l)->grid.numLevels() == slot.current->grid.numLevels() && time == slot.current->time)
@@ -198,7 +205,7 @@ void LayerSet::setTime(std::size_t layer, std::string time) {
   slot.dropPending(); // replaced, or cancelled by going back to the current time
   slot.opt.time = time;
   if (time == slot.current->time && slot.current->grid.numLevels() == levelsFor(slot)) return;
-  auto l = make(slot.opt.layer, time, layer > 0, slot.opt.maxLevel);
+  auto l = makeFor(slot, time, layer > 0, slot.opt.maxLevel);
   if (!l) throw std::invalid_argument(l.error());
   slot.pending = std::move(*l);
 }

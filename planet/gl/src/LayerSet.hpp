@@ -24,12 +24,14 @@
 #include <tellus/planet/TextureLru.hpp>
 #include <tellus/planet/TextureStreamer.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
+#include <tellus/values/ColourScale.hpp>
 
 #include <cstddef>
 #include <cstdint>
 #include <expected>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -50,6 +52,8 @@ struct LayerTextures {
   std::string layer;
   std::string time;
   bool overlay = false;
+  /** A layer of values (LayerOptions::values): its tiles decoded as floats (ValueTexture.hpp). */
+  std::optional<values::ValueFormat> valueFormat;
   TileGrid grid;
   int texWidth = 0, texHeight = 0; ///< the grid's tile size: its node textures' size
   int texLevels = 1;
@@ -91,6 +95,9 @@ struct LayerSlot {
   LayerOptions opt;
   std::unique_ptr<LayerTextures> current;
   std::unique_ptr<LayerTextures> pending;
+  /** A layer of values with `range: data`: the range of the values its drawn nodes show, as
+   * planDraw last found it (nullopt: none yet). */
+  std::optional<values::ValueRange> dataRange;
   std::size_t swaps = 0;
   std::size_t retiredRequested = 0; ///< tiles of times no longer drawn
   std::size_t retiredReceived = 0;
@@ -125,6 +132,9 @@ public:
    * and its own tile size, its streamer, and its share of the texture budget. */
   std::expected<std::unique_ptr<LayerTextures>, std::string>
   make(const std::string& name, const std::string& time, bool overlay, int maxLevel);
+  /** make() for the slot's layer (its values' format too). */
+  std::expected<std::unique_ptr<LayerTextures>, std::string>
+  makeFor(const LayerSlot& slot, const std::string& time, bool overlay, int maxLevel);
 
   std::size_t size() const noexcept { return slots_.size(); }
   LayerSlot& operator[](std::size_t i) { return slots_[i]; }

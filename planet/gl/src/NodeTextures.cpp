@@ -15,6 +15,20 @@ int nodeTextureLevels(int width, int height) noexcept {
 }
 
 GlTexture makeNodeTexture(int width, int height, const NodeTextureFormat& format) {
+  if (format.values) { // one level of floats, never filtered (planet.frag reads it by texelFetch)
+    GlTexture texture;
+    glBindTexture(GL_TEXTURE_2D, texture.id());
+    if (format.storage)
+      glTexStorage2D(GL_TEXTURE_2D, 1, GL_R32F, width, height);
+    else
+      glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, width, height, 0, GL_RED, GL_FLOAT, nullptr);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    return texture;
+  }
   const auto levels = static_cast<GLsizei>(nodeTextureLevels(width, height));
   GlTexture texture;
   glBindTexture(GL_TEXTURE_2D, texture.id());

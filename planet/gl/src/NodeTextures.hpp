@@ -9,6 +9,7 @@
 #include "GlObjects.hpp"
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
 #include <vector>
@@ -20,6 +21,8 @@ namespace tellus::planet {
 struct NodeTextureFormat {
   bool storage = false;
   float anisotropy = 1.0f;
+  /** A layer of values (issue 24): one level of R32F, nearest filtering (ValueTexture.hpp). */
+  bool values = false;
 };
 
 /** The mip levels of a width x height texture: every level down to 1 x 1, as the decoder builds
@@ -27,7 +30,7 @@ struct NodeTextureFormat {
 int nodeTextureLevels(int width, int height) noexcept;
 
 /** A new node texture of that size with all its levels allocated, linear-mipmap filtered,
- * clamped at its edges. Left bound to GL_TEXTURE_2D. */
+ * clamped at its edges (format.values: one R32F level, nearest). Left bound to GL_TEXTURE_2D. */
 GlTexture makeNodeTexture(int width, int height, const NodeTextureFormat& format);
 
 /** A node texture and whether it is wider than its layer's tiles (a polar cap's: never pooled). */
@@ -37,6 +40,12 @@ struct NodeTexture {
   /** The frame time (RendererOptions::frameClock, s) it was first drawn at, for its fade-in; NaN:
    * not drawn yet; -infinity: shown at once (no fade: a layer time swapped in whole). */
   double shownSinceS = std::numeric_limits<double>::quiet_NaN();
+  /** A layer of values: a bounded sample of its finite values (`range: data`), and the texture's
+   * floats kept on the CPU (rows from the south, 4 bytes each; width x height) for the value
+   * under the cursor (Renderer::layerValueAt). */
+  std::vector<float> sample{};
+  std::vector<std::uint8_t> values{};
+  int width = 0, height = 0;
 };
 
 /** The free node textures of one layer. Every node texture of a layer has its grid's tile size

@@ -9,6 +9,7 @@
 #include "RendererImpl.hpp"
 #include "StarsPass.hpp"
 #include "TextureIntake.hpp"
+#include "ValueTexture.hpp"
 
 #include <tellus/planet/Morph.hpp>
 #include <tellus/planet/TextureFallback.hpp>
@@ -168,7 +169,7 @@ void Renderer::Impl::warmUp() {
   if (layers.size() > 1) { // the program with overlays, and a second pass
     const auto n = static_cast<std::uint32_t>(stats.overlaysPerPass + 1);
     for (std::uint32_t i = 0; i < n; ++i)
-      list.bindings.push_back({&texture, UvTransform{}, 0.0f, false});
+      list.bindings.push_back({&texture, UvTransform{}, 0.0f, false, std::nullopt});
     list.parts.back().overlayEnd = n;
   }
   const Camera cam(geodesy, CameraPose{}, {opt.width, opt.height}, opt.verticalFovDeg);
@@ -259,10 +260,25 @@ void Renderer::Impl::draw(const Camera& camera, const DrawList& list) {
                    geo.drawList(),
                    terrain.heightAt(camera.pose().latDeg, camera.pose().lonDeg),
                    stats);
+  if (opt.legend) drawLegends();
   if (opt.visibleWindow) {
     const SceneFramebuffer& fb = scene->framebuffer();
     presenter.present(context->window(), fb.id(), fb.width(), fb.height());
   }
+}
+
+void Renderer::Impl::drawLegends() {
+  std::vector<LegendEntry> entries;
+  for (const LayerSlot& slot : layers.slots()) {
+    if (!slot.opt.values || !slot.opt.visible || !(slot.opt.opacity > 0.0)) continue;
+    const ValueLayerOptions& v = *slot.opt.values;
+    entries.push_back({colourScaleFor(v, slot.dataRange),
+                       v.format.unit,
+                       v.title.empty() ? slot.opt.layer : v.title});
+  }
+  if (entries.empty()) return;
+  const SceneFramebuffer& fb = scene->framebuffer();
+  legends.draw(entries, fb.id(), fb.width(), fb.height(), opt.dome.has_value());
 }
 
 void Renderer::Impl::houseKeeping() {
@@ -322,6 +338,7 @@ void Renderer::frame(const CameraPose& pose) {
   intakeTextures(m.layers, m.decoder, m.uploads, m.stats);
   ph.intake = lap();
   // What this frame draws, and the LRU told so before anything new is inserted.
+  updateDataRanges(m.layers); // `range: data` of layers of values (issue 24)
   DrawList list = planDraw(m.layers, m.globalTexture, m.stats, frameS, m.opt.fadeInSeconds);
   // A fade in progress is not the settled image (RendererOptions::fadeInSeconds).
   const bool complete = !list.fading && drawsWhatLodAsks(m.layers, tree, [&m](const Node& n) {
@@ -445,6 +462,35 @@ void Renderer::setLayerMaxLevel(std::size_t layer, int maxLevel) {
   impl_->context->makeCurrent();
   impl_->layers.setMaxLevel(layer, maxLevel);
 }
+std::optional<ValueLayerOptions> Renderer::layerValues(std::size_t layer) const {
+  if (layer >= impl_->layers.size()) return std::nullopt;
+  return impl_->layers[layer].opt.values;
+}
+
+void Renderer::setLayerValues(std::size_t layer, const ValueLayerOptions& v) {
+  if (layer >= impl_->layers.size() || !impl_->layers[layer].opt.values)
+    throw std::invalid_argument("only a layer of values has a colour scale");
+  values::ColourScale s{values::findColourMap(v.colourMap), v.min, v.max, v.scaling, v.outOfRange};
+  if (auto ok = values::checkScale(s); !ok) throw std::invalid_argument(ok.error());
+  if (!(v.min < v.max)) throw std::invalid_argument("the range must be min < max");
+  ValueLayerOptions& now = *impl_->layers[layer].opt.values;
+  const values::ValueFormat format = now.format; // the tiles' format never changes here
+  now = v;
+  now.format = format;
+}
+
+std::optional<float> Renderer::layerValueAt(std::size_t layer, double latDeg, double lonDeg) const {
+  if (layer >= impl_->layers.size() || !impl_->layers[layer].opt.values) return std::nullopt;
+  return valueAtPoint(*impl_->layers[layer].current, latDeg, lonDeg);
+}
+
+void Renderer::setLegend(bool on) {
+  impl_->opt.legend = on;
+}
+bool Renderer::legend() const noexcept {
+  return impl_->opt.legend;
+}
+
 void Renderer::moveLayer(std::size_t from, std::size_t to) {
   impl_->layers.move(from, to);
 }

@@ -23,6 +23,7 @@
 
 #include "GlContext.hpp"
 #include "LayerSet.hpp"
+#include "LegendOverlay.hpp"
 #include "NodeMeshes.hpp"
 #include "NodeTextures.hpp"
 #include "SceneDraw.hpp"
@@ -70,6 +71,8 @@ struct Renderer::Impl {
   void buildMeshes(View& view);
   /** The draw phase: the scene (SceneDraw) and, for a visible window, the presentation. */
   void draw(const Camera& camera, const DrawList& list);
+  /** The legends of the visible layers of values, into the scene's framebuffer. */
+  void drawLegends();
   /** The end of the frame's work: tiles that arrived for nodes gone from view are dropped after a
    * while (asked again if needed), unused meshes too, and the window's events polled. */
   void houseKeeping();
@@ -91,6 +94,7 @@ struct Renderer::Impl {
   GlTexture globalTexture{NoCreate}; ///< always resident: the last fallback
   std::unique_ptr<SceneDraw> scene;
   GlobePass* globePass = nullptr; ///< the scene's globe pass (owned by scene): its morph scale
+  LegendOverlay legends;          ///< the layers of values' legends (RendererOptions::legend)
   WindowPresenter presenter;
   RenderStats stats;
   bool lastComplete = false;

@@ -1,6 +1,7 @@
 #include "TextureDecoder.hpp"
 
 #include "Codec.hpp"
+#include "ValueTexture.hpp"
 
 #include <algorithm>
 #include <cerrno>
@@ -63,6 +64,7 @@ decodeTile(const DecodeJob& job, std::size_t t, const ImageDecoder& other) {
 } // namespace
 
 DecodedTexture decodeTexture(const DecodeJob& job, const ImageDecoder& other) {
+  if (job.valueFormat) return decodeValueTexture(job);
   DecodedTexture out;
   out.key = job.key;
   out.tag = job.tag;

@@ -2,9 +2,12 @@
 // Decoding node textures on worker threads: the tiles of a node (one, or `span` tiles of a merged
 // polar node, composed side by side and down-sampled east-west) become one RGBA8 image of the
 // grid's tile size, rows from the south (GL's first row), with every mip level built on the CPU.
+// A layer of values (issue 24; DecodeJob::valueFormat) becomes one level of floats instead
+// (ValueTexture.hpp).
 
 #include <tellus/planet/Quadtree.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
+#include <tellus/values/ValueFormat.hpp>
 
 #include <condition_variable>
 #include <cstddef>
@@ -21,7 +24,7 @@ namespace tellus::planet {
 struct MipLevel {
   int width = 0;
   int height = 0;
-  std::vector<std::uint8_t> rgba; ///< rows from the south
+  std::vector<std::uint8_t> rgba; ///< rows from the south (values: 4 bytes a float, R32F)
 };
 
 struct DecodeJob {
@@ -38,6 +41,8 @@ struct DecodeJob {
   /** Absent tiles (and texels no tile covers) transparent rather than dark: overlay layers. */
   bool transparent = false;
   int tag = 0; ///< the caller's, returned in DecodedTexture (which layer the texture is for)
+  /** A layer of values: its tiles are raw samples read by values::decode (ValueTexture.hpp). */
+  std::optional<values::ValueFormat> valueFormat;
 };
 
 /** Colours are premultiplied by alpha (an opaque texture is unchanged), so that filtering and mip
@@ -49,6 +54,10 @@ struct DecodedTexture {
   std::string error;
   std::vector<MipLevel> levels; ///< level 0 first, down to 1 x 1
   std::size_t bytes = 0;        ///< all levels
+  /** A layer of values: levels is one level of floats (R32F, NaN = no data), and sample a few
+   * of its finite values (ValueLayerOptions::kDataRangeSample at most) for `range: data`. */
+  bool values = false;
+  std::vector<float> sample;
 };
 
 /** Composes, resamples and builds the mip chain (pure; what the workers run). JPEG and PNG

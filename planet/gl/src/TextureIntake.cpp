@@ -40,6 +40,7 @@ std::optional<DecodeJob> takeDecodeJob(LayerTextures& l, Node& node) {
   job.tileHeight = l.texHeight;
   job.transparent = l.overlay;
   job.tag = l.tag;
+  job.valueFormat = l.valueFormat;
   for (std::int64_t i = 0; i < textureTileCount(k); ++i) {
     const auto it = l.received.find(textureTile(k, i));
     if (it == l.received.end()) {

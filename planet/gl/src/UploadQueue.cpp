@@ -38,12 +38,14 @@ void UploadQueue::step(LayerSet& layers,
       queue_.pop_front();
       continue;
     }
+    NodeTextureFormat layerFormat = format;
+    layerFormat.values = u.texture.values; // R32F, one level (ValueTexture.hpp)
     if (!u.gl.texture.created())
       u.gl = l->pool.acquire(u.texture.levels.front().width,
                              u.texture.levels.front().height,
                              l->texWidth,
                              l->texHeight,
-                             format,
+                             layerFormat,
                              &stats.texturesReused);
     const MipLevel& level = u.texture.levels[u.level];
     const auto rowBytes = static_cast<std::size_t>(level.width) * 4;
@@ -55,8 +57,8 @@ void UploadQueue::step(LayerSet& layers,
                     u.row,
                     level.width,
                     rows,
-                    GL_RGBA,
-                    GL_UNSIGNED_BYTE,
+                    u.texture.values ? GL_RED : GL_RGBA,
+                    u.texture.values ? GL_FLOAT : GL_UNSIGNED_BYTE,
                     level.rgba.data() + static_cast<std::size_t>(u.row) * rowBytes);
     const std::size_t sent = static_cast<std::size_t>(rows) * rowBytes;
     stats.bytesUploaded += sent;
@@ -66,6 +68,12 @@ void UploadQueue::step(LayerSet& layers,
     u.row = 0;
     if (++u.level < u.texture.levels.size()) continue;
     // Complete: drawable from the next frame on.
+    u.gl.sample = std::move(u.texture.sample);
+    if (u.texture.values) { // kept for the value under the cursor (ValueTexture.hpp)
+      u.gl.width = u.texture.levels.front().width;
+      u.gl.height = u.texture.levels.front().height;
+      u.gl.values = std::move(u.texture.levels.front().rgba);
+    }
     l->install(u.texture.key, std::move(u.gl), u.texture.bytes);
     ++stats.texturesUploaded;
     queue_.pop_front();

@@ -1,3 +1,5 @@
+#include "ViewerValues.hpp"
+
 #include <tellus/planet/SceneTime.hpp>
 #include <tellus/planet_gl/Viewer.hpp>
 
@@ -149,6 +151,7 @@ private:
   std::size_t selected_ = 0;                         ///< the layer [ ] - = act on
   std::vector<std::size_t> timeIndex_;
   double lastX_ = 0.0, lastY_ = 0.0;
+  std::pair<double, double> cursor_{0.0, 0.0}; ///< window coordinates
   bool dragging_ = false;
   Flight flight_;
   bool screenshotHeld_ = false;
@@ -368,7 +371,7 @@ void ViewerLoop::updateTitle(Clock::time_point now) {
   const double sinceTitle = std::chrono::duration<double>(now - lastTitle_).count();
   if (sinceTitle < 0.5) return;
   const auto& s = renderer_.stats();
-  char title[256];
+  char title[384];
   std::snprintf(title,
                 sizeof title,
                 "tellus  %.0f fps  %zu nodes  level %d  %zu tiles in flight  %.0f MB  "
@@ -388,6 +391,17 @@ void ViewerLoop::updateTitle(Clock::time_point now) {
     const std::size_t used = std::strlen(title);
     std::snprintf(title + used, sizeof title - used, "  %s x%g", t.c_str(), sceneClock_->rate());
   }
+  int ww = 0, wh = 0; // the value under the cursor (issue 24), window to framebuffer pixels
+  glfwGetWindowSize(window_, &ww, &wh);
+  const std::string value = valueUnderCursor(
+      renderer_,
+      selected_,
+      cursor_.first * (ww > 0 ? static_cast<double>(renderer_.width()) / ww : 1.0),
+      cursor_.second * (wh > 0 ? static_cast<double>(renderer_.height()) / wh : 1.0));
+  if (!value.empty()) {
+    const std::size_t used = std::strlen(title);
+    std::snprintf(title + used, sizeof title - used, "  %s", value.c_str());
+  }
   glfwSetWindowTitle(window_, title);
   renderer_.setOverlayText(title + 7); // the same line on screen, without "tellus  "
   lastTitle_ = now;
@@ -405,6 +419,7 @@ std::uint64_t ViewerLoop::run() {
     renderer_.resize(fw, fh);
     double x = 0.0, y = 0.0;
     glfwGetCursorPos(window_, &x, &y);
+    cursor_ = {x, y};
     const bool pressed = glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
     if (input_.doubleClick) flyToDoubleClick();
     drag(x, y, pressed);
@@ -413,7 +428,8 @@ std::uint64_t ViewerLoop::run() {
     if (flight_.active) pose_ = flight_.at(dt);
     bool layersChanged = false;
     for (const int key : input_.keys)
-      if (!timeKey(key)) layersChanged = layerKey(key) || layersChanged;
+      if (!timeKey(key))
+        layersChanged = valueKey(renderer_, selected_, key) || layerKey(key) || layersChanged;
     input_.keys.clear();
     // The scene's time with the wall clock; at more than 10x real time the sun moves visibly:
     // every frame is drawn, not twice a second.

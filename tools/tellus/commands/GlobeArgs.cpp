@@ -27,7 +27,8 @@ std::vector<cli::OptionSpec> globeOptions() {
           {"no-geomorph", K::Flag}, {"exaggeration", K::Value},  {"min-relief-px", K::Value},
           {"sun", K::Value},        {"overlay", K::Value, true}, {"dome", K::OptionalValue},
           {"dome-tilt", K::Value},  {"dome-method", K::Value},   {"time", K::Value},
-          {"no-sun", K::Flag},      {"no-night", K::Flag}};
+          {"no-sun", K::Flag},      {"no-night", K::Flag},       {"legend", K::Flag},
+          {"no-legend", K::Flag}};
 }
 
 std::expected<std::optional<EarthModel>, std::string> earthArg(const cli::Args& a) {

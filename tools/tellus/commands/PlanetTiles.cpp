@@ -20,6 +20,36 @@ bool drawsStars(const char* cmd) {
   return std::string_view(cmd) != "height";
 }
 
+/** A value layer (or an elevation layer shown as colours; issue 24) drawn by the renderer: its
+ * format and scale from `layers[].values`, the colour map and range of the renderer's entry when
+ * it gives them (rl may be null: --overlay). nullopt for imagery. */
+std::optional<planet::ValueLayerOptions> valueOptions(const LayerConfig& lc,
+                                                      const RenderLayerSettings* rl) {
+  if (!lc.isValueLayer()) return std::nullopt;
+  const ValueSettings& v = lc.values;
+  planet::ValueLayerOptions o;
+  o.format = v.format;
+  o.colourMap = rl != nullptr && !rl->colourMap.empty() ? rl->colourMap : v.colourMap;
+  o.min = v.min;
+  o.max = v.max;
+  o.scaling = v.scaling;
+  o.outOfRange = v.outOfRange;
+  o.rangeFromData = v.rangeFromData;
+  o.lowPercent = v.lowPercent;
+  o.highPercent = v.highPercent;
+  if (rl != nullptr && rl->range) {
+    o.min = (*rl->range)[0];
+    o.max = (*rl->range)[1];
+    o.rangeFromData = false;
+  }
+  if (o.rangeFromData && o.scaling == values::Scaling::Log && !(o.min > 0.0)) {
+    o.min = 1.0; // the fallback until the data gives a range: any valid log range
+    o.max = 10.0;
+  }
+  o.title = lc.title.empty() ? lc.name : lc.title;
+  return o;
+}
+
 /** The layers drawn over the base chosen before (issue #7): renderer.layers[1..] of the
  * configuration, then each --overlay NAME[,OPACITY]; the base's time from renderer.layers[0] when
  * it is the base. Regional datasets (renderer.layers[].regional, renderer.terrain.regional) make
@@ -46,6 +76,7 @@ public:
       o.visible = l.visible;
       o.maxLevel = l.maxLevel;
       o.night = l.night;
+      if (lc != nullptr) o.values = valueOptions(*lc, &l);
       ro_.overlays.push_back(o);
       combine(l.layer, l.regional);
     }
@@ -70,12 +101,14 @@ public:
       }
       o.opacity = (*op)[0];
     }
-    if (o.layer.empty() ||
-        (config_ != nullptr && (lc == nullptr || lc->kind != LayerKind::Imagery))) {
-      std::fprintf(
-          stderr, "tellus %s: --overlay must name an imagery layer, got '%s'\n", cmd, v.c_str());
+    if (o.layer.empty() || (config_ != nullptr && lc == nullptr)) {
+      std::fprintf(stderr,
+                   "tellus %s: --overlay must name an imagery or value layer, got '%s'\n",
+                   cmd,
+                   v.c_str());
       return false;
     }
+    if (lc != nullptr) o.values = valueOptions(*lc, nullptr);
     ro_.overlays.push_back(o);
     return true;
   }
@@ -228,6 +261,7 @@ std::expected<PlanetTiles, int> openRemote(const cli::Args& a,
     terrain = terrain && loaded->renderer.terrain.enabled;
     t.sceneTime = loaded->renderer.time;
     t.night = loaded->renderer.night;
+    t.legend = loaded->renderer.legend;
     settings = loaded->renderer;
   }
   ro.atmosphere = atmosphereOptions(settings.atmosphere); // the configuration's default: on
@@ -312,6 +346,7 @@ openLocal(const cli::Args& a, const char* cmd, planet::RendererOptions& ro) {
   applyRendererSettings(config.renderer, a, ro, t.earth);
   t.sceneTime = config.renderer.time;
   t.night = config.renderer.night;
+  t.legend = config.renderer.legend;
   if (auto bad = applyTerrainArgs(a, ro)) {
     std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());
     return std::unexpected(kExitUsage);

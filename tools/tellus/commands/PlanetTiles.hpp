@@ -40,6 +40,8 @@ struct PlanetTiles {
   /** The configuration's `renderer.time` ("" = none) and `renderer.night` (issue 23). */
   std::string sceneTime;
   bool night = true;
+  /** The configuration's `renderer.legend` (issue 24); nullopt: the command's default. */
+  std::optional<bool> legend;
 };
 
 /** The tile source and the layers for command `cmd` ("render", "view", "height"), filling `ro`

@@ -366,6 +366,8 @@ int runRender(const cli::Args& a) {
     return kExitUsage;
   }
   hideNightLayers(a, tiles->night, ro);
+  // Legends of value layers (issue 24): off in render unless --legend or renderer.legend.
+  ro.legend = a.flag("legend") || (!a.flag("no-legend") && tiles->legend.value_or(false));
   // Fading (renderer.fade_in) is for frames a viewer watches: --wait-complete writes only settled
   // images, which a fade would only delay (the image is the same: a fade ends before a frame is
   // complete). A flight as streamed fades on the flight's time.

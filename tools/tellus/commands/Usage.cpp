@@ -48,10 +48,15 @@ commands:
              [--no-fade-in] [--no-geomorph] (renderer.fade_in, renderer.geomorph: no popping)
              [--no-terrain] [--exaggeration X] [--sun LAT,LON]
              [--min-relief-px PX] (renderer.terrain.min_relief_px: heights only where relief shows)
-             [--overlay NAME[,OPACITY]]... (imagery over the base; also renderer.layers);
+             [--overlay NAME[,OPACITY]]... (imagery or value layers over the base, a value
+             layer coloured by its colour map; also renderer.layers)
+             [--legend | --no-legend] the value layers' legends (renderer.legend; default:
+             view on, render off);
              view: 0-9 select a layer (1-9 also show/hide it), - = opacity, , . order,
              ; ' deepest level, [ ] its time; the scene's time: L faster, H slower,
-             J backwards, K pause, N now
+             J backwards, K pause, N now; value layers (the selected, else the first): C next
+             colour map, Z X narrow/widen its range, Q E shift it, G legends; the value under
+             the cursor ends the status line
              render: [--edge-fixing on|off] (off shows the cracks it closes; for comparisons)
              render, view and height: [--geoid on|off] (renderer.geoid: mean-sea-level heights
              onto the ellipsoid, h = H + N)

@@ -78,6 +78,8 @@ int runView(const cli::Args& a) {
     return kExitUsage;
   }
   hideNightLayers(a, tiles->night, ro);
+  // Legends of value layers (issue 24): on in view unless renderer.legend or --no-legend says no.
+  ro.legend = !a.flag("no-legend") && (a.flag("legend") || tiles->legend.value_or(true));
   if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg"; fs::exists(global))
     ro.globalImage = global;
   const Geodesy geodesy(earth->value_or(tiles->earth));

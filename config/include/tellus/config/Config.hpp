@@ -111,6 +111,11 @@ struct RenderLayerSettings {
   /** Overlays: a night layer (issue 23), shown on the dark side only, as light, blended across
    * the terminator by the sun's elevation (planet::LayerOptions::night). */
   bool night = false;
+  /** Overlays that name a value layer (or an elevation layer shown as colours; issue 24): the
+   * colour map and range drawn instead of the layer's own `values.colour_map` / `values.range`
+   * ("" / nullopt: the layer's). */
+  std::string colourMap;
+  std::optional<std::array<double, 2>> range;
 };
 
 /** YAML `renderer.dome` (issue #7): the angular fisheye domemaster of `--dome`. */
@@ -194,6 +199,9 @@ struct RendererSettings {
   double fadeInS = 0.3;
   /** No popping (issue 23): geomorphing of node heights between levels (thesis 6.2.2). */
   bool geomorph = true;
+  /** YAML `renderer.legend` (issue 24): the legends of visible value layers; nullopt: the
+   * command's default (view: shown, render: not; --legend, --no-legend override). */
+  std::optional<bool> legend;
 };
 
 /** YAML `cache`. */

@@ -25,6 +25,8 @@
 #include <tellus/planet/HeightStreamer.hpp>
 #include <tellus/planet/StarCatalogue.hpp>
 #include <tellus/planet/Terrain.hpp>
+#include <tellus/values/ColourScale.hpp>
+#include <tellus/values/ValueFormat.hpp>
 
 #include <array>
 #include <cstddef>
@@ -54,6 +56,32 @@ struct RgbaImage {
 using ImageDecoder = std::function<std::expected<RgbaImage, std::string>(
     std::span<const std::byte> bytes, std::string_view contentType, int width, int height)>;
 
+/** A layer of values (issue 24): its tiles are raw samples (values::decode: BIL, TIFF, 16-bit
+ * PNG) that the renderer keeps as one float per texel (an R32F texture, exact: no rounding of the
+ * values on the GPU) and colours in the shader with the EXACT rule of values/ColourScale.hpp
+ * (t in float, index = clamp(floor(t * 256), 0, 255), the map's entry; no data and, with
+ * OutOfRange::Transparent, values outside the range transparent: the layers below show).
+ * Sampling is the nearest texel (no filtering of values, no mip levels): each texel keeps its
+ * own value's colour, as in the proxy's GetMap of the same tile, so a render and a map agree
+ * texel for texel (a bilinear mix of values would colour values no sample has, and a NaN
+ * neighbour has no mix). */
+struct ValueLayerOptions {
+  values::ValueFormat format; ///< how the tiles' raw samples become values (unit included)
+  std::string colourMap{values::kDefaultColourMap}; ///< a values::colourMaps() name
+  double min = 0.0; ///< the range (a fixed one, or the fallback of rangeFromData)
+  double max = 1.0;
+  values::Scaling scaling = values::Scaling::Linear;
+  values::OutOfRange outOfRange = values::OutOfRange::Clamp;
+  /** The range from the values drawn (`range: data`): the lowPercent and highPercent
+   * percentiles of a bounded sample (at most kDataRangeSample values a texture) of the textures
+   * the layer's visible nodes show, recomputed each frame; min/max until a texture is there. */
+  bool rangeFromData = false;
+  double lowPercent = 0.0;
+  double highPercent = 100.0;
+  std::string title; ///< for the legend ("" = the layer's name)
+  static constexpr std::size_t kDataRangeSample = 256;
+};
+
 /** An imagery layer drawn over the base imagery (issue #7): sea-surface temperature, night lights,
  * clouds. Its tiles must share the base layer's level-zero tile size (a key is the same sector in
  * both); their pixel size may differ. Transparent texels (PNG alpha) and absent tiles show what
@@ -70,6 +98,9 @@ struct LayerOptions {
    * ellipsoid at the point, as Uniview and OpenSpace blend their night textures. Hidden when the
    * globe is unlit (no sunlight, no sunLatLon). */
   bool night = false;
+  /** A layer of values coloured by the renderer (ValueLayerOptions); nullopt: imagery. An
+   * overlay only (the base is opaque imagery). */
+  std::optional<ValueLayerOptions> values{};
 };
 
 /** How the dome is drawn (issue #7; docs/design/dome.md). */
@@ -211,6 +242,10 @@ struct RendererOptions {
    * (planet/Morph.hpp), so that a split or a merge moves heights continuously. Off by default in
    * the library (`renderer.geomorph` defaults to on). */
   bool geomorph = false;
+  /** The legend of each visible layer of values (issue 24; planet/gl/src/LegendOverlay.hpp):
+   * drawn into the frame after the scene (readPixels has it), bottom left or inside a dome's
+   * circle, scaled by an integer factor of the frame's size. Off in the library. */
+  bool legend = false;
   bool visibleWindow = false; ///< a window the user sees (`tellus view`); else hidden
   std::string windowTitle = "tellus";
 };
@@ -379,6 +414,19 @@ public:
   /** The deepest level of a layer fetched and drawn (-1: the layer's own deepest). Swapped in like
    * a time change: the textures the new limit needs first, then all at once. */
   void setLayerMaxLevel(std::size_t layer, int maxLevel);
+  /** Layers of values (issue 24): the options a layer is drawn with now (nullopt for imagery or
+   * an index past the layers), and new ones (the same layer's format; its colour map and range
+   * changed: `view`'s keys). Refused with std::invalid_argument for an imagery layer, an unknown
+   * colour map or a range that is not min < max (log: > 0). */
+  std::optional<ValueLayerOptions> layerValues(std::size_t layer) const;
+  void setLayerValues(std::size_t layer, const ValueLayerOptions& values);
+  /** The value a layer of values holds at a point (its nearest texel of the deepest resident
+   * texture there; values::sample's bilinear rule within it would need the raw tile): NaN for no
+   * data or nothing resident; nullopt for an imagery layer. */
+  std::optional<float> layerValueAt(std::size_t layer, double latDeg, double lonDeg) const;
+  /** Shows or hides the legends (RendererOptions::legend) from the next frame on. */
+  void setLegend(bool on);
+  bool legend() const noexcept;
   /** Moves an overlay to another place in the drawing order (both indices 1..). */
   void moveLayer(std::size_t from, std::size_t to);
   /** Resizes the framebuffer (window resize). */

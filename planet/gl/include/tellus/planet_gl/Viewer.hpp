@@ -16,7 +16,11 @@
  * the sun, the night side, the sky) runs with the wall clock from ViewerOptions::sceneTime: L runs
  * it faster and H slower (x1, x10, x60, x600, x3600, x86400 its pace, real time the slowest), J
  * turns it backwards (or forwards again), K pauses and resumes it, N goes back to now at real
- * time (SceneClock, planet/SceneTime.hpp). The statistics line (fps, nodes drawn, tiles in flight,
+ * time (SceneClock, planet/SceneTime.hpp). Layers of values (issue 24; planet/gl/src/
+ * ViewerValues.hpp): C cycles the colour map of the selected value layer (else the first one),
+ * Z and X narrow and widen its range, Q and E shift it down and up, G shows or hides the
+ * legends; the value under the cursor ("title value unit") ends the statistics line. The
+ * statistics line (fps, nodes drawn, tiles in flight,
  * texture MB, camera, the scene's time and its pace) is drawn at the top left of the window (its
  * own 5 x 7 font, TextOverlay.cpp) and is the window title, refreshed twice a second.
  */
