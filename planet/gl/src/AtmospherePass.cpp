@@ -5,10 +5,13 @@
 #include "GlShader.hpp"
 #include "Shaders.hpp"
 
+#include <tellus/planet/AtmosphereCache.hpp>
+
 #include <glm/glm.hpp>
 
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 
 namespace tellus::planet {
@@ -80,13 +83,17 @@ std::expected<std::unique_ptr<AtmospherePass>, std::string>
 AtmospherePass::create(const GlCapabilities& gl,
                        AtmosphereParameters parameters,
                        double exposure,
-                       const Geodesy& body) {
+                       const Geodesy& body,
+                       const std::string& cacheDir) {
   if (parameters.bottomRadiusM <= 0.0) parameters.bottomRadiusM = body.equatorialRadius();
   if (const std::string bad = parameters.validate(); !bad.empty())
     return std::unexpected("atmosphere: " + bad);
   if (!(exposure > 0.0 && std::isfinite(exposure)))
     return std::unexpected(std::string("atmosphere: the exposure must be positive"));
-  return create(gl, AtmosphereTables::precompute(parameters), exposure, body);
+  AtmosphereCacheResult tables = cachedAtmosphereTables(cacheDir, parameters);
+  if (!tables.note.empty() && !cacheDir.empty() && tables.note.rfind("no file", 0) != 0)
+    std::fprintf(stderr, "tellus: atmosphere tables: %s (computed anew)\n", tables.note.c_str());
+  return create(gl, std::move(tables.tables), exposure, body);
 }
 
 std::expected<std::unique_ptr<AtmospherePass>, std::string> AtmospherePass::create(

@@ -54,13 +54,15 @@ namespace tellus::planet {
 
 class AtmospherePass final : public ScenePass {
 public:
-  /** Computes the tables for `parameters` (its bottom radius <= 0: the body's equatorial radius)
-   * and makes the program and textures. exposure: the display's scale of radiance (solar units). */
+  /** Computes the tables for `parameters` (its bottom radius <= 0: the body's equatorial radius),
+   * or reads them from `cacheDir` (AtmosphereCache.hpp; empty: no cache), and makes the program
+   * and textures. exposure: the display's scale of radiance (solar units). */
   static std::expected<std::unique_ptr<AtmospherePass>, std::string>
   create(const GlCapabilities& gl,
          AtmosphereParameters parameters,
          double exposure,
-         const Geodesy& body);
+         const Geodesy& body,
+         const std::string& cacheDir = {});
 
   /** With tables already computed (tests share one set between contexts). */
   static std::expected<std::unique_ptr<AtmospherePass>, std::string>
@@ -68,7 +70,7 @@ public:
 
   const char* name() const noexcept override { return "atmosphere"; }
   void draw(const FrameContext& frame) override;
-  /** Seconds the tables took to compute. */
+  /** Seconds the tables took to compute (or to read from the cache). */
   double precomputeSeconds() const noexcept { return tables_.precomputeSeconds(); }
   const AtmosphereTables& tables() const noexcept { return tables_; }
 
