@@ -15,6 +15,21 @@ uniform sampler3D uScattering; // Rayleigh + multiple (divided by the Rayleigh p
 uniform sampler3D uMie;
 uniform vec4 uLut; // this table: azimuth size, zenith size, slices (0: the sky's), this slice
 
+// The log of one mu_s row (clamped to the table) of a nu slice, at (umu, ur).
+vec3 muSRow(sampler3D t, float slice, float i, float umu, float ur) {
+  float c = clamp(i, 0.0, uSizes.y - 1.0);
+  vec3 v = texture(t, vec3((slice + (c + 0.5) / uSizes.y) / uSizes.x, umu, ur)).rgb;
+  return log(max(v, vec3(1e-20)));
+}
+vec3 alongMuS(sampler3D t, float slice, float im, float f, float umu, float ur) {
+  vec3 p0 = muSRow(t, slice, im - 1.0, umu, ur), p1 = muSRow(t, slice, im, umu, ur);
+  vec3 p2 = muSRow(t, slice, im + 1.0, umu, ur), p3 = muSRow(t, slice, im + 2.0, umu, ur);
+  float f2 = f * f, f3 = f2 * f;
+  vec3 v = 0.5 * (2.0 * p1 + (p2 - p0) * f + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * f2 +
+                  (-p0 + 3.0 * p1 - 3.0 * p2 + p3) * f3);
+  return exp(clamp(v, min(p1, p2), max(p1, p2)));
+}
+
 void lookupScattering(float h, float mu, float muS, float nu, bool ground, out vec3 rayleigh,
                       out vec3 mie) {
   float rho = rhoOf(h);
@@ -27,10 +42,15 @@ void lookupScattering(float h, float mu, float muS, float nu, bool ground, out v
   float x = clamp((nu + 1.0) / 2.0, 0.0, 1.0) * (uSizes.x - 1.0);
   float slice = min(floor(x), uSizes.x - 2.0);
   float f = x - slice;
-  vec3 uvw0 = vec3((slice + umus) / uSizes.x, umu, ur);
-  vec3 uvw1 = vec3((slice + 1.0 + umus) / uSizes.x, umu, ur);
-  rayleigh = mix(texture(uScattering, uvw0).rgb, texture(uScattering, uvw1).rgb, f);
-  mie = mix(texture(uMie, uvw0).rgb, texture(uMie, uvw1).rgb, f);
+  // Along mu_s: Catmull-Rom through the logarithms of the four nearest rows, held between the
+  // middle two (AtmosphereLookup.cpp's lookupScattering: no kinks at the rows, which showed as
+  // bands parallel to the terminator with a linear blend).
+  float xm = umus * uSizes.y - 0.5;
+  float im = floor(xm);
+  float fm = xm - im;
+  rayleigh = mix(alongMuS(uScattering, slice, im, fm, umu, ur),
+                 alongMuS(uScattering, slice + 1.0, im, fm, umu, ur), f);
+  mie = mix(alongMuS(uMie, slice, im, fm, umu, ur), alongMuS(uMie, slice + 1.0, im, fm, umu, ur), f);
 }
 
 // The sky along a ray (AtmosphereTables::ray without the phases): distance < 0: to the shell's
