@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <iterator>
 #include <system_error>
 #include <unistd.h>
 #include <vector>
@@ -114,10 +113,13 @@ std::expected<AtmosphereTables, std::string> loadAtmosphereTables(const std::fil
                                                                   const AtmosphereParameters& p,
                                                                   const AtmosphereTableSizes& s) {
   const auto start = std::chrono::steady_clock::now();
-  std::ifstream in(file, std::ios::binary);
+  std::ifstream in(file, std::ios::binary | std::ios::ate);
   if (!in) return std::unexpected("no file " + file.string());
-  const std::vector<char> data{std::istreambuf_iterator<char>(in),
-                               std::istreambuf_iterator<char>()};
+  const std::streamoff size = in.tellg();
+  if (size < 0) return std::unexpected("cannot read " + file.string());
+  std::vector<char> data(static_cast<std::size_t>(size));
+  in.seekg(0);
+  if (!in.read(data.data(), size)) return std::unexpected("cannot read " + file.string());
   const std::vector<char> head = describe(p, s);
   const std::size_t fixed = kMagic.size() + head.size();
   if (data.size() < fixed + sizeof(std::uint64_t))

@@ -132,7 +132,7 @@ AtmosphereTables AtmosphereTables::precompute(const AtmosphereParameters& p,
   if (threads <= 0)
     threads = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, 8);
   t.computeTransmittance();
-  t.computeMultiple();
+  t.computeMultiple(threads);
   t.computeScattering(threads);
   t.seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return t;
@@ -193,15 +193,16 @@ toSun(const AtmosphereTables& t, const atmo::Shell& s, double alpha, double h, d
   return t.transmittanceToTop(h, muS) * smoothstep(-sinH * alpha, sinH * alpha, muS - cosH);
 }
 
-void AtmosphereTables::computeMultiple() {
+void AtmosphereTables::computeMultiple(int threads) {
   // Hillaire 2020, section 5.5: L_2nd and f_ms over 8 x 8 directions of the sphere (equal areas),
   // 20 steps each; Psi_ms = L_2nd / (1 - f_ms). A sun of irradiance 1.
   const atmo::Shell s(p_);
   const int w = s_.multipleW, hgt = s_.multipleH;
   multiple_.assign(sz(w * hgt * 3), 0.0f);
   constexpr int kDirs = 8, kSteps = 20;
-  for (int j = 0; j < hgt; ++j)
-    for (int i = 0; i < w; ++i) {
+  parallelFor(hgt * w, threads, [&](int cell) {
+    const int j = cell / w, i = cell % w;
+    {
       const double h = p_.topAltitudeM * j / (hgt - 1);
       const double muS = -1.0 + 2.0 * i / (w - 1);
       const glm::dvec3 sun(std::sqrt(std::max(0.0, 1.0 - muS * muS)), 0.0, muS);
@@ -240,6 +241,7 @@ void AtmosphereTables::computeMultiple() {
         }
       put(multiple_, j * w + i, l2 / (glm::dvec3(1.0) - f));
     }
+  });
 }
 
 void AtmosphereTables::computeScattering(int threads) {

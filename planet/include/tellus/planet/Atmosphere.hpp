@@ -164,7 +164,7 @@ private:
   Scattered
   lookupScattering(double h, double mu, double muS, double nu, bool ground) const noexcept;
   void computeTransmittance();
-  void computeMultiple();
+  void computeMultiple(int threads);
   void computeScattering(int threads);
 
   AtmosphereParameters p_;
