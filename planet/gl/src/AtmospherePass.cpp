@@ -125,29 +125,8 @@ std::expected<void, std::string> AtmospherePass::makeGl(const GlCapabilities& gl
   const int w = s.scatteringNu * s.scatteringMuS;
   scattering_ = makeTable3d(w, s.scatteringMu, s.scatteringR, tables_.scatteringTable());
   mie_ = makeTable3d(w, s.scatteringMu, s.scatteringR, tables_.mieTable());
-  skyRayleigh_ = makeTarget(kSkyAzimuth, s.scatteringMu, 0);
-  skyMie_ = makeTarget(kSkyAzimuth, s.scatteringMu, 0);
-  skyTransmittance_ = makeTarget(kSkyAzimuth, s.scatteringMu, 0);
-  airRayleigh_ = makeTarget(kAirAzimuth, kAirZenith, kAirSlices);
-  airMie_ = makeTarget(kAirAzimuth, kAirZenith, kAirSlices);
-  airTransmittance_ = makeTarget(kAirAzimuth, kAirZenith, kAirSlices);
   depthFbo_ = GlFramebuffer();
-  skyFbo_ = GlFramebuffer();
-  glBindFramebuffer(GL_FRAMEBUFFER, skyFbo_.id());
-  const std::array<GLuint, 3> sky{skyRayleigh_.id(), skyMie_.id(), skyTransmittance_.id()};
-  for (std::size_t i = 0; i < 3; ++i)
-    glFramebufferTexture2D(GL_FRAMEBUFFER, kTargets[i], GL_TEXTURE_2D, sky[i], 0);
-  glDrawBuffers(3, kTargets.data());
-  const bool skyComplete = glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
-  airFbo_ = GlFramebuffer();
-  glBindFramebuffer(GL_FRAMEBUFFER, airFbo_.id());
-  const std::array<GLuint, 3> air{airRayleigh_.id(), airMie_.id(), airTransmittance_.id()};
-  for (std::size_t i = 0; i < 3; ++i)
-    glFramebufferTextureLayer(GL_FRAMEBUFFER, kTargets[i], air[i], 0, 0);
-  glDrawBuffers(3, kTargets.data());
-  const bool airComplete = glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  if (!skyComplete || !airComplete)
+  if (!makeViewTables())
     return std::unexpected(std::string("atmosphere: the view tables cannot be rendered into"));
   const GLuint id = program_.id();
   glUseProgram(id);
@@ -168,6 +147,32 @@ std::expected<void, std::string> AtmospherePass::makeGl(const GlCapabilities& gl
   glUniform1i(at(lid, "uMie"), 2);
   glUseProgram(0);
   return {};
+}
+
+bool AtmospherePass::makeViewTables() {
+  const int zenith = tables_.sizes().scatteringMu;
+  skyRayleigh_ = makeTarget(kSkyAzimuth, zenith, 0);
+  skyMie_ = makeTarget(kSkyAzimuth, zenith, 0);
+  skyTransmittance_ = makeTarget(kSkyAzimuth, zenith, 0);
+  airRayleigh_ = makeTarget(kAirAzimuth, kAirZenith, kAirSlices);
+  airMie_ = makeTarget(kAirAzimuth, kAirZenith, kAirSlices);
+  airTransmittance_ = makeTarget(kAirAzimuth, kAirZenith, kAirSlices);
+  skyFbo_ = GlFramebuffer();
+  glBindFramebuffer(GL_FRAMEBUFFER, skyFbo_.id());
+  const std::array<GLuint, 3> sky{skyRayleigh_.id(), skyMie_.id(), skyTransmittance_.id()};
+  for (std::size_t i = 0; i < 3; ++i)
+    glFramebufferTexture2D(GL_FRAMEBUFFER, kTargets[i], GL_TEXTURE_2D, sky[i], 0);
+  glDrawBuffers(3, kTargets.data());
+  const bool skyComplete = glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
+  airFbo_ = GlFramebuffer();
+  glBindFramebuffer(GL_FRAMEBUFFER, airFbo_.id());
+  const std::array<GLuint, 3> air{airRayleigh_.id(), airMie_.id(), airTransmittance_.id()};
+  for (std::size_t i = 0; i < 3; ++i)
+    glFramebufferTextureLayer(GL_FRAMEBUFFER, kTargets[i], air[i], 0, 0);
+  glDrawBuffers(3, kTargets.data());
+  const bool airComplete = glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  return skyComplete && airComplete;
 }
 
 void AtmospherePass::setShellUniforms(GLuint id) {

@@ -89,6 +89,8 @@ public:
 private:
   AtmospherePass(AtmosphereTables tables, double exposure, const Geodesy& body, bool clipControl);
   std::expected<void, std::string> makeGl(const GlCapabilities& gl);
+  /** The view tables' textures and framebuffers; false when they cannot be rendered into. */
+  bool makeViewTables();
   void copyDepth(const DrawTarget& target);
   /** The eye's altitude (m, sphere space) and frame for a scene. */
   struct EyeFrame {
