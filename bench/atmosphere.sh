@@ -10,6 +10,11 @@
 # 4-second flight in 21 frames instead of 101; VIEWS="flat" leaves the dome out). OFF="..." sets
 # what "without" turns off: the whole look of issue 23 against none of it is
 # OFF="--no-atmosphere --no-stars --no-sun --no-night --no-fade-in --no-geomorph".
+# BEFORE=path/to/other/tellus: side by side in one run, before (that binary) and after (this
+# one): each round renders, alternated, after with everything ("on"), before with everything
+# ("before"), after without the atmosphere ("noatmo"), without the stars ("nostars") and without
+# the whole look ("none"); the table then gives the whole look (on / none) and the atmosphere
+# alone (on / noatmo) for both binaries, and the stars alone (on / nostars).
 set -euo pipefail
 tellus=${1:-build/tools/tellus/tellus}
 rounds=${ROUNDS:-2}
@@ -42,13 +47,45 @@ for r in $(seq "$rounds"); do
     for v in $views; do
       size=(--size 1024x768)
       [ "$v" = dome ] && size=(--dome --size 2048)
-      run "$flight" "$v" on "${size[@]}"
-      run "$flight" "$v" off "${size[@]}" "${off[@]}"
+      if [ -n "${BEFORE:-}" ]; then
+        none=(--no-atmosphere --no-stars --no-sun --no-night --no-fade-in --no-geomorph)
+        run "$flight" "$v" on "${size[@]}"
+        tellus=$BEFORE run "$flight" "$v" before "${size[@]}"
+        run "$flight" "$v" noatmo "${size[@]}" --no-atmosphere
+        run "$flight" "$v" nostars "${size[@]}" --no-stars
+        run "$flight" "$v" none "${size[@]}" "${none[@]}"
+      else
+        run "$flight" "$v" on "${size[@]}"
+        run "$flight" "$v" off "${size[@]}" "${off[@]}"
+      fi
     done
   done
 done >"$work/results.txt"
 cat "$work/results.txt"
 echo
+if [ -n "${BEFORE:-}" ]; then
+  echo "| flight | view | median frame ms: after, before, no atmosphere, no stars, none of the look | whole look after / before | atmosphere alone after / before | stars alone | tables ms after / before |"
+  echo "|---|---|---|---|---|---|---|"
+  python3 - "$work/results.txt" <<'PY'
+import sys, collections, statistics
+rows = collections.defaultdict(lambda: collections.defaultdict(list))
+pre = collections.defaultdict(list)
+for line in open(sys.argv[1]):
+    flight, view, name, ms, p = line.split()
+    rows[(flight, view)][name].append(float(ms))
+    if name in ("on", "before"):
+        pre[name].append(float(p))
+med = statistics.median
+for (flight, view), d in rows.items():
+    m = {k: med(v) for k, v in d.items()}
+    print("| %s | %s | %.1f, %.1f, %.1f, %.1f, %.1f | %.2fx / %.2fx | %.2fx / %.2fx | %.2fx | %.0f / %.0f |" % (
+        flight, "1024x768" if view == "flat" else "dome 2048 direct",
+        m["on"], m["before"], m["noatmo"], m["nostars"], m["none"],
+        m["on"] / m["none"], m["before"] / m["none"], m["on"] / m["noatmo"],
+        m["before"] / m["noatmo"], m["on"] / m["nostars"], med(pre["on"]), med(pre["before"])))
+PY
+  exit 0
+fi
 echo "| flight | view | with atmosphere: median frame ms per round | without | with / without per round | with / without (median of rounds) | precomputation ms per run (median) |"
 echo "|---|---|---|---|---|---|---|"
 python3 - "$work/results.txt" <<'PY'

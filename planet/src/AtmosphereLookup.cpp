@@ -61,6 +61,23 @@ trilinear(const std::vector<float>& t, int w, int h, int d, double u, double v, 
   return plane(z0) * (1 - fz) + plane(z1) * fz;
 }
 
+/** The tables' smallest value taken in a logarithm (their zeros: night, rays of no length). */
+constexpr double kFloor = 1e-20;
+
+/** Catmull-Rom between p1 (f = 0) and p2 (f = 1), held between them (no overshoot where a row
+ * is at kFloor). */
+glm::dvec3 catmullRom(const glm::dvec3& p0,
+                      const glm::dvec3& p1,
+                      const glm::dvec3& p2,
+                      const glm::dvec3& p3,
+                      double f) {
+  const double f2 = f * f, f3 = f2 * f;
+  const glm::dvec3 v =
+      0.5 * (2.0 * p1 + (p2 - p0) * f + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * f2 +
+             (-p0 + 3.0 * p1 - 3.0 * p2 + p3) * f3);
+  return glm::clamp(v, glm::min(p1, p2), glm::max(p1, p2));
+}
+
 } // namespace
 
 double rayleighPhase(double nu) noexcept {
@@ -85,12 +102,6 @@ glm::dvec3 AtmosphereTables::multipleScattering(double h, double muS) const noex
   return bilinear(multiple_, s_.multipleW, s_.multipleH, u, v);
 }
 
-glm::dvec3 AtmosphereTables::groundIrradiance(double h, double muS) const noexcept {
-  const double u = atmo::unitToCoord(std::clamp((muS + 1.0) / 2.0, 0.0, 1.0), s_.irradianceW);
-  const double v = atmo::unitToCoord(std::clamp(h / p_.topAltitudeM, 0.0, 1.0), s_.irradianceH);
-  return bilinear(irradiance_, s_.irradianceW, s_.irradianceH, u, v);
-}
-
 AtmosphereTables::Scattered AtmosphereTables::lookupScattering(
     double h, double mu, double muS, double nu, bool ground) const noexcept {
   const atmo::Shell s(p_);
@@ -100,13 +111,27 @@ AtmosphereTables::Scattered AtmosphereTables::lookupScattering(
   const double slice = std::min(std::floor(x), static_cast<double>(s_.scatteringNu - 2));
   const double f = x - slice;
   const int w = s_.scatteringNu * s_.scatteringMuS;
-  const double u0 = (slice + umus) / s_.scatteringNu, u1 = (slice + 1.0 + umus) / s_.scatteringNu;
   Scattered out;
   auto tri = [&](const std::vector<float>& t, double u) {
     return trilinear(t, w, s_.scatteringMu, s_.scatteringR, u, umu, ur);
   };
-  out.rayleigh = tri(scattering_, u0) * (1.0 - f) + tri(scattering_, u1) * f;
-  out.mie = tri(mie_, u0) * (1.0 - f) + tri(mie_, u1) * f;
+  // Along mu_s: Catmull-Rom through the logarithms of the four nearest rows (held between the
+  // two middle ones), not linear: in twilight the sky falls by orders of magnitude across a few
+  // rows, and a linear blend's kink at each row showed as bands parallel to the terminator.
+  const int n = s_.scatteringMuS;
+  const double xm = umus * n - 0.5;
+  const double im = std::floor(xm);
+  const double fm = xm - im;
+  auto along = [&](const std::vector<float>& t, double sl) {
+    glm::dvec3 p[4];
+    for (int k = 0; k < 4; ++k) {
+      const int c = std::clamp(static_cast<int>(im) + k - 1, 0, n - 1);
+      p[k] = glm::log(glm::max(tri(t, (sl + (c + 0.5) / n) / s_.scatteringNu), glm::dvec3(kFloor)));
+    }
+    return glm::exp(catmullRom(p[0], p[1], p[2], p[3], fm));
+  };
+  out.rayleigh = along(scattering_, slice) * (1.0 - f) + along(scattering_, slice + 1.0) * f;
+  out.mie = along(mie_, slice) * (1.0 - f) + along(mie_, slice + 1.0) * f;
   return out;
 }
 

@@ -1,6 +1,6 @@
 // The atmosphere's tables, computed on the CPU in double (Atmosphere.hpp): transmittance
 // (Bruneton 2017), Hillaire's (2020) multiple-scattering table Psi_ms, the single-scattering
-// table with Psi_ms folded in, and the ground's irradiance. Own implementation of the papers'
+// table with Psi_ms folded in. Own implementation of the papers'
 // integrals: trapezoids along each ray, rows shared out to worker threads.
 #include "AtmosphereGeometry.hpp"
 
@@ -132,10 +132,35 @@ AtmosphereTables AtmosphereTables::precompute(const AtmosphereParameters& p,
   if (threads <= 0)
     threads = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, 8);
   t.computeTransmittance();
-  t.computeMultiple();
+  t.computeMultiple(threads);
   t.computeScattering(threads);
-  t.computeIrradiance();
   t.seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return t;
+}
+
+std::expected<AtmosphereTables, std::string>
+AtmosphereTables::fromData(const AtmosphereParameters& p,
+                           const AtmosphereTableSizes& sizes,
+                           std::vector<float> transmittance,
+                           std::vector<float> scattering,
+                           std::vector<float> mie,
+                           std::vector<float> multiple,
+                           double seconds) {
+  auto n = [](int a, int b, int c = 1) { return sz(a) * sz(b) * sz(c) * 3; };
+  const std::size_t s4 =
+      n(sizes.scatteringNu * sizes.scatteringMuS, sizes.scatteringMu, sizes.scatteringR);
+  if (transmittance.size() != n(sizes.transmittanceW, sizes.transmittanceH) ||
+      scattering.size() != s4 || mie.size() != s4 ||
+      multiple.size() != n(sizes.multipleW, sizes.multipleH))
+    return std::unexpected(std::string("atmosphere tables of the wrong sizes"));
+  AtmosphereTables t;
+  t.p_ = p;
+  t.s_ = sizes;
+  t.transmittance_ = std::move(transmittance);
+  t.scattering_ = std::move(scattering);
+  t.mie_ = std::move(mie);
+  t.multiple_ = std::move(multiple);
+  t.seconds_ = seconds;
   return t;
 }
 
@@ -168,15 +193,16 @@ toSun(const AtmosphereTables& t, const atmo::Shell& s, double alpha, double h, d
   return t.transmittanceToTop(h, muS) * smoothstep(-sinH * alpha, sinH * alpha, muS - cosH);
 }
 
-void AtmosphereTables::computeMultiple() {
+void AtmosphereTables::computeMultiple(int threads) {
   // Hillaire 2020, section 5.5: L_2nd and f_ms over 8 x 8 directions of the sphere (equal areas),
   // 20 steps each; Psi_ms = L_2nd / (1 - f_ms). A sun of irradiance 1.
   const atmo::Shell s(p_);
   const int w = s_.multipleW, hgt = s_.multipleH;
   multiple_.assign(sz(w * hgt * 3), 0.0f);
   constexpr int kDirs = 8, kSteps = 20;
-  for (int j = 0; j < hgt; ++j)
-    for (int i = 0; i < w; ++i) {
+  parallelFor(hgt * w, threads, [&](int cell) {
+    const int j = cell / w, i = cell % w;
+    {
       const double h = p_.topAltitudeM * j / (hgt - 1);
       const double muS = -1.0 + 2.0 * i / (w - 1);
       const glm::dvec3 sun(std::sqrt(std::max(0.0, 1.0 - muS * muS)), 0.0, muS);
@@ -215,6 +241,7 @@ void AtmosphereTables::computeMultiple() {
         }
       put(multiple_, j * w + i, l2 / (glm::dvec3(1.0) - f));
     }
+  });
 }
 
 void AtmosphereTables::computeScattering(int threads) {
@@ -326,36 +353,6 @@ void AtmosphereTables::computeScattering(int threads) {
       }
     }
   });
-}
-
-void AtmosphereTables::computeIrradiance() {
-  // The direct sun on a horizontal surface (the cosine averaged over the sun's disc where it
-  // crosses the horizon, Bruneton 2017) plus the sky's radiance over the upper hemisphere.
-  const int w = s_.irradianceW, hgt = s_.irradianceH;
-  irradiance_.assign(sz(w * hgt * 3), 0.0f);
-  constexpr int kTheta = 8, kPhi = 16;
-  const double alpha = p_.sunAngularRadiusRad;
-  for (int j = 0; j < hgt; ++j)
-    for (int i = 0; i < w; ++i) {
-      const double h = p_.topAltitudeM * j / (hgt - 1);
-      const double muS = -1.0 + 2.0 * i / (w - 1);
-      const double cosFactor = muS < -alpha  ? 0.0
-                               : muS > alpha ? muS
-                                             : (muS + alpha) * (muS + alpha) / (4.0 * alpha);
-      glm::dvec3 e = p_.solarIrradiance * transmittanceToTop(h, muS) * cosFactor;
-      const glm::dvec3 sun(std::sqrt(std::max(0.0, 1.0 - muS * muS)), 0.0, muS);
-      const double dTheta = kPi / 2.0 / kTheta, dPhi = 2.0 * kPi / kPhi;
-      for (int a = 0; a < kTheta; ++a)
-        for (int b = 0; b < kPhi; ++b) {
-          const double th = (a + 0.5) * dTheta, ph = (b + 0.5) * dPhi;
-          const glm::dvec3 dir(
-              std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
-          const AtmosphereRay sky =
-              ray(h, dir.z, muS, glm::dot(dir, sun), std::numeric_limits<double>::infinity());
-          e += sky.inscatter * dir.z * std::sin(th) * dTheta * dPhi;
-        }
-      put(irradiance_, j * w + i, e);
-    }
 }
 
 } // namespace tellus::planet

@@ -5,9 +5,13 @@
 #include "GlShader.hpp"
 #include "Shaders.hpp"
 
+#include <tellus/planet/AtmosphereCache.hpp>
+
 #include <glm/glm.hpp>
 
+#include <array>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 
 namespace tellus::planet {
@@ -45,6 +49,27 @@ GLint at(GLuint program, const char* name) {
   return glGetUniformLocation(program, name);
 }
 
+/** An empty RGBA16F table the view tables' builder renders into (2D: depth 0). */
+GlTexture makeTarget(int w, int h, int d) {
+  GlTexture t;
+  const GLenum kind = d > 0 ? GL_TEXTURE_3D : GL_TEXTURE_2D;
+  glBindTexture(kind, t.id());
+  if (d > 0)
+    glTexImage3D(kind, 0, GL_RGBA16F, w, h, d, 0, GL_RGBA, GL_FLOAT, nullptr);
+  else
+    glTexImage2D(kind, 0, GL_RGBA16F, w, h, 0, GL_RGBA, GL_FLOAT, nullptr);
+  glTexParameteri(kind, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(kind, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(kind, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(kind, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glTexParameteri(kind, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
+  glBindTexture(kind, 0);
+  return t;
+}
+
+constexpr std::array<GLenum, 3> kTargets{
+    GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+
 } // namespace
 
 AtmospherePass::AtmospherePass(AtmosphereTables tables,
@@ -58,13 +83,17 @@ std::expected<std::unique_ptr<AtmospherePass>, std::string>
 AtmospherePass::create(const GlCapabilities& gl,
                        AtmosphereParameters parameters,
                        double exposure,
-                       const Geodesy& body) {
+                       const Geodesy& body,
+                       const std::string& cacheDir) {
   if (parameters.bottomRadiusM <= 0.0) parameters.bottomRadiusM = body.equatorialRadius();
   if (const std::string bad = parameters.validate(); !bad.empty())
     return std::unexpected("atmosphere: " + bad);
   if (!(exposure > 0.0 && std::isfinite(exposure)))
     return std::unexpected(std::string("atmosphere: the exposure must be positive"));
-  return create(gl, AtmosphereTables::precompute(parameters), exposure, body);
+  AtmosphereCacheResult tables = cachedAtmosphereTables(cacheDir, parameters);
+  if (!tables.note.empty() && !cacheDir.empty() && tables.note.rfind("no file", 0) != 0)
+    std::fprintf(stderr, "tellus: atmosphere tables: %s (computed anew)\n", tables.note.c_str());
+  return create(gl, std::move(tables.tables), exposure, body);
 }
 
 std::expected<std::unique_ptr<AtmospherePass>, std::string> AtmospherePass::create(
@@ -73,27 +102,103 @@ std::expected<std::unique_ptr<AtmospherePass>, std::string> AtmospherePass::crea
     return std::unexpected(std::string("atmosphere: the exposure must be positive"));
   std::unique_ptr<AtmospherePass> p(
       new AtmospherePass(std::move(tables), exposure, body, gl.clipControl));
-  const std::string header = gl.glslHeader();
-  auto program = linkProgram(
-      header + kShader_atmosphere_vert, header + kShader_atmosphere_frag, "atmosphere shader");
-  if (!program) return std::unexpected(program.error());
-  p->program_ = std::move(*program);
-  p->vao_ = GlVertexArray();
-  const AtmosphereTableSizes& s = p->tables_.sizes();
-  p->transmittance_ =
-      makeTable2d(s.transmittanceW, s.transmittanceH, p->tables_.transmittanceTable());
-  const int w = s.scatteringNu * s.scatteringMuS;
-  p->scattering_ = makeTable3d(w, s.scatteringMu, s.scatteringR, p->tables_.scatteringTable());
-  p->mie_ = makeTable3d(w, s.scatteringMu, s.scatteringR, p->tables_.mieTable());
-  p->depthFbo_ = GlFramebuffer();
-  const GLuint id = p->program_.id();
-  glUseProgram(id);
-  glUniform1i(at(id, "uTransmittance"), 0);
-  glUniform1i(at(id, "uScattering"), 1);
-  glUniform1i(at(id, "uMie"), 2);
-  glUniform1i(at(id, "uDepth"), 3);
-  glUseProgram(0);
+  if (auto made = p->makeGl(gl); !made) return std::unexpected(made.error());
   return p;
+}
+
+std::expected<void, std::string> AtmospherePass::makeGl(const GlCapabilities& gl) {
+  const std::string header = gl.glslHeader();
+  const std::string common = kShader_atmosphere_common_glsl;
+  auto program = linkProgram(header + kShader_atmosphere_vert,
+                             header + common + kShader_atmosphere_frag,
+                             "atmosphere shader");
+  if (!program) return std::unexpected(program.error());
+  program_ = std::move(*program);
+  auto lut = linkProgram(header + kShader_atmosphere_vert,
+                         header + common + kShader_atmosphere_lut_frag,
+                         "atmosphere view-table shader");
+  if (!lut) return std::unexpected(lut.error());
+  lutProgram_ = std::move(*lut);
+  vao_ = GlVertexArray();
+  const AtmosphereTableSizes& s = tables_.sizes();
+  transmittance_ = makeTable2d(s.transmittanceW, s.transmittanceH, tables_.transmittanceTable());
+  const int w = s.scatteringNu * s.scatteringMuS;
+  scattering_ = makeTable3d(w, s.scatteringMu, s.scatteringR, tables_.scatteringTable());
+  mie_ = makeTable3d(w, s.scatteringMu, s.scatteringR, tables_.mieTable());
+  depthFbo_ = GlFramebuffer();
+  if (!makeViewTables())
+    return std::unexpected(std::string("atmosphere: the view tables cannot be rendered into"));
+  const GLuint id = program_.id();
+  glUseProgram(id);
+  setShellUniforms(id);
+  glUniform1i(at(id, "uDepth"), 0);
+  glUniform1i(at(id, "uSkyRayleigh"), 1);
+  glUniform1i(at(id, "uSkyMie"), 2);
+  glUniform1i(at(id, "uSkyTransmittance"), 3);
+  glUniform1i(at(id, "uAirRayleigh"), 4);
+  glUniform1i(at(id, "uAirMie"), 5);
+  glUniform1i(at(id, "uAirTransmittance"), 6);
+  glUniform2f(at(id, "uSkyLut"), float(kSkyAzimuth), float(s.scatteringMu));
+  const GLuint lid = lutProgram_.id();
+  glUseProgram(lid);
+  setShellUniforms(lid);
+  glUniform1i(at(lid, "uTransmittance"), 0);
+  glUniform1i(at(lid, "uScattering"), 1);
+  glUniform1i(at(lid, "uMie"), 2);
+  glUseProgram(0);
+  return {};
+}
+
+bool AtmospherePass::makeViewTables() {
+  const int zenith = tables_.sizes().scatteringMu;
+  skyRayleigh_ = makeTarget(kSkyAzimuth, zenith, 0);
+  skyMie_ = makeTarget(kSkyAzimuth, zenith, 0);
+  skyTransmittance_ = makeTarget(kSkyAzimuth, zenith, 0);
+  airRayleigh_ = makeTarget(kAirAzimuth, kAirZenith, kAirSlices);
+  airMie_ = makeTarget(kAirAzimuth, kAirZenith, kAirSlices);
+  airTransmittance_ = makeTarget(kAirAzimuth, kAirZenith, kAirSlices);
+  skyFbo_ = GlFramebuffer();
+  glBindFramebuffer(GL_FRAMEBUFFER, skyFbo_.id());
+  const std::array<GLuint, 3> sky{skyRayleigh_.id(), skyMie_.id(), skyTransmittance_.id()};
+  for (std::size_t i = 0; i < 3; ++i)
+    glFramebufferTexture2D(GL_FRAMEBUFFER, kTargets[i], GL_TEXTURE_2D, sky[i], 0);
+  glDrawBuffers(3, kTargets.data());
+  const bool skyComplete = glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
+  airFbo_ = GlFramebuffer();
+  glBindFramebuffer(GL_FRAMEBUFFER, airFbo_.id());
+  const std::array<GLuint, 3> air{airRayleigh_.id(), airMie_.id(), airTransmittance_.id()};
+  for (std::size_t i = 0; i < 3; ++i)
+    glFramebufferTextureLayer(GL_FRAMEBUFFER, kTargets[i], air[i], 0, 0);
+  glDrawBuffers(3, kTargets.data());
+  const bool airComplete = glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  return skyComplete && airComplete;
+}
+
+void AtmospherePass::setShellUniforms(GLuint id) {
+  const AtmosphereParameters& p = tables_.parameters();
+  const AtmosphereTableSizes& s = tables_.sizes();
+  const double bigH = std::sqrt(p.topAltitudeM * (2.0 * p.bottomRadiusM + p.topAltitudeM));
+  glUniform4f(at(id, "uShell"),
+              static_cast<float>(p.bottomRadiusM),
+              static_cast<float>(p.topRadiusM()),
+              static_cast<float>(p.topAltitudeM),
+              static_cast<float>(bigH));
+  glUniform4f(at(id, "uSizes"),
+              static_cast<float>(s.scatteringNu),
+              static_cast<float>(s.scatteringMuS),
+              static_cast<float>(s.scatteringMu),
+              static_cast<float>(s.scatteringR));
+  glUniform4f(at(id, "uTexSizes"),
+              static_cast<float>(s.transmittanceW),
+              static_cast<float>(s.transmittanceH),
+              static_cast<float>(p.muSMin),
+              static_cast<float>(p.miePhaseG));
+  glUniform4f(at(id, "uAirLut"),
+              float(kAirAzimuth),
+              float(kAirZenith),
+              float(kAirSlices),
+              static_cast<float>(kAirLogC));
 }
 
 void AtmospherePass::copyDepth(const DrawTarget& target) {
@@ -134,18 +239,73 @@ void AtmospherePass::copyDepth(const DrawTarget& target) {
   glBindFramebuffer(GL_FRAMEBUFFER, target.fbo);
 }
 
-void AtmospherePass::setUniforms(const FrameContext& frame) {
-  const GLuint id = program_.id();
-  const AtmosphereParameters& p = tables_.parameters();
-  const AtmosphereTableSizes& s = tables_.sizes();
-  const Camera& cam = frame.camera;
+AtmospherePass::EyeFrame AtmospherePass::eyeFrame(const FrameContext& frame) const {
   // The eye in sphere space (the polar axis stretched), in double; narrowed once.
   const glm::dvec3 scale(1.0, 1.0, polarStretch_);
   const glm::dvec3 eye = frame.eye * scale;
   const double r = glm::length(eye);
-  const glm::dvec3 up = eye / r;
-  const glm::dvec3 sun =
-      frame.sun ? glm::normalize(glm::dvec3(frame.sun->x, frame.sun->y, frame.sun->z) * scale) : up;
+  EyeFrame e;
+  e.up = eye / r;
+  e.altitude = r - tables_.parameters().bottomRadiusM;
+  e.sun = frame.sun ? glm::normalize(glm::dvec3(frame.sun->x, frame.sun->y, frame.sun->z) * scale)
+                    : e.up;
+  // The sun's horizontal direction; at the zenith or the nadir any horizontal one.
+  glm::dvec3 side = e.sun - glm::dot(e.sun, e.up) * e.up;
+  if (glm::length(side) < 1e-9) {
+    side = glm::cross(e.up, std::abs(e.up.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0));
+  }
+  e.side = glm::normalize(side);
+  e.normal = glm::cross(e.up, e.side);
+  return e;
+}
+
+void AtmospherePass::updateViewTables(float altitude, float muS) {
+  if (tablesMade_ && altitude == lastAltitude_ && muS == lastMuS_) return;
+  GLint viewport[4];
+  glGetIntegerv(GL_VIEWPORT, viewport);
+  const GLboolean scissor = glIsEnabled(GL_SCISSOR_TEST);
+  glDisable(GL_SCISSOR_TEST);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_BLEND);
+  glBlendFunc(GL_ONE, GL_ZERO); // dual-source factors forbid three draw buffers even unblended
+  const GLuint id = lutProgram_.id();
+  glUseProgram(id);
+  glUniform1f(at(id, "uEyeAltitude"), altitude);
+  glUniform1f(at(id, "uMuS"), muS);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, transmittance_.id());
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_3D, scattering_.id());
+  glActiveTexture(GL_TEXTURE2);
+  glBindTexture(GL_TEXTURE_3D, mie_.id());
+  glBindVertexArray(vao_.id());
+  const GLint lut = at(id, "uLut");
+  const int zenith = tables_.sizes().scatteringMu;
+  glBindFramebuffer(GL_FRAMEBUFFER, skyFbo_.id());
+  glViewport(0, 0, kSkyAzimuth, zenith);
+  glUniform4f(lut, float(kSkyAzimuth), float(zenith), 0.0f, 0.0f);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glBindFramebuffer(GL_FRAMEBUFFER, airFbo_.id());
+  glViewport(0, 0, kAirAzimuth, kAirZenith);
+  const std::array<GLuint, 3> air{airRayleigh_.id(), airMie_.id(), airTransmittance_.id()};
+  for (int k = 0; k < kAirSlices; ++k) {
+    for (std::size_t i = 0; i < 3; ++i)
+      glFramebufferTextureLayer(GL_FRAMEBUFFER, kTargets[i], air[i], 0, k);
+    glUniform4f(lut, float(kAirAzimuth), float(kAirZenith), float(kAirSlices), float(k));
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+  }
+  glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+  if (scissor) glEnable(GL_SCISSOR_TEST);
+  tablesMade_ = true;
+  lastAltitude_ = altitude;
+  lastMuS_ = muS;
+  ++updates_;
+}
+
+void AtmospherePass::setUniforms(const FrameContext& frame, const EyeFrame& e) {
+  const GLuint id = program_.id();
+  const AtmosphereParameters& p = tables_.parameters();
+  const Camera& cam = frame.camera;
   glm::dmat4 view = cam.view();
   view[3] = glm::dvec4(0.0, 0.0, 0.0, 1.0);
   const glm::mat4 inv(glm::inverse(cam.projection() * view));
@@ -167,62 +327,70 @@ void AtmospherePass::setUniforms(const FrameContext& frame) {
   glUniform1f(at(id, "uNear"), static_cast<float>(cam.nearM()));
   glUniform1i(at(id, "uClipControl"), clipControl_ ? 1 : 0);
   glUniform3f(at(id, "uScale"), 1.0f, 1.0f, static_cast<float>(polarStretch_));
-  glUniform3f(
-      at(id, "uUp"), static_cast<float>(up.x), static_cast<float>(up.y), static_cast<float>(up.z));
-  glUniform1f(at(id, "uEyeAltitude"), static_cast<float>(r - p.bottomRadiusM));
-  glUniform3f(at(id, "uSun"),
-              static_cast<float>(sun.x),
-              static_cast<float>(sun.y),
-              static_cast<float>(sun.z));
-  const double bigH = std::sqrt(p.topAltitudeM * (2.0 * p.bottomRadiusM + p.topAltitudeM));
-  glUniform4f(at(id, "uShell"),
-              static_cast<float>(p.bottomRadiusM),
-              static_cast<float>(p.topRadiusM()),
-              static_cast<float>(p.topAltitudeM),
-              static_cast<float>(bigH));
-  glUniform4f(at(id, "uSizes"),
-              static_cast<float>(s.scatteringNu),
-              static_cast<float>(s.scatteringMuS),
-              static_cast<float>(s.scatteringMu),
-              static_cast<float>(s.scatteringR));
-  glUniform4f(at(id, "uTexSizes"),
-              static_cast<float>(s.transmittanceW),
-              static_cast<float>(s.transmittanceH),
-              static_cast<float>(p.muSMin),
-              static_cast<float>(p.miePhaseG));
+  auto vec = [&](const char* name, const glm::dvec3& v) {
+    glUniform3f(
+        at(id, name), static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z));
+  };
+  vec("uUp", e.up);
+  vec("uSun", e.sun);
+  vec("uSunSide", e.side);
+  vec("uSunNormal", e.normal);
+  vec("uSolar", p.solarIrradiance);
+  glUniform1f(at(id, "uEyeAltitude"), static_cast<float>(e.altitude));
+  // The eye's constants of the zenith map (shaders/atmosphere.frag, zenithOf), in double.
+  const double b = p.bottomRadiusM, a = p.topAltitudeM, t = p.topRadiusM();
+  const double h = std::max(e.altitude, 0.0), r = b + h;
+  const double rho = std::sqrt(h * (2.0 * b + h));
+  const double bigH = std::sqrt(a * (2.0 * b + a));
+  const bool inside = static_cast<float>(e.altitude) <= static_cast<float>(a);
+  glUniform4f(at(id, "uEye"),
+              static_cast<float>(r),
+              static_cast<float>(h * (2.0 * b + h)),
+              static_cast<float>((a - h) * (t + r)),
+              inside ? 1.0f : 0.0f);
+  auto inverse = [](double x) { return x > 0.0 ? 1.0 / x : 0.0; };
+  glUniform4f(at(id, "uZenith"),
+              static_cast<float>(h),
+              static_cast<float>(inverse(rho - h)),
+              static_cast<float>(a - h),
+              static_cast<float>(inverse(rho + bigH - (a - h))));
   const double alpha = p.sunAngularRadiusRad;
   glUniform4f(at(id, "uSunDisc"),
               static_cast<float>(std::cos(alpha)),
               static_cast<float>(1.0 / (std::numbers::pi * alpha * alpha)),
               static_cast<float>(exposure_),
               0.0f);
-  glUniform3f(at(id, "uSolar"),
-              static_cast<float>(p.solarIrradiance.x),
-              static_cast<float>(p.solarIrradiance.y),
-              static_cast<float>(p.solarIrradiance.z));
 }
 
 void AtmospherePass::draw(const FrameContext& frame) {
+  const EyeFrame e = eyeFrame(frame);
+  updateViewTables(static_cast<float>(e.altitude), static_cast<float>(glm::dot(e.up, e.sun)));
   copyDepth(frame.target);
   glDisable(GL_DEPTH_TEST);
   glDepthMask(GL_FALSE);
   glEnable(GL_BLEND);
   glBlendFunc(GL_ONE, GL_SRC1_COLOR);
   glUseProgram(program_.id());
-  setUniforms(frame);
-  glActiveTexture(GL_TEXTURE0);
-  glBindTexture(GL_TEXTURE_2D, transmittance_.id());
-  glActiveTexture(GL_TEXTURE1);
-  glBindTexture(GL_TEXTURE_3D, scattering_.id());
-  glActiveTexture(GL_TEXTURE2);
-  glBindTexture(GL_TEXTURE_3D, mie_.id());
-  glActiveTexture(GL_TEXTURE3);
-  glBindTexture(GL_TEXTURE_2D, depth_.id());
+  setUniforms(frame, e);
+  const std::array<std::pair<GLenum, GLuint>, 7> textures{
+      {{GL_TEXTURE_2D, depth_.id()},
+       {GL_TEXTURE_2D, skyRayleigh_.id()},
+       {GL_TEXTURE_2D, skyMie_.id()},
+       {GL_TEXTURE_2D, skyTransmittance_.id()},
+       {GL_TEXTURE_3D, airRayleigh_.id()},
+       {GL_TEXTURE_3D, airMie_.id()},
+       {GL_TEXTURE_3D, airTransmittance_.id()}}};
+  for (std::size_t i = 0; i < textures.size(); ++i) {
+    glActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(i));
+    glBindTexture(textures[i].first, textures[i].second);
+  }
   glBindVertexArray(vao_.id());
   glDrawArrays(GL_TRIANGLES, 0, 3);
   glBindVertexArray(0);
-  glBindTexture(GL_TEXTURE_2D, 0);
-  glActiveTexture(GL_TEXTURE0);
+  for (std::size_t i = textures.size(); i-- > 0;) {
+    glActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(i));
+    glBindTexture(textures[i].first, 0);
+  }
   glDisable(GL_BLEND);
   glDepthMask(GL_TRUE);
   glEnable(GL_DEPTH_TEST);

@@ -8,10 +8,27 @@
  *
  * Per scene: the target's depth is copied (glBlitFramebuffer) into the pass's own depth texture,
  * which the shader reads (distance = near / depth, Depth.hpp): the air lies over the terrain's real
- * heights, in the flat view, each cube face of the dome and the direct fisheye alike. One
- * triangle covers the target; each pixel's direction comes from the inverse view-projection
+ * heights, in the flat view, each cube face of the dome and the direct fisheye alike.
+ *
+ * The cost (bench/RESULTS.md): per pixel the pass does not march or look up Bruneton's 4D tables.
+ * After Hillaire (2020), it reads two small view tables that depend only on the eye's altitude
+ * and the sun's elevation there, remade (shaders/atmosphere_lut.frag, from the 4D tables, as
+ * AtmosphereTables::ray() computes) when either changed since the last scene, so once a frame at
+ * most, not per cube face:
+ * - the sky table, kSkyAzimuth x the scattering table's mu size: per view direction (azimuth from
+ *   the sun's, u^2 pi; zenith by Bruneton's map at the eye, or where the ray enters the shell from
+ *   above: its rows are the 4D table's mu rows, so the zenith interpolation is the same) the
+ *   Rayleigh (with the multiple scattering) and Mie inscatter without their phase functions, and
+ *   the transmittance;
+ * - the aerial table, kAirAzimuth x kAirZenith x kAirSlices: the same along each ray to
+ *   kAirSlices distances between where it enters the shell and where it leaves it (the ground or
+ *   the top), spaced logarithmically from both ends (shaders/atmosphere_common.glsl, sliceUnit).
+ * Per pixel: the direction's coordinates (a few square roots), three bilinear (sky) or trilinear
+ * (terrain) lookups, the phase functions at the exact nu, the sun's disc and the display map.
+ *
+ * One triangle covers the target; each pixel's direction comes from the inverse view-projection
  * (flat, cube faces) or the inverse fisheye map (direct dome: theta = |ndc / perRadian|). The
- * eye's altitude and zenith are computed here in double (camera-relative: per pixel only a unit
+ * eye's altitude and frame are computed here in double (camera-relative: per pixel only a unit
  * direction is float). Colour goes on by dual-source blending (GL 3.3 core): framebuffer =
  * inscatter + framebuffer x transmittance, in display values (1 - exp(-exposure L), gamma 2.2).
  *
@@ -27,6 +44,8 @@
 
 #include <tellus/planet/Atmosphere.hpp>
 
+#include <glm/vec3.hpp>
+
 #include <expected>
 #include <memory>
 #include <string>
@@ -35,13 +54,15 @@ namespace tellus::planet {
 
 class AtmospherePass final : public ScenePass {
 public:
-  /** Computes the tables for `parameters` (its bottom radius <= 0: the body's equatorial radius)
-   * and makes the program and textures. exposure: the display's scale of radiance (solar units). */
+  /** Computes the tables for `parameters` (its bottom radius <= 0: the body's equatorial radius),
+   * or reads them from `cacheDir` (AtmosphereCache.hpp; empty: no cache), and makes the program
+   * and textures. exposure: the display's scale of radiance (solar units). */
   static std::expected<std::unique_ptr<AtmospherePass>, std::string>
   create(const GlCapabilities& gl,
          AtmosphereParameters parameters,
          double exposure,
-         const Geodesy& body);
+         const Geodesy& body,
+         const std::string& cacheDir = {});
 
   /** With tables already computed (tests share one set between contexts). */
   static std::expected<std::unique_ptr<AtmospherePass>, std::string>
@@ -49,24 +70,52 @@ public:
 
   const char* name() const noexcept override { return "atmosphere"; }
   void draw(const FrameContext& frame) override;
-  /** Seconds the tables took to compute. */
+  /** Seconds the tables took to compute (or to read from the cache). */
   double precomputeSeconds() const noexcept { return tables_.precomputeSeconds(); }
   const AtmosphereTables& tables() const noexcept { return tables_; }
 
+  /** The view tables' sizes (azimuth, zenith, slices). */
+  static constexpr int kSkyAzimuth = 64;
+  static constexpr int kAirAzimuth = 16;
+  static constexpr int kAirZenith = 64;
+  static constexpr int kAirSlices = 32;
+  /** The aerial slices' logarithmic map's constant c (sliceUnit, from both ends of the ray):
+   * consecutive slices e^(2c/31) = 1.57 times farther from their end, the first at 1/2200 of the
+   * ray's span through the shell. */
+  static constexpr double kAirLogC = 7.0;
+  /** How many times the view tables were made (tests: not per cube face, not when still). */
+  int viewTableUpdates() const noexcept { return updates_; }
+
 private:
   AtmospherePass(AtmosphereTables tables, double exposure, const Geodesy& body, bool clipControl);
+  std::expected<void, std::string> makeGl(const GlCapabilities& gl);
+  /** The view tables' textures and framebuffers; false when they cannot be rendered into. */
+  bool makeViewTables();
   void copyDepth(const DrawTarget& target);
-  void setUniforms(const FrameContext& frame);
+  /** The eye's altitude (m, sphere space) and frame for a scene. */
+  struct EyeFrame {
+    glm::dvec3 up, sun, side, normal;
+    double altitude = 0.0;
+  };
+  EyeFrame eyeFrame(const FrameContext& frame) const;
+  void setShellUniforms(GLuint program);
+  void updateViewTables(float altitude, float muS);
+  void setUniforms(const FrameContext& frame, const EyeFrame& e);
 
   AtmosphereTables tables_;
   double exposure_;
   double polarStretch_; ///< equatorial / polar radius of the body
   bool clipControl_;
-  GlProgram program_{NoCreate};
+  GlProgram program_{NoCreate}, lutProgram_{NoCreate};
   GlVertexArray vao_{NoCreate};
   GlTexture transmittance_{NoCreate}, scattering_{NoCreate}, mie_{NoCreate}, depth_{NoCreate};
-  GlFramebuffer depthFbo_{NoCreate};
+  GlTexture skyRayleigh_{NoCreate}, skyMie_{NoCreate}, skyTransmittance_{NoCreate};
+  GlTexture airRayleigh_{NoCreate}, airMie_{NoCreate}, airTransmittance_{NoCreate};
+  GlFramebuffer depthFbo_{NoCreate}, skyFbo_{NoCreate}, airFbo_{NoCreate};
   int depthWidth_ = 0, depthHeight_ = 0;
+  bool tablesMade_ = false; ///< the view tables hold lastAltitude_, lastMuS_
+  float lastAltitude_ = 0.0f, lastMuS_ = 0.0f;
+  int updates_ = 0;
 };
 
 } // namespace tellus::planet

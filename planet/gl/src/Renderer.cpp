@@ -112,8 +112,11 @@ std::string Renderer::Impl::openGl() {
   }
   scene->addPass(std::move(*globe));
   if (opt.atmosphere) {
-    auto air =
-        AtmospherePass::create(gl, opt.atmosphere->parameters, opt.atmosphere->exposure, geodesy);
+    auto air = AtmospherePass::create(gl,
+                                      opt.atmosphere->parameters,
+                                      opt.atmosphere->exposure,
+                                      geodesy,
+                                      opt.atmosphere->tableCacheDir);
     if (!air) return air.error();
     stats.atmospherePrecomputeMs = (*air)->precomputeSeconds() * 1000.0;
     scene->addPass(std::move(*air));

@@ -8,6 +8,7 @@
 #include <tellus/proxy/ImageCodec.hpp>
 
 #include <cstdio>
+#include <filesystem>
 #include <span>
 #include <string_view>
 #include <utility>
@@ -265,6 +266,11 @@ std::expected<PlanetTiles, int> openRemote(const cli::Args& a,
     settings = loaded->renderer;
   }
   ro.atmosphere = atmosphereOptions(settings.atmosphere); // the configuration's default: on
+  if (ro.atmosphere) // the tables' cache: under --cache or the default cache root
+    ro.atmosphere->tableCacheDir =
+        ((a.get("cache") ? std::filesystem::path(*a.get("cache")) : defaultCacheRoot()) /
+         "atmosphere")
+            .string();
   if (!a.get("layer") && !settings.layers.empty()) ro.layer = settings.layers.front().layer;
   if (auto bad = applyTerrainArgs(a, ro)) {
     std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());
@@ -344,6 +350,8 @@ openLocal(const cli::Args& a, const char* cmd, planet::RendererOptions& ro) {
   if (!t.ctx) return std::unexpected(kExitError);
   const Config& config = t.ctx->config;
   applyRendererSettings(config.renderer, a, ro, t.earth);
+  if (ro.atmosphere) // the tables' cache, under the cache root
+    ro.atmosphere->tableCacheDir = (config.cache.root / "atmosphere").string();
   t.sceneTime = config.renderer.time;
   t.night = config.renderer.night;
   t.legend = config.renderer.legend;

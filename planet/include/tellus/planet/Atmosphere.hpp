@@ -97,11 +97,9 @@ struct AtmosphereTableSizes {
   int scatteringMu = 128; ///< even: half for rays that reach the ground, half for those that do not
   int scatteringMuS = 32;
   int scatteringNu = 8;
-  int multipleW = 32;   ///< Psi_ms: mu_s
-  int multipleH = 32;   ///< r
-  int irradianceW = 64; ///< mu_s
-  int irradianceH = 16; ///< r
-  int samples = 32;     ///< integration steps along one ray of the scattering table
+  int multipleW = 128; ///< Psi_ms: mu_s (linear in [-1, 1]: 0.016 apart, twilight gets rows)
+  int multipleH = 32;  ///< r
+  int samples = 32;    ///< integration steps along one ray of the scattering table
 };
 
 /** What the sky contributes along one view ray: radiance added (the inscatter, per channel) and
@@ -117,9 +115,9 @@ struct AtmosphereRay {
  * - scattering: (scatteringNu * scatteringMuS) x scatteringMu x scatteringR: the Rayleigh single
  *   scattering plus the multiple scattering divided by the Rayleigh phase of the texel's nu;
  * - mie: the same layout, the Mie single scattering (phase functions applied at lookup);
- * - multiple: multipleW x multipleH, Psi_ms for a sun of irradiance 1;
- * - irradiance: irradianceW x irradianceH, the ground's irradiance from the sky (direct sun +
- *   sky, for a horizontal surface at altitude r, sun at mu_s), for lighting the ground.
+ * - multiple: multipleW x multipleH, Psi_ms for a sun of irradiance 1.
+ * (Bruneton's ground irradiance table is not made: the globe's sunlight is shaders/planet.frag's
+ * own, and nothing read the table.)
  */
 class AtmosphereTables {
 public:
@@ -127,14 +125,23 @@ public:
   static AtmosphereTables precompute(const AtmosphereParameters& p,
                                      const AtmosphereTableSizes& sizes = {},
                                      int threads = 0);
+  /** Tables read back from disk (AtmosphereCache.hpp); each vector's size must be what `sizes`
+   * gives (else an error). seconds: what reading them took. */
+  static std::expected<AtmosphereTables, std::string> fromData(const AtmosphereParameters& p,
+                                                               const AtmosphereTableSizes& sizes,
+                                                               std::vector<float> transmittance,
+                                                               std::vector<float> scattering,
+                                                               std::vector<float> mie,
+                                                               std::vector<float> multiple,
+                                                               double seconds);
 
   const AtmosphereParameters& parameters() const noexcept { return p_; }
   const AtmosphereTableSizes& sizes() const noexcept { return s_; }
   const std::vector<float>& transmittanceTable() const noexcept { return transmittance_; }
   const std::vector<float>& scatteringTable() const noexcept { return scattering_; }
   const std::vector<float>& mieTable() const noexcept { return mie_; }
-  const std::vector<float>& irradianceTable() const noexcept { return irradiance_; }
   const std::vector<float>& multipleTable() const noexcept { return multiple_; }
+  /** Seconds the tables took to compute, or to read (fromData). */
   double precomputeSeconds() const noexcept { return seconds_; }
 
   /** The transmittance from altitude h (m above the bottom) along mu to the top (1 above it
@@ -142,8 +149,6 @@ public:
   glm::dvec3 transmittanceToTop(double h, double mu) const noexcept;
   /** Psi_ms at (h, mu_s), sun irradiance 1. */
   glm::dvec3 multipleScattering(double h, double muS) const noexcept;
-  /** The ground's irradiance at h with the sun at mu_s (solar units). */
-  glm::dvec3 groundIrradiance(double h, double muS) const noexcept;
 
   /** The sky along a view ray from an eye at altitude h (any: below 0 is taken as 0, above the top
    * the ray is moved to where it enters), mu = cos(view zenith), muS = cos(sun zenith), nu =
@@ -159,13 +164,12 @@ private:
   Scattered
   lookupScattering(double h, double mu, double muS, double nu, bool ground) const noexcept;
   void computeTransmittance();
-  void computeMultiple();
+  void computeMultiple(int threads);
   void computeScattering(int threads);
-  void computeIrradiance();
 
   AtmosphereParameters p_;
   AtmosphereTableSizes s_;
-  std::vector<float> transmittance_, scattering_, mie_, irradiance_, multiple_;
+  std::vector<float> transmittance_, scattering_, mie_, multiple_;
   double seconds_ = 0.0;
 };
 

@@ -218,6 +218,9 @@ struct RendererOptions {
     AtmosphereParameters parameters; ///< bottomRadiusM <= 0: the body's equatorial radius
     /** The display's scale of radiance (solar units): shown = 1 - exp(-exposure L), gamma 2.2. */
     double exposure = 2.5;
+    /** Where the precomputed tables are kept between runs (planet/AtmosphereCache.hpp); empty:
+     * computed at every start, nothing written. The CLI: <cache root>/atmosphere. */
+    std::string tableCacheDir;
   };
   std::optional<Atmosphere> atmosphere;
   /** Added to the decoding threads' nice value: decoding in the background gives the CPU up to
