@@ -22,7 +22,7 @@ xdotool windowfocus --sync "$win" || true
 hold() { xdotool keydown "$1"; sleep 0.3; xdotool keyup "$1"; }
 shot() { # waits for the n-th screenshot
   hold p
-  for _ in $(seq 100); do [ -s "$work/tellus-$1.png" ] && return 0; sleep 0.1; done
+  for _ in $(seq 300); do [ -s "$work/tellus-$1.png" ] && return 0; sleep 0.1; done # 30 s: frames are slow under load
   fail "screenshot $1 not written: $(cat "$work/out.txt")"
 }
 sleep 3 # the level-zero textures stream in
