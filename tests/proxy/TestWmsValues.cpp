@@ -317,6 +317,10 @@ TEST(WmsValuesIntegration, CapabilitiesDeclareStylesLegendsAndQueryable) {
                           "&amp;SLD_VERSION=1.1.0&amp;LAYER=sst&amp;STYLE=coolwarm"),
               std::string::npos);
     EXPECT_NE(r.body.find("<LegendURL width=\"256\" height=\"56\">"), std::string::npos);
+    // GetLegendGraphic declared: the DTD's element in 1.1.1, SLD 1.1.0's in 1.3.0.
+    EXPECT_NE(r.body.find(std::string(version) == "1.3.0" ? "<sld:GetLegendGraphic>"
+                                                          : "<GetLegendGraphic>"),
+              std::string::npos);
   }
 }
 

@@ -85,6 +85,11 @@ CapabilitiesModel WmsFrontEnd::capabilitiesModel(const HttpRequest& req) const {
                                InfoFormat::Gml,
                                InfoFormat::GmlXml})
       m.getFeatureInfoFormats.emplace_back(toString(f));
+  // GetLegendGraphic (PNG) is declared when a layer has a style with a legend (a colour map).
+  if (std::any_of(all.begin(), all.end(), [](const LayerSpec& l) {
+        return l.values.has_value() && !l.values->styles.empty();
+      }))
+    m.getLegendGraphicFormats.emplace_back("image/png");
   m.updateSequence = fe_.updateSequence;
   m.lastUpdate = fe_.lastUpdate;
   m.maxWidth = fe_.options.limits.maxWidth;
