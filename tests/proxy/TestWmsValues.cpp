@@ -68,6 +68,7 @@ test::FakeReply upstreamTile(const test::FakeRequest& req) {
   if (w <= 0 || h <= 0 || w > 1024 || h > 1024) return test::FakeReply::withStatus(400, "size");
   const auto n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
   if (paramOf(req.target, "LAYERS") == "upchl") return chlTile(w, h);
+  if (paramOf(req.target, "LAYERS") == "updown") return test::FakeReply::withStatus(500, "down");
   if (paramOf(req.target, "LAYERS") != "upsst" && paramOf(req.target, "LAYERS") != "updem") {
     std::vector<std::uint8_t> px(n * 3, 90);
     return test::FakeReply::ok(bytesOf(*encodeImage("image/jpeg", w, h, 3, px.data())),
@@ -138,6 +139,14 @@ LayerSpec chl() {
   return l;
 }
 
+/** An elevation value layer whose upstream always fails (500). */
+LayerSpec down() {
+  LayerSpec l = dem();
+  l.name = "down";
+  l.upstreamLayer = "updown";
+  return l;
+}
+
 LayerSpec sat() {
   LayerSpec l;
   l.name = "sat";
@@ -170,7 +179,7 @@ struct Server {
     u.policy.timeout = 2000ms;
     u.policy.retries = 0;
     auto t = TileService::create(
-        *cache, *fetcher, {u}, {sst(), sat(), dem(), chl()}, TileServiceOptions{});
+        *cache, *fetcher, {u}, {sst(), sat(), dem(), chl(), down()}, TileServiceOptions{});
     EXPECT_TRUE(t) << (t ? "" : t.error());
     tiles = std::move(*t);
     FrontEndOptions options;
@@ -440,6 +449,77 @@ TEST(WmsValuesIntegration, GetFeatureInfoExceptionsAsTheStandardSays) {
         r.body, c.v130 ? test::WmsDocument::Exception130 : test::WmsDocument::Exception111);
     EXPECT_TRUE(verdict.valid) << verdict.output << "\n" << r.body;
   }
+}
+
+/** A PNG's bit depth and colour type (IHDR), {0, 0} when it is not a PNG. */
+std::pair<int, int> pngDepthAndType(const std::string& body) {
+  if (body.size() < 26 || body.compare(1, 3, "PNG") != 0) return {0, 0};
+  return {static_cast<unsigned char>(body[24]), static_cast<unsigned char>(body[25])};
+}
+
+// A styled map of an elevation value layer is a picture (8-bit RGBA), so a GetMap of it that
+// fails with EXCEPTIONS=BLANK or INIMAGE (1.3.0) or se_blank / se_inimage (1.1.1) is answered
+// with a picture too, as the map would have been, not with the 16-bit heights PNG that the layer
+// unstyled is: both for a style the layer does not have and for an upstream that fails.
+TEST(WmsValuesIntegration, StyledMapsFailAsPicturesWithBlankOrInImageExceptions) {
+  Server s;
+  const std::string v130 = "SERVICE=WMS&VERSION=1.3.0&REQUEST=GetMap&CRS=CRS:84"
+                           "&BBOX=-180,-90,180,90&WIDTH=64&HEIGHT=32&FORMAT=image/png"
+                           "&TRANSPARENT=TRUE";
+  const std::string v111 = "SERVICE=WMS&VERSION=1.1.1&REQUEST=GetMap&SRS=EPSG:4326"
+                           "&BBOX=-180,-90,180,90&WIDTH=64&HEIGHT=32&FORMAT=image/png"
+                           "&TRANSPARENT=TRUE";
+  struct Case {
+    std::string query;
+    bool inImage;
+  };
+  const std::vector<Case> cases = {
+      {v130 + "&LAYERS=dem&STYLES=magma&EXCEPTIONS=BLANK", false},
+      {v130 + "&LAYERS=dem&STYLES=magma&EXCEPTIONS=INIMAGE", true},
+      {v130 + "&LAYERS=down&STYLES=terrain&EXCEPTIONS=BLANK", false},
+      {v130 + "&LAYERS=down&STYLES=terrain&EXCEPTIONS=INIMAGE", true},
+      {v111 + "&LAYERS=dem&STYLES=magma&EXCEPTIONS=application/vnd.ogc.se_blank", false},
+      {v111 + "&LAYERS=down&STYLES=viridis&EXCEPTIONS=application/vnd.ogc.se_inimage", true},
+      {v111 + "&LAYERS=sat,down&STYLES=,terrain&EXCEPTIONS=application/vnd.ogc.se_blank", false},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.query);
+    const auto r = s.get(c.query);
+    ASSERT_EQ(r.header("content-type"), "image/png") << r.body.substr(0, 400);
+    EXPECT_EQ(pngDepthAndType(r.body), (std::pair{8, 6})); // 8-bit RGBA, as the map would be
+    auto im = codec::decodePng(span(r.body));
+    ASSERT_TRUE(im) << im.error();
+    ASSERT_EQ(im->width, 64);
+    ASSERT_EQ(im->height, 32);
+    bool drawn = false;
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 64; ++x)
+        drawn = drawn || pixel(*im, x, y)[3] != 0;
+    EXPECT_EQ(drawn, c.inImage); // blank: all transparent; in image: the message drawn
+  }
+  // The same failures unstyled are heights, as the map would have been (16-bit grey).
+  const auto plain = s.get(v130 + "&LAYERS=down&STYLES=&EXCEPTIONS=BLANK");
+  EXPECT_EQ(plain.header("content-type"), "image/png");
+  EXPECT_EQ(pngDepthAndType(plain.body), (std::pair{16, 0}));
+  // The styled map itself, for comparison: the same kind of PNG as its blank.
+  const auto map = s.get(v130 + "&LAYERS=dem&STYLES=terrain&EXCEPTIONS=BLANK");
+  EXPECT_EQ(pngDepthAndType(map.body), (std::pair{8, 6}));
+}
+
+// BIL is data: a style does not colour an elevation layer in a BIL16 map (its heights, the same
+// bytes as unstyled), and such a map that fails is a blank BIL16.
+TEST(WmsValuesIntegration, BilMapsOfStyledElevationLayersAreHeights) {
+  Server s;
+  const std::string q = "SERVICE=WMS&VERSION=1.3.0&REQUEST=GetMap&CRS=CRS:84"
+                        "&BBOX=-180,-90,180,90&WIDTH=64&HEIGHT=32&FORMAT=application/bil16";
+  const auto styled = s.get(q + "&LAYERS=dem&STYLES=terrain");
+  ASSERT_EQ(styled.status, 200) << styled.body.substr(0, 400);
+  EXPECT_EQ(styled.header("content-type"), "application/bil16");
+  EXPECT_EQ(styled.body.size(), 64u * 32u * 2u);
+  EXPECT_EQ(styled.body, s.get(q + "&LAYERS=dem&STYLES=").body);
+  const auto failed = s.get(q + "&LAYERS=down&STYLES=terrain&EXCEPTIONS=BLANK");
+  EXPECT_EQ(failed.header("content-type"), "application/bil16");
+  EXPECT_EQ(failed.body.size(), 64u * 32u * 2u);
 }
 
 } // namespace

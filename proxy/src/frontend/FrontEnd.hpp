@@ -95,12 +95,20 @@ public:
 private:
   /** What a map of these layers is made of: heights (mapIsHeights) or a picture, and the
    * no-data value of heights (the first elevation layer's, else -32768). Unknown names count as
-   * imagery. */
+   * imagery. A layer drawn in colour (drawnInColour: its STYLES entry, `styles` parallel to
+   * `names` or empty) makes a PNG or TIFF map a picture; BIL16 stays heights (BIL is data: a
+   * style does not apply). One rule for the map and for the image an exception is drawn in. */
   struct MapKind {
     bool heights = false;
     std::int16_t noData = -32768;
   };
-  MapKind mapKind(MapFormat format, const std::vector<std::string>& names) const;
+  MapKind mapKind(MapFormat format,
+                  const std::vector<std::string>& names,
+                  const std::vector<std::string>& styles) const;
+  /** Whether a layer with this STYLES entry is drawn with a colour map: its style's colour map
+   * (styleOf), or, for a style it does not have, whether it is a value layer (whose styles are
+   * colour maps: what the request asked for is a picture). */
+  bool drawnInColour(const LayerSpec& l, std::string_view style) const;
   void capabilities(const HttpRequest& req,
                     const GetCapabilitiesRequest& caps,
                     const WmsErrorContext& ctx,

@@ -118,20 +118,31 @@ CapabilitiesModel WmsFrontEnd::capabilitiesModel(const HttpRequest& req) const {
 // ---- GetMap -------------------------------------------------------------------------------------
 
 WmsFrontEnd::MapKind WmsFrontEnd::mapKind(MapFormat format,
-                                          const std::vector<std::string>& names) const {
+                                          const std::vector<std::string>& names,
+                                          const std::vector<std::string>& styles) const {
   MapKind k;
   bool allElevation = !names.empty();
   bool noDataSet = false;
-  for (const std::string& n : names) {
-    const LayerSpec* l = fe_.tiles.layer(n);
+  bool coloured = false;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    const LayerSpec* l = fe_.tiles.layer(names[i]);
     allElevation = allElevation && l && l->elevation;
     if (l && l->elevation && !noDataSet) {
       k.noData = l->noData;
       noDataSet = true;
     }
+    if (l && drawnInColour(*l, i < styles.size() ? std::string_view(styles[i]) : ""))
+      coloured = true;
   }
-  k.heights = mapIsHeights(format, allElevation);
+  // A layer drawn with a colour map is a picture: the map is heights only when no layer is,
+  // except in BIL, which is only ever heights.
+  k.heights = mapIsHeights(format, allElevation) && (!coloured || format == MapFormat::Bil16);
   return k;
+}
+
+bool WmsFrontEnd::drawnInColour(const LayerSpec& l, std::string_view style) const {
+  const auto map = styleOf(l, style);
+  return map ? *map != nullptr : l.values.has_value();
 }
 
 void WmsFrontEnd::getMap(const HttpRequest& req,
@@ -142,12 +153,12 @@ void WmsFrontEnd::getMap(const HttpRequest& req,
   // map is (mapIsHeights), and each layer is drawn as that (MapComposer).
   auto layers = mapLayers(m, ctx, respond);
   if (!layers) return;
-  MapKind kind = mapKind(m.mapFormat, m.layers);
-  // A layer drawn with a colour map is a picture: the map is heights only when no layer is.
-  if (std::any_of(layers->begin(), layers->end(), [](const ComposeLayer& l) {
-        return l.colourMap != nullptr;
-      }))
-    kind.heights = false;
+  const MapKind kind = mapKind(m.mapFormat, m.layers, m.styles);
+  // In a heights map (BIL) an elevation layer is its heights, whatever its style.
+  if (kind.heights) {
+    for (ComposeLayer& l : *layers)
+      if (l.layer->elevation) l.colourMap = nullptr;
+  }
   if (sendOneTile(req, m, *layers, kind, ctx, respond)) return;
   // Any other box, size, format or several layers: composed from the tiles.
   if (static_cast<std::int64_t>(m.width) * m.height > fe_.options.maxMapPixels) {
@@ -297,7 +308,8 @@ void WmsFrontEnd::exception(const WmsErrorContext& ctx,
     const std::string text = ctx.exceptions == GetMapRequest::Exceptions::InImage
                                  ? sanitizeForClient(e.code + ": " + e.message)
                                  : std::string();
-    const MapKind kind = mapKind(ctx.mapFormat, ctx.layers);
+    // The image the map would have been: a styled value layer's is a picture (mapKind).
+    const MapKind kind = mapKind(ctx.mapFormat, ctx.layers, ctx.styles);
     if (auto img = blankMap(ctx.mapFormat,
                             kind.heights,
                             ctx.width,

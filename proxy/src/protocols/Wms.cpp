@@ -688,6 +688,7 @@ WmsErrorContext wmsErrorContext(const QueryParams& params, const WmsLimits& limi
   ctx.mapFormat = mapFormat;
   ctx.format = std::string(toString(mapFormat));
   if (const auto layers = nonEmpty(params, "layers")) ctx.layers = splitCommas(*layers);
+  if (const auto styles = nonEmpty(params, "styles")) ctx.styles = splitCommas(*styles);
   ctx.width = *width;
   ctx.height = *height;
   ctx.transparent = *transparent;

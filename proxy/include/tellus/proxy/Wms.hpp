@@ -222,6 +222,8 @@ struct WmsErrorContext {
   MapFormat mapFormat = MapFormat::Png;
   std::vector<std::string>
       layers; ///< LAYERS as given (to tell heights from pictures), may be empty
+  /// STYLES as given (a styled value layer is a picture), may be empty or of another length
+  std::vector<std::string> styles;
   std::int32_t width = 0;
   std::int32_t height = 0;
   bool transparent = false;
