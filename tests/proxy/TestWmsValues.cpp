@@ -23,6 +23,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <span>
@@ -131,6 +132,7 @@ LayerSpec chl() {
   l.dataset.mimeType = "image/tiff";
   l.values->format = values::ValueFormat{};
   l.values->format.container = values::Container::Tiff;
+  l.values->format.encoding = values::Encoding::Float32; // `encoding: float32`
   l.values->format.unit = "mg/m³";
   l.values->defaultStyle = "viridis";
   l.values->styles = {"viridis"};
@@ -167,7 +169,7 @@ struct Server {
   std::unique_ptr<ProxyFrontEnd> front;
   std::unique_ptr<HttpServer> server;
 
-  Server() {
+  explicit Server(std::vector<LayerSpec> layers = {sst(), sat(), dem(), chl(), down()}) {
     cache = test::openTestCache(dir.path());
     fetcher = std::make_unique<Fetcher>();
     UpstreamSpec u;
@@ -178,8 +180,7 @@ struct Server {
     u.crs = "EPSG:4326";
     u.policy.timeout = 2000ms;
     u.policy.retries = 0;
-    auto t = TileService::create(
-        *cache, *fetcher, {u}, {sst(), sat(), dem(), chl(), down()}, TileServiceOptions{});
+    auto t = TileService::create(*cache, *fetcher, {u}, std::move(layers), TileServiceOptions{});
     EXPECT_TRUE(t) << (t ? "" : t.error());
     tiles = std::move(*t);
     FrontEndOptions options;
@@ -520,6 +521,74 @@ TEST(WmsValuesIntegration, BilMapsOfStyledElevationLayersAreHeights) {
   const auto failed = s.get(q + "&LAYERS=down&STYLES=terrain&EXCEPTIONS=BLANK");
   EXPECT_EQ(failed.header("content-type"), "application/bil16");
   EXPECT_EQ(failed.body.size(), 64u * 32u * 2u);
+}
+
+/** The Float32 values of an application/bil32 body (little-endian). */
+std::vector<float> bil32Values(const std::string& body) {
+  std::vector<float> v(body.size() / 4);
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    std::uint32_t bits = 0;
+    for (std::size_t b = 0; b < 4; ++b)
+      bits |= std::uint32_t(static_cast<unsigned char>(body[k * 4 + b])) << (8 * b);
+    v[k] = std::bit_cast<float>(bits);
+  }
+  return v;
+}
+
+// application/bil32: a map of Float32 values, little-endian, for layers of Float32 values only;
+// offered in the capabilities when a layer has them. A pixel on a texel centre has the tile's
+// value; a style does not apply; a failed map with EXCEPTIONS=BLANK is no data (NaN, or the
+// layer's no-data value).
+TEST(WmsValuesIntegration, Bil32MapsAreFloat32Values) {
+  Server s;
+  // 0..36 E, 36 S..0: the columns of one level-0 tile, rows across two (texel-aligned).
+  const std::string q = "SERVICE=WMS&VERSION=1.3.0&REQUEST=GetMap&CRS=CRS:84"
+                        "&BBOX=0,-36,36,0&WIDTH=64&HEIGHT=64&FORMAT=application/bil32";
+  const auto r = s.get(q + "&LAYERS=chl&STYLES=");
+  ASSERT_EQ(r.status, 200) << r.body.substr(0, 400);
+  EXPECT_EQ(r.header("content-type"), "application/bil32") << r.body.substr(0, 400);
+  ASSERT_EQ(r.body.size(), 64u * 64u * 4u);
+  const std::vector<float> v = bil32Values(r.body);
+  for (const int y : {0, 31, 63})
+    for (const int x : {0, 17, 40, 63})
+      EXPECT_FLOAT_EQ(v[std::size_t(y * 64 + x)],
+                      static_cast<float>(std::pow(10.0, (x + 0.5) / 64 * 4.0 - 2.0)))
+          << x << "," << y;
+  // The style does not apply: the same values with the layer's colour map named.
+  EXPECT_EQ(s.get(q + "&LAYERS=chl&STYLES=viridis").body, r.body);
+  // Layers without Float32 values: InvalidFormat (an Int16 value layer, imagery).
+  for (const std::string layer : {"sst", "sat", "dem"}) {
+    const auto refused = s.get(q + "&LAYERS=" + layer + "&STYLES=");
+    EXPECT_NE(refused.body.find("InvalidFormat"), std::string::npos) << layer << refused.body;
+    EXPECT_TRUE(test::validateWms(refused.body, test::WmsDocument::Exception130).valid);
+  }
+  // BLANK: no data everywhere (chl names none: NaN).
+  const auto blank = s.get(q + "&LAYERS=chl&STYLES=magma&EXCEPTIONS=BLANK");
+  EXPECT_EQ(blank.header("content-type"), "application/bil32");
+  ASSERT_EQ(blank.body.size(), 64u * 64u * 4u);
+  const auto nan = bil32Values(blank.body);
+  EXPECT_TRUE(std::all_of(nan.begin(), nan.end(), [](float f) { return std::isnan(f); }));
+  // Advertised (service-wide, as every GetMap format) because chl's values are Float32.
+  for (const std::string version : {"1.1.1", "1.3.0"}) {
+    const auto caps = s.get("SERVICE=WMS&REQUEST=GetCapabilities&VERSION=" + version);
+    EXPECT_NE(caps.body.find("<Format>application/bil32</Format>"), std::string::npos) << version;
+  }
+}
+
+TEST(WmsValuesIntegration, Bil32IsOfferedOnlyWithFloat32LayersAndFillsTheirNoData) {
+  Server withoutFloat32({sst(), sat(), dem()});
+  const auto caps = withoutFloat32.get("SERVICE=WMS&REQUEST=GetCapabilities&VERSION=1.3.0");
+  ASSERT_EQ(caps.status, 200);
+  EXPECT_EQ(caps.body.find("application/bil32"), std::string::npos);
+  LayerSpec marked = chl();
+  marked.values->format.noData = -9999.0;
+  Server withNoData({marked});
+  const auto blank =
+      withNoData.get("SERVICE=WMS&VERSION=1.3.0&REQUEST=GetMap&CRS=CRS:84&LAYERS=chl&STYLES=magma"
+                     "&BBOX=0,-36,36,0&WIDTH=8&HEIGHT=4&FORMAT=application/bil32&EXCEPTIONS=BLANK");
+  ASSERT_EQ(blank.body.size(), 8u * 4u * 4u) << blank.body;
+  for (const float f : bil32Values(blank.body))
+    EXPECT_EQ(f, -9999.0f);
 }
 
 } // namespace

@@ -16,6 +16,7 @@
 #include <tellus/values/ValueFormat.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
@@ -187,7 +188,9 @@ private:
   }
 
   void fill(bool ycc) {
-    if (r_.heights) {
+    if (r_.values) {
+      values_.assign(pixels_, std::numeric_limits<float>::quiet_NaN());
+    } else if (r_.heights) {
       heights_.assign(pixels_, r_.noData);
     } else if (ycc) {
       // Nothing to fill: composePlane writes every sample of the planes, the background where
@@ -301,7 +304,7 @@ private:
     const LayerSpec& spec = *l.spec.layer;
     const GridSpec& g = l.grid->spec();
     // Decoded tiles are kept (whole) in an LRU by their ETag, which names their bytes.
-    const bool valued = l.spec.colourMap != nullptr && spec.values.has_value();
+    const bool valued = (l.spec.colourMap != nullptr || r_.values) && spec.values.has_value();
     const std::string cacheKey = spec.name + '\n' + l.spec.time + '\n' + a.etag +
                                  (ycc ? "\nycc" : "") + (valued ? "\nvalues" : "");
     bool keep = false;
@@ -384,7 +387,9 @@ private:
     };
     // Every level of the grid is served (firstLevel is an upstream offset): first level 0.
     const TileGrid& grid = *l.grid;
-    if (l.spec.colourMap && spec.values) {
+    if (r_.values) { // a map of values: every layer is a value layer (the front end checks)
+      count(composeValues(grid, r_.bbox, r_.width, r_.height, l.level, 0, lookup, values_));
+    } else if (l.spec.colourMap && spec.values) {
       drawValueLayer(l, lookup);
     } else if (spec.elevation && r_.heights) {
       count(composeHeights(
@@ -429,6 +434,12 @@ private:
   // ---- the bytes --------------------------------------------------------------------------------
 
   std::expected<std::vector<std::byte>, std::string> encode(bool ycc) {
+    if (r_.values) {
+      if (!std::isnan(r_.valueNoData))
+        std::replace_if(
+            values_.begin(), values_.end(), [](float v) { return std::isnan(v); }, r_.valueNoData);
+      return encodeBil32(r_.width, r_.height, values_.data());
+    }
     if (r_.heights) {
       return encodeHeights(r_.format == MapFormat::Png ? "image/png" : toString(r_.format),
                            r_.width,
@@ -478,6 +489,7 @@ private:
   ComposerBuffers& buffers_ = composerBuffers(); ///< this composer thread's (TileDecode.hpp)
   std::vector<std::uint8_t>& canvas_ = buffers_.canvas;
   std::vector<std::int16_t> heights_;
+  std::vector<float> values_; ///< a map of values (application/bil32)
   // One layer of the other kind than the map, before it is drawn over the map (see
   // ComposeRequest::layers).
   std::vector<std::int16_t> layerHeights_;
