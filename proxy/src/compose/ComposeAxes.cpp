@@ -1,6 +1,7 @@
 // A map's axes at one level and the tiles they name (ComposeSampling.hpp): which texels each
 // output column and row samples, remembered between maps; the level a map is composed from and
-// the tiles it needs (composeLevel, composeTiles, composeTilesYcc, chromaLayout: Compose.hpp).
+// the tiles it needs (composeLevel, composeTiles, composeTilesYcc, chromaLayout: Compose.hpp); the
+// fallback to coarser levels.
 #include "compose/ComposeSampling.hpp"
 
 #include <mutex>
@@ -261,6 +262,26 @@ LevelTiles levelTiles(const TileGrid& grid,
     }
   }
   return t;
+}
+
+bool Fallback::quad(std::int32_t i, std::int32_t j, Quad& q) {
+  for (std::int32_t l = level_ - 1; l >= first_; --l) {
+    const LevelTiles& t = tiles(l);
+    if (quadAt(t,
+               t.cols.samples[static_cast<std::size_t>(i)],
+               t.rows.samples[static_cast<std::size_t>(j)],
+               q))
+      return true;
+  }
+  return false;
+}
+
+const LevelTiles& Fallback::tiles(std::int32_t l) {
+  const auto k = static_cast<std::size_t>(level_ - 1 - l);
+  if (levels_.size() <= k) levels_.resize(k + 1);
+  if (levels_[k].empty())
+    levels_[k].push_back(levelTiles(grid_, box_, width_, height_, l, lookup_));
+  return levels_[k].front();
 }
 
 } // namespace compose

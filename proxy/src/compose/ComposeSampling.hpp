@@ -156,26 +156,12 @@ public:
       : grid_(grid), box_(box), width_(width), height_(height), level_(level), first_(firstLevel),
         lookup_(lookup) {}
 
-  bool quad(std::int32_t i, std::int32_t j, Quad& q) {
-    for (std::int32_t l = level_ - 1; l >= first_; --l) {
-      const LevelTiles& t = tiles(l);
-      if (quadAt(t,
-                 t.cols.samples[static_cast<std::size_t>(i)],
-                 t.rows.samples[static_cast<std::size_t>(j)],
-                 q))
-        return true;
-    }
-    return false;
-  }
+  /** The four texels of pixel (i, j) at the nearest coarser level that has them; false when
+   * none has (out of line: the slow path, ComposeAxes.cpp). */
+  bool quad(std::int32_t i, std::int32_t j, Quad& q);
 
 private:
-  const LevelTiles& tiles(std::int32_t l) {
-    const auto k = static_cast<std::size_t>(level_ - 1 - l);
-    if (levels_.size() <= k) levels_.resize(k + 1);
-    if (levels_[k].empty())
-      levels_[k].push_back(levelTiles(grid_, box_, width_, height_, l, lookup_));
-    return levels_[k].front();
-  }
+  const LevelTiles& tiles(std::int32_t l);
 
   const TileGrid& grid_;
   Sector box_;
