@@ -2,6 +2,7 @@
 // never blended in), and pictures of them: values coloured by a scale, heights as grey, a picture's
 // luminance as heights. The axes and the other samplers: ComposeSampling.hpp.
 #include "compose/ComposeSampling.hpp"
+#include <tellus/values/Sample.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -58,25 +59,15 @@ ComposeStats composeHeights(const TileGrid& grid,
 
 namespace {
 
-/** Bilinear value of a quad of value tiles; the largest weight's texel where one is NaN. */
+/** The value of a quad of value tiles by values/Sample.hpp's rule (bilinearValue, in double):
+ * bilinear; the texel the point lies in where one of the four is NaN. */
 float sampleValue(const Quad& q) noexcept {
-  double v[4];
-  bool any = false;
-  for (int k = 0; k < 4; ++k) {
-    v[k] = static_cast<double>(q.t[k]->values[q.index[k]]);
-    any = any || std::isnan(v[k]);
-  }
-  if (any) {
-    const double w[4] = {
-        (1 - q.fx) * (1 - q.fy), q.fx * (1 - q.fy), (1 - q.fx) * q.fy, q.fx * q.fy};
-    int best = 0;
-    for (int k = 1; k < 4; ++k)
-      if (w[k] > w[best]) best = k;
-    return static_cast<float>(v[best]);
-  }
-  const double top = v[0] * (1.0 - q.fx) + v[1] * q.fx;
-  const double bottom = v[2] * (1.0 - q.fx) + v[3] * q.fx;
-  return static_cast<float>(top * (1.0 - q.fy) + bottom * q.fy);
+  return static_cast<float>(values::bilinearValue(static_cast<double>(q.t[0]->values[q.index[0]]),
+                                                  static_cast<double>(q.t[1]->values[q.index[1]]),
+                                                  static_cast<double>(q.t[2]->values[q.index[2]]),
+                                                  static_cast<double>(q.t[3]->values[q.index[3]]),
+                                                  q.fx,
+                                                  q.fy));
 }
 
 } // namespace
