@@ -3,10 +3,13 @@ every GetMap answers a PNG of one solid colour per TIME (listed below), so that 
 which time each frame is at; a GetMap without TIME, or at a time not listed, gets 400 (tellus must
 never ask for a time the layer does not declare). Every request is logged to LOGFILE, one query
 string a line. Usage: time_upstream.py PORTFILE LOGFILE (binds 127.0.0.1 on a free port, writes
-the port to PORTFILE, serves until killed). Standard library only."""
+the port to PORTFILE, serves until killed). TIME_UPSTREAM_DELAY_MS in the environment delays
+every answer (a slow upstream, to see fetching ahead at work). Standard library only."""
+import os
 import struct
 import sys
 import threading
+import time
 import zlib
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from urllib.parse import parse_qsl, urlsplit
@@ -18,6 +21,7 @@ COLOURS = {
     "2024-04-01": (240, 230, 20),
 }
 LOCK = threading.Lock()
+DELAY_S = float(os.environ.get("TIME_UPSTREAM_DELAY_MS", "0")) / 1000.0
 
 
 def png(w, h, rgb):
@@ -45,6 +49,7 @@ class Handler(BaseHTTPRequestHandler):
             self.send_response(400)
             self.end_headers()
             return
+        time.sleep(DELAY_S)
         body = png(int(q.get("WIDTH", "64")), int(q.get("HEIGHT", "64")), colour)
         self.send_response(200)
         self.send_header("Content-Type", "image/png")
