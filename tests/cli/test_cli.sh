@@ -176,6 +176,30 @@ if err=$("$tellus" seed --cache "$tcache" --layer bluemarble --levels 0 --time 2
   fail "--time for a layer without TIME was accepted"
 fi
 echo "$err" | grep -q "no TIME dimension" || fail "no TIME dimension: $err"
+# Several times (issue 24): a range on the daily grid seeds each time in turn; a range or list with
+# a time the layer does not declare is refused by name before anything is fetched; too many.
+out=$("$tellus" seed --config "$work/daily.yaml" --cache "$tcache" --layer daily --levels 0 \
+  --bbox -30,-30,30,30 --time 2024-01-20/2024-01-24/P2D) || fail "seed a range: $out"
+echo "$out" | grep -q "daily: time 3 of 3: 2024-01-24" || fail "seed a range, per time: $out"
+[ "$(echo "$out" | grep -c "6 written")" = 3 ] || fail "a range of three times: $out"
+out=$("$tellus" seed --config "$work/daily.yaml" --cache "$tcache" --layer daily --levels 0 \
+  --bbox -30,-30,30,30 --time 2024-01-20T00:00:00Z,2024-01-25) || fail "seed a list: $out"
+echo "$out" | grep -q "time 1 of 2: 2024-01-20$" || fail "the layer's spelling of a time: $out"
+echo "$out" | grep -q "6 already cached, 0 written" || fail "a time seeded before is cached: $out"
+before=$("$tellus" cache stats --json --cache "$tcache" | python3 -c 'import json,sys; print(json.load(sys.stdin)["tiles"])')
+for bad in "2024-01-30/2024-02-02/P1D:2024-02-01" "2024-01-01/2024-01-02/PT12H:2024-01-01T12:00:00Z" \
+  "2024-01-05,2024-03-01:2024-03-01"; do
+  range=${bad%%:[0-9]*}
+  named=${bad#"$range":}
+  if err=$("$tellus" seed --config "$work/daily.yaml" --cache "$tcache" --layer daily --levels 0 \
+    --time "$range" 2>&1); then fail "--time $range was accepted: $err"; fi
+  echo "$err" | grep -qF "does not declare $named" || fail "--time $range: $err"
+done
+if err=$("$tellus" seed --config "$work/daily.yaml" --cache "$tcache" --layer daily --levels 0 \
+  --time 2024-01-01T00:00:00Z/2024-01-31T00:00:00Z/PT1M 2>&1); then fail "a huge range was accepted"; fi
+echo "$err" | grep -q "more than 1000 instants" || fail "a huge range: $err"
+after=$("$tellus" cache stats --json --cache "$tcache" | python3 -c 'import json,sys; print(json.load(sys.stdin)["tiles"])')
+[ "$before" = "$after" ] || fail "a refused --time seeded tiles: $before -> $after"
 
 # server.jpeg_quality reaches the maps tellus composes: the first luma quantisation step of a
 # GetMap that is not one tile is 16 at quality 50 (libjpeg's table unscaled; 3 at the default 90).

@@ -85,6 +85,19 @@ RenderStats sampleStats() {
   sst.visible = false;
   sst.swaps = 1;
   sst.night = true;
+  RenderStats::Layer::Animation& a = sst.animation.emplace();
+  a.state = "holding";
+  a.target = "2024-01-02";
+  a.instants = 12;
+  a.steps = 1;
+  a.heldSteps = 1;
+  a.heldSeconds = 0.25;
+  a.aheadRequested = 8;
+  a.aheadReceived = 4;
+  a.aheadInFlight = 4;
+  a.aheadMaxInFlight = 4;
+  a.aheadWanted = 16;
+  a.aheadSettled = 4;
   s.layers = {base, sst};
   return s;
 }
@@ -143,8 +156,8 @@ TEST(RenderStatsJson, TheDocumentToTheByte) {
   "scene_time_unix": 1710957600.250,
   "sunlight": true,
   "layers": [
-    {"name": "bluemarble", "time": "", "pending_time": "", "opacity": 1.000, "visible": true, "night": false, "tiles_requested": 51, "tiles_received": 52, "textures_resident": 53, "swaps": 0},
-    {"name": "sst", "time": "2024-01-01", "pending_time": "2024-01-02", "opacity": 0.500, "visible": false, "night": true, "tiles_requested": 0, "tiles_received": 0, "textures_resident": 0, "swaps": 1}
+    {"name": "bluemarble", "time": "", "pending_time": "", "opacity": 1.000, "visible": true, "night": false, "tiles_requested": 51, "tiles_received": 52, "textures_resident": 53, "swaps": 0, "animation": null},
+    {"name": "sst", "time": "2024-01-01", "pending_time": "2024-01-02", "opacity": 0.500, "visible": false, "night": true, "tiles_requested": 0, "tiles_received": 0, "textures_resident": 0, "swaps": 1, "animation": {"state": "holding", "target": "2024-01-02", "times": 12, "steps": 1, "held_steps": 1, "held_seconds": 0.250, "ahead_requested": 8, "ahead_received": 4, "ahead_in_flight": 4, "ahead_max_in_flight": 4, "ahead_wanted": 16, "ahead_settled": 4}}
   ],
   "median_frame_ms": 5.000,
   "p95_frame_ms": 7.250,
@@ -176,6 +189,8 @@ TEST(RenderStatsJson, ReadsBackAsJson) {
   EXPECT_EQ(j["longest_frame"]["index"], 1);
   EXPECT_EQ(j["scene_time"], "2024-03-20T18:00:00Z");
   EXPECT_EQ(j["layers"][1]["night"], true);
+  EXPECT_TRUE(j["layers"][0]["animation"].is_null());
+  EXPECT_EQ(j["layers"][1]["animation"]["state"], "holding");
   EXPECT_EQ(j.size(), 58u); // every member, none twice
 }
 

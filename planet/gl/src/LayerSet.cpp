@@ -210,6 +210,18 @@ void LayerSet::setTime(std::size_t layer, std::string time) {
   slot.pending = std::move(*l);
 }
 
+void LayerSet::animate(std::size_t layer, std::optional<TimeAnimation> animation) {
+  if (layer >= slots_.size()) throw std::invalid_argument("no such layer");
+  LayerSlot& slot = slots_[layer];
+  slot.prefetch.reset();
+  slot.animation = std::move(animation);
+  if (!slot.animation) return;
+  PrefetchParams p;
+  p.layer = slot.opt.layer;
+  p.maxInFlight = slot.animation->options().aheadInFlight;
+  slot.prefetch = std::make_unique<TimePrefetcher>(source_, p);
+}
+
 void LayerSet::swapReady() {
   for (LayerSlot& slot : slots_) {
     if (!slot.pending || !slot.pending->ready()) continue;
@@ -250,6 +262,25 @@ LayerTotals LayerSet::collectStats(RenderStats& stats) const {
     ls.tilesRequested = slot.retiredRequested;
     ls.tilesReceived = slot.retiredReceived;
     ls.texturesResident = slot.current->lru.count();
+    ls.animation.reset();
+    if (slot.animation) {
+      RenderStats::Layer::Animation& a = ls.animation.emplace();
+      a.state = playStateName(slot.animation->state());
+      a.target = slot.animation->target();
+      a.instants = slot.animation->instants().size();
+      a.steps = slot.animation->steps();
+      a.heldSteps = slot.animation->heldSteps();
+      a.heldSeconds = slot.animation->heldSeconds();
+      if (slot.prefetch) {
+        const PrefetchStats& p = slot.prefetch->stats();
+        a.aheadRequested = p.requested;
+        a.aheadReceived = p.received;
+        a.aheadInFlight = p.inFlight;
+        a.aheadMaxInFlight = p.maxInFlightSeen;
+        a.aheadWanted = p.wanted;
+        a.aheadSettled = p.settled;
+      }
+    }
     for (const LayerTextures* l : {slot.current.get(), slot.pending.get()}) {
       if (l == nullptr) continue;
       const StreamStats& st = l->streamer->stats();

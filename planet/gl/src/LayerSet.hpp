@@ -23,6 +23,8 @@
 #include <tellus/planet/Quadtree.hpp>
 #include <tellus/planet/TextureLru.hpp>
 #include <tellus/planet/TextureStreamer.hpp>
+#include <tellus/planet/TimeAnimation.hpp>
+#include <tellus/planet/TimePrefetch.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
 #include <tellus/values/ColourScale.hpp>
 
@@ -101,6 +103,10 @@ struct LayerSlot {
   std::size_t swaps = 0;
   std::size_t retiredRequested = 0; ///< tiles of times no longer drawn
   std::size_t retiredReceived = 0;
+  /** Time that plays (issue 24; LayerAnimation.hpp): the layer's animation and what fetches its
+   * next times ahead; none when not animated. */
+  std::optional<TimeAnimation> animation;
+  std::unique_ptr<TimePrefetcher> prefetch;
   /** Drops the pending textures (their tiles counted as retired). */
   void dropPending();
 };
@@ -161,6 +167,9 @@ public:
   void setTime(std::size_t layer, std::string time);
   void setMaxLevel(std::size_t layer, int maxLevel);
   void move(std::size_t from, std::size_t to);
+  /** Plays the layer's time (LayerAnimation.hpp), replacing an animation it had; nullopt stops
+   * it (the layer keeps the time it shows). */
+  void animate(std::size_t layer, std::optional<TimeAnimation> animation);
 
   /** A layer whose pending time is ready swaps to it, all at once, for the next frame. */
   void swapReady();

@@ -119,6 +119,23 @@ void addTerrain(Document& doc, const RenderStats& s) {
            {"camera_lifted", boolean(s.cameraLifted)}});
 }
 
+/** Time that plays (issue 24): null for a layer that is not animated. */
+std::string animationJson(const std::optional<RenderStats::Layer::Animation>& a) {
+  if (!a) return "null";
+  return inlineObject({{"state", jsonString(a->state)},
+                       {"target", jsonString(a->target)},
+                       {"times", number(a->instants)},
+                       {"steps", number(a->steps)},
+                       {"held_steps", number(a->heldSteps)},
+                       {"held_seconds", fixed3(a->heldSeconds)},
+                       {"ahead_requested", number(a->aheadRequested)},
+                       {"ahead_received", number(a->aheadReceived)},
+                       {"ahead_in_flight", number(a->aheadInFlight)},
+                       {"ahead_max_in_flight", number(a->aheadMaxInFlight)},
+                       {"ahead_wanted", number(a->aheadWanted)},
+                       {"ahead_settled", number(a->aheadSettled)}});
+}
+
 /** The dome (issue #7): how the last frame was drawn and the direct method's error estimate; the
  * layers: the base, then the overlays in drawing order, one per line. */
 void addDomeAndLayers(Document& doc, const RenderStats& s) {
@@ -154,7 +171,8 @@ void addDomeAndLayers(Document& doc, const RenderStats& s) {
                             {"tiles_requested", number(l.tilesRequested)},
                             {"tiles_received", number(l.tilesReceived)},
                             {"textures_resident", number(l.texturesResident)},
-                            {"swaps", number(l.swaps)}});
+                            {"swaps", number(l.swaps)},
+                            {"animation", animationJson(l.animation)}});
   }
   doc.add("layers", layers + "\n  ]");
 }

@@ -6,6 +6,7 @@
 #include "DrawList.hpp"
 #include "FrameUpdate.hpp"
 #include "GlobePass.hpp"
+#include "LayerAnimation.hpp"
 #include "RendererImpl.hpp"
 #include "StarsPass.hpp"
 #include "TextureIntake.hpp"
@@ -297,6 +298,7 @@ void Renderer::Impl::endFrame(const FrameStats& tree,
                               FramePhases& phases,
                               Clock::time_point t0) {
   layers.swapReady();
+  observeAnimations(layers, frameS);
   const LayerTotals totals = layers.collectStats(stats);
   lastComplete =
       complete && totals.idle && uploads.empty() && decoder.pending() == 0 && !terrain.busy();
@@ -328,10 +330,13 @@ void Renderer::frame(const CameraPose& pose) {
   const auto t0 = Clock::now();
   const double nowS = std::chrono::duration<double>(t0 - m.start).count();
   const double frameS = m.opt.frameClock ? m.opt.frameClock() : nowS; // fades' time
+  m.frameS = frameS;
   m.terrain.setTime(frameS); // before the heights delivered this frame (beginFrame) arrive
   Impl::View view = m.beginFrame(pose);
+  stepAnimations(m.layers, frameS); // time that plays: the instants asked for (issue 24)
   // A copy: the tree it comes from may be swapped out at the end of this frame (a time change).
   const FrameStats tree = updateLayers(m.layers, view.camera, nowS);
+  fetchAhead(m.layers);
   m.terrain.want(m.layers.geo(), nowS, m.stats);
   m.stats.updateMs = msSince(t0);
   m.stats.longestUpdateMs = std::max(m.stats.longestUpdateMs, m.stats.updateMs);
@@ -449,57 +454,6 @@ void Renderer::resize(int width, int height) {
   m.opt.width = width;
   m.opt.height = height;
   m.scene->resize();
-}
-
-// Layers: the set's own rules (LayerSet.hpp); a change that drops textures needs the context.
-std::size_t Renderer::layerCount() const noexcept {
-  return impl_->layers.size();
-}
-void Renderer::setLayerOpacity(std::size_t layer, double opacity) {
-  impl_->layers.setOpacity(layer, opacity);
-}
-void Renderer::setLayerVisible(std::size_t layer, bool visible) {
-  impl_->layers.setVisible(layer, visible);
-}
-void Renderer::setLayerMaxLevel(std::size_t layer, int maxLevel) {
-  impl_->context->makeCurrent();
-  impl_->layers.setMaxLevel(layer, maxLevel);
-}
-std::optional<ValueLayerOptions> Renderer::layerValues(std::size_t layer) const {
-  if (layer >= impl_->layers.size()) return std::nullopt;
-  return impl_->layers[layer].opt.values;
-}
-
-void Renderer::setLayerValues(std::size_t layer, const ValueLayerOptions& v) {
-  if (layer >= impl_->layers.size() || !impl_->layers[layer].opt.values)
-    throw std::invalid_argument("only a layer of values has a colour scale");
-  values::ColourScale s{values::findColourMap(v.colourMap), v.min, v.max, v.scaling, v.outOfRange};
-  if (auto ok = values::checkScale(s); !ok) throw std::invalid_argument(ok.error());
-  if (!(v.min < v.max)) throw std::invalid_argument("the range must be min < max");
-  ValueLayerOptions& now = *impl_->layers[layer].opt.values;
-  const values::ValueFormat format = now.format; // the tiles' format never changes here
-  now = v;
-  now.format = format;
-}
-
-std::optional<float> Renderer::layerValueAt(std::size_t layer, double latDeg, double lonDeg) const {
-  if (layer >= impl_->layers.size() || !impl_->layers[layer].opt.values) return std::nullopt;
-  return valueAtPoint(*impl_->layers[layer].current, latDeg, lonDeg);
-}
-
-void Renderer::setLegend(bool on) {
-  impl_->opt.legend = on;
-}
-bool Renderer::legend() const noexcept {
-  return impl_->opt.legend;
-}
-
-void Renderer::moveLayer(std::size_t from, std::size_t to) {
-  impl_->layers.move(from, to);
-}
-void Renderer::setLayerTime(std::size_t layer, std::string time) {
-  impl_->context->makeCurrent();
-  impl_->layers.setTime(layer, std::move(time));
 }
 
 } // namespace tellus::planet

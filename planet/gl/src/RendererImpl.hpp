@@ -79,6 +79,8 @@ struct Renderer::Impl {
   /** Ready layer times swapped in, and the frame's statistics. */
   void endFrame(const FrameStats& tree, bool complete, FramePhases& phases, Clock::time_point t0);
   double surfaceHeightAt(double latDeg, double lonDeg) const;
+  /** The frame clock now (RendererOptions::frameClock, else seconds since start). */
+  double frameClockNow() const;
 
   std::unique_ptr<GlContext> context; // first: destroyed last
   ITileSource& source;
@@ -102,6 +104,7 @@ struct Renderer::Impl {
    * a layer time swaps a tree out. */
   std::optional<DrawList> lastList;
   Clock::time_point start = Clock::now();
+  double frameS = 0.0; ///< the frame clock of the frame being drawn
   CameraPose drawnPose{};
 };
 

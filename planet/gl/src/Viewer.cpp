@@ -1,3 +1,4 @@
+#include "ViewerAnimation.hpp"
 #include "ViewerValues.hpp"
 
 #include <tellus/planet/SceneTime.hpp>
@@ -371,7 +372,7 @@ void ViewerLoop::updateTitle(Clock::time_point now) {
   const double sinceTitle = std::chrono::duration<double>(now - lastTitle_).count();
   if (sinceTitle < 0.5) return;
   const auto& s = renderer_.stats();
-  char title[384];
+  char title[512];
   std::snprintf(title,
                 sizeof title,
                 "tellus  %.0f fps  %zu nodes  level %d  %zu tiles in flight  %.0f MB  "
@@ -390,6 +391,10 @@ void ViewerLoop::updateTitle(Clock::time_point now) {
     const std::string t = formatSceneTime(sceneClock_->time());
     const std::size_t used = std::strlen(title);
     std::snprintf(title + used, sizeof title - used, "  %s x%g", t.c_str(), sceneClock_->rate());
+  }
+  if (const std::string playing = animationStatus(renderer_); !playing.empty()) {
+    const std::size_t used = std::strlen(title); // time that plays (issue 24)
+    std::snprintf(title + used, sizeof title - used, "%s", playing.c_str());
   }
   int ww = 0, wh = 0; // the value under the cursor (issue 24), window to framebuffer pixels
   glfwGetWindowSize(window_, &ww, &wh);
@@ -429,11 +434,13 @@ std::uint64_t ViewerLoop::run() {
     bool layersChanged = false;
     for (const int key : input_.keys)
       if (!timeKey(key))
-        layersChanged = valueKey(renderer_, selected_, key) || layerKey(key) || layersChanged;
+        layersChanged = valueKey(renderer_, selected_, key) ||
+                        animationKey(renderer_, selected_, key) || layerKey(key) || layersChanged;
     input_.keys.clear();
     // The scene's time with the wall clock; at more than 10x real time the sun moves visibly:
     // every frame is drawn, not twice a second.
-    const bool timeRuns = sceneClock_ && std::abs(sceneClock_->rate()) > 1.0;
+    const bool timeRuns =
+        (sceneClock_ && std::abs(sceneClock_->rate()) > 1.0) || animationRuns(renderer_);
     if (sceneClock_) renderer_.setTime(sceneClock_->advance(wallSeconds()));
     if (layersChanged) {
       renderer_.frame(pose_); // the stats printed show the change

@@ -2,6 +2,7 @@
 // keyframes (--path, --frames; planet::FlightPath), with the statistics of --stats
 // (planet::renderStatsJson).
 
+#include "AnimateArgs.hpp"
 #include "Commands.hpp"
 #include "Context.hpp"
 #include "GlobeArgs.hpp"
@@ -296,6 +297,10 @@ int renderFlight(const RenderArgs& ra,
     for (const auto& [name, value] : k.layerTimes)
       if (std::find(drawn.begin(), drawn.end(), name) == drawn.end())
         return usage("a keyframe's \"times\" names a layer that is not drawn", name);
+  for (std::size_t i = 0; i < drawn.size(); ++i)
+    for (const planet::Keyframe& k : flight.keyframes())
+      if (r.layerAnimation(i) != nullptr && k.layerTimes.contains(drawn[i]))
+        return usage("a keyframe's \"times\" names a layer that --animate plays", drawn[i]);
   bool allComplete = true;
   // --repeat: the flight again in the same renderer (what stays resident is not streamed again:
   // the later passes' frame times are the views' cost without streaming).
@@ -374,6 +379,14 @@ int runRender(const cli::Args& a) {
   if (ra->waitComplete) ro.fadeInSeconds = 0.0;
   if (ra->flight && !ra->waitComplete)
     ro.frameClock = [clock = ra->flightClockS] { return *clock; };
+  // Time that plays (issue 24) runs on the flight's clock: with --wait-complete each frame waits
+  // for its time's swap, so frame n shows the time of n / fps (deterministic).
+  auto animations = animateArgs(a, *tiles, ro);
+  if (!animations) return usage(animations.error().c_str(), "");
+  if (!animations->empty()) {
+    if (!ra->flight) return usage("--animate needs a flight (--path, --frames)", "");
+    ro.frameClock = [clock = ra->flightClockS] { return *clock; };
+  }
   const Geodesy geodesy(ra->earth.value_or(tiles->earth));
   // The always-resident global texture: the bundled Blue Marble.
   if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg"; fs::exists(global))
@@ -383,6 +396,8 @@ int runRender(const cli::Args& a) {
     std::fprintf(stderr, "tellus render: %s\n", renderer.error().c_str());
     return kExitError;
   }
+  for (auto& anim : *animations)
+    (*renderer)->animateLayer(anim.layer, std::move(anim.animation));
   RenderSession session(**renderer, a, ra->waitSeconds);
   return ra->flight ? renderFlight(*ra, ro, **renderer, session)
                     : renderView(*ra, **renderer, session);
@@ -395,6 +410,8 @@ Command renderCommand() {
   Command c{"render", tileSourceOptions(), 0, &runRender};
   const auto globe = globeOptions();
   c.options.insert(c.options.end(), globe.begin(), globe.end());
+  const auto animate = animateOptions();
+  c.options.insert(c.options.end(), animate.begin(), animate.end());
   c.options.insert(c.options.end(),
                    {{"out", K::Value},
                     {"wait-complete", K::OptionalValue},

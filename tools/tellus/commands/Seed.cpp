@@ -5,6 +5,7 @@
 #include "Commands.hpp"
 #include "Context.hpp"
 
+#include <tellus/cli/LayerTimes.hpp>
 #include <tellus/cli/ProxyFromConfig.hpp>
 #include <tellus/cli/Values.hpp>
 #include <tellus/proxy/Fetcher.hpp>
@@ -30,9 +31,11 @@ using cli::humanBytes;
 
 /** What the command line asks of a seeding run. */
 struct SeedArgs {
-  SeedOptions range;         ///< --levels, --bbox, --dry-run
-  ServiceSeedOptions remote; ///< --time, --concurrency, --rate, --retries, --refresh
-  double metaTiles = 0;      ///< --meta-tiles; 0: each upstream's own
+  SeedOptions range; ///< --levels, --bbox, --dry-run
+  /** --concurrency, --rate, --retries, --refresh; its time is --time as written (one instant, a
+   * list or a range: seedLayers expands it per layer). */
+  ServiceSeedOptions remote;
+  double metaTiles = 0; ///< --meta-tiles; 0: each upstream's own
 };
 
 /** A progress line: a bar on a terminal (redrawn in place), else a plain line every 5 s. */
@@ -213,40 +216,55 @@ std::expected<SeedArgs, int> parseSeedArgs(const cli::Args& a) {
   return s;
 }
 
-/** The layers to seed: each --layer, else every layer; each able to take --time (TIME checked
- * against its dimension, as a WMS client's would be). kExitUsage after saying why. */
-std::expected<std::vector<const LayerConfig*>, int>
+/** A layer to seed and the times to seed it at ("" for a layer without a TIME dimension). */
+struct LayerPlan {
+  const LayerConfig* layer = nullptr;
+  std::vector<std::string> times;
+};
+
+/** The layers to seed: each --layer, else every layer; each with the times of --time (one
+ * instant, a list or a range A/B/P, every instant checked against the layer's declared TIME
+ * dimension as a WMS client's would be: cli::layerTimes), else its default time. Everything is
+ * checked before anything is fetched. kExitUsage after saying why. */
+std::expected<std::vector<LayerPlan>, int>
 seedLayers(const cli::Args& a, const Config& config, const std::string& time) {
-  std::vector<const LayerConfig*> layers;
+  std::vector<LayerPlan> plans;
   for (const auto& name : a.all("layer")) {
     const auto* l = config.layer(name);
     if (!l) {
       std::fprintf(stderr, "tellus seed: no layer '%s'\n", name.c_str());
       return std::unexpected(kExitUsage);
     }
-    layers.push_back(l);
+    plans.push_back({l, {}});
   }
-  if (layers.empty()) {
+  if (plans.empty()) {
     for (const auto& l : config.layers)
-      layers.push_back(&l);
+      plans.push_back({&l, {}});
   }
-  for (const LayerConfig* l : layers) {
-    const auto t =
-        resolveTimeDimension(l->name, l->time.values, l->time.period, l->time.defaultValue, time);
-    if (!t) {
-      std::fprintf(stderr,
-                   "tellus seed: --time for layer '%s': %s\n",
-                   l->name.c_str(),
-                   t.error().message.c_str());
-      return std::unexpected(kExitUsage);
-    }
-    if (!time.empty() && t->empty()) {
+  for (LayerPlan& p : plans) {
+    const LayerConfig* l = p.layer;
+    if (!time.empty() && !l->time.enabled()) {
       std::fprintf(
           stderr, "tellus seed: layer '%s' has no TIME dimension; drop --time\n", l->name.c_str());
       return std::unexpected(kExitUsage);
     }
+    if (time.empty()) { // its default time, in its own spelling ("" without a dimension)
+      const auto t =
+          resolveTimeDimension(l->name, l->time.values, l->time.period, l->time.defaultValue, "");
+      p.times = {t.value_or("")};
+      continue;
+    }
+    auto times = cli::layerTimes(*l, time);
+    if (!times) {
+      std::fprintf(stderr,
+                   "tellus seed: --time for layer '%s': %s\n",
+                   l->name.c_str(),
+                   times.error().c_str());
+      return std::unexpected(kExitUsage);
+    }
+    p.times = std::move(*times);
   }
-  return layers;
+  return plans;
 }
 
 /** The tile service seeding goes through, as `serve` fetches but within --concurrency. */
@@ -336,37 +354,44 @@ int runSeed(const cli::Args& a) {
   if (!s) return s.error();
   auto ctx = setUp(a, CacheUse::Seed);
   if (!ctx) return kExitError;
-  const auto layers = seedLayers(a, ctx->config, s->remote.time);
-  if (!layers) return layers.error();
+  const auto plans = seedLayers(a, ctx->config, s->remote.time);
+  if (!plans) return plans.error();
   int rc = kExitOk;
   Fetcher fetcher;
   std::unique_ptr<TileService> service; // made when the first layer needs it
-  for (const LayerConfig* layer : *layers) {
+  for (const LayerPlan& plan : *plans) {
+    const LayerConfig* layer = plan.layer;
     const UpstreamConfig* upstream = ctx->config.upstream(layer->upstream);
     const bool local = upstream && upstream->type == UpstreamConfig::Type::Local;
-    // A layer with a TIME dimension is seeded at --time, else at its default time.
-    const std::string& time = s->remote.time;
-    const std::string layerTime =
-        resolveTimeDimension(
-            layer->name, layer->time.values, layer->time.period, layer->time.defaultValue, time)
-            .value_or(time);
-    int layerRc = kExitOk;
-    if (!local || s->remote.refresh || !layerTime.empty()) {
-      if (!service) {
-        auto created = seedingService(*ctx, fetcher, *s);
-        if (!created) {
-          std::fprintf(stderr, "tellus seed: %s\n", created.error().c_str());
-          return kExitError;
-        }
-        service = std::move(*created);
+    for (std::size_t i = 0; i < plan.times.size(); ++i) {
+      // A layer with a TIME dimension is seeded at each time of --time, else at its default.
+      const std::string& layerTime = plan.times[i];
+      if (plan.times.size() > 1) {
+        std::printf("%s: time %zu of %zu: %s\n",
+                    layer->name.c_str(),
+                    i + 1,
+                    plan.times.size(),
+                    layerTime.c_str());
+        std::fflush(stdout);
       }
-      layerRc = seedThroughTheService(*service, *ctx->cache, *layer, *s, layerTime);
-    } else {
-      layerRc = seedFromTheRaster(*ctx->cache, *layer, *upstream, s->range);
+      int layerRc = kExitOk;
+      if (!local || s->remote.refresh || !layerTime.empty()) {
+        if (!service) {
+          auto created = seedingService(*ctx, fetcher, *s);
+          if (!created) {
+            std::fprintf(stderr, "tellus seed: %s\n", created.error().c_str());
+            return kExitError;
+          }
+          service = std::move(*created);
+        }
+        layerRc = seedThroughTheService(*service, *ctx->cache, *layer, *s, layerTime);
+      } else {
+        layerRc = seedFromTheRaster(*ctx->cache, *layer, *upstream, s->range);
+      }
+      if (layerRc == kExitCacheFull) return kExitCacheFull; // the next would not fit either
+      if (layerRc == kExitError) return kExitError;
+      if (layerRc != kExitOk) rc = layerRc;
     }
-    if (layerRc == kExitCacheFull) return kExitCacheFull; // the next layers would not fit either
-    if (layerRc == kExitError) return kExitError;
-    if (layerRc != kExitOk) rc = layerRc;
   }
   return rc;
 }

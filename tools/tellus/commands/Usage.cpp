@@ -11,6 +11,9 @@ commands:
   seed     fill the cache from the layers' upstreams
              [--layer NAME]... [--levels A-B] [--bbox W,S,E,N] [--dry-run]
              [--time T] [--concurrency N] [--rate TILES/S] [--retries N] [--refresh]
+             --time T: one TIME, a list T1,T2 or a range A/B/P (A/B: the layer's times
+                                      within); each checked against the layer's grid
+                                      before anything is fetched, at most 1000
              [--meta-tiles N]         N x N tiles per WMS GetMap (default: the upstream's
                                       meta_tiles, 4; 1 = one GetMap per tile)
   cache    inspect and maintain the cache
@@ -52,11 +55,15 @@ commands:
              layer coloured by its colour map; also renderer.layers)
              [--legend | --no-legend] the value layers' legends (renderer.legend; default:
              view on, render off);
+             [--animate LAYER=TIMES]... time that plays (TIMES as seed --time; render: with
+             --path) [--rate N] times a second (1) [--once] (default: loop) [--fetch-ahead K]
+                                      the next K times' tiles fetched ahead (2)
              view: 0-9 select a layer (1-9 also show/hide it), - = opacity, , . order,
              ; ' deepest level, [ ] its time; the scene's time: L faster, H slower,
-             J backwards, K pause, N now; value layers (the selected, else the first): C next
-             colour map, Z X narrow/widen its range, Q E shift it, G legends; the value under
-             the cursor ends the status line
+             J backwards, K pause, N now; --animate: Space plays/pauses, [ ] step it;
+             value layers (the selected, else the first): C next colour map, Z X
+             narrow/widen its range, Q E shift it, G legends; the value under the cursor
+             and each animated layer's TIME and state end the status line
              render: [--edge-fixing on|off] (off shows the cracks it closes; for comparisons)
              render, view and height: [--geoid on|off] (renderer.geoid: mean-sea-level heights
              onto the ellipsoid, h = H + N)

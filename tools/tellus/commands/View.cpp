@@ -1,5 +1,6 @@
 // `tellus view`: the interactive globe in a GLFW window (planet::runViewer).
 
+#include "AnimateArgs.hpp"
 #include "Commands.hpp"
 #include "Context.hpp"
 #include "GlobeArgs.hpp"
@@ -11,6 +12,7 @@
 
 #include <cstdio>
 #include <string>
+#include <utility>
 
 namespace fs = std::filesystem;
 
@@ -77,6 +79,11 @@ int runView(const cli::Args& a) {
     std::fprintf(stderr, "tellus view: %s\n", bad->c_str());
     return kExitUsage;
   }
+  auto animations = animateArgs(a, *tiles, ro); // time that plays (issue 24)
+  if (!animations) {
+    std::fprintf(stderr, "tellus view: %s\n", animations.error().c_str());
+    return kExitUsage;
+  }
   hideNightLayers(a, tiles->night, ro);
   // Legends of value layers (issue 24): on in view unless renderer.legend or --no-legend says no.
   ro.legend = !a.flag("no-legend") && (a.flag("legend") || tiles->legend.value_or(true));
@@ -88,6 +95,8 @@ int runView(const cli::Args& a) {
     std::fprintf(stderr, "tellus view: %s\n", renderer.error().c_str());
     return kExitError;
   }
+  for (auto& anim : *animations)
+    (*renderer)->animateLayer(anim.layer, std::move(anim.animation));
   vo.start = pose;
   vo.layerTimes = tiles->layerTimes;
   vo.sceneTime = ro.timeUnixSeconds;
@@ -95,6 +104,8 @@ int runView(const cli::Args& a) {
               "P screenshot, Esc quits; time: L faster, H slower, J backwards, K pause, N now%s\n",
               ro.overlays.empty() ? ""
                                   : "; layers: 0-9 select (1-9 show/hide), - = opacity, [ ] time");
+  if (!animations->empty())
+    std::printf("tellus view: --animate: Space plays or pauses, [ ] step the animated layer\n");
   std::fflush(stdout);
   const auto frames = planet::runViewer(**renderer, vo);
   std::printf("tellus view: %llu frames\n", static_cast<unsigned long long>(frames));
@@ -108,6 +119,8 @@ Command viewCommand() {
   const auto globe = globeOptions();
   c.options.insert(c.options.end(), globe.begin(), globe.end());
   c.options.push_back({"exit-after", cli::OptionKind::Value});
+  const auto animate = animateOptions();
+  c.options.insert(c.options.end(), animate.begin(), animate.end());
   return c;
 }
 

@@ -25,6 +25,7 @@
 #include <tellus/planet/HeightStreamer.hpp>
 #include <tellus/planet/StarCatalogue.hpp>
 #include <tellus/planet/Terrain.hpp>
+#include <tellus/planet/TimeAnimation.hpp>
 #include <tellus/values/ColourScale.hpp>
 #include <tellus/values/ValueFormat.hpp>
 
@@ -327,6 +328,23 @@ struct RenderStats {
     std::size_t tilesReceived = 0;
     std::size_t texturesResident = 0; ///< now
     std::size_t swaps = 0;            ///< time changes completed
+    /** Time that plays (issue 24; Renderer::animateLayer): nullopt when not animated. */
+    struct Animation {
+      std::string state;  ///< "playing", "holding" (waiting for the target's tiles), "paused",
+                          ///< "ended"
+      std::string target; ///< the instant asked for (shown once `time` equals it)
+      std::size_t instants = 0;
+      std::size_t steps = 0;          ///< instants shown after being asked for
+      std::size_t heldSteps = 0;      ///< of them, shown only after frames of holding
+      double heldSeconds = 0.0;       ///< the frame clock's seconds those held in all
+      std::size_t aheadRequested = 0; ///< tiles of the next times fetched ahead (totals)
+      std::size_t aheadReceived = 0;
+      std::size_t aheadInFlight = 0;    ///< now
+      std::size_t aheadMaxInFlight = 0; ///< the most at once (never above the bound)
+      std::size_t aheadWanted = 0;      ///< last frame: the drawn nodes' tiles at the times ahead
+      std::size_t aheadSettled = 0;     ///< ... of them answered
+    };
+    std::optional<Animation> animation;
   };
   std::vector<Layer> layers;
   int overlaysPerPass = 0; ///< overlay textures blended in one pass
@@ -414,6 +432,20 @@ public:
    * visible node has its texture of the new time (or none exists), never tile by tile. Setting
    * the time again before that replaces the pending time; the current time cancels it. */
   void setLayerTime(std::size_t layer, std::string time);
+  /** Time that plays (issue 24; planet/TimeAnimation.hpp): the layer steps through the
+   * animation's instants on the frame clock (RendererOptions::frameClock, else the steady
+   * clock), each swapped in whole through setLayerTime once its tiles for the view are all there
+   * (the shown time holds until then: RenderStats::Layer::animation says "holding"), and the
+   * tiles of the next fetchAhead instants for the drawn nodes asked for ahead at a priority below
+   * every visible tile (at most aheadInFlight at once; planet/TimePrefetch.hpp). Replaces an
+   * animation of that layer; nullopt stops it. Out-of-range layers refused (invalid_argument). */
+  void animateLayer(std::size_t layer, std::optional<TimeAnimation> animation);
+  /** The layer's animation (nullptr: none, or no such layer). */
+  const TimeAnimation* layerAnimation(std::size_t layer) const noexcept;
+  /** `view`'s keys: pause or play the layer's animation from now on the frame clock, or step it
+   * by hand (paused); no-ops for a layer without one. */
+  void toggleLayerAnimation(std::size_t layer);
+  void stepLayerAnimation(std::size_t layer, int delta);
   /** The deepest level of a layer fetched and drawn (-1: the layer's own deepest). Swapped in like
    * a time change: the textures the new limit needs first, then all at once. */
   void setLayerMaxLevel(std::size_t layer, int maxLevel);

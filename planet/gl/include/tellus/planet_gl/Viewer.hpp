@@ -19,7 +19,11 @@
  * time (SceneClock, planet/SceneTime.hpp). Layers of values (issue 24; planet/gl/src/
  * ViewerValues.hpp): C cycles the colour map of the selected value layer (else the first one),
  * Z and X narrow and widen its range, Q and E shift it down and up, G shows or hides the
- * legends; the value under the cursor ("title value unit") ends the statistics line. The
+ * legends; the value under the cursor ("title value unit") ends the statistics line. Time that
+ * plays (issue 24; planet/gl/src/ViewerAnimation.hpp): Space plays or pauses an animated layer
+ * (Renderer::animateLayer; the selected one, else the first), [ and ] step an animated selected
+ * layer's animation by hand, and each animated layer's "name TIME state" joins the statistics
+ * line (holding: the next time's tiles are not all there yet). The
  * statistics line (fps, nodes drawn, tiles in flight,
  * texture MB, camera, the scene's time and its pace) is drawn at the top left of the window (its
  * own 5 x 7 font, TextOverlay.cpp) and is the window title, refreshed twice a second.
