@@ -65,7 +65,8 @@ void writeFile(const fs::path& p, std::string_view text) {
 // ---- examples and defaults ---------------------------------------------------------------------
 
 TEST(ConfigYaml, EveryExampleParses) {
-  for (const char* name : {"default.yaml", "mapserver.yaml", "public.yaml", "heights.yaml"}) {
+  for (const char* name :
+       {"default.yaml", "mapserver.yaml", "public.yaml", "heights.yaml", "sst.yaml"}) {
     const auto c = loadConfig(kExamples / name);
     ASSERT_TRUE(c) << c.error().toString();
     EXPECT_EQ(c->sourceFile, kExamples / name);
@@ -86,6 +87,30 @@ TEST(ConfigYaml, HeightsExample) {
   ASSERT_EQ(c->renderer.layers.size(), 2u);
   EXPECT_EQ(c->renderer.layers[1].layer, "heights");
   EXPECT_EQ(c->renderer.layers[1].opacity, 0.5);
+}
+
+// Real data as values (issue 24): the bundled COADS SST, hundredths of a degree C, land no data.
+TEST(ConfigYaml, SeaSurfaceTemperatureExample) {
+  const auto c = loadConfig(kExamples / "sst.yaml");
+  ASSERT_TRUE(c) << c.error().toString();
+  const LayerConfig* sst = c->layer("sst");
+  ASSERT_NE(sst, nullptr);
+  EXPECT_EQ(sst->kind, LayerKind::Values);
+  EXPECT_EQ(sst->dataset.mimeType, "application/bil16");
+  EXPECT_EQ(sst->values.format.encoding, values::Encoding::Int16);
+  EXPECT_EQ(sst->values.format.scale, 0.01);
+  EXPECT_EQ(sst->values.format.noData, -32768.0);
+  EXPECT_EQ(sst->values.format.unit, "°C");
+  EXPECT_EQ(sst->values.colourMap, "magma");
+  EXPECT_EQ(sst->values.min, -2.0);
+  EXPECT_EQ(sst->values.max, 32.0);
+  const UpstreamConfig* up = c->upstream(sst->upstream);
+  ASSERT_NE(up, nullptr);
+  EXPECT_EQ(up->type, UpstreamConfig::Type::Local);
+  EXPECT_TRUE(fs::exists(up->path)) << up->path; // the bundled file, through data_dir
+  EXPECT_EQ(up->path.filename(), "sst_coads_jan_int16.tif");
+  ASSERT_EQ(c->renderer.layers.size(), 2u);
+  EXPECT_EQ(c->renderer.layers[1].layer, "sst");
 }
 
 // renderer.layers[i].colour_map and range: value layers only, known maps, min < max.
