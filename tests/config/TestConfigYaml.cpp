@@ -197,6 +197,24 @@ TEST(ConfigYaml, PublicExample) {
   EXPECT_EQ(elev->kind, LayerKind::Elevation);
   EXPECT_EQ(elev->upstreamLayer, "GEBCO,aster_v2,USGS-NED");
   EXPECT_EQ(elev->maxAge, seconds(30 * 86400));
+  // Its heights as values (issue 24): colour-map styles over WMS, metres.
+  EXPECT_TRUE(elev->isValueLayer());
+  EXPECT_EQ(elev->values.colourMap, "terrain");
+  EXPECT_EQ(elev->values.styles,
+            (std::vector<std::string>{"terrain", "viridis", "cividis", "turbo"}));
+  EXPECT_EQ(elev->values.min, -8000.0);
+  EXPECT_EQ(elev->values.max, 8000.0);
+  EXPECT_EQ(elev->values.format.unit, "m");
+  // NEO's and GIBS's WMS layers send coloured pictures, not values (the example says why): they
+  // stay imagery.
+  for (const char* name : {"bluemarble",
+                           "modis-truecolor",
+                           "sea-surface-temperature",
+                           "land-temperature-climatology"}) {
+    ASSERT_NE(c->layer(name), nullptr) << name;
+    EXPECT_EQ(c->layer(name)->kind, LayerKind::Imagery) << name;
+    EXPECT_FALSE(c->layer(name)->isValueLayer()) << name;
+  }
   EXPECT_EQ(c->layer("srtm30plus")->dataset.grid.numLevels, 10);
   EXPECT_TRUE(c->layer("bluemarble")->dataset.pinned);
   EXPECT_EQ(c->server.offlineResponse, OfflineResponse::Blank);
