@@ -224,3 +224,36 @@ TEST(SeederIntegration, SeedsResumesAndCountsADryRun) {
   EXPECT_EQ(hit->kind, CacheLookup::Kind::Hit);
   EXPECT_EQ(hit->meta.contentType, "image/jpeg");
 }
+
+// A value layer seeded from its raster (`tellus seed` of a local layer): the tiles' no-data is
+// the layer's (SeedOptions::noData), and the source's land is never mixed into the sea's values.
+TEST(SeederIntegration, SeedsValuesWithTheLayersNoData) {
+  test::TempDir dir("seed-values");
+  auto cache = test::openTestCache(dir.path());
+  ASSERT_TRUE(cache);
+  DatasetSpec spec;
+  spec.server = "local-sst";
+  spec.name = "sst";
+  spec.grid = GridSpec{Sector{}, 36.0, 64, 64, 1};
+  spec.mimeType = "application/bil16";
+  spec.extension = "bil";
+  const auto id = *cache->registerDataset(spec);
+  SeedOptions so;
+  so.box = Sector{-108, -18, -72, 18}; // the Pacific coast of South America: tile (0, 2, 2)
+  auto report = seedFromRaster(*cache, id, sst(), so);
+  ASSERT_TRUE(report);
+  EXPECT_EQ(report->written, 1);
+  auto hit = cache->get(id, TileKey{0, 2, 2});
+  ASSERT_TRUE(hit);
+  ASSERT_EQ(hit->bytes.size(), 64u * 64u * 2u);
+  int land = 0;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const int v = bilAt(hit->bytes, 64, x, y);
+      if (v == -32768)
+        ++land;
+      else
+        EXPECT_TRUE(v > 1500 && v < 3200) << x << "," << y << ": " << v;
+    }
+  EXPECT_GT(land, 200);
+}
