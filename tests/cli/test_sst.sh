@@ -10,7 +10,9 @@
 #   - the styled GetMap (magma, its default style), read by GDAL, is the magma colour of that
 #     value at the same pixel (index +-1 where the value sits on a bin edge), opaque; land is
 #     transparent;
-#   - GetLegendGraphic is a PNG.
+#   - GetLegendGraphic is a PNG;
+#   - `tellus height --values sst` at the same points prints what GetFeatureInfo answered (the same
+#     tile, the same value function), and "no data" on land.
 # Usage: test_sst.sh path/to/tellus
 set -euo pipefail
 tellus=$1
@@ -56,8 +58,12 @@ points=(
 : >"$work/got"
 : >"$work/cells"
 : >"$work/colours"
+: >"$work/height"
 for p in "${points[@]}"; do
   read -r x y what <<<"$p"
+  "$tellus" height --config "$work/sst.yaml" --cache "$work/cache" --values sst \
+    --lat $((89 - 2 * y)) --lon $((-179 + 2 * x)) >>"$work/height" 2>"$work/height.err" \
+    || fail "tellus height --values at $what: $(cat "$work/height.err")"
   curl -sf -o "$work/info.json" \
     "$base&REQUEST=GetFeatureInfo&$map&QUERY_LAYERS=sst&INFO_FORMAT=application/json&I=$x&J=$y" \
     || fail "GetFeatureInfo at $what"
@@ -73,9 +79,10 @@ for p in "${points[@]}"; do
 done
 gdallocationinfo -valonly "$src/data/sst_coads_jan_int16.tif" <"$work/cells" >"$work/source"
 python3 - "$work/got" "$work/source" "$work/colours" "$src/values/src/ColourMapTables.cpp" \
-  "${#points[@]}" <<'PY'
+  "${#points[@]}" "$work/height" <<'PY'
 import re, sys
 got = [line.split() for line in open(sys.argv[1])]
+height = [line.strip() for line in open(sys.argv[6])]
 source = [int(float(v)) for v in open(sys.argv[2]).read().split()]
 colours = [[int(v) for v in line.split()] for line in open(sys.argv[3])]
 table = open(sys.argv[4]).read()
@@ -85,10 +92,14 @@ magma = [tuple(map(int, t)) for t in re.findall(r"\{(\d+), (\d+), (\d+)\}", body
 assert len(magma) == 256, len(magma)
 n = int(sys.argv[5])
 assert len(got) == n and len(colours) == n and len(source) == 9 * n, (len(got), len(source))
+assert len(height) == n, height
 bad = []
 for k in range(n):
     cells = source[9 * k:9 * k + 9]
     value, unit = got[k]
+    same = height[k] == "no data" if value == "null" else abs(float(height[k]) - float(value)) < 1e-3
+    if not same:
+        bad.append(f"point {k}: tellus height --values printed {height[k]}, GetFeatureInfo {value}")
     if k == n - 1:  # the Sahara
         if value != "null" or cells[4] != -32768 or colours[k][3] != 0:
             bad.append(f"Sahara: value {value}, source {cells[4]}, pixel {colours[k]}")
