@@ -25,11 +25,15 @@
 // = 0): night layers show nothing.
 //
 // Layers of values (issue 24; uOverlayValues[i].x = 1): the overlay's texture holds one float a
-// texel (R32F, NaN = no data), read at the nearest texel (texelFetch: never filtered) and
-// coloured by values/ColourScale.hpp's rule in float: t = (v - low) / (high - low) (log: of
-// log10 v, low and high already log10; v <= 0 below the range), out of the range transparent
-// (uOverlayValues[i].w = 1) or clamped, index = clamp(floor(t * 256), 0, 255) into row
-// uOverlayValues[i].y of uColourMaps (one 256-entry map a row), opaque; no data transparent.
+// texel (R32F, NaN = no data, rows from the south), never filtered by GL: valueAt reads the four
+// texels around the point with texelFetch and follows values/Sample.hpp's rule (the one the
+// proxy's composed maps and values::sample follow) in float: texel centres at +0.5, clamped to
+// the texture's edges; bilinear of the values; where one of the four is NaN, the texel the point
+// lies in (ties to the second texel, counted as the CPU counts them: rows from the north). The
+// value is then coloured by values/ColourScale.hpp's rule in float: t = (v - low) / (high - low)
+// (log: of log10 v, low and high already log10; v <= 0 below the range), out of the range
+// transparent (uOverlayValues[i].w = 1) or clamped, index = clamp(floor(t * 256), 0, 255) into
+// row uOverlayValues[i].y of uColourMaps (one 256-entry map a row), opaque; no data transparent.
 in vec2 vUv;
 in vec2 vUvNode;
 in vec3 vNormal;
@@ -64,9 +68,32 @@ vec3 fadeIn(vec3 colour) {
 
 const float kAmbient = 0.04;
 
-vec4 valueColour(sampler2D values, vec2 uv, vec4 scale, vec2 range) {
+// values::axisTexels and values::bilinearValue (values/Sample.hpp) in float. p: texel
+// coordinates with y counted from the north edge (the CPU's rows).
+float valueAt(sampler2D values, vec2 uv) {
   ivec2 size = textureSize(values, 0);
-  float v = texelFetch(values, clamp(ivec2(floor(uv * vec2(size))), ivec2(0), size - 1), 0).r;
+  vec2 p = vec2(uv.x, 1.0 - uv.y) * vec2(size);
+  vec2 g = clamp(p - 0.5, vec2(0.0), vec2(size - 1));
+  ivec2 i0 = ivec2(floor(g));
+  ivec2 i1 = min(i0 + 1, size - 1);
+  vec2 f = g - vec2(i0);
+  // Rows from the north -> the texture's rows (from the south).
+  int r0 = size.y - 1 - i0.y, r1 = size.y - 1 - i1.y;
+  float v00 = texelFetch(values, ivec2(i0.x, r0), 0).r;
+  float v10 = texelFetch(values, ivec2(i1.x, r0), 0).r;
+  float v01 = texelFetch(values, ivec2(i0.x, r1), 0).r;
+  float v11 = texelFetch(values, ivec2(i1.x, r1), 0).r;
+  if (isnan(v00) || isnan(v10) || isnan(v01) || isnan(v11)) {
+    bool right = f.x >= 0.5, down = f.y >= 0.5;
+    return down ? (right ? v11 : v01) : (right ? v10 : v00);
+  }
+  float top = v00 * (1.0 - f.x) + v10 * f.x;
+  float bottom = v01 * (1.0 - f.x) + v11 * f.x;
+  return top * (1.0 - f.y) + bottom * f.y;
+}
+
+vec4 valueColour(sampler2D values, vec2 uv, vec4 scale, vec2 range) {
+  float v = valueAt(values, uv);
   if (isnan(v)) return vec4(0.0);
   float t;
   if (scale.z > 0.5 && v <= 0.0) t = -1.0;

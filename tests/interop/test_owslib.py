@@ -42,6 +42,14 @@ def check_value_layer(wms, version):
         fail("%s: the legend is no 256x56 PNG: %r" % (version, body[:100]))
     if "application/json" not in wms.getOperationByName("GetFeatureInfo").formatOptions:
         fail("%s: GetFeatureInfo formats" % version)
+    # GetLegendGraphic is declared: 1.1.1's own element, 1.3.0's sld:GetLegendGraphic (SLD 1.1.0).
+    try:
+        legend_formats = wms.getOperationByName("GetLegendGraphic").formatOptions
+    except KeyError:
+        fail("%s: GetLegendGraphic is not declared: %s" % (version,
+                                                            [op.name for op in wms.operations]))
+    if "image/png" not in legend_formats:
+        fail("%s: GetLegendGraphic formats %s" % (version, legend_formats))
     # The Himalaya (86.9 E, 28 N) and the Pacific (150 W, 0) in maps of 1 pixel per degree.
     heights = []
     for bbox, xy in (((60, 10, 100, 40), (26, 12)), ((-170, -20, -130, 10), (20, 10))):

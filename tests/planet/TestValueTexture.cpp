@@ -54,7 +54,7 @@ TEST(ValueTexture, OneLevelOfFloatsRowsFromTheSouthNoDataNaN) {
   const DecodedTexture d = decodeTexture(job(4, 1));
   ASSERT_TRUE(d.ok) << d.error;
   EXPECT_TRUE(d.values);
-  ASSERT_EQ(d.levels.size(), 1u); // never mip-mapped: sampled at the nearest texel
+  ASSERT_EQ(d.levels.size(), 1u); // never mip-mapped: read by texelFetch
   EXPECT_EQ(d.bytes, 4u * 4u * 4u);
   EXPECT_EQ(texel(d, 0, 3), 0.0f);  // the tile's north-west sample is the texture's last row
   EXPECT_EQ(texel(d, 2, 0), 16.0f); // (10 * 3 + 2) * 0.5

@@ -2,8 +2,8 @@
 // A world for the renderer's layers of values (issue 24, label gl): a flat grey base (PNG) and a
 // layer of values ("vals", BIL16 Int16 tiles, one level of 36-degree 32 x 32 tiles: each texel
 // 1.125 degrees) whose raw samples say where they are, some of them no data. The CPU's colour of
-// the texel under any point (values::decode and values::apply over the same tile bytes) is what
-// a render must show there (tests/planet/TestValuesGl.cpp).
+// any point (values::decode, values::sample and values::colourOf over the same tile bytes) is
+// what a render must show there (tests/planet/TestValuesGl.cpp).
 
 #include "../support/FakeTileSource.hpp"
 

@@ -431,6 +431,12 @@ TEST(CapabilitiesSchemas, EveryModelIsValidAgainstTheOfficialSchemas) {
   monthly.timeValues = {"2004-01", "2004-02"};
   timed.layers = {daily, monthly, dem};
   models.emplace_back("time", timed);
+  CapabilitiesModel legends = fixedModel();
+  legends.getFeatureInfoFormats = {"text/plain", "application/json"};
+  legends.getLegendGraphicFormats = {"image/png"};
+  legends.layers[1].legendStyles = {
+      CapabilitiesStyle{"viridis", "Viridis", "http://h/wms?REQUEST=GetLegendGraphic", 256, 56}};
+  models.emplace_back("legends", legends);
   for (const auto& [what, model] : models) {
     for (const WmsVersion v : {WmsVersion::V111, WmsVersion::V130}) {
       const std::string xml = capabilitiesXml(v, model);
@@ -468,4 +474,65 @@ TEST(CapabilitiesSchemas, TheValidationRefusesBrokenDocuments) {
   const auto d = noDoctype.find("<!DOCTYPE");
   noDoctype.erase(d, noDoctype.find('>', d) + 2 - d);
   EXPECT_FALSE(test::validateWms(noDoctype, test::WmsDocument::Capabilities111).valid);
+}
+
+namespace {
+
+CapabilitiesModel legendModel() {
+  CapabilitiesModel m = fixedModel();
+  m.getFeatureInfoFormats = {"text/plain"};
+  m.getLegendGraphicFormats = {"image/png"};
+  return m;
+}
+
+} // namespace
+
+// GetLegendGraphic declared as each version's standard says: 1.1.1 the DTD's element after
+// GetFeatureInfo; 1.3.0 SLD 1.1.0's sld:GetLegendGraphic (an _ExtendedOperation), with the sld
+// namespace and its schema's location; neither when no format is offered.
+TEST(CapabilitiesSchemas, GetLegendGraphicIsDeclaredAsTheStandardsSay) {
+  const std::string v111 = capabilitiesXml(WmsVersion::V111, legendModel());
+  const auto info111 = v111.find("</GetFeatureInfo>");
+  const auto legend111 = v111.find("<GetLegendGraphic>\n        <Format>image/png</Format>");
+  ASSERT_NE(legend111, std::string::npos) << v111;
+  EXPECT_LT(info111, legend111);
+  EXPECT_LT(legend111, v111.find("</Request>"));
+  EXPECT_FALSE(contains(v111, "sld:"));
+  const auto verdict111 = test::validateWms(v111, test::WmsDocument::Capabilities111);
+  EXPECT_TRUE(verdict111.valid) << verdict111.output;
+
+  const std::string v130 = capabilitiesXml(WmsVersion::V130, legendModel());
+  EXPECT_TRUE(contains(v130, "xmlns:sld=\"http://www.opengis.net/sld\""));
+  EXPECT_TRUE(contains(v130,
+                       "http://www.opengis.net/sld "
+                       "http://schemas.opengis.net/sld/1.1.0/sld_capabilities.xsd\""));
+  const auto legend130 = v130.find("<sld:GetLegendGraphic>\n        <Format>image/png</Format>");
+  ASSERT_NE(legend130, std::string::npos) << v130;
+  EXPECT_LT(v130.find("</GetFeatureInfo>"), legend130);
+  EXPECT_LT(legend130, v130.find("</sld:GetLegendGraphic>\n    </Request>"));
+  const auto verdict130 = test::validateWms(v130, test::WmsDocument::Capabilities130);
+  EXPECT_TRUE(verdict130.valid) << verdict130.output << "\n" << v130;
+
+  // The validation can fail: the operation in the WMS namespace (1.3.0 has no such element), or
+  // before GetMap (both versions fix the order).
+  std::string unprefixed = v130;
+  for (const std::string tag : {"<sld:GetLegendGraphic>", "</sld:GetLegendGraphic>"}) {
+    const auto at = unprefixed.find(tag);
+    unprefixed.erase(at + (tag[1] == '/' ? 2 : 1), 4);
+  }
+  EXPECT_FALSE(test::validateWms(unprefixed, test::WmsDocument::Capabilities130).valid);
+  std::string early = v111;
+  const std::string block = early.substr(early.find("      <GetLegendGraphic>"),
+                                         early.find("</GetLegendGraphic>\n") + 20 -
+                                             early.find("      <GetLegendGraphic>"));
+  early.erase(early.find(block), block.size());
+  early.insert(early.find("      <GetMap>"), block);
+  EXPECT_FALSE(test::validateWms(early, test::WmsDocument::Capabilities111).valid) << early;
+
+  // Not offered: not declared, and no sld namespace.
+  for (const WmsVersion v : {WmsVersion::V111, WmsVersion::V130}) {
+    const std::string plain = capabilitiesXml(v, fixedModel());
+    EXPECT_FALSE(contains(plain, "GetLegendGraphic")) << toString(v);
+    EXPECT_FALSE(contains(plain, "sld")) << toString(v);
+  }
 }

@@ -23,6 +23,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <span>
@@ -68,6 +69,7 @@ test::FakeReply upstreamTile(const test::FakeRequest& req) {
   if (w <= 0 || h <= 0 || w > 1024 || h > 1024) return test::FakeReply::withStatus(400, "size");
   const auto n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
   if (paramOf(req.target, "LAYERS") == "upchl") return chlTile(w, h);
+  if (paramOf(req.target, "LAYERS") == "updown") return test::FakeReply::withStatus(500, "down");
   if (paramOf(req.target, "LAYERS") != "upsst" && paramOf(req.target, "LAYERS") != "updem") {
     std::vector<std::uint8_t> px(n * 3, 90);
     return test::FakeReply::ok(bytesOf(*encodeImage("image/jpeg", w, h, 3, px.data())),
@@ -130,11 +132,20 @@ LayerSpec chl() {
   l.dataset.mimeType = "image/tiff";
   l.values->format = values::ValueFormat{};
   l.values->format.container = values::Container::Tiff;
+  l.values->format.encoding = values::Encoding::Float32; // `encoding: float32`
   l.values->format.unit = "mg/m³";
   l.values->defaultStyle = "viridis";
   l.values->styles = {"viridis"};
   l.values->rangeFromData = true;
   l.values->scaling = values::Scaling::Log;
+  return l;
+}
+
+/** An elevation value layer whose upstream always fails (500). */
+LayerSpec down() {
+  LayerSpec l = dem();
+  l.name = "down";
+  l.upstreamLayer = "updown";
   return l;
 }
 
@@ -158,7 +169,7 @@ struct Server {
   std::unique_ptr<ProxyFrontEnd> front;
   std::unique_ptr<HttpServer> server;
 
-  Server() {
+  explicit Server(std::vector<LayerSpec> layers = {sst(), sat(), dem(), chl(), down()}) {
     cache = test::openTestCache(dir.path());
     fetcher = std::make_unique<Fetcher>();
     UpstreamSpec u;
@@ -169,8 +180,7 @@ struct Server {
     u.crs = "EPSG:4326";
     u.policy.timeout = 2000ms;
     u.policy.retries = 0;
-    auto t = TileService::create(
-        *cache, *fetcher, {u}, {sst(), sat(), dem(), chl()}, TileServiceOptions{});
+    auto t = TileService::create(*cache, *fetcher, {u}, std::move(layers), TileServiceOptions{});
     EXPECT_TRUE(t) << (t ? "" : t.error());
     tiles = std::move(*t);
     FrontEndOptions options;
@@ -317,6 +327,10 @@ TEST(WmsValuesIntegration, CapabilitiesDeclareStylesLegendsAndQueryable) {
                           "&amp;SLD_VERSION=1.1.0&amp;LAYER=sst&amp;STYLE=coolwarm"),
               std::string::npos);
     EXPECT_NE(r.body.find("<LegendURL width=\"256\" height=\"56\">"), std::string::npos);
+    // GetLegendGraphic declared: the DTD's element in 1.1.1, SLD 1.1.0's in 1.3.0.
+    EXPECT_NE(r.body.find(std::string(version) == "1.3.0" ? "<sld:GetLegendGraphic>"
+                                                          : "<GetLegendGraphic>"),
+              std::string::npos);
   }
 }
 
@@ -436,6 +450,145 @@ TEST(WmsValuesIntegration, GetFeatureInfoExceptionsAsTheStandardSays) {
         r.body, c.v130 ? test::WmsDocument::Exception130 : test::WmsDocument::Exception111);
     EXPECT_TRUE(verdict.valid) << verdict.output << "\n" << r.body;
   }
+}
+
+/** A PNG's bit depth and colour type (IHDR), {0, 0} when it is not a PNG. */
+std::pair<int, int> pngDepthAndType(const std::string& body) {
+  if (body.size() < 26 || body.compare(1, 3, "PNG") != 0) return {0, 0};
+  return {static_cast<unsigned char>(body[24]), static_cast<unsigned char>(body[25])};
+}
+
+// A styled map of an elevation value layer is a picture (8-bit RGBA), so a GetMap of it that
+// fails with EXCEPTIONS=BLANK or INIMAGE (1.3.0) or se_blank / se_inimage (1.1.1) is answered
+// with a picture too, as the map would have been, not with the 16-bit heights PNG that the layer
+// unstyled is: both for a style the layer does not have and for an upstream that fails.
+TEST(WmsValuesIntegration, StyledMapsFailAsPicturesWithBlankOrInImageExceptions) {
+  Server s;
+  const std::string v130 = "SERVICE=WMS&VERSION=1.3.0&REQUEST=GetMap&CRS=CRS:84"
+                           "&BBOX=-180,-90,180,90&WIDTH=64&HEIGHT=32&FORMAT=image/png"
+                           "&TRANSPARENT=TRUE";
+  const std::string v111 = "SERVICE=WMS&VERSION=1.1.1&REQUEST=GetMap&SRS=EPSG:4326"
+                           "&BBOX=-180,-90,180,90&WIDTH=64&HEIGHT=32&FORMAT=image/png"
+                           "&TRANSPARENT=TRUE";
+  struct Case {
+    std::string query;
+    bool inImage;
+  };
+  const std::vector<Case> cases = {
+      {v130 + "&LAYERS=dem&STYLES=magma&EXCEPTIONS=BLANK", false},
+      {v130 + "&LAYERS=dem&STYLES=magma&EXCEPTIONS=INIMAGE", true},
+      {v130 + "&LAYERS=down&STYLES=terrain&EXCEPTIONS=BLANK", false},
+      {v130 + "&LAYERS=down&STYLES=terrain&EXCEPTIONS=INIMAGE", true},
+      {v111 + "&LAYERS=dem&STYLES=magma&EXCEPTIONS=application/vnd.ogc.se_blank", false},
+      {v111 + "&LAYERS=down&STYLES=viridis&EXCEPTIONS=application/vnd.ogc.se_inimage", true},
+      {v111 + "&LAYERS=sat,down&STYLES=,terrain&EXCEPTIONS=application/vnd.ogc.se_blank", false},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.query);
+    const auto r = s.get(c.query);
+    ASSERT_EQ(r.header("content-type"), "image/png") << r.body.substr(0, 400);
+    EXPECT_EQ(pngDepthAndType(r.body), (std::pair{8, 6})); // 8-bit RGBA, as the map would be
+    auto im = codec::decodePng(span(r.body));
+    ASSERT_TRUE(im) << im.error();
+    ASSERT_EQ(im->width, 64);
+    ASSERT_EQ(im->height, 32);
+    bool drawn = false;
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 64; ++x)
+        drawn = drawn || pixel(*im, x, y)[3] != 0;
+    EXPECT_EQ(drawn, c.inImage); // blank: all transparent; in image: the message drawn
+  }
+  // The same failures unstyled are heights, as the map would have been (16-bit grey).
+  const auto plain = s.get(v130 + "&LAYERS=down&STYLES=&EXCEPTIONS=BLANK");
+  EXPECT_EQ(plain.header("content-type"), "image/png");
+  EXPECT_EQ(pngDepthAndType(plain.body), (std::pair{16, 0}));
+  // The styled map itself, for comparison: the same kind of PNG as its blank.
+  const auto map = s.get(v130 + "&LAYERS=dem&STYLES=terrain&EXCEPTIONS=BLANK");
+  EXPECT_EQ(pngDepthAndType(map.body), (std::pair{8, 6}));
+}
+
+// BIL is data: a style does not colour an elevation layer in a BIL16 map (its heights, the same
+// bytes as unstyled), and such a map that fails is a blank BIL16.
+TEST(WmsValuesIntegration, BilMapsOfStyledElevationLayersAreHeights) {
+  Server s;
+  const std::string q = "SERVICE=WMS&VERSION=1.3.0&REQUEST=GetMap&CRS=CRS:84"
+                        "&BBOX=-180,-90,180,90&WIDTH=64&HEIGHT=32&FORMAT=application/bil16";
+  const auto styled = s.get(q + "&LAYERS=dem&STYLES=terrain");
+  ASSERT_EQ(styled.status, 200) << styled.body.substr(0, 400);
+  EXPECT_EQ(styled.header("content-type"), "application/bil16");
+  EXPECT_EQ(styled.body.size(), 64u * 32u * 2u);
+  EXPECT_EQ(styled.body, s.get(q + "&LAYERS=dem&STYLES=").body);
+  const auto failed = s.get(q + "&LAYERS=down&STYLES=terrain&EXCEPTIONS=BLANK");
+  EXPECT_EQ(failed.header("content-type"), "application/bil16");
+  EXPECT_EQ(failed.body.size(), 64u * 32u * 2u);
+}
+
+/** The Float32 values of an application/bil32 body (little-endian). */
+std::vector<float> bil32Values(const std::string& body) {
+  std::vector<float> v(body.size() / 4);
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    std::uint32_t bits = 0;
+    for (std::size_t b = 0; b < 4; ++b)
+      bits |= std::uint32_t(static_cast<unsigned char>(body[k * 4 + b])) << (8 * b);
+    v[k] = std::bit_cast<float>(bits);
+  }
+  return v;
+}
+
+// application/bil32: a map of Float32 values, little-endian, for layers of Float32 values only;
+// offered in the capabilities when a layer has them. A pixel on a texel centre has the tile's
+// value; a style does not apply; a failed map with EXCEPTIONS=BLANK is no data (NaN, or the
+// layer's no-data value).
+TEST(WmsValuesIntegration, Bil32MapsAreFloat32Values) {
+  Server s;
+  // 0..36 E, 36 S..0: the columns of one level-0 tile, rows across two (texel-aligned).
+  const std::string q = "SERVICE=WMS&VERSION=1.3.0&REQUEST=GetMap&CRS=CRS:84"
+                        "&BBOX=0,-36,36,0&WIDTH=64&HEIGHT=64&FORMAT=application/bil32";
+  const auto r = s.get(q + "&LAYERS=chl&STYLES=");
+  ASSERT_EQ(r.status, 200) << r.body.substr(0, 400);
+  EXPECT_EQ(r.header("content-type"), "application/bil32") << r.body.substr(0, 400);
+  ASSERT_EQ(r.body.size(), 64u * 64u * 4u);
+  const std::vector<float> v = bil32Values(r.body);
+  for (const int y : {0, 31, 63})
+    for (const int x : {0, 17, 40, 63})
+      EXPECT_FLOAT_EQ(v[std::size_t(y * 64 + x)],
+                      static_cast<float>(std::pow(10.0, (x + 0.5) / 64 * 4.0 - 2.0)))
+          << x << "," << y;
+  // The style does not apply: the same values with the layer's colour map named.
+  EXPECT_EQ(s.get(q + "&LAYERS=chl&STYLES=viridis").body, r.body);
+  // Layers without Float32 values: InvalidFormat (an Int16 value layer, imagery).
+  for (const std::string layer : {"sst", "sat", "dem"}) {
+    const auto refused = s.get(q + "&LAYERS=" + layer + "&STYLES=");
+    EXPECT_NE(refused.body.find("InvalidFormat"), std::string::npos) << layer << refused.body;
+    EXPECT_TRUE(test::validateWms(refused.body, test::WmsDocument::Exception130).valid);
+  }
+  // BLANK: no data everywhere (chl names none: NaN).
+  const auto blank = s.get(q + "&LAYERS=chl&STYLES=magma&EXCEPTIONS=BLANK");
+  EXPECT_EQ(blank.header("content-type"), "application/bil32");
+  ASSERT_EQ(blank.body.size(), 64u * 64u * 4u);
+  const auto nan = bil32Values(blank.body);
+  EXPECT_TRUE(std::all_of(nan.begin(), nan.end(), [](float f) { return std::isnan(f); }));
+  // Advertised (service-wide, as every GetMap format) because chl's values are Float32.
+  for (const std::string version : {"1.1.1", "1.3.0"}) {
+    const auto caps = s.get("SERVICE=WMS&REQUEST=GetCapabilities&VERSION=" + version);
+    EXPECT_NE(caps.body.find("<Format>application/bil32</Format>"), std::string::npos) << version;
+  }
+}
+
+TEST(WmsValuesIntegration, Bil32IsOfferedOnlyWithFloat32LayersAndFillsTheirNoData) {
+  Server withoutFloat32({sst(), sat(), dem()});
+  const auto caps = withoutFloat32.get("SERVICE=WMS&REQUEST=GetCapabilities&VERSION=1.3.0");
+  ASSERT_EQ(caps.status, 200);
+  EXPECT_EQ(caps.body.find("application/bil32"), std::string::npos);
+  LayerSpec marked = chl();
+  marked.values->format.noData = -9999.0;
+  Server withNoData({marked});
+  const auto blank =
+      withNoData.get("SERVICE=WMS&VERSION=1.3.0&REQUEST=GetMap&CRS=CRS:84&LAYERS=chl&STYLES=magma"
+                     "&BBOX=0,-36,36,0&WIDTH=8&HEIGHT=4&FORMAT=application/bil32&EXCEPTIONS=BLANK");
+  ASSERT_EQ(blank.body.size(), 8u * 4u * 4u) << blank.body;
+  for (const float f : bil32Values(blank.body))
+    EXPECT_EQ(f, -9999.0f);
 }
 
 } // namespace

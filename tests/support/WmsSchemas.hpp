@@ -17,7 +17,7 @@ namespace tellus::test {
 enum class WmsDocument {
   Capabilities111, ///< WMT_MS_Capabilities, DOCTYPE WMS_MS_Capabilities.dtd (--valid)
   Exception111,    ///< ServiceExceptionReport, DOCTYPE WMS_exception_1_1_1.dtd (--valid)
-  Capabilities130, ///< WMS_Capabilities against capabilities_1_3_0.xsd
+  Capabilities130, ///< WMS_Capabilities against capabilities_1_3_0.xsd and SLD 1.1.0's extension
   Exception130,    ///< ServiceExceptionReport against exceptions_1_3_0.xsd
 };
 
@@ -35,7 +35,8 @@ inline std::filesystem::path wmsSchemaDir() {
  *
  * 1.1.1 documents are validated against the DTD their own DOCTYPE names (--valid, the URL mapped
  * by the catalog), so a document that names another DTD, or none, fails too; 1.3.0 documents
- * against the vendored XSD. Never valid when xmllint is missing (it is a test dependency:
+ * against the vendored XSDs (capabilities_1_3_0.xsd, through SLD 1.1.0's sld_capabilities.xsd
+ * that imports it). Never valid when xmllint is missing (it is a test dependency:
  * tools/debian-packages.txt).
  */
 inline SchemaVerdict validateWms(std::string_view xml, WmsDocument kind) {
@@ -55,7 +56,9 @@ inline SchemaVerdict validateWms(std::string_view xml, WmsDocument kind) {
     how = "--valid";
     break;
   case WmsDocument::Capabilities130:
-    how = "--schema '" + (dir / "opengis/wms/1.3.0/capabilities_1_3_0.xsd").string() + "'";
+    // SLD 1.1.0's capabilities extension imports the WMS 1.3.0 schema: a document is checked
+    // against both, so that sld:GetLegendGraphic (an _ExtendedOperation) is known.
+    how = "--schema '" + (dir / "opengis/sld/1.1.0/sld_capabilities.xsd").string() + "'";
     break;
   case WmsDocument::Exception130:
     how = "--schema '" + (dir / "opengis/wms/1.3.0/exceptions_1_3_0.xsd").string() + "'";

@@ -1,7 +1,6 @@
+#include <tellus/values/Sample.hpp>
 #include <tellus/values/ValueFormat.hpp>
 
-#include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 
@@ -26,22 +25,13 @@ bool startsWithNoCase(std::string_view text, std::string_view prefix) noexcept {
 float sample(const ValueRaster& raster, double x, double y) noexcept {
   const int w = raster.width, h = raster.height;
   if (w <= 0 || h <= 0 || !(x >= 0.0 && x <= w && y >= 0.0 && y <= h)) return kNaN;
-  // The nearest pixel, and the four centres around (x, y) clamped to the raster.
-  const int nx = std::min(static_cast<int>(x), w - 1), ny = std::min(static_cast<int>(y), h - 1);
-  const double fx = std::clamp(x - 0.5, 0.0, static_cast<double>(w - 1));
-  const double fy = std::clamp(y - 0.5, 0.0, static_cast<double>(h - 1));
-  const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
-  const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
-  const double ax = fx - x0, ay = fy - y0;
-  const std::array<double, 4> v{static_cast<double>(raster.at(x0, y0)),
-                                static_cast<double>(raster.at(x1, y0)),
-                                static_cast<double>(raster.at(x0, y1)),
-                                static_cast<double>(raster.at(x1, y1))};
-  if (std::any_of(v.begin(), v.end(), [](double s) { return std::isnan(s); }))
-    return raster.at(nx, ny);
-  const double top = v[0] * (1.0 - ax) + v[1] * ax;
-  const double bottom = v[2] * (1.0 - ax) + v[3] * ax;
-  return static_cast<float>(top * (1.0 - ay) + bottom * ay);
+  const AxisTexels<double> c = axisTexels(x, w), r = axisTexels(y, h);
+  return static_cast<float>(bilinearValue(static_cast<double>(raster.at(c.i0, r.i0)),
+                                          static_cast<double>(raster.at(c.i1, r.i0)),
+                                          static_cast<double>(raster.at(c.i0, r.i1)),
+                                          static_cast<double>(raster.at(c.i1, r.i1)),
+                                          c.f,
+                                          r.f));
 }
 
 std::string_view encodingName(Encoding encoding) noexcept {

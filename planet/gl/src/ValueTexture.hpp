@@ -7,10 +7,11 @@
  *
  * The texture: the node's tiles decoded by values::decode (the values module: BIL, TIFF, 16-bit
  * PNG; value = raw * scale + offset, no data = NaN), side by side for a merged polar node (each
- * texel takes the value of the tile column nearest its centre: values are never averaged, as the
- * GPU never filters them), rows from the south. One level, 4 bytes a texel (R32F: the decoded
- * float exactly, the value the proxy's values::apply colours). Texels no tile covers are NaN
- * (transparent). An undecodable tile leaves its columns NaN and the error in DecodedTexture.
+ * texel takes the value of the tile column nearest its centre: values are never averaged here;
+ * the shader samples them by values/Sample.hpp's rule), rows from the south. One level, 4 bytes a
+ * texel (R32F: the decoded float exactly, the value the proxy's values::apply colours). Texels no
+ * tile covers are NaN (transparent). An undecodable tile leaves its columns NaN and the error in
+ * DecodedTexture.
  *
  * The scale: the map's row in the colour map texture (values::colourMaps() in order, one row
  * each), the range (log: of log10 values, as ColourScale.hpp's rule), the scaling and what

@@ -39,6 +39,10 @@ struct ComposeRequest {
   /** The map is heights (mapIsHeights): BIL16, Int16 TIFF or 16-bit PNG, else a picture. */
   bool heights = false;
   std::int16_t noData = -32768; ///< of a heights map: where no layer has data
+  /** The map is values (application/bil32): every layer a value layer, its values sampled as
+   * composeValues does (later layers win where they have data), `valueNoData` where none has. */
+  bool values = false;
+  float valueNoData = kNoValue;
   bool transparent = false;
   std::optional<std::uint32_t> bgcolor;
   std::string ifNoneMatch; ///< the client's If-None-Match ("" = none)

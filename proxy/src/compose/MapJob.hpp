@@ -16,7 +16,8 @@
 namespace tellus {
 
 /** A decoded tile and the samples view of it (or of its Y, Cb and Cr planes, stored one after the
- * other in `rgb`); its pixel storage goes back to the composer thread's buffers (MapRender.cpp). */
+ * other in `rgb`); its pixel storage goes back to the composer thread's buffers (TileDecode.cpp).
+ */
 struct DecodedTile {
   TileSamples view{};
   std::array<TileSamples, 3> planes{};

@@ -1,11 +1,12 @@
 // The map of one GetMap from its tiles' answers (MapComposer::finish's work, on a composer
 // worker), in the order of its steps: the validators (a client that has the map gets 304 before
-// anything is decoded); the canvas; per layer the tiles decoded (only the part sampled, or whole
-// and kept), the holes filled from the nearest coarser cached tile, the samples drawn (on Y, Cb and
-// Cr planes when every tile is a 4:2:0 JPEG, else on RGB(A) or heights, with the RGB path taking
-// over when a tile turns out not to be); then the map encoded. See
+// anything is decoded); the canvas; per layer the tiles decoded (TileDecode.cpp: only the part
+// sampled, or whole and kept), the holes filled from the nearest coarser cached tile, the samples
+// drawn (on Y, Cb and Cr planes when every tile is a 4:2:0 JPEG, else on RGB(A) or heights, with
+// the RGB path taking over when a tile turns out not to be); then the map encoded. See
 // docs/design/composition.md.
 #include "compose/MapJob.hpp"
+#include "compose/TileDecode.hpp"
 
 #include <tellus/cache/TilePath.hpp>
 #include <tellus/codec/JpegYcc.hpp>
@@ -15,6 +16,7 @@
 #include <tellus/values/ValueFormat.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
@@ -47,30 +49,6 @@ std::optional<std::vector<std::byte>> bytesOf(const TileAnswer& a) {
   if (a.file) return a.file->readAll();
   return a.bytes;
 }
-
-/**
- * Pixel buffers kept by each composer thread between maps: a map decodes a dozen tiles of the same
- * size and fills a canvas of the same size as the last one, so reusing the storage spares the
- * allocation, the kernel's page faults and the clearing of fresh memory (a third of the CPU time
- * of a 1024x768 map before, by perf).
- */
-struct Buffers {
-  std::vector<std::vector<std::uint8_t>> spare;
-  std::vector<std::uint8_t> canvas;
-  std::vector<std::uint8_t> cb, cr; // the chroma planes of a map composed as YCbCr
-  std::vector<std::uint8_t> take() {
-    if (spare.empty()) return {};
-    auto b = std::move(spare.back());
-    spare.pop_back();
-    return b;
-  }
-  void give(std::vector<std::uint8_t>&& b) {
-    // At most 16 tiles' worth (about 12 MiB of 512-pixel RGB) stays per thread.
-    if (spare.size() < 16 && b.capacity() > 0 && b.capacity() <= (4u << 20))
-      spare.push_back(std::move(b));
-  }
-};
-thread_local Buffers buffers;
 
 struct KeyLess {
   bool operator()(const TileKey& a, const TileKey& b) const noexcept {
@@ -120,7 +98,7 @@ public:
     auto encoded = encode(ycc);
     if (!encoded) return error("cannot encode the map: " + encoded.error());
     if (canvas_.capacity() > (16u << 20)) canvas_ = {}; // a huge map's canvas is not kept
-    if (buffers.cb.capacity() > (4u << 20)) buffers.cb = buffers.cr = {};
+    if (buffers_.cb.capacity() > (4u << 20)) buffers_.cb = buffers_.cr = {};
     map_.kind = ComposedMap::Kind::Map;
     map_.bytes = std::move(*encoded);
     map_.contentType = std::string(contentTypeOf(r_.format));
@@ -210,7 +188,9 @@ private:
   }
 
   void fill(bool ycc) {
-    if (r_.heights) {
+    if (r_.values) {
+      values_.assign(pixels_, std::numeric_limits<float>::quiet_NaN());
+    } else if (r_.heights) {
       heights_.assign(pixels_, r_.noData);
     } else if (ycc) {
       // Nothing to fill: composePlane writes every sample of the planes, the background where
@@ -324,7 +304,7 @@ private:
     const LayerSpec& spec = *l.spec.layer;
     const GridSpec& g = l.grid->spec();
     // Decoded tiles are kept (whole) in an LRU by their ETag, which names their bytes.
-    const bool valued = l.spec.colourMap != nullptr && spec.values.has_value();
+    const bool valued = (l.spec.colourMap != nullptr || r_.values) && spec.values.has_value();
     const std::string cacheKey = spec.name + '\n' + l.spec.time + '\n' + a.etag +
                                  (ycc ? "\nycc" : "") + (valued ? "\nvalues" : "");
     bool keep = false;
@@ -365,71 +345,6 @@ private:
     return d;
   }
 
-  static bool decodeHeightsInto(DecodedTile& d,
-                                std::span<const std::byte> bytes,
-                                const LayerSpec& spec,
-                                const GridSpec& g) {
-    auto h = decodeHeights(bytes, spec.dataset.mimeType, g.tileWidth, g.tileHeight);
-    if (!h) return false;
-    d.heights = std::move(*h);
-    d.view = TileSamples{g.tileWidth, g.tileHeight, 1, nullptr, d.heights.data()};
-    return true;
-  }
-
-  /** A value layer's tile as values (tellus::values; the whole tile: values are few). */
-  static bool decodeValuesInto(DecodedTile& d,
-                               std::span<const std::byte> bytes,
-                               const ValueLayerSpec& spec,
-                               const GridSpec& g) {
-    auto v = values::decode(bytes, spec.format, g.tileWidth, g.tileHeight);
-    if (!v) return false;
-    d.values = std::move(v->values);
-    d.view = TileSamples{g.tileWidth, g.tileHeight, 1, nullptr, nullptr, d.values.data()};
-    return true;
-  }
-
-  static bool decodePlanesInto(DecodedTile& d,
-                               std::span<const std::byte> bytes,
-                               const GridSpec& g,
-                               const std::array<std::int32_t, 4>* region,
-                               bool keep,
-                               bool& notYcc) {
-    const auto w = static_cast<std::size_t>(g.tileWidth);
-    const auto h = static_cast<std::size_t>(g.tileHeight);
-    if (!keep) d.rgb = buffers.take(); // a kept tile gets storage of its own size
-    d.rgb.resize(w * h + 2 * (w / 2) * (h / 2));
-    std::uint8_t* y = d.rgb.data();
-    std::uint8_t* cb = y + w * h;
-    std::uint8_t* cr = cb + (w / 2) * (h / 2);
-    std::string message;
-    switch (codec::decodeJpegYcc(bytes, g.tileWidth, g.tileHeight, region, y, cb, cr, message)) {
-    case codec::YccDecode::Ok:
-      break;
-    case codec::YccDecode::NotYcc420:
-      notYcc = true;
-      return false;
-    case codec::YccDecode::Failed:
-      return false;
-    }
-    d.planes = {TileSamples{g.tileWidth, g.tileHeight, 1, y, nullptr},
-                TileSamples{g.tileWidth / 2, g.tileHeight / 2, 1, cb, nullptr},
-                TileSamples{g.tileWidth / 2, g.tileHeight / 2, 1, cr, nullptr}};
-    return true;
-  }
-
-  static bool decodeRgbInto(DecodedTile& d,
-                            std::span<const std::byte> bytes,
-                            std::string_view type,
-                            const GridSpec& g,
-                            const std::array<std::int32_t, 4>* region,
-                            bool keep) {
-    if (!keep) d.rgb = buffers.take();
-    const auto channels = decodeImageryInto(bytes, type, g.tileWidth, g.tileHeight, d.rgb, region);
-    if (!channels) return false;
-    d.view = TileSamples{g.tileWidth, g.tileHeight, *channels, d.rgb.data(), nullptr};
-    return true;
-  }
-
   /** The three planes, each from the tiles' plane of the same index, each sample written (the
    * background's Y, Cb or Cr where no tile covers it). */
   void drawPlanes(const Layer& l, const DecodedTiles& decoded) {
@@ -441,8 +356,8 @@ private:
         return it == decoded.end() ? nullptr : &it->second->planes[static_cast<std::size_t>(plane)];
       };
       std::vector<std::uint8_t>& target = plane == 0   ? canvas_
-                                          : plane == 1 ? buffers.cb
-                                                       : buffers.cr;
+                                          : plane == 1 ? buffers_.cb
+                                                       : buffers_.cr;
       const auto background = ycbcr[static_cast<std::size_t>(plane)];
       const ComposeStats s =
           plane == 0
@@ -472,7 +387,9 @@ private:
     };
     // Every level of the grid is served (firstLevel is an upstream offset): first level 0.
     const TileGrid& grid = *l.grid;
-    if (l.spec.colourMap && spec.values) {
+    if (r_.values) { // a map of values: every layer is a value layer (the front end checks)
+      count(composeValues(grid, r_.bbox, r_.width, r_.height, l.level, 0, lookup, values_));
+    } else if (l.spec.colourMap && spec.values) {
       drawValueLayer(l, lookup);
     } else if (spec.elevation && r_.heights) {
       count(composeHeights(
@@ -517,6 +434,12 @@ private:
   // ---- the bytes --------------------------------------------------------------------------------
 
   std::expected<std::vector<std::byte>, std::string> encode(bool ycc) {
+    if (r_.values) {
+      if (!std::isnan(r_.valueNoData))
+        std::replace_if(
+            values_.begin(), values_.end(), [](float v) { return std::isnan(v); }, r_.valueNoData);
+      return encodeBil32(r_.width, r_.height, values_.data());
+    }
     if (r_.heights) {
       return encodeHeights(r_.format == MapFormat::Png ? "image/png" : toString(r_.format),
                            r_.width,
@@ -524,8 +447,12 @@ private:
                            heights_.data());
     }
     if (ycc) {
-      return codec::encodeJpegYcc(
-          r_.width, r_.height, canvas_.data(), buffers.cb.data(), buffers.cr.data(), jpegQuality_);
+      return codec::encodeJpegYcc(r_.width,
+                                  r_.height,
+                                  canvas_.data(),
+                                  buffers_.cb.data(),
+                                  buffers_.cr.data(),
+                                  jpegQuality_);
     }
     if (png8_) {
       const codec::PalettedImage p = codec::quantize(canvas_.data(), cc_, pixels_);
@@ -559,8 +486,10 @@ private:
   std::size_t pixels_ = 0; ///< width * height
   std::uint8_t bg_[4] = {};
   std::optional<ChromaLayout> chroma_;
-  std::vector<std::uint8_t>& canvas_ = buffers.canvas;
+  ComposerBuffers& buffers_ = composerBuffers(); ///< this composer thread's (TileDecode.hpp)
+  std::vector<std::uint8_t>& canvas_ = buffers_.canvas;
   std::vector<std::int16_t> heights_;
+  std::vector<float> values_; ///< a map of values (application/bil32)
   // One layer of the other kind than the map, before it is drawn over the map (see
   // ComposeRequest::layers).
   std::vector<std::int16_t> layerHeights_;
@@ -570,10 +499,6 @@ private:
 };
 
 } // namespace
-
-DecodedTile::~DecodedTile() {
-  buffers.give(std::move(rgb));
-}
 
 ComposedMap renderMap(const MapComposer::Job& job,
                       TileService& tiles,

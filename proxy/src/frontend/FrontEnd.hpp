@@ -95,12 +95,25 @@ public:
 private:
   /** What a map of these layers is made of: heights (mapIsHeights) or a picture, and the
    * no-data value of heights (the first elevation layer's, else -32768). Unknown names count as
-   * imagery. */
+   * imagery. A layer drawn in colour (drawnInColour: its STYLES entry, `styles` parallel to
+   * `names` or empty) makes a PNG or TIFF map a picture; BIL16 stays heights (BIL is data: a
+   * style does not apply), and so does BIL32, values. One rule for the map and for the image an
+   * exception is drawn in. */
   struct MapKind {
     bool heights = false;
     std::int16_t noData = -32768;
+    /** A map of values (application/bil32), no data as the first value layer's (as a value:
+     * raw no-data * scale + offset), NaN when it has none. */
+    bool values = false;
+    float valueNoData = kNoValue;
   };
-  MapKind mapKind(MapFormat format, const std::vector<std::string>& names) const;
+  MapKind mapKind(MapFormat format,
+                  const std::vector<std::string>& names,
+                  const std::vector<std::string>& styles) const;
+  /** Whether a layer with this STYLES entry is drawn with a colour map: its style's colour map
+   * (styleOf), or, for a style it does not have, whether it is a value layer (whose styles are
+   * colour maps: what the request asked for is a picture). */
+  bool drawnInColour(const LayerSpec& l, std::string_view style) const;
   void capabilities(const HttpRequest& req,
                     const GetCapabilitiesRequest& caps,
                     const WmsErrorContext& ctx,
@@ -110,7 +123,8 @@ private:
               GetMapRequest&& m,
               const WmsErrorContext& ctx,
               const Responder& respond);
-  /** Every layer of a GetMap, checked (known, style, time); nullopt when an exception was sent. */
+  /** Every layer of a GetMap, checked (known, style, time; for a map of values, Float32 values);
+   * nullopt when an exception was sent. */
   std::optional<std::vector<ComposeLayer>>
   mapLayers(const GetMapRequest& m, const WmsErrorContext& ctx, const Responder& respond) const;
   /** One layer in its own format, exactly one tile: the cached file itself. False when the map

@@ -75,6 +75,12 @@ CapabilitiesModel WmsFrontEnd::capabilitiesModel(const HttpRequest& req) const {
   for (const MapFormat f :
        {MapFormat::Jpeg, MapFormat::Png, MapFormat::Png8, MapFormat::Bil16, MapFormat::Tiff})
     add(std::string(toString(f)));
+  // Values as Float32 BIL: offered when a layer's values are Float32 (only those layers answer it).
+  const auto& layers = fe_.tiles.layers();
+  if (std::any_of(layers.begin(), layers.end(), [](const LayerSpec& l) {
+        return l.values && l.values->format.encoding == values::Encoding::Float32;
+      }))
+    add(std::string(toString(MapFormat::Bil32)));
   m.getMapFormats = formats;
   // GetFeatureInfo is offered when a layer is queryable (a value or elevation layer).
   const auto& all = fe_.tiles.layers();
@@ -85,6 +91,11 @@ CapabilitiesModel WmsFrontEnd::capabilitiesModel(const HttpRequest& req) const {
                                InfoFormat::Gml,
                                InfoFormat::GmlXml})
       m.getFeatureInfoFormats.emplace_back(toString(f));
+  // GetLegendGraphic (PNG) is declared when a layer has a style with a legend (a colour map).
+  if (std::any_of(all.begin(), all.end(), [](const LayerSpec& l) {
+        return l.values.has_value() && !l.values->styles.empty();
+      }))
+    m.getLegendGraphicFormats.emplace_back("image/png");
   m.updateSequence = fe_.updateSequence;
   m.lastUpdate = fe_.lastUpdate;
   m.maxWidth = fe_.options.limits.maxWidth;
@@ -113,20 +124,39 @@ CapabilitiesModel WmsFrontEnd::capabilitiesModel(const HttpRequest& req) const {
 // ---- GetMap -------------------------------------------------------------------------------------
 
 WmsFrontEnd::MapKind WmsFrontEnd::mapKind(MapFormat format,
-                                          const std::vector<std::string>& names) const {
+                                          const std::vector<std::string>& names,
+                                          const std::vector<std::string>& styles) const {
   MapKind k;
   bool allElevation = !names.empty();
   bool noDataSet = false;
-  for (const std::string& n : names) {
-    const LayerSpec* l = fe_.tiles.layer(n);
+  bool coloured = false;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    const LayerSpec* l = fe_.tiles.layer(names[i]);
     allElevation = allElevation && l && l->elevation;
     if (l && l->elevation && !noDataSet) {
       k.noData = l->noData;
       noDataSet = true;
     }
+    if (l && drawnInColour(*l, i < styles.size() ? std::string_view(styles[i]) : ""))
+      coloured = true;
   }
-  k.heights = mapIsHeights(format, allElevation);
+  // A layer drawn with a colour map is a picture: the map is heights only when no layer is,
+  // except in BIL, which is only ever heights.
+  k.heights = mapIsHeights(format, allElevation) && (!coloured || format == MapFormat::Bil16);
+  k.values = format == MapFormat::Bil32;
+  for (const std::string& n : names) {
+    const LayerSpec* l = fe_.tiles.layer(n);
+    if (!k.values || !l || !l->values || !l->values->format.noData) continue;
+    const values::ValueFormat& f = l->values->format;
+    k.valueNoData = static_cast<float>(*f.noData * f.scale + f.offset);
+    break;
+  }
   return k;
+}
+
+bool WmsFrontEnd::drawnInColour(const LayerSpec& l, std::string_view style) const {
+  const auto map = styleOf(l, style);
+  return map ? *map != nullptr : l.values.has_value();
 }
 
 void WmsFrontEnd::getMap(const HttpRequest& req,
@@ -137,12 +167,11 @@ void WmsFrontEnd::getMap(const HttpRequest& req,
   // map is (mapIsHeights), and each layer is drawn as that (MapComposer).
   auto layers = mapLayers(m, ctx, respond);
   if (!layers) return;
-  MapKind kind = mapKind(m.mapFormat, m.layers);
-  // A layer drawn with a colour map is a picture: the map is heights only when no layer is.
-  if (std::any_of(layers->begin(), layers->end(), [](const ComposeLayer& l) {
-        return l.colourMap != nullptr;
-      }))
-    kind.heights = false;
+  const MapKind kind = mapKind(m.mapFormat, m.layers, m.styles);
+  // In a heights map (BIL) an elevation layer is its heights, whatever its style; in a map of
+  // values (BIL32), every layer its values.
+  for (ComposeLayer& l : *layers)
+    if ((kind.heights && l.layer->elevation) || kind.values) l.colourMap = nullptr;
   if (sendOneTile(req, m, *layers, kind, ctx, respond)) return;
   // Any other box, size, format or several layers: composed from the tiles.
   if (static_cast<std::int64_t>(m.width) * m.height > fe_.options.maxMapPixels) {
@@ -174,6 +203,16 @@ std::optional<std::vector<ComposeLayer>> WmsFrontEnd::mapLayers(const GetMapRequ
       exception(ctx, colourMap.error(), respond);
       return std::nullopt;
     }
+    if (m.mapFormat == MapFormat::Bil32 &&
+        !(l->values && l->values->format.encoding == values::Encoding::Float32)) {
+      exception(ctx,
+                OgcException{std::string(ogc::kInvalidFormat),
+                             "FORMAT",
+                             "application/bil32 is a map of Float32 values: layer '" + l->name +
+                                 "' has none"},
+                respond);
+      return std::nullopt;
+    }
     auto time = FrontEnd::resolveTime(*l, m.time);
     if (!time) {
       exception(ctx, time.error(), respond);
@@ -196,6 +235,7 @@ bool WmsFrontEnd::sendOneTile(const HttpRequest& req,
   const LayerSpec* l = layers.front().layer;
   if (layers.size() != 1 || layers.front().colourMap != nullptr ||
       m.format != l->dataset.mimeType || kind.heights != l->elevation ||
+      (kind.values && l->values->format.byteOrder != values::ByteOrder::Little) ||
       !(m.opacities.empty() || m.opacities.front() >= 1.0))
     return false;
   const TileGrid* g = fe_.tiles.grid(l->name);
@@ -242,6 +282,8 @@ void WmsFrontEnd::compose(const HttpRequest& req,
   cr.format = m.mapFormat;
   cr.heights = kind.heights;
   cr.noData = kind.noData;
+  cr.values = kind.values;
+  cr.valueNoData = kind.valueNoData;
   cr.transparent = m.transparent;
   cr.bgcolor = m.bgcolor;
   cr.ifNoneMatch = std::string(req.header("if-none-match"));
@@ -292,7 +334,8 @@ void WmsFrontEnd::exception(const WmsErrorContext& ctx,
     const std::string text = ctx.exceptions == GetMapRequest::Exceptions::InImage
                                  ? sanitizeForClient(e.code + ": " + e.message)
                                  : std::string();
-    const MapKind kind = mapKind(ctx.mapFormat, ctx.layers);
+    // The image the map would have been: a styled value layer's is a picture (mapKind).
+    const MapKind kind = mapKind(ctx.mapFormat, ctx.layers, ctx.styles);
     if (auto img = blankMap(ctx.mapFormat,
                             kind.heights,
                             ctx.width,
@@ -300,7 +343,8 @@ void WmsFrontEnd::exception(const WmsErrorContext& ctx,
                             ctx.bgcolor,
                             ctx.transparent,
                             text,
-                            kind.noData)) {
+                            kind.noData,
+                            kind.valueNoData)) {
       HttpResponse r;
       fe_.common(r);
       r.status = 200;
@@ -333,8 +377,15 @@ void WmsFrontEnd::emptyImage(const GetMapRequest& m,
                              std::string_view why,
                              TileOrigin origin,
                              const Responder& respond) const {
-  auto img = blankMap(
-      m.mapFormat, kind.heights, m.width, m.height, m.bgcolor, m.transparent, {}, kind.noData);
+  auto img = blankMap(m.mapFormat,
+                      kind.heights,
+                      m.width,
+                      m.height,
+                      m.bgcolor,
+                      m.transparent,
+                      {},
+                      kind.noData,
+                      kind.valueNoData);
   if (!img) {
     WmsErrorContext ctx;
     ctx.version = m.version;

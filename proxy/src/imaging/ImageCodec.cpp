@@ -6,6 +6,8 @@
 #include <tellus/codec/Quantize.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
 
+#include <algorithm>
+#include <bit>
 #include <cstring>
 
 namespace tellus {
@@ -80,6 +82,18 @@ encodeHeights(std::string_view mimeType, int width, int height, const std::int16
   return codec::encodeBil16(width, height, heights);
 }
 
+std::vector<std::byte> encodeBil32(int width, int height, const float* values) {
+  const auto n =
+      static_cast<std::size_t>(std::max(width, 0)) * static_cast<std::size_t>(std::max(height, 0));
+  std::vector<std::byte> out(n * 4);
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto bits = std::bit_cast<std::uint32_t>(values[k]);
+    for (std::size_t b = 0; b < 4; ++b)
+      out[k * 4 + b] = static_cast<std::byte>(bits >> (8 * b)); // little-endian on any host
+  }
+  return out;
+}
+
 std::expected<std::vector<std::byte>, std::string> blankMap(MapFormat format,
                                                             bool heights,
                                                             int width,
@@ -87,9 +101,14 @@ std::expected<std::vector<std::byte>, std::string> blankMap(MapFormat format,
                                                             std::optional<std::uint32_t> bgcolor,
                                                             bool transparent,
                                                             std::string_view text,
-                                                            std::int16_t noData) {
+                                                            std::int16_t noData,
+                                                            float valueNoData) {
   if (width <= 0 || height <= 0) return std::unexpected("bad image shape");
   const auto n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  if (format == MapFormat::Bil32) {
+    const std::vector<float> values(n, valueNoData);
+    return encodeBil32(width, height, values.data());
+  }
   if (heights) {
     const std::vector<std::int16_t> values(n, noData);
     return encodeHeights(

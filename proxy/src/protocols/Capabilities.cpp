@@ -10,6 +10,7 @@ namespace tellus {
 namespace {
 
 constexpr std::string_view kXlinkNs = "http://www.w3.org/1999/xlink";
+constexpr std::string_view kSldNs = "http://www.opengis.net/sld";
 
 // Appends lines with two-space indentation.
 class XmlWriter {
@@ -115,9 +116,25 @@ void writeServiceCommon(XmlWriter& w,
   w.element(2, "AccessConstraints", "none");
 }
 
+/** One operation of Request: its formats and the one GET URL. */
+void writeOperation(XmlWriter& w,
+                    std::string_view tag,
+                    const std::vector<std::string>& formats,
+                    const CapabilitiesModel& m,
+                    bool declareXlink) {
+  w.line(3, "<" + std::string(tag) + ">");
+  for (const std::string& f : formats)
+    w.element(4, "Format", f);
+  writeDcpType(w, 4, m.onlineResource, declareXlink);
+  w.line(3, "</" + std::string(tag) + ">");
+}
+
+/** `legendTag`: GetLegendGraphic's element, "GetLegendGraphic" in 1.1.1 (the DTD's, after
+ * DescribeLayer's place), "sld:GetLegendGraphic" in 1.3.0 (an _ExtendedOperation of SLD 1.1.0). */
 void writeRequest(XmlWriter& w,
                   const CapabilitiesModel& m,
                   std::string_view capsFormat,
+                  std::string_view legendTag,
                   bool declareXlink) {
   w.line(2, "<Request>");
   w.line(3, "<GetCapabilities>");
@@ -129,13 +146,10 @@ void writeRequest(XmlWriter& w,
     w.element(4, "Format", f);
   writeDcpType(w, 4, m.onlineResource, declareXlink);
   w.line(3, "</GetMap>");
-  if (!m.getFeatureInfoFormats.empty()) {
-    w.line(3, "<GetFeatureInfo>");
-    for (const std::string& f : m.getFeatureInfoFormats)
-      w.element(4, "Format", f);
-    writeDcpType(w, 4, m.onlineResource, declareXlink);
-    w.line(3, "</GetFeatureInfo>");
-  }
+  if (!m.getFeatureInfoFormats.empty())
+    writeOperation(w, "GetFeatureInfo", m.getFeatureInfoFormats, m, declareXlink);
+  if (!m.getLegendGraphicFormats.empty())
+    writeOperation(w, legendTag, m.getLegendGraphicFormats, m, declareXlink);
   w.line(2, "</Request>");
 }
 
@@ -206,7 +220,7 @@ std::string capabilities111(const CapabilitiesModel& m) {
   writeServiceCommon(w, m, "OGC:WMS", true);
   w.line(1, "</Service>");
   w.line(1, "<Capability>");
-  writeRequest(w, m, "application/vnd.ogc.wms_xml", true);
+  writeRequest(w, m, "application/vnd.ogc.wms_xml", "GetLegendGraphic", true);
   writeExceptionFormats(w,
                         {"application/vnd.ogc.se_xml",
                          "application/vnd.ogc.se_inimage",
@@ -264,10 +278,16 @@ std::string capabilities130(const CapabilitiesModel& m) {
   if (!m.updateSequence.empty()) root += attr("updateSequence", m.updateSequence);
   root += attr("xmlns", "http://www.opengis.net/wms");
   root += attr("xmlns:xlink", kXlinkNs);
+  // GetLegendGraphic is the SLD profile's operation: its element and schema are SLD 1.1.0's.
+  const bool sld = !m.getLegendGraphicFormats.empty();
+  if (sld) root += attr("xmlns:sld", kSldNs);
   root += attr("xmlns:xsi", "http://www.w3.org/2001/XMLSchema-instance");
-  root += attr("xsi:schemaLocation",
-               "http://www.opengis.net/wms "
-               "http://schemas.opengis.net/wms/1.3.0/capabilities_1_3_0.xsd");
+  std::string schemas = "http://www.opengis.net/wms "
+                        "http://schemas.opengis.net/wms/1.3.0/capabilities_1_3_0.xsd";
+  if (sld)
+    schemas +=
+        " " + std::string(kSldNs) + " http://schemas.opengis.net/sld/1.1.0/sld_capabilities.xsd";
+  root += attr("xsi:schemaLocation", schemas);
   w.line(0, root + ">");
   w.line(1, "<Service>");
   writeServiceCommon(w, m, "WMS", false);
@@ -275,7 +295,7 @@ std::string capabilities130(const CapabilitiesModel& m) {
   if (m.maxHeight > 0) w.element(2, "MaxHeight", std::to_string(m.maxHeight));
   w.line(1, "</Service>");
   w.line(1, "<Capability>");
-  writeRequest(w, m, "text/xml", false);
+  writeRequest(w, m, "text/xml", "sld:GetLegendGraphic", false);
   writeExceptionFormats(w, {"XML", "INIMAGE", "BLANK"});
   w.line(2, "<Layer>");
   w.element(3, "Title", m.title);

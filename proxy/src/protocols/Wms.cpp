@@ -586,6 +586,7 @@ std::optional<MapFormat> parseMapFormat(std::string_view format) noexcept {
   if (f == "image/png;mode=24bit") return MapFormat::Png24;
   if (f == "image/png;mode=32bit") return MapFormat::Png32;
   if (f == "application/bil16") return MapFormat::Bil16;
+  if (f == "application/bil32") return MapFormat::Bil32;
   if (f == "image/tiff") return MapFormat::Tiff;
   return std::nullopt;
 }
@@ -606,6 +607,8 @@ std::string_view toString(MapFormat format) noexcept {
     return "application/bil16";
   case MapFormat::Tiff:
     return "image/tiff";
+  case MapFormat::Bil32:
+    return "application/bil32";
   }
   return "image/png";
 }
@@ -688,6 +691,7 @@ WmsErrorContext wmsErrorContext(const QueryParams& params, const WmsLimits& limi
   ctx.mapFormat = mapFormat;
   ctx.format = std::string(toString(mapFormat));
   if (const auto layers = nonEmpty(params, "layers")) ctx.layers = splitCommas(*layers);
+  if (const auto styles = nonEmpty(params, "styles")) ctx.styles = splitCommas(*styles);
   ctx.width = *width;
   ctx.height = *height;
   ctx.transparent = *transparent;

@@ -58,6 +58,11 @@ struct CapabilitiesModel {
   std::vector<std::string> getMapFormats;
   /** GetFeatureInfo's INFO_FORMATs; the operation is declared only when there are some. */
   std::vector<std::string> getFeatureInfoFormats;
+  /** GetLegendGraphic's FORMATs (the SLD profile's request); declared only when there are some:
+   * in 1.1.1 as the DTD's <GetLegendGraphic> in Request, in 1.3.0 as <sld:GetLegendGraphic>, an
+   * _ExtendedOperation of SLD 1.1.0 (sld_capabilities.xsd), with xmlns:sld and that schema in
+   * xsi:schemaLocation. */
+  std::vector<std::string> getLegendGraphicFormats;
   std::string updateSequence; ///< root updateSequence attribute, omitted when empty
   /** ISO 8601 UTC (e.g. 2026-11-23T00:00:00Z); written as the Service keyword
    * "LastUpdate=<value>", omitted when empty. */

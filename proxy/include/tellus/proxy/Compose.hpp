@@ -157,9 +157,10 @@ ComposeStats composeHeights(const TileGrid& grid,
                             std::int16_t noData,
                             std::vector<std::int16_t>& heights);
 
-/** Draws one value layer into `values` (width * height floats, NaN = no data): bilinear between
- * texel centres in double; where one of the four texels is NaN, the texel of the largest weight
- * (NaN when that one is), the rule of values::sample. Pixels with a value replace what is there. */
+/** Draws one value layer into `values` (width * height floats, NaN = no data) by the one
+ * sampling rule of values/Sample.hpp (values::bilinearValue in double, across tile edges):
+ * bilinear between texel centres; where one of the four texels is NaN, the texel the pixel's
+ * centre lies in (NaN when that one is). Pixels with a value replace what is there. */
 ComposeStats composeValues(const TileGrid& grid,
                            const Sector& box,
                            std::int32_t width,

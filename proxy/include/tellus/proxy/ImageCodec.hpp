@@ -37,6 +37,10 @@ std::expected<std::vector<std::byte>, std::string> encodeImage(std::string_view 
 std::expected<std::vector<std::byte>, std::string>
 encodeHeights(std::string_view mimeType, int width, int height, const std::int16_t* heights);
 
+/** Encodes values as "application/bil32": Float32, little-endian (as World Wind reads BIL and
+ * as tellus writes BIL16), row-major from the top row, no header. */
+std::vector<std::byte> encodeBil32(int width, int height, const float* values);
+
 /**
  * A map without data, in any GetMap format: for WMS EXCEPTIONS=BLANK and INIMAGE, and for a map
  * where there is no tile. A picture (`heights` false) is BGCOLOR (default white), fully
@@ -44,7 +48,8 @@ encodeHeights(std::string_view mimeType, int width, int height, const std::int16
  * PNG is opaque otherwise); `text`, if any, is drawn in black with the DejaVu Sans Mono font when
  * it is installed (INIMAGE; else the image stays plain; only drawing text loads the imaging
  * module). Heights (`heights`: BIL16, Int16 TIFF or 16-bit PNG, see mapIsHeights) are `noData`
- * everywhere, and `text` is not drawn: text drawn into heights would be terrain.
+ * everywhere, and `text` is not drawn: text drawn into heights would be terrain. A map of values
+ * (application/bil32) is `valueNoData` everywhere, without text either.
  */
 std::expected<std::vector<std::byte>, std::string> blankMap(MapFormat format,
                                                             bool heights,
@@ -53,7 +58,8 @@ std::expected<std::vector<std::byte>, std::string> blankMap(MapFormat format,
                                                             std::optional<std::uint32_t> bgcolor,
                                                             bool transparent,
                                                             std::string_view text = {},
-                                                            std::int16_t noData = -32768);
+                                                            std::int16_t noData = -32768,
+                                                            float valueNoData = kNoValue);
 
 /** Decoded imagery: 8-bit RGB (channels 3) or RGBA (4), row-major, top row first. */
 struct DecodedImage {

@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <expected>
+#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -73,7 +74,12 @@ inline constexpr double kMaxBboxMagnitudeDeg = 1.0e6;
  * 8-bit RGB(A) TIFF) and heights (BIL16; PNG is 16-bit and TIFF Int16 heights when every layer
  * of the map is an elevation layer). Which a map is made as: mapIsHeights().
  */
-enum class MapFormat { Jpeg, Png, Png8, Png24, Png32, Bil16, Tiff };
+/** GetMap formats. Bil32: a map of values (Float32, little-endian, as World Wind reads BIL), for
+ * value layers whose samples are Float32 only. */
+enum class MapFormat { Jpeg, Png, Png8, Png24, Png32, Bil16, Tiff, Bil32 };
+
+/** The no-data value of a map of values (application/bil32) whose layers do not name one. */
+inline constexpr float kNoValue = std::numeric_limits<float>::quiet_NaN();
 
 /**
  * A FORMAT value as a MapFormat. A MIME type is case-insensitive in its type, subtype and
@@ -83,7 +89,8 @@ enum class MapFormat { Jpeg, Png, Png8, Png24, Png32, Bil16, Tiff };
  */
 std::optional<MapFormat> parseMapFormat(std::string_view format) noexcept;
 /** The canonical spelling: "image/jpeg", "image/png", "image/png; mode=8bit",
- * "image/png; mode=24bit", "image/png; mode=32bit", "application/bil16", "image/tiff". */
+ * "image/png; mode=24bit", "image/png; mode=32bit", "application/bil16", "image/tiff",
+ * "application/bil32". */
 std::string_view toString(MapFormat format) noexcept;
 /** The Content-Type of a map in that format ("image/png" for every PNG). */
 std::string_view contentTypeOf(MapFormat format) noexcept;
@@ -222,6 +229,8 @@ struct WmsErrorContext {
   MapFormat mapFormat = MapFormat::Png;
   std::vector<std::string>
       layers; ///< LAYERS as given (to tell heights from pictures), may be empty
+  /// STYLES as given (a styled value layer is a picture), may be empty or of another length
+  std::vector<std::string> styles;
   std::int32_t width = 0;
   std::int32_t height = 0;
   bool transparent = false;

@@ -21,8 +21,8 @@
  * The CPU computes t in double. The GPU's shader computes the same formula in float32 (a 256x1
  * texture read with texelFetch at that index): float rounding moves t * 256 by at most ~3e-5 for
  * values of the range's magnitude, so the two agree exactly except where t * 256 lies within 1e-4
- * of an integer, where they may differ by one bin (one table entry). Tests that compare a render
- * with a GetMap allow exactly that.
+ * of an integer, where they may differ by one bin (one table entry). Which value a pixel shows
+ * between texels is Sample.hpp's rule, on both sides.
  *
  * Range from the data: rangeFromData gives min/max or percentiles of the finite values (for a
  * log scale only of the positive ones), which the caller puts into the scale; a scale itself

@@ -11,9 +11,9 @@
  * GPU with the same rule (ColourScale.hpp). The module depends on codec only (Image, PNG); zlib
  * is PRIVATE (Deflate TIFFs).
  *
- * Headers: ValueFormat.hpp (formats, decode, point sampling), ColourMap.hpp (the tables),
- * ColourScale.hpp (value -> colour, the exact index rule, raster -> RGBA), Legend.hpp (the
- * colour bar with ticks and unit).
+ * Headers: ValueFormat.hpp (formats, decode, point sampling), Sample.hpp (the sampling rule),
+ * ColourMap.hpp (the tables), ColourScale.hpp (value -> colour, the exact index rule, raster ->
+ * RGBA), Legend.hpp (the colour bar with ticks and unit).
  *
  * The cache keeps the upstream's bytes as sent; decoding happens when the values are used.
  *
@@ -83,9 +83,10 @@ std::expected<ValueRaster, std::string>
 decode(std::span<const std::byte> bytes, const ValueFormat& format, int width = 0, int height = 0);
 
 /** The value at (x, y) in pixel coordinates, where pixel (i, j) covers [i, i+1) x [j, j+1) and its
- * centre is (i + 0.5, j + 0.5): bilinear between the four nearest centres (clamped at the
- * edges); when any of those four is NaN, the nearest pixel's value (NaN if that one is no data).
- * NaN outside [0, width] x [0, height] or for an empty raster. */
+ * centre is (i + 0.5, j + 0.5), by the one sampling rule of Sample.hpp (axisTexels,
+ * bilinearValue): bilinear between the four nearest centres (clamped at the edges); when any of
+ * those four is NaN, the value of the pixel (x, y) lies in (NaN if that one is no data). NaN
+ * outside [0, width] x [0, height] or for an empty raster. */
 float sample(const ValueRaster& raster, double x, double y) noexcept;
 
 /** "int16", "uint16", "float32" and back (nullopt for another name). */

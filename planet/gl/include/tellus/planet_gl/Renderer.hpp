@@ -61,10 +61,10 @@ using ImageDecoder = std::function<std::expected<RgbaImage, std::string>(
  * values on the GPU) and colours in the shader with the EXACT rule of values/ColourScale.hpp
  * (t in float, index = clamp(floor(t * 256), 0, 255), the map's entry; no data and, with
  * OutOfRange::Transparent, values outside the range transparent: the layers below show).
- * Sampling is the nearest texel (no filtering of values, no mip levels): each texel keeps its
- * own value's colour, as in the proxy's GetMap of the same tile, so a render and a map agree
- * texel for texel (a bilinear mix of values would colour values no sample has, and a NaN
- * neighbour has no mix). */
+ * Sampling: values/Sample.hpp, the proxy's GetMap's rule (four texelFetch, no GL filtering):
+ * bilinear of the values, then the colour; beside no data the point's own texel. A render and a
+ * GetMap agree within one colour entry but in the half texel along a tile's edge, where a node's
+ * texture has no neighbour texels and is clamped (docs/design/values-renderer.md). */
 struct ValueLayerOptions {
   values::ValueFormat format; ///< how the tiles' raw samples become values (unit included)
   std::string colourMap{values::kDefaultColourMap}; ///< a values::colourMaps() name
@@ -423,9 +423,9 @@ public:
    * colour map or a range that is not min < max (log: > 0). */
   std::optional<ValueLayerOptions> layerValues(std::size_t layer) const;
   void setLayerValues(std::size_t layer, const ValueLayerOptions& values);
-  /** The value a layer of values holds at a point (its nearest texel of the deepest resident
-   * texture there; values::sample's bilinear rule within it would need the raw tile): NaN for no
-   * data or nothing resident; nullopt for an imagery layer. */
+  /** The value a layer of values holds at a point (values::sample's rule, the shader's, on the
+   * deepest resident texture there): NaN for no data or nothing resident; nullopt for an imagery
+   * layer. */
   std::optional<float> layerValueAt(std::size_t layer, double latDeg, double lonDeg) const;
   /** Shows or hides the legends (RendererOptions::legend) from the next frame on. */
   void setLegend(bool on);
