@@ -134,6 +134,20 @@ TEST(ProxyFromConfig, ElevationNoDataIsClampedIntoSixteenBits) {
   EXPECT_EQ(noData(-9999.9), -9999); // toward zero, as a cast does
 }
 
+// A value layer's tiles from a local raster carry its own no-data sample (values.no_data), else
+// the default -32768.
+TEST(ProxyFromConfig, ValueLayerNoDataIsItsOwn) {
+  LayerConfig l;
+  l.kind = LayerKind::Values;
+  EXPECT_EQ(layerSpec(l).noData, -32768);
+  l.values.format.noData = -9999.0;
+  EXPECT_EQ(layerSpec(l).noData, -9999);
+  l.values.format.noData = 1e9;
+  EXPECT_EQ(layerSpec(l).noData, 32767);
+  l.kind = LayerKind::Imagery; // not a value layer: the elevation setting, as before
+  EXPECT_EQ(layerSpec(l).noData, -32768);
+}
+
 // Value layers (issue 24): a value layer's default style is its colour map; an elevation
 // layer's stays the uncoloured one; the styles default to every colour map; imagery has none.
 TEST(ProxyFromConfig, ValueLayersCarryTheirFormatStylesAndScale) {

@@ -65,7 +65,8 @@ void writeFile(const fs::path& p, std::string_view text) {
 // ---- examples and defaults ---------------------------------------------------------------------
 
 TEST(ConfigYaml, EveryExampleParses) {
-  for (const char* name : {"default.yaml", "mapserver.yaml", "public.yaml", "heights.yaml"}) {
+  for (const char* name :
+       {"default.yaml", "mapserver.yaml", "public.yaml", "heights.yaml", "sst.yaml"}) {
     const auto c = loadConfig(kExamples / name);
     ASSERT_TRUE(c) << c.error().toString();
     EXPECT_EQ(c->sourceFile, kExamples / name);
@@ -86,6 +87,30 @@ TEST(ConfigYaml, HeightsExample) {
   ASSERT_EQ(c->renderer.layers.size(), 2u);
   EXPECT_EQ(c->renderer.layers[1].layer, "heights");
   EXPECT_EQ(c->renderer.layers[1].opacity, 0.5);
+}
+
+// Real data as values (issue 24): the bundled COADS SST, hundredths of a degree C, land no data.
+TEST(ConfigYaml, SeaSurfaceTemperatureExample) {
+  const auto c = loadConfig(kExamples / "sst.yaml");
+  ASSERT_TRUE(c) << c.error().toString();
+  const LayerConfig* sst = c->layer("sst");
+  ASSERT_NE(sst, nullptr);
+  EXPECT_EQ(sst->kind, LayerKind::Values);
+  EXPECT_EQ(sst->dataset.mimeType, "application/bil16");
+  EXPECT_EQ(sst->values.format.encoding, values::Encoding::Int16);
+  EXPECT_EQ(sst->values.format.scale, 0.01);
+  EXPECT_EQ(sst->values.format.noData, -32768.0);
+  EXPECT_EQ(sst->values.format.unit, "°C");
+  EXPECT_EQ(sst->values.colourMap, "magma");
+  EXPECT_EQ(sst->values.min, -2.0);
+  EXPECT_EQ(sst->values.max, 32.0);
+  const UpstreamConfig* up = c->upstream(sst->upstream);
+  ASSERT_NE(up, nullptr);
+  EXPECT_EQ(up->type, UpstreamConfig::Type::Local);
+  EXPECT_TRUE(fs::exists(up->path)) << up->path; // the bundled file, through data_dir
+  EXPECT_EQ(up->path.filename(), "sst_coads_jan_int16.tif");
+  ASSERT_EQ(c->renderer.layers.size(), 2u);
+  EXPECT_EQ(c->renderer.layers[1].layer, "sst");
 }
 
 // renderer.layers[i].colour_map and range: value layers only, known maps, min < max.
@@ -172,6 +197,24 @@ TEST(ConfigYaml, PublicExample) {
   EXPECT_EQ(elev->kind, LayerKind::Elevation);
   EXPECT_EQ(elev->upstreamLayer, "GEBCO,aster_v2,USGS-NED");
   EXPECT_EQ(elev->maxAge, seconds(30 * 86400));
+  // Its heights as values (issue 24): colour-map styles over WMS, metres.
+  EXPECT_TRUE(elev->isValueLayer());
+  EXPECT_EQ(elev->values.colourMap, "terrain");
+  EXPECT_EQ(elev->values.styles,
+            (std::vector<std::string>{"terrain", "viridis", "cividis", "turbo"}));
+  EXPECT_EQ(elev->values.min, -8000.0);
+  EXPECT_EQ(elev->values.max, 8000.0);
+  EXPECT_EQ(elev->values.format.unit, "m");
+  // NEO's and GIBS's WMS layers send coloured pictures, not values (the example says why): they
+  // stay imagery.
+  for (const char* name : {"bluemarble",
+                           "modis-truecolor",
+                           "sea-surface-temperature",
+                           "land-temperature-climatology"}) {
+    ASSERT_NE(c->layer(name), nullptr) << name;
+    EXPECT_EQ(c->layer(name)->kind, LayerKind::Imagery) << name;
+    EXPECT_FALSE(c->layer(name)->isValueLayer()) << name;
+  }
   EXPECT_EQ(c->layer("srtm30plus")->dataset.grid.numLevels, 10);
   EXPECT_TRUE(c->layer("bluemarble")->dataset.pinned);
   EXPECT_EQ(c->server.offlineResponse, OfflineResponse::Blank);

@@ -29,6 +29,13 @@ const LocalRasterSource& etopo() {
   return *src;
 }
 
+/** The bundled COADS sea-surface temperature (January, 0.01 deg C, land -32768; data/README.md). */
+const LocalRasterSource& sst() {
+  static const auto src = LocalRasterSource::open(kData / "sst_coads_jan_int16.tif");
+  EXPECT_TRUE(src) << (src ? "" : src.error());
+  return *src;
+}
+
 std::int16_t bilAt(const std::vector<std::byte>& bil, int width, int x, int y) {
   const auto i = 2 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
                       static_cast<std::size_t>(x));
@@ -97,6 +104,51 @@ TEST(LocalRasterSource, Bil16HeightsMatchTheSourceData) {
   EXPECT_GT(maxH, 5000); // Tibet and the Himalaya at 20' resolution
   // The Pacific near the Mariana trench is deep.
   EXPECT_LT(src.sample(11.0, 142.0, 0), -4000.0);
+}
+
+// The bundled SST grid: values at its cell centres as GDAL reads them (gdallocationinfo
+// -wgs84 data/sst_coads_jan_int16.tif LON LAT), land no data.
+TEST(LocalRasterSource, BundledSeaSurfaceTemperature) {
+  const auto& src = sst();
+  EXPECT_EQ(src.width(), 180);
+  EXPECT_EQ(src.height(), 90);
+  EXPECT_EQ(src.channels(), 1);
+  EXPECT_EQ(src.sampleType(), SampleType::Int16);
+  const Sector c = src.coverage();
+  EXPECT_NEAR(c.west, -180.0, 1e-9);
+  EXPECT_NEAR(c.north, 90.0, 1e-9);
+  EXPECT_NEAR(c.east, 180.0, 1e-9);
+  EXPECT_NEAR(c.south, -90.0, 1e-9);
+  EXPECT_EQ(src.sample(1.0, -159.0, 0, -32768), 2662.0);      // central Pacific, 26.62 C
+  EXPECT_EQ(src.sample(1.0, 151.0, 0, -32768), 2939.0);       // the western Pacific warm pool
+  EXPECT_EQ(src.sample(1.0, -29.0, 0, -32768), 2704.0);       // equatorial Atlantic
+  EXPECT_TRUE(std::isnan(src.sample(23.0, 10.0, 0, -32768))); // the Sahara: no data
+}
+
+// Land is no data in the grid: a sample beside a coast takes the nearest sea cell instead of
+// mixing -32768 in (1 N: 79 W is sea, 26.30 C; 77 W is Colombia), and a rendered value tile holds
+// only no-data and plausible temperatures.
+TEST(LocalRasterSource, NoDataIsNeverMixedIn) {
+  const auto& src = sst();
+  EXPECT_EQ(src.sample(1.0, -78.2, 0, -32768), 2630.0);
+  EXPECT_EQ(src.sample(1.0, -77.8, 0, -32768), 2630.0); // nearer the land cell: still the sea's
+  EXPECT_LT(src.sample(1.0, -78.2, 0), -10000.0);       // what mixing would give
+  // Level 0 over the Pacific coast of South America (36 degrees, 64 px).
+  auto bil = src.renderTile(Sector{-108, -18, -72, 18}, 64, 64, "application/bil16", -32768);
+  ASSERT_TRUE(bil) << bil.error();
+  int sea = 0, land = 0;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const int v = bilAt(*bil, 64, x, y);
+      if (v == -32768) {
+        ++land;
+      } else {
+        ++sea;
+        EXPECT_TRUE(v > 1500 && v < 3200) << x << "," << y << ": " << v;
+      }
+    }
+  EXPECT_GT(sea, 2000);
+  EXPECT_GT(land, 200);
 }
 
 TEST(LocalRasterSource, ReadsWorldFilesStrictly) {
@@ -171,4 +223,37 @@ TEST(SeederIntegration, SeedsResumesAndCountsADryRun) {
   ASSERT_TRUE(hit);
   EXPECT_EQ(hit->kind, CacheLookup::Kind::Hit);
   EXPECT_EQ(hit->meta.contentType, "image/jpeg");
+}
+
+// A value layer seeded from its raster (`tellus seed` of a local layer): the tiles' no-data is
+// the layer's (SeedOptions::noData), and the source's land is never mixed into the sea's values.
+TEST(SeederIntegration, SeedsValuesWithTheLayersNoData) {
+  test::TempDir dir("seed-values");
+  auto cache = test::openTestCache(dir.path());
+  ASSERT_TRUE(cache);
+  DatasetSpec spec;
+  spec.server = "local-sst";
+  spec.name = "sst";
+  spec.grid = GridSpec{Sector{}, 36.0, 64, 64, 1};
+  spec.mimeType = "application/bil16";
+  spec.extension = "bil";
+  const auto id = *cache->registerDataset(spec);
+  SeedOptions so;
+  so.box = Sector{-108, -18, -72, 18}; // the Pacific coast of South America: tile (0, 2, 2)
+  auto report = seedFromRaster(*cache, id, sst(), so);
+  ASSERT_TRUE(report);
+  EXPECT_EQ(report->written, 1);
+  auto hit = cache->get(id, TileKey{0, 2, 2});
+  ASSERT_TRUE(hit);
+  ASSERT_EQ(hit->bytes.size(), 64u * 64u * 2u);
+  int land = 0;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const int v = bilAt(hit->bytes, 64, x, y);
+      if (v == -32768)
+        ++land;
+      else
+        EXPECT_TRUE(v > 1500 && v < 3200) << x << "," << y << ": " << v;
+    }
+  EXPECT_GT(land, 200);
 }

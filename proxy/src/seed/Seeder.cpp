@@ -74,7 +74,8 @@ seedFromRaster(TileCache& cache,
       auto bytes = source.renderTile(grid->sectorOf(key),
                                      grid->spec().tileWidth,
                                      grid->spec().tileHeight,
-                                     info->spec.mimeType);
+                                     info->spec.mimeType,
+                                     options.noData);
       if (!bytes) {
         ++report.failed;
         if (report.failures.size() < 10) report.failures.push_back(bytes.error());

@@ -103,7 +103,12 @@ private:
   }
 };
 
-/** Bilinear sample of one channel of row-major, north-first samples (NaN outside). */
+/**
+ * Bilinear sample of one channel of row-major, north-first samples (NaN outside). A tap that is no
+ * data (equal to `noData`, or NaN) is never mixed in: where one of the four is, the sample is the
+ * nearest tap that has data (the one of largest weight), NaN when none has (the composer's rule
+ * for heights, Compose.cpp's sampleHeight). A `noData` of NaN marks no sample but NaN.
+ */
 template <class T>
 double sampleFrom(const T* px,
                   int width,
@@ -112,7 +117,8 @@ double sampleFrom(const T* px,
                   const RasterGeoref& g,
                   double latDeg,
                   double lonDeg,
-                  int channel) noexcept {
+                  int channel,
+                  double noData) noexcept {
   if (!std::isfinite(latDeg) || !std::isfinite(lonDeg) || channel < 0 || channel >= channels) {
     return std::numeric_limits<double>::quiet_NaN();
   }
@@ -148,8 +154,17 @@ double sampleFrom(const T* px,
                                       static_cast<std::size_t>(channels) +
                                   static_cast<std::size_t>(channel)]);
   };
-  const double top = at(x0, y0) * (1 - fx) + at(x1, y0) * fx;
-  const double bottom = at(x0, y1) * (1 - fx) + at(x1, y1) * fx;
+  const double v[4] = {at(x0, y0), at(x1, y0), at(x0, y1), at(x1, y1)};
+  const double w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+  const auto missing = [noData](double s) { return std::isnan(s) || s == noData; };
+  if (missing(v[0]) || missing(v[1]) || missing(v[2]) || missing(v[3])) {
+    int best = -1;
+    for (int k = 0; k < 4; ++k)
+      if (!missing(v[k]) && (best < 0 || w[k] > w[best])) best = k;
+    return best < 0 ? std::numeric_limits<double>::quiet_NaN() : v[best];
+  }
+  const double top = v[0] * (1 - fx) + v[1] * fx;
+  const double bottom = v[2] * (1 - fx) + v[3] * fx;
   return top * (1 - fy) + bottom * fy;
 }
 
@@ -234,7 +249,8 @@ Sector LocalRasterSource::coverage() const noexcept {
                 georef_.north};
 }
 
-double LocalRasterSource::sample(double latDeg, double lonDeg, int channel) const noexcept {
+double
+LocalRasterSource::sample(double latDeg, double lonDeg, int channel, double noData) const noexcept {
   if (!std::isfinite(latDeg) || !std::isfinite(lonDeg) || channel < 0 || channel >= channels_) {
     return std::numeric_limits<double>::quiet_NaN();
   }
@@ -248,7 +264,7 @@ double LocalRasterSource::sample(double latDeg, double lonDeg, int channel) cons
             return std::numeric_limits<double>::quiet_NaN();
           } else {
             return sampleFrom(
-                v.data(), width_, height_, channels_, georef_, latDeg, lonDeg, channel);
+                v.data(), width_, height_, channels_, georef_, latDeg, lonDeg, channel, noData);
           }
         },
         (*p)->samples);
@@ -284,8 +300,13 @@ LocalRasterSource::renderTile(const Sector& box,
           return std::unexpected("no pixels");
         } else {
           const auto* px = v.data();
+          // Heights and values: a source sample equal to the tile's no-data value is no data
+          // too (a grid with land masked, data/sst_coads_jan_int16.tif), never mixed in.
+          const double sourceNoData =
+              elevation ? static_cast<double>(noData) : std::numeric_limits<double>::quiet_NaN();
           const auto sample = [&](double lat, double lon, int channel) {
-            return sampleFrom(px, width_, height_, channels_, georef_, lat, lon, channel);
+            return sampleFrom(
+                px, width_, height_, channels_, georef_, lat, lon, channel, sourceNoData);
           };
           const auto w = static_cast<std::size_t>(width);
           const auto h = static_cast<std::size_t>(height);

@@ -1,6 +1,8 @@
 // `tellus height --lat A --lon B`: the terrain height there from the deepest level of the
 // elevation layer that has a tile at the point (with the neighbours its bilinear taps reach), the
-// same height function the renderer draws (planet::HeightField).
+// same height function the renderer draws (planet::HeightField). With `--values LAYER` (issue 24):
+// the value of a layer of values there, with its unit, by the function GetFeatureInfo answers
+// with (values::decode, then values::sample in the tile).
 
 #include "Commands.hpp"
 #include "Context.hpp"
@@ -9,7 +11,9 @@
 
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/cli/Values.hpp>
+#include <tellus/config/Config.hpp>
 #include <tellus/planet/Terrain.hpp>
+#include <tellus/values/ValueFormat.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -119,6 +123,66 @@ void printHeights(
                  H);
 }
 
+/** `--values LAYER`: the layer's value at the point from the deepest level with a tile there:
+ * values::sample of the decoded tile at the point's place in it (bilinear between texel centres,
+ * the nearest texel with data beside no data), what GetFeatureInfo answers for a map drawn from
+ * that level (proxy/src/frontend/WmsValues.cpp). Prints the value (or "no data"); the layer,
+ * level and unit on stderr. */
+int printValue(const cli::Args& a, double la, double lo, const std::string& name) {
+  planet::RendererOptions ro;
+  auto tiles = openPlanetTiles(a, "height", ro);
+  if (!tiles) return tiles.error();
+  const LayerConfig* lc = tiles->ctx ? tiles->ctx->config.layer(name) : nullptr;
+  if (lc == nullptr || lc->kind != LayerKind::Values)
+    return usage("--values must name a layer of values (kind: values) of the local configuration",
+                 name);
+  const auto grid = TileGrid::create(lc->dataset.grid);
+  if (!grid) {
+    std::fprintf(stderr, "tellus height: %s\n", grid.error().c_str());
+    return kExitError;
+  }
+  std::string lastError;
+  for (int level = grid->numLevels() - 1; level >= 0; --level) {
+    const auto key = grid->keyAt(la, lo == 180.0 ? -180.0 : lo, level);
+    if (!key) continue;
+    const TileResult r = fetchTile(*tiles->source, {name, "", *key}, std::chrono::seconds(60));
+    if (r.status != TileStatus::Ok) {
+      if (r.status == TileStatus::Failed) lastError = r.message;
+      continue;
+    }
+    auto raster =
+        values::decode(r.bytes, lc->values.format, grid->spec().tileWidth, grid->spec().tileHeight);
+    if (!raster) {
+      lastError = raster.error();
+      continue;
+    }
+    const Sector s = grid->sectorOf(*key);
+    const float v = values::sample(*raster,
+                                   (lo - s.west) / (s.east - s.west) * raster->width,
+                                   (s.north - la) / (s.north - s.south) * raster->height);
+    if (std::isnan(v))
+      std::printf("no data\n");
+    else
+      std::printf("%.6g\n", static_cast<double>(v));
+    std::fprintf(stderr,
+                 "tellus height: layer %s, level %d: %s%s%s\n",
+                 name.c_str(),
+                 level,
+                 std::isnan(v) ? "no data" : std::to_string(v).c_str(),
+                 lc->values.format.unit.empty() || std::isnan(v) ? "" : " ",
+                 std::isnan(v) ? "" : lc->values.format.unit.c_str());
+    return kExitOk;
+  }
+  std::fprintf(stderr,
+               "tellus height: no tile of %s at %.6f, %.6f%s%s\n",
+               name.c_str(),
+               la,
+               lo,
+               lastError.empty() ? "" : ": ",
+               lastError.c_str());
+  return kExitError;
+}
+
 int runHeight(const cli::Args& a) {
   const auto latArg = a.get("lat"), lonArg = a.get("lon");
   if (!latArg || !lonArg) return usage("--lat and --lon are required", "");
@@ -126,6 +190,11 @@ int runHeight(const cli::Args& a) {
   if (!lat || !((*lat)[0] >= -90.0 && (*lat)[0] <= 90.0))
     return usage("--lat must be a latitude in [-90, 90]", *latArg);
   if (!lon || !std::isfinite((*lon)[0])) return usage("--lon must be a longitude", *lonArg);
+  if (const auto layer = a.get("values")) {
+    if (a.get("elevation") || a.get("datum"))
+      return usage("--values takes neither --elevation nor --datum", *layer);
+    return printValue(a, (*lat)[0], std::remainder((*lon)[0], 360.0), *layer);
+  }
   const auto datumArg = a.get("datum");
   if (datumArg && *datumArg != "msl" && *datumArg != "ellipsoid")
     return usage("--datum must be msl or ellipsoid", *datumArg);
@@ -173,9 +242,12 @@ int runHeight(const cli::Args& a) {
 Command heightCommand() {
   using K = cli::OptionKind;
   Command c{"height", tileSourceOptions(), 0, &runHeight};
-  c.options.insert(
-      c.options.end(),
-      {{"lat", K::Value}, {"lon", K::Value}, {"elevation", K::Value}, {"datum", K::Value}});
+  c.options.insert(c.options.end(),
+                   {{"lat", K::Value},
+                    {"lon", K::Value},
+                    {"elevation", K::Value},
+                    {"datum", K::Value},
+                    {"values", K::Value}});
   return c;
 }
 

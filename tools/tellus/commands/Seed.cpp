@@ -340,7 +340,9 @@ int seedFromTheRaster(TileCache& cache,
     std::fprintf(stderr, "tellus seed: %s: %s\n", layer.name.c_str(), source.error().c_str());
     return kExitError;
   }
-  auto report = seedFromRaster(cache, *id, *source, so);
+  SeedOptions withNoData = so;
+  withNoData.noData = cli::layerSpec(layer).noData; // a value layer's own values.no_data
+  auto report = seedFromRaster(cache, *id, *source, withNoData);
   if (!report) {
     std::fprintf(
         stderr, "tellus seed: %s: %s\n", layer.name.c_str(), report.error().message.c_str());

@@ -72,6 +72,8 @@ commands:
   height   the terrain height in metres at a point, from the elevation layer's deepest level
              --lat A --lon B [--elevation LAYER] [--datum msl|ellipsoid] [--offline | --server URL]
              (prints H above mean sea level, or h = H + N with --datum ellipsoid; both on stderr)
+             or --values LAYER: the value of a layer of values there (or "no data"; its unit
+             on stderr), as GetFeatureInfo answers it
 
 options for every command (anything else is refused with exit code 2; --help prints this):
   --cache DIR   cache root (default: $TELLUS_CACHE, $XDG_CACHE_HOME/tellus or ~/.cache/tellus)

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <expected>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -75,7 +76,9 @@ public:
    * them: "image/jpeg", "image/png" (RGB, or RGBA with transparent outside the coverage),
    * "application/bil16" (channel 0 as little-endian Int16, rounded, `noData` outside) or
    * "image/tiff" (Int16). Sampling is at pixel centres; longitudes wrap when the image spans 360
-   * degrees. Errors name what failed.
+   * degrees. For the two heights formats a source sample equal to `noData` (or NaN) is no data:
+   * it is never mixed into a bilinear sample (the nearest of the four taps with data is taken, as
+   * sample() says), and a pixel with no tap of data is `noData`. Errors name what failed.
    */
   std::expected<std::vector<std::byte>, std::string> renderTile(const Sector& box,
                                                                 int width,
@@ -84,8 +87,12 @@ public:
                                                                 std::int16_t noData = -32768) const;
 
   /** Bilinear sample of one channel at a position (NaN outside the coverage, or when the pixels
-   * cannot be decoded). */
-  double sample(double latDeg, double lonDeg, int channel) const noexcept;
+   * cannot be decoded). Taps equal to `noData` or NaN are no data and never mixed in: where any of
+   * the four is, the answer is the tap of largest weight that has data, NaN when none has. */
+  double sample(double latDeg,
+                double lonDeg,
+                int channel,
+                double noData = std::numeric_limits<double>::quiet_NaN()) const noexcept;
 
 private:
   struct Pixels;

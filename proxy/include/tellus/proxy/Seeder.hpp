@@ -29,6 +29,9 @@ struct SeedOptions {
   std::int32_t toLevel = 0;
   std::optional<Sector> box; ///< default: the dataset's sector
   bool dryRun = false;       ///< count only
+  /// seedFromRaster, heights and values formats: the no-data sample of the tiles and of the
+  /// source (LocalRasterSource::renderTile); the layer's (LayerSpec::noData).
+  std::int16_t noData = -32768;
 };
 
 struct SeedReport {

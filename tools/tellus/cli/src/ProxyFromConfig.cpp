@@ -93,7 +93,12 @@ LayerSpec layerSpec(const LayerConfig& l) {
   s.upstreamLayer = l.upstreamLayer;
   s.firstLevel = l.firstLevel;
   s.elevation = l.kind == LayerKind::Elevation;
-  s.noData = static_cast<std::int16_t>(std::clamp(l.elevation.noData, -32768.0, 32767.0));
+  // The no-data sample of tiles a local raster renders (and of heights maps): a value layer's
+  // own `values.no_data` when it has one, so that the tiles mean what the layer says they mean.
+  const double noData = l.kind == LayerKind::Values && l.values.format.noData
+                            ? *l.values.format.noData
+                            : l.elevation.noData;
+  s.noData = static_cast<std::int16_t>(std::clamp(noData, -32768.0, 32767.0));
   s.ttl = l.ttl;
   s.opacity = l.opacity;
   s.maxAge = l.maxAge;
