@@ -2,6 +2,7 @@
 // never blended in), and pictures of them: values coloured by a scale, heights as grey, a picture's
 // luminance as heights. The axes and the other samplers: ComposeSampling.hpp.
 #include "compose/ComposeSampling.hpp"
+
 #include <tellus/values/Sample.hpp>
 
 #include <algorithm>
