@@ -73,13 +73,22 @@ int sideQuadrant(int n, Direction d, int i) noexcept {
 }
 
 /** The zero-area fan of one coarse segment: from its first vertex (apex) over the chain (our
- * vertices strictly inside it, then its last vertex), into the quadrant range given. */
+ * vertices strictly inside it, then its last vertex), into the quadrant range given. Wound as
+ * the grid's cells (counter-clockwise seen from outside) over the sliver it closes, the gap
+ * between our side and the coarse chord beyond it: the chain runs west to east or south to north,
+ * so a south or an east side's fan is reversed. Wound backwards (as before), a draw with back
+ * faces culled (Renderer::redrawLast) dropped the slivers and showed one-pixel cracks. */
 void addFan(TerrainMesh& mesh,
             std::vector<std::uint32_t>& quadrant,
+            Direction side,
             std::uint32_t apex,
             const std::vector<std::uint32_t>& chain) {
+  const bool reversed = side == Direction::South || side == Direction::East;
   for (std::size_t a = 0; a + 1 < chain.size(); ++a) {
-    quadrant.insert(quadrant.end(), {apex, chain[a], chain[a + 1]});
+    if (reversed)
+      quadrant.insert(quadrant.end(), {apex, chain[a + 1], chain[a]});
+    else
+      quadrant.insert(quadrant.end(), {apex, chain[a], chain[a + 1]});
     ++mesh.zeroAreaTriangles;
   }
 }
@@ -200,7 +209,7 @@ void fixOntoPolyline(TerrainMesh& mesh,
     const int lastInner = firstInner + static_cast<int>(chain.size()) - 1;
     const std::uint32_t apex = coarseIndex(j, firstInner);
     chain.push_back(coarseIndex(j + 1, lastInner));
-    addFan(mesh, quad[static_cast<std::size_t>(side.quadrant(firstInner))], apex, chain);
+    addFan(mesh, quad[static_cast<std::size_t>(side.quadrant(firstInner))], side.d, apex, chain);
   }
   // A coarse vertex strictly between two of ours (never so in the power-of-two case) is a kink
   // of the coarse edge that our straight segment cuts across: the triangle between them is not
@@ -344,7 +353,7 @@ void addChordFans(TerrainMesh& mesh,
     const int lastInner = firstInner + static_cast<int>(chain.size()) - 1;
     const std::uint32_t apex = coarseIndex(j, firstInner);
     chain.push_back(coarseIndex(j + 1, lastInner));
-    addFan(mesh, quad[static_cast<std::size_t>(side.quadrant(firstInner))], apex, chain);
+    addFan(mesh, quad[static_cast<std::size_t>(side.quadrant(firstInner))], side.d, apex, chain);
   }
 }
 

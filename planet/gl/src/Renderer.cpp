@@ -101,6 +101,7 @@ std::string Renderer::Impl::openGl() {
   if (!globe) return globe.error();
   stats.overlaysPerPass = (*globe)->overlaysPerPass();
   globePass = globe->get();
+  globePass->setCullBackFaces(opt.cullBackFaces);
   scene = std::make_unique<SceneDraw>(opt, geodesy, gl);
   if (opt.stars) { // behind everything: before the globe (ScenePass.hpp)
     auto stars = StarsPass::create(gl,
@@ -390,7 +391,7 @@ void Renderer::redrawLast(const CameraPose& pose) {
   const Camera camera = m.cameraFor(m.clampToTerrain(pose));
   m.globePass->setCullBackFaces(true); // what the last frame culled stays background
   m.draw(camera, *m.lastList);
-  m.globePass->setCullBackFaces(false);
+  m.globePass->setCullBackFaces(m.opt.cullBackFaces);
   glDisable(GL_CULL_FACE);
   glFinish();
 }

@@ -184,6 +184,10 @@ struct RendererOptions {
   /** Edge fixing (finer edges onto coarser chords, zero-area triangles). Off only to measure what
    * it costs and what it prevents (benchmarks, the test that shows the cracks it closes). */
   bool fixEdges = true;
+  /** Diagnostic (tests): every frame drawn with back faces culled, as Renderer::redrawLast
+   * draws. The surface seen from outside is front faces only, so nothing that belongs may vanish,
+   * and a crack shows the background (the globe's inside is culled), which a test can count. */
+  bool cullBackFaces = false;
   /** Vertex positions as doubles on the GPU (OpenGL 4.x), made eye-relative by one double
    * subtraction. Off, or on a 3.3 context: two floats per coordinate (high + low), the eye's
    * pair subtracted in float (GpuVertex.hpp; as precise as doubles at the views measured,
