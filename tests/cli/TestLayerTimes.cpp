@@ -7,7 +7,6 @@
 
 #include <gtest/gtest.h>
 
-#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -21,9 +20,7 @@ LayerConfig monthly() { // a period the configuration expanded, as ParseLayers d
   l.name = "sst";
   l.time.period = "2024-01-01/2024-12-01/P1M";
   for (int m = 1; m <= 12; ++m) {
-    char d[16];
-    std::snprintf(d, sizeof d, "2024-%02d-01", m);
-    l.time.values.push_back(d);
+    l.time.values.push_back("2024-" + std::string(m < 10 ? "0" : "") + std::to_string(m) + "-01");
   }
   l.time.defaultValue = "2024-12-01";
   return l;
