@@ -31,6 +31,8 @@ public:
     return true;
   }
   bool over() const noexcept { return over_; }
+  /** The cap: a period longer than it makes the collector go over, whatever came before. */
+  std::size_t cap() const noexcept { return max_; }
   std::vector<std::string> take() { return std::move(out_); }
 
 private:
@@ -90,11 +92,8 @@ expandItem(std::string_view item, std::span<const std::string> declared, Collect
   if (!step) return bad("has a bad ISO 8601 duration (e.g. P1D, P1M, PT6H)");
   if (step->zero()) return bad("has a period of zero length");
   const Shape shape{a->shape.dateOnly && step->seconds == 0, true, true};
-  for (std::int64_t k = 0;; ++k) {
-    const std::int64_t t = addDuration(a->seconds, *step, k);
-    if (t > b->seconds) break;
+  for (const std::int64_t t : periodInstants(a->seconds, b->seconds, *step, out.cap()))
     if (!out.add(t, formatInstant(t, shape))) break;
-  }
   return {};
 }
 

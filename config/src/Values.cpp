@@ -4,6 +4,7 @@
 #include "ConfigInternal.hpp"
 
 #include <tellus/cache/IsoTime.hpp>
+#include <tellus/cache/TimeRange.hpp>
 
 #include <algorithm>
 #include <charconv>
@@ -244,17 +245,11 @@ std::expected<TimePeriod, std::string> parseTimePeriod(std::string_view text,
   const bool dateOnly = start->shape.dateOnly && end->shape.dateOnly && step->seconds == 0;
   const iso8601::Shape shape{dateOnly, true, true};
   TimePeriod r{*start, *end, {}, 0};
-  for (std::int64_t k = 0;; ++k) {
-    const std::int64_t t = iso8601::addDuration(start->seconds, *step, k);
-    if (t > end->seconds) break;
-    if (r.count >= maxValues) {
-      r.count = maxValues + 1;
-      r.expanded.clear();
-      break;
-    }
+  const auto instants = iso8601::periodInstants(start->seconds, end->seconds, *step, maxValues);
+  r.count = instants.size();
+  if (r.count > maxValues) return r; // too many: counted to maxValues + 1, none kept
+  for (const std::int64_t t : instants)
     r.expanded.push_back(iso8601::formatInstant(t, shape));
-    ++r.count;
-  }
   return r;
 }
 

@@ -19,7 +19,10 @@
  * a range of 9999 years by the second costs maxInstants + 1 steps, not 3e11). Pure functions.
  */
 
+#include <tellus/cache/IsoTime.hpp>
+
 #include <cstddef>
+#include <cstdint>
 #include <expected>
 #include <span>
 #include <string>
@@ -27,6 +30,23 @@
 #include <vector>
 
 namespace tellus::iso8601 {
+
+/** The instants start + k x step (k = 0, 1, ...; addDuration's calendar, each from start, never
+ * chained) up to end, in order, as POSIX seconds: the one expansion of a period (the
+ * configuration's `layers[].time.period` and expandTimes' A/B/P). It stops after maxInstants + 1,
+ * so a result longer than maxInstants means "too many" and a huge period costs no more. */
+inline std::vector<std::int64_t> periodInstants(std::int64_t startSeconds,
+                                                std::int64_t endSeconds,
+                                                const Duration& step,
+                                                std::size_t maxInstants) {
+  std::vector<std::int64_t> out;
+  for (std::int64_t k = 0; out.size() <= maxInstants; ++k) {
+    const std::int64_t t = addDuration(startSeconds, step, k);
+    if (t > endSeconds) break;
+    out.push_back(t);
+  }
+  return out;
+}
 
 /** The instants `text` names (see the file comment); `declared` serves A/B items. */
 std::expected<std::vector<std::string>, std::string>
