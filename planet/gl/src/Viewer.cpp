@@ -155,7 +155,6 @@ private:
   std::pair<double, double> cursor_{0.0, 0.0}; ///< window coordinates
   bool dragging_ = false;
   Flight flight_;
-  bool screenshotHeld_ = false;
   int screenshots_ = 0;
   std::uint64_t frames_ = 0;
   Clock::time_point lastTitle_ = Clock::now();
@@ -431,12 +430,22 @@ std::uint64_t ViewerLoop::run() {
     zoom();
     turn(dt);
     if (flight_.active) pose_ = flight_.at(dt);
+    // Keys are taken as pressed, not polled: a tap shorter than a slow frame still counts; keys
+    // pressed before the first frame wait for it (the layers are known from then on).
     bool layersChanged = false;
-    for (const int key : input_.keys)
-      if (!timeKey(key))
-        layersChanged = valueKey(renderer_, selected_, key) ||
-                        animationKey(renderer_, selected_, key) || layerKey(key) || layersChanged;
-    input_.keys.clear();
+    bool shot = false;
+    if (frames_ > 0) {
+      for (const int key : input_.keys) {
+        if (key == GLFW_KEY_P)
+          shot = true;
+        else if (key == GLFW_KEY_ESCAPE)
+          glfwSetWindowShouldClose(window_, GLFW_TRUE);
+        else if (!timeKey(key))
+          layersChanged = valueKey(renderer_, selected_, key) ||
+                          animationKey(renderer_, selected_, key) || layerKey(key) || layersChanged;
+      }
+      input_.keys.clear();
+    }
     // The scene's time with the wall clock; at more than 10x real time the sun moves visibly:
     // every frame is drawn, not twice a second.
     const bool timeRuns =
@@ -446,8 +455,6 @@ std::uint64_t ViewerLoop::run() {
       renderer_.frame(pose_); // the stats printed show the change
       printSelectedLayer();
     }
-    if (glfwGetKey(window_, GLFW_KEY_ESCAPE) == GLFW_PRESS)
-      glfwSetWindowShouldClose(window_, GLFW_TRUE);
 
     // Idle (nothing moved, nothing streaming): wait for input instead of drawing the same frame
     // again, but draw twice a second so that retries and deferred splits still happen. An
@@ -457,9 +464,7 @@ std::uint64_t ViewerLoop::run() {
                        pose_.headingDeg != drawn_.headingDeg || pose_.tiltDeg != drawn_.tiltDeg ||
                        fw != drawnW_ || fh != drawnH_ || timeRuns;
     const double sinceDrawn = std::chrono::duration<double>(Clock::now() - drawnAt_).count();
-    const bool shot = glfwGetKey(window_, GLFW_KEY_P) == GLFW_PRESS;
-    if (frames_ > 0 && !moved && !renderer_.busy() && sinceDrawn < 0.5 &&
-        !(shot && !screenshotHeld_)) {
+    if (frames_ > 0 && !moved && !renderer_.busy() && sinceDrawn < 0.5 && !shot) {
       glfwWaitEventsTimeout(0.5 - sinceDrawn);
       continue;
     }
@@ -470,8 +475,7 @@ std::uint64_t ViewerLoop::run() {
     drawnW_ = fw;
     drawnH_ = fh;
     drawnAt_ = Clock::now();
-    if (shot && !screenshotHeld_) screenshot();
-    screenshotHeld_ = shot;
+    if (shot) screenshot();
     updateTitle(now);
   }
   return frames_;
