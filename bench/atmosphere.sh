@@ -15,6 +15,9 @@
 # ("before"), after without the atmosphere ("noatmo"), without the stars ("nostars") and without
 # the whole look ("none"); the table then gives the whole look (on / none) and the atmosphere
 # alone (on / noatmo) for both binaries, and the stars alone (on / nostars).
+# RESOLUTIONS=1: the atmosphere's resolutions side by side (renderer.atmosphere.resolution): each
+# round renders, alternated, with the whole look at --atmosphere-resolution full, half and
+# quarter, without the atmosphere ("noatmo") and without any of the look ("none").
 set -euo pipefail
 tellus=${1:-build/tools/tellus/tellus}
 rounds=${ROUNDS:-2}
@@ -47,7 +50,14 @@ for r in $(seq "$rounds"); do
     for v in $views; do
       size=(--size 1024x768)
       [ "$v" = dome ] && size=(--dome --size 2048)
-      if [ -n "${BEFORE:-}" ]; then
+      if [ -n "${RESOLUTIONS:-}" ]; then
+        none=(--no-atmosphere --no-stars --no-sun --no-night --no-fade-in --no-geomorph)
+        for res in full half quarter; do
+          run "$flight" "$v" "$res" "${size[@]}" --atmosphere-resolution "$res"
+        done
+        run "$flight" "$v" noatmo "${size[@]}" --no-atmosphere
+        run "$flight" "$v" none "${size[@]}" "${none[@]}"
+      elif [ -n "${BEFORE:-}" ]; then
         none=(--no-atmosphere --no-stars --no-sun --no-night --no-fade-in --no-geomorph)
         run "$flight" "$v" on "${size[@]}"
         tellus=$BEFORE run "$flight" "$v" before "${size[@]}"
@@ -63,6 +73,26 @@ for r in $(seq "$rounds"); do
 done >"$work/results.txt"
 cat "$work/results.txt"
 echo
+if [ -n "${RESOLUTIONS:-}" ]; then
+  echo "| flight | view | median frame ms: full, half, quarter, no atmosphere, none of the look | whole look / none: full, half, quarter | atmosphere alone (/ no atmosphere): full, half, quarter |"
+  echo "|---|---|---|---|---|"
+  python3 - "$work/results.txt" <<'PY'
+import sys, collections, statistics
+rows = collections.defaultdict(lambda: collections.defaultdict(list))
+for line in open(sys.argv[1]):
+    flight, view, name, ms, _ = line.split()
+    rows[(flight, view)][name].append(float(ms))
+for (flight, view), d in rows.items():
+    m = {k: statistics.median(v) for k, v in d.items()}
+    r = ("full", "half", "quarter")
+    print("| %s | %s | %s | %s | %s |" % (
+        flight, "1024x768" if view == "flat" else "dome 2048 direct",
+        ", ".join("%.1f" % m[k] for k in r + ("noatmo", "none")),
+        ", ".join("%.2fx" % (m[k] / m["none"]) for k in r),
+        ", ".join("%.2fx" % (m[k] / m["noatmo"]) for k in r)))
+PY
+  exit 0
+fi
 if [ -n "${BEFORE:-}" ]; then
   echo "| flight | view | median frame ms: after, before, no atmosphere, no stars, none of the look | whole look after / before | atmosphere alone after / before | stars alone | tables ms after / before |"
   echo "|---|---|---|---|---|---|---|"

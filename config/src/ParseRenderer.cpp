@@ -127,7 +127,7 @@ std::array<double, 3> triple(Reader& r, const YAML::Node& v, const std::string& 
   return out;
 }
 
-/** renderer.atmosphere: on or off, the exposure, the physical parameters. */
+/** renderer.atmosphere: on or off, the exposure, the resolution, the physical parameters. */
 void readAtmosphere(Reader& r, const Map& renderer, AtmosphereSettings& a) {
   const auto [anode, awhere] = renderer.child("atmosphere");
   const Map m(r,
@@ -136,6 +136,7 @@ void readAtmosphere(Reader& r, const Map& renderer, AtmosphereSettings& a) {
               awhere,
               {"enabled",
                "exposure",
+               "resolution",
                "bottom_radius",
                "top_altitude",
                "rayleigh_scattering",
@@ -159,6 +160,14 @@ void readAtmosphere(Reader& r, const Map& renderer, AtmosphereSettings& a) {
   };
   if (auto v = m.get("enabled")) a.enabled = boolean(r, *v, m.path("enabled"));
   num("exposure", a.exposure);
+  if (auto v = m.get("resolution")) {
+    const std::string res = text(r, *v, m.path("resolution"));
+    const auto divisor = atmosphereResolutionDivisor(res);
+    if (divisor)
+      a.resolutionDivisor = *divisor;
+    else
+      r.fail(v->Mark(), m.path("resolution"), "must be full, half or quarter, got '" + res + "'");
+  }
   num("bottom_radius", a.bottomRadius);
   num("top_altitude", a.topAltitude);
   rgb("rayleigh_scattering", a.rayleighScattering);

@@ -63,6 +63,25 @@ glow = max(px(air, 160 + 72, 120)[2], px(air, 160 - 73, 120)[2])
 assert glow > 40 and px(bare, 160 + 74, 120) == (0, 0, 0), glow
 assert px(air, 160 + 76, 120)[2] < 8 and px(air, 5, 5) == (0, 0, 0), px(air, 160 + 76, 120)
 PY
+# --atmosphere-resolution (renderer.atmosphere.resolution): the default half against full, the
+# same look away from the limb; an unknown one is a usage error.
+"$tellus" render --no-stars --cache "$cache" --camera 0,0,2e7 --size 320x240 --out "$work/air-full.png" \
+  --wait-complete=30 --atmosphere-resolution full >/dev/null || fail "render with the full-resolution atmosphere"
+python3 - "$work/air.png" "$work/air-full.png" "$here" <<'PY' || fail "half against full resolution"
+import sys
+sys.path.insert(0, sys.argv[3])
+from png_pixels import pixels
+_, _, half, n = pixels(sys.argv[1])
+_, _, full, _ = pixels(sys.argv[2])
+for x, y in [(160, 120), (120, 100), (200, 150), (5, 5)]:
+    a, b = half[y][x * n:x * n + 3], full[y][x * n:x * n + 3]
+    assert all(abs(int(p) - int(q)) <= 3 for p, q in zip(a, b)), (x, y, a, b)
+PY
+set +e
+"$tellus" render --cache "$cache" --atmosphere-resolution eighth --out "$work/x.png" >"$work/res.txt" 2>&1
+rc=$?
+set -e
+[ $rc -eq 2 ] && grep -q "full, half or quarter" "$work/res.txt" || fail "--atmosphere-resolution eighth: $rc $(cat "$work/res.txt")"
 
 # Tiles over HTTP from a remote `tellus serve` (--server): the same cache behind a server on any
 # free port gives the same complete image, byte for byte; a dead server is a clear error.

@@ -331,7 +331,7 @@ renderer:
   geomorph: false
   dome: {enabled: true, fov: 210, tilt: 30, face_scale: 0.8, method: cube, direct_max_error: 2}
   stars: {enabled: false, magnitude_limit: 5, brightness: 2.5}
-  atmosphere: {enabled: false, exposure: 4, top_altitude: 80000, mie_g: 0.7,
+  atmosphere: {enabled: false, exposure: 4, resolution: quarter, top_altitude: 80000, mie_g: 0.7,
                rayleigh_scattering: [1e-6, 2e-6, 3e-6], ground_albedo: [0.3, 0.3, 0.3]}
 upstreams:
   - name: ww
@@ -431,6 +431,7 @@ layers:
   EXPECT_EQ(c->renderer.stars.brightness, 2.5);
   EXPECT_FALSE(c->renderer.atmosphere.enabled);
   EXPECT_EQ(c->renderer.atmosphere.exposure, 4.0);
+  EXPECT_EQ(c->renderer.atmosphere.resolutionDivisor, 4);
   EXPECT_EQ(c->renderer.atmosphere.topAltitude, 80000.0);
   EXPECT_EQ(c->renderer.atmosphere.mieG, 0.7);
   EXPECT_EQ(c->renderer.atmosphere.rayleighScattering[2], 3e-6);
@@ -679,6 +680,10 @@ layers:
   const ConfigError airKey =
       errorOf("renderer:\n  atmosphere: {haze: 1}\n" + std::string(kMinimal));
   EXPECT_EQ(airKey.key, "renderer.atmosphere.haze");
+  const ConfigError airResolution =
+      errorOf("renderer:\n  atmosphere: {resolution: eighth}\n" + std::string(kMinimal));
+  EXPECT_EQ(airResolution.key, "renderer.atmosphere.resolution");
+  EXPECT_EQ(airResolution.message, "must be full, half or quarter, got 'eighth'");
 
   const ConfigError geoid = errorOf("renderer: {geoid: egm96}\n" + std::string(kMinimal));
   EXPECT_EQ(geoid.key, "renderer.geoid");

@@ -72,19 +72,19 @@ constexpr std::array<GLenum, 3> kTargets{
 
 } // namespace
 
-AtmospherePass::AtmospherePass(AtmosphereTables tables,
-                               double exposure,
-                               const Geodesy& body,
-                               bool clipControl)
+AtmospherePass::AtmospherePass(
+    AtmosphereTables tables, double exposure, const Geodesy& body, bool clipControl, int divisor)
     : tables_(std::move(tables)), exposure_(exposure),
-      polarStretch_(body.equatorialRadius() / body.polarRadius()), clipControl_(clipControl) {}
+      polarStretch_(body.equatorialRadius() / body.polarRadius()), clipControl_(clipControl),
+      divisor_(divisor) {}
 
 std::expected<std::unique_ptr<AtmospherePass>, std::string>
 AtmospherePass::create(const GlCapabilities& gl,
                        AtmosphereParameters parameters,
                        double exposure,
                        const Geodesy& body,
-                       const std::string& cacheDir) {
+                       const std::string& cacheDir,
+                       int divisor) {
   if (parameters.bottomRadiusM <= 0.0) parameters.bottomRadiusM = body.equatorialRadius();
   if (const std::string bad = parameters.validate(); !bad.empty())
     return std::unexpected("atmosphere: " + bad);
@@ -93,15 +93,21 @@ AtmospherePass::create(const GlCapabilities& gl,
   AtmosphereCacheResult tables = cachedAtmosphereTables(cacheDir, parameters);
   if (!tables.note.empty() && !cacheDir.empty() && tables.note.rfind("no file", 0) != 0)
     std::fprintf(stderr, "tellus: atmosphere tables: %s (computed anew)\n", tables.note.c_str());
-  return create(gl, std::move(tables.tables), exposure, body);
+  return create(gl, std::move(tables.tables), exposure, body, divisor);
 }
 
-std::expected<std::unique_ptr<AtmospherePass>, std::string> AtmospherePass::create(
-    const GlCapabilities& gl, AtmosphereTables tables, double exposure, const Geodesy& body) {
+std::expected<std::unique_ptr<AtmospherePass>, std::string>
+AtmospherePass::create(const GlCapabilities& gl,
+                       AtmosphereTables tables,
+                       double exposure,
+                       const Geodesy& body,
+                       int divisor) {
   if (!(exposure > 0.0 && std::isfinite(exposure)))
     return std::unexpected(std::string("atmosphere: the exposure must be positive"));
+  if (divisor != 1 && divisor != 2 && divisor != 4)
+    return std::unexpected(std::string("atmosphere: the resolution's divisor must be 1, 2 or 4"));
   std::unique_ptr<AtmospherePass> p(
-      new AtmospherePass(std::move(tables), exposure, body, gl.clipControl));
+      new AtmospherePass(std::move(tables), exposure, body, gl.clipControl, divisor));
   if (auto made = p->makeGl(gl); !made) return std::unexpected(made.error());
   return p;
 }
@@ -109,11 +115,21 @@ std::expected<std::unique_ptr<AtmospherePass>, std::string> AtmospherePass::crea
 std::expected<void, std::string> AtmospherePass::makeGl(const GlCapabilities& gl) {
   const std::string header = gl.glslHeader();
   const std::string common = kShader_atmosphere_common_glsl;
+  const std::string split = divisor_ > 1 ? "#define TELLUS_ATMOSPHERE_SPLIT 1\n" : "";
   auto program = linkProgram(header + kShader_atmosphere_vert,
-                             header + common + kShader_atmosphere_frag,
+                             header + split + common + kShader_atmosphere_frag,
                              "atmosphere shader");
   if (!program) return std::unexpected(program.error());
   program_ = std::move(*program);
+  if (divisor_ > 1) {
+    auto composite = linkProgram(header + kShader_atmosphere_vert,
+                                 header + "#define TELLUS_ATMOSPHERE_COMPOSITE 1\n" + common +
+                                     kShader_atmosphere_frag,
+                                 "atmosphere composite shader");
+    if (!composite) return std::unexpected(composite.error());
+    compositeProgram_ = std::move(*composite);
+    hazeFbo_ = GlFramebuffer();
+  }
   auto lut = linkProgram(header + kShader_atmosphere_vert,
                          header + common + kShader_atmosphere_lut_frag,
                          "atmosphere view-table shader");
@@ -128,17 +144,23 @@ std::expected<void, std::string> AtmospherePass::makeGl(const GlCapabilities& gl
   depthFbo_ = GlFramebuffer();
   if (!makeViewTables())
     return std::unexpected(std::string("atmosphere: the view tables cannot be rendered into"));
-  const GLuint id = program_.id();
-  glUseProgram(id);
-  setShellUniforms(id);
-  glUniform1i(at(id, "uDepth"), 0);
-  glUniform1i(at(id, "uSkyRayleigh"), 1);
-  glUniform1i(at(id, "uSkyMie"), 2);
-  glUniform1i(at(id, "uSkyTransmittance"), 3);
-  glUniform1i(at(id, "uAirRayleigh"), 4);
-  glUniform1i(at(id, "uAirMie"), 5);
-  glUniform1i(at(id, "uAirTransmittance"), 6);
-  glUniform2f(at(id, "uSkyLut"), float(kSkyAzimuth), float(s.scatteringMu));
+  for (const GLuint id : {program_.id(), compositeProgram_.id()}) {
+    if (id == 0) continue;
+    glUseProgram(id);
+    setShellUniforms(id);
+    glUniform1i(at(id, "uDepth"), 0);
+    glUniform1i(at(id, "uSkyRayleigh"), 1);
+    glUniform1i(at(id, "uSkyMie"), 2);
+    glUniform1i(at(id, "uSkyTransmittance"), 3);
+    glUniform1i(at(id, "uAirRayleigh"), 4);
+    glUniform1i(at(id, "uAirMie"), 5);
+    glUniform1i(at(id, "uAirTransmittance"), 6);
+    glUniform1i(at(id, "uGlow"), 7);
+    glUniform1i(at(id, "uFactor"), 8);
+    glUniform1i(at(id, "uSunLight"), 9);
+    glUniform1i(at(id, "uDivisor"), divisor_);
+    glUniform2f(at(id, "uSkyLut"), float(kSkyAzimuth), float(s.scatteringMu));
+  }
   const GLuint lid = lutProgram_.id();
   glUseProgram(lid);
   setShellUniforms(lid);
@@ -223,6 +245,7 @@ void AtmospherePass::copyDepth(const DrawTarget& target) {
     glReadBuffer(GL_NONE);
     depthWidth_ = target.width;
     depthHeight_ = target.height;
+    if (divisor_ > 1) makeHaze();
   }
   glBindFramebuffer(GL_READ_FRAMEBUFFER, target.fbo);
   glBindFramebuffer(GL_DRAW_FRAMEBUFFER, depthFbo_.id());
@@ -237,6 +260,32 @@ void AtmospherePass::copyDepth(const DrawTarget& target) {
                     GL_DEPTH_BUFFER_BIT,
                     GL_NEAREST);
   glBindFramebuffer(GL_FRAMEBUFFER, target.fbo);
+}
+
+bool AtmospherePass::makeHaze() {
+  hazeWidth_ = (depthWidth_ + divisor_ - 1) / divisor_;
+  hazeHeight_ = (depthHeight_ + divisor_ - 1) / divisor_;
+  auto colour = [&] {
+    GlTexture t;
+    glBindTexture(GL_TEXTURE_2D, t.id());
+    glTexImage2D(
+        GL_TEXTURE_2D, 0, GL_RGBA8, hazeWidth_, hazeHeight_, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glBindTexture(GL_TEXTURE_2D, 0);
+    return t;
+  };
+  glow_ = colour();
+  factor_ = colour();
+  sunLight_ = colour();
+  glBindFramebuffer(GL_FRAMEBUFFER, hazeFbo_.id());
+  const std::array<GLuint, 3> haze{glow_.id(), factor_.id(), sunLight_.id()};
+  for (std::size_t i = 0; i < 3; ++i)
+    glFramebufferTexture2D(GL_FRAMEBUFFER, kTargets[i], GL_TEXTURE_2D, haze[i], 0);
+  glDrawBuffers(3, kTargets.data());
+  return glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
 }
 
 AtmospherePass::EyeFrame AtmospherePass::eyeFrame(const FrameContext& frame) const {
@@ -302,8 +351,7 @@ void AtmospherePass::updateViewTables(float altitude, float muS) {
   ++updates_;
 }
 
-void AtmospherePass::setUniforms(const FrameContext& frame, const EyeFrame& e) {
-  const GLuint id = program_.id();
+void AtmospherePass::setUniforms(GLuint id, const FrameContext& frame, const EyeFrame& e) {
   const AtmosphereParameters& p = tables_.parameters();
   const Camera& cam = frame.camera;
   glm::dmat4 view = cam.view();
@@ -322,6 +370,9 @@ void AtmospherePass::setUniforms(const FrameContext& frame, const EyeFrame& e) {
                 static_cast<float>(diameter / frame.framebufferHeight / alpha),
                 static_cast<float>(alpha));
   }
+  glUniform2f(at(id, "uTarget"),
+              static_cast<float>(frame.target.width),
+              static_cast<float>(frame.target.height));
   const glm::vec3 forward(cam.forward());
   glUniform3f(at(id, "uForward"), forward.x, forward.y, forward.z);
   glUniform1f(at(id, "uNear"), static_cast<float>(cam.nearM()));
@@ -368,23 +419,46 @@ void AtmospherePass::draw(const FrameContext& frame) {
   copyDepth(frame.target);
   glDisable(GL_DEPTH_TEST);
   glDepthMask(GL_FALSE);
-  glEnable(GL_BLEND);
-  glBlendFunc(GL_ONE, GL_SRC1_COLOR);
-  glUseProgram(program_.id());
-  setUniforms(frame, e);
-  const std::array<std::pair<GLenum, GLuint>, 7> textures{
-      {{GL_TEXTURE_2D, depth_.id()},
-       {GL_TEXTURE_2D, skyRayleigh_.id()},
-       {GL_TEXTURE_2D, skyMie_.id()},
-       {GL_TEXTURE_2D, skyTransmittance_.id()},
-       {GL_TEXTURE_3D, airRayleigh_.id()},
-       {GL_TEXTURE_3D, airMie_.id()},
-       {GL_TEXTURE_3D, airTransmittance_.id()}}};
+  std::array<std::pair<GLenum, GLuint>, 10> textures{{{GL_TEXTURE_2D, depth_.id()},
+                                                      {GL_TEXTURE_2D, skyRayleigh_.id()},
+                                                      {GL_TEXTURE_2D, skyMie_.id()},
+                                                      {GL_TEXTURE_2D, skyTransmittance_.id()},
+                                                      {GL_TEXTURE_3D, airRayleigh_.id()},
+                                                      {GL_TEXTURE_3D, airMie_.id()},
+                                                      {GL_TEXTURE_3D, airTransmittance_.id()},
+                                                      {GL_TEXTURE_2D, 0},
+                                                      {GL_TEXTURE_2D, 0},
+                                                      {GL_TEXTURE_2D, 0}}};
   for (std::size_t i = 0; i < textures.size(); ++i) {
     glActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(i));
     glBindTexture(textures[i].first, textures[i].second);
   }
   glBindVertexArray(vao_.id());
+  if (divisor_ > 1) { // the haze's textures first, unblended, at their size
+    GLint viewport[4];
+    glGetIntegerv(GL_VIEWPORT, viewport);
+    glBindFramebuffer(GL_FRAMEBUFFER, hazeFbo_.id());
+    glViewport(0, 0, hazeWidth_, hazeHeight_);
+    glDisable(GL_BLEND);
+    glBlendFunc(GL_ONE, GL_ZERO); // dual-source factors forbid three draw buffers
+    glUseProgram(program_.id());
+    setUniforms(program_.id(), frame, e);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glBindFramebuffer(GL_FRAMEBUFFER, frame.target.fbo);
+    glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+    // Sampled only now: bound while they are drawn into, they would be a feedback loop.
+    const std::array<GLuint, 3> haze{glow_.id(), factor_.id(), sunLight_.id()};
+    for (std::size_t i = 0; i < haze.size(); ++i) {
+      glActiveTexture(GL_TEXTURE7 + static_cast<GLenum>(i));
+      glBindTexture(GL_TEXTURE_2D, haze[i]);
+      textures[7 + i].second = haze[i];
+    }
+  }
+  const GLuint id = divisor_ > 1 ? compositeProgram_.id() : program_.id();
+  glEnable(GL_BLEND);
+  glBlendFunc(GL_ONE, GL_SRC1_COLOR);
+  glUseProgram(id);
+  setUniforms(id, frame, e);
   glDrawArrays(GL_TRIANGLES, 0, 3);
   glBindVertexArray(0);
   for (std::size_t i = textures.size(); i-- > 0;) {

@@ -26,6 +26,15 @@
  * Per pixel: the direction's coordinates (a few square roots), three bilinear (sky) or trilinear
  * (terrain) lookups, the phase functions at the exact nu, the sun's disc and the display map.
  *
+ * At a lower resolution (`divisor` 2 or 4, renderer.atmosphere.resolution; 2 by default): the
+ * shader above (TELLUS_ATMOSPHERE_SPLIT) draws the haze's display value, its factor, the
+ * transmittance to space and a key of the depth (log2 of the distance) into three textures of
+ * 1 / divisor the target's size; a second full-screen pass (TELLUS_ATMOSPHERE_COMPOSITE) spreads
+ * them over the target (bilinear) where their key agrees with the pixel's own depth, computes
+ * the pixel in full where it does not (the limb, silhouettes against the sky or far terrain keep
+ * their sharp edge), and draws the sun's disc at full resolution. The accuracy and the time this
+ * trades are measured (AtmosphereGl.LowerResolutionsAgreeWithTheFullOne, bench/RESULTS.md).
+ *
  * One triangle covers the target; each pixel's direction comes from the inverse view-projection
  * (flat, cube faces) or the inverse fisheye map (direct dome: theta = |ndc / perRadian|). The
  * eye's altitude and frame are computed here in double (camera-relative: per pixel only a unit
@@ -62,11 +71,19 @@ public:
          AtmosphereParameters parameters,
          double exposure,
          const Geodesy& body,
-         const std::string& cacheDir = {});
+         const std::string& cacheDir = {},
+         int divisor = kDefaultDivisor);
 
   /** With tables already computed (tests share one set between contexts). */
   static std::expected<std::unique_ptr<AtmospherePass>, std::string>
-  create(const GlCapabilities& gl, AtmosphereTables tables, double exposure, const Geodesy& body);
+  create(const GlCapabilities& gl,
+         AtmosphereTables tables,
+         double exposure,
+         const Geodesy& body,
+         int divisor = kDefaultDivisor);
+
+  /** The resolution's divisor by default: half the target's width and height. */
+  static constexpr int kDefaultDivisor = 2;
 
   const char* name() const noexcept override { return "atmosphere"; }
   void draw(const FrameContext& frame) override;
@@ -87,11 +104,16 @@ public:
   int viewTableUpdates() const noexcept { return updates_; }
 
 private:
-  AtmospherePass(AtmosphereTables tables, double exposure, const Geodesy& body, bool clipControl);
+  AtmospherePass(
+      AtmosphereTables tables, double exposure, const Geodesy& body, bool clipControl, int divisor);
   std::expected<void, std::string> makeGl(const GlCapabilities& gl);
   /** The view tables' textures and framebuffers; false when they cannot be rendered into. */
   bool makeViewTables();
+  /** The target's depth into depth_ (and, when its size changed, the haze's textures). */
   void copyDepth(const DrawTarget& target);
+  /** divisor_ > 1: the three textures of the haze at 1 / divisor_ of depth_'s size; false:
+   * incomplete. */
+  bool makeHaze();
   /** The eye's altitude (m, sphere space) and frame for a scene. */
   struct EyeFrame {
     glm::dvec3 up, sun, side, normal;
@@ -100,19 +122,21 @@ private:
   EyeFrame eyeFrame(const FrameContext& frame) const;
   void setShellUniforms(GLuint program);
   void updateViewTables(float altitude, float muS);
-  void setUniforms(const FrameContext& frame, const EyeFrame& e);
+  void setUniforms(GLuint program, const FrameContext& frame, const EyeFrame& e);
 
   AtmosphereTables tables_;
   double exposure_;
   double polarStretch_; ///< equatorial / polar radius of the body
   bool clipControl_;
-  GlProgram program_{NoCreate}, lutProgram_{NoCreate};
+  int divisor_; ///< 1: full resolution; 2, 4: the haze at that fraction, then composited
+  GlProgram program_{NoCreate}, lutProgram_{NoCreate}, compositeProgram_{NoCreate};
   GlVertexArray vao_{NoCreate};
   GlTexture transmittance_{NoCreate}, scattering_{NoCreate}, mie_{NoCreate}, depth_{NoCreate};
   GlTexture skyRayleigh_{NoCreate}, skyMie_{NoCreate}, skyTransmittance_{NoCreate};
   GlTexture airRayleigh_{NoCreate}, airMie_{NoCreate}, airTransmittance_{NoCreate};
-  GlFramebuffer depthFbo_{NoCreate}, skyFbo_{NoCreate}, airFbo_{NoCreate};
-  int depthWidth_ = 0, depthHeight_ = 0;
+  GlTexture glow_{NoCreate}, factor_{NoCreate}, sunLight_{NoCreate};
+  GlFramebuffer depthFbo_{NoCreate}, skyFbo_{NoCreate}, airFbo_{NoCreate}, hazeFbo_{NoCreate};
+  int depthWidth_ = 0, depthHeight_ = 0, hazeWidth_ = 0, hazeHeight_ = 0;
   bool tablesMade_ = false; ///< the view tables hold lastAltitude_, lastMuS_
   float lastAltitude_ = 0.0f, lastMuS_ = 0.0f;
   int updates_ = 0;

@@ -118,7 +118,8 @@ std::string Renderer::Impl::openGl() {
                                       opt.atmosphere->parameters,
                                       opt.atmosphere->exposure,
                                       geodesy,
-                                      opt.atmosphere->tableCacheDir);
+                                      opt.atmosphere->tableCacheDir,
+                                      opt.atmosphere->resolutionDivisor);
     if (!air) return air.error();
     stats.atmospherePrecomputeMs = (*air)->precomputeSeconds() * 1000.0;
     scene->addPass(std::move(*air));

@@ -21,14 +21,29 @@ std::vector<cli::OptionSpec> tileSourceOptions() {
 
 std::vector<cli::OptionSpec> globeOptions() {
   using K = cli::OptionKind;
-  return {{"camera", K::Value},     {"size", K::Value},          {"layer", K::Value},
-          {"threshold", K::Value},  {"earth", K::Value},         {"no-terrain", K::Flag},
-          {"no-stars", K::Flag},    {"no-atmosphere", K::Flag},  {"no-fade-in", K::Flag},
-          {"no-geomorph", K::Flag}, {"exaggeration", K::Value},  {"min-relief-px", K::Value},
-          {"sun", K::Value},        {"overlay", K::Value, true}, {"dome", K::OptionalValue},
-          {"dome-tilt", K::Value},  {"dome-method", K::Value},   {"time", K::Value},
-          {"no-sun", K::Flag},      {"no-night", K::Flag},       {"legend", K::Flag},
-          {"no-legend", K::Flag}};
+  return {{"camera", K::Value},
+          {"size", K::Value},
+          {"layer", K::Value},
+          {"threshold", K::Value},
+          {"earth", K::Value},
+          {"no-terrain", K::Flag},
+          {"no-stars", K::Flag},
+          {"no-atmosphere", K::Flag},
+          {"no-fade-in", K::Flag},
+          {"no-geomorph", K::Flag},
+          {"exaggeration", K::Value},
+          {"min-relief-px", K::Value},
+          {"sun", K::Value},
+          {"overlay", K::Value, true},
+          {"dome", K::OptionalValue},
+          {"dome-tilt", K::Value},
+          {"dome-method", K::Value},
+          {"time", K::Value},
+          {"no-sun", K::Flag},
+          {"no-night", K::Flag},
+          {"legend", K::Flag},
+          {"no-legend", K::Flag},
+          {"atmosphere-resolution", K::Value}};
 }
 
 std::expected<std::optional<EarthModel>, std::string> earthArg(const cli::Args& a) {
@@ -73,6 +88,7 @@ std::optional<planet::RendererOptions::Atmosphere> atmosphereOptions(const Atmos
   auto& p = a.parameters;
   const auto vec = [](const std::array<double, 3>& v) { return glm::dvec3(v[0], v[1], v[2]); };
   a.exposure = s.exposure;
+  a.resolutionDivisor = s.resolutionDivisor;
   p.bottomRadiusM = s.bottomRadius; // 0: the body's (AtmospherePass)
   p.topAltitudeM = s.topAltitude;
   p.rayleighScattering = vec(s.rayleighScattering);
@@ -176,6 +192,11 @@ std::optional<std::string> applyTerrainArgs(const cli::Args& a, planet::Renderer
     return "--geoid must be on or off, got '" + *e + "'";
   if (auto bad = applyTradeArgs(a, ro)) return bad;
   if (a.flag("no-atmosphere")) ro.atmosphere.reset();
+  if (auto e = a.get("atmosphere-resolution")) {
+    const auto divisor = atmosphereResolutionDivisor(*e);
+    if (!divisor) return "--atmosphere-resolution must be full, half or quarter, got '" + *e + "'";
+    if (ro.atmosphere) ro.atmosphere->resolutionDivisor = *divisor;
+  }
   if (auto e = a.get("sun")) {
     const auto v = cli::parseNumbers(*e, 2, 2);
     if (!v || (*v)[0] < -90.0 || (*v)[0] > 90.0)

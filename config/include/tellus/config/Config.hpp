@@ -141,11 +141,23 @@ struct StarsSettings {
   double brightness = 1.0;
 };
 
+/** `renderer.atmosphere.resolution` (and `--atmosphere-resolution`): full 1, half 2, quarter 4;
+ * nullopt for any other name. */
+inline std::optional<int> atmosphereResolutionDivisor(std::string_view name) {
+  if (name == "full") return 1;
+  if (name == "half") return 2;
+  if (name == "quarter") return 4;
+  return std::nullopt;
+}
+
 /** YAML `renderer.atmosphere` (issue 23): the physically based sky and aerial perspective; the
  * physical parameters of planet/Atmosphere.hpp (defaults: the Earth, Bruneton 2017), SI units. */
 struct AtmosphereSettings {
-  bool enabled = true;          ///< on by default in the configuration (`--no-atmosphere`: off)
-  double exposure = 2.5;        ///< display = 1 - exp(-exposure x radiance), (0, 1e6]
+  bool enabled = true;   ///< on by default in the configuration (`--no-atmosphere`: off)
+  double exposure = 2.5; ///< display = 1 - exp(-exposure x radiance), (0, 1e6]
+  /** `resolution`: the sky and haze computed at full, half or quarter the width and height
+   * (`--atmosphere-resolution`); 1, 2 (the default) or 4. */
+  int resolutionDivisor = 2;
   double bottomRadius = 0.0;    ///< `bottom_radius` metres; 0: the body's equatorial radius
   double topAltitude = 60000.0; ///< `top_altitude` metres above the bottom, (0, 1e6]
   std::array<double, 3> rayleighScattering{5.802e-6, 13.558e-6, 33.1e-6}; ///< 1/m, R G B

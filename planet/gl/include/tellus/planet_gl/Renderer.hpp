@@ -226,6 +226,10 @@ struct RendererOptions {
     /** Where the precomputed tables are kept between runs (planet/AtmosphereCache.hpp); empty:
      * computed at every start, nothing written. The CLI: <cache root>/atmosphere. */
     std::string tableCacheDir;
+    /** The sky and haze computed at 1 / divisor of the target's width and height, then spread
+     * over it (the sun's disc at full resolution): 1, 2 (the default) or 4
+     * (AtmospherePass.hpp; the accuracy and time it trades in bench/RESULTS.md). */
+    int resolutionDivisor = 2;
   };
   std::optional<Atmosphere> atmosphere;
   /** Added to the decoding threads' nice value: decoding in the background gives the CPU up to
