@@ -154,7 +154,7 @@ def main():
                 fail("%s: imagery as image/tiff: %r" % (version, body[:300]))
             # EXCEPTIONS=BLANK (each version's spelling) in 8-bit PNG: an image, never XML.
             blank = "BLANK" if version == "1.3.0" else "application/vnd.ogc.se_blank"
-            body = wms.getmap(layers=["bluemarble"], styles=[""], srs="EPSG:3857",
+            body = wms.getmap(layers=["bluemarble"], styles=[""], srs="EPSG:32633",
                               bbox=(5, -10, 30, 10), size=(64, 32), format="image/png; mode=8bit",
                               transparent=True, exceptions=blank).read()
             if body[:8] != b"\x89PNG\r\n\x1a\n" or body[25] != 3:
