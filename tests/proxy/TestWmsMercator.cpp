@@ -11,9 +11,11 @@
 #include "../values/TiffBuilder.hpp"
 
 #include <tellus/cache/TileCache.hpp>
+#include <tellus/codec/Jpeg.hpp>
 #include <tellus/codec/Png.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
+#include <tellus/proxy/ImageCodec.hpp>
 #include <tellus/proxy/MapBox.hpp>
 #include <tellus/proxy/ProxyFrontEnd.hpp>
 #include <tellus/proxy/TileService.hpp>
@@ -45,6 +47,10 @@ std::string paramOf(const std::string& target, const std::string& name) {
                        end == std::string::npos ? std::string::npos : end - at - name.size() - 1);
 }
 
+double greyOf(double lat) {
+  return 255.0 * (90.0 - lat) / 180.0;
+}
+
 /** A Float32 TIFF whose samples are their texel centre's latitude (WMS 1.3.0 EPSG:4326 upstream:
  * BBOX south,west,north,east). */
 test::FakeReply latitudeTile(const test::FakeRequest& req) {
@@ -53,6 +59,17 @@ test::FakeReply latitudeTile(const test::FakeRequest& req) {
   if (w <= 0 || h <= 0 || w > 1024 || h > 1024) return test::FakeReply::withStatus(400, "size");
   double b[4] = {};
   std::sscanf(paramOf(req.target, "BBOX").c_str(), "%lf,%lf,%lf,%lf", &b[0], &b[1], &b[2], &b[3]);
+  if (paramOf(req.target, "LAYERS") == "uppic") { // grey = 255 * (90 - latitude) / 180
+    std::vector<std::uint8_t> px;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        px.insert(
+            px.end(),
+            3,
+            static_cast<std::uint8_t>(std::lround(greyOf(b[2] - (y + 0.5) * (b[2] - b[0]) / h))));
+    return test::FakeReply::ok(bytesOf(*encodeImage("image/jpeg", w, h, 3, px.data())),
+                               "image/jpeg");
+  }
   std::vector<std::uint32_t> bits;
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)
@@ -83,6 +100,18 @@ LayerSpec latitudeLayer() {
   return l;
 }
 
+/** A JPEG picture layer whose grey is 255 * (90 - latitude) / 180. */
+LayerSpec pictureLayer() {
+  LayerSpec l;
+  l.name = "pic";
+  l.title = "Latitude as grey";
+  l.upstream = "up";
+  l.upstreamLayer = "uppic";
+  l.dataset.grid = GridSpec{Sector{}, 36.0, 64, 64, 6};
+  l.dataset.mimeType = "image/jpeg";
+  return l;
+}
+
 struct Server {
   test::FakeUpstream up{latitudeTile};
   test::TempDir dir{"wms-mercator"};
@@ -103,7 +132,8 @@ struct Server {
     u.crs = "EPSG:4326";
     u.policy.timeout = 2000ms;
     u.policy.retries = 0;
-    auto t = TileService::create(*cache, *fetcher, {u}, {latitudeLayer()}, TileServiceOptions{});
+    auto t = TileService::create(
+        *cache, *fetcher, {u}, {latitudeLayer(), pictureLayer()}, TileServiceOptions{});
     EXPECT_TRUE(t) << (t ? "" : t.error());
     tiles = std::move(*t);
     front = std::make_unique<ProxyFrontEnd>(*tiles, FrontEndOptions{});
@@ -230,4 +260,29 @@ TEST(WmsMercatorIntegration, GetFeatureInfoGoesThroughTheSameRows) {
                           "&INFO_FORMAT=application/json&X=5&Y=100" +
                           kBox);
   EXPECT_EQ(v111.body, s.get(q + "&I=5&J=100").body);
+}
+
+// A JPEG map of one band (a box small in latitude) is composed on the YCbCr planes, the chroma's
+// rows at the inverse Mercator too (an odd height: the chroma reaches half a sample past the box);
+// the PNG of the same map is composed in RGB: both are the latitude's grey, row by row.
+TEST(WmsMercatorIntegration, JpegMapsOnThePlanesAreTheSameRows) {
+  Server s;
+  const double y0 = yOfLatitude(40.0), y1 = yOfLatitude(50.0);
+  const std::string q = "SERVICE=WMS&VERSION=1.3.0&REQUEST=GetMap&LAYERS=pic&STYLES=&CRS=EPSG:3857"
+                        "&BBOX=0," +
+                        std::to_string(y0) + ",1000000," + std::to_string(y1) +
+                        "&WIDTH=64&HEIGHT=101";
+  const auto jpeg = s.get(q + "&FORMAT=image/jpeg");
+  ASSERT_EQ(jpeg.status, 200) << jpeg.body.substr(0, 300);
+  auto j = codec::decodeJpeg(span(jpeg.body));
+  auto p = codec::decodePng(span(s.get(q + "&FORMAT=image/png").body));
+  ASSERT_TRUE(j);
+  ASSERT_TRUE(p);
+  ASSERT_EQ(j->height, 101);
+  for (int row = 0; row < 101; ++row) {
+    const double lat = latitudeOfY(y1 - (row + 0.5) * (y1 - y0) / 101);
+    const auto at = (std::size_t(row) * 64 + 30);
+    EXPECT_NEAR(p->pixels[at * std::size_t(p->channels) + 1], greyOf(lat), 2.5) << row;
+    EXPECT_NEAR(j->pixels[at * std::size_t(j->channels) + 1], greyOf(lat), 3.5) << row;
+  }
 }
