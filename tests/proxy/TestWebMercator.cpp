@@ -39,8 +39,7 @@ struct LatitudeTiles {
   enum class Kind { Values, Rgb, Green };
   const TileGrid& g;
   Kind kind;
-  mutable std::map<std::tuple<int, std::int64_t, std::int64_t>, std::unique_ptr<TileSamples>>
-      tiles;
+  mutable std::map<std::tuple<int, std::int64_t, std::int64_t>, std::unique_ptr<TileSamples>> tiles;
   mutable std::vector<std::unique_ptr<std::vector<float>>> values;
   mutable std::vector<std::unique_ptr<std::vector<std::uint8_t>>> rgb;
 
@@ -121,8 +120,8 @@ TEST(WebMercator, ProjectionAtTheExtremes) {
   EXPECT_EQ(latitudeOfY(0.0), 0.0);
   EXPECT_NEAR(kMaxY, 20037508.342789244, 1e-8);
   // The square's edge is atan(sinh(pi)): y(kMaxLatitude) = pi R, and back.
-  EXPECT_NEAR(kMaxLatitude, std::atan(std::sinh(std::numbers::pi)) * 180.0 / std::numbers::pi,
-              1e-12);
+  EXPECT_NEAR(
+      kMaxLatitude, std::atan(std::sinh(std::numbers::pi)) * 180.0 / std::numbers::pi, 1e-12);
   EXPECT_NEAR(yOfLatitude(kMaxLatitude), kMaxY, 1e-6);
   EXPECT_NEAR(yOfLatitude(-kMaxLatitude), -kMaxY, 1e-6);
   EXPECT_NEAR(latitudeOfY(kMaxY), kMaxLatitude, 1e-12);
@@ -233,7 +232,8 @@ TEST(WebMercator, ValuesRowByRowAreTheInverseMercator) {
   // Not what rows evenly in latitude would give (the stretching this replaces): 20 degrees off
   // in the middle of the map.
   const double linear = box.north - (h / 2 + 0.5) * (box.north - box.south) / h;
-  EXPECT_GT(std::fabs(static_cast<double>(values[static_cast<std::size_t>(h / 2 * w)]) - linear), 5.0);
+  EXPECT_GT(std::fabs(static_cast<double>(values[static_cast<std::size_t>(h / 2 * w)]) - linear),
+            5.0);
 }
 
 // Around 80 N (a map of 200 km square, 64 x 64 pixels): rows at the inverse Mercator, and each row
@@ -389,8 +389,8 @@ TEST(WebMercatorWms, CapabilitiesAdvertiseIt) {
   m.layers = {world, part};
   const std::string c130 = capabilitiesXml(WmsVersion::V130, m);
   EXPECT_NE(c130.find("<CRS>EPSG:3857</CRS>"), std::string::npos);
-  const std::string worldBox = "minx=\"" + formatCoordinate(-kMaxY) + "\" miny=\"" +
-                               formatCoordinate(-kMaxY) + "\"";
+  const std::string worldBox =
+      "minx=\"" + formatCoordinate(-kMaxY) + "\" miny=\"" + formatCoordinate(-kMaxY) + "\"";
   EXPECT_NE(c130.find("<BoundingBox CRS=\"EPSG:3857\" " + worldBox), std::string::npos) << c130;
   EXPECT_NE(c130.find("<BoundingBox CRS=\"EPSG:3857\" minx=\"0\" miny=\"0\" maxx=\"" +
                       formatCoordinate(kMaxY / 2) + "\" maxy=\"" +
