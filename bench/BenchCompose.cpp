@@ -10,6 +10,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <array>
 #include <limits>
 #include <map>
@@ -267,6 +268,103 @@ void BM_ValuesSampleColour(benchmark::State& state) {
   state.counters["tiles"] = static_cast<double>(keys.size());
 }
 BENCHMARK(BM_ValuesSampleColour)->Unit(benchmark::kMillisecond);
+
+// ---- Web Mercator against lat/long: the same area and size, 1024 x 768 ----------------------
+
+// The northern box: 60 x 25 degrees up to 80 N, where a Mercator pixel is 5.8 times shorter in
+// latitude than in longitude.
+const Sector kNorthBox{-100.3, 55.0, -40.3, 80.0};
+
+/** Argument 0: kBox in EPSG:4326, 1: kBox in EPSG:3857 (its corners projected, rows evenly in
+ * y), 2 and 3: kNorthBox. */
+MapBox boxOfArgument(std::int64_t arg) {
+  using namespace mercator;
+  const Sector& b = arg < 2 ? kBox : kNorthBox;
+  if (arg % 2 == 0) return b;
+  return mercatorBox(Sector{
+      xOfLongitude(b.west), yOfLatitude(b.south), xOfLongitude(b.east), yOfLatitude(b.north)});
+}
+
+using LevelKey = std::tuple<std::int32_t, std::int64_t, std::int64_t>;
+
+/** The tiles of every band of a map (each band's level), with the regions sampled. */
+std::map<LevelKey, std::array<std::int32_t, 4>> bandTiles(const TileGrid& g,
+                                                          const std::vector<ComposeBand>& bands) {
+  std::map<LevelKey, std::array<std::int32_t, 4>> tiles;
+  for (const ComposeBand& b : bands) {
+    const auto keys = composeTiles(g, b.box, 1024, 768, b.level, 256);
+    for (const auto& t : *keys) {
+      auto [it, fresh] = tiles.try_emplace({t.key.level, t.key.row, t.key.col}, t.region);
+      if (!fresh)
+        it->second = {std::min(it->second[0], t.region[0]),
+                      std::min(it->second[1], t.region[1]),
+                      std::max(it->second[2], t.region[2]),
+                      std::max(it->second[3], t.region[3])};
+    }
+  }
+  return tiles;
+}
+
+/** BM_SampleOnly's map in either CRS: its rows in bands, each from its own level (one band in
+ * lat/long). */
+void BM_SampleOnlyCrs(benchmark::State& state) {
+  const TileGrid g = grid();
+  const MapBox box = boxOfArgument(state.range(0));
+  const auto bands = composeBands(g, box, 1024, 768, 0);
+  const auto tiles = bandTiles(g, bands);
+  std::map<LevelKey, std::vector<std::uint8_t>> pixels;
+  std::map<LevelKey, TileSamples> views;
+  for (const auto& [k, region] : tiles) {
+    auto& p = pixels[k] = tilePixels(TileKey{std::get<0>(k), std::get<1>(k), std::get<2>(k)});
+    views[k] = TileSamples{512, 512, 3, p.data(), nullptr};
+  }
+  const TileLookup lookup = [&](const TileKey& k) -> const TileSamples* {
+    const auto it = views.find({k.level, k.row, k.col});
+    return it != views.end() ? &it->second : nullptr;
+  };
+  std::vector<std::uint8_t> canvas(1024 * 768 * 3);
+  for (auto _ : state) {
+    for (const ComposeBand& b : bands)
+      composeImagery(g, b.box, 1024, 768, b.level, 0, lookup, 1.0, canvas, 3);
+    benchmark::DoNotOptimize(canvas.data());
+  }
+  state.counters["tiles"] = static_cast<double>(tiles.size());
+  state.counters["bands"] = static_cast<double>(bands.size());
+}
+BENCHMARK(BM_SampleOnlyCrs)->DenseRange(0, 3)->Unit(benchmark::kMillisecond);
+
+/** BM_DecodeSampleEncodeJpeg's map in either CRS (the RGB path, as a map of several bands). */
+void BM_DecodeSampleEncodeJpegCrs(benchmark::State& state) {
+  const TileGrid g = grid();
+  const MapBox box = boxOfArgument(state.range(0));
+  const auto bands = composeBands(g, box, 1024, 768, 0);
+  auto regions = bandTiles(g, bands);
+  std::map<LevelKey, std::vector<std::byte>> jpegs;
+  for (const auto& [k, region] : regions) {
+    const auto px = tilePixels(TileKey{std::get<0>(k), std::get<1>(k), std::get<2>(k)});
+    jpegs[k] = *encodeImage("image/jpeg", 512, 512, 3, px.data());
+  }
+  std::vector<std::uint8_t> canvas(1024 * 768 * 3);
+  for (auto _ : state) {
+    std::map<LevelKey, std::pair<std::vector<std::uint8_t>, TileSamples>> decoded;
+    for (const auto& [k, jpeg] : jpegs) {
+      auto& [px, view] = decoded[k];
+      const auto ch = decodeImageryInto(jpeg, "image/jpeg", 512, 512, px, &regions[k]);
+      view = TileSamples{512, 512, *ch, px.data(), nullptr};
+    }
+    const TileLookup lookup = [&](const TileKey& k) -> const TileSamples* {
+      const auto it = decoded.find({k.level, k.row, k.col});
+      return it != decoded.end() ? &it->second.second : nullptr;
+    };
+    for (const ComposeBand& b : bands)
+      composeImagery(g, b.box, 1024, 768, b.level, 0, lookup, 1.0, canvas, 3);
+    const auto out = encodeImage("image/jpeg", 1024, 768, 3, canvas.data());
+    benchmark::DoNotOptimize(out->data());
+  }
+  state.counters["tiles"] = static_cast<double>(regions.size());
+  state.counters["bands"] = static_cast<double>(bands.size());
+}
+BENCHMARK(BM_DecodeSampleEncodeJpegCrs)->DenseRange(0, 3)->Unit(benchmark::kMillisecond);
 
 /** A picture layer's whole map in PNG: PNG tiles decoded, sampled, the map encoded as PNG. */
 void BM_DecodeSampleEncodePng(benchmark::State& state) {

@@ -62,8 +62,9 @@ void checkGetMap(const GetMapRequest& m, const WmsLimits& limits) {
   TELLUS_FUZZ_CHECK(std::isfinite(b.west) && std::isfinite(b.south) && std::isfinite(b.east) &&
                     std::isfinite(b.north));
   TELLUS_FUZZ_CHECK(b.west < b.east && b.south < b.north);
+  const bool mercator = m.crs == kWebMercator; // the bbox in metres
   for (const double v : {b.west, b.south, b.east, b.north}) {
-    TELLUS_FUZZ_CHECK(std::fabs(v) <= kMaxBboxMagnitudeDeg);
+    TELLUS_FUZZ_CHECK(std::fabs(v) <= (mercator ? kMaxBboxMagnitudeMetres : kMaxBboxMagnitudeDeg));
     TELLUS_FUZZ_CHECK(!(v == 0.0 && std::signbit(v))); // -0 is normalised to 0
   }
   TELLUS_FUZZ_CHECK(m.width >= 1 && m.width <= limits.maxWidth);
@@ -71,7 +72,12 @@ void checkGetMap(const GetMapRequest& m, const WmsLimits& limits) {
   TELLUS_FUZZ_CHECK(!m.layers.empty() && m.styles.size() == m.layers.size());
   for (const auto& l : m.layers)
     TELLUS_FUZZ_CHECK(!l.empty());
-  TELLUS_FUZZ_CHECK(m.crs == "EPSG:4326" || m.crs == "CRS:84");
+  TELLUS_FUZZ_CHECK(m.crs == "EPSG:4326" || m.crs == "CRS:84" || mercator);
+  // The map's box: finite longitudes in order, latitudes inside the Mercator square's.
+  const MapBox box = mapBoxOf(m);
+  TELLUS_FUZZ_CHECK(std::isfinite(box.west) && std::isfinite(box.east) && box.west <= box.east);
+  TELLUS_FUZZ_CHECK(!mercator ||
+                    (box.south <= box.north && box.north <= 90.0 && box.rows == MapRows::Mercator));
   TELLUS_FUZZ_CHECK(!m.format.empty());
   TELLUS_FUZZ_CHECK(!m.bgcolor || *m.bgcolor <= 0xFFFFFFu);
 }

@@ -3,7 +3,8 @@
 #   - the WMS driver's capabilities parser lists the layers of GetCapabilities;
 #   - the WMS driver's WorldWind mini-driver reads /wwtile tiles, and its pixels are the cached
 #     tile's (rows counted from the south, levels as tellus numbers them);
-#   - the WMS driver reads the elevation layer in a picture format (grey).
+#   - the WMS driver reads the elevation layer in a picture format (grey);
+#   - the WMS driver reads an EPSG:3857 window: GDAL's reprojection of the lon/lat map.
 # Usage: test_gdal.sh path/to/tellus
 set -euo pipefail
 tellus=$1
@@ -88,6 +89,50 @@ b = [int(v) for v in sys.argv[2].split()]
 sys.exit(0 if len(a) == 3 and len(b) == 3 and max(abs(x - y) for x, y in zip(a, b)) <= 8 else 1)
 PY
 done
+
+# Web Mercator (EPSG:3857) through GDAL's WMS driver, which asks for boxes in metres of its own
+# choosing: the map must be tellus's lat/long GetMap of the place reprojected by GDAL (gdalwarp,
+# bilinear), rows at the inverse Mercator (lon -88..-83, lat 65..70, inside the cached tile). Rows
+# evenly in latitude would be 6 pixels off in the middle: the same comparison shifted by 6 rows
+# must be clearly worse.
+read -r mx0 my0 mx1 my1 < <(python3 -c '
+import math
+R = 6378137.0
+x = lambda lon: math.radians(lon) * R
+y = lambda lat: R * math.asinh(math.tan(math.radians(lat)))
+print(x(-88), y(65), x(-83), y(70))')
+# The reference: 7 x 7 degrees at the cached level's own resolution (398 px: level 2), lon/lat.
+curl -sf -o "$work/ref4326.png" "$base/wms?SERVICE=WMS&VERSION=1.1.1&REQUEST=GetMap&LAYERS=bluemarble&STYLES=&SRS=EPSG:4326&BBOX=-89,64,-82,71&WIDTH=398&HEIGHT=398&FORMAT=image/png" \
+  || fail "GetMap of the lon/lat reference"
+gdal_translate -q -a_srs EPSG:4326 -a_ullr -89 71 -82 64 "$work/ref4326.png" "$work/ref4326.tif" || fail "georeferencing the reference"
+gdalwarp -q -s_srs EPSG:4326 -t_srs EPSG:3857 -te "$mx0" "$my0" "$mx1" "$my1" -ts 256 256 -r bilinear \
+  "$work/ref4326.tif" "$work/ref3857.tif" || fail "gdalwarp of the reference into EPSG:3857"
+cat >"$work/merc.xml" <<XML
+<GDAL_WMS>
+  <Service name="WMS"><Version>1.1.1</Version><ServerUrl>$base/wms?</ServerUrl><SRS>EPSG:3857</SRS>
+    <ImageFormat>image/png</ImageFormat><Layers>bluemarble</Layers></Service>
+  <DataWindow><UpperLeftX>-20037508.34</UpperLeftX><UpperLeftY>20037508.34</UpperLeftY>
+    <LowerRightX>20037508.34</LowerRightX><LowerRightY>-20037508.34</LowerRightY>
+    <SizeX>2097152</SizeX><SizeY>2097152</SizeY></DataWindow>
+  <BandsCount>3</BandsCount>
+</GDAL_WMS>
+XML
+gdal_translate -q -of GTiff -projwin "$mx0" "$my1" "$mx1" "$my0" -outsize 256 256 "$work/merc.xml" "$work/merc.tif" \
+  || fail "gdal_translate of an EPSG:3857 window through the WMS driver"
+grep -qi 'srs=epsg:3857[^"]*" status=200' "$work/access.log" || fail "no EPSG:3857 GetMap in the access log"
+for f in merc ref3857; do gdal_translate -q -of PNG -b 1 -b 2 -b 3 "$work/$f.tif" "$work/$f.png" || fail "$f as PNG"; done
+/usr/bin/python3 - "$work/merc.png" "$work/ref3857.png" <<'PY' || fail "the EPSG:3857 map is not the reprojected lon/lat map"
+import sys
+import numpy as np
+from PIL import Image
+a = np.asarray(Image.open(sys.argv[1]).convert("RGB"), dtype=np.int32)
+b = np.asarray(Image.open(sys.argv[2]).convert("RGB"), dtype=np.int32)
+inner = (slice(8, -8), slice(8, -8))
+same = np.abs(a[inner] - b[inner]).mean()
+shifted = np.abs(np.roll(a, 6, axis=0)[inner] - b[inner]).mean()
+print("EPSG:3857 against the reprojected lon/lat map: mean |difference| %.2f (%.2f shifted by 6 rows)" % (same, shifted))
+sys.exit(0 if same < 6.0 and shifted > 1.5 * same else 1)
+PY
 
 # Heights in a picture format (the GetMap format list is service-wide): GDAL's WMS driver reads
 # the elevation layer as a JPEG, a grey picture of the relief (docs/CONFIG.md, "WMS": -11000 m

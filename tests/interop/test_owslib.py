@@ -2,11 +2,13 @@
 """Interoperability: OWSLib (Debian's python3-owslib) reads tellus serve's capabilities in WMS
 1.1.1 and 1.3.0 and fetches tile-aligned maps through its GetMap, as a Python user would; every
 advertised format for every layer, and EXCEPTIONS=BLANK in 8-bit PNG; the elevation layer as a
-value layer: its styles' legends (GetLegendGraphic) and GetFeatureInfo.
+value layer: its styles' legends (GetLegendGraphic) and GetFeatureInfo; a map in EPSG:3857
+against the lon/lat map of the same place.
 
 Usage: test_owslib.py path/to/tellus
 """
 import json
+import math
 import os
 import re
 import shutil
@@ -70,6 +72,46 @@ def check_value_layer(wms, version):
         fail("%s: GetFeatureInfo text/plain: %r" % (version, text))
 
 
+def check_web_mercator(wms, version):
+    """EPSG:3857 (issue 25) is advertised, and a map in it is the lon/lat map of the same place
+    with its rows at the inverse Mercator: both asked through OWSLib as application/bil16 (the
+    imagery's luminance, easy to read), the lon/lat one resampled here row by row."""
+    if "EPSG:3857" not in wms["bluemarble"].crsOptions:
+        fail("%s: EPSG:3857 is not advertised: %s" % (version, wms["bluemarble"].crsOptions))
+    radius = 6378137.0
+    x = lambda lon: math.radians(lon) * radius
+    y = lambda lat: radius * math.asinh(math.tan(math.radians(lat)))
+    lat_of = lambda v: math.degrees(math.atan(math.sinh(v / radius)))
+    width, height = 250, 300
+    merc = wms.getmap(layers=["bluemarble"], styles=[""], srs="EPSG:3857",
+                      bbox=(x(5), y(40), x(30), y(70)), size=(width, height),
+                      format="application/bil16").read()
+    ref = wms.getmap(layers=["bluemarble"], styles=[""], srs="EPSG:4326", bbox=(5, 40, 30, 70),
+                     size=(width, height), format="application/bil16").read()
+    if len(merc) != width * height * 2 or len(ref) != len(merc):
+        fail("%s: EPSG:3857 bil16 map: %r" % (version, merc[:300]))
+    merc = struct.unpack("<%dh" % (width * height), merc)
+    ref = struct.unpack("<%dh" % (width * height), ref)
+    row = lambda m, j: m[j * width:(j + 1) * width]
+    diff_mercator = diff_linear = 0.0
+    for j in range(10, height - 10):
+        lat = lat_of(y(70) - (j + 0.5) * (y(70) - y(40)) / height)
+        r = (70 - lat) / 0.1 - 0.5  # the reference's fractional row
+        r0 = min(int(math.floor(r)), height - 2)
+        f = r - r0
+        expected = [a * (1 - f) + b * f for a, b in zip(row(ref, r0), row(ref, r0 + 1))]
+        diff_mercator += sum(abs(a - b) for a, b in zip(row(merc, j), expected))
+        diff_linear += sum(abs(a - b) for a, b in zip(row(merc, j), row(ref, j)))
+    count = (height - 20) * width
+    diff_mercator /= count
+    diff_linear /= count
+    print("%s: EPSG:3857 rows against the lon/lat map: mean |difference| %.2f at the inverse "
+          "Mercator, %.2f evenly in latitude" % (version, diff_mercator, diff_linear))
+    if not (diff_mercator < 4.0 and diff_linear > 2 * diff_mercator):
+        fail("%s: EPSG:3857 rows: mean |difference| %.2f at the inverse Mercator, %.2f evenly in "
+             "latitude" % (version, diff_mercator, diff_linear))
+
+
 def main():
     tellus = sys.argv[1]
     work = tempfile.mkdtemp(prefix="tellus-owslib.", dir=os.environ.get("TMPDIR"))
@@ -77,6 +119,9 @@ def main():
     # Level 0 tile 2/5 (Africa) of bluemarble and the etopo tile over the Himalaya.
     subprocess.run([tellus, "seed", "--cache", cache, "--layer", "bluemarble", "--levels", "0",
                     "--bbox", "1,-17,35,17"], check=True, stdout=subprocess.DEVNULL)
+    # And tile 3/5 (lon 0..36, lat 36..72) for the Web Mercator map.
+    subprocess.run([tellus, "seed", "--cache", cache, "--layer", "bluemarble", "--levels", "0",
+                    "--bbox", "1,37,35,71"], check=True, stdout=subprocess.DEVNULL)
     log = open(os.path.join(work, "serve.txt"), "w+")
     server = subprocess.Popen([tellus, "serve", "--cache", cache, "--listen", "127.0.0.1:0"],
                               stdout=log, stderr=subprocess.STDOUT)
@@ -154,12 +199,13 @@ def main():
                 fail("%s: imagery as image/tiff: %r" % (version, body[:300]))
             # EXCEPTIONS=BLANK (each version's spelling) in 8-bit PNG: an image, never XML.
             blank = "BLANK" if version == "1.3.0" else "application/vnd.ogc.se_blank"
-            body = wms.getmap(layers=["bluemarble"], styles=[""], srs="EPSG:3857",
+            body = wms.getmap(layers=["bluemarble"], styles=[""], srs="EPSG:32633",
                               bbox=(5, -10, 30, 10), size=(64, 32), format="image/png; mode=8bit",
                               transparent=True, exceptions=blank).read()
             if body[:8] != b"\x89PNG\r\n\x1a\n" or body[25] != 3:
                 fail("%s: BLANK in image/png; mode=8bit: %r" % (version, body[:300]))
             check_value_layer(wms, version)
+            check_web_mercator(wms, version)
         cached = [os.path.join(root, f) for root, _, files in os.walk(cache) for f in files
                   if f == "2_5.jpg"]
         if not cached or open(cached[0], "rb").read() != tile:

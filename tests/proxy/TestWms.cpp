@@ -283,9 +283,9 @@ TEST(Wms, CrsAndSrsNamesPerVersion) {
   EXPECT_EQ(getMap(noSrs111 + "&CRS=EPSG:4326").bbox, kFirstTile);
   expectError(noCrs130, ogc::kMissingParameterValue, "CRS");
   expectError(noSrs111, ogc::kMissingParameterValue, "SRS");
-  expectError(with(k130, "CRS", "EPSG:3857"), ogc::kInvalidCrs, "CRS");
-  expectError(with(k111, "SRS", "EPSG:3857"), ogc::kInvalidSrs, "SRS");
-  expectError(noCrs130 + "&SRS=EPSG:900913", ogc::kInvalidCrs, "SRS");
+  expectError(with(k130, "CRS", "EPSG:32633"), ogc::kInvalidCrs, "CRS");
+  expectError(with(k111, "SRS", "EPSG:32633"), ogc::kInvalidSrs, "SRS");
+  expectError(noCrs130 + "&SRS=EPSG:2056", ogc::kInvalidCrs, "SRS");
   expectError(with(k130, "CRS", "EPSG:43260"), ogc::kInvalidCrs, "CRS");
   // Values are compared case-insensitively and normalised.
   EXPECT_EQ(getMap(with(k130, "CRS", "crs:84")).crs, "CRS:84");
@@ -437,7 +437,7 @@ TEST(Wms, ErrorContextForUnparsedRequests) {
   EXPECT_EQ(ctx("VERSION=junk").version, WmsVersion::V130);
   // INIMAGE with a bad CRS: the image parameters are good, so the error can be drawn.
   const auto inimage = ctx(
-      with(with(with(k130, "EXCEPTIONS", "INIMAGE"), "CRS", "EPSG:3857"), "BGCOLOR", "0x112233") +
+      with(with(with(k130, "EXCEPTIONS", "INIMAGE"), "CRS", "EPSG:32633"), "BGCOLOR", "0x112233") +
       "&TRANSPARENT=FALSE");
   EXPECT_EQ(inimage.exceptions, Exceptions::InImage);
   EXPECT_EQ(inimage.format, "image/jpeg");

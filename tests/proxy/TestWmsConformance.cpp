@@ -520,7 +520,7 @@ TEST(WmsConformanceIntegration, GetMapParameterTable) {
            fails(miss),
            fails(miss),
            {{"epsg:4326", kMap},
-            {"EPSG:3857", fails(invalidCrsCode(v))},
+            {"EPSG:32633", fails(invalidCrsCode(v))},
             {"EPSG:43260", fails(invalidCrsCode(v))},
             {"AUTO:42001", fails(invalidCrsCode(v))}}},
           {"BBOX",
@@ -764,7 +764,7 @@ TEST(WmsConformanceIntegration, BlankAndInImageInEveryFormat) {
                           "BGCOLOR",
                           "0x336699"),
                      v == WmsVersion::V130 ? "CRS" : "SRS",
-                     "EPSG:3857");
+                     "EPSG:32633");
             if (transparent) p = with(p, "TRANSPARENT", "TRUE");
             SCOPED_TRACE(join(p));
             const auto r = s.get(join(p));

@@ -42,7 +42,7 @@ std::int16_t sampleHeight(const Quad& q, std::int16_t noData) noexcept {
 } // namespace
 
 ComposeStats composeHeights(const TileGrid& grid,
-                            const Sector& box,
+                            const MapBox& box,
                             std::int32_t width,
                             std::int32_t height,
                             std::int32_t level,
@@ -74,7 +74,7 @@ float sampleValue(const Quad& q) noexcept {
 } // namespace
 
 ComposeStats composeValues(const TileGrid& grid,
-                           const Sector& box,
+                           const MapBox& box,
                            std::int32_t width,
                            std::int32_t height,
                            std::int32_t level,

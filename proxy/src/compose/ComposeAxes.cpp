@@ -85,7 +85,7 @@ std::int32_t slotOf(std::vector<std::int64_t>& tiles, std::int64_t tile) {
  * clamped to the sector's texels otherwise.
  */
 Axis computeColumns(const TileGrid& grid,
-                    const Sector& box,
+                    const MapBox& box,
                     std::int32_t width,
                     std::int32_t level) {
   const GridSpec& spec = grid.spec();
@@ -135,7 +135,7 @@ Axis computeColumns(const TileGrid& grid,
 
 /** Rows: texel y counted from +90 down (tile rows are counted from the south), clamped at the
  * poles and at the sector's edges. */
-Axis computeRows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int32_t level) {
+Axis computeRows(const TileGrid& grid, const MapBox& box, std::int32_t height, std::int32_t level) {
   const GridSpec& spec = grid.spec();
   const double res = grid.deltaDeg(level) / spec.tileHeight;
   const std::int64_t rowCount = grid.rowCount(level);
@@ -146,13 +146,14 @@ Axis computeRows(const TileGrid& grid, const Sector& box, std::int32_t height, s
       0, static_cast<std::int64_t>(std::floor((90.0 - spec.sector.north) / res)));
   const auto last = std::min<std::int64_t>(
       total - 1, static_cast<std::int64_t>(std::ceil((90.0 - spec.sector.south) / res)) - 1);
-  const double dy = (box.north - box.south) / height;
   Axis a;
   a.samples.resize(static_cast<std::size_t>(height));
   TileCursor cursor{spec.tileHeight};
-  for (std::int32_t j = 0; j < height; ++j) {
-    const double lat = box.north - (j + 0.5) * dy;
-    if (lat > north || lat < south) continue; // past a pole or outside the layer
+  const std::int32_t begin = std::max(0, box.rowBegin), end = std::min(height, box.rowEnd);
+  for (std::int32_t j = begin; j < end; ++j) {
+    const double lat = box.rowLatitude(j, height);
+    // Past a pole, outside the layer, or past the Mercator square (NaN).
+    if (!(lat <= north && lat >= south)) continue;
     const double g = (90.0 - lat) / res - 0.5;
     const double fl = std::floor(g);
     const double f = g - fl;
@@ -180,18 +181,26 @@ Axis computeRows(const TileGrid& grid, const Sector& box, std::int32_t height, s
  * tens of nanoseconds per sample. Shared by all threads (under a lock, held only to look up and
  * to store a pointer); the axes are immutable once made.
  */
+/** What an axis depends on besides the grid, the samples and the level: its span (west and east;
+ * north and south, or a Mercator map's y), how rows are spaced and the band of rows drawn. */
+struct AxisSpan {
+  double from, to;
+  MapRows rows = MapRows::Latitude;
+  std::int32_t begin = 0, end = 0;
+  friend bool operator==(const AxisSpan&, const AxisSpan&) = default;
+};
+
 template <class Compute>
 std::shared_ptr<const Axis> memoAxis(bool isColumns,
                                      const GridSpec& spec,
-                                     double from,
-                                     double to,
+                                     const AxisSpan& span,
                                      std::int32_t samples,
                                      std::int32_t level,
                                      Compute&& compute) {
   struct Entry {
     bool isColumns;
     GridSpec spec;
-    double from, to;
+    AxisSpan span;
     std::int32_t samples, level;
     std::shared_ptr<const Axis> axis;
   };
@@ -209,8 +218,8 @@ std::shared_ptr<const Axis> memoAxis(bool isColumns,
   {
     const std::lock_guard<std::mutex> guard(memo.lock);
     for (const Entry& e : memo.entries) {
-      if (e.isColumns == isColumns && e.spec == spec && e.from == from && e.to == to &&
-          e.samples == samples && e.level == level) {
+      if (e.isColumns == isColumns && e.spec == spec && e.span == span && e.samples == samples &&
+          e.level == level) {
         found = e.axis;
         break;
       }
@@ -219,7 +228,7 @@ std::shared_ptr<const Axis> memoAxis(bool isColumns,
   if (found) return found;
   auto a = std::make_shared<const Axis>(compute());
   if (samples <= kLargest) {
-    Entry e{isColumns, spec, from, to, samples, level, a};
+    Entry e{isColumns, spec, span, samples, level, a};
     const std::lock_guard<std::mutex> guard(memo.lock);
     if (memo.entries.size() < kEntries) {
       memo.entries.push_back(std::move(e));
@@ -234,21 +243,27 @@ std::shared_ptr<const Axis> memoAxis(bool isColumns,
 } // namespace
 
 std::shared_ptr<const Axis>
-columns(const TileGrid& grid, const Sector& box, std::int32_t width, std::int32_t level) {
-  return memoAxis(true, grid.spec(), box.west, box.east, width, level, [&] {
+columns(const TileGrid& grid, const MapBox& box, std::int32_t width, std::int32_t level) {
+  return memoAxis(true, grid.spec(), AxisSpan{box.west, box.east}, width, level, [&] {
     return computeColumns(grid, box, width, level);
   });
 }
 
 std::shared_ptr<const Axis>
-rows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int32_t level) {
-  return memoAxis(false, grid.spec(), box.north, box.south, height, level, [&] {
+rows(const TileGrid& grid, const MapBox& box, std::int32_t height, std::int32_t level) {
+  const bool mercator = box.rows == MapRows::Mercator;
+  const AxisSpan span{mercator ? box.northY : box.north,
+                      mercator ? box.southY : box.south,
+                      box.rows,
+                      std::max(0, box.rowBegin),
+                      std::min(height, box.rowEnd)};
+  return memoAxis(false, grid.spec(), span, height, level, [&] {
     return computeRows(grid, box, height, level);
   });
 }
 
 LevelTiles levelTiles(const TileGrid& grid,
-                      const Sector& box,
+                      const MapBox& box,
                       std::int32_t width,
                       std::int32_t height,
                       std::int32_t level,
@@ -291,7 +306,7 @@ using compose::columns;
 using compose::rows;
 
 std::optional<ChromaLayout>
-chromaLayout(const TileGrid& grid, const Sector& box, std::int32_t width, std::int32_t height) {
+chromaLayout(const TileGrid& grid, const MapBox& box, std::int32_t width, std::int32_t height) {
   GridSpec spec = grid.spec();
   if (spec.tileWidth % 2 != 0 || spec.tileHeight % 2 != 0 || width <= 0 || height <= 0)
     return std::nullopt;
@@ -301,17 +316,27 @@ chromaLayout(const TileGrid& grid, const Sector& box, std::int32_t width, std::i
   if (!half) return std::nullopt;
   const std::int32_t cw = (width + 1) / 2, ch = (height + 1) / 2;
   const double dx = (box.east - box.west) / width;
-  const double dy = (box.north - box.south) / height;
-  Sector b = box;
+  MapBox b = box;
   // The odd pixel's chroma reaches half a chroma sample past the box (what JPEG's edge
   // replication would give it is as good; this keeps the sample spacing exact).
   if (cw * 2 != width) b.east = box.west + dx * (2 * cw);
-  if (ch * 2 != height) b.south = box.north - dy * (2 * ch);
+  if (ch * 2 != height) {
+    if (box.rows == MapRows::Mercator) {
+      b.southY = box.northY - (box.northY - box.southY) / height * (2 * ch);
+      b.south = mercator::latitudeOfY(std::clamp(b.southY, -mercator::kMaxY, mercator::kMaxY));
+    } else {
+      const double dy = (box.north - box.south) / height;
+      b.south = box.north - dy * (2 * ch);
+    }
+  }
+  // The band's rows in chroma rows (a chroma row covers two of the map's).
+  if (box.rowBegin > 0) b.rowBegin = box.rowBegin / 2;
+  if (box.rowEnd < height) b.rowEnd = (box.rowEnd + 1) / 2;
   return ChromaLayout{*half, b, cw, ch};
 }
 
 std::expected<std::vector<ComposeTile>, std::size_t> composeTilesYcc(const TileGrid& grid,
-                                                                     const Sector& box,
+                                                                     const MapBox& box,
                                                                      std::int32_t width,
                                                                      std::int32_t height,
                                                                      std::int32_t level,
@@ -345,14 +370,12 @@ std::expected<std::vector<ComposeTile>, std::size_t> composeTilesYcc(const TileG
   return keys;
 }
 
-std::int32_t composeLevel(const TileGrid& grid,
-                          const Sector& box,
-                          std::int32_t width,
-                          std::int32_t height,
-                          std::int32_t firstLevel) {
+namespace {
+
+/** The coarsest level from `firstLevel` whose texels are no larger than a pixel of pixelX x
+ * pixelY degrees; the deepest when none is. */
+std::int32_t levelFor(const TileGrid& grid, double pixelX, double pixelY, std::int32_t firstLevel) {
   const GridSpec& spec = grid.spec();
-  const double pixelX = (box.east - box.west) / width;
-  const double pixelY = (box.north - box.south) / height;
   const std::int32_t first = std::clamp(firstLevel, 0, grid.numLevels() - 1);
   for (std::int32_t l = first; l < grid.numLevels(); ++l) {
     const double texelX = grid.deltaDeg(l) / spec.tileWidth;
@@ -363,8 +386,72 @@ std::int32_t composeLevel(const TileGrid& grid,
   return grid.numLevels() - 1;
 }
 
+} // namespace
+
+std::vector<ComposeBand> composeBands(const TileGrid& grid,
+                                      const MapBox& box,
+                                      std::int32_t width,
+                                      std::int32_t height,
+                                      std::int32_t firstLevel) {
+  const double pixelX = (box.east - box.west) / width;
+  if (box.rows == MapRows::Latitude || height <= 0) {
+    const double pixelY = (box.north - box.south) / height;
+    return {ComposeBand{box, levelFor(grid, pixelX, pixelY, firstLevel)}};
+  }
+  std::vector<ComposeBand> bands;
+  const auto add = [&](std::int32_t j, std::int32_t level) {
+    if (!bands.empty() && bands.back().level == level) {
+      bands.back().box.rowEnd = j + 1;
+      return;
+    }
+    MapBox b = box;
+    b.rowBegin = j;
+    b.rowEnd = j + 1;
+    bands.push_back(ComposeBand{b, level});
+  };
+  double top = box.rowEdgeLatitude(0, height);
+  std::int32_t pending = 0; // rows past the square not yet in a band
+  for (std::int32_t j = 0; j < height; ++j) {
+    const double bottom = box.rowEdgeLatitude(j + 1, height);
+    const double pixelY = top - bottom;
+    top = bottom;
+    if (!(pixelY > 0.0)) { // wholly past the square: in the band above, or the next one
+      if (bands.empty()) {
+        ++pending;
+      } else {
+        bands.back().box.rowEnd = j + 1;
+      }
+      continue;
+    }
+    add(j, levelFor(grid, pixelX, pixelY, firstLevel));
+    if (pending > 0) {
+      bands.front().box.rowBegin = 0;
+      pending = 0;
+    }
+  }
+  if (bands.empty()) { // nothing inside the square: one band that draws nothing
+    MapBox b = box;
+    b.rowBegin = 0;
+    b.rowEnd = height;
+    bands.push_back(ComposeBand{b, levelFor(grid, pixelX, pixelX, firstLevel)});
+  }
+  bands.back().box.rowEnd = height;
+  return bands;
+}
+
+std::int32_t composeLevel(const TileGrid& grid,
+                          const MapBox& box,
+                          std::int32_t width,
+                          std::int32_t height,
+                          std::int32_t firstLevel) {
+  std::int32_t level = 0;
+  for (const ComposeBand& b : composeBands(grid, box, width, height, firstLevel))
+    level = std::max(level, b.level);
+  return level;
+}
+
 std::expected<std::vector<ComposeTile>, std::size_t> composeTiles(const TileGrid& grid,
-                                                                  const Sector& box,
+                                                                  const MapBox& box,
                                                                   std::int32_t width,
                                                                   std::int32_t height,
                                                                   std::int32_t level,

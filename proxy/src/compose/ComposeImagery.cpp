@@ -133,7 +133,7 @@ void drawImageryRow(const LevelTiles& t,
 } // namespace
 
 ComposeStats composeImagery(const TileGrid& grid,
-                            const Sector& box,
+                            const MapBox& box,
                             std::int32_t width,
                             std::int32_t height,
                             std::int32_t level,

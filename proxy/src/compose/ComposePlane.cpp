@@ -368,7 +368,7 @@ void samplePlaneRowWithHoles(const LevelTiles& t,
  * path's (weights in 1/256, one rounding), so the same values.
  */
 ComposeStats composePlaneInto(const TileGrid& grid,
-                              const Sector& box,
+                              const MapBox& box,
                               std::int32_t width,
                               std::int32_t height,
                               std::int32_t level,
@@ -392,7 +392,7 @@ ComposeStats composePlaneInto(const TileGrid& grid,
                                 t.cols.samples.end(),
                                 [](const AxisSample& c) { return c.slotA < 0; });
   const auto w = static_cast<std::size_t>(width);
-  for (std::int32_t j = 0; j < height; ++j) {
+  for (std::int32_t j = std::max(0, box.rowBegin); j < std::min(height, box.rowEnd); ++j) {
     const AxisSample& r = t.rows.samples[static_cast<std::size_t>(j)];
     std::uint8_t* out = canvas + static_cast<std::size_t>(j) * w;
     if (r.slotA < 0 || outsideColumns) {
@@ -410,7 +410,7 @@ ComposeStats composePlaneInto(const TileGrid& grid,
 } // namespace compose
 
 ComposeStats composePlane(const TileGrid& grid,
-                          const Sector& box,
+                          const MapBox& box,
                           std::int32_t width,
                           std::int32_t height,
                           std::int32_t level,

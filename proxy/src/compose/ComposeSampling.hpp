@@ -52,11 +52,13 @@ struct Axis {
  * wrapped around a global layer, clamped to the sector otherwise), shared with other maps of the
  * same columns. */
 std::shared_ptr<const Axis>
-columns(const TileGrid& grid, const Sector& box, std::int32_t width, std::int32_t level);
+columns(const TileGrid& grid, const MapBox& box, std::int32_t width, std::int32_t level);
 
-/** The rows (texel y counted from +90 down, clamped at the poles and the sector's edges). */
+/** The rows (texel y counted from +90 down, clamped at the poles and the sector's edges), each
+ * at the box's latitude of its centre (MapBox::rowLatitude); rows outside the box's band, past a
+ * pole or past the Mercator square have slot -1. */
 std::shared_ptr<const Axis>
-rows(const TileGrid& grid, const Sector& box, std::int32_t height, std::int32_t level);
+rows(const TileGrid& grid, const MapBox& box, std::int32_t height, std::int32_t level);
 
 /** The tiles of one level laid out by (row slot, column slot). */
 struct LevelTiles {
@@ -76,7 +78,7 @@ struct LevelTiles {
 
 /** The tiles of `level` that the map's axes name, each looked up once (null where not there). */
 LevelTiles levelTiles(const TileGrid& grid,
-                      const Sector& box,
+                      const MapBox& box,
                       std::int32_t width,
                       std::int32_t height,
                       std::int32_t level,
@@ -147,7 +149,7 @@ inline void over(const std::uint8_t src[4], std::uint8_t* dst, int channels) noe
 class Fallback {
 public:
   Fallback(const TileGrid& grid,
-           const Sector& box,
+           const MapBox& box,
            std::int32_t width,
            std::int32_t height,
            std::int32_t level,
@@ -164,7 +166,7 @@ private:
   const LevelTiles& tiles(std::int32_t l);
 
   const TileGrid& grid_;
-  Sector box_;
+  MapBox box_;
   std::int32_t width_, height_, level_, first_;
   const TileLookup& lookup_;
   std::vector<std::vector<LevelTiles>> levels_; // index: levels above `level_` minus one
@@ -174,7 +176,7 @@ private:
  * levels per pixel. */
 template <class Draw>
 ComposeStats forEachPixel(const TileGrid& grid,
-                          const Sector& box,
+                          const MapBox& box,
                           std::int32_t width,
                           std::int32_t height,
                           std::int32_t level,
@@ -212,7 +214,7 @@ ComposeStats forEachPixel(const TileGrid& grid,
  * null, else leaves those pixels.
  */
 ComposeStats composePlaneInto(const TileGrid& grid,
-                              const Sector& box,
+                              const MapBox& box,
                               std::int32_t width,
                               std::int32_t height,
                               std::int32_t level,

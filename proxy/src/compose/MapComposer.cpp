@@ -34,6 +34,32 @@ MapComposer::MapComposer(TileService& tiles,
     yccDisabled_ = true;
 }
 
+namespace {
+
+/** `more` added to `keys`: a tile two bands both sample once, with the union of their regions
+ * (bands of one level are apart only when a map straddles the equator). */
+void appendTiles(std::vector<ComposeTile>& keys, std::vector<ComposeTile>&& more) {
+  if (keys.empty()) {
+    keys = std::move(more);
+    return;
+  }
+  for (ComposeTile& c : more) {
+    auto it = std::find_if(keys.begin(), keys.end(), [&](const ComposeTile& k) {
+      return k.key.level == c.key.level && k.key.row == c.key.row && k.key.col == c.key.col;
+    });
+    if (it == keys.end()) {
+      keys.push_back(c);
+    } else {
+      it->region = {std::min(it->region[0], c.region[0]),
+                    std::min(it->region[1], c.region[1]),
+                    std::max(it->region[2], c.region[2]),
+                    std::max(it->region[3], c.region[3])};
+    }
+  }
+}
+
+} // namespace
+
 std::size_t MapComposer::decodedCacheBytes() const {
   return decodedCache_ ? decodedCache_->bytes() : 0;
 }
@@ -66,20 +92,27 @@ MapComposer::compose(ComposeRequest request,
     l.spec = cl;
     l.grid = tiles_.grid(cl.layer->name);
     if (!l.grid) return std::unexpected("no layer '" + cl.layer->name + "'");
-    l.level = composeLevel(*l.grid, r.bbox, r.width, r.height, 0);
-    const std::size_t left = maxTiles_ > total ? maxTiles_ - total : 0;
-    auto keys = job->ycc ? composeTilesYcc(*l.grid, r.bbox, r.width, r.height, l.level, left)
-                         : composeTiles(*l.grid, r.bbox, r.width, r.height, l.level, left);
-    if (!keys) {
-      return std::unexpected("the map needs more than " + std::to_string(maxTiles_) +
-                             " tiles (level " + std::to_string(l.level) + " of layer '" +
-                             cl.layer->name + "'); ask for a smaller box or fewer pixels");
+    l.bands = composeBands(*l.grid, r.bbox, r.width, r.height, 0);
+    // The planes' chroma rows straddle two bands' rows: a map of several bands on the RGB path.
+    if (l.bands.size() > 1) job->ycc = false;
+    for (const ComposeBand& band : l.bands) {
+      const std::size_t left = maxTiles_ > total ? maxTiles_ - total : 0;
+      auto keys = job->ycc ? composeTilesYcc(*l.grid, band.box, r.width, r.height, band.level, left)
+                           : composeTiles(*l.grid, band.box, r.width, r.height, band.level, left);
+      if (!keys) {
+        return std::unexpected("the map needs more than " + std::to_string(maxTiles_) +
+                               " tiles (level " + std::to_string(band.level) + " of layer '" +
+                               cl.layer->name + "'); ask for a smaller box or fewer pixels");
+      }
+      total += keys->size();
+      appendTiles(l.keys, std::move(*keys));
     }
-    total += keys->size();
-    l.keys = std::move(*keys);
     l.answers.resize(l.keys.size());
     job->layers.push_back(std::move(l));
   }
+  total = 0;
+  for (const Job::Layer& l : job->layers)
+    total += l.keys.size();
   job->pending = total + 1; // +1: the loop below, so nothing finishes before every fetch starts
   const auto arrived = [this, gate = gate_, job] {
     if (job->pending.fetch_sub(1) != 1) return;

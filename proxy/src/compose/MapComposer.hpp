@@ -32,7 +32,9 @@ struct ComposeRequest {
   /** Drawn in order, imagery and elevation layers alike: into a picture, heights as grey
    * (drawHeightsAsGrey); into heights, imagery as its luminance (drawLuminanceAsHeights). */
   std::vector<ComposeLayer> layers;
-  Sector bbox{}; ///< lon/lat, west < east, south < north
+  /** lon/lat, west < east, south < north; rows evenly in latitude, or in Web Mercator y
+   * (mercatorBox): each layer composed in bands of rows (composeBands). */
+  MapBox bbox{};
   std::int32_t width = 0;
   std::int32_t height = 0;
   MapFormat format = MapFormat::Png;

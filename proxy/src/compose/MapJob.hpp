@@ -42,7 +42,7 @@ struct MapComposer::Job {
   struct Layer {
     ComposeLayer spec;
     const TileGrid* grid = nullptr;
-    std::int32_t level = 0;
+    std::vector<ComposeBand> bands;  // one for a map of latitude rows
     std::vector<ComposeTile> keys;   // with the part of each tile that is sampled
     std::vector<TileAnswer> answers; // parallel to keys
   };

@@ -129,6 +129,10 @@ private:
                   r_.bbox.east,
                   r_.bbox.north);
     validators_ += box;
+    if (r_.bbox.rows == MapRows::Mercator) {
+      std::snprintf(box, sizeof box, "|3857:%.17g,%.17g", r_.bbox.southY, r_.bbox.northY);
+      validators_ += box;
+    }
     map_.origin = TileOrigin::Hit;
     map_.maxAgeSeconds = 86400 * 365;
     for (const auto& l : job_.layers) {
@@ -359,15 +363,17 @@ private:
                                           : plane == 1 ? buffers_.cb
                                                        : buffers_.cr;
       const auto background = ycbcr[static_cast<std::size_t>(plane)];
+      // One band (MapComposer takes a map of several off the planes).
+      const std::int32_t level = l.bands.front().level;
       const ComposeStats s =
           plane == 0
               ? composePlane(
-                    *l.grid, r_.bbox, r_.width, r_.height, l.level, 0, lookup, background, target)
+                    *l.grid, r_.bbox, r_.width, r_.height, level, 0, lookup, background, target)
               : composePlane(chroma_->grid,
                              chroma_->box,
                              chroma_->width,
                              chroma_->height,
-                             l.level,
+                             level,
                              0,
                              lookup,
                              background,
@@ -388,25 +394,30 @@ private:
     // Every level of the grid is served (firstLevel is an upstream offset): first level 0.
     const TileGrid& grid = *l.grid;
     if (r_.values) { // a map of values: every layer is a value layer (the front end checks)
-      count(composeValues(grid, r_.bbox, r_.width, r_.height, l.level, 0, lookup, values_));
+      for (const ComposeBand& b : l.bands)
+        count(composeValues(grid, b.box, r_.width, r_.height, b.level, 0, lookup, values_));
     } else if (l.spec.colourMap && spec.values) {
       drawValueLayer(l, lookup);
     } else if (spec.elevation && r_.heights) {
-      count(composeHeights(
-          grid, r_.bbox, r_.width, r_.height, l.level, 0, lookup, spec.noData, heights_));
+      for (const ComposeBand& b : l.bands)
+        count(composeHeights(
+            grid, b.box, r_.width, r_.height, b.level, 0, lookup, spec.noData, heights_));
     } else if (spec.elevation) { // heights in a picture: grey over the canvas
       layerHeights_.assign(pixels_, spec.noData);
-      count(composeHeights(
-          grid, r_.bbox, r_.width, r_.height, l.level, 0, lookup, spec.noData, layerHeights_));
+      for (const ComposeBand& b : l.bands)
+        count(composeHeights(
+            grid, b.box, r_.width, r_.height, b.level, 0, lookup, spec.noData, layerHeights_));
       drawHeightsAsGrey(layerHeights_, spec.noData, l.spec.opacity, canvas_, cc_);
     } else if (r_.heights) { // a picture in heights: its luminance where it is opaque
       layerPicture_.assign(pixels_ * 4, 0);
-      count(composeImagery(
-          grid, r_.bbox, r_.width, r_.height, l.level, 0, lookup, 1.0, layerPicture_, 4));
+      for (const ComposeBand& b : l.bands)
+        count(composeImagery(
+            grid, b.box, r_.width, r_.height, b.level, 0, lookup, 1.0, layerPicture_, 4));
       drawLuminanceAsHeights(layerPicture_, heights_);
     } else {
-      count(composeImagery(
-          grid, r_.bbox, r_.width, r_.height, l.level, 0, lookup, l.spec.opacity, canvas_, cc_));
+      for (const ComposeBand& b : l.bands)
+        count(composeImagery(
+            grid, b.box, r_.width, r_.height, b.level, 0, lookup, l.spec.opacity, canvas_, cc_));
     }
   }
 
@@ -415,7 +426,8 @@ private:
   void drawValueLayer(const Layer& l, const TileLookup& lookup) {
     const ValueLayerSpec& spec = *l.spec.layer->values;
     layerValues_.assign(pixels_, std::numeric_limits<float>::quiet_NaN());
-    count(composeValues(*l.grid, r_.bbox, r_.width, r_.height, l.level, 0, lookup, layerValues_));
+    for (const ComposeBand& b : l.bands)
+      count(composeValues(*l.grid, b.box, r_.width, r_.height, b.level, 0, lookup, layerValues_));
     const values::ColourScale scale = spec.scale(*l.spec.colourMap, layerValues_);
     if (r_.heights) {
       layerPicture_.assign(pixels_ * 4, 0);

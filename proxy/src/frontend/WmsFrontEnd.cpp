@@ -236,7 +236,7 @@ bool WmsFrontEnd::sendOneTile(const HttpRequest& req,
   if (layers.size() != 1 || layers.front().colourMap != nullptr ||
       m.format != l->dataset.mimeType || kind.heights != l->elevation ||
       (kind.values && l->values->format.byteOrder != values::ByteOrder::Little) ||
-      !(m.opacities.empty() || m.opacities.front() >= 1.0))
+      !(m.opacities.empty() || m.opacities.front() >= 1.0) || m.crs == kWebMercator)
     return false;
   const TileGrid* g = fe_.tiles.grid(l->name);
   const auto key = g->keyForBbox(m.bbox, m.width, m.height);
@@ -276,7 +276,7 @@ void WmsFrontEnd::compose(const HttpRequest& req,
                           const Responder& respond) {
   ComposeRequest cr;
   cr.layers = std::move(layers);
-  cr.bbox = m.bbox;
+  cr.bbox = mapBoxOf(m);
   cr.width = m.width;
   cr.height = m.height;
   cr.format = m.mapFormat;

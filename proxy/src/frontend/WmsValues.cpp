@@ -24,11 +24,20 @@ OgcException ogcError(std::string_view code, std::string_view locator, std::stri
   return OgcException{std::string(code), std::string(locator), std::move(message)};
 }
 
-/** The pixel's centre in lon/lat (the map's rows from the north). */
-std::pair<double, double> pixelCentre(const GetMapRequest& m, std::int32_t i, std::int32_t j) {
-  const Sector& b = m.bbox;
-  return {b.west + (i + 0.5) * (b.east - b.west) / m.width,
-          b.north - (j + 0.5) * (b.north - b.south) / m.height};
+/** The pixel's centre in lon/lat, as the map samples it (the map's rows from the north; a Web
+ * Mercator map's row at the inverse Mercator of its centre's y); `mapped` false past the Mercator
+ * square (the map draws nothing there; the latitude is still the inverse Mercator's). */
+struct PixelCentre {
+  double lon, lat;
+  bool mapped;
+};
+PixelCentre pixelCentre(const GetMapRequest& m, std::int32_t i, std::int32_t j) {
+  const MapBox b = mapBoxOf(m);
+  const double lon = b.west + (i + 0.5) * (b.east - b.west) / m.width;
+  const double lat = b.rowLatitude(j, m.height);
+  if (!std::isnan(lat)) return {lon, lat, true};
+  return {
+      lon, mercator::latitudeOfY(b.northY - (j + 0.5) * ((b.northY - b.southY) / m.height)), false};
 }
 
 /** The value at (lon, lat) of a tile's bytes: values::decode, then values::sample at the point's
@@ -99,12 +108,17 @@ void fetchValue(FrontEnd& fe,
                 const FetchGate& gate) {
   const LayerSpec& l = *cl.layer;
   const TileGrid* grid = fe.tiles.grid(l.name);
-  const auto [lon, lat] = pixelCentre(f.map, f.i, f.j);
+  const auto [lon, lat, mapped] = pixelCentre(f.map, f.i, f.j);
   const Sector& sector = l.dataset.grid.sector;
   const bool global = sector.west <= -180.0 && sector.east >= 180.0;
   const double plon = global ? std::remainder(lon, 360.0) : lon;
   gather->values[k] = FeatureInfoValue{l.name, plon, lat, std::nullopt, l.values->format.unit};
-  const std::int32_t level = composeLevel(*grid, f.map.bbox, f.map.width, f.map.height, 0);
+  // The level the map draws the pixel's row from (a Web Mercator map's band of that row).
+  std::int32_t level = 0;
+  for (const ComposeBand& b : composeBands(*grid, mapBoxOf(f.map), f.map.width, f.map.height, 0)) {
+    if (b.box.drawsRow(f.j)) level = b.level;
+  }
+  if (!mapped) return; // past the Mercator square: no data
   const auto key = grid->keyAt(lat, plon == 180.0 ? -180.0 : plon, level);
   if (!key) return;
   gather->start();

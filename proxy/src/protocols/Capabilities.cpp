@@ -1,4 +1,5 @@
 #include <tellus/proxy/Capabilities.hpp>
+#include <tellus/proxy/MapBox.hpp>
 #include <tellus/proxy/Query.hpp>
 
 #include <algorithm>
@@ -197,6 +198,18 @@ std::string layerOpen(const CapabilitiesLayer& layer) {
 
 // ---- 1.1.1 -----------------------------------------------------------------------------------
 
+/** A layer's box in EPSG:3857 metres (x, y), clamped to the Mercator square. */
+std::string mercatorBoxAttributes(const Sector& b) {
+  using namespace mercator;
+  const auto x = [](double lon) { return xOfLongitude(std::clamp(lon, -180.0, 180.0)); };
+  // The square's edges exactly (the formula's tangent at 85.05 is 1e-11 off).
+  const auto y = [](double lat) {
+    return lat >= kMaxLatitude ? kMaxY : lat <= -kMaxLatitude ? -kMaxY : yOfLatitude(lat);
+  };
+  return attrNum("minx", x(b.west)) + attrNum("miny", y(b.south)) + attrNum("maxx", x(b.east)) +
+         attrNum("maxy", y(b.north));
+}
+
 void writeBoxes111(XmlWriter& w, int depth, const Sector& b) {
   w.line(depth,
          "<LatLonBoundingBox" + attrNum("minx", b.west) + attrNum("miny", b.south) +
@@ -204,6 +217,7 @@ void writeBoxes111(XmlWriter& w, int depth, const Sector& b) {
   w.line(depth,
          "<BoundingBox" + attr("SRS", "EPSG:4326") + attrNum("minx", b.west) +
              attrNum("miny", b.south) + attrNum("maxx", b.east) + attrNum("maxy", b.north) + "/>");
+  w.line(depth, "<BoundingBox" + attr("SRS", "EPSG:3857") + mercatorBoxAttributes(b) + "/>");
 }
 
 std::string capabilities111(const CapabilitiesModel& m) {
@@ -228,6 +242,7 @@ std::string capabilities111(const CapabilitiesModel& m) {
   w.line(2, "<Layer>");
   w.element(3, "Title", m.title);
   w.element(3, "SRS", "EPSG:4326");
+  w.element(3, "SRS", "EPSG:3857");
   writeBoxes111(w, 3, unionOf(m.layers));
   for (const CapabilitiesLayer& layer : m.layers) {
     w.line(3, layerOpen(layer));
@@ -268,6 +283,7 @@ void writeBoxes130(XmlWriter& w, int depth, const Sector& b) {
   w.line(depth,
          "<BoundingBox" + attr("CRS", "EPSG:4326") + attrNum("minx", b.south) +
              attrNum("miny", b.west) + attrNum("maxx", b.north) + attrNum("maxy", b.east) + "/>");
+  w.line(depth, "<BoundingBox" + attr("CRS", "EPSG:3857") + mercatorBoxAttributes(b) + "/>");
 }
 
 std::string capabilities130(const CapabilitiesModel& m) {
@@ -301,6 +317,7 @@ std::string capabilities130(const CapabilitiesModel& m) {
   w.element(3, "Title", m.title);
   w.element(3, "CRS", "EPSG:4326");
   w.element(3, "CRS", "CRS:84");
+  w.element(3, "CRS", "EPSG:3857");
   writeBoxes130(w, 3, unionOf(m.layers));
   for (const CapabilitiesLayer& layer : m.layers) {
     w.line(3, layerOpen(layer));

@@ -329,6 +329,7 @@ std::expected<WmsRequest, OgcException> parseGetCapabilities(const QueryParams& 
 
 std::expected<Sector, OgcException>
 parseBbox(std::string_view value, bool latFirst, std::string_view crs) {
+  const double limit = crs == kWebMercator ? kMaxBboxMagnitudeMetres : kMaxBboxMagnitudeDeg;
   const std::vector<std::string> parts = splitCommas(value);
   if (parts.size() != 4) {
     return fail(ogc::kInvalidParameterValue, "BBOX", "BBOX must have 4 comma-separated numbers");
@@ -341,7 +342,7 @@ parseBbox(std::string_view value, bool latFirst, std::string_view crs) {
                   "BBOX",
                   "BBOX value " + quoted(parts[i]) + " is not a finite number");
     }
-    if (std::fabs(*c) > kMaxBboxMagnitudeDeg) {
+    if (std::fabs(*c) > limit) {
       return fail(ogc::kInvalidParameterValue,
                   "BBOX",
                   "BBOX value " + quoted(parts[i]) + " is out of range");
@@ -430,11 +431,13 @@ Step readCrsAndBbox(const QueryParams& params, GetMapRequest& req) {
     latFirst = v130;
   } else if (iequals(*crs, "CRS:84")) {
     req.crs = "CRS:84";
+  } else if (isWebMercator(*crs)) {
+    req.crs = std::string(kWebMercator); // easting, northing under both versions
   } else {
     return fail(invalidCrsCode(req.version),
                 crsLocator,
                 std::string(crsLocator) + " " + quoted(*crs) +
-                    " is not supported (EPSG:4326 or CRS:84)");
+                    " is not supported (EPSG:4326, CRS:84 or EPSG:3857)");
   }
 
   const auto bbox = nonEmpty(params, "bbox");
@@ -632,6 +635,15 @@ bool mapIsHeights(MapFormat format, bool everyLayerIsElevation) noexcept {
 
 std::string_view toString(WmsVersion version) noexcept {
   return version == WmsVersion::V111 ? "1.1.1" : "1.3.0";
+}
+
+bool isWebMercator(std::string_view crs) noexcept {
+  return iequals(crs, "EPSG:3857") || iequals(crs, "EPSG:900913") || iequals(crs, "EPSG:102100") ||
+         iequals(crs, "EPSG:102113");
+}
+
+MapBox mapBoxOf(const GetMapRequest& m) noexcept {
+  return m.crs == kWebMercator ? mercatorBox(m.bbox) : MapBox(m.bbox);
 }
 
 std::string_view invalidCrsCode(WmsVersion version) noexcept {

@@ -15,7 +15,9 @@
  *   Longitudes wrap around a global layer (a box from 170 to 190 crosses the antimeridian, and
  *   bilinear filtering joins the last and the first column); latitudes past +-90 and places
  *   outside the layer's sector are left as they were (the background). At the poles the edge row
- *   is repeated (clamped), never wrapped.
+ *   is repeated (clamped), never wrapped. Each row's latitude is the box's (MapBox.hpp): evenly
+ *   spaced, or for a Web Mercator map the inverse Mercator of the row centre's y (rows past the
+ *   Mercator square left as they were); only the rows of the box's band are drawn.
  * - **Fallback**: where a tile of the level is missing, the nearest coarser tile that is present
  *   is sampled instead, per pixel, with the same filter at its own resolution.
  * - **Heights**: bilinear on raw 16-bit values; where one of the four texels is no-data, the
@@ -24,6 +26,7 @@
 
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/cache/TileKey.hpp>
+#include <tellus/proxy/MapBox.hpp>
 #include <tellus/values/ColourScale.hpp>
 
 #include <array>
@@ -37,12 +40,35 @@
 
 namespace tellus {
 
-/** The level a map of `width` x `height` pixels over `box` is composed from. */
+/** The level a map of `width` x `height` pixels over `box` is composed from (a Mercator map's:
+ * the finest of its bands', composeBands). */
 std::int32_t composeLevel(const TileGrid& grid,
-                          const Sector& box,
+                          const MapBox& box,
                           std::int32_t width,
                           std::int32_t height,
                           std::int32_t firstLevel);
+
+/**
+ * A band of a map's rows and the level it is composed from. A map of latitude rows is one band at
+ * composeLevel. A Web Mercator map's pixel covers cos(latitude) times fewer degrees of latitude
+ * than of longitude, so one level for the whole map would either blur the rows near the poles
+ * (the level of the equator's pixels magnified 5.8 times at 80 degrees) or need the finest
+ * level's tiles over the whole box (16 to 256 times the tiles of a world map): each row takes the
+ * coarsest level whose texels are no larger than its pixels on both axes (its extent in latitude
+ * from its two edges' inverse Mercator), and runs of rows of the same level are one band. Rows
+ * past the Mercator square join a neighbouring band (they draw nothing). Bands cover rows
+ * [0, height) in order, each drawn by the composers below with its own box (rowBegin, rowEnd)
+ * and level.
+ */
+struct ComposeBand {
+  MapBox box;
+  std::int32_t level = 0;
+};
+std::vector<ComposeBand> composeBands(const TileGrid& grid,
+                                      const MapBox& box,
+                                      std::int32_t width,
+                                      std::int32_t height,
+                                      std::int32_t firstLevel);
 
 /** A tile a map needs, and the part of it that sampling reads: texels [x0, x1) x [y0, y1), rows
  * from the top (what a decoder may limit itself to). */
@@ -57,7 +83,7 @@ struct ComposeTile {
  * order from the north-west. An error (with the count) when more than `maxTiles` are needed.
  */
 std::expected<std::vector<ComposeTile>, std::size_t> composeTiles(const TileGrid& grid,
-                                                                  const Sector& box,
+                                                                  const MapBox& box,
                                                                   std::int32_t width,
                                                                   std::int32_t height,
                                                                   std::int32_t level,
@@ -71,12 +97,12 @@ std::expected<std::vector<ComposeTile>, std::size_t> composeTiles(const TileGrid
  */
 struct ChromaLayout {
   TileGrid grid;
-  Sector box;
+  MapBox box;
   std::int32_t width = 0;
   std::int32_t height = 0;
 };
 std::optional<ChromaLayout>
-chromaLayout(const TileGrid& grid, const Sector& box, std::int32_t width, std::int32_t height);
+chromaLayout(const TileGrid& grid, const MapBox& box, std::int32_t width, std::int32_t height);
 
 /**
  * composeTiles for a map composed as Y, Cb and Cr planes: the tiles and regions the luma needs
@@ -85,7 +111,7 @@ chromaLayout(const TileGrid& grid, const Sector& box, std::int32_t width, std::i
  * luma's tiles (the chroma adds at most a row and a column).
  */
 std::expected<std::vector<ComposeTile>, std::size_t> composeTilesYcc(const TileGrid& grid,
-                                                                     const Sector& box,
+                                                                     const MapBox& box,
                                                                      std::int32_t width,
                                                                      std::int32_t height,
                                                                      std::int32_t level,
@@ -118,7 +144,7 @@ struct ComposeStats {
   std::size_t missingPixels = 0;
 };
 ComposeStats composeImagery(const TileGrid& grid,
-                            const Sector& box,
+                            const MapBox& box,
                             std::int32_t width,
                             std::int32_t height,
                             std::int32_t level,
@@ -131,12 +157,13 @@ ComposeStats composeImagery(const TileGrid& grid,
 /**
  * composeImagery for one plane (tiles of one channel, opaque; `canvasChannels` 1) that writes every
  * pixel of `plane` (resized to width * height): `background` where no tile covers it (outside the
- * layer, past a pole, no tile at any level). The same plane as filling it with `background` and
+ * layer, past a pole, no tile at any level; of the box's band: the rows outside it are left as
+ * they are). The same plane as filling it with `background` and
  * then composing over it, without the fill (a composed JPEG map's planes are nearly always all
  * sampled).
  */
 ComposeStats composePlane(const TileGrid& grid,
-                          const Sector& box,
+                          const MapBox& box,
                           std::int32_t width,
                           std::int32_t height,
                           std::int32_t level,
@@ -148,7 +175,7 @@ ComposeStats composePlane(const TileGrid& grid,
 /** Draws one elevation layer into `heights` (width * height): pixels with a value that is not
  * `noData` replace what is there (later layers win where they have data). */
 ComposeStats composeHeights(const TileGrid& grid,
-                            const Sector& box,
+                            const MapBox& box,
                             std::int32_t width,
                             std::int32_t height,
                             std::int32_t level,
@@ -162,7 +189,7 @@ ComposeStats composeHeights(const TileGrid& grid,
  * bilinear between texel centres; where one of the four texels is NaN, the texel the pixel's
  * centre lies in (NaN when that one is). Pixels with a value replace what is there. */
 ComposeStats composeValues(const TileGrid& grid,
-                           const Sector& box,
+                           const MapBox& box,
                            std::int32_t width,
                            std::int32_t height,
                            std::int32_t level,

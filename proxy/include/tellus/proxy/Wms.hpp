@@ -8,6 +8,7 @@
 
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/cache/TileKey.hpp>
+#include <tellus/proxy/MapBox.hpp>
 #include <tellus/proxy/Query.hpp>
 
 #include <cstdint>
@@ -67,6 +68,12 @@ struct WmsLimits {
 /** Largest |coordinate| accepted in a BBOX (degrees). Boxes past +-180/+-90 are legal WMS
  * requests (the outside is drawn empty), but a box of 1e300 degrees is an attack, not a map. */
 inline constexpr double kMaxBboxMagnitudeDeg = 1.0e6;
+/// The same for an EPSG:3857 BBOX (metres; the Mercator square's half side is about 2.0e7).
+inline constexpr double kMaxBboxMagnitudeMetres = 1.0e12;
+/// Web Mercator's normalised name (EPSG:900913, EPSG:102100 and EPSG:102113 are read as it).
+inline constexpr std::string_view kWebMercator = "EPSG:3857";
+/** Whether a CRS/SRS names Web Mercator: EPSG:3857 or one of its aliases (any case). */
+bool isWebMercator(std::string_view crs) noexcept;
 
 /**
  * The GetMap output formats tellus serves, for every layer (docs/CONFIG.md, "WMS"): pictures
@@ -99,6 +106,11 @@ std::string_view contentTypeOf(MapFormat format) noexcept;
  * a picture: an imagery layer whose tiles are TIFF is served as it is cached). */
 bool mapIsHeights(MapFormat format, bool everyLayerIsElevation) noexcept;
 
+struct GetMapRequest;
+/** The box a map of this request is composed over (Compose.hpp): lon/lat rows, or for EPSG:3857
+ * the bbox's metres as longitudes and Web Mercator rows (mercatorBox). */
+MapBox mapBoxOf(const GetMapRequest& m) noexcept;
+
 struct GetCapabilitiesRequest {
   WmsVersion version = WmsVersion::V130; ///< after version negotiation
   std::string updateSequence;            ///< UPDATESEQUENCE, empty when absent
@@ -112,9 +124,11 @@ struct GetMapRequest {
   std::vector<std::string> layers; ///< non-empty, names verbatim (case-sensitive), none empty
   /** Always exactly one entry per layer; "" is the layer's default style. */
   std::vector<std::string> styles;
-  std::string crs; ///< normalised: "EPSG:4326" or "CRS:84"
+  std::string crs; ///< normalised: "EPSG:4326", "CRS:84" or "EPSG:3857" (kWebMercator)
   /** ALWAYS lon/lat (west, south, east, north) after the axis-order handling; west < east and
-   * south < north; may extend past +-180 / +-90; -0 is normalised to 0. */
+   * south < north; may extend past +-180 / +-90; -0 is normalised to 0. For EPSG:3857: metres,
+   * west/east the easting (x) and south/north the northing (y) under both versions, and may
+   * extend past the Mercator square (mapBoxOf gives the map's box in degrees). */
   Sector bbox{};
   std::int32_t width = 0;  ///< 1 .. WmsLimits::maxWidth
   std::int32_t height = 0; ///< 1 .. WmsLimits::maxHeight
@@ -200,9 +214,12 @@ std::expected<WmsRequest, OgcException> parseGetFeatureInfo(const QueryParams& p
  * - GetMap needs VERSION 1.1.1 or 1.3.0 (missing -> MissingParameterValue, other ->
  *   InvalidParameterValue); 1.1.1 reads SRS, 1.3.0 reads CRS, each with the other as fallback.
  *   EPSG:4326 under 1.3.0 has a lat/lon BBOX; CRS:84 and EPSG:4326 under 1.1.1 are lon/lat;
- *   any other CRS -> InvalidCRS (1.3.0) / InvalidSRS (1.1.1).
- * - BBOX: four finite numbers with min < max on both axes and |value| <= kMaxBboxMagnitudeDeg,
- *   else InvalidParameterValue (locator BBOX).
+ *   EPSG:3857 (and its aliases EPSG:900913, EPSG:102100, EPSG:102113, normalised to EPSG:3857)
+ *   is easting/northing in metres under both; any other CRS -> InvalidCRS (1.3.0) / InvalidSRS
+ *   (1.1.1).
+ * - BBOX: four finite numbers with min < max on both axes and |value| <= kMaxBboxMagnitudeDeg
+ *   (kMaxBboxMagnitudeMetres for EPSG:3857), else InvalidParameterValue (locator BBOX). A
+ *   Web Mercator BBOX past the Mercator square is valid (the part outside it is empty).
  * - WIDTH/HEIGHT: whole numbers in [1, limits], else InvalidParameterValue.
  * - FORMAT, LAYERS (non-empty) and STYLES (both versions; `STYLES=` selects the default styles)
  *   are required (MissingParameterValue); a FORMAT that parseMapFormat does not know ->
