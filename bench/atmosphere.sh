@@ -17,7 +17,9 @@
 # alone (on / noatmo) for both binaries, and the stars alone (on / nostars).
 # RESOLUTIONS=1: the atmosphere's resolutions side by side (renderer.atmosphere.resolution): each
 # round renders, alternated, with the whole look at --atmosphere-resolution full, half and
-# quarter, without the atmosphere ("noatmo") and without any of the look ("none").
+# quarter, without the atmosphere ("noatmo") and without any of the look ("none"); the table
+# gives the settled frames' median and each whole run's CPU seconds (less sensitive to other
+# load than wall time: the runs differ only in the look).
 set -euo pipefail
 tellus=${1:-build/tools/tellus/tellus}
 rounds=${ROUNDS:-2}
@@ -30,16 +32,18 @@ paths="$(dirname "$0")/paths"
 run() { # flight, view name, configuration name, arguments...
   local flight=$1 view=$2 name=$3
   shift 3
-  xvfb-run -a -s '-screen 0 1280x1024x24' "$tellus" render --cache "$work/cache" \
+  /usr/bin/time -f "%U %S" -o "$work/cpu.txt" xvfb-run -a -s '-screen 0 1280x1024x24' \
+    "$tellus" render --cache "$work/cache" \
     --path "$paths/$flight.json" --frames "$work/frames" --fps "$fps" --repeat 2 \
     --stats "$work/s.json" "$@" >/dev/null
-  python3 - "$flight" "$view" "$name" "$work/s.json" <<'PY'
+  python3 - "$flight" "$view" "$name" "$work/s.json" "$work/cpu.txt" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[4]))
 t = s["frame_times_ms"][len(s["frame_times_ms"]) // 2:]  # the settled second pass
 t.sort()
-print("%s %s %s %.2f %.1f" % (sys.argv[1], sys.argv[2], sys.argv[3], t[len(t) // 2],
-                              s.get("atmosphere_precompute_ms", 0.0)))
+cpu = sum(float(x) for x in open(sys.argv[5]).read().split()[-2:])  # the whole run's CPU s
+print("%s %s %s %.2f %.1f %.2f" % (sys.argv[1], sys.argv[2], sys.argv[3], t[len(t) // 2],
+                                   s.get("atmosphere_precompute_ms", 0.0), cpu))
 PY
 }
 for flight in descent level; do # warm the cache
@@ -74,22 +78,27 @@ done >"$work/results.txt"
 cat "$work/results.txt"
 echo
 if [ -n "${RESOLUTIONS:-}" ]; then
-  echo "| flight | view | median frame ms: full, half, quarter, no atmosphere, none of the look | whole look / none: full, half, quarter | atmosphere alone (/ no atmosphere): full, half, quarter |"
-  echo "|---|---|---|---|---|"
+  echo "| flight | view | median frame ms: full, half, quarter, no atmosphere, none of the look | whole look / none: full, half, quarter | run CPU s: full, half, quarter, no atmosphere, none | the atmosphere's CPU share of the look (full, half, quarter - no atmosphere) / (full - none) |"
+  echo "|---|---|---|---|---|---|"
   python3 - "$work/results.txt" <<'PY'
 import sys, collections, statistics
 rows = collections.defaultdict(lambda: collections.defaultdict(list))
+cpu = collections.defaultdict(lambda: collections.defaultdict(list))
 for line in open(sys.argv[1]):
-    flight, view, name, ms, _ = line.split()
+    flight, view, name, ms, _, c = line.split()
     rows[(flight, view)][name].append(float(ms))
-for (flight, view), d in rows.items():
+    cpu[(flight, view)][name].append(float(c))
+r = ("full", "half", "quarter")
+for key, d in rows.items():
     m = {k: statistics.median(v) for k, v in d.items()}
-    r = ("full", "half", "quarter")
-    print("| %s | %s | %s | %s | %s |" % (
-        flight, "1024x768" if view == "flat" else "dome 2048 direct",
+    c = {k: statistics.median(v) for k, v in cpu[key].items()}
+    look = c["full"] - c["none"]
+    print("| %s | %s | %s | %s | %s | %s |" % (
+        key[0], "1024x768" if key[1] == "flat" else "dome 2048 direct",
         ", ".join("%.1f" % m[k] for k in r + ("noatmo", "none")),
         ", ".join("%.2fx" % (m[k] / m["none"]) for k in r),
-        ", ".join("%.2fx" % (m[k] / m["noatmo"]) for k in r)))
+        ", ".join("%.1f" % c[k] for k in r + ("noatmo", "none")),
+        ", ".join("%.2f" % ((c[k] - c["noatmo"]) / look) for k in r)))
 PY
   exit 0
 fi
@@ -101,7 +110,7 @@ import sys, collections, statistics
 rows = collections.defaultdict(lambda: collections.defaultdict(list))
 pre = collections.defaultdict(list)
 for line in open(sys.argv[1]):
-    flight, view, name, ms, p = line.split()
+    flight, view, name, ms, p = line.split()[:5]
     rows[(flight, view)][name].append(float(ms))
     if name in ("on", "before"):
         pre[name].append(float(p))
@@ -123,7 +132,7 @@ import sys, collections
 rows = collections.defaultdict(lambda: collections.defaultdict(list))
 pre = []
 for line in open(sys.argv[1]):
-    flight, view, name, ms, p = line.split()
+    flight, view, name, ms, p = line.split()[:5]
     rows[(flight, view)][name].append(float(ms))
     if name == "on":
         pre.append(float(p))
