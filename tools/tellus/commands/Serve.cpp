@@ -1,4 +1,4 @@
-// `tellus serve`: the WMS / World Wind tile server over the cache, until SIGINT or SIGTERM.
+// `tellus serve`: the WMS / WMTS / World Wind tile server over the cache, until SIGINT or SIGTERM.
 
 #include "Commands.hpp"
 #include "Context.hpp"
