@@ -49,7 +49,8 @@ struct WmtsServer {
   std::unique_ptr<ProxyFrontEnd> front;
   std::unique_ptr<HttpServer> server;
 
-  explicit WmtsServer(const std::string& upstreamUrl) {
+  /** `levels`: of both layers (1: every map is composed from level 0, whatever its scale). */
+  explicit WmtsServer(const std::string& upstreamUrl, std::int32_t levels = 3) {
     cache = openTestCache(dir.path());
     fetcher = std::make_unique<Fetcher>();
     UpstreamSpec u;
@@ -62,7 +63,7 @@ struct WmtsServer {
     l.name = "sat";
     l.title = "Satellite";
     l.upstream = "up";
-    l.dataset.grid = GridSpec{Sector{}, 36.0, 256, 256, 3};
+    l.dataset.grid = GridSpec{Sector{}, 36.0, 256, 256, levels};
     l.dataset.mimeType = "image/png";
     l.maxAge = 3600s;
     LayerSpec d = l;
