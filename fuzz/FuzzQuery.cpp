@@ -1,12 +1,14 @@
 // libFuzzer target: a URL query string as a client sends it, through everything the WMS and World
 // Wind front ends do with it before touching the cache: parseQuery, parseWms, wmsErrorContext,
-// parseWorldWindTile, checkUpdateSequence and xmlEscape (what error bodies quote). Besides the
-// sanitizers, every documented property of a successful parse is checked; a violation traps.
+// parseWorldWindTile, parseWmtsKvp (WMTS), checkUpdateSequence and xmlEscape (what error bodies
+// quote). Besides the sanitizers, every documented property of a successful parse is checked; a
+// violation traps.
 
 #include "FuzzCheck.hpp"
 
 #include <tellus/proxy/Query.hpp>
 #include <tellus/proxy/Wms.hpp>
+#include <tellus/proxy/Wmts.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -160,6 +162,19 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     return 0;
   }
   checkParams(*params, 2048);
+
+  if (const auto wmts = parseWmtsKvp(*params)) {
+    if (const auto* t = std::get_if<WmtsGetTileRequest>(&*wmts)) {
+      TELLUS_FUZZ_CHECK(!t->layer.empty() && !t->format.empty() && !t->tileMatrixSet.empty() &&
+                        !t->tileMatrix.empty());
+      TELLUS_FUZZ_CHECK(t->row >= 0 && t->col >= 0 && t->extension.empty());
+    }
+  } else {
+    const OgcException& e = wmts.error();
+    TELLUS_FUZZ_CHECK(isKnownOgcCode(e.code) || e.code == "VersionNegotiationFailed");
+    TELLUS_FUZZ_CHECK(!e.message.empty());
+    TELLUS_FUZZ_CHECK(wmtsExceptionHttpStatus(e.code) >= 400);
+  }
 
   for (const WmsLimits limits : {WmsLimits{}, WmsLimits{256, 64}}) {
     const auto request = parseWms(*params, limits);

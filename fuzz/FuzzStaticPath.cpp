@@ -1,12 +1,14 @@
 // libFuzzer target: the paths of the static tile front end and of the cache's tile tree
 // (parseStaticTilePath, parseTileRelativePath) and the encoding of names into one path component
-// (encodeNameComponent). A path that parses must be the canonical text of what it parsed to (no
-// two paths name one tile); an encoded name must be one harmless path component.
+// (encodeNameComponent), and WMTS's RESTful paths (parseWmtsRest). A path that parses must be the
+// canonical text of what it parsed to (no two paths name one tile); an encoded name must be one
+// harmless path component.
 
 #include "FuzzCheck.hpp"
 
 #include <tellus/cache/TilePath.hpp>
 #include <tellus/proxy/Wms.hpp>
+#include <tellus/proxy/Wmts.hpp>
 
 #include <cstddef>
 #include <cstdint>
@@ -113,5 +115,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     checkRelativePath(input.substr(slash + 1));
   }
   checkEncodedName(input);
+  // A WMTS RESTful path: a tile has every part, whole numbers, an extension; an error says why.
+  if (const auto wmts = parseWmtsRest(input)) {
+    if (const auto* t = std::get_if<WmtsGetTileRequest>(&*wmts)) {
+      TELLUS_FUZZ_CHECK(!t->layer.empty() && !t->style.empty() && !t->tileMatrixSet.empty() &&
+                        !t->tileMatrix.empty() && !t->extension.empty());
+      TELLUS_FUZZ_CHECK(t->row >= 0 && t->col >= 0 && (!t->time || !t->time->empty()));
+    }
+  } else {
+    TELLUS_FUZZ_CHECK(!wmts.error().message.empty());
+  }
   return 0;
 }

@@ -12,10 +12,13 @@
 #   B  tellus static path  /tiles/bluemarble/L/R/R_C.jpg
 #   C  tellus WMS 1.1.1    GetMap SRS=EPSG:4326, BBOX=w,s,e,n of the tile, 512x512, image/jpeg
 #   D  tellus WMS 1.3.0    GetMap CRS=EPSG:4326, BBOX=s,w,n,e (lat/lon axis order)
+#   W  tellus WMTS KVP     GetTile in the layer's own set WorldWind_<layer> (TILEROW counted from
+#                          the top: rows - 1 - R), the same cached files
+#   R  tellus WMTS REST    /wmts/1.0.0/<layer>/default/WorldWind_<layer>/L/<row>/C.jpg
 #   N  nginx static files  /L/R/R_C.jpg
 #
 # Each series is one `wrk -t2 -c64 -d10s --latency` run with bench/proxy/urls.lua (a random URL of
-# the list per request). The set runs ROUNDS times, alternating the order (A B C D N, N D C B A, ...),
+# the list per request). The set runs ROUNDS times, alternating the order (A B C D W R N, N R W ...),
 # and the summary gives the median per series, its ratio to nginx and the goals of issue #3
 # (>= 0.95x nginx, p99 < 5 ms at 64 connections; RSS < 100 MiB with 1,000 connections open).
 #
@@ -176,6 +179,10 @@ series = {
          "&BBOX=%s,%s,%s,%s&WIDTH=%d&HEIGHT=%d&FORMAT=%s" % ((layer,) + tuple(map(g, sector(L, r, c, dl))) + (w, h, mime)),
     "D": lambda L, r, c, dl: "/wms?SERVICE=WMS&VERSION=1.3.0&REQUEST=GetMap&LAYERS=%s&STYLES=&CRS=EPSG:4326"
          "&BBOX=%s,%s,%s,%s&WIDTH=%d&HEIGHT=%d&FORMAT=%s" % ((layer,) + tuple(map(g, (lambda W, S, E, N: (S, W, N, E))(*sector(L, r, c, dl)))) + (w, h, mime)),
+    "W": lambda L, r, c, dl: "/wmts?SERVICE=WMTS&REQUEST=GetTile&VERSION=1.0.0&LAYER=%s&STYLE=default"
+         "&FORMAT=%s&TILEMATRIXSET=WorldWind_%s&TILEMATRIX=%d&TILEROW=%d&TILECOL=%d"
+         % (layer, mime, layer, L, round(180 / dl) - 1 - r, c),
+    "R": lambda L, r, c, dl: f"/wmts/1.0.0/{layer}/default/WorldWind_{layer}/{L}/{round(180 / dl) - 1 - r}/{c}.{ext}",
     "N": lambda L, r, c, dl: f"/{L}/{r}/{r}_{c}.{ext}",
 }
 for name, fmt in series.items():
@@ -214,7 +221,7 @@ wait_port() { # LOG: the port tellus prints
   return 1
 }
 tellus_port="$(wait_port "$work/serve.log")" || die "tellus serve did not start"
-series="A B C D N"
+series="A B C D W R N"
 if [[ -n "$COMPARE_THREADS" ]]; then
   # shellcheck disable=SC2086
   "$tellus" serve --cache "$cache" --data "$repo/data" --listen 127.0.0.1:0 $SERVE_ARGS \
@@ -224,7 +231,7 @@ if [[ -n "$COMPARE_THREADS" ]]; then
   pids+=("$tellus_t_pid")
   tellus_t_port="$(wait_port "$work/serve-t.log")" || die "the second tellus serve did not start"
   cp "$work/urls-A.txt" "$work/urls-T.txt"
-  series="A B C D T N"
+  series="A B C D W R T N"
   say "second tellus serve (series T) on 127.0.0.1:$tellus_t_port (pid $tellus_t_pid, $COMPARE_THREADS loop threads)"
 fi
 
@@ -305,6 +312,8 @@ declare -A label=(
   [C]="tellus WMS 1.1.1 GetMap"
   [D]="tellus WMS 1.3.0 GetMap"
   [T]="tellus /wwtile, ${COMPARE_THREADS:-?} thr."
+  [W]="tellus WMTS KVP GetTile"
+  [R]="tellus WMTS RESTful"
   [N]="nginx static files"
 )
 port_of() {
@@ -447,6 +456,10 @@ for s in label:
         goal = f">=0.95x {g1}, p99<5ms {g2}"
     print(f"{label[s]:<27}{rps:>9.0f}{f'({lo:.0f}-{hi:.0f})':>17}{p50:>8.2f}{p99:>8.2f}{p999:>8.2f}"
           f"{ratio:>8.2f}x{cpu:>11.1f}{srv:>9.0f}{wrk:>9.0f}{other:>7.0f}{steal:>7.0f}{errors:>7}  {goal}")
+for s in ("W", "R"):
+    if s in label:
+        print(f"{label[s]} against /wwtile in the same rounds: {med(s, 'req_s') / med('A', 'req_s'):.3f}x "
+              f"(issue 25's goal: within 5 %)")
 loads = [r["load"] for s in rows for r in rows[s]]
 print(f"1-minute load at the start of the runs: {min(loads):.2f}-{max(loads):.2f}")
 print("CPU us/req: the server's user+system CPU time (all threads/workers) per answered request;")

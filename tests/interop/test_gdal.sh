@@ -5,6 +5,9 @@
 #     tile's (rows counted from the south, levels as tellus numbers them);
 #   - the WMS driver reads the elevation layer in a picture format (grey);
 #   - the WMS driver reads an EPSG:3857 window: GDAL's reprojection of the lon/lat map.
+#   - the WMTS driver lists the layers and tile matrix sets of /wmts, reads the layer's own World
+#     Wind set (the cached tile's pixels) and WorldCRS84Quad (composed: the tile's pixels within
+#     the bilinear filter's few levels).
 # Usage: test_gdal.sh path/to/tellus
 set -euo pipefail
 tellus=$1
@@ -68,6 +71,48 @@ for p in "100 200" "400 30" "7 500" "511 511"; do
   b=$(gdallocationinfo -valonly "$tile" $p | tr '\n' ' ')
   [ -n "$a" ] && [ "$a" = "$b" ] || fail "pixel $p through GDAL is '$a', in the cached tile '$b'"
 done
+# WMTS (issue 25): GDAL's WMTS driver, one subdataset per layer and tile matrix set.
+wmts="WMTS:$base/wmts/1.0.0/WMTSCapabilities.xml"
+gdalinfo "$wmts" >"$work/wmts-caps.txt" 2>&1 || fail "GDAL could not read the WMTS capabilities: $(cat "$work/wmts-caps.txt")"
+for want in "layer=bluemarble,tilematrixset=WorldWind_bluemarble" \
+            "layer=bluemarble,tilematrixset=WorldCRS84Quad" \
+            "layer=bluemarble,tilematrixset=GoogleMapsCompatible"; do
+  grep -q "$want" "$work/wmts-caps.txt" || fail "WMTS: no subdataset $want: $(cat "$work/wmts-caps.txt")"
+done
+# The own set at tile matrix 2 is the World Wind level 2: the same block as above, the same pixels.
+own="$wmts,layer=bluemarble,tilematrixset=WorldWind_bluemarble,tilematrix=2"
+gdalinfo "$own" | grep -q "Size is 20480, 10240" || fail "WMTS: GDAL sees another raster size: $(gdalinfo "$own")"
+gdal_translate -q -srcwin 5120 1024 512 512 -of GTiff "$own" "$work/wmts-block.tif" \
+  || fail "gdal_translate through the WMTS driver"
+grep -q 'target=/wmts/1.0.0/bluemarble/default/WorldWind_bluemarble/2/2/10.jpg status=200 .* cache=HIT' \
+  "$work/access.log" \
+  || fail "GDAL's WMTS GetTile was not the cached tile: $(grep wmts "$work/access.log")"
+for p in "100 200" "400 30" "7 500" "511 511"; do
+  # shellcheck disable=SC2086
+  a=$(gdallocationinfo -valonly "$work/wmts-block.tif" $p | head -n 3 | tr '\n' ' ') # RGB of RGBA
+  # shellcheck disable=SC2086
+  b=$(gdallocationinfo -valonly "$tile" $p | tr '\n' ' ')
+  [ -n "$a" ] && [ "$a" = "$b" ] || fail "WMTS pixel $p through GDAL is '$a', in the cached tile '$b'"
+done
+# WorldCRS84Quad: tiles composed from the cached level-2 tile (their edges are not World Wind's).
+gdal_translate -q -of GTiff -outsize 300 300 -projwin -88 70 -83 65 \
+  "$wmts,layer=bluemarble,tilematrixset=WorldCRS84Quad" "$work/wmts-quad.tif" \
+  || fail "gdal_translate of WorldCRS84Quad through the WMTS driver"
+cp "$tile" "$work/t17.jpg"
+printf '%s\n' 0.017578125 0 0 -0.017578125 -89.9912109375 71.9912109375 >"$work/t17.jgw"
+for p in "-85.5 67.5" "-87.9 69.9" "-83.2 65.3"; do
+  # shellcheck disable=SC2086
+  a=$(gdallocationinfo -valonly -wgs84 "$work/wmts-quad.tif" $p | head -n 3 | tr '\n' ' ')
+  # shellcheck disable=SC2086
+  b=$(gdallocationinfo -valonly -geoloc "$work/t17.jpg" $p | tr '\n' ' ')
+  python3 - "$a" "$b" <<'PY' || fail "WorldCRS84Quad pixel $p through GDAL is '$a', in the cached tile '$b'"
+import sys
+a = [int(v) for v in sys.argv[1].split()]
+b = [int(v) for v in sys.argv[2].split()]
+sys.exit(0 if len(a) == 3 and len(b) == 3 and max(abs(x - y) for x, y in zip(a, b)) <= 8 else 1)
+PY
+done
+
 # The WMS driver on an arbitrary window: GDAL asks for boxes of its own choosing, which tellus
 # composes from the cached level-2 tile; the pixels agree with the tile's (bilinear, a few levels
 # of difference at most).
@@ -75,8 +120,6 @@ gdal_translate -q -of GTiff -outsize 300 300 -projwin -88 70 -83 65 \
   "WMS:$base/wms?SERVICE=WMS&VERSION=1.1.1&REQUEST=GetMap&LAYERS=bluemarble&SRS=EPSG:4326&BBOX=-180,-90,180,90&FORMAT=image/jpeg" \
   "$work/window.tif" || fail "gdal_translate of an arbitrary window through the WMS driver"
 grep -qi "request=getmap.* status=200" "$work/access.log" || fail "no GetMap in the access log: $(tail -3 "$work/access.log")"
-cp "$tile" "$work/t17.jpg"
-printf '%s\n' 0.017578125 0 0 -0.017578125 -89.9912109375 71.9912109375 >"$work/t17.jgw"
 for p in "-85.5 67.5" "-87.9 69.9" "-83.2 65.3"; do
   # shellcheck disable=SC2086
   a=$(gdallocationinfo -valonly -wgs84 "$work/window.tif" $p | tr '\n' ' ')

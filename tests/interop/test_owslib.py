@@ -3,7 +3,10 @@
 1.1.1 and 1.3.0 and fetches tile-aligned maps through its GetMap, as a Python user would; every
 advertised format for every layer, and EXCEPTIONS=BLANK in 8-bit PNG; the elevation layer as a
 value layer: its styles' legends (GetLegendGraphic) and GetFeatureInfo; a map in EPSG:3857
-against the lon/lat map of the same place.
+against the lon/lat map of the same place. WMTS 1.0.0 through OWSLib's
+WebMapTileService: the capabilities (layers, tile matrix sets, the styles and formats), GetTile in
+the layer's own World Wind set (the cached tile's bytes, rows counted from the top) and in
+WorldCRS84Quad (composed, then kept: the same bytes again).
 
 Usage: test_owslib.py path/to/tellus
 """
@@ -20,6 +23,7 @@ import time
 import urllib.request
 
 from owslib.wms import WebMapService
+from owslib.wmts import WebMapTileService
 
 
 def fail(message):
@@ -110,6 +114,46 @@ def check_web_mercator(wms, version):
     if not (diff_mercator < 4.0 and diff_linear > 2 * diff_mercator):
         fail("%s: EPSG:3857 rows: mean |difference| %.2f at the inverse Mercator, %.2f evenly in "
              "latitude" % (version, diff_mercator, diff_linear))
+
+
+def check_wmts(base, tile):
+    """OWSLib's WebMapTileService on /wmts: what it reads of the capabilities, and GetTile (KVP)."""
+    wmts = WebMapTileService(base + "/wmts", version="1.0.0", timeout=10)
+    if wmts.identification.type != "OGC WMTS":
+        fail("WMTS: service type %r" % wmts.identification.type)
+    if not {"bluemarble", "etopo"} <= set(wmts.contents):
+        fail("WMTS: layers %s" % sorted(wmts.contents))
+    sets = set(wmts.tilematrixsets)
+    if not {"WorldWind_bluemarble", "WorldCRS84Quad", "GoogleMapsCompatible"} <= sets:
+        fail("WMTS: tile matrix sets %s" % sorted(sets))
+    layer = wmts["bluemarble"]
+    if set(layer.tilematrixsetlinks) != {"WorldWind_bluemarble", "WorldCRS84Quad",
+                                          "GoogleMapsCompatible"}:
+        fail("WMTS: bluemarble's sets %s" % sorted(layer.tilematrixsetlinks))
+    if layer.formats != ["image/jpeg"] or "default" not in layer.styles:
+        fail("WMTS: formats %s, styles %s" % (layer.formats, layer.styles))
+    own = wmts.tilematrixsets["WorldWind_bluemarble"].tilematrix
+    if (own["0"].matrixwidth, own["0"].matrixheight, own["0"].tilewidth) != (10, 5, 512):
+        fail("WMTS: level 0 of the own set is %sx%s tiles of %s px" % (
+            own["0"].matrixwidth, own["0"].matrixheight, own["0"].tilewidth))
+    quad = wmts.tilematrixsets["WorldCRS84Quad"].tilematrix["0"]
+    if round(quad.scaledenominator, 4) != 279541132.0144 or tuple(quad.topleftcorner) != (-180, 90):
+        fail("WMTS: WorldCRS84Quad 0 is %s at %s" % (quad.scaledenominator, quad.topleftcorner))
+    limits = layer.tilematrixsetlinks["WorldWind_bluemarble"].tilematrixlimits["0"]
+    if (limits.mintilerow, limits.maxtilerow, limits.mintilecol, limits.maxtilecol) != (0, 4, 0, 9):
+        fail("WMTS: limits of level 0 %s" % vars(limits))
+    # World Wind's level-0 tile row 2 (from the south), column 5 is WMTS row 5 - 1 - 2 = 2.
+    body = wmts.gettile(layer="bluemarble", tilematrixset="WorldWind_bluemarble", tilematrix="0",
+                        row=2, column=5, format="image/jpeg", style="default").read()
+    if body != tile:
+        fail("WMTS: GetTile in the own set is not the cached tile: %r" % body[:200])
+    composed = []
+    for _ in range(2):
+        r = wmts.gettile(layer="bluemarble", tilematrixset="WorldCRS84Quad", tilematrix="2",
+                         row=1, column=4, format="image/jpeg", style="default")
+        composed.append(r.read())
+    if composed[0][:3] != b"\xff\xd8\xff" or composed[0] != composed[1]:
+        fail("WMTS: WorldCRS84Quad tiles %r, %r" % (composed[0][:100], composed[1][:100]))
 
 
 def main():
@@ -210,6 +254,7 @@ def main():
                   if f == "2_5.jpg"]
         if not cached or open(cached[0], "rb").read() != tile:
             fail("GetMap did not answer the cached tile's bytes")
+        check_wmts("http://127.0.0.1:%s" % port, tile)
         print("owslib interop: all checks passed")
     finally:
         server.terminate()

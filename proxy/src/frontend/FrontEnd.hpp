@@ -15,9 +15,12 @@
 #include <tellus/proxy/ProxyFrontEnd.hpp>
 #include <tellus/proxy/TileService.hpp>
 #include <tellus/proxy/Wms.hpp>
+#include <tellus/proxy/Wmts.hpp>
 
 #include <cstdint>
 #include <expected>
+#include <map>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -199,6 +202,68 @@ private:
   HttpResponse tileError(const TileAnswer& a) const;
 
   FrontEnd& fe_;
+};
+
+/** WMTS 1.0.0 (`/wmts?` KVP, `/wmts/1.0.0/...` RESTful; WmtsFrontEnd.cpp): GetCapabilities and
+ * GetTile in three kinds of tile matrix sets (Wmts.hpp): the layer's own World Wind grid (the
+ * cached file, as /wwtile sends it), WorldCRS84Quad (composed, then kept in the cache as a
+ * dataset of its own: WmtsComposed.cpp) and GoogleMapsCompatible (a WMS GetMap in EPSG:3857
+ * through WmsFrontEnd). Errors are OWS 1.1 exception reports with WMTS's HTTP statuses. */
+class WmtsFrontEnd {
+public:
+  WmtsFrontEnd(FrontEnd& fe, WmsFrontEnd& wms);
+  void handle(const HttpRequest& req, const Responder& respond);
+
+private:
+  struct LayerSets {
+    const LayerSpec* layer = nullptr;
+    std::vector<WmtsTileMatrixSet> sets; ///< WorldWind, then the composed ones (if composable)
+  };
+  void capabilities(const HttpRequest& req, const Responder& respond) const;
+  void getTile(const HttpRequest& req, const WmtsGetTileRequest& t, const Responder& respond);
+  void worldWindTile(const HttpRequest& req,
+                     const LayerSpec& l,
+                     const TileKey& key,
+                     std::string time,
+                     const Responder& respond);
+  /** WorldCRS84Quad: from the cache of the composed set, else composed and kept (WmtsComposed). */
+  void crs84QuadTile(const HttpRequest& req,
+                     const LayerSpec& l,
+                     const WmtsTileMatrix& m,
+                     std::int32_t level,
+                     std::int64_t row,
+                     std::int64_t col,
+                     std::string time,
+                     std::int32_t levels,
+                     const Responder& respond);
+  /** GoogleMapsCompatible: a WMS GetMap of the tile's box in EPSG:3857 (WmtsComposed). */
+  void mercatorTile(const HttpRequest& req,
+                    const LayerSpec& l,
+                    const WmtsTileMatrix& m,
+                    std::int64_t row,
+                    std::int64_t col,
+                    const std::string& time,
+                    const Responder& respond);
+  /** The composed WorldCRS84Quad set of a layer at a time as a cache dataset: (id, folder), or
+   * nullopt when the cache cannot register it (then nothing is kept). */
+  std::optional<std::pair<DatasetId, std::string>>
+  crs84QuadDataset(const LayerSpec& l, const std::string& time, std::int32_t levels);
+  void exception(const OgcException& e,
+                 const Responder& respond,
+                 int status = 0,
+                 std::optional<FrontEnd::Temporary> temporary = std::nullopt) const;
+  void tileFailure(const TileAnswer& a, const Responder& respond) const;
+
+  /** The layers' sets, made on first use (the front ends are made before FrontEnd). */
+  const std::vector<LayerSets>& layerSets() const;
+
+  FrontEnd& fe_;
+  WmsFrontEnd& wms_;
+  mutable std::once_flag setsOnce_;
+  mutable std::vector<LayerSets> layers_;
+  mutable std::vector<WmtsTileMatrixSet> composedDefinitions_; ///< at the most levels of any layer
+  std::mutex datasetsMutex_;
+  std::map<std::pair<std::string, std::string>, std::pair<DatasetId, std::string>> datasets_;
 };
 
 /** The page (WebPage.hpp): `/` and its files, `/layers.json`, the plain-text index at

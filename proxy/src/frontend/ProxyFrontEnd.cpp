@@ -1,6 +1,7 @@
 // The HttpHandler of `tellus serve`: each request counted (/metrics) and, when the access log is
 // on, logged; refused requests and OPTIONS answered here; the rest routed to its front end (WMS,
-// World Wind and static tiles, the page and /metrics: FrontEnd.hpp). Nothing escapes a handler.
+// World Wind and static tiles, WMTS, the page and /metrics: FrontEnd.hpp). Nothing escapes a
+// handler.
 #include "frontend/FrontEnd.hpp"
 
 #include <tellus/proxy/Log.hpp>
@@ -18,12 +19,13 @@ namespace {
 Protocol protocolOf(const HttpRequest& req) {
   const bool wms =
       req.path == "/wms" || req.path == "/wms/" || (req.path == "/" && !req.query.empty());
-  return wms                               ? Protocol::Wms
-         : req.path == "/wwtile"           ? Protocol::WorldWind
-         : req.path.starts_with("/tiles/") ? Protocol::Static
-         : isWebPagePath(req.path)         ? Protocol::Page
-         : req.path == "/metrics"          ? Protocol::Metrics
-                                           : Protocol::Other;
+  return wms                                                     ? Protocol::Wms
+         : req.path == "/wwtile"                                 ? Protocol::WorldWind
+         : req.path.starts_with("/tiles/")                       ? Protocol::Static
+         : req.path == "/wmts" || req.path.starts_with("/wmts/") ? Protocol::Wmts
+         : isWebPagePath(req.path)                               ? Protocol::Page
+         : req.path == "/metrics"                                ? Protocol::Metrics
+                                                                 : Protocol::Other;
 }
 
 /** A header list such as Access-Control-Request-Headers asks for: tokens (RFC 9110) separated by
@@ -74,6 +76,7 @@ struct ProxyFrontEnd::Impl {
   // through the WMS front end while it stops.
   WmsFrontEnd wms{fe};
   TileFrontEnd tiles{fe};
+  WmtsFrontEnd wmts{fe, wms};
   PagesFrontEnd pages{fe};
   FrontEnd fe;
 
@@ -155,6 +158,8 @@ struct ProxyFrontEnd::Impl {
       return tiles.worldWind(req, respond);
     case Protocol::Static:
       return tiles.staticTile(req, respond);
+    case Protocol::Wmts:
+      return wmts.handle(req, respond);
     case Protocol::Page:
       return pages.index(req, respond);
     case Protocol::Metrics:

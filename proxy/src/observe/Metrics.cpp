@@ -12,6 +12,8 @@ const char* toString(Protocol p) noexcept {
     return "worldwind";
   case Protocol::Static:
     return "static";
+  case Protocol::Wmts:
+    return "wmts";
   case Protocol::Page:
     return "page";
   case Protocol::Metrics:

@@ -880,6 +880,10 @@ const TileGrid* TileService::grid(std::string_view name) const noexcept {
   return it == impl_->layerIndex.end() ? nullptr : &impl_->grids[it->second];
 }
 
+TileCache& TileService::cache() const noexcept {
+  return impl_->cache;
+}
+
 void TileService::getTile(std::string_view layer,
                           std::string_view time,
                           const TileKey& key,

@@ -1,4 +1,4 @@
-// `tellus serve`: the WMS / World Wind tile server over the cache, until SIGINT or SIGTERM.
+// `tellus serve`: the WMS / WMTS / World Wind tile server over the cache, until SIGINT or SIGTERM.
 
 #include "Commands.hpp"
 #include "Context.hpp"
@@ -82,6 +82,7 @@ void printEndpoints(const std::string& base,
               server.offline ? ", offline" : "");
   if (webPageEmbedded()) std::printf("  map page      %s/\n", base.c_str());
   std::printf("  capabilities  %s/wms?SERVICE=WMS&REQUEST=GetCapabilities\n", base.c_str());
+  std::printf("  WMTS          %s/wmts/1.0.0/WMTSCapabilities.xml\n", base.c_str());
   std::printf("  metrics       %s/metrics  (Prometheus)\n", base.c_str());
   for (const auto& l : tiles.layers()) {
     const auto& g = l.dataset.grid;

@@ -22,7 +22,7 @@ commands:
                                       DURATION: e.g. 30d, 12h, 15m, 45s; says what it removes
                                       (every layer unless --layer) before it does
              | export --gpkg FILE --layer NAME [--levels A-B] | import --gpkg FILE --layer NAME
-  serve    the WMS / World Wind tile server
+  serve    the WMS / WMTS / World Wind tile server
              [--listen HOST:PORT] [--threads N] [--offline]
              [--log-level error|warn|info|debug] [--access-log FILE|-]
   render   headless globe rendering to PNG (an X display or xvfb-run)

@@ -23,8 +23,8 @@
 
 namespace tellus {
 
-enum class Protocol : std::uint8_t { Wms, WorldWind, Static, Page, Metrics, Other };
-inline constexpr std::size_t kProtocolCount = 6;
+enum class Protocol : std::uint8_t { Wms, WorldWind, Static, Wmts, Page, Metrics, Other };
+inline constexpr std::size_t kProtocolCount = 7;
 const char* toString(Protocol p) noexcept;
 
 /** What a tile request came to (the X-Cache header, plus the non-tile answers; Refused: the

@@ -127,6 +127,10 @@ public:
   /** The grid of a layer (nullptr for an unknown layer). */
   const TileGrid* grid(std::string_view layer) const noexcept;
 
+  /** The cache the layers' tiles are kept in (WMTS keeps its composed tile matrix sets there,
+   * each a dataset of its own). */
+  TileCache& cache() const noexcept;
+
   /** One tile; `done` runs exactly once, possibly on another thread, possibly before return.
    * `time` must already be validated ("" = no time). When the request would start a fetch from a
    * remote upstream (a miss or an expired tile that no flight is fetching yet), `gate`'s budget is
