@@ -412,6 +412,10 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     FetchRequest req;
     req.upstream = u.name;
     req.url = upstreamUrl(u, l, g.sectorOf(fk.key), fk.key, time);
+    if (req.url.empty()) { // a WMTS tile outside the upstream's matrix: there is none to fetch
+      land(fk, absent(TileOrigin::Miss, "the upstream has no tile here"));
+      return;
+    }
     if (stale) {
       req.ifNoneMatch = stale->meta.etag;
       req.ifModifiedSince = stale->meta.lastModified;
@@ -800,6 +804,7 @@ TileService::create(TileCache& cache,
                     std::vector<LayerSpec> layers,
                     TileServiceOptions options) {
   auto impl = std::make_shared<Impl>(cache, fetcher, options);
+  std::map<std::string, WmtsCapabilities, std::less<>> wmtsCaps;
   for (auto& u : upstreams) {
     if (u.type == UpstreamSpec::Type::Local) {
       auto src = LocalRasterSource::open(u.path);
@@ -807,6 +812,20 @@ TileService::create(TileCache& cache,
       impl->rasters.emplace(u.name, std::move(*src));
     } else {
       fetcher.setPolicy(u.name, u.policy);
+    }
+    if (u.type == UpstreamSpec::Type::Wmts) {
+      const auto root =
+          options.wmtsCapabilitiesRoot.empty() ? cache.root() : options.wmtsCapabilitiesRoot;
+      std::string note;
+      auto caps = loadWmtsCapabilities(fetcher,
+                                       u.name,
+                                       u.url,
+                                       root.empty() ? root : wmtsCapabilitiesFile(root, u.name),
+                                       options.offline,
+                                       &note);
+      if (!caps) return std::unexpected("upstream '" + u.name + "': " + caps.error());
+      if (!note.empty()) logger().log(LogLevel::Warn, "upstream", note, {{"upstream", u.name}});
+      wmtsCaps.emplace(u.name, std::move(*caps));
     }
     const std::string name = u.name;
     impl->upstreams.emplace(name, std::move(u));
@@ -819,6 +838,18 @@ TileService::create(TileCache& cache,
     if (!grid) return std::unexpected("layer '" + l.name + "': " + grid.error());
     if (impl->layerIndex.contains(l.name)) return std::unexpected("layer '" + l.name + "' twice");
     if (l.upstreamLayer.empty()) l.upstreamLayer = l.name;
+    if (const auto caps = wmtsCaps.find(l.upstream); caps != wmtsCaps.end()) {
+      const UpstreamSpec& u = impl->upstreams.at(l.upstream);
+      WmtsChoice choice{l.upstreamLayer,
+                        l.dataset.style,
+                        l.dataset.mimeType,
+                        l.tileMatrixSet,
+                        u.wmtsEncoding,
+                        wmtsCapabilitiesUrl(u.url)};
+      auto bound = bindWmtsLayer(caps->second, choice, l.dataset.grid);
+      if (!bound) return std::unexpected("layer '" + l.name + "': " + bound.error());
+      l.wmts = std::make_shared<const WmtsTiles>(std::move(*bound));
+    }
     l.dataset.name = l.name;
     l.dataset.server = l.upstream;
     l.dataset.time.clear();
@@ -994,6 +1025,8 @@ std::string TileService::upstreamUrl(const UpstreamSpec& u,
                                      const Sector& s,
                                      const TileKey& key,
                                      std::string_view time) {
+  if (u.type == UpstreamSpec::Type::Wmts)
+    return l.wmts ? wmtsTileUrl(*l.wmts, key, time).value_or(std::string()) : std::string();
   if (u.type == UpstreamSpec::Type::WorldWind) {
     std::string url = u.url;
     if (url.find('?') == std::string::npos) {
