@@ -18,8 +18,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cstdlib>
 #include <map>
+#include <span>
 
 using namespace tellus;
 using namespace std::chrono_literals;
@@ -70,6 +73,20 @@ std::string capabilities(const std::string& base) {
          base +
          R"(/MODIS_Terra_CorrectedReflectance_TrueColor/default/{Time}/{TileMatrixSet}/{TileMatrix}/{TileRow}/{TileCol}.jpg"/>
     </Layer>
+    <Layer>
+      <ows:Identifier>Shifted</ows:Identifier>
+      <Format>image/jpeg</Format>
+      <Dimension><ows:Identifier>Time</ows:Identifier><Default>2014-02-07</Default></Dimension>
+      <TileMatrixSetLink><TileMatrixSet>shifted</TileMatrixSet></TileMatrixSetLink>
+      <ResourceURL format="image/jpeg" resourceType="tile" template=")" +
+         base + R"(/Shifted/default/{Time}/{TileMatrixSet}/{TileMatrix}/{TileRow}/{TileCol}.jpg"/>
+    </Layer>
+    <TileMatrixSet><ows:Identifier>shifted</ows:Identifier>
+      <ows:SupportedCRS>urn:ogc:def:crs:OGC:1.3:CRS84</ows:SupportedCRS>
+      <TileMatrix><ows:Identifier>0</ows:Identifier><ScaleDenominator>27954113.20143589</ScaleDenominator>
+        <TopLeftCorner>-180 72</TopLeftCorner><TileWidth>512</TileWidth><TileHeight>512</TileHeight>
+        <MatrixWidth>10</MatrixWidth><MatrixHeight>5</MatrixHeight></TileMatrix>
+    </TileMatrixSet>
     <TileMatrixSet><ows:Identifier>250m</ows:Identifier>
       <ows:SupportedCRS>urn:ogc:def:crs:OGC:1.3:CRS84</ows:SupportedCRS>)" +
          gibsMatrices() + R"(</TileMatrixSet>
@@ -134,7 +151,8 @@ test::FakeReply serveWmts(const test::FakeRequest& r, const std::string& base) {
     col = param(r.target, "TILECOL");
   } else {
     const auto parts = split(path, '/'); // "", wmts, layer, default, time, set, matrix, row, col
-    if (parts.size() != 9 || parts[5] != "250m" || !parts[8].ends_with(".jpg"))
+    if (parts.size() != 9 || (parts[5] != "250m" && parts[5] != "shifted") ||
+        !parts[8].ends_with(".jpg"))
       return test::FakeReply::withStatus(404, "no such path");
     time = parts[4];
     matrix = parts[6];
@@ -173,13 +191,15 @@ struct WmtsProxy {
       ups.push_back(u);
     }
     std::vector<LayerSpec> layers;
-    for (const auto& [name, upstream] :
-         {std::pair<std::string, std::string>{"modis", "gibs"}, {"modis-kvp", "gibs-kvp"}}) {
+    for (const auto& [name, upstream] : {std::pair<std::string, std::string>{"modis", "gibs"},
+                                         {"modis-kvp", "gibs-kvp"},
+                                         {"shifted", "gibs"}}) {
       LayerSpec l;
       l.name = name;
       l.upstream = upstream;
-      l.upstreamLayer = "MODIS_Terra_CorrectedReflectance_TrueColor";
-      l.dataset.grid = GridSpec{Sector{}, 36.0, 512, 512, 3};
+      l.upstreamLayer =
+          name == "shifted" ? "Shifted" : "MODIS_Terra_CorrectedReflectance_TrueColor";
+      l.dataset.grid = GridSpec{Sector{}, 36.0, 512, 512, name == "shifted" ? 1 : 3};
       l.dataset.mimeType = "image/jpeg";
       l.timeValues = {"2000-01-01", "2000-01-02", "2000-01-03", "2013-06-01", "2014-02-07"};
       l.timeDefault = "2014-02-07";
@@ -371,4 +391,50 @@ TEST(WmtsIntegration, ALayerTheUpstreamLacksIsRefusedAtStart) {
   EXPECT_NE(t.error().find("layer 'sst'"), std::string::npos) << t.error();
   EXPECT_NE(t.error().find("'MODIS_Terra_CorrectedReflectance_TrueColor'"), std::string::npos)
       << t.error();
+}
+
+TEST(WmtsIntegration, ASetThatDoesNotLineUpIsComposedFromTheTilesThatCoverIt) {
+  Fake fake;
+  test::TempDir dir("wmts-compose");
+  WmtsProxy p(dir.path(), fake.up.url("/wmts/1.0.0/WMTSCapabilities.xml"));
+  ASSERT_TRUE(p.tiles) << p.error;
+  // The set "shifted" starts at 72 N: World Wind tile (0, 3, 0), 18-54 N, is the bottom half of
+  // its row 0 over the top half of its row 1.
+  const auto r = p.get("/wwtile?T=shifted&L=0&X=0&Y=3");
+  ASSERT_EQ(r.status, 200) << r.body;
+  EXPECT_EQ(r.headers.at("x-cache"), "MISS");
+  std::vector<std::string> asked;
+  for (const auto& q : fake.up.received())
+    if (q.target.starts_with("/wmts/Shifted/")) asked.push_back(q.target);
+  std::sort(asked.begin(), asked.end());
+  EXPECT_EQ(asked,
+            (std::vector<std::string>{"/wmts/Shifted/default/2014-02-07/shifted/0/0/0.jpg",
+                                      "/wmts/Shifted/default/2014-02-07/shifted/0/1/0.jpg"}));
+  const auto bytes = [](const std::string& s) {
+    return std::span(reinterpret_cast<const std::byte*>(s.data()), s.size());
+  };
+  auto got = codec::decodeJpeg(bytes(r.body));
+  auto upper = codec::decodeJpeg(bytes(fakeTile("2014-02-07", "0", "0", "0")));
+  auto lower = codec::decodeJpeg(bytes(fakeTile("2014-02-07", "0", "1", "0")));
+  ASSERT_TRUE(got && upper && lower);
+  ASSERT_EQ(got->width, 512);
+  ASSERT_EQ(got->height, 512);
+  // Same pixel size, half a tile down: output row y is source row y + 256 of row 0 (y < 256),
+  // row y - 256 of row 1 after; JPEG encoded again at quality 90.
+  double diff = 0;
+  for (int y = 0; y < 512; ++y)
+    for (int x = 0; x < 512 * 3; ++x) {
+      const auto& src = y < 256 ? *upper : *lower;
+      const int sy = y < 256 ? y + 256 : y - 256;
+      diff += std::abs(int(got->pixels[std::size_t(y) * 1536 + std::size_t(x)]) -
+                       int(src.pixels[std::size_t(sy) * 1536 + std::size_t(x)]));
+    }
+  EXPECT_LT(diff / (512.0 * 1536.0), 4.0);
+  const auto again = p.get("/wwtile?T=shifted&L=0&X=0&Y=3");
+  EXPECT_EQ(again.headers.at("x-cache"), "HIT");
+  EXPECT_EQ(again.body, r.body);
+  // One source tile failing fails the tile and stores nothing.
+  const auto down = p.get("/tiles/shifted/0/3/3_0.jpg?time=2000-01-01");
+  EXPECT_GE(down.status, 500) << down.body;
+  EXPECT_FALSE(p.cached("shifted", "2000-01-01", TileKey{0, 3, 0}));
 }

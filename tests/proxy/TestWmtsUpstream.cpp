@@ -3,11 +3,14 @@
 // World Wind grids by arithmetic, tile URLs (REST and KVP, rows flipped), and the refusals.
 
 #include "../../proxy/src/upstream/MiniXml.hpp"
+#include "../../proxy/src/upstream/WmtsCompose.hpp"
 
+#include <tellus/codec/Png.hpp>
 #include <tellus/proxy/WmtsUpstream.hpp>
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <fstream>
 #include <sstream>
 
@@ -251,27 +254,16 @@ TEST(WmtsMapping, LevelsPastTheSetsFinestAreRefusedWithTheLimit) {
   EXPECT_NE(t.error().find("at most 6"), std::string::npos) << t.error();
 }
 
-TEST(WmtsMapping, SetsThatDoNotLineUpAreRefusedSayingWhy) {
-  // GIBS's 16 km set stops at 72-degree tiles: nothing of it is a World Wind level.
+TEST(WmtsMapping, SetsTooCoarseOrProjectedAreRefusedSayingWhy) {
+  // GIBS's 16 km set stops at 72-degree tiles: nothing of it is as fine as a World Wind level.
   WmtsChoice sst;
   sst.layer = "Sea_Surface_Temp_Microwave";
   sst.format = "image/png";
   auto t = bindWmtsLayer(gibs(), sst, wwGrid(1));
   ASSERT_FALSE(t);
-  EXPECT_NE(t.error().find("does not line up"), std::string::npos) << t.error();
+  EXPECT_NE(t.error().find("no matrix as fine as the grid's level 0"), std::string::npos)
+      << t.error();
   EXPECT_NE(t.error().find("72 deg"), std::string::npos) << t.error();
-  // Another tile size.
-  auto small = bindWmtsLayer(gibs(), modis(), wwGrid(1, 256));
-  ASSERT_FALSE(small);
-  EXPECT_NE(small.error().find("does not line up"), std::string::npos) << small.error();
-  // A corner half a tile off the grid's edges.
-  const std::string sd36 = "27954113.20143589";
-  auto off = parseWmtsCapabilities(
-      syntheticDocument("urn:ogc:def:crs:OGC:1.3:CRS84", matrix("a", sd36, "-162 90", 10, 5)));
-  ASSERT_TRUE(off) << off.error();
-  auto o = bindWmtsLayer(*off, synthetic(), wwGrid(1));
-  ASSERT_FALSE(o);
-  EXPECT_NE(o.error().find("top-left corner"), std::string::npos) << o.error();
   // Web Mercator.
   auto merc = parseWmtsCapabilities(
       syntheticDocument("urn:ogc:def:crs:EPSG::3857",
@@ -282,19 +274,55 @@ TEST(WmtsMapping, SetsThatDoNotLineUpAreRefusedSayingWhy) {
   EXPECT_NE(m.error().find("Web Mercator"), std::string::npos) << m.error();
 }
 
+TEST(WmtsMapping, LevelsNoMatrixLinesUpWithAreComposedFromTheCoarsestFineEnough) {
+  // 256 px grid tiles: no GIBS matrix has them; level 0 (0.14 deg/px) comes from GIBS matrix 2
+  // (72-degree tiles of 512 px: the same pixel), level 1 from matrix 3.
+  auto t = bindWmtsLayer(gibs(), modis(), wwGrid(2, 256));
+  ASSERT_TRUE(t) << t.error();
+  EXPECT_EQ(t->levels[0].composeFrom, 2);
+  EXPECT_EQ(t->levels[1].composeFrom, 3);
+  EXPECT_TRUE(wmtsComposed(*t, TileKey{0, 0, 0}));
+  EXPECT_FALSE(wmtsTileUrl(*t, TileKey{0, 0, 0}, ""));
+  // The south-westernmost 36-degree tile lies in GIBS tile (row 2, col 0) of matrix 2 alone.
+  const auto src =
+      wmtsSourceTiles(*t, TileKey{0, 0, 0}, Sector{-180, -90, -144, -54}, 256, 256, "2013-06-01");
+  ASSERT_EQ(src.size(), 1u);
+  EXPECT_EQ(src[0].row, 2);
+  EXPECT_EQ(src[0].col, 0);
+  EXPECT_NE(src[0].url.find("/2013-06-01/EPSG4326_250m/2/2/0.jpg"), std::string::npos)
+      << src[0].url;
+  // A corner half a tile off the grid's edges: composed from that matrix, two tiles a grid tile.
+  const std::string sd36 = "27954113.20143589";
+  auto off = parseWmtsCapabilities(
+      syntheticDocument("urn:ogc:def:crs:OGC:1.3:CRS84", matrix("a", sd36, "-180 72", 10, 5)));
+  ASSERT_TRUE(off) << off.error();
+  auto o = bindWmtsLayer(*off, synthetic(), wwGrid(1));
+  ASSERT_TRUE(o) << o.error();
+  EXPECT_EQ(o->levels[0].composeFrom, 0);
+  const auto two = wmtsSourceTiles(*o, TileKey{0, 3, 0}, Sector{-180, 18, -144, 54}, 512, 512, "");
+  ASSERT_EQ(two.size(), 2u);
+  EXPECT_EQ(two[0].row, 0);
+  EXPECT_EQ(two[1].row, 1);
+  EXPECT_EQ(two[1].col, 0);
+  // North of the matrix (72-90 N is outside it; the tile 54-90 N needs only its row 0).
+  EXPECT_EQ(wmtsSourceTiles(*o, TileKey{0, 4, 0}, Sector{-180, 54, -144, 90}, 512, 512, "").size(),
+            1u);
+}
+
 TEST(WmtsMapping, AlignmentIsArithmeticWithATolerance) {
   // The set's name says nothing; EPSG:4326 corners latitude first (as the standard has them);
   // a scale denominator rounded to 10 digits still lines up (0.01 px over the whole matrix), one
-  // 3e-6 off does not.
+  // 4e-6 off does not (that level is composed instead).
   for (const auto& [sd, aligned] : std::vector<std::pair<std::string, bool>>{
-           {"27954113.20143589", true}, {"27954113.20", true}, {"27954200.0", false}}) {
+           {"27954113.20143589", true}, {"27954113.20", true}, {"27954000.0", false}}) {
     SCOPED_TRACE(sd);
     auto caps = parseWmtsCapabilities(
         syntheticDocument("urn:ogc:def:crs:EPSG::4326", matrix("top", sd, "90 -180", 10, 5)));
     ASSERT_TRUE(caps) << caps.error();
     auto t = bindWmtsLayer(*caps, synthetic(), wwGrid(1));
-    EXPECT_EQ(t.has_value(), aligned) << (t ? "" : t.error());
-    if (t) {
+    ASSERT_TRUE(t) << t.error();
+    EXPECT_EQ(t->levels[0].composeFrom < 0, aligned);
+    if (aligned) {
       EXPECT_EQ(t->levels[0].rowBase, 4);
       EXPECT_FALSE(t->rest); // no ResourceURL: KVP, on the capabilities URL's path
       EXPECT_EQ(wmtsTileUrl(*t, TileKey{0, 0, 0}, ""),
@@ -357,4 +385,72 @@ TEST(WmtsMapping, CapabilitiesUrlIsCompletedOnlyWhenItAsksForNothing) {
             "http://h/wmts?request=GetCapabilities&service=WMTS");
   EXPECT_EQ(wmtsCapabilitiesUrl("https://h/wmts/1.0.0/WMTSCapabilities.xml"),
             "https://h/wmts/1.0.0/WMTSCapabilities.xml");
+}
+
+// ------------------------------------------------------------------------------ composition
+
+namespace {
+
+std::vector<std::byte> solidPng(int w, int h, std::array<std::uint8_t, 4> rgba) {
+  std::vector<std::uint8_t> px(static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4);
+  for (std::size_t i = 0; i < px.size(); ++i)
+    px[i] = rgba[i % 4];
+  return *codec::encodePng(w, h, 4, px.data());
+}
+
+std::array<int, 4> pixelAt(const codec::Image& img, int x, int y) {
+  const auto i = (static_cast<std::size_t>(y) * static_cast<std::size_t>(img.width) +
+                  static_cast<std::size_t>(x)) *
+                 4;
+  return {img.pixels[i], img.pixels[i + 1], img.pixels[i + 2], img.pixels[i + 3]};
+}
+
+} // namespace
+
+TEST(WmtsCompose, TilesAreSampledWhereTheyLieAndNothingOutsideTheMatrix) {
+  // Matrix "a": 36-degree tiles of 512 px from (-180, 72); grid tile (0, 3, 0) spans 18-54 N:
+  // its top half is the bottom half of source row 0, its bottom half the top of source row 1.
+  auto caps = parseWmtsCapabilities(syntheticDocument(
+      "urn:ogc:def:crs:OGC:1.3:CRS84", matrix("a", "27954113.20143589", "-180 72", 10, 5)));
+  ASSERT_TRUE(caps) << caps.error();
+  auto t = bindWmtsLayer(*caps, synthetic(), wwGrid(1));
+  ASSERT_TRUE(t) << t.error();
+  const Sector sector{-180, 18, -144, 54};
+  auto src = wmtsSourceTiles(*t, TileKey{0, 3, 0}, sector, 512, 512, "");
+  ASSERT_EQ(src.size(), 2u);
+  std::vector<WmtsFetchedTile> fetched{{src[0], solidPng(512, 512, {200, 10, 10, 255})},
+                                       {src[1], solidPng(512, 512, {10, 10, 200, 255})}};
+  auto png = composeWmtsTile(*t, TileKey{0, 3, 0}, sector, 512, 512, fetched, "image/png");
+  ASSERT_TRUE(png) << png.error();
+  auto img = codec::decodePng(*png);
+  ASSERT_TRUE(img);
+  ASSERT_EQ(img->width, 512);
+  EXPECT_EQ(pixelAt(*img, 0, 0), (std::array<int, 4>{200, 10, 10, 255}));
+  EXPECT_EQ(pixelAt(*img, 300, 255), (std::array<int, 4>{200, 10, 10, 255}));
+  EXPECT_EQ(pixelAt(*img, 300, 256), (std::array<int, 4>{10, 10, 200, 255}));
+  EXPECT_EQ(pixelAt(*img, 511, 511), (std::array<int, 4>{10, 10, 200, 255}));
+  // A source tile the server does not have (404) is transparent, not black.
+  fetched[1].bytes.clear();
+  auto hole = composeWmtsTile(*t, TileKey{0, 3, 0}, sector, 512, 512, fetched, "image/png");
+  ASSERT_TRUE(hole) << hole.error();
+  auto h = codec::decodePng(*hole);
+  ASSERT_TRUE(h);
+  EXPECT_EQ(pixelAt(*h, 10, 10), (std::array<int, 4>{200, 10, 10, 255}));
+  EXPECT_EQ(pixelAt(*h, 10, 400)[3], 0);
+  // The tile 54-90 N: north of 72 N is outside the matrix, transparent.
+  const Sector north{-180, 54, -144, 90};
+  auto top = wmtsSourceTiles(*t, TileKey{0, 4, 0}, north, 512, 512, "");
+  ASSERT_EQ(top.size(), 1u);
+  std::vector<WmtsFetchedTile> one{{top[0], solidPng(512, 512, {200, 10, 10, 255})}};
+  auto edge = composeWmtsTile(*t, TileKey{0, 4, 0}, north, 512, 512, one, "image/png");
+  ASSERT_TRUE(edge) << edge.error();
+  auto e = codec::decodePng(*edge);
+  ASSERT_TRUE(e);
+  EXPECT_EQ(pixelAt(*e, 5, 200)[3], 0);
+  EXPECT_EQ(pixelAt(*e, 5, 300), (std::array<int, 4>{200, 10, 10, 255}));
+  // A source tile of the wrong size, or garbage, is an error naming its URL.
+  std::vector<WmtsFetchedTile> bad{{src[0], solidPng(256, 256, {0, 0, 0, 255})}};
+  auto wrong = composeWmtsTile(*t, TileKey{0, 3, 0}, sector, 512, 512, bad, "image/jpeg");
+  ASSERT_FALSE(wrong);
+  EXPECT_NE(wrong.error().find("256 x 256"), std::string::npos) << wrong.error();
 }

@@ -163,63 +163,86 @@ bindWmtsLayer(const WmtsCapabilities& caps, const WmtsChoice& choice, const Grid
                            (set->crs.empty() ? std::string("no CRS") : "'" + set->crs + "'") +
                            ": only lat/long sets (EPSG:4326, CRS84) can be mapped onto the grid; "
                            "Web Mercator and other projected upstream sets are not supported yet");
+  for (const auto& m : set->matrices) {
+    const double lon = axes == Axes::LonLat ? m.topLeftX : m.topLeftY;
+    const double lat = axes == Axes::LonLat ? m.topLeftY : m.topLeftX;
+    // Some servers (GIBS) write EPSG:4326 corners longitude first: a "latitude" beyond 90 says so.
+    const bool swapped = axes == Axes::LatLon && std::fabs(lat) > 90.0;
+    t.matrices.push_back(WmtsMatrixGeometry{m.identifier,
+                                            swapped ? lat : lon,
+                                            swapped ? lon : lat,
+                                            m.scaleDenominator * kPixelMetres / kMetresPerDegree,
+                                            m.tileWidth,
+                                            m.tileHeight,
+                                            m.matrixWidth,
+                                            m.matrixHeight});
+  }
   for (std::int32_t level = 0; level < grid.numLevels; ++level) {
     const double span = grid.levelZeroDeltaDeg / std::ldexp(1.0, level);
     const double pixel = span / grid.tileWidth;
-    const WmtsTileMatrix* found = nullptr;
-    for (const auto& m : set->matrices) {
-      if (m.tileWidth != grid.tileWidth || m.tileHeight != grid.tileHeight) continue;
-      const double mPixel = m.scaleDenominator * kPixelMetres / kMetresPerDegree;
-      const double mSpan = mPixel * m.tileWidth;
-      if (std::fabs(mSpan - span) * static_cast<double>(m.matrixWidth) > kTolerancePx * pixel)
-        continue;
-      found = &m;
-      break;
-    }
-    if (!found) {
-      if (level == 0)
-        return std::unexpected(
-            "tile matrix set '" + set->identifier + "' does not line up with the layer's grid (" +
-            std::to_string(grid.levelZeroDeltaDeg) + "-degree level 0, " +
-            std::to_string(grid.tileWidth) + " px tiles): its matrices are " +
-            setDescription(*set) + "; composing sets that do not line up is not supported yet");
-      return std::unexpected("tile matrix set '" + set->identifier + "' lines up with levels 0-" +
-                             std::to_string(level - 1) + " of the grid only (its finest is " +
-                             set->matrices.back().identifier + "): set grid.levels to at most " +
-                             std::to_string(level));
-    }
-    const double lon = axes == Axes::LonLat ? found->topLeftX : found->topLeftY;
-    const double lat = axes == Axes::LonLat ? found->topLeftY : found->topLeftX;
-    // Some servers (GIBS) write EPSG:4326 corners longitude first: a "latitude" beyond 90 says so.
-    const bool swapped = axes == Axes::LatLon && std::fabs(lat) > 90.0;
-    const double west = swapped ? lat : lon;
-    const double north = swapped ? lon : lat;
     const double tol = kTolerancePx / grid.tileWidth;
-    // World Wind's origin is (-90, -180): tile (row, col) spans from -90 + row * span northwards.
-    const auto colBase = whole((-180.0 - west) / span, tol);
-    const auto northRows = whole((north + 90.0) / span, tol);
-    if (!colBase || !northRows)
-      return std::unexpected("tile matrix '" + found->identifier + "' of set '" + set->identifier +
-                             "' has its top-left corner off the grid's tile " +
-                             "edges; composing sets that do not line up is not supported yet");
     WmtsLevel lv;
-    lv.matrix = found->identifier;
-    lv.colBase = *colBase;
-    lv.rowBase = *northRows - 1;
-    lv.matrixWidth = found->matrixWidth;
-    lv.matrixHeight = found->matrixHeight;
+    for (std::size_t i = 0; i < t.matrices.size() && lv.matrix.empty(); ++i) {
+      const WmtsMatrixGeometry& m = t.matrices[i];
+      if (m.tileWidth != grid.tileWidth || m.tileHeight != grid.tileHeight) continue;
+      if (std::fabs(m.pixelDeg * m.tileWidth - span) * static_cast<double>(m.matrixWidth) >
+          kTolerancePx * pixel)
+        continue;
+      // World Wind's origin is (-90, -180): tile (row, col) spans from -90 + row * span north.
+      const auto colBase = whole((-180.0 - m.west) / span, tol);
+      const auto northRows = whole((m.north + 90.0) / span, tol);
+      if (!colBase || !northRows) continue;
+      lv.matrix = m.identifier;
+      lv.colBase = *colBase;
+      lv.rowBase = *northRows - 1;
+      lv.matrixWidth = m.matrixWidth;
+      lv.matrixHeight = m.matrixHeight;
+    }
+    if (lv.matrix.empty()) {
+      // Composed from the coarsest matrix at least as fine as the level.
+      int from = -1;
+      for (std::size_t i = 0; i < t.matrices.size(); ++i) {
+        const WmtsMatrixGeometry& m = t.matrices[i];
+        if (m.pixelDeg > pixel * (1.0 + 1e-9)) continue;
+        if (from < 0 || m.pixelDeg > t.matrices[static_cast<std::size_t>(from)].pixelDeg)
+          from = static_cast<int>(i);
+      }
+      if (from < 0) {
+        if (level == 0)
+          return std::unexpected("tile matrix set '" + set->identifier +
+                                 "' has no matrix as fine as the grid's level 0 (" +
+                                 std::to_string(grid.tileWidth) + " px tiles of " +
+                                 std::to_string(grid.levelZeroDeltaDeg) +
+                                 " degrees): its matrices are " + setDescription(*set));
+        return std::unexpected("tile matrix set '" + set->identifier + "' reaches levels 0-" +
+                               std::to_string(level - 1) + " of the grid only (its finest is " +
+                               set->matrices.back().identifier + "): set grid.levels to at most " +
+                               std::to_string(level));
+      }
+      const WmtsMatrixGeometry& m = t.matrices[static_cast<std::size_t>(from)];
+      // At most this many upstream tiles make one grid tile (a sanity bound).
+      const double across = std::ceil(span / (m.pixelDeg * m.tileWidth)) + 1.0;
+      const double down = std::ceil(span / (m.pixelDeg * m.tileHeight)) + 1.0;
+      if (across * down > 64.0)
+        return std::unexpected("level " + std::to_string(level) +
+                               " of the grid would be composed from " +
+                               std::to_string(static_cast<long long>(across * down)) +
+                               " tiles of matrix '" + m.identifier + "' each: more than 64");
+      lv.composeFrom = from;
+      lv.matrix = m.identifier;
+    }
     t.levels.push_back(std::move(lv));
   }
   return t;
 }
 
-std::optional<std::string>
-wmtsTileUrl(const WmtsTiles& t, const TileKey& key, std::string_view time) {
-  if (key.level < 0 || static_cast<std::size_t>(key.level) >= t.levels.size()) return std::nullopt;
-  const WmtsLevel& lv = t.levels[static_cast<std::size_t>(key.level)];
-  const std::int64_t row = lv.rowBase - key.row;
-  const std::int64_t col = lv.colBase + key.col;
-  if (row < 0 || col < 0 || row >= lv.matrixHeight || col >= lv.matrixWidth) return std::nullopt;
+namespace {
+
+std::string urlOf(const WmtsTiles& t,
+                  const std::string& matrix,
+                  std::int64_t row,
+                  std::int64_t col,
+                  std::string_view time) {
   const std::string timeValue(time.empty() ? std::string_view(t.timeDefault) : time);
   if (!t.rest) {
     std::string url = t.urlTemplate;
@@ -230,7 +253,7 @@ wmtsTileUrl(const WmtsTiles& t, const TileKey& key, std::string_view time) {
     }
     url += "SERVICE=WMTS&REQUEST=GetTile&VERSION=1.0.0&LAYER=" + encode(t.layer) +
            "&STYLE=" + encode(t.style) + "&FORMAT=" + encode(t.format) +
-           "&TILEMATRIXSET=" + encode(t.tileMatrixSet) + "&TILEMATRIX=" + encode(lv.matrix) +
+           "&TILEMATRIXSET=" + encode(t.tileMatrixSet) + "&TILEMATRIX=" + encode(matrix) +
            "&TILEROW=" + std::to_string(row) + "&TILECOL=" + std::to_string(col);
     if (!t.timeName.empty() && !timeValue.empty()) url += "&TIME=" + encode(timeValue);
     for (const auto& [name, value] : t.dimensions)
@@ -256,7 +279,7 @@ wmtsTileUrl(const WmtsTiles& t, const TileKey& key, std::string_view time) {
     if (iequals(name, "TileMatrixSet"))
       value = t.tileMatrixSet;
     else if (iequals(name, "TileMatrix"))
-      value = lv.matrix;
+      value = matrix;
     else if (iequals(name, "TileRow"))
       value = std::to_string(row);
     else if (iequals(name, "TileCol"))
@@ -280,6 +303,59 @@ wmtsTileUrl(const WmtsTiles& t, const TileKey& key, std::string_view time) {
     i = close + 1;
   }
   return url;
+}
+
+} // namespace
+
+bool wmtsComposed(const WmtsTiles& t, const TileKey& key) noexcept {
+  return key.level >= 0 && static_cast<std::size_t>(key.level) < t.levels.size() &&
+         t.levels[static_cast<std::size_t>(key.level)].composeFrom >= 0;
+}
+
+std::vector<WmtsSourceTile> wmtsSourceTiles(const WmtsTiles& t,
+                                            const TileKey& key,
+                                            const Sector& s,
+                                            int width,
+                                            int height,
+                                            std::string_view time) {
+  std::vector<WmtsSourceTile> out;
+  if (!wmtsComposed(t, key) || width < 1 || height < 1) return out;
+  const auto from = t.levels[static_cast<std::size_t>(key.level)].composeFrom;
+  const WmtsMatrixGeometry& m = t.matrices[static_cast<std::size_t>(from)];
+  const double mw = static_cast<double>(m.matrixWidth) * m.tileWidth;   // pixels across
+  const double mh = static_cast<double>(m.matrixHeight) * m.tileHeight; // pixels down
+  // The source pixels the bilinear samples at the first and last output pixel centres touch
+  // (composeWmtsTile samples at the same places), clipped to the matrix.
+  const double pxW = (s.east - s.west) / width;
+  const double pxH = (s.north - s.south) / height;
+  // (A millionth of a pixel of slack: a weight that small is no reason to fetch a tile.)
+  const auto lo = [](double v) { return std::floor(v + 1e-6); };
+  const auto hi = [](double v) { return std::ceil(v - 1e-6); };
+  const double u0 = lo((s.west + 0.5 * pxW - m.west) / m.pixelDeg - 0.5);
+  const double u1 = hi((s.east - 0.5 * pxW - m.west) / m.pixelDeg - 0.5);
+  const double v0 = lo((m.north - (s.north - 0.5 * pxH)) / m.pixelDeg - 0.5);
+  const double v1 = hi((m.north - (s.south + 0.5 * pxH)) / m.pixelDeg - 0.5);
+  if (u1 < 0 || v1 < 0 || u0 >= mw || v0 >= mh) return out; // outside the matrix: no tile
+  const auto tileOf = [](double px, double max, std::int32_t size) {
+    return static_cast<std::int64_t>(std::clamp(px, 0.0, max - 1) / size);
+  };
+  const std::int64_t c0 = tileOf(u0, mw, m.tileWidth), c1 = tileOf(u1, mw, m.tileWidth);
+  const std::int64_t r0 = tileOf(v0, mh, m.tileHeight), r1 = tileOf(v1, mh, m.tileHeight);
+  for (std::int64_t r = r0; r <= r1; ++r)
+    for (std::int64_t c = c0; c <= c1; ++c)
+      out.push_back(WmtsSourceTile{r, c, urlOf(t, m.identifier, r, c, time)});
+  return out;
+}
+
+std::optional<std::string>
+wmtsTileUrl(const WmtsTiles& t, const TileKey& key, std::string_view time) {
+  if (key.level < 0 || static_cast<std::size_t>(key.level) >= t.levels.size()) return std::nullopt;
+  const WmtsLevel& lv = t.levels[static_cast<std::size_t>(key.level)];
+  if (lv.composeFrom >= 0) return std::nullopt;
+  const std::int64_t row = lv.rowBase - key.row;
+  const std::int64_t col = lv.colBase + key.col;
+  if (row < 0 || col < 0 || row >= lv.matrixHeight || col >= lv.matrixWidth) return std::nullopt;
+  return urlOf(t, lv.matrix, row, col, time);
 }
 
 std::string wmtsCapabilitiesUrl(const std::string& url) {

@@ -16,8 +16,10 @@
  * level n + 3 is World Wind level n (36-degree tiles). GIBS levels 0-2 (288, 144 and 72 degrees)
  * have no World Wind level and are never fetched; World Wind levels finer than the set's finest
  * matrix are refused at start (a layer's grid.levels must stop there: upsampling makes nothing).
- * Sets that do not line up (another tile size or origin) and projected sets (Web Mercator) are
- * refused at start with a message that says why; composing them is not done yet.
+ * A level that no matrix lines up with (another tile size, span or origin) is composed: from the
+ * coarsest matrix at least as fine as the level, the upstream tiles covering the grid tile are
+ * fetched, decoded, sampled bilinearly at the grid's pixel centres and encoded in the layer's
+ * format (WmtsCompose.hpp). Projected sets (Web Mercator) are refused at start, saying so.
  *
  * Capabilities are fetched once at start through the upstream's fetcher and kept in a file
  * (WmtsCapabilitiesCache) so that a start without the network, or with `--offline`, reads the
@@ -108,8 +110,22 @@ struct WmtsChoice {
   std::string capabilitiesUrl; ///< where the KVP base comes from when the document names none
 };
 
-/** One World Wind level's matrix: WMTS row = rowBase - row, WMTS column = colBase + col. */
+/** Where a matrix lies, in degrees (the corner as west and north whatever the CRS's axis order). */
+struct WmtsMatrixGeometry {
+  std::string identifier;
+  double west = -180.0;
+  double north = 90.0;
+  double pixelDeg = 0.0; ///< one pixel's span
+  std::int32_t tileWidth = 0;
+  std::int32_t tileHeight = 0;
+  std::int64_t matrixWidth = 0;
+  std::int64_t matrixHeight = 0;
+};
+
+/** One World Wind level's matrix: WMTS row = rowBase - row, WMTS column = colBase + col; or, when
+ * `composeFrom` >= 0, the index in WmtsTiles::matrices of the matrix it is composed from. */
 struct WmtsLevel {
+  int composeFrom = -1;
   std::string matrix;
   std::int64_t rowBase = 0;
   std::int64_t colBase = 0;
@@ -129,8 +145,29 @@ struct WmtsTiles {
   std::string timeDefault; ///< its default (used when a tile is asked for without a time)
   /// other dimensions, at their defaults
   std::vector<std::pair<std::string, std::string>> dimensions;
-  std::vector<WmtsLevel> levels; ///< one per level of the grid
+  std::vector<WmtsLevel> levels;            ///< one per level of the grid
+  std::vector<WmtsMatrixGeometry> matrices; ///< the set's matrices (what composed levels use)
 };
+
+/** One upstream tile of a composed level. */
+struct WmtsSourceTile {
+  std::int64_t row = 0; ///< WMTS row (from the top) and column of the source matrix
+  std::int64_t col = 0;
+  std::string url;
+};
+
+/** Whether the level of `key` is composed (not re-indexed). */
+bool wmtsComposed(const WmtsTiles& tiles, const TileKey& key) noexcept;
+
+/** The upstream tiles a composed tile of `sector`, `width` x `height` pixels, needs: those its
+ * bilinear samples touch, inside the source matrix (empty when the tile lies outside it: there is
+ * no such tile). */
+std::vector<WmtsSourceTile> wmtsSourceTiles(const WmtsTiles& tiles,
+                                            const TileKey& key,
+                                            const Sector& sector,
+                                            int width,
+                                            int height,
+                                            std::string_view time);
 
 /** Chooses and checks (layer, style, format, set exist; clear errors naming what exists) and
  * maps every level of `grid` onto a matrix of the set (see the file comment). */
