@@ -44,8 +44,8 @@ struct UpstreamSpec {
   /// Wms: seeding asks for up to metaTiles x metaTiles tiles of a level with one GetMap (getTiles);
   /// 1 = one GetMap per tile. The configuration's default is 4 (docs/CONFIG.md).
   int metaTiles = 1;
-  WmtsEncoding wmtsEncoding = WmtsEncoding::Auto; ///< Wmts: how tiles are asked for
   UpstreamPolicy policy;
+  WmtsEncoding wmtsEncoding = WmtsEncoding::Auto; ///< Wmts: how tiles are asked for
 };
 
 /** A layer as the proxy serves it. */
@@ -56,9 +56,6 @@ struct LayerSpec {
   DatasetSpec dataset; ///< server = upstream name, name = layer name, time = "" (per request)
   std::string upstream;
   std::string upstreamLayer; ///< WMS LAYERS / World Wind T= / WMTS LAYER (default: name)
-  std::string tileMatrixSet; ///< Wmts: the upstream's set ("" = the layer's only one)
-  /// Wmts: the upstream layer bound to this layer's grid (TileService::create fills it in)
-  std::shared_ptr<const WmtsTiles> wmts;
   std::int32_t firstLevel = 0;
   bool elevation = false;
   std::int16_t noData = -32768;
@@ -70,6 +67,9 @@ struct LayerSpec {
   std::string timeDefault;
   /** Value and elevation layers: samples, colour-map styles, queryable (ValueLayer.hpp). */
   std::optional<ValueLayerSpec> values;
+  std::string tileMatrixSet; ///< Wmts: the upstream's set ("" = the layer's only one)
+  /// Wmts: the upstream layer bound to this layer's grid (TileService::create fills it in)
+  std::shared_ptr<const WmtsTiles> wmts;
 };
 
 /** Where an answer came from (the X-Cache header). */
