@@ -88,12 +88,13 @@ test-sanitizers: web-page
 # build-fuzz/artifacts/<target>/ and the log in build-fuzz/<target>.log. Replay one:
 # build-fuzz/fuzz/<target> <file>.
 FUZZ_SECONDS ?= 20
-FUZZ_TARGETS := fuzz_query fuzz_static_path fuzz_config fuzz_codec fuzz_values
+FUZZ_TARGETS := fuzz_query fuzz_static_path fuzz_config fuzz_codec fuzz_values fuzz_wmts_capabilities
 fuzz: setup
 	@[ -f build-fuzz/build.ninja ] || cmake --preset fuzz
 	cmake --build build-fuzz -j$(JOBS) --target tellus_fuzz
 	@set -e; for t in $(FUZZ_TARGETS); do \
 	  case $$t in fuzz_config) dict=fuzz/config.dict;; fuzz_codec|fuzz_values) dict=fuzz/codec.dict;; \
+	    fuzz_wmts_capabilities) dict=fuzz/wmts.dict;; \
 	    *) dict=fuzz/wms.dict;; esac; \
 	  mkdir -p build-fuzz/corpus-work/$$t build-fuzz/artifacts/$$t; \
 	  cp fuzz/corpus/$$t/* build-fuzz/corpus-work/$$t/; \

@@ -13,18 +13,20 @@ namespace {
 
 UpstreamConfig::Type readType(Reader& r, const Map& m) {
   const auto t = m.need("type");
-  switch (choice(r, t, m.path("type"), {"local", "wms", "worldwind"})) {
+  switch (choice(r, t, m.path("type"), {"local", "wms", "worldwind", "wmts"})) {
   case 0:
     return UpstreamConfig::Type::Local;
   case 1:
     return UpstreamConfig::Type::Wms;
-  default:
+  case 2:
     return UpstreamConfig::Type::WorldWind;
+  default:
+    return UpstreamConfig::Type::Wmts;
   }
 }
 
 /** The keys of the other types are errors (a local upstream has no url, a remote one no path,
- * only wms has version, crs and meta_tiles). */
+ * only wms has version, crs and meta_tiles, only wmts has encoding). */
 void refuseOtherTypesKeys(Reader& r, const Map& m, UpstreamConfig::Type type) {
   const auto notFor = [&](std::string_view key, const char* which) {
     if (m.has(key))
@@ -44,14 +46,16 @@ void refuseOtherTypesKeys(Reader& r, const Map& m, UpstreamConfig::Type type) {
                            "max_retry_after_wait",
                            "headers",
                            "redirects"})
-      notFor(key, "wms and worldwind");
+      notFor(key, "wms, worldwind and wmts");
+    notFor("encoding", "wmts");
     notFor("version", "wms");
     notFor("crs", "wms");
     notFor("meta_tiles", "wms");
     return;
   }
   notFor("path", "local");
-  if (type == UpstreamConfig::Type::WorldWind) {
+  if (type != UpstreamConfig::Type::Wmts) notFor("encoding", "wmts");
+  if (type == UpstreamConfig::Type::WorldWind || type == UpstreamConfig::Type::Wmts) {
     notFor("version", "wms");
     notFor("crs", "wms");
     notFor("meta_tiles", "wms");
@@ -125,6 +129,12 @@ void readRemote(Reader& r, const Map& m, UpstreamConfig& u) {
     u.failureThreshold = int32(r, *v, m.path("failure_threshold"));
   if (auto v = m.get("redirects")) u.redirects = readRedirects(r, *v, m.path("redirects"));
   if (auto v = m.get("headers")) readHeaders(r, *v, m.path("headers"), u.headers);
+  if (auto v = m.get("encoding")) {
+    constexpr UpstreamConfig::Encoding kEncodings[] = {UpstreamConfig::Encoding::Auto,
+                                                       UpstreamConfig::Encoding::Rest,
+                                                       UpstreamConfig::Encoding::Kvp};
+    u.encoding = kEncodings[choice(r, *v, m.path("encoding"), {"auto", "rest", "kvp"})];
+  }
 }
 
 } // namespace
@@ -151,7 +161,8 @@ readUpstream(Reader& r, const YAML::Node& node, std::string path, const fs::path
                "max_retry_after_wait",
                "headers",
                "redirects",
-               "meta_tiles"});
+               "meta_tiles",
+               "encoding"});
   if (node.IsNull())
     r.fail(node.Mark(), m.path(), "expected a mapping (name, type, ...), got nothing");
   UpstreamConfig u;

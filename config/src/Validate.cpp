@@ -132,7 +132,7 @@ checkUpstream(const UpstreamConfig& u, std::size_t i, bool checkFiles) {
     }
     return std::nullopt;
   }
-  if (u.url.empty()) return issue("url", "a wms / worldwind upstream needs one");
+  if (u.url.empty()) return issue("url", "a wms / worldwind / wmts upstream needs one");
   if (auto e = checkHttpUrl(u.url)) return issue("url", *e);
   if (u.type == UpstreamConfig::Type::Wms) {
     if (u.wmsVersion != "1.1.1" && u.wmsVersion != "1.3.0")
@@ -294,6 +294,8 @@ checkLayer(const Config& c, const UpstreamIndex& upstreams, const LayerConfig& l
   if (l.isValueLayer()) {
     if (auto e = checkValueSettings(l)) return issue(e->first, e->second);
   }
+  if (!l.tileMatrixSet.empty() && up->type != UpstreamConfig::Type::Wmts)
+    return issue("tile_matrix_set", "applies to layers of wmts upstreams only");
   if (l.firstLevel != 0) {
     if (up->type != UpstreamConfig::Type::WorldWind)
       return issue("grid.first_level", "applies to worldwind upstreams only");

@@ -69,6 +69,13 @@ TEST(ProxyFromConfig, UpstreamTypesAndRedirectPoliciesMapOneToOne) {
   EXPECT_EQ(upstreamSpec(u).type, UpstreamSpec::Type::Wms);
   u.type = UpstreamConfig::Type::WorldWind;
   EXPECT_EQ(upstreamSpec(u).type, UpstreamSpec::Type::WorldWind);
+  u.type = UpstreamConfig::Type::Wmts;
+  EXPECT_EQ(upstreamSpec(u).type, UpstreamSpec::Type::Wmts);
+  EXPECT_EQ(upstreamSpec(u).wmtsEncoding, WmtsEncoding::Auto);
+  u.encoding = UpstreamConfig::Encoding::Rest;
+  EXPECT_EQ(upstreamSpec(u).wmtsEncoding, WmtsEncoding::Rest);
+  u.encoding = UpstreamConfig::Encoding::Kvp;
+  EXPECT_EQ(upstreamSpec(u).wmtsEncoding, WmtsEncoding::Kvp);
   u.redirects = RedirectPolicy::SameOrigin;
   EXPECT_EQ(upstreamSpec(u).policy.redirects, UpstreamPolicy::Redirects::SameOrigin);
   u.redirects = RedirectPolicy::Any;
@@ -85,6 +92,7 @@ TEST(ProxyFromConfig, LayerKeepsEveryField) {
   l.kind = LayerKind::Imagery;
   l.upstream = "gibs";
   l.upstreamLayer = "GHRSST_L4";
+  l.tileMatrixSet = "1km";
   l.firstLevel = 2;
   l.dataset.server = "gibs";
   l.dataset.name = "sst";
@@ -102,6 +110,7 @@ TEST(ProxyFromConfig, LayerKeepsEveryField) {
   EXPECT_EQ(s.abstract, "GHRSST");
   EXPECT_EQ(s.upstream, "gibs");
   EXPECT_EQ(s.upstreamLayer, "GHRSST_L4");
+  EXPECT_EQ(s.tileMatrixSet, "1km");
   EXPECT_EQ(s.firstLevel, 2);
   EXPECT_EQ(s.dataset.server, "gibs");
   EXPECT_EQ(s.dataset.name, "sst");

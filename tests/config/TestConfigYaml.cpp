@@ -185,6 +185,20 @@ TEST(ConfigYaml, PublicExample) {
   EXPECT_EQ(modis->time.period, "2000-02-24/2025-12-31/P1D");
   EXPECT_EQ(modis->time.defaultValue, "2025-06-01");
 
+  const UpstreamConfig* wmts = c->upstream("gibs-wmts");
+  ASSERT_NE(wmts, nullptr);
+  EXPECT_EQ(wmts->type, UpstreamConfig::Type::Wmts);
+  EXPECT_EQ(wmts->encoding, UpstreamConfig::Encoding::Rest);
+  EXPECT_EQ(wmts->url, "https://gibs.earthdata.nasa.gov/wmts/epsg4326/best/wmts.cgi");
+  for (const char* name : {"modis-truecolor-wmts", "sea-surface-temperature-wmts"}) {
+    const LayerConfig* l = c->layer(name);
+    ASSERT_NE(l, nullptr) << name;
+    EXPECT_EQ(l->upstream, "gibs-wmts");
+    EXPECT_FALSE(l->tileMatrixSet.empty());
+    EXPECT_TRUE(l->time.enabled());
+  }
+  EXPECT_EQ(c->layer("modis-truecolor-wmts")->tileMatrixSet, "250m");
+
   const LayerConfig* sst = c->layer("sea-surface-temperature");
   ASSERT_NE(sst, nullptr);
   ASSERT_FALSE(sst->time.values.empty());
@@ -651,11 +665,11 @@ layers:
 
   const ConfigError type = errorOf(R"(upstreams:
   - name: up
-    type: wmts
+    type: tms
 )");
   EXPECT_EQ(type.key, "upstreams[0].type");
   EXPECT_EQ(type.line, 3);
-  EXPECT_EQ(type.message, "'wmts' is not one of local, wms, worldwind");
+  EXPECT_EQ(type.message, "'tms' is not one of local, wms, worldwind, wmts");
 
   const ConfigError earth = errorOf("renderer:\n  earth: flat\n" + std::string(kMinimal));
   EXPECT_EQ(earth.key, "renderer.earth");
@@ -1200,7 +1214,7 @@ layers: []
 )");
   EXPECT_EQ(local.line, 5);
   EXPECT_EQ(local.key, "upstreams[0].redirects");
-  EXPECT_EQ(local.message, "'redirects' applies to wms and worldwind upstreams only");
+  EXPECT_EQ(local.message, "'redirects' applies to wms, worldwind and wmts upstreams only");
 
   const auto budget =
       parse("server: {limits: {fetches_per_client_per_minute: 30}}\n" + std::string(kMinimal));
@@ -1217,4 +1231,48 @@ layers: []
   const ConfigError word =
       errorOf("server: {limits: {fetches_per_client_per_minute: many}}\n" + std::string(kMinimal));
   EXPECT_EQ(word.key, "server.limits.fetches_per_client_per_minute");
+}
+
+TEST(ConfigYaml, WmtsUpstreamsAndTheirKeys) {
+  const auto c = parse(R"(upstreams:
+  - name: gibs
+    type: wmts
+    url: https://gibs.example/wmts/epsg4326/best/wmts.cgi
+    encoding: kvp
+    retries: 1
+layers:
+  - name: modis
+    upstream: gibs
+    upstream_layer: MODIS_Terra_CorrectedReflectance_TrueColor
+    tile_matrix_set: 250m
+    format: image/jpeg
+    grid: {levels: 6}
+)");
+  ASSERT_TRUE(c) << c.error().toString();
+  EXPECT_EQ(c->upstreams[0].type, UpstreamConfig::Type::Wmts);
+  EXPECT_EQ(c->upstreams[0].encoding, UpstreamConfig::Encoding::Kvp);
+  EXPECT_EQ(c->upstreams[0].retries, 1);
+  EXPECT_EQ(c->layers[0].tileMatrixSet, "250m");
+
+  const ConfigError encoding = errorOf(R"(upstreams:
+  - {name: w, type: wmts, url: "http://example.org/", encoding: soap}
+)");
+  EXPECT_EQ(encoding.key, "upstreams[0].encoding");
+  EXPECT_EQ(encoding.message, "'soap' is not one of auto, rest, kvp");
+  const ConfigError onWms = errorOf(R"(upstreams:
+  - {name: w, type: wms, url: "http://example.org/", encoding: rest}
+)");
+  EXPECT_EQ(onWms.key, "upstreams[0].encoding");
+  EXPECT_EQ(onWms.message, "'encoding' applies to wmts upstreams only");
+  const ConfigError version = errorOf(R"(upstreams:
+  - {name: w, type: wmts, url: "http://example.org/", version: 1.3.0}
+)");
+  EXPECT_EQ(version.key, "upstreams[0].version");
+  const ConfigError noUrl = errorOf(R"(upstreams:
+  - {name: w, type: wmts}
+)");
+  EXPECT_EQ(noUrl.key, "upstreams[0].url");
+  const ConfigError set = errorOf(std::string(kMinimal) + "    tile_matrix_set: 250m\n");
+  EXPECT_EQ(set.key, "layers[0].tile_matrix_set");
+  EXPECT_NE(set.message.find("wmts upstreams only"), std::string::npos) << set.message;
 }

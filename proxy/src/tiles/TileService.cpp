@@ -1,5 +1,6 @@
 #include "tiles/MetaTile.hpp"
 #include "tiles/WorkerPool.hpp"
+#include "upstream/WmtsCompose.hpp"
 
 #include <tellus/cache/RequestQueue.hpp>
 #include <tellus/cache/TilePath.hpp>
@@ -409,9 +410,17 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                    const std::string& folder,
                    std::string time,
                    std::optional<CacheLookup> stale) {
+    if (l.wmts && wmtsComposed(*l.wmts, fk.key)) {
+      composeRemote(fk, l, u, g, folder, time, std::move(stale));
+      return;
+    }
     FetchRequest req;
     req.upstream = u.name;
     req.url = upstreamUrl(u, l, g.sectorOf(fk.key), fk.key, time);
+    if (req.url.empty()) { // a WMTS tile outside the upstream's matrix: there is none to fetch
+      land(fk, absent(TileOrigin::Miss, "the upstream has no tile here"));
+      return;
+    }
     if (stale) {
       req.ifNoneMatch = stale->meta.etag;
       req.ifModifiedSince = stale->meta.lastModified;
@@ -434,6 +443,94 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                       im->onFetched(fk, l, g, folder, std::move(stale), std::move(r));
                     });
                   });
+  }
+
+  /** The answers gathered for one composed WMTS tile. */
+  struct WmtsGather {
+    std::mutex mutex;
+    std::vector<WmtsFetchedTile> tiles;
+    std::optional<FetchResult> failure; ///< the first answer that is neither a tile nor a 404
+    std::size_t left = 0;
+    std::optional<CacheLookup> stale;
+  };
+
+  /** A WMTS tile of a level no matrix lines up with (WmtsCompose.hpp): the upstream tiles that
+   * cover it are fetched, then composed on a worker and handed to onFetched as the upstream's
+   * answer (validated and stored as any fetched tile). */
+  void composeRemote(const FlightKey& fk,
+                     const LayerSpec& l,
+                     const UpstreamSpec& u,
+                     const TileGrid& g,
+                     const std::string& folder,
+                     const std::string& time,
+                     std::optional<CacheLookup> stale) {
+    const Sector sector = g.sectorOf(fk.key);
+    const auto sources =
+        wmtsSourceTiles(*l.wmts, fk.key, sector, g.spec().tileWidth, g.spec().tileHeight, time);
+    if (sources.empty()) {
+      land(fk, absent(TileOrigin::Miss, "the upstream has no tile here"));
+      return;
+    }
+    auto gather = std::make_shared<WmtsGather>();
+    gather->left = sources.size();
+    gather->stale = std::move(stale);
+    for (const auto& src : sources)
+      gather->tiles.push_back(WmtsFetchedTile{src, {}});
+    fetches.fetch_add(sources.size());
+    for (std::size_t i = 0; i < sources.size(); ++i) {
+      FetchRequest req;
+      req.upstream = u.name;
+      req.url = sources[i].url;
+      fetcher.fetch(
+          std::move(req),
+          [weak = weak_from_this(), gather, i, fk, &l, &g, folder, sector](FetchResult&& r) {
+            {
+              std::lock_guard lock(gather->mutex);
+              if (r && r->status == 200)
+                gather->tiles[i].bytes = std::move(r->body);
+              else if (!(r && noSuchTile(r->status)) && !gather->failure)
+                gather->failure = std::move(r);
+              if (--gather->left > 0) return;
+            }
+            const auto self = weak.lock();
+            if (!self) return;
+            self->workers->post([im = self.get(), gather, fk, &l, &g, folder, sector] {
+              im->onComposedFetched(fk, l, g, folder, sector, *gather);
+            });
+          });
+    }
+  }
+
+  void onComposedFetched(const FlightKey& fk,
+                         const LayerSpec& l,
+                         const TileGrid& g,
+                         const std::string& folder,
+                         const Sector& sector,
+                         WmtsGather& gather) {
+    if (gather.failure)
+      return onFetched(fk, l, g, folder, std::move(gather.stale), std::move(*gather.failure));
+    FetchResponse resp;
+    const bool none = std::all_of(
+        gather.tiles.begin(), gather.tiles.end(), [](const auto& t) { return t.bytes.empty(); });
+    if (none) {
+      resp.status = 404;
+      return onFetched(fk, l, g, folder, std::move(gather.stale), FetchResult(std::move(resp)));
+    }
+    auto composed = composeWmtsTile(*l.wmts,
+                                    fk.key,
+                                    sector,
+                                    g.spec().tileWidth,
+                                    g.spec().tileHeight,
+                                    gather.tiles,
+                                    l.dataset.mimeType);
+    if (!composed) {
+      land(fk, error("the upstream's tiles could not be composed: " + composed.error()));
+      return;
+    }
+    resp.status = 200;
+    resp.contentType = l.dataset.mimeType;
+    resp.body = std::move(*composed);
+    onFetched(fk, l, g, folder, std::move(gather.stale), FetchResult(std::move(resp)));
   }
 
   void onFetched(const FlightKey& fk,
@@ -800,6 +897,7 @@ TileService::create(TileCache& cache,
                     std::vector<LayerSpec> layers,
                     TileServiceOptions options) {
   auto impl = std::make_shared<Impl>(cache, fetcher, options);
+  std::map<std::string, WmtsCapabilities, std::less<>> wmtsCaps;
   for (auto& u : upstreams) {
     if (u.type == UpstreamSpec::Type::Local) {
       auto src = LocalRasterSource::open(u.path);
@@ -807,6 +905,20 @@ TileService::create(TileCache& cache,
       impl->rasters.emplace(u.name, std::move(*src));
     } else {
       fetcher.setPolicy(u.name, u.policy);
+    }
+    if (u.type == UpstreamSpec::Type::Wmts) {
+      const auto root =
+          options.wmtsCapabilitiesRoot.empty() ? cache.root() : options.wmtsCapabilitiesRoot;
+      std::string note;
+      auto caps = loadWmtsCapabilities(fetcher,
+                                       u.name,
+                                       u.url,
+                                       root.empty() ? root : wmtsCapabilitiesFile(root, u.name),
+                                       options.offline,
+                                       &note);
+      if (!caps) return std::unexpected("upstream '" + u.name + "': " + caps.error());
+      if (!note.empty()) logger().log(LogLevel::Warn, "upstream", note, {{"upstream", u.name}});
+      wmtsCaps.emplace(u.name, std::move(*caps));
     }
     const std::string name = u.name;
     impl->upstreams.emplace(name, std::move(u));
@@ -819,6 +931,18 @@ TileService::create(TileCache& cache,
     if (!grid) return std::unexpected("layer '" + l.name + "': " + grid.error());
     if (impl->layerIndex.contains(l.name)) return std::unexpected("layer '" + l.name + "' twice");
     if (l.upstreamLayer.empty()) l.upstreamLayer = l.name;
+    if (const auto caps = wmtsCaps.find(l.upstream); caps != wmtsCaps.end()) {
+      const UpstreamSpec& u = impl->upstreams.at(l.upstream);
+      WmtsChoice choice{l.upstreamLayer,
+                        l.dataset.style,
+                        l.dataset.mimeType,
+                        l.tileMatrixSet,
+                        u.wmtsEncoding,
+                        wmtsCapabilitiesUrl(u.url)};
+      auto bound = bindWmtsLayer(caps->second, choice, l.dataset.grid);
+      if (!bound) return std::unexpected("layer '" + l.name + "': " + bound.error());
+      l.wmts = std::make_shared<const WmtsTiles>(std::move(*bound));
+    }
     l.dataset.name = l.name;
     l.dataset.server = l.upstream;
     l.dataset.time.clear();
@@ -998,6 +1122,8 @@ std::string TileService::upstreamUrl(const UpstreamSpec& u,
                                      const Sector& s,
                                      const TileKey& key,
                                      std::string_view time) {
+  if (u.type == UpstreamSpec::Type::Wmts)
+    return l.wmts ? wmtsTileUrl(*l.wmts, key, time).value_or(std::string()) : std::string();
   if (u.type == UpstreamSpec::Type::WorldWind) {
     std::string url = u.url;
     if (url.find('?') == std::string::npos) {

@@ -235,12 +235,19 @@ struct UpstreamConfig {
     Local,     ///< a georeferenced image on disk (world file next to it)
     Wms,       ///< an OGC WMS 1.1.1 / 1.3.0 server (GetMap)
     WorldWind, ///< a World Wind tile server (T=&L=&X=&Y= appended to the URL)
+    Wmts,      ///< an OGC WMTS 1.0.0 server (NASA GIBS): its capabilities at `url`
+  };
+  /** Wmts: how tiles are asked for (YAML `encoding`). */
+  enum class Encoding {
+    Auto, ///< REST when the layer has a ResourceURL template for its format, else KVP
+    Rest, ///< the layer's ResourceURL template
+    Kvp,  ///< GetTile with query parameters
   };
 
   std::string name; ///< referenced by layers; also the cache's server folder
   Type type = Type::Local;
-  std::filesystem::path path;       ///< Local: the image, absolute after loading
-  std::string url;                  ///< Wms / WorldWind: http(s) URL, a query string is allowed
+  std::filesystem::path path; ///< Local: the image, absolute after loading
+  std::string url; ///< Wms / WorldWind: http(s) URL, a query string is allowed; Wmts: capabilities
   std::string wmsVersion = "1.3.0"; ///< Wms: "1.1.1" or "1.3.0"
   std::string crs = "EPSG:4326";    ///< Wms: "EPSG:4326" or "CRS:84"
   std::chrono::milliseconds connectTimeout{5'000};
@@ -252,7 +259,8 @@ struct UpstreamConfig {
   int retries = 3;                                     ///< for 5xx and timeouts
   /// Wms: `tellus seed` asks for up to metaTiles x metaTiles tiles with one GetMap (1 = per tile)
   int metaTiles = 4;
-  int failureThreshold = 5; ///< consecutive failures that open the circuit breaker
+  int failureThreshold = 5;           ///< consecutive failures that open the circuit breaker
+  Encoding encoding = Encoding::Auto; ///< Wmts only
   std::vector<std::pair<std::string, std::string>> headers; ///< sent with every request, in order
   RedirectPolicy redirects = RedirectPolicy::SameOrigin;    ///< redirects followed (at most 5 hops)
 };
@@ -323,6 +331,8 @@ struct LayerConfig {
   std::string upstream;        ///< name of an entry of Config::upstreams
   std::string upstreamLayer;   ///< WMS LAYERS / World Wind T= value sent upstream (default: name)
   std::int32_t firstLevel = 0; ///< WorldWind: level L here is level L + firstLevel upstream
+  /// Wmts: the upstream's tile matrix set (YAML `tile_matrix_set`; "" = the layer's only one)
+  std::string tileMatrixSet;
   /** The cached dataset: server = upstream, name = name, grid, mimeType (YAML `format`),
    * extension (jpg, png, bil, tif from the format), style (WMS STYLES sent upstream), pinned
    * (YAML `cache.pinned`). time stays "": one dataset per TIME value is made by the proxy. */

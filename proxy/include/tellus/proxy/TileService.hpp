@@ -16,6 +16,7 @@
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/Metrics.hpp>
 #include <tellus/proxy/ValueLayer.hpp>
+#include <tellus/proxy/WmtsUpstream.hpp>
 
 #include <chrono>
 #include <cstdint>
@@ -33,17 +34,18 @@ namespace tellus {
 
 /** An upstream as the proxy uses it (the composition root maps the configuration onto this). */
 struct UpstreamSpec {
-  enum class Type { Local, Wms, WorldWind };
+  enum class Type { Local, Wms, WorldWind, Wmts };
   std::string name;
   Type type = Type::Local;
   std::filesystem::path path; ///< Local: a georeferenced image
-  std::string url;            ///< Wms / WorldWind: base URL (may hold a query)
+  std::string url; ///< Wms / WorldWind: base URL (may hold a query); Wmts: its capabilities
   std::string wmsVersion = "1.3.0";
   std::string crs = "EPSG:4326"; ///< EPSG:4326 or CRS:84
   /// Wms: seeding asks for up to metaTiles x metaTiles tiles of a level with one GetMap (getTiles);
   /// 1 = one GetMap per tile. The configuration's default is 4 (docs/CONFIG.md).
   int metaTiles = 1;
   UpstreamPolicy policy;
+  WmtsEncoding wmtsEncoding = WmtsEncoding::Auto; ///< Wmts: how tiles are asked for
 };
 
 /** A layer as the proxy serves it. */
@@ -53,7 +55,7 @@ struct LayerSpec {
   std::string abstract;
   DatasetSpec dataset; ///< server = upstream name, name = layer name, time = "" (per request)
   std::string upstream;
-  std::string upstreamLayer; ///< WMS LAYERS / World Wind T= (default: name)
+  std::string upstreamLayer; ///< WMS LAYERS / World Wind T= / WMTS LAYER (default: name)
   std::int32_t firstLevel = 0;
   bool elevation = false;
   std::int16_t noData = -32768;
@@ -65,6 +67,9 @@ struct LayerSpec {
   std::string timeDefault;
   /** Value and elevation layers: samples, colour-map styles, queryable (ValueLayer.hpp). */
   std::optional<ValueLayerSpec> values;
+  std::string tileMatrixSet; ///< Wmts: the upstream's set ("" = the layer's only one)
+  /// Wmts: the upstream layer bound to this layer's grid (TileService::create fills it in)
+  std::shared_ptr<const WmtsTiles> wmts;
 };
 
 /** Where an answer came from (the X-Cache header). */
@@ -105,12 +110,16 @@ struct TileServiceOptions {
   /// Wall time of fetched tiles (fetched-at, so expiry) and of absent markers' retry times; null:
   /// the system's (tests inject a ManualClock, which outlives the service).
   const Clock* clock = nullptr;
+  /// Where WMTS upstreams' capabilities are kept (wmtsCapabilitiesFile); empty: the cache's root.
+  std::filesystem::path wmtsCapabilitiesRoot;
 };
 
 class TileService final : public ITileSource {
 public:
-  /** Registers every layer's dataset (time "") and opens local rasters; fails with a message naming
-   * the layer or upstream. The cache and fetcher must outlive the service. */
+  /** Registers every layer's dataset (time "") and opens local rasters; reads each WMTS upstream's
+   * capabilities (fetched, or the saved copy when offline or unreachable: loadWmtsCapabilities;
+   * blocks meanwhile) and binds its layers (bindWmtsLayer); fails with a message naming the layer
+   * or upstream. The cache and fetcher must outlive the service. */
   static std::expected<std::unique_ptr<TileService>, std::string>
   create(TileCache& cache,
          Fetcher& fetcher,
@@ -186,7 +195,8 @@ public:
   void reprioritize(TileRequestId id, double priority) override;
   bool cancel(TileRequestId id) override;
 
-  /** The WMS or World Wind URL that fetches a tile from a remote upstream (for tests and logs). */
+  /** The WMS, World Wind or WMTS URL that fetches a tile from a remote upstream (for tests and
+   * logs); "" for a WMTS tile outside the upstream's matrix (there is no such tile). */
   static std::string upstreamUrl(const UpstreamSpec& upstream,
                                  const LayerSpec& layer,
                                  const Sector& sector,

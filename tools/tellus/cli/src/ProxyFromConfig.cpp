@@ -15,6 +15,8 @@ UpstreamSpec::Type upstreamType(UpstreamConfig::Type t) {
     return UpstreamSpec::Type::Wms;
   case UpstreamConfig::Type::WorldWind:
     return UpstreamSpec::Type::WorldWind;
+  case UpstreamConfig::Type::Wmts:
+    return UpstreamSpec::Type::Wmts;
   }
   return UpstreamSpec::Type::WorldWind;
 }
@@ -42,6 +44,9 @@ UpstreamSpec upstreamSpec(const UpstreamConfig& u) {
   s.wmsVersion = u.wmsVersion;
   s.crs = u.crs;
   s.metaTiles = u.metaTiles;
+  s.wmtsEncoding = u.encoding == UpstreamConfig::Encoding::Rest  ? WmtsEncoding::Rest
+                   : u.encoding == UpstreamConfig::Encoding::Kvp ? WmtsEncoding::Kvp
+                                                                 : WmtsEncoding::Auto;
   s.policy.maxConnections = u.maxConnections;
   s.policy.connectTimeout = u.connectTimeout;
   s.policy.timeout = u.timeout;
@@ -91,6 +96,7 @@ LayerSpec layerSpec(const LayerConfig& l) {
   s.dataset = l.dataset;
   s.upstream = l.upstream;
   s.upstreamLayer = l.upstreamLayer;
+  s.tileMatrixSet = l.tileMatrixSet;
   s.firstLevel = l.firstLevel;
   s.elevation = l.kind == LayerKind::Elevation;
   // The no-data sample of tiles a local raster renders (and of heights maps): a value layer's
