@@ -136,10 +136,12 @@ float distanceOf(vec3 ray, float depth, out vec3 sdir) {
   return uFisheye != 0 ? along * slen : along * slen / max(dot(ray, uForward), 1e-30);
 }
 
-// The key the composite compares depths by: log2 of the distance / 32 (0.125 of a doubling per
-// 8-bit step), 1 for the sky.
-float depthKey(float distance) {
-  return distance < 0.0 ? 1.0 : clamp(log2(max(distance, 1.0)) / 32.0, 0.0, 0.99);
+// The key the composite compares depths by: log2 of the distance along the view axis (the ray,
+// fisheye) / 32 (0.125 of a doubling per 8-bit step), 1 where the globe drew nothing.
+float depthKey(float depth) {
+  if (depth <= 0.0) return 1.0;
+  float nd = uClipControl != 0 ? depth : 2.0 * depth - 1.0;
+  return clamp(log2(max(uNear / max(nd, 1e-30), 1.0)) / 32.0, 0.0, 0.99);
 }
 
 // The air along a ray to `distance` (-1: to space or the ground): the inscatter's radiance without
@@ -187,7 +189,58 @@ vec3 discOf(vec3 sdir, vec3 transmittance) {
   return dot(sdir, uSun) > uSunDisc.x ? transmittance * uSolar * uSunDisc.y : vec3(0.0);
 }
 
+#ifdef TELLUS_ATMOSPHERE_COMPOSITE
+// The pixel from the split pass's textures when it may be (outColor and outFactor written: true):
+// the depth compared by key only, the ray made only for the sun's disc.
+bool fromLowerResolution(float depth) {
+  // Texel i stands for pixel centre i * divisor + 0.5: this pixel's place t among the texels,
+  // the four around it.
+  vec2 t = (gl_FragCoord.xy - 0.5) / float(uDivisor);
+  ivec2 size = textureSize(uGlow, 0);
+  ivec2 i0 = clamp(ivec2(floor(t)), ivec2(0), size - 1), i1 = min(i0 + 1, size - 1);
+  vec2 f = clamp(t - floor(t), 0.0, 1.0);
+  vec4 g00 = texelFetch(uGlow, i0, 0), g10 = texelFetch(uGlow, ivec2(i1.x, i0.y), 0);
+  vec4 g01 = texelFetch(uGlow, ivec2(i0.x, i1.y), 0), g11 = texelFetch(uGlow, i1, 0);
+  // The lower resolution where the four texels' depths agree with this pixel's (within 0.6 of a
+  // doubling of the distance, or all sky) and their values are close (within 0.08 of the display
+  // range, 20 levels: not the limb's thin glow nor the horizon); in full where not.
+  float key = depthKey(depth);
+  vec4 keys = abs(vec4(g00.a, g10.a, g01.a, g11.a) - key);
+  vec3 spread = max(max(g00.rgb, g10.rgb), max(g01.rgb, g11.rgb)) -
+                min(min(g00.rgb, g10.rgb), min(g01.rgb, g11.rgb));
+  if (max(max(keys.x, keys.y), max(keys.z, keys.w)) < 0.6 / 32.0 &&
+      max(spread.r, max(spread.g, spread.b)) < 0.08) {
+    vec2 uv = (t + 0.5) / vec2(size);
+    vec3 glow = mix(mix(g00.rgb, g10.rgb, f.x), mix(g01.rgb, g11.rgb, f.x), f.y);
+    vec3 factor = texture(uFactor, uv).rgb;
+    vec4 light = texture(uSunLight, uv);
+    vec3 ray;
+    if (light.a > 0.0 && rayAt(vNdc, vRay, ray)) {
+      vec3 sdir = normalize(uScale * ray);
+      if (dot(sdir, uSun) > uSunDisc.x) {
+        // The disc added to the sky's radiance before the display map: 1 - exp(-e (S + D)) =
+        // 1 - (1 - s) exp(-e D), with s the sky's value before the gamma; tr: the
+        // transmittance (the texture's rgb is weighted by a where sky and ground meet).
+        vec3 tr = light.rgb / light.a;
+        vec3 sky = pow(glow, vec3(2.2));
+        vec3 lit = vec3(1.0) - (vec3(1.0) - sky) * exp(-uSunDisc.z * discOf(sdir, tr));
+        lit = pow(lit, vec3(1.0 / 2.2));
+        glow = mix(glow, lit, light.a);
+        factor = mix(factor, factorOf(tr, lit), light.a);
+      }
+    }
+    outColor = vec4(glow, 0.0);
+    outFactor = vec4(factor, 1.0);
+    return true;
+  }
+  return false;
+}
+#endif
+
 void main() {
+#ifdef TELLUS_ATMOSPHERE_COMPOSITE
+  if (fromLowerResolution(texelFetch(uDepth, ivec2(gl_FragCoord.xy), 0).r)) return;
+#endif
   vec3 ray;
 #ifdef TELLUS_ATMOSPHERE_SPLIT
   // A texel stands for the target's pixel at its block's lower left corner, its ray and its
@@ -216,50 +269,12 @@ void main() {
   float depth = texelFetch(uDepth, ivec2(px), 0).r;
   float distance = distanceOf(ray, depth, sdir);
   vec3 glow = display(airAlong(sdir, distance, transmittance, seesSpace));
-  outGlow = vec4(glow, depthKey(distance));
+  outGlow = vec4(glow, depthKey(depth));
   outFactor = vec4(factorOf(transmittance, glow), 1.0);
   outSunLight = seesSpace ? vec4(transmittance, 1.0) : vec4(0.0);
 #else
   float depth = texelFetch(uDepth, ivec2(gl_FragCoord.xy), 0).r;
   float distance = distanceOf(ray, depth, sdir);
-#ifdef TELLUS_ATMOSPHERE_COMPOSITE
-  // Texel i stands for pixel centre i * divisor + 0.5: this pixel's place t among the texels,
-  // the four around it.
-  vec2 t = (gl_FragCoord.xy - 0.5) / float(uDivisor);
-  ivec2 size = textureSize(uGlow, 0);
-  ivec2 i0 = clamp(ivec2(floor(t)), ivec2(0), size - 1), i1 = min(i0 + 1, size - 1);
-  vec2 f = clamp(t - floor(t), 0.0, 1.0);
-  vec4 g00 = texelFetch(uGlow, i0, 0), g10 = texelFetch(uGlow, ivec2(i1.x, i0.y), 0);
-  vec4 g01 = texelFetch(uGlow, ivec2(i0.x, i1.y), 0), g11 = texelFetch(uGlow, i1, 0);
-  // The lower resolution where the four texels' depths agree with this pixel's (within 0.6 of a
-  // doubling of the distance, or all sky) and their values are close (within 0.08 of the display
-  // range, 20 levels: not the limb's thin glow nor the horizon); in full where not.
-  float key = depthKey(distance);
-  vec4 keys = abs(vec4(g00.a, g10.a, g01.a, g11.a) - key);
-  vec3 spread = max(max(g00.rgb, g10.rgb), max(g01.rgb, g11.rgb)) -
-                min(min(g00.rgb, g10.rgb), min(g01.rgb, g11.rgb));
-  if (max(max(keys.x, keys.y), max(keys.z, keys.w)) < 0.6 / 32.0 &&
-      max(spread.r, max(spread.g, spread.b)) < 0.08) {
-    vec2 uv = (t + 0.5) / vec2(size);
-    vec3 glow = mix(mix(g00.rgb, g10.rgb, f.x), mix(g01.rgb, g11.rgb, f.x), f.y);
-    vec3 factor = texture(uFactor, uv).rgb;
-    vec4 light = texture(uSunLight, uv);
-    if (light.a > 0.0 && dot(sdir, uSun) > uSunDisc.x) {
-      // The disc added to the sky's radiance before the display map: 1 - exp(-e (S + D)) =
-      // 1 - (1 - s) exp(-e D), with s the sky's value before the gamma; tr: the transmittance
-      // (the texture's rgb is weighted by a where sky and ground meet).
-      vec3 tr = light.rgb / light.a;
-      vec3 sky = pow(glow, vec3(2.2));
-      vec3 lit = vec3(1.0) - (vec3(1.0) - sky) * exp(-uSunDisc.z * discOf(sdir, tr));
-      lit = pow(lit, vec3(1.0 / 2.2));
-      glow = mix(glow, lit, light.a);
-      factor = mix(factor, factorOf(tr, lit), light.a);
-    }
-    outColor = vec4(glow, 0.0);
-    outFactor = vec4(factor, 1.0);
-    return;
-  }
-#endif
   vec3 inscatter = airAlong(sdir, distance, transmittance, seesSpace);
   if (seesSpace) inscatter += discOf(sdir, transmittance);
   vec3 glow = display(inscatter);

@@ -158,7 +158,7 @@ TEST(WmtsCapabilities, GibsDocumentIsReadWhole) {
             "http://map1.vis.earthdata.nasa.gov/wmts-geo/MODIS_Terra_CorrectedReflectance_TrueColor"
             "/default/{Time}/{TileMatrixSet}/{TileMatrix}/{TileRow}/{TileCol}.jpg");
   EXPECT_TRUE(c.layer("VIIRS_CityLights_2012")->dimensions.empty());
-  const WmtsTileMatrixSet* s = c.tileMatrixSet("EPSG4326_250m");
+  const UpstreamTileMatrixSet* s = c.tileMatrixSet("EPSG4326_250m");
   ASSERT_NE(s, nullptr);
   EXPECT_EQ(s->crs, "urn:ogc:def:crs:OGC:1.3:CRS84");
   ASSERT_EQ(s->matrices.size(), 9u);

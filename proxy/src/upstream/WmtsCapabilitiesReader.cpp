@@ -28,9 +28,9 @@ std::optional<std::int64_t> integer(std::string_view s) {
   return v;
 }
 
-std::expected<WmtsTileMatrix, std::string> readMatrix(const xml::Element& m,
-                                                      const std::string& set) {
-  WmtsTileMatrix t;
+std::expected<UpstreamTileMatrix, std::string> readMatrix(const xml::Element& m,
+                                                          const std::string& set) {
+  UpstreamTileMatrix t;
   t.identifier = m.childText("Identifier");
   const std::string where = "tile matrix '" + t.identifier + "' of set '" + set + "'";
   if (t.identifier.empty())
@@ -134,7 +134,7 @@ const WmtsLayer* WmtsCapabilities::layer(std::string_view id) const noexcept {
   return nullptr;
 }
 
-const WmtsTileMatrixSet* WmtsCapabilities::tileMatrixSet(std::string_view id) const noexcept {
+const UpstreamTileMatrixSet* WmtsCapabilities::tileMatrixSet(std::string_view id) const noexcept {
   for (const auto& s : tileMatrixSets)
     if (s.identifier == id) return &s;
   return nullptr;
@@ -165,7 +165,7 @@ std::expected<WmtsCapabilities, std::string> parseWmtsCapabilities(std::string_v
     caps.layers.push_back(std::move(layer));
   }
   for (const xml::Element* s : contents->all("TileMatrixSet")) {
-    WmtsTileMatrixSet set;
+    UpstreamTileMatrixSet set;
     set.identifier = s->childText("Identifier");
     if (set.identifier.empty()) return std::unexpected("a <TileMatrixSet> has no ows:Identifier");
     set.crs = s->childText("SupportedCRS");

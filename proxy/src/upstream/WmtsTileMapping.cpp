@@ -67,7 +67,7 @@ std::optional<std::int64_t> whole(double v, double tol) {
   return static_cast<std::int64_t>(r);
 }
 
-std::string setDescription(const WmtsTileMatrixSet& set) {
+std::string setDescription(const UpstreamTileMatrixSet& set) {
   std::string out;
   for (const auto& m : set.matrices) {
     const double deg = m.scaleDenominator * kPixelMetres / kMetresPerDegree * m.tileWidth;
@@ -124,7 +124,7 @@ bindWmtsLayer(const WmtsCapabilities& caps, const WmtsChoice& choice, const Grid
   } else {
     t.tileMatrixSet = choice.tileMatrixSet;
   }
-  const WmtsTileMatrixSet* set = caps.tileMatrixSet(t.tileMatrixSet);
+  const UpstreamTileMatrixSet* set = caps.tileMatrixSet(t.tileMatrixSet);
   if (!set)
     return std::unexpected("tile matrix set '" + t.tileMatrixSet + "' linked by " + what +
                            " is not described in the capabilities");

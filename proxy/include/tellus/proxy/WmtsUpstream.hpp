@@ -42,7 +42,7 @@ namespace tellus {
 
 class Fetcher;
 
-struct WmtsTileMatrix {
+struct UpstreamTileMatrix {
   std::string identifier;
   double scaleDenominator = 0.0;
   double topLeftX = 0.0; ///< as written: the CRS's first axis
@@ -53,10 +53,10 @@ struct WmtsTileMatrix {
   std::int64_t matrixHeight = 0;
 };
 
-struct WmtsTileMatrixSet {
+struct UpstreamTileMatrixSet {
   std::string identifier;
   std::string crs; ///< ows:SupportedCRS as written
-  std::vector<WmtsTileMatrix> matrices;
+  std::vector<UpstreamTileMatrix> matrices;
 };
 
 struct WmtsDimension {
@@ -85,10 +85,10 @@ struct WmtsCapabilities {
   std::string title;
   std::string getTileKvpUrl; ///< OperationsMetadata GetTile's KVP href ("" if none)
   std::vector<WmtsLayer> layers;
-  std::vector<WmtsTileMatrixSet> tileMatrixSets;
+  std::vector<UpstreamTileMatrixSet> tileMatrixSets;
 
   const WmtsLayer* layer(std::string_view id) const noexcept;
-  const WmtsTileMatrixSet* tileMatrixSet(std::string_view id) const noexcept;
+  const UpstreamTileMatrixSet* tileMatrixSet(std::string_view id) const noexcept;
 };
 
 /** Parses a WMTS 1.0.0 Capabilities document. An error says what is missing or malformed (an
