@@ -2,10 +2,11 @@
 // with its access log, Debian's Chromium driven by playwright-core (no browser download), a guard
 // that lets the browser reach loopback only, and colours read back from a screenshot.
 import {spawn, spawnSync} from 'node:child_process';
-import {mkdtempSync, readFileSync, rmSync} from 'node:fs';
+import {createReadStream, existsSync, mkdtempSync, readFileSync, rmSync, statSync} from 'node:fs';
+import {createServer} from 'node:http';
 import {createRequire} from 'node:module';
 import {tmpdir} from 'node:os';
-import {join, resolve as absolute} from 'node:path';
+import {extname, join, normalize, resolve as absolute, sep} from 'node:path';
 
 export function fail(message) {
   console.error(`FAIL: ${message}`);
@@ -30,12 +31,16 @@ export function workDir(name) {
 }
 
 /**
- * `tellus seed --cache DIR --levels 0-1`, then `tellus serve` on 127.0.0.1:0 with an access log;
- * resolves with its base URL once it printed "listening on". Killed at exit.
+ * `tellus seed --cache DIR --levels 0-1` (of every layer, or of `seedLayers`: seeding etopo takes
+ * most of the time), then `tellus serve` on 127.0.0.1:0 with an access log; resolves with its base
+ * URL once it printed "listening on". Killed at exit.
  */
-export async function startTellus(tellus, work, extraServeArgs = []) {
+export async function startTellus(tellus, work, extraServeArgs = [], seedLayers = []) {
   const cache = join(work, 'cache');
-  const seed = spawnSync(tellus, ['seed', '--cache', cache, '--levels', '0-1'], {encoding: 'utf8'});
+  const seed = spawnSync(
+    tellus,
+    ['seed', '--cache', cache, '--levels', '0-1', ...seedLayers.flatMap((l) => ['--layer', l])],
+    {encoding: 'utf8'});
   if (seed.status !== 0) fail(`tellus seed: ${seed.stderr}${seed.stdout}`);
   const accessLog = join(work, 'access.log');
   const server = spawn(
@@ -172,3 +177,78 @@ export const isOcean = ([r, g, b]) => b >= 15 && b > r + 10 && b > g;
 /** Blue Marble land (desert, steppe, rain forest as dark as (21, 34, 8)): red or green above blue.
  * Black, what a globe or map without imagery shows, is neither land nor ocean. */
 export const isLand = ([r, g, b]) => r + g >= 30 && Math.max(r, g) > b + 5;
+
+/**
+ * A loopback server for a test's own files, another origin than tellus (so tiles become WebGL or
+ * canvas pixels only with tellus's CORS header): `files` maps a URL path to a file or to a string
+ * of HTML, `dirs` a URL prefix ending in '/' to a directory whose files it serves. Resolves with
+ * its base URL; closed at exit.
+ */
+export async function serveFixture({files = {}, dirs = {}}) {
+  const types = {'.html': 'text/html', '.js': 'text/javascript', '.css': 'text/css',
+                 '.json': 'application/json', '.png': 'image/png', '.jpg': 'image/jpeg',
+                 '.wasm': 'application/wasm'};
+  const server = createServer((req, res) => {
+    const path = decodeURIComponent(new URL(req.url, 'http://x').pathname);
+    let file = files[path];
+    if (typeof file === 'object') {
+      res.writeHead(200, {'Content-Type': 'text/html'}).end(file.html);
+      return;
+    }
+    for (const [prefix, dir] of Object.entries(dirs)) {
+      if (file || !path.startsWith(prefix)) continue;
+      const inDir = normalize(join(dir, path.slice(prefix.length)));
+      if (inDir.startsWith(normalize(dir) + sep)) file = inDir;
+    }
+    if (!file || !existsSync(file) || !statSync(file).isFile()) {
+      res.writeHead(404).end();
+      return;
+    }
+    res.writeHead(200, {'Content-Type': types[extname(file)] ?? 'application/octet-stream'});
+    createReadStream(file).pipe(res);
+  });
+  await new Promise((resolve) => server.listen(0, '127.0.0.1', resolve));
+  process.on('exit', () => server.close());
+  return `http://127.0.0.1:${server.address().port}`;
+}
+
+/**
+ * The colours of the cached tiles at [lat, lon] places: World Wind level `level` of `layer` (36
+ * degree level zero, `size` px) read from tellus's static path /tiles/ (the cached files), decoded
+ * by the browser and averaged over a window of `radius` pixels around each place.
+ */
+export async function cachedColours(context, base, {layer, level, size, places, radius = 4}) {
+  const page = await context.newPage();
+  try {
+    return await page.evaluate(
+      async ({base, layer, level, size, places, radius}) => {
+        const delta = 36 / 2 ** level;
+        const out = [];
+        for (const [lat, lon] of places) {
+          const row = Math.floor((lat + 90) / delta);
+          const col = Math.floor((lon + 180) / delta);
+          const img = new Image();
+          img.crossOrigin = 'anonymous';
+          img.src = `${base}/tiles/${layer}/${level}/${row}/${row}_${col}.jpg`;
+          await img.decode();
+          const canvas = document.createElement('canvas');
+          canvas.width = canvas.height = size;
+          const g = canvas.getContext('2d', {willReadFrequently: true});
+          g.drawImage(img, 0, 0);
+          const x = Math.round(((lon + 180) / delta - col) * size);
+          const y = Math.round((row + 1 - (lat + 90) / delta) * size);
+          const d = g.getImageData(x - radius, y - radius, 2 * radius + 1, 2 * radius + 1).data;
+          const sum = [0, 0, 0];
+          for (let i = 0; i < d.length; i += 4) for (let c = 0; c < 3; ++c) sum[c] += d[i + c];
+          out.push(sum.map((s) => Math.round(s / (d.length / 4))));
+        }
+        return out;
+      },
+      {base, layer, level, size, places, radius});
+  } finally {
+    await page.close();
+  }
+}
+
+/** Colours alike within `tolerance` in each channel. */
+export const near = (a, b, tolerance) => a.every((v, i) => Math.abs(v - b[i]) <= tolerance);
