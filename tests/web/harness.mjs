@@ -215,7 +215,7 @@ export async function serveFixture({files = {}, dirs = {}}) {
 /**
  * The colours of the cached tiles at [lat, lon] places: World Wind level `level` of `layer` (36
  * degree level zero, `size` px) read from tellus's static path /tiles/ (the cached files), decoded
- * by the browser and averaged over a window of `radius` pixels around each place.
+ * by the browser and averaged over a window of `radius` pixels around each place (within its tile).
  */
 export async function cachedColours(context, base, {layer, level, size, places, radius = 4}) {
   const page = await context.newPage();
@@ -239,8 +239,13 @@ export async function cachedColours(context, base, {layer, level, size, places, 
           const y = Math.round((row + 1 - (lat + 90) / delta) * size);
           const d = g.getImageData(x - radius, y - radius, 2 * radius + 1, 2 * radius + 1).data;
           const sum = [0, 0, 0];
-          for (let i = 0; i < d.length; i += 4) for (let c = 0; c < 3; ++c) sum[c] += d[i + c];
-          out.push(sum.map((s) => Math.round(s / (d.length / 4))));
+          let n = 0; // the pixels inside the tile (outside, getImageData gives transparent black)
+          for (let i = 0; i < d.length; i += 4) {
+            if (d[i + 3] === 0) continue;
+            for (let c = 0; c < 3; ++c) sum[c] += d[i + c];
+            ++n;
+          }
+          out.push(sum.map((s) => Math.round(s / n)));
         }
         return out;
       },
