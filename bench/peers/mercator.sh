@@ -67,12 +67,23 @@ done
 [[ $(upstream_requests) -eq $up0 ]] || die "the first Web Mercator tiles reached the upstream: a tile outside the seeded set"
 say "checked: the first 20 tiles of each series answer 200, image/*, without an upstream request"
 
-# 2. cold: every tile once
+# 2. cold: every tile once; the server's CPU time (all its processes) read before and after
+merc_ticks() { # SERIES: utime + stime of the server's processes, clock ticks
+  local t=0 p pids
+  case $1 in t?) pids="$tellus_pid" ;; p?) pids="$(gunicorn_pids)" ;; esac
+  for p in $pids; do
+    [[ -r /proc/$p/stat ]] || continue
+    t=$((t + $(awk '{ sub(/.*\) /, ""); print $12 + $13 }' "/proc/$p/stat")))
+  done
+  echo "$t"
+}
 for s in tg pg; do
   say "cold: ${merc_label[$s]}, $(wc -l <"$work/cold-$s.txt") tiles once, $MERC_CONNECTIONS connections"
+  c0=$(merc_ticks "$s")
   python3 "$here/once.py" "http://127.0.0.1:$(merc_port "$s")" "$work/cold-$s.txt" "$MERC_CONNECTIONS" \
     "$work/res-$s-cold.txt" >/dev/null || die "once.py failed on $s"
-  echo -e "$s\tcold\t$(sed 's/^RESULT //' "$work/res-$s-cold.txt")" >>"$merc_runs"
+  c1=$(merc_ticks "$s")
+  echo -e "$s\tcold\t$(sed 's/^RESULT //' "$work/res-$s-cold.txt") cpu_ticks=$((c1 - c0))" >>"$merc_runs"
   echo "   $(sed 's/^RESULT //' "$work/res-$s-cold.txt")"
 done
 [[ -n "$(find "$work/mapproxy/cache_gm" -name '*.jpeg' -print -quit 2>/dev/null)" ]] ||
@@ -106,7 +117,7 @@ x_cache="$(curl -s -o /dev/null -D - "http://127.0.0.1:$tellus_port$(tail -n 1 "
 # summary
 mkdir -p "$OUT_DIR"
 python3 - "$merc_runs" "$up_merc" "$x_cache" "$MERC_ZOOMS" "$REGION" "$commit" <<'EOF' | tee "$OUT_DIR/peers-mercator-summary.txt"
-import statistics, sys
+import os, statistics, sys
 runs, up, x_cache, zooms, region, commit = sys.argv[1:7]
 rows = {}
 for line in open(runs):
@@ -115,7 +126,8 @@ for line in open(runs):
     rows.setdefault((f[0], f[1]), []).append(kv)
 name = {"tg": "tellus", "pg": "MapProxy"}
 print(f"Web Mercator (GoogleMapsCompatible) tiles from the lat/long cache, z {zooms} inside {region}, tree {commit}")
-print(f"{'':10} {'cold tiles/s':>13} {'errors':>7} {'warm tiles/s':>13} {'p99 ms':>8} {'bytes/tile':>11}")
+hz = os.sysconf("SC_CLK_TCK")
+print(f"{'':10} {'cold tiles/s':>13} {'CPU ms/tile':>12} {'errors':>7} {'warm tiles/s':>13} {'p99 ms':>8} {'bytes/tile':>11}")
 rate = {}
 for s in ("tg", "pg"):
     cold = rows[(s, "cold")][0]
@@ -124,9 +136,11 @@ for s in ("tg", "pg"):
     p99 = statistics.median(int(k["p99_us"]) for k in warm) / 1000 if warm else float("nan")
     errors = int(cold["errors"]) + sum(int(k["status"]) + int(k["timeout"]) for k in warm)
     rate[s] = (float(cold["req_s"]), w)
-    print(f"{name[s]:10} {float(cold['req_s']):13.1f} {errors:7d} {w:13.1f} {p99:8.2f} "
+    cpu = int(cold["cpu_ticks"]) / hz * 1000 / int(cold["requests"])
+    rate[s] = rate[s] + (cpu,)
+    print(f"{name[s]:10} {float(cold['req_s']):13.1f} {cpu:12.2f} {errors:7d} {w:13.1f} {p99:8.2f} "
           f"{int(cold['bytes']) / int(cold['requests']):11.0f}")
 print(f"tellus / MapProxy: cold {rate['tg'][0] / rate['pg'][0]:.2f}x, warm {rate['tg'][1] / rate['pg'][1]:.2f}x "
-      f"(goal: >= 3x the faster peer)")
+      f"(goal: >= 3x the faster peer); server CPU per cold tile: MapProxy / tellus {rate['pg'][2] / rate['tg'][2]:.2f}x")
 print(f"upstream requests during the Web Mercator runs: {up} (must be 0); tellus's X-Cache on a warm tile: {x_cache}")
 EOF
