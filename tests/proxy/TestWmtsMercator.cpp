@@ -160,3 +160,16 @@ TEST(WmtsMercator, TilesFromACoarserFallbackAreNotKept) {
   }
   EXPECT_GT(up.requests(), 50u);
 }
+
+TEST(WmtsMercator, KeptTilesExpireWithTheLayersTtl) {
+  test::FakeUpstream up(test::gradientTile);
+  WmtsServer s(up.url("/wms"), 3, std::chrono::hours(2));
+  ASSERT_EQ(s.get("/wmts/1.0.0/sat/default/GoogleMapsCompatible/2/1/2.png").status, 200);
+  const auto d = mercatorDataset(*s.cache, "sat");
+  ASSERT_TRUE(d);
+  const auto kept = s.cache->peek(d->id, TileKey{2, 2, 2});
+  ASSERT_TRUE(kept);
+  ASSERT_EQ(kept->kind, CacheLookup::Kind::Hit);
+  ASSERT_TRUE(kept->meta.expiresAt);
+  EXPECT_EQ(*kept->meta.expiresAt - kept->meta.fetchedAt, 2 * 3600 * 1000);
+}
