@@ -19,14 +19,16 @@
 #  1. Checks: the first 20 tiles of each series answer 200 image/* without an upstream request
 #     (they are left out of the cold pass: composed here already).
 #  2. Cold: every other tile of the list once (once.py, MERC_CONNECTIONS parallel keep-alive
-#     connections), the servers one after the other: each tile composed from the lat/long cache
-#     and written to the server's own Web Mercator cache. Tiles per second over the wall time.
+#     connections), in MERC_COLD_PARTS (6) parts with the servers alternating: each tile composed
+#     from the lat/long cache and written to the server's own Web Mercator cache. Tiles per second
+#     over the parts' summed wall time, and the server's CPU per tile.
 #  3. Warm: wrk (urls.lua, random tiles of the same list, -c MERC_CONNECTIONS) for DURATION per
 #     series, ROUNDS rounds alternating, medians: every tile from the server's Web Mercator cache.
 #  No upstream request may happen during 1-3 (checked).
 
 MERC_ZOOMS="${MERC_ZOOMS:-3-7}"
 MERC_CONNECTIONS="${MERC_CONNECTIONS:-16}"
+MERC_COLD_PARTS="${MERC_COLD_PARTS:-6}"
 merc_lo="${MERC_ZOOMS%-*}" merc_hi="${MERC_ZOOMS#*-}"
 
 python3 - "$work" "$REGION" "$merc_lo" "$merc_hi" <<'EOF'
@@ -77,14 +79,35 @@ merc_ticks() { # SERIES: utime + stime of the server's processes, clock ticks
   done
   echo "$t"
 }
+# The list is cut into MERC_COLD_PARTS parts (every part-th tile: each spans every zoom level) and
+# the servers alternate part by part (the order reversed every other part), so that a change in
+# the machine's other load falls on both; the parts' times and CPU are summed.
 for s in tg pg; do
-  say "cold: ${merc_label[$s]}, $(wc -l <"$work/cold-$s.txt") tiles once, $MERC_CONNECTIONS connections"
-  c0=$(merc_ticks "$s")
-  python3 "$here/once.py" "http://127.0.0.1:$(merc_port "$s")" "$work/cold-$s.txt" "$MERC_CONNECTIONS" \
-    "$work/res-$s-cold.txt" >/dev/null || die "once.py failed on $s"
-  c1=$(merc_ticks "$s")
-  echo -e "$s\tcold\t$(sed 's/^RESULT //' "$work/res-$s-cold.txt") cpu_ticks=$((c1 - c0))" >>"$merc_runs"
-  echo "   $(sed 's/^RESULT //' "$work/res-$s-cold.txt")"
+  split -n "r/$MERC_COLD_PARTS" -d "$work/cold-$s.txt" "$work/cold-$s.part"
+done
+declare -A cold_us=([tg]=0 [pg]=0) cold_ticks=([tg]=0 [pg]=0) cold_n=([tg]=0 [pg]=0) cold_bytes=([tg]=0 [pg]=0) cold_err=([tg]=0 [pg]=0)
+say "cold: $(wc -l <"$work/cold-tg.txt") tiles once each, in $MERC_COLD_PARTS parts alternating, $MERC_CONNECTIONS connections"
+for part in $(seq 0 $((MERC_COLD_PARTS - 1))); do
+  order="tg pg"
+  ((part % 2)) && order="pg tg"
+  for s in $order; do
+    f="$work/cold-$s.part$(printf '%02d' "$part")"
+    c0=$(merc_ticks "$s")
+    python3 "$here/once.py" "http://127.0.0.1:$(merc_port "$s")" "$f" "$MERC_CONNECTIONS" "$f.res" >/dev/null ||
+      die "once.py failed on $s"
+    c1=$(merc_ticks "$s")
+    read -r n us bytes errors < <(sed 's/^RESULT //' "$f.res" | tr ' ' '\n' | awk -F= '
+      $1 == "requests" { n = $2 } $1 == "duration_us" { d = $2 } $1 == "bytes" { b = $2 } $1 == "errors" { e = $2 }
+      END { print n, d, b, e }')
+    echo "   part $part, $s: $n tiles in $((us / 1000)) ms, $((c1 - c0)) CPU ticks"
+    cold_n[$s]=$((cold_n[$s] + n)) cold_us[$s]=$((cold_us[$s] + us)) cold_bytes[$s]=$((cold_bytes[$s] + bytes))
+    cold_err[$s]=$((cold_err[$s] + errors)) cold_ticks[$s]=$((cold_ticks[$s] + c1 - c0))
+  done
+done
+for s in tg pg; do
+  rate="$(awk -v n="${cold_n[$s]}" -v us="${cold_us[$s]}" 'BEGIN { printf "%.1f", n / (us / 1e6) }')"
+  echo -e "$s\tcold\trequests=${cold_n[$s]} duration_us=${cold_us[$s]} req_s=$rate bytes=${cold_bytes[$s]} errors=${cold_err[$s]} cpu_ticks=${cold_ticks[$s]}" >>"$merc_runs"
+  echo "   ${merc_label[$s]}: $rate tiles/s over the parts"
 done
 [[ -n "$(find "$work/mapproxy/cache_gm" -name '*.jpeg' -print -quit 2>/dev/null)" ]] ||
   die "MapProxy kept no Web Mercator tile in $work/mapproxy/cache_gm"
