@@ -6,6 +6,8 @@
 #   SEED_ROUNDS=1 ROUNDS=1 DURATION=2s WARMUP=0 LEVELS=0-3 CEILING_DURATION=3s LOAD_DURATION=3s \
 #     bench/peers/run.sh                                 # a smoke run, about 1-1.5 minutes
 #   ONLY=seed bench/peers/run.sh                         # step 1 alone (seeding), about 3 minutes
+#   ONLY=mercator bench/peers/run.sh                     # Web Mercator tiles composed from the
+#                                                        # lat/long caches: mercator.sh
 #
 # What it sets up, every server on 127.0.0.1 only, on ports it picks (0 where the program allows):
 #
@@ -75,7 +77,9 @@
 #   LOAD_WAIT_S=0 MAX_LOAD=0.8    before the seeding (the first measurement), wait up to
 #                                 LOAD_WAIT_S s for a 1-minute load below MAX_LOAD
 #   OUT_DIR=build/bench           peers-runs.tsv, peers-summary.txt
-#   ONLY=                         seed: step 1 alone (the seeders and the ceilings), then the summary
+#   ONLY=                         seed: step 1 alone (the seeders and the ceilings), then the summary;
+#                                 mercator: tellus and MapProxy seeded once, then mercator.sh (its
+#                                 settings: MERC_ZOOMS=3-7 MERC_CONNECTIONS=16)
 #   KEEP=0                        1: keep the work folder (configs, logs, caches, URL lists)
 #   UPSTREAM_CPUS=                CPU list (taskset -c, e.g. 0): the upstream (Apache and its mapserv
 #                                 processes) runs on these CPUs, and the seeders and the ceiling's
@@ -133,7 +137,9 @@ if [[ -n "$UPSTREAM_CPUS" ]]; then
   [[ -n "$other_cpus" ]] || { echo "run.sh: UPSTREAM_CPUS=$UPSTREAM_CPUS leaves no CPU for the seeders" >&2; exit 1; }
   up_pin=(taskset -c "$UPSTREAM_CPUS") seed_pin=(taskset -c "$other_cpus")
 fi
-[[ -z "$ONLY" || "$ONLY" == seed ]] || { echo "run.sh: ONLY=$ONLY: only ONLY=seed is known" >&2; exit 1; }
+[[ -z "$ONLY" || "$ONLY" == seed || "$ONLY" == mercator ]] || { echo "run.sh: ONLY=$ONLY: ONLY=seed or ONLY=mercator" >&2; exit 1; }
+# ONLY=mercator: the lat/long caches seeded once (tellus and MapProxy), then mercator.sh
+[[ "$ONLY" != mercator ]] || SEED_ROUNDS=1
 
 say() { echo "== $*"; }
 warn() { echo "run.sh: warning: $*" >&2; }
@@ -500,6 +506,7 @@ seeder() { # NAME ROUND: one seeder into an empty cache, timed
     "$(($(upstream_failures) - f0))"
 }
 seed_order="up512 up2048 tellus1 tellus MapProxy MapCache"
+[[ "$ONLY" != mercator ]] || seed_order="tellus MapProxy"
 for round in $(seq 1 "$SEED_ROUNDS"); do
   order="$seed_order"
   ((round % 2)) || order="$(echo "$seed_order" | tr ' ' '\n' | tac | tr '\n' ' ' | sed 's/ $//')"
@@ -516,7 +523,8 @@ for round in $(seq 1 "$SEED_ROUNDS"); do
   done
 done
 grep -E 'levels .* planned' "$work/seed-tellus-$SEED_ROUNDS.log" | sed 's/^/   tellus: /'
-tail -c 300 "$work/seed-MapCache-$SEED_ROUNDS.log" | tr '\r' '\n' | grep seeded | tail -1 | sed 's/^ */   mapcache_seed: /'
+[[ ! -f "$work/seed-MapCache-$SEED_ROUNDS.log" ]] ||
+  tail -c 300 "$work/seed-MapCache-$SEED_ROUNDS.log" | tr '\r' '\n' | grep seeded | tail -1 | sed 's/^ */   mapcache_seed: /'
 
 tellus_arbitrary=1 up_during_load=0 arb_answer="" all_series=""
 runs="$work/runs.tsv"
@@ -533,7 +541,7 @@ pids+=("$tellus_pid")
   --threads "$MAPPROXY_THREADS" --no-control-socket app:application) >"$work/mapproxy/gunicorn.log" 2>&1 &
 mapproxy_pid=$!
 pids+=("$mapproxy_pid")
-start_apache "$work/mapcache/apache/httpd.conf" "$mc_port"
+[[ "$ONLY" == mercator ]] || start_apache "$work/mapcache/apache/httpd.conf" "$mc_port"
 tellus_port="" mp_port=""
 for _ in $(seq 1 200); do
   [[ -n "$tellus_port" ]] || tellus_port="$(grep -o 'listening on http://127.0.0.1:[0-9]*' "$work/tellus/serve.log" | sed 's/.*://' || true)"
@@ -549,6 +557,11 @@ for _ in $(seq 1 100); do
   sleep 0.2
 done
 say "tellus on 127.0.0.1:$tellus_port, MapCache on 127.0.0.1:$mc_port, MapProxy on 127.0.0.1:$mp_port, upstream on 127.0.0.1:$up_port"
+if [[ "$ONLY" == mercator ]]; then
+  # shellcheck source=mercator.sh
+  source "$here/mercator.sh"
+  exit 0
+fi
 
 declare -A label=(
   [tw]="tellus World Wind /wwtile"

@@ -180,6 +180,26 @@ TEST(Wmts, WellKnownSetsHaveTheStandardsScales) {
   EXPECT_EQ(crs84QuadCacheKey(1, 0, 0), (TileKey{1, 1, 0}));
 }
 
+TEST(Wmts, ComposedSetsAreKeptInGridsOfTheirMatrixSizes) {
+  // GoogleMapsCompatible: 2^z x 2^z tiles at every level, the keys from the matrix's rows (from
+  // the south) and columns; the tiles past them are not the grid's.
+  const auto merc = TileGrid::create(composedCacheGrid(WmtsSetKind::GoogleMapsCompatible, 7));
+  ASSERT_TRUE(merc) << merc.error();
+  for (const std::int32_t z : {0, 1, 4, 6}) {
+    const std::int64_t n = std::int64_t{1} << z;
+    EXPECT_EQ(merc->rowCount(z), n);
+    EXPECT_TRUE(merc->isValid(crs84QuadCacheKey(z, 0, n - 1)));
+    EXPECT_TRUE(merc->isValid(crs84QuadCacheKey(z, n - 1, 0)));
+    EXPECT_FALSE(merc->isValid(crs84QuadCacheKey(z, 0, n))) << z;
+  }
+  EXPECT_EQ(merc->numLevels(), 7);
+  EXPECT_EQ(merc->spec().tileWidth, 256);
+  const auto quad = TileGrid::create(composedCacheGrid(WmtsSetKind::WorldCRS84Quad, 3));
+  ASSERT_TRUE(quad) << quad.error();
+  EXPECT_EQ(quad->spec(), (GridSpec{Sector{}, 180.0, 256, 256, 3}));
+  EXPECT_TRUE(quad->isValid(crs84QuadCacheKey(2, 0, 7)));
+}
+
 TEST(Wmts, ComposedSetsGoAsDeepAsTheLayer) {
   // 36-degree, 512 px, 10 levels: finest pixel 36/512/512 degrees; WorldCRS84Quad's level z has
   // 180/256/2^z: z = 9 is 0.00137 > 0.000137..., z = 13 ... the first at least as fine.

@@ -50,7 +50,10 @@ struct WmtsServer {
   std::unique_ptr<HttpServer> server;
 
   /** `levels`: of both layers (1: every map is composed from level 0, whatever its scale). */
-  explicit WmtsServer(const std::string& upstreamUrl, std::int32_t levels = 3) {
+  /** `ttl`: of both layers (0: their tiles never expire). */
+  explicit WmtsServer(const std::string& upstreamUrl,
+                      std::int32_t levels = 3,
+                      std::chrono::milliseconds ttl = 0ms) {
     cache = openTestCache(dir.path());
     fetcher = std::make_unique<Fetcher>();
     UpstreamSpec u;
@@ -66,6 +69,7 @@ struct WmtsServer {
     l.dataset.grid = GridSpec{Sector{}, 36.0, 256, 256, levels};
     l.dataset.mimeType = "image/png";
     l.maxAge = 3600s;
+    l.ttl = ttl;
     LayerSpec d = l;
     d.name = "daily";
     d.timeValues = {"2024-03-01", "2024-03-02"};

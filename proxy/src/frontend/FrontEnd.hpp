@@ -207,11 +207,11 @@ private:
 /** WMTS 1.0.0 (`/wmts?` KVP, `/wmts/1.0.0/...` RESTful; WmtsFrontEnd.cpp): GetCapabilities and
  * GetTile in three kinds of tile matrix sets (Wmts.hpp): the layer's own World Wind grid (the
  * cached file, as /wwtile sends it), WorldCRS84Quad (composed, then kept in the cache as a
- * dataset of its own: WmtsComposed.cpp) and GoogleMapsCompatible (a WMS GetMap in EPSG:3857
- * through WmsFrontEnd). Errors are OWS 1.1 exception reports with WMTS's HTTP statuses. */
+ * dataset of its own: WmtsComposed.cpp) and GoogleMapsCompatible (composed in EPSG:3857 and kept
+ * the same way). Errors are OWS 1.1 exception reports with WMTS's HTTP statuses. */
 class WmtsFrontEnd {
 public:
-  WmtsFrontEnd(FrontEnd& fe, WmsFrontEnd& wms);
+  explicit WmtsFrontEnd(FrontEnd& fe);
   void handle(const HttpRequest& req, const Responder& respond);
 
 private:
@@ -226,28 +226,25 @@ private:
                      const TileKey& key,
                      std::string time,
                      const Responder& respond);
-  /** WorldCRS84Quad: from the cache of the composed set, else composed and kept (WmtsComposed). */
-  void crs84QuadTile(const HttpRequest& req,
-                     const LayerSpec& l,
-                     const WmtsTileMatrix& m,
-                     std::int32_t level,
-                     std::int64_t row,
-                     std::int64_t col,
-                     std::string time,
-                     std::int32_t levels,
-                     const Responder& respond);
-  /** GoogleMapsCompatible: a WMS GetMap of the tile's box in EPSG:3857 (WmtsComposed). */
-  void mercatorTile(const HttpRequest& req,
+  /** WorldCRS84Quad and GoogleMapsCompatible: from the cache of the composed set, else composed
+   * (a Mercator tile's rows evenly in Mercator y) and kept when made of fresh tiles of the right
+   * level (WmtsComposed). */
+  void composedTile(const HttpRequest& req,
                     const LayerSpec& l,
+                    WmtsSetKind kind,
                     const WmtsTileMatrix& m,
+                    std::int32_t level,
                     std::int64_t row,
                     std::int64_t col,
-                    const std::string& time,
+                    std::string time,
+                    std::int32_t levels,
                     const Responder& respond);
-  /** The composed WorldCRS84Quad set of a layer at a time as a cache dataset: (id, folder), or
+  /** A layer's composed set (`<layer>.<set>`) at a time as a cache dataset: (id, folder), or
    * nullopt when the cache cannot register it (then nothing is kept). */
-  std::optional<std::pair<DatasetId, std::string>>
-  crs84QuadDataset(const LayerSpec& l, const std::string& time, std::int32_t levels);
+  std::optional<std::pair<DatasetId, std::string>> composedDataset(const LayerSpec& l,
+                                                                   WmtsSetKind kind,
+                                                                   const std::string& time,
+                                                                   std::int32_t levels);
   void exception(const OgcException& e,
                  const Responder& respond,
                  int status = 0,
@@ -258,11 +255,11 @@ private:
   const std::vector<LayerSets>& layerSets() const;
 
   FrontEnd& fe_;
-  WmsFrontEnd& wms_;
   mutable std::once_flag setsOnce_;
   mutable std::vector<LayerSets> layers_;
   mutable std::vector<WmtsTileMatrixSet> composedDefinitions_; ///< at the most levels of any layer
   std::mutex datasetsMutex_;
+  /// (`<layer>.<set>`, time) -> (id, folder)
   std::map<std::pair<std::string, std::string>, std::pair<DatasetId, std::string>> datasets_;
 };
 

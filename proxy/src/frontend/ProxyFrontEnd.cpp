@@ -76,7 +76,7 @@ struct ProxyFrontEnd::Impl {
   // through the WMS front end while it stops.
   WmsFrontEnd wms{fe};
   TileFrontEnd tiles{fe};
-  WmtsFrontEnd wmts{fe, wms};
+  WmtsFrontEnd wmts{fe};
   PagesFrontEnd pages{fe};
   FrontEnd fe;
 

@@ -33,7 +33,7 @@ bool composable(const LayerSpec& l) {
 
 } // namespace
 
-WmtsFrontEnd::WmtsFrontEnd(FrontEnd& fe, WmsFrontEnd& wms) : fe_(fe), wms_(wms) {}
+WmtsFrontEnd::WmtsFrontEnd(FrontEnd& fe) : fe_(fe) {}
 
 const std::vector<WmtsFrontEnd::LayerSets>& WmtsFrontEnd::layerSets() const {
   std::call_once(setsOnce_, [this] {
@@ -166,17 +166,17 @@ void WmtsFrontEnd::getTile(const HttpRequest& req,
     return worldWindTile(
         req, l, worldWindKeyOf(*set, *matrix, t.row, t.col), std::move(*time), respond);
   case WmtsSetKind::WorldCRS84Quad:
-    return crs84QuadTile(req,
-                         l,
-                         m,
-                         static_cast<std::int32_t>(*matrix),
-                         t.row,
-                         t.col,
-                         std::move(*time),
-                         static_cast<std::int32_t>(set->matrices.size()),
-                         respond);
   case WmtsSetKind::GoogleMapsCompatible:
-    return mercatorTile(req, l, m, t.row, t.col, *time, respond);
+    return composedTile(req,
+                        l,
+                        set->kind,
+                        m,
+                        static_cast<std::int32_t>(*matrix),
+                        t.row,
+                        t.col,
+                        std::move(*time),
+                        static_cast<std::int32_t>(set->matrices.size()),
+                        respond);
   }
 }
 

@@ -159,6 +159,13 @@ TileKey crs84QuadCacheKey(std::int32_t level, std::int64_t row, std::int64_t col
   return TileKey{level, (std::int64_t{1} << level) - 1 - row, col};
 }
 
+GridSpec composedCacheGrid(WmtsSetKind kind, std::int32_t levels) {
+  const Sector world{};
+  const Sector west{-180.0, -90.0, 0.0, 90.0};
+  return GridSpec{
+      kind == WmtsSetKind::GoogleMapsCompatible ? west : world, 180.0, 256, 256, levels};
+}
+
 std::expected<std::size_t, OgcException> checkWmtsTile(const WmtsTileMatrixSet& set,
                                                        std::string_view id,
                                                        std::int64_t row,

@@ -94,9 +94,15 @@ TileKey worldWindKeyOf(const WmtsTileMatrixSet& set,
                        std::size_t matrix,
                        std::int64_t row,
                        std::int64_t col);
-/** The key of a WorldCRS84Quad tile in its own cache grid (levelZeroDelta 180, 256 px, rows from
- * the south as every cache grid). */
+/** The key of a composed set's tile (WorldCRS84Quad or GoogleMapsCompatible) in its own cache
+ * grid (composedCacheGrid): the matrix as the level, rows counted from the south as in every
+ * cache grid. */
 TileKey crs84QuadCacheKey(std::int32_t level, std::int64_t row, std::int64_t col);
+/** The grid a composed set's tiles are kept in as a cache dataset, `levels` levels of 256 px:
+ * WorldCRS84Quad its own (180-degree level zero, 2^(z+1) x 2^z tiles); GoogleMapsCompatible one
+ * with its matrices' sizes, 2^z x 2^z (the western half of a 180-degree grid: the cache only
+ * counts tiles, a Mercator tile's box is not the lat/long box that grid gives its key). */
+GridSpec composedCacheGrid(WmtsSetKind kind, std::int32_t levels);
 
 /** The matrix named `id` and the tile's range check: InvalidParameterValue (locator
  * TileMatrix) for an unknown matrix, TileOutOfRange (TileRow / TileCol) outside the layer's
