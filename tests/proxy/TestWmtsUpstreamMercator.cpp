@@ -53,8 +53,8 @@ constexpr double kHalf = std::numbers::pi * kR;
 /** The sector of World Wind tile (level, row, col) of a 36-degree grid. */
 Sector sectorOf(int level, int row, int col) {
   const double span = 36.0 / (1 << level);
-  return Sector{-180.0 + col * span, -90.0 + row * span, -180.0 + (col + 1) * span,
-                -90.0 + (row + 1) * span};
+  return Sector{
+      -180.0 + col * span, -90.0 + row * span, -180.0 + (col + 1) * span, -90.0 + (row + 1) * span};
 }
 
 struct Range {
@@ -64,8 +64,8 @@ struct Range {
 
 /** The rows and columns of the source tiles one grid tile needs, as wmtsSourceTiles says. */
 Range rangeOf(const WmtsTiles& t, int level, int row, int col) {
-  const auto tiles = wmtsSourceTiles(t, TileKey{level, row, col}, sectorOf(level, row, col), 512,
-                                     512, "");
+  const auto tiles =
+      wmtsSourceTiles(t, TileKey{level, row, col}, sectorOf(level, row, col), 512, 512, "");
   Range r{INT64_MAX, INT64_MIN, INT64_MAX, INT64_MIN};
   for (const auto& s : tiles) {
     r.r0 = std::min(r.r0, s.row);
@@ -84,7 +84,8 @@ Range expectedRange(int level, int row, int col, int z) {
   const Sector s = sectorOf(level, row, col);
   const double px = (s.east - s.west) / 512.0;
   const double p = 2.0 * kHalf / (256.0 * std::ldexp(1.0, z)); // metres per source pixel
-  const double maxLat = 2.0 * std::atan(std::exp(std::numbers::pi)) * 180.0 / std::numbers::pi - 90.0;
+  const double maxLat =
+      2.0 * std::atan(std::exp(std::numbers::pi)) * 180.0 / std::numbers::pi - 90.0;
   const auto y = [](double lat) {
     return kR * std::log(std::tan(std::numbers::pi / 4.0 + lat * std::numbers::pi / 360.0));
   };
@@ -169,8 +170,9 @@ TEST(WmtsMercatorMapping, CoveringTilesAtTheEquatorSixtyEightyNorthThePoleAndThe
   // The URLs name the zoom's matrix, WMTS rows from the top.
   const auto tiles = wmtsSourceTiles(*t, TileKey{2, 10, 39}, sectorOf(2, 10, 39), 512, 512, "");
   ASSERT_FALSE(tiles.empty());
-  EXPECT_EQ(tiles.front().url, "https://wmts.example/merc/Latitude_Bands/default/2014-02-07/"
-                               "GoogleMapsCompatible_Level7/7/60/124.png");
+  EXPECT_EQ(tiles.front().url,
+            "https://wmts.example/merc/Latitude_Bands/default/2014-02-07/"
+            "GoogleMapsCompatible_Level7/7/60/124.png");
   // South of -85.0511 as north of it: a level-2 tile wholly beyond the square needs nothing.
   auto deep = bindWmtsLayer(caps(), choice("GoogleMapsCompatible_Level7"), wwGrid(3));
   ASSERT_TRUE(deep);

@@ -53,7 +53,8 @@ matrices(const UpstreamTileMatrixSet& set) {
                              ", not at the Web Mercator square's (-20037508.34 20037508.34)");
     if (m.tileWidth < 1 || m.tileWidth != m.tileHeight)
       return std::unexpected(mw + " has tiles of " + std::to_string(m.tileWidth) + " x " +
-                             std::to_string(m.tileHeight) + " pixels: Web Mercator tiles are square");
+                             std::to_string(m.tileHeight) +
+                             " pixels: Web Mercator tiles are square");
     const double pixel = m.scaleDenominator * kPixelMetres;
     const double tiles = 2.0 * mercator::kMaxY / (pixel * m.tileWidth); // tiles across the square
     const double zoom = std::round(std::log2(tiles));
@@ -87,7 +88,8 @@ matrices(const UpstreamTileMatrixSet& set) {
 }
 
 int zoomOf(const WmtsMatrixGeometry& m) noexcept {
-  return static_cast<int>(std::lround(std::log2(2.0 * mercator::kMaxY / (m.pixelMetres * m.tileWidth))));
+  return static_cast<int>(
+      std::lround(std::log2(2.0 * mercator::kMaxY / (m.pixelMetres * m.tileWidth))));
 }
 
 double columnOf(const WmtsMatrixGeometry& m, double lon) noexcept {
