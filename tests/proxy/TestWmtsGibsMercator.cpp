@@ -12,6 +12,7 @@
 #include "../support/TempDir.hpp"
 
 #include <tellus/cache/TileCache.hpp>
+#include <tellus/codec/Jpeg.hpp>
 #include <tellus/codec/Png.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/HttpServer.hpp>
@@ -34,7 +35,8 @@ namespace {
 
 constexpr double kR = 6378137.0;
 constexpr double kHalf = std::numbers::pi * kR;
-const double kMaxLat = 2.0 * std::atan(std::exp(std::numbers::pi)) * 180.0 / std::numbers::pi - 90.0;
+const double kMaxLat =
+    2.0 * std::atan(std::exp(std::numbers::pi)) * 180.0 / std::numbers::pi - 90.0;
 
 double mercatorY(double lat) {
   return kR * std::log(std::tan(std::numbers::pi / 4.0 + lat * std::numbers::pi / 360.0));
@@ -83,13 +85,22 @@ test::FakeReply serve(const test::FakeRequest& r, const std::string& base) {
   if (r.target == "/merc/1.0.0/WMTSCapabilities.xml")
     return test::FakeReply::ok(capabilities(base), "application/xml");
   const auto parts = split(r.target, '/'); // "", merc, layer, default, time, set, z, row, col
-  if (parts.size() != 9 || parts[2] != "Latitude_Bands" || !parts[8].ends_with(".png"))
+  const bool jpeg = parts.size() == 9 && parts[2] == "Latitude_Bands_Jpeg";
+  if (parts.size() != 9 || (parts[2] != "Latitude_Bands" && !jpeg) ||
+      !parts[8].ends_with(jpeg ? ".jpg" : ".png"))
     return test::FakeReply::withStatus(404, "no such path");
   const int z = std::stoi(parts[6]), row = std::stoi(parts[7]);
   const int col = std::stoi(parts[8]);
   if (row < 0 || col < 0 || row >= (1 << z) || col >= (1 << z))
     return test::FakeReply::withStatus(400, "no such tile");
   if (parts[4] == "2000-01-01") return test::FakeReply::withStatus(500, "down");
+  if (jpeg) { // mid grey
+    const std::vector<std::uint8_t> grey(256 * 256 * 3, 128);
+    const auto bytes = codec::encodeJpeg(256, 256, 3, grey.data());
+    EXPECT_TRUE(bytes);
+    return test::FakeReply::ok(
+        std::string(reinterpret_cast<const char*>(bytes->data()), bytes->size()), "image/jpeg");
+  }
   return test::FakeReply::ok(latitudeTile(row), "image/png");
 }
 
@@ -108,7 +119,8 @@ struct Fake {
 };
 
 /** The cache, fetcher, tile service and HTTP front; layers "bands" (PNG, 36-degree grid of 3
- * levels) and "small" (4.5-degree tiles of 64 px) on the fake's GoogleMapsCompatible set. */
+ * levels) and "small" (4.5-degree tiles of 64 px; "small-jpeg" the same in JPEG) on the fake's
+ * GoogleMapsCompatible set. */
 struct Proxy {
   std::unique_ptr<TileCache> cache;
   std::unique_ptr<Fetcher> fetcher;
@@ -139,7 +151,11 @@ struct Proxy {
     LayerSpec small = l;
     small.name = "small";
     small.dataset.grid = GridSpec{Sector{}, 4.5, 64, 64, 1};
-    auto t = TileService::create(*cache, *fetcher, {u}, {l, small}, TileServiceOptions{});
+    LayerSpec jpeg = small;
+    jpeg.name = "small-jpeg";
+    jpeg.upstreamLayer = "Latitude_Bands_Jpeg";
+    jpeg.dataset.mimeType = "image/jpeg";
+    auto t = TileService::create(*cache, *fetcher, {u}, {l, small, jpeg}, TileServiceOptions{});
     if (!t) {
       error = t.error();
       return;
@@ -172,13 +188,14 @@ struct Proxy {
 };
 
 codec::Image decoded(const std::string& body) {
-  auto img = codec::decodePng(std::span(reinterpret_cast<const std::byte*>(body.data()), body.size()));
+  auto img =
+      codec::decodePng(std::span(reinterpret_cast<const std::byte*>(body.data()), body.size()));
   EXPECT_TRUE(img) << (img ? "" : img.error());
   return img ? *img : codec::Image{};
 }
 
-/** Checks every row of a level-2 tile of grid row `row` (9 degrees, zoom 7: 1223 m pixels) against the
- * Mercator row of its latitude; returns how many rows were drawn. */
+/** Checks every row of a level-2 tile of grid row `row` (9 degrees, zoom 7: 1223 m pixels) against
+ * the Mercator row of its latitude; returns how many rows were drawn. */
 int checkRows(const codec::Image& img, int row) {
   EXPECT_EQ(img.width, 512);
   EXPECT_EQ(img.height, 512);
@@ -225,8 +242,8 @@ TEST(WmtsGibsMercator, RowsLandAtTheirLatitudesFromTheCoveringTilesOnly) {
                         {"0-9 N at the antimeridian", 10, 39, 60, 63, 124, 127}};
   for (const Case& c : cases) {
     const std::size_t before = fake.tiles().size();
-    const auto r = p.get("/wwtile?T=bands&L=2&X=" + std::to_string(c.col) +
-                         "&Y=" + std::to_string(c.row));
+    const auto r =
+        p.get("/wwtile?T=bands&L=2&X=" + std::to_string(c.col) + "&Y=" + std::to_string(c.row));
     ASSERT_EQ(r.status, 200) << c.where << ": " << r.body;
     EXPECT_EQ(checkRows(decoded(r.body), c.row), 512) << c.where;
     std::set<std::string> asked;
@@ -267,6 +284,23 @@ TEST(WmtsGibsMercator, NothingAbove85NorthAndTilesBeyondTheSquareAreAbsent) {
   for (int j = 0; j < 64; ++j) {
     const double lat = 85.5 - (j + 0.5) * (4.5 / 64.0);
     EXPECT_EQ(img.pixels[static_cast<std::size_t>(j) * 64 * 4 + 3], lat > kMaxLat ? 0 : 255) << lat;
+  }
+  // A JPEG layer has no alpha: the same rows are black, the others the upstream's grey.
+  const auto dark = p.get("/wwtile?T=small-jpeg&L=0&X=20&Y=38");
+  ASSERT_EQ(dark.status, 200) << dark.body;
+  auto grey = codec::decodeJpeg(
+      std::span(reinterpret_cast<const std::byte*>(dark.body.data()), dark.body.size()));
+  ASSERT_TRUE(grey);
+  for (int j = 0; j < 64; ++j) {
+    const double lat = 85.5 - (j + 0.5) * (4.5 / 64.0);
+    const int v = grey->pixels[(static_cast<std::size_t>(j) * 64 + 32) * 3];
+    // (JPEG blurs the edge row pair: those two rows are not checked.)
+    if (std::fabs(lat - kMaxLat) < 4.5 / 64.0) continue;
+    if (lat > kMaxLat) {
+      EXPECT_LT(v, 12) << lat;
+    } else {
+      EXPECT_NEAR(v, 128, 6) << lat;
+    }
   }
 }
 
