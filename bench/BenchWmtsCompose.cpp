@@ -18,13 +18,14 @@ using namespace tellus;
 
 namespace {
 
-std::string matrixXml(int id, const std::string& scale, const std::string& corner, int tile, int w,
-                      int h) {
-  return "<TileMatrix><ows:Identifier>" + std::to_string(id) + "</ows:Identifier><ScaleDenominator>" +
-         scale + "</ScaleDenominator><TopLeftCorner>" + corner + "</TopLeftCorner><TileWidth>" +
-         std::to_string(tile) + "</TileWidth><TileHeight>" + std::to_string(tile) +
-         "</TileHeight><MatrixWidth>" + std::to_string(w) + "</MatrixWidth><MatrixHeight>" +
-         std::to_string(h) + "</MatrixHeight></TileMatrix>";
+std::string
+matrixXml(int id, const std::string& scale, const std::string& corner, int tile, int w, int h) {
+  return "<TileMatrix><ows:Identifier>" + std::to_string(id) +
+         "</ows:Identifier><ScaleDenominator>" + scale + "</ScaleDenominator><TopLeftCorner>" +
+         corner + "</TopLeftCorner><TileWidth>" + std::to_string(tile) +
+         "</TileWidth><TileHeight>" + std::to_string(tile) + "</TileHeight><MatrixWidth>" +
+         std::to_string(w) + "</MatrixWidth><MatrixHeight>" + std::to_string(h) +
+         "</MatrixHeight></TileMatrix>";
 }
 
 /** Layer "L" on set "merc" (zooms 0-7) or "geo" (one matrix of 9-degree 512 px tiles from 85.5 N,
@@ -101,6 +102,12 @@ void BM_WmtsComposeLatLong(benchmark::State& state) {
 } // namespace
 
 // 0-9 N, 27-36 N, 54-63 N, 72-81 N, 81-90 N.
-BENCHMARK(BM_WmtsComposeMercator)->Arg(10)->Arg(13)->Arg(16)->Arg(18)->Arg(19)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_WmtsComposeMercator)
+    ->Arg(10)
+    ->Arg(13)
+    ->Arg(16)
+    ->Arg(18)
+    ->Arg(19)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_WmtsComposeLatLong)->Arg(10)->Arg(16)->Arg(18)->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

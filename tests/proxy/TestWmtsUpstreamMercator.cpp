@@ -4,6 +4,8 @@
 // formulas written here in their forward form, y = R ln tan(pi/4 + phi/2)), and what a grid tile
 // costs in upstream tiles at several latitudes.
 
+#include "../../proxy/src/upstream/WmtsMercator.hpp"
+
 #include <tellus/proxy/WmtsUpstream.hpp>
 
 #include <gtest/gtest.h>
@@ -130,6 +132,27 @@ TEST(WmtsMercatorMapping, RecognisedByCrsAndGeometryNotByName) {
   auto deep = bindWmtsLayer(caps(), choice("GoogleMapsCompatible_Level7"), wwGrid(4));
   ASSERT_FALSE(deep);
   EXPECT_NE(deep.error().find("set grid.levels to at most 3"), std::string::npos) << deep.error();
+}
+
+TEST(WmtsMercatorMapping, CrsSpellingsOfWebMercator) {
+  for (const char* crs : {"urn:ogc:def:crs:EPSG::3857",
+                          "urn:ogc:def:crs:EPSG:6.18.3:3857",
+                          "EPSG:3857",
+                          "epsg:900913",
+                          "EPSG:3785",
+                          "ESRI:102100",
+                          "EPSG:102113",
+                          "OSGEO:41001",
+                          "http://www.opengis.net/def/crs/EPSG/0/3857"})
+    EXPECT_TRUE(wmtsmercator::isMercatorCrs(crs)) << crs;
+  for (const char* crs : {"urn:ogc:def:crs:EPSG::4326",
+                          "urn:ogc:def:crs:OGC:1.3:CRS84",
+                          "EPSG:32633",
+                          "3857",
+                          "EPSG:38570",
+                          "GoogleMapsCompatible",
+                          ""})
+    EXPECT_FALSE(wmtsmercator::isMercatorCrs(crs)) << crs;
 }
 
 TEST(WmtsMercatorMapping, ZoomIsTheCoarsestWhosePixelIsAsFineAtEveryLatitude) {

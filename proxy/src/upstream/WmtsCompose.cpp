@@ -89,8 +89,12 @@ composeWmtsTile(const WmtsTiles& tiles,
   const std::int64_t x0 = c0 * m.tileWidth, x1 = (c1 + 1) * m.tileWidth - 1;
   const std::int64_t y0 = r0 * m.tileHeight, y1 = (r1 + 1) * m.tileHeight - 1;
   const std::int64_t xMax = m.matrixWidth * m.tileWidth, yMax = m.matrixHeight * m.tileHeight;
+  // A Web Mercator matrix covering the whole square repeats its edge pixels (they reach the
+  // antimeridian and 85.0511 degrees); a regional one is transparent outside, as lat/long ones.
+  const bool wholeSquare = tiles.mercator && m.matrixWidth == m.matrixHeight &&
+                           (std::int64_t{1} << wmtsmercator::zoomOf(m)) == m.matrixWidth;
   const auto sample = [&](std::int64_t x, std::int64_t y, int c) -> double {
-    if (tiles.mercator) { // the square's edges repeat (its pixels reach the antimeridian)
+    if (wholeSquare) {
       x = std::clamp<std::int64_t>(x, 0, xMax - 1);
       y = std::clamp<std::int64_t>(y, 0, yMax - 1);
     }

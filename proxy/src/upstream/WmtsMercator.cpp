@@ -123,8 +123,9 @@ TileRange sourceRange(const WmtsMatrixGeometry& m, const Sector& s, int width, i
   const double mw = static_cast<double>(m.matrixWidth) * m.tileWidth;
   const double mh = static_cast<double>(m.matrixHeight) * m.tileHeight;
   if (u1 < 0 || v1 < 0 || u0 >= mw || v0 >= mh) return out;
-  // Samples past the matrix's edges repeat its edge pixels (composeWmtsTile), so the range is
-  // clamped to it: no tile beyond the antimeridian or the square is asked for.
+  // Samples past the matrix's edges repeat its edge pixels, or are transparent for a regional
+  // matrix (composeWmtsTile): the range is clamped to it, no tile beyond the antimeridian or the
+  // square is asked for.
   const auto tileOf = [](double px, double max, std::int32_t size) {
     return static_cast<std::int64_t>(std::clamp(px, 0.0, max - 1) / size);
   };
