@@ -198,6 +198,16 @@ TEST(ConfigYaml, PublicExample) {
     EXPECT_TRUE(l->time.enabled());
   }
   EXPECT_EQ(c->layer("modis-truecolor-wmts")->tileMatrixSet, "250m");
+  // GIBS's Web Mercator endpoint, composed onto the lat/long grid.
+  const UpstreamConfig* merc = c->upstream("gibs-wmts-3857");
+  ASSERT_NE(merc, nullptr);
+  EXPECT_EQ(merc->type, UpstreamConfig::Type::Wmts);
+  EXPECT_EQ(merc->url,
+            "https://gibs.earthdata.nasa.gov/wmts/epsg3857/best/1.0.0/WMTSCapabilities.xml");
+  const LayerConfig* modisMerc = c->layer("modis-truecolor-wmts-3857");
+  ASSERT_NE(modisMerc, nullptr);
+  EXPECT_EQ(modisMerc->upstream, "gibs-wmts-3857");
+  EXPECT_EQ(modisMerc->tileMatrixSet, "GoogleMapsCompatible_Level9");
 
   const LayerConfig* sst = c->layer("sea-surface-temperature");
   ASSERT_NE(sst, nullptr);

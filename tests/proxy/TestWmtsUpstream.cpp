@@ -264,14 +264,24 @@ TEST(WmtsMapping, SetsTooCoarseOrProjectedAreRefusedSayingWhy) {
   EXPECT_NE(t.error().find("no matrix as fine as the grid's level 0"), std::string::npos)
       << t.error();
   EXPECT_NE(t.error().find("72 deg"), std::string::npos) << t.error();
-  // Web Mercator.
+  // A projected CRS other than Web Mercator (UTM 33 N), even with Web Mercator's numbers.
+  auto utm = parseWmtsCapabilities(
+      syntheticDocument("urn:ogc:def:crs:EPSG::32633",
+                        matrix("0", "559082264.0287178", "-20037508.34 20037508.34", 1, 1)));
+  ASSERT_TRUE(utm) << utm.error();
+  auto m = bindWmtsLayer(*utm, synthetic(), wwGrid(1));
+  ASSERT_FALSE(m);
+  EXPECT_NE(m.error().find("only Web Mercator"), std::string::npos) << m.error();
+  // Web Mercator (512 px tiles) whose finest zoom is coarser than level 0
+  // (TestWmtsUpstreamMercator.cpp).
   auto merc = parseWmtsCapabilities(
       syntheticDocument("urn:ogc:def:crs:EPSG::3857",
-                        matrix("0", "559082264.0287178", "-20037508.34 20037508.34", 1, 1)));
+                        matrix("0", "279541132.0143589", "-20037508.34 20037508.34", 1, 1)));
   ASSERT_TRUE(merc) << merc.error();
-  auto m = bindWmtsLayer(*merc, synthetic(), wwGrid(1));
-  ASSERT_FALSE(m);
-  EXPECT_NE(m.error().find("Web Mercator"), std::string::npos) << m.error();
+  auto coarse = bindWmtsLayer(*merc, synthetic(), wwGrid(1));
+  ASSERT_FALSE(coarse);
+  EXPECT_NE(coarse.error().find("has no zoom as fine as the grid's level 0"), std::string::npos)
+      << coarse.error();
 }
 
 TEST(WmtsMapping, LevelsNoMatrixLinesUpWithAreComposedFromTheCoarsestFineEnough) {

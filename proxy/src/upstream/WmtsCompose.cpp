@@ -2,9 +2,12 @@
 
 #include "WmtsCompose.hpp"
 
+#include "WmtsMercator.hpp"
+
 #include <tellus/codec/Image.hpp>
 #include <tellus/codec/Jpeg.hpp>
 #include <tellus/codec/Png.hpp>
+#include <tellus/proxy/MapBox.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -86,7 +89,15 @@ composeWmtsTile(const WmtsTiles& tiles,
   const std::int64_t x0 = c0 * m.tileWidth, x1 = (c1 + 1) * m.tileWidth - 1;
   const std::int64_t y0 = r0 * m.tileHeight, y1 = (r1 + 1) * m.tileHeight - 1;
   const std::int64_t xMax = m.matrixWidth * m.tileWidth, yMax = m.matrixHeight * m.tileHeight;
+  // A Web Mercator matrix covering the whole square repeats its edge pixels (they reach the
+  // antimeridian and 85.0511 degrees); a regional one is transparent outside, as lat/long ones.
+  const bool wholeSquare = tiles.mercator && m.matrixWidth == m.matrixHeight &&
+                           (std::int64_t{1} << wmtsmercator::zoomOf(m)) == m.matrixWidth;
   const auto sample = [&](std::int64_t x, std::int64_t y, int c) -> double {
+    if (wholeSquare) {
+      x = std::clamp<std::int64_t>(x, 0, xMax - 1);
+      y = std::clamp<std::int64_t>(y, 0, yMax - 1);
+    }
     if (x < 0 || y < 0 || x >= xMax || y >= yMax) return 0.0; // outside the matrix: transparent
     x = std::clamp(x, x0, x1);
     y = std::clamp(y, y0, y1);
@@ -104,15 +115,25 @@ composeWmtsTile(const WmtsTiles& tiles,
                                 static_cast<std::size_t>(channels));
   const double pxW = (sector.east - sector.west) / width;
   const double pxH = (sector.north - sector.south) / height;
+  // Source pixel coordinates of the output's columns and rows: linear in lat/long sets; in Web
+  // Mercator ones x of the longitude and y of the latitude (MapBox.hpp's formulas), rows beyond
+  // the square (+-85.0511 degrees) left empty.
+  std::vector<double> us(static_cast<std::size_t>(width));
+  for (int x = 0; x < width; ++x) {
+    const double lon = sector.west + (x + 0.5) * pxW;
+    us[static_cast<std::size_t>(x)] =
+        tiles.mercator ? wmtsmercator::columnOf(m, lon) : (lon - m.west) / m.pixelDeg - 0.5;
+  }
   for (int y = 0; y < height; ++y) {
     const double lat = sector.north - (y + 0.5) * pxH;
-    const double v = (m.north - lat) / m.pixelDeg - 0.5;
+    if (tiles.mercator && std::fabs(lat) > mercator::kMaxLatitude) continue; // nothing: zeros
+    const double v =
+        tiles.mercator ? wmtsmercator::rowOf(m, lat) : (m.north - lat) / m.pixelDeg - 0.5;
     const double vf = std::floor(v);
     const double fy = v - vf;
     const auto sy = static_cast<std::int64_t>(vf);
     for (int x = 0; x < width; ++x) {
-      const double lon = sector.west + (x + 0.5) * pxW;
-      const double u = (lon - m.west) / m.pixelDeg - 0.5;
+      const double u = us[static_cast<std::size_t>(x)];
       const double uf = std::floor(u);
       const double fx = u - uf;
       const auto sx = static_cast<std::int64_t>(uf);

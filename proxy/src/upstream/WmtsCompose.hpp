@@ -5,7 +5,10 @@
  * no matrix of its set lines up with (WmtsUpstream.hpp). Each output pixel centre (lat/long of the
  * grid tile, rows from the north) is sampled bilinearly in the source matrix's pixels across the
  * mosaic of fetched tiles (edges clamped to what was fetched); a source tile the server does not
- * have (404) is transparent. JPEG layers are encoded RGB at quality 90, PNG layers RGBA.
+ * have (404) is transparent. Web Mercator sets are sampled at each pixel centre's Mercator x and
+ * y (WmtsMercator.hpp); past the square's edges its edge pixels repeat, and rows beyond +-85.0511
+ * degrees are empty. JPEG layers are encoded RGB at quality 90 (empty: black), PNG layers RGBA
+ * (empty: transparent).
  */
 
 #include <tellus/proxy/WmtsUpstream.hpp>

@@ -1,5 +1,8 @@
 // A WMTS layer's matrices mapped onto a World Wind grid, and tile URLs (WmtsUpstream.hpp).
 
+#include "WmtsMercator.hpp"
+
+#include <tellus/proxy/MapBox.hpp>
 #include <tellus/proxy/WmtsUpstream.hpp>
 
 #include <algorithm>
@@ -77,6 +80,50 @@ std::string setDescription(const UpstreamTileMatrixSet& set) {
            std::to_string(m.tileWidth) + " px";
   }
   return out;
+}
+
+/** The grid's levels on a Web Mercator set: each composed from the coarsest zoom whose pixel spans
+ * at most the level's pixel in longitude (WmtsMercator.hpp), within a bound on the tiles one grid
+ * tile needs (counted at the tile nearest the square's north edge, where it is largest). */
+std::expected<void, std::string>
+bindMercatorLevels(WmtsTiles& t, const UpstreamTileMatrixSet& set, const GridSpec& grid) {
+  constexpr std::size_t kMaxTiles = 256;
+  for (std::int32_t level = 0; level < grid.numLevels; ++level) {
+    const double span = grid.levelZeroDeltaDeg / std::ldexp(1.0, level);
+    const double pixel = span / grid.tileWidth;
+    int from = -1;
+    for (std::size_t i = 0; i < t.matrices.size(); ++i) {
+      const WmtsMatrixGeometry& m = t.matrices[i];
+      if (m.pixelDeg > pixel * (1.0 + 1e-9)) continue;
+      if (from < 0 || m.pixelDeg > t.matrices[static_cast<std::size_t>(from)].pixelDeg)
+        from = static_cast<int>(i);
+    }
+    if (from < 0)
+      return std::unexpected(
+          "tile matrix set '" + set.identifier + "' (Web Mercator) " +
+          (level == 0
+               ? std::string("has no zoom as fine as the grid's level 0: its matrices are ") +
+                     setDescription(set)
+               : "reaches levels 0-" + std::to_string(level - 1) +
+                     " of the grid only: set grid.levels to at most " + std::to_string(level)));
+    const WmtsMatrixGeometry& m = t.matrices[static_cast<std::size_t>(from)];
+    // World Wind's origin is (-90, -180); the row holding 85.0511 N needs the most rows.
+    const double south = -90.0 + std::floor((mercator::kMaxLatitude + 90.0) / span) * span;
+    const Sector worst{-180.0, south, -180.0 + span, south + span};
+    const auto r = wmtsmercator::sourceRange(m, worst, grid.tileWidth, grid.tileHeight);
+    const auto n = static_cast<std::size_t>(std::max<std::int64_t>(0, r.r1 - r.r0 + 1) *
+                                            std::max<std::int64_t>(0, r.c1 - r.c0 + 1));
+    if (n > kMaxTiles)
+      return std::unexpected("level " + std::to_string(level) +
+                             " of the grid would be composed from up to " + std::to_string(n) +
+                             " tiles of matrix '" + m.identifier + "' each: more than " +
+                             std::to_string(kMaxTiles));
+    WmtsLevel lv;
+    lv.composeFrom = from;
+    lv.matrix = m.identifier;
+    t.levels.push_back(std::move(lv));
+  }
+  return {};
 }
 
 } // namespace
@@ -157,12 +204,21 @@ bindWmtsLayer(const WmtsCapabilities& caps, const WmtsChoice& choice, const Grid
     }
   }
   // The matrices, level by level.
+  if (wmtsmercator::isMercatorCrs(set->crs)) {
+    auto merc = wmtsmercator::matrices(*set);
+    if (!merc) return std::unexpected(merc.error());
+    t.matrices = std::move(*merc);
+    t.mercator = true;
+    if (auto levels = bindMercatorLevels(t, *set, grid); !levels)
+      return std::unexpected(levels.error());
+    return t;
+  }
   const Axes axes = axesOf(set->crs);
   if (axes == Axes::Other)
     return std::unexpected("tile matrix set '" + set->identifier + "' is in " +
                            (set->crs.empty() ? std::string("no CRS") : "'" + set->crs + "'") +
                            ": only lat/long sets (EPSG:4326, CRS84) can be mapped onto the grid; "
-                           "Web Mercator and other projected upstream sets are not supported yet");
+                           "of the projected ones only Web Mercator (EPSG:3857) is");
   for (const auto& m : set->matrices) {
     const double lon = axes == Axes::LonLat ? m.topLeftX : m.topLeftY;
     const double lat = axes == Axes::LonLat ? m.topLeftY : m.topLeftX;
@@ -322,6 +378,13 @@ std::vector<WmtsSourceTile> wmtsSourceTiles(const WmtsTiles& t,
   if (!wmtsComposed(t, key) || width < 1 || height < 1) return out;
   const auto from = t.levels[static_cast<std::size_t>(key.level)].composeFrom;
   const WmtsMatrixGeometry& m = t.matrices[static_cast<std::size_t>(from)];
+  if (t.mercator) {
+    const auto r = wmtsmercator::sourceRange(m, s, width, height);
+    for (std::int64_t row = r.r0; row <= r.r1; ++row)
+      for (std::int64_t col = r.c0; col <= r.c1; ++col)
+        out.push_back(WmtsSourceTile{row, col, urlOf(t, m.identifier, row, col, time)});
+    return out;
+  }
   const double mw = static_cast<double>(m.matrixWidth) * m.tileWidth;   // pixels across
   const double mh = static_cast<double>(m.matrixHeight) * m.tileHeight; // pixels down
   // The source pixels the bilinear samples at the first and last output pixel centres touch

@@ -19,7 +19,10 @@
  * A level that no matrix lines up with (another tile size, span or origin) is composed: from the
  * coarsest matrix at least as fine as the level, the upstream tiles covering the grid tile are
  * fetched, decoded, sampled bilinearly at the grid's pixel centres and encoded in the layer's
- * format (WmtsCompose.hpp). Projected sets (Web Mercator) are refused at start, saying so.
+ * format (WmtsCompose.hpp). Web Mercator sets (EPSG:3857 and its aliases, recognised by CRS and
+ * matrix geometry, never by name) are composed at every level: each output row's latitude taken
+ * to Mercator y, from the coarsest zoom whose pixel is as fine as the level's (WmtsMercator.hpp);
+ * rows beyond +-85.0511 degrees are left empty. Other projected sets are refused at start.
  *
  * Capabilities are fetched once at start through the upstream's fetcher and kept in a file
  * (WmtsCapabilitiesCache) so that a start without the network, or with `--offline`, reads the
@@ -120,6 +123,12 @@ struct WmtsMatrixGeometry {
   std::int32_t tileHeight = 0;
   std::int64_t matrixWidth = 0;
   std::int64_t matrixHeight = 0;
+  /// Web Mercator sets (WmtsTiles::mercator): the corner and pixel size in metres as written
+  /// (west, north and pixelDeg then give the longitude of the corner, 85.0511 and a pixel's
+  /// longitude span).
+  double originX = 0.0;
+  double originY = 0.0;
+  double pixelMetres = 0.0;
 };
 
 /** One World Wind level's matrix: WMTS row = rowBase - row, WMTS column = colBase + col; or, when
@@ -147,6 +156,7 @@ struct WmtsTiles {
   std::vector<std::pair<std::string, std::string>> dimensions;
   std::vector<WmtsLevel> levels;            ///< one per level of the grid
   std::vector<WmtsMatrixGeometry> matrices; ///< the set's matrices (what composed levels use)
+  bool mercator = false; ///< a Web Mercator set: every level composed (WmtsMercator.hpp)
 };
 
 /** One upstream tile of a composed level. */
