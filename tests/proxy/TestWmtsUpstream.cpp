@@ -247,6 +247,37 @@ TEST(WmtsMapping, KvpGetTileCarriesEveryParameter) {
             "EPSG4326_500m/3/4/0.jpg");
 }
 
+// Found by fuzz_wmts_capabilities: a ResourceURL whose template is missing (a misspelt attribute)
+// or addresses no tile made empty URLs. Such a ResourceURL is not used: KVP instead, or a refusal
+// when the configuration asks for REST.
+TEST(WmtsMapping, ResourceUrlsThatAddressNoTileAreNotUsed) {
+  const std::string layer = "<ows:Identifier>L</ows:Identifier><Format>image/png</Format>";
+  for (const std::string& resource :
+       {std::string("<ResourceURL format=\"image/png\" resourceType=\"tile\" tpmelate=\"x\"/>"),
+        std::string("<ResourceURL format=\"image/png\" resourceType=\"tile\" "
+                    "template=\"{Style}\"/>"),
+        std::string("<ResourceURL format=\"image/png\" resourceType=\"tile\" "
+                    "template=\"http://up.example/{TileMatrix}/{TileRow}.png\"/>")}) {
+    std::string doc = syntheticDocument("urn:ogc:def:crs:OGC:1.3:CRS84",
+                                        matrix("0", "27954113.20143589", "-180 90", 10, 5));
+    doc.replace(doc.find(layer), layer.size(), layer + resource);
+    auto caps = parseWmtsCapabilities(doc);
+    ASSERT_TRUE(caps) << caps.error();
+    WmtsChoice c = synthetic();
+    auto t = bindWmtsLayer(*caps, c, wwGrid(1));
+    ASSERT_TRUE(t) << t.error();
+    EXPECT_FALSE(t->rest) << resource;
+    const auto url = wmtsTileUrl(*t, TileKey{0, 0, 0}, "");
+    ASSERT_TRUE(url);
+    EXPECT_TRUE(url->starts_with("http://up.example/wmts?SERVICE=WMTS&REQUEST=GetTile")) << *url;
+    c.encoding = WmtsEncoding::Rest;
+    auto r = bindWmtsLayer(*caps, c, wwGrid(1));
+    ASSERT_FALSE(r);
+    EXPECT_NE(r.error().find("names {TileMatrix}, {TileRow} and {TileCol}"), std::string::npos)
+        << r.error();
+  }
+}
+
 TEST(WmtsMapping, LevelsPastTheSetsFinestAreRefusedWithTheLimit) {
   auto t = bindWmtsLayer(gibs(), modis(), wwGrid(7));
   ASSERT_FALSE(t);

@@ -45,6 +45,21 @@ bool iequals(std::string_view a, std::string_view b) {
   });
 }
 
+/** A REST template can address tiles only if it names the matrix, the row and the column (WMTS
+ * 1.0.0, 10.2.1); a ResourceURL without them (or without a template at all) is not used. */
+bool addressesTiles(std::string_view tmpl) {
+  const auto has = [&](std::string_view name) {
+    for (std::size_t open = tmpl.find('{'); open != std::string_view::npos;
+         open = tmpl.find('{', open + 1)) {
+      const std::size_t close = tmpl.find('}', open);
+      if (close == std::string_view::npos) return false;
+      if (iequals(tmpl.substr(open + 1, close - open - 1), name)) return true;
+    }
+    return false;
+  };
+  return has("TileMatrix") && has("TileRow") && has("TileCol");
+}
+
 std::string joined(const std::vector<std::string>& names) {
   std::string out;
   for (const auto& n : names)
@@ -189,10 +204,12 @@ bindWmtsLayer(const WmtsCapabilities& caps, const WmtsChoice& choice, const Grid
   // Encoding: REST with the layer's template for the format, or KVP.
   const WmtsResourceUrl* resource = nullptr;
   for (const auto& r : layer->resourceUrls)
-    if (r.format == t.format && (r.resourceType.empty() || r.resourceType == "tile")) resource = &r;
+    if (r.format == t.format && (r.resourceType.empty() || r.resourceType == "tile") &&
+        addressesTiles(r.tmpl))
+      resource = &r;
   if (choice.encoding == WmtsEncoding::Rest && !resource)
     return std::unexpected(what + " has no ResourceURL template for '" + t.format +
-                           "': use encoding kvp");
+                           "' that names {TileMatrix}, {TileRow} and {TileCol}: use encoding kvp");
   t.rest = resource && choice.encoding != WmtsEncoding::Kvp;
   if (t.rest) {
     t.urlTemplate = resource->tmpl;
