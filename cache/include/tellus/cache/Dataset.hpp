@@ -25,6 +25,9 @@ struct DatasetSpec {
   std::string style;     ///< WMS STYLES value ("" = default)
   std::string time;      ///< WMS TIME value ("" = none)
   bool pinned = false;   ///< never evicted by the size limit (shows that must run offline)
+  /// the body the grid's latitudes and longitudes lie on (issue 26): "earth", "moon", "mars" or a
+  /// configured body's name; its datasets are kept apart from another body's of the same name
+  std::string body = "earth";
 };
 
 /** The folder of a dataset below the cache root: "<encoded server>/<encoded name>-<8 hex hash>". */
