@@ -26,14 +26,15 @@
  * Per pixel: the direction's coordinates (a few square roots), three bilinear (sky) or trilinear
  * (terrain) lookups, the phase functions at the exact nu, the sun's disc and the display map.
  *
- * At a lower resolution (`divisor` 2 or 4, renderer.atmosphere.resolution; 2 by default): the
- * shader above (TELLUS_ATMOSPHERE_SPLIT) draws the haze's display value, its factor, the
- * transmittance to space and a key of the depth (log2 of the distance) into three textures of
- * 1 / divisor the target's size; a second full-screen pass (TELLUS_ATMOSPHERE_COMPOSITE) spreads
- * them over the target (bilinear) where their key agrees with the pixel's own depth, computes
- * the pixel in full where it does not (the limb, silhouettes against the sky or far terrain keep
- * their sharp edge), and draws the sun's disc at full resolution. The accuracy and the time this
- * trades are measured (AtmosphereGl.LowerResolutionsAgreeWithTheFullOne, bench/RESULTS.md).
+ * At a lower resolution (`divisor` 2 or 4, renderer.atmosphere.resolution; full by default:
+ * bench/RESULTS.md): the shader above (TELLUS_ATMOSPHERE_SPLIT) draws the haze's display value, its
+ * factor, the transmittance to space and a key of the depth (log2 of the distance) into three
+ * textures of 1 / divisor the target's size; a second full-screen pass
+ * (TELLUS_ATMOSPHERE_COMPOSITE) spreads them over the target (bilinear) where their key agrees with
+ * the pixel's own depth, computes the pixel in full where it does not (the limb, silhouettes
+ * against the sky or far terrain keep their sharp edge), and draws the sun's disc at full
+ * resolution. The accuracy and the time this trades are measured
+ * (AtmosphereGl.LowerResolutionsAgreeWithTheFullOne, bench/RESULTS.md).
  *
  * One triangle covers the target; each pixel's direction comes from the inverse view-projection
  * (flat, cube faces) or the inverse fisheye map (direct dome: theta = |ndc / perRadian|). The
@@ -82,8 +83,9 @@ public:
          const Geodesy& body,
          int divisor = kDefaultDivisor);
 
-  /** The resolution's divisor by default: half the target's width and height. */
-  static constexpr int kDefaultDivisor = 2;
+  /** The resolution's divisor by default: full resolution (the lower ones cost more on Mesa
+   * llvmpipe: docs/design/atmosphere.md). */
+  static constexpr int kDefaultDivisor = 1;
 
   const char* name() const noexcept override { return "atmosphere"; }
   void draw(const FrameContext& frame) override;

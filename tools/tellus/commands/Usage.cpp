@@ -49,7 +49,7 @@ commands:
              [--no-stars] (renderer.stars: the star background from data/stars-hip-6.5.txt)
              [--no-atmosphere] (renderer.atmosphere.enabled: the sky and the air's haze)
              [--atmosphere-resolution full|half|quarter] (renderer.atmosphere.resolution:
-                                      the sky and haze computed at that fraction; half)
+                                      the sky and haze computed at that fraction; full)
              [--no-fade-in] [--no-geomorph] (renderer.fade_in, renderer.geomorph: no popping)
              [--no-terrain] [--exaggeration X] [--sun LAT,LON]
              [--min-relief-px PX] (renderer.terrain.min_relief_px: heights only where relief shows)

@@ -156,8 +156,8 @@ struct AtmosphereSettings {
   bool enabled = true;   ///< on by default in the configuration (`--no-atmosphere`: off)
   double exposure = 2.5; ///< display = 1 - exp(-exposure x radiance), (0, 1e6]
   /** `resolution`: the sky and haze computed at full, half or quarter the width and height
-   * (`--atmosphere-resolution`); 1, 2 (the default) or 4. */
-  int resolutionDivisor = 2;
+   * (`--atmosphere-resolution`); 1 (the default), 2 or 4. */
+  int resolutionDivisor = 1;
   double bottomRadius = 0.0;    ///< `bottom_radius` metres; 0: the body's equatorial radius
   double topAltitude = 60000.0; ///< `top_altitude` metres above the bottom, (0, 1e6]
   std::array<double, 3> rayleighScattering{5.802e-6, 13.558e-6, 33.1e-6}; ///< 1/m, R G B

@@ -227,9 +227,9 @@ struct RendererOptions {
      * computed at every start, nothing written. The CLI: <cache root>/atmosphere. */
     std::string tableCacheDir;
     /** The sky and haze computed at 1 / divisor of the target's width and height, then spread
-     * over it (the sun's disc at full resolution): 1, 2 (the default) or 4
+     * over it (the sun's disc at full resolution): 1 (the default), 2 or 4
      * (AtmospherePass.hpp; the accuracy and time it trades in bench/RESULTS.md). */
-    int resolutionDivisor = 2;
+    int resolutionDivisor = 1;
   };
   std::optional<Atmosphere> atmosphere;
   /** Added to the decoding threads' nice value: decoding in the background gives the CPU up to
