@@ -85,7 +85,8 @@ TEST(IauRotation, MarsSiderealDayIs24h37m22_66s) {
 
 TEST(IauRotation, MoonPoleFollowsCassinisLaws) {
   // The ecliptic's pole (J2000: RA 270, dec 90 - 23.4393) and the Moon's mean ascending node.
-  const glm::dvec3 eclipticPole = astro::equatorialDirection(270.0 * kDeg, (90.0 - 23.439291) * kDeg);
+  const glm::dvec3 eclipticPole =
+      astro::equatorialDirection(270.0 * kDeg, (90.0 - 23.439291) * kDeg);
   const glm::dvec3 equinox(1.0, 0.0, 0.0);
   const glm::dvec3 eclipticY = glm::cross(eclipticPole, equinox);
   for (const double years : {-20.0, -3.3, 0.0, 4.1, 9.0, 17.5, 26.0}) {
