@@ -55,7 +55,7 @@ glm::dvec3 heliocentric(const ElementsWithRates& el, double t) noexcept {
   const double lon = el.at.meanLongitude + el.rate.meanLongitude * t;
   const double peri = el.at.perihelionLongitude + el.rate.perihelionLongitude * t;
   const double node = (el.at.nodeLongitude + el.rate.nodeLongitude * t) * kDeg;
-  const double omega = peri * kDeg - node;                     // argument of perihelion
+  const double omega = peri * kDeg - node;                             // argument of perihelion
   const double meanAnomaly = std::remainder(lon - peri, 360.0) * kDeg; // (-pi, pi]
   const double ecc = eccentricAnomaly(meanAnomaly, e);
   // In the orbit's plane, x towards the perihelion.

@@ -133,8 +133,8 @@ MoonPlace moonPlace(double unixSeconds) noexcept {
 glm::dvec3 moonPositionCelestial(double unixSeconds) noexcept {
   const double t = ttCenturies(unixSeconds);
   const MoonPlace p = moonPlaceTt(t);
-  const glm::dvec3 ofDate =
-      eclipticToEquatorial(p.longitudeRad, p.latitudeRad, p.distanceM, nutationTt(t).meanObliquityRad);
+  const glm::dvec3 ofDate = eclipticToEquatorial(
+      p.longitudeRad, p.latitudeRad, p.distanceM, nutationTt(t).meanObliquityRad);
   // Mean equator of date back to J2000.0: the transpose of the precession.
   return glm::transpose(precessionFromJ2000(unixSeconds)) * ofDate;
 }

@@ -2,6 +2,9 @@
 
 namespace tellus::planet::astro::detail {
 
+// One row of each table a line, as printed.
+// clang-format off
+
 // Meeus table 47.A: D, M, M', F, sum l (1e-6 degree, sin), sum r (1e-3 km, cos). The last row
 // has a distance term only.
 const std::array<MoonLongitudeDistanceTerm, 60> kMoonLongitudeDistanceTerms = {{
@@ -198,5 +201,6 @@ const std::array<NutationTerm, 63> kNutationTerms = {{
     {0, 0, 3, 2, 2, -3.0, 0.0, 0.0, 0.0},
     {2, -1, 0, 2, 2, -3.0, 0.0, 0.0, 0.0},
 }};
+// clang-format on
 
 } // namespace tellus::planet::astro::detail

@@ -12,8 +12,8 @@
 #include <glm/matrix.hpp>
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <numbers>
 #include <string>
 
@@ -64,7 +64,8 @@ TEST(Ephemeris, EarthsSunAgreesWithTheLighting) {
   // 2050 (aberration alone is 0.0057 of it).
   double worst = 0.0;
   for (double t = utc("1950-01-01T00:00:00Z"); t < utc("2050-12-31T00:00:00Z"); t += 37.3 * 86400.0)
-    worst = std::max(worst, angleDeg(sunDirectionInBody(EphemerisBody::earth, t), sunDirectionEcef(t)));
+    worst =
+        std::max(worst, angleDeg(sunDirectionInBody(EphemerisBody::earth, t), sunDirectionEcef(t)));
   EXPECT_LT(worst, 0.02);
 }
 
@@ -85,17 +86,19 @@ TEST(Ephemeris, MarsOppositionsOf2020And2022) {
     const double t = utc(iso);
     const glm::dvec3 sun = -earthHeliocentric(t);
     const glm::dvec3 mars = bodyPositionCelestial(EphemerisBody::mars, t);
-    EXPECT_NEAR(std::abs(std::remainder(eclipticLongitudeDeg(mars) - eclipticLongitudeDeg(sun), 360.0)),
-                180.0,
-                1.0)
+    EXPECT_NEAR(
+        std::abs(std::remainder(eclipticLongitudeDeg(mars) - eclipticLongitudeDeg(sun), 360.0)),
+        180.0,
+        1.0)
         << iso;
     // Mars's latitude then is a few degrees at most: the elongation is nearly 180 too.
     EXPECT_GT(angleDeg(sun, mars), 175.0) << iso;
   }
   // Three months earlier Mars is far from opposition.
   const double before = utc("2020-07-13T00:00:00Z");
-  EXPECT_LT(angleDeg(-earthHeliocentric(before), bodyPositionCelestial(EphemerisBody::mars, before)),
-            120.0);
+  EXPECT_LT(
+      angleDeg(-earthHeliocentric(before), bodyPositionCelestial(EphemerisBody::mars, before)),
+      120.0);
 }
 
 TEST(Ephemeris, MarsDistancesAtItsClosestApproaches) {
@@ -168,7 +171,8 @@ TEST(EphemerisExtremes, FarDatesStayFiniteAndPlausible) {
                           "1700-03-01T00:00:00Z",
                           "2300-03-01T00:00:00Z"}) {
     const double t = utc(iso);
-    for (const EphemerisBody body : {EphemerisBody::earth, EphemerisBody::moon, EphemerisBody::mars}) {
+    for (const EphemerisBody body :
+         {EphemerisBody::earth, EphemerisBody::moon, EphemerisBody::mars}) {
       const glm::dvec3 s = sunDirectionInBody(body, t);
       EXPECT_TRUE(std::isfinite(s.x) && std::isfinite(s.y) && std::isfinite(s.z)) << iso;
       EXPECT_NEAR(glm::length(s), 1.0, 1e-12) << iso;
@@ -193,7 +197,9 @@ TEST(EphemerisExtremes, FarDatesStayFiniteAndPlausible) {
 TEST(EphemerisExtremes, EarthsSunAt1900And2100StaysNearTheLighting) {
   // The two low-precision theories are made for 1800-2050 and 1950-2050; at the ends of the
   // century they still agree within the 0.02 degree (found: 0.004).
-  for (const char* iso : {"1900-03-21T00:00:00Z", "1900-09-23T00:00:00Z", "2100-06-21T00:00:00Z",
+  for (const char* iso : {"1900-03-21T00:00:00Z",
+                          "1900-09-23T00:00:00Z",
+                          "2100-06-21T00:00:00Z",
                           "2100-12-21T00:00:00Z"}) {
     const double t = utc(iso);
     EXPECT_LT(angleDeg(sunDirectionInBody(EphemerisBody::earth, t), sunDirectionEcef(t)), 0.02)

@@ -141,7 +141,8 @@ TEST(Moon, TotalEclipseOf2024April8SeenFromGreatestEclipse) {
   const double lat = 25.29 * kDeg, lon = -104.14 * kDeg;
   const double a = 6378137.0, e2 = 6.69437999014e-3;
   const double n = a / std::sqrt(1.0 - e2 * std::sin(lat) * std::sin(lat));
-  const glm::dvec3 site(n * std::cos(lat) * std::cos(lon), n * std::cos(lat) * std::sin(lon),
+  const glm::dvec3 site(n * std::cos(lat) * std::cos(lon),
+                        n * std::cos(lat) * std::sin(lon),
                         n * (1.0 - e2) * std::sin(lat));
   const glm::dvec3 toMoon = moonPositionEcef(t) - site;
   const glm::dvec3 toSun = sunDirectionEcef(t);

@@ -10,10 +10,10 @@
  * Kepler's equation, the J2000 ecliptic turned to the J2000 equator by the obliquity 23.43928
  * degrees. Standish's stated errors over 1800-2050: the Earth-Moon barycentre 20" in right
  * ascension, 8" in declination, 6000 km; Mars 40" in right ascension, 25000 km (under 0.05% of
- * its distance from the Earth at any time). Outside 1800-2050 the errors grow (tests check 1900 and 2100 stay
- * finite and plausible, not accurate). The table gives the Earth-Moon barycentre: the Earth is
- * moved from it by the Moon's geocentric position (Moon.hpp) over 1 + 81.30057 (the Earth/Moon
- * mass ratio of DE430).
+ * its distance from the Earth at any time). Outside 1800-2050 the errors grow (tests check 1900 and
+ * 2100 stay finite and plausible, not accurate). The table gives the Earth-Moon barycentre: the
+ * Earth is moved from it by the Moon's geocentric position (Moon.hpp) over 1 + 81.30057 (the
+ * Earth/Moon mass ratio of DE430).
  *
  * Frames: positions in metres in the J2000.0 celestial frame of Astronomy.hpp (the ecliptic
  * elements are ICRF-aligned to well under the theory's error), geometric (no light time: Mars is

@@ -42,9 +42,9 @@ struct Nutation {
 };
 Nutation nutationTt(double ttCenturies) noexcept;
 
-/** The Moon's geocentric place. */
+/** The Moon's geocentric place (ecliptic: mean ecliptic and equinox of date). */
 struct MoonPlace {
-  double longitudeRad = 0.0;         ///< geometric ecliptic longitude, mean equinox of date, [0, 2 pi)
+  double longitudeRad = 0.0;         ///< geometric ecliptic longitude, [0, 2 pi)
   double latitudeRad = 0.0;          ///< ecliptic latitude
   double distanceM = 0.0;            ///< centre to centre, metres
   double apparentLongitudeRad = 0.0; ///< longitude + nutation in longitude, [0, 2 pi)
