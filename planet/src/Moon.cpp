@@ -61,6 +61,13 @@ glm::dvec3 eclipticToEquatorial(double lon, double lat, double dist, double eps)
   return {x, ce * y - se * z, se * y + ce * z};
 }
 
+/** Mean obliquity of the ecliptic (Meeus 22.2): 23 26' 21.448" - 46.8150" T - 0.00059" T^2 +
+ * 0.001813" T^3. */
+double meanObliquityRad(double t) noexcept {
+  return (23.0 + 26.0 / 60.0) * kDeg +
+         (21.448 - t * (46.8150 + t * (0.00059 - t * 0.001813))) * kArcSec;
+}
+
 } // namespace
 
 double ttCenturies(double unixSeconds) noexcept {
@@ -84,9 +91,7 @@ Nutation nutationTt(double t) noexcept {
   Nutation out;
   out.longitudeRad = psi * 1e-4 * kArcSec;
   out.obliquityRad = eps * 1e-4 * kArcSec;
-  // 22.2: 23 26' 21.448" - 46.8150" T - 0.00059" T^2 + 0.001813" T^3.
-  out.meanObliquityRad =
-      (23.0 + 26.0 / 60.0) * kDeg + (21.448 - 46.8150 * t - 0.00059 * t2 + 0.001813 * t3) * kArcSec;
+  out.meanObliquityRad = meanObliquityRad(t);
   return out;
 }
 
@@ -133,8 +138,8 @@ MoonPlace moonPlace(double unixSeconds) noexcept {
 glm::dvec3 moonPositionCelestial(double unixSeconds) noexcept {
   const double t = ttCenturies(unixSeconds);
   const MoonPlace p = moonPlaceTt(t);
-  const glm::dvec3 ofDate = eclipticToEquatorial(
-      p.longitudeRad, p.latitudeRad, p.distanceM, nutationTt(t).meanObliquityRad);
+  const glm::dvec3 ofDate =
+      eclipticToEquatorial(p.longitudeRad, p.latitudeRad, p.distanceM, meanObliquityRad(t));
   // Mean equator of date back to J2000.0: the transpose of the precession.
   return glm::transpose(precessionFromJ2000(unixSeconds)) * ofDate;
 }

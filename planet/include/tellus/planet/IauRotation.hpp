@@ -65,7 +65,8 @@ struct IauRotation {
 };
 
 /** A body's orientation at an instant: its north pole's right ascension and declination in the
- * J2000.0 celestial frame and the prime meridian's angle W, degrees (W not wrapped). */
+ * J2000.0 celestial frame and the prime meridian's angle W, degrees (W less the rate's whole
+ * turns: within a turn and the periodic terms of w0). */
 struct IauOrientation {
   double poleRaDeg = 0.0;
   double poleDecDeg = 90.0;
