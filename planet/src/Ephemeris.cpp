@@ -138,9 +138,13 @@ glm::dvec3 sunDirectionInBody(EphemerisBody body, double unixSeconds) noexcept {
   case EphemerisBody::mars:
     sun = -marsHeliocentric(unixSeconds);
     break;
-  case EphemerisBody::moon:
-    sun = -earthHeliocentric(unixSeconds) - moonPositionCelestial(unixSeconds);
+  case EphemerisBody::moon: {
+    // The Moon's position once: it moves the Earth off the barycentre too.
+    const glm::dvec3 moon = moonPositionCelestial(unixSeconds);
+    sun =
+        -(earthMoonBarycentreHeliocentric(unixSeconds) - moon / (1.0 + kEarthMoonMassRatio)) - moon;
     break;
+  }
   case EphemerisBody::earth:
   default:
     sun = -earthHeliocentric(unixSeconds);

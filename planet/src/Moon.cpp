@@ -95,7 +95,10 @@ Nutation nutationTt(double t) noexcept {
   return out;
 }
 
-MoonPlace moonPlaceTt(double t) noexcept {
+namespace {
+
+/** The geometric place (chapter 47 without the nutation): longitude, latitude, distance. */
+MoonPlace geometricPlace(double t) noexcept {
   const LunarArguments a = lunarArguments(t);
   const double e = 1.0 - 0.002516 * t - 0.0000074 * t * t;
   double sumL = 0.0, sumR = 0.0, sumB = 0.0;
@@ -122,6 +125,13 @@ MoonPlace moonPlaceTt(double t) noexcept {
   p.longitudeRad = wrapTwoPi(lp + sumL * 1e-6 * kDeg);
   p.latitudeRad = sumB * 1e-6 * kDeg;
   p.distanceM = (385000.56 + sumR * 1e-3) * 1000.0;
+  return p;
+}
+
+} // namespace
+
+MoonPlace moonPlaceTt(double t) noexcept {
+  MoonPlace p = geometricPlace(t);
   const Nutation n = nutationTt(t);
   p.apparentLongitudeRad = wrapTwoPi(p.longitudeRad + n.longitudeRad);
   const double eps = n.trueObliquity();
@@ -137,7 +147,7 @@ MoonPlace moonPlace(double unixSeconds) noexcept {
 
 glm::dvec3 moonPositionCelestial(double unixSeconds) noexcept {
   const double t = ttCenturies(unixSeconds);
-  const MoonPlace p = moonPlaceTt(t);
+  const MoonPlace p = geometricPlace(t);
   const glm::dvec3 ofDate =
       eclipticToEquatorial(p.longitudeRad, p.latitudeRad, p.distanceM, meanObliquityRad(t));
   // Mean equator of date back to J2000.0: the transpose of the precession.
