@@ -1,0 +1,289 @@
+// TileService: the cache-through lookup, single flight, the answers and the stores.
+
+#include "tiles/TileServiceImpl.hpp"
+
+#include <tellus/proxy/Log.hpp>
+
+#include <cstdio>
+
+namespace tellus {
+
+namespace {
+
+std::string
+strongEtag(const std::string& folder, const TileKey& k, UnixMillis fetchedAt, std::size_t size) {
+  char buf[80];
+  std::snprintf(
+      buf,
+      sizeof buf,
+      "\"%016llx-%llx-%zx\"",
+      static_cast<unsigned long long>(stableHash64(folder + "/" + tileRelativePath(k, ""))),
+      static_cast<unsigned long long>(fetchedAt),
+      size);
+  return buf;
+}
+
+} // namespace
+
+std::expected<std::pair<DatasetId, std::string>, std::string>
+TileService::Impl::dataset(const LayerSpec& l, std::string_view time) {
+  std::lock_guard lock(datasetsMutex);
+  const auto key = std::make_pair(l.name, std::string(time));
+  if (const auto it = datasets.find(key); it != datasets.end()) return it->second;
+  DatasetSpec spec = l.dataset;
+  spec.time = std::string(time);
+  auto id = cache.registerDataset(spec);
+  if (!id && id.error().code == CacheErrc::DiskFull) {
+    // Served from the upstream, not stored; registered by a later request once there is room.
+    noticeStoreState(&id.error());
+    const std::string folder = datasetFolder(spec);
+    return std::make_pair(unregisteredId(folder), folder);
+  }
+  if (!id) return std::unexpected("cache: " + id.error().message);
+  const auto value = std::make_pair(*id, datasetFolder(spec));
+  datasets.emplace(key, value);
+  return value;
+}
+
+void TileService::Impl::noticeStoreState(const CacheError* refusal) {
+  const bool writable = refusal == nullptr && cache.storeStatus().writable;
+  if (storingLogged.exchange(writable) == writable) return;
+  const std::string root = cache.root().string();
+  const auto space = cache.diskSpace();
+  const std::string freeBytes = space ? std::to_string(space->freeBytes) : "?";
+  const std::string freeInodes = space ? std::to_string(space->freeInodes) : "?";
+  if (!writable) {
+    logger().log(LogLevel::Error,
+                 "cache",
+                 "the cache is full: tiles are served but not stored until there is room",
+                 {{"root", root},
+                  {"free_bytes", freeBytes},
+                  {"free_inodes", freeInodes},
+                  {"error", refusal ? std::string_view(refusal->message) : "disk full"}});
+  } else {
+    logger().log(LogLevel::Warn,
+                 "cache",
+                 "the cache stores tiles again",
+                 {{"root", root}, {"free_bytes", freeBytes}, {"free_inodes", freeInodes}});
+  }
+}
+
+bool TileService::Impl::join(const FlightKey& k, Done done) {
+  std::lock_guard lock(flightsMutex);
+  auto [it, inserted] = flights.try_emplace(k);
+  it->second.push_back(std::move(done));
+  return inserted;
+}
+
+TileService::Impl::Joined
+TileService::Impl::joinGated(const FlightKey& k, Done& done, FetchGate gate) {
+  std::lock_guard lock(flightsMutex);
+  if (const auto it = flights.find(k); it != flights.end()) {
+    it->second.push_back(std::move(done));
+    return {};
+  }
+  if (gate.budget) {
+    if (auto wait = gate.budget->take(gate.client)) return {false, wait};
+  }
+  flights[k].push_back(std::move(done));
+  return {true, std::nullopt};
+}
+
+bool TileService::Impl::landIfCachedNow(const FlightKey& fk, const std::string& folder) {
+  if (fk.dataset < 0) return false;
+  auto again = cache.openTile(fk.dataset, fk.key);
+  if (!again || again->kind != CacheLookup::Kind::Hit || again->stale) return false;
+  land(fk,
+       tile(TileOrigin::Hit,
+            {},
+            std::move(again->meta.contentType),
+            again->meta.fetchedAt,
+            folder,
+            fk.key,
+            std::move(again->file)));
+  return true;
+}
+
+void TileService::Impl::land(const FlightKey& k, TileAnswer&& answer) {
+  std::vector<Done> waiters;
+  {
+    std::lock_guard lock(flightsMutex);
+    const auto it = flights.find(k);
+    if (it == flights.end()) return;
+    waiters = std::move(it->second);
+    flights.erase(it);
+  }
+  for (std::size_t i = 0; i + 1 < waiters.size(); ++i) {
+    TileAnswer copy = answer;
+    waiters[i](std::move(copy));
+  }
+  if (!waiters.empty()) waiters.back()(std::move(answer));
+}
+
+TileAnswer TileService::Impl::unavailable(const std::string& upstream, std::string message) const {
+  TileAnswer a = error(std::move(message));
+  a.failure = TileAnswer::Failure::Unavailable;
+  const auto wait = std::chrono::ceil<std::chrono::seconds>(fetcher.unavailableFor(upstream));
+  a.retryAfterSeconds = std::max<std::int64_t>(kMinRetryAfterSeconds, wait.count());
+  return a;
+}
+
+TileAnswer TileService::Impl::fetchFailure(const std::string& upstream, const FetchError& e) const {
+  const std::string what = e.code == FetchErrc::HttpError && e.httpStatus > 0
+                               ? "HTTP " + std::to_string(e.httpStatus)
+                               : std::string(toString(e.code));
+  switch (e.code) {
+  case FetchErrc::Timeout:
+  case FetchErrc::Connect:
+  case FetchErrc::CircuitOpen:
+  case FetchErrc::Truncated:
+  case FetchErrc::Throttled:
+  case FetchErrc::Cancelled:
+    return unavailable(upstream, "the upstream is unavailable (" + what + ")");
+  case FetchErrc::HttpError:
+    if (e.httpStatus >= 500 || e.httpStatus == 429)
+      return unavailable(upstream, "the upstream is unavailable (" + what + ")");
+    break;
+  default:
+    break;
+  }
+  return error("the upstream failed (" + what + ")");
+}
+
+TileAnswer TileService::Impl::tile(TileOrigin origin,
+                                   std::vector<std::byte> bytes,
+                                   std::string contentType,
+                                   UnixMillis fetchedAt,
+                                   const std::string& folder,
+                                   const TileKey& key,
+                                   std::shared_ptr<const TileFile> file) {
+  TileAnswer a;
+  a.kind = TileAnswer::Kind::Tile;
+  a.origin = origin;
+  a.etag = strongEtag(
+      folder, key, fetchedAt, file ? static_cast<std::size_t>(file->size()) : bytes.size());
+  a.bytes = std::move(bytes);
+  a.file = std::move(file);
+  a.contentType = std::move(contentType);
+  a.fetchedAt = fetchedAt;
+  return a;
+}
+
+TileAnswer
+TileService::Impl::staleTile(CacheLookup&& old, const std::string& folder, const TileKey& key) {
+  return tile(TileOrigin::Stale,
+              std::move(old.bytes),
+              std::move(old.meta.contentType),
+              old.meta.fetchedAt,
+              folder,
+              key,
+              std::move(old.file));
+}
+
+void TileService::Impl::store(const FlightKey& fk,
+                              const std::string& folder,
+                              std::vector<std::byte> bytes,
+                              TileMeta meta) {
+  std::optional<CacheError> notStored;
+  if (fk.dataset < 0) {
+    notStored = CacheError{CacheErrc::DiskFull,
+                           "the cache is full: the layer's dataset could not be registered"};
+  } else if (auto put = cache.put(fk.dataset, fk.key, bytes, meta); !put) {
+    notStored = std::move(put.error());
+  }
+  if (notStored && notStored->code == CacheErrc::DiskFull) {
+    refusedStores.fetch_add(1, std::memory_order_relaxed);
+    noticeStoreState(&*notStored); // logged once per change, not once per tile
+  } else if (notStored) {
+    logger().log(LogLevel::Error,
+                 "cache",
+                 "cannot cache a tile; it is served but not kept",
+                 {{"error", notStored->message}});
+  } else {
+    noticeStoreState(nullptr);
+  }
+  TileAnswer a =
+      tile(TileOrigin::Miss, std::move(bytes), meta.contentType, meta.fetchedAt, folder, fk.key);
+  a.notStored = std::move(notStored);
+  land(fk, std::move(a));
+}
+
+void TileService::Impl::getTile(std::string_view layerName,
+                                std::string_view time,
+                                const TileKey& key,
+                                Done done,
+                                FetchGate gate) {
+  const auto li = layerIndex.find(layerName);
+  if (li == layerIndex.end()) return done(error("no layer '" + std::string(layerName) + "'"));
+  const LayerSpec& l = layers[li->second];
+  const TileGrid& g = grids[li->second];
+  if (key.level < 0 || key.level >= g.numLevels() || !g.isValid(key)) {
+    return done(absent(TileOrigin::Hit, "outside the layer's coverage"));
+  }
+  // Layers without TIME (most requests) use the dataset registered at start: no lock, no copy.
+  std::pair<DatasetId, std::string> timed;
+  const std::pair<DatasetId, std::string>* ds = &defaultDatasets[li->second];
+  if (!time.empty()) {
+    auto found = dataset(l, time);
+    if (!found) return done(error(found.error()));
+    timed = std::move(*found);
+    ds = &timed;
+  }
+  if (time.empty() && ds->first < 0) { // not registered for lack of space: room now?
+    auto again = dataset(l, time);
+    if (!again) return done(error(again.error()));
+    timed = std::move(*again);
+    ds = &timed;
+  }
+  const auto& [id, folder] = *ds;
+  // The file held open, not read: the HTTP server sends it with sendfile(2). A dataset the
+  // cache could not register has nothing cached.
+  auto found =
+      id < 0 ? std::expected<CacheLookup, CacheError>(CacheLookup{}) : cache.openTile(id, key);
+  if (!found) return done(error("cache: " + std::string(toString(found.error().code))));
+  const UnixMillis now = nowMillis();
+  if (found->kind == CacheLookup::Kind::Hit && !found->stale) {
+    return done(tile(TileOrigin::Hit,
+                     {},
+                     std::move(found->meta.contentType),
+                     found->meta.fetchedAt,
+                     folder,
+                     key,
+                     std::move(found->file)));
+  }
+  if (found->kind == CacheLookup::Kind::Absent && found->retryAfter > now) {
+    return done(absent(TileOrigin::Hit, "the upstream has no tile here"));
+  }
+  const UpstreamSpec& u = upstreams.at(l.upstream);
+  const bool forced = forcedOffline.load();
+  std::optional<CacheLookup> stale;
+  if (found->kind == CacheLookup::Kind::Hit) stale = std::move(*found);
+  if (forced || !remoteReachable(u)) {
+    if (stale) {
+      return done(staleTile(std::move(*stale), folder, key));
+    }
+    // Offline by choice: there is no tile to be had. An open breaker is a temporary failure.
+    if (forced) return done(absent(TileOrigin::Offline, "offline: the tile is not cached"));
+    TileAnswer a = unavailable(
+        u.name, "the upstream is unreachable (circuit open) and the tile is not cached");
+    a.origin = TileOrigin::Offline;
+    return done(std::move(a));
+  }
+  const FlightKey fk{id, key};
+  // Local rasters are rendered here, not fetched: the budget counts upstream fetches.
+  const auto joined = joinGated(fk, done, u.type == UpstreamSpec::Type::Local ? FetchGate{} : gate);
+  if (joined.refused) {
+    // Over the client's budget: what the cache has is still served.
+    if (stale) return done(staleTile(std::move(*stale), folder, key));
+    return done(overBudget(*joined.refused));
+  }
+  if (!joined.first) return; // someone is already fetching it
+  if (landIfCachedNow(fk, folder)) return;
+  if (u.type == UpstreamSpec::Type::Local) {
+    renderLocal(fk, l, g, folder, std::move(stale));
+  } else {
+    fetchRemote(fk, l, u, g, folder, std::string(time), std::move(stale));
+  }
+}
+
+} // namespace tellus
