@@ -1,8 +1,8 @@
 // libFuzzer target: a URL query string as a client sends it, through everything the WMS and World
 // Wind front ends do with it before touching the cache: parseQuery, parseWms, wmsErrorContext,
-// parseWorldWindTile, parseWmtsKvp (WMTS), checkUpdateSequence and xmlEscape (what error bodies
-// quote). Besides the sanitizers, every documented property of a successful parse is checked; a
-// violation traps.
+// parseWorldWindTile, parseWmtsKvp and parseWmtsKvpQuery (WMTS, the two agree), checkUpdateSequence
+// and xmlEscape (what error bodies quote). Besides the sanitizers, every documented property of a
+// successful parse is checked; a violation traps.
 
 #include "FuzzCheck.hpp"
 
@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <variant>
 
 namespace {
@@ -155,6 +156,24 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   constexpr std::size_t kSmallParamBytes = 16;
   const auto small = parseQuery(input, kSmallParamBytes, 256);
   if (small) checkParams(*small, kSmallParamBytes);
+
+  // The WMTS front end's one-pass parse: where it answers, the general path's answer.
+  for (const auto& [paramBytes, queryBytes] :
+       {std::pair<std::size_t, std::size_t>{kSmallParamBytes, 256}, {2048, 16384}}) {
+    const auto quick = parseWmtsKvpQuery(input, paramBytes, queryBytes);
+    if (!quick) continue;
+    const auto general = paramBytes == kSmallParamBytes ? small : parseQuery(input);
+    TELLUS_FUZZ_CHECK(general.has_value());
+    const auto expected = parseWmtsKvp(*general);
+    TELLUS_FUZZ_CHECK(quick->has_value() == expected.has_value());
+    if (expected) {
+      TELLUS_FUZZ_CHECK(**quick == *expected);
+    } else {
+      TELLUS_FUZZ_CHECK(quick->error().code == expected.error().code &&
+                        quick->error().locator == expected.error().locator &&
+                        quick->error().message == expected.error().message);
+    }
+  }
 
   const auto params = parseQuery(input);
   if (!params) {

@@ -20,8 +20,8 @@ OgcException invalid(std::string_view locator, std::string message) {
 
 bool iequalsAscii(std::string_view a, std::string_view b) {
   return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
-           return std::tolower(static_cast<unsigned char>(x)) ==
-                  std::tolower(static_cast<unsigned char>(y));
+           const auto lower = [](char c) { return c >= 'A' && c <= 'Z' ? char(c - 'A' + 'a') : c; };
+           return lower(x) == lower(y);
          });
 }
 
@@ -67,9 +67,14 @@ const std::vector<WmtsFrontEnd::LayerSets>& WmtsFrontEnd::layerSets() const {
 void WmtsFrontEnd::handle(const HttpRequest& req, const Responder& respond) {
   std::expected<WmtsRequest, OgcException> parsed;
   if (req.path == "/wmts" || req.path == "/wmts/") {
-    auto params = parseQuery(req.query, fe_.options.maxParamBytes, fe_.options.maxQueryBytes);
-    if (!params) return exception(invalid("", params.error()), respond);
-    parsed = parseWmtsKvp(*params);
+    if (auto quick =
+            parseWmtsKvpQuery(req.query, fe_.options.maxParamBytes, fe_.options.maxQueryBytes)) {
+      parsed = std::move(*quick);
+    } else {
+      auto params = parseQuery(req.query, fe_.options.maxParamBytes, fe_.options.maxQueryBytes);
+      if (!params) return exception(invalid("", params.error()), respond);
+      parsed = parseWmtsKvp(*params);
+    }
   } else if (req.path.starts_with("/wmts/1.0.0/")) {
     parsed =
         parseWmtsRest(std::string_view(req.path).substr(std::string_view("/wmts/1.0.0/").size()));

@@ -2,8 +2,10 @@
 #include <tellus/proxy/Wmts.hpp>
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <numbers>
 
 namespace tellus {
@@ -193,17 +195,97 @@ std::expected<std::size_t, OgcException> checkWmtsTile(const WmtsTileMatrixSet& 
 
 // ---- requests -----------------------------------------------------------------------------------
 
-std::expected<WmtsRequest, OgcException> parseWmtsKvp(const QueryParams& params) {
-  const auto service = params.get("service");
+namespace {
+
+/** The KVP parameters a WMTS request reads, by their index in kKvpNames (in the order in which
+ * parseKvpValues checks them for conflicts: VERSION..TIME). */
+namespace KvpKey {
+enum : std::size_t {
+  Service,
+  Request,
+  AcceptVersions,
+  Version,
+  Layer,
+  Style,
+  Format,
+  TileMatrixSet,
+  TileMatrix,
+  TileRow,
+  TileCol,
+  Time,
+  Count
+};
+}
+constexpr std::array<std::string_view, KvpKey::Count> kKvpNames{"service",
+                                                                "request",
+                                                                "acceptversions",
+                                                                "version",
+                                                                "layer",
+                                                                "style",
+                                                                "format",
+                                                                "tilematrixset",
+                                                                "tilematrix",
+                                                                "tilerow",
+                                                                "tilecol",
+                                                                "time"};
+
+/** The index in kKvpNames of a parameter's name (ASCII case-insensitive), or KvpKey::Count. */
+std::size_t kvpIndex(std::string_view name) noexcept {
+  // Every name is lower-case letters: (c | 0x20) is c lower-cased exactly when it can match. The
+  // names are 4 to 14 bytes long: compared as two overlapping words.
+  const auto is = [name](std::size_t key) {
+    const std::string_view k = kKvpNames[key];
+    const auto word = [](std::string_view s, std::size_t at, std::size_t n) {
+      std::uint64_t w = 0;
+      std::memcpy(&w, s.data() + at, n);
+      return w;
+    };
+    const std::size_t n = k.size() < 8 ? 4 : 8;
+    const std::uint64_t caseBits = n == 8 ? 0x2020202020202020u : 0x20202020u;
+    return ((word(name, 0, n) | caseBits) == word(k, 0, n)) &&
+           ((word(name, k.size() - n, n) | caseBits) == word(k, k.size() - n, n));
+  };
+  switch (name.size()) { // the names of each length, in kKvpNames's order
+  case 4:
+    return is(KvpKey::Time) ? KvpKey::Time : KvpKey::Count;
+  case 5:
+    return is(KvpKey::Layer) ? KvpKey::Layer : is(KvpKey::Style) ? KvpKey::Style : KvpKey::Count;
+  case 6:
+    return is(KvpKey::Format) ? KvpKey::Format : KvpKey::Count;
+  case 7:
+    for (const std::size_t key :
+         {KvpKey::Service, KvpKey::Request, KvpKey::Version, KvpKey::TileRow, KvpKey::TileCol})
+      if (is(key)) return key;
+    return KvpKey::Count;
+  case 10:
+    return is(KvpKey::TileMatrix) ? KvpKey::TileMatrix : KvpKey::Count;
+  case 13:
+    return is(KvpKey::TileMatrixSet) ? KvpKey::TileMatrixSet : KvpKey::Count;
+  case 14:
+    return is(KvpKey::AcceptVersions) ? KvpKey::AcceptVersions : KvpKey::Count;
+  default:
+    return KvpKey::Count;
+  }
+}
+
+/** The values (first occurrence) and conflicts of the parameters of kKvpNames. */
+struct KvpValues {
+  std::array<std::optional<std::string_view>, KvpKey::Count> values;
+  std::array<bool, KvpKey::Count> conflicting{};
+  std::optional<std::string_view> get(std::size_t key) const noexcept { return values[key]; }
+};
+
+std::expected<WmtsRequest, OgcException> parseKvpValues(const KvpValues& params) {
+  const auto service = params.get(KvpKey::Service);
   if (!service || service->empty())
     return std::unexpected(err(ogc::kMissingParameterValue, "SERVICE", "SERVICE is missing"));
   if (!iequals(*service, "WMTS"))
     return std::unexpected(err(ogc::kInvalidParameterValue, "SERVICE", "SERVICE must be WMTS"));
-  const auto request = params.get("request");
+  const auto request = params.get(KvpKey::Request);
   if (!request || request->empty())
     return std::unexpected(err(ogc::kMissingParameterValue, "REQUEST", "REQUEST is missing"));
   if (iequals(*request, "GetCapabilities")) {
-    if (const auto av = params.get("acceptversions")) {
+    if (const auto av = params.get(KvpKey::AcceptVersions)) {
       bool ok = false;
       std::string_view rest = *av;
       while (!ok) {
@@ -221,38 +303,32 @@ std::expected<WmtsRequest, OgcException> parseWmtsKvp(const QueryParams& params)
   if (!iequals(*request, "GetTile"))
     return std::unexpected(
         err(ogc::kOperationNotSupported, "REQUEST", "REQUEST must be GetCapabilities or GetTile"));
-  for (const std::string_view k : {"version",
-                                   "layer",
-                                   "style",
-                                   "format",
-                                   "tilematrixset",
-                                   "tilematrix",
-                                   "tilerow",
-                                   "tilecol",
-                                   "time"}) {
-    if (params.isConflicting(k))
+  for (std::size_t i = KvpKey::Version; i <= KvpKey::Time; ++i) {
+    const std::string_view k = kKvpNames[i];
+    if (params.conflicting[i])
       return std::unexpected(
           err(ogc::kInvalidParameterValue, k, std::string(k) + " is given twice"));
   }
-  const auto version = params.get("version");
+  const auto version = params.get(KvpKey::Version);
   if (!version || version->empty())
     return std::unexpected(err(ogc::kMissingParameterValue, "VERSION", "VERSION is missing"));
   if (*version != "1.0.0")
     return std::unexpected(err(ogc::kInvalidParameterValue, "VERSION", "VERSION must be 1.0.0"));
   WmtsGetTileRequest t;
   struct Field {
-    std::string_view key, locator;
+    std::size_t key;
+    std::string_view locator;
     std::string* into;
     bool mayBeEmpty;
   };
   std::string row, col;
-  for (const Field& f : {Field{"layer", "LAYER", &t.layer, false},
-                         Field{"style", "STYLE", &t.style, true},
-                         Field{"format", "FORMAT", &t.format, false},
-                         Field{"tilematrixset", "TILEMATRIXSET", &t.tileMatrixSet, false},
-                         Field{"tilematrix", "TILEMATRIX", &t.tileMatrix, false},
-                         Field{"tilerow", "TILEROW", &row, false},
-                         Field{"tilecol", "TILECOL", &col, false}}) {
+  for (const Field& f : {Field{KvpKey::Layer, "LAYER", &t.layer, false},
+                         Field{KvpKey::Style, "STYLE", &t.style, true},
+                         Field{KvpKey::Format, "FORMAT", &t.format, false},
+                         Field{KvpKey::TileMatrixSet, "TILEMATRIXSET", &t.tileMatrixSet, false},
+                         Field{KvpKey::TileMatrix, "TILEMATRIX", &t.tileMatrix, false},
+                         Field{KvpKey::TileRow, "TILEROW", &row, false},
+                         Field{KvpKey::TileCol, "TILECOL", &col, false}}) {
     const auto v = params.get(f.key);
     if (!v || (v->empty() && !f.mayBeEmpty))
       return std::unexpected(
@@ -269,8 +345,51 @@ std::expected<WmtsRequest, OgcException> parseWmtsKvp(const QueryParams& params)
         err(ogc::kInvalidParameterValue, "TILECOL", "TILECOL must be a whole number >= 0"));
   t.row = *r;
   t.col = *c;
-  if (const auto time = params.get("time")) t.time = std::string(*time);
+  if (const auto time = params.get(KvpKey::Time)) t.time = std::string(*time);
   return t;
+}
+
+} // namespace
+
+std::expected<WmtsRequest, OgcException> parseWmtsKvp(const QueryParams& params) {
+  KvpValues v;
+  for (const QueryParams::Entry& e : params.entries()) { // one entry per name (lower-case)
+    const std::size_t i = kvpIndex(e.key);
+    if (i == KvpKey::Count) continue;
+    v.values[i] = std::string_view(e.value);
+    v.conflicting[i] = e.conflicting;
+  }
+  return parseKvpValues(v);
+}
+
+std::optional<std::expected<WmtsRequest, OgcException>>
+parseWmtsKvpQuery(std::string_view query, std::size_t maxParamBytes, std::size_t maxQueryBytes) {
+  // What parseQuery would refuse or decode (and a name given twice) is left to it.
+  if (query.size() > maxQueryBytes) return std::nullopt;
+  if (!query.empty() && query.front() == '?') query.remove_prefix(1);
+  for (const char c : {'%', '+', '\0'}) // decoded by parseQuery
+    if (query.find(c) != std::string_view::npos) return std::nullopt;
+  KvpValues v;
+  std::size_t count = 0;
+  std::size_t offset = 0;
+  while (offset <= query.size()) {
+    const std::size_t amp = query.find('&', offset);
+    const std::size_t end = amp == std::string_view::npos ? query.size() : amp;
+    const std::string_view segment = query.substr(offset, end - offset);
+    offset = end + 1;
+    if (segment.empty()) continue;
+    if (++count > kMaxQueryParams) return std::nullopt;
+    const std::size_t eq = segment.find('=');
+    const std::string_view key = segment.substr(0, eq);
+    const std::string_view value =
+        eq == std::string_view::npos ? std::string_view{} : segment.substr(eq + 1);
+    if (key.size() > maxParamBytes || value.size() > maxParamBytes) return std::nullopt;
+    const std::size_t k = kvpIndex(key);
+    if (k == KvpKey::Count) continue;
+    if (v.values[k]) return std::nullopt; // given twice: parseQuery tells repeats from conflicts
+    v.values[k] = value;
+  }
+  return parseKvpValues(v);
 }
 
 std::expected<WmtsRequest, OgcException> parseWmtsRest(std::string_view path) {

@@ -147,6 +147,15 @@ using WmtsRequest = std::variant<WmtsGetCapabilitiesRequest, WmtsGetTileRequest>
 std::expected<WmtsRequest, OgcException> parseWmtsKvp(const QueryParams& params);
 
 /**
+ * @brief parseQuery and parseWmtsKvp in one pass, without copying the parameters: the same answer
+ * for the queries it takes, those without percent escapes, '+', NUL bytes or a WMTS parameter
+ * given twice, within the limits (parseQuery's arguments). Any other query -> std::nullopt: the
+ * caller takes parseQuery and parseWmtsKvp. (A GetTile's cost beside /wwtile: bench/RESULTS.md.)
+ */
+std::optional<std::expected<WmtsRequest, OgcException>>
+parseWmtsKvpQuery(std::string_view query, std::size_t maxParamBytes, std::size_t maxQueryBytes);
+
+/**
  * @brief A RESTful path after `/wmts/1.0.0/`: `WMTSCapabilities.xml`, or
  * `<layer>/<style>/[<time>/]<set>/<matrix>/<row>/<col>.<ext>` (the ResourceURL templates of the
  * capabilities), each segment percent-decoded. Anything else -> InvalidParameterValue (locator
