@@ -4,6 +4,7 @@
 
 #include <tellus/cache/RequestQueue.hpp>
 #include <tellus/cache/TilePath.hpp>
+#include <tellus/proxy/BodyCrs.hpp>
 #include <tellus/proxy/LocalRasterSource.hpp>
 #include <tellus/proxy/Log.hpp>
 #include <tellus/proxy/TileService.hpp>
@@ -16,6 +17,7 @@
 #include <deque>
 #include <map>
 #include <mutex>
+#include <numbers>
 #include <thread>
 #include <unordered_map>
 
@@ -939,6 +941,8 @@ TileService::create(TileCache& cache,
                         l.tileMatrixSet,
                         u.wmtsEncoding,
                         wmtsCapabilitiesUrl(u.url)};
+      if (const auto body = bodyCrs(l.dataset.body); body && !isEarthBody(l.dataset.body))
+        choice.bodyMetresPerDegree = body->meanRadiusM * std::numbers::pi / 180.0;
       auto bound = bindWmtsLayer(caps->second, choice, l.dataset.grid);
       if (!bound) return std::unexpected("layer '" + l.name + "': " + bound.error());
       l.wmts = std::make_shared<const WmtsTiles>(std::move(*bound));
