@@ -27,6 +27,9 @@ std::string variantKey(const DatasetSpec& s) {
   }
   k += std::to_string(g.tileWidth) + ',' + std::to_string(g.tileHeight) + ',';
   k += s.mimeType + '\n' + s.style + '\n' + s.time;
+  // The body enters only when it is not the Earth, so that every cache written before bodies
+  // existed keeps its folders (issue 26).
+  if (!isEarthBody(s.body)) k += "\nbody=" + s.body;
   return k;
 }
 
@@ -76,6 +79,10 @@ std::optional<std::int32_t> toInt(const std::string& s) {
 
 } // namespace
 
+bool isEarthBody(std::string_view body) {
+  return body == kEarthBody;
+}
+
 std::string datasetVariant(const DatasetSpec& spec) {
   char buf[17];
   std::snprintf(
@@ -112,6 +119,7 @@ std::string serializeDatasetSpec(const DatasetSpec& s) {
   line("style", s.style);
   line("time", s.time);
   line("pinned", s.pinned ? "1" : "0");
+  if (!isEarthBody(s.body)) line("body", s.body); // absent = the Earth (descriptors before bodies)
   return out;
 }
 
@@ -164,6 +172,10 @@ std::optional<DatasetSpec> parseDatasetSpec(std::string_view text) {
   if (const auto* st = get("style")) s.style = *st;
   if (const auto* t = get("time")) s.time = *t;
   if (const auto* p = get("pinned")) s.pinned = *p == "1";
+  if (const auto* b = get("body")) {
+    if (b->empty()) return std::nullopt;
+    s.body = *b;
+  }
   return s;
 }
 

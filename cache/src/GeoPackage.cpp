@@ -280,6 +280,15 @@ std::expected<std::map<std::int64_t, std::int32_t>, CacheError> gridLevels(sqlit
   return levelOf;
 }
 
+/** A GeoPackage's tiles are in EPSG:4326 here, the Earth's CRS: a dataset on another body
+ * (issue 26) would be mislabelled, and is refused rather than written as if on the Earth. */
+std::expected<void, CacheError> earthOnly(const DatasetSpec& spec, const char* what) {
+  if (isEarthBody(spec.body)) return {};
+  return std::unexpected(invalid("dataset '" + spec.name + "' lies on " + spec.body +
+                                 ": only the Earth's datasets are " + what +
+                                 " as GeoPackages (EPSG:4326)"));
+}
+
 } // namespace
 
 std::expected<GpkgReport, CacheError> exportGeoPackage(TileCache& cache,
@@ -291,6 +300,7 @@ std::expected<GpkgReport, CacheError> exportGeoPackage(TileCache& cache,
   const auto info = cache.dataset(dataset);
   if (!info) return std::unexpected(invalid("unknown dataset id " + std::to_string(dataset)));
   const DatasetSpec& spec = info->spec;
+  if (auto b = earthOnly(spec, "exported"); !b) return std::unexpected(b.error());
   if (spec.mimeType != "image/jpeg" && spec.mimeType != "image/png")
     return std::unexpected(invalid("a GeoPackage tile pyramid holds JPEG or PNG tiles; '" +
                                    spec.name + "' is " + spec.mimeType));
@@ -324,6 +334,7 @@ importGeoPackage(TileCache& cache, DatasetId dataset, const fs::path& file, std:
   const auto info = cache.dataset(dataset);
   if (!info) return std::unexpected(invalid("unknown dataset id " + std::to_string(dataset)));
   const DatasetSpec& spec = info->spec;
+  if (auto b = earthOnly(spec, "imported"); !b) return std::unexpected(b.error());
   auto grid = TileGrid::create(spec.grid);
   if (!grid) return std::unexpected(invalid(grid.error()));
   auto opened = openGpkg(file, false);

@@ -107,3 +107,25 @@ TEST(GeoPackage, RefusesWhatItCannotHoldOrMatch) {
   std::ofstream(junk) << "not sqlite";
   EXPECT_FALSE(importGeoPackage(*cache, id, junk));
 }
+
+TEST(GeoPackage, RefusesADatasetOnAnotherBody) {
+  test::TempDir dir("gpkg");
+  auto cache = test::openTestCache(dir.path() / "a");
+  DatasetSpec moon = test::imagerySpec("lroc");
+  moon.body = "moon";
+  const auto id = *cache->registerDataset(moon);
+  ASSERT_TRUE(cache->put(id, TileKey{0, 1, 1}, jpegLike({0, 1, 1}), {}));
+  const fs::path file = dir.path() / "moon.gpkg";
+  auto e = exportGeoPackage(*cache, id, file);
+  ASSERT_FALSE(e);
+  EXPECT_EQ(e.error().code, CacheErrc::InvalidArgument);
+  EXPECT_NE(e.error().message.find("moon"), std::string::npos) << e.error().message;
+  EXPECT_FALSE(fs::exists(file));
+  // An Earth GeoPackage is not read into the Moon's dataset either.
+  const auto earth = *cache->registerDataset(test::imagerySpec());
+  ASSERT_TRUE(cache->put(earth, TileKey{0, 1, 1}, jpegLike({0, 1, 1}), {}));
+  ASSERT_TRUE(exportGeoPackage(*cache, earth, file));
+  auto m = importGeoPackage(*cache, id, file);
+  ASSERT_FALSE(m);
+  EXPECT_NE(m.error().message.find("moon"), std::string::npos) << m.error().message;
+}

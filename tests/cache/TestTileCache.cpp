@@ -65,7 +65,7 @@ TEST(TileCache, PutGetRoundTripInWorldWindTree) {
   EXPECT_TRUE(fs::exists(file)) << file;
   EXPECT_TRUE(fs::exists(dir.path() / datasetFolder(imagery()) / "dataset.txt"));
   EXPECT_TRUE(fs::exists(dir.path() / "index.sqlite"));
-  EXPECT_EQ(userVersion(dir.path() / "index.sqlite"), 2);
+  EXPECT_EQ(userVersion(dir.path() / "index.sqlite"), 3);
 }
 
 TEST(TileCache, HostileNamesStayInsideTheRoot) {
@@ -174,7 +174,7 @@ TEST(TileCache, MigratesSchemaVersion1) {
   auto cache = openCache(dir.path());
   ASSERT_TRUE(cache);
   EXPECT_FALSE(cache->wasRebuiltAtOpen());
-  EXPECT_EQ(userVersion(dir.path() / "index.sqlite"), 2);
+  EXPECT_EQ(userVersion(dir.path() / "index.sqlite"), 3);
   EXPECT_EQ(*cache->totalBytes(), 250);
   ASSERT_TRUE(cache->dataset(7));
   EXPECT_EQ(cache->peek(7, TileKey{0, 0, 1})->size, 150);

@@ -98,6 +98,7 @@ TEST(ProxyFromConfig, LayerKeepsEveryField) {
   l.dataset.name = "sst";
   l.dataset.mimeType = "image/png";
   l.dataset.pinned = true;
+  l.dataset.body = "mars"; // issue 26: the body travels inside the dataset
   l.ttl = 3600000ms;
   l.maxAge = 600s;
   l.opacity = 0.25;
@@ -116,6 +117,7 @@ TEST(ProxyFromConfig, LayerKeepsEveryField) {
   EXPECT_EQ(s.dataset.name, "sst");
   EXPECT_EQ(s.dataset.mimeType, "image/png");
   EXPECT_TRUE(s.dataset.pinned);
+  EXPECT_EQ(s.dataset.body, "mars");
   EXPECT_FALSE(s.elevation);
   EXPECT_EQ(s.ttl, 3600000ms);
   EXPECT_EQ(s.maxAge, 600s);

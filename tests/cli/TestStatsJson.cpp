@@ -33,6 +33,7 @@ TEST(StatsJson, TheLayoutScriptsRead) {
   a.levels = {{0, 4, 0, 40000}, {1, 12, 2, 83456}};
   DatasetStats b = dataset(7, "sst", false);
   b.dataset.spec.time = "2024-01-01";
+  b.dataset.spec.body = "mars";
   b.tiles = 1;
   b.bytes = 9;
   b.levels = {{3, 1, 0, 9}};
@@ -40,10 +41,12 @@ TEST(StatsJson, TheLayoutScriptsRead) {
       cacheStatsJson("/var/cache/tellus", std::vector<DatasetStats>{a, b}),
       R"({"root":"/var/cache/tellus","tiles":17,"bytes":123465,"datasets":[)"
       R"({"id":1,"server":"local","name":"bluemarble","folder":"local/bluemarble-0123abcd",)"
-      R"("format":"image/jpeg","time":"","pinned":true,"tiles":16,"bytes":123456,"levels":[)"
+      R"("format":"image/jpeg","time":"","pinned":true,"body":"earth","tiles":16,"bytes":123456,)"
+      R"("levels":[)"
       R"({"level":0,"tiles":4,"absent":0,"bytes":40000},{"level":1,"tiles":12,"absent":2,)"
       R"("bytes":83456}]},{"id":7,"server":"local","name":"sst","folder":"local/sst-0123abcd",)"
-      R"("format":"image/jpeg","time":"2024-01-01","pinned":false,"tiles":1,"bytes":9,"levels":[)"
+      R"("format":"image/jpeg","time":"2024-01-01","pinned":false,"body":"mars","tiles":1,)"
+      R"("bytes":9,"levels":[)"
       R"({"level":3,"tiles":1,"absent":0,"bytes":9}]}]})"
       "\n");
   EXPECT_EQ(cacheStatsJson("c", {}), "{\"root\":\"c\",\"tiles\":0,\"bytes\":0,\"datasets\":[]}\n");

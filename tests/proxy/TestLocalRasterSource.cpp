@@ -66,6 +66,29 @@ TEST(LocalRasterSource, ColoursAreWhereTheEarthPutsThem) {
   EXPECT_GT(src.sample(-85.0, 0.0, 0), 180.0);
 }
 
+// The bundled Moon and Mars (issue 26, data/README.md): north up, 180 W at the left, features
+// where the IAU frames put them.
+TEST(LocalRasterSource, TheMoonAndMarsAreWhereTheirFeaturesAre) {
+  const auto moon = LocalRasterSource::open(kData / "moon_2048x1024.jpg");
+  ASSERT_TRUE(moon) << moon.error();
+  EXPECT_EQ(moon->width(), 2048);
+  // Tycho's rays (43.3 S, 11.4 W) bright; Mare Imbrium (32.8 N, 15.6 W) and Mare Serenitatis
+  // (28 N, 17.5 E) dark; the southern highlands in between.
+  const double tycho = moon->sample(-43.31, -11.36, 0);
+  const double imbrium = moon->sample(32.8, -15.6, 0);
+  const double highlands = moon->sample(-60.0, 0.0, 0);
+  EXPECT_GT(tycho, highlands + 30);
+  EXPECT_GT(highlands, imbrium + 30);
+  EXPECT_LT(moon->sample(28.0, 17.5, 0), highlands - 30);
+  const auto mars = LocalRasterSource::open(kData / "mars_512x256.jpg");
+  ASSERT_TRUE(mars) << mars.error();
+  EXPECT_EQ(mars->width(), 512);
+  // Hellas (42.4 S, 70 E) bright and red; Syrtis Major (8.4 N, 69.5 E) dark; the north cap white.
+  EXPECT_GT(mars->sample(-42.4, 70.0, 0), mars->sample(8.4, 69.5, 0) + 60);
+  EXPECT_GT(mars->sample(-42.4, 70.0, 0), mars->sample(-42.4, 70.0, 2) + 60);
+  EXPECT_GT(mars->sample(88.0, 0.0, 2), 180.0);
+}
+
 TEST(LocalRasterSource, JpegTileDecodesToTheRightSize) {
   auto tile = blueMarble().renderTile(Sector{-180, -90, -144, -54}, 512, 512, "image/jpeg");
   ASSERT_TRUE(tile) << tile.error();

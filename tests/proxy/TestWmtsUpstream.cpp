@@ -11,7 +11,9 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cstdio>
 #include <fstream>
+#include <numbers>
 #include <sstream>
 
 using namespace tellus;
@@ -494,4 +496,41 @@ TEST(WmtsCompose, TilesAreSampledWhereTheyLieAndNothingOutsideTheMatrix) {
   auto wrong = composeWmtsTile(*t, TileKey{0, 3, 0}, sector, 512, 512, bad, "image/jpeg");
   ASSERT_FALSE(wrong);
   EXPECT_NE(wrong.error().find("256 x 256"), std::string::npos) << wrong.error();
+}
+
+// Issue 26: a layer on the Moon reads a NASA-Trek-like set (2 x 1 tiles of 180 degrees and 256 px
+// at zoom 0) in the Moon's IAU CRS, latitude first, whether its scale denominators are counted
+// on the Moon's radius or on the Earth's; a 45-degree grid is zoom 2 on, re-indexed.
+TEST(WmtsMapping, AnotherBodysSetIsReadInItsIauCrsOnWhicheverRadiusItCounts) {
+  const double moonMetresPerDegree = 1737400.0 * std::numbers::pi / 180.0;
+  const auto trekLike = [](double metresPerDegree) {
+    std::string ms;
+    for (int z = 0; z < 4; ++z) {
+      char sd[64];
+      std::snprintf(sd, sizeof sd, "%.10f", 180.0 / (1 << z) / 256 * metresPerDegree / 0.00028);
+      ms += matrix(std::to_string(z), sd, "90 -180", 2 << z, 1 << z, 256);
+    }
+    return syntheticDocument("urn:ogc:def:crs:IAU:2015:30100", ms);
+  };
+  const GridSpec grid{Sector{}, 45.0, 256, 256, 2};
+  WmtsChoice moon = synthetic();
+  moon.bodyMetresPerDegree = moonMetresPerDegree;
+  for (const double counted : {moonMetresPerDegree, 111319.49079327357}) {
+    SCOPED_TRACE(counted);
+    auto caps = parseWmtsCapabilities(trekLike(counted));
+    ASSERT_TRUE(caps) << caps.error();
+    auto t = bindWmtsLayer(*caps, moon, grid);
+    ASSERT_TRUE(t) << t.error();
+    ASSERT_EQ(t->levels.size(), 2u);
+    EXPECT_LT(t->levels[0].composeFrom, 0);
+    EXPECT_EQ(t->levels[0].matrix, "2");
+    EXPECT_EQ(t->levels[1].matrix, "3");
+    EXPECT_EQ(t->levels[0].rowBase, 3);
+  }
+  // An Earth layer does not take the Moon's CRS.
+  auto caps = parseWmtsCapabilities(trekLike(moonMetresPerDegree));
+  ASSERT_TRUE(caps);
+  auto earth = bindWmtsLayer(*caps, synthetic(), grid);
+  ASSERT_FALSE(earth);
+  EXPECT_NE(earth.error().find("IAU:2015:30100"), std::string::npos) << earth.error();
 }

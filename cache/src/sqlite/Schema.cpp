@@ -60,6 +60,11 @@ CREATE TRIGGER tiles_upd AFTER UPDATE OF bytes ON tiles BEGIN
 END;
 )sql";
 
+// Version 3: the body a dataset lies on (issue 26); every dataset of an older index is the Earth's.
+constexpr const char* kV2toV3 = R"sql(
+ALTER TABLE datasets ADD COLUMN body TEXT NOT NULL DEFAULT 'earth';
+)sql";
+
 std::expected<int, CacheError> userVersion(sqlite3* db) {
   sql::Stmt s(db, "PRAGMA user_version");
   if (!s.ok()) return std::unexpected(sql::errorFrom(db, s.prepareRc(), "reading schema version"));
@@ -117,6 +122,10 @@ std::expected<void, CacheError> ensure(sqlite3* db) {
   if (*v == 1) {
     if (auto r = run(db, kV1toV2, "migrating schema v1 -> v2"); !r) return fail(r.error());
     *v = 2;
+  }
+  if (*v == 2) {
+    if (auto r = run(db, kV2toV3, "migrating schema v2 -> v3"); !r) return fail(r.error());
+    *v = 3;
   }
   const std::string setVersion = "PRAGMA user_version = " + std::to_string(kVersion);
   if (auto r = run(db, setVersion.c_str(), "writing schema version"); !r) return fail(r.error());

@@ -10,7 +10,7 @@
 namespace tellus::schema {
 
 /** The version written by this build (PRAGMA user_version). */
-inline constexpr int kVersion = 2;
+inline constexpr int kVersion = 3;
 
 /** Creates the schema in an empty database or migrates an older one, in one transaction.
  * Fails with CacheErrc::Schema for a newer version or a database that is not a tellus index. */

@@ -19,11 +19,12 @@ int run(const sql::Stmt& s) {
 /** Inserts a dataset row (the usage row follows by trigger); returns its id. */
 std::expected<DatasetId, CacheError>
 insertDataset(sqlite3* db, const DatasetSpec& spec, std::string_view folder, UnixMillis createdAt) {
-  sql::Stmt ins(db,
-                "INSERT INTO datasets(server, name, folder, west, south, east, north, "
-                "level_zero_delta, tile_width, tile_height, num_levels, mime_type, extension, "
-                "style, time, pinned, created_at) VALUES "
-                "(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17)");
+  sql::Stmt ins(
+      db,
+      "INSERT INTO datasets(server, name, folder, west, south, east, north, "
+      "level_zero_delta, tile_width, tile_height, num_levels, mime_type, extension, "
+      "style, time, pinned, created_at, body) VALUES "
+      "(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18)");
   if (!ins.ok()) return std::unexpected(sql::errorFrom(db, ins.prepareRc(), "registering dataset"));
   sql::Stmt::Use u(ins);
   const GridSpec& g = spec.grid;
@@ -35,7 +36,7 @@ insertDataset(sqlite3* db, const DatasetSpec& spec, std::string_view folder, Uni
   u.bind(11, std::int64_t{g.numLevels}).bind(12, std::string_view(spec.mimeType));
   u.bind(13, std::string_view(spec.extension)).bind(14, std::string_view(spec.style));
   u.bind(15, std::string_view(spec.time)).bind(16, std::int64_t{spec.pinned ? 1 : 0});
-  u.bind(17, createdAt);
+  u.bind(17, createdAt).bind(18, std::string_view(spec.body));
   const int rc = u.step();
   if (rc != SQLITE_DONE) return std::unexpected(sql::errorFrom(db, rc, "registering dataset"));
   return sqlite3_last_insert_rowid(db);

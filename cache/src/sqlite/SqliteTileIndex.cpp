@@ -101,12 +101,14 @@ DatasetInfo datasetFromRow(const sql::Stmt::Use& u) {
   s.time = u.text(15);
   s.pinned = u.i64(16) != 0;
   d.createdAt = u.i64(17);
+  s.body = u.text(18);
   return d;
 }
 
 constexpr const char* kDatasetColumns =
     "SELECT id, server, name, folder, west, south, east, north, level_zero_delta, tile_width, "
-    "tile_height, num_levels, mime_type, extension, style, time, pinned, created_at FROM datasets ";
+    "tile_height, num_levels, mime_type, extension, style, time, pinned, created_at, body "
+    "FROM datasets ";
 
 } // namespace
 

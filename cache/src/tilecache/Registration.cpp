@@ -27,6 +27,13 @@ std::expected<TileGrid, CacheError> validated(const DatasetSpec& spec) {
     return std::unexpected(
         invalid("dataset '" + spec.name + "': extension must be 1-8 of [a-z0-9]"));
   }
+  // A body is a name (it enters the hash and the index): never empty, no control characters.
+  if (spec.body.empty() || std::any_of(spec.body.begin(), spec.body.end(), [](char c) {
+        return static_cast<unsigned char>(c) < 0x20;
+      })) {
+    return std::unexpected(
+        invalid("dataset '" + spec.name + "': body must be a name, got '" + spec.body + "'"));
+  }
   return std::move(*grid);
 }
 

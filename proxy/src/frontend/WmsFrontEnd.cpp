@@ -5,6 +5,7 @@
 #include "frontend/FrontEnd.hpp"
 
 #include <tellus/cache/TilePath.hpp>
+#include <tellus/proxy/BodyCrs.hpp>
 #include <tellus/proxy/Capabilities.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
 #include <tellus/proxy/Query.hpp>
@@ -13,6 +14,50 @@
 #include <cstdio>
 
 namespace tellus {
+
+namespace {
+
+/** The CRS and the layers of a map must lie on one body (docs/design/bodies-proxy.md): an Earth
+ * layer takes no IAU code; another body's layer takes its own IAU code, or EPSG:4326 / CRS:84 read
+ * as degrees on that body (what USGS Astrogeology's planetary servers advertise), never EPSG:3857
+ * (the Earth's Web Mercator). Unknown layers are left to the layer check. */
+std::optional<OgcException> bodyMismatch(const GetMapRequest& m, const TileService& tiles) {
+  const std::string locator = m.version == WmsVersion::V130 ? "CRS" : "SRS";
+  const auto invalidCrs = [&](std::string message) {
+    return OgcException{std::string(invalidCrsCode(m.version)), locator, std::move(message)};
+  };
+  const LayerSpec* first = nullptr;
+  for (const std::string& name : m.layers) {
+    const LayerSpec* l = tiles.layer(name);
+    if (!l) continue;
+    const std::string& body = l->dataset.body;
+    if (first && first->dataset.body != body) {
+      return OgcException{std::string(ogc::kInvalidParameterValue),
+                          "LAYERS",
+                          "layers '" + first->name + "' (" + first->dataset.body + ") and '" +
+                              l->name + "' (" + body + ") lie on different bodies"};
+    }
+    first = l;
+    const bool iau = m.crs.starts_with("IAU:");
+    if (isEarthBody(body)) {
+      if (iau) return invalidCrs("layer '" + name + "' lies on the Earth, not in " + m.crs);
+      continue;
+    }
+    const auto b = bodyCrs(body);
+    if (!b) {
+      return invalidCrs("layer '" + name + "' lies on '" + body +
+                        "', which has no IAU code known to tellus (World Wind tiles only)");
+    }
+    if (m.crs == kWebMercator || (iau && m.crs != iauCrs130(b->iauCode))) {
+      return invalidCrs(
+          "layer '" + name + "' lies on " + body + ": " + m.crs + " is not its CRS (" +
+          (m.version == WmsVersion::V130 ? iauCrs130(b->iauCode) : iauCrs111(b->iauCode)) + ")");
+    }
+  }
+  return std::nullopt;
+}
+
+} // namespace
 
 void WmsFrontEnd::handle(const HttpRequest& req, const Responder& respond) {
   auto params = parseQuery(req.query, fe_.options.maxParamBytes, fe_.options.maxQueryBytes);
@@ -24,6 +69,11 @@ void WmsFrontEnd::handle(const HttpRequest& req, const Responder& respond) {
   const WmsErrorContext ctx = wmsErrorContext(*params, fe_.options.limits);
   auto parsed = parseWms(*params, fe_.options.limits);
   if (!parsed) return exception(ctx, parsed.error(), respond);
+  const GetMapRequest* map = std::get_if<GetMapRequest>(&*parsed);
+  if (const auto* f = std::get_if<GetFeatureInfoRequest>(&*parsed)) map = &f->map;
+  if (map) {
+    if (auto e = bodyMismatch(*map, fe_.tiles)) return exception(ctx, *e, respond);
+  }
   if (const auto* caps = std::get_if<GetCapabilitiesRequest>(&*parsed))
     return capabilities(req, *caps, ctx, respond);
   if (const auto* g = std::get_if<GetLegendGraphicRequest>(&*parsed))
@@ -102,6 +152,12 @@ CapabilitiesModel WmsFrontEnd::capabilitiesModel(const HttpRequest& req) const {
   m.maxHeight = fe_.options.limits.maxHeight;
   for (const auto& l : fe_.tiles.layers()) {
     CapabilitiesLayer c;
+    if (!isEarthBody(l.dataset.body)) {
+      // A body without a known IAU code has no CRS to be named by: World Wind tiles only.
+      const auto b = bodyCrs(l.dataset.body);
+      if (!b) continue;
+      c.iauCode = b->iauCode;
+    }
     c.name = l.name;
     c.title = l.title.empty() ? l.name : l.title;
     c.abstract = l.abstract;

@@ -42,6 +42,15 @@ const std::vector<WmtsFrontEnd::LayerSets>& WmtsFrontEnd::layerSets() const {
       LayerSets ls;
       ls.layer = &l;
       const GridSpec& g = l.dataset.grid;
+      if (!isEarthBody(l.dataset.body)) {
+        // Another body: only its own grid, in its IAU CRS; one the table does not know has no
+        // CRS to be named by and is not served here (World Wind tiles only).
+        const auto body = bodyCrs(l.dataset.body);
+        if (!body) continue;
+        ls.sets.push_back(bodyWorldWindMatrixSet(l.name, g, l.firstLevel, *body));
+        layers_.push_back(std::move(ls));
+        continue;
+      }
       ls.sets.push_back(worldWindMatrixSet(l.name, g, l.firstLevel));
       if (composable(l)) {
         for (const WmtsSetKind k :
@@ -107,6 +116,7 @@ void WmtsFrontEnd::capabilities(const HttpRequest& req, const Responder& respond
     info.timeValues = l.timeValues;
     info.timePeriod = l.timePeriod;
     info.timeDefault = l.timeDefault;
+    if (!isEarthBody(l.dataset.body)) info.bodyCrs = ls.sets.front().crs;
     for (const WmtsTileMatrixSet& s : ls.sets)
       info.sets.push_back(&s);
     m.sets.push_back(&ls.sets.front());

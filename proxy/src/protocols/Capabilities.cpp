@@ -1,3 +1,4 @@
+#include <tellus/proxy/BodyCrs.hpp>
 #include <tellus/proxy/Capabilities.hpp>
 #include <tellus/proxy/MapBox.hpp>
 #include <tellus/proxy/Query.hpp>
@@ -220,6 +221,24 @@ void writeBoxes111(XmlWriter& w, int depth, const Sector& b) {
   w.line(depth, "<BoundingBox" + attr("SRS", "EPSG:3857") + mercatorBoxAttributes(b) + "/>");
 }
 
+/** A body's layer in 1.1.1: its IAU2000 SRS and boxes (lon/lat: 1.1.1 has no axis order). */
+void writeBodyLayer111(XmlWriter& w, int depth, const CapabilitiesLayer& layer) {
+  const std::string srs = iauCrs111(layer.iauCode);
+  const Sector& b = layer.bbox;
+  w.element(depth, "SRS", srs);
+  w.line(depth,
+         "<LatLonBoundingBox" + attrNum("minx", b.west) + attrNum("miny", b.south) +
+             attrNum("maxx", b.east) + attrNum("maxy", b.north) + "/>");
+  w.line(depth,
+         "<BoundingBox" + attr("SRS", srs) + attrNum("minx", b.west) + attrNum("miny", b.south) +
+             attrNum("maxx", b.east) + attrNum("maxy", b.north) + "/>");
+}
+
+bool anyOtherBody(const CapabilitiesModel& m) {
+  return std::any_of(
+      m.layers.begin(), m.layers.end(), [](const CapabilitiesLayer& l) { return l.iauCode != 0; });
+}
+
 std::string capabilities111(const CapabilitiesModel& m) {
   std::string out;
   XmlWriter w(out);
@@ -241,16 +260,32 @@ std::string capabilities111(const CapabilitiesModel& m) {
                          "application/vnd.ogc.se_blank"});
   w.line(2, "<Layer>");
   w.element(3, "Title", m.title);
-  w.element(3, "SRS", "EPSG:4326");
-  w.element(3, "SRS", "EPSG:3857");
-  writeBoxes111(w, 3, unionOf(m.layers));
+  const bool perLayer = anyOtherBody(m);
+  if (perLayer) {
+    const Sector b = unionOf(m.layers);
+    w.line(3,
+           "<LatLonBoundingBox" + attrNum("minx", b.west) + attrNum("miny", b.south) +
+               attrNum("maxx", b.east) + attrNum("maxy", b.north) + "/>");
+  } else {
+    w.element(3, "SRS", "EPSG:4326");
+    w.element(3, "SRS", "EPSG:3857");
+    writeBoxes111(w, 3, unionOf(m.layers));
+  }
   for (const CapabilitiesLayer& layer : m.layers) {
     w.line(3, layerOpen(layer));
     w.element(4, "Name", layer.name);
     w.element(4, "Title", layer.title);
     if (!layer.abstract.empty()) w.element(4, "Abstract", layer.abstract);
     writeLayerKeywords(w, 4, layer);
-    writeBoxes111(w, 4, layer.bbox);
+    if (layer.iauCode != 0) {
+      writeBodyLayer111(w, 4, layer);
+    } else {
+      if (perLayer) {
+        w.element(4, "SRS", "EPSG:4326");
+        w.element(4, "SRS", "EPSG:3857");
+      }
+      writeBoxes111(w, 4, layer.bbox);
+    }
     if (hasTime(layer)) {
       w.line(4, "<Dimension" + attr("name", "time") + attr("units", "ISO8601") + "/>");
       std::string extent = "<Extent" + attr("name", "time");
@@ -269,13 +304,10 @@ std::string capabilities111(const CapabilitiesModel& m) {
 
 // ---- 1.3.0 -----------------------------------------------------------------------------------
 
+void writeGeographicBox130(XmlWriter& w, int depth, const Sector& b);
+
 void writeBoxes130(XmlWriter& w, int depth, const Sector& b) {
-  w.line(depth, "<EX_GeographicBoundingBox>");
-  w.element(depth + 1, "westBoundLongitude", formatCoordinate(b.west));
-  w.element(depth + 1, "eastBoundLongitude", formatCoordinate(b.east));
-  w.element(depth + 1, "southBoundLatitude", formatCoordinate(b.south));
-  w.element(depth + 1, "northBoundLatitude", formatCoordinate(b.north));
-  w.line(depth, "</EX_GeographicBoundingBox>");
+  writeGeographicBox130(w, depth, b);
   w.line(depth,
          "<BoundingBox" + attr("CRS", "CRS:84") + attrNum("minx", b.west) +
              attrNum("miny", b.south) + attrNum("maxx", b.east) + attrNum("maxy", b.north) + "/>");
@@ -284,6 +316,33 @@ void writeBoxes130(XmlWriter& w, int depth, const Sector& b) {
          "<BoundingBox" + attr("CRS", "EPSG:4326") + attrNum("minx", b.south) +
              attrNum("miny", b.west) + attrNum("maxx", b.north) + attrNum("maxy", b.east) + "/>");
   w.line(depth, "<BoundingBox" + attr("CRS", "EPSG:3857") + mercatorBoxAttributes(b) + "/>");
+}
+
+void writeGeographicBox130(XmlWriter& w, int depth, const Sector& b) {
+  w.line(depth, "<EX_GeographicBoundingBox>");
+  w.element(depth + 1, "westBoundLongitude", formatCoordinate(b.west));
+  w.element(depth + 1, "eastBoundLongitude", formatCoordinate(b.east));
+  w.element(depth + 1, "southBoundLatitude", formatCoordinate(b.south));
+  w.element(depth + 1, "northBoundLatitude", formatCoordinate(b.north));
+  w.line(depth, "</EX_GeographicBoundingBox>");
+}
+
+/** A body's layer in 1.3.0: its IAU CRS, the box in degrees of the body (as planetary servers
+ * write EX_GeographicBoundingBox) and in the CRS's own axis order, latitude first. */
+void writeBodyLayer130(XmlWriter& w, int depth, const CapabilitiesLayer& layer) {
+  const std::string crs = iauCrs130(layer.iauCode);
+  const Sector& b = layer.bbox;
+  w.element(depth, "CRS", crs);
+  writeGeographicBox130(w, depth, b);
+  w.line(depth,
+         "<BoundingBox" + attr("CRS", crs) + attrNum("minx", b.south) + attrNum("miny", b.west) +
+             attrNum("maxx", b.north) + attrNum("maxy", b.east) + "/>");
+}
+
+void writeEarthCrs130(XmlWriter& w, int depth) {
+  w.element(depth, "CRS", "EPSG:4326");
+  w.element(depth, "CRS", "CRS:84");
+  w.element(depth, "CRS", "EPSG:3857");
 }
 
 std::string capabilities130(const CapabilitiesModel& m) {
@@ -315,17 +374,25 @@ std::string capabilities130(const CapabilitiesModel& m) {
   writeExceptionFormats(w, {"XML", "INIMAGE", "BLANK"});
   w.line(2, "<Layer>");
   w.element(3, "Title", m.title);
-  w.element(3, "CRS", "EPSG:4326");
-  w.element(3, "CRS", "CRS:84");
-  w.element(3, "CRS", "EPSG:3857");
-  writeBoxes130(w, 3, unionOf(m.layers));
+  const bool perLayer = anyOtherBody(m);
+  if (perLayer) {
+    writeGeographicBox130(w, 3, unionOf(m.layers));
+  } else {
+    writeEarthCrs130(w, 3);
+    writeBoxes130(w, 3, unionOf(m.layers));
+  }
   for (const CapabilitiesLayer& layer : m.layers) {
     w.line(3, layerOpen(layer));
     w.element(4, "Name", layer.name);
     w.element(4, "Title", layer.title);
     if (!layer.abstract.empty()) w.element(4, "Abstract", layer.abstract);
     writeLayerKeywords(w, 4, layer);
-    writeBoxes130(w, 4, layer.bbox);
+    if (layer.iauCode != 0) {
+      writeBodyLayer130(w, 4, layer);
+    } else {
+      if (perLayer) writeEarthCrs130(w, 4);
+      writeBoxes130(w, 4, layer.bbox);
+    }
     if (hasTime(layer)) {
       std::string dim = "<Dimension" + attr("name", "time") + attr("units", "ISO8601");
       if (!layer.timeDefault.empty()) dim += attr("default", layer.timeDefault);

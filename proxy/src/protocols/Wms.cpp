@@ -1,4 +1,5 @@
 #include <tellus/cache/TilePath.hpp>
+#include <tellus/proxy/BodyCrs.hpp>
 #include <tellus/proxy/Wms.hpp>
 
 #include <array>
@@ -433,11 +434,16 @@ Step readCrsAndBbox(const QueryParams& params, GetMapRequest& req) {
     req.crs = "CRS:84";
   } else if (isWebMercator(*crs)) {
     req.crs = std::string(kWebMercator); // easting, northing under both versions
+  } else if (const auto iau = parseIauCrs(*crs); iau && *iau % 100 == 0) {
+    // A body's geographic CRS (BodyCrs.hpp): latitude first in 1.3.0, as the IAU 2015
+    // definitions order their axes; whether a layer lies on that body is the front end's.
+    req.crs = iauCrs130(*iau);
+    latFirst = v130;
   } else {
     return fail(invalidCrsCode(req.version),
                 crsLocator,
                 std::string(crsLocator) + " " + quoted(*crs) +
-                    " is not supported (EPSG:4326, CRS:84 or EPSG:3857)");
+                    " is not supported (EPSG:4326, CRS:84, EPSG:3857 or a body's IAU:<code>)");
   }
 
   const auto bbox = nonEmpty(params, "bbox");

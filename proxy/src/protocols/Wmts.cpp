@@ -91,6 +91,19 @@ worldWindMatrixSet(std::string_view layer, const GridSpec& grid, std::int32_t fi
   return s;
 }
 
+WmtsTileMatrixSet bodyWorldWindMatrixSet(std::string_view layer,
+                                         const GridSpec& grid,
+                                         std::int32_t firstLevel,
+                                         const BodyCrs& body) {
+  WmtsTileMatrixSet s = worldWindMatrixSet(layer, grid, firstLevel);
+  s.crs = iauCrsUrn(body.iauCode);
+  s.latFirst = true;
+  const double metresPerDegree = body.meanRadiusM * std::numbers::pi / 180.0;
+  for (WmtsTileMatrix& m : s.matrices)
+    m.scaleDenominator = m.tileSpan / m.tileWidth * metresPerDegree / kPixelMetres;
+  return s;
+}
+
 std::int32_t composedLevels(WmtsSetKind kind, const GridSpec& grid) {
   const double finestDeg =
       std::ldexp(grid.levelZeroDeltaDeg, -(grid.numLevels - 1)) / grid.tileWidth;

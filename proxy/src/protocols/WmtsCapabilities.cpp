@@ -73,11 +73,20 @@ void layer(Writer& w, const WmtsLayerInfo& l, const std::string& base) {
   w.line(2, "<Layer>");
   w.element(3, "ows:Title", l.title);
   if (!l.abstract.empty()) w.element(3, "ows:Abstract", l.abstract);
-  w.line(3, "<ows:WGS84BoundingBox>");
-  w.element(4, "ows:LowerCorner", number(l.bbox.west) + " " + number(l.bbox.south));
-  w.element(4, "ows:UpperCorner", number(l.bbox.east) + " " + number(l.bbox.north));
-  w.line(3, "</ows:WGS84BoundingBox>");
+  if (l.bodyCrs.empty()) {
+    w.line(3, "<ows:WGS84BoundingBox>");
+    w.element(4, "ows:LowerCorner", number(l.bbox.west) + " " + number(l.bbox.south));
+    w.element(4, "ows:UpperCorner", number(l.bbox.east) + " " + number(l.bbox.north));
+    w.line(3, "</ows:WGS84BoundingBox>");
+  }
   w.element(3, "ows:Identifier", l.identifier);
+  if (!l.bodyCrs.empty()) {
+    // Another body: no WGS 84 box; the box in the body's CRS, latitude first as its axes are.
+    w.line(3, "<ows:BoundingBox crs=\"" + xmlEscape(l.bodyCrs) + "\">");
+    w.element(4, "ows:LowerCorner", number(l.bbox.south) + " " + number(l.bbox.west));
+    w.element(4, "ows:UpperCorner", number(l.bbox.north) + " " + number(l.bbox.east));
+    w.line(3, "</ows:BoundingBox>");
+  }
   w.line(3, "<Style isDefault=\"true\">");
   w.element(4, "ows:Identifier", "default");
   w.line(3, "</Style>");
@@ -128,7 +137,10 @@ void matrixSet(Writer& w, const WmtsTileMatrixSet& s) {
     w.line(3, "<TileMatrix>");
     w.element(4, "ows:Identifier", m.identifier);
     w.element(4, "ScaleDenominator", number(m.scaleDenominator));
-    w.element(4, "TopLeftCorner", number(m.left) + " " + number(m.top));
+    w.element(4,
+              "TopLeftCorner",
+              s.latFirst ? number(m.top) + " " + number(m.left)
+                         : number(m.left) + " " + number(m.top));
     w.element(4, "TileWidth", std::to_string(m.tileWidth));
     w.element(4, "TileHeight", std::to_string(m.tileHeight));
     w.element(4, "MatrixWidth", std::to_string(m.matrixWidth));

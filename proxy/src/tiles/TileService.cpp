@@ -3,7 +3,10 @@
 
 #include "tiles/TileServiceImpl.hpp"
 
+#include <tellus/proxy/BodyCrs.hpp>
 #include <tellus/proxy/Log.hpp>
+
+#include <numbers>
 
 namespace tellus {
 
@@ -110,6 +113,8 @@ TileService::create(TileCache& cache,
                         l.tileMatrixSet,
                         u.wmtsEncoding,
                         wmtsCapabilitiesUrl(u.url)};
+      if (const auto body = bodyCrs(l.dataset.body); body && !isEarthBody(l.dataset.body))
+        choice.bodyMetresPerDegree = body->meanRadiusM * std::numbers::pi / 180.0;
       auto bound = bindWmtsLayer(caps->second, choice, l.dataset.grid);
       if (!bound) return std::unexpected("layer '" + l.name + "': " + bound.error());
       l.wmts = std::make_shared<const WmtsTiles>(std::move(*bound));

@@ -71,11 +71,40 @@ std::string joined(const std::vector<std::string>& names) {
  * lat/long CRS at all. */
 enum class Axes { LonLat, LatLon, Other };
 
-Axes axesOf(std::string_view crs) {
+/** Whether `crs` names a body's planetocentric geographic IAU CRS (code NAIF id x 100, e.g.
+ * IAU:30100, IAU2000:49900, urn:ogc:def:crs:IAU:2015:30100, .../def/crs/IAU/2015/30100). */
+bool iauGeographic(std::string_view crs) {
+  if (crs.find("IAU") == std::string_view::npos) return false;
+  const auto at = crs.find_last_of(":/");
+  if (at == std::string_view::npos) return false;
+  const std::string_view digits = crs.substr(at + 1);
+  if (digits.size() < 3 || digits.size() > 7 ||
+      !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
+    return false;
+  return digits.ends_with("00");
+}
+
+Axes axesOf(std::string_view crs, bool otherBody) {
   const auto has = [&](std::string_view s) { return crs.find(s) != std::string_view::npos; };
   if (has("CRS84") || has("CRS:84") || has("OGC:2:84") || has("OGC/1.3/CRS84")) return Axes::LonLat;
   const bool epsg4326 = (has("EPSG") && (crs.ends_with(":4326") || crs.ends_with("/4326")));
-  return epsg4326 ? Axes::LatLon : Axes::Other;
+  // The IAU 2015 geographic CRSs put latitude first, as EPSG:4326 does.
+  return epsg4326 || (otherBody && iauGeographic(crs)) ? Axes::LatLon : Axes::Other;
+}
+
+/** The metres per degree a lat/long set's scale denominators are counted with: the Earth's, or a
+ * body's when only that count makes one of its matrices span exactly 360 degrees. */
+double metresPerDegreeOf(const UpstreamTileMatrixSet& set, double bodyMetresPerDegree) {
+  const auto global = [&](double metresPerDegree) {
+    return std::ranges::any_of(set.matrices, [&](const UpstreamTileMatrix& m) {
+      const double width = m.scaleDenominator * kPixelMetres / metresPerDegree *
+                           static_cast<double>(m.tileWidth) * static_cast<double>(m.matrixWidth);
+      return std::fabs(width - 360.0) <= 360.0 * 1e-6;
+    });
+  };
+  if (bodyMetresPerDegree > 0.0 && !global(kMetresPerDegree) && global(bodyMetresPerDegree))
+    return bodyMetresPerDegree;
+  return kMetresPerDegree;
 }
 
 /** Whether `v` is within `tol` of a whole number; the number. */
@@ -230,7 +259,8 @@ bindWmtsLayer(const WmtsCapabilities& caps, const WmtsChoice& choice, const Grid
       return std::unexpected(levels.error());
     return t;
   }
-  const Axes axes = axesOf(set->crs);
+  const Axes axes = axesOf(set->crs, choice.bodyMetresPerDegree > 0.0);
+  const double metresPerDegree = metresPerDegreeOf(*set, choice.bodyMetresPerDegree);
   if (axes == Axes::Other)
     return std::unexpected("tile matrix set '" + set->identifier + "' is in " +
                            (set->crs.empty() ? std::string("no CRS") : "'" + set->crs + "'") +
@@ -244,7 +274,7 @@ bindWmtsLayer(const WmtsCapabilities& caps, const WmtsChoice& choice, const Grid
     t.matrices.push_back(WmtsMatrixGeometry{m.identifier,
                                             swapped ? lat : lon,
                                             swapped ? lon : lat,
-                                            m.scaleDenominator * kPixelMetres / kMetresPerDegree,
+                                            m.scaleDenominator * kPixelMetres / metresPerDegree,
                                             m.tileWidth,
                                             m.tileHeight,
                                             m.matrixWidth,

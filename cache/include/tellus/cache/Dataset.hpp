@@ -5,7 +5,9 @@
 #include <tellus/cache/TileGrid.hpp>
 
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <string_view>
 
 namespace tellus {
 
@@ -30,10 +32,18 @@ struct DatasetSpec {
   std::string body = "earth";
 };
 
+/** The body of every dataset written before bodies existed. */
+inline constexpr std::string_view kEarthBody = "earth";
+
+/** Whether `body` names the Earth: such a dataset's hash and descriptor are those of a cache
+ * written before bodies existed (the body enters the hash and `dataset.txt` only otherwise). */
+bool isEarthBody(std::string_view body);
+
 /** The folder of a dataset below the cache root: "<encoded server>/<encoded name>-<8 hex hash>". */
 std::string datasetFolder(const DatasetSpec& spec);
 
-/** The variant hash alone (8 hex digits) of the fields that make tiles differ. */
+/** The variant hash alone (8 hex digits) of the fields that make tiles differ: the grid, the
+ * format, the style, the time and, when it is not the Earth, the body. */
 std::string datasetVariant(const DatasetSpec& spec);
 
 /** Serialises a spec as the small `dataset.txt` descriptor kept in each dataset folder (so that an

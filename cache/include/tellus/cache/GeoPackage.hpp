@@ -7,7 +7,9 @@
  * Zoom level n is the grid's level n: the level-zero matrix is the grid's level-zero tiles (10 x 5
  * for 36-degree tiles), each level halves the pixel size. GeoPackage counts rows from the top
  * (north) where World Wind counts from the bottom: gpkg_row = matrix_height - 1 - row. Only JPEG
- * and PNG tiles can be stored (the tiles of the core GeoPackage standard).
+ * and PNG tiles can be stored (the tiles of the core GeoPackage standard). Only the Earth's
+ * datasets: one on another body (DatasetSpec::body) is refused both ways, since its tiles would
+ * be labelled EPSG:4326.
  */
 
 #include <tellus/cache/CacheError.hpp>

@@ -46,6 +46,9 @@ struct CapabilitiesLayer {
   /** Written as the layer keyword "LastUpdate=<Unix ms>", which World Wind Java reads to expire its
    * own tile cache (WMSCapabilities.getLayerLatestLastUpdateTime); omitted when 0. */
   std::int64_t lastUpdateMillis = 0;
+  /** The layer's body (BodyCrs.hpp): 0 for the Earth (EPSG:4326, CRS:84 and EPSG:3857), else the
+   * body's geographic IAU code, its only CRS (IAU:n in 1.3.0, IAU2000:n in 1.1.1). */
+  std::int32_t iauCode = 0;
 
   friend bool operator==(const CapabilitiesLayer&, const CapabilitiesLayer&) = default;
 };
@@ -82,6 +85,10 @@ struct CapabilitiesModel {
  * BoundingBox CRS="EPSG:4326" in EPSG axis order (minx = south latitude, miny = west longitude);
  * time as Dimension with the values as content. The root layer's box is the union of the layers'
  * (the globe when there are none). Numbers are printed shortest round-trip; text is XML-escaped.
+ * When a layer lies on another body (iauCode), the CRSs move from the root layer (whose children
+ * would inherit them) to each layer: an Earth layer lists the Earth's, a body's layer only its IAU
+ * code with a BoundingBox in it (lat/lon in 1.3.0, as the IAU 2015 axes are); the root keeps
+ * only its geographic box.
  */
 std::string capabilitiesXml(WmsVersion version, const CapabilitiesModel& model);
 

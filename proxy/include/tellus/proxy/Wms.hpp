@@ -124,7 +124,8 @@ struct GetMapRequest {
   std::vector<std::string> layers; ///< non-empty, names verbatim (case-sensitive), none empty
   /** Always exactly one entry per layer; "" is the layer's default style. */
   std::vector<std::string> styles;
-  std::string crs; ///< normalised: "EPSG:4326", "CRS:84" or "EPSG:3857" (kWebMercator)
+  /// normalised: "EPSG:4326", "CRS:84", "EPSG:3857" (kWebMercator) or a body's "IAU:<code>"
+  std::string crs;
   /** ALWAYS lon/lat (west, south, east, north) after the axis-order handling; west < east and
    * south < north; may extend past +-180 / +-90; -0 is normalised to 0. For EPSG:3857: metres,
    * west/east the easting (x) and south/north the northing (y) under both versions, and may
@@ -215,8 +216,10 @@ std::expected<WmsRequest, OgcException> parseGetFeatureInfo(const QueryParams& p
  *   InvalidParameterValue); 1.1.1 reads SRS, 1.3.0 reads CRS, each with the other as fallback.
  *   EPSG:4326 under 1.3.0 has a lat/lon BBOX; CRS:84 and EPSG:4326 under 1.1.1 are lon/lat;
  *   EPSG:3857 (and its aliases EPSG:900913, EPSG:102100, EPSG:102113, normalised to EPSG:3857)
- *   is easting/northing in metres under both; any other CRS -> InvalidCRS (1.3.0) / InvalidSRS
- *   (1.1.1).
+ *   is easting/northing in metres under both; a body's geographic IAU code (BodyCrs.hpp:
+ *   IAU:n, IAU2000:n, IAU_2015:n, IAU:2015:n with n a multiple of 100, normalised to IAU:n) is
+ *   lat/lon under 1.3.0 and lon/lat under 1.1.1; any other CRS -> InvalidCRS (1.3.0) /
+ *   InvalidSRS (1.1.1). Whether the layers lie on the CRS's body is the front end's check.
  * - BBOX: four finite numbers with min < max on both axes and |value| <= kMaxBboxMagnitudeDeg
  *   (kMaxBboxMagnitudeMetres for EPSG:3857), else InvalidParameterValue (locator BBOX). A
  *   Web Mercator BBOX past the Mercator square is valid (the part outside it is empty).

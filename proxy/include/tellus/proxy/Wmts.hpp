@@ -18,6 +18,7 @@
 
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/cache/TileKey.hpp>
+#include <tellus/proxy/BodyCrs.hpp>
 #include <tellus/proxy/Query.hpp>
 #include <tellus/proxy/Wms.hpp>
 
@@ -72,7 +73,9 @@ struct WmtsTileMatrix {
 struct WmtsTileMatrixSet {
   std::string identifier;
   WmtsSetKind kind = WmtsSetKind::WorldWind;
-  std::string crs;               ///< urn:ogc:def:crs:OGC:1.3:CRS84 or urn:ogc:def:crs:EPSG::3857
+  /// urn:ogc:def:crs:OGC:1.3:CRS84, urn:ogc:def:crs:EPSG::3857 or a body's IAU URN (BodyCrs.hpp)
+  std::string crs;
+  bool latFirst = false; ///< TopLeftCorner written "top left" (a body's IAU CRS: latitude first)
   std::string wellKnownScaleSet; ///< "" = none
   std::int32_t firstLevel = 0;   ///< WorldWind: the World Wind level of matrices[0]
   std::vector<WmtsTileMatrix> matrices;
@@ -81,6 +84,13 @@ struct WmtsTileMatrixSet {
 /** The layer's own grid as a set (`WorldWind_<layer>`), levels firstLevel .. numLevels - 1. */
 WmtsTileMatrixSet
 worldWindMatrixSet(std::string_view layer, const GridSpec& grid, std::int32_t firstLevel);
+/** The same set for a layer on another body (issue 26): in the body's IAU CRS (latitude first),
+ * scale denominators counted on the body's mean radius. A body's layer has no composed sets
+ * (WorldCRS84Quad and GoogleMapsCompatible are the Earth's). */
+WmtsTileMatrixSet bodyWorldWindMatrixSet(std::string_view layer,
+                                         const GridSpec& grid,
+                                         std::int32_t firstLevel,
+                                         const BodyCrs& body);
 /** How many levels a composed set needs for a grid: down to the first whose pixels are no
  * larger than the grid's finest (at the equator for GoogleMapsCompatible), at most 25. */
 std::int32_t composedLevels(WmtsSetKind kind, const GridSpec& grid);
@@ -175,6 +185,8 @@ struct WmtsLayerInfo {
   std::string timePeriod;
   std::string timeDefault;
   std::vector<const WmtsTileMatrixSet*> sets; ///< with the layer's limits
+  /// "" = the Earth (ows:WGS84BoundingBox); a body's CRS URN: ows:BoundingBox in it, lat/lon
+  std::string bodyCrs;
 };
 
 struct WmtsCapabilitiesModel {

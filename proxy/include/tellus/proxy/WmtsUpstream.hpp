@@ -23,6 +23,10 @@
  * matrix geometry, never by name) are composed at every level: each output row's latitude taken
  * to Mercator y, from the coarsest zoom whose pixel is as fine as the level's (WmtsMercator.hpp);
  * rows beyond +-85.0511 degrees are left empty. Other projected sets are refused at start.
+ * Another body's layer (WmtsChoice::bodyMetresPerDegree) also takes the body's planetocentric IAU
+ * CRS (latitude first, as EPSG:4326), and a set none of whose matrices spans exactly 360 degrees
+ * at the Earth's metres per degree but one does at the body's is read at the body's (a server may
+ * count its scale denominators either way; NASA Trek's were not verified offline).
  *
  * Capabilities are fetched once at start through the upstream's fetcher and kept in a file
  * (WmtsCapabilitiesCache) so that a start without the network, or with `--offline`, reads the
@@ -111,6 +115,9 @@ struct WmtsChoice {
   std::string tileMatrixSet;
   WmtsEncoding encoding = WmtsEncoding::Auto;
   std::string capabilitiesUrl; ///< where the KVP base comes from when the document names none
+  /// A layer on another body (issue 26): metres per degree on that body (BodyCrs.hpp's mean
+  /// radius), for a set whose scale denominators are counted on it; 0 = the Earth's only.
+  double bodyMetresPerDegree = 0.0;
 };
 
 /** Where a matrix lies, in degrees (the corner as west and north whatever the CRS's axis order). */

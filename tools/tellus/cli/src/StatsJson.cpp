@@ -25,6 +25,7 @@ Json datasetJson(const DatasetStats& d) {
   j["format"] = d.dataset.spec.mimeType;
   j["time"] = d.dataset.spec.time;
   j["pinned"] = d.dataset.spec.pinned;
+  j["body"] = d.dataset.spec.body; // issue 26: the same name on two bodies is two datasets
   j["tiles"] = d.tiles;
   j["bytes"] = d.bytes;
   j["levels"] = std::move(levels);
