@@ -10,6 +10,18 @@
 
 namespace tellus::planet {
 
+namespace {
+
+/** The sun's direction in the drawn body's fixed frame at a time: the Earth's from Astronomy;
+ * other bodies' need their ephemeris (the ephem work of issue 26); until then nullopt (unlit
+ * unless RendererOptions::sunLatLon places the sun). */
+std::optional<glm::dvec3> sunDirectionInBodyFrame(const Body& body, double unixSeconds) {
+  if (body.name == "earth") return astro::sunDirectionEcef(unixSeconds);
+  return std::nullopt;
+}
+
+} // namespace
+
 glm::mat4 eyeCentredViewProjection(const Camera& camera) {
   glm::dmat4 view = camera.view();
   view[3] = glm::dvec4(0.0, 0.0, 0.0, 1.0);
@@ -124,8 +136,8 @@ void SceneDraw::drawScene(const Camera& camera,
   if (opt_.sunLatLon) {
     sun = geodesy_.surfaceNormal((*opt_.sunLatLon)[0], (*opt_.sunLatLon)[1]);
   } else if (opt_.timeUnixSeconds) {
-    const glm::dvec3 s = astro::sunDirectionEcef(*opt_.timeUnixSeconds);
-    sun = Ecef{s.x, s.y, s.z};
+    if (const auto s = sunDirectionInBodyFrame(geodesy_.body(), *opt_.timeUnixSeconds))
+      sun = Ecef{s->x, s->y, s->z};
   }
   const FrameContext frame{.camera = camera,
                            .target = target,
