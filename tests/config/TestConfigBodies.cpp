@@ -125,9 +125,9 @@ TEST(ConfigBodies, BadBodiesAreRefused) {
   EXPECT_EQ(bad("name: x\n    radii: 1000\n    atmosphere: thick").key, "bodies[0].atmosphere");
   EXPECT_EQ(bad("name: x\n    radii: 100000\n    atmosphere: {top_altitude: 200000}").key,
             "bodies[0].atmosphere.top_altitude");
-  const ConfigError twice = errorOf(std::string(kLayers) +
-                                    "bodies:\n  - name: x\n    radii: 1000\n  - name: x\n"
-                                    "    radii: 1000\n");
+  const ConfigError twice =
+      errorOf(std::string(kLayers) + "bodies:\n  - name: x\n    radii: 1000\n  - name: x\n"
+                                     "    radii: 1000\n");
   EXPECT_EQ(twice.key, "bodies[1].name");
   EXPECT_GT(twice.line, 0);
 }
