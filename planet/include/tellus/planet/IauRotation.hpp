@@ -12,7 +12,27 @@
  * Astronomy.hpp); W is the angle, along the body's equator, from the node of that equator on the
  * ICRF equator to the prime meridian.
  *
- * Pure data here; the evaluation (body-fixed <-> celestial) lives beside it (IauRotation.cpp).
+ * The elements are data; the evaluation (body-fixed <-> celestial) is declared at the end of this
+ * file and lives in IauRotation.cpp, with the built-in Earth, Moon and Mars:
+ *   - Earth: WGCCRE 2009/2015, alpha0 = 0.00 - 0.641 T, delta0 = 90.00 - 0.557 T,
+ *     W = 190.147 + 360.9856235 d. A low-accuracy model of the Earth: its prime meridian and
+ *     GMST with IAU 1976 precession (Astronomy.hpp's ECEF) are 0.025 degree apart at J2000 and
+ *     drift apart by 0.0023 degree a year. ECEF stays the Earth's fixed frame everywhere
+ *     (Ephemeris.hpp); this is for symmetry and comparison.
+ *   - Moon: WGCCRE 2009 (Archinal et al. 2011, Celest. Mech. Dyn. Astr. 109:101, Table 2, kept
+ *     unchanged in the 2015 report): the mean Earth/polar axis frame, 13 periodic terms E1..E13
+ *     and the -1.4e-12 d^2 term; about 150 m on the surface against the DE421 libration.
+ *   - Mars: WGCCRE 2015 (Archinal et al. 2018, Table 2, the model of Konopliv et al. 2016 that
+ *     pck00011.tpc carries): alpha0 = 317.269202 - 0.10927547 T, delta0 = 54.432516 - 0.05827105 T,
+ *     W = 176.049863 + 350.891982443297 d, with their periodic terms (arguments in degrees plus a
+ *     rate per Julian century, stored here per day). The 2009 constants (317.68143, 52.88650,
+ *     176.630) are what these give at J2000 to 0.002 degree.
+ *
+ * Time: d and T count TDB from J2000.0, taken here as UTC + 69.184 s (TT - UTC since 2017; TDB -
+ * TT < 2 ms). Earlier and later the difference from the real Delta T is seconds to minutes: the
+ * Moon turns 0.00015 degree a second, Mars 0.004, the Earth 0.004, all inside the models'
+ * accuracies for the renderer's 0.01 degree except the Earth's and Mars's turn beyond a few
+ * decades from now (the Earth uses ECEF, which takes UT1 as UTC, instead).
  */
 
 #include <glm/mat3x3.hpp>
@@ -43,5 +63,35 @@ struct IauRotation {
   double primeMeridianDegPerDay2 = 0.0; ///< w2 * d^2 where the report has one (the Moon)
   std::vector<IauPeriodicTerm> terms;   ///< periodic terms (empty for most bodies)
 };
+
+/** A body's orientation at an instant: its north pole's right ascension and declination in the
+ * J2000.0 celestial frame and the prime meridian's angle W, degrees (W not wrapped). */
+struct IauOrientation {
+  double poleRaDeg = 0.0;
+  double poleDecDeg = 90.0;
+  double primeMeridianDeg = 0.0;
+};
+
+/** TDB - UTC taken throughout (TT - UTC = 32.184 s + 37 leap seconds since 2017). */
+inline constexpr double kTdbMinusUtcSeconds = 69.184;
+
+/** Days of TDB from J2000.0 at a UTC instant (POSIX seconds): the WGCCRE d. */
+double iauDaysFromJ2000(double unixSeconds) noexcept;
+
+/** The elements evaluated at `tdbDays` (d; T = d / 36525). */
+IauOrientation evaluateIauRotation(const IauRotation& r, double tdbDays) noexcept;
+
+/** The rotation body-fixed -> J2000.0 celestial of an orientation: its columns are the body's x
+ * (the prime meridian on the equator), y (90 degrees east) and z (the north pole) in the
+ * celestial frame. Orthonormal, determinant 1; its transpose turns celestial into body-fixed. */
+glm::dmat3 iauBodyFixedToCelestial(const IauOrientation& o) noexcept;
+
+/** The same for elements at a UTC instant (POSIX seconds). */
+glm::dmat3 iauBodyFixedToCelestial(const IauRotation& r, double unixSeconds) noexcept;
+
+/** The built-in elements (see the file comment for their sources). */
+const IauRotation& iauEarth() noexcept;
+const IauRotation& iauMoon() noexcept;
+const IauRotation& iauMars() noexcept;
 
 } // namespace tellus::planet
