@@ -33,14 +33,7 @@ Body earthBody() {
   b.name = "earth";
   b.radiusA = b.radiusB = 6378137.0;
   b.radiusC = 6378137.0 * (1.0 - 1.0 / 298.257223563);
-  // WGCCRE 2015: alpha0 = 0.00 - 0.641 T, delta0 = 90.00 - 0.557 T, W = 190.147 + 360.9856235 d.
-  b.rotation = IauRotation{.poleRaDeg = 0.0,
-                           .poleRaDegPerCentury = -0.641,
-                           .poleDecDeg = 90.0,
-                           .poleDecDegPerCentury = -0.557,
-                           .primeMeridianDeg = 190.147,
-                           .rotationDegPerDay = 360.9856235,
-                           .terms = {}};
+  b.rotation = iauEarth();
   b.atmosphere = AtmosphereParameters{};
   b.atmosphere->bottomRadiusM = b.radiusA;
   return b;
@@ -57,16 +50,7 @@ Body moonBody() {
   Body b;
   b.name = "moon";
   b.radiusA = b.radiusB = b.radiusC = 1737400.0;
-  // WGCCRE 2015 (constant and secular terms only): alpha0 = 269.9949 + 0.0031 T,
-  // delta0 = 66.5392 + 0.0130 T, W = 38.3213 + 13.17635815 d - 1.4e-12 d^2.
-  b.rotation = IauRotation{.poleRaDeg = 269.9949,
-                           .poleRaDegPerCentury = 0.0031,
-                           .poleDecDeg = 66.5392,
-                           .poleDecDegPerCentury = 0.0130,
-                           .primeMeridianDeg = 38.3213,
-                           .rotationDegPerDay = 13.17635815,
-                           .primeMeridianDegPerDay2 = -1.4e-12,
-                           .terms = {}};
+  b.rotation = iauMoon();
   b.iauCrsCode = 30100;
   return b;
 }
@@ -94,15 +78,7 @@ Body marsBody() {
   b.name = "mars";
   b.radiusA = b.radiusB = 3396190.0;
   b.radiusC = 3376200.0;
-  // WGCCRE 2009/2015 linear terms: alpha0 = 317.68143 - 0.1061 T, delta0 = 52.88650 - 0.0609 T,
-  // W = 176.630 + 350.89198226 d.
-  b.rotation = IauRotation{.poleRaDeg = 317.68143,
-                           .poleRaDegPerCentury = -0.1061,
-                           .poleDecDeg = 52.88650,
-                           .poleDecDegPerCentury = -0.0609,
-                           .primeMeridianDeg = 176.630,
-                           .rotationDegPerDay = 350.89198226,
-                           .terms = {}};
+  b.rotation = iauMars();
   b.atmosphere = marsAtmosphere();
   b.iauCrsCode = 49900;
   b.reliefBoundM = 26000.0;

@@ -4,6 +4,7 @@
 
 #include <tellus/planet/Astronomy.hpp>
 #include <tellus/planet/DomeDirect.hpp>
+#include <tellus/planet/Ephemeris.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -12,11 +13,13 @@ namespace tellus::planet {
 
 namespace {
 
-/** The sun's direction in the drawn body's fixed frame at a time: the Earth's from Astronomy;
- * other bodies' need their ephemeris (the ephem work of issue 26); until then nullopt (unlit
- * unless RendererOptions::sunLatLon places the sun). */
+/** The sun's direction in the drawn body's fixed frame at a time: the Earth's from Astronomy (as
+ * before bodies), the Moon's and Mars's from their ephemeris (Ephemeris.hpp); a configured body
+ * has no orbit here, so nullopt (unlit unless RendererOptions::sunLatLon places the sun). */
 std::optional<glm::dvec3> sunDirectionInBodyFrame(const Body& body, double unixSeconds) {
   if (body.name == "earth") return astro::sunDirectionEcef(unixSeconds);
+  if (const auto known = astro::ephemerisBodyByName(body.name))
+    return astro::sunDirectionInBody(*known, unixSeconds);
   return std::nullopt;
 }
 

@@ -3,11 +3,11 @@
 namespace tellus::commands {
 
 std::expected<std::string, std::string> chooseBody(const cli::Args& a, const Config* config) {
-  const std::string name = a.get("body") ? *a.get("body")
+  const std::string name = a.get("body")       ? *a.get("body")
                            : config != nullptr ? config->renderer.body
                                                : std::string("earth");
-  const bool known = config != nullptr ? config->knowsBody(name)
-                                        : planet::builtinBody(name).has_value();
+  const bool known =
+      config != nullptr ? config->knowsBody(name) : planet::builtinBody(name).has_value();
   if (known) return name;
   std::string list;
   for (const std::string_view b : kBuiltinBodies)
@@ -37,8 +37,8 @@ planet::Body bodyFromConfig(const BodyConfig& c) {
     planet::AtmosphereParameters p;
     p.bottomRadiusM = s.bottomRadius > 0.0 ? s.bottomRadius : c.radii[0];
     p.topAltitudeM = s.topAltitude;
-    p.rayleighScattering = {s.rayleighScattering[0], s.rayleighScattering[1],
-                            s.rayleighScattering[2]};
+    p.rayleighScattering = {
+        s.rayleighScattering[0], s.rayleighScattering[1], s.rayleighScattering[2]};
     p.rayleighScaleHeightM = s.rayleighScaleHeight;
     p.mieScattering = s.mieScattering;
     p.mieExtinction = s.mieExtinction;

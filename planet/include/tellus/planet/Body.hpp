@@ -15,9 +15,8 @@
  *   "earth": the sphere of 6371008.8 m that EarthModel::Sphere names;
  * - moon: the sphere of 1737400 m (IAU 2015, IAU_2015:30100);
  * - mars: 3396190 m by 3376200 m (IAU 2015, IAU_2015:49900).
- * Rotation elements: the WGCCRE 2015 report's constant and linear terms (Archinal et al. 2018;
- * the Moon's periodic terms are left out here, which moves its pole by up to ~4 degrees: the ephem
- * work's evaluation of the full series replaces this where lighting needs it).
+ * Rotation elements: IauRotation.hpp's built-in ones (iauEarth, iauMoon, iauMars: WGCCRE, with
+ * the Moon's and Mars's periodic terms).
  *
  * Mars's atmosphere: Rayleigh 19.918e-3, 13.57e-3, 5.75e-3 per km at 680, 550, 440 nm with a
  * scale height of 10.44 km, Mie 53.62e-3 per km (single-scattering albedo 0.98979, g = 0.85) with
