@@ -19,6 +19,19 @@ const UpstreamConfig* Config::upstream(std::string_view name) const noexcept {
   return nullptr;
 }
 
+const BodyConfig* Config::body(std::string_view name) const noexcept {
+  for (const auto& b : bodies) {
+    if (b.name == name) return &b;
+  }
+  return nullptr;
+}
+
+bool Config::knowsBody(std::string_view name) const noexcept {
+  for (const std::string_view b : kBuiltinBodies)
+    if (b == name) return true;
+  return body(name) != nullptr;
+}
+
 std::string ConfigError::toString() const {
   std::string s = file.empty() ? std::string("<config>") : file;
   if (line > 0) {

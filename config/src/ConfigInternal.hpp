@@ -41,6 +41,14 @@ struct ValidationIssue {
  */
 std::optional<ValidationIssue> findIssue(const Config& config, bool checkFiles);
 
+/** renderer.atmosphere's values (also a body's): (key under "atmosphere.", message) of the
+ * first bad one (Validate.cpp). */
+std::optional<std::pair<std::string, std::string>>
+checkAtmosphereSettings(const AtmosphereSettings& a);
+
+/** The bodies section, renderer.body and every layer's body (ValidateBodies.cpp). */
+std::optional<ValidationIssue> checkBodies(const Config& config);
+
 /** Layer and upstream names: [A-Za-z0-9_.-]+. */
 bool isValidName(std::string_view name) noexcept;
 

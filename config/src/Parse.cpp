@@ -48,12 +48,16 @@ Config build(Reader& r, const YAML::Node& doc, const fs::path& baseDir, const Pa
            "",
            "the top level must be a mapping (server, cache, data_dir, upstreams, layers), got " +
                describe(doc));
-  const Map root(
-      r, doc, "", doc.Mark(), {"server", "cache", "renderer", "data_dir", "upstreams", "layers"});
+  const Map root(r,
+                 doc,
+                 "",
+                 doc.Mark(),
+                 {"server", "cache", "renderer", "bodies", "data_dir", "upstreams", "layers"});
   Config c;
   readServer(r, root, c.server);
   readCache(r, root, baseDir, c.cache);
   readRenderer(r, root, c.renderer);
+  readBodies(r, root, c.bodies);
 
   fs::path dataDir = baseDir;
   if (auto v = root.get("data_dir")) dataDir = resolvePath(text(r, *v, "data_dir"), baseDir);

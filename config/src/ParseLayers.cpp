@@ -159,7 +159,8 @@ LayerConfig readLayer(Reader& r, const YAML::Node& node, std::string path) {
                "time",
                "cache",
                "opacity",
-               "tile_matrix_set"});
+               "tile_matrix_set",
+               "body"});
   if (node.IsNull())
     r.fail(node.Mark(), m.path(), "expected a mapping (name, upstream, ...), got nothing");
   LayerConfig l;
@@ -176,6 +177,7 @@ LayerConfig readLayer(Reader& r, const YAML::Node& node, std::string path) {
       r.fail(v->Mark(), m.path("opacity"), "an opacity is a number from 0 to 1");
   }
   if (auto v = m.get("style")) l.dataset.style = text(r, *v, m.path("style"));
+  if (auto v = m.get("body")) l.dataset.body = text(r, *v, m.path("body"));
   if (auto v = m.get("tile_matrix_set")) l.tileMatrixSet = text(r, *v, m.path("tile_matrix_set"));
   l.dataset.mimeType = text(r, m.need("format"), m.path("format"));
   l.dataset.extension = extensionFor(l.dataset.mimeType);

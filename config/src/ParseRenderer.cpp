@@ -127,12 +127,18 @@ std::array<double, 3> triple(Reader& r, const YAML::Node& v, const std::string& 
   return out;
 }
 
-/** renderer.atmosphere: on or off, the exposure, the resolution, the physical parameters. */
-void readAtmosphere(Reader& r, const Map& renderer, AtmosphereSettings& a) {
-  const auto [anode, awhere] = renderer.child("atmosphere");
+} // namespace
+
+/** renderer.atmosphere (and bodies[i].atmosphere): on or off, the exposure, the resolution, the
+ * physical parameters. */
+void readAtmosphereMap(Reader& r,
+                       const YAML::Node& anode,
+                       const std::string& path,
+                       const YAML::Mark& awhere,
+                       AtmosphereSettings& a) {
   const Map m(r,
               anode,
-              renderer.path("atmosphere"),
+              path,
               awhere,
               {"enabled",
                "exposure",
@@ -185,6 +191,13 @@ void readAtmosphere(Reader& r, const Map& renderer, AtmosphereSettings& a) {
   num("min_sun_cosine", a.minSunCosine);
 }
 
+namespace {
+
+void readAtmosphere(Reader& r, const Map& renderer, AtmosphereSettings& a) {
+  const auto [anode, awhere] = renderer.child("atmosphere");
+  readAtmosphereMap(r, anode, renderer.path("atmosphere"), awhere, a);
+}
+
 } // namespace
 
 void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
@@ -206,6 +219,7 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
                "stars",
                "atmosphere",
                "earth",
+               "body",
                "geoid",
                "layers",
                "overlays_per_pass",
@@ -238,6 +252,7 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
   if (auto v = m.get("earth"))
     g.earth = choice(r, *v, m.path("earth"), {"wgs84", "sphere"}) == 0 ? EarthShape::Wgs84
                                                                        : EarthShape::Sphere;
+  if (auto v = m.get("body")) g.body = text(r, *v, m.path("body"));
   if (auto v = m.get("geoid")) g.geoid = boolean(r, *v, m.path("geoid"));
   if (auto v = m.get("overlays_per_pass"))
     g.overlaysPerPass = int32(r, *v, m.path("overlays_per_pass"));

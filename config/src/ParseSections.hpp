@@ -6,6 +6,7 @@
 #include "YamlReader.hpp"
 
 #include <string>
+#include <vector>
 
 namespace tellus::detail::yaml {
 
@@ -22,6 +23,14 @@ readUpstream(Reader& r, const YAML::Node& node, std::string path, const fs::path
 /** layers[i].values (ParseValues.cpp), after the layer's kind, format and elevation are read. */
 void readValues(Reader& r, const Map& layer, LayerConfig& l);
 
+/** A mapping of renderer.atmosphere's keys (node at path) into a (ParseRenderer.cpp). */
+void readAtmosphereMap(Reader& r,
+                       const YAML::Node& node,
+                       const std::string& path,
+                       const YAML::Mark& where,
+                       AtmosphereSettings& a);
+/** The bodies section (ParseBodies.cpp) into out. */
+void readBodies(Reader& r, const Map& root, std::vector<BodyConfig>& out);
 /** One entry of layers, at path. */
 LayerConfig readLayer(Reader& r, const YAML::Node& node, std::string path);
 

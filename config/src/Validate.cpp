@@ -347,6 +347,11 @@ std::optional<std::pair<std::string, std::string>> checkAtmosphere(const Atmosph
 
 } // namespace
 
+std::optional<std::pair<std::string, std::string>>
+checkAtmosphereSettings(const AtmosphereSettings& a) {
+  return checkAtmosphere(a);
+}
+
 std::optional<ValidationIssue> checkRenderer(const RendererSettings& g) {
   const auto issue = [](std::string key, std::string message) {
     return ValidationIssue{"renderer." + key, "renderer", std::move(message)};
@@ -553,6 +558,7 @@ checkRenderLayer(const Config& c, std::size_t i, const LayerConfig*& base) {
 std::optional<ValidationIssue> findIssue(const Config& c, bool checkFiles) {
   if (auto s = checkServer(c.server)) return s;
   if (auto g = checkRenderer(c.renderer)) return g;
+  if (auto b = checkBodies(c)) return b;
   if (c.cache.root.empty()) return ValidationIssue{"cache.root", "cache", "is empty"};
   UpstreamIndex upstreams;
   if (auto e = checkUpstreams(c, checkFiles, upstreams)) return e;

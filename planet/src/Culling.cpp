@@ -125,7 +125,7 @@ bool isBackFacing(const Camera& camera, const NodeGeometry& node) noexcept {
 }
 
 HorizonOccluder::HorizonOccluder(const Geodesy& geodesy, double occluderHeightM) noexcept
-    : equatorialRadiusM(geodesy.equatorialRadius() + occluderHeightM),
+    : equatorialRadiusM(geodesy.minEquatorialRadius() + occluderHeightM),
       polarRadiusM(geodesy.polarRadius() + occluderHeightM) {}
 
 namespace {

@@ -139,6 +139,12 @@ Renderer::create(ITileSource& source, const Geodesy& geodesy, RendererOptions op
   for (const LayerOptions& l : options.overlays)
     if (!(l.opacity >= 0.0 && l.opacity <= 1.0))
       return std::unexpected("overlay '" + l.layer + "': the opacity must be in [0, 1]");
+  // The body decides the sky (issue 26): none on an airless body, its own air on any other than
+  // the Earth (whose parameters the options may tune); and the relief bound covers its mountains.
+  const Body& body = geodesy.body();
+  if (options.atmosphere && !body.atmosphere) options.atmosphere.reset();
+  if (options.atmosphere && body.name != "earth") options.atmosphere->parameters = *body.atmosphere;
+  options.terrainReliefBoundM = std::max(options.terrainReliefBoundM, body.reliefBoundM);
   auto impl = std::make_unique<Impl>(source, geodesy, std::move(options), *grid);
   if (auto err = impl->openGl(); !err.empty()) return std::unexpected(err);
   if (auto opened = impl->layers.open(); !opened) return std::unexpected(opened.error());

@@ -4,11 +4,26 @@
 
 #include <tellus/planet/Astronomy.hpp>
 #include <tellus/planet/DomeDirect.hpp>
+#include <tellus/planet/Ephemeris.hpp>
 
 #include <algorithm>
 #include <cmath>
 
 namespace tellus::planet {
+
+namespace {
+
+/** The sun's direction in the drawn body's fixed frame at a time: the Earth's from Astronomy (as
+ * before bodies), the Moon's and Mars's from their ephemeris (Ephemeris.hpp); a configured body
+ * has no orbit here, so nullopt (unlit unless RendererOptions::sunLatLon places the sun). */
+std::optional<glm::dvec3> sunDirectionInBodyFrame(const Body& body, double unixSeconds) {
+  if (body.name == "earth") return astro::sunDirectionEcef(unixSeconds);
+  if (const auto known = astro::ephemerisBodyByName(body.name))
+    return astro::sunDirectionInBody(*known, unixSeconds);
+  return std::nullopt;
+}
+
+} // namespace
 
 glm::mat4 eyeCentredViewProjection(const Camera& camera) {
   glm::dmat4 view = camera.view();
@@ -124,8 +139,8 @@ void SceneDraw::drawScene(const Camera& camera,
   if (opt_.sunLatLon) {
     sun = geodesy_.surfaceNormal((*opt_.sunLatLon)[0], (*opt_.sunLatLon)[1]);
   } else if (opt_.timeUnixSeconds) {
-    const glm::dvec3 s = astro::sunDirectionEcef(*opt_.timeUnixSeconds);
-    sun = Ecef{s.x, s.y, s.z};
+    if (const auto s = sunDirectionInBodyFrame(geodesy_.body(), *opt_.timeUnixSeconds))
+      sun = Ecef{s->x, s->y, s->z};
   }
   const FrameContext frame{.camera = camera,
                            .target = target,

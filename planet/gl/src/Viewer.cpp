@@ -142,7 +142,6 @@ private:
   void screenshot();
   void updateTitle(Clock::time_point now);
 
-  static constexpr double kEarthRadius = 6371000.0;
   Renderer& renderer_;
   GLFWwindow* window_;
   const ViewerOptions& options_;
@@ -226,7 +225,8 @@ void ViewerLoop::drag(double x, double y, bool pressed) {
       if (x != lastX_ || y != lastY_) flight_.active = false; // the user takes over
       const double metresPerPixel = std::max(1.0, pose_.altitudeM) * 2.0 *
                                     std::tan(45.0 * M_PI / 360.0) / std::max(1, renderer_.height());
-      const double degPerPixel = metresPerPixel / kEarthRadius * 180.0 / M_PI;
+      const double degPerPixel =
+          metresPerPixel / renderer_.geodesy().equatorialRadius() * 180.0 / M_PI;
       const double h = pose_.headingDeg * M_PI / 180.0;
       const double dx = x - lastX_, dy = y - lastY_;
       // Screen right is east turned by the heading; screen down is south turned likewise.

@@ -58,8 +58,11 @@ std::optional<planet::ValueLayerOptions> valueOptions(const LayerConfig& lc,
  * saying why. */
 class RenderLayers {
 public:
-  RenderLayers(const RendererSettings& g, const Config* config, planet::RendererOptions& ro)
-      : g_(g), config_(config), ro_(ro) {}
+  RenderLayers(const RendererSettings& g,
+               const Config* config,
+               planet::RendererOptions& ro,
+               std::string body)
+      : g_(g), config_(config), ro_(ro), body_(std::move(body)) {}
 
   /** renderer.layers of the configuration. */
   void fromSettings() {
@@ -69,6 +72,7 @@ public:
     }
     for (std::size_t i = 1; i < g_.layers.size(); ++i) {
       const RenderLayerSettings& l = g_.layers[i];
+      if (!onBody(layerConfig(l.layer), body_)) continue; // another body's layer (issue 26)
       planet::LayerOptions o;
       o.layer = l.layer;
       o.time = l.time;
@@ -101,6 +105,15 @@ public:
         return false;
       }
       o.opacity = (*op)[0];
+    }
+    if (lc != nullptr && !onBody(lc, body_)) {
+      std::fprintf(stderr,
+                   "tellus %s: --overlay '%s' lies on the %s, not on the %s (--body)\n",
+                   cmd,
+                   o.layer.c_str(),
+                   lc->dataset.body.c_str(),
+                   body_.c_str());
+      return false;
     }
     if (o.layer.empty() || (config_ != nullptr && lc == nullptr)) {
       std::fprintf(stderr,
@@ -153,6 +166,7 @@ private:
   const RendererSettings& g_;
   const Config* config_; ///< nullptr with --server: names are the server's
   planet::RendererOptions& ro_;
+  std::string body_;
   std::vector<planet::CombinedLayer> combined_;
 };
 
@@ -162,7 +176,7 @@ bool applyRenderLayers(const RendererSettings& g,
                        planet::RendererOptions& ro,
                        PlanetTiles& t,
                        const char* cmd) {
-  RenderLayers layers(g, config, ro);
+  RenderLayers layers(g, config, ro, t.body);
   layers.fromSettings();
   for (const std::string& v : a.all("overlay"))
     if (!layers.fromOverlayArg(v, cmd)) return false;
@@ -236,6 +250,19 @@ int chooseRemoteLayers(const RemoteTileSource& remote,
   return kExitOk;
 }
 
+/** The body shown (--body, else renderer.body) into t; false after saying why. */
+bool setBody(const cli::Args& a, const Config* config, PlanetTiles& t, const char* cmd) {
+  auto body = chooseBody(a, config);
+  if (!body) {
+    std::fprintf(stderr, "tellus %s: %s\n", cmd, body.error().c_str());
+    return false;
+  }
+  t.body = *body;
+  if (config != nullptr)
+    if (const BodyConfig* b = config->body(t.body)) t.configuredBody = *b;
+  return true;
+}
+
 /** --server URL: the layers of a remote `tellus serve`; of --config only its renderer settings
  * matter. */
 std::expected<PlanetTiles, int> openRemote(const cli::Args& a,
@@ -260,11 +287,13 @@ std::expected<PlanetTiles, int> openRemote(const cli::Args& a,
     }
     applyRendererSettings(loaded->renderer, a, ro, t.earth);
     terrain = terrain && loaded->renderer.terrain.enabled;
+    if (!setBody(a, &*loaded, t, cmd)) return std::unexpected(kExitUsage);
     t.sceneTime = loaded->renderer.time;
     t.night = loaded->renderer.night;
     t.legend = loaded->renderer.legend;
     settings = loaded->renderer;
   }
+  if (!a.get("config") && !setBody(a, nullptr, t, cmd)) return std::unexpected(kExitUsage);
   ro.atmosphere = atmosphereOptions(settings.atmosphere); // the configuration's default: on
   if (ro.atmosphere) // the tables' cache: under --cache or the default cache root
     ro.atmosphere->tableCacheDir =
@@ -283,7 +312,7 @@ std::expected<PlanetTiles, int> openRemote(const cli::Args& a,
   }
   if (const int rc = chooseRemoteLayers(**remote, a, server, terrain, cmd, ro); rc != kExitOk)
     return std::unexpected(rc);
-  if (auto bad = applyGeoid(a, settings.geoid, ro)) {
+  if (auto bad = applyGeoid(a, settings.geoid && t.body == "earth", ro)) {
     std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());
     return std::unexpected(kExitError);
   }
@@ -298,10 +327,13 @@ std::expected<PlanetTiles, int> openRemote(const cli::Args& a,
 }
 
 /** renderer.terrain: the elevation layer (its name, or the first one) unless turned off. */
-void chooseElevation(const Config& config, const cli::Args& a, planet::RendererOptions& ro) {
+void chooseElevation(const Config& config,
+                     const cli::Args& a,
+                     const std::string& body,
+                     planet::RendererOptions& ro) {
   if (!config.renderer.terrain.enabled || a.flag("no-terrain")) return;
   for (const auto& l : config.layers)
-    if (l.kind == LayerKind::Elevation &&
+    if (l.kind == LayerKind::Elevation && l.dataset.body == body &&
         (config.renderer.terrain.layer.empty() || l.name == config.renderer.terrain.layer)) {
       ro.elevationLayer = l.name;
       ro.elevationEncoding = {l.elevation.scale, l.elevation.offset, l.elevation.noData};
@@ -310,10 +342,12 @@ void chooseElevation(const Config& config, const cli::Args& a, planet::RendererO
     }
 }
 
-/** The base layer: --layer (an imagery layer), else renderer.layers[0], else the first imagery
- * layer. The exit code after saying why, or 0. */
+/** The base layer on the body: --layer (an imagery layer), else renderer.layers[0], else the
+ * first imagery layer; kBareLayer (the body's bare globe) when none lies on the body. The exit
+ * code after saying why, or 0. */
 int chooseBase(const Config& config,
                const cli::Args& a,
+               const std::string& body,
                const char* cmd,
                planet::RendererOptions& ro) {
   if (const auto layerArg = a.get("layer")) {
@@ -325,18 +359,36 @@ int chooseBase(const Config& config,
                    layerArg->c_str());
       return kExitUsage;
     }
+    if (!onBody(layer, body)) {
+      std::fprintf(stderr,
+                   "tellus %s: --layer '%s' lies on the %s, not on the %s (--body)\n",
+                   cmd,
+                   layerArg->c_str(),
+                   layer->dataset.body.c_str(),
+                   body.c_str());
+      return kExitUsage;
+    }
     ro.layer = *layerArg;
-  } else if (!config.renderer.layers.empty()) {
+  } else if (!config.renderer.layers.empty() &&
+             onBody(config.layer(config.renderer.layers.front().layer), body)) {
     ro.layer = config.renderer.layers.front().layer;
   } else {
     for (const auto& candidate : config.layers)
-      if (candidate.kind == LayerKind::Imagery) {
+      if (candidate.kind == LayerKind::Imagery && candidate.dataset.body == body) {
         ro.layer = candidate.name;
         break;
       }
-    if (ro.layer.empty()) {
+    if (ro.layer.empty() && body == "earth") {
       std::fprintf(stderr, "tellus %s: the configuration has no imagery layer\n", cmd);
       return kExitError;
+    }
+    if (ro.layer.empty()) {
+      std::fprintf(stderr,
+                   "tellus %s: no imagery layer lies on the %s: its globe is drawn in the "
+                   "fallback colour\n",
+                   cmd,
+                   body.c_str());
+      ro.layer = kBareLayer;
     }
   }
   return kExitOk;
@@ -349,6 +401,7 @@ openLocal(const cli::Args& a, const char* cmd, planet::RendererOptions& ro) {
   t.ctx = setUp(a);
   if (!t.ctx) return std::unexpected(kExitError);
   const Config& config = t.ctx->config;
+  if (!setBody(a, &config, t, cmd)) return std::unexpected(kExitUsage);
   applyRendererSettings(config.renderer, a, ro, t.earth);
   if (ro.atmosphere) // the tables' cache, under the cache root
     ro.atmosphere->tableCacheDir = (config.cache.root / "atmosphere").string();
@@ -360,8 +413,8 @@ openLocal(const cli::Args& a, const char* cmd, planet::RendererOptions& ro) {
     return std::unexpected(kExitUsage);
   }
   ro.imageDecoder = &decodeImageryAsRgba;
-  chooseElevation(config, a, ro);
-  if (auto bad = applyGeoid(a, config.renderer.geoid, ro)) {
+  chooseElevation(config, a, t.body, ro);
+  if (auto bad = applyGeoid(a, config.renderer.geoid && t.body == "earth", ro)) {
     std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());
     return std::unexpected(kExitError);
   }
@@ -369,7 +422,8 @@ openLocal(const cli::Args& a, const char* cmd, planet::RendererOptions& ro) {
     std::fprintf(stderr, "tellus %s: %s\n", cmd, bad->c_str());
     return std::unexpected(kExitError);
   }
-  if (const int rc = chooseBase(config, a, cmd, ro); rc != kExitOk) return std::unexpected(rc);
+  if (const int rc = chooseBase(config, a, t.body, cmd, ro); rc != kExitOk)
+    return std::unexpected(rc);
   t.fetcher = std::make_unique<Fetcher>();
   auto specs = cli::proxySpecs(config);
   TileServiceOptions tso = cli::tileServiceOptions(config.server);
@@ -385,6 +439,10 @@ openLocal(const cli::Args& a, const char* cmd, planet::RendererOptions& ro) {
   }
   t.service = std::move(*tiles);
   t.source = t.service.get();
+  if (ro.layer == kBareLayer) {
+    t.bare = std::make_unique<BareLayerSource>(*t.source);
+    t.source = t.bare.get();
+  }
   if (!applyRenderLayers(config.renderer, &config, a, ro, t, cmd))
     return std::unexpected(kExitUsage);
   return t;

@@ -8,6 +8,7 @@
  * decoders; the geoid.
  */
 
+#include "Bodies.hpp"
 #include "Context.hpp"
 
 #include <tellus/cache/TileSource.hpp>
@@ -35,6 +36,15 @@ struct PlanetTiles {
   std::unique_ptr<planet::RegionalTileSource> regional; ///< over service or remote, when used
   ITileSource* source = nullptr;                        ///< what the renderer reads
   EarthModel earth = EarthModel::Wgs84;                 ///< the configuration's renderer.earth
+  /** The body shown (--body, else renderer.body; issue 26): only its layers are drawn. */
+  std::string body = "earth";
+  std::optional<BodyConfig> configuredBody; ///< when body is one of the configuration's
+  std::unique_ptr<BareLayerSource> bare;    ///< when no imagery layer lies on the body
+  /** The body as the renderer's Geodesy takes it (the Earth in the model given). */
+  planet::Body bodyFor(EarthModel model) const {
+    if (configuredBody) return bodyFromConfig(*configuredBody);
+    return resolveBody(body, nullptr, model);
+  }
   /** Per renderer layer (base, overlays): the TIME values `view` steps through ([ and ]). */
   std::vector<std::vector<std::string>> layerTimes;
   /** The configuration's `renderer.time` ("" = none) and `renderer.night` (issue 23). */

@@ -387,9 +387,10 @@ int runRender(const cli::Args& a) {
     if (!ra->flight) return usage("--animate needs a flight (--path, --frames)", "");
     ro.frameClock = [clock = ra->flightClockS] { return *clock; };
   }
-  const Geodesy geodesy(ra->earth.value_or(tiles->earth));
-  // The always-resident global texture: the bundled Blue Marble.
-  if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg"; fs::exists(global))
+  const Geodesy geodesy(tiles->bodyFor(ra->earth.value_or(tiles->earth)));
+  // The always-resident global texture: the bundled Blue Marble (the Earth's only).
+  if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg";
+      tiles->body == "earth" && fs::exists(global))
     ro.globalImage = global;
   auto renderer = planet::Renderer::create(*tiles->source, geodesy, ro);
   if (!renderer) {

@@ -68,7 +68,9 @@ commands:
              and each animated layer's TIME and state end the status line
              render: [--edge-fixing on|off] (off shows the cracks it closes; for comparisons)
              render, view and height: [--geoid on|off] (renderer.geoid: mean-sea-level heights
-             onto the ellipsoid, h = H + N)
+             onto the ellipsoid, h = H + N; the Earth's only)
+             render, view and height: [--body NAME] (renderer.body: earth, moon, mars or a
+             configured one; only its layers are used; none for it: a bare fallback globe)
              render, for the speed/accuracy sweep (bench/trade.sh): [--mesh-size N]
              [--upload-per-frame BYTES] [--vertices double|float]
   height   the terrain height in metres at a point, from the elevation layer's deepest level

@@ -87,9 +87,10 @@ int runView(const cli::Args& a) {
   hideNightLayers(a, tiles->night, ro);
   // Legends of value layers (issue 24): on in view unless renderer.legend or --no-legend says no.
   ro.legend = !a.flag("no-legend") && (a.flag("legend") || tiles->legend.value_or(true));
-  if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg"; fs::exists(global))
+  if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg";
+      tiles->body == "earth" && fs::exists(global))
     ro.globalImage = global;
-  const Geodesy geodesy(earth->value_or(tiles->earth));
+  const Geodesy geodesy(tiles->bodyFor(earth->value_or(tiles->earth)));
   auto renderer = planet::Renderer::create(*tiles->source, geodesy, ro);
   if (!renderer) {
     std::fprintf(stderr, "tellus view: %s\n", renderer.error().c_str());

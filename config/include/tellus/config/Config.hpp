@@ -175,7 +175,31 @@ struct AtmosphereSettings {
   double minSunCosine = -0.2; ///< `min_sun_cosine`: below it the sky is black, (-1, 0)
 };
 
+/** The bodies every configuration knows (planet/Body.hpp builds them): the Earth (WGS84), the
+ * Moon (a sphere of 1737.4 km), Mars (3396.19 by 3376.2 km). */
+inline constexpr std::array<std::string_view, 3> kBuiltinBodies{"earth", "moon", "mars"};
+
+/** One entry of YAML `bodies` (issue 26): a body beside the built-in ones (docs/design/bodies.md).
+ * Angles in degrees, rates per Julian century (pole) and per day (prime meridian), as the IAU
+ * WGCCRE report gives them. */
+struct BodyConfig {
+  std::string name;                             ///< [A-Za-z0-9_.-]+, not a built-in body's
+  std::array<double, 3> radii{0.0, 0.0, 0.0};   ///< a >= b (equatorial), c (polar), metres
+  double poleRa = 0.0;                          ///< `rotation.pole_ra`
+  double poleRaRate = 0.0;                      ///< `rotation.pole_ra_rate`
+  double poleDec = 90.0;                        ///< `rotation.pole_dec`
+  double poleDecRate = 0.0;                     ///< `rotation.pole_dec_rate`
+  double primeMeridian = 0.0;                   ///< `rotation.prime_meridian`
+  double rotationRate = 0.0;                    ///< `rotation.rate` (degrees a day)
+  std::optional<AtmosphereSettings> atmosphere; ///< `atmosphere: none` (the default): nullopt
+  int iauCode = 0;                              ///< `iau_code`: its IAU planetary CRS code; 0 none
+  double reliefBound = 11000.0;                 ///< `relief_bound`: largest |height|, metres
+};
+
 struct RendererSettings {
+  /** YAML `renderer.body`: the body the renderer shows (a built-in or a configured one); the
+   * renderer draws only the layers on it (LayerConfig::dataset.body). --body overrides it. */
+  std::string body = "earth";
   double lodThreshold = 1.0;                  ///< texel-to-pixel threshold, 0.05 - 64
   int meshSize = 33;                          ///< vertices along a node's edge, 2^n + 1 in [3, 257]
   double fovDeg = 45.0;                       ///< vertical field of view, (1, 170)
@@ -353,6 +377,7 @@ struct Config {
   ServerSettings server;
   CacheSettings cache;
   RendererSettings renderer;
+  std::vector<BodyConfig> bodies; ///< YAML `bodies`: the configured ones (besides kBuiltinBodies)
   std::vector<UpstreamConfig> upstreams;
   std::vector<LayerConfig> layers;
 
@@ -360,6 +385,10 @@ struct Config {
   const LayerConfig* layer(std::string_view name) const noexcept;
   /** The upstream with this name, or nullptr. */
   const UpstreamConfig* upstream(std::string_view name) const noexcept;
+  /** A configured body (not a built-in one) with this name, or nullptr. */
+  const BodyConfig* body(std::string_view name) const noexcept;
+  /** A built-in or a configured body's name. */
+  bool knowsBody(std::string_view name) const noexcept;
 };
 
 /** Why a configuration could not be loaded. line and column are 1-based; 0 = unknown (e.g. the

@@ -7,7 +7,20 @@
  * Angles in degrees, heights and coordinates in metres, always double precision. Tile latitudes are
  * geodetic: on the WGS84 ellipsoid a tile edge at latitude phi is where the ellipsoid normal makes
  * the angle phi with the equator.
+ *
+ * Issue 26: a Geodesy is made from any planet::Body (Body.hpp): a sphere or a biaxial ellipsoid
+ * through GeographicLib's Geocentric (a, f = 1 - c/a), a triaxial ellipsoid by its own conversion
+ * (GeodesyTriaxial.cpp: planetographic latitude and longitude are those of the ellipsoid's normal;
+ * fromEcef solves for the foot of the normal by Newton's method). Geodesy(EarthModel) is
+ * Geodesy(earthBody()) or Geodesy(earthSphereBody()), bit for bit.
+ *
+ * The renderer's shape-dependent paths (picking, culling, the LOD's bounds, the atmosphere) read
+ * equatorialRadius() and polarRadius() and treat the body as biaxial; for a triaxial body those
+ * are a and c and the horizon occluder uses b (the inscribed biaxial ellipsoid), so culling stays
+ * conservative while vertices (toEcef) are exact.
  */
+
+#include <tellus/planet/Body.hpp>
 
 #include <memory>
 
@@ -34,13 +47,18 @@ enum class EarthModel {
 class Geodesy {
 public:
   explicit Geodesy(EarthModel model = EarthModel::Wgs84);
+  /** @throws std::invalid_argument when body.validate() says what is wrong. */
+  explicit Geodesy(const planet::Body& body);
   ~Geodesy();
   Geodesy(Geodesy&&) noexcept;
   Geodesy& operator=(Geodesy&&) noexcept;
 
+  /** Sphere for a spherical body, Wgs84 for any other (the Earth model's name only). */
   EarthModel model() const noexcept;
-  double equatorialRadius() const noexcept;
-  double polarRadius() const noexcept;
+  const planet::Body& body() const noexcept;
+  double equatorialRadius() const noexcept;    ///< a (the largest equatorial semi-axis)
+  double minEquatorialRadius() const noexcept; ///< b (== a unless triaxial)
+  double polarRadius() const noexcept;         ///< c
 
   /** Position of a point; NaN in gives NaN out; |lat| > 90 gives NaN. lon is any value (wraps). */
   Ecef toEcef(double latDeg, double lonDeg, double heightM) const noexcept;

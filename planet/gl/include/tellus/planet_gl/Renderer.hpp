@@ -15,7 +15,9 @@
  * Inside (planet/gl/src/RendererImpl.hpp), frame() is a sequence of phases, one unit each (update,
  * intake, plan, upload, mesh, draw), and its draw phase an ordered list of scene passes
  * (ScenePass.hpp): the place for the atmosphere, sun and stars (issue 23). The body drawn is the
- * Geodesy given to create() (issue 26 makes it one body among several).
+ * Geodesy given to create(), made from a planet::Body (issue 26, docs/design/bodies.md): the body
+ * decides the sky (none without an atmosphere), the sun (the Earth's from Astronomy; other bodies'
+ * from their ephemeris) and the relief bound.
  */
 
 #include <tellus/cache/TileSource.hpp>
@@ -180,7 +182,9 @@ struct RendererOptions {
    * relief); below that it draws the bare ellipsoid. A function of the camera alone, so a frame
    * does not depend on what earlier frames loaded. 0: heights always. */
   double terrainMinReliefPx = 0.5;
-  double terrainReliefBoundM = 11000.0; ///< |height| bound for that test (Everest 8,849 m, +N)
+  /** |height| bound for that test (Everest 8,849 m, +N); create() raises it to the body's
+   * Body::reliefBoundM (Mars: 26 km). */
+  double terrainReliefBoundM = 11000.0;
   /** Edge fixing (finer edges onto coarser chords, zero-area triangles). Off only to measure what
    * it costs and what it prevents (benchmarks, the test that shows the cracks it closes). */
   bool fixEdges = true;
@@ -218,7 +222,9 @@ struct RendererOptions {
   double starBrightness = 1.0;
   /** The atmosphere (issue 23; planet/Atmosphere.hpp, planet/gl/src/AtmospherePass.hpp): the sky
    * and the aerial perspective, drawn after the globe; nullopt: none (the library's default, so
-   * that renderer tests keep their pixels; the configuration turns it on). */
+   * that renderer tests keep their pixels; the configuration turns it on). The body overrides it
+   * (create()): an airless body (the Moon) gets no atmosphere pass at all, and a body other than
+   * the Earth gets its own parameters (Body::atmosphere) whatever these say. */
   struct Atmosphere {
     AtmosphereParameters parameters; ///< bottomRadiusM <= 0: the body's equatorial radius
     /** The display's scale of radiance (solar units): shown = 1 - exp(-exposure L), gamma 2.2. */
@@ -399,7 +405,7 @@ public:
   /** Terrain height in metres (exaggerated) at a point from the deepest height data loaded
    * (bilinear); 0 without an elevation layer. */
   double terrainHeight(double latDeg, double lonDeg) const;
-  /** The Earth model the renderer draws on (the one given to create()). */
+  /** The body the renderer draws (the one given to create()). */
   const Geodesy& geodesy() const noexcept;
   /** One frame: quadtree and streamer update, decoded textures to upload, uploads within the
    * budget, draw into the framebuffer (and the window when visible). */
