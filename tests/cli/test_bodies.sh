@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Other bodies on the command line (issue 26): `tellus height --body moon` reads the Moon's
 # elevation layer (a flat 1500 m local raster) and not the Earth's; unknown bodies and a body
-# without heights are refused; with `render` (needs a display): `render --body moon` on the embedded
-# default (no Moon layer there yet: the bare globe in its fallback colour), a configured Moon
-# imagery layer drawn, and an Earth layer refused for the Moon.
+# without heights are refused; with `render` (needs a display): the Moon and Mars of the embedded
+# default against their bundled maps at known coordinates, a configured Moon imagery layer drawn,
+# and an Earth layer refused for the Moon.
 # Usage: test_bodies.sh TELLUS height|render
 set -euo pipefail
 tellus=$1
@@ -52,9 +52,8 @@ if [ "$mode" = height ]; then
     fail "height --body moon: $(cat "$work/err")"
   [ "$got" = 1500.00 ] || fail "height --body moon: $got, want 1500.00 ($(cat "$work/err"))"
   grep -q "moonheights" "$work/err" || fail "height --body moon used $(cat "$work/err")"
-  # The poles and the 180-degree meridian (at lat 90, lon 180 `height` reads 0 on every body, the
-  # Earth's too: a bug of the point's sampling at that corner, not of bodies).
-  for p in "90 0" "-90 0" "10 180" "-10 -180"; do
+  # The poles and the 180-degree meridian.
+  for p in "90 0" "-90 0" "90 180" "-90 -180" "10 180" "-10 -180"; do
     read -r lat lon <<<"$p"
     got=$("$tellus" height --config "$work/bodies.yaml" --body moon --lat $lat --lon $lon 2>/dev/null)
     [ "$got" = 1500.00 ] || fail "height --body moon at $lat, $lon: $got"
@@ -74,12 +73,43 @@ if [ "$mode" = height ]; then
   exit 0
 fi
 
-# render: the embedded default has no Moon layer yet: the bare globe in its fallback colour.
+# render on the embedded default: the bundled Moon and Mars maps (data/README.md), unlit and
+# without air, straight down at known places (maria, highlands, Hellas, Syrtis Major, Tharsis):
+# the image's centre is the map's colour there, the mean of its 3x3 pixels around the place read
+# by GDAL from the bundled file and its world file, within what the tiles' resampling and JPEG
+# coding leave (24 levels); then no air around the Moon.
+mapcolour() { # map lat lon step: the mean R G B of the map's 3x3 samples around the place
+  python3 - "$@" <<'PY'
+import subprocess, sys
+m, lat, lon, st = sys.argv[1], float(sys.argv[2]), float(sys.argv[3]), float(sys.argv[4])
+s = [0, 0, 0]
+for dy in (-1, 0, 1):
+    for dx in (-1, 0, 1):
+        out = subprocess.run(["gdallocationinfo", "-valonly", "-geoloc", m, str(lon + dx * st),
+                              str(lat + dy * st)], capture_output=True, text=True, check=True)
+        s = [a + int(v) for a, v in zip(s, out.stdout.split())]
+print(" ".join(str(round(v / 9)) for v in s))
+PY
+}
+for p in "moon 17 59" "moon -30 10" "moon 0 0" "mars -42 70" "mars 8.4 69.5" "mars 20 -110"; do
+  read -r body lat lon <<<"$p"
+  map=$data/moon_2048x1024.jpg step=0.176
+  [ "$body" = mars ] && map=$data/mars_512x256.jpg step=0.703
+  "$tellus" render --body "$body" --cache "$work/c2" --camera "$lat,$lon,3e5" \
+    --size 32x32 --no-stars --no-sun --no-atmosphere --wait-complete --out "$work/shot-$body.png" \
+    2>"$work/err" || fail "render --body $body: $(cat "$work/err")"
+  read -r r g b < <(pixel "$work/shot-$body.png" 16 16)
+  read -r -a want < <(mapcolour "$map" "$lat" "$lon" "$step")
+  for got in "$r ${want[0]}" "$g ${want[1]}" "$b ${want[2]}"; do
+    read -r x y <<<"$got"
+    d=$((x - y))
+    [ "${d#-}" -le 24 ] || fail "$body at $lat, $lon: rendered $r $g $b, the map has ${want[*]}"
+  done
+done
 "$tellus" render --body moon --offline --cache "$work/c1" --camera 0,0,4e6 --size 128x128 \
   --no-stars --out "$work/bare.png" 2>"$work/err" || fail "render --body moon: $(cat "$work/err")"
-grep -q "fallback colour" "$work/err" || fail "render --body moon said: $(cat "$work/err")"
 read -r r g b < <(pixel "$work/bare.png" 2 2)
-[ "$((r + g + b))" = 0 ] || fail "the sky around the bare Moon is $r $g $b, want black (no air)"
+[ "$((r + g + b))" = 0 ] || fail "the sky around the Moon is $r $g $b, want black (no air)"
 # The configured Moon map, unlit: grey, and the disc the Moon's size (98 px radius for 256 px:
 # asin(1737.4 / 5737.4) is 17.6 degrees, tan(17.6) / tan(22.5) x 128; the Earth's radius would fill
 # the frame).

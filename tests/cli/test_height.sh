@@ -67,6 +67,12 @@ b=$("$tellus" height --cache "$cache" --lat 10 --lon -180 2>/dev/null)
 s1=$("$tellus" height --cache "$cache" --lat -90 --lon 45 2>/dev/null)
 s2=$("$tellus" height --cache "$cache" --lat -90 --lon -120 2>/dev/null)
 [ "$s1" = "$s2" ] || fail "the south pole is one point: $s1 against $s2"
+# The pole at the 180-degree meridian read 0 (the tiles loaded were not those sampled).
+for lon in 180 -180; do
+  n=$("$tellus" height --cache "$cache" --lat 90 --lon $lon 2>/dev/null)
+  n0=$("$tellus" height --cache "$cache" --lat 90 --lon 0 2>/dev/null)
+  [ "$n" = "$n0" ] || fail "the north pole at lon $lon gives $n, at lon 0 $n0"
+done
 
 # The datum (issue #8): H above mean sea level by default, h = H + N with --datum ellipsoid, N from
 # the bundled EGM96 grid at its own nodes (egm96_15.gtx: 4.5 N 79 E -106.975 m, south of India;

@@ -65,8 +65,12 @@ void writeFile(const fs::path& p, std::string_view text) {
 // ---- examples and defaults ---------------------------------------------------------------------
 
 TEST(ConfigYaml, EveryExampleParses) {
-  for (const char* name :
-       {"default.yaml", "mapserver.yaml", "public.yaml", "heights.yaml", "sst.yaml"}) {
+  for (const char* name : {"default.yaml",
+                           "mapserver.yaml",
+                           "public.yaml",
+                           "heights.yaml",
+                           "sst.yaml",
+                           "planetary.yaml"}) {
     const auto c = loadConfig(kExamples / name);
     ASSERT_TRUE(c) << c.error().toString();
     EXPECT_EQ(c->sourceFile, kExamples / name);

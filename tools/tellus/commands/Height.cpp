@@ -214,7 +214,10 @@ int runHeight(const cli::Args& a) {
     return kExitError;
   }
   PointHeights heights{planet::HeightField(*grid), planet::HeightField(*grid), {}};
-  const double la = (*lat)[0], lo = std::remainder((*lon)[0], 360.0);
+  // A pole is one point: its longitude is 0, as HeightField takes it (the tiles loaded around the
+  // point must be those it reads).
+  const double la = (*lat)[0];
+  const double lo = std::abs(la) == 90.0 ? 0.0 : std::remainder((*lon)[0], 360.0);
   int level = grid->numLevels() - 1;
   while (level >= 0 && !loadLevel(*grid, level, la, lo, *tiles->source, ro, heights))
     --level;
