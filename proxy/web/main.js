@@ -85,7 +85,8 @@ function layerLabel(layer, checked) {
 function start(info) {
   document.getElementById('title').textContent = info.title;
   document.title = info.title;
-  const imagery = info.layers.filter((l) => !l.elevation);
+  // The page's globe is the Earth: layers on other bodies (issue 26) are not offered.
+  const imagery = info.layers.filter((l) => !l.elevation && (l.body ?? 'earth') === 'earth');
   const elevation = info.layers.filter((l) => l.elevation);
 
   const list = document.getElementById('elevation');

@@ -28,6 +28,7 @@ LayerSpec layer(std::string name, GridSpec grid, std::string title = {}) {
 std::vector<LayerSpec> someLayers() {
   LayerSpec heights = layer("etopo", GridSpec{Sector{-10.5, -20, 30.25, 40}, 22.5, 150, 150, 5});
   heights.elevation = true;
+  heights.dataset.body = "moon"; // issue 26: the body travels; absent, the Earth
   heights.firstLevel = 2;
   heights.dataset.mimeType = "application/bil16";
   heights.dataset.extension = "bil";
@@ -63,6 +64,7 @@ TEST(LayersJson, WhatThePageWritesARemoteReadsBack) {
     const RemoteLayer& r = (*read)[i];
     EXPECT_EQ(r.name, layers[i].name);
     EXPECT_EQ(r.elevation, layers[i].elevation);
+    EXPECT_EQ(r.dataset.body, layers[i].dataset.body);
     EXPECT_EQ(r.dataset.server, "host:8080");
     EXPECT_EQ(r.dataset.name, layers[i].name);
     EXPECT_EQ(r.dataset.mimeType, layers[i].dataset.mimeType);

@@ -135,11 +135,12 @@ TEST(WebPage, LayersJsonDescribesEachGridAndEscapesStrings) {
       j,
       "{\"title\":\"my \\\"cache\\\"\",\"layers\":[\n"
       "{\"name\":\"bluemarble\",\"title\":\"Blue \\\"Marble\\\"\\n\\\\ \\u0001 m\xc3\xa4p\","
-      "\"format\":\"image/jpeg\",\"extension\":\"jpg\",\"elevation\":false,"
+      "\"format\":\"image/jpeg\",\"extension\":\"jpg\",\"elevation\":false,\"body\":\"earth\","
       "\"levelZeroDelta\":36,\"tileWidth\":512,\"tileHeight\":512,\"levels\":3,"
       "\"firstLevel\":0,\"sector\":{\"west\":-180,\"south\":-90,\"east\":180,\"north\":90}},\n"
       "{\"name\":\"etopo\",\"title\":\"etopo\",\"format\":\"application/bil16\","
-      "\"extension\":\"bil\",\"elevation\":true,\"levelZeroDelta\":22.5,\"tileWidth\":150,"
+      "\"extension\":\"bil\",\"elevation\":true,\"body\":\"earth\",\"levelZeroDelta\":22.5,"
+      "\"tileWidth\":150,"
       "\"tileHeight\":150,\"levels\":5,\"firstLevel\":1,"
       "\"sector\":{\"west\":-10.5,\"south\":-20,\"east\":30.25,\"north\":40}}\n"
       "]}\n");

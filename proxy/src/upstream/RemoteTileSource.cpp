@@ -147,6 +147,9 @@ std::expected<RemoteLayer, std::string> readLayer(const Json& o, std::string_vie
   if (auto g = TileGrid::create(l.dataset.grid); !g) return std::unexpected(g.error());
   if (const Json* el = member(o, "elevation"); el && el->is_boolean())
     l.elevation = el->get<bool>();
+  // The body (issue 26; absent from older servers: the Earth).
+  if (const Json* b = member(o, "body"); b && b->is_string() && !b->get<std::string>().empty())
+    l.dataset.body = b->get<std::string>();
   return l;
 }
 

@@ -173,6 +173,7 @@ std::string layerJson(const LayerSpec& l) {
                      {"format", jsonString(l.dataset.mimeType)},
                      {"extension", jsonString(l.dataset.extension)},
                      {"elevation", l.elevation ? "true" : "false"},
+                     {"body", jsonString(l.dataset.body)},
                      {"levelZeroDelta", jsonNumber(g.levelZeroDeltaDeg)},
                      {"tileWidth", std::to_string(g.tileWidth)},
                      {"tileHeight", std::to_string(g.tileHeight)},
