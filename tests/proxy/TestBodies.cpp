@@ -37,8 +37,7 @@ struct BodyServer {
   std::unique_ptr<TileCache> cache;
   std::unique_ptr<Fetcher> fetcher;
   std::unique_ptr<TileService> tiles;
-  std::unique_ptr<ProxyFrontEnd> front;
-  std::unique_ptr<HttpServer> server;
+  std::unique_ptr<test::ServedFrontEnd> web; ///< after the service: stopped before it goes
 
   explicit BodyServer(std::vector<LayerSpec> layers = {layerOn("sat", "earth"),
                                                        layerOn("lroc", "moon"),
@@ -55,23 +54,9 @@ struct BodyServer {
     auto t = TileService::create(*cache, *fetcher, {u}, std::move(layers), {});
     EXPECT_TRUE(t) << (t ? "" : t.error());
     tiles = std::move(*t);
-    front = std::make_unique<ProxyFrontEnd>(*tiles, FrontEndOptions{});
-    HttpServerOptions so;
-    so.threads = 2;
-    server = std::make_unique<HttpServer>(so, [this](HttpRequest&& r, Responder respond) {
-      front->handle(std::move(r), std::move(respond));
-    });
-    EXPECT_TRUE(server->start());
+    web = std::make_unique<test::ServedFrontEnd>(*tiles);
   }
-  ~BodyServer() {
-    server->stop();
-    front.reset();
-    tiles.reset();
-    fetcher.reset();
-  }
-  test::HttpResult get(const std::string& target) const {
-    return test::httpGet("http://127.0.0.1:" + std::to_string(server->port()) + target);
-  }
+  test::HttpResult get(const std::string& target) const { return web->get(target); }
 };
 
 /** The text of the <Layer> element whose Name is `name` (up to its closing tag). */

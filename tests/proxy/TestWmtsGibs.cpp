@@ -7,6 +7,7 @@
 #include "../support/CacheFixtures.hpp"
 #include "../support/FakeUpstream.hpp"
 #include "../support/HttpClient.hpp"
+#include "../support/ServedFrontEnd.hpp"
 #include "../support/TempDir.hpp"
 
 #include <tellus/cache/TileCache.hpp>
@@ -171,8 +172,7 @@ struct WmtsProxy {
   std::unique_ptr<TileCache> cache;
   std::unique_ptr<Fetcher> fetcher;
   std::unique_ptr<TileService> tiles;
-  std::unique_ptr<ProxyFrontEnd> front;
-  std::unique_ptr<HttpServer> server;
+  std::unique_ptr<test::ServedFrontEnd> web; ///< after the service: stopped before it goes
   std::string error;
 
   WmtsProxy(const std::filesystem::path& root, const std::string& capsUrl, bool offline = false) {
@@ -213,23 +213,9 @@ struct WmtsProxy {
       return;
     }
     tiles = std::move(*t);
-    front = std::make_unique<ProxyFrontEnd>(*tiles, FrontEndOptions{});
-    HttpServerOptions so;
-    so.threads = 2;
-    server = std::make_unique<HttpServer>(so, [this](HttpRequest&& r, Responder respond) {
-      front->handle(std::move(r), std::move(respond));
-    });
-    EXPECT_TRUE(server->start());
+    web = std::make_unique<test::ServedFrontEnd>(*tiles);
   }
-  ~WmtsProxy() {
-    if (server) server->stop();
-    front.reset();
-    tiles.reset();
-    fetcher.reset();
-  }
-  test::HttpResult get(const std::string& target) const {
-    return test::httpGet("http://127.0.0.1:" + std::to_string(server->port()) + target);
-  }
+  test::HttpResult get(const std::string& target) const { return web->get(target); }
   /** Whether the cache holds a tile of `layer` at `time` for `key`. */
   bool cached(const std::string& layer, const std::string& time, const TileKey& key) {
     auto spec = *tiles->describe(layer, time);

@@ -9,6 +9,7 @@
 #include "../support/CacheFixtures.hpp"
 #include "../support/FakeUpstream.hpp"
 #include "../support/HttpClient.hpp"
+#include "../support/ServedFrontEnd.hpp"
 #include "../support/TempDir.hpp"
 
 #include <tellus/cache/TileCache.hpp>
@@ -125,8 +126,7 @@ struct Proxy {
   std::unique_ptr<TileCache> cache;
   std::unique_ptr<Fetcher> fetcher;
   std::unique_ptr<TileService> tiles;
-  std::unique_ptr<ProxyFrontEnd> front;
-  std::unique_ptr<HttpServer> server;
+  std::unique_ptr<test::ServedFrontEnd> web; ///< after the service: stopped before it goes
   std::string error;
 
   Proxy(const std::filesystem::path& root, const std::string& capsUrl) {
@@ -161,23 +161,9 @@ struct Proxy {
       return;
     }
     tiles = std::move(*t);
-    front = std::make_unique<ProxyFrontEnd>(*tiles, FrontEndOptions{});
-    HttpServerOptions so;
-    so.threads = 2;
-    server = std::make_unique<HttpServer>(so, [this](HttpRequest&& r, Responder respond) {
-      front->handle(std::move(r), std::move(respond));
-    });
-    EXPECT_TRUE(server->start());
+    web = std::make_unique<test::ServedFrontEnd>(*tiles);
   }
-  ~Proxy() {
-    if (server) server->stop();
-    front.reset();
-    tiles.reset();
-    fetcher.reset();
-  }
-  test::HttpResult get(const std::string& target) const {
-    return test::httpGet("http://127.0.0.1:" + std::to_string(server->port()) + target);
-  }
+  test::HttpResult get(const std::string& target) const { return web->get(target); }
   bool cached(const std::string& time, const TileKey& key) {
     auto spec = *tiles->describe("bands", time);
     auto id = cache->registerDataset(spec);

@@ -86,7 +86,7 @@ TEST(WmtsIntegration, WorldCrs84QuadIsTheWmsMapOfTheBoxAndIsKept) {
   EXPECT_EQ(again.header("etag"), quad.header("etag"));
   EXPECT_EQ(again.header("x-cache"), "HIT");
   EXPECT_EQ(up.requests(), fetched);
-  const auto notModified = test::httpGet("http://127.0.0.1:" + std::to_string(s.server->port()) +
+  const auto notModified = test::httpGet("http://127.0.0.1:" + std::to_string(s.web->port()) +
                                              "/wmts/1.0.0/sat/default/WorldCRS84Quad/2/1/5.png",
                                          {{"If-None-Match", quad.header("etag")}});
   EXPECT_EQ(notModified.status, 304);

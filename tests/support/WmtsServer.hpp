@@ -5,6 +5,7 @@
 #include "CacheFixtures.hpp"
 #include "FakeUpstream.hpp"
 #include "HttpClient.hpp"
+#include "ServedFrontEnd.hpp"
 #include "TempDir.hpp"
 
 #include <tellus/cache/TileCache.hpp>
@@ -46,8 +47,7 @@ struct WmtsServer {
   std::unique_ptr<TileCache> cache;
   std::unique_ptr<Fetcher> fetcher;
   std::unique_ptr<TileService> tiles;
-  std::unique_ptr<ProxyFrontEnd> front;
-  std::unique_ptr<HttpServer> server;
+  std::unique_ptr<ServedFrontEnd> web; ///< after the service: stopped before it goes
 
   /** `levels`: of both layers (1: every map is composed from level 0, whatever its scale). */
   /** `ttl`: of both layers (0: their tiles never expire). */
@@ -77,23 +77,9 @@ struct WmtsServer {
     auto t = TileService::create(*cache, *fetcher, {u}, {l, d}, {});
     EXPECT_TRUE(t) << (t ? "" : t.error());
     tiles = std::move(*t);
-    front = std::make_unique<ProxyFrontEnd>(*tiles, FrontEndOptions{});
-    HttpServerOptions so;
-    so.threads = 2;
-    server = std::make_unique<HttpServer>(so, [this](HttpRequest&& r, Responder respond) {
-      front->handle(std::move(r), std::move(respond));
-    });
-    EXPECT_TRUE(server->start());
+    web = std::make_unique<ServedFrontEnd>(*tiles);
   }
-  ~WmtsServer() {
-    server->stop();
-    front.reset();
-    tiles.reset();
-    fetcher.reset();
-  }
-  HttpResult get(const std::string& target) const {
-    return httpGet("http://127.0.0.1:" + std::to_string(server->port()) + target);
-  }
+  HttpResult get(const std::string& target) const { return web->get(target); }
 };
 
 inline std::vector<std::uint8_t> pixels(const HttpResult& r, int size = 256) {
