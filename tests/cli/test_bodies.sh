@@ -52,6 +52,9 @@ if [ "$mode" = height ]; then
     fail "height --body moon: $(cat "$work/err")"
   [ "$got" = 1500.00 ] || fail "height --body moon: $got, want 1500.00 ($(cat "$work/err"))"
   grep -q "moonheights" "$work/err" || fail "height --body moon used $(cat "$work/err")"
+  # The Moon has no sea: its heights are above its own sphere, and the message says so.
+  grep -q "above the reference surface of moon" "$work/err" && ! grep -q "sea level" "$work/err" ||
+    fail "height --body moon says: $(cat "$work/err")"
   # The poles and the 180-degree meridian.
   for p in "90 0" "-90 0" "90 180" "-90 -180" "10 180" "-10 -180"; do
     read -r lat lon <<<"$p"

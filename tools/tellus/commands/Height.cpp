@@ -100,10 +100,24 @@ bool loadLevel(const TileGrid& grid,
   return haveCentre;
 }
 
-void printHeights(
-    const planet::RendererOptions& ro, int level, double H, double h, bool ellipsoid) {
+void printHeights(const planet::RendererOptions& ro,
+                  const std::string& body,
+                  int level,
+                  double H,
+                  double h,
+                  bool ellipsoid) {
   std::printf("%.2f\n", ellipsoid ? h : H);
-  if (ro.verticalDatum.usesGeoid())
+  if (body != "earth")
+    // No geoid but the Earth's: another body's heights are above its own reference surface
+    // (the Moon's sphere, Mars's ellipsoid: the datum its data are given against).
+    std::fprintf(stderr,
+                 "tellus height: layer %s, level %d: H %.2f m above the reference surface of "
+                 "%s, drawn as a height above it; printed: H\n",
+                 ro.elevationLayer.c_str(),
+                 level,
+                 H,
+                 body.c_str());
+  else if (ro.verticalDatum.usesGeoid())
     std::fprintf(stderr,
                  "tellus height: layer %s, level %d: H %.2f m above mean sea level, h = H + N "
                  "%.2f m above the WGS84 ellipsoid (N %.2f m, EGM96; the renderer draws h); "
@@ -236,7 +250,7 @@ int runHeight(const cli::Args& a) {
     std::fprintf(stderr, "tellus height: --datum ellipsoid needs the geoid (--geoid on)\n");
     return kExitUsage;
   }
-  printHeights(ro, level, H, h, ellipsoid);
+  printHeights(ro, tiles->body, level, H, h, ellipsoid);
   return kExitOk;
 }
 
