@@ -392,6 +392,7 @@ int runRender(const cli::Args& a) {
   if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg";
       tiles->body == "earth" && fs::exists(global))
     ro.globalImage = global;
+  addSceneBodies(ro, tiles->sceneBodies, dataDir(a), ra->earth.value_or(tiles->earth));
   auto renderer = planet::Renderer::create(*tiles->source, geodesy, ro);
   if (!renderer) {
     std::fprintf(stderr, "tellus render: %s\n", renderer.error().c_str());

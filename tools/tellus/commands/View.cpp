@@ -91,6 +91,7 @@ int runView(const cli::Args& a) {
       tiles->body == "earth" && fs::exists(global))
     ro.globalImage = global;
   const Geodesy geodesy(tiles->bodyFor(earth->value_or(tiles->earth)));
+  addSceneBodies(ro, tiles->sceneBodies, dataDir(a), earth->value_or(tiles->earth));
   auto renderer = planet::Renderer::create(*tiles->source, geodesy, ro);
   if (!renderer) {
     std::fprintf(stderr, "tellus view: %s\n", renderer.error().c_str());
