@@ -4,6 +4,9 @@
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
 
+#include <algorithm>
+#include <cmath>
+#include <numbers>
 #include <stdexcept>
 
 namespace tellus::planet {
@@ -38,12 +41,37 @@ DistantGlobe::DistantGlobe(const Body& body, int slices, int stacks) : body_(bod
                        static_cast<float>(j) / static_cast<float>(stacks));
     }
   }
-  for (unsigned j = 0; j < static_cast<unsigned>(stacks); ++j)
-    for (unsigned i = 0; i < static_cast<unsigned>(slices); ++i) {
-      const unsigned a = j * columns + i, b = a + 1, c = a + columns, d = c + 1;
-      if (j > 0) indices_.insert(indices_.end(), {a, b, d}); // the south pole's row is a point
-      if (j + 1 < static_cast<unsigned>(stacks)) indices_.insert(indices_.end(), {a, d, c});
-    }
+  slices_ = slices;
+  for (int stride = 1; stride <= 8; stride *= 2) {
+    if (stride > 1 && (slices % stride != 0 || stacks % stride != 0 || slices / stride < 8 ||
+                       stacks / stride < 4))
+      break;
+    const auto k = static_cast<unsigned>(stride);
+    const auto rows = static_cast<unsigned>(stacks) / k, cols = static_cast<unsigned>(slices) / k;
+    std::vector<unsigned> idx;
+    for (unsigned j = 0; j < rows; ++j)
+      for (unsigned i = 0; i < cols; ++i) {
+        const unsigned a = j * k * columns + i * k, b = a + k, c = a + k * columns, d = c + k;
+        if (j > 0) idx.insert(idx.end(), {a, b, d}); // the south pole's row is a point
+        if (j + 1 < rows) idx.insert(idx.end(), {a, d, c});
+      }
+    indices_.push_back(std::move(idx));
+  }
+}
+
+const std::vector<unsigned>& DistantGlobe::indices(int stride) const noexcept {
+  std::size_t k = 0;
+  while (k + 1 < indices_.size() && (2 << k) <= stride)
+    ++k;
+  return stride >= 1 && (1 << k) == stride ? indices_[k] : indices_[0];
+}
+
+int DistantGlobe::strideFor(double radiusPx) const noexcept {
+  const double needed = std::numbers::pi * std::sqrt(5.0 * std::max(radiusPx, 0.0));
+  int stride = 1;
+  while (2 * stride <= (1 << (indices_.size() - 1)) && slices_ / (2 * stride) >= needed)
+    stride *= 2;
+  return stride;
 }
 
 void DistantGlobe::cameraRelative(const BodyPlacement& placement,

@@ -128,3 +128,20 @@ TEST(SceneBodies, VerticesAreCameraRelativeBeforeTheyAreFloats) {
   EXPECT_NEAR(out[next * 8 + 3], n.x, 1e-6);
   EXPECT_NEAR(out[next * 8 + 5], n.z, 1e-6);
 }
+
+TEST(SceneBodies, ASmallDiscTakesACoarserGridOfTheSameVertices) {
+  const DistantGlobe g(moonBody()); // 128 x 64
+  EXPECT_EQ(g.indices(1).size(), static_cast<std::size_t>(128 * (2 * 64 - 2) * 3));
+  EXPECT_EQ(g.indices(8).size(), static_cast<std::size_t>(16 * (2 * 8 - 2) * 3));
+  EXPECT_EQ(g.indices(3).size(), g.indices(1).size()); // no such stride: the finest
+  for (const unsigned i : g.indices(8))
+    ASSERT_LT(i, g.vertexCount());
+  // n slices are within 0.1 px when n >= pi sqrt(5 r): 16 up to r = 5.2 px, 128 past 41 px.
+  EXPECT_EQ(g.strideFor(3.0), 8);
+  EXPECT_EQ(g.strideFor(12.0), 4);
+  EXPECT_EQ(g.strideFor(40.0), 2);
+  EXPECT_EQ(g.strideFor(500.0), 1);
+  const DistantGlobe small(moonBody(), 16, 8); // stride 2 leaves 8 x 4 quads, 4 would not
+  EXPECT_EQ(small.strideFor(0.1), 2);
+  EXPECT_EQ(small.indices(4).size(), small.indices(1).size());
+}

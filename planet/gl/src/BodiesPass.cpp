@@ -7,7 +7,17 @@
 
 #include <tellus/planet/StarCatalogue.hpp>
 
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
 namespace tellus::planet {
+
+namespace {
+constexpr double kDegree = std::numbers::pi / 180.0;
+} // namespace
 
 std::expected<std::unique_ptr<BodiesPass>, std::string>
 BodiesPass::create(const GlCapabilities& gl,
@@ -35,7 +45,7 @@ BodiesPass::create(const GlCapabilities& gl,
       return std::unexpected("body '" + b.body.name +
                              "' has no ephemeris: it cannot share a scene");
     if (*which == frameBody) continue;
-    auto d = std::unique_ptr<Drawn>(new Drawn{*which, DistantGlobe(b.body), {}, {}, {}, {}});
+    auto d = std::unique_ptr<Drawn>(new Drawn{*which, DistantGlobe(b.body), {}, {}, {}, {}, {}});
     d->texture = makeGlobalTexture(b.globalImage, b.colour);
     d->vao = GlVertexArray();
     d->vbo = GlBuffer();
@@ -56,10 +66,15 @@ BodiesPass::create(const GlCapabilities& gl,
     glVertexAttribPointer(
         2, 2, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<const void*>(6 * sizeof(float)));
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, d->ibo.id());
-    const auto& idx = d->globe.indices();
+    std::vector<unsigned> all;
+    for (std::size_t k = 0; k < d->ranges.size(); ++k) {
+      const auto& idx = d->globe.indices(1 << k);
+      d->ranges[k] = {all.size(), idx.size()};
+      all.insert(all.end(), idx.begin(), idx.end());
+    }
     glBufferData(GL_ELEMENT_ARRAY_BUFFER,
-                 static_cast<GLsizeiptr>(idx.size() * sizeof(unsigned)),
-                 idx.data(),
+                 static_cast<GLsizeiptr>(all.size() * sizeof(unsigned)),
+                 all.data(),
                  GL_STATIC_DRAW);
     glBindVertexArray(0);
     glBindBuffer(GL_ARRAY_BUFFER, 0);
@@ -87,8 +102,22 @@ void BodiesPass::draw(const FrameContext& frame) {
   glDisable(GL_CULL_FACE);
   glDisable(GL_BLEND);
   glActiveTexture(GL_TEXTURE0);
+  const Camera& cam = frame.camera;
+  // Pixels per unit of tan(angle) on the axis (perspective), or per radian (fisheye).
+  const double focal = cam.isFisheye() ? cam.pixelsPerRadian()
+                                       : cam.viewport().height / 2.0 /
+                                             std::tan(cam.verticalFovDeg() / 2.0 * kDegree);
   for (const auto& d : bodies_) {
-    d->globe.cameraRelative(placeBody(frameBody_, d->which, t), frame.eye, scratch_);
+    const BodyPlacement at = placeBody(frameBody_, d->which, t);
+    d->globe.cameraRelative(at, frame.eye, scratch_);
+    const double dist = glm::length(at.centre - frame.eye);
+    const double alpha = std::asin(std::min(1.0, d->globe.body().radiusA / std::max(dist, 1.0)));
+    const double radiusPx = focal * (cam.isFisheye() ? alpha : std::tan(std::min(alpha, 1.5)));
+    const int stride = d->globe.strideFor(radiusPx);
+    std::size_t k = 0;
+    while ((1 << (k + 1)) <= stride)
+      ++k;
+    const auto [first, count] = d->ranges[k];
     glBindVertexArray(d->vao.id());
     glBindBuffer(GL_ARRAY_BUFFER, d->vbo.id());
     glBufferSubData(GL_ARRAY_BUFFER,
@@ -96,8 +125,10 @@ void BodiesPass::draw(const FrameContext& frame) {
                     static_cast<GLsizeiptr>(scratch_.size() * sizeof(float)),
                     scratch_.data());
     glBindTexture(GL_TEXTURE_2D, d->texture.id());
-    glDrawElements(
-        GL_TRIANGLES, static_cast<GLsizei>(d->globe.indices().size()), GL_UNSIGNED_INT, nullptr);
+    glDrawElements(GL_TRIANGLES,
+                   static_cast<GLsizei>(count),
+                   GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(first * sizeof(unsigned)));
   }
   glBindVertexArray(0);
   glBindBuffer(GL_ARRAY_BUFFER, 0);

@@ -10,7 +10,9 @@
  *
  * Precision: every frame each body's vertices are made camera-relative on the CPU in double
  * (DistantGlobe::cameraRelative: the body's centre minus the eye, plus the rotated offset) and
- * uploaded as floats (8,385 vertices, 268 KB a body a frame); the shader adds nothing large. In the
+ * uploaded as floats (8,385 vertices, 268 KB a body a frame); the shader adds nothing large. The
+ * triangles drawn are the grid's coarsest within 0.1 pixel of the ellipsoid at the body's size in
+ * the image (DistantGlobe::strideFor: 256 triangles for a few pixels, 16,256 at the finest). In the
  * direct dome they go through the fisheye map (shaders/body.vert, TELLUS_FISHEYE); in the cube
  * faces each face draws them with its own camera.
  *
@@ -26,6 +28,7 @@
 #include <tellus/planet/SceneBodies.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
 
+#include <array>
 #include <expected>
 #include <memory>
 #include <string>
@@ -55,6 +58,8 @@ private:
     GlBuffer vbo{NoCreate};
     GlBuffer ibo{NoCreate};
     GlVertexArray vao{NoCreate};
+    /** Per stride 1, 2, 4, 8 (DistantGlobe::indices): the first index and the count in ibo. */
+    std::array<std::pair<std::size_t, std::size_t>, 4> ranges{};
   };
   BodiesPass() = default;
 

@@ -16,7 +16,8 @@
  * its ellipsoid (planetographic latitudes, as its tiles), with the uv of an equirectangular global
  * image (north up, -180 at the left). Model only what the scene needs: the other body is at least
  * ~350,000 km away whenever the camera is near its own body, where a 128 x 64 grid's chords are
- * under 1.2e-3 of its radius (a 0.05 pixel error for a 40-pixel disc); flying close to it means
+ * under 1.2e-3 of its radius (a 0.05 pixel error for a 40-pixel disc), and a disc a few pixels
+ * wide takes a coarser grid of the same vertices (strideFor); flying close to it means
  * orbiting it instead (the camera's body changes: its quadtree, terrain and layers take over).
  * Its vertices are made camera-relative on the CPU in double each frame (centre - eye, plus the
  * rotated body-fixed offset) and only then narrowed to float: nothing Earth-Moon-sized reaches a
@@ -61,8 +62,14 @@ public:
   const Body& body() const noexcept { return body_; }
   /** Vertices (slices + 1) x (stacks + 1), rows from the south pole. */
   std::size_t vertexCount() const noexcept { return fixed_.size(); }
-  /** Triangles' vertex indices (the poles' degenerate ones left out). */
-  const std::vector<unsigned>& indices() const noexcept { return indices_; }
+  /** Triangles' vertex indices (the poles' degenerate ones left out) of the grid taken every
+   * `stride` vertices each way: 1, 2, 4 or 8 while that leaves at least 8 x 4 quads (a coarser
+   * stride gives stride 1's). The vertices are the same for every stride. */
+  const std::vector<unsigned>& indices(int stride = 1) const noexcept;
+  /** The coarsest stride whose chords stay within 0.1 pixel of the ellipsoid on a disc of
+   * `radiusPx` pixels (n slices miss it by R (1 - cos(pi / n)), about R pi^2 / (2 n^2)): a body a
+   * few pixels wide is drawn with 16 x 8 quads, not 128 x 64. */
+  int strideFor(double radiusPx) const noexcept;
   /** Per vertex 8 floats: the position relative to `eye` (the scene's frame, metres), the
    * ellipsoid's unit normal in the scene's frame, the uv. Written into `out` (resized). The
    * subtraction is in double; only its result is narrowed. */
@@ -79,7 +86,8 @@ private:
   std::vector<glm::dvec3> fixed_;
   std::vector<glm::dvec3> normals_;
   std::vector<glm::vec2> uv_;
-  std::vector<unsigned> indices_;
+  int slices_ = 0;
+  std::vector<std::vector<unsigned>> indices_; ///< [k]: stride 2^k
 };
 
 } // namespace tellus::planet
