@@ -127,4 +127,15 @@ CameraPose flightPoseOver(const FlightPath& path, double timeS, const Body& orbi
   return poseOf(e, orbited);
 }
 
+CameraPose
+poseOverOtherBody(const CameraPose& pose, const Body& from, const Body& to, double unixSeconds) {
+  if (from.name == to.name) return pose;
+  const Geodesy g(from);
+  const Camera cam(g, pose, Viewport{64, 64}, 45.0);
+  const BodyPlacement p = placeBody(*sceneBodyOf(to), *sceneBodyOf(from), unixSeconds);
+  return poseOf(
+      {p.centre + p.rotation * cam.position(), p.rotation * cam.forward(), p.rotation * cam.up()},
+      to);
+}
+
 } // namespace tellus::planet

@@ -148,4 +148,33 @@ hold Escape
 for _ in $(seq 100); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
 wait "$pid" || fail "tellus view --animate exited with $?: $(cat "$work/anim.txt")"
 pid=
+# Several bodies (issue 26): with --bodies moon, B orbits the Moon with the eye kept where it was
+# (the Earth's day side, now the Moon's scene body, still fills the middle of the view), and B
+# again the Earth; each renderer says what it orbits.
+rm -f "$work"/tellus-*.png
+"$tellus" view --no-atmosphere --no-stars --cache "$work/cache" --size 160x100 --camera -20,122,2e7 \
+  --time 2024-01-18T03:52:00Z --bodies moon >"$work/bodies.txt" 2>&1 &
+pid=$!
+orbiting() { # waits for the n-th renderer's line, checks it, and finds its window
+  for _ in $(seq 300); do [ "$(grep -c "^tellus view: orbiting" "$work/bodies.txt")" -ge "$1" ] && break; sleep 0.1; done
+  [ "$(grep "^tellus view: orbiting" "$work/bodies.txt" | sed -n "$1p")" = "tellus view: orbiting $2" ] ||
+    fail "B: want 'orbiting $2': $(cat "$work/bodies.txt")"
+  win=$(timeout 30 xdotool search --sync --pid "$pid" --name '^tellus') || fail "no window: $(cat "$work/bodies.txt")"
+  win=$(echo "$win" | tail -1)
+  xdotool windowfocus --sync "$win" || true
+  for _ in $(seq 300); do xdotool getwindowname "$win" | grep -q " fps " && break; sleep 0.1; done
+}
+orbiting 1 "earth; B orbits moon"
+xdotool key --window "$win" b
+orbiting 2 "moon; B orbits earth"
+shot 1
+rgb=$(python3 "$here/png_pixels.py" "$work/tellus-1.png" 80 50)
+python3 -c "import sys; r,g,b=map(int,sys.argv[1:]); sys.exit(0 if b > r and b > 20 else 1)" $rgb ||
+  fail "the Earth is not in the middle after B: $rgb"
+xdotool key --window "$win" b
+orbiting 3 "earth; B orbits moon"
+hold Escape
+for _ in $(seq 100); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+wait "$pid" || fail "tellus view --bodies exited with $?: $(cat "$work/bodies.txt")"
+pid=
 echo "view CLI: ok"

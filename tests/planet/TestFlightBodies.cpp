@@ -117,3 +117,19 @@ TEST(FlightBodies, AFlightFromTheEarthToTheMoonIsContinuousInTheCommonFrame) {
   const Camera atMoon(moon, p.keyframes()[1].pose, Viewport{64, 64}, 45.0);
   EXPECT_GT(glm::dot(eye(10.0).forward(), m.rotation * atMoon.forward()), std::cos(1e-6));
 }
+
+TEST(FlightBodies, ChangingTheBodyOrbitedKeepsTheEye) {
+  // view's B: 20,000 km over the Earth, then over the Moon, then back: the same eye each time.
+  const CameraPose start{20.0, 10.0, 2.0e7, 30.0, 40.0};
+  const CameraPose onMoon = poseOverOtherBody(start, earthBody(), moonBody(), kUtcS);
+  const BodyPlacement e = placeBody(astro::EphemerisBody::moon, astro::EphemerisBody::earth, kUtcS);
+  EXPECT_LT(
+      glm::length(eyeOf(moonBody(), onMoon) - (e.centre + e.rotation * eyeOf(earthBody(), start))),
+      1e-3);
+  const CameraPose back = poseOverOtherBody(onMoon, moonBody(), earthBody(), kUtcS);
+  EXPECT_NEAR(back.latDeg, start.latDeg, 1e-9);
+  EXPECT_NEAR(back.lonDeg, start.lonDeg, 1e-9);
+  EXPECT_NEAR(back.altitudeM, start.altitudeM, 1e-4);
+  EXPECT_NEAR(back.headingDeg, start.headingDeg, 1e-7);
+  EXPECT_NEAR(back.tiltDeg, start.tiltDeg, 1e-7);
+}

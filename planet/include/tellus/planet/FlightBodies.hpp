@@ -34,4 +34,9 @@ std::optional<std::string> flightBodiesProblem(const FlightPath& path, const Bod
  * flightBodiesProblem). */
 CameraPose flightPoseOver(const FlightPath& path, double timeS, const Body& orbited);
 
+/** The same eye (position and view) as `pose` over `from`, as a pose over `to`, at a UTC instant
+ * (POSIX seconds): `view`'s key that changes the body orbited. Both need an ephemeris. */
+CameraPose
+poseOverOtherBody(const CameraPose& pose, const Body& from, const Body& to, double unixSeconds);
+
 } // namespace tellus::planet
