@@ -7,8 +7,12 @@
 #include <tellus/planet/Ephemeris.hpp>
 #include <tellus/planet/IauRotation.hpp>
 #include <tellus/planet/Moon.hpp>
+#include <tellus/planet/SceneBodies.hpp>
 
 #include <benchmark/benchmark.h>
+
+#include <cstdint>
+#include <vector>
 
 using namespace tellus::planet;
 using namespace tellus::planet::astro;
@@ -55,6 +59,31 @@ void BM_SunDirectionInBody(benchmark::State& state) {
   state.SetLabel(ephemerisBodyName(body));
 }
 BENCHMARK(BM_SunDirectionInBody)->Arg(0)->Arg(1)->Arg(2);
+
+/** A scene body's CPU work a frame (issue 26, planet/gl/src/BodiesPass.cpp): the Moon placed in
+ * the Earth's frame, then its 128 x 64 globe's 8,385 vertices made camera-relative in double. */
+void BM_PlaceMoonInTheEarthsFrame(benchmark::State& state) {
+  double t = kStart;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(placeBody(EphemerisBody::earth, EphemerisBody::moon, t));
+    t += 60.0;
+  }
+}
+BENCHMARK(BM_PlaceMoonInTheEarthsFrame);
+
+void BM_DistantGlobeCameraRelative(benchmark::State& state) {
+  const DistantGlobe moon(moonBody());
+  const BodyPlacement at = placeBody(EphemerisBody::earth, EphemerisBody::moon, kStart);
+  std::vector<float> out;
+  glm::dvec3 eye(7.0e6, 0.0, 0.0);
+  for (auto _ : state) {
+    moon.cameraRelative(at, eye, out);
+    benchmark::DoNotOptimize(out.data());
+    eye.y += 1.0;
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(moon.vertexCount()));
+}
+BENCHMARK(BM_DistantGlobeCameraRelative);
 
 } // namespace
 

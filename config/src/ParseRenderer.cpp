@@ -220,6 +220,7 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
                "atmosphere",
                "earth",
                "body",
+               "bodies",
                "geoid",
                "layers",
                "overlays_per_pass",
@@ -253,6 +254,7 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
     g.earth = choice(r, *v, m.path("earth"), {"wgs84", "sphere"}) == 0 ? EarthShape::Wgs84
                                                                        : EarthShape::Sphere;
   if (auto v = m.get("body")) g.body = text(r, *v, m.path("body"));
+  if (auto v = m.get("bodies")) readNames(r, *v, m.path("bodies"), g.bodies);
   if (auto v = m.get("geoid")) g.geoid = boolean(r, *v, m.path("geoid"));
   if (auto v = m.get("overlays_per_pass"))
     g.overlaysPerPass = int32(r, *v, m.path("overlays_per_pass"));

@@ -66,6 +66,22 @@ std::optional<ValidationIssue> checkBodies(const Config& c) {
     return ValidationIssue{"renderer.body",
                            "renderer",
                            "no body named '" + c.renderer.body + "' (known: " + known(c) + ")"};
+  // renderer.bodies: only bodies with an ephemeris can share a scene (planet/SceneBodies.hpp).
+  for (std::size_t i = 0; i < c.renderer.bodies.size(); ++i) {
+    const std::string& b = c.renderer.bodies[i];
+    if (b != "earth" && b != "moon" && b != "mars")
+      return ValidationIssue{"renderer.bodies[" + std::to_string(i) + "]",
+                             "renderer",
+                             "'" + b +
+                                 "' cannot share a scene: only earth, moon and mars have an "
+                                 "ephemeris"};
+    const std::string& orbited = c.renderer.body;
+    if (orbited != "earth" && orbited != "moon" && orbited != "mars")
+      return ValidationIssue{"renderer.bodies",
+                             "renderer",
+                             "the body orbited ('" + orbited +
+                                 "') has no ephemeris: no other body can join it"};
+  }
   for (std::size_t i = 0; i < c.layers.size(); ++i) {
     const LayerConfig& l = c.layers[i];
     if (!c.knowsBody(l.dataset.body))

@@ -1,3 +1,4 @@
+#include <tellus/planet/Body.hpp>
 #include <tellus/planet/FlightPath.hpp>
 #include <tellus/planet/SceneTime.hpp>
 
@@ -87,6 +88,12 @@ std::expected<Keyframe, std::string> readKeyframe(const Json& object, std::size_
       } else {
         return keyframeError(index, "expected \"utc\": an ISO 8601 UTC time or POSIX seconds");
       }
+      continue;
+    }
+    if (key == "body") {
+      if (!value.is_string() || !builtinBody(value.get<std::string>()))
+        return keyframeError(index, "expected \"body\": earth, moon or mars");
+      k.body = value.get<std::string>();
       continue;
     }
     if (key == "times") {

@@ -148,4 +148,59 @@ hold Escape
 for _ in $(seq 100); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
 wait "$pid" || fail "tellus view --animate exited with $?: $(cat "$work/anim.txt")"
 pid=
+# Several bodies (issue 26): with --bodies moon, B orbits the Moon with the eye kept where it was
+# (the Earth's day side, the Indian Ocean, now the Moon's scene body, fills the middle), and B
+# again the Earth; each renderer says what it orbits.
+rm -f "$work"/tellus-*.png
+"$tellus" view --no-atmosphere --no-stars --cache "$work/cache" --size 160x100 --camera -20,95,2e7 \
+  --time 2024-01-18T03:52:00Z --bodies moon >"$work/bodies.txt" 2>&1 &
+pid=$!
+orbiting() { # waits for the n-th renderer's line, checks it, and finds its window
+  for _ in $(seq 300); do [ "$(grep -c "^tellus view: orbiting" "$work/bodies.txt")" -ge "$1" ] && break; sleep 0.1; done
+  [ "$(grep "^tellus view: orbiting" "$work/bodies.txt" | sed -n "$1p")" = "tellus view: orbiting $2" ] ||
+    fail "B: want 'orbiting $2': $(cat "$work/bodies.txt")"
+  for _ in $(seq 300); do # (the last renderer's window may still be going)
+    win=$(xdotool search --pid "$pid" --name '^tellus' 2>/dev/null | tail -1 || true)
+    [ -n "$win" ] && xdotool getwindowname "$win" 2>/dev/null | grep -q " fps " && break
+    sleep 0.1
+  done
+  xdotool windowfocus --sync "$win" 2>/dev/null || true
+}
+press_b() { # B until the n-th renderer says what it orbits (a press lost to a closing window)
+  for _ in $(seq 30); do
+    [ "$(grep -c "^tellus view: orbiting" "$work/bodies.txt")" -ge "$1" ] && return 0
+    xdotool key --window "$win" b 2>/dev/null || true
+    for _ in $(seq 30); do [ "$(grep -c "^tellus view: orbiting" "$work/bodies.txt")" -ge "$1" ] && return 0; sleep 0.1; done
+  done
+}
+orbiting 1 "earth; B orbits moon"
+shot 1
+mv "$work/tellus-1.png" "$work/before-b.png"
+press_b 2
+orbiting 2 "moon; B orbits earth"
+shot 1
+# The middle 16 x 16 pixels before and after B: the same ocean (the quadtree's tiles, then the
+# Moon's scene body with the same map), lit, within what their texel sampling leaves.
+PYTHONPATH="$here" python3 - "$work/before-b.png" "$work/tellus-1.png" <<'PY' ||
+import sys
+from png_pixels import pixels
+def mean(path):
+    w, h, rows, n = pixels(path)
+    s = [0, 0, 0]
+    for y in range(h // 2 - 8, h // 2 + 8):
+        for x in range(w // 2 - 8, w // 2 + 8):
+            for c in range(3):
+                s[c] += rows[y][x * n + c]
+    return [v / 256.0 for v in s]
+a, b = mean(sys.argv[1]), mean(sys.argv[2])
+print("middle before B %s, after %s" % (a, b))
+assert a[2] > 8 and b[2] > 8 and all(abs(p - q) < 8 for p, q in zip(a, b)), (a, b)
+PY
+  fail "the eye moved with B"
+press_b 3
+orbiting 3 "earth; B orbits moon"
+hold Escape
+for _ in $(seq 100); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+wait "$pid" || fail "tellus view --bodies exited with $?: $(cat "$work/bodies.txt")"
+pid=
 echo "view CLI: ok"

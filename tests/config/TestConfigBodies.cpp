@@ -131,3 +131,23 @@ TEST(ConfigBodies, BadBodiesAreRefused) {
   EXPECT_EQ(twice.key, "bodies[1].name");
   EXPECT_GT(twice.line, 0);
 }
+
+TEST(ConfigBodies, TheScenesOtherBodiesAreListedAndUnknownOnesRefused) {
+  const auto c = parse(std::string(kLayers) + "renderer:\n  body: moon\n  bodies: [earth, moon]\n");
+  ASSERT_TRUE(c) << c.error().toString();
+  EXPECT_EQ(c->renderer.bodies, (std::vector<std::string>{"earth", "moon"}));
+  EXPECT_TRUE(parse(std::string(kLayers))->renderer.bodies.empty());
+
+  const ConfigError e = errorOf(std::string(kLayers) + "renderer:\n  bodies: [moon, pluto]\n");
+  EXPECT_EQ(e.key, "renderer.bodies[1]");
+  EXPECT_EQ(e.line, 18);
+  EXPECT_NE(e.message.find("'pluto' cannot share a scene"), std::string::npos) << e.message;
+  // A configured body has no orbit: it can neither join a scene nor be orbited in one.
+  const std::string vesta = "bodies:\n  - name: vesta\n    radii: 262700\n";
+  EXPECT_EQ(errorOf(std::string(kLayers) + vesta + "renderer:\n  bodies: [vesta]\n").key,
+            "renderer.bodies[0]");
+  const ConfigError o =
+      errorOf(std::string(kLayers) + vesta + "renderer:\n  body: vesta\n  bodies: [moon]\n");
+  EXPECT_EQ(o.key, "renderer.bodies");
+  EXPECT_NE(o.message.find("no ephemeris"), std::string::npos) << o.message;
+}

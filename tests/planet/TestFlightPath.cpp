@@ -27,7 +27,7 @@ FlightPath path(const std::string& json) {
 }
 
 Keyframe key(double t, double lat, double lon, double alt, double heading = 0, double tilt = 0) {
-  return {t, {lat, lon, alt, heading, tilt}, {}, std::nullopt};
+  return {t, {lat, lon, alt, heading, tilt}, {}, std::nullopt, {}};
 }
 
 FlightPath flight(std::vector<Keyframe> keys) {

@@ -73,7 +73,7 @@ void TexturePool::release(NodeTexture texture) {
   // else it is deleted here
 }
 
-GlTexture makeGlobalTexture(const std::filesystem::path& image) {
+GlTexture makeGlobalTexture(const std::filesystem::path& image, std::array<std::uint8_t, 3> flat) {
   MipLevel base;
   if (!image.empty()) {
     if (auto img = readImageFile(image)) {
@@ -89,7 +89,7 @@ GlTexture makeGlobalTexture(const std::filesystem::path& image) {
   }
   if (base.rgba.empty()) {
     base.width = base.height = 1;
-    base.rgba = {10, 20, 60, 255};
+    base.rgba = {flat[0], flat[1], flat[2], 255};
   }
   const auto levels = buildMips(std::move(base));
   GlTexture texture;

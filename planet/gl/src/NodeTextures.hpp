@@ -8,6 +8,7 @@
 
 #include "GlObjects.hpp"
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -71,8 +72,9 @@ private:
 };
 
 /** The global texture from an equirectangular JPEG/PNG of the whole globe (north up, -180 at the
- * left; CPU mip levels, wrapping east-west); a flat dark blue when the path is empty or the file
- * unreadable. Left bound to GL_TEXTURE_2D. */
-GlTexture makeGlobalTexture(const std::filesystem::path& image);
+ * left; CPU mip levels, wrapping east-west); `flat` (a dark blue) when the path is empty or the
+ * file unreadable. Left bound to GL_TEXTURE_2D. */
+GlTexture makeGlobalTexture(const std::filesystem::path& image,
+                            std::array<std::uint8_t, 3> flat = {10, 20, 60});
 
 } // namespace tellus::planet

@@ -3,6 +3,7 @@
 // the thread that created the Renderer.
 
 #include "AtmospherePass.hpp"
+#include "BodiesPass.hpp"
 #include "DrawList.hpp"
 #include "FrameUpdate.hpp"
 #include "GlobePass.hpp"
@@ -113,6 +114,15 @@ std::string Renderer::Impl::openGl() {
     scene->addPass(std::move(*stars));
   }
   scene->addPass(std::move(*globe));
+  if (!opt.sceneBodies.empty()) { // after the globe, under its air (BodiesPass.hpp)
+    const auto frameBody = sceneBodyOf(geodesy.body());
+    if (!frameBody)
+      return "body '" + geodesy.body().name + "' has no ephemeris: no other body can join it";
+    auto bodies = BodiesPass::create(
+        gl, opt.dome && opt.dome->method == DomeMethod::Direct, *frameBody, opt.sceneBodies);
+    if (!bodies) return bodies.error();
+    scene->addPass(std::move(*bodies));
+  }
   if (opt.atmosphere) {
     auto air = AtmospherePass::create(gl,
                                       opt.atmosphere->parameters,

@@ -434,17 +434,25 @@ std::uint64_t ViewerLoop::run() {
     // pressed before the first frame wait for it (the layers are known from then on).
     bool layersChanged = false;
     bool shot = false;
+    std::string nextBody;
     if (frames_ > 0) {
       for (const int key : input_.keys) {
         if (key == GLFW_KEY_P)
           shot = true;
         else if (key == GLFW_KEY_ESCAPE)
           glfwSetWindowShouldClose(window_, GLFW_TRUE);
+        else if (key == GLFW_KEY_B && options_.bodies.size() > 1 && options_.end != nullptr)
+          nextBody = options_.bodies[1];
         else if (!timeKey(key))
           layersChanged = valueKey(renderer_, selected_, key) ||
                           animationKey(renderer_, selected_, key) || layerKey(key) || layersChanged;
       }
       input_.keys.clear();
+    }
+    if (!nextBody.empty()) { // B: the caller orbits the next body from here
+      *options_.end = {
+          nextBody, pose_, sceneClock_ ? std::optional(sceneClock_->time()) : std::nullopt};
+      return frames_;
     }
     // The scene's time with the wall clock; at more than 10x real time the sun moves visibly:
     // every frame is drawn, not twice a second.

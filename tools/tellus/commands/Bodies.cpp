@@ -1,5 +1,7 @@
 #include "Bodies.hpp"
 
+#include <algorithm>
+
 namespace tellus::commands {
 
 std::expected<std::string, std::string> chooseBody(const cli::Args& a, const Config* config) {
@@ -16,6 +18,43 @@ std::expected<std::string, std::string> chooseBody(const cli::Args& a, const Con
     for (const auto& b : config->bodies)
       list += ", " + b.name;
   return std::unexpected("--body must name a body (" + list + "), got '" + name + "'");
+}
+
+std::expected<std::vector<std::string>, std::string> chooseSceneBodies(const cli::Args& a,
+                                                                       const Config* config) {
+  std::vector<std::string> names;
+  if (const auto list = a.get("bodies")) {
+    std::string rest = *list;
+    for (std::size_t at = 0; at <= rest.size();) {
+      const std::size_t comma = std::min(rest.find(',', at), rest.size());
+      names.push_back(rest.substr(at, comma - at));
+      at = comma + 1;
+    }
+  } else if (config != nullptr) {
+    names = config->renderer.bodies;
+  }
+  for (const std::string& n : names)
+    if (n != "earth" && n != "moon" && n != "mars")
+      return std::unexpected("--bodies must list earth, moon or mars (the bodies with an "
+                             "ephemeris), got '" +
+                             n + "'");
+  return names;
+}
+
+void addSceneBodies(planet::RendererOptions& ro,
+                    const std::vector<std::string>& names,
+                    const std::filesystem::path& dataDir,
+                    EarthModel earth) {
+  for (const std::string& n : names) {
+    planet::RendererOptions::SceneBody b{resolveBody(n, nullptr, earth), {}, {128, 128, 128}};
+    const char* image = n == "earth"  ? "bmng_2048x1024.jpg"
+                        : n == "moon" ? "moon_2048x1024.jpg"
+                                      : "mars_512x256.jpg";
+    if (n == "earth") b.colour = {10, 20, 60};
+    if (n == "mars") b.colour = {170, 100, 60};
+    if (std::filesystem::exists(dataDir / image)) b.globalImage = dataDir / image;
+    ro.sceneBodies.push_back(std::move(b));
+  }
 }
 
 planet::Body bodyFromConfig(const BodyConfig& c) {

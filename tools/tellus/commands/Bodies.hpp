@@ -12,11 +12,14 @@
 #include <tellus/config/Config.hpp>
 #include <tellus/planet/Body.hpp>
 #include <tellus/planet/Geodesy.hpp>
+#include <tellus/planet_gl/Renderer.hpp>
 
 #include <atomic>
 #include <expected>
+#include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace tellus::commands {
 
@@ -26,6 +29,19 @@ inline constexpr const char* kBareLayer = "tellus.bare";
 /** --body, else config's renderer.body (config may be null: --server without --config), checked
  * against the built-in and configured bodies; the usage error's text when unknown. */
 std::expected<std::string, std::string> chooseBody(const cli::Args& a, const Config* config);
+
+/** The scene's other bodies (issue 26): --bodies (comma-separated), else the configuration's
+ * renderer.bodies (config may be null); each earth, moon or mars, the bodies with an ephemeris;
+ * the usage error's text otherwise. */
+std::expected<std::vector<std::string>, std::string> chooseSceneBodies(const cli::Args& a,
+                                                                       const Config* config);
+
+/** Each body named as one of the renderer's scene bodies, with its bundled global image from
+ * `dataDir` when there (the Blue Marble, the Moon's and Mars's maps; else a flat colour). */
+void addSceneBodies(planet::RendererOptions& ro,
+                    const std::vector<std::string>& names,
+                    const std::filesystem::path& dataDir,
+                    EarthModel earth);
 
 /** The body named (known to chooseBody); the Earth as the sphere when earth is Sphere. */
 planet::Body resolveBody(const std::string& name, const Config* config, EarthModel earth);

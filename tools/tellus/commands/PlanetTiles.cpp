@@ -258,6 +258,12 @@ bool setBody(const cli::Args& a, const Config* config, PlanetTiles& t, const cha
     return false;
   }
   t.body = *body;
+  auto others = chooseSceneBodies(a, config);
+  if (!others) {
+    std::fprintf(stderr, "tellus %s: %s\n", cmd, others.error().c_str());
+    return false;
+  }
+  t.sceneBodies = std::move(*others);
   if (config != nullptr)
     if (const BodyConfig* b = config->body(t.body)) t.configuredBody = *b;
   return true;

@@ -40,6 +40,8 @@ struct PlanetTiles {
   std::string body = "earth";
   std::optional<BodyConfig> configuredBody; ///< when body is one of the configuration's
   std::unique_ptr<BareLayerSource> bare;    ///< when no imagery layer lies on the body
+  /** The scene's other bodies (--bodies, else renderer.bodies; issue 26): earth, moon, mars. */
+  std::vector<std::string> sceneBodies;
   /** The body as the renderer's Geodesy takes it (the Earth in the model given). */
   planet::Body bodyFor(EarthModel model) const {
     if (configuredBody) return bodyFromConfig(*configuredBody);

@@ -10,6 +10,7 @@
 
 #include <tellus/cli/Values.hpp>
 #include <tellus/planet/Camera.hpp>
+#include <tellus/planet/FlightBodies.hpp>
 #include <tellus/planet/FlightPath.hpp>
 #include <tellus/planet_gl/RenderStatsJson.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
@@ -314,10 +315,11 @@ int renderFlight(const RenderArgs& ra,
     char name[32];
     std::snprintf(name, sizeof name, "frame_%05lld.png", static_cast<long long>(n % count));
     if (!ra.probeFrames.empty() && n > 0 && n < count) { // before the frame changes anything
-      r.redrawLast(flight.poseAt(at));
+      r.redrawLast(planet::flightPoseOver(flight, at, r.geodesy().body()));
       if (!writePng(fs::path(ra.probeFrames) / name, r)) return kExitError;
     }
-    const bool complete = session.renderOne(flight.poseAt(at), ra.waitSeconds, !ra.waitComplete);
+    const bool complete = session.renderOne(
+        planet::flightPoseOver(flight, at, r.geodesy().body()), ra.waitSeconds, !ra.waitComplete);
     allComplete = allComplete && complete;
     if (ra.waitComplete && !complete) {
       session.writeStats(session.secondsSince(), false);
@@ -392,6 +394,16 @@ int runRender(const cli::Args& a) {
   if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg";
       tiles->body == "earth" && fs::exists(global))
     ro.globalImage = global;
+  if (ra->flight) { // keyframes on other bodies (issue 26): flown in the common frame, drawn
+    if (auto bad = planet::flightBodiesProblem(*ra->flight, geodesy.body()))
+      return usage(bad->c_str(), "");
+    for (const planet::Keyframe& k : ra->flight->keyframes())
+      if (!k.body.empty() && k.body != tiles->body &&
+          std::find(tiles->sceneBodies.begin(), tiles->sceneBodies.end(), k.body) ==
+              tiles->sceneBodies.end())
+        tiles->sceneBodies.push_back(k.body);
+  }
+  addSceneBodies(ro, tiles->sceneBodies, dataDir(a), ra->earth.value_or(tiles->earth));
   auto renderer = planet::Renderer::create(*tiles->source, geodesy, ro);
   if (!renderer) {
     std::fprintf(stderr, "tellus render: %s\n", renderer.error().c_str());

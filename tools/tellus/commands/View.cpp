@@ -7,12 +7,17 @@
 #include "PlanetTiles.hpp"
 
 #include <tellus/cli/Values.hpp>
+#include <tellus/planet/FlightBodies.hpp>
+#include <tellus/planet/SceneTime.hpp>
+#include <tellus/planet/StarCatalogue.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
 #include <tellus/planet_gl/Viewer.hpp>
 
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -62,7 +67,16 @@ int parseViewArgs(const cli::Args& a,
   return kExitOk;
 }
 
-int runView(const cli::Args& a) {
+/** One renderer's view of one body (issue 26: B ends it to orbit the next body; `next` then says
+ * which, with the other bodies and the eye's pose over it). */
+struct NextBody {
+  std::string body;
+  std::vector<std::string> others;
+  planet::CameraPose pose;
+  std::optional<double> sceneTime;
+};
+
+int viewBody(const cli::Args& a, NextBody& next) {
   planet::CameraPose pose{20.0, 10.0, 2.0e7, 0.0, 0.0};
   planet::RendererOptions ro;
   ro.width = 1280;
@@ -91,6 +105,7 @@ int runView(const cli::Args& a) {
       tiles->body == "earth" && fs::exists(global))
     ro.globalImage = global;
   const Geodesy geodesy(tiles->bodyFor(earth->value_or(tiles->earth)));
+  addSceneBodies(ro, tiles->sceneBodies, dataDir(a), earth->value_or(tiles->earth));
   auto renderer = planet::Renderer::create(*tiles->source, geodesy, ro);
   if (!renderer) {
     std::fprintf(stderr, "tellus view: %s\n", renderer.error().c_str());
@@ -101,6 +116,12 @@ int runView(const cli::Args& a) {
   vo.start = pose;
   vo.layerTimes = tiles->layerTimes;
   vo.sceneTime = ro.timeUnixSeconds;
+  // B: the scene's bodies in turn, this one first (issue 26).
+  vo.bodies = {tiles->body};
+  for (const std::string& b : tiles->sceneBodies)
+    if (b != tiles->body) vo.bodies.push_back(b);
+  planet::ViewerOptions::End end;
+  vo.end = &end;
   std::printf("tellus view: drag to move, wheel to zoom, W/S tilt, A/D heading, R reset, "
               "P screenshot, Esc quits; time: L faster, H slower, J backwards, K pause, N now%s\n",
               ro.overlays.empty() ? ""
@@ -108,9 +129,49 @@ int runView(const cli::Args& a) {
   if (!animations->empty())
     std::printf("tellus view: --animate: Space plays or pauses, [ ] step the animated layer\n");
   std::fflush(stdout);
+  if (vo.bodies.size() > 1)
+    std::printf(
+        "tellus view: orbiting %s; B orbits %s\n", tiles->body.c_str(), vo.bodies[1].c_str());
+  std::fflush(stdout);
   const auto frames = planet::runViewer(**renderer, vo);
   std::printf("tellus view: %llu frames\n", static_cast<unsigned long long>(frames));
+  if (!end.nextBody.empty()) {
+    const planet::Body to = resolveBody(end.nextBody, nullptr, earth->value_or(tiles->earth));
+    next.body = end.nextBody;
+    next.others.assign(vo.bodies.begin(), vo.bodies.end());
+    std::erase(next.others, end.nextBody);
+    next.sceneTime = end.sceneTime;
+    next.pose = planet::poseOverOtherBody(
+        end.pose, geodesy.body(), to, end.sceneTime.value_or(planet::kJ2000UnixSeconds));
+  }
   return kExitOk;
+}
+
+/** The view, once per body orbited: B makes the next body's renderer with the eye kept. */
+int runView(const cli::Args& first) {
+  cli::Args a = first;
+  for (;;) {
+    NextBody next;
+    if (const int rc = viewBody(a, next); rc != kExitOk || next.body.empty()) return rc;
+    char camera[160];
+    std::snprintf(camera,
+                  sizeof camera,
+                  "%.17g,%.17g,%.17g,%.17g,%.17g",
+                  next.pose.latDeg,
+                  next.pose.lonDeg,
+                  next.pose.altitudeM,
+                  next.pose.headingDeg,
+                  next.pose.tiltDeg);
+    std::string others;
+    for (const std::string& b : next.others)
+      others += (others.empty() ? "" : ",") + b;
+    for (const char* o : {"body", "bodies", "camera", "time"})
+      a.options.erase(o);
+    a.options.emplace("body", next.body);
+    a.options.emplace("bodies", others);
+    a.options.emplace("camera", camera);
+    if (next.sceneTime) a.options.emplace("time", planet::formatSceneTime(*next.sceneTime));
+  }
 }
 
 } // namespace

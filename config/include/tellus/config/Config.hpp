@@ -200,6 +200,11 @@ struct RendererSettings {
   /** YAML `renderer.body`: the body the renderer shows (a built-in or a configured one); the
    * renderer draws only the layers on it (LayerConfig::dataset.body). --body overrides it. */
   std::string body = "earth";
+  /** YAML `renderer.bodies`: the other bodies the scene shows beside the body orbited, each placed
+   * by the ephemeris at the scene's time (issue 26, docs/design/bodies.md "Several bodies"):
+   * earth, moon or mars (the bodies with an ephemeris); the orbited body may be listed (skipped).
+   * Empty: one body. */
+  std::vector<std::string> bodies;
   double lodThreshold = 1.0;                  ///< texel-to-pixel threshold, 0.05 - 64
   int meshSize = 33;                          ///< vertices along a node's edge, 2^n + 1 in [3, 257]
   double fovDeg = 45.0;                       ///< vertical field of view, (1, 170)

@@ -14,7 +14,8 @@
  * heading and tilt (degrees) are 0 when left out; "times" and "utc" are optional. "utc" is the
  * scene's time (issue 23: the sun, the stars) at that keyframe, an ISO 8601 UTC string
  * (SceneTime.hpp; not "now": a flight is reproducible) or POSIX seconds; "time" is already the
- * flight's own clock, hence the other name. Any other key is an error,
+ * flight's own clock, hence the other name. "body" (optional) names the built-in body the
+ * keyframe's lat, lon and alt refer to (FlightBodies.hpp). Any other key is an error,
  * as is a value out of range (lat [-90, 90], alt [-11000, 1e10], tilt [0, 180]) or a time that
  * does not increase.
  *
@@ -51,6 +52,9 @@ struct Keyframe {
   std::map<std::string, std::string> layerTimes;
   /** "utc": the scene's time at this keyframe, UTC as POSIX seconds; nullopt: none given. */
   std::optional<double> sceneTimeUnixSeconds;
+  /** "body": the built-in body ("earth", "moon", "mars") the pose's coordinates refer to; "": the
+   * body the flight is rendered over (issue 26; FlightBodies.hpp flies between bodies). */
+  std::string body;
 };
 
 class FlightPath {

@@ -264,6 +264,17 @@ struct RendererOptions {
    * drawn into the frame after the scene (readPixels has it), bottom left or inside a dome's
    * circle, scaled by an integer factor of the frame's size. Off in the library. */
   bool legend = false;
+  /** Other bodies in the scene (issue 26, `renderer.bodies`; planet/SceneBodies.hpp): each drawn
+   * whole as a coarse globe with its global image (empty or unreadable: `colour`), placed and
+   * turned by the ephemeris at timeUnixSeconds (none: J2000.0) in the drawn body's frame, lit by
+   * the scene's sun. Only bodies with an ephemeris (earth, moon, mars) may share a scene, the drawn
+   * body too (create() refuses others); an entry naming the drawn body is skipped. */
+  struct SceneBody {
+    Body body;
+    std::filesystem::path globalImage;
+    std::array<std::uint8_t, 3> colour{128, 128, 128};
+  };
+  std::vector<SceneBody> sceneBodies;
   bool visibleWindow = false; ///< a window the user sees (`tellus view`); else hidden
   std::string windowTitle = "tellus";
 };

@@ -23,7 +23,8 @@
  * plays (issue 24; planet/gl/src/ViewerAnimation.hpp): Space plays or pauses an animated layer
  * (Renderer::animateLayer; the selected one, else the first), [ and ] step an animated selected
  * layer's animation by hand, and each animated layer's "name TIME state" joins the statistics
- * line (holding: the next time's tiles are not all there yet). The
+ * line (holding: the next time's tiles are not all there yet). B orbits the next of the scene's
+ * bodies (ViewerOptions::bodies, issue 26). The
  * statistics line (fps, nodes drawn, tiles in flight,
  * texture MB, camera, the scene's time and its pace) is drawn at the top left of the window (its
  * own 5 x 7 font, TextOverlay.cpp) and is the window title, refreshed twice a second.
@@ -54,6 +55,17 @@ struct ViewerOptions {
   /** The clock the scene's time runs with (steady() paces it, now() is N's "now"); null: the
    * system's. Tests pass a ManualClock. */
   std::shared_ptr<const Clock> clock;
+  /** Issue 26: the bodies B steps through, the orbited one first (`tellus view`: it and the
+   * scene's others); B with two or more ends the loop with `end` saying the next one, the pose and
+   * the scene's time, and the caller makes the renderer of that body (keeping the eye where it
+   * is, FlightBodies.hpp poseOverOtherBody). */
+  std::vector<std::string> bodies;
+  struct End {
+    std::string nextBody; ///< "": the window was closed (or maxFrames reached)
+    CameraPose pose;
+    std::optional<double> sceneTime;
+  };
+  End* end = nullptr;
 };
 
 /** Runs until the window closes (or maxFrames). Returns the number of frames drawn. */

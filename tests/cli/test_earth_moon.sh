@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# The Earth and the Moon in one scene on the command line (issue 26, label gl): the dome show of
+# bench/paths/earth-to-moon-dome.json (2,000 km over the Earth, then 500 km over the Moon's near
+# side at full moon, 2024-01-25 17:54 UTC: its keyframes name their body) rendered small on the
+# embedded default twice, orbiting the Earth (the Moon a coarse globe with its bundled map) and
+# orbiting the Moon (`--body moon`: its quadtree and bundled layer; the Earth the coarse globe):
+# the last frame looks straight down at the lit Moon both ways, alike; unknown bodies are
+# refused.
+# Usage: test_earth_moon.sh TELLUS
+set -euo pipefail
+tellus=$1
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+path="$here/../../bench/paths/earth-to-moon-dome.json"
+work=$(mktemp -d "${TMPDIR:-/tmp}/tellus-earth-moon.XXXXXX")
+trap '[ -n "${KEEP:-}" ] || rm -rf "$work"' EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+for scene in earth moon; do
+  "$tellus" render --cache "$work/cache" --path "$path" --frames "$work/$scene" --fps 1 \
+    --size 256x256 --dome 180 --wait-complete --no-stars --body "$scene" >"$work/out" 2>&1 ||
+    fail "render over the $scene: $(cat "$work/out")"
+  [ -f "$work/$scene/frame_00004.png" ] || fail "no frame 4 ($scene): $(ls "$work/$scene")"
+done
+# The mean of the central 32 x 32 pixels of the last frame: the lit Moon, as bright and coloured
+# whichever body is orbited (the coarse globe against the quadtree, the same map).
+PYTHONPATH="$here" python3 - "$work/earth/frame_00004.png" "$work/moon/frame_00004.png" <<'PY' ||
+import sys
+from png_pixels import pixels
+
+def centre(path):
+    w, h, rows, n = pixels(path)
+    s = [0, 0, 0]
+    for y in range(h // 2 - 16, h // 2 + 16):
+        for x in range(w // 2 - 16, w // 2 + 16):
+            for c in range(3):
+                s[c] += rows[y][x * n + c]
+    return [v / 1024.0 for v in s]
+
+earth, moon = centre(sys.argv[1]), centre(sys.argv[2])
+print("centre over the Earth %s, over the Moon %s" % (earth, moon))
+assert min(earth) > 40 and min(moon) > 40, (earth, moon)
+assert all(abs(a - b) < 20 for a, b in zip(earth, moon)), (earth, moon)
+PY
+  fail "the Moon at the end of the flight"
+rc=0
+"$tellus" render --cache "$work/cache" --camera 0,0,2e7 --size 64x64 --out "$work/x.png" \
+  --bodies moon,pluto 2>"$work/err" || rc=$?
+[ "$rc" = 2 ] || fail "--bodies pluto: exit $rc, want 2"
+grep -q "pluto" "$work/err" || fail "--bodies pluto said: $(cat "$work/err")"
+echo "ok: the Earth and the Moon in one dome show"
