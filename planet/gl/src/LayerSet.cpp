@@ -58,8 +58,6 @@ bool LayerTextures::ready() const {
       if (streamer->state(textureTile(n.key(), i)) == TileFetch::Failed) return true;
     return false;
   };
-  for (const auto& root : tree->roots())
-    if (root && !settled(*root)) return false;
   for (const Node* n : tree->drawList())
     if (!settled(*n)) return false;
   return true;

@@ -85,7 +85,7 @@ struct LayerTextures {
   /** Textures the LRU let go: back to the pool, their tiles may be fetched again, and any node
    * still marked Finished for them falls back from now on. How many went. */
   std::size_t evict();
-  /** A new time is ready when every node its LOD draws (and every root) has its texture, or has
+  /** A new time is ready when every node its LOD draws has its texture, or has
    * none to get (absent, undecodable, or its fetch failed and waits for a retry: a dead upstream
    * must not hold the old time forever). */
   bool ready() const;

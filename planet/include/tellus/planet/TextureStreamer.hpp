@@ -3,10 +3,11 @@
  * @file TextureStreamer.hpp
  * @brief Stream order (thesis 4.6): which tiles to ask an ITileSource for, each frame.
  *
- * Candidates are the drawn nodes whose texture is not resident, and every root until its texture
- * is (roots go first so the whole globe is drawable). A candidate's score is its clipped projected
- * area in pixels (ScreenArea.hpp) times (1 + the levels its displayed texture lacks: own 0,
- * ancestor level difference, global level + 1). A node needs its tiles (one, or the
+ * Candidates are the drawn nodes whose texture is not resident (drawn roots go first; a root that
+ * is not drawn is not fetched: what a drawn node lacks shows the global texture, issue 29), and
+ * the nearest ancestor of an absent one that may have a texture. A candidate's score is its clipped
+ * projected area in pixels (ScreenArea.hpp) times (1 + the levels its displayed texture lacks: own
+ * 0, ancestor level difference, global level + 1). A node needs its tiles (one, or the
  * textureTileCount(key) <= 16 tiles of a merged polar node, Quadtree.hpp); a tile takes its best
  * node's score. At most `maxInFlight` requests are out; in-flight requests are re-scored every
  * frame (reprioritize) and cancelled once no candidate wants them. A tile the source calls absent
@@ -73,7 +74,7 @@ public:
 
   /**
    * One frame, after tree.update(camera): drains finished requests, sets the texture state of
-   * the drawn nodes and roots (Finished when `resident` holds the node's texture; else from its
+   * the drawn nodes (Finished when `resident` holds the node's texture; else from its
    * tiles: Absent when all are absent, CheckingCache while any is in flight, Decoding once all
    * arrived), scores the candidates, cancels, reprioritizes and requests. nowS is a monotonic
    * clock in seconds.
