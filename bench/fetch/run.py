@@ -12,7 +12,7 @@ on the globe), and the seconds to a complete image. Texel sizes come from the sc
 (the resolution of the map drawn there) and the camera's rays cast onto the WGS84 ellipsoid (both
 renderers place the same pose the same way: heading from north, tilt from the nadir).
 Usage: bench/fetch/run.py [TELLUS] (default build/tools/tellus/tellus); env THRESHOLDS (default
-"1 2"), VIEWS (names, default all), NO_CESIUM=1, NODE_MODULES (default build/tests/web-npm/
+"1 2"), OVERVIEW (default "0 1": without and with renderer.overview, issue 29), VIEWS (names, default all), NO_CESIUM=1, NODE_MODULES (default build/tests/web-npm/
 node_modules), OUT (default a new temporary directory). Prints a Markdown table and writes
 OUT/results.json."""
 import json
@@ -155,7 +155,7 @@ def get(url):
 
 def png_of(out, row):
     r = row["renderer"]
-    name = f"cesium-{row['view']}" if r == "cesium" else f"tellus-{r.split()[1]}-{row['view']}"
+    name = f"cesium-{row['view']}" if r.startswith("cesium") else f"tellus-{r.split()[1]}-{row['view']}"
     return os.path.join(out, name + ".png")
 
 
@@ -204,15 +204,21 @@ def main():
         url = f"http://127.0.0.1:{open(portfile).read().strip()}"
         with open(os.path.join(HERE, "fetch.yaml")) as f:
             config = f.read().replace("@URL@", url + "/wms")
-        cfg = os.path.join(out, "fetch.yaml")
-        with open(cfg, "w") as f:
-            f.write(config)
+        cfgs = {}
+        for ov in ("0", "1"):
+            cfgs[ov] = os.path.join(out, f"fetch-{ov}.yaml")
+            with open(cfgs[ov], "w") as f:
+                f.write(config.replace("@OVERVIEW@", "overview: synthetic-overview" if ov == "1"
+                                       else "# no overview"))
+        overviews = os.environ.get("OVERVIEW", "0 1").split()
         rows = []
         for v in views:
-            for t in thresholds:
+            for t, ov in [(t, ov) for ov in overviews for t in thresholds]:
+                cfg = cfgs[ov]
+                tag = f"t{t}" + ("-ov" if ov == "1" else "")
                 cache = tempfile.mkdtemp(prefix=f"cache-{v[0]}-", dir=out)
-                png = os.path.join(out, f"tellus-t{t}-{v[0]}.png")
-                stats = os.path.join(out, f"tellus-t{t}-{v[0]}.json")
+                png = os.path.join(out, f"tellus-{tag}-{v[0]}.png")
+                stats = os.path.join(out, f"tellus-{tag}-{v[0]}.json")
                 get(url + "/reset")
                 cmd = [tellus, "render", "--config", cfg, "--cache", cache, "--data", out,
                        "--camera", ",".join(str(x) for x in v[1:]), "--size", f"{W}x{H}",
@@ -223,7 +229,7 @@ def main():
                 seconds = time.monotonic() - started
                 counts = get(url + "/stats")
                 m = measure(v, png) if rc == 0 else None
-                rows.append({"view": v[0], "renderer": f"tellus t{t}", "rc": rc,
+                rows.append({"view": v[0], "renderer": f"tellus {tag}", "rc": rc,
                              "seconds": seconds, **counts, "measure": m})
                 print(json.dumps(rows[-1]), flush=True)
         if not os.environ.get("NO_CESIUM"):
@@ -237,7 +243,8 @@ def main():
             for line in run.stdout.splitlines():
                 c = json.loads(line)
                 v = next(x for x in views if x[0] == c["name"])
-                rows.append({"view": c["name"], "renderer": "cesium", "rc": 0,
+                rows.append({"view": c["name"], "rc": 0,
+                             "renderer": "cesium" + ("" if c["settled"] else " (not settled)"),
                              "seconds": c["seconds"], "requests": c["requests"],
                              "texels": c["texels"],
                              "measure": measure(v, os.path.join(out, f"cesium-{c['name']}.png"))})

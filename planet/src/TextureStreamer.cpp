@@ -154,7 +154,7 @@ void TextureStreamer::wantCandidates(Quadtree& tree,
       wantAncestorOf(*n, camera, nowS, resident);
       continue;
     }
-    if (!needsTexture(*n)) continue;
+    if (!needsTexture(*n) || overviewSuffices(*n, overviewFactor_)) continue;
     ++stats_.candidates;
     if (n->level() == 0) { // drawn roots first: then every drawn node has a texture of its own
       want(*n, kRootBoost, nowS);

@@ -346,6 +346,52 @@ TEST(TextureStreamer, AViewThatDrawsNoRootFetchesNone) {
   EXPECT_TRUE(askedRoot);
 }
 
+// Issue 29: the global texture as an overview of the layer, k times coarser than level zero,
+// shows a drawn root whose texels times k stay within the threshold; then the root is not fetched.
+TEST(TextureFallback, AnOverviewShowsTheRootsWhoseTexelsItMatches) {
+  const Geodesy g;
+  QuadtreeParams p = treeParams();
+  p.lod = {512, 512, 1.0};
+  Quadtree tree(g, planet::test::globalGrid(), p);
+  const Camera globe(g, {0.0, 0.0, 2e7, 0.0, 0.0}, {1280, 720}, 35.98);
+  converge(tree, globe);
+  ASSERT_FALSE(tree.drawList().empty());
+  for (const Node* n : tree.drawList()) {
+    ASSERT_EQ(n->level(), 0); // level zero's texels are below half a pixel from 20,000 km
+    const double r2 = n->drawnTexelRatioSquared();
+    EXPECT_GT(r2, 0.0);
+    EXPECT_LT(r2, 0.25);
+    EXPECT_TRUE(overviewSuffices(*n, 2.0));
+    EXPECT_FALSE(overviewSuffices(*n, 0.0)); // no overview
+    EXPECT_EQ(overviewSuffices(*n, 3.0), r2 * 9.0 <= 1.0);
+    EXPECT_FALSE(overviewSuffices(*n, 1.0 / std::sqrt(r2) * 1.01)); // one per cent too coarse
+  }
+  // Closer, the children are drawn: never shown by the overview, however fine it is.
+  const Camera close(g, {0.0, 0.0, 3e6, 0.0, 0.0}, {1280, 720}, 35.98);
+  converge(tree, close);
+  for (const Node* n : tree.drawList()) {
+    if (n->level() > 0) {
+      EXPECT_FALSE(overviewSuffices(*n, 1e-3));
+    }
+  }
+
+  // The streamer: with a 2x overview the whole-globe view asks for nothing; without, for the
+  // drawn roots.
+  for (const double factor : {0.0, 2.0}) {
+    Quadtree t(g, planet::test::globalGrid(), p);
+    FakeTileSource src;
+    holdAll(src);
+    TextureStreamer streamer(src, {"l", "", 100, 1.0, 120.0});
+    streamer.setOverviewFactor(factor);
+    converge(t, globe);
+    streamer.update(t, globe, 0.0, nullptr);
+    std::size_t drawnTiles = 0;
+    for (const Node* n : t.drawList())
+      drawnTiles += static_cast<std::size_t>(textureTileCount(n->key()));
+    EXPECT_EQ(src.requestCount(), factor > 0.0 ? 0u : drawnTiles) << factor;
+  }
+}
+
 TEST(TextureStreamer, CancelsWhatTheCameraLeftAndReprioritizes) {
   const Geodesy g;
   Quadtree tree(g, planet::test::globalGrid(), treeParams());

@@ -1,5 +1,7 @@
 #include "LayerSet.hpp"
 
+#include <tellus/planet/TextureFallback.hpp>
+
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
@@ -16,6 +18,7 @@ bool LayerTextures::done(const Node& n) const {
     return x.texture == TextureState::Finished || undecodable.contains(x.key());
   };
   if (own(n)) return true;
+  if (overviewSuffices(n, overviewFactor)) return true;
   if (n.texture != TextureState::Absent) return false;
   for (const Node* a = n.parent(); a != nullptr; a = a->parent())
     if (a->texture != TextureState::Absent) return own(*a);

@@ -61,6 +61,9 @@ struct LayerTextures {
   int texLevels = 1;
   std::unique_ptr<Quadtree> tree;
   std::unique_ptr<TextureStreamer> streamer;
+  /** The global texture is an overview this many times coarser than level zero (Overview.hpp):
+   * a root it suffices for is done (overviewSuffices). 0: none (or not composed yet). */
+  double overviewFactor = 0.0;
   TextureLru lru;
   std::unordered_map<NodeKey, NodeTexture, NodeKeyHash> textures; ///< resident, drawable
   TexturePool pool;

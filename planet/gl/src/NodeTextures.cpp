@@ -87,6 +87,10 @@ GlTexture makeGlobalTexture(const std::filesystem::path& image) {
                     base.rgba.data() + static_cast<std::size_t>(img->height - 1 - y) * stride);
     }
   }
+  return makeGlobalTexture(std::move(base));
+}
+
+GlTexture makeGlobalTexture(MipLevel base) {
   if (base.rgba.empty()) {
     base.width = base.height = 1;
     base.rgba = {10, 20, 60, 255};

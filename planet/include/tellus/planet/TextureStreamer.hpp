@@ -86,6 +86,11 @@ public:
   /** The texture of this node went away (evicted): its tiles may be asked for again. */
   void forget(const NodeKey& key);
 
+  /** The global texture is now an overview `factor` times coarser than level zero: a drawn root
+   * it suffices for (overviewSuffices) is no longer a candidate. 0 (the default): none. */
+  void setOverviewFactor(double factor) noexcept { overviewFactor_ = factor; }
+  double overviewFactor() const noexcept { return overviewFactor_; }
+
   TileFetch state(const TileKey& key) const noexcept;
   const StreamStats& stats() const noexcept { return stats_; }
   /** The score the tile was last given (0 when none); for tests and the statistics line. */
@@ -122,6 +127,7 @@ private:
 
   ITileSource& source_;
   StreamParams params_;
+  double overviewFactor_ = 0.0;
   std::shared_ptr<Inbox> inbox_;
   std::unordered_map<TileKey, Entry, TileKeyHash> tiles_;
   std::unordered_map<std::uint64_t, TileKey> byToken_;
