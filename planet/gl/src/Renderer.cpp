@@ -352,6 +352,7 @@ void Renderer::frame(const CameraPose& pose) {
   if (m.overview) applyOverview(*m.overview, m.globalTexture, m.layers.base());
   // A copy: the tree it comes from may be swapped out at the end of this frame (a time change).
   const FrameStats tree = updateLayers(m.layers, view.camera, nowS);
+  if (m.overview) overviewUnder(*m.overview, m.layers.base());
   fetchAhead(m.layers);
   m.terrain.want(m.layers.geo(), nowS, m.stats);
   m.stats.updateMs = msSince(t0);
