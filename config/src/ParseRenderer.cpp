@@ -229,7 +229,8 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
                "night",
                "fade_in",
                "geomorph",
-               "legend"});
+               "legend",
+               "overview"});
   if (auto v = m.get("lod_threshold")) g.lodThreshold = number(r, *v, m.path("lod_threshold"));
   if (auto v = m.get("mesh_size")) g.meshSize = int32(r, *v, m.path("mesh_size"));
   if (auto v = m.get("fov")) g.fovDeg = number(r, *v, m.path("fov"));
@@ -255,6 +256,7 @@ void readRenderer(Reader& r, const Map& root, RendererSettings& g) {
                                                                        : EarthShape::Sphere;
   if (auto v = m.get("body")) g.body = text(r, *v, m.path("body"));
   if (auto v = m.get("bodies")) readNames(r, *v, m.path("bodies"), g.bodies);
+  if (auto v = m.get("overview")) g.overview = text(r, *v, m.path("overview"));
   if (auto v = m.get("geoid")) g.geoid = boolean(r, *v, m.path("geoid"));
   if (auto v = m.get("overlays_per_pass"))
     g.overlaysPerPass = int32(r, *v, m.path("overlays_per_pass"));

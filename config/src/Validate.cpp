@@ -567,6 +567,12 @@ std::optional<ValidationIssue> findIssue(const Config& c, bool checkFiles) {
   const LayerConfig* base = nullptr;
   for (std::size_t i = 0; i < c.renderer.layers.size(); ++i)
     if (auto e = checkRenderLayer(c, i, base)) return e;
+  if (const std::string& o = c.renderer.overview; !o.empty()) {
+    const auto* l = c.layer(o);
+    if (l == nullptr || l->kind != LayerKind::Imagery)
+      return ValidationIssue{
+          "renderer.overview", "renderer", "'" + o + "' is not an imagery layer"};
+  }
   return std::nullopt;
 }
 

@@ -240,6 +240,7 @@ void Quadtree::visit(Node& node, bool insideFrustum, const Camera& camera) {
     return;
   }
   node.lastDrawn_ = frame_;
+  node.drawnTexelRatioSquared_ = std::max(lod.worstRatioSquared, lod.worstTexelRatioSquared);
   drawList_.push_back(&node);
   stats_.maxLevel = std::max(stats_.maxLevel, node.key_.level);
 }

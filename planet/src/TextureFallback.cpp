@@ -73,4 +73,9 @@ TexturePlan planTexture(const Node& node) noexcept {
   return plan;
 }
 
+bool overviewSuffices(const Node& node, double factor) noexcept {
+  return factor > 0.0 && node.level() == 0 && node.drawnTexelRatioSquared() > 0.0 &&
+         node.drawnTexelRatioSquared() * factor * factor <= 1.0;
+}
+
 } // namespace tellus::planet

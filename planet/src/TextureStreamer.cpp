@@ -146,23 +146,20 @@ void TextureStreamer::wantCandidates(Quadtree& tree,
                                      const Camera& camera,
                                      double nowS,
                                      const TextureLru* resident) {
-  for (const auto& root : tree.roots()) {
-    if (!root) continue;
-    refreshState(*root, resident);
-    if (needsTexture(*root)) {
-      ++stats_.candidates;
-      want(*root, kRootBoost, nowS);
-    }
-  }
+  // Only what is drawn (issue 29): a root off screen, or above drawn nodes, is not fetched; what
+  // a drawn node lacks shows its nearest resident ancestor or the global texture.
   for (Node* n : tree.drawList()) {
-    if (n->level() == 0) continue; // done above
     refreshState(*n, resident);
     if (n->texture == TextureState::Absent) {
       wantAncestorOf(*n, camera, nowS, resident);
       continue;
     }
-    if (!needsTexture(*n)) continue;
+    if (!needsTexture(*n) || overviewSuffices(*n, overviewFactor_)) continue;
     ++stats_.candidates;
+    if (n->level() == 0) { // drawn roots first: then every drawn node has a texture of its own
+      want(*n, kRootBoost, nowS);
+      continue;
+    }
     const int shown = shownLevel(*n);
     const double area = nodeScreenArea(camera, n->geometry());
     want(*n, area * (1.0 + static_cast<double>(n->level() - shown)), nowS);
@@ -176,7 +173,7 @@ void TextureStreamer::wantAncestorOf(const Node& n,
                                      const Camera& camera,
                                      double nowS,
                                      const TextureLru* resident) {
-  for (Node* a = n.parent(); a != nullptr && a->level() > 0; a = a->parent()) {
+  for (Node* a = n.parent(); a != nullptr; a = a->parent()) {
     refreshState(*a, resident);
     if (a->texture == TextureState::Absent) continue;
     if (needsTexture(*a)) {

@@ -155,6 +155,15 @@ TEST(Config, RendererSettingsAreValidated) {
   fails([](RendererSettings& g) { g.meshSize = 32; }, "mesh_size");
   fails([](RendererSettings& g) { g.meshSize = 513; }, "mesh_size");
   fails([](RendererSettings& g) { g.fovDeg = 180.0; }, "fov");
+  { // renderer.overview (issue 29): an imagery layer of the configuration
+    Config bad = c;
+    bad.renderer.overview = "no-such-layer";
+    const auto v = validate(bad);
+    ASSERT_FALSE(v);
+    EXPECT_NE(v.error().find("overview"), std::string::npos) << v.error();
+    bad.renderer.overview = c.renderer.layers.at(0).layer;
+    EXPECT_TRUE(validate(bad));
+  }
   fails([](RendererSettings& g) { g.textureBudget = 1000; }, "texture_budget");
   fails([](RendererSettings& g) { g.uploadPerFrame = 0; }, "upload_per_frame");
   fails([](RendererSettings& g) { g.maxInFlight = 0; }, "max_in_flight");

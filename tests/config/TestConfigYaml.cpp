@@ -344,6 +344,7 @@ renderer:
   lod_threshold: 1.5
   mesh_size: 17
   fov: 60
+  overview: pic
   texture_budget: 256MiB
   upload_per_frame: 2MiB
   max_in_flight: 4
@@ -444,6 +445,7 @@ layers:
   EXPECT_EQ(c->renderer.lodThreshold, 1.5);
   EXPECT_EQ(c->renderer.meshSize, 17);
   EXPECT_EQ(c->renderer.fovDeg, 60.0);
+  EXPECT_EQ(c->renderer.overview, "pic");
   EXPECT_EQ(c->renderer.textureBudget, 256ULL << 20);
   EXPECT_EQ(c->renderer.uploadPerFrame, 2ULL << 20);
   EXPECT_EQ(c->renderer.maxInFlight, 4);

@@ -262,16 +262,21 @@ TEST(TextureLru, BudgetHoldsOverRandomCameraPaths) {
 
 // ---- streaming ----
 
-TEST(TextureStreamer, RootsFirstThenByScoreWithinTheWindow) {
+TEST(TextureStreamer, DrawnRootsFirstThenByScoreWithinTheWindow) {
   const Geodesy g;
   Quadtree tree(g, planet::test::globalGrid(), treeParams());
   FakeTileSource src;
   holdAll(src);
   TextureStreamer streamer(src, {"layer", "", 8, 1.0, 120.0});
-  const Camera cam(g, {46.5, 8.0, 3e5, 0.0, 30.0}, {1024, 768});
+  const Camera cam(g, {20.0, 8.0, 6e6, 0.0, 0.0}, {1024, 768}); // roots at the limb
+  std::set<TileKey> drawnRoots;
   double now = 0.0;
   for (int frame = 0; frame < 200; ++frame, now += 1.0 / 60.0) {
     tree.update(cam);
+    for (const Node* n : tree.drawList())
+      if (n->level() == 0)
+        for (std::int64_t i = 0; i < textureTileCount(n->key()); ++i)
+          drawnRoots.insert(textureTile(n->key(), i));
     streamer.update(tree, cam, now, nullptr);
     EXPECT_LE(src.openCount(), 8u); // the window
     // The source finishes the oldest open request each frame.
@@ -282,15 +287,109 @@ TEST(TextureStreamer, RootsFirstThenByScoreWithinTheWindow) {
       }
   }
   const auto requests = src.requests();
-  ASSERT_GT(requests.size(), 60u);
-  for (std::size_t i = 0; i < 50; ++i)
-    EXPECT_EQ(requests[i].address.key.level, 0) << i; // the whole globe first
-  for (std::size_t i = 50; i < requests.size(); ++i)
-    EXPECT_GT(requests[i].address.key.level, 0);
+  ASSERT_GT(requests.size(), drawnRoots.size() + 10);
+  ASSERT_FALSE(drawnRoots.empty());
+  // The drawn roots first, and only those (issue 29): none of the far side, none above the view.
+  EXPECT_LT(drawnRoots.size(), 50u);
+  for (std::size_t i = 0; i < drawnRoots.size(); ++i) {
+    EXPECT_EQ(requests[i].address.key.level, 0) << i;
+    EXPECT_TRUE(drawnRoots.contains(requests[i].address.key)) << i;
+  }
+  for (std::size_t i = drawnRoots.size(); i < requests.size(); ++i)
+    EXPECT_GT(requests[i].address.key.level, 0) << i;
   EXPECT_EQ(requests[0].address.layer, "layer");
-  // After the roots, the first requests are the nadir's biggest on screen: their scores do not
-  // grow within a frame's batch, and each is a drawn node's tile.
-  EXPECT_GE(requests[50].priority, requests[51].priority);
+  // After the roots, the first requests are the biggest on screen: their scores do not grow
+  // within a frame's batch, and each is a drawn node's tile.
+  EXPECT_GE(requests[drawnRoots.size()].priority, requests[drawnRoots.size() + 1].priority);
+}
+
+// A close view draws no root: it fetches no level-zero tile at all (issue 29), its nodes show the
+// global texture until their own arrive; a root under an absent node is asked for all the same.
+TEST(TextureStreamer, AViewThatDrawsNoRootFetchesNone) {
+  const Geodesy g;
+  Quadtree tree(g, planet::test::globalGrid(), treeParams());
+  FakeTileSource src;
+  answerAll(src, TileStatus::Ok);
+  TextureStreamer streamer(src, {"l", "", 1000, 1.0, 120.0});
+  TextureLru lru(std::size_t{1} << 40);
+  const Camera cam(g, {0.0, 180.0, 2e5, 0.0, 0.0}, {1280, 720});
+  converge(tree, cam);
+  for (const Node* n : tree.drawList())
+    ASSERT_GT(n->level(), 0);
+  streamer.update(tree, cam, 0.0, &lru);
+  std::size_t wanted = 0;
+  for (const Node* n : tree.drawList())
+    wanted += static_cast<std::size_t>(textureTileCount(n->key()));
+  EXPECT_EQ(src.requestCount(), wanted);
+  for (const auto& r : src.requests())
+    EXPECT_GT(r.address.key.level, 0);
+  const Node* drawn = tree.drawList().front();
+  streamer.update(tree, cam, 0.1, &lru);
+  EXPECT_EQ(drawn->texture, TextureState::Decoding); // received (answered at once)
+  const TexturePlan plan = planTexture(*drawn);
+  ASSERT_EQ(plan.partCount, 1);
+  EXPECT_EQ(plan.parts[0].source, TextureSource::Global); // no ancestor was fetched
+
+  // Every drawn node absent: the nearest ancestors are asked for, up to the roots.
+  Quadtree tree2(g, planet::test::globalGrid(), treeParams());
+  FakeTileSource src2;
+  src2.setFallbackAnswer([](const TileAddress& a) {
+    return tile(a.key.level == 0 ? TileStatus::Ok : TileStatus::Absent);
+  });
+  TextureStreamer streamer2(src2, {"l", "", 1000, 1.0, 120.0});
+  converge(tree2, cam);
+  for (int i = 0; i < 40; ++i)
+    streamer2.update(tree2, cam, 0.1 * i, &lru);
+  bool askedRoot = false;
+  for (const auto& r : src2.requests())
+    askedRoot = askedRoot || r.address.key.level == 0;
+  EXPECT_TRUE(askedRoot);
+}
+
+// Issue 29: the global texture as an overview of the layer, k times coarser than level zero,
+// shows a drawn root whose texels times k stay within the threshold; then the root is not fetched.
+TEST(TextureFallback, AnOverviewShowsTheRootsWhoseTexelsItMatches) {
+  const Geodesy g;
+  QuadtreeParams p = treeParams();
+  p.lod = {512, 512, 1.0};
+  Quadtree tree(g, planet::test::globalGrid(), p);
+  const Camera globe(g, {0.0, 0.0, 2e7, 0.0, 0.0}, {1280, 720}, 35.98);
+  converge(tree, globe);
+  ASSERT_FALSE(tree.drawList().empty());
+  for (const Node* n : tree.drawList()) {
+    ASSERT_EQ(n->level(), 0); // level zero's texels are below half a pixel from 20,000 km
+    const double r2 = n->drawnTexelRatioSquared();
+    EXPECT_GT(r2, 0.0);
+    EXPECT_LT(r2, 0.25);
+    EXPECT_TRUE(overviewSuffices(*n, 2.0));
+    EXPECT_FALSE(overviewSuffices(*n, 0.0)); // no overview
+    EXPECT_EQ(overviewSuffices(*n, 3.0), r2 * 9.0 <= 1.0);
+    EXPECT_FALSE(overviewSuffices(*n, 1.0 / std::sqrt(r2) * 1.01)); // one per cent too coarse
+  }
+  // Closer, the children are drawn: never shown by the overview, however fine it is.
+  const Camera close(g, {0.0, 0.0, 3e6, 0.0, 0.0}, {1280, 720}, 35.98);
+  converge(tree, close);
+  for (const Node* n : tree.drawList()) {
+    if (n->level() > 0) {
+      EXPECT_FALSE(overviewSuffices(*n, 1e-3));
+    }
+  }
+
+  // The streamer: with a 2x overview the whole-globe view asks for nothing; without, for the
+  // drawn roots.
+  for (const double factor : {0.0, 2.0}) {
+    Quadtree t(g, planet::test::globalGrid(), p);
+    FakeTileSource src;
+    holdAll(src);
+    TextureStreamer streamer(src, {"l", "", 100, 1.0, 120.0});
+    streamer.setOverviewFactor(factor);
+    converge(t, globe);
+    streamer.update(t, globe, 0.0, nullptr);
+    std::size_t drawnTiles = 0;
+    for (const Node* n : t.drawList())
+      drawnTiles += static_cast<std::size_t>(textureTileCount(n->key()));
+    EXPECT_EQ(src.requestCount(), factor > 0.0 ? 0u : drawnTiles) << factor;
+  }
 }
 
 TEST(TextureStreamer, CancelsWhatTheCameraLeftAndReprioritizes) {
@@ -389,8 +488,16 @@ TEST(TextureStreamer, StatesFollowTheTiles) {
   const Camera cam(g, {0.0, 0.0, 2e7, 0.0, 0.0}, {1024, 768});
   tree.update(cam);
   streamer.update(tree, cam, 0.0, &lru);
-  ASSERT_EQ(src.requestCount(), 50u); // the roots
-  const Node& root = *tree.roots()[0];
+  std::size_t drawnRoots = 0;
+  for (const Node* n : tree.drawList())
+    drawnRoots += n->level() == 0 ? 1u : 0u;
+  ASSERT_GT(drawnRoots, 0u);
+  ASSERT_EQ(src.requestCount(), drawnRoots); // the drawn roots (issue 29: not all 50)
+  const Node* first = nullptr;
+  for (const Node* n : tree.drawList())
+    if (n->key().firstTile() == src.requests()[0].address.key) first = n;
+  ASSERT_NE(first, nullptr);
+  const Node& root = *first;
   tree.update(cam);
   streamer.update(tree, cam, 0.1, &lru);
   EXPECT_EQ(root.texture, TextureState::CheckingCache);
@@ -446,7 +553,7 @@ TEST(TextureStreamer, AVeryWidePolarNodeAsksForAtMostSixteenTiles) {
     wanted += static_cast<std::size_t>(textureTileCount(n->key()));
   }
   EXPECT_GT(widest, kMaxTextureTiles) << "the view should draw a merged row wider than 16";
-  EXPECT_LE(src.requestCount(), wanted + 50); // the drawn nodes' tiles and the roots
+  EXPECT_LE(src.requestCount(), wanted); // the drawn nodes' tiles
   EXPECT_LT(src.requestCount(), 5000u);
 }
 

@@ -91,9 +91,9 @@ void bindOverlays(const LayerSet& layers,
                   std::vector<OverlayBinding>& bindings,
                   const std::vector<std::optional<ValueScaleUniform>>& scales = {});
 
-/** The frame's draw list (see the file comment): every layer's roots marked used (they stay
- * resident like the global texture: the streamer wants them until they are, so evicting one would
- * only fetch it again), then each drawn node's parts with the base layer's textures (marked
+/** The frame's draw list (see the file comment): every layer's resident roots marked used (once
+ * fetched, a level-zero texture stays resident like the global texture: the fallback of every
+ * node under it), then each drawn node's parts with the base layer's textures (marked
  * used) or the global one, and their overlays. Counts stats.mergedNodesDrawn.
  * Fading (fadeInS > 0): a base texture first drawn at frame time t0 (set now, when first drawn)
  * is drawn with fade = (nowS - t0) / fadeInS (clamped to [0, 1]) over what the part showed

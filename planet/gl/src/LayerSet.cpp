@@ -1,5 +1,7 @@
 #include "LayerSet.hpp"
 
+#include <tellus/planet/TextureFallback.hpp>
+
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
@@ -16,6 +18,7 @@ bool LayerTextures::done(const Node& n) const {
     return x.texture == TextureState::Finished || undecodable.contains(x.key());
   };
   if (own(n)) return true;
+  if (overviewSuffices(n, overviewFactor)) return true;
   if (n.texture != TextureState::Absent) return false;
   for (const Node* a = n.parent(); a != nullptr; a = a->parent())
     if (a->texture != TextureState::Absent) return own(*a);
@@ -58,8 +61,6 @@ bool LayerTextures::ready() const {
       if (streamer->state(textureTile(n.key(), i)) == TileFetch::Failed) return true;
     return false;
   };
-  for (const auto& root : tree->roots())
-    if (root && !settled(*root)) return false;
   for (const Node* n : tree->drawList())
     if (!settled(*n)) return false;
   return true;

@@ -61,6 +61,9 @@ struct LayerTextures {
   int texLevels = 1;
   std::unique_ptr<Quadtree> tree;
   std::unique_ptr<TextureStreamer> streamer;
+  /** The global texture is an overview this many times coarser than level zero (Overview.hpp):
+   * a root it suffices for is done (overviewSuffices). 0: none (or not composed yet). */
+  double overviewFactor = 0.0;
   TextureLru lru;
   std::unordered_map<NodeKey, NodeTexture, NodeKeyHash> textures; ///< resident, drawable
   TexturePool pool;
@@ -85,7 +88,7 @@ struct LayerTextures {
   /** Textures the LRU let go: back to the pool, their tiles may be fetched again, and any node
    * still marked Finished for them falls back from now on. How many went. */
   std::size_t evict();
-  /** A new time is ready when every node its LOD draws (and every root) has its texture, or has
+  /** A new time is ready when every node its LOD draws has its texture, or has
    * none to get (absent, undecodable, or its fetch failed and waits for a retry: a dead upstream
    * must not hold the old time forever). */
   bool ready() const;

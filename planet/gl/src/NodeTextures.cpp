@@ -91,6 +91,14 @@ GlTexture makeGlobalTexture(const std::filesystem::path& image, std::array<std::
     base.width = base.height = 1;
     base.rgba = {flat[0], flat[1], flat[2], 255};
   }
+  return makeGlobalTexture(std::move(base));
+}
+
+GlTexture makeGlobalTexture(MipLevel base) {
+  if (base.rgba.empty()) {
+    base.width = base.height = 1;
+    base.rgba = {10, 20, 60, 255};
+  }
   const auto levels = buildMips(std::move(base));
   GlTexture texture;
   glBindTexture(GL_TEXTURE_2D, texture.id());

@@ -71,10 +71,14 @@ private:
   std::vector<GlTexture> free_;
 };
 
+struct MipLevel;
+
 /** The global texture from an equirectangular JPEG/PNG of the whole globe (north up, -180 at the
  * left; CPU mip levels, wrapping east-west); `flat` (a dark blue) when the path is empty or the
  * file unreadable. Left bound to GL_TEXTURE_2D. */
 GlTexture makeGlobalTexture(const std::filesystem::path& image,
                             std::array<std::uint8_t, 3> flat = {10, 20, 60});
+/** The same from an image already in memory (rows from the south; empty: dark blue). */
+GlTexture makeGlobalTexture(MipLevel base);
 
 } // namespace tellus::planet

@@ -158,6 +158,13 @@ Renderer::create(ITileSource& source, const Geodesy& geodesy, RendererOptions op
   auto impl = std::make_unique<Impl>(source, geodesy, std::move(options), *grid);
   if (auto err = impl->openGl(); !err.empty()) return std::unexpected(err);
   if (auto opened = impl->layers.open(); !opened) return std::unexpected(opened.error());
+  if (!impl->opt.overviewLayer.empty()) {
+    const GridSpec& g = grid->spec();
+    auto o = Overview::start(
+        source, impl->opt.overviewLayer, impl->opt.time, g.levelZeroDeltaDeg / g.tileWidth);
+    if (!o) return std::unexpected(o.error());
+    impl->overview = std::move(*o);
+  }
   if (!impl->opt.elevationLayer.empty()) {
     if (auto opened = impl->terrain.open(source); !opened) return std::unexpected(opened.error());
     for (LayerSlot& l : impl->layers.slots())
@@ -352,8 +359,10 @@ void Renderer::frame(const CameraPose& pose) {
   m.terrain.setTime(frameS); // before the heights delivered this frame (beginFrame) arrive
   Impl::View view = m.beginFrame(pose);
   stepAnimations(m.layers, frameS); // time that plays: the instants asked for (issue 24)
+  if (m.overview) applyOverview(*m.overview, m.globalTexture, m.layers.base());
   // A copy: the tree it comes from may be swapped out at the end of this frame (a time change).
   const FrameStats tree = updateLayers(m.layers, view.camera, nowS);
+  if (m.overview) overviewUnder(*m.overview, m.layers.base());
   fetchAhead(m.layers);
   m.terrain.want(m.layers.geo(), nowS, m.stats);
   m.stats.updateMs = msSince(t0);

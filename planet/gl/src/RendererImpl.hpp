@@ -26,6 +26,7 @@
 #include "LegendOverlay.hpp"
 #include "NodeMeshes.hpp"
 #include "NodeTextures.hpp"
+#include "Overview.hpp"
 #include "SceneDraw.hpp"
 #include "TerrainState.hpp"
 #include "TextureDecoder.hpp"
@@ -93,7 +94,8 @@ struct Renderer::Impl {
   UploadPacer pacer;
   UploadQueue uploads;
   std::unique_ptr<NodeMeshes> meshes;
-  GlTexture globalTexture{NoCreate}; ///< always resident: the last fallback
+  GlTexture globalTexture{NoCreate};  ///< always resident: the last fallback
+  std::unique_ptr<Overview> overview; ///< RendererOptions::overviewLayer's, else null
   std::unique_ptr<SceneDraw> scene;
   GlobePass* globePass = nullptr; ///< the scene's globe pass (owned by scene): its morph scale
   LegendOverlay legends;          ///< the layers of values' legends (RendererOptions::legend)

@@ -119,6 +119,7 @@ void applyRendererSettings(const RendererSettings& g,
   if (!a.get("threshold")) ro.lodThreshold = g.lodThreshold;
   ro.meshSize = g.meshSize;
   ro.verticalFovDeg = g.fovDeg;
+  ro.overviewLayer = g.overview;
   ro.textureBudgetBytes = static_cast<std::size_t>(g.textureBudget);
   ro.uploadBytesPerFrame = static_cast<std::size_t>(g.uploadPerFrame);
   ro.maxInFlight = static_cast<std::size_t>(g.maxInFlight);

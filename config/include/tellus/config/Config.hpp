@@ -205,6 +205,9 @@ struct RendererSettings {
    * earth, moon or mars (the bodies with an ephemeris); the orbited body may be listed (skipped).
    * Empty: one body. */
   std::vector<std::string> bodies;
+  /** YAML `renderer.overview`: a layer of the base imagery's whole globe on a coarser grid, the
+   * global texture and what whole-globe views draw (issue 29); "" none. */
+  std::string overview;
   double lodThreshold = 1.0;                  ///< texel-to-pixel threshold, 0.05 - 64
   int meshSize = 33;                          ///< vertices along a node's edge, 2^n + 1 in [3, 257]
   double fovDeg = 45.0;                       ///< vertical field of view, (1, 170)

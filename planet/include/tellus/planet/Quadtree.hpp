@@ -172,6 +172,11 @@ public:
   std::uint64_t lastVisibleFrame() const noexcept { return lastVisible_; }
   std::uint64_t lastDrawnFrame() const noexcept { return lastDrawn_; }
 
+  /** (The largest texel of the node's own texture on screen / the LOD threshold)^2 when it was
+   * last drawn (the larger of LodResult's two ratios), 0 before: at most about 1 for a drawn node.
+   * An overview k times coarser suffices where k^2 times this is <= 1 (TextureFallback.hpp). */
+  double drawnTexelRatioSquared() const noexcept { return drawnTexelRatioSquared_; }
+
   /** Owned by the texture layer (TextureStreamer, the GL layer); the tree only stores it. */
   TextureState texture = TextureState::NoTexture;
 
@@ -190,6 +195,7 @@ private:
   std::unique_ptr<const EastWestEdges> widened_;
   std::uint64_t lastVisible_ = 0;
   std::uint64_t lastDrawn_ = 0;
+  double drawnTexelRatioSquared_ = 0.0;
 };
 
 struct QuadtreeParams {

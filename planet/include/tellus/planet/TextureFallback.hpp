@@ -50,4 +50,11 @@ struct TexturePlan {
 /** Ready means TextureState::Finished. */
 TexturePlan planTexture(const Node& node) noexcept;
 
+/** Whether a drawn root may show the global texture instead of its own (issue 29): the global
+ * texture is an overview of the layer `factor` times coarser than level zero (texel size over
+ * level zero's; <= 0: no overview) and its texels on screen, the node's own times factor, stay
+ * within the LOD threshold. Then the root's own tiles are not fetched: a whole-globe view costs
+ * the overview's texels, not level zero's. False below level zero. */
+bool overviewSuffices(const Node& node, double factor) noexcept;
+
 } // namespace tellus::planet

@@ -3,10 +3,11 @@
  * @file TextureStreamer.hpp
  * @brief Stream order (thesis 4.6): which tiles to ask an ITileSource for, each frame.
  *
- * Candidates are the drawn nodes whose texture is not resident, and every root until its texture
- * is (roots go first so the whole globe is drawable). A candidate's score is its clipped projected
- * area in pixels (ScreenArea.hpp) times (1 + the levels its displayed texture lacks: own 0,
- * ancestor level difference, global level + 1). A node needs its tiles (one, or the
+ * Candidates are the drawn nodes whose texture is not resident (drawn roots go first; a root that
+ * is not drawn is not fetched: what a drawn node lacks shows the global texture, issue 29), and
+ * the nearest ancestor of an absent one that may have a texture. A candidate's score is its clipped
+ * projected area in pixels (ScreenArea.hpp) times (1 + the levels its displayed texture lacks: own
+ * 0, ancestor level difference, global level + 1). A node needs its tiles (one, or the
  * textureTileCount(key) <= 16 tiles of a merged polar node, Quadtree.hpp); a tile takes its best
  * node's score. At most `maxInFlight` requests are out; in-flight requests are re-scored every
  * frame (reprioritize) and cancelled once no candidate wants them. A tile the source calls absent
@@ -73,7 +74,7 @@ public:
 
   /**
    * One frame, after tree.update(camera): drains finished requests, sets the texture state of
-   * the drawn nodes and roots (Finished when `resident` holds the node's texture; else from its
+   * the drawn nodes (Finished when `resident` holds the node's texture; else from its
    * tiles: Absent when all are absent, CheckingCache while any is in flight, Decoding once all
    * arrived), scores the candidates, cancels, reprioritizes and requests. nowS is a monotonic
    * clock in seconds.
@@ -84,6 +85,11 @@ public:
   std::vector<ReceivedTile> takeReceived();
   /** The texture of this node went away (evicted): its tiles may be asked for again. */
   void forget(const NodeKey& key);
+
+  /** The global texture is now an overview `factor` times coarser than level zero: a drawn root
+   * it suffices for (overviewSuffices) is no longer a candidate. 0 (the default): none. */
+  void setOverviewFactor(double factor) noexcept { overviewFactor_ = factor; }
+  double overviewFactor() const noexcept { return overviewFactor_; }
 
   TileFetch state(const TileKey& key) const noexcept;
   const StreamStats& stats() const noexcept { return stats_; }
@@ -121,6 +127,7 @@ private:
 
   ITileSource& source_;
   StreamParams params_;
+  double overviewFactor_ = 0.0;
   std::shared_ptr<Inbox> inbox_;
   std::unordered_map<TileKey, Entry, TileKeyHash> tiles_;
   std::unordered_map<std::uint64_t, TileKey> byToken_;

@@ -141,6 +141,11 @@ struct RendererOptions {
   /** An equirectangular JPEG/PNG of the whole globe (north up, -180 at the left), the always
    * resident global texture. Empty or unreadable: a flat dark blue. */
   std::filesystem::path globalImage;
+  /** A layer of the base imagery's whole globe on a coarser grid (e.g. 90-degree level-zero
+   * tiles of 512 px), or empty: its level-zero tiles, fetched at the start, become the global
+   * texture (instead of globalImage), and a level-zero node whose texels it shows within the
+   * LOD threshold is drawn with it, its own tiles not fetched (issue 29). */
+  std::string overviewLayer;
   std::array<double, 3> background{0.0, 0.0, 0.0}; ///< RGB in [0, 1]
   double lodThreshold = 1.0;                       ///< texel-to-pixel threshold (> 0)
   /** Anisotropic filtering of node textures (sharper tilted views; 1 = off; capped by the GL).
