@@ -229,10 +229,10 @@ ComposeStats composePlaneInto(const TileGrid& grid,
 inline constexpr std::int32_t kMaxColumnSamples = 24;
 
 /**
- * How many samples across each pixel a map's columns need at `level` (ComposeWide.cpp): 1 while
- * a pixel spans at most two texels of its level (always on a lat/long map of square pixels),
- * else one sample per texel the pixel spans (up to kMaxColumnSamples): a Mercator map near
- * the poles, whose rows take their level from their extent in latitude.
+ * How many samples across each pixel a Mercator map's columns need at `level` (ComposeWide.cpp):
+ * 1 while a pixel spans at most two texels of its level, else one sample per texel the pixel
+ * spans (up to kMaxColumnSamples): rows near the poles, whose level follows their extent in
+ * latitude. Always 1 for a lat/long map.
  */
 std::int32_t
 columnSamples(const TileGrid& grid, const MapBox& box, std::int32_t width, std::int32_t level);

@@ -11,6 +11,9 @@ namespace tellus::compose {
 
 std::int32_t
 columnSamples(const TileGrid& grid, const MapBox& box, std::int32_t width, std::int32_t level) {
+  // Lat/long maps as before: square pixels never span more than two texels, and a map of wide
+  // pixels (a box stretched east-west) is sampled once a pixel as it always was.
+  if (box.rows != MapRows::Mercator) return 1;
   if (width <= 0 || level < 0 || level >= grid.numLevels()) return 1;
   const double pixelX = (box.east - box.west) / width;
   const double texelX = grid.deltaDeg(level) / grid.spec().tileWidth;
