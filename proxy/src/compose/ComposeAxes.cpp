@@ -456,7 +456,10 @@ std::expected<std::vector<ComposeTile>, std::size_t> composeTiles(const TileGrid
                                                                   std::int32_t height,
                                                                   std::int32_t level,
                                                                   std::size_t maxTiles) {
-  const auto columnAxis = columns(grid, box, width, level);
+  // The columns as drawn: with several samples across a pixel where one would alias (the
+  // texels at either edge of the map are then those of the outer samples).
+  const auto columnAxis =
+      columns(grid, box, width * compose::columnSamples(grid, box, width, level), level);
   const auto rowAxis = rows(grid, box, height, level);
   const Axis& c = *columnAxis;
   const Axis& r = *rowAxis;

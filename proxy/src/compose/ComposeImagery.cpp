@@ -150,6 +150,19 @@ ComposeStats composeImagery(const TileGrid& grid,
   const int cc = canvasChannels == 3 ? 3 : 4;
   canvas.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) *
                 static_cast<std::size_t>(cc));
+  if (const std::int32_t s = compose::columnSamples(grid, box, width, level); s > 1) {
+    return compose::composeWide(
+        box,
+        width,
+        height,
+        s,
+        cc,
+        true,
+        canvas.data(),
+        [&](const MapBox& b, std::int32_t w, std::int32_t h, std::vector<std::uint8_t>& wide) {
+          return composeImagery(grid, b, w, h, level, firstLevel, tiles, opacity, wide, cc);
+        });
+  }
   const double o = std::isfinite(opacity) ? std::clamp(opacity, 0.0, 1.0) : 1.0;
   const auto scale = static_cast<std::int32_t>(std::lround(o * 256.0));
   ComposeStats stats;

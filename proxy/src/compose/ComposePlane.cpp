@@ -376,6 +376,20 @@ ComposeStats composePlaneInto(const TileGrid& grid,
                               const TileLookup& tiles,
                               const std::uint8_t* background,
                               std::uint8_t* canvas) {
+  if (const std::int32_t s = columnSamples(grid, box, width, level); s > 1) {
+    // With a background every sample of the band's rows is written.
+    return composeWide(
+        box,
+        width,
+        height,
+        s,
+        1,
+        background == nullptr,
+        canvas,
+        [&](const MapBox& b, std::int32_t w, std::int32_t h, std::vector<std::uint8_t>& wide) {
+          return composePlaneInto(grid, b, w, h, level, firstLevel, tiles, background, wide.data());
+        });
+  }
   ComposeStats stats;
   const LevelTiles t = levelTiles(grid, box, width, height, level, tiles);
   Fallback fallback(grid, box, width, height, level, std::max(0, firstLevel), tiles);

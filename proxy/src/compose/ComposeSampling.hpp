@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -222,5 +223,37 @@ ComposeStats composePlaneInto(const TileGrid& grid,
                               const TileLookup& tiles,
                               const std::uint8_t* background,
                               std::uint8_t* canvas);
+
+/** At most this many samples across a pixel (composeWide): up to 85.05 degrees a Mercator pixel
+ * spans fewer than 2 / cos(85.05) = 23.2 texels of its level. */
+inline constexpr std::int32_t kMaxColumnSamples = 24;
+
+/**
+ * How many samples across each pixel a Mercator map's columns need at `level` (ComposeWide.cpp):
+ * 1 while a pixel spans at most two texels of its level, else one sample per texel the pixel
+ * spans (up to kMaxColumnSamples): rows near the poles, whose level follows their extent in
+ * latitude. Always 1 for a lat/long map.
+ */
+std::int32_t
+columnSamples(const TileGrid& grid, const MapBox& box, std::int32_t width, std::int32_t level);
+
+/** Draws the band of a map `samples` times as wide (box, width, height, canvas of that map). */
+using WideDraw = std::function<ComposeStats(
+    const MapBox&, std::int32_t, std::int32_t, std::vector<std::uint8_t>&)>;
+
+/**
+ * The band of rows of `box` drawn by `draw` as a map of those rows alone `samples` (> 1) times as
+ * wide, then each pixel of `canvas` (width x height, `channels` bytes a pixel) the mean of its
+ * samples. With `over` the wide canvas starts as `canvas`'s rows, each pixel repeated (a layer
+ * drawn over what is there); else `draw` writes every sample. Stats in pixels of the map.
+ */
+ComposeStats composeWide(const MapBox& box,
+                         std::int32_t width,
+                         std::int32_t height,
+                         std::int32_t samples,
+                         std::int32_t channels,
+                         bool over,
+                         std::uint8_t* canvas,
+                         const WideDraw& draw);
 
 } // namespace tellus::compose

@@ -6,6 +6,7 @@
 // (statuses, caching headers, the redaction of every message a client sees).
 
 #include "compose/MapComposer.hpp"
+#include "tiles/WorkerPool.hpp"
 
 #include <tellus/proxy/Capabilities.hpp>
 #include <tellus/proxy/FetchBudget.hpp>
@@ -40,8 +41,14 @@ struct FrontEnd {
   std::string updateSequence;
   std::string lastUpdate;
   std::int64_t startedMillis;
-  FetchBudget budget;   // upstream fetches per client address
+  FetchBudget budget; // upstream fetches per client address
+  /// Composed WMTS tiles written to the cache (and then answered) off the composer's workers:
+  /// a write waits for its fsync, which would hold a worker that could be composing the next
+  /// tile. Declared before the composer: its last maps still find it.
+  WorkerPool writers{kComposedWriters};
   MapComposer composer; // last: its workers stop first
+
+  static constexpr int kComposedWriters = 4;
 
   static constexpr const char* kAllowedMethods = "GET, HEAD, OPTIONS";
 

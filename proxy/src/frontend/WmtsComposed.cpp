@@ -114,15 +114,18 @@ void WmtsFrontEnd::composedTile(const HttpRequest& req,
         // standing in for a missing one.
         const bool whole = (a.origin == TileOrigin::Hit || a.origin == TileOrigin::Miss) &&
                            map.fallbackPixels == 0;
-        if (ds && whole) {
+        if (!ds || !whole) return fe_.sendTile(v, std::move(a), *l, respond);
+        // Kept, then answered (a client that has the answer finds the tile kept), on a writer:
+        // the composer's worker goes on to the next map while this one's fsync runs.
+        fe_.writers.post([fe = &fe_, v, l, ds, key, respond, a = std::move(a)]() mutable {
           TileMeta meta;
           meta.contentType = a.contentType;
           meta.etag = a.etag;
           meta.fetchedAt = a.fetchedAt;
           if (l->ttl.count() > 0) meta.expiresAt = a.fetchedAt + l->ttl.count();
-          (void)fe_.tiles.cache().put(ds->first, key, a.bytes, meta); // not kept: made again
-        }
-        fe_.sendTile(v, std::move(a), *l, respond);
+          (void)fe->tiles.cache().put(ds->first, key, a.bytes, meta); // not kept: made again
+          fe->sendTile(v, std::move(a), *l, respond);
+        });
       });
   if (!started)
     exception(OgcException{std::string(ogc::kNoApplicableCode), "", started.error()}, respond);
