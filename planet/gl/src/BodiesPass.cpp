@@ -5,6 +5,7 @@
 #include "NodeTextures.hpp"
 #include "Shaders.hpp"
 
+#include <tellus/planet/Culling.hpp>
 #include <tellus/planet/StarCatalogue.hpp>
 
 #include <glm/geometric.hpp>
@@ -109,6 +110,12 @@ void BodiesPass::draw(const FrameContext& frame) {
                                              std::tan(cam.verticalFovDeg() / 2.0 * kDegree);
   for (const auto& d : bodies_) {
     const BodyPlacement at = placeBody(frameBody_, d->which, t);
+    // Out of view: neither its vertices made nor uploaded (the sphere of its largest radius).
+    const Body& b = d->globe.body();
+    const BoundingSphere sphere{at.centre, std::max({b.radiusA, b.radiusB, b.radiusC})};
+    if ((cam.isFisheye() ? classifyCone(cam, sphere) : classify(cam.frustum(), sphere)) ==
+        FrustumResult::Outside)
+      continue;
     d->globe.cameraRelative(at, frame.eye, scratch_);
     const double dist = glm::length(at.centre - frame.eye);
     const double alpha = std::asin(std::min(1.0, d->globe.body().radiusA / std::max(dist, 1.0)));
