@@ -192,6 +192,15 @@ TEST(RenderStatsJson, ReadsBackAsJson) {
   EXPECT_TRUE(j["layers"][0]["animation"].is_null());
   EXPECT_EQ(j["layers"][1]["animation"]["state"], "holding");
   EXPECT_EQ(j.size(), 58u); // every member, none twice
+  // A flight between bodies (issue 26): the body orbited at the end and where it changed.
+  const std::vector<OrbitSwitch> switches = {{3, "moon"}, {9, "earth"}};
+  const Json f = Json::parse(
+      renderStatsJson(sampleStats(), {3.0, false, frames, cpu, "earth", switches}), nullptr, false);
+  ASSERT_FALSE(f.is_discarded());
+  EXPECT_EQ(f["body"], "earth");
+  EXPECT_EQ(f["orbit_switches"],
+            Json::parse(R"([{"frame": 3, "body": "moon"}, {"frame": 9, "body": "earth"}])"));
+  EXPECT_EQ(f.size(), 60u);
 }
 
 TEST(RenderStatsJson, StringsAreEscapedAndInvalidUtf8Replaced) {

@@ -237,6 +237,13 @@ std::string renderStatsJson(const RenderStats& stats, const RenderRun& run) {
   addTerrain(doc, stats);
   addDomeAndLayers(doc, stats);
   addFrameTimes(doc, run);
+  if (!run.body.empty()) {
+    std::string switches = "[";
+    for (const OrbitSwitch& o : run.orbitSwitches)
+      switches += (switches.size() > 1 ? ", " : "") +
+                  inlineObject({{"frame", number(o.frame)}, {"body", jsonString(o.body)}});
+    doc.add({{"body", jsonString(run.body)}, {"orbit_switches", switches + "]"}});
+  }
   return std::move(doc).finish();
 }
 

@@ -54,6 +54,15 @@ struct PlanetTiles {
   bool night = true;
   /** The configuration's `renderer.legend` (issue 24); nullopt: the command's default. */
   std::optional<bool> legend;
+  /** The sources of the other bodies' renderers (tilesForBody): bare globes, regional layers. */
+  std::vector<std::unique_ptr<ITileSource>> bodySources;
+};
+
+/** What the renderer of another body of a flight reads (issue 26: the camera orbits the body it
+ * is near, docs/design/bodies.md "Flying between bodies"). */
+struct BodyTiles {
+  planet::RendererOptions ro;
+  ITileSource* source = nullptr;
 };
 
 /** The tile source and the layers for command `cmd` ("render", "view", "height"), filling `ro`
@@ -61,5 +70,17 @@ struct PlanetTiles {
  * rest 1) after saying why. */
 std::expected<PlanetTiles, int>
 openPlanetTiles(const cli::Args& a, const char* cmd, planet::RendererOptions& ro);
+
+/** The options and source of `body`'s renderer beside the one openPlanetTiles chose for t.body:
+ * `base` (its size, dome, sun, stars, air, ...) with the layers chosen for `body` as --body
+ * would choose them (renderer.layers on that body, else its first imagery layer, else the bare
+ * globe; its elevation layer; the geoid on the Earth only) but for --layer and --overlay, which
+ * name t.body's layers. With --server: `base` over the server's layers. The exit code after
+ * saying why. */
+std::expected<BodyTiles, int> tilesForBody(const cli::Args& a,
+                                           const char* cmd,
+                                           PlanetTiles& t,
+                                           const std::string& body,
+                                           const planet::RendererOptions& base);
 
 } // namespace tellus::commands

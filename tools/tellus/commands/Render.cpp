@@ -5,6 +5,7 @@
 #include "AnimateArgs.hpp"
 #include "Commands.hpp"
 #include "Context.hpp"
+#include "FlightRenderers.hpp"
 #include "GlobeArgs.hpp"
 #include "PlanetTiles.hpp"
 
@@ -12,6 +13,7 @@
 #include <tellus/planet/Camera.hpp>
 #include <tellus/planet/FlightBodies.hpp>
 #include <tellus/planet/FlightPath.hpp>
+#include <tellus/planet/OrbitChoice.hpp>
 #include <tellus/planet_gl/RenderStatsJson.hpp>
 #include <tellus/planet_gl/Renderer.hpp>
 
@@ -200,12 +202,19 @@ double processCpuMs() {
   return ms(u.ru_utime) + ms(u.ru_stime);
 }
 
-/** Frames drawn by one renderer: each image drawn until complete (or for a while), every frame's
- * time kept for --stats. */
+/** Frames drawn by the renderers of a render: each image drawn until complete (or for a while),
+ * every frame's time and the body orbited (a flight between bodies) kept for --stats. */
 class RenderSession {
 public:
   RenderSession(planet::Renderer& r, const cli::Args& a, double waitSeconds)
-      : r_(r), statsFile_(a.get("stats")), waitSeconds_(waitSeconds) {}
+      : r_(&r), statsFile_(a.get("stats")), waitSeconds_(waitSeconds) {}
+
+  /** The renderer that draws from now on (a flight changed the body orbited at frame n). */
+  void use(planet::Renderer& r, std::size_t n) {
+    if (&r == r_) return;
+    r_ = &r;
+    switches_.push_back({n, r.geodesy().body().name});
+  }
 
   double secondsSince() const {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
@@ -216,25 +225,25 @@ public:
     const auto begin = std::chrono::steady_clock::now();
     for (;;) {
       const double cpu0 = processCpuMs();
-      r_.frame(p);
+      r_->frame(p);
       cpuMs_.push_back(processCpuMs() - cpu0);
-      frames_.push_back(r_.stats().phases);
+      frames_.push_back(r_->stats().phases);
       const double t =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
-      if (once || r_.complete() || t > limit) break;
+      if (once || r_->complete() || t > limit) break;
       // Nothing to upload: the next frame can only wait for tiles and decoders; drawing it at
       // once would take the CPU from them (on llvmpipe drawing is CPU work).
-      if (!r_.busy() || r_.stats().uploadsPending == 0)
+      if (!r_->busy() || r_->stats().uploadsPending == 0)
         std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
-    return r_.complete();
+    return r_->complete();
   }
 
   /** --stats FILE.json, when asked for; false after saying why it could not be written. */
   bool writeStats(double elapsed, bool complete) const {
     if (!statsFile_) return true;
-    const std::string json =
-        planet::renderStatsJson(r_.stats(), {elapsed, complete, frames_, cpuMs_});
+    const std::string json = planet::renderStatsJson(
+        r_->stats(), {elapsed, complete, frames_, cpuMs_, r_->geodesy().body().name, switches_});
     std::FILE* f = std::fopen(statsFile_->c_str(), "w");
     if (f == nullptr || std::fputs(json.c_str(), f) < 0 || std::fclose(f) != 0) {
       std::fprintf(stderr, "tellus render: cannot write %s\n", statsFile_->c_str());
@@ -244,7 +253,7 @@ public:
   }
 
   int notComplete(const char* what) const {
-    const auto& s = r_.stats();
+    const auto& s = r_->stats();
     std::fprintf(stderr,
                  "tellus render: %s was not complete after %g s (%zu nodes drawn, %zu tiles in "
                  "flight, %zu failed, %zu decoding, %zu uploading); no image written\n",
@@ -259,12 +268,13 @@ public:
   }
 
 private:
-  planet::Renderer& r_;
+  planet::Renderer* r_;
   std::optional<std::string> statsFile_;
   double waitSeconds_;
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
   std::vector<planet::FramePhases> frames_;
   std::vector<double> cpuMs_;
+  std::vector<planet::OrbitSwitch> switches_;
 };
 
 bool writePng(const fs::path& file, planet::Renderer& r) {
@@ -275,11 +285,10 @@ bool writePng(const fs::path& file, planet::Renderer& r) {
 }
 
 /** A flight: numbered PNGs at --fps. With --wait-complete every frame is complete (offline show
- * production); without, each image is one renderer frame (what a live viewer saw). */
-int renderFlight(const RenderArgs& ra,
-                 const planet::RendererOptions& ro,
-                 planet::Renderer& r,
-                 RenderSession& session) {
+ * production); without, each image is one renderer frame (what a live viewer saw). Each frame is
+ * drawn by the renderer of the body the camera orbits then (planet::OrbitSwitcher; one renderer
+ * unless the keyframes name other bodies and --body does not pin one). */
+int renderFlight(const RenderArgs& ra, std::vector<BodyRenderer>& rs, RenderSession& session) {
   const planet::FlightPath& flight = *ra.flight;
   std::error_code ec;
   fs::create_directories(ra.frames, ec);
@@ -290,36 +299,43 @@ int renderFlight(const RenderArgs& ra,
   }
   const std::int64_t count = flight.frameCount(ra.fps);
   // Layer times of the keyframes: which renderer layers (0 the base, then the overlays) a name
-  // means; every name must be drawn.
-  std::vector<std::string> drawn{ro.layer};
-  for (const auto& o : ro.overlays)
-    drawn.push_back(o.layer);
+  // means; every name must be drawn by a body's renderer.
   for (const planet::Keyframe& k : flight.keyframes())
     for (const auto& [name, value] : k.layerTimes)
-      if (std::find(drawn.begin(), drawn.end(), name) == drawn.end())
+      if (std::none_of(rs.begin(), rs.end(), [&](const BodyRenderer& b) {
+            return std::find(b.drawn.begin(), b.drawn.end(), name) != b.drawn.end();
+          }))
         return usage("a keyframe's \"times\" names a layer that is not drawn", name);
-  for (std::size_t i = 0; i < drawn.size(); ++i)
-    for (const planet::Keyframe& k : flight.keyframes())
-      if (r.layerAnimation(i) != nullptr && k.layerTimes.contains(drawn[i]))
-        return usage("a keyframe's \"times\" names a layer that --animate plays", drawn[i]);
+  for (const BodyRenderer& b : rs)
+    for (std::size_t i = 0; i < b.drawn.size(); ++i)
+      for (const planet::Keyframe& k : flight.keyframes())
+        if (b.renderer->layerAnimation(i) != nullptr && k.layerTimes.contains(b.drawn[i]))
+          return usage("a keyframe's \"times\" names a layer that --animate plays", b.drawn[i]);
+  std::vector<planet::Body> bodies;
+  for (const BodyRenderer& b : rs)
+    bodies.push_back(b.renderer->geodesy().body());
+  planet::OrbitSwitcher orbit(std::move(bodies));
   bool allComplete = true;
   // --repeat: the flight again in the same renderer (what stays resident is not streamed again:
   // the later passes' frame times are the views' cost without streaming).
   for (std::int64_t n = 0; n < count * ra.repeat; ++n) {
     const double at = flight.frameTimeS(n % count, ra.fps);
     *ra.flightClockS = static_cast<double>(n) / ra.fps;
+    const planet::CameraPose pose = orbit.flightPose(flight, at);
+    const BodyRenderer& body = rs[orbit.current()];
+    planet::Renderer& r = *body.renderer;
+    session.use(r, static_cast<std::size_t>(n));
     for (const auto& [name, value] : flight.layerTimesAt(at))
-      for (std::size_t i = 0; i < drawn.size(); ++i)
-        if (drawn[i] == name) r.setLayerTime(i, value);
+      for (std::size_t i = 0; i < body.drawn.size(); ++i)
+        if (body.drawn[i] == name) r.setLayerTime(i, value);
     if (const auto sceneTime = flight.sceneTimeAt(at)) r.setTime(*sceneTime);
     char name[32];
     std::snprintf(name, sizeof name, "frame_%05lld.png", static_cast<long long>(n % count));
     if (!ra.probeFrames.empty() && n > 0 && n < count) { // before the frame changes anything
-      r.redrawLast(planet::flightPoseOver(flight, at, r.geodesy().body()));
+      r.redrawLast(pose);
       if (!writePng(fs::path(ra.probeFrames) / name, r)) return kExitError;
     }
-    const bool complete = session.renderOne(
-        planet::flightPoseOver(flight, at, r.geodesy().body()), ra.waitSeconds, !ra.waitComplete);
+    const bool complete = session.renderOne(pose, ra.waitSeconds, !ra.waitComplete);
     allComplete = allComplete && complete;
     if (ra.waitComplete && !complete) {
       session.writeStats(session.secondsSince(), false);
@@ -394,26 +410,29 @@ int runRender(const cli::Args& a) {
   if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg";
       tiles->body == "earth" && fs::exists(global))
     ro.globalImage = global;
-  if (ra->flight) { // keyframes on other bodies (issue 26): flown in the common frame, drawn
+  // Keyframes on other bodies (issue 26): flown in the common frame, each body a renderer of its
+  // own that draws while the camera orbits it (unless --body pins the one orbited), every other
+  // body a coarse globe in it.
+  const auto bodies = orbitableBodies(a, ra->flight ? &*ra->flight : nullptr, tiles->body);
+  if (ra->flight) {
     if (auto bad = planet::flightBodiesProblem(*ra->flight, geodesy.body()))
       return usage(bad->c_str(), "");
+    auto& scene = tiles->sceneBodies;
     for (const planet::Keyframe& k : ra->flight->keyframes())
-      if (!k.body.empty() && k.body != tiles->body &&
-          std::find(tiles->sceneBodies.begin(), tiles->sceneBodies.end(), k.body) ==
-              tiles->sceneBodies.end())
-        tiles->sceneBodies.push_back(k.body);
+      if (!k.body.empty() && std::find(scene.begin(), scene.end(), k.body) == scene.end())
+        scene.push_back(k.body); // the drawn body's entry is skipped by its own renderer
+    if (bodies.size() > 1 && std::find(scene.begin(), scene.end(), tiles->body) == scene.end())
+      scene.push_back(tiles->body);
   }
   addSceneBodies(ro, tiles->sceneBodies, dataDir(a), ra->earth.value_or(tiles->earth));
-  auto renderer = planet::Renderer::create(*tiles->source, geodesy, ro);
-  if (!renderer) {
-    std::fprintf(stderr, "tellus render: %s\n", renderer.error().c_str());
-    return kExitError;
-  }
+  auto renderers =
+      makeBodyRenderers(a, "render", *tiles, bodies, geodesy, ro, ra->earth.value_or(tiles->earth));
+  if (!renderers) return renderers.error();
   for (auto& anim : *animations)
-    (*renderer)->animateLayer(anim.layer, std::move(anim.animation));
-  RenderSession session(**renderer, a, ra->waitSeconds);
-  return ra->flight ? renderFlight(*ra, ro, **renderer, session)
-                    : renderView(*ra, **renderer, session);
+    renderers->front().renderer->animateLayer(anim.layer, std::move(anim.animation));
+  RenderSession session(*renderers->front().renderer, a, ra->waitSeconds);
+  return ra->flight ? renderFlight(*ra, *renderers, session)
+                    : renderView(*ra, *renderers->front().renderer, session);
 }
 
 } // namespace

@@ -24,6 +24,8 @@
  * "scene_time" is the scene's time of the last frame (issue 23) as ISO 8601 UTC
  * ("2024-03-20T12:00:00Z", whole seconds; "scene_time_unix" the POSIX seconds with three decimals),
  * null for none; "sunlight" whether the globe was lit; each layer says whether it is "night".
+ * "body" is the body orbited at the last frame and "orbit_switches" each change of it along a
+ * flight between bodies (issue 26), [{"frame": 61, "body": "moon"}].
  * Times are milliseconds with three decimals (seconds for "seconds"), "dome_error_px" four
  * significant digits or null when infinite (an edge the direct method cannot map), counts are
  * integers. Strings are JSON strings (escaped; invalid UTF-8 replaced by U+FFFD).
@@ -51,12 +53,22 @@ struct FrameTimeSummary {
 
 FrameTimeSummary summarizeFrameTimes(std::span<const FramePhases> frames);
 
+/** A flight between bodies changed the body orbited (issue 26): from frame `frame` on, `body`. */
+struct OrbitSwitch {
+  std::size_t frame = 0;
+  std::string body;
+};
+
 /** What a render did, as `--stats` writes it. */
 struct RenderRun {
   double seconds = 0.0;  ///< wall clock from the first frame to the end
   bool complete = false; ///< the image (every frame of a flight) showed what its LOD asked for
   std::span<const FramePhases> frames; ///< every frame drawn, in order
   std::span<const double> frameCpuMs;  ///< the process's CPU time of each frame (all threads)
+  /** The body orbited at the last frame ("": neither it nor the switches are written) and each
+   * change of it along a flight. */
+  std::string body;
+  std::span<const OrbitSwitch> orbitSwitches;
 };
 
 /** The statistics document (see the file comment), ending in a newline. */
