@@ -150,7 +150,7 @@ wait "$pid" || fail "tellus view --animate exited with $?: $(cat "$work/anim.txt
 pid=
 # Several bodies (issue 26): with --bodies moon, B orbits the Moon with the eye kept where it was
 # (the Earth's day side, the Indian Ocean, now the Moon's scene body, fills the middle), and B
-# again the Earth; each renderer says what it orbits.
+# again the Earth; each renderer says what it orbits, and all draw in the same window.
 rm -f "$work"/tellus-*.png
 "$tellus" view --no-atmosphere --no-stars --cache "$work/cache" --size 160x100 --camera -20,95,2e7 \
   --time 2024-01-18T03:52:00Z --bodies moon >"$work/bodies.txt" 2>&1 &
@@ -174,10 +174,14 @@ press_b() { # B until the n-th renderer says what it orbits (a press lost to a c
   done
 }
 orbiting 1 "earth; B orbits moon"
+first_win=$win
 shot 1
 mv "$work/tellus-1.png" "$work/before-b.png"
 press_b 2
 orbiting 2 "moon; B orbits earth"
+[ "$win" = "$first_win" ] || fail "B opened another window ($first_win, then $win)"
+[ "$(xdotool search --pid "$pid" --name '^tellus' | wc -l)" = 1 ] ||
+  fail "B: more than one window: $(xdotool search --pid "$pid" --name '^tellus')"
 shot 1
 # The middle 16 x 16 pixels before and after B: the same ocean (the quadtree's tiles, then the
 # Moon's scene body with the same map), lit, within what their texel sampling leaves.

@@ -80,12 +80,17 @@ Renderer::Impl::~Impl() {
 }
 
 std::string Renderer::Impl::openGl() {
-  auto made = GlContext::create({.visible = opt.visibleWindow,
-                                 .width = opt.width,
-                                 .height = opt.height,
-                                 .title = opt.windowTitle});
-  if (!made) return made.error();
-  context = std::move(*made);
+  if (opt.shareWindowOf != nullptr) { // another body's renderer's window (issue 26)
+    context = opt.shareWindowOf->impl_->context;
+    context->makeCurrent();
+  } else {
+    auto made = GlContext::create({.visible = opt.visibleWindow,
+                                   .width = opt.width,
+                                   .height = opt.height,
+                                   .title = opt.windowTitle});
+    if (!made) return made.error();
+    context = std::move(*made);
+  }
   const GlCapabilities& gl = context->capabilities();
   stats.reversedZ = gl.clipControl;
   stats.glVersion = gl.version;

@@ -83,7 +83,7 @@ struct Renderer::Impl {
   /** The frame clock now (RendererOptions::frameClock, else seconds since start). */
   double frameClockNow() const;
 
-  std::unique_ptr<GlContext> context; // first: destroyed last
+  std::shared_ptr<GlContext> context; // first: destroyed last (shareWindowOf: shared)
   ITileSource& source;
   const Geodesy& geodesy;
   RendererOptions opt;

@@ -38,7 +38,7 @@ makeBodyRenderers(const cli::Args& a,
                   EarthModel earth) {
   std::vector<BodyRenderer> out;
   for (const std::string& name : bodies) {
-    BodyRenderer b{name, nullptr, {}, nullptr};
+    BodyRenderer b{name, nullptr, {}, t.layerTimes, nullptr};
     const Geodesy* geodesy = &first;
     ITileSource* source = t.source;
     planet::RendererOptions o = ro;
@@ -47,6 +47,8 @@ makeBodyRenderers(const cli::Args& a,
       if (!tiles) return std::unexpected(tiles.error());
       o = std::move(tiles->ro);
       source = tiles->source;
+      b.layerTimes = std::move(tiles->layerTimes);
+      if (o.visibleWindow) o.shareWindowOf = out.front().renderer.get(); // view's B (issue 26)
       b.geodesy = std::make_unique<Geodesy>(resolveBody(name, nullptr, earth));
       geodesy = b.geodesy.get();
       if (const auto global = dataDir(a) / "bmng_2048x1024.jpg";

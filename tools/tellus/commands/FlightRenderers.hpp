@@ -26,6 +26,7 @@ struct BodyRenderer {
   std::string body;
   std::unique_ptr<Geodesy> geodesy; ///< what the renderer draws (null: the command's, the first)
   std::vector<std::string> drawn;   ///< its layers' names: the base, then the overlays
+  std::vector<std::vector<std::string>> layerTimes; ///< per layer, its TIME values (view's [ ])
   std::unique_ptr<planet::Renderer> renderer;
 };
 
@@ -36,7 +37,8 @@ orbitableBodies(const cli::Args& a, const planet::FlightPath* flight, const std:
 
 /** A renderer for each body of `bodies` (the first from `first` and `ro` over t.source, as a
  * single-body render makes it; the others from tilesForBody with ro's other settings, the Blue
- * Marble as the Earth's global texture from `dataDir`). The exit code after saying why. */
+ * Marble as the Earth's global texture from the data directory; with ro.visibleWindow they draw
+ * in the first one's window). The exit code after saying why. */
 std::expected<std::vector<BodyRenderer>, int>
 makeBodyRenderers(const cli::Args& a,
                   const char* cmd,

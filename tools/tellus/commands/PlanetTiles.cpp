@@ -307,7 +307,7 @@ std::expected<BodyTiles, int> tilesForBody(const cli::Args& a,
                                            PlanetTiles& t,
                                            const std::string& body,
                                            const planet::RendererOptions& base) {
-  BodyTiles out{base, t.source};
+  BodyTiles out{base, t.source, t.layerTimes};
   if (!t.ctx || body == t.body) return out; // --server: its layers are not filtered by body
   const Config& config = t.ctx->config;
   cli::Args b = a; // --layer and --overlay are the first body's; the geoid the Earth's
@@ -338,6 +338,7 @@ std::expected<BodyTiles, int> tilesForBody(const cli::Args& a,
     return std::unexpected(kExitUsage);
   if (own.regional) t.bodySources.push_back(std::move(own.regional));
   out.source = own.source;
+  out.layerTimes = std::move(own.layerTimes);
   return out;
 }
 

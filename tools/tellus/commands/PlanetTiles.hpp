@@ -63,6 +63,7 @@ struct PlanetTiles {
 struct BodyTiles {
   planet::RendererOptions ro;
   ITileSource* source = nullptr;
+  std::vector<std::vector<std::string>> layerTimes; ///< as PlanetTiles::layerTimes
 };
 
 /** The tile source and the layers for command `cmd` ("render", "view", "height"), filling `ro`

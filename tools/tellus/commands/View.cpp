@@ -3,6 +3,7 @@
 #include "AnimateArgs.hpp"
 #include "Commands.hpp"
 #include "Context.hpp"
+#include "FlightRenderers.hpp"
 #include "GlobeArgs.hpp"
 #include "PlanetTiles.hpp"
 
@@ -13,6 +14,7 @@
 #include <tellus/planet_gl/Renderer.hpp>
 #include <tellus/planet_gl/Viewer.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -67,16 +69,10 @@ int parseViewArgs(const cli::Args& a,
   return kExitOk;
 }
 
-/** One renderer's view of one body (issue 26: B ends it to orbit the next body; `next` then says
- * which, with the other bodies and the eye's pose over it). */
-struct NextBody {
-  std::string body;
-  std::vector<std::string> others;
-  planet::CameraPose pose;
-  std::optional<double> sceneTime;
-};
-
-int viewBody(const cli::Args& a, NextBody& next) {
+/** The view: a renderer per body of the scene (issue 26: the orbited one, then --bodies or
+ * renderer.bodies), all in one window; B hands the window to the next body's renderer with the
+ * eye kept (planet::poseOverOtherBody), the one left drawn as a coarse globe by the next. */
+int runView(const cli::Args& a) {
   planet::CameraPose pose{20.0, 10.0, 2.0e7, 0.0, 0.0};
   planet::RendererOptions ro;
   ro.width = 1280;
@@ -85,8 +81,8 @@ int viewBody(const cli::Args& a, NextBody& next) {
   ro.windowTitle = "tellus";
   planet::ViewerOptions vo;
   if (const int rc = parseViewArgs(a, pose, ro, vo); rc != kExitOk) return rc;
-  const auto earth = earthArg(a);
-  if (!earth) return usage("--earth must be wgs84 or sphere", earth.error());
+  const auto earthModel = earthArg(a);
+  if (!earthModel) return usage("--earth must be wgs84 or sphere", earthModel.error());
   auto tiles = openPlanetTiles(a, "view", ro);
   if (!tiles) return tiles.error();
   if (auto bad = applySceneTime(a, tiles->sceneTime, "now", ro)) {
@@ -104,22 +100,24 @@ int viewBody(const cli::Args& a, NextBody& next) {
   if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg";
       tiles->body == "earth" && fs::exists(global))
     ro.globalImage = global;
-  const Geodesy geodesy(tiles->bodyFor(earth->value_or(tiles->earth)));
-  addSceneBodies(ro, tiles->sceneBodies, dataDir(a), earth->value_or(tiles->earth));
-  auto renderer = planet::Renderer::create(*tiles->source, geodesy, ro);
-  if (!renderer) {
-    std::fprintf(stderr, "tellus view: %s\n", renderer.error().c_str());
-    return kExitError;
-  }
-  for (auto& anim : *animations)
-    (*renderer)->animateLayer(anim.layer, std::move(anim.animation));
-  vo.start = pose;
-  vo.layerTimes = tiles->layerTimes;
-  vo.sceneTime = ro.timeUnixSeconds;
-  // B: the scene's bodies in turn, this one first (issue 26).
-  vo.bodies = {tiles->body};
+  const EarthModel earth = earthModel->value_or(tiles->earth);
+  const Geodesy geodesy(tiles->bodyFor(earth));
+  // B: the scene's bodies in turn, this one first (issue 26); each body's renderer shows the
+  // others (its own entry skipped).
+  std::vector<std::string> bodies{tiles->body};
   for (const std::string& b : tiles->sceneBodies)
-    if (b != tiles->body) vo.bodies.push_back(b);
+    if (std::find(bodies.begin(), bodies.end(), b) == bodies.end()) bodies.push_back(b);
+  if (bodies.size() > 1 &&
+      std::find(tiles->sceneBodies.begin(), tiles->sceneBodies.end(), tiles->body) ==
+          tiles->sceneBodies.end())
+    tiles->sceneBodies.push_back(tiles->body);
+  addSceneBodies(ro, tiles->sceneBodies, dataDir(a), earth);
+  auto renderers = makeBodyRenderers(a, "view", *tiles, bodies, geodesy, ro, earth);
+  if (!renderers) return renderers.error();
+  for (auto& anim : *animations)
+    renderers->front().renderer->animateLayer(anim.layer, std::move(anim.animation));
+  vo.start = pose;
+  vo.sceneTime = ro.timeUnixSeconds;
   planet::ViewerOptions::End end;
   vo.end = &end;
   std::printf("tellus view: drag to move, wheel to zoom, W/S tilt, A/D heading, R reset, "
@@ -128,50 +126,31 @@ int viewBody(const cli::Args& a, NextBody& next) {
                                   : "; layers: 0-9 select (1-9 show/hide), - = opacity, [ ] time");
   if (!animations->empty())
     std::printf("tellus view: --animate: Space plays or pauses, [ ] step the animated layer\n");
-  std::fflush(stdout);
-  if (vo.bodies.size() > 1)
-    std::printf(
-        "tellus view: orbiting %s; B orbits %s\n", tiles->body.c_str(), vo.bodies[1].c_str());
-  std::fflush(stdout);
-  const auto frames = planet::runViewer(**renderer, vo);
+  std::uint64_t frames = 0;
+  for (std::size_t at = 0;;) {
+    BodyRenderer& shown = (*renderers)[at];
+    vo.layerTimes = shown.layerTimes;
+    vo.bodies.clear(); // this body first, then the others in turn
+    for (std::size_t i = 0; i < bodies.size(); ++i)
+      vo.bodies.push_back(bodies[(at + i) % bodies.size()]);
+    if (bodies.size() > 1)
+      std::printf(
+          "tellus view: orbiting %s; B orbits %s\n", vo.bodies[0].c_str(), vo.bodies[1].c_str());
+    std::fflush(stdout);
+    end = {};
+    frames += planet::runViewer(*shown.renderer, vo);
+    if (end.nextBody.empty()) break;
+    const std::size_t next = (at + 1) % bodies.size();
+    const planet::Body& from = shown.renderer->geodesy().body();
+    vo.start = planet::poseOverOtherBody(end.pose,
+                                         from,
+                                         (*renderers)[next].renderer->geodesy().body(),
+                                         end.sceneTime.value_or(planet::kJ2000UnixSeconds));
+    vo.sceneTime = end.sceneTime;
+    at = next;
+  }
   std::printf("tellus view: %llu frames\n", static_cast<unsigned long long>(frames));
-  if (!end.nextBody.empty()) {
-    const planet::Body to = resolveBody(end.nextBody, nullptr, earth->value_or(tiles->earth));
-    next.body = end.nextBody;
-    next.others.assign(vo.bodies.begin(), vo.bodies.end());
-    std::erase(next.others, end.nextBody);
-    next.sceneTime = end.sceneTime;
-    next.pose = planet::poseOverOtherBody(
-        end.pose, geodesy.body(), to, end.sceneTime.value_or(planet::kJ2000UnixSeconds));
-  }
   return kExitOk;
-}
-
-/** The view, once per body orbited: B makes the next body's renderer with the eye kept. */
-int runView(const cli::Args& first) {
-  cli::Args a = first;
-  for (;;) {
-    NextBody next;
-    if (const int rc = viewBody(a, next); rc != kExitOk || next.body.empty()) return rc;
-    char camera[160];
-    std::snprintf(camera,
-                  sizeof camera,
-                  "%.17g,%.17g,%.17g,%.17g,%.17g",
-                  next.pose.latDeg,
-                  next.pose.lonDeg,
-                  next.pose.altitudeM,
-                  next.pose.headingDeg,
-                  next.pose.tiltDeg);
-    std::string others;
-    for (const std::string& b : next.others)
-      others += (others.empty() ? "" : ",") + b;
-    for (const char* o : {"body", "bodies", "camera", "time"})
-      a.options.erase(o);
-    a.options.emplace("body", next.body);
-    a.options.emplace("bodies", others);
-    a.options.emplace("camera", camera);
-    if (next.sceneTime) a.options.emplace("time", planet::formatSceneTime(*next.sceneTime));
-  }
 }
 
 } // namespace

@@ -46,6 +46,8 @@
 
 namespace tellus::planet {
 
+class Renderer;
+
 /** 8-bit RGBA pixels, rows from the top (decoded images, readImageFile). */
 struct RgbaImage {
   int width = 0;
@@ -282,6 +284,10 @@ struct RendererOptions {
   std::vector<SceneBody> sceneBodies;
   bool visibleWindow = false; ///< a window the user sees (`tellus view`); else hidden
   std::string windowTitle = "tellus";
+  /** Another renderer whose window and GL context this one draws in (issue 26: `view`'s B, the
+   * next body in the same window), instead of opening its own; the window stays while either
+   * lives. Both belong to one thread; the one whose frame() runs last shows. */
+  const Renderer* shareWindowOf = nullptr;
 };
 
 /** Where one frame's time went on the main thread (wall clock, ms). GL calls only queue work;
