@@ -41,6 +41,8 @@ refused "unexpected argument 'extra'" seed --cache "$cache" extra
 refused "unknown option --camra (did you mean --camera?)" render --cache "$cache" --camra 0,0,1e7 --out "$work/x.png"
 refused "unknown option --siz (did you mean --size?)" view --cache "$cache" --siz 10x10
 refused "unknown option --latt (did you mean --lat?)" height --cache "$cache" --latt 1 --lon 2
+# --bodies (the scene's other bodies, issue 26) means nothing to height: refused, not ignored.
+refused "unknown option --bodies" height --cache "$cache" --lat 1 --lon 2 --bodies moon
 refused "unknown option -layer (did you mean --layer?)" seed --cache "$cache" -layer bluemarble
 refused "unknown command 'sede'" sede
 

@@ -19,13 +19,13 @@ std::vector<cli::OptionSpec> tileSourceOptions() {
   return {{"offline", K::Flag},
           {"server", K::Value},
           {"geoid", K::Value},
-          {"body", K::Value},
-          {"bodies", K::Value}};
+          {"body", K::Value}};
 }
 
 std::vector<cli::OptionSpec> globeOptions() {
   using K = cli::OptionKind;
   return {{"camera", K::Value},
+          {"bodies", K::Value}, // the scene's other bodies (issue 26): render and view only
           {"size", K::Value},
           {"layer", K::Value},
           {"threshold", K::Value},

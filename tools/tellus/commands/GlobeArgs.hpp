@@ -18,10 +18,10 @@
 
 namespace tellus::commands {
 
-/** --offline, --server and --geoid: where render, view and height get their tiles. */
+/** --offline, --server, --geoid and --body: where render, view and height get their tiles. */
 std::vector<cli::OptionSpec> tileSourceOptions();
-/** What render and view both take: --camera, --size, --layer, --threshold, --earth, terrain,
- * --overlay and the dome's options. */
+/** What render and view both take: --camera, --bodies, --size, --layer, --threshold, --earth,
+ * terrain, --overlay and the dome's options. */
 std::vector<cli::OptionSpec> globeOptions();
 
 /** `--earth wgs84|sphere`; nullopt when absent, the value given when bad. */

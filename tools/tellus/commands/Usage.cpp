@@ -73,7 +73,8 @@ commands:
              configured one; only its layers are used; none for it: a bare fallback globe)
              render and view: [--bodies LIST] (renderer.bodies: the other bodies in the scene,
              of earth, moon, mars; each placed by the ephemeris at the scene's time; view: B
-             orbits the next of them, the eye kept; render --path: keyframes' "body")
+             orbits the next of them in the same window, the eye kept; render --path:
+             keyframes' "body": the camera orbits the body it is near, unless --body pins it)
              render, for the speed/accuracy sweep (bench/trade.sh): [--mesh-size N]
              [--upload-per-frame BYTES] [--vertices double|float]
   height   the terrain height in metres at a point, from the elevation layer's deepest level
