@@ -76,22 +76,26 @@ int DistantGlobe::strideFor(double radiusPx) const noexcept {
 
 void DistantGlobe::cameraRelative(const BodyPlacement& placement,
                                   const glm::dvec3& eye,
-                                  std::vector<float>& out) const {
+                                  std::vector<float>& out,
+                                  int stride) const {
   out.resize(fixed_.size() * 8);
   const glm::dvec3 centre = placement.centre - eye; // double: the only large subtraction
-  float* o = out.data();
-  for (std::size_t i = 0; i < fixed_.size(); ++i, o += 8) {
-    const glm::dvec3 p = centre + placement.rotation * fixed_[i];
-    const glm::dvec3 n = placement.rotation * normals_[i];
-    o[0] = static_cast<float>(p.x);
-    o[1] = static_cast<float>(p.y);
-    o[2] = static_cast<float>(p.z);
-    o[3] = static_cast<float>(n.x);
-    o[4] = static_cast<float>(n.y);
-    o[5] = static_cast<float>(n.z);
-    o[6] = uv_[i].x;
-    o[7] = uv_[i].y;
-  }
+  const std::size_t step = stride > 1 ? static_cast<std::size_t>(stride) : 1;
+  const std::size_t row = rowLength();
+  for (std::size_t j = 0; j * row < fixed_.size(); j += step)
+    for (std::size_t i = j * row; i < (j + 1) * row; i += step) {
+      float* o = out.data() + i * 8;
+      const glm::dvec3 p = centre + placement.rotation * fixed_[i];
+      const glm::dvec3 n = placement.rotation * normals_[i];
+      o[0] = static_cast<float>(p.x);
+      o[1] = static_cast<float>(p.y);
+      o[2] = static_cast<float>(p.z);
+      o[3] = static_cast<float>(n.x);
+      o[4] = static_cast<float>(n.y);
+      o[5] = static_cast<float>(n.z);
+      o[6] = uv_[i].x;
+      o[7] = uv_[i].y;
+    }
 }
 
 } // namespace tellus::planet

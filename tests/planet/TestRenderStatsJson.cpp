@@ -169,13 +169,13 @@ TEST(RenderStatsJson, TheDocumentToTheByte) {
   "frame_cpu_ms": [10.000, 12.500, 8.000]
 }
 )";
-  EXPECT_EQ(renderStatsJson(sampleStats(), {1.2346, true, frames, cpu}), want);
+  EXPECT_EQ(renderStatsJson(sampleStats(), {1.2346, true, frames, cpu, {}, {}}), want);
 }
 
 TEST(RenderStatsJson, ReadsBackAsJson) {
   const std::vector<FramePhases> frames = {frame(5.0), frame(7.25)};
   const std::vector<double> cpu = {1.0, 2.0};
-  const Json j = Json::parse(renderStatsJson(sampleStats(), {3.0, false, frames, cpu}),
+  const Json j = Json::parse(renderStatsJson(sampleStats(), {3.0, false, frames, cpu, {}, {}}),
                              nullptr,
                              /*allow_exceptions=*/false);
   ASSERT_FALSE(j.is_discarded());

@@ -129,6 +129,28 @@ TEST(SceneBodies, VerticesAreCameraRelativeBeforeTheyAreFloats) {
   EXPECT_NEAR(out[next * 8 + 5], n.z, 1e-6);
 }
 
+TEST(SceneBodies, OnlyTheVerticesAStrideDrawsAreMadeCameraRelative) {
+  // Stride 4 of a 32 x 16 grid: rows and columns 0, 4, 8, ... written as stride 1 writes them;
+  // the rest left as they were (-1 here), and every index of indices(4) among those written.
+  const DistantGlobe g(moonBody(), 32, 16);
+  const BodyPlacement p = placeBody(EphemerisBody::earth, EphemerisBody::moon, kFirstQuarter2024);
+  const glm::dvec3 eye{1.0e7, -2.0e6, 3.0e5};
+  std::vector<float> all, some(g.vertexCount() * 8, -1.0f);
+  g.cameraRelative(p, eye, all);
+  g.cameraRelative(p, eye, some, 4);
+  ASSERT_EQ(g.rowLength(), 33u);
+  std::size_t written = 0;
+  for (std::size_t v = 0; v < g.vertexCount(); ++v) {
+    const bool drawn = (v / 33) % 4 == 0 && (v % 33) % 4 == 0;
+    for (std::size_t k = 0; k < 8; ++k)
+      EXPECT_EQ(some[v * 8 + k], drawn ? all[v * 8 + k] : -1.0f) << v << " " << k;
+    written += drawn ? 1 : 0;
+  }
+  EXPECT_EQ(written, 5u * 9u);
+  for (const unsigned i : g.indices(4))
+    EXPECT_TRUE((i / 33) % 4 == 0 && (i % 33) % 4 == 0) << i;
+}
+
 TEST(SceneBodies, ASmallDiscTakesACoarserGridOfTheSameVertices) {
   const DistantGlobe g(moonBody()); // 128 x 64
   EXPECT_EQ(g.indices(1).size(), static_cast<std::size_t>(128 * (2 * 64 - 2) * 3));

@@ -116,7 +116,6 @@ void BodiesPass::draw(const FrameContext& frame) {
     if ((cam.isFisheye() ? classifyCone(cam, sphere) : classify(cam.frustum(), sphere)) ==
         FrustumResult::Outside)
       continue;
-    d->globe.cameraRelative(at, frame.eye, scratch_);
     const double dist = glm::length(at.centre - frame.eye);
     const double alpha = std::asin(std::min(1.0, d->globe.body().radiusA / std::max(dist, 1.0)));
     const double radiusPx = focal * (cam.isFisheye() ? alpha : std::tan(std::min(alpha, 1.5)));
@@ -125,12 +124,24 @@ void BodiesPass::draw(const FrameContext& frame) {
     while ((1 << (k + 1)) <= stride)
       ++k;
     const auto [first, count] = d->ranges[k];
+    // Only the vertices the stride draws are made camera-relative, and only their rows uploaded
+    // (a disc a few pixels wide: 9 rows of 129 vertices, not 65).
+    d->globe.cameraRelative(at, frame.eye, scratch_, stride);
     glBindVertexArray(d->vao.id());
     glBindBuffer(GL_ARRAY_BUFFER, d->vbo.id());
-    glBufferSubData(GL_ARRAY_BUFFER,
-                    0,
-                    static_cast<GLsizeiptr>(scratch_.size() * sizeof(float)),
-                    scratch_.data());
+    const auto upload = [this](std::size_t from, std::size_t floats) {
+      glBufferSubData(GL_ARRAY_BUFFER,
+                      static_cast<GLintptr>(from * sizeof(float)),
+                      static_cast<GLsizeiptr>(floats * sizeof(float)),
+                      scratch_.data() + from);
+    };
+    const std::size_t rowFloats = d->globe.rowLength() * 8;
+    if (stride == 1)
+      upload(0, scratch_.size());
+    else
+      for (std::size_t row = 0; row < scratch_.size();
+           row += rowFloats * static_cast<std::size_t>(stride))
+        upload(row, rowFloats);
     glBindTexture(GL_TEXTURE_2D, d->texture.id());
     glDrawElements(GL_TRIANGLES,
                    static_cast<GLsizei>(count),

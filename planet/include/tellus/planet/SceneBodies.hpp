@@ -72,10 +72,15 @@ public:
   int strideFor(double radiusPx) const noexcept;
   /** Per vertex 8 floats: the position relative to `eye` (the scene's frame, metres), the
    * ellipsoid's unit normal in the scene's frame, the uv. Written into `out` (resized). The
-   * subtraction is in double; only its result is narrowed. */
+   * subtraction is in double; only its result is narrowed. Only the vertices indices(stride)
+   * draws are written (rows and columns that are multiples of stride); the others keep what
+   * `out` held. */
   void cameraRelative(const BodyPlacement& placement,
                       const glm::dvec3& eye,
-                      std::vector<float>& out) const;
+                      std::vector<float>& out,
+                      int stride = 1) const;
+  /** Vertices per row (slices + 1): row j starts at vertex j * rowLength(). */
+  std::size_t rowLength() const noexcept { return static_cast<std::size_t>(slices_) + 1; }
   /** The body-fixed position (metres) and unit normal of vertex i, and its uv. */
   const glm::dvec3& fixedPosition(std::size_t i) const noexcept { return fixed_[i]; }
   const glm::dvec3& fixedNormal(std::size_t i) const noexcept { return normals_[i]; }
