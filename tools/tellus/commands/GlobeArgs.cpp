@@ -16,10 +16,7 @@ namespace tellus::commands {
 
 std::vector<cli::OptionSpec> tileSourceOptions() {
   using K = cli::OptionKind;
-  return {{"offline", K::Flag},
-          {"server", K::Value},
-          {"geoid", K::Value},
-          {"body", K::Value}};
+  return {{"offline", K::Flag}, {"server", K::Value}, {"geoid", K::Value}, {"body", K::Value}};
 }
 
 std::vector<cli::OptionSpec> globeOptions() {
