@@ -8,7 +8,9 @@
 # one frame (bench/paths/earth-moon.json). Then flying between bodies (PARTS=switch): the dome
 # show bench/paths/earth-to-moon-dome.json (512 x 512 dome, 10 fps) without --body, the camera
 # switching from the Earth's renderer to the Moon's on the way (planet/OrbitChoice.hpp), against
-# the same flight orbiting the Moon throughout (--body moon), alternating. Mesa llvmpipe under
+# the same flight orbiting the Moon throughout (--body moon) and the Earth throughout (--body
+# earth: the flight as it was drawn before switching, the same frames until the switch),
+# alternating. Mesa llvmpipe under
 # Xvfb: frame times are CPU figures.
 # Usage: [PARTS="scene switch"] bench/bodies.sh [path/to/tellus] [rounds]
 #        (default build/tools/tellus/tellus, 3; both parts)
@@ -60,9 +62,9 @@ if [[ " $parts " == *" switch "* ]]; then
   echo "|---|---|---|---|---|---|"
   declare -A flown
   for r in $(seq 1 "$rounds"); do
-    for scene in switch moon; do
+    for scene in switch moon earth; do
       extra=()
-      [ "$scene" = moon ] && extra=(--body moon)
+      [ "$scene" != switch ] && extra=(--body "$scene")
       xvfb-run -a -s '-screen 0 1280x1024x24' "$tellus" render --cache "$work/cache" \
         --path "$paths/earth-to-moon-dome.json" --frames "$work/frames" --fps 10 --dome 180 \
         --size 512 --no-stars --repeat 2 --stats "$work/s.json" "${extra[@]}" >/dev/null
@@ -73,5 +75,5 @@ if [[ " $parts " == *" switch "* ]]; then
     done
   done
   echo
-  python3 -c "a=${flown[moon]}/$rounds; b=${flown[switch]}/$rounds; print('switching: mean of settled medians %.2f ms against --body moon %.2f ms: %.3f' % (b, a, b / a))"
+  python3 -c "m=${flown[moon]}/$rounds; e=${flown[earth]}/$rounds; s=${flown[switch]}/$rounds; print('switching: mean of settled medians %.2f ms; --body moon %.2f ms (switch / moon %.3f); --body earth %.2f ms (switch / earth %.3f)' % (s, m, s / m, e, s / e))"
 fi
