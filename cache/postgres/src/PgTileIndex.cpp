@@ -79,25 +79,41 @@ openPgTileIndex(const PgTileIndexOptions& options) {
 // ---------------------------------------------------------------------------------- readers
 
 PgTileIndex::Reader::~Reader() {
-  if (!conn_ || pg::broken(conn_.get())) return;
+  if (!conn_) return; // moved from
   std::lock_guard lock(index_->readMutex_);
-  if (index_->idleReaders_.size() <
-      static_cast<std::size_t>(std::max(1, index_->options_.readConnections))) {
+  if (!pg::broken(conn_.get()) &&
+      index_->idleReaders_.size() <
+          static_cast<std::size_t>(std::max(1, index_->options_.readConnections))) {
     index_->idleReaders_.push_back(std::move(conn_));
+  } else {
+    conn_.reset();
+    --index_->openReaders_;
   }
+  index_->readerFreed_.notify_one();
 }
 
 std::expected<PgTileIndex::Reader, CacheError> PgTileIndex::reader() {
   {
-    std::lock_guard lock(readMutex_);
+    std::unique_lock lock(readMutex_);
+    // At most maxReadConnections at once: a burst waits for a connection rather than opening
+    // one per request (each costs the server a process).
+    readerFreed_.wait(lock, [this] {
+      return !idleReaders_.empty() || openReaders_ < std::max(1, options_.maxReadConnections);
+    });
     if (!idleReaders_.empty()) {
       auto c = std::move(idleReaders_.back());
       idleReaders_.pop_back();
       return Reader{this, std::move(c)};
     }
+    ++openReaders_;
   }
   auto c = pg::connect(options_.connect);
-  if (!c) return std::unexpected(c.error());
+  if (!c) {
+    std::lock_guard lock(readMutex_);
+    --openReaders_;
+    readerFreed_.notify_one();
+    return std::unexpected(c.error());
+  }
   return Reader{this, std::move(*c)};
 }
 

@@ -3,8 +3,9 @@
  * @file PgTileIndex.hpp
  * @brief PgTileIndex: ITileIndex over libpq (the public side is tellus/cache_pg/PgTileIndex.hpp).
  *
- * - Reads borrow a pooled connection (autocommit, so committed state only); one found broken is
- *   dropped and the next read connects anew, so a restarted server costs the reads in flight only.
+ * - Reads borrow a pooled connection (autocommit, so committed state only; at most
+ *   maxReadConnections at once, the rest wait); one found broken is dropped and the next read
+ *   connects anew, so a restarted server costs the reads in flight only.
  * - Writes use one connection; begin() reconnects it when the server went away in between.
  * - Selections (prune, eviction) stream through a cursor in a read-only transaction, 1000 rows a
  *   fetch, so a selection of millions of rows is never held in memory.
@@ -16,6 +17,7 @@
 
 #include <tellus/cache/TileIndex.hpp>
 
+#include <condition_variable>
 #include <mutex>
 #include <vector>
 
@@ -94,7 +96,9 @@ private:
   PgTileIndexOptions options_;
 
   std::mutex readMutex_;
+  std::condition_variable readerFreed_;
   std::vector<pg::ConnPtr> idleReaders_;
+  int openReaders_ = 0; ///< idle + borrowed
 
   // The writer's (one thread at a time).
   pg::ConnPtr writer_;

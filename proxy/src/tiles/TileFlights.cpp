@@ -106,13 +106,19 @@ bool TileService::Impl::landIfCachedNow(const FlightKey& fk, const std::string& 
 
 void TileService::Impl::land(const FlightKey& k, TileAnswer&& answer) {
   std::vector<Done> waiters;
+  std::optional<LeaseKey> lease;
   {
     std::lock_guard lock(flightsMutex);
-    const auto it = flights.find(k);
-    if (it == flights.end()) return;
-    waiters = std::move(it->second);
-    flights.erase(it);
+    if (const auto h = heldLeases.find(k); h != heldLeases.end()) {
+      lease = std::move(h->second);
+      heldLeases.erase(h);
+    }
+    if (const auto it = flights.find(k); it != flights.end()) {
+      waiters = std::move(it->second);
+      flights.erase(it);
+    }
   }
+  if (lease) options.leases->release(*lease);
   for (std::size_t i = 0; i + 1 < waiters.size(); ++i) {
     TileAnswer copy = answer;
     waiters[i](std::move(copy));
@@ -281,9 +287,46 @@ void TileService::Impl::getTile(std::string_view layerName,
   if (landIfCachedNow(fk, folder)) return;
   if (u.type == UpstreamSpec::Type::Local) {
     renderLocal(fk, l, g, folder, std::move(stale));
+  } else if (options.leases) {
+    fetchUnderLease(fk, l, u, g, folder, std::string(time), std::move(stale));
   } else {
     fetchRemote(fk, l, u, g, folder, std::string(time), std::move(stale));
   }
+}
+
+void TileService::Impl::fetchUnderLease(const FlightKey& fk,
+                                        const LayerSpec& l,
+                                        const UpstreamSpec& u,
+                                        const TileGrid& g,
+                                        const std::string& folder,
+                                        const std::string& time,
+                                        std::optional<CacheLookup> stale) {
+  const LeaseKey lease{folder, fk.key};
+  auto kept = std::make_shared<std::optional<CacheLookup>>(std::move(stale));
+  // Woken on the lease service's thread: the look at the cache and the next try run on a worker.
+  auto retry = [weak = weak_from_this(), fk, &l, &u, &g, folder, time, kept] {
+    const auto self = weak.lock();
+    if (!self) return;
+    self->workers->post([im = self.get(), fk, &l, &u, &g, folder, time, kept] {
+      if (im->landIfCachedNow(fk, folder)) return; // the holder stored it
+      im->fetchUnderLease(fk, l, u, g, folder, time, std::move(*kept));
+    });
+  };
+  const LeaseOutcome got =
+      options.leases->acquireOrWait(lease, options.leaseRecheck, std::move(retry));
+  if (got == LeaseOutcome::Waiting) {
+    leaseWaits.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  if (got == LeaseOutcome::Acquired) {
+    {
+      std::lock_guard lock(flightsMutex);
+      heldLeases.insert_or_assign(fk, lease);
+    }
+    // Another process may have stored it between our look and the lease.
+    if (landIfCachedNow(fk, folder)) return;
+  }
+  fetchRemote(fk, l, u, g, folder, time, std::move(*kept));
 }
 
 } // namespace tellus

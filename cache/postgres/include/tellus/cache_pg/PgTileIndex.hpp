@@ -39,8 +39,9 @@ struct PgConnectOptions {
 
 struct PgTileIndexOptions {
   PgConnectOptions connect;
-  int readConnections = 4; ///< pooled read connections kept
-  bool readOnly = false;   ///< no writes: the schema must exist
+  int readConnections = 4;     ///< idle read connections kept
+  int maxReadConnections = 16; ///< read connections open at once (more readers wait)
+  bool readOnly = false;       ///< no writes: the schema must exist
 };
 
 /** True for `postgresql://` and `postgres://` URIs: what `cache.index` takes as PostgreSQL. */
