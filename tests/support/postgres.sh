@@ -5,6 +5,8 @@
 #                           free loopback port with its unix socket in DIR, print the connection
 #                           URI on stdout (also written to DIR/uri). Takes ~1-2 s.
 #   postgres.sh stop DIR    stop the server (fast shutdown) and remove DIR.
+#   postgres.sh pause DIR   stop the server, keeping its data (a database that went away);
+#   postgres.sh resume DIR  start it again on the same port (the same URI).
 #
 # fsync, synchronous_commit and full_page_writes are off: a test server's data may be lost in a
 # crash, its speed may not. PostgreSQL refuses to run as root (CI is root): as root the cluster
@@ -46,10 +48,11 @@ start() {
   local port tries=0
   while :; do
     port=$(free_port)
+    echo "-c listen_addresses=127.0.0.1 -p $port -c unix_socket_directories=$dir \
+          -c fsync=off -c synchronous_commit=off -c full_page_writes=off \
+          -c max_connections=400 -c shared_buffers=64MB" >"$dir/options"
     if as_owner "$PG_BIN/pg_ctl" -D "$dir/data" -l "$dir/server.log" -w -t 30 \
-         -o "-c listen_addresses=127.0.0.1 -p $port -c unix_socket_directories=$dir \
-             -c fsync=off -c synchronous_commit=off -c full_page_writes=off \
-             -c max_connections=400 -c shared_buffers=64MB" start >/dev/null; then
+         -o "$(cat "$dir/options")" start >/dev/null; then
       break
     fi
     tries=$((tries + 1))
@@ -68,8 +71,19 @@ stop() {
   rm -rf "$dir"
 }
 
+pause() {
+  as_owner "$PG_BIN/pg_ctl" -D "$1/data" -m fast -w stop >/dev/null
+}
+
+resume() {
+  as_owner "$PG_BIN/pg_ctl" -D "$1/data" -l "$1/server.log" -w -t 30 -o "$(cat "$1/options")" \
+    start >/dev/null
+}
+
 case "${1:-}" in
   start) [ $# -eq 2 ] || die "usage: postgres.sh start DIR"; start "$(realpath -m "$2")" ;;
   stop) [ $# -eq 2 ] || die "usage: postgres.sh stop DIR"; stop "$(realpath -m "$2")" ;;
-  *) die "usage: postgres.sh start|stop DIR" ;;
+  pause) [ $# -eq 2 ] || die "usage: postgres.sh pause DIR"; pause "$(realpath -m "$2")" ;;
+  resume) [ $# -eq 2 ] || die "usage: postgres.sh resume DIR"; resume "$(realpath -m "$2")" ;;
+  *) die "usage: postgres.sh start|stop|pause|resume DIR" ;;
 esac

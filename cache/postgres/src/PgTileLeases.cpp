@@ -89,7 +89,7 @@ public:
                    "giving a lease back");
   }
 
-  bool healthy() const override { return listening_.load() && lockHealthy_.load(); }
+  bool healthy() const override { return listening_.load(); }
 
 private:
   struct Waiter {

@@ -246,6 +246,8 @@ void TileService::Impl::getTile(std::string_view layerName,
   // cache could not register has nothing cached.
   auto found =
       id < 0 ? std::expected<CacheLookup, CacheError>(CacheLookup{}) : cache.openTile(id, key);
+  if (!found && options.leases) return serveWithoutIndex(id, folder, key, std::move(done));
+  if (found && options.leases) indexDown.store(false, std::memory_order_relaxed);
   if (!found) return done(error("cache: " + std::string(toString(found.error().code))));
   const UnixMillis now = nowMillis();
   if (found->kind == CacheLookup::Kind::Hit && !found->stale) {
@@ -292,6 +294,35 @@ void TileService::Impl::getTile(std::string_view layerName,
   } else {
     fetchRemote(fk, l, u, g, folder, std::string(time), std::move(stale));
   }
+}
+
+void TileService::Impl::serveWithoutIndex(DatasetId id,
+                                          const std::string& folder,
+                                          const TileKey& key,
+                                          Done done) {
+  // The shared index cannot be reached: what the store holds is served (tiles are stored whole),
+  // nothing is fetched or stored until the index answers again.
+  if (!indexDown.exchange(true)) {
+    logger().log(LogLevel::Error,
+                 "cache",
+                 "the shared index is unreachable: serving the stored tiles, read-only",
+                 {});
+  }
+  servedWithoutIndex.fetch_add(1, std::memory_order_relaxed);
+  auto stored = cache.openFromStore(id, key);
+  if (stored && stored->kind == CacheLookup::Kind::Hit) {
+    return done(tile(TileOrigin::Hit,
+                     {},
+                     std::move(stored->meta.contentType),
+                     0,
+                     folder,
+                     key,
+                     std::move(stored->file)));
+  }
+  TileAnswer a = error("the shared cache index is unreachable and the tile is not stored");
+  a.failure = TileAnswer::Failure::Unavailable;
+  a.retryAfterSeconds = kMinRetryAfterSeconds;
+  done(std::move(a));
 }
 
 void TileService::Impl::fetchUnderLease(const FlightKey& fk,

@@ -62,6 +62,9 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
   // Leases held by flights of this process (options.leases), given back when the flight lands.
   std::unordered_map<FlightKey, LeaseKey, FlightKeyHash> heldLeases;
   std::atomic<std::uint64_t> leaseWaits{0}; // misses that waited for another process's fetch
+  // A shared index (options.leases) that failed its last lookup: answers come from the store.
+  std::atomic<bool> indexDown{false};
+  std::atomic<std::uint64_t> servedWithoutIndex{0};
 
   // ITileSource: a bounded number of tiles in flight, the rest queued by priority.
   struct Queued {
@@ -116,6 +119,9 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
   /** Answers a flight's waiters; gives its lease back (after the tile was stored: the waiters of
    * other processes find it). */
   void land(const FlightKey& k, TileAnswer&& answer);
+
+  /** A lookup in a shared index that failed: the store's tile, or 503 (read-only meanwhile). */
+  void serveWithoutIndex(DatasetId id, const std::string& folder, const TileKey& key, Done done);
 
   /** A remote miss under options.leases: fetches when the lease is taken (or the lease service is
    * down), or waits for the holder's release and then looks at the cache again. */
