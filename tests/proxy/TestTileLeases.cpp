@@ -10,6 +10,7 @@
 
 #include <tellus/cache/TileLeases.hpp>
 #include <tellus/proxy/Fetcher.hpp>
+#include <tellus/proxy/ImageCodec.hpp>
 #include <tellus/proxy/TileService.hpp>
 
 #include <gtest/gtest.h>
@@ -109,6 +110,14 @@ struct Service {
   }
 };
 
+/** A valid 64 px PNG: what the tile service's validation takes. */
+test::FakeReply pngReply(const test::FakeRequest&) {
+  const std::vector<std::uint8_t> px(64 * 64 * 3, 90);
+  const auto bytes = *encodeImage("image/png", 64, 64, 3, px.data());
+  return test::FakeReply::ok(std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
+                             "image/png");
+}
+
 std::string text(const std::vector<std::byte>& b) {
   return std::string(reinterpret_cast<const char*>(b.data()), b.size());
 }
@@ -116,8 +125,7 @@ std::string text(const std::vector<std::byte>& b) {
 } // namespace
 
 TEST(TileLeases, AMissWaitingForAnotherProcessServesTheTileItStoredAndFetchesNothing) {
-  test::FakeUpstream up(
-      [](const test::FakeRequest&) { return test::FakeReply::ok("fetched here", "image/png"); });
+  test::FakeUpstream up(pngReply);
   auto leases = std::make_shared<ScriptedLeases>(LeaseOutcome::Waiting);
   Service s(up.url("/wms"), leases);
   const TileKey k{1, 2, 3};
@@ -147,8 +155,7 @@ TEST(TileLeases, AMissWaitingForAnotherProcessServesTheTileItStoredAndFetchesNot
 }
 
 TEST(TileLeases, AMissThatTakesTheLeaseFetchesStoresThenReleasesIt) {
-  test::FakeUpstream up(
-      [](const test::FakeRequest&) { return test::FakeReply::ok("fetched here", "image/png"); });
+  test::FakeUpstream up(pngReply);
   auto leases = std::make_shared<ScriptedLeases>(LeaseOutcome::Acquired);
   Service s(up.url("/wms"), leases);
   const TileKey k{1, 2, 3};
