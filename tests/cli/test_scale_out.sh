@@ -10,6 +10,8 @@
 #   - the database stopped: stored tiles are still served (read-only), a miss is a 503, /metrics
 #     says tellus_shared_index_up 0; started again: misses are fetched and stored again, without
 #     restarting tellus;
+#   - two `tellus seed` of one command on the shared index split the job: no GetMap twice, and a
+#     third run afterwards finds every tile cached;
 #   - a password in cache.index is refused at start, and a failing connection's message on stderr
 #     has no password (from the password file) in it.
 # Usage: test_scale_out.sh path/to/tellus
@@ -133,6 +135,29 @@ for _ in $(seq 50); do
 done
 cmp -s "$work/c.png" "$work/c2.png" || fail "instance 2 did not serve instance 1's tile"
 echo "database stopped and started: stored tiles served meanwhile, service resumed without restarts ($(getmaps) upstream requests in all)"
+
+# --- two seeders on one job --------------------------------------------------------------------
+curl -fsS "http://127.0.0.1:$up/stats" >"$work/before.json"
+seed() { "$tellus" seed --config "$work/tellus.yaml" --cache "$work/cache" --layer shared --levels 0-2 "$@"; }
+seed >"$work/seed1.txt" 2>&1 &
+s1=$!
+seed >"$work/seed2.txt" 2>&1 &
+s2=$!
+wait "$s1" || fail "seeder 1: $(cat "$work/seed1.txt")"
+wait "$s2" || fail "seeder 2: $(cat "$work/seed2.txt")"
+curl -fsS "http://127.0.0.1:$up/stats" >"$work/after.json"
+python3 - "$work/before.json" "$work/after.json" <<'PY' || fail "a GetMap was made twice by the two seeders"
+import json, sys
+before, after = (json.load(open(p))["by_bbox"] for p in sys.argv[1:3])
+twice = {b: n - before.get(b, 0) for b, n in after.items() if n - before.get(b, 0) > 1}
+again = {b: n - before[b] for b, n in after.items() if b in before and n > before[b]}
+assert not twice, twice
+assert not again, again  # cached before the job: skipped
+print("two seeders:", sum(after[b] - before.get(b, 0) for b in after), "GetMaps, none twice")
+PY
+grep -h "shared job" "$work/seed1.txt" "$work/seed2.txt"
+seed >"$work/seed3.txt" 2>&1 || fail "the third seeder: $(cat "$work/seed3.txt")"
+grep -q " 0 written" "$work/seed3.txt" || fail "the job left tiles unseeded: $(cat "$work/seed3.txt")"
 
 # --- credentials ----------------------------------------------------------------------------------
 sed 's|cache: {index: "postgresql://tellus@|cache: {index: "postgresql://tellus:hunter2@|' \

@@ -59,6 +59,9 @@ CREATE TRIGGER datasets_usage AFTER INSERT OR DELETE ON datasets
   FOR EACH ROW EXECUTE FUNCTION tellus_usage();
 CREATE TRIGGER tiles_usage AFTER INSERT OR DELETE OR UPDATE OF bytes ON tiles
   FOR EACH ROW EXECUTE FUNCTION tellus_usage();
+-- Seeding jobs shared by several `tellus seed` (PgSeedJob.hpp): a row per band of a job.
+CREATE TABLE seed_bands(job text NOT NULL, level integer NOT NULL, row bigint NOT NULL,
+                        done boolean NOT NULL DEFAULT false, PRIMARY KEY(job, level, row));
 INSERT INTO tellus_meta VALUES ('schema_version', '1');
 )sql";
 
