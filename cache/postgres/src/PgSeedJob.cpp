@@ -1,6 +1,6 @@
-#include <tellus/cache_pg/PgSeedJob.hpp>
-
 #include "Pg.hpp"
+
+#include <tellus/cache_pg/PgSeedJob.hpp>
 
 namespace tellus {
 
@@ -16,8 +16,8 @@ PgSeedJob::~PgSeedJob() {
   if (impl_ && impl_->held) (void)pg::exec(impl_->conn.get(), "ROLLBACK", "giving a band back");
 }
 
-std::expected<std::unique_ptr<PgSeedJob>, CacheError>
-PgSeedJob::open(const PgConnectOptions& connect, std::string name, const std::vector<SeedBand>& bands) {
+std::expected<std::unique_ptr<PgSeedJob>, CacheError> PgSeedJob::open(
+    const PgConnectOptions& connect, std::string name, const std::vector<SeedBand>& bands) {
   auto c = pg::connect(connect);
   if (!c) return std::unexpected(c.error());
   auto impl = std::make_unique<Impl>();
@@ -57,10 +57,11 @@ std::expected<std::optional<SeedBand>, CacheError> PgSeedJob::next() {
     p.add(std::string_view(impl_->name))
         .add(std::int64_t{impl_->held->level})
         .add(impl_->held->row);
-    auto d = pg::exec(db,
-                      "UPDATE seed_bands SET done = true WHERE job = $1 AND level = $2 AND row = $3",
-                      p,
-                      "finishing a band");
+    auto d =
+        pg::exec(db,
+                 "UPDATE seed_bands SET done = true WHERE job = $1 AND level = $2 AND row = $3",
+                 p,
+                 "finishing a band");
     impl_->held.reset();
     if (!d) {
       (void)pg::exec(db, "ROLLBACK", "giving a band back");
@@ -79,14 +80,13 @@ std::expected<std::optional<SeedBand>, CacheError> PgSeedJob::next() {
     return std::unexpected(r.error());
   }
   if (PQntuples(r->get()) == 1) {
-    impl_->held = SeedBand{static_cast<std::int32_t>(pg::i64(r->get(), 0, 0)), pg::i64(r->get(), 0, 1)};
+    impl_->held =
+        SeedBand{static_cast<std::int32_t>(pg::i64(r->get(), 0, 0)), pg::i64(r->get(), 0, 1)};
     return impl_->held;
   }
   // None free. When none is held by another seeder either, the job is over: forget it.
-  auto left = pg::exec(db,
-                       "SELECT count(*) FROM seed_bands WHERE job = $1 AND NOT done",
-                       job,
-                       "finishing the job");
+  auto left = pg::exec(
+      db, "SELECT count(*) FROM seed_bands WHERE job = $1 AND NOT done", job, "finishing the job");
   if (left && pg::i64(left->get(), 0, 0) == 0)
     (void)pg::exec(db, "DELETE FROM seed_bands WHERE job = $1", job, "finishing the job");
   if (auto c = pg::exec(db, "COMMIT", "finishing the job"); !c) return std::unexpected(c.error());
