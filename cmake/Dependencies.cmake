@@ -48,3 +48,5 @@ endif()
 if(TELLUS_BUILD_BENCH)
   find_package(benchmark CONFIG REQUIRED)
 endif()
+# libpq (issue 27): the PostgreSQL index and leases of tellus::cache_pg, PRIVATE to that module.
+pkg_check_modules(LIBPQ REQUIRED IMPORTED_TARGET libpq)

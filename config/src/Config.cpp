@@ -55,3 +55,29 @@ std::filesystem::path defaultCacheRoot() {
 }
 
 } // namespace tellus
+
+namespace tellus {
+
+std::optional<std::string> checkIndexUri(std::string_view uri) {
+  if (uri.empty()) return std::nullopt;
+  if (!uri.starts_with("postgresql://") && !uri.starts_with("postgres://")) {
+    return "cache.index takes a postgresql:// URI (or nothing: SQLite in cache.root)";
+  }
+  const std::size_t start = uri.find("://") + 3;
+  const std::size_t hostEnd = uri.find_first_of("/?", start);
+  const std::string_view authority = uri.substr(start, hostEnd - start);
+  const std::size_t at = authority.rfind('@');
+  const bool userPassword =
+      at != std::string_view::npos && authority.substr(0, at).find(':') != std::string_view::npos;
+  const std::size_t q = uri.find('?');
+  const bool passwordParam =
+      q != std::string_view::npos && (uri.find("?password=", q) != std::string_view::npos ||
+                                      uri.find("&password=", q) != std::string_view::npos);
+  if (userPassword || passwordParam) {
+    return "cache.index holds a password; give it in PGPASSWORD, a PGPASSFILE, or "
+           "cache.index_password_file (a file whose first line is the password)";
+  }
+  return std::nullopt;
+}
+
+} // namespace tellus

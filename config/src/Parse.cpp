@@ -26,11 +26,21 @@ constexpr std::uintmax_t kMaxFileBytes = 16U << 20;
 
 void readCache(Reader& r, const Map& root, const fs::path& baseDir, CacheSettings& c) {
   const auto [node, where] = root.child("cache");
-  const Map m(r, node, root.path("cache"), where, {"root", "size_limit"});
+  const Map m(
+      r, node, root.path("cache"), where, {"root", "size_limit", "index", "index_password_file"});
   std::string rootText;
   if (auto v = m.get("root")) rootText = text(r, *v, m.path("root"));
   c.root = rootText.empty() ? defaultCacheRoot() : resolvePath(rootText, baseDir);
   if (auto v = m.get("size_limit")) c.sizeLimitBytes = size(r, *v, m.path("size_limit"));
+  if (auto v = m.get("index")) {
+    c.index = text(r, *v, m.path("index"));
+    if (auto bad = checkIndexUri(c.index)) r.fail(v->Mark(), m.path("index"), *bad);
+  }
+  if (auto v = m.get("index_password_file")) {
+    c.indexPasswordFile = resolvePath(text(r, *v, m.path("index_password_file")), baseDir);
+    if (c.index.empty())
+      r.fail(v->Mark(), m.path("index_password_file"), "needs cache.index (a postgresql:// URI)");
+  }
 }
 
 struct ParseOptions {

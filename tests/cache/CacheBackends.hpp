@@ -1,8 +1,9 @@
 #pragma once
 // The cache's suite over every implementation of its index and tile store: a value-parameterised
-// fixture whose parameter is the backend (SQLite + files, memory). Each root is one cache: a folder
-// for SQLite + files, an index and a store in memory kept across reopenings for memory. Time is a
-// ManualClock shared by every cache of a test.
+// fixture whose parameter is the backend (SQLite + files, memory, PostgreSQL + files). Each root is
+// one cache: a folder for SQLite + files, an index and a store in memory kept across reopenings for
+// memory, a database of its own and a folder for PostgreSQL (tests/cache_pg/, which sets
+// sharedIndexOpener()). Time is a ManualClock shared by every cache of a test.
 
 #include "../support/CacheFixtures.hpp"
 #include "../support/MemoryTileIndex.hpp"
@@ -16,19 +17,43 @@
 
 #include <gtest/gtest.h>
 
+#include <expected>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
 #include <string>
 #include <sys/resource.h>
+#include <vector>
 
 namespace tellus::test {
 
-enum class Backend { SqliteFiles, Memory };
+enum class Backend { SqliteFiles, Memory, PostgresFiles };
 
 inline std::string backendName(const ::testing::TestParamInfo<Backend>& info) {
-  return info.param == Backend::SqliteFiles ? "SqliteFiles" : "Memory";
+  switch (info.param) {
+  case Backend::SqliteFiles:
+    return "SqliteFiles";
+  case Backend::Memory:
+    return "Memory";
+  case Backend::PostgresFiles:
+    return "PostgresFiles";
+  }
+  return "?";
+}
+
+/** The backends the contract runs on in this executable (tests/cache/Backends.cpp: SQLite and
+ * memory; tests/cache_pg/: PostgreSQL). */
+std::vector<Backend> contractBackends();
+
+/** Opens the index of a server-backed backend (PostgreSQL) for the cache at `root`: the same
+ * root, the same database. Set by the executable that runs such a backend. */
+using SharedIndexOpener = std::function<std::expected<std::shared_ptr<ITileIndex>, CacheError>(
+    const std::filesystem::path& root, bool readOnly)>;
+inline SharedIndexOpener& sharedIndexOpener() {
+  static SharedIndexOpener opener;
+  return opener;
 }
 
 class CacheBackendTest : public ::testing::TestWithParam<Backend> {
@@ -47,9 +72,10 @@ protected:
 
   /** Opens (or reopens) the cache at o.root on this test's backend. */
   std::unique_ptr<TileCache> open(const TileCache::Options& o) {
-    auto c = GetParam() == Backend::SqliteFiles
-                 ? TileCache::open(o)
-                 : TileCache::open(o, memoryAt(o.root).index, memoryAt(o.root).store);
+    auto c = GetParam() == Backend::SqliteFiles ? TileCache::open(o)
+             : GetParam() == Backend::Memory
+                 ? TileCache::open(o, memoryAt(o.root).index, memoryAt(o.root).store)
+                 : openShared(o);
     EXPECT_TRUE(c) << (c ? "" : c.error().message);
     return c ? std::move(*c) : nullptr;
   }
@@ -98,6 +124,14 @@ protected:
   }
 
 private:
+  std::expected<std::unique_ptr<TileCache>, CacheError> openShared(const TileCache::Options& o) {
+    auto index = sharedIndexOpener()(o.root, o.readOnly);
+    if (!index) return std::unexpected(index.error());
+    auto store = openFileTileStore(FileTileStoreOptions{o.root, o.readOnly, o.fsyncTiles});
+    if (!store) return std::unexpected(store.error());
+    return TileCache::open(o, *index, std::shared_ptr<ITileStore>(std::move(*store)));
+  }
+
   struct Memory {
     std::shared_ptr<MemoryTileIndex> index;
     std::shared_ptr<MemoryTileStore> store;

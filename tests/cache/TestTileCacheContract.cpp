@@ -28,7 +28,7 @@ class TileCacheContract : public test::CacheBackendTest {};
 
 INSTANTIATE_TEST_SUITE_P(Backends,
                          TileCacheContract,
-                         ::testing::Values(test::Backend::SqliteFiles, test::Backend::Memory),
+                         ::testing::ValuesIn(test::contractBackends()),
                          test::backendName);
 
 TEST_P(TileCacheContract, PutGetRoundTrip) {

@@ -304,3 +304,28 @@ TEST(ConfigExtremes, LogLevelMustBeKnown) {
   EXPECT_EQ(ok->server.logLevel, "debug");
   EXPECT_EQ(ok->server.accessLog, "/tmp/a.log");
 }
+
+TEST(ConfigExtremes, CacheIndexIsAPostgresUriWithoutAPassword) {
+  const auto ok =
+      parse("cache: {index: 'postgresql://tile@db.example:5432/tellus?sslmode=require', "
+            "index_password_file: /run/secrets/pg}\n" +
+            layerWith(""));
+  ASSERT_TRUE(ok) << ok.error().message;
+  EXPECT_EQ(ok->cache.index, "postgresql://tile@db.example:5432/tellus?sslmode=require");
+  EXPECT_EQ(ok->cache.indexPasswordFile, std::filesystem::path("/run/secrets/pg"));
+  EXPECT_TRUE(parse("cache: {}\n" + layerWith(""))->cache.index.empty()); // SQLite, as today
+  for (const char* uri :
+       {"postgresql://tile:hunter2@db/tellus", "postgres://db/tellus?user=tile&password=hunter2"}) {
+    const auto e = parse("cache: {index: '" + std::string(uri) + "'}\n" + layerWith(""));
+    ASSERT_FALSE(e) << uri;
+    EXPECT_EQ(e.error().key, "cache.index");
+    EXPECT_EQ(e.error().message.find("hunter2"), std::string::npos) << e.error().message;
+    EXPECT_NE(e.error().message.find("PGPASSWORD"), std::string::npos);
+  }
+  const auto notPg = parse("cache: {index: 'mysql://db/tellus'}\n" + layerWith(""));
+  ASSERT_FALSE(notPg);
+  EXPECT_EQ(notPg.error().key, "cache.index");
+  const auto fileAlone = parse("cache: {index_password_file: /x}\n" + layerWith(""));
+  ASSERT_FALSE(fileAlone);
+  EXPECT_EQ(fileAlone.error().key, "cache.index_password_file");
+}

@@ -238,6 +238,23 @@ std::expected<CacheLookup, CacheError> TileCache::openTile(DatasetId id, const T
   return hit(*row);
 }
 
+std::expected<CacheLookup, CacheError> TileCache::openFromStore(DatasetId id, const TileKey& key) {
+  Impl& im = *impl_;
+  auto d = im.datasets.checked(id, key);
+  if (!d) return std::unexpected(d.error());
+  const auto at = (*d)->at(key);
+  const auto stat = im.store->stat(at);
+  if (!stat) return CacheLookup{};
+  auto tile = im.store->open(at, stat->size);
+  if (!tile) return CacheLookup{};
+  CacheLookup out;
+  out.kind = CacheLookup::Kind::Hit;
+  out.file = std::move(tile->file);
+  out.size = stat->size;
+  out.meta.contentType = (*d)->info.spec.mimeType;
+  return out;
+}
+
 std::expected<CacheLookup, CacheError> TileCache::get(DatasetId id, const TileKey& key) {
   auto found = openTile(id, key);
   if (!found || found->kind != CacheLookup::Kind::Hit) return found;

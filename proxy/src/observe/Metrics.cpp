@@ -262,6 +262,28 @@ void ProxyMetrics::renderCache(std::string& out,
         "counter",
         "Fetched tiles the cache did not keep for lack of space (each was served all the same).");
     out += "tellus_cache_store_refused_total " + std::to_string(cacheHealth->refusedStores) + "\n";
+    if (cacheHealth->sharedIndexUp) {
+      header(
+          out,
+          "tellus_shared_index_up",
+          "gauge",
+          "1 while the shared PostgreSQL index answers; 0 while it does not: the instance serves "
+          "what the tile store holds, read-only, and stores nothing.");
+      out +=
+          std::string("tellus_shared_index_up ") + (*cacheHealth->sharedIndexUp ? "1" : "0") + "\n";
+      header(out,
+             "tellus_lease_waits_total",
+             "counter",
+             "Misses that waited for another instance's fetch of the tile (single flight across "
+             "instances) instead of fetching it.");
+      out += "tellus_lease_waits_total " + std::to_string(cacheHealth->leaseWaits) + "\n";
+      header(out,
+             "tellus_served_without_index_total",
+             "counter",
+             "Tile requests answered from the tile store alone while the shared index was down.");
+      out += "tellus_served_without_index_total " +
+             std::to_string(cacheHealth->servedWithoutIndex) + "\n";
+    }
     if (cacheHealth->freeBytes) {
       header(out,
              "tellus_cache_free_bytes",

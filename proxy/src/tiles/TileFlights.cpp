@@ -106,13 +106,19 @@ bool TileService::Impl::landIfCachedNow(const FlightKey& fk, const std::string& 
 
 void TileService::Impl::land(const FlightKey& k, TileAnswer&& answer) {
   std::vector<Done> waiters;
+  std::optional<LeaseKey> lease;
   {
     std::lock_guard lock(flightsMutex);
-    const auto it = flights.find(k);
-    if (it == flights.end()) return;
-    waiters = std::move(it->second);
-    flights.erase(it);
+    if (const auto h = heldLeases.find(k); h != heldLeases.end()) {
+      lease = std::move(h->second);
+      heldLeases.erase(h);
+    }
+    if (const auto it = flights.find(k); it != flights.end()) {
+      waiters = std::move(it->second);
+      flights.erase(it);
+    }
   }
+  if (lease) options.leases->release(*lease);
   for (std::size_t i = 0; i + 1 < waiters.size(); ++i) {
     TileAnswer copy = answer;
     waiters[i](std::move(copy));
@@ -240,6 +246,8 @@ void TileService::Impl::getTile(std::string_view layerName,
   // cache could not register has nothing cached.
   auto found =
       id < 0 ? std::expected<CacheLookup, CacheError>(CacheLookup{}) : cache.openTile(id, key);
+  if (!found && options.leases) return serveWithoutIndex(id, folder, key, std::move(done));
+  if (found && options.leases) indexDown.store(false, std::memory_order_relaxed);
   if (!found) return done(error("cache: " + std::string(toString(found.error().code))));
   const UnixMillis now = nowMillis();
   if (found->kind == CacheLookup::Kind::Hit && !found->stale) {
@@ -281,9 +289,75 @@ void TileService::Impl::getTile(std::string_view layerName,
   if (landIfCachedNow(fk, folder)) return;
   if (u.type == UpstreamSpec::Type::Local) {
     renderLocal(fk, l, g, folder, std::move(stale));
+  } else if (options.leases) {
+    fetchUnderLease(fk, l, u, g, folder, std::string(time), std::move(stale));
   } else {
     fetchRemote(fk, l, u, g, folder, std::string(time), std::move(stale));
   }
+}
+
+void TileService::Impl::serveWithoutIndex(DatasetId id,
+                                          const std::string& folder,
+                                          const TileKey& key,
+                                          Done done) {
+  // The shared index cannot be reached: what the store holds is served (tiles are stored whole),
+  // nothing is fetched or stored until the index answers again.
+  if (!indexDown.exchange(true)) {
+    logger().log(LogLevel::Error,
+                 "cache",
+                 "the shared index is unreachable: serving the stored tiles, read-only",
+                 {});
+  }
+  servedWithoutIndex.fetch_add(1, std::memory_order_relaxed);
+  auto stored = cache.openFromStore(id, key);
+  if (stored && stored->kind == CacheLookup::Kind::Hit) {
+    return done(tile(TileOrigin::Hit,
+                     {},
+                     std::move(stored->meta.contentType),
+                     0,
+                     folder,
+                     key,
+                     std::move(stored->file)));
+  }
+  TileAnswer a = error("the shared cache index is unreachable and the tile is not stored");
+  a.failure = TileAnswer::Failure::Unavailable;
+  a.retryAfterSeconds = kMinRetryAfterSeconds;
+  done(std::move(a));
+}
+
+void TileService::Impl::fetchUnderLease(const FlightKey& fk,
+                                        const LayerSpec& l,
+                                        const UpstreamSpec& u,
+                                        const TileGrid& g,
+                                        const std::string& folder,
+                                        const std::string& time,
+                                        std::optional<CacheLookup> stale) {
+  const LeaseKey lease{folder, fk.key};
+  auto kept = std::make_shared<std::optional<CacheLookup>>(std::move(stale));
+  // Woken on the lease service's thread: the look at the cache and the next try run on a worker.
+  auto retry = [weak = weak_from_this(), fk, &l, &u, &g, folder, time, kept] {
+    const auto self = weak.lock();
+    if (!self) return;
+    self->workers->post([im = self.get(), fk, &l, &u, &g, folder, time, kept] {
+      if (im->landIfCachedNow(fk, folder)) return; // the holder stored it
+      im->fetchUnderLease(fk, l, u, g, folder, time, std::move(*kept));
+    });
+  };
+  const LeaseOutcome got =
+      options.leases->acquireOrWait(lease, options.leaseRecheck, std::move(retry));
+  if (got == LeaseOutcome::Waiting) {
+    leaseWaits.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  if (got == LeaseOutcome::Acquired) {
+    {
+      std::lock_guard lock(flightsMutex);
+      heldLeases.insert_or_assign(fk, lease);
+    }
+    // Another process may have stored it between our look and the lease.
+    if (landIfCachedNow(fk, folder)) return;
+  }
+  fetchRemote(fk, l, u, g, folder, time, std::move(*kept));
 }
 
 } // namespace tellus

@@ -257,6 +257,11 @@ CacheHealthMetrics TileService::cacheHealth() const {
   CacheHealthMetrics h;
   h.writable = impl_->cache.storeStatus().writable;
   h.refusedStores = impl_->refusedStores.load(std::memory_order_relaxed);
+  if (impl_->options.leases) {
+    h.sharedIndexUp = impl_->options.leases->healthy() && !impl_->indexDown.load();
+    h.leaseWaits = impl_->leaseWaits.load(std::memory_order_relaxed);
+    h.servedWithoutIndex = impl_->servedWithoutIndex.load(std::memory_order_relaxed);
+  }
   if (const auto space = impl_->cache.diskSpace()) {
     h.freeBytes = space->freeBytes;
     h.freeInodes = space->freeInodes;

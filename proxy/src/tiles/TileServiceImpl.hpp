@@ -10,6 +10,7 @@
 #include "upstream/WmtsCompose.hpp"
 
 #include <tellus/cache/RequestQueue.hpp>
+#include <tellus/cache/TileLeases.hpp>
 #include <tellus/cache/TilePath.hpp>
 #include <tellus/proxy/LocalRasterSource.hpp>
 #include <tellus/proxy/TileService.hpp>
@@ -58,6 +59,12 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
 
   std::mutex flightsMutex;
   std::unordered_map<FlightKey, std::vector<Done>, FlightKeyHash> flights;
+  // Leases held by flights of this process (options.leases), given back when the flight lands.
+  std::unordered_map<FlightKey, LeaseKey, FlightKeyHash> heldLeases;
+  std::atomic<std::uint64_t> leaseWaits{0}; // misses that waited for another process's fetch
+  // A shared index (options.leases) that failed its last lookup: answers come from the store.
+  std::atomic<bool> indexDown{false};
+  std::atomic<std::uint64_t> servedWithoutIndex{0};
 
   // ITileSource: a bounded number of tiles in flight, the rest queued by priority.
   struct Queued {
@@ -109,7 +116,22 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
    * there and fresh now. */
   bool landIfCachedNow(const FlightKey& fk, const std::string& folder);
 
+  /** Answers a flight's waiters; gives its lease back (after the tile was stored: the waiters of
+   * other processes find it). */
   void land(const FlightKey& k, TileAnswer&& answer);
+
+  /** A lookup in a shared index that failed: the store's tile, or 503 (read-only meanwhile). */
+  void serveWithoutIndex(DatasetId id, const std::string& folder, const TileKey& key, Done done);
+
+  /** A remote miss under options.leases: fetches when the lease is taken (or the lease service is
+   * down), or waits for the holder's release and then looks at the cache again. */
+  void fetchUnderLease(const FlightKey& fk,
+                       const LayerSpec& l,
+                       const UpstreamSpec& u,
+                       const TileGrid& g,
+                       const std::string& folder,
+                       const std::string& time,
+                       std::optional<CacheLookup> stale);
 
   static TileAnswer absent(TileOrigin origin, std::string message) {
     TileAnswer a;

@@ -1,5 +1,9 @@
 #include "Context.hpp"
 
+#include <tellus/cache/TileStore.hpp>
+#include <tellus/cache_pg/PgTileIndex.hpp>
+#include <tellus/cache_pg/PgTileLeases.hpp>
+
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -52,10 +56,36 @@ std::size_t descriptorBudget(int maxConnections) {
   return static_cast<std::size_t>(std::clamp(spare / 2, 64LL, 16384LL));
 }
 
+namespace {
+
+/** cache.index is PostgreSQL (issue 27): the shared index, the tiles in the file tree under the
+ * root (a folder every instance mounts; the object store replaces it), and the leases. */
+std::expected<std::unique_ptr<TileCache>, CacheError> openShared(Context& ctx,
+                                                                 const TileCache::Options& o) {
+  PgConnectOptions connect;
+  connect.conninfo = ctx.config.cache.index;
+  connect.passwordFile = ctx.config.cache.indexPasswordFile;
+  PgTileIndexOptions io;
+  io.connect = connect;
+  io.readOnly = o.readOnly;
+  auto index = openPgTileIndex(io);
+  if (!index) return std::unexpected(index.error());
+  auto store = openFileTileStore(FileTileStoreOptions{o.root, o.readOnly, o.fsyncTiles});
+  if (!store) return std::unexpected(store.error());
+  auto leases = openPgTileLeases(connect);
+  if (!leases) return std::unexpected(leases.error());
+  ctx.leases = std::move(*leases);
+  return TileCache::open(o,
+                         std::shared_ptr<ITileIndex>(std::move(*index)),
+                         std::shared_ptr<ITileStore>(std::move(*store)));
+}
+
+} // namespace
+
 std::optional<Context> setUp(const cli::Args& a, CacheUse use) {
   auto config = loadConfiguration(a);
   if (!config) return std::nullopt;
-  Context ctx{std::move(*config), nullptr};
+  Context ctx{std::move(*config), nullptr, nullptr};
   TileCache::Options o;
   o.root = ctx.config.cache.root;
   o.sizeLimitBytes = ctx.config.cache.sizeLimitBytes;
@@ -63,7 +93,7 @@ std::optional<Context> setUp(const cli::Args& a, CacheUse use) {
   o.indexWriteBehind = use == CacheUse::Seed;
   if (use == CacheUse::Serve)
     o.openFiles = descriptorBudget(ctx.config.server.limits.maxConnections);
-  auto cache = TileCache::open(o);
+  auto cache = ctx.config.cache.index.empty() ? TileCache::open(o) : openShared(ctx, o);
   if (!cache) {
     std::fprintf(stderr, "tellus: cache %s: %s\n", o.root.c_str(), cache.error().message.c_str());
     return std::nullopt;

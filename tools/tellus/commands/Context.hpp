@@ -6,6 +6,7 @@
  */
 
 #include <tellus/cache/TileCache.hpp>
+#include <tellus/cache/TileLeases.hpp>
 #include <tellus/config/CommandLine.hpp>
 #include <tellus/config/Config.hpp>
 
@@ -32,6 +33,9 @@ enum class CacheUse {
 struct Context {
   Config config;
   std::unique_ptr<TileCache> cache;
+  /// Single-flight leases across instances: PostgreSQL's when cache.index is one (issue 27), else
+  /// null (this process alone). Serve hands them to the tile service.
+  std::shared_ptr<ITileLeases> leases;
 };
 
 /** The bundled data: --data, else $TELLUS_DATA_DIR, else the source tree's data/. */

@@ -5,6 +5,8 @@
 #include "Commands.hpp"
 #include "Context.hpp"
 
+#include <tellus/cache/TileGrid.hpp>
+#include <tellus/cache_pg/PgSeedJob.hpp>
 #include <tellus/cli/LayerTimes.hpp>
 #include <tellus/cli/ProxyFromConfig.hpp>
 #include <tellus/cli/Values.hpp>
@@ -325,6 +327,96 @@ int seedThroughTheService(TileService& service,
   return kExitOk;
 }
 
+/** One layer as a job shared with every `tellus seed` of the same command on the same PostgreSQL
+ * index (issue 27): band by band (a level's row of tiles), each band seeded by the one seeder that
+ * took it (PgSeedJob: SELECT ... FOR UPDATE SKIP LOCKED); its exit code. */
+int seedSharedJob(TileService& service,
+                  TileCache& cache,
+                  const LayerConfig& layer,
+                  const SeedArgs& s,
+                  const std::string& time,
+                  const PgConnectOptions& connect) {
+  auto grid = TileGrid::create(layer.dataset.grid);
+  if (!grid) {
+    std::fprintf(stderr, "tellus seed: %s: %s\n", layer.name.c_str(), grid.error().c_str());
+    return kExitError;
+  }
+  const Sector box = s.range.box ? *s.range.box : layer.dataset.grid.sector;
+  const std::int32_t top = std::min(s.range.toLevel, grid->numLevels() - 1);
+  std::vector<SeedBand> bands;
+  for (std::int32_t level = s.range.fromLevel; level <= top; ++level) {
+    for (std::int64_t row = 0; row < grid->rowCount(level); ++row) {
+      const Sector rs = grid->sectorOf(TileKey{level, row, 0});
+      if (rs.north > box.south && rs.south < box.north) bands.push_back(SeedBand{level, row});
+    }
+  }
+  char name[256];
+  std::snprintf(name,
+                sizeof name,
+                "%s|%s|%d-%d|%.17g,%.17g,%.17g,%.17g",
+                datasetFolder(layer.dataset).c_str(),
+                time.c_str(),
+                s.range.fromLevel,
+                top,
+                box.west,
+                box.south,
+                box.east,
+                box.north);
+  auto job = PgSeedJob::open(connect, name, bands);
+  if (!job) {
+    std::fprintf(stderr, "tellus seed: %s: %s\n", layer.name.c_str(), job.error().message.c_str());
+    return kExitError;
+  }
+  SeedReport total;
+  std::int64_t bandsSeeded = 0;
+  for (;;) {
+    auto band = (*job)->next();
+    if (!band) {
+      std::fprintf(
+          stderr, "tellus seed: %s: %s\n", layer.name.c_str(), band.error().message.c_str());
+      return kExitError;
+    }
+    if (!*band) break;
+    ServiceSeedOptions opts = s.remote;
+    opts.time = time;
+    opts.concurrency = 2 * s.remote.concurrency;
+    opts.range = s.range;
+    opts.range.fromLevel = opts.range.toLevel = (*band)->level;
+    // The band's row, inside the box; its edges pulled in so that no neighbouring row is taken.
+    const Sector rs = grid->sectorOf(TileKey{(*band)->level, (*band)->row, 0});
+    const double eps = (rs.north - rs.south) * 1e-6;
+    opts.range.box = Sector{box.west,
+                            std::max(box.south, rs.south) + eps,
+                            box.east,
+                            std::min(box.north, rs.north) - eps};
+    auto report = seedThroughService(service, cache, layer.name, opts);
+    if (!report) {
+      std::fprintf(stderr, "tellus seed: %s: %s\n", layer.name.c_str(), report.error().c_str());
+      return kExitError;
+    }
+    ++bandsSeeded;
+    total.planned += report->planned;
+    total.skipped += report->skipped;
+    total.written += report->written;
+    total.absent += report->absent;
+    total.retried += report->retried;
+    total.failed += report->failed;
+    total.notStored += report->notStored;
+    total.bytes += report->bytes;
+    for (auto& f : report->failures)
+      if (total.failures.size() < 5) total.failures.push_back(std::move(f));
+    if (!report->stoppedBecause.empty()) {
+      total.stoppedBecause = report->stoppedBecause;
+      break;
+    }
+  }
+  std::printf("%-12s shared job: %lld of %zu bands seeded here\n",
+              layer.name.c_str(),
+              static_cast<long long>(bandsSeeded),
+              bands.size());
+  return printSeedSummary(layer, s.range, total);
+}
+
 /** One layer cut from its local raster straight into the cache; its exit code. */
 int seedFromTheRaster(TileCache& cache,
                       const LayerConfig& layer,
@@ -386,7 +478,14 @@ int runSeed(const cli::Args& a) {
           }
           service = std::move(*created);
         }
-        layerRc = seedThroughTheService(*service, *ctx->cache, *layer, *s, layerTime);
+        if (!ctx->config.cache.index.empty() && !s->range.dryRun) {
+          PgConnectOptions connect;
+          connect.conninfo = ctx->config.cache.index;
+          connect.passwordFile = ctx->config.cache.indexPasswordFile;
+          layerRc = seedSharedJob(*service, *ctx->cache, *layer, *s, layerTime, connect);
+        } else {
+          layerRc = seedThroughTheService(*service, *ctx->cache, *layer, *s, layerTime);
+        }
       } else {
         layerRc = seedFromTheRaster(*ctx->cache, *layer, *upstream, s->range);
       }

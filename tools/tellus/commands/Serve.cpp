@@ -121,11 +121,13 @@ int runServe(const cli::Args& a) {
 
   Fetcher fetcher;
   auto specs = cli::proxySpecs(ctx->config);
+  TileServiceOptions tileOptions = cli::tileServiceOptions(server);
+  tileOptions.leases = ctx->leases;
   auto tiles = TileService::create(*ctx->cache,
                                    fetcher,
                                    std::move(specs.upstreams),
                                    std::move(specs.layers),
-                                   cli::tileServiceOptions(server));
+                                   std::move(tileOptions));
   if (!tiles) {
     std::fprintf(stderr, "tellus serve: %s\n", tiles.error().c_str());
     return kExitError;

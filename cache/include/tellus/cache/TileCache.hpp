@@ -136,6 +136,11 @@ public:
   std::expected<CacheLookup, CacheError> openTile(DatasetId id, const TileKey& key);
   /** Index-only check (no file access): Hit/Absent/Miss kind and staleness, no bytes, no touch. */
   std::expected<CacheLookup, CacheError> peek(DatasetId id, const TileKey& key) const;
+  /** The store alone, for when the index cannot be reached (a shared index's server down, issue
+   * 27): the tile file held open as openTile() does, with the dataset's content type and no
+   * validators or expiry (never stale); Miss when the store has none. Tiles are written whole
+   * (staged, then renamed), so what is found is a complete tile. */
+  std::expected<CacheLookup, CacheError> openFromStore(DatasetId id, const TileKey& key);
   /** Stores a tile durably; returns when the index row is committed (write-behind: when the
    * bytes are in a temp file). DiskFull when the disk (bytes, inodes, quota) or the index refuses,
    * or at once while storeStatus().writable is false and Options::fullRecheck has not passed. */

@@ -252,7 +252,16 @@ struct RendererSettings {
 struct CacheSettings {
   std::filesystem::path root;       ///< cache root (index.sqlite + the tile tree)
   std::uint64_t sizeLimitBytes = 0; ///< 0 = unlimited
+  /// YAML `index` (issue 27): "" = SQLite in the root (the embedded default); a postgresql:// URI
+  /// = a PostgreSQL index shared by several instances, with single-flight leases. Never holds a
+  /// password (refused): that comes from PGPASSWORD, PGPASSFILE or `indexPasswordFile`.
+  std::string index;
+  std::optional<std::filesystem::path> indexPasswordFile; ///< YAML `index_password_file`
 };
+
+/** Why `cache.index` is refused (not a postgresql:// URI, or one holding a password; the message
+ * never repeats the password), or nullopt when it is taken. */
+std::optional<std::string> checkIndexUri(std::string_view uri);
 
 /** YAML `upstreams[].redirects`: which redirects of an upstream are followed. */
 enum class RedirectPolicy {

@@ -38,6 +38,10 @@ const char* toString(TileOutcome o) noexcept;
 struct CacheHealthMetrics {
   bool writable = true;
   std::uint64_t refusedStores = 0;
+  /// A shared index (cache.index, issue 27): whether its server answers; nullopt: none.
+  std::optional<bool> sharedIndexUp;
+  std::uint64_t leaseWaits = 0;         ///< misses that waited for another instance's fetch
+  std::uint64_t servedWithoutIndex = 0; ///< requests answered from the store alone (index down)
   std::optional<std::uint64_t> freeBytes;
   std::optional<std::uint64_t> freeInodes;
 };

@@ -11,6 +11,7 @@
 #include <tellus/cache/Clock.hpp>
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/cache/TileGrid.hpp>
+#include <tellus/cache/TileLeases.hpp>
 #include <tellus/cache/TileSource.hpp>
 #include <tellus/proxy/FetchBudget.hpp>
 #include <tellus/proxy/Fetcher.hpp>
@@ -112,6 +113,13 @@ struct TileServiceOptions {
   const Clock* clock = nullptr;
   /// Where WMTS upstreams' capabilities are kept (wmtsCapabilitiesFile); empty: the cache's root.
   std::filesystem::path wmtsCapabilitiesRoot;
+  /// Single flight across processes sharing one index (issue 27, TileLeases.hpp): a miss of a
+  /// remote upstream takes the tile's lease before it is fetched, or waits for another process's
+  /// fetch and reads the tile it stored. Null: this process alone (its own flights only).
+  std::shared_ptr<ITileLeases> leases;
+  /// How long a waiter waits for a release before it tries the lease again (a holder that died
+  /// releases nothing; its lease is free as soon as its connection is gone).
+  std::chrono::milliseconds leaseRecheck{1000};
 };
 
 class TileService final : public ITileSource {

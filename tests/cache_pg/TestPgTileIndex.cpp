@@ -1,0 +1,140 @@
+// What is PostgreSQL's own in the index: connection strings and their passwords, several indexes
+// (instances) on one database. The rows' behaviour is the cache contract's (PgBackends.cpp).
+
+#include "../support/CacheFixtures.hpp"
+#include "../support/TempDir.hpp"
+#include "PgServer.hpp"
+
+#include <tellus/cache_pg/PgTileIndex.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+
+using namespace tellus;
+
+namespace {
+
+std::unique_ptr<ITileIndex> openAt(const std::string& uri) {
+  PgTileIndexOptions o;
+  o.connect.conninfo = uri;
+  auto index = openPgTileIndex(o);
+  EXPECT_TRUE(index) << (index ? "" : index.error().message);
+  return index ? std::move(*index) : nullptr;
+}
+
+} // namespace
+
+TEST(PgTileIndex, RedactsPasswordsOfUrisAndKeywordStrings) {
+  EXPECT_EQ(redactConninfo("postgresql://tile:s3cret@db.example:5432/tellus?sslmode=require"),
+            "postgresql://tile:***@db.example:5432/tellus?sslmode=require");
+  EXPECT_EQ(redactConninfo("postgresql://db/tellus?user=u&password=s3cret&x=1"),
+            "postgresql://db/tellus?user=u&password=***&x=1");
+  EXPECT_EQ(redactConninfo("host=db password=s3cret dbname=t"), "host=db password=*** dbname=t");
+  EXPECT_EQ(redactConninfo("postgresql://tile@db/tellus"), "postgresql://tile@db/tellus");
+  EXPECT_TRUE(isPostgresUri("postgres://db/t"));
+  EXPECT_FALSE(isPostgresUri("/var/cache/tellus"));
+}
+
+TEST(PgTileIndex, RefusesAPasswordInTheConnectionStringWithoutRepeatingIt) {
+  for (const char* uri : {"postgresql://tile:s3cret@127.0.0.1/tellus",
+                          "postgresql://127.0.0.1/tellus?password=s3cret",
+                          "host=127.0.0.1 password=s3cret"}) {
+    PgTileIndexOptions o;
+    o.connect.conninfo = uri;
+    auto index = openPgTileIndex(o);
+    ASSERT_FALSE(index) << uri;
+    EXPECT_EQ(index.error().code, CacheErrc::InvalidArgument);
+    EXPECT_NE(index.error().message.find("PGPASSWORD"), std::string::npos);
+    EXPECT_EQ(index.error().message.find("s3cret"), std::string::npos) << index.error().message;
+  }
+  PgTileIndexOptions bad;
+  bad.connect.conninfo = "postgresql://[::1";
+  EXPECT_FALSE(openPgTileIndex(bad));
+}
+
+TEST(PgTileIndex, AFailingConnectionSaysWhereButNeverThePassword) {
+  test::TempDir dir{"pgpw"};
+  const auto file = dir.path() / "password";
+  std::ofstream(file) << "pw-from-file-9d1\n";
+  ::setenv("PGPASSWORD", "pw-from-env-7c2", 1);
+  PgTileIndexOptions o;
+  // Nothing listens on port 1; then a server that knows no such database.
+  for (const std::string& uri :
+       {std::string("postgresql://tile@127.0.0.1:1/tellus"), test::pgUriOf("no_such_db")}) {
+    o.connect.conninfo = uri;
+    for (bool withFile : {false, true}) {
+      o.connect.passwordFile = withFile ? std::optional(file) : std::nullopt;
+      auto index = openPgTileIndex(o);
+      ASSERT_FALSE(index);
+      const std::string& m = index.error().message;
+      EXPECT_NE(m.find("cannot connect to PostgreSQL at"), std::string::npos) << m;
+      EXPECT_EQ(m.find("pw-from-file"), std::string::npos) << m;
+      EXPECT_EQ(m.find("pw-from-env"), std::string::npos) << m;
+    }
+  }
+  ::unsetenv("PGPASSWORD");
+  o.connect.conninfo = test::pgAdminUri();
+  o.connect.passwordFile = dir.path() / "missing";
+  auto missing = openPgTileIndex(o);
+  ASSERT_FALSE(missing);
+  EXPECT_NE(missing.error().message.find("password file"), std::string::npos);
+}
+
+TEST(PgTileIndex, InstancesOnOneDatabaseShareRowsAndNoticeEachOthersCommits) {
+  const std::string uri = test::pgCreateDatabase();
+  auto a = openAt(uri);
+  auto b = openAt(uri);
+  ASSERT_TRUE(a && b);
+  EXPECT_FALSE(a->changedByOthers());
+  EXPECT_FALSE(b->changedByOthers());
+  const auto spec = test::imagerySpec("bluemarble");
+  ASSERT_TRUE(a->begin());
+  auto da = a->upsertDataset(spec, "local/bluemarble", 1000);
+  ASSERT_TRUE(da);
+  TileRow row;
+  row.bytes = 1234;
+  row.meta.contentType = "image/jpeg";
+  row.meta.etag = "\"e\"";
+  row.meta.fetchedAt = 5000;
+  ASSERT_TRUE(a->putRow(da->id, TileKey{3, 4, 5}, row));
+  EXPECT_FALSE(b->lookup(da->id, TileKey{3, 4, 5}).value()); // not committed yet
+  ASSERT_TRUE(a->commit());
+  EXPECT_FALSE(a->changedByOthers()) << "its own commit";
+  EXPECT_TRUE(b->changedByOthers());
+  EXPECT_FALSE(b->changedByOthers());
+  auto seen = b->lookup(da->id, TileKey{3, 4, 5});
+  ASSERT_TRUE(seen && *seen);
+  EXPECT_EQ((*seen)->bytes, 1234);
+  EXPECT_EQ((*seen)->meta.etag, "\"e\"");
+  // The same dataset registered by another instance is the same row.
+  ASSERT_TRUE(b->begin());
+  auto db = b->upsertDataset(spec, "local/bluemarble", 2000);
+  ASSERT_TRUE(db && b->commit());
+  EXPECT_EQ(db->id, da->id);
+  EXPECT_EQ(db->createdAt, 1000);
+  EXPECT_EQ(b->totalBytes().value(), 1234);
+  EXPECT_EQ(a->integrity(), "ok");
+}
+
+TEST(PgTileIndex, ARolledBackSavepointUndoesItsOperationOnly) {
+  auto a = openAt(test::pgCreateDatabase());
+  ASSERT_TRUE(a);
+  ASSERT_TRUE(a->begin());
+  auto d = a->upsertDataset(test::imagerySpec("bm"), "local/bm", 1);
+  ASSERT_TRUE(d);
+  TileRow row;
+  row.bytes = 10;
+  a->savepoint();
+  ASSERT_TRUE(a->putRow(d->id, TileKey{0, 0, 0}, row));
+  a->releaseSavepoint();
+  a->savepoint();
+  ASSERT_TRUE(a->putRow(d->id, TileKey{0, 0, 1}, row));
+  a->rollbackToSavepoint();
+  a->releaseSavepoint();
+  ASSERT_TRUE(a->commit());
+  EXPECT_TRUE(a->lookup(d->id, TileKey{0, 0, 0}).value());
+  EXPECT_FALSE(a->lookup(d->id, TileKey{0, 0, 1}).value());
+  EXPECT_EQ(a->totalBytes().value(), 10);
+}

@@ -1,0 +1,178 @@
+// The tile service's use of single-flight leases across processes (TileServiceOptions::leases,
+// issue 27), against a scripted ITileLeases: a miss whose lease another process holds waits and
+// serves the tile that process stored, fetching nothing; a miss that takes the lease fetches,
+// stores, and gives the lease back after the row is committed. PostgreSQL's leases themselves are
+// tested in tests/cache_pg/, three real instances in tests/cli/test_scale_out.sh.
+
+#include "../support/CacheFixtures.hpp"
+#include "../support/FakeUpstream.hpp"
+#include "../support/TempDir.hpp"
+
+#include <tellus/cache/TileLeases.hpp>
+#include <tellus/proxy/Fetcher.hpp>
+#include <tellus/proxy/ImageCodec.hpp>
+#include <tellus/proxy/TileService.hpp>
+
+#include <gtest/gtest.h>
+
+#include <condition_variable>
+#include <cstring>
+#include <future>
+#include <mutex>
+
+using namespace tellus;
+using namespace std::chrono_literals;
+
+namespace {
+
+/** Answers every acquireOrWait with `outcome`; keeps the waiters' retries for the test to call. */
+class ScriptedLeases final : public ITileLeases {
+public:
+  explicit ScriptedLeases(LeaseOutcome outcome) : outcome_(outcome) {}
+
+  LeaseOutcome acquireOrWait(const LeaseKey& key,
+                             std::chrono::milliseconds,
+                             std::function<void()> retry) override {
+    std::lock_guard lock(mutex_);
+    asked.push_back(key);
+    if (outcome_ == LeaseOutcome::Waiting) retries_.push_back(std::move(retry));
+    changed_.notify_all();
+    return outcome_;
+  }
+  void release(const LeaseKey& key) override {
+    if (onRelease) onRelease(key);
+    std::lock_guard lock(mutex_);
+    released.push_back(key);
+  }
+  bool healthy() const override { return true; }
+
+  /** Waits until someone waits for a lease. */
+  bool waiterArrived() {
+    std::unique_lock lock(mutex_);
+    return changed_.wait_for(lock, 30s, [this] { return !retries_.empty(); });
+  }
+
+  /** Lets later asks take the lease and wakes the first waiter (as the holder's release does). */
+  bool wakeOneWaiter() {
+    std::function<void()> retry;
+    {
+      std::unique_lock lock(mutex_);
+      if (retries_.empty()) return false;
+      retry = std::move(retries_.front());
+      retries_.erase(retries_.begin());
+      outcome_ = LeaseOutcome::Acquired;
+    }
+    retry();
+    return true;
+  }
+
+  std::vector<LeaseKey> asked, released;
+  std::function<void(const LeaseKey&)> onRelease;
+
+private:
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  LeaseOutcome outcome_;
+  std::vector<std::function<void()>> retries_;
+};
+
+struct Service {
+  test::TempDir dir{"leases"};
+  std::unique_ptr<TileCache> cache = test::openTestCache(dir.path());
+  Fetcher fetcher;
+  std::unique_ptr<TileService> tiles;
+
+  Service(const std::string& url, std::shared_ptr<ITileLeases> leases) {
+    UpstreamSpec u;
+    u.name = "up";
+    u.type = UpstreamSpec::Type::Wms;
+    u.url = url;
+    u.policy.retries = 0;
+    LayerSpec l;
+    l.name = "sat";
+    l.upstream = "up";
+    l.dataset.grid = GridSpec{Sector{}, 36.0, 64, 64, 3};
+    l.dataset.mimeType = "image/png";
+    TileServiceOptions o;
+    o.leases = std::move(leases);
+    auto t = TileService::create(*cache, fetcher, {u}, {l}, o);
+    EXPECT_TRUE(t) << (t ? "" : t.error());
+    if (t) tiles = std::move(*t);
+  }
+  ~Service() { tiles.reset(); }
+
+  DatasetId datasetId() { return *cache->registerDataset(tiles->layer("sat")->dataset); }
+
+  std::future<TileAnswer> get(const TileKey& k) {
+    auto p = std::make_shared<std::promise<TileAnswer>>();
+    tiles->getTile("sat", "", k, [p](TileAnswer&& a) { p->set_value(std::move(a)); });
+    return p->get_future();
+  }
+};
+
+/** A valid 64 px PNG: what the tile service's validation takes. */
+test::FakeReply pngReply(const test::FakeRequest&) {
+  const std::vector<std::uint8_t> px(64 * 64 * 3, 90);
+  const auto bytes = *encodeImage("image/png", 64, 64, 3, px.data());
+  return test::FakeReply::ok(std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
+                             "image/png");
+}
+
+std::string text(const std::vector<std::byte>& b) {
+  return std::string(reinterpret_cast<const char*>(b.data()), b.size());
+}
+
+} // namespace
+
+TEST(TileLeases, AMissWaitingForAnotherProcessServesTheTileItStoredAndFetchesNothing) {
+  test::FakeUpstream up(pngReply);
+  auto leases = std::make_shared<ScriptedLeases>(LeaseOutcome::Waiting);
+  Service s(up.url("/wms"), leases);
+  const TileKey k{1, 2, 3};
+  auto answer = s.get(k);
+  ASSERT_TRUE(leases->waiterArrived());
+  EXPECT_NE(answer.wait_for(0s), std::future_status::ready);
+  // The holder, another process on the same index, stores the tile and releases its lease.
+  const std::string theirs = "stored by the holder";
+  std::vector<std::byte> bytes(theirs.size());
+  std::memcpy(bytes.data(), theirs.data(), theirs.size());
+  TileMeta meta;
+  meta.contentType = "image/png";
+  ASSERT_TRUE(s.cache->put(s.datasetId(), k, bytes, meta));
+  ASSERT_TRUE(leases->wakeOneWaiter());
+  ASSERT_EQ(answer.wait_for(30s), std::future_status::ready);
+  const TileAnswer a = answer.get();
+  ASSERT_EQ(a.kind, TileAnswer::Kind::Tile) << a.message;
+  ASSERT_TRUE(a.file);
+  const auto served = a.file->readAll();
+  ASSERT_TRUE(served);
+  EXPECT_EQ(text(*served), theirs);
+  EXPECT_EQ(up.requests(), 0u);
+  ASSERT_EQ(leases->asked.size(), 1u);
+  EXPECT_EQ(leases->asked[0].key, k);
+  EXPECT_EQ(leases->asked[0].folder, datasetFolder(s.tiles->layer("sat")->dataset));
+  EXPECT_TRUE(leases->released.empty()) << "a waiter holds no lease";
+}
+
+TEST(TileLeases, AMissThatTakesTheLeaseFetchesStoresThenReleasesIt) {
+  test::FakeUpstream up(pngReply);
+  auto leases = std::make_shared<ScriptedLeases>(LeaseOutcome::Acquired);
+  Service s(up.url("/wms"), leases);
+  const TileKey k{1, 2, 3};
+  bool storedAtRelease = false;
+  leases->onRelease = [&](const LeaseKey&) {
+    auto row = s.cache->peek(s.datasetId(), k);
+    storedAtRelease = row && row->kind == CacheLookup::Kind::Hit;
+  };
+  auto answer = s.get(k);
+  ASSERT_EQ(answer.wait_for(30s), std::future_status::ready);
+  EXPECT_EQ(answer.get().kind, TileAnswer::Kind::Tile);
+  EXPECT_EQ(up.requests(), 1u);
+  ASSERT_EQ(leases->released.size(), 1u);
+  EXPECT_EQ(leases->released[0].key, k);
+  EXPECT_TRUE(storedAtRelease) << "the lease went back before the tile's row was committed";
+  // A second request is a hit: no lease asked.
+  auto again = s.get(k);
+  ASSERT_EQ(again.wait_for(30s), std::future_status::ready);
+  EXPECT_EQ(leases->asked.size(), 1u);
+}
