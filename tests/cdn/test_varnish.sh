@@ -9,7 +9,8 @@
 #     URL is a 200 at once;
 #   - PURGE with an xkey-purge header of a layer's key removes that layer's tiles, not others';
 #   - `tellus cache prune --layer` with server.cdn.purge pointing at Varnish: the pruned layer's
-#     tile leaves Varnish (the next request reaches tellus), the other layer's stays.
+#     tile leaves Varnish (the next request reaches tellus), the other layer's stays; and so does
+#     `tellus seed --refresh` of that layer.
 # Usage: test_varnish.sh path/to/tellus. Exits 77 (skipped) without varnishd or vmod_xkey.
 set -euo pipefail
 tellus=$1
@@ -138,4 +139,18 @@ j=$(head_of "$v/wwtile?T=sat&L=1&X=2&Y=3")
 # business.)
 k=$(head_of "$v/wwtile?T=other&L=0&X=0&Y=0")
 [ "$(field x-varnish <<<"$k" | wc -w)" = 2 ] || fail "prune of sat took other's tile: $k"
-echo "ok: Varnish in front of tellus serve: hits, 304, no error kept, purge by key and by prune"
+
+# 6. `tellus seed --refresh` of sat (one tile of level 0) purges sat in Varnish too.
+head_of "$v/wwtile?T=sat&L=1&X=2&Y=3" >/dev/null # kept again
+l=$(head_of "$v/wwtile?T=sat&L=1&X=2&Y=3")
+[ "$(field x-varnish <<<"$l" | wc -w)" = 2 ] || fail "not kept again before the refresh: $l"
+"$tellus" seed --config "$work/prune.yaml" --cache "$work/cache" --layer sat --levels 0 \
+  --bbox -180,-90,-144,-54 --refresh >"$work/refresh.log" 2>&1 ||
+  fail "seed --refresh: $(cat "$work/refresh.log")"
+grep -q "purged 1 keys at server.cdn.purge\[0\]" "$work/refresh.log" ||
+  fail "seed --refresh did not purge: $(cat "$work/refresh.log")"
+m=$(head_of "$v/wwtile?T=sat&L=1&X=2&Y=3")
+[ "$(field x-varnish <<<"$m" | wc -w)" = 1 ] || fail "a refreshed layer's tile is still in Varnish: $m"
+n=$(head_of "$v/wwtile?T=other&L=0&X=0&Y=0")
+[ "$(field x-varnish <<<"$n" | wc -w)" = 2 ] || fail "the refresh of sat took other's tile: $n"
+echo "ok: Varnish in front of tellus serve: hits, 304, no error kept, purge by key, by prune and by refresh"
