@@ -200,9 +200,8 @@ TEST(CdnHeaders, ComposedMapsAndWmtsTilesHaveKeysAnd304) {
                 .status,
             304);
   // The capabilities documents: their own key, a short lifetime, 304.
-  for (const std::string& caps :
-       {std::string("/wms?SERVICE=WMS&REQUEST=GetCapabilities"),
-        std::string("/wmts?SERVICE=WMTS&REQUEST=GetCapabilities")}) {
+  for (const std::string& caps : {std::string("/wms?SERVICE=WMS&REQUEST=GetCapabilities"),
+                                  std::string("/wmts?SERVICE=WMTS&REQUEST=GetCapabilities")}) {
     const auto c = s.get(caps);
     ASSERT_EQ(c.status, 200);
     EXPECT_EQ(c.header("xkey"), "tellus capabilities");
@@ -266,9 +265,9 @@ TEST(CdnHeaders, AbsentTilesAndEmptyMapsLiveShortly) {
   ASSERT_EQ(r.status, 404);
   EXPECT_EQ(r.header("cache-control"), "public, max-age=30, s-maxage=30");
   EXPECT_EQ(r.header("xkey"), "tellus layer:sat layer:sat/1");
-  const auto empty = s.get(
-      "/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.1.1&LAYERS=sat&STYLES=&SRS=EPSG:4326"
-      "&BBOX=-144,-90,-108,-54&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg");
+  const auto empty =
+      s.get("/wms?SERVICE=WMS&REQUEST=GetMap&VERSION=1.1.1&LAYERS=sat&STYLES=&SRS=EPSG:4326"
+            "&BBOX=-144,-90,-108,-54&WIDTH=256&HEIGHT=256&FORMAT=image/jpeg");
   ASSERT_EQ(empty.status, 200);
   EXPECT_EQ(empty.header("cache-control"), "public, max-age=30, s-maxage=30");
 }

@@ -24,12 +24,12 @@ std::string tileCacheControl(std::chrono::seconds maxAge,
   const std::int64_t browser = std::max<std::int64_t>(0, maxAge.count());
   const std::int64_t ttlSeconds = std::chrono::duration_cast<std::chrono::seconds>(ttl).count();
   const std::int64_t shared =
-      cdn.sMaxAge ? cdn.sMaxAge->count() : (ttl.count() > 0 ? std::max<std::int64_t>(1, ttlSeconds)
-                                                            : browser);
+      cdn.sMaxAge ? cdn.sMaxAge->count()
+                  : (ttl.count() > 0 ? std::max<std::int64_t>(1, ttlSeconds) : browser);
   const std::int64_t swr = cdn.staleWhileRevalidate ? cdn.staleWhileRevalidate->count()
                                                     : std::min<std::int64_t>(shared, kDay);
-  std::string v = "public, max-age=" + std::to_string(browser) +
-                  ", s-maxage=" + std::to_string(shared);
+  std::string v =
+      "public, max-age=" + std::to_string(browser) + ", s-maxage=" + std::to_string(shared);
   if (swr > 0) v += ", stale-while-revalidate=" + std::to_string(swr);
   if (cdn.staleIfError.count() > 0)
     v += ", stale-if-error=" + std::to_string(cdn.staleIfError.count());
@@ -59,6 +59,8 @@ std::string layerKeys(std::string_view layer, std::string_view time, std::int32_
   return k;
 }
 
-std::string capabilitiesKeys() { return "tellus capabilities"; }
+std::string capabilitiesKeys() {
+  return "tellus capabilities";
+}
 
 } // namespace tellus

@@ -10,7 +10,9 @@ namespace tellus {
 
 namespace {
 
-std::size_t discard(char*, std::size_t size, std::size_t n, void*) { return size * n; }
+std::size_t discard(char*, std::size_t size, std::size_t n, void*) {
+  return size * n;
+}
 
 bool keySafe(const std::string& k) {
   return !k.empty() && std::none_of(k.begin(), k.end(), [](char c) {
@@ -19,9 +21,8 @@ bool keySafe(const std::string& k) {
   });
 }
 
-PurgeOutcome purgeOnce(const std::string& endpoint,
-                       const std::string& keys,
-                       std::chrono::milliseconds timeout) {
+PurgeOutcome
+purgeOnce(const std::string& endpoint, const std::string& keys, std::chrono::milliseconds timeout) {
   PurgeOutcome out{endpoint, 0, {}};
   std::unique_ptr<CURL, decltype(&curl_easy_cleanup)> h(curl_easy_init(), &curl_easy_cleanup);
   if (!h) {

@@ -19,8 +19,9 @@ struct PurgeOutcome {
   bool ok() const { return error.empty(); }
 };
 
-/** PURGE each endpoint once per batch of keys (at most `batch` keys in one header, space-separated);
- * blocking, each request within `timeout`. Keys with blanks or control bytes are refused (error). */
+/** PURGE each endpoint once per batch of keys (at most `batch` keys in one header,
+ * space-separated); blocking, each request within `timeout`. Keys with blanks or control bytes are
+ * refused (error). */
 std::vector<PurgeOutcome> purgeKeys(const std::vector<std::string>& endpoints,
                                     const std::vector<std::string>& keys,
                                     std::chrono::milliseconds timeout = std::chrono::seconds(10),

@@ -5,7 +5,8 @@
 // (stale-while-revalidate, stale-if-error), which surrogate keys name it for a purge (the `xkey`
 // header of Varnish's vmod_xkey) and, for every error, that it is not to be kept at all.
 // Pure functions of the configuration: the front ends (proxy/src/frontend/) call them, and
-// `tellus cache prune` and `tellus seed --refresh` name the same keys when they purge (CdnPurge.hpp).
+// `tellus cache prune` and `tellus seed --refresh` name the same keys when they purge
+// (CdnPurge.hpp).
 
 #include <chrono>
 #include <cstdint>
@@ -41,9 +42,8 @@ inline constexpr std::string_view kNoStore = "no-store";
 
 /** Cache-Control of a tile or map kept for `maxAge` by browsers, its shared-cache lifetime from
  * the layer's `ttl` (0: tiles never expire) unless configured. */
-std::string tileCacheControl(std::chrono::seconds maxAge,
-                             std::chrono::milliseconds ttl,
-                             const CdnOptions& cdn);
+std::string
+tileCacheControl(std::chrono::seconds maxAge, std::chrono::milliseconds ttl, const CdnOptions& cdn);
 
 /** Cache-Control of an absent tile, an empty map or a stale tile: shortMaxAge for both. */
 std::string shortCacheControl(const CdnOptions& cdn);
