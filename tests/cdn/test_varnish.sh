@@ -10,7 +10,7 @@
 #   - PURGE with an xkey-purge header of a layer's key removes that layer's tiles, not others';
 #   - `tellus cache prune --layer` with server.cdn.purge pointing at Varnish: the pruned layer's
 #     tile leaves Varnish (the next request reaches tellus), the other layer's stays; and so does
-#     `tellus seed --refresh` of that layer.
+#     `tellus seed --refresh` of that layer; a purge that fails exits 1 and shows no token.
 # Usage: test_varnish.sh path/to/tellus. Exits 77 (skipped) without varnishd or vmod_xkey.
 set -euo pipefail
 tellus=$1
@@ -153,4 +153,15 @@ m=$(head_of "$v/wwtile?T=sat&L=1&X=2&Y=3")
 [ "$(field x-varnish <<<"$m" | wc -w)" = 1 ] || fail "a refreshed layer's tile is still in Varnish: $m"
 n=$(head_of "$v/wwtile?T=other&L=0&X=0&Y=0")
 [ "$(field x-varnish <<<"$n" | wc -w)" = 2 ] || fail "the refresh of sat took other's tile: $n"
+
+# 7. A purge that fails: the command says so and exits 1, naming the endpoint by its place and
+# origin, never the rest of its URL (a token in its query; credentials in it are refused).
+config "\"http://127.0.0.1:1/purge?token=s3cr3t\"" >"$work/bad-purge.yaml"
+if "$tellus" cache prune --config "$work/bad-purge.yaml" --cache "$work/cache" --layer other \
+  --older-than 0s >"$work/bad-purge.log" 2>&1; then
+  fail "a failed purge exited 0: $(cat "$work/bad-purge.log")"
+fi
+grep -q "purging server.cdn.purge\[0\] (http://127.0.0.1:1) failed" "$work/bad-purge.log" ||
+  fail "the failed purge is not reported: $(cat "$work/bad-purge.log")"
+! grep -q "s3cr3t" "$work/bad-purge.log" || fail "the purge URL's token was shown"
 echo "ok: Varnish in front of tellus serve: hits, 304, no error kept, purge by key, by prune and by refresh"
