@@ -52,6 +52,41 @@ void readLimits(Reader& r, const Map& server, ServerLimits& lim) {
         static_cast<std::int32_t>(integer(r, *v, l.path("max_tiles_per_map"), 1, 1 << 20));
 }
 
+/** A duration in whole seconds (server.cdn's). */
+std::chrono::seconds wholeSeconds(Reader& r, const YAML::Node& v, const std::string& path) {
+  const auto d = duration(r, v, path);
+  if (d.count() % 1000 != 0)
+    r.fail(v.Mark(), path, "must be whole seconds, got '" + v.Scalar() + "'");
+  return std::chrono::duration_cast<std::chrono::seconds>(d);
+}
+
+/** server.cdn: the headers shared caches are told, and the purge endpoints. */
+void readCdn(Reader& r, const Map& server, CdnSettings& c) {
+  const auto [cn, cwhere] = server.child("cdn");
+  const Map m(r,
+              cn,
+              server.path("cdn"),
+              cwhere,
+              {"s_maxage",
+               "stale_while_revalidate",
+               "stale_if_error",
+               "short_max_age",
+               "key_header",
+               "purge"});
+  if (auto v = m.get("s_maxage")) c.sMaxAge = wholeSeconds(r, *v, m.path("s_maxage"));
+  if (auto v = m.get("stale_while_revalidate"))
+    c.staleWhileRevalidate = wholeSeconds(r, *v, m.path("stale_while_revalidate"));
+  if (auto v = m.get("stale_if_error"))
+    c.staleIfError = wholeSeconds(r, *v, m.path("stale_if_error"));
+  if (auto v = m.get("short_max_age")) c.shortMaxAge = wholeSeconds(r, *v, m.path("short_max_age"));
+  if (auto v = m.get("key_header")) c.keyHeader = text(r, *v, m.path("key_header"));
+  if (auto v = m.get("purge")) {
+    std::size_t i = 0;
+    for (const auto& e : list(r, *v, m.path("purge")))
+      c.purge.push_back(text(r, e, m.path("purge") + "[" + std::to_string(i++) + "]"));
+  }
+}
+
 } // namespace
 
 void readServer(Reader& r, const Map& root, ServerSettings& s) {
@@ -70,7 +105,8 @@ void readServer(Reader& r, const Map& root, ServerSettings& s) {
                "log_level",
                "access_log",
                "jpeg_quality",
-               "limits"});
+               "limits",
+               "cdn"});
   if (auto v = m.get("listen")) {
     auto a = detail::parseListenAddress(text(r, *v, m.path("listen")));
     if (!a) r.fail(v->Mark(), m.path("listen"), a.error());
@@ -95,6 +131,7 @@ void readServer(Reader& r, const Map& root, ServerSettings& s) {
     s.jpegQuality = static_cast<int>(integer(r, *v, m.path("jpeg_quality"), 1, 100));
 
   readLimits(r, m, s.limits);
+  readCdn(r, m, s.cdn);
 }
 
 } // namespace tellus::detail::yaml

@@ -7,6 +7,7 @@
 #include <tellus/values/ColourMap.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -108,6 +109,19 @@ std::optional<ValidationIssue> checkServer(const ServerSettings& s) {
     return issue("limits.requests_per_second", "must be a finite number >= 0");
   if (!std::isfinite(l.fetchesPerClientPerMinute) || l.fetchesPerClientPerMinute < 0.0)
     return issue("limits.fetches_per_client_per_minute", "must be a finite number >= 0");
+  const CdnSettings& c = s.cdn;
+  if (c.sMaxAge && c.sMaxAge->count() < 0) return issue("cdn.s_maxage", "must not be negative");
+  if (c.staleWhileRevalidate && c.staleWhileRevalidate->count() < 0)
+    return issue("cdn.stale_while_revalidate", "must not be negative");
+  if (c.staleIfError.count() < 0) return issue("cdn.stale_if_error", "must not be negative");
+  if (c.shortMaxAge.count() < 0) return issue("cdn.short_max_age", "must not be negative");
+  if (!std::all_of(c.keyHeader.begin(), c.keyHeader.end(), [](char ch) {
+        return std::isalnum(static_cast<unsigned char>(ch)) || ch == '-' || ch == '_';
+      }))
+    return issue("cdn.key_header",
+                 "must be a header name (A-Z a-z 0-9 - _), got '" + c.keyHeader + "'");
+  for (std::size_t i = 0; i < c.purge.size(); ++i)
+    if (auto e = checkHttpUrl(c.purge[i])) return issue("cdn.purge[" + std::to_string(i) + "]", *e);
   return std::nullopt;
 }
 

@@ -235,6 +235,12 @@ ServerSettings busyServer() {
   s.limits.maxMapPixels = 1000000;
   s.limits.maxTilesPerMap = 64;
   s.limits.decodedTileCache = 5u << 20;
+  s.cdn.sMaxAge = std::chrono::seconds(7200);
+  s.cdn.staleWhileRevalidate = std::chrono::seconds(30);
+  s.cdn.staleIfError = std::chrono::seconds(0);
+  s.cdn.shortMaxAge = std::chrono::seconds(5);
+  s.cdn.keyHeader = "Surrogate-Key";
+  s.cdn.purge = {"http://127.0.0.1:6081/"};
   return s;
 }
 
@@ -253,6 +259,12 @@ TEST(ProxyFromConfig, FrontEndKeepsEveryServerSetting) {
   EXPECT_EQ(o.composeThreads, 6);
   EXPECT_EQ(o.maxParamBytes, 1024u);
   EXPECT_EQ(o.fetchesPerClientPerMinute, 30.0);
+  EXPECT_EQ(o.cdn.sMaxAge, std::chrono::seconds(7200));
+  EXPECT_EQ(o.cdn.staleWhileRevalidate, std::chrono::seconds(30));
+  EXPECT_EQ(o.cdn.staleIfError, std::chrono::seconds(0));
+  EXPECT_EQ(o.cdn.shortMaxAge, std::chrono::seconds(5));
+  EXPECT_EQ(o.cdn.keyHeader, "Surrogate-Key");
+  EXPECT_EQ(o.cdn.purge, std::vector<std::string>{"http://127.0.0.1:6081/"});
   EXPECT_EQ(frontEndOptions(ServerSettings{}, 1).offlineResponse,
             FrontEndOptions::OfflineResponse::Exception);
   // No core count known (hardware_concurrency() is 0): one worker all the same.

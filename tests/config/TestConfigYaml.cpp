@@ -1249,6 +1249,37 @@ layers: []
   EXPECT_EQ(word.key, "server.limits.fetches_per_client_per_minute");
 }
 
+TEST(ConfigYaml, ServerCdnKeysAndTheirChecks) {
+  const auto none = parse(std::string(kMinimal));
+  ASSERT_TRUE(none) << none.error().toString();
+  EXPECT_FALSE(none->server.cdn.sMaxAge);
+  EXPECT_EQ(none->server.cdn.staleIfError, std::chrono::seconds(7 * 86400));
+  EXPECT_EQ(none->server.cdn.keyHeader, "xkey");
+  EXPECT_TRUE(none->server.cdn.purge.empty());
+  const auto cdn =
+      parse("server:\n  cdn:\n    s_maxage: 2h\n    stale_while_revalidate: 30s\n"
+            "    stale_if_error: 0s\n    short_max_age: 5s\n"
+            "    key_header: Surrogate-Key\n"
+            "    purge: [\"http://127.0.0.1:6081/\", \"https://cdn.example/purge\"]\n" +
+            std::string(kMinimal));
+  ASSERT_TRUE(cdn) << cdn.error().toString();
+  EXPECT_EQ(cdn->server.cdn.sMaxAge, std::chrono::seconds(7200));
+  EXPECT_EQ(cdn->server.cdn.staleWhileRevalidate, std::chrono::seconds(30));
+  EXPECT_EQ(cdn->server.cdn.staleIfError, std::chrono::seconds(0));
+  EXPECT_EQ(cdn->server.cdn.shortMaxAge, std::chrono::seconds(5));
+  EXPECT_EQ(cdn->server.cdn.keyHeader, "Surrogate-Key");
+  ASSERT_EQ(cdn->server.cdn.purge.size(), 2u);
+  EXPECT_EQ(cdn->server.cdn.purge[1], "https://cdn.example/purge");
+  EXPECT_EQ(errorOf("server: {cdn: {s_maxage: 1500ms}}\n" + std::string(kMinimal)).key,
+            "server.cdn.s_maxage");
+  EXPECT_EQ(errorOf("server: {cdn: {purge: [ftp://x/]}}\n" + std::string(kMinimal)).key,
+            "server.cdn.purge[0]");
+  EXPECT_EQ(errorOf("server: {cdn: {key_header: \"a b\"}}\n" + std::string(kMinimal)).key,
+            "server.cdn.key_header");
+  EXPECT_EQ(errorOf("server: {cdn: {purge_all: true}}\n" + std::string(kMinimal)).key,
+            "server.cdn.purge_all");
+}
+
 TEST(ConfigYaml, WmtsUpstreamsAndTheirKeys) {
   const auto c = parse(R"(upstreams:
   - name: gibs

@@ -166,7 +166,9 @@ TEST(ProxyIntegration, EveryProtocolGivesTheSameCachedBytes) {
   EXPECT_EQ(first.header("x-cache"), "MISS");
   EXPECT_EQ(first.header("content-type"), "image/jpeg");
   EXPECT_EQ(first.header("access-control-allow-origin"), "*");
-  EXPECT_EQ(first.header("cache-control"), "public, max-age=3600");
+  EXPECT_EQ(first.header("cache-control"), // s-maxage: no ttl, so max_age (HttpCaching.hpp)
+            "public, max-age=3600, s-maxage=3600, stale-while-revalidate=3600, "
+            "stale-if-error=604800");
   for (const auto& target : {kWms111,
                              kWms130,
                              kWms130Crs84,
@@ -1187,7 +1189,7 @@ TEST(ComposeIntegration, HolesAreFilledFromCoarserLevelsOrReported) {
   const std::string target = getMap("sat", "2,-16,16,-2", 200, 200, "image/png");
   const auto filled = p.get(target);
   ASSERT_EQ(filled.header("content-type"), "image/png") << filled.body.substr(0, 400);
-  EXPECT_EQ(filled.header("cache-control"), "public, max-age=60");
+  EXPECT_EQ(filled.header("cache-control"), "public, max-age=60, s-maxage=60");
   expectNear(rgbAt(decodeAnswer(filled, 200, 200), 100, 100), parent, 2, "level 0 fills in");
   // A failing upstream where level 0 is cached: still a map, from level 0.
   status = 500;

@@ -155,19 +155,43 @@ std::expected<std::string, OgcException> FrontEnd::resolveTime(const LayerSpec& 
 
 // ---- a tile as cached ---------------------------------------------------------------------------
 
+void FrontEnd::cacheHeaders(HttpResponse& r,
+                            std::chrono::seconds maxAge,
+                            std::chrono::milliseconds ttl,
+                            bool stale,
+                            const std::string& keys) const {
+  r.setHeader("Cache-Control",
+              stale ? shortCacheControl(options.cdn) : tileCacheControl(maxAge, ttl, options.cdn));
+  if (!options.cdn.keyHeader.empty() && !keys.empty()) r.setHeader(options.cdn.keyHeader, keys);
+}
+
+void FrontEnd::shortLived(HttpResponse& r, const std::string& keys) const {
+  r.setHeader("Cache-Control", shortCacheControl(options.cdn));
+  if (!options.cdn.keyHeader.empty() && !keys.empty()) r.setHeader(options.cdn.keyHeader, keys);
+}
+
+void FrontEnd::finishCaching(HttpResponse& r) const {
+  std::string_view cc;
+  for (const auto& [k, v] : r.headers)
+    if (k == "Cache-Control") cc = v;
+  if (keepable(r.status, cc)) return;
+  r.setHeader("Cache-Control", std::string(kNoStore));
+  const std::string& key = options.cdn.keyHeader;
+  if (!key.empty()) std::erase_if(r.headers, [&](const auto& h) { return h.first == key; });
+}
+
 void FrontEnd::sendTile(const Validators& req,
                         TileAnswer&& a,
                         const LayerSpec& l,
-                        const Responder& respond) const {
+                        const std::string& keys,
+                        const Responder& respond,
+                        bool provisional) const {
   HttpResponse r;
   r.headers.reserve(8);
   common(r);
   r.setHeader("ETag", a.etag);
   r.setHeader("Last-Modified", formatHttpDate(a.fetchedAt));
-  r.setHeader("Cache-Control",
-              a.origin == TileOrigin::Stale
-                  ? std::string("public, max-age=60")
-                  : "public, max-age=" + std::to_string(l.maxAge.count()));
+  cacheHeaders(r, l.maxAge, l.ttl, provisional || a.origin == TileOrigin::Stale, keys);
   r.setHeader("X-Cache", toString(a.origin));
   const std::string_view inm = req.ifNoneMatch;
   bool notModified = false;

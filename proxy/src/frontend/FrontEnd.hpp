@@ -18,6 +18,7 @@
 #include <tellus/proxy/Wms.hpp>
 #include <tellus/proxy/Wmts.hpp>
 
+#include <chrono>
 #include <cstdint>
 #include <expected>
 #include <map>
@@ -89,11 +90,27 @@ struct FrontEnd {
         : ifNoneMatch(req.header("if-none-match")),
           ifModifiedSince(req.header("if-modified-since")) {}
   };
-  /** A tile as it is cached (200, or 304 for the client's validators), with its caching headers. */
+  /** A tile as it is cached (200, or 304 for the client's validators), with its caching headers
+   * and its surrogate keys (`keys`: layerKeys; "" = none). A provisional tile (stale, or composed
+   * with a coarser tile standing in) is kept briefly (shortCacheControl). */
   void sendTile(const Validators& req,
                 TileAnswer&& a,
                 const LayerSpec& l,
-                const Responder& respond) const;
+                const std::string& keys,
+                const Responder& respond,
+                bool provisional = false) const;
+  /** Cache-Control of a fresh tile of these layers (the shortest max_age and ttl) or a stale one,
+   * and the surrogate keys when they are on. */
+  void cacheHeaders(HttpResponse& r,
+                    std::chrono::seconds maxAge,
+                    std::chrono::milliseconds ttl,
+                    bool stale,
+                    const std::string& keys) const;
+  /** Cache-Control of an answer that says "no tile here" (404, an empty map), with its keys. */
+  void shortLived(HttpResponse& r, const std::string& keys) const;
+  /** The last word on every answer (ProxyFrontEnd): an error no cache may keep says no-store
+   * (keepable) and loses its surrogate keys. */
+  void finishCaching(HttpResponse& r) const;
 };
 
 /** GetCapabilities and GetMap (one tile as cached, or composed), their OGC exceptions. */
@@ -173,6 +190,7 @@ private:
   void describeStyles(const LayerSpec& l, const std::string& base, CapabilitiesLayer& c) const;
   /** GetLegendGraphic: the PNG legend of a value layer's style (WmsValues.cpp). */
   void legend(const GetLegendGraphicRequest& g,
+              std::string_view ifNoneMatch,
               const WmsErrorContext& ctx,
               const Responder& respond) const;
   /** GetFeatureInfo: the value of each queried value layer at the pixel (WmsValues.cpp). */
@@ -185,6 +203,7 @@ private:
                   const MapKind& kind,
                   std::string_view why,
                   TileOrigin origin,
+                  const std::string& keys,
                   const Responder& respond) const;
 
   FrontEnd& fe_;
@@ -206,7 +225,7 @@ private:
                      const std::string* time = nullptr);
   /** A tile that could not be had: 404 when there is no such tile, 503 or 429 with Retry-After
    * when it may come later, 502 when the upstream's answer was not a tile. */
-  HttpResponse tileError(const TileAnswer& a) const;
+  HttpResponse tileError(const TileAnswer& a, const std::string& keys) const;
 
   FrontEnd& fe_;
 };
@@ -256,7 +275,7 @@ private:
                  const Responder& respond,
                  int status = 0,
                  std::optional<FrontEnd::Temporary> temporary = std::nullopt) const;
-  void tileFailure(const TileAnswer& a, const Responder& respond) const;
+  void tileFailure(const TileAnswer& a, const std::string& keys, const Responder& respond) const;
 
   /** The layers' sets, made on first use (the front ends are made before FrontEnd). */
   const std::vector<LayerSets>& layerSets() const;

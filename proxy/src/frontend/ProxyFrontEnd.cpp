@@ -138,14 +138,15 @@ struct ProxyFrontEnd::Impl {
     std::optional<Access> access;
     if (logger().accessLogEnabled())
       access = Access{std::chrono::steady_clock::now(), req.remoteAddress, req.method, req.target};
-    return
-        [metrics = &fe.metrics, protocol, access = std::move(access), respond = std::move(respond)](
-            HttpResponse&& r) {
-          const auto bytes = r.file ? static_cast<std::uint64_t>(r.file->size) : r.body.size();
-          metrics->requestFinished(protocol, r.status, bytes);
-          if (access) logAccess(*access, protocol, r, bytes);
-          respond(std::move(r));
-        };
+    return [fe = &fe, protocol, access = std::move(access), respond = std::move(respond)](
+               HttpResponse&& r) {
+      fe->finishCaching(r); // an error is never kept, whoever made it
+      ProxyMetrics* metrics = &fe->metrics;
+      const auto bytes = r.file ? static_cast<std::uint64_t>(r.file->size) : r.body.size();
+      metrics->requestFinished(protocol, r.status, bytes);
+      if (access) logAccess(*access, protocol, r, bytes);
+      respond(std::move(r));
+    };
   }
 
   void route(const HttpRequest& req, Protocol protocol, const Responder& respond) {

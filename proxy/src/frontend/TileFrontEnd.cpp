@@ -51,23 +51,26 @@ void TileFrontEnd::serveTilePath(const HttpRequest& req,
                                  const std::string* time) {
   const LayerSpec* l = fe_.tiles.layer(layerName);
   if (!l) return respond(fe_.plain(404, "no such layer\n"));
+  const std::string& t = time ? *time : l->timeDefault;
   fe_.tiles.getTile(
       layerName,
-      time ? *time : l->timeDefault,
+      t,
       key,
-      [this, v = FrontEnd::Validators(req), l, respond](TileAnswer&& a) {
+      [this, v = FrontEnd::Validators(req), l, t, level = key.level, respond](TileAnswer&& a) {
         fe_.countTile(l, a);
-        if (a.kind == TileAnswer::Kind::Tile) return fe_.sendTile(v, std::move(a), *l, respond);
-        respond(tileError(a));
+        const std::string keys = layerKeys(l->name, t, level);
+        if (a.kind == TileAnswer::Kind::Tile)
+          return fe_.sendTile(v, std::move(a), *l, keys, respond);
+        respond(tileError(a, keys));
       },
       fe_.gateFor(req));
 }
 
-HttpResponse TileFrontEnd::tileError(const TileAnswer& a) const {
+HttpResponse TileFrontEnd::tileError(const TileAnswer& a, const std::string& keys) const {
   if (a.kind == TileAnswer::Kind::Absent) {
     auto r = fe_.errorText(404, a.message);
     r.setHeader("X-Cache", toString(a.origin));
-    r.setHeader("Cache-Control", "public, max-age=60");
+    fe_.shortLived(r, keys);
     return r;
   }
   auto r = fe_.errorText(502, a.message);

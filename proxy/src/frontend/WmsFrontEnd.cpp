@@ -77,7 +77,7 @@ void WmsFrontEnd::handle(const HttpRequest& req, const Responder& respond) {
   if (const auto* caps = std::get_if<GetCapabilitiesRequest>(&*parsed))
     return capabilities(req, *caps, ctx, respond);
   if (const auto* g = std::get_if<GetLegendGraphicRequest>(&*parsed))
-    return legend(*g, ctx, respond);
+    return legend(*g, req.header("if-none-match"), ctx, respond);
   if (const auto* f = std::get_if<GetFeatureInfoRequest>(&*parsed))
     return featureInfo(req, *f, ctx, respond);
   getMap(req, std::move(std::get<GetMapRequest>(*parsed)), ctx, respond);
@@ -99,7 +99,7 @@ void WmsFrontEnd::capabilities(const HttpRequest& req,
   std::snprintf(
       etag, sizeof etag, "\"%016llx\"", static_cast<unsigned long long>(stableHash64(xml)));
   r.setHeader("ETag", etag);
-  r.setHeader("Cache-Control", "public, max-age=60");
+  fe_.cacheHeaders(r, std::chrono::seconds(60), {}, false, capabilitiesKeys());
   if (ifNoneMatchHits(req.header("if-none-match"), etag)) {
     r.status = 304;
     r.body.clear();
@@ -302,10 +302,19 @@ bool WmsFrontEnd::sendOneTile(const HttpRequest& req,
       l->name,
       layers.front().time,
       *key,
-      [this, v = FrontEnd::Validators(req), l, m = std::move(m), kind, ctx, respond](
-          TileAnswer&& a) {
+      [this,
+       v = FrontEnd::Validators(req),
+       l,
+       m = std::move(m),
+       kind,
+       ctx,
+       time = layers.front().time,
+       level = key->level,
+       respond](TileAnswer&& a) {
         fe_.countTile(l, a);
-        if (a.kind == TileAnswer::Kind::Tile) return fe_.sendTile(v, std::move(a), *l, respond);
+        const std::string keys = layerKeys(l->name, time, level);
+        if (a.kind == TileAnswer::Kind::Tile)
+          return fe_.sendTile(v, std::move(a), *l, keys, respond);
         if (a.kind == TileAnswer::Kind::Absent) {
           if (a.origin == TileOrigin::Offline &&
               fe_.options.offlineResponse == FrontEndOptions::OfflineResponse::Exception) {
@@ -313,7 +322,7 @@ bool WmsFrontEnd::sendOneTile(const HttpRequest& req,
                 ctx, OgcException{std::string(ogc::kNoApplicableCode), "", a.message}, respond);
           }
           // No tile there: an empty map, not an error.
-          return emptyImage(m, kind, a.message, a.origin, respond);
+          return emptyImage(m, kind, a.message, a.origin, keys, respond);
         }
         exception(ctx,
                   OgcException{std::string(ogc::kNoApplicableCode), "", a.message},
@@ -343,12 +352,23 @@ void WmsFrontEnd::compose(const HttpRequest& req,
   cr.transparent = m.transparent;
   cr.bgcolor = m.bgcolor;
   cr.ifNoneMatch = std::string(req.header("if-none-match"));
+  // The map's surrogate keys (each layer, each time) and shared-cache lifetime (the shortest
+  // ttl of its layers; 0 when none expires).
+  std::string keys = "tellus";
+  std::chrono::milliseconds ttl{0};
+  std::chrono::seconds maxAge{86400 * 365};
+  for (const ComposeLayer& l : cr.layers) {
+    maxAge = std::min(maxAge, l.layer->maxAge);
+    keys += " " + layerKey(l.layer->name);
+    if (!l.time.empty()) keys += " " + layerKey(l.layer->name, l.time);
+    if (l.layer->ttl.count() > 0 && (ttl.count() == 0 || l.layer->ttl < ttl)) ttl = l.layer->ttl;
+  }
   cr.fetchBudget = fe_.gateFor(req).budget;
   cr.client = req.remoteAddress;
   auto started = fe_.composer.compose(
       std::move(cr),
       [this](const LayerSpec& layer, const TileAnswer& a) { fe_.countTile(&layer, a); },
-      [this, ctx, respond](ComposedMap&& map) {
+      [this, ctx, keys = std::move(keys), ttl, maxAge, respond](ComposedMap&& map) {
         fe_.metrics.composedTiles(map.decodedTiles,
                                   map.tiles > map.decodedTiles ? map.tiles - map.decodedTiles : 0);
         if (map.kind == ComposedMap::Kind::Error) {
@@ -360,7 +380,12 @@ void WmsFrontEnd::compose(const HttpRequest& req,
         HttpResponse r;
         fe_.common(r);
         r.setHeader("ETag", map.etag);
-        r.setHeader("Cache-Control", "public, max-age=" + std::to_string(map.maxAgeSeconds));
+        // A map of stale tiles, or with stand-ins or holes (MapRender shortened its max-age), is
+        // kept briefly.
+        const bool provisional =
+            (map.origin != TileOrigin::Hit && map.origin != TileOrigin::Miss) ||
+            map.maxAgeSeconds < maxAge.count();
+        fe_.cacheHeaders(r, std::chrono::seconds(map.maxAgeSeconds), ttl, provisional, keys);
         r.setHeader("X-Cache", toString(map.origin));
         if (map.kind == ComposedMap::Kind::NotModified) {
           r.status = 304;
@@ -413,6 +438,7 @@ void WmsFrontEnd::exception(const WmsErrorContext& ctx,
   const FormattedResponse f = formatWmsException(ctx.version, e, fe_.options.exceptionsHttpStatus);
   auto r = HttpResponse::text(f.httpStatus, f.contentType, f.body);
   fe_.common(r);
+  r.setHeader("Cache-Control", std::string(kNoStore)); // with status 200 too: never the answer
   respond(std::move(r));
 }
 
@@ -432,6 +458,7 @@ void WmsFrontEnd::emptyImage(const GetMapRequest& m,
                              const MapKind& kind,
                              std::string_view why,
                              TileOrigin origin,
+                             const std::string& keys,
                              const Responder& respond) const {
   auto img = blankMap(m.mapFormat,
                       kind.heights,
@@ -452,7 +479,7 @@ void WmsFrontEnd::emptyImage(const GetMapRequest& m,
   fe_.common(r);
   r.setHeader("Content-Type", std::string(contentTypeOf(m.mapFormat)));
   r.setHeader("X-Cache", toString(origin));
-  r.setHeader("Cache-Control", "public, max-age=60");
+  fe_.shortLived(r, keys);
   r.body = std::move(*img);
   respond(std::move(r));
 }

@@ -3,6 +3,7 @@
 // value at a pixel, sampled from the layer's tile through tellus::values).
 #include "frontend/FrontEnd.hpp"
 
+#include <tellus/cache/TilePath.hpp>
 #include <tellus/codec/Png.hpp>
 #include <tellus/proxy/Compose.hpp>
 #include <tellus/proxy/FeatureInfo.hpp>
@@ -10,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <mutex>
 
@@ -178,6 +180,7 @@ void WmsFrontEnd::describeStyles(const LayerSpec& l,
 }
 
 void WmsFrontEnd::legend(const GetLegendGraphicRequest& g,
+                         std::string_view ifNoneMatch,
                          const WmsErrorContext& ctx,
                          const Responder& respond) const {
   WmsErrorContext c = ctx;
@@ -221,8 +224,17 @@ void WmsFrontEnd::legend(const GetLegendGraphicRequest& g,
   fe_.common(r);
   r.status = 200;
   r.setHeader("Content-Type", "image/png");
-  r.setHeader("Cache-Control", "public, max-age=" + std::to_string(l->maxAge.count()));
-  r.body = std::move(*png);
+  fe_.cacheHeaders(r, l->maxAge, {}, false, layerKeys(l->name, {}));
+  const std::string_view bytes(reinterpret_cast<const char*>(png->data()), png->size());
+  char etag[24];
+  std::snprintf(
+      etag, sizeof etag, "\"%016llx\"", static_cast<unsigned long long>(stableHash64(bytes)));
+  r.setHeader("ETag", etag);
+  if (ifNoneMatchHits(ifNoneMatch, etag)) {
+    r.status = 304;
+  } else {
+    r.body = std::move(*png);
+  }
   respond(std::move(r));
 }
 

@@ -22,6 +22,20 @@ std::string quotedHash(std::string_view text) {
   return etag;
 }
 
+/** A composed tile's surrogate keys: its layer's (and time's), and its own dataset's (and time's,
+ * which `tellus cache prune` of that dataset purges) and level's
+ * (`layer:<layer>.WorldCRS84Quad/<level>`). */
+std::string
+composedKeys(const LayerSpec& l, WmtsSetKind kind, const std::string& time, std::int32_t level) {
+  const std::string set =
+      l.name + "." +
+      std::string(kind == WmtsSetKind::GoogleMapsCompatible ? kGoogleMapsCompatible
+                                                            : kWorldCrs84Quad);
+  std::string k = layerKeys(l.name, time) + " " + layerKey(set);
+  if (!time.empty()) k += " " + layerKey(set, time);
+  return k + " " + layerKey(set) + "/" + std::to_string(level);
+}
+
 } // namespace
 
 std::optional<std::pair<DatasetId, std::string>> WmtsFrontEnd::composedDataset(
@@ -72,7 +86,8 @@ void WmtsFrontEnd::composedTile(const HttpRequest& req,
       a.contentType = std::move(found->meta.contentType);
       a.fetchedAt = found->meta.fetchedAt;
       a.etag = std::move(found->meta.etag);
-      return fe_.sendTile(FrontEnd::Validators(req), std::move(a), l, respond);
+      return fe_.sendTile(
+          FrontEnd::Validators(req), std::move(a), l, composedKeys(l, kind, time, level), respond);
     }
   }
   const MapFormat format = *parseMapFormat(l.dataset.mimeType);
@@ -91,7 +106,13 @@ void WmtsFrontEnd::composedTile(const HttpRequest& req,
   auto started = fe_.composer.compose(
       std::move(cr),
       [this](const LayerSpec& layer, const TileAnswer& a) { fe_.countTile(&layer, a); },
-      [this, v = FrontEnd::Validators(req), l = &l, ds, key, respond](ComposedMap&& map) {
+      [this,
+       v = FrontEnd::Validators(req),
+       l = &l,
+       ds,
+       key,
+       keys = composedKeys(l, kind, time, level),
+       respond](ComposedMap&& map) {
         fe_.metrics.composedTiles(map.decodedTiles,
                                   map.tiles > map.decodedTiles ? map.tiles - map.decodedTiles : 0);
         if (map.kind != ComposedMap::Kind::Map) {
@@ -114,17 +135,17 @@ void WmtsFrontEnd::composedTile(const HttpRequest& req,
         // standing in for a missing one.
         const bool whole = (a.origin == TileOrigin::Hit || a.origin == TileOrigin::Miss) &&
                            map.fallbackPixels == 0;
-        if (!ds || !whole) return fe_.sendTile(v, std::move(a), *l, respond);
+        if (!ds || !whole) return fe_.sendTile(v, std::move(a), *l, keys, respond, !whole);
         // Kept, then answered (a client that has the answer finds the tile kept), on a writer:
         // the composer's worker goes on to the next map while this one's fsync runs.
-        fe_.writers.post([fe = &fe_, v, l, ds, key, respond, a = std::move(a)]() mutable {
+        fe_.writers.post([fe = &fe_, v, l, ds, key, keys, respond, a = std::move(a)]() mutable {
           TileMeta meta;
           meta.contentType = a.contentType;
           meta.etag = a.etag;
           meta.fetchedAt = a.fetchedAt;
           if (l->ttl.count() > 0) meta.expiresAt = a.fetchedAt + l->ttl.count();
           (void)fe->tiles.cache().put(ds->first, key, a.bytes, meta); // not kept: made again
-          fe->sendTile(v, std::move(a), *l, respond);
+          fe->sendTile(v, std::move(a), *l, keys, respond);
         });
       });
   if (!started)

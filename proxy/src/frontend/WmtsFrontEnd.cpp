@@ -131,7 +131,7 @@ void WmtsFrontEnd::capabilities(const HttpRequest& req, const Responder& respond
   std::snprintf(
       etag, sizeof etag, "\"%016llx\"", static_cast<unsigned long long>(stableHash64(xml)));
   r.setHeader("ETag", etag);
-  r.setHeader("Cache-Control", "public, max-age=60");
+  fe_.cacheHeaders(r, std::chrono::seconds(60), {}, false, capabilitiesKeys());
   if (ifNoneMatchHits(req.header("if-none-match"), etag)) {
     r.status = 304;
     r.body.clear();
@@ -204,15 +204,20 @@ void WmtsFrontEnd::worldWindTile(const HttpRequest& req,
       l.name,
       time,
       key,
-      [this, v = FrontEnd::Validators(req), l = &l, respond](TileAnswer&& a) {
+      [this, v = FrontEnd::Validators(req), l = &l, time, level = key.level, respond](
+          TileAnswer&& a) {
         fe_.countTile(l, a);
-        if (a.kind == TileAnswer::Kind::Tile) return fe_.sendTile(v, std::move(a), *l, respond);
-        tileFailure(a, respond);
+        const std::string keys = layerKeys(l->name, time, level);
+        if (a.kind == TileAnswer::Kind::Tile)
+          return fe_.sendTile(v, std::move(a), *l, keys, respond);
+        tileFailure(a, keys, respond);
       },
       fe_.gateFor(req));
 }
 
-void WmtsFrontEnd::tileFailure(const TileAnswer& a, const Responder& respond) const {
+void WmtsFrontEnd::tileFailure(const TileAnswer& a,
+                               const std::string& keys,
+                               const Responder& respond) const {
   const OgcException e{std::string(ogc::kNoApplicableCode), "", a.message};
   if (a.kind == TileAnswer::Kind::Absent) {
     // No tile there (the upstream has none): 404, which WMTS clients draw as empty.
@@ -220,7 +225,7 @@ void WmtsFrontEnd::tileFailure(const TileAnswer& a, const Responder& respond) co
         e,
         [&](HttpResponse&& r) {
           r.setHeader("X-Cache", toString(a.origin));
-          r.setHeader("Cache-Control", "public, max-age=60");
+          fe_.shortLived(r, keys);
           respond(std::move(r));
         },
         404);

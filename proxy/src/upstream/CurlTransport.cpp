@@ -1,7 +1,8 @@
 // The libcurl transport (Transport.hpp): one multi handle driven by the Fetcher's thread
 // (curl_multi_perform, curl_multi_poll, curl_multi_wakeup from any thread), easy handles kept per
 // pool for reuse, bodies and the headers the Fetcher reads collected per transfer. The only code
-// in tellus that uses libcurl's transfer API; urlOrigin() is here too (libcurl's URL parser).
+// in tellus that uses libcurl's multi API (CdnPurge.cpp sends PURGE with the easy API);
+// urlOrigin() is here too (libcurl's URL parser).
 // It reports what happened and decides nothing: retries, the breaker, redirects are the Fetcher's.
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/Transport.hpp>

@@ -2,10 +2,12 @@
 
 #include "Commands.hpp"
 #include "Context.hpp"
+#include "Purge.hpp"
 
 #include <tellus/cache/GeoPackage.hpp>
 #include <tellus/cli/StatsJson.hpp>
 #include <tellus/cli/Values.hpp>
+#include <tellus/proxy/HttpCaching.hpp>
 
 #include <algorithm>
 #include <cstdio>
@@ -195,12 +197,21 @@ bool pruneLayerKnown(Context& ctx, const std::string& name) {
   return false;
 }
 
-/** Says what goes before it goes: which layers, which of their tiles, how many. */
-bool printPrunable(Context& ctx, const PruneOptions& po, const cli::Args& a) {
+/** Says what goes before it goes: which layers, which of their tiles, how many. Adds the
+ * surrogate keys of each dataset (its layer's, at its time) to `keys`, for the CDN's purge. */
+bool printPrunable(Context& ctx,
+                   const PruneOptions& po,
+                   const cli::Args& a,
+                   std::vector<std::string>& keys) {
   const auto doomed = ctx.cache->prunable(po);
   if (!doomed) {
     std::fprintf(stderr, "tellus cache prune: %s\n", doomed.error().message.c_str());
     return false;
+  }
+  for (const auto& d : *doomed) {
+    if (d.tiles == 0) continue;
+    std::string k = layerKey(d.dataset.spec.name, d.dataset.spec.time);
+    if (std::find(keys.begin(), keys.end(), k) == keys.end()) keys.push_back(std::move(k));
   }
   std::int64_t doomedTiles = 0;
   std::int64_t doomedBytes = 0;
@@ -233,7 +244,8 @@ int prune(Context& ctx, const cli::Args& a, std::chrono::milliseconds olderThan)
   po.datasetName = a.get("layer");
   po.includePinned = a.flag("include-pinned");
   if (po.datasetName && !pruneLayerKnown(ctx, *po.datasetName)) return kExitUsage;
-  if (!printPrunable(ctx, po, a)) return kExitError;
+  std::vector<std::string> keys;
+  if (!printPrunable(ctx, po, a, keys)) return kExitError;
   if (a.flag("dry-run")) return kExitOk;
   auto n = ctx.cache->prune(po);
   if (!n) {
@@ -241,6 +253,8 @@ int prune(Context& ctx, const cli::Args& a, std::chrono::milliseconds olderThan)
     return kExitError;
   }
   std::printf("pruned %lld tiles\n", static_cast<long long>(*n));
+  // The shared caches in front of `tellus serve` forget what is gone (server.cdn.purge).
+  if (*n > 0 && !purgeCdn(ctx.config, keys, "cache prune")) return kExitError;
   return kExitOk;
 }
 

@@ -4,6 +4,7 @@
 
 #include "Commands.hpp"
 #include "Context.hpp"
+#include "Purge.hpp"
 
 #include <tellus/cache/TileGrid.hpp>
 #include <tellus/cache_pg/PgSeedJob.hpp>
@@ -11,6 +12,7 @@
 #include <tellus/cli/ProxyFromConfig.hpp>
 #include <tellus/cli/Values.hpp>
 #include <tellus/proxy/Fetcher.hpp>
+#include <tellus/proxy/HttpCaching.hpp>
 #include <tellus/proxy/LocalRasterSource.hpp>
 #include <tellus/proxy/Seeder.hpp>
 #include <tellus/proxy/TileService.hpp>
@@ -491,6 +493,10 @@ int runSeed(const cli::Args& a) {
       }
       if (layerRc == kExitCacheFull) return kExitCacheFull; // the next would not fit either
       if (layerRc == kExitError) return kExitError;
+      // Refreshed tiles replace what shared caches in front of `tellus serve` keep: purged by
+      // the layer's key at this time (server.cdn.purge).
+      if (s->remote.refresh && !purgeCdn(ctx->config, {layerKey(layer->name, layerTime)}, "seed"))
+        rc = kExitError;
       if (layerRc != kExitOk) rc = layerRc;
     }
   }

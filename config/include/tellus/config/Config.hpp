@@ -54,6 +54,17 @@ struct ServerLimits {
   std::uint64_t decodedTileCache = 32ULL << 20;
 };
 
+/** YAML `server.cdn`: what shared HTTP caches in front of tellus are told, and where a purge
+ * goes (docs/CONFIG.md, docs/design/cdn.md). Durations in whole seconds. */
+struct CdnSettings {
+  std::optional<std::chrono::seconds> sMaxAge;              ///< none: the layer's ttl, else max_age
+  std::optional<std::chrono::seconds> staleWhileRevalidate; ///< none: s-maxage, at most 1 day
+  std::chrono::seconds staleIfError{7 * 86400};
+  std::chrono::seconds shortMaxAge{60}; ///< absent tiles, empty maps, stale tiles
+  std::string keyHeader = "xkey";       ///< surrogate keys; "" = none
+  std::vector<std::string> purge;       ///< http(s) URLs that take PURGE with xkey-purge
+};
+
 /** YAML `server`. */
 struct ServerSettings {
   std::string listenHost = "127.0.0.1"; ///< IPv6 without brackets
@@ -70,6 +81,7 @@ struct ServerSettings {
    * tile); cached tiles are served as stored. MapProxy's `jpeg_quality`, MapCache's <quality>. */
   int jpegQuality = 90;
   ServerLimits limits;
+  CdnSettings cdn;
 };
 
 /** YAML `renderer.earth`: the figure of the Earth the renderer places imagery on. */

@@ -8,6 +8,7 @@
  */
 
 #include <tellus/proxy/FetchBudget.hpp>
+#include <tellus/proxy/HttpCaching.hpp>
 #include <tellus/proxy/HttpDates.hpp> // formatHttpDate, parseHttpDate, ifNoneMatchHits
 #include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/TileService.hpp>
@@ -46,6 +47,9 @@ struct FrontEndOptions {
   /// The fetch budget's time; null: the system's (tests inject a ManualClock, which outlives the
   /// front end).
   const Clock* clock = nullptr;
+  /// What shared caches (a CDN, Varnish) are told: s-maxage, stale-*, surrogate keys
+  /// (HttpCaching.hpp, docs/design/cdn.md).
+  CdnOptions cdn;
 };
 
 class ProxyFrontEnd {

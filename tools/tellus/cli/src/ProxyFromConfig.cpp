@@ -147,6 +147,18 @@ FrontEndOptions frontEndOptions(const ServerSettings& server, int composeThreads
   o.composeThreads = std::max(1, composeThreads);
   o.maxParamBytes = server.limits.maxParamBytes;
   o.fetchesPerClientPerMinute = server.limits.fetchesPerClientPerMinute;
+  o.cdn = cdnOptions(server.cdn);
+  return o;
+}
+
+CdnOptions cdnOptions(const CdnSettings& cdn) {
+  CdnOptions o;
+  o.sMaxAge = cdn.sMaxAge;
+  o.staleWhileRevalidate = cdn.staleWhileRevalidate;
+  o.staleIfError = cdn.staleIfError;
+  o.shortMaxAge = cdn.shortMaxAge;
+  o.keyHeader = cdn.keyHeader;
+  o.purge = cdn.purge;
   return o;
 }
 

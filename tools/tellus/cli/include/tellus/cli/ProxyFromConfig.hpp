@@ -38,6 +38,9 @@ TileServiceOptions tileServiceOptions(const ServerSettings& server);
  * quality), composing maps on `composeThreads` workers (at least 1). */
 FrontEndOptions frontEndOptions(const ServerSettings& server, int composeThreads);
 
+/** What shared caches are told, and where purges go (YAML `server.cdn`). */
+CdnOptions cdnOptions(const CdnSettings& cdn);
+
 /** The HTTP server of YAML `server`: where it listens, its threads and its limits (at least one
  * connection). */
 HttpServerOptions httpServerOptions(const ServerSettings& server);
