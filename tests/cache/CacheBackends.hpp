@@ -1,8 +1,9 @@
 #pragma once
 // The cache's suite over every implementation of its index and tile store: a value-parameterised
-// fixture whose parameter is the backend (SQLite + files, memory). Each root is one cache: a folder
-// for SQLite + files, an index and a store in memory kept across reopenings for memory. Time is a
-// ManualClock shared by every cache of a test.
+// fixture whose parameter is the backend (SQLite + files, memory; S3 with the SQLite index in
+// tellus_cache_s3_tests, which sets s3StoreFactory(): this executable links no S3 code). Each root
+// is one cache: a folder for SQLite + files, an index and a store in memory kept across reopenings
+// for memory. Time is a ManualClock shared by every cache of a test.
 
 #include "../support/CacheFixtures.hpp"
 #include "../support/MemoryTileIndex.hpp"
@@ -17,6 +18,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -25,10 +27,19 @@
 
 namespace tellus::test {
 
-enum class Backend { SqliteFiles, Memory };
+enum class Backend { SqliteFiles, Memory, S3 };
 
 inline std::string backendName(const ::testing::TestParamInfo<Backend>& info) {
-  return info.param == Backend::SqliteFiles ? "SqliteFiles" : "Memory";
+  return info.param == Backend::SqliteFiles ? "SqliteFiles"
+         : info.param == Backend::Memory    ? "Memory"
+                                            : "S3";
+}
+
+/** Backend::S3's store for a cache root (its own key prefix, its local folder under the root). */
+using S3StoreFactory = std::function<std::shared_ptr<ITileStore>(const std::filesystem::path&)>;
+inline S3StoreFactory& s3StoreFactory() {
+  static S3StoreFactory factory;
+  return factory;
 }
 
 class CacheBackendTest : public ::testing::TestWithParam<Backend> {
@@ -47,9 +58,10 @@ protected:
 
   /** Opens (or reopens) the cache at o.root on this test's backend. */
   std::unique_ptr<TileCache> open(const TileCache::Options& o) {
-    auto c = GetParam() == Backend::SqliteFiles
-                 ? TileCache::open(o)
-                 : TileCache::open(o, memoryAt(o.root).index, memoryAt(o.root).store);
+    auto c = GetParam() == Backend::SqliteFiles ? TileCache::open(o)
+             : GetParam() == Backend::Memory
+                 ? TileCache::open(o, memoryAt(o.root).index, memoryAt(o.root).store)
+                 : openS3(o);
     EXPECT_TRUE(c) << (c ? "" : c.error().message);
     return c ? std::move(*c) : nullptr;
   }
@@ -63,6 +75,7 @@ protected:
   ITileStore& store(const std::filesystem::path& root = {}) {
     const auto at = root.empty() ? dir.path() : root;
     if (GetParam() == Backend::Memory) return *memoryAt(at).store;
+    if (GetParam() == Backend::S3) return *s3At(at);
     auto& s = fileStores_[at.string()];
     if (!s) s = std::move(*openFileTileStore(FileTileStoreOptions{at, false, false}));
     return *s;
@@ -98,6 +111,19 @@ protected:
   }
 
 private:
+  std::expected<std::unique_ptr<TileCache>, CacheError> openS3(const TileCache::Options& o) {
+    if (!o.readOnly) std::filesystem::create_directories(o.root); // the local index's folder
+    auto index = openSqliteTileIndex(
+        SqliteTileIndexOptions{o.root, o.readOnly, o.busyTimeout, o.readConnections, o.clock});
+    if (!index) return std::unexpected(index.error());
+    return TileCache::open(o, std::move(*index), s3At(o.root));
+  }
+  std::shared_ptr<ITileStore> s3At(const std::filesystem::path& root) {
+    auto& s = fileStores_[root.string()];
+    if (!s) s = s3StoreFactory()(root);
+    return s;
+  }
+
   struct Memory {
     std::shared_ptr<MemoryTileIndex> index;
     std::shared_ptr<MemoryTileStore> store;
