@@ -26,11 +26,43 @@ constexpr std::uintmax_t kMaxFileBytes = 16U << 20;
 
 void readCache(Reader& r, const Map& root, const fs::path& baseDir, CacheSettings& c) {
   const auto [node, where] = root.child("cache");
-  const Map m(r, node, root.path("cache"), where, {"root", "size_limit"});
+  const Map m(r, node, root.path("cache"), where, {"root", "size_limit", "store", "s3"});
   std::string rootText;
   if (auto v = m.get("root")) rootText = text(r, *v, m.path("root"));
   c.root = rootText.empty() ? defaultCacheRoot() : resolvePath(rootText, baseDir);
   if (auto v = m.get("size_limit")) c.sizeLimitBytes = size(r, *v, m.path("size_limit"));
+  if (auto v = m.get("store")) {
+    c.store = text(r, *v, m.path("store"));
+    if (!c.store.empty() && !c.store.starts_with("s3://"))
+      r.fail(v->Mark(),
+             m.path("store"),
+             "store must be s3://BUCKET[/PREFIX] (or absent: tiles under cache.root), got '" +
+                 c.store + "'");
+  }
+  const auto [sn, swhere] = m.child("s3");
+  const Map sm(r, sn, m.path("s3"), swhere, {"endpoint", "region", "credentials_file"});
+  if (auto v = sm.get("endpoint")) {
+    c.s3.endpoint = text(r, *v, sm.path("endpoint"));
+    while (c.s3.endpoint.ends_with('/'))
+      c.s3.endpoint.pop_back();
+    if (c.s3.endpoint.find('@') != std::string::npos) // not echoed: it may hold a password
+      r.fail(v->Mark(),
+             sm.path("endpoint"),
+             "endpoint must not hold a user or a password: S3 credentials come from "
+             "AWS_ACCESS_KEY_ID/AWS_SECRET_ACCESS_KEY or a credentials file");
+    const bool http = c.s3.endpoint.starts_with("http://") || c.s3.endpoint.starts_with("https://");
+    if (!http || c.s3.endpoint.find('/', c.s3.endpoint.find("//") + 2) != std::string::npos)
+      r.fail(v->Mark(),
+             sm.path("endpoint"),
+             "endpoint must be http(s)://HOST[:PORT] with no path and no user, got '" +
+                 c.s3.endpoint + "'");
+  }
+  if (auto v = sm.get("region")) c.s3.region = text(r, *v, sm.path("region"));
+  if (auto v = sm.get("credentials_file"))
+    c.s3.credentialsFile = resolvePath(text(r, *v, sm.path("credentials_file")), baseDir);
+  if (!c.store.empty() && c.s3.endpoint.empty())
+    r.fail(
+        node.Mark(), m.path("s3"), "cache.store is " + c.store + ": cache.s3.endpoint is needed");
 }
 
 struct ParseOptions {

@@ -23,7 +23,11 @@ if [[ $cmd == stop ]]; then
     . "$dir/s3.env"
     for p in $S3_PIDS; do kill "$p" 2>/dev/null || true; done
     for p in $S3_PIDS; do
-      for _ in $(seq 50); do kill -0 "$p" 2>/dev/null || break; sleep 0.1; done
+      # Gone, or a zombie (an orphan whose reaper is slow; a container's init may never reap).
+      for _ in $(seq 50); do
+        [[ -r /proc/$p/stat && $(cut -d' ' -f3 "/proc/$p/stat" 2>/dev/null) != Z ]] || break
+        sleep 0.1
+      done
       kill -9 "$p" 2>/dev/null || true
     done
   fi

@@ -1,5 +1,8 @@
 #include "Context.hpp"
 
+#include <tellus/cache/TileIndex.hpp>
+#include <tellus/cache_s3/S3TileStore.hpp>
+
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -52,6 +55,35 @@ std::size_t descriptorBudget(int maxConnections) {
   return static_cast<std::size_t>(std::clamp(spare / 2, 64LL, 16384LL));
 }
 
+namespace {
+
+/** `cache.store: s3://...`: the tiles in object storage, the index (SQLite) under the root; read
+ * tiles land in `<root>/s3-local` (unlinked files). */
+std::expected<std::unique_ptr<TileCache>, CacheError> openWithS3Store(const Config& config,
+                                                                      const TileCache::Options& o) {
+  const auto& c = config.cache;
+  auto url = parseS3Url(c.store);
+  if (!url) return std::unexpected(url.error());
+  auto credentials = s3CredentialsFromEnvironment(c.s3.credentialsFile);
+  if (!credentials) return std::unexpected(credentials.error());
+  S3TileStoreOptions so;
+  so.endpoint = c.s3.endpoint;
+  so.region = c.s3.region;
+  so.location = std::move(*url);
+  so.credentials = std::move(*credentials);
+  so.localFolder = o.root / "s3-local";
+  auto store = openS3TileStore(so);
+  if (!store) return std::unexpected(store.error());
+  std::error_code ec;
+  if (!o.readOnly) fs::create_directories(o.root, ec);
+  auto index = openSqliteTileIndex(
+      SqliteTileIndexOptions{o.root, o.readOnly, o.busyTimeout, o.readConnections, o.clock});
+  if (!index) return std::unexpected(index.error());
+  return TileCache::open(o, std::move(*index), std::move(*store));
+}
+
+} // namespace
+
 std::optional<Context> setUp(const cli::Args& a, CacheUse use) {
   auto config = loadConfiguration(a);
   if (!config) return std::nullopt;
@@ -63,7 +95,7 @@ std::optional<Context> setUp(const cli::Args& a, CacheUse use) {
   o.indexWriteBehind = use == CacheUse::Seed;
   if (use == CacheUse::Serve)
     o.openFiles = descriptorBudget(ctx.config.server.limits.maxConnections);
-  auto cache = TileCache::open(o);
+  auto cache = ctx.config.cache.store.empty() ? TileCache::open(o) : openWithS3Store(ctx.config, o);
   if (!cache) {
     std::fprintf(stderr, "tellus: cache %s: %s\n", o.root.c_str(), cache.error().message.c_str());
     return std::nullopt;

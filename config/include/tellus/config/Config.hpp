@@ -252,6 +252,18 @@ struct RendererSettings {
 struct CacheSettings {
   std::filesystem::path root;       ///< cache root (index.sqlite + the tile tree)
   std::uint64_t sizeLimitBytes = 0; ///< 0 = unlimited
+  /** YAML `cache.store` (issue 27): "" keeps the tiles under root (the embedded default);
+   * `s3://BUCKET[/PREFIX]` keeps them in S3-compatible object storage (`cache.s3`), the index
+   * staying under root. */
+  std::string store;
+  /** YAML `cache.s3`: where the bucket is. Credentials never come from here: from
+   * AWS_ACCESS_KEY_ID / AWS_SECRET_ACCESS_KEY, else the credentials file. */
+  struct S3 {
+    std::string endpoint;             ///< `http(s)://host[:port]`, path-style requests
+    std::string region = "us-east-1"; ///< what requests are signed for
+    std::filesystem::path
+        credentialsFile; ///< "" = $AWS_SHARED_CREDENTIALS_FILE or ~/.aws/credentials
+  } s3;
 };
 
 /** YAML `upstreams[].redirects`: which redirects of an upstream are followed. */
