@@ -40,7 +40,8 @@ void readCache(Reader& r, const Map& root, const fs::path& baseDir, CacheSetting
                  c.store + "'");
   }
   const auto [sn, swhere] = m.child("s3");
-  const Map sm(r, sn, m.path("s3"), swhere, {"endpoint", "region", "credentials_file"});
+  const Map sm(
+      r, sn, m.path("s3"), swhere, {"endpoint", "region", "credentials_file", "local_tier"});
   if (auto v = sm.get("endpoint")) {
     c.s3.endpoint = text(r, *v, sm.path("endpoint"));
     while (c.s3.endpoint.ends_with('/'))
@@ -60,6 +61,12 @@ void readCache(Reader& r, const Map& root, const fs::path& baseDir, CacheSetting
   if (auto v = sm.get("region")) c.s3.region = text(r, *v, sm.path("region"));
   if (auto v = sm.get("credentials_file"))
     c.s3.credentialsFile = resolvePath(text(r, *v, sm.path("credentials_file")), baseDir);
+  if (auto v = sm.get("local_tier")) c.s3.localTier = boolean(r, *v, sm.path("local_tier"));
+  if (!c.store.empty() && c.sizeLimitBytes > 0)
+    r.fail(node.Mark(),
+           m.path("size_limit"),
+           "size_limit evicts tiles from the store, here the bucket other instances share: it "
+           "cannot be combined with cache.store yet");
   if (!c.store.empty() && c.s3.endpoint.empty())
     r.fail(
         node.Mark(), m.path("s3"), "cache.store is " + c.store + ": cache.s3.endpoint is needed");

@@ -27,16 +27,19 @@
 
 namespace tellus::test {
 
-enum class Backend { SqliteFiles, Memory, S3 };
+enum class Backend { SqliteFiles, Memory, S3, S3Tiered };
 
 inline std::string backendName(const ::testing::TestParamInfo<Backend>& info) {
   return info.param == Backend::SqliteFiles ? "SqliteFiles"
          : info.param == Backend::Memory    ? "Memory"
-                                            : "S3";
+         : info.param == Backend::S3        ? "S3"
+                                            : "S3Tiered";
 }
 
-/** Backend::S3's store for a cache root (its own key prefix, its local folder under the root). */
-using S3StoreFactory = std::function<std::shared_ptr<ITileStore>(const std::filesystem::path&)>;
+/** Backend::S3's store for a cache root (its own key prefix, its local folder under the root);
+ * `tiered`: behind the file tree under the root (S3Tiered). */
+using S3StoreFactory =
+    std::function<std::shared_ptr<ITileStore>(const std::filesystem::path&, bool tiered)>;
 inline S3StoreFactory& s3StoreFactory() {
   static S3StoreFactory factory;
   return factory;
@@ -75,7 +78,7 @@ protected:
   ITileStore& store(const std::filesystem::path& root = {}) {
     const auto at = root.empty() ? dir.path() : root;
     if (GetParam() == Backend::Memory) return *memoryAt(at).store;
-    if (GetParam() == Backend::S3) return *s3At(at);
+    if (GetParam() == Backend::S3 || GetParam() == Backend::S3Tiered) return *s3At(at);
     auto& s = fileStores_[at.string()];
     if (!s) s = std::move(*openFileTileStore(FileTileStoreOptions{at, false, false}));
     return *s;
@@ -120,7 +123,7 @@ private:
   }
   std::shared_ptr<ITileStore> s3At(const std::filesystem::path& root) {
     auto& s = fileStores_[root.string()];
-    if (!s) s = s3StoreFactory()(root);
+    if (!s) s = s3StoreFactory()(root, GetParam() == Backend::S3Tiered);
     return s;
   }
 

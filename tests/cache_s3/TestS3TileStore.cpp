@@ -7,6 +7,7 @@
 #include "S3Server.hpp"
 
 #include <tellus/cache/TileFile.hpp>
+#include <tellus/cache_s3/TieredTileStore.hpp>
 
 #include <curl/curl.h>
 
@@ -310,4 +311,29 @@ TEST(S3Credentials, FromTheEnvironmentElseAFileAndNeverInTheMessage) {
   ASSERT_FALSE(none);
   EXPECT_EQ(none.error().message.find("AKHALF"), std::string::npos);
   EXPECT_NE(none.error().message.find("AWS_ACCESS_KEY_ID"), std::string::npos);
+}
+
+TEST_F(S3StoreIntegration, TheLocalTierTakesACopyOfWhatItReadsFromTheSharedStore) {
+  std::shared_ptr<ITileStore> shared = open();
+  ASSERT_TRUE(shared);
+  std::shared_ptr<ITileStore> local =
+      std::move(*openFileTileStore(FileTileStoreOptions{dir.path() / "tier", false, false}));
+  auto tiered = makeTieredTileStore(local, shared);
+  ASSERT_TRUE(tiered->prepareDataset("srv/ds"));
+  ASSERT_TRUE(put(*shared, kTile, "another instance stored it"));
+  EXPECT_FALSE(local->stat(kTile));
+  const auto t = tiered->open(kTile, 26);
+  ASSERT_TRUE(t);
+  EXPECT_EQ(text(*t), "another instance stored it");
+  const auto copy = local->open(kTile, 26); // the next read is a local hit
+  ASSERT_TRUE(copy);
+  EXPECT_EQ(text(*copy), "another instance stored it");
+  // Writes reach both tiers; removals leave neither.
+  const TileLocation other{"srv/ds", "jpg", TileKey{3, 2, 2}};
+  ASSERT_TRUE(put(*tiered, other, "both"));
+  EXPECT_TRUE(local->stat(other));
+  EXPECT_TRUE(shared->stat(other));
+  tiered->remove(other);
+  EXPECT_FALSE(local->stat(other));
+  EXPECT_FALSE(shared->stat(other));
 }

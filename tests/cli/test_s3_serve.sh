@@ -2,8 +2,9 @@
 # `tellus serve` with its tiles in S3 (issue 27, `cache.store: s3://...`): a real S3 server on
 # loopback (tests/support/s3-server.sh: Swift + s3api; TELLUS_S3_ENV names a running one's s3.env,
 # else one is started here) and the fake GIBS of test_wmts.sh as the upstream. Checked:
-#   - a tile fetched upstream is served and stored in the bucket (the index stays local, SQLite);
-#   - with the local index and the local folder gone, `tellus cache rebuild` finds the tile in the
+#   - a tile fetched upstream is served and stored in the bucket and in the local tier (the file
+#     tree under the cache root; the index stays local, SQLite);
+#   - with the local tier, index and folder gone, `tellus cache rebuild` finds the tile in the
 #     bucket and `serve --offline` serves it from there, byte for byte, the upstream not asked;
 #   - wrong credentials stop the start with a message that names the bucket and the endpoint but
 #     not the key; the credentials appear in no log.
@@ -88,16 +89,17 @@ cmp -s "$work/a.png" "$work/tiles/2014-02-04_3_4_3.png" || fail "the tile is not
 asked=$(grep -c '/2014-02-04/EPSG4326_1km/3/4/3.png$' "$work/upstream.log")
 [ "$asked" = 1 ] || fail "the upstream was asked $asked times"
 stop
-[ -z "$(find "$work/cache" -name '*.png')" ] || fail "a tile was written under the cache root"
+[ -n "$(find "$work/cache" -name '*.png')" ] || fail "no copy in the local tier"
 
-# The local index and folder emptied: the bucket is all that holds the tile.
-rm -rf "$work/cache/index.sqlite"* "$work/cache/s3-local"
+# The local tier (tree, index, folder) emptied: the bucket is all that holds the tile.
+find "$work/cache" -mindepth 1 -maxdepth 1 ! -name wmts-capabilities -exec rm -rf {} +
 "$tellus" cache rebuild --config "$work/tellus.yaml" --cache "$work/cache" >"$work/rebuild.txt" 2>&1 ||
   fail "rebuild: $(cat "$work/rebuild.txt")"
 start "$work/offline.txt" --offline
 [ "$(get '/wwtile?T=sst&L=0&X=3&Y=0' "$work/b.png")" = 200 ] || fail "from S3: $(cat "$work/b.png")"
 cmp -s "$work/b.png" "$work/a.png" || fail "the tile read back from S3 differs"
 stop
+[ -n "$(find "$work/cache" -name '*.png')" ] || fail "the tile read from S3 was not copied locally"
 asked=$(grep -c '/2014-02-04/EPSG4326_1km/3/4/3.png$' "$work/upstream.log")
 [ "$asked" = 1 ] || fail "the upstream was asked again ($asked times)"
 

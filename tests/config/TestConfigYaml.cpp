@@ -1303,6 +1303,11 @@ TEST(ConfigYaml, CacheStoreInS3) {
   EXPECT_EQ(c->cache.s3.endpoint, "http://127.0.0.1:9000");
   EXPECT_EQ(c->cache.s3.region, "eu-west-1");
   EXPECT_EQ(c->cache.s3.credentialsFile, fs::path("/base/creds"));
+  EXPECT_TRUE(c->cache.s3.localTier);
+  EXPECT_EQ(errorOf("cache: {store: 's3://b', size_limit: 1GiB, s3: {endpoint: 'http://h'}}\n" +
+                    std::string(kMinimal))
+                .key,
+            "cache.size_limit");
   EXPECT_EQ(parse(std::string(kMinimal))->cache.store, ""); // the default: tiles under the root
 
   EXPECT_EQ(errorOf("cache: {store: 'file:///x'}\n" + std::string(kMinimal)).key, "cache.store");

@@ -2,6 +2,7 @@
 
 #include <tellus/cache/TileIndex.hpp>
 #include <tellus/cache_s3/S3TileStore.hpp>
+#include <tellus/cache_s3/TieredTileStore.hpp>
 
 #include <algorithm>
 #include <cstdio>
@@ -57,8 +58,9 @@ std::size_t descriptorBudget(int maxConnections) {
 
 namespace {
 
-/** `cache.store: s3://...`: the tiles in object storage, the index (SQLite) under the root; read
- * tiles land in `<root>/s3-local` (unlinked files). */
+/** `cache.store: s3://...`: the tiles in object storage, the index (SQLite) under the root, the
+ * file tree under the root in front (`cache.s3.local_tier`); read tiles land in `<root>/s3-local`
+ * (unlinked files) on their way. */
 std::expected<std::unique_ptr<TileCache>, CacheError> openWithS3Store(const Config& config,
                                                                       const TileCache::Options& o) {
   const auto& c = config.cache;
@@ -72,14 +74,20 @@ std::expected<std::unique_ptr<TileCache>, CacheError> openWithS3Store(const Conf
   so.location = std::move(*url);
   so.credentials = std::move(*credentials);
   so.localFolder = o.root / "s3-local";
-  auto store = openS3TileStore(so);
-  if (!store) return std::unexpected(store.error());
+  auto s3 = openS3TileStore(so);
+  if (!s3) return std::unexpected(s3.error());
+  std::shared_ptr<ITileStore> store = std::move(*s3);
+  if (c.s3.localTier) { // the file tree under the root in front of the bucket
+    auto local = openFileTileStore(FileTileStoreOptions{o.root, o.readOnly, o.fsyncTiles});
+    if (!local) return std::unexpected(local.error());
+    store = makeTieredTileStore(std::move(*local), std::move(store));
+  }
   std::error_code ec;
   if (!o.readOnly) fs::create_directories(o.root, ec);
   auto index = openSqliteTileIndex(
       SqliteTileIndexOptions{o.root, o.readOnly, o.busyTimeout, o.readConnections, o.clock});
   if (!index) return std::unexpected(index.error());
-  return TileCache::open(o, std::move(*index), std::move(*store));
+  return TileCache::open(o, std::move(*index), std::move(store));
 }
 
 } // namespace

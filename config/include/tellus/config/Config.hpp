@@ -261,8 +261,9 @@ struct CacheSettings {
   struct S3 {
     std::string endpoint;             ///< `http(s)://host[:port]`, path-style requests
     std::string region = "us-east-1"; ///< what requests are signed for
-    std::filesystem::path
-        credentialsFile; ///< "" = $AWS_SHARED_CREDENTIALS_FILE or ~/.aws/credentials
+    /** "" = $AWS_SHARED_CREDENTIALS_FILE, else ~/.aws/credentials. */
+    std::filesystem::path credentialsFile;
+    bool localTier = true; ///< the file tree under root in front of the bucket (a local copy)
   } s3;
 };
 
