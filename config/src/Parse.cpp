@@ -26,8 +26,11 @@ constexpr std::uintmax_t kMaxFileBytes = 16U << 20;
 
 void readCache(Reader& r, const Map& root, const fs::path& baseDir, CacheSettings& c) {
   const auto [node, where] = root.child("cache");
-  const Map m(
-      r, node, root.path("cache"), where, {"root", "size_limit", "index", "index_password_file"});
+  const Map m(r,
+              node,
+              root.path("cache"),
+              where,
+              {"root", "size_limit", "index", "index_password_file", "store", "s3"});
   std::string rootText;
   if (auto v = m.get("root")) rootText = text(r, *v, m.path("root"));
   c.root = rootText.empty() ? defaultCacheRoot() : resolvePath(rootText, baseDir);
@@ -41,6 +44,45 @@ void readCache(Reader& r, const Map& root, const fs::path& baseDir, CacheSetting
     if (c.index.empty())
       r.fail(v->Mark(), m.path("index_password_file"), "needs cache.index (a postgresql:// URI)");
   }
+  if (auto v = m.get("store")) {
+    c.store = text(r, *v, m.path("store"));
+    if (!c.store.empty() && !c.store.starts_with("s3://"))
+      r.fail(v->Mark(),
+             m.path("store"),
+             "store must be s3://BUCKET[/PREFIX] (or absent: tiles under cache.root), got '" +
+                 c.store + "'");
+  }
+  const auto [sn, swhere] = m.child("s3");
+  const Map sm(
+      r, sn, m.path("s3"), swhere, {"endpoint", "region", "credentials_file", "local_tier"});
+  if (auto v = sm.get("endpoint")) {
+    c.s3.endpoint = text(r, *v, sm.path("endpoint"));
+    while (c.s3.endpoint.ends_with('/'))
+      c.s3.endpoint.pop_back();
+    if (c.s3.endpoint.find('@') != std::string::npos) // not echoed: it may hold a password
+      r.fail(v->Mark(),
+             sm.path("endpoint"),
+             "endpoint must not hold a user or a password: S3 credentials come from "
+             "AWS_ACCESS_KEY_ID/AWS_SECRET_ACCESS_KEY or a credentials file");
+    const bool http = c.s3.endpoint.starts_with("http://") || c.s3.endpoint.starts_with("https://");
+    if (!http || c.s3.endpoint.find('/', c.s3.endpoint.find("//") + 2) != std::string::npos)
+      r.fail(v->Mark(),
+             sm.path("endpoint"),
+             "endpoint must be http(s)://HOST[:PORT] with no path and no user, got '" +
+                 c.s3.endpoint + "'");
+  }
+  if (auto v = sm.get("region")) c.s3.region = text(r, *v, sm.path("region"));
+  if (auto v = sm.get("credentials_file"))
+    c.s3.credentialsFile = resolvePath(text(r, *v, sm.path("credentials_file")), baseDir);
+  if (auto v = sm.get("local_tier")) c.s3.localTier = boolean(r, *v, sm.path("local_tier"));
+  if (!c.store.empty() && c.sizeLimitBytes > 0)
+    r.fail(node.Mark(),
+           m.path("size_limit"),
+           "size_limit evicts tiles from the store, here the bucket other instances share: it "
+           "cannot be combined with cache.store yet");
+  if (!c.store.empty() && c.s3.endpoint.empty())
+    r.fail(
+        node.Mark(), m.path("s3"), "cache.store is " + c.store + ": cache.s3.endpoint is needed");
 }
 
 struct ParseOptions {

@@ -1,9 +1,11 @@
 #pragma once
 // The cache's suite over every implementation of its index and tile store: a value-parameterised
-// fixture whose parameter is the backend (SQLite + files, memory, PostgreSQL + files). Each root is
+// fixture whose parameter is the backend (SQLite + files, memory; PostgreSQL + files in
+// tellus_cache_pg_tests, which sets sharedIndexOpener(); S3 with the SQLite index in
+// tellus_cache_s3_tests, which sets s3StoreFactory(): this executable links neither). Each root is
 // one cache: a folder for SQLite + files, an index and a store in memory kept across reopenings for
-// memory, a database of its own and a folder for PostgreSQL (tests/cache_pg/, which sets
-// sharedIndexOpener()). Time is a ManualClock shared by every cache of a test.
+// memory, a database of its own and a folder for PostgreSQL. Time is a ManualClock shared by every
+// cache of a test.
 
 #include "../support/CacheFixtures.hpp"
 #include "../support/MemoryTileIndex.hpp"
@@ -29,7 +31,7 @@
 
 namespace tellus::test {
 
-enum class Backend { SqliteFiles, Memory, PostgresFiles };
+enum class Backend { SqliteFiles, Memory, PostgresFiles, S3, S3Tiered };
 
 inline std::string backendName(const ::testing::TestParamInfo<Backend>& info) {
   switch (info.param) {
@@ -39,12 +41,16 @@ inline std::string backendName(const ::testing::TestParamInfo<Backend>& info) {
     return "Memory";
   case Backend::PostgresFiles:
     return "PostgresFiles";
+  case Backend::S3:
+    return "S3";
+  case Backend::S3Tiered:
+    return "S3Tiered";
   }
   return "?";
 }
 
 /** The backends the contract runs on in this executable (tests/cache/Backends.cpp: SQLite and
- * memory; tests/cache_pg/: PostgreSQL). */
+ * memory; tests/cache_pg/: PostgreSQL; tellus_cache_s3_tests instantiates S3 and S3Tiered). */
 std::vector<Backend> contractBackends();
 
 /** Opens the index of a server-backed backend (PostgreSQL) for the cache at `root`: the same
@@ -54,6 +60,15 @@ using SharedIndexOpener = std::function<std::expected<std::shared_ptr<ITileIndex
 inline SharedIndexOpener& sharedIndexOpener() {
   static SharedIndexOpener opener;
   return opener;
+}
+
+/** Backend::S3's store for a cache root (its own key prefix, its local folder under the root);
+ * `tiered`: behind the file tree under the root (S3Tiered). */
+using S3StoreFactory =
+    std::function<std::shared_ptr<ITileStore>(const std::filesystem::path&, bool tiered)>;
+inline S3StoreFactory& s3StoreFactory() {
+  static S3StoreFactory factory;
+  return factory;
 }
 
 class CacheBackendTest : public ::testing::TestWithParam<Backend> {
@@ -75,7 +90,8 @@ protected:
     auto c = GetParam() == Backend::SqliteFiles ? TileCache::open(o)
              : GetParam() == Backend::Memory
                  ? TileCache::open(o, memoryAt(o.root).index, memoryAt(o.root).store)
-                 : openShared(o);
+             : GetParam() == Backend::PostgresFiles ? openShared(o)
+                                                    : openS3(o);
     EXPECT_TRUE(c) << (c ? "" : c.error().message);
     return c ? std::move(*c) : nullptr;
   }
@@ -89,6 +105,7 @@ protected:
   ITileStore& store(const std::filesystem::path& root = {}) {
     const auto at = root.empty() ? dir.path() : root;
     if (GetParam() == Backend::Memory) return *memoryAt(at).store;
+    if (GetParam() == Backend::S3 || GetParam() == Backend::S3Tiered) return *s3At(at);
     auto& s = fileStores_[at.string()];
     if (!s) s = std::move(*openFileTileStore(FileTileStoreOptions{at, false, false}));
     return *s;
@@ -130,6 +147,18 @@ private:
     auto store = openFileTileStore(FileTileStoreOptions{o.root, o.readOnly, o.fsyncTiles});
     if (!store) return std::unexpected(store.error());
     return TileCache::open(o, *index, std::shared_ptr<ITileStore>(std::move(*store)));
+  }
+  std::expected<std::unique_ptr<TileCache>, CacheError> openS3(const TileCache::Options& o) {
+    if (!o.readOnly) std::filesystem::create_directories(o.root); // the local index's folder
+    auto index = openSqliteTileIndex(
+        SqliteTileIndexOptions{o.root, o.readOnly, o.busyTimeout, o.readConnections, o.clock});
+    if (!index) return std::unexpected(index.error());
+    return TileCache::open(o, std::move(*index), s3At(o.root));
+  }
+  std::shared_ptr<ITileStore> s3At(const std::filesystem::path& root) {
+    auto& s = fileStores_[root.string()];
+    if (!s) s = s3StoreFactory()(root, GetParam() == Backend::S3Tiered);
+    return s;
   }
 
   struct Memory {

@@ -26,10 +26,19 @@ class TileCacheContract : public test::CacheBackendTest {};
 
 } // namespace
 
+#ifdef TELLUS_CONTRACT_S3
+// tellus_cache_s3_tests: the same contract on the S3 store, alone and behind the file tree (a
+// real server, tests/cache_s3).
+INSTANTIATE_TEST_SUITE_P(Backends,
+                         TileCacheContract,
+                         ::testing::Values(test::Backend::S3, test::Backend::S3Tiered),
+                         test::backendName);
+#else
 INSTANTIATE_TEST_SUITE_P(Backends,
                          TileCacheContract,
                          ::testing::ValuesIn(test::contractBackends()),
                          test::backendName);
+#endif
 
 TEST_P(TileCacheContract, PutGetRoundTrip) {
   auto cache = open();

@@ -1323,3 +1323,33 @@ layers:
   EXPECT_EQ(set.key, "layers[0].tile_matrix_set");
   EXPECT_NE(set.message.find("wmts upstreams only"), std::string::npos) << set.message;
 }
+
+TEST(ConfigYaml, CacheStoreInS3) {
+  const auto c =
+      parse("cache:\n  store: s3://tiles/prod\n  s3: {endpoint: 'http://127.0.0.1:9000/', "
+            "region: eu-west-1, credentials_file: creds}\n" +
+            std::string(kMinimal));
+  ASSERT_TRUE(c) << c.error().toString();
+  EXPECT_EQ(c->cache.store, "s3://tiles/prod");
+  EXPECT_EQ(c->cache.s3.endpoint, "http://127.0.0.1:9000");
+  EXPECT_EQ(c->cache.s3.region, "eu-west-1");
+  EXPECT_EQ(c->cache.s3.credentialsFile, fs::path("/base/creds"));
+  EXPECT_TRUE(c->cache.s3.localTier);
+  EXPECT_EQ(errorOf("cache: {store: 's3://b', size_limit: 1GiB, s3: {endpoint: 'http://h'}}\n" +
+                    std::string(kMinimal))
+                .key,
+            "cache.size_limit");
+  EXPECT_EQ(parse(std::string(kMinimal))->cache.store, ""); // the default: tiles under the root
+
+  EXPECT_EQ(errorOf("cache: {store: 'file:///x'}\n" + std::string(kMinimal)).key, "cache.store");
+  const ConfigError noEndpoint = errorOf("cache: {store: 's3://b'}\n" + std::string(kMinimal));
+  EXPECT_EQ(noEndpoint.key, "cache.s3");
+  EXPECT_NE(noEndpoint.message.find("endpoint"), std::string::npos);
+  for (const char* bad : {"ftp://h", "http://h/path", "http://user:pw@h"}) {
+    const ConfigError e = errorOf("cache: {store: 's3://b', s3: {endpoint: '" + std::string(bad) +
+                                  "'}}\n" + std::string(kMinimal));
+    EXPECT_EQ(e.key, "cache.s3.endpoint") << bad;
+    EXPECT_EQ(e.message.find("pw@"), std::string::npos) << e.message; // no password echoed
+  }
+  EXPECT_EQ(errorOf("cache: {s3: {secret: x}}\n" + std::string(kMinimal)).key, "cache.s3.secret");
+}

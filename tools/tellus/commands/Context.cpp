@@ -1,8 +1,11 @@
 #include "Context.hpp"
 
+#include <tellus/cache/TileIndex.hpp>
 #include <tellus/cache/TileStore.hpp>
 #include <tellus/cache_pg/PgTileIndex.hpp>
 #include <tellus/cache_pg/PgTileLeases.hpp>
+#include <tellus/cache_s3/S3TileStore.hpp>
+#include <tellus/cache_s3/TieredTileStore.hpp>
 
 #include <algorithm>
 #include <cstdio>
@@ -58,10 +61,53 @@ std::size_t descriptorBudget(int maxConnections) {
 
 namespace {
 
-/** cache.index is PostgreSQL (issue 27): the shared index, the tiles in the file tree under the
- * root (a folder every instance mounts; the object store replaces it), and the leases. */
-std::expected<std::unique_ptr<TileCache>, CacheError> openShared(Context& ctx,
+/** The tile store `cache.store` names: the file tree under the root (the embedded default), or
+ * S3-compatible object storage (issue 27) with the file tree in front (`cache.s3.local_tier`);
+ * read tiles land in `<root>/s3-local` (unlinked files) on their way. */
+std::expected<std::shared_ptr<ITileStore>, CacheError> openStore(const Config& config,
                                                                  const TileCache::Options& o) {
+  const auto& c = config.cache;
+  if (c.store.empty()) {
+    auto files = openFileTileStore(FileTileStoreOptions{o.root, o.readOnly, o.fsyncTiles});
+    if (!files) return std::unexpected(files.error());
+    return std::shared_ptr<ITileStore>(std::move(*files));
+  }
+  auto url = parseS3Url(c.store);
+  if (!url) return std::unexpected(url.error());
+  auto credentials = s3CredentialsFromEnvironment(c.s3.credentialsFile);
+  if (!credentials) return std::unexpected(credentials.error());
+  S3TileStoreOptions so;
+  so.endpoint = c.s3.endpoint;
+  so.region = c.s3.region;
+  so.location = std::move(*url);
+  so.credentials = std::move(*credentials);
+  so.localFolder = o.root / "s3-local";
+  auto s3 = openS3TileStore(so);
+  if (!s3) return std::unexpected(s3.error());
+  std::shared_ptr<ITileStore> store = std::move(*s3);
+  if (c.s3.localTier) { // the file tree under the root in front of the bucket
+    auto local = openFileTileStore(FileTileStoreOptions{o.root, o.readOnly, o.fsyncTiles});
+    if (!local) return std::unexpected(local.error());
+    store = makeTieredTileStore(std::move(*local), std::move(store));
+  }
+  return store;
+}
+
+/** A cache that is not the embedded default (issue 27): the index in SQLite under the root or in
+ * PostgreSQL (`cache.index`, shared by several instances, with the single-flight leases), the
+ * tiles where `cache.store` says (a folder every instance mounts, or object storage). */
+std::expected<std::unique_ptr<TileCache>, CacheError> openScaledOut(Context& ctx,
+                                                                    const TileCache::Options& o) {
+  std::error_code ec;
+  if (!o.readOnly) fs::create_directories(o.root, ec); // the local index's, tier's folder
+  auto store = openStore(ctx.config, o);
+  if (!store) return std::unexpected(store.error());
+  if (ctx.config.cache.index.empty()) {
+    auto index = openSqliteTileIndex(
+        SqliteTileIndexOptions{o.root, o.readOnly, o.busyTimeout, o.readConnections, o.clock});
+    if (!index) return std::unexpected(index.error());
+    return TileCache::open(o, std::move(*index), std::move(*store));
+  }
   PgConnectOptions connect;
   connect.conninfo = ctx.config.cache.index;
   connect.passwordFile = ctx.config.cache.indexPasswordFile;
@@ -70,14 +116,10 @@ std::expected<std::unique_ptr<TileCache>, CacheError> openShared(Context& ctx,
   io.readOnly = o.readOnly;
   auto index = openPgTileIndex(io);
   if (!index) return std::unexpected(index.error());
-  auto store = openFileTileStore(FileTileStoreOptions{o.root, o.readOnly, o.fsyncTiles});
-  if (!store) return std::unexpected(store.error());
   auto leases = openPgTileLeases(connect);
   if (!leases) return std::unexpected(leases.error());
   ctx.leases = std::move(*leases);
-  return TileCache::open(o,
-                         std::shared_ptr<ITileIndex>(std::move(*index)),
-                         std::shared_ptr<ITileStore>(std::move(*store)));
+  return TileCache::open(o, std::shared_ptr<ITileIndex>(std::move(*index)), std::move(*store));
 }
 
 } // namespace
@@ -93,7 +135,8 @@ std::optional<Context> setUp(const cli::Args& a, CacheUse use) {
   o.indexWriteBehind = use == CacheUse::Seed;
   if (use == CacheUse::Serve)
     o.openFiles = descriptorBudget(ctx.config.server.limits.maxConnections);
-  auto cache = ctx.config.cache.index.empty() ? TileCache::open(o) : openShared(ctx, o);
+  const bool embedded = ctx.config.cache.index.empty() && ctx.config.cache.store.empty();
+  auto cache = embedded ? TileCache::open(o) : openScaledOut(ctx, o);
   if (!cache) {
     std::fprintf(stderr, "tellus: cache %s: %s\n", o.root.c_str(), cache.error().message.c_str());
     return std::nullopt;

@@ -269,6 +269,19 @@ struct CacheSettings {
   /// password (refused): that comes from PGPASSWORD, PGPASSFILE or `indexPasswordFile`.
   std::string index;
   std::optional<std::filesystem::path> indexPasswordFile; ///< YAML `index_password_file`
+  /** YAML `cache.store` (issue 27): "" keeps the tiles under root (the embedded default);
+   * `s3://BUCKET[/PREFIX]` keeps them in S3-compatible object storage (`cache.s3`), the index
+   * staying under root. */
+  std::string store;
+  /** YAML `cache.s3`: where the bucket is. Credentials never come from here: from
+   * AWS_ACCESS_KEY_ID / AWS_SECRET_ACCESS_KEY, else the credentials file. */
+  struct S3 {
+    std::string endpoint;             ///< `http(s)://host[:port]`, path-style requests
+    std::string region = "us-east-1"; ///< what requests are signed for
+    /** "" = $AWS_SHARED_CREDENTIALS_FILE, else ~/.aws/credentials. */
+    std::filesystem::path credentialsFile;
+    bool localTier = true; ///< the file tree under root in front of the bucket (a local copy)
+  } s3;
 };
 
 /** Why `cache.index` is refused (not a postgresql:// URI, or one holding a password; the message

@@ -1,0 +1,162 @@
+#!/usr/bin/env bash
+# A real S3 server on loopback for tests (issue 27): OpenStack Swift from Debian 12's packages
+# (swift-proxy, swift-object, swift-container, swift-account) with its s3api middleware and
+# tempauth, one replica, rings built in the folder, every server on a free loopback port.
+#
+#   s3-server.sh start DIR   starts it under DIR (created; tile data in DIR/srv, which needs
+#                            xattrs: ext4, xfs and tmpfs have them), creates the bucket, writes
+#                            DIR/s3.env (S3_ENDPOINT, S3_REGION, S3_BUCKET, AWS_ACCESS_KEY_ID,
+#                            AWS_SECRET_ACCESS_KEY, S3_PIDS) and prints it; exits once it answers
+#   s3-server.sh stop DIR    stops the servers that DIR/s3.env names (by pid) and removes DIR
+#
+# Run as root (CI), the servers drop to the `swift` user the packages create (or `tellus-test`,
+# created if missing). The credentials are fixed test ones; nothing here is for production.
+set -euo pipefail
+
+cmd=${1:-}
+dir=${2:-}
+[[ -n $cmd && -n $dir ]] || { echo "usage: $0 start|stop DIR" >&2; exit 2; }
+
+if [[ $cmd == stop ]]; then
+  if [[ -f $dir/s3.env ]]; then
+    # shellcheck disable=SC1091
+    . "$dir/s3.env"
+    for p in $S3_PIDS; do kill "$p" 2>/dev/null || true; done
+    for p in $S3_PIDS; do
+      # Gone, or a zombie (an orphan whose reaper is slow; a container's init may never reap).
+      for _ in $(seq 50); do
+        [[ -r /proc/$p/stat && $(cut -d' ' -f3 "/proc/$p/stat" 2>/dev/null) != Z ]] || break
+        sleep 0.1
+      done
+      kill -9 "$p" 2>/dev/null || true
+    done
+  fi
+  rm -rf "$dir"
+  exit 0
+fi
+[[ $cmd == start ]] || { echo "unknown command: $cmd" >&2; exit 2; }
+for b in swift-proxy-server swift-object-server swift-container-server swift-account-server \
+  swift-ring-builder; do
+  command -v "$b" >/dev/null || {
+    echo "$b missing: apt-get install swift-proxy swift-object swift-container swift-account" >&2
+    exit 3
+  }
+done
+
+start_ns=$(date +%s%N)
+here=$(cd "$(dirname "$0")" && pwd)
+mkdir -p "$dir/srv/d1" "$dir/etc" "$dir/log" "$dir/run"
+dir=$(cd "$dir" && pwd)
+user=$(id -un)
+if [[ $(id -u) == 0 ]]; then
+  if id swift >/dev/null 2>&1; then user=swift
+  else
+    id tellus-test >/dev/null 2>&1 || useradd --system --no-create-home tellus-test
+    user=tellus-test
+  fi
+  chown -R "$user" "$dir/srv" "$dir/run" "$dir/log"
+  chmod 755 "$dir"
+fi
+
+# Four free loopback ports (bound to port 0, read back, released).
+read -r p_proxy p_obj p_cont p_acct < <(/usr/bin/python3 - <<'EOF'
+import socket
+socks = [socket.socket() for _ in range(4)]
+for s in socks:
+    s.bind(("127.0.0.1", 0))
+print(*[s.getsockname()[1] for s in socks])
+EOF
+)
+
+etc=$dir/etc
+cat >"$etc/swift.conf" <<EOF
+[swift-hash]
+swift_hash_path_suffix = tellus-test
+swift_hash_path_prefix = tellus-test
+[storage-policy:0]
+name = Policy-0
+default = yes
+EOF
+
+common() { # $1 port
+  cat <<EOF
+[DEFAULT]
+bind_ip = 127.0.0.1
+bind_port = $1
+workers = 0
+user = $user
+swift_dir = $etc
+devices = $dir/srv
+mount_check = false
+log_name = swift
+log_udp_host = 127.0.0.1
+log_udp_port = 9
+EOF
+}
+for kind in object container account; do
+  case $kind in object) port=$p_obj ;; container) port=$p_cont ;; account) port=$p_acct ;; esac
+  {
+    common "$port"
+    printf '[pipeline:main]\npipeline = %s-server\n' "$kind"
+    printf '[app:%s-server]\nuse = egg:swift#%s\n' "$kind" "$kind"
+  } >"$etc/$kind-server.conf"
+done
+/usr/bin/python3 "$here/s3_server_helper.py" rings "$etc" "$p_obj" "$p_cont" "$p_acct"
+
+{
+  common "$p_proxy"
+  cat <<'EOF'
+[pipeline:main]
+pipeline = catch_errors proxy-logging cache s3api tempauth proxy-logging proxy-server
+[app:proxy-server]
+use = egg:swift#proxy
+account_autocreate = true
+[filter:catch_errors]
+use = egg:swift#catch_errors
+[filter:cache]
+paste.filter_factory = tellus_swift_cache:filter_factory
+[filter:proxy-logging]
+use = egg:swift#proxy_logging
+[filter:s3api]
+use = egg:swift#s3api
+location = us-east-1
+force_swift_request_proxy_log = false
+[filter:tempauth]
+use = egg:swift#tempauth
+user_tellus_s3 = tellus-test-secret .admin
+EOF
+} >"$etc/proxy-server.conf"
+
+[[ $user == "$(id -un)" ]] || chown -R "$user" "$etc"
+pids=""
+for kind in object container account proxy; do
+  PYTHONPATH=$here "swift-$kind-server" "$etc/$kind-server.conf" -v >"$dir/log/$kind.log" 2>&1 &
+  pids="$pids $!"
+done
+pids=${pids# }
+
+endpoint=http://127.0.0.1:$p_proxy
+cat >"$dir/s3.env" <<EOF
+S3_ENDPOINT=$endpoint
+S3_REGION=us-east-1
+S3_BUCKET=tellus
+AWS_ACCESS_KEY_ID=tellus:s3
+AWS_SECRET_ACCESS_KEY=tellus-test-secret
+S3_PIDS="$pids"
+EOF
+
+fail() {
+  echo "s3-server: $1" >&2
+  tail -n 20 "$dir"/log/*.log >&2 || true
+  [[ -n ${S3_KEEP:-} ]] || "$0" stop "$dir"
+  exit 1
+}
+
+# Wait for the proxy (and, through it, the storage servers) and create the bucket through S3.
+code=$(/usr/bin/python3 "$here/s3_server_helper.py" bucket "$endpoint" tellus tellus:s3 \
+  tellus-test-secret us-east-1) || true
+[[ $code == 200 || $code == 409 ]] || fail "could not create the bucket on $endpoint (HTTP $code)"
+
+ms=$((($(date +%s%N) - start_ns) / 1000000))
+echo "S3_START_MS=$ms" >>"$dir/s3.env"
+cat "$dir/s3.env"
