@@ -3,6 +3,7 @@ the same small PNG of one colour per BBOX (so that two tiles differ and one tile
 bytes), after an adjustable delay.
   GET /stats            {"getmaps": N, "by_bbox": {BBOX: n, ...}}
   GET /delay?ms=N       later GetMaps wait N ms before answering (a slow upstream)
+  GET /salt?v=TEXT      later GetMaps answer another colour (a refreshed tile: same size, new bytes)
   anything else         a GetMap (the query is not checked beyond BBOX)
 Usage: counting_wms.py PORTFILE (binds 127.0.0.1 on a free port, writes the port to PORTFILE,
 serves until killed). Standard library only."""
@@ -17,7 +18,7 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from urllib.parse import parse_qsl, urlsplit
 
 LOCK = threading.Lock()
-STATE = {"getmaps": 0, "by_bbox": {}, "delay_s": 0.0}
+STATE = {"getmaps": 0, "by_bbox": {}, "delay_s": 0.0, "salt": ""}
 
 
 def png(w, h, rgb):
@@ -56,8 +57,13 @@ class Handler(BaseHTTPRequestHandler):
             with LOCK:
                 STATE["delay_s"] = float(query.get("MS", "0")) / 1000.0
             return self.answer(200, b"ok", "text/plain")
+        if url.path == "/salt":
+            with LOCK:
+                STATE["salt"] = query.get("V", "")
+            return self.answer(200, b"ok", "text/plain")
         bbox = query.get("BBOX", "")
         with LOCK:
+            salt = STATE["salt"]
             STATE["getmaps"] += 1
             STATE["by_bbox"][bbox] = STATE["by_bbox"].get(bbox, 0) + 1
             delay = STATE["delay_s"]
@@ -65,7 +71,7 @@ class Handler(BaseHTTPRequestHandler):
             time.sleep(delay)
         w = int(query.get("WIDTH", "64"))
         h = int(query.get("HEIGHT", "64"))
-        colour = hashlib.sha256(bbox.encode()).digest()[:3]
+        colour = hashlib.sha256((salt + bbox).encode()).digest()[:3]
         self.answer(200, png(w, h, colour), "image/png")
 
 

@@ -8,6 +8,9 @@
 #                            DIR/s3.env (S3_ENDPOINT, S3_REGION, S3_BUCKET, AWS_ACCESS_KEY_ID,
 #                            AWS_SECRET_ACCESS_KEY, S3_PIDS) and prints it; exits once it answers
 #   s3-server.sh stop DIR    stops the servers that DIR/s3.env names (by pid) and removes DIR
+#   s3-server.sh pause DIR   kills (-9) the S3 front (swift-proxy-server), keeping the data: the
+#                            object store gone under load
+#   s3-server.sh resume DIR  starts the front again on the same port; exits once it answers
 #
 # Run as root (CI), the servers drop to the `swift` user the packages create (or `tellus-test`,
 # created if missing). The credentials are fixed test ones; nothing here is for production.
@@ -15,7 +18,25 @@ set -euo pipefail
 
 cmd=${1:-}
 dir=${2:-}
-[[ -n $cmd && -n $dir ]] || { echo "usage: $0 start|stop DIR" >&2; exit 2; }
+[[ -n $cmd && -n $dir ]] || { echo "usage: $0 start|stop|pause|resume DIR" >&2; exit 2; }
+here=$(cd "$(dirname "$0")" && pwd)
+
+if [[ $cmd == pause || $cmd == resume ]]; then
+  # shellcheck disable=SC1091
+  . "$dir/s3.env"
+  read -r -a all <<<"$S3_PIDS"
+  proxy=${all[3]}
+  if [[ $cmd == pause ]]; then
+    kill -9 "$proxy" 2>/dev/null || true
+    exit 0
+  fi
+  PYTHONPATH=$here swift-proxy-server "$dir/etc/proxy-server.conf" -v >>"$dir/log/proxy.log" 2>&1 &
+  sed -i "s/^S3_PIDS=.*/S3_PIDS=\"${all[0]} ${all[1]} ${all[2]} $!\"/" "$dir/s3.env"
+  code=$(/usr/bin/python3 "$here/s3_server_helper.py" bucket "$S3_ENDPOINT" "$S3_BUCKET" \
+    "$AWS_ACCESS_KEY_ID" "$AWS_SECRET_ACCESS_KEY" "$S3_REGION") || true
+  [[ $code == 200 || $code == 409 ]] || { echo "s3-server: not back (HTTP $code)" >&2; exit 1; }
+  exit 0
+fi
 
 if [[ $cmd == stop ]]; then
   if [[ -f $dir/s3.env ]]; then
