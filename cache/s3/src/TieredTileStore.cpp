@@ -3,6 +3,8 @@
 #include <tellus/cache/TileFile.hpp>
 #include <tellus/cache_s3/TieredTileStore.hpp>
 
+#include <sys/stat.h>
+
 namespace tellus {
 
 namespace {
@@ -48,6 +50,18 @@ private:
   std::shared_ptr<StagedRemoval> shared_;
 };
 
+/** Whether the local copy was written before its index row (whose fetched-at the reader passes):
+ * the tile was refreshed by another instance since, through the shared store; the local copy is
+ * replaced from there. Costs one fstat on the slow path only (rows a reader remembers skip it). */
+bool olderThanRow(const StoredTile& t, const TileLocation& at) {
+  if (at.notBefore <= 0) return false;
+  struct stat st {};
+  if (::fstat(t.file->fd(), &st) != 0) return true;
+  const auto ms =
+      static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1000 + st.st_mtim.tv_nsec / 1000000;
+  return ms < at.notBefore;
+}
+
 class TieredTileStore final : public ITileStore {
 public:
   TieredTileStore(std::shared_ptr<ITileStore> local, std::shared_ptr<ITileStore> shared)
@@ -66,7 +80,7 @@ public:
   }
 
   std::optional<StoredTile> open(const TileLocation& at, std::int64_t size) override {
-    if (auto t = local_->open(at, size)) return t;
+    if (auto t = local_->open(at, size); t && !olderThanRow(*t, at)) return t;
     auto remote = shared_->open(at, size);
     if (!remote) return std::nullopt;
     // Copied into the local tier as it is read; a tier that cannot take it (full) is skipped.

@@ -226,7 +226,9 @@ std::expected<CacheLookup, CacheError> TileCache::openTile(DatasetId id, const T
   const std::uint64_t generation = im.rows.generation();
   auto found = peek(id, key);
   if (!found || found->kind != CacheLookup::Kind::Hit) return found;
-  auto tile = im.store->open((*d)->at(key), found->size);
+  auto at = (*d)->at(key);
+  at.notBefore = found->meta.fetchedAt; // a local tier's copy older than the row is stale
+  auto tile = im.store->open(at, found->size);
   if (!tile) {
     // The tile vanished or changed under us: report a miss, and let the writer drop the row if
     // it still names no such tile (self-healing).

@@ -43,6 +43,10 @@ struct TileLocation {
   std::string_view folder;    ///< the dataset's folder (DatasetInfo::folder)
   std::string_view extension; ///< the dataset's extension ("jpg")
   TileKey key;
+  /** The index row's fetched-at, where the reader knows it (0: not known): a copy a tier made
+   * before this is of an older version of the tile (refreshed elsewhere since) and is not served.
+   */
+  UnixMillis notBefore = 0;
 };
 
 /** Which version of a tile is stored: changes whenever the tile is replaced (files: device and
