@@ -1,6 +1,6 @@
 """A WMS upstream that counts what is asked of it (issue 27's scale-out tests): every GetMap answers
 the same small PNG of one colour per BBOX (so that two tiles differ and one tile is always the same
-bytes), after an adjustable delay.
+bytes), stored uncompressed (every tile of a size is as long), after an adjustable delay.
   GET /stats            {"getmaps": N, "by_bbox": {BBOX: n, ...}}
   GET /delay?ms=N       later GetMaps wait N ms before answering (a slow upstream)
   GET /salt?v=TEXT      later GetMaps answer another colour (a refreshed tile: same size, new bytes)
@@ -29,7 +29,7 @@ def png(w, h, rgb):
         return c + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
 
     ihdr = struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)
-    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(raw))
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(raw, 0))
             + chunk(b"IEND", b""))
 
 
