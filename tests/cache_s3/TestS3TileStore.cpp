@@ -11,6 +11,7 @@
 
 #include <curl/curl.h>
 
+#include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <cstring>
@@ -336,4 +337,33 @@ TEST_F(S3StoreIntegration, TheLocalTierTakesACopyOfWhatItReadsFromTheSharedStore
   tiered->remove(other);
   EXPECT_FALSE(local->stat(other));
   EXPECT_FALSE(shared->stat(other));
+}
+
+TEST_F(S3StoreIntegration, ALocalCopyOlderThanItsRowIsReplacedFromTheSharedStore) {
+  std::shared_ptr<ITileStore> shared = open();
+  ASSERT_TRUE(shared);
+  std::shared_ptr<ITileStore> local =
+      std::move(*openFileTileStore(FileTileStoreOptions{dir.path() / "tier", false, false}));
+  auto tiered = makeTieredTileStore(local, shared);
+  ASSERT_TRUE(tiered->prepareDataset("srv/ds"));
+  ASSERT_TRUE(put(*tiered, kTile, "version one"));
+  // Another instance refreshes the tile: new bytes of the same size in the shared store, a row
+  // fetched after this instance's copy was written (a minute ahead: no clock needed).
+  ASSERT_TRUE(put(*shared, kTile, "version two"));
+  const auto rowFetchedAt = std::chrono::duration_cast<std::chrono::milliseconds>(
+                                std::chrono::system_clock::now().time_since_epoch())
+                                .count() +
+                            60000;
+  TileLocation unknown = kTile; // no row's time: the local copy is served
+  const auto old = tiered->open(unknown, 11);
+  ASSERT_TRUE(old);
+  EXPECT_EQ(text(*old), "version one");
+  TileLocation newer = kTile;
+  newer.notBefore = rowFetchedAt;
+  const auto fresh = tiered->open(newer, 11);
+  ASSERT_TRUE(fresh);
+  EXPECT_EQ(text(*fresh), "version two");
+  const auto copy = local->open(kTile, 11); // the local copy replaced
+  ASSERT_TRUE(copy);
+  EXPECT_EQ(text(*copy), "version two");
 }
