@@ -240,3 +240,75 @@ TEST(TileCacheMemory, ACommitRefusedAfterTheInstallKeepsTheTileItWouldHaveReplac
   EXPECT_TRUE(cache->put(id, fresh, filled(3000, 3), {}));
   EXPECT_TRUE(cache->storeStatus().writable);
 }
+
+namespace {
+
+/** A shared store that can be out of reach (an object store in an outage): while `down`, opening a
+ * tile finds nothing and asking whether there is one is an error, as S3TileStore answers. */
+class StoreOutOfReach final : public ITileStore {
+public:
+  explicit StoreOutOfReach(std::shared_ptr<ITileStore> inner) : inner_(std::move(inner)) {}
+  bool down = false;
+
+  Result prepareDataset(std::string_view f) override { return inner_->prepareDataset(f); }
+  std::optional<std::string> readDescriptor(std::string_view f) override {
+    return inner_->readDescriptor(f);
+  }
+  Result writeDescriptor(std::string_view f, std::string_view t) override {
+    return inner_->writeDescriptor(f, t);
+  }
+  std::optional<StoredTile> open(const TileLocation& at, std::int64_t size) override {
+    return down ? std::nullopt : inner_->open(at, size);
+  }
+  std::optional<TileStat> stat(const TileLocation& at) override {
+    return down ? std::nullopt : inner_->stat(at);
+  }
+  std::expected<std::optional<TileStat>, CacheError> statOrError(const TileLocation& at) override {
+    if (down) return std::unexpected(CacheError{CacheErrc::Io, "the store does not answer"});
+    return inner_->stat(at);
+  }
+  std::expected<std::shared_ptr<StagedTile>, CacheError>
+  stage(const TileLocation& at, std::span<const std::byte> bytes) override {
+    return inner_->stage(at, bytes);
+  }
+  std::shared_ptr<StagedRemoval> stageRemoval(const TileLocation& at) override {
+    return inner_->stageRemoval(at);
+  }
+  void remove(const TileLocation& at) override { inner_->remove(at); }
+  Result lockChanges(std::chrono::milliseconds t) override { return inner_->lockChanges(t); }
+  void unlockChanges() override { inner_->unlockChanges(); }
+  std::optional<DiskSpace> freeSpace() const override { return inner_->freeSpace(); }
+  std::size_t removeDeadTemps(std::string_view f) override { return inner_->removeDeadTemps(f); }
+  std::vector<std::string> datasetFolders() override { return inner_->datasetFolders(); }
+  void scan(std::string_view f, const EntryVisitor& v) override { inner_->scan(f, v); }
+  void removeEntry(std::string_view f, std::string_view p) override { inner_->removeEntry(f, p); }
+
+private:
+  std::shared_ptr<ITileStore> inner_;
+};
+
+} // namespace
+
+// Issue 27: a tile read while the shared store is out of reach is a miss, but its row stays in the
+// (shared) index: an outage never empties the index, and once the store is back the tile is there.
+TEST(TileCacheStoreOutage, ATileUnreadableDuringAnOutageKeepsItsRow) {
+  auto clock = std::make_shared<ManualClock>();
+  auto index = std::make_shared<test::MemoryTileIndex>();
+  auto store = std::make_shared<StoreOutOfReach>(std::make_shared<test::MemoryTileStore>(clock));
+  TileCache::Options o;
+  o.root = "/nonexistent-memory-root";
+  o.fsyncTiles = false;
+  o.clock = clock;
+  o.fileRecheck = std::chrono::milliseconds(0);
+  auto cache = TileCache::open(o, index, store);
+  ASSERT_TRUE(cache) << cache.error().message;
+  const auto id = *(*cache)->registerDataset(imagery());
+  const TileKey k{2, 1, 3};
+  ASSERT_TRUE((*cache)->put(id, k, filled(400, 9), {}));
+  store->down = true;
+  EXPECT_EQ((*cache)->get(id, k)->kind, CacheLookup::Kind::Miss);
+  (*cache)->flush(); // the self-healing the miss asked for has run
+  EXPECT_EQ((*cache)->peek(id, k)->kind, CacheLookup::Kind::Hit);
+  store->down = false;
+  EXPECT_EQ((*cache)->get(id, k)->bytes, filled(400, 9));
+}

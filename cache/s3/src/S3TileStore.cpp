@@ -221,6 +221,14 @@ public:
     if (!r.ok() || r.contentLength < 0) return std::nullopt;
     return TileStat{r.contentLength, versionOf(r.etag)};
   }
+  std::expected<std::optional<TileStat>, CacheError> statOrError(const TileLocation& at) override {
+    const auto r =
+        s_->client.send(s3::Request{"HEAD", s_->encoded(s_->layout.tile(at)), {}, {}, {}});
+    if (r.status == 404) return std::nullopt;
+    if (!r.ok() || r.contentLength < 0)
+      return std::unexpected(CacheError{CacheErrc::Io, "S3 HEAD of a tile: " + r.describe()});
+    return TileStat{r.contentLength, versionOf(r.etag)};
+  }
 
   std::expected<std::shared_ptr<StagedTile>, CacheError>
   stage(const TileLocation& at, std::span<const std::byte> bytes) override {

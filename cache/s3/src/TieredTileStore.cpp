@@ -99,6 +99,10 @@ public:
     if (auto s = local_->stat(at)) return s;
     return shared_->stat(at);
   }
+  std::expected<std::optional<TileStat>, CacheError> statOrError(const TileLocation& at) override {
+    if (auto s = local_->stat(at)) return s;
+    return shared_->statOrError(at);
+  }
   std::expected<std::shared_ptr<StagedTile>, CacheError>
   stage(const TileLocation& at, std::span<const std::byte> bytes) override {
     auto local = local_->stage(at, bytes);

@@ -91,7 +91,9 @@ Result TileCache::Impl::healRow(DatasetId id, const TileKey& key) {
   const auto bytes = index->presentBytes(id, key);
   if (!bytes) return std::unexpected(bytes.error());
   if (!*bytes) return {};
-  const auto stored = store->stat(d->at(key));
+  const auto asked = store->statOrError(d->at(key));
+  if (!asked) return {}; // the store is out of reach: keep the row, ask again on the next open
+  const auto& stored = *asked;
   if (stored && stored->size == **bytes) return {};
   // A tile of another size than its row says is not that tile: both go (it is fetched again).
   if (stored) store->remove(d->at(key));

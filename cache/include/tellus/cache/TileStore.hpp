@@ -126,6 +126,12 @@ public:
   virtual std::optional<StoredTile> open(const TileLocation& at, std::int64_t size) = 0;
   /** A tile's size and version; nullopt when there is none. */
   virtual std::optional<TileStat> stat(const TileLocation& at) = 0;
+  /** stat() that tells "there is none" (nullopt) from "the store could not be asked" (an error:
+   * an object store out of reach). The cache drops a tile's row only on a definite "none", so an
+   * outage of a shared store never empties the shared index. A local store always knows. */
+  virtual std::expected<std::optional<TileStat>, CacheError> statOrError(const TileLocation& at) {
+    return stat(at);
+  }
   /** Writes a tile's new bytes durably where no reader sees them. DiskFull when there is no room
    * (nothing is left behind); messages name the tile. */
   virtual std::expected<std::shared_ptr<StagedTile>, CacheError>
