@@ -1,8 +1,7 @@
 #include <tellus/cluster/Comm.hpp>
 
-#include <mpi.h>
-
 #include <cstdlib>
+#include <mpi.h>
 
 namespace tellus::cluster {
 

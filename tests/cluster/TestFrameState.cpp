@@ -22,14 +22,30 @@ TEST(FrameState, DigestSeesEveryField) {
   for (int field = 0; field < 8; ++field) {
     FrameState t = s;
     switch (field) {
-    case 0: t.frame = 8; break;
-    case 1: t.latDeg = std::nextafter(t.latDeg, 90.0); break;
-    case 2: t.lonDeg += 1e-9; break;
-    case 3: t.altitudeM += 1e-3; break;
-    case 4: t.headingDeg = -t.headingDeg; break;
-    case 5: t.tiltDeg = 0.0; break;
-    case 6: t.sceneTimeUnixS += 1.0; break;
-    default: t.hasSceneTime = 0; break;
+    case 0:
+      t.frame = 8;
+      break;
+    case 1:
+      t.latDeg = std::nextafter(t.latDeg, 90.0);
+      break;
+    case 2:
+      t.lonDeg += 1e-9;
+      break;
+    case 3:
+      t.altitudeM += 1e-3;
+      break;
+    case 4:
+      t.headingDeg = -t.headingDeg;
+      break;
+    case 5:
+      t.tiltDeg = 0.0;
+      break;
+    case 6:
+      t.sceneTimeUnixS += 1.0;
+      break;
+    default:
+      t.hasSceneTime = 0;
+      break;
     }
     EXPECT_TRUE(seen.insert(digest(t)).second) << "field " << field;
   }

@@ -78,7 +78,8 @@ std::string parseCluster(const cli::Args& a, ClusterArgs& c) {
     if (a.get("fps")) return "--fps needs --path";
     const auto v = cli::parseNumbers(*camera, 3, 5);
     if (!v) return "--camera must be LAT,LON,ALT[,HEADING,TILT]: " + *camera;
-    c.pose = {(*v)[0], (*v)[1], (*v)[2], v->size() > 3 ? (*v)[3] : 0.0, v->size() > 4 ? (*v)[4] : 0.0};
+    c.pose = {
+        (*v)[0], (*v)[1], (*v)[2], v->size() > 3 ? (*v)[3] : 0.0, v->size() > 4 ? (*v)[4] : 0.0};
     if (c.pose.latDeg < -90.0 || c.pose.latDeg > 90.0 || c.pose.tiltDeg < 0.0 ||
         c.pose.tiltDeg > 180.0)
       return "--camera latitude must be in [-90, 90] and tilt in [0, 180]: " + *camera;
@@ -255,10 +256,8 @@ int runCluster(const cli::Args& a) {
   addSceneBodies(ro, tiles->sceneBodies, dataDir(a), tiles->earth);
   auto renderer = planet::Renderer::create(*tiles->source, geodesy, ro);
   if (!renderer)
-    std::fprintf(stderr,
-                 "tellus cluster: channel %s: %s\n",
-                 channel.name.c_str(),
-                 renderer.error().c_str());
+    std::fprintf(
+        stderr, "tellus cluster: channel %s: %s\n", channel.name.c_str(), renderer.error().c_str());
   return runChannel(**comm, c, channel, renderer ? renderer->get() : nullptr);
 }
 
