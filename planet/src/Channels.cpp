@@ -63,7 +63,7 @@ std::string readSize(const Json& object, const char* key, int& out) {
 std::string readChannel(const Json& j, Channel& c) {
   if (!j.is_object()) return "not an object";
   static const std::set<std::string> known{
-      "name", "azimuth", "elevation", "hfov", "vfov", "roll", "width", "height"};
+      "name", "azimuth", "elevation", "hfov", "vfov", "roll", "width", "height", "warp", "blend"};
   for (const auto& [key, value] : j.items()) {
     (void)value;
     if (!known.contains(key)) return "unknown key \"" + key + "\"";
@@ -82,6 +82,13 @@ std::string readChannel(const Json& j, Channel& c) {
                               readSize(j, "width", c.width),
                               readSize(j, "height", c.height)}) {
     if (!message.empty()) return message;
+  }
+  for (const auto& [key, out] : {std::pair{"warp", &c.warp}, std::pair{"blend", &c.blend}}) {
+    if (const auto it = j.find(key); it != j.end()) {
+      if (!it->is_string() || it->get<std::string>().empty())
+        return std::string(key) + ": a file name is required";
+      *out = it->get<std::string>();
+    }
   }
   const double aspect = static_cast<double>(c.width) / c.height;
   const double fovAspect = std::tan(c.hfovDeg * kDeg / 2.0) / std::tan(c.vfovDeg * kDeg / 2.0);
@@ -158,7 +165,12 @@ std::expected<std::vector<Channel>, std::string> readChannels(const std::filesys
   std::ifstream in(file, std::ios::binary);
   if (!in) return std::unexpected(file.string() + ": cannot be read");
   const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  return parseChannels(text, file.string());
+  auto channels = parseChannels(text, file.string());
+  if (channels)
+    for (Channel& c : *channels)
+      for (std::filesystem::path* p : {&c.warp, &c.blend})
+        if (!p->empty() && p->is_relative()) *p = file.parent_path() / *p;
+  return channels;
 }
 
 } // namespace tellus::planet

@@ -82,6 +82,39 @@ for n in north east south west zenith; do
   [ "$(ls "$work/f" | grep -c "^channel-$n-")" -eq "$frames" ] || fail "channel $n: not $frames images"
 done
 
+# Warp and blend (a pass after rendering): the identity warp with a white mask changes no byte of
+# the north channel; a black mask makes the east channel black.
+python3 - "$work" <<'PY'
+import json, struct, sys, zlib
+work = sys.argv[1]
+def png(path, w, h, v):
+    raw = b"".join(b"\0" + bytes([v]) * w for _ in range(h))
+    chunk = lambda t, d: struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d))
+    open(path, "wb").write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 0, 0, 0, 0))
+                           + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+png(f"{work}/white.png", 100, 70, 255)
+png(f"{work}/black.png", 100, 70, 0)
+json.dump({"columns": 3, "rows": 2, "uv": [[0, 0], [0.5, 0], [1, 0], [0, 1], [0.5, 1], [1, 1]]},
+          open(f"{work}/identity.json", "w"))
+d = json.load(open(f"{work}/small.json"))
+d["channels"][0].update(warp="identity.json", blend="white.png")
+d["channels"][1]["blend"] = f"{work}/black.png"
+json.dump(d, open(f"{work}/warped.json", "w"))
+PY
+cluster 6 "$work/small.json" "${opts[@]}" --camera "$camera" --wait-complete --out "$work/w0" >/dev/null ||
+  fail "cluster without warps"
+cluster 6 "$work/warped.json" "${opts[@]}" --camera "$camera" --wait-complete --out "$work/w1" >/dev/null ||
+  fail "cluster with warps"
+cmp -s "$work/w0/channel-north-00000.png" "$work/w1/channel-north-00000.png" ||
+  fail "the identity warp changed the north channel"
+cmp -s "$work/w0/channel-east-00000.png" "$work/w1/channel-east-00000.png" &&
+  fail "the black mask did not change the east channel"
+PYTHONPATH="$here" python3 -c "
+import sys
+from png_pixels import pixels
+w, h, rows, n = pixels(sys.argv[1])
+sys.exit(any(any(r) for r in rows))" "$work/w1/channel-east-00000.png" || fail "east is not black"
+
 # Usage errors: exit 2 and a message naming what is wrong.
 set +e
 msg=$(cluster 2 "$work/dome.json" --camera "$camera" --out "$work/u" 2>&1)

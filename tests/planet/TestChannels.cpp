@@ -31,6 +31,19 @@ void expectNear(const glm::dvec3& a, const glm::dvec3& b, double tolerance = 1e-
   EXPECT_NEAR(a.z, b.z, tolerance);
 }
 
+Channel channel(double az, double el, double h, double v, double roll, int width, int height) {
+  Channel c;
+  c.name = "c";
+  c.azimuthDeg = az;
+  c.elevationDeg = el;
+  c.hfovDeg = h;
+  c.vfovDeg = v;
+  c.rollDeg = roll;
+  c.width = width;
+  c.height = height;
+  return c;
+}
+
 std::string errorOf(const std::string& json) {
   const auto parsed = parseChannels(json, "dome.json");
   EXPECT_FALSE(parsed.has_value()) << json;
@@ -50,7 +63,7 @@ TEST(Channels, FramesAreOrthonormalAndRightHanded) {
   for (const double az : {0.0, 37.0, 90.0, 200.0})
     for (const double el : {-30.0, 0.0, 20.0, 89.0, 90.0})
       for (const double roll : {0.0, 15.0, -90.0}) {
-        const ChannelFrame f = channelFrame({"c", az, el, 90, 90, roll, 100, 100});
+        const ChannelFrame f = channelFrame(channel(az, el, 90, 90, roll, 100, 100));
         expectNear(f.forward, domeDirection(az, el));
         EXPECT_NEAR(glm::length(f.up), 1.0, 1e-12);
         EXPECT_NEAR(glm::dot(f.forward, f.up), 0.0, 1e-12);
@@ -58,14 +71,14 @@ TEST(Channels, FramesAreOrthonormalAndRightHanded) {
       }
   // Roll 0: up is where the elevation rises (the zenith side); at the zenith, away from the
   // azimuth. Roll 90 turns up onto the former right.
-  expectNear(channelFrame({"c", 0, 0, 90, 90, 0, 100, 100}).up, {0, 0, -1});
-  expectNear(channelFrame({"c", 0, 90, 90, 90, 0, 100, 100}).up, {0, -1, 0});
-  const ChannelFrame still = channelFrame({"c", 30, 10, 90, 90, 0, 100, 100});
-  expectNear(channelFrame({"c", 30, 10, 90, 90, 90, 100, 100}).up, still.right);
+  expectNear(channelFrame(channel(0, 0, 90, 90, 0, 100, 100)).up, {0, 0, -1});
+  expectNear(channelFrame(channel(0, 90, 90, 90, 0, 100, 100)).up, {0, -1, 0});
+  const ChannelFrame still = channelFrame(channel(30, 10, 90, 90, 0, 100, 100));
+  expectNear(channelFrame(channel(30, 10, 90, 90, 90, 100, 100)).up, still.right);
 }
 
 TEST(Channels, PinholeMapAndItsInverse) {
-  const Channel c{"c", 45, 20, 110, 90, 10, 200, 140};
+  const Channel c = channel(45, 20, 110, 90, 10, 200, 140);
   glm::dvec2 px;
   ASSERT_TRUE(projectToChannel(c, domeDirection(45, 20), px));
   EXPECT_NEAR(px.x, 100.0, 1e-9);
@@ -117,8 +130,10 @@ TEST(Channels, RefusesMalformedConfigurations) {
   EXPECT_EQ(errorOf(R"({"channels": []})"), "dome.json: channels: not a non-empty array");
   EXPECT_EQ(errorOf("{\"channels\": [{" + channel + "}]}"),
             "dome.json: channels[0]: height: missing");
-  EXPECT_EQ(errorOf("{\"channels\": [{" + channel + R"(, "height": 100, "warp": "w.pfm"}]})"),
-            "dome.json: channels[0]: unknown key \"warp\"");
+  EXPECT_EQ(errorOf("{\"channels\": [{" + channel + R"(, "height": 100, "mpcdi": "w.pfm"}]})"),
+            "dome.json: channels[0]: unknown key \"mpcdi\"");
+  EXPECT_EQ(errorOf("{\"channels\": [{" + channel + R"(, "height": 100, "warp": 3}]})"),
+            "dome.json: channels[0]: warp: a file name is required");
   const std::string ok = "{" + channel + R"(, "height": 100})";
   EXPECT_EQ(errorOf("{\"channels\": [" + ok + ", " + ok + "]}"),
             "dome.json: channels[1]: name \"a\" repeated");
@@ -149,6 +164,13 @@ TEST(Channels, ReadsAFileAndNamesItInErrors) {
   const auto read = readChannels(file);
   ASSERT_TRUE(read.has_value()) << read.error();
   EXPECT_EQ(read->back().name, "zenith");
+  EXPECT_TRUE(read->back().warp.empty());
+  std::ofstream(file) << R"({"channels": [{"name": "a", "azimuth": 0, "elevation": 20, "hfov": 90,
+    "vfov": 90, "width": 10, "height": 10, "warp": "w.json", "blend": "/m/b.png"}]})";
+  const auto withFiles = readChannels(file);
+  ASSERT_TRUE(withFiles.has_value()) << withFiles.error();
+  EXPECT_EQ(withFiles->front().warp, dir / "w.json"); // beside the configuration
+  EXPECT_EQ(withFiles->front().blend, std::filesystem::path("/m/b.png"));
   const auto missing = readChannels(dir / "none.json");
   ASSERT_FALSE(missing.has_value());
   EXPECT_EQ(missing.error(), (dir / "none.json").string() + ": cannot be read");

@@ -13,6 +13,7 @@
 
 #include <tellus/cli/Values.hpp>
 #include <tellus/cluster/Comm.hpp>
+#include <tellus/planet/ChannelWarp.hpp>
 #include <tellus/planet/Channels.hpp>
 #include <tellus/planet/FlightBodies.hpp>
 #include <tellus/planet/FlightPath.hpp>
@@ -170,11 +171,19 @@ bool renderOne(planet::Renderer& r, const planet::CameraPose& pose, const Cluste
   }
 }
 
-/** A channel (rank >= 1): the master's state drawn, the barrier, then the image written. */
+/** A channel (rank >= 1): the master's state drawn, the barrier, then the image warped and
+ * blended (when calibrated) and written. */
+/** The channel's warp mesh and blend mask (none when not configured). */
+struct Calibration {
+  std::optional<planet::WarpMesh> warp;
+  std::optional<std::vector<float>> blend;
+};
+
 int runChannel(cluster::Comm& comm,
                const ClusterArgs& c,
                const planet::Channel& channel,
-               planet::Renderer* renderer) {
+               planet::Renderer* renderer,
+               const Calibration& cal) {
   const fs::path digests = c.out / ("digest-" + channel.name + ".txt");
   fs::remove(digests);
   if (!comm.allWell(renderer != nullptr)) return kExitError;
@@ -195,10 +204,17 @@ int runChannel(cluster::Comm& comm,
     char name[32];
     std::snprintf(name, sizeof name, "-%05lld.png", static_cast<long long>(s.frame));
     std::string err;
+    planet::ChannelImage image{renderer->width(), renderer->height(), renderer->readPixels()};
+    if (cal.warp || cal.blend) // the warp and blend pass (ChannelWarp.hpp)
+      image = planet::warpAndBlend(image,
+                                   image.width,
+                                   image.height,
+                                   cal.warp ? &*cal.warp : nullptr,
+                                   cal.blend ? &*cal.blend : nullptr);
     if (!planet::writePngRgb(c.out / ("channel-" + channel.name + name),
-                             renderer->width(),
-                             renderer->height(),
-                             renderer->readPixels(),
+                             image.width,
+                             image.height,
+                             image.rgba,
                              &err)) {
       std::fprintf(stderr, "tellus cluster: %s\n", err.c_str());
       comm.abort(kExitError); // the others wait at the next barrier: end them all
@@ -254,11 +270,26 @@ int runCluster(const cli::Args& a) {
       tiles->body == "earth" && fs::exists(global))
     ro.globalImage = global;
   addSceneBodies(ro, tiles->sceneBodies, dataDir(a), tiles->earth);
+  Calibration cal;
+  std::string problem;
+  if (!channel.warp.empty()) {
+    if (auto w = planet::readWarpMesh(channel.warp))
+      cal.warp = std::move(*w);
+    else
+      problem = w.error();
+  }
+  if (!channel.blend.empty()) {
+    if (auto b = planet::readBlendMask(channel.blend, channel.width, channel.height))
+      cal.blend = std::move(*b);
+    else
+      problem = b.error();
+  }
   auto renderer = planet::Renderer::create(*tiles->source, geodesy, ro);
-  if (!renderer)
-    std::fprintf(
-        stderr, "tellus cluster: channel %s: %s\n", channel.name.c_str(), renderer.error().c_str());
-  return runChannel(**comm, c, channel, renderer ? renderer->get() : nullptr);
+  if (!renderer) problem = renderer.error();
+  if (!problem.empty())
+    std::fprintf(stderr, "tellus cluster: channel %s: %s\n", channel.name.c_str(), problem.c_str());
+  return runChannel(
+      **comm, c, channel, renderer && problem.empty() ? renderer->get() : nullptr, cal);
 }
 
 } // namespace

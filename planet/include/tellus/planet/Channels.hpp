@@ -38,6 +38,11 @@ struct Channel {
   double rollDeg = 0.0;
   int width = 640; ///< [1, 16384]
   int height = 640;
+  /** Optional (empty: none): the warp mesh (ChannelWarp.hpp, JSON) and the blend mask (a PNG of
+   * width x height) applied to the rendered image; relative paths are taken from the
+   * configuration file's folder by readChannels. */
+  std::filesystem::path warp;
+  std::filesystem::path blend;
 };
 
 /** A channel's frame in dome coordinates: where it looks, its image's up and right (right =
@@ -59,13 +64,14 @@ bool projectToChannel(const Channel& channel, const glm::dvec3& domeDir, glm::dv
 glm::dvec3 channelPixelDirection(const Channel& channel, const glm::dvec2& px) noexcept;
 
 /** Parses a channel configuration (docs/design/cluster.md):
- * {"channels": [{"name", "azimuth", "elevation", "hfov", "vfov", "roll", "width", "height"}]}
- * (roll optional, 0). Unknown keys, missing or out-of-range values, duplicate names and pixels
- * that are not square are refused; the message says which channel and key. `origin` prefixes
- * messages (the file). */
+ * {"channels": [{"name", "azimuth", "elevation", "hfov", "vfov", "roll", "width", "height",
+ * "warp", "blend"}]} (roll optional, 0; warp and blend optional file names). Unknown keys, missing
+ * or out-of-range values, duplicate names and pixels that are not square are refused; the message
+ * says which channel and key. `origin` prefixes messages (the file). */
 std::expected<std::vector<Channel>, std::string> parseChannels(std::string_view json,
                                                                std::string_view origin = "");
-/** Reads and parses a file; messages begin with its path. */
+/** Reads and parses a file; messages begin with its path. Relative warp and blend paths are
+ * made relative to the file's folder. */
 std::expected<std::vector<Channel>, std::string> readChannels(const std::filesystem::path& file);
 
 } // namespace tellus::planet
