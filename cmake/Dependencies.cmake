@@ -40,6 +40,10 @@ find_package(yaml-cpp CONFIG REQUIRED)
 find_package(nlohmann_json 3.11 CONFIG REQUIRED)
 # Boost.Beast + Asio (header-only) for the HTTP server; see docs/design/dependencies.md.
 find_package(Boost 1.74 REQUIRED)
+# Open MPI (issue 28: `tellus cluster`; PRIVATE to tellus::cluster)
+# The C API from C++ (the project enables no C; the deprecated C++ bindings left out).
+set(MPI_CXX_SKIP_MPICXX ON)
+find_package(MPI REQUIRED COMPONENTS CXX)
 pkg_check_modules(EPOXY REQUIRED IMPORTED_TARGET epoxy)
 if(TELLUS_BUILD_TESTS)
   find_package(GTest CONFIG REQUIRED)

@@ -79,8 +79,13 @@ Camera::Camera(const Geodesy& geodesy,
   right_ = glm::normalize(glm::cross(forward_, up_));
 
   buildMatrices();
-  const double aspect = static_cast<double>(viewport.width) / static_cast<double>(viewport.height);
-  const double ty = std::tan(0.5 * verticalFovDeg * std::numbers::pi / 180.0), tx = ty * aspect;
+  castViewportGround(geodesy);
+}
+
+void Camera::castViewportGround(const Geodesy& geodesy) {
+  const double aspect =
+      static_cast<double>(viewport_.width) / static_cast<double>(viewport_.height);
+  const double ty = std::tan(0.5 * vfovDeg_ * std::numbers::pi / 180.0), tx = ty * aspect;
   constexpr std::array<std::array<double, 2>, 9> ndc{
       {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}, {0, -1}, {1, 0}, {0, 1}, {-1, 0}, {0, 0}}};
   std::array<glm::dvec3, 9> dirs{};
@@ -140,7 +145,8 @@ Camera::Camera(const Camera& from,
                const glm::dvec3& forward,
                const glm::dvec3& up,
                Viewport viewport,
-               double verticalFovDeg)
+               double verticalFovDeg,
+               const Geodesy* geodesy)
     : pose_(from.pose_), viewport_(viewport), vfovDeg_(verticalFovDeg), near_(from.near_),
       position_(from.position_) {
   if (viewport.width <= 0 || viewport.height <= 0)
@@ -151,6 +157,7 @@ Camera::Camera(const Camera& from,
   right_ = glm::normalize(glm::cross(forward_, up));
   up_ = glm::cross(right_, forward_);
   buildMatrices();
+  if (geodesy != nullptr) castViewportGround(*geodesy);
 }
 
 void Camera::buildMatrices() {

@@ -148,3 +148,19 @@ TEST(CameraExtremes, AllOutputsFiniteOverASweep) {
           }
   EXPECT_EQ(cameras, 8 * 6 * 7 * 4 * 4);
 }
+
+// A turned camera (a dome's projector channel, issue 28) given the geodesy sees the same ground
+// through its viewport as the perspective camera of the same frame; without, none.
+TEST(Camera, TurnedCameraCastsItsViewportGround) {
+  const Geodesy g;
+  const Camera cam(g, {10.0, 20.0, 3000.0, 30.0, 60.0}, {400, 300}, 50.0);
+  const Camera turned(cam, cam.forward(), cam.up(), {400, 300}, 50.0, &g);
+  const Camera bare(cam, cam.forward(), cam.up(), {400, 300}, 50.0);
+  for (std::size_t i = 0; i < cam.viewportGround().size(); ++i) {
+    EXPECT_EQ(turned.viewportGround()[i].hit, cam.viewportGround()[i].hit);
+    EXPECT_NEAR(turned.viewportGround()[i].latDeg, cam.viewportGround()[i].latDeg, 1e-9);
+    EXPECT_NEAR(turned.viewportGround()[i].lonDeg, cam.viewportGround()[i].lonDeg, 1e-9);
+    EXPECT_FALSE(bare.viewportGround()[i].hit);
+  }
+  EXPECT_TRUE(cam.viewportGround()[4].hit); // the bottom edge sees the ground
+}

@@ -20,8 +20,13 @@ using namespace tellus::commands;
 namespace {
 
 std::optional<Command> findCommand(std::string_view name) {
-  for (const auto make :
-       {&seedCommand, &cacheCommand, &serveCommand, &renderCommand, &viewCommand, &heightCommand}) {
+  for (const auto make : {&seedCommand,
+                          &cacheCommand,
+                          &serveCommand,
+                          &renderCommand,
+                          &viewCommand,
+                          &heightCommand,
+                          &clusterCommand}) {
     Command c = make();
     if (c.name == name) return c;
   }

@@ -246,11 +246,20 @@ Camera Renderer::Impl::cameraFor(const CameraPose& pose) const {
                   std::min(opt.width, opt.height),
                   Fisheye{opt.dome->fovDeg, opt.dome->tiltDeg},
                   nearDistanceFor(above, 90.0, 1.0));
-  return Camera(geodesy,
-                pose,
-                {opt.width, opt.height},
-                opt.verticalFovDeg,
-                nearDistanceFor(above, opt.verticalFovDeg, aspect));
+  const double nearM = nearDistanceFor(above, opt.verticalFovDeg, aspect);
+  if (opt.channelView) { // a dome's projector channel: its direction in the dome's frame
+    const Camera dome(geodesy, pose, 2, Fisheye{180.0, opt.channelView->domeTiltDeg}, nearM);
+    const auto world = [&](const glm::dvec3& d) {
+      return d.x * dome.right() + d.y * dome.up() - d.z * dome.forward();
+    };
+    return Camera(dome,
+                  world(opt.channelView->forward),
+                  world(opt.channelView->up),
+                  {opt.width, opt.height},
+                  opt.verticalFovDeg,
+                  &geodesy);
+  }
+  return Camera(geodesy, pose, {opt.width, opt.height}, opt.verticalFovDeg, nearM);
 }
 
 Renderer::Impl::View Renderer::Impl::beginFrame(const CameraPose& pose) {

@@ -30,6 +30,7 @@ Command serveCommand();
 Command renderCommand();
 Command viewCommand();
 Command heightCommand();
+Command clusterCommand(); ///< issue 28: the dome's projector channels over MPI
 
 /** `tellus --help`: every command and its options. */
 extern const char* const kUsage;

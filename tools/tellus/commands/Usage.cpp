@@ -39,6 +39,13 @@ commands:
              (PATH.json: [{"time":0,"lat":..,"lon":..,"alt":..,"heading":..,"tilt":..,
               "times":{"LAYER":"TIME"},"utc":"2024-06-20T18:00:00Z"}, ...]: a layer's time
               from that keyframe on; "utc" the scene's time, interpolated between keyframes)
+  cluster  the dome as projector channels over MPI (docs/design/cluster.md):
+             mpirun -n K tellus cluster CONFIG.json --out DIR (K = channels + 1)
+             --camera LAT,LON,ALT[,HEADING,TILT] | --path PATH.json [--fps N]
+             [--wait-complete[=SECONDS]] [--background R,G,B] [--dome-tilt DEG] and
+             render's globe options;
+             rank 0 broadcasts each frame's state, rank i draws channel i:
+             DIR/channel-NAME-FRAME.png, DIR/digest-NAME.txt (digest-master.txt)
   view     the interactive globe (a GLFW window)
              [--camera LAT,LON,ALT[,HEADING,TILT]] [--size WxH] [--layer NAME] [--threshold T]
              [--earth wgs84|sphere] [--offline | --server URL] [--dome [FOV]] [--dome-tilt DEG] [--dome-method direct|cube]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc

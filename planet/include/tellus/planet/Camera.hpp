@@ -84,12 +84,15 @@ public:
          const Fisheye& fisheye,
          double nearM = 0.1);
   /** The same camera position and pose turned to look along forward with this up (orthogonalised;
-   * a cube face of a dome), a perspective of this viewport and vertical field of view. */
+   * a cube face of a dome, a dome's projector channel), a perspective of this viewport and
+   * vertical field of view. With a geodesy it casts viewportGround() as a perspective camera
+   * does (a channel's LOD needs it); without, viewportGround() hits nothing. */
   Camera(const Camera& from,
          const glm::dvec3& forward,
          const glm::dvec3& up,
          Viewport viewport,
-         double verticalFovDeg);
+         double verticalFovDeg,
+         const Geodesy* geodesy = nullptr);
 
   bool isFisheye() const noexcept { return fisheye_; }
   /** Fisheye: half the FOV (the cone of visible directions) and the image's pixels per radian
@@ -156,6 +159,7 @@ private:
   double halfAngle_ = 0.0, pixelsPerRadian_ = 0.0;
 
   void buildMatrices();
+  void castViewportGround(const Geodesy& geodesy);
   void castGroundRays(const Geodesy& geodesy,
                       std::span<const glm::dvec3> directions,
                       std::span<GroundPoint> out);

@@ -253,6 +253,17 @@ struct RendererOptions {
    * directly or as cube faces and a warp (DomeOptions::method), with the LOD and culling of the
    * fisheye; nullopt: a perspective. */
   std::optional<DomeOptions> dome;
+  /** A projector channel of a dome (issue 28, docs/design/cluster.md): the perspective (this
+   * size, verticalFovDeg) looks along `forward` with `up`, given in the dome coordinates of the
+   * fisheye camera the pose makes with domeTiltDeg (x its right, y its up, z back: planet/
+   * Channels.hpp), instead of along the pose's forward; LOD and culling are the channel's own.
+   * Ignored with a dome. nullopt: the pose's own view. */
+  struct ChannelView {
+    glm::dvec3 forward{0.0, 0.0, -1.0};
+    glm::dvec3 up{0.0, 1.0, 0.0};
+    double domeTiltDeg = 0.0;
+  };
+  std::optional<ChannelView> channelView;
   /** No popping (issue 23): a base-layer texture that arrives fades in over this many seconds of
    * frameClock from what was drawn before it (its nearest resident ancestor's texture, else the
    * global one) instead of appearing at once; the frame is not complete() while a fade runs, so a

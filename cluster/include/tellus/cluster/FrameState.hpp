@@ -1,0 +1,46 @@
+#pragma once
+/**
+ * @file FrameState.hpp
+ * @brief What the master of a cluster (issue 28, docs/design/cluster.md) broadcasts each frame:
+ * the frame's number, the camera's pose and the scene's time, a small POD that every channel
+ * draws from; and its digest, which every rank writes per frame so that a test can check that
+ * all ranks drew the same state for the same frame (frame lock). MPI-free.
+ */
+
+#include <tellus/planet/Camera.hpp>
+
+#include <cstdint>
+#include <string>
+
+namespace tellus::cluster {
+
+struct FrameState {
+  std::int64_t frame = 0; ///< 0, 1, ...; -1: the show is over (the channels stop)
+  double latDeg = 0.0;    ///< the camera's pose (planet::CameraPose), in double
+  double lonDeg = 0.0;
+  double altitudeM = 0.0;
+  double headingDeg = 0.0;
+  double tiltDeg = 0.0;
+  double sceneTimeUnixS = 0.0; ///< meaningful when hasSceneTime
+  std::int32_t hasSceneTime = 0;
+  std::int32_t reserved = 0; ///< zero (no uninitialised padding goes over the wire)
+
+  planet::CameraPose pose() const noexcept {
+    return {latDeg, lonDeg, altitudeM, headingDeg, tiltDeg};
+  }
+  void setPose(const planet::CameraPose& p) noexcept {
+    latDeg = p.latDeg;
+    lonDeg = p.lonDeg;
+    altitudeM = p.altitudeM;
+    headingDeg = p.headingDeg;
+    tiltDeg = p.tiltDeg;
+  }
+};
+
+/** FNV-1a (64 bits) over every field's bytes in order: equal states, equal digests; a changed bit
+ * of any field changes it. */
+std::uint64_t digest(const FrameState& state) noexcept;
+/** "FRAME DIGEST\n" (the digest in 16 hex digits): a line of a rank's digest file. */
+std::string digestLine(const FrameState& state);
+
+} // namespace tellus::cluster
