@@ -63,14 +63,9 @@ getmaps() { curl -fsS "http://127.0.0.1:$up/stats" | python3 -c 'import json,sys
 
 # --- 300 concurrent requests for one missing tile over three instances ---------------------------
 tile='/wwtile?T=shared&L=2&X=5&Y=3'
-result=$(python3 "$here/burst.py" 300 "$tile" "${ports[@]}")
+result=$(python3 "$here/burst.py" 300 "$tile" "${ports[@]}") ||
+  fail "the burst (not all 200, or several bodies): $result"
 echo "burst of 300 over 3 instances: $result"
-python3 - "$result" <<'PY' || fail "the burst: $result"
-import json, sys
-r = json.loads(sys.argv[1])
-assert r["statuses"] == {"200": 300}, r["statuses"]
-assert r["bodies"] == 1, r["bodies"]
-PY
 [ "$(getmaps)" = 1 ] || fail "300 requests for one tile over 3 instances made $(getmaps) upstream requests"
 
 # --- the holder killed mid-fetch: another instance fetches within 2 s -----------------------------

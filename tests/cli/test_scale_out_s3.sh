@@ -88,14 +88,9 @@ get() { # $1: port, $2: target, $3: output; prints the status
 
 # --- 1. 300 concurrent requests for one missing tile over the three and Varnish -------------------
 tile='/wwtile?T=shared&L=2&X=5&Y=3'
-result=$(python3 "$here/burst.py" 300 "$tile" "${ports[@]}" "$vport")
+result=$(python3 "$here/burst.py" 300 "$tile" "${ports[@]}" "$vport") ||
+  fail "the burst (not all 200, or several bodies): $result"
 echo "burst of 300 over 3 instances + Varnish (PostgreSQL index, S3 store): $result"
-python3 - "$result" <<'PY' || fail "the burst: $result"
-import json, sys
-r = json.loads(sys.argv[1])
-assert r["statuses"] == {"200": 300}, r["statuses"]
-assert r["bodies"] == 1, r["bodies"]
-PY
 [ "$(getmaps)" = 1 ] || fail "300 requests for one tile made $(getmaps) upstream requests"
 
 # --- 2. the holder killed mid-fetch: another instance answers within 2 s ---------------------------
