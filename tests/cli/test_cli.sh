@@ -88,7 +88,7 @@ grep -q -- "--threads must be 0-256" "$work/threads.txt" || fail "no --threads m
 # tellus serve as a user starts it: any free port, read back from what it prints; then SIGTERM.
 "$tellus" serve --cache "$cache" --listen 127.0.0.1:0 --threads 2 >"$work/serve.txt" 2>&1 &
 server=$!
-for _ in $(seq 50); do grep -q "listening on" "$work/serve.txt" && break; sleep 0.1; done
+for _ in $(seq 600); do grep -q "listening on" "$work/serve.txt" && break; kill -0 $server 2>/dev/null || break; sleep 0.1; done
 port=$(grep -o "127.0.0.1:[0-9]*" "$work/serve.txt" | head -n 1 | cut -d: -f2)
 [ -n "$port" ] || fail "serve did not say where it listens: $(cat "$work/serve.txt")"
 imaging_mapped() { grep -Eq "libtellus_imaging|libOpenImageIO" "/proc/$server/maps"; }
@@ -216,7 +216,7 @@ YAML
 "$tellus" serve --config "$work/q50.yaml" --cache "$work/qcache" --listen 127.0.0.1:0 \
   >"$work/qserve.txt" 2>&1 &
 server=$!
-for _ in $(seq 50); do grep -q "listening on" "$work/qserve.txt" && break; sleep 0.1; done
+for _ in $(seq 600); do grep -q "listening on" "$work/qserve.txt" && break; kill -0 $server 2>/dev/null || break; sleep 0.1; done
 port=$(grep -o "127.0.0.1:[0-9]*" "$work/qserve.txt" | head -n 1 | cut -d: -f2)
 [ -n "$port" ] || fail "serve (q50) did not say where it listens: $(cat "$work/qserve.txt")"
 code=$(curl -s -o "$work/q50.jpg" -w "%{http_code}" "http://127.0.0.1:$port/wms?SERVICE=WMS&VERSION=1.1.1&REQUEST=GetMap&LAYERS=bm&STYLES=&SRS=EPSG:4326&BBOX=-30,-20,40,30&WIDTH=300&HEIGHT=200&FORMAT=image/jpeg")
@@ -262,7 +262,7 @@ set -e
 dd if=/dev/zero of="$mnt/filler" bs=4k >/dev/null 2>&1 || true
 "$tellus" serve --cache "$mnt/c" --listen 127.0.0.1:0 >"$work/full-serve.txt" 2>&1 &
 server=$!
-for _ in $(seq 50); do grep -q "listening on" "$work/full-serve.txt" && break; sleep 0.1; done
+for _ in $(seq 600); do grep -q "listening on" "$work/full-serve.txt" && break; kill -0 $server 2>/dev/null || break; sleep 0.1; done
 port=$(grep -o "127.0.0.1:[0-9]*" "$work/full-serve.txt" | head -n 1 | cut -d: -f2)
 if [ -n "$port" ]; then
   curl -s -D "$work/full-hit.hdr" -o /dev/null -w "%{http_code}" \

@@ -87,7 +87,7 @@ set -e
 # free port gives the same complete image, byte for byte; a dead server is a clear error.
 "$tellus" serve --cache "$cache" --listen 127.0.0.1:0 --threads 1 >"$work/serve.txt" 2>&1 &
 server=$!
-for _ in $(seq 50); do grep -q "listening on" "$work/serve.txt" && break; sleep 0.1; done
+for _ in $(seq 600); do grep -q "listening on" "$work/serve.txt" && break; kill -0 $server 2>/dev/null || break; sleep 0.1; done
 port=$(grep -o "127.0.0.1:[0-9]*" "$work/serve.txt" | head -n 1 | cut -d: -f2)
 [ -n "$port" ] || fail "serve did not say where it listens: $(cat "$work/serve.txt")"
 "$tellus" render --no-sun --no-atmosphere --server "http://127.0.0.1:$port" --camera 0,0,2e7 --size 320x240 \
