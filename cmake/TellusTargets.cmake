@@ -18,6 +18,11 @@ function(tellus_apply_options target)
     # special members). Clang is the fuzzing compiler (TELLUS_FUZZ, the "fuzz" preset).
     target_compile_options(${target} PRIVATE -U__cpp_concepts -D__cpp_concepts=202002L)
   endif()
+  if(TELLUS_UNITY_BUILD AND CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
+    # g++ warns when a class with external linkage defined in a header has a member or base of an
+    # anonymous-namespace type; a unity batch includes the .cpp files, so it takes them for headers.
+    target_compile_options(${target} PRIVATE -Wno-subobject-linkage)
+  endif()
   # Same floating-point results on every platform: no fused multiply-add contraction (tile edges
   # must be bit-identical to what World Wind computes).
   target_compile_options(${target} PRIVATE -ffp-contract=off)
@@ -114,5 +119,18 @@ function(tellus_add_test name)
     file(WRITE ${label_script}
          "if(${list_var})\n  set_tests_properties(\${${list_var}} PROPERTIES LABELS \"${label_list}\")\nendif()\n")
     set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES ${label_script})
+  endforeach()
+endfunction()
+
+# tellus_unity_skip(<file> ...): files (relative to the current source directory) that a unity build
+# (TELLUS_UNITY_BUILD) compiles on their own, because a file-local name of theirs clashes with one
+# of another file of the same target. Recorded by absolute path, so that the fuzz libraries, which
+# compile some of the same files from fuzz/, leave them out of their batches as well. Renaming the
+# clashing names (or sharing them through a header) takes a file off these lists.
+function(tellus_unity_skip)
+  foreach(f IN LISTS ARGN)
+    get_filename_component(abs ${f} ABSOLUTE)
+    set_source_files_properties(${abs} PROPERTIES SKIP_UNITY_BUILD_INCLUSION ON)
+    set_property(GLOBAL APPEND PROPERTY TELLUS_UNITY_SKIPPED ${abs})
   endforeach()
 endfunction()

@@ -8,8 +8,6 @@ namespace {
 
 using Result = std::expected<void, CacheError>;
 
-constexpr int kStatePresent = 1;
-constexpr int kStateAbsent = 2;
 constexpr int kFetchRows = 1000;
 
 Result done(const std::expected<pg::ResultPtr, CacheError>& r) {
@@ -72,7 +70,7 @@ void PgTileIndex::rollbackToSavepoint() {
 
 Result PgTileIndex::putRow(DatasetId id, const TileKey& key, const TileRow& row) {
   auto p = pg::keyParams(id, key);
-  p.add(std::int64_t{row.present ? kStatePresent : kStateAbsent}).add(row.bytes);
+  p.add(std::int64_t{row.present ? pg::kStatePresent : pg::kStateAbsent}).add(row.bytes);
   p.add(std::string_view(row.meta.contentType)).add(std::string_view(row.meta.etag));
   p.add(std::string_view(row.meta.lastModified)).add(row.meta.expiresAt);
   p.add(row.meta.fetchedAt).add(row.retryAfter);
@@ -121,7 +119,7 @@ PgTileIndex::presentBytes(DatasetId id, const TileKey& key) {
                  pg::keyParams(id, key),
                  "checking a tile");
   if (!r) return std::unexpected(r.error());
-  if (PQntuples(r->get()) == 1 && pg::i64(r->get(), 0, 0) == kStatePresent)
+  if (PQntuples(r->get()) == 1 && pg::i64(r->get(), 0, 0) == pg::kStatePresent)
     return pg::i64(r->get(), 0, 1);
   return std::nullopt;
 }

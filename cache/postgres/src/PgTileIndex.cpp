@@ -13,8 +13,6 @@ namespace {
 
 using Result = std::expected<void, CacheError>;
 
-constexpr int kStateAbsent = 2;
-
 constexpr const char* kDatasetColumns =
     "SELECT id, server, name, folder, west, south, east, north, level_zero_delta, tile_width, "
     "tile_height, num_levels, mime_type, extension, style, time, pinned, created_at, body "
@@ -138,7 +136,7 @@ std::expected<std::optional<TileRow>, CacheError> PgTileIndex::lookup(DatasetId 
   if (PQntuples(r) == 0) return std::nullopt;
   TileRow row;
   row.bytes = pg::i64(r, 0, 1);
-  if (pg::i64(r, 0, 0) == kStateAbsent) {
+  if (pg::i64(r, 0, 0) == pg::kStateAbsent) {
     row.present = false;
     row.retryAfter = pg::optI64(r, 0, 7);
     return row;

@@ -107,6 +107,10 @@ private:
 };
 
 namespace pg {
+
+/** The tiles table's state column: a stored tile, or one its upstream said is absent. */
+inline constexpr int kStatePresent = 1;
+inline constexpr int kStateAbsent = 2;
 /** Binds $1..$4 = dataset, level, row, col. */
 inline Params keyParams(DatasetId id, const TileKey& k) {
   Params p;

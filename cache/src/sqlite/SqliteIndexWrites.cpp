@@ -8,9 +8,6 @@ namespace {
 
 using Result = std::expected<void, CacheError>;
 
-constexpr int kStatePresent = 1;
-constexpr int kStateAbsent = 2;
-
 int run(const sql::Stmt& s) {
   sql::Stmt::Use u(s);
   return u.step();
@@ -127,7 +124,7 @@ void SqliteTileIndex::rollbackToSavepoint() {
 Result SqliteTileIndex::putRow(DatasetId id, const TileKey& key, const TileRow& row) {
   sql::Stmt::Use u(upsertTile_);
   sql::bindKey(u, id, key);
-  u.bind(5, std::int64_t{row.present ? kStatePresent : kStateAbsent}).bind(6, row.bytes);
+  u.bind(5, std::int64_t{row.present ? sql::kStatePresent : sql::kStateAbsent}).bind(6, row.bytes);
   u.bind(7, std::string_view(row.meta.contentType)).bind(8, std::string_view(row.meta.etag));
   u.bind(9, std::string_view(row.meta.lastModified)).bind(10, row.meta.expiresAt);
   u.bind(11, row.meta.fetchedAt).bind(12, row.retryAfter);
@@ -170,7 +167,7 @@ SqliteTileIndex::presentBytes(DatasetId id, const TileKey& key) {
   sql::Stmt::Use u(rowBytes_);
   sql::bindKey(u, id, key);
   const int rc = u.step();
-  if (rc == SQLITE_ROW && u.i64(0) == kStatePresent) return u.i64(1);
+  if (rc == SQLITE_ROW && u.i64(0) == sql::kStatePresent) return u.i64(1);
   if (rc != SQLITE_ROW && rc != SQLITE_DONE)
     return std::unexpected(sql::errorFrom(writeDb_.get(), rc, "checking a tile"));
   return std::nullopt;

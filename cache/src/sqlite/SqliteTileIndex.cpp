@@ -17,7 +17,6 @@ using Result = std::expected<void, CacheError>;
 
 constexpr const char* kIndexName = "index.sqlite";
 constexpr const char* kCorruptMarker = "index.corrupt";
-constexpr int kStateAbsent = 2;
 
 sql::DbPtr openDb(const fs::path& path, bool readOnly, bool create, int busyMs, int* rcOut) {
   sqlite3* raw = nullptr;
@@ -235,7 +234,7 @@ std::expected<std::optional<TileRow>, CacheError> SqliteTileIndex::lookup(Datase
   }
   TileRow row;
   row.bytes = u.i64(1);
-  if (u.i64(0) == kStateAbsent) {
+  if (u.i64(0) == sql::kStateAbsent) {
     row.present = false;
     if (!u.isNull(7)) row.retryAfter = u.i64(7);
     return row;

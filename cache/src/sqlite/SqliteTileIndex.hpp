@@ -29,6 +29,10 @@ namespace tellus {
 
 namespace sql {
 
+/** The tiles table's state column: a stored tile, or one its upstream said is absent. */
+inline constexpr int kStatePresent = 1;
+inline constexpr int kStateAbsent = 2;
+
 /** Binds ?1..?4 = dataset, level, row, col: the tiles table's primary key. */
 inline void bindKey(Stmt::Use& u, DatasetId id, const TileKey& k) {
   u.bind(1, id).bind(2, std::int64_t{k.level}).bind(3, k.row).bind(4, k.col);

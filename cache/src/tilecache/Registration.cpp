@@ -13,26 +13,26 @@ namespace {
 
 using Result = std::expected<void, CacheError>;
 
-CacheError invalid(std::string msg) {
+CacheError invalidSpec(std::string msg) {
   return CacheError{CacheErrc::InvalidArgument, std::move(msg)};
 }
 
 std::expected<TileGrid, CacheError> validated(const DatasetSpec& spec) {
   auto grid = TileGrid::create(spec.grid);
-  if (!grid) return std::unexpected(invalid("dataset '" + spec.name + "': " + grid.error()));
+  if (!grid) return std::unexpected(invalidSpec("dataset '" + spec.name + "': " + grid.error()));
   if (spec.extension.empty() || spec.extension.size() > 8 ||
       !std::all_of(spec.extension.begin(), spec.extension.end(), [](char c) {
         return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9');
       })) {
     return std::unexpected(
-        invalid("dataset '" + spec.name + "': extension must be 1-8 of [a-z0-9]"));
+        invalidSpec("dataset '" + spec.name + "': extension must be 1-8 of [a-z0-9]"));
   }
   // A body is a name (it enters the hash and the index): never empty, no control characters.
   if (spec.body.empty() || std::any_of(spec.body.begin(), spec.body.end(), [](char c) {
         return static_cast<unsigned char>(c) < 0x20;
       })) {
     return std::unexpected(
-        invalid("dataset '" + spec.name + "': body must be a name, got '" + spec.body + "'"));
+        invalidSpec("dataset '" + spec.name + "': body must be a name, got '" + spec.body + "'"));
   }
   return std::move(*grid);
 }
@@ -116,7 +116,7 @@ std::vector<DatasetInfo> TileCache::datasets() const {
 std::expected<void, CacheError> TileCache::setPinned(DatasetId id, bool pinned) {
   Impl& im = *impl_;
   if (!im.datasets.find(id))
-    return std::unexpected(invalid("unknown dataset id " + std::to_string(id)));
+    return std::unexpected(invalidSpec("unknown dataset id " + std::to_string(id)));
   auto r = im.writer.submit([&]() -> Result { return im.index->setPinned(id, pinned); });
   if (!r) return r;
   im.datasets.setPinned(id, pinned);

@@ -30,24 +30,24 @@ namespace tellus::planet {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using SteadyClock = std::chrono::steady_clock;
 
-double msSince(Clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+double msSince(SteadyClock::time_point t) {
+  return std::chrono::duration<double, std::milli>(SteadyClock::now() - t).count();
 }
 
 /** Milliseconds since the last call (or since it was made). */
 class Lap {
 public:
   double operator()() {
-    const auto now = Clock::now();
+    const auto now = SteadyClock::now();
     const double ms = std::chrono::duration<double, std::milli>(now - last_).count();
     last_ = now;
     return ms;
   }
 
 private:
-  Clock::time_point last_ = Clock::now();
+  SteadyClock::time_point last_ = SteadyClock::now();
 };
 
 std::optional<std::string> invalidOptions(const RendererOptions& o) {
@@ -335,7 +335,7 @@ void Renderer::Impl::houseKeeping() {
 void Renderer::Impl::endFrame(const FrameStats& tree,
                               bool complete,
                               FramePhases& phases,
-                              Clock::time_point t0) {
+                              SteadyClock::time_point t0) {
   layers.swapReady();
   observeAnimations(layers, frameS);
   const LayerTotals totals = layers.collectStats(stats);
@@ -366,7 +366,7 @@ void Renderer::Impl::endFrame(const FrameStats& tree,
 // The frame: its phases in order (RendererImpl.hpp), each timed into RenderStats::phases.
 void Renderer::frame(const CameraPose& pose) {
   Impl& m = *impl_;
-  const auto t0 = Clock::now();
+  const auto t0 = SteadyClock::now();
   const double nowS = std::chrono::duration<double>(t0 - m.start).count();
   const double frameS = m.opt.frameClock ? m.opt.frameClock() : nowS; // fades' time
   m.frameS = frameS;

@@ -101,7 +101,7 @@ void header(std::string& out, const char* name, const char* type, const char* he
   out += '\n';
 }
 
-std::string number(double v) {
+std::string metricValue(double v) {
   char buf[40];
   std::snprintf(buf, sizeof buf, "%.17g", v);
   return buf;
@@ -232,13 +232,13 @@ void ProxyMetrics::renderUpstreams(std::string& out,
     const std::string label = prometheusLabel(u.name);
     for (std::size_t i = 0; i < Fetcher::kLatencyBounds.size(); ++i) {
       out += "tellus_upstream_request_duration_seconds_bucket{upstream=\"" + label + "\",le=\"" +
-             number(Fetcher::kLatencyBounds[i]) + "\"} " +
+             metricValue(Fetcher::kLatencyBounds[i]) + "\"} " +
              std::to_string(u.stats.latencyBuckets[i]) + "\n";
     }
     out += "tellus_upstream_request_duration_seconds_bucket{upstream=\"" + label +
            "\",le=\"+Inf\"} " + std::to_string(u.stats.latencyBuckets.back()) + "\n";
     out += "tellus_upstream_request_duration_seconds_sum{upstream=\"" + label + "\"} " +
-           number(u.stats.latencySumSeconds) + "\n";
+           metricValue(u.stats.latencySumSeconds) + "\n";
     out += "tellus_upstream_request_duration_seconds_count{upstream=\"" + label + "\"} " +
            std::to_string(u.stats.latencyCount) + "\n";
   }
@@ -325,7 +325,7 @@ void ProxyMetrics::renderBudget(std::string& out, const FetchBudgetMetrics& budg
          "gauge",
          "Upstream fetches one client address may cause per minute (0: unlimited; "
          "server.limits.fetches_per_client_per_minute).");
-  out += "tellus_client_fetch_budget_per_minute " + number(budget.perMinute) + "\n";
+  out += "tellus_client_fetch_budget_per_minute " + metricValue(budget.perMinute) + "\n";
   header(out,
          "tellus_client_fetch_budget_refused_total",
          "counter",
