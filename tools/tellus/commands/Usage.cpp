@@ -41,6 +41,8 @@ commands:
               from that keyframe on; "utc" the scene's time, interpolated between keyframes)
   cluster  the dome as projector channels over MPI (docs/design/cluster.md):
              mpirun -n K tellus cluster CONFIG.json --out DIR (K = channels + 1)
+             (or --mpcdi FILE.mpcdi for CONFIG.json: a VESA MPCDI calibration,
+              profiles "2d" and "3d", one channel a region)
              --camera LAT,LON,ALT[,HEADING,TILT] | --path PATH.json [--fps N]
              [--wait-complete[=SECONDS]] [--background R,G,B] [--dome-tilt DEG] and
              render's globe options;
