@@ -33,6 +33,8 @@ commands:
                                       220 degrees, --size N: N x N, black outside the circle)
              [--dome-method direct|cube]  one pass through the fisheye (default) or cube
                                       faces and a warp (renderer.dome.method)
+             [--channel CONFIG.json|FILE.mpcdi[,NAME]]  one cluster channel's frustum and
+                                      size (tellus cluster; its warp and blend not applied)
              or a flight: --path PATH.json --frames DIR [--fps N] [--repeat N] instead of
              --camera/--out; [--probe-frames DIR] (as streamed) before each frame the last
                                       frame's state drawn from its pose (bench/popping.sh)
