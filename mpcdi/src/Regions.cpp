@@ -45,7 +45,8 @@ directions(Profile profile, const RegionInput& r, const std::string& origin) {
   std::vector<glm::dvec3> out(at(0, p.height, p.width));
   std::size_t valid = 0;
   for (std::size_t i = 0; i < out.size(); ++i) {
-    const double x = p.xyz[i * 3], y = p.xyz[i * 3 + 1], z = p.xyz[i * 3 + 2];
+    const auto x = static_cast<double>(p.xyz[i * 3]), y = static_cast<double>(p.xyz[i * 3 + 1]),
+               z = static_cast<double>(p.xyz[i * 3 + 2]);
     const auto pw = static_cast<std::size_t>(p.width);
     const std::string where =
         "texel (" + std::to_string(i % pw) + ", " + std::to_string(i / pw) + ") from the top left";
@@ -163,7 +164,7 @@ std::vector<float> weights(const Alpha& a, int width, int height) {
     for (int x = 0; x < width; ++x) {
       double v;
       if (a.width == width && a.height == height) {
-        v = a.stored[at(x, y, width)];
+        v = static_cast<double>(a.stored[at(x, y, width)]);
       } else {
         const double sx = std::clamp((x + 0.5) * a.width / width - 0.5, 0.0, a.width - 1.0);
         const double sy = std::clamp((y + 0.5) * a.height / height - 0.5, 0.0, a.height - 1.0);
