@@ -44,6 +44,11 @@ find_package(Boost 1.74 REQUIRED)
 # The C API from C++ (the project enables no C; the deprecated C++ bindings left out).
 set(MPI_CXX_SKIP_MPICXX ON)
 find_package(MPI REQUIRED COMPONENTS CXX)
+# VESA MPCDI (issue 28): libzip reads the .mpcdi archive and expat its mpcdi.xml, PRIVATE to
+# tellus::mpcdi (mpcdi/). libzip through pkg-config: Debian 12's CMake config of libzip-dev names
+# the zipcmp tools of another package and fails without them.
+pkg_check_modules(LIBZIP REQUIRED IMPORTED_TARGET libzip)
+find_package(EXPAT REQUIRED)
 pkg_check_modules(EPOXY REQUIRED IMPORTED_TARGET epoxy)
 if(TELLUS_BUILD_TESTS)
   find_package(GTest CONFIG REQUIRED)

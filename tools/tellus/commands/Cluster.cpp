@@ -13,6 +13,7 @@
 
 #include <tellus/cli/Values.hpp>
 #include <tellus/cluster/Comm.hpp>
+#include <tellus/mpcdi/Mpcdi.hpp>
 #include <tellus/planet/ChannelWarp.hpp>
 #include <tellus/planet/Channels.hpp>
 #include <tellus/planet/FlightBodies.hpp>
@@ -48,8 +49,10 @@ struct ClusterArgs {
 };
 
 std::string parseCluster(const cli::Args& a, ClusterArgs& c) {
-  if (a.positional.size() != 1) return "a channel configuration CONFIG.json is required";
-  auto channels = planet::readChannels(a.positional[0]);
+  const auto mpcdiFile = a.get("mpcdi"); // a VESA MPCDI calibration instead of CONFIG.json
+  if (a.positional.size() != (mpcdiFile ? 0u : 1u))
+    return "a channel configuration CONFIG.json or --mpcdi FILE.mpcdi (not both) is required";
+  auto channels = mpcdiFile ? mpcdi::readMpcdi(*mpcdiFile) : planet::readChannels(a.positional[0]);
   if (!channels) return channels.error();
   c.channels = std::move(*channels);
   if (a.flag("dome") || a.get("dome-method") || a.get("size"))
@@ -272,13 +275,15 @@ int runCluster(const cli::Args& a) {
   addSceneBodies(ro, tiles->sceneBodies, dataDir(a), tiles->earth);
   Calibration cal;
   std::string problem;
-  if (!channel.warp.empty()) {
+  if (channel.warpMesh) cal.warp = *channel.warpMesh; // an MPCDI file's, in memory
+  if (channel.blendMask) cal.blend = *channel.blendMask;
+  if (!channel.warp.empty() && !cal.warp) {
     if (auto w = planet::readWarpMesh(channel.warp))
       cal.warp = std::move(*w);
     else
       problem = w.error();
   }
-  if (!channel.blend.empty()) {
+  if (!channel.blend.empty() && !cal.blend) {
     if (auto b = planet::readBlendMask(channel.blend, channel.width, channel.height))
       cal.blend = std::move(*b);
     else
@@ -304,7 +309,8 @@ Command clusterCommand() {
                     {"wait-complete", K::OptionalValue},
                     {"background", K::Value},
                     {"path", K::Value},
-                    {"fps", K::Value}});
+                    {"fps", K::Value},
+                    {"mpcdi", K::Value}});
   return c;
 }
 

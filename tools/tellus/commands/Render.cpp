@@ -10,7 +10,9 @@
 #include "PlanetTiles.hpp"
 
 #include <tellus/cli/Values.hpp>
+#include <tellus/mpcdi/Mpcdi.hpp>
 #include <tellus/planet/Camera.hpp>
+#include <tellus/planet/Channels.hpp>
 #include <tellus/planet/FlightBodies.hpp>
 #include <tellus/planet/FlightPath.hpp>
 #include <tellus/planet/OrbitChoice.hpp>
@@ -374,6 +376,34 @@ int renderView(const RenderArgs& ra, planet::Renderer& r, RenderSession& session
   return kExitOk;
 }
 
+/** --channel CONFIG[,NAME] (issue 28, bench/channel.sh): one projector channel's frustum and size
+ * (CONFIG.json, or an .mpcdi file; NAME, else the first channel), as `tellus cluster` draws it;
+ * its warp and blend are the cluster's. An empty message: no --channel. */
+std::string applyChannelArg(const cli::Args& a, planet::RendererOptions& ro) {
+  const auto arg = a.get("channel");
+  if (!arg) return {};
+  if (a.flag("dome") || a.get("size"))
+    return "--channel has its own view and size: no --dome, --size";
+  const auto comma = arg->rfind(',');
+  const std::string file = arg->substr(0, comma);
+  const std::string name = comma == std::string::npos ? std::string() : arg->substr(comma + 1);
+  auto channels = file.ends_with(".mpcdi") ? mpcdi::readMpcdi(file) : planet::readChannels(file);
+  if (!channels) return channels.error();
+  const auto c = std::find_if(channels->begin(), channels->end(), [&](const planet::Channel& x) {
+    return name.empty() || x.name == name;
+  });
+  if (c == channels->end()) return file + ": no channel named \"" + name + "\"";
+  const planet::ChannelFrame f = planet::channelFrame(*c);
+  ro.channelView =
+      planet::RendererOptions::ChannelView{f.forward, f.up, ro.dome ? ro.dome->tiltDeg : 0.0};
+  if (const auto d = domeArgs(a); d && d->tiltDeg) ro.channelView->domeTiltDeg = *d->tiltDeg;
+  ro.dome.reset();
+  ro.width = c->width;
+  ro.height = c->height;
+  ro.verticalFovDeg = c->vfovDeg;
+  return {};
+}
+
 int runRender(const cli::Args& a) {
   planet::RendererOptions ro;
   const auto ra = parseRenderArgs(a, ro);
@@ -389,6 +419,7 @@ int runRender(const cli::Args& a) {
     return kExitUsage;
   }
   hideNightLayers(a, tiles->night, ro);
+  if (const auto bad = applyChannelArg(a, ro); !bad.empty()) return usage(bad.c_str(), "");
   // Legends of value layers (issue 24): off in render unless --legend or renderer.legend.
   ro.legend = a.flag("legend") || (!a.flag("no-legend") && tiles->legend.value_or(false));
   // Fading (renderer.fade_in) is for frames a viewer watches: --wait-complete writes only settled
@@ -457,7 +488,8 @@ Command renderCommand() {
                     {"edge-fixing", K::Value},
                     {"mesh-size", K::Value},
                     {"upload-per-frame", K::Value},
-                    {"vertices", K::Value}});
+                    {"vertices", K::Value},
+                    {"channel", K::Value}});
   return c;
 }
 

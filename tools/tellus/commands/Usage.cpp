@@ -33,6 +33,8 @@ commands:
                                       220 degrees, --size N: N x N, black outside the circle)
              [--dome-method direct|cube]  one pass through the fisheye (default) or cube
                                       faces and a warp (renderer.dome.method)
+             [--channel CONFIG.json|FILE.mpcdi[,NAME]]  one cluster channel's frustum and
+                                      size (tellus cluster; its warp and blend not applied)
              or a flight: --path PATH.json --frames DIR [--fps N] [--repeat N] instead of
              --camera/--out; [--probe-frames DIR] (as streamed) before each frame the last
                                       frame's state drawn from its pose (bench/popping.sh)
@@ -41,6 +43,8 @@ commands:
               from that keyframe on; "utc" the scene's time, interpolated between keyframes)
   cluster  the dome as projector channels over MPI (docs/design/cluster.md):
              mpirun -n K tellus cluster CONFIG.json --out DIR (K = channels + 1)
+             (or --mpcdi FILE.mpcdi for CONFIG.json: a VESA MPCDI calibration,
+              profiles "2d" and "3d", one channel a region)
              --camera LAT,LON,ALT[,HEADING,TILT] | --path PATH.json [--fps N]
              [--wait-complete[=SECONDS]] [--background R,G,B] [--dome-tilt DEG] and
              render's globe options;

@@ -23,11 +23,14 @@
 
 #include <expected>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
 
 namespace tellus::planet {
+
+struct WarpMesh; // ChannelWarp.hpp
 
 struct Channel {
   std::string name; ///< [A-Za-z0-9_-]+, unique in a configuration (file names)
@@ -43,6 +46,10 @@ struct Channel {
    * configuration file's folder by readChannels. */
   std::filesystem::path warp;
   std::filesystem::path blend;
+  /** Or the warp mesh and the blend mask (width x height weights) already in memory: a VESA
+   * MPCDI file's (tellus::mpcdi, mpcdi/include/tellus/mpcdi/Mpcdi.hpp). Used before the files. */
+  std::shared_ptr<const WarpMesh> warpMesh;
+  std::shared_ptr<const std::vector<float>> blendMask;
 };
 
 /** A channel's frame in dome coordinates: where it looks, its image's up and right (right =

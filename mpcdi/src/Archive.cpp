@@ -1,0 +1,74 @@
+#include "Archive.hpp"
+
+#include <zip.h>
+
+namespace tellus::mpcdi::detail {
+
+struct Archive::Impl {
+  zip_t* zip = nullptr;
+  ~Impl() {
+    if (zip != nullptr) zip_discard(zip);
+  }
+};
+
+Archive::Archive(std::unique_ptr<Impl> impl, std::string file)
+    : impl_(std::move(impl)), file_(std::move(file)) {}
+Archive::Archive(Archive&&) noexcept = default;
+Archive& Archive::operator=(Archive&&) noexcept = default;
+Archive::~Archive() = default;
+
+std::expected<Archive, std::string> Archive::open(const std::filesystem::path& file) {
+  int code = 0;
+  zip_t* z = zip_open(file.c_str(), ZIP_RDONLY | ZIP_CHECKCONS, &code);
+  if (z == nullptr) {
+    std::string what;
+    switch (code) {
+    case ZIP_ER_NOENT:
+    case ZIP_ER_OPEN:
+      what = "cannot be read";
+      break;
+    case ZIP_ER_NOZIP:
+      what = "not a zip archive (an .mpcdi file is a zip of mpcdi.xml and its files)";
+      break;
+    case ZIP_ER_INCONS:
+      what = "a damaged zip archive";
+      break;
+    default: {
+      zip_error_t e;
+      zip_error_init_with_code(&e, code);
+      what = std::string("not a readable zip archive: ") + zip_error_strerror(&e);
+      zip_error_fini(&e);
+    }
+    }
+    return std::unexpected(file.string() + ": " + what);
+  }
+  auto impl = std::make_unique<Impl>();
+  impl->zip = z;
+  return Archive(std::move(impl), file.string());
+}
+
+std::expected<std::string, std::string> Archive::read(const std::string& name,
+                                                      std::size_t maxBytes) const {
+  zip_stat_t st;
+  zip_stat_init(&st);
+  if (zip_stat(impl_->zip, name.c_str(), 0, &st) != 0)
+    return std::unexpected("no " + name + " in the archive");
+  if ((st.valid & ZIP_STAT_SIZE) == 0 || st.size > maxBytes)
+    return std::unexpected(name + ": larger than " + std::to_string(maxBytes) + " bytes");
+  zip_file_t* f = zip_fopen(impl_->zip, name.c_str(), 0);
+  if (f == nullptr) return std::unexpected(name + ": " + zip_strerror(impl_->zip));
+  std::string bytes(static_cast<std::size_t>(st.size), '\0');
+  std::size_t got = 0;
+  while (got < bytes.size()) {
+    const zip_int64_t n = zip_fread(f, bytes.data() + got, bytes.size() - got);
+    if (n <= 0) break;
+    got += static_cast<std::size_t>(n);
+  }
+  const bool ok = got == bytes.size();
+  std::string why = ok ? std::string() : zip_file_strerror(f);
+  zip_fclose(f);
+  if (!ok) return std::unexpected(name + ": cannot be inflated: " + why);
+  return bytes;
+}
+
+} // namespace tellus::mpcdi::detail
