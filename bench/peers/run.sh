@@ -290,8 +290,10 @@ imaging_module="$(dirname "$TELLUS")/../../imaging/libtellus_imaging.so"
 tellus="$work/bin/tellus"
 commit="$(git -C "$repo" rev-parse --short HEAD 2>/dev/null || echo '?')"
 [[ -z "$(git -C "$repo" status --porcelain --untracked-files=no 2>/dev/null)" ]] || commit="$commit+changes"
+mp_banner="MapProxy $MAPPROXY_VERSION, gunicorn $GUNICORN_VERSION"
+[[ "$ONLY" != burst ]] || mp_banner="MapProxy and gunicorn: Debian's (the burst line)"
 say "tellus $TELLUS ($(stat -c '%y' "$TELLUS" | cut -d. -f1), tree $commit); $(apache2 -v | head -1 | sed 's/Server version: //');" \
-  "mod_mapcache $(dpkg-query -W -f='${Version}' libapache2-mod-mapcache); MapProxy $MAPPROXY_VERSION, gunicorn $GUNICORN_VERSION;" \
+  "mod_mapcache $(dpkg-query -W -f='${Version}' libapache2-mod-mapcache); $mp_banner;" \
   "MapServer $(/usr/lib/cgi-bin/mapserv -v | sed -E 's/MapServer version ([^ ]*).*/\1/'); $(wrk -v 2>&1 | head -1 | cut -d' ' -f1-2)"
 IFS=, read -r RW RS RE RN <<<"$REGION"
 LEVEL_LO="${LEVELS%-*}"
