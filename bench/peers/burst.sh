@@ -22,8 +22,8 @@
 # upstream's requests during the burst (its access log), p50/p99/max latency; every answer must be
 # a 200 image/* and every tile one body.
 #
-# Not the same work upstream: on a miss MapCache and MapProxy fetch the tile's whole 4x4 metatile
-# (one 2048 px GetMap), tellus serve the tile alone (512 px) unless its metatile path is used.
+# The same work upstream: on a miss all three fetch the tile's whole 4x4 metatile (one 2048 px
+# GetMap; tellus serve does on a shared index, TileServiceOptions::metaTilesOnMiss).
 
 BURST="${BURST:-300}"
 BURST_LEVEL="${BURST_LEVEL:-6}"
@@ -225,6 +225,6 @@ for kind in ("tile", "meta"):
               f"tellus upstream requests per burst {sorted(ups)} (goal: 1 per metatile: "
               f"{'met' if ups == {1} else 'MISSED'})")
 print("tile: one tile; meta: the 16 tiles of one 4x4 metatile, client i asking for tile i mod 16."
-      " MapCache and MapProxy fetch a miss's whole metatile (2048 px); tellus serve one tile (512 px).")
+      " Each server fetches a miss's whole metatile (one 2048 px GetMap).")
 EOF
 say "bursts: $OUT_DIR/peers-bursts.tsv, summary: $summary"
