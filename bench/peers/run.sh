@@ -8,6 +8,9 @@
 #   ONLY=seed bench/peers/run.sh                         # step 1 alone (seeding), about 3 minutes
 #   ONLY=mercator bench/peers/run.sh                     # Web Mercator tiles composed from the
 #                                                        # lat/long caches: mercator.sh
+#   ONLY=burst bench/peers/run.sh                        # single flight across 3 instances of
+#                                                        # each server on one shared cache:
+#                                                        # burst.sh, about 2-3 minutes
 #
 # What it sets up, every server on 127.0.0.1 only, on ports it picks (0 where the program allows):
 #
@@ -78,6 +81,7 @@
 #                                 LOAD_WAIT_S s for a 1-minute load below MAX_LOAD
 #   OUT_DIR=build/bench           peers-runs.tsv, peers-summary.txt
 #   ONLY=                         seed: step 1 alone (the seeders and the ceilings), then the summary;
+#                                 burst: burst.sh alone (BURST=300 BURST_LEVEL=6 MC_LOCK_RETRY=0.1);
 #                                 mercator: tellus and MapProxy seeded once, then mercator.sh (its
 #                                 settings: MERC_ZOOMS=3-7 MERC_CONNECTIONS=16)
 #   KEEP=0                        1: keep the work folder (configs, logs, caches, URL lists)
@@ -137,7 +141,8 @@ if [[ -n "$UPSTREAM_CPUS" ]]; then
   [[ -n "$other_cpus" ]] || { echo "run.sh: UPSTREAM_CPUS=$UPSTREAM_CPUS leaves no CPU for the seeders" >&2; exit 1; }
   up_pin=(taskset -c "$UPSTREAM_CPUS") seed_pin=(taskset -c "$other_cpus")
 fi
-[[ -z "$ONLY" || "$ONLY" == seed || "$ONLY" == mercator ]] || { echo "run.sh: ONLY=$ONLY: ONLY=seed or ONLY=mercator" >&2; exit 1; }
+[[ -z "$ONLY" || "$ONLY" == seed || "$ONLY" == mercator || "$ONLY" == burst ]] ||
+  { echo "run.sh: ONLY=$ONLY: ONLY=seed, ONLY=mercator or ONLY=burst" >&2; exit 1; }
 # ONLY=mercator: the lat/long caches seeded once (tellus and MapProxy), then mercator.sh
 [[ "$ONLY" != mercator ]] || SEED_ROUNDS=1
 
@@ -156,7 +161,7 @@ sudo=()
 [[ $EUID -ne 0 ]] && sudo=(sudo)
 missing=()
 for p in cgi-mapserver mapserver-bin gdal-bin wrk curl python3 iproute2 apache2-bin libapache2-mod-mapcache \
-  libapache2-mod-fcgid mapcache-tools; do
+  libapache2-mod-fcgid mapcache-tools $([[ "$ONLY" != burst ]] || echo memcached python3-mapproxy gunicorn postgresql-15); do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
 done
 # python3-venv: ensurepip is what it adds
@@ -172,7 +177,8 @@ fi
 
 venv="$PEERS_DIR/venv"
 want_pip=("MapProxy==$MAPPROXY_VERSION" "gunicorn==$GUNICORN_VERSION")
-if ! "$venv/bin/python" - "$MAPPROXY_VERSION" "$GUNICORN_VERSION" 2>/dev/null <<'EOF'; then
+# ONLY=burst runs Debian's MapProxy (python3-mapproxy) under Debian's gunicorn: no venv
+if [[ "$ONLY" != burst ]] && ! "$venv/bin/python" - "$MAPPROXY_VERSION" "$GUNICORN_VERSION" 2>/dev/null <<'EOF'; then
 import sys
 from importlib.metadata import version
 sys.exit(0 if (version("MapProxy"), version("gunicorn")) == tuple(sys.argv[1:3]) else 1)
@@ -214,6 +220,7 @@ cleanup() {
   for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
   for c in "${apache_confs[@]}"; do apache2 -f "$c" -k stop 2>/dev/null || true; done
   for p in "${pids[@]}"; do wait "$p" 2>/dev/null || true; done
+  [[ -z "${pg_dir:-}" ]] || "$repo/tests/support/postgres.sh" stop "$pg_dir" || true
   # Apache stops its children (and mod_fcgid its mapserv processes) after the parent got TERM
   for c in "${apache_confs[@]}"; do
     for _ in $(seq 1 100); do
@@ -283,8 +290,10 @@ imaging_module="$(dirname "$TELLUS")/../../imaging/libtellus_imaging.so"
 tellus="$work/bin/tellus"
 commit="$(git -C "$repo" rev-parse --short HEAD 2>/dev/null || echo '?')"
 [[ -z "$(git -C "$repo" status --porcelain --untracked-files=no 2>/dev/null)" ]] || commit="$commit+changes"
+mp_banner="MapProxy $MAPPROXY_VERSION, gunicorn $GUNICORN_VERSION"
+[[ "$ONLY" != burst ]] || mp_banner="MapProxy and gunicorn: Debian's (the burst line)"
 say "tellus $TELLUS ($(stat -c '%y' "$TELLUS" | cut -d. -f1), tree $commit); $(apache2 -v | head -1 | sed 's/Server version: //');" \
-  "mod_mapcache $(dpkg-query -W -f='${Version}' libapache2-mod-mapcache); MapProxy $MAPPROXY_VERSION, gunicorn $GUNICORN_VERSION;" \
+  "mod_mapcache $(dpkg-query -W -f='${Version}' libapache2-mod-mapcache); $mp_banner;" \
   "MapServer $(/usr/lib/cgi-bin/mapserv -v | sed -E 's/MapServer version ([^ ]*).*/\1/'); $(wrk -v 2>&1 | head -1 | cut -d' ' -f1-2)"
 IFS=, read -r RW RS RE RN <<<"$REGION"
 LEVEL_LO="${LEVELS%-*}"
@@ -412,6 +421,11 @@ check_image() { # NAME URL: 200, image/*, a body; prints the Content-Type
   fi
 }
 check_image upstream "http://127.0.0.1:$up_port$(head -n 1 "$work/urls-up512.txt")" || die "the upstream does not answer images"
+if [[ "$ONLY" == burst ]]; then
+  # shellcheck source=burst.sh
+  source "$here/burst.sh"
+  exit 0
+fi
 
 # ------------------------------------------------------------------------------ the three caches' configurations
 mkdir -p "$work/tellus" "$work/mapproxy/cache" "$work/mapcache/apache" "$work/mapcache/cache" "$work/mapcache/locks"

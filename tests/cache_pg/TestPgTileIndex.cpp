@@ -11,6 +11,8 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <thread>
+#include <vector>
 
 using namespace tellus;
 
@@ -137,4 +139,28 @@ TEST(PgTileIndex, ARolledBackSavepointUndoesItsOperationOnly) {
   EXPECT_TRUE(a->lookup(d->id, TileKey{0, 0, 0}).value());
   EXPECT_FALSE(a->lookup(d->id, TileKey{0, 0, 1}).value());
   EXPECT_EQ(a->totalBytes().value(), 10);
+}
+
+TEST(PgTileIndex, InstancesStartedAtOnceOnAnEmptyDatabaseCreateTheSchemaOnce) {
+  // Three `tellus serve` started together: each saw no schema, the first created it under the
+  // lock, and the others, woken, must see it (a backend's catalog cache of "no such table" from
+  // before it waited used to make them create it again: "relation already exists").
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    const std::string uri = test::pgCreateDatabase();
+    constexpr std::size_t kInstances = 8;
+    std::vector<std::string> errors(kInstances);
+    std::vector<std::thread> threads;
+    for (std::size_t i = 0; i < kInstances; ++i) {
+      threads.emplace_back([&, i] {
+        PgTileIndexOptions o;
+        o.connect.conninfo = uri;
+        auto index = openPgTileIndex(o);
+        if (!index) errors[i] = index.error().message;
+      });
+    }
+    for (auto& t : threads)
+      t.join();
+    for (const auto& e : errors)
+      EXPECT_EQ(e, "");
+  }
 }

@@ -4,7 +4,8 @@
 # in for the object store), in front of an upstream that counts its GetMaps
 # (tests/support/counting_wms.py). Checked:
 #   - 300 concurrent requests for one missing tile, spread over the three: exactly one upstream
-#     request, every client gets 200 and the same bytes; p50/p99 printed;
+#     request, every client gets 200 and the same bytes; p50/p99 printed; the same for the 16
+#     tiles of one missing metatile (a miss fetches its metatile under the metatile's lease);
 #   - the instance holding a tile's lease killed (-9) while its fetch is under way (a slow
 #     upstream): another instance fetches the tile and answers its waiting clients within 2 s;
 #   - the database stopped: stored tiles are still served (read-only), a miss is a 503, /metrics
@@ -68,20 +69,32 @@ result=$(python3 "$here/burst.py" 300 "$tile" "${ports[@]}") ||
 echo "burst of 300 over 3 instances: $result"
 [ "$(getmaps)" = 1 ] || fail "300 requests for one tile over 3 instances made $(getmaps) upstream requests"
 
+# --- 300 concurrent requests for the 16 tiles of one missing metatile over three instances --------
+# (meta_tiles 4: a miss fetches its 4x4 metatile under the metatile's lease.) Level 2 is 40 x 20
+# tiles; the tiles above are in the metatile of rows 0-3, columns 4-7; this one is rows 8-11,
+# columns 20-23.
+for r in 8 9 10 11; do for c in 20 21 22 23; do echo "/wwtile?T=shared&L=2&X=$c&Y=$r"; done; done \
+  >"$work/metatile.txt"
+result=$(python3 "$here/burst.py" 300 "@$work/metatile.txt" "${ports[@]}") ||
+  fail "the metatile burst (not all 200, or several bodies for one tile): $result"
+echo "burst of 300 over the 16 tiles of a metatile and 3 instances: $result"
+[ "$(getmaps)" = 2 ] ||
+  fail "300 requests for one metatile's tiles made $(($(getmaps) - 1)) upstream requests: $(curl -fsS "http://127.0.0.1:$up/stats")"
+
 # --- the holder killed mid-fetch: another instance fetches within 2 s -----------------------------
 curl -fsS "http://127.0.0.1:$up/delay?ms=30000" >/dev/null
-tile2='/wwtile?T=shared&L=2&X=6&Y=3'
+tile2='/wwtile?T=shared&L=2&X=9&Y=3' # another metatile
 curl -s -o /dev/null "http://127.0.0.1:${ports[0]}$tile2" & # instance 0 takes the lease
 holder_client=$!
-for _ in $(seq 100); do [ "$(getmaps)" = 2 ] && break; sleep 0.05; done
-[ "$(getmaps)" = 2 ] || fail "instance 0 did not fetch the second tile"
+for _ in $(seq 100); do [ "$(getmaps)" = 3 ] && break; sleep 0.05; done
+[ "$(getmaps)" = 3 ] || fail "instance 0 did not fetch the second tile"
 # Clients of the other two wait for instance 0's fetch.
 curl -s -o "$work/w1.png" -w '%{http_code}' "http://127.0.0.1:${ports[1]}$tile2" >"$work/w1.code" &
 w1=$!
 curl -s -o "$work/w2.png" -w '%{http_code}' "http://127.0.0.1:${ports[2]}$tile2" >"$work/w2.code" &
 w2=$!
 sleep 0.5
-[ "$(getmaps)" = 2 ] || fail "a waiting instance fetched while the holder was alive"
+[ "$(getmaps)" = 3 ] || fail "a waiting instance fetched while the holder was alive"
 curl -fsS "http://127.0.0.1:$up/delay?ms=0" >/dev/null
 killed_at=$(date +%s.%N)
 kill -9 "${pids[0]}"
@@ -94,7 +107,7 @@ echo "holder killed: the waiting clients were answered ${took} s later"
   fail "waiting clients got $(cat "$work/w1.code") and $(cat "$work/w2.code")"
 cmp -s "$work/w1.png" "$work/w2.png" || fail "the two instances served different bytes"
 python3 -c "import sys; sys.exit(0 if $took < 2.0 else 1)" || fail "took ${took} s (> 2 s)"
-[ "$(getmaps)" = 3 ] || fail "expected 3 upstream requests (two tiles, one refetch), got $(getmaps)"
+[ "$(getmaps)" = 4 ] || fail "expected 4 upstream requests (two tiles, a metatile, one refetch), got $(getmaps)"
 
 # --- the database down, then back ------------------------------------------------------------------
 metric() { curl -fsS "http://127.0.0.1:$1/metrics" | awk -v m="$2" '$1 == m {print $2}'; }
@@ -110,11 +123,11 @@ for p in 1 2; do
   [ "$code" = 200 ] || fail "instance $p did not serve a stored tile with the database down: $code"
   cmp -s "$work/down$p.png" "$work/a1.png" || fail "instance $p served other bytes without the index"
 done
-tile3='/wwtile?T=shared&L=2&X=7&Y=3'
+tile3='/wwtile?T=shared&L=2&X=13&Y=3' # another metatile
 code=$(curl -s -o /dev/null -w '%{http_code}' "http://127.0.0.1:${ports[1]}$tile3")
 [ "$code" = 503 ] || fail "a miss with the database down: $code, not 503"
 [ "$(metric "${ports[1]}" tellus_shared_index_up)" = 0 ] || fail "/metrics does not say the index is down"
-[ "$(getmaps)" = 3 ] || fail "an instance fetched with the database down"
+[ "$(getmaps)" = 4 ] || fail "an instance fetched with the database down"
 "$src/tests/support/postgres.sh" resume "$work/pg"
 for _ in $(seq 50); do
   code=$(curl -s -o "$work/c.png" -w '%{http_code}' "http://127.0.0.1:${ports[1]}$tile3")

@@ -82,12 +82,16 @@ struct Service {
   Fetcher fetcher;
   std::unique_ptr<TileService> tiles;
 
-  Service(const std::string& url, std::shared_ptr<ITileLeases> leases) {
+  Service(const std::string& url,
+          std::shared_ptr<ITileLeases> leases,
+          int metaTiles = 1,
+          bool metaTilesOnMiss = false) {
     UpstreamSpec u;
     u.name = "up";
     u.type = UpstreamSpec::Type::Wms;
     u.url = url;
     u.policy.retries = 0;
+    u.metaTiles = metaTiles;
     LayerSpec l;
     l.name = "sat";
     l.upstream = "up";
@@ -95,6 +99,7 @@ struct Service {
     l.dataset.mimeType = "image/png";
     TileServiceOptions o;
     o.leases = std::move(leases);
+    o.metaTilesOnMiss = metaTilesOnMiss;
     auto t = TileService::create(*cache, fetcher, {u}, {l}, o);
     EXPECT_TRUE(t) << (t ? "" : t.error());
     if (t) tiles = std::move(*t);
@@ -114,6 +119,20 @@ struct Service {
 test::FakeReply pngReply(const test::FakeRequest&) {
   const std::vector<std::uint8_t> px(64 * 64 * 3, 90);
   const auto bytes = *encodeImage("image/png", 64, 64, 3, px.data());
+  return test::FakeReply::ok(std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
+                             "image/png");
+}
+
+/** A PNG of the GetMap's WIDTH x HEIGHT (a metatile's, split by the service). */
+test::FakeReply sizedPngReply(const test::FakeRequest& r) {
+  auto param = [&](const std::string& name) {
+    const auto at = r.target.find(name + "=");
+    return at == std::string::npos ? 0 : std::atoi(r.target.c_str() + at + name.size() + 1);
+  };
+  const int w = param("WIDTH"), h = param("HEIGHT");
+  if (w <= 0 || h <= 0 || w > 1024 || h > 1024) return test::FakeReply::withStatus(400, "size");
+  const std::vector<std::uint8_t> px(static_cast<std::size_t>(w * h * 3), 90);
+  const auto bytes = *encodeImage("image/png", w, h, 3, px.data());
   return test::FakeReply::ok(std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
                              "image/png");
 }
@@ -175,4 +194,109 @@ TEST(TileLeases, AMissThatTakesTheLeaseFetchesStoresThenReleasesIt) {
   auto again = s.get(k);
   ASSERT_EQ(again.wait_for(30s), std::future_status::ready);
   EXPECT_EQ(leases->asked.size(), 1u);
+}
+
+TEST(TileLeases, AMissFetchesItsWholeMetatileUnderTheMetatilesLeaseReleasedOnceEveryTileIsStored) {
+  // serve on a shared index (metaTilesOnMiss): instances missing different tiles of one metatile
+  // ask for one lease, the metatile's, so that one of them fetches it all.
+  test::FakeUpstream up(sizedPngReply);
+  auto leases = std::make_shared<ScriptedLeases>(LeaseOutcome::Acquired);
+  Service s(up.url("/wms"), leases, 4, true);
+  const TileKey k{1, 2, 3}; // level 1: 10 x 5 tiles; its metatile is rows 0-3, columns 0-3
+  std::size_t storedAtRelease = 0;
+  std::promise<void> releasedOnce;
+  leases->onRelease = [&](const LeaseKey&) {
+    for (std::int64_t r = 0; r < 4; ++r)
+      for (std::int64_t c = 0; c < 4; ++c) {
+        auto row = s.cache->peek(s.datasetId(), TileKey{1, r, c});
+        storedAtRelease += row && row->kind == CacheLookup::Kind::Hit;
+      }
+    releasedOnce.set_value();
+  };
+  auto answer = s.get(k);
+  ASSERT_EQ(answer.wait_for(30s), std::future_status::ready);
+  EXPECT_EQ(answer.get().kind, TileAnswer::Kind::Tile);
+  // The tile's own answer may come before its neighbours are stored; the lease goes back after.
+  ASSERT_EQ(releasedOnce.get_future().wait_for(30s), std::future_status::ready);
+  EXPECT_EQ(up.requests(), 1u);
+  EXPECT_EQ(s.tiles->metaTileFetches(), 1u);
+  ASSERT_EQ(leases->asked.size(), 1u);
+  EXPECT_EQ(leases->asked[0].key, (TileKey{1, 0, 0})) << "the metatile's lease, not the tile's";
+  EXPECT_EQ(storedAtRelease, 16u) << "the lease went back before every tile was stored";
+  // Another tile of the metatile is a hit: no lease, no request.
+  auto other = s.get(TileKey{1, 0, 1});
+  ASSERT_EQ(other.wait_for(30s), std::future_status::ready);
+  EXPECT_EQ(other.get().origin, TileOrigin::Hit);
+  EXPECT_EQ(up.requests(), 1u);
+  EXPECT_EQ(leases->asked.size(), 1u);
+}
+
+TEST(TileLeases, AMissWaitingForTheMetatilesHolderServesWhatItStoredAndFetchesNothing) {
+  test::FakeUpstream up(sizedPngReply);
+  auto leases = std::make_shared<ScriptedLeases>(LeaseOutcome::Waiting);
+  Service s(up.url("/wms"), leases, 4, true);
+  const TileKey k{1, 2, 3};
+  auto answer = s.get(k);
+  ASSERT_TRUE(leases->waiterArrived());
+  ASSERT_EQ(leases->asked.size(), 1u);
+  EXPECT_EQ(leases->asked[0].key, (TileKey{1, 0, 0}));
+  // The holder (another instance, asked for another tile of the metatile) stores them all.
+  const std::string theirs = "stored by the holder";
+  std::vector<std::byte> bytes(theirs.size());
+  std::memcpy(bytes.data(), theirs.data(), theirs.size());
+  TileMeta meta;
+  meta.contentType = "image/png";
+  for (std::int64_t r = 0; r < 4; ++r)
+    for (std::int64_t c = 0; c < 4; ++c)
+      ASSERT_TRUE(s.cache->put(s.datasetId(), TileKey{1, r, c}, bytes, meta));
+  ASSERT_TRUE(leases->wakeOneWaiter());
+  ASSERT_EQ(answer.wait_for(30s), std::future_status::ready);
+  const TileAnswer a = answer.get();
+  ASSERT_EQ(a.kind, TileAnswer::Kind::Tile) << a.message;
+  ASSERT_TRUE(a.file);
+  EXPECT_EQ(text(*a.file->readAll()), theirs);
+  EXPECT_EQ(up.requests(), 0u);
+  EXPECT_TRUE(leases->released.empty());
+}
+
+TEST(TileLeases, WithoutMetaTilesOnMissAMissFetchesItsTileAloneUnderTheTilesLease) {
+  test::FakeUpstream up(sizedPngReply);
+  auto leases = std::make_shared<ScriptedLeases>(LeaseOutcome::Acquired);
+  Service s(up.url("/wms"), leases, 4, false);
+  auto answer = s.get(TileKey{1, 2, 3});
+  ASSERT_EQ(answer.wait_for(30s), std::future_status::ready);
+  EXPECT_EQ(answer.get().kind, TileAnswer::Kind::Tile);
+  EXPECT_EQ(s.tiles->metaTileFetches(), 0u);
+  ASSERT_EQ(leases->asked.size(), 1u);
+  EXPECT_EQ(leases->asked[0].key, (TileKey{1, 2, 3}));
+}
+
+TEST(TileLeases, SeedingsMetatilesTakeTheMetatilesLease) {
+  // getTiles (what `tellus seed` asks for): one lease for the block, released after its tiles.
+  test::FakeUpstream up(sizedPngReply);
+  auto leases = std::make_shared<ScriptedLeases>(LeaseOutcome::Acquired);
+  Service s(up.url("/wms"), leases, 4, false);
+  const std::vector<TileKey> keys{{1, 0, 4}, {1, 0, 5}, {1, 1, 4}, {1, 1, 5}};
+  std::mutex m;
+  std::condition_variable cv;
+  std::size_t answered = 0, releases = 0;
+  leases->onRelease = [&](const LeaseKey&) {
+    std::lock_guard lock(m);
+    ++releases;
+    cv.notify_all();
+  };
+  s.tiles->getTiles("sat", "", keys, [&](const TileKey&, TileAnswer&& a) {
+    EXPECT_EQ(a.kind, TileAnswer::Kind::Tile) << a.message;
+    std::lock_guard lock(m);
+    ++answered;
+    cv.notify_all();
+  });
+  {
+    std::unique_lock lock(m);
+    ASSERT_TRUE(cv.wait_for(lock, 30s, [&] { return answered == keys.size() && releases > 0; }));
+    EXPECT_EQ(releases, 1u);
+  }
+  EXPECT_EQ(up.requests(), 1u);
+  ASSERT_EQ(leases->asked.size(), 1u);
+  EXPECT_EQ(leases->asked[0].key, (TileKey{1, 0, 4}));
 }

@@ -65,8 +65,12 @@ CREATE TABLE seed_bands(job text NOT NULL, level integer NOT NULL, row bigint NO
 INSERT INTO tellus_meta VALUES ('schema_version', '1');
 )sql";
 
-// Any constant: the advisory lock that one creator of the schema holds.
-constexpr const char* kLock = "SELECT pg_advisory_xact_lock(7227001)";
+// Any constant: the advisory lock that one creator of the schema holds. A session lock, taken
+// before the transaction that looks again: a backend that waited for it inside a transaction kept
+// its catalog cache's "no tellus_meta" from before the wait (invalidations are read when a
+// transaction starts), and created the schema a second time ("relation already exists").
+constexpr const char* kLock = "SELECT pg_advisory_lock(7227001)";
+constexpr const char* kUnlock = "SELECT pg_advisory_unlock(7227001)";
 
 std::expected<std::optional<int>, CacheError> version(PGconn* conn) {
   auto t = exec(conn, "SELECT to_regclass('tellus_meta') IS NOT NULL", "reading schema");
@@ -99,18 +103,20 @@ std::expected<void, CacheError> ensureSchema(PGconn* conn, bool readOnly) {
   if (readOnly) {
     return std::unexpected(CacheError{CacheErrc::Io, "the database holds no tellus index"});
   }
-  if (auto b = exec(conn, "BEGIN", "creating schema"); !b) return std::unexpected(b.error());
-  auto fail = [conn](CacheError e) -> std::expected<void, CacheError> {
-    (void)exec(conn, "ROLLBACK", "rolling back");
+  if (auto l = exec(conn, kLock, "creating schema"); !l) return std::unexpected(l.error());
+  auto fail = [conn](CacheError e, bool rollback) -> std::expected<void, CacheError> {
+    if (rollback) (void)exec(conn, "ROLLBACK", "rolling back");
+    (void)exec(conn, kUnlock, "creating schema");
     return std::unexpected(std::move(e));
   };
-  if (auto l = exec(conn, kLock, "creating schema"); !l) return fail(l.error());
+  if (auto b = exec(conn, "BEGIN", "creating schema"); !b) return fail(b.error(), false);
   v = version(conn); // another instance may have created it meanwhile
-  if (!v) return fail(v.error());
+  if (!v) return fail(v.error(), true);
   if (!*v) {
-    if (auto c = exec(conn, kV1, "creating schema"); !c) return fail(c.error());
+    if (auto c = exec(conn, kV1, "creating schema"); !c) return fail(c.error(), true);
   }
-  if (auto c = exec(conn, "COMMIT", "creating schema"); !c) return std::unexpected(c.error());
+  if (auto c = exec(conn, "COMMIT", "creating schema"); !c) return fail(c.error(), false);
+  (void)exec(conn, kUnlock, "creating schema");
   return *v ? check(**v) : std::expected<void, CacheError>{};
 }
 

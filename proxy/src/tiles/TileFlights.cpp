@@ -106,7 +106,7 @@ bool TileService::Impl::landIfCachedNow(const FlightKey& fk, const std::string& 
 
 void TileService::Impl::land(const FlightKey& k, TileAnswer&& answer) {
   std::vector<Done> waiters;
-  std::optional<LeaseKey> lease;
+  std::shared_ptr<LeaseHold> lease;
   {
     std::lock_guard lock(flightsMutex);
     if (const auto h = heldLeases.find(k); h != heldLeases.end()) {
@@ -118,7 +118,7 @@ void TileService::Impl::land(const FlightKey& k, TileAnswer&& answer) {
       flights.erase(it);
     }
   }
-  if (lease) options.leases->release(*lease);
+  lease.reset(); // the last flight holding it: released (the tile is stored), waiters wake
   for (std::size_t i = 0; i + 1 < waiters.size(); ++i) {
     TileAnswer copy = answer;
     waiters[i](std::move(copy));
@@ -289,6 +289,8 @@ void TileService::Impl::getTile(std::string_view layerName,
   if (landIfCachedNow(fk, folder)) return;
   if (u.type == UpstreamSpec::Type::Local) {
     renderLocal(fk, l, g, folder, std::move(stale));
+  } else if (options.metaTilesOnMiss && !stale && metaCapable(l, u)) {
+    missUnderMetaLease(fk, l, u, g, folder, std::string(time));
   } else if (options.leases) {
     fetchUnderLease(fk, l, u, g, folder, std::string(time), std::move(stale));
   } else {
@@ -352,7 +354,7 @@ void TileService::Impl::fetchUnderLease(const FlightKey& fk,
   if (got == LeaseOutcome::Acquired) {
     {
       std::lock_guard lock(flightsMutex);
-      heldLeases.insert_or_assign(fk, lease);
+      heldLeases.insert_or_assign(fk, std::make_shared<LeaseHold>(options.leases, lease));
     }
     // Another process may have stored it between our look and the lease.
     if (landIfCachedNow(fk, folder)) return;

@@ -40,6 +40,77 @@ void TileService::Impl::getTiles(std::string_view layerName,
   const auto& [id, folder] = ds;
   std::vector<TileKey> owned = claimMissing(layerName, time, keys, g, id, folder, done);
   if (owned.empty()) return;
+  fetchBlockUnderLease(std::move(owned), l, u, g, id, folder, std::string(time));
+}
+
+void TileService::Impl::missUnderMetaLease(const FlightKey& fk,
+                                           const LayerSpec& l,
+                                           const UpstreamSpec& u,
+                                           const TileGrid& g,
+                                           const std::string& folder,
+                                           const std::string& time) {
+  const TileBlock meta = metaTileOf(g, fk.key, u.metaTiles);
+  const UnixMillis now = nowMillis();
+  std::vector<TileKey> owned{fk.key};
+  for (std::int64_t r = meta.row0; r < meta.row0 + meta.rows; ++r) {
+    for (std::int64_t c = meta.col0; c < meta.col0 + meta.cols; ++c) {
+      const TileKey k{fk.key.level, r, c};
+      if (k == fk.key || !g.isValid(k)) continue;
+      const auto known = cache.peek(fk.dataset, k);
+      const bool missing = known && known->kind != CacheLookup::Kind::Hit &&
+                           !(known->kind == CacheLookup::Kind::Absent && known->retryAfter > now);
+      if (!missing) continue;
+      // Every missing tile is fetched, also one whose flight another request of this process
+      // opened a moment ago: that request's own try waits for this lease, then finds its tile
+      // stored (a tile left out would cost a second GetMap). A tile nobody asked for gets a flight
+      // with no waiter, so that a request meanwhile joins it.
+      (void)join(FlightKey{fk.dataset, k}, [](TileAnswer&&) {});
+      owned.push_back(k);
+    }
+  }
+  fetchBlockUnderLease(std::move(owned), l, u, g, fk.dataset, folder, time);
+}
+
+void TileService::Impl::fetchBlockUnderLease(std::vector<TileKey> owned,
+                                             const LayerSpec& l,
+                                             const UpstreamSpec& u,
+                                             const TileGrid& g,
+                                             DatasetId id,
+                                             const std::string& folder,
+                                             const std::string& time) {
+  if (!options.leases) return fetchBlock(std::move(owned), l, u, g, id, folder, time);
+  const TileBlock meta = metaTileOf(g, owned.front(), u.metaTiles);
+  const LeaseKey lease{folder, TileKey{meta.level, meta.row0, meta.col0}};
+  // Woken on the lease service's thread: the look at the cache and the next try run on a worker.
+  auto retry = [weak = weak_from_this(), owned, &l, &u, &g, id, folder, time] {
+    const auto self = weak.lock();
+    if (!self) return;
+    self->workers->post([im = self.get(), owned, &l, &u, &g, id, folder, time] {
+      std::vector<TileKey> left;
+      for (const TileKey& k : owned)
+        if (!im->landIfCachedNow(FlightKey{id, k}, folder)) left.push_back(k);
+      if (!left.empty()) im->fetchBlockUnderLease(std::move(left), l, u, g, id, folder, time);
+    });
+  };
+  const LeaseOutcome got =
+      options.leases->acquireOrWait(lease, options.leaseRecheck, std::move(retry));
+  if (got == LeaseOutcome::Waiting) {
+    leaseWaits.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  if (got == LeaseOutcome::Acquired) {
+    const auto hold = std::make_shared<LeaseHold>(options.leases, lease);
+    {
+      std::lock_guard lock(flightsMutex);
+      for (const TileKey& k : owned) // a tile's own lease, if one is held, stays its flight's
+        heldLeases.try_emplace(FlightKey{id, k}, hold);
+    }
+    // Another process may have stored some between our look and the lease.
+    std::erase_if(owned, [&](const TileKey& k) {
+      return landIfCachedNow(FlightKey{id, k}, folder);
+    });
+    if (owned.empty()) return;
+  }
   fetchBlock(std::move(owned), l, u, g, id, folder, time);
 }
 

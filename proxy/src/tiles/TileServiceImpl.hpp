@@ -35,6 +35,17 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     }
   };
   using Done = std::function<void(TileAnswer&&)>;
+  /** A lease taken here, given back when the last flight holding it lands (a metatile's lease is
+   * held by the flights of every tile fetched with it). */
+  struct LeaseHold {
+    std::shared_ptr<ITileLeases> leases;
+    LeaseKey key;
+    LeaseHold(std::shared_ptr<ITileLeases> l, LeaseKey k)
+        : leases(std::move(l)), key(std::move(k)) {}
+    LeaseHold(const LeaseHold&) = delete;
+    LeaseHold& operator=(const LeaseHold&) = delete;
+    ~LeaseHold() { leases->release(key); }
+  };
 
   TileCache& cache;
   Fetcher& fetcher;
@@ -59,8 +70,9 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
 
   std::mutex flightsMutex;
   std::unordered_map<FlightKey, std::vector<Done>, FlightKeyHash> flights;
-  // Leases held by flights of this process (options.leases), given back when the flight lands.
-  std::unordered_map<FlightKey, LeaseKey, FlightKeyHash> heldLeases;
+  // Leases held by flights of this process (options.leases), given back when the last flight
+  // holding one lands.
+  std::unordered_map<FlightKey, std::shared_ptr<LeaseHold>, FlightKeyHash> heldLeases;
   std::atomic<std::uint64_t> leaseWaits{0}; // misses that waited for another process's fetch
   // A shared index (options.leases) that failed its last lookup: answers come from the store.
   std::atomic<bool> indexDown{false};
@@ -132,6 +144,30 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                        const std::string& folder,
                        const std::string& time,
                        std::optional<CacheLookup> stale);
+
+  /** A plain miss of a metatile-capable layer with options.metaTilesOnMiss: the tile's whole
+   * metatile is fetched with one GetMap under the metatile's lease (with options.leases), so that
+   * instances missing different tiles of it cause one upstream request. `fk`'s flight is ours;
+   * every missing tile of the metatile is fetched (one without a flight gets one with no waiter).
+   */
+  void missUnderMetaLease(const FlightKey& fk,
+                          const LayerSpec& l,
+                          const UpstreamSpec& u,
+                          const TileGrid& g,
+                          const std::string& folder,
+                          const std::string& time);
+
+  /** fetchBlock under the lease of the metatile holding owned's first tile (options.leases):
+   * fetched when the lease is taken (or the lease service is down), the lease held until every
+   * owned tile has landed; or, while another process holds it, waited for, then the cache looked
+   * at again and what is still missing fetched under the lease. Without leases: fetchBlock. */
+  void fetchBlockUnderLease(std::vector<TileKey> owned,
+                            const LayerSpec& l,
+                            const UpstreamSpec& u,
+                            const TileGrid& g,
+                            DatasetId id,
+                            const std::string& folder,
+                            const std::string& time);
 
   static TileAnswer absent(TileOrigin origin, std::string message) {
     TileAnswer a;

@@ -288,6 +288,8 @@ seedingService(Context& ctx, Fetcher& fetcher, const SeedArgs& s) {
   // disk's waits overlap instead of queueing behind two workers.
   TileServiceOptions options;
   options.renderThreads = std::max(options.renderThreads, s.remote.concurrency);
+  // A shared index: each metatile (or tile) fetched under its lease, as `serve` fetches them.
+  options.leases = ctx.leases;
   return TileService::create(
       *ctx.cache, fetcher, std::move(specs.upstreams), std::move(specs.layers), options);
 }

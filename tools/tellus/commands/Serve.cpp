@@ -123,6 +123,9 @@ int runServe(const cli::Args& a) {
   auto specs = cli::proxySpecs(ctx->config);
   TileServiceOptions tileOptions = cli::tileServiceOptions(server);
   tileOptions.leases = ctx->leases;
+  // Several instances: a miss fetches its metatile under the metatile's lease (one upstream
+  // request for the tiles of a metatile however they are spread over the instances).
+  tileOptions.metaTilesOnMiss = ctx->leases != nullptr;
   auto tiles = TileService::create(*ctx->cache,
                                    fetcher,
                                    std::move(specs.upstreams),

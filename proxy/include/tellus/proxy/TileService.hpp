@@ -120,6 +120,12 @@ struct TileServiceOptions {
   /// How long a waiter waits for a release before it tries the lease again (a holder that died
   /// releases nothing; its lease is free as soon as its connection is gone).
   std::chrono::milliseconds leaseRecheck{1000};
+  /// A plain miss (nothing cached) of a layer whose WMS upstream has metaTiles > 1 fetches the
+  /// tile's whole metatile with one GetMap and stores its missing tiles, under the metatile's lease
+  /// when `leases` is set: what `serve` does on a shared index (issue 27), so that instances
+  /// missing different tiles of one metatile cause one upstream request. False: one GetMap per
+  /// missed tile (the embedded default; an expired tile is always refreshed alone).
+  bool metaTilesOnMiss = false;
 };
 
 class TileService final : public ITileSource {
