@@ -92,7 +92,6 @@ std::string parseCluster(const cli::Args& a, ClusterArgs& c) {
   }
   c.loop = a.flag("loop");
   c.realtime = a.flag("realtime");
-  if (c.loop && c.flight.has_value() == false && !a.get("camera")) return "--loop needs a show";
   if (const auto t = a.get("channel-timeout")) {
     const auto v = cli::parseNumbers(*t, 1, 1);
     if (!v || (*v)[0] <= 0.0 || (*v)[0] > 3600.0)
