@@ -54,6 +54,16 @@ TEST(FrameState, DigestSeesEveryField) {
   EXPECT_EQ(tellus::cluster::digestLine(s).size(), 2u + 16u + 1u);
 }
 
+// ranksLost tells the ranks at the end of a show not to finalize MPI; it is no part of what is
+// drawn, so not of the digest.
+TEST(FrameState, DigestLeavesRanksLostOut) {
+  FrameState s;
+  s.frame = -1;
+  FrameState t = s;
+  t.ranksLost = 1;
+  EXPECT_EQ(digest(s), digest(t));
+}
+
 // The state goes over the wire as bytes (MPI_BYTE): a POD of fixed size, no hidden padding.
 static_assert(std::is_trivially_copyable_v<FrameState>);
 static_assert(sizeof(FrameState) == 8 + 6 * 8 + 4 + 4);

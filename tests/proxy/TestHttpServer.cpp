@@ -248,6 +248,27 @@ TEST(HttpServer, RefusedRequestsReachTheHandlerFlagged) {
 
 // A raw space or a control byte in the request target is a malformed request line: 400 (the
 // handler sees what could be read of it, for the access log), then the connection closes.
+// acceptPost (tellus cluster's control API): POST reaches the handler with its body; a body over
+// 8 KiB is still refused.
+TEST(HttpServer, AcceptPostHandsTheBodyOver) {
+  HttpServerOptions o = quickOptions();
+  o.acceptPost = true;
+  HttpServer server(o, [](HttpRequest&& req, Responder respond) {
+    if (req.refusal != HttpRefusal::None)
+      return respond(HttpResponse::text(refusalStatus(req.refusal), "text/plain", "refused"));
+    respond(HttpResponse::text(200, "text/plain", req.method + " " + req.path + " " + req.body));
+  });
+  ASSERT_TRUE(server.start());
+  RawClient c(server.port());
+  c.send("POST /camera HTTP/1.1\r\nHost: a\r\nContent-Length: 11\r\n\r\n{\"lat\": 10}");
+  const std::string r = c.readResponse();
+  EXPECT_TRUE(r.starts_with("HTTP/1.1 200")) << r;
+  EXPECT_TRUE(r.ends_with("POST /camera {\"lat\": 10}")) << r;
+  RawClient big(server.port());
+  big.send("POST /x HTTP/1.1\r\nHost: a\r\nContent-Length: 9000\r\n\r\n" + std::string(9000, 'a'));
+  EXPECT_TRUE(big.readResponse().starts_with("HTTP/1.1 413"));
+}
+
 TEST(HttpServer, ARawSpaceOrControlByteInTheTargetIs400) {
   std::mutex m;
   std::vector<std::string> targets;

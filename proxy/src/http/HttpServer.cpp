@@ -180,7 +180,8 @@ private:
   void doRead(bool first) {
     parser_.emplace();
     parser_->header_limit(static_cast<std::uint32_t>(server_->options.maxHeaderBytes));
-    // tellus serves GET, HEAD and OPTIONS; a small body is read (to refuse its request).
+    // tellus serves GET, HEAD and OPTIONS (and POST where acceptPost); a small body is read (to
+    // refuse its request, or for POST).
     parser_->body_limit(8192);
     // The first request must arrive within the request timeout; later ones within keep-alive.
     stream_.expires_after(first ? server_->options.requestTimeout
@@ -250,8 +251,10 @@ private:
     head_ = msg.method() == http::verb::head;
     version_ = msg.version();
     stream_.expires_never(); // the handler's own timeouts bound the wait for the answer
+    const bool post = msg.method() == http::verb::post && server_->options.acceptPost;
+    if (post) req.body = msg.body();
     if (msg.method() != http::verb::get && msg.method() != http::verb::head &&
-        msg.method() != http::verb::options) {
+        msg.method() != http::verb::options && !post) {
       req.refusal = HttpRefusal::MethodNotAllowed;
     } else if (!server_->admit(req.remoteAddress)) {
       req.refusal = HttpRefusal::TooManyRequests;

@@ -1,11 +1,15 @@
 // `tellus cluster CONFIG`: the dome as a cluster of projector channels (issue 28,
 // docs/design/cluster.md), run as `mpirun -n K tellus cluster CONFIG ...` with K = channels + 1.
-// Rank 0 is the master: it owns the camera, the scene's time and the flight (--camera or --path)
-// and broadcasts each frame's state (cluster::FrameState); rank i >= 1 renders channel i - 1 of
-// CONFIG headless with its own frustum, LOD and culling, waits at the barrier (every rank) and
-// only then writes its image (the swap): OUT/channel-NAME-FRAME.png. Every rank appends the
-// digest of the state it drew to OUT/digest-NAME.txt (the master's: digest-master.txt).
+// Rank 0 is the master (ClusterMaster.cpp): it owns the camera, the scene's time and the flight
+// (--camera or --path) and sends each frame's state (cluster::FrameState); rank i >= 1 renders
+// channel i - 1 of CONFIG headless with its own frustum, LOD and culling (ClusterChannel.cpp),
+// answers, waits for the master's go (the barrier) and only then writes its image (the swap):
+// OUT/channel-NAME-FRAME.png. Every rank appends the digest of the state it drew to
+// OUT/digest-NAME.txt (the master's: digest-master.txt). A channel started alone with
+// --join NAME --port FILE rejoins a running master.
 
+#include "ClusterArgs.hpp"
+#include "ClusterControl.hpp"
 #include "Commands.hpp"
 #include "Context.hpp"
 #include "GlobeArgs.hpp"
@@ -34,19 +38,6 @@
 namespace fs = std::filesystem;
 
 namespace tellus::commands {
-namespace {
-
-/** The arguments every rank parses alike (mpirun gives each the same command line). */
-struct ClusterArgs {
-  std::vector<planet::Channel> channels;
-  std::optional<planet::FlightPath> flight;
-  planet::CameraPose pose;
-  double fps = 25.0;
-  fs::path out;
-  bool waitComplete = false;
-  double waitSeconds = 60.0;
-  std::optional<std::array<double, 3>> background; ///< --background R,G,B in [0, 1]
-};
 
 std::string parseCluster(const cli::Args& a, ClusterArgs& c) {
   const auto mpcdiFile = a.get("mpcdi"); // a VESA MPCDI calibration instead of CONFIG.json
@@ -73,6 +64,7 @@ std::string parseCluster(const cli::Args& a, ClusterArgs& c) {
       if (!k.layerTimes.empty() || !k.body.empty())
         return *path + ": a keyframe's \"times\" and \"body\" are not broadcast to channels yet";
     c.flight = std::move(*read);
+    c.pathFile = *path;
     if (const auto f = a.get("fps")) {
       const auto v = cli::parseNumbers(*f, 1, 1);
       if (!v || (*v)[0] <= 0.0 || (*v)[0] > 1000.0) return "--fps must be in (0, 1000]: " + *f;
@@ -101,12 +93,28 @@ std::string parseCluster(const cli::Args& a, ClusterArgs& c) {
       return "--wait-complete=SECONDS must be in (0, 86400]: " + *w;
     c.waitSeconds = (*v)[0];
   }
+  c.loop = a.flag("loop");
+  c.realtime = a.flag("realtime");
+  if (const auto t = a.get("channel-timeout")) {
+    const auto v = cli::parseNumbers(*t, 1, 1);
+    if (!v || (*v)[0] <= 0.0 || (*v)[0] > 3600.0)
+      return "--channel-timeout must be in (0, 3600] seconds: " + *t;
+    c.channelTimeout = (*v)[0];
+  }
+  if (const auto p = a.get("port")) {
+    if (p->empty()) return "--port FILE needs a file";
+    c.port = *p;
+  }
+  if (const auto k = a.get("control")) c.control = *k;
+  if (const auto j = a.get("join")) {
+    if (c.port.empty()) return "--join NAME needs --port FILE (the master's)";
+    if (std::none_of(c.channels.begin(), c.channels.end(), [&](const planet::Channel& ch) {
+          return ch.name == *j;
+        }))
+      return "--join " + *j + ": no such channel in " + a.positional[0];
+    c.join = *j;
+  }
   return {};
-}
-
-/** The frames of the show: the flight's at --fps, or the one view. */
-std::int64_t frameCount(const ClusterArgs& c) {
-  return c.flight ? c.flight->frameCount(c.fps) : 1;
 }
 
 bool appendLine(const fs::path& file, const std::string& line) {
@@ -115,151 +123,16 @@ bool appendLine(const fs::path& file, const std::string& line) {
   return static_cast<bool>(f);
 }
 
-/** The master (rank 0): each frame's state broadcast, then the barrier. */
-int runMaster(cluster::Comm& comm,
-              const ClusterArgs& c,
-              const planet::Body& body,
-              std::optional<double> sceneTime,
-              bool channelsWell) {
-  const fs::path digests = c.out / "digest-master.txt";
-  fs::remove(digests);
-  if (!comm.allWell(channelsWell)) {
-    std::fprintf(stderr, "tellus cluster: a channel could not start (its message above)\n");
-    return kExitError;
-  }
-  const auto start = std::chrono::steady_clock::now();
-  const std::int64_t count = frameCount(c);
-  for (std::int64_t n = 0; n < count; ++n) {
-    cluster::FrameState s;
-    s.frame = n;
-    if (c.flight) {
-      const double at = c.flight->frameTimeS(n, c.fps);
-      s.setPose(planet::flightPoseOver(*c.flight, at, body));
-      if (const auto t = c.flight->sceneTimeAt(at)) sceneTime = t;
-    } else {
-      s.setPose(c.pose);
-    }
-    s.hasSceneTime = sceneTime ? 1 : 0;
-    s.sceneTimeUnixS = sceneTime.value_or(0.0);
-    comm.broadcast(s);
-    if (!comm.allWell(appendLine(digests, cluster::digestLine(s)))) {
-      std::fprintf(stderr,
-                   "tellus cluster: frame %lld failed on a rank (its message above); stopped\n",
-                   static_cast<long long>(n));
-      return kExitError;
-    }
-  }
-  cluster::FrameState end;
-  end.frame = -1;
-  comm.broadcast(end);
-  std::printf("tellus cluster: %lld frames of %zu channels in %s after %.2f s\n",
-              static_cast<long long>(count),
-              c.channels.size(),
-              c.out.string().c_str(),
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  return kExitOk;
-}
+namespace {
 
-/** Frames until complete (--wait-complete, up to its seconds) or one; whether it is complete. */
-bool renderOne(planet::Renderer& r, const planet::CameraPose& pose, const ClusterArgs& c) {
-  const auto begin = std::chrono::steady_clock::now();
-  for (;;) {
-    r.frame(pose);
-    if (!c.waitComplete || r.complete()) return r.complete();
-    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count() >
-        c.waitSeconds)
-      return false;
-    if (!r.busy() || r.stats().uploadsPending == 0)
-      std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-}
-
-/** A channel (rank >= 1): the master's state drawn, the barrier, then the image warped and
- * blended (when calibrated) and written. */
-/** The channel's warp mesh and blend mask (none when not configured). */
-struct Calibration {
-  std::optional<planet::WarpMesh> warp;
-  std::optional<std::vector<float>> blend;
-};
-
-int runChannel(cluster::Comm& comm,
-               const ClusterArgs& c,
-               const planet::Channel& channel,
-               planet::Renderer* renderer,
-               const Calibration& cal) {
-  const fs::path digests = c.out / ("digest-" + channel.name + ".txt");
-  fs::remove(digests);
-  if (!comm.allWell(renderer != nullptr)) return kExitError;
-  for (;;) {
-    cluster::FrameState s;
-    comm.broadcast(s);
-    if (s.frame < 0) return kExitOk;
-    renderer->setTime(s.hasSceneTime ? std::optional<double>(s.sceneTimeUnixS) : std::nullopt);
-    bool well = renderOne(*renderer, s.pose(), c) || !c.waitComplete;
-    if (!well)
-      std::fprintf(stderr,
-                   "tellus cluster: channel %s: frame %lld not complete after %g s\n",
-                   channel.name.c_str(),
-                   static_cast<long long>(s.frame),
-                   c.waitSeconds);
-    well = appendLine(digests, cluster::digestLine(s)) && well;
-    if (!comm.allWell(well)) return kExitError; // the barrier before the swap
-    char name[32];
-    std::snprintf(name, sizeof name, "-%05lld.png", static_cast<long long>(s.frame));
-    std::string err;
-    planet::ChannelImage image{renderer->width(), renderer->height(), renderer->readPixels()};
-    if (cal.warp || cal.blend) // the warp and blend pass (ChannelWarp.hpp)
-      image = planet::warpAndBlend(image,
-                                   image.width,
-                                   image.height,
-                                   cal.warp ? &*cal.warp : nullptr,
-                                   cal.blend ? &*cal.blend : nullptr);
-    if (!planet::writePngRgb(c.out / ("channel-" + channel.name + name),
-                             image.width,
-                             image.height,
-                             image.rgba,
-                             &err)) {
-      std::fprintf(stderr, "tellus cluster: %s\n", err.c_str());
-      comm.abort(kExitError); // the others wait at the next barrier: end them all
-    }
-  }
-}
-
-int runCluster(const cli::Args& a) {
-  auto comm = cluster::Comm::init();
-  if (!comm) {
-    std::fprintf(stderr, "tellus cluster: %s\n", comm.error().c_str());
-    return kExitError;
-  }
-  const int rank = (*comm)->rank();
-  // Usage errors: every rank finds the same ones; rank 0 says them.
-  auto say = [rank](const std::string& what, int code) {
-    if (rank == 0) std::fprintf(stderr, "tellus cluster: %s (tellus --help)\n", what.c_str());
-    return code;
-  };
-  ClusterArgs c;
-  if (const auto bad = parseCluster(a, c); !bad.empty()) return say(bad, kExitUsage);
-  if (static_cast<std::size_t>((*comm)->size()) != c.channels.size() + 1)
-    return say("run with one rank per channel and the master: mpirun -n " +
-                   std::to_string(c.channels.size() + 1) + " (got " +
-                   std::to_string((*comm)->size()) + ")",
-               kExitUsage);
-  std::error_code ec;
-  fs::create_directories(c.out, ec);
-  if (ec) return say(c.out.string() + ": " + ec.message(), kExitError);
-  planet::RendererOptions ro;
-  ro.decodeNice = 0;
-  auto tiles = openPlanetTiles(a, "cluster", ro);
-  if (!tiles) return tiles.error(); // every rank opened the same: every rank fails alike
-  if (auto bad = applySceneTime(a, tiles->sceneTime, kDefaultRenderTime, ro))
-    return say(*bad, kExitUsage);
-  hideNightLayers(a, tiles->night, ro);
-  ro.legend = false;
-  ro.fadeInSeconds = 0.0; // a channel's image must not depend on how long it took to draw
-  const Geodesy geodesy(tiles->bodyFor(tiles->earth));
-  if (rank == 0) return runMaster(**comm, c, geodesy.body(), ro.timeUnixSeconds, true);
-
-  const planet::Channel& channel = c.channels[static_cast<std::size_t>(rank - 1)];
+/** The channel's renderer and calibration (problem: why it cannot draw), then its loop. */
+int startChannel(cluster::Comm* comm,
+                 const cli::Args& a,
+                 const ClusterArgs& c,
+                 const planet::Channel& channel,
+                 PlanetTiles& tiles,
+                 planet::RendererOptions ro) {
+  const Geodesy geodesy(tiles.bodyFor(tiles.earth));
   const planet::ChannelFrame frame = planet::channelFrame(channel);
   ro.channelView = planet::RendererOptions::ChannelView{
       frame.forward, frame.up, ro.dome ? ro.dome->tiltDeg : 0.0};
@@ -270,9 +143,9 @@ int runCluster(const cli::Args& a) {
   ro.verticalFovDeg = channel.vfovDeg;
   if (c.background) ro.background = *c.background;
   if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg";
-      tiles->body == "earth" && fs::exists(global))
+      tiles.body == "earth" && fs::exists(global))
     ro.globalImage = global;
-  addSceneBodies(ro, tiles->sceneBodies, dataDir(a), tiles->earth);
+  addSceneBodies(ro, tiles.sceneBodies, dataDir(a), tiles.earth);
   Calibration cal;
   std::string problem;
   if (channel.warpMesh) cal.warp = *channel.warpMesh; // an MPCDI file's, in memory
@@ -289,12 +162,95 @@ int runCluster(const cli::Args& a) {
     else
       problem = b.error();
   }
-  auto renderer = planet::Renderer::create(*tiles->source, geodesy, ro);
+  auto renderer = planet::Renderer::create(*tiles.source, geodesy, ro);
   if (!renderer) problem = renderer.error();
   if (!problem.empty())
     std::fprintf(stderr, "tellus cluster: channel %s: %s\n", channel.name.c_str(), problem.c_str());
-  return runChannel(
-      **comm, c, channel, renderer && problem.empty() ? renderer->get() : nullptr, cal);
+  else // a first frame off the clock (shaders, the global image): the master's come in time
+    (*renderer)->frame(c.flight ? planet::flightPoseOver(*c.flight, 0.0, geodesy.body()) : c.pose);
+  std::unique_ptr<cluster::Comm> joined;
+  if (comm == nullptr) { // --join: the renderer is ready, the master's next frame is drawn
+    if (!problem.empty()) return kExitError;
+    auto j = cluster::Comm::join(c.port, channel.name, 60.0);
+    if (!j) {
+      std::fprintf(
+          stderr, "tellus cluster: channel %s: %s\n", channel.name.c_str(), j.error().c_str());
+      return kExitError;
+    }
+    joined = std::move(*j);
+    comm = joined.get();
+  }
+  return runChannel(*comm,
+                    c,
+                    channel,
+                    renderer && problem.empty() ? renderer->get() : nullptr,
+                    cal,
+                    joined != nullptr);
+}
+
+int runCluster(const cli::Args& a) {
+  ClusterArgs c;
+  std::unique_ptr<cluster::Comm> comm;
+  int rank = 0;
+  if (a.get("join")) { // a channel restarted alone: its own mpirun job
+    if (const auto bad = parseCluster(a, c); !bad.empty()) {
+      std::fprintf(stderr, "tellus cluster: %s (tellus --help)\n", bad.c_str());
+      return kExitUsage;
+    }
+  } else {
+    auto init = cluster::Comm::init();
+    if (!init) {
+      std::fprintf(stderr, "tellus cluster: %s\n", init.error().c_str());
+      return kExitError;
+    }
+    comm = std::move(*init);
+    rank = comm->rank();
+  }
+  // Usage errors: every rank finds the same ones; rank 0 says them.
+  auto say = [rank](const std::string& what, int code) {
+    if (rank == 0) std::fprintf(stderr, "tellus cluster: %s (tellus --help)\n", what.c_str());
+    return code;
+  };
+  if (comm) {
+    if (const auto bad = parseCluster(a, c); !bad.empty()) return say(bad, kExitUsage);
+    if (static_cast<std::size_t>(comm->size()) != c.channels.size() + 1)
+      return say("run with one rank per channel and the master: mpirun -n " +
+                     std::to_string(c.channels.size() + 1) + " (got " +
+                     std::to_string(comm->size()) + ")",
+                 kExitUsage);
+  }
+  std::error_code ec;
+  fs::create_directories(c.out, ec);
+  if (ec) return say(c.out.string() + ": " + ec.message(), kExitError);
+  planet::RendererOptions ro;
+  ro.decodeNice = 0;
+  auto tiles = openPlanetTiles(a, "cluster", ro);
+  if (!tiles) return tiles.error(); // every rank opened the same: every rank fails alike
+  if (auto bad = applySceneTime(a, tiles->sceneTime, kDefaultRenderTime, ro))
+    return say(*bad, kExitUsage);
+  hideNightLayers(a, tiles->night, ro);
+  ro.legend = false;
+  ro.fadeInSeconds = 0.0; // a channel's image must not depend on how long it took to draw
+  if (comm && rank == 0) {
+    const Geodesy geodesy(tiles->bodyFor(tiles->earth));
+    std::unique_ptr<Console> console;
+    if (!c.control.empty()) {
+      auto started = Console::start(c.control);
+      if (!started) {
+        std::fprintf(stderr, "tellus cluster: %s\n", started.error().c_str());
+        comm->abort(kExitUsage); // the channels wait for the master's first frame
+      }
+      console = std::move(*started);
+      std::printf("tellus cluster: control on http://127.0.0.1:%u\n", console->port());
+      std::fflush(stdout);
+    }
+    return runMaster(*comm, c, geodesy.body(), ro.timeUnixSeconds, console.get());
+  }
+  const auto byName = [&](const planet::Channel& ch) { return ch.name == c.join; };
+  const planet::Channel& channel =
+      comm ? c.channels[static_cast<std::size_t>(rank - 1)]
+           : *std::find_if(c.channels.begin(), c.channels.end(), byName);
+  return startChannel(comm.get(), a, c, channel, *tiles, ro);
 }
 
 } // namespace
@@ -310,7 +266,13 @@ Command clusterCommand() {
                     {"background", K::Value},
                     {"path", K::Value},
                     {"fps", K::Value},
-                    {"mpcdi", K::Value}});
+                    {"mpcdi", K::Value},
+                    {"loop", K::Flag},
+                    {"realtime", K::Flag},
+                    {"channel-timeout", K::Value},
+                    {"port", K::Value},
+                    {"join", K::Value},
+                    {"control", K::Value}});
   return c;
 }
 

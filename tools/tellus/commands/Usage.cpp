@@ -48,8 +48,15 @@ commands:
              --camera LAT,LON,ALT[,HEADING,TILT] | --path PATH.json [--fps N]
              [--wait-complete[=SECONDS]] [--background R,G,B] [--dome-tilt DEG] and
              render's globe options;
-             rank 0 broadcasts each frame's state, rank i draws channel i:
-             DIR/channel-NAME-FRAME.png, DIR/digest-NAME.txt (digest-master.txt)
+             rank 0 sends each frame's state, rank i draws channel i:
+             DIR/channel-NAME-FRAME.png, DIR/digest-NAME.txt (digest-master.txt);
+             live: [--loop] (until SIGINT/SIGTERM) [--realtime] (paced at --fps)
+             [--channel-timeout S] (10: a channel silent that long is lost, the others
+             go on; mpirun --enable-recovery) [--port FILE] (rejoining channels: both
+             jobs under mpirun --ompi-server file:URI); a channel restarted alone:
+             mpirun -n 1 tellus cluster CONFIG.json --join NAME --port FILE (as the master);
+             [--control 127.0.0.1:PORT] the console: GET /status, POST /camera, /time,
+             /path (HTTP/JSON on loopback; PORT 0: any, printed)
   view     the interactive globe (a GLFW window)
              [--camera LAT,LON,ALT[,HEADING,TILT]] [--size WxH] [--layer NAME] [--threshold T]
              [--earth wgs84|sphere] [--offline | --server URL] [--dome [FOV]] [--dome-tilt DEG] [--dome-method direct|cube]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc

@@ -23,7 +23,10 @@ struct FrameState {
   double tiltDeg = 0.0;
   double sceneTimeUnixS = 0.0; ///< meaningful when hasSceneTime
   std::int32_t hasSceneTime = 0;
-  std::int32_t reserved = 0; ///< zero (no uninitialised padding goes over the wire)
+  /// The end of the show (frame -1) only: 1 when a rank of the job died, so that no rank calls
+  /// MPI_Finalize (Open MPI 4.1's waits for the dead one); 0 otherwise (also: no uninitialised
+  /// padding goes over the wire). Not in the digest.
+  std::int32_t ranksLost = 0;
 
   planet::CameraPose pose() const noexcept {
     return {latDeg, lonDeg, altitudeM, headingDeg, tiltDeg};

@@ -36,7 +36,7 @@ enum class HttpRefusal : std::uint8_t {
   None,             ///< a request to serve
   BadRequest,       ///< malformed: request line (a raw space or control byte in the target),
                     ///< header or body framing; the connection closes after the answer
-  MethodNotAllowed, ///< a method other than GET, HEAD and OPTIONS
+  MethodNotAllowed, ///< a method other than GET, HEAD and OPTIONS (and POST: acceptPost)
   BodyTooLarge,     ///< a body over 8 KiB; the connection closes after the answer
   TooManyRequests,  ///< over HttpServerOptions::requestsPerSecond for its address
   HeaderTooLarge,   ///< request line and headers over maxHeaderBytes; closes after the answer
@@ -55,6 +55,7 @@ struct HttpRequest {
   /// other answer is replaced by a 500). method and target are what could be read of the request
   /// line ("" when nothing could), headers only when they were parsed.
   HttpRefusal refusal = HttpRefusal::None;
+  std::string body; ///< a POST's (HttpServerOptions::acceptPost), at most 8 KiB
 
   /** First header with this lower-case name, or "". */
   std::string_view header(std::string_view lowerName) const noexcept;
@@ -98,6 +99,9 @@ struct HttpServerOptions {
   /// The rate limit's time; null: the system's (tests inject a ManualClock, which outlives the
   /// server). Connection timeouts are Asio's timers on the real clock.
   const Clock* clock = nullptr;
+  /// POST reaches the handler with its body (`tellus cluster`'s control API); otherwise it is
+  /// refused as MethodNotAllowed, as the tile server refuses it.
+  bool acceptPost = false;
 };
 
 class HttpServer {

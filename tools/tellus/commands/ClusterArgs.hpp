@@ -1,0 +1,85 @@
+#pragma once
+/**
+ * @file ClusterArgs.hpp
+ * @brief `tellus cluster` (issue 28, docs/design/cluster.md) split by role: the arguments every
+ * rank parses alike (Cluster.cpp), the master's loop (ClusterMaster.cpp) and a channel's
+ * (ClusterChannel.cpp).
+ */
+
+#include "Context.hpp"
+
+#include <tellus/cli/Values.hpp>
+#include <tellus/cluster/Comm.hpp>
+#include <tellus/planet/ChannelWarp.hpp>
+#include <tellus/planet/Channels.hpp>
+#include <tellus/planet/FlightPath.hpp>
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace tellus::planet {
+class Renderer;
+struct Body;
+} // namespace tellus::planet
+
+namespace tellus::commands {
+
+class Console;
+
+/** The arguments every rank parses alike (mpirun gives each the same command line). */
+struct ClusterArgs {
+  std::vector<planet::Channel> channels;
+  std::optional<planet::FlightPath> flight;
+  std::string pathFile; ///< --path's
+  planet::CameraPose pose;
+  double fps = 25.0;
+  std::filesystem::path out;
+  bool waitComplete = false;
+  double waitSeconds = 60.0;
+  std::optional<std::array<double, 3>> background; ///< --background R,G,B in [0, 1]
+  bool loop = false;     ///< --loop: the show runs until stopped (SIGINT, SIGTERM)
+  bool realtime = false; ///< --realtime: the master paces the frames at --fps
+  /// --channel-timeout: a channel silent this long on a frame is lost, the others go on; 0 (the
+  /// default): the master waits as long as it takes (a show rendered to files wants every frame)
+  double channelTimeout = 0;
+  /** How long the master waits for a frame's answers: for ever without --channel-timeout. */
+  double frameDeadline() const {
+    return channelTimeout > 0 ? channelTimeout + (waitComplete ? waitSeconds : 0.0) : 1e9;
+  }
+  std::filesystem::path port; ///< --port FILE: the master's port for channels to rejoin
+  std::string join;           ///< --join NAME: this process rejoins as channel NAME
+  std::string control;        ///< --control HOST:PORT: the master's HTTP/JSON console
+};
+
+/** The arguments checked; an empty string, else what is wrong. */
+std::string parseCluster(const cli::Args& a, ClusterArgs& c);
+
+bool appendLine(const std::filesystem::path& file, const std::string& line);
+
+/** The master (rank 0): each frame's state to the channels, their answers, the go to swap. */
+int runMaster(cluster::Comm& comm,
+              const ClusterArgs& c,
+              const planet::Body& body,
+              std::optional<double> sceneTime,
+              Console* console);
+
+/** The channel's warp mesh and blend mask (none when not configured). */
+struct Calibration {
+  std::optional<planet::WarpMesh> warp;
+  std::optional<std::vector<float>> blend;
+};
+
+/** A channel: the master's state drawn, its answer, the go, then the image warped and blended
+ * (when calibrated) and written. renderer null: it could not start (the master is told). */
+int runChannel(cluster::Comm& comm,
+               const ClusterArgs& c,
+               const planet::Channel& channel,
+               planet::Renderer* renderer,
+               const Calibration& cal,
+               bool joined);
+
+} // namespace tellus::commands

@@ -1,0 +1,104 @@
+// A channel of `tellus cluster` (rank >= 1, or a restarted one joined through the master's
+// port; docs/design/cluster.md): the master's state drawn, its answer, the go, then the swap:
+// the image warped and blended (when calibrated) and written.
+
+#include "ClusterArgs.hpp"
+
+#include <tellus/planet_gl/Renderer.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <thread>
+
+namespace fs = std::filesystem;
+
+namespace tellus::commands {
+namespace {
+
+/** Frames until complete (--wait-complete, up to its seconds) or one; whether it is complete. */
+bool renderOne(planet::Renderer& r, const planet::CameraPose& pose, const ClusterArgs& c) {
+  const auto begin = std::chrono::steady_clock::now();
+  for (;;) {
+    r.frame(pose);
+    if (!c.waitComplete || r.complete()) return r.complete();
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count() >
+        c.waitSeconds)
+      return false;
+    if (!r.busy() || r.stats().uploadsPending == 0)
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+}
+
+} // namespace
+
+int runChannel(cluster::Comm& comm,
+               const ClusterArgs& c,
+               const planet::Channel& channel,
+               planet::Renderer* renderer,
+               const Calibration& cal,
+               bool joined) {
+  const fs::path digests = c.out / ("digest-" + channel.name + ".txt");
+  if (!joined) { // a channel restarted goes on with its file
+    fs::remove(digests);
+    comm.answer(renderer != nullptr);
+  }
+  if (renderer == nullptr) return kExitError;
+  // The master waits up to --channel-timeout (and --wait-complete's) for every channel's answer;
+  // silence longer than that means it is gone, or it dropped this channel.
+  const double wait = 2.0 * c.frameDeadline() + 10.0 + (c.realtime ? 1.0 / c.fps : 0.0);
+  for (bool first = true;; first = false) {
+    const auto s = comm.receiveState(first ? std::max(300.0, wait) : wait);
+    if (!s) {
+      std::fprintf(stderr,
+                   "tellus cluster: channel %s: no frame from the master in %g s; stopped\n",
+                   channel.name.c_str(),
+                   first ? std::max(300.0, wait) : wait);
+      return kExitError;
+    }
+    if (s->frame < 0) {                                      // the end of the show
+      if (s->ranksLost != 0 && !joined) comm.skipFinalize(); // a rank of its own job died
+      return kExitOk;
+    }
+    renderer->setTime(s->hasSceneTime ? std::optional<double>(s->sceneTimeUnixS) : std::nullopt);
+    bool well = renderOne(*renderer, s->pose(), c) || !c.waitComplete;
+    if (!well)
+      std::fprintf(stderr,
+                   "tellus cluster: channel %s: frame %lld not complete after %g s\n",
+                   channel.name.c_str(),
+                   static_cast<long long>(s->frame),
+                   c.waitSeconds);
+    well = appendLine(digests, cluster::digestLine(*s)) && well;
+    comm.answer(well);
+    const auto go = comm.receiveGo(wait); // the barrier before the swap
+    if (!go) {
+      std::fprintf(stderr,
+                   "tellus cluster: channel %s: the master dropped it at frame %lld (too late?) "
+                   "or is gone; stopped\n",
+                   channel.name.c_str(),
+                   static_cast<long long>(s->frame));
+      return kExitError;
+    }
+    if (!*go) return kExitError; // the show stopped: a rank failed (its message on its stderr)
+    char name[32];
+    std::snprintf(name, sizeof name, "-%05lld.png", static_cast<long long>(s->frame));
+    std::string err;
+    planet::ChannelImage image{renderer->width(), renderer->height(), renderer->readPixels()};
+    if (cal.warp || cal.blend) // the warp and blend pass (ChannelWarp.hpp)
+      image = planet::warpAndBlend(image,
+                                   image.width,
+                                   image.height,
+                                   cal.warp ? &*cal.warp : nullptr,
+                                   cal.blend ? &*cal.blend : nullptr);
+    if (!planet::writePngRgb(c.out / ("channel-" + channel.name + name),
+                             image.width,
+                             image.height,
+                             image.rgba,
+                             &err)) {
+      std::fprintf(stderr, "tellus cluster: %s\n", err.c_str());
+      return kExitError; // the master loses this channel at the next frame
+    }
+  }
+}
+
+} // namespace tellus::commands
