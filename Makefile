@@ -42,6 +42,11 @@ run: build
 # embedded from there by the sanitizer trees (TELLUS_WEB_DIST_FROM); the fuzz tree builds only
 # the parsers. Each stage says how long it took, and each ctest run where its time went
 # (tools/test-times).
+# On CI (a fresh machine, no ccache) compiling the four trees from scratch (~1,130 files) is most
+# of its time. Every tree but the debug preset is a unity build (TELLUS_UNITY_BUILD,
+# CMakeLists.txt: batches of 8 files a translation unit), which built an ASan+UBSan sample in
+# 0.69x the CPU of file by file; the four trees are estimated at ~0.70x (bench/RESULTS.md, "CI
+# build CPU"). -DTELLUS_UNITY_BUILD=OFF compiles file by file.
 test: format-check test-release test-sanitizers fuzz
 
 format-check:
