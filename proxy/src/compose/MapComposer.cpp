@@ -137,9 +137,32 @@ MapComposer::compose(ComposeRequest request,
   return {};
 }
 
+namespace {
+
+/** The texels of the tiles a map was asked to be made of, into `map` (upstreamTexels,
+ * cachedTexels), and the map's own (outputTexels). */
+void countSourceTexels(const MapComposer::Job& job, ComposedMap& map) {
+  for (const MapComposer::Job::Layer& l : job.layers) {
+    const auto texels = static_cast<std::uint64_t>(l.grid->spec().tileWidth) *
+                        static_cast<std::uint64_t>(l.grid->spec().tileHeight);
+    for (const TileAnswer& a : l.answers) {
+      if (a.kind != TileAnswer::Kind::Tile) continue;
+      (a.origin == TileOrigin::Miss ? map.upstreamTexels : map.cachedTexels) += texels;
+    }
+  }
+  if (map.kind == ComposedMap::Kind::Map) {
+    map.outputTexels = static_cast<std::uint64_t>(job.request.width) *
+                       static_cast<std::uint64_t>(job.request.height);
+  }
+}
+
+} // namespace
+
 void MapComposer::finish(const std::shared_ptr<Job>& job) {
   try {
-    job->done(renderMap(*job, tiles_, decodedCache_.get(), jpegQuality_));
+    ComposedMap map = renderMap(*job, tiles_, decodedCache_.get(), jpegQuality_);
+    countSourceTexels(*job, map);
+    job->done(std::move(map));
   } catch (const std::exception& e) {
     ComposedMap failedMap;
     failedMap.kind = ComposedMap::Kind::Error;
