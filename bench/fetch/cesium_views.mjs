@@ -5,6 +5,8 @@
 //   {"name", "requests", "texels", "seconds", "settled"} (settled: every tile in view was drawn
 //   before CESIUM_LIMIT_S seconds, default 300; else what it had fetched by then).
 // Usage: node cesium_views.mjs NODE_MODULES UPSTREAM_URL VIEWS_JSON OUT
+// Env WMS_URL and WMS_LAYER: the WMS CesiumJS asks (default UPSTREAM_URL/wms, layer synthetic),
+// e.g. `tellus serve` in front of the upstream (run.py's PROXY=1); the counts stay the upstream's.
 import {existsSync, readFileSync} from 'node:fs';
 import {dirname, join} from 'node:path';
 import {fileURLToPath} from 'node:url';
@@ -27,8 +29,9 @@ try {
     const page = await context.newPage();
     await fetch(`${upstream}/reset`);
     const started = Date.now();
-    const q = new URLSearchParams({wms: `${upstream}/wms`, lat: v.lat, lon: v.lon, alt: v.alt,
-                                   heading: v.heading, tilt: v.tilt});
+    const q = new URLSearchParams({wms: process.env.WMS_URL ?? `${upstream}/wms`,
+                                   layers: process.env.WMS_LAYER ?? 'synthetic', lat: v.lat,
+                                   lon: v.lon, alt: v.alt, heading: v.heading, tilt: v.tilt});
     await page.goto(`${fixture}/cesium_fetch.html?${q}`, {waitUntil: 'load'});
     // A view that never settles (tiles still loading after the limit) is reported as it stands.
     const settled = await page

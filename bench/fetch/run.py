@@ -11,13 +11,19 @@ over the screen (p10/p50/p90 of the larger and of the smaller side, on a 32 x 18
 on the globe), and the seconds to a complete image. Texel sizes come from the screenshot's blue
 (the resolution of the map drawn there) and the camera's rays cast onto the WGS84 ellipsoid (both
 renderers place the same pose the same way: heading from north, tilt from the nadir).
+With PROXY=1, instead: CesiumJS through `tellus serve` (a fresh server and cache per view, the
+same configuration, CesiumJS asking its layer synthetic-imagery), and per view what the server
+returned (tellus_compose_output_texels_total), what it fetched upstream for it (the upstream's
+own count, and tellus_compose_source_texels_total{origin="upstream"}) and their ratio (issue 29's
+goal: at most 2).
 Usage: bench/fetch/run.py [TELLUS] (default build/tools/tellus/tellus); env THRESHOLDS (default
-"1 2"), OVERVIEW (default "0 1": without and with renderer.overview, issue 29), VIEWS (names, default all), NO_CESIUM=1, NODE_MODULES (default build/tests/web-npm/
-node_modules), OUT (default a new temporary directory). Prints a Markdown table and writes
-OUT/results.json."""
+"1 2"), OVERVIEW (default "0 1": without and with renderer.overview, issue 29), VIEWS (names,
+default all), NO_CESIUM=1, PROXY=1, NODE_MODULES (default build/tests/web-npm/node_modules), OUT
+(default a new temporary directory). Prints a Markdown table and writes OUT/results.json."""
 import json
 import math
 import os
+import socket
 import subprocess
 import sys
 import tempfile
@@ -173,6 +179,82 @@ def table(rows):
               f"{'/'.join(fmt(x) for x in m['smaller'])} | {r['seconds']:.1f} |")
 
 
+def metrics(url):
+    """The samples of a Prometheus exposition at url, by name with labels."""
+    with urllib.request.urlopen(url, timeout=30) as r:
+        text = r.read().decode()
+    out = {}
+    for line in text.splitlines():
+        if line and not line.startswith("#"):
+            name, _, value = line.rpartition(" ")
+            out[name] = float(value)
+    return out
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def through_serve(tellus, url, config, views, out, node_modules):
+    """CesiumJS through a fresh `tellus serve` per view (PROXY=1): rows of what it cost upstream."""
+    rows = []
+    for v in views:
+        port = free_port()
+        cache = tempfile.mkdtemp(prefix=f"serve-{v[0]}-", dir=out)
+        log = open(os.path.join(out, f"serve-{v[0]}.log"), "w")
+        server = subprocess.Popen([tellus, "serve", "--config", config, "--cache", cache,
+                                   "--listen", f"127.0.0.1:{port}"], stdout=log, stderr=log)
+        base = f"http://127.0.0.1:{port}"
+        try:
+            for _ in range(100):
+                try:
+                    metrics(base + "/metrics")
+                    break
+                except OSError:
+                    time.sleep(0.1)
+            vfile = os.path.join(out, f"views-{v[0]}.json")
+            with open(vfile, "w") as f:
+                json.dump([{"name": v[0], "lat": v[1], "lon": v[2], "alt": v[3], "heading": v[4],
+                            "tilt": v[5], "width": W, "height": H}], f)
+            env = dict(os.environ, WMS_URL=base + "/wms", WMS_LAYER="synthetic-imagery")
+            run = subprocess.run(["node", os.path.join(HERE, "cesium_views.mjs"), node_modules, url,
+                                  vfile, out], stdout=subprocess.PIPE, text=True, env=env)
+            m = metrics(base + "/metrics")
+        finally:
+            server.terminate()
+            server.wait()
+            log.close()
+        for line in run.stdout.splitlines():
+            c = json.loads(line)
+            maps = sum(x for k, x in m.items() if k.startswith(
+                'tellus_http_requests_total{protocol="wms",code="200"'))
+            # CesiumJS's maps are 256 x 256 (the count for a binary without the counter).
+            served = m.get("tellus_compose_output_texels_total", maps * 256 * 256)
+            row = {"view": c["name"], "settled": c["settled"], "seconds": c["seconds"],
+                   "maps": int(maps), "served_texels": served,
+                   "upstream_requests": c["requests"], "upstream_texels": c["texels"],
+                   "counted_upstream_texels": m.get(
+                       'tellus_compose_source_texels_total{origin="upstream"}', float("nan")),
+                   "tile_errors": c.get("tileErrors", 0)}
+            row["ratio"] = row["upstream_texels"] / served if served else float("nan")
+            rows.append(row)
+            print(json.dumps(row), flush=True)
+    return rows
+
+
+def serve_table(rows):
+    print("| view | GetMaps answered | texels answered | upstream GetMaps | upstream texels "
+          "(server's count) | upstream / answered | seconds |")
+    print("|---|---|---|---|---|---|---|")
+    for r in rows:
+        print(f"| {r['view']}{'' if r['settled'] else ' (not settled)'} | {r['maps']} | "
+              f"{r['served_texels']:.0f} | {r['upstream_requests']} | {r['upstream_texels']} "
+              f"({r['counted_upstream_texels']:.0f}) | **{r['ratio']:.2f}** | "
+              f"{r['seconds']:.1f} |")
+
+
 def remeasure(out):
     """Measures the images of an earlier run again (run.py --remeasure OUT)."""
     with open(os.path.join(out, "results.json")) as f:
@@ -210,6 +292,14 @@ def main():
             with open(cfgs[ov], "w") as f:
                 f.write(config.replace("@OVERVIEW@", "overview: synthetic-overview" if ov == "1"
                                        else "# no overview"))
+        nm = os.environ.get("NODE_MODULES", os.path.join(ROOT, "build/tests/web-npm/node_modules"))
+        if os.environ.get("PROXY"):
+            rows = through_serve(tellus, url, cfgs["0"], views, out, nm)
+            with open(os.path.join(out, "results.json"), "w") as f:
+                json.dump(rows, f, indent=1)
+            print(f"\n{out}\n")
+            serve_table(rows)
+            return
         overviews = os.environ.get("OVERVIEW", "0 1").split()
         rows = []
         for v in views:
@@ -233,7 +323,6 @@ def main():
                              "seconds": seconds, **counts, "measure": m})
                 print(json.dumps(rows[-1]), flush=True)
         if not os.environ.get("NO_CESIUM"):
-            nm = os.environ.get("NODE_MODULES", os.path.join(ROOT, "build/tests/web-npm/node_modules"))
             vfile = os.path.join(out, "views.json")
             with open(vfile, "w") as f:
                 json.dump([{"name": v[0], "lat": v[1], "lon": v[2], "alt": v[3], "heading": v[4],

@@ -82,12 +82,14 @@ const std::uint8_t* px(const std::vector<std::uint8_t>& canvas, int width, int i
 
 } // namespace
 
-TEST(Compose, LevelIsTheCoarsestNotCoarserThanTheMap) {
+TEST(Compose, LevelIsTheCoarsestWithinSqrt2OfTheMap) {
   const auto g = grid(512, 10);
   // Level 0: 36 deg / 512 px. A map of exactly that resolution takes level 0.
   EXPECT_EQ(composeLevel(g, Sector{0, 0, 36, 36}, 512, 512, 0), 0);
-  // A little finer than level 0 needs level 1; a little coarser is still level 0.
-  EXPECT_EQ(composeLevel(g, Sector{0, 0, 36, 36}, 513, 513, 0), 1);
+  // A little finer than level 0 is still level 0 (magnified 1.002 times: within kMaxUpsampling);
+  // finer than that by more than sqrt 2 needs level 1; a little coarser is still level 0.
+  EXPECT_EQ(composeLevel(g, Sector{0, 0, 36, 36}, 513, 513, 0), 0);
+  EXPECT_EQ(composeLevel(g, Sector{0, 0, 36, 36}, 725, 725, 0), 1);
   EXPECT_EQ(composeLevel(g, Sector{0, 0, 36, 36}, 300, 300, 0), 0);
   // The finer of the two axes decides.
   EXPECT_EQ(composeLevel(g, Sector{0, 0, 36, 36}, 100, 2048, 0), 2);

@@ -1126,14 +1126,46 @@ TEST(ComposeIntegration, AnyBoxIsComposedFromTilesFetchedOnce) {
 TEST(ComposeIntegration, AntimeridianBoxJoinsBothSides) {
   test::FakeUpstream up(tileReply);
   Proxy p(up.url("/wms"));
-  // 0.1-degree pixels: level 1 (18-degree tiles), columns 19 and 0, rows 4 and 5.
-  const auto r = p.get(getMap("sat", "170,-10,190,10", 200, 200, "image/png"));
+  // 0.08-degree pixels: level 1 (18-degree tiles; level 0's 0.14-degree texels would be 1.76
+  // pixels), columns 19 and 0, rows 4 and 5.
+  const auto r = p.get(getMap("sat", "170,-10,190,10", 250, 250, "image/png"));
   ASSERT_EQ(r.status, 200);
   ASSERT_EQ(r.header("content-type"), "image/png") << r.body.substr(0, 400);
   EXPECT_EQ(up.requests(), 4u);
-  const auto img = decodeAnswer(r, 200, 200);
-  expectNear(rgbAt(img, 50, 50), tileColour(p, 1, 19, 5), 2, "west of 180, north");
-  expectNear(rgbAt(img, 150, 150), tileColour(p, 1, 0, 4), 2, "east of 180, south");
+  const auto img = decodeAnswer(r, 250, 250);
+  expectNear(rgbAt(img, 62, 62), tileColour(p, 1, 19, 5), 2, "west of 180, north");
+  expectNear(rgbAt(img, 187, 187), tileColour(p, 1, 0, 4), 2, "east of 180, south");
+}
+
+// Issue 29: a map coarser than level zero comes from a layer of the same upstream layer on a
+// coarser global grid (here 90-degree tiles: 8 tiles for the world, not level zero's 50), and
+// /metrics counts what composed maps cost upstream against what they return. A map that the
+// coarser grid would magnify more than sqrt 2 times still comes from "sat".
+TEST(ComposeIntegration, CoarseMapsComeFromTheSameDataOnACoarserGrid) {
+  test::FakeUpstream up(tileReply);
+  LayerSpec ov;
+  ov.name = "sat-overview";
+  ov.upstreamLayer = "upsat";
+  ov.dataset.grid = GridSpec{Sector{}, 90.0, 256, 256, 1};
+  ov.dataset.mimeType = "image/jpeg";
+  ov.maxAge = 3600s;
+  Proxy p(up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, Proxy::fastPolicy(), "upsat", {}, {ov});
+  // 1-degree pixels: the overview's 0.35-degree texels.
+  ASSERT_EQ(p.get(getMap("sat", "-180,-90,180,90", 360, 180, "image/png")).status, 200);
+  EXPECT_EQ(up.requests(), 8u);
+  // 0.2-degree pixels: the overview would be 1.76 times the pixel; level 0 of "sat", 3 x 2 tiles.
+  ASSERT_EQ(p.get(getMap("sat", "-170,-80,-100,-30", 350, 250, "image/png")).status, 200);
+  EXPECT_EQ(up.requests(), 14u);
+  const auto m = p.get("/metrics");
+  ASSERT_EQ(m.status, 200);
+  const auto value = [&](const std::string& name) -> long long {
+    const auto at = m.body.find("\n" + name + " ");
+    if (at == std::string::npos) return -1;
+    return std::stoll(m.body.substr(at + name.size() + 2));
+  };
+  EXPECT_EQ(value("tellus_compose_output_texels_total"), 360 * 180 + 350 * 250) << m.body;
+  EXPECT_EQ(value("tellus_compose_source_texels_total{origin=\"upstream\"}"), 14 * 256 * 256);
+  EXPECT_EQ(value("tellus_compose_source_texels_total{origin=\"cache\"}"), 0);
 }
 
 TEST(ComposeIntegration, LayersAreDrawnInOrderWithTheirOpacity) {

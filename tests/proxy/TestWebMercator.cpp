@@ -181,8 +181,8 @@ TEST(WebMercator, BandsTakeFinerLevelsTowardThePoles) {
   for (std::size_t k = 1; k < bands.size(); ++k)
     EXPECT_EQ(bands[k].box.rowBegin, bands[k - 1].box.rowEnd);
   // Symmetric about the equator; the equator at the longitude's need (0.703 deg pixels: level 0,
-  // 0.5625 deg texels), each row at the coarsest level that is not coarser than its pixel's
-  // extent in latitude.
+  // 0.5625 deg texels), each row at the coarsest level whose texels are at most kMaxUpsampling
+  // times its pixel's extent in latitude.
   EXPECT_EQ(bands.front().level, bands.back().level);
   const auto levelOfRow = [&](std::int32_t j) {
     for (const auto& b : bands)
@@ -193,9 +193,9 @@ TEST(WebMercator, BandsTakeFinerLevelsTowardThePoles) {
   for (const std::int32_t j : {0, 10, 40, 100, 200}) {
     const double extent = world.rowEdgeLatitude(j, 512) - world.rowEdgeLatitude(j + 1, 512);
     const std::int32_t l = levelOfRow(j);
-    EXPECT_LE(g.deltaDeg(l) / 64, extent * (1 + 1e-9)) << j;
+    EXPECT_LE(g.deltaDeg(l) / 64, kMaxUpsampling * extent * (1 + 1e-9)) << j;
     if (l > 0) {
-      EXPECT_GT(g.deltaDeg(l - 1) / 64, extent) << j;
+      EXPECT_GT(g.deltaDeg(l - 1) / 64, kMaxUpsampling * extent) << j;
     }
   }
   EXPECT_EQ(composeLevel(g, world, 512, 512, 0), bands.front().level);
@@ -237,8 +237,8 @@ TEST(WebMercator, ValuesRowByRowAreTheInverseMercator) {
 }
 
 // Around 80 N (a map of 200 km square, 64 x 64 pixels): rows at the inverse Mercator, and each row
-// from a level whose texels are no taller than its pixels (not magnified: no blur), the same
-// level for the imagery (blue = 10 * level).
+// from a level whose texels are at most kMaxUpsampling times as tall as its pixels (magnified no
+// more than any map), the same level for the imagery (blue = 10 * level).
 TEST(WebMercator, At80DegreesRowsAreNeitherStretchedNorBlurred) {
   const auto g = grid(32, 10);
   const LatitudeTiles values(g, LatitudeTiles::Kind::Values);
@@ -257,12 +257,12 @@ TEST(WebMercator, At80DegreesRowsAreNeitherStretchedNorBlurred) {
     EXPECT_NEAR(p[1], 255.0 * (90.0 - lat) / 180.0, 1.01) << j;
     const std::int32_t level = p[2] / 10;
     const double extent = box.rowEdgeLatitude(j, h) - box.rowEdgeLatitude(j + 1, h);
-    EXPECT_LE(g.deltaDeg(level) / 32, extent * (1 + 1e-9)) << j;
+    EXPECT_LE(g.deltaDeg(level) / 32, kMaxUpsampling * extent * (1 + 1e-9)) << j;
     EXPECT_EQ(p[3], 255);
   }
-  // The longitude's need alone (1.8 degrees over 64 px = 0.028 deg) would take level 6 here (a
-  // 0.0176 deg texel); 80 N's rows need about 1/cos(80) = 5.8 times finer: level 8.
-  EXPECT_EQ(composeLevel(g, Sector{box.west, 79.8, box.east, 80.2}, w, 1, 0), 6);
+  // The longitude's need alone (1.8 degrees over 64 px = 0.028 deg) would take level 5 here (a
+  // 0.035 deg texel, 1.25 pixels); 80 N's rows need about 1/cos(80) = 5.8 times finer: level 8.
+  EXPECT_EQ(composeLevel(g, Sector{box.west, 79.8, box.east, 80.2}, w, 1, 0), 5);
   EXPECT_EQ(canvas[2] / 10, 8);
   EXPECT_EQ(canvas[static_cast<std::size_t>((h - 1) * w * 4 + 2)] / 10, 8);
 }

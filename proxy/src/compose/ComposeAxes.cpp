@@ -372,16 +372,17 @@ std::expected<std::vector<ComposeTile>, std::size_t> composeTilesYcc(const TileG
 
 namespace {
 
-/** The coarsest level from `firstLevel` whose texels are no larger than a pixel of pixelX x
- * pixelY degrees; the deepest when none is. */
+/** The level from `firstLevel` a pixel of pixelX x pixelY degrees is composed from: the coarsest
+ * whose texels are at most kMaxUpsampling times the pixel on both axes (composeLevel); the
+ * deepest when none is. */
 std::int32_t levelFor(const TileGrid& grid, double pixelX, double pixelY, std::int32_t firstLevel) {
   const GridSpec& spec = grid.spec();
   const std::int32_t first = std::clamp(firstLevel, 0, grid.numLevels() - 1);
+  // A relative tolerance: a map of exactly a level's resolution (times the bound) takes it.
+  const double x = pixelX * kMaxUpsampling * (1.0 + 1e-9);
+  const double y = pixelY * kMaxUpsampling * (1.0 + 1e-9);
   for (std::int32_t l = first; l < grid.numLevels(); ++l) {
-    const double texelX = grid.deltaDeg(l) / spec.tileWidth;
-    const double texelY = grid.deltaDeg(l) / spec.tileHeight;
-    // A relative tolerance: a map of exactly the level's resolution takes that level.
-    if (texelX <= pixelX * (1.0 + 1e-9) && texelY <= pixelY * (1.0 + 1e-9)) return l;
+    if (grid.deltaDeg(l) / spec.tileWidth <= x && grid.deltaDeg(l) / spec.tileHeight <= y) return l;
   }
   return grid.numLevels() - 1;
 }

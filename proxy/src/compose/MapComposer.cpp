@@ -58,6 +58,50 @@ void appendTiles(std::vector<ComposeTile>& keys, std::vector<ComposeTile>&& more
   }
 }
 
+/** Whether `c` serves the same upstream data as `l` (upstream, upstream layer, style, body, kind,
+ * times) on another grid. */
+bool sameSource(const LayerSpec& c, const LayerSpec& l) {
+  return c.name != l.name && c.upstream == l.upstream && c.upstreamLayer == l.upstreamLayer &&
+         c.dataset.style == l.dataset.style && c.dataset.body == l.dataset.body &&
+         c.elevation == l.elevation && !c.values && !l.values && c.timeValues == l.timeValues &&
+         c.timePeriod == l.timePeriod;
+}
+
+/**
+ * The layer a map of latitude rows coarser than `l`'s level zero is composed from (issue 29):
+ * another layer of the same upstream data on a global grid (e.g. the one `renderer.overview`
+ * names), the coarsest whose level for this map still has texels at most kMaxUpsampling times
+ * its pixels and coarser than `l`'s on both axes; null when there is none (the map then takes
+ * `l`'s level zero, however many of its tiles that needs).
+ */
+const LayerSpec* coarserSource(const TileService& tiles,
+                               const LayerSpec& l,
+                               const TileGrid& g,
+                               const ComposeRequest& r) {
+  if (r.bbox.rows != MapRows::Latitude || r.width <= 0 || r.height <= 0) return nullptr;
+  if (composeLevel(g, r.bbox, r.width, r.height, 0) != 0) return nullptr;
+  const double px = (r.bbox.east - r.bbox.west) / r.width * kMaxUpsampling * (1.0 + 1e-9);
+  const double py = (r.bbox.north - r.bbox.south) / r.height * kMaxUpsampling * (1.0 + 1e-9);
+  double bestX = g.deltaDeg(0) / g.spec().tileWidth;
+  double bestY = g.deltaDeg(0) / g.spec().tileHeight;
+  const LayerSpec* best = nullptr;
+  for (const LayerSpec& c : tiles.layers()) {
+    if (!sameSource(c, l)) continue;
+    const TileGrid* cg = tiles.grid(c.name);
+    if (!cg) continue;
+    const Sector& s = cg->spec().sector;
+    if (s.west > -180.0 || s.east < 180.0 || s.south > -90.0 || s.north < 90.0) continue;
+    const std::int32_t level = composeLevel(*cg, r.bbox, r.width, r.height, 0);
+    const double cx = cg->deltaDeg(level) / cg->spec().tileWidth;
+    const double cy = cg->deltaDeg(level) / cg->spec().tileHeight;
+    if (cx > px || cy > py || cx <= bestX || cy <= bestY) continue;
+    best = &c;
+    bestX = cx;
+    bestY = cy;
+  }
+  return best;
+}
+
 } // namespace
 
 std::size_t MapComposer::decodedCacheBytes() const {
@@ -92,6 +136,10 @@ MapComposer::compose(ComposeRequest request,
     l.spec = cl;
     l.grid = tiles_.grid(cl.layer->name);
     if (!l.grid) return std::unexpected("no layer '" + cl.layer->name + "'");
+    if (const LayerSpec* coarser = coarserSource(tiles_, *cl.layer, *l.grid, r)) {
+      l.spec.layer = coarser;
+      l.grid = tiles_.grid(coarser->name);
+    }
     l.bands = composeBands(*l.grid, r.bbox, r.width, r.height, 0);
     // The planes' chroma rows straddle two bands' rows: a map of several bands on the RGB path.
     if (l.bands.size() > 1) job->ycc = false;
@@ -137,9 +185,32 @@ MapComposer::compose(ComposeRequest request,
   return {};
 }
 
+namespace {
+
+/** The texels of the tiles a map was asked to be made of, into `map` (upstreamTexels,
+ * cachedTexels), and the map's own (outputTexels). */
+void countSourceTexels(const MapComposer::Job& job, ComposedMap& map) {
+  for (const MapComposer::Job::Layer& l : job.layers) {
+    const auto texels = static_cast<std::uint64_t>(l.grid->spec().tileWidth) *
+                        static_cast<std::uint64_t>(l.grid->spec().tileHeight);
+    for (const TileAnswer& a : l.answers) {
+      if (a.kind != TileAnswer::Kind::Tile) continue;
+      (a.origin == TileOrigin::Miss ? map.upstreamTexels : map.cachedTexels) += texels;
+    }
+  }
+  if (map.kind == ComposedMap::Kind::Map) {
+    map.outputTexels = static_cast<std::uint64_t>(job.request.width) *
+                       static_cast<std::uint64_t>(job.request.height);
+  }
+}
+
+} // namespace
+
 void MapComposer::finish(const std::shared_ptr<Job>& job) {
   try {
-    job->done(renderMap(*job, tiles_, decodedCache_.get(), jpegQuality_));
+    ComposedMap map = renderMap(*job, tiles_, decodedCache_.get(), jpegQuality_);
+    countSourceTexels(*job, map);
+    job->done(std::move(map));
   } catch (const std::exception& e) {
     ComposedMap failedMap;
     failedMap.kind = ComposedMap::Kind::Error;

@@ -69,6 +69,11 @@ struct ComposedMap {
   std::size_t tiles = 0;        ///< tiles sampled (all layers, fallbacks included)
   std::size_t decodedTiles = 0; ///< of those, decoded for this map (the rest came decoded)
   std::size_t fallbackPixels = 0;
+  /// Texels of the tiles asked for the map (all layers): fetched from the upstream for it
+  /// (TileOrigin::Miss), or found in the cache (issue 29: its upstream cost against its pixels).
+  std::uint64_t upstreamTexels = 0;
+  std::uint64_t cachedTexels = 0;
+  std::uint64_t outputTexels = 0; ///< width x height of a Map, else 0
 };
 
 class DecodedTileCache; // MapJob.hpp

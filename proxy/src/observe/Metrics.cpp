@@ -118,6 +118,14 @@ void ProxyMetrics::composedTiles(std::uint64_t decoded, std::uint64_t kept) noex
   composedKept_.fetch_add(kept, std::memory_order_relaxed);
 }
 
+void ProxyMetrics::composedTexels(std::uint64_t output,
+                                  std::uint64_t fromUpstream,
+                                  std::uint64_t fromCache) noexcept {
+  outputTexels_.fetch_add(output, std::memory_order_relaxed);
+  upstreamTexels_.fetch_add(fromUpstream, std::memory_order_relaxed);
+  cachedTexels_.fetch_add(fromCache, std::memory_order_relaxed);
+}
+
 std::string ProxyMetrics::render(const std::vector<UpstreamMetrics>& upstreams,
                                  std::optional<std::int64_t> cacheBytes,
                                  std::uint64_t decodedTileCacheBytes,
@@ -312,6 +320,21 @@ void ProxyMetrics::renderComposer(std::string& out, std::uint64_t decodedTileCac
          std::to_string(composedDecoded_.load(std::memory_order_relaxed)) + "\n";
   out += "tellus_composed_map_tiles_total{source=\"kept\"} " +
          std::to_string(composedKept_.load(std::memory_order_relaxed)) + "\n";
+  header(out,
+         "tellus_compose_output_texels_total",
+         "counter",
+         "Pixels of the composed GetMaps and WMTS tiles answered (width x height).");
+  out += "tellus_compose_output_texels_total " +
+         std::to_string(outputTexels_.load(std::memory_order_relaxed)) + "\n";
+  header(out,
+         "tellus_compose_source_texels_total",
+         "counter",
+         "Texels of the tiles composed answers were made from: fetched from the upstream for the "
+         "answer, or found in the cache (a tile counted once per answer that samples it).");
+  out += "tellus_compose_source_texels_total{origin=\"upstream\"} " +
+         std::to_string(upstreamTexels_.load(std::memory_order_relaxed)) + "\n";
+  out += "tellus_compose_source_texels_total{origin=\"cache\"} " +
+         std::to_string(cachedTexels_.load(std::memory_order_relaxed)) + "\n";
   header(out,
          "tellus_decoded_tile_cache_bytes",
          "gauge",

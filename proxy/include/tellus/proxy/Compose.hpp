@@ -40,8 +40,16 @@
 
 namespace tellus {
 
+/** The most a composed map magnifies its level's texels along either axis (issue 29): sqrt(2).
+ * Of the two levels around a pixel's size, the one nearer in log2 of the texel size (as CesiumJS
+ * picks an imagery level): a map costs 0.5 to 2 texels of its level a pixel, where the finer of
+ * the two alone would cost 1 to 4. */
+inline constexpr double kMaxUpsampling = 1.4142135623730951;
+
 /** The level a map of `width` x `height` pixels over `box` is composed from (a Mercator map's:
- * the finest of its bands', composeBands). */
+ * the finest of its bands', composeBands): the coarsest level whose texels are at most
+ * kMaxUpsampling times the map's pixels on both axes (a pixel of exactly a level's texel takes
+ * that level); the deepest level when none is fine enough; never above `firstLevel`. */
 std::int32_t composeLevel(const TileGrid& grid,
                           const MapBox& box,
                           std::int32_t width,
@@ -54,8 +62,9 @@ std::int32_t composeLevel(const TileGrid& grid,
  * than of longitude, so one level for the whole map would either blur the rows near the poles
  * (the level of the equator's pixels magnified 5.8 times at 80 degrees) or need the finest
  * level's tiles over the whole box (16 to 256 times the tiles of a world map): each row takes the
- * coarsest level whose texels are no larger than its pixels on both axes (its extent in latitude
- * from its two edges' inverse Mercator), and runs of rows of the same level are one band. Rows
+ * level composeLevel's rule gives its pixels (its extent in latitude from its two edges' inverse
+ * Mercator: near the poles the latitude axis decides), and runs of rows of the same level are one
+ * band. Rows
  * past the Mercator square join a neighbouring band (they draw nothing). Bands cover rows
  * [0, height) in order, each drawn by the composers below with its own box (rowBegin, rowEnd)
  * and level.
