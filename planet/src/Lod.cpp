@@ -122,8 +122,8 @@ void testWholeEdges(const std::array<glm::dvec2, 4>& px,
 enum class Point { Corner, Midpoint, Nearest, Rim, Ground, Border };
 
 /** A point of an edge where it crosses the viewport's border, by the edge's parameter (0 at the
- * edge's first corner, 1 at its second; chord and arc agree to within a fraction of a texel's
- * worth of the sample's place). */
+ * edge's first corner, 1 at its second), found on the chord between the corners (testTexels
+ * moves it onto the edge's own crossing). */
 struct BorderPoint {
   std::size_t a, b;
   double t;
@@ -389,7 +389,7 @@ void testTexels(const Camera& camera,
     };
     double ta = bp.t, tb = std::clamp(bp.t + (bp.t < 0.5 ? 1e-3 : -1e-3), 0.0, 1.0);
     double fa = dist(ta), fb = dist(tb);
-    for (int i = 0; i < 4 && std::abs(fa) > 1e-9 * std::abs(pointAt(ta).position.x) && fa != fb;
+    for (int i = 0; i < 4 && std::abs(fa) > 1e-9 * glm::length(pointAt(ta).position) && fa != fb;
          ++i) {
       const double tc = std::clamp(ta - fa * (ta - tb) / (fa - fb), 0.0, 1.0);
       tb = ta;
