@@ -93,10 +93,10 @@ enum class EdgeSplit { LengthOverLimit, RatioOverOne };
 
 /** The thesis's test on the corners' pixels: SW-SE and NW-NE run east-west, SE-NE and NW-SW
  * north-south; a pole edge has length 0. */
-void testEdges(const std::array<glm::dvec2, 4>& px,
-               const LodParams& params,
-               EdgeSplit rule,
-               LodResult& r) noexcept {
+void testWholeEdges(const std::array<glm::dvec2, 4>& px,
+                    const LodParams& params,
+                    EdgeSplit rule,
+                    LodResult& r) noexcept {
   const double limitW = static_cast<double>(params.tileWidthPx) * params.threshold;
   const double limitH = static_cast<double>(params.tileHeightPx) * params.threshold;
   const double limitW2 = limitW * limitW;
@@ -117,8 +117,66 @@ void testEdges(const std::array<glm::dvec2, 4>& px,
   }
 }
 
-/** Which sample point of the local texel test a projection is asked about. */
-enum class Point { Corner, Midpoint, Nearest, Rim, Ground };
+/** Which sample point of the local texel test a projection is asked about. Border: where an edge
+ * of the node crosses the viewport's border (the on-screen test's clipped edges). */
+enum class Point { Corner, Midpoint, Nearest, Rim, Ground, Border };
+
+/** A point of an edge where it crosses the viewport's border, by the edge's parameter (0 at the
+ * edge's first corner, 1 at its second), found on the chord between the corners (testTexels
+ * moves it onto the edge's own crossing). */
+struct BorderPoint {
+  std::size_t a, b;
+  double t;
+  int plane; ///< the frustum plane crossed (clipSegment's order)
+};
+
+/** The signed distance of a clip-space point inside frustum plane k: the near plane, then the
+ * right, left, top and bottom sides (>= 0 inside). */
+double planeDistance(const glm::dvec4& c, int k, double near) noexcept {
+  switch (k) {
+  case 0:
+    return c.w - near;
+  case 1:
+    return c.w - c.x;
+  case 2:
+    return c.w + c.x;
+  case 3:
+    return c.w - c.y;
+  default:
+    return c.w + c.y;
+  }
+}
+
+/** The part of the clip-space segment a-b inside the view frustum (near plane and the four
+ * sides), as parameters [t0, t1]; false when none of it is. */
+bool clipSegment(const glm::dvec4& a,
+                 const glm::dvec4& b,
+                 double near,
+                 double& t0,
+                 double& t1,
+                 int* plane0 = nullptr,
+                 int* plane1 = nullptr) {
+  t0 = 0.0;
+  t1 = 1.0;
+  const std::array<glm::dvec2, 5> d{{{a.w - near, b.w - near},
+                                     {a.w - a.x, b.w - b.x},
+                                     {a.w + a.x, b.w + b.x},
+                                     {a.w - a.y, b.w - b.y},
+                                     {a.w + a.y, b.w + b.y}}};
+  for (int k = 0; k < 5; ++k) {
+    const glm::dvec2& p = d[static_cast<std::size_t>(k)];
+    if (p.x < 0.0 && p.y < 0.0) return false;
+    if (p.x < 0.0 && p.x / (p.x - p.y) > t0) {
+      t0 = p.x / (p.x - p.y);
+      if (plane0) *plane0 = k;
+    }
+    if (p.y < 0.0 && p.x / (p.x - p.y) < t1) {
+      t1 = p.x / (p.x - p.y);
+      if (plane1) *plane1 = k;
+    }
+  }
+  return t1 > t0;
+}
 
 /** The perspective's pixels: the corners through the view-projection and the perspective
  * division; a texel through the division's derivative at its point (projectedLength2). */
@@ -127,10 +185,54 @@ public:
   static constexpr bool kMidpoints = false;
   static constexpr EdgeSplit kEdgeSplit = EdgeSplit::LengthOverLimit;
 
-  explicit PerspectiveProbe(const Camera& camera) noexcept
+  /** onScreen: only what the viewport shows counts (LodParams::onScreenOnly). */
+  PerspectiveProbe(const Camera& camera, bool onScreen, double a = 1.0, double b = 1.0) noexcept
       : camera_(camera), halfW_(0.5 * static_cast<double>(camera.viewport().width)),
-        halfH_(0.5 * static_cast<double>(camera.viewport().height)),
-        rows_(camera.viewProjection()) {}
+        halfH_(0.5 * static_cast<double>(camera.viewport().height)), rows_(camera.viewProjection()),
+        onScreen_(onScreen), invA2_(1.0 / (a * a)), invB2_(1.0 / (b * b)) {}
+
+  /** With onScreen: whether an admitted sample faces the camera (its ellipsoid normal towards
+   * the eye). A node whose on-screen samples all lie on the globe's far side is hidden (the
+   * culling's bounds are conservative for large nodes); it keeps the whole-node test, which
+   * splits it so that culling can drop its children, instead of being drawn and fetched. */
+  bool sawFacing() const noexcept { return facing_; }
+
+  /** The edges: with onScreen, each edge's part inside the frustum against its share of the tile's
+   * texels (an edge wholly off screen does not count), and where an edge crosses the border the
+   * crossing becomes a sample of the local test; else the thesis's whole edges. */
+  void testEdges(const std::array<glm::dvec2, 4>& px, const LodParams& params, LodResult& r) {
+    if (!onScreen_) {
+      testWholeEdges(px, params, kEdgeSplit, r);
+      return;
+    }
+    const double limitW = static_cast<double>(params.tileWidthPx) * params.threshold;
+    const double limitH = static_cast<double>(params.tileHeightPx) * params.threshold;
+    struct Edge {
+      std::size_t a, b;
+      bool eastWest;
+    };
+    constexpr std::array<Edge, 4> edges{
+        {{SW, SE, true}, {NW, NE, true}, {SE, NE, false}, {SW, NW, false}}};
+    for (const Edge& e : edges) {
+      double t0 = 0.0, t1 = 1.0;
+      int k0 = 0, k1 = 0;
+      if (!clipSegment(clip_[e.a], clip_[e.b], camera_.nearM(), t0, t1, &k0, &k1)) continue;
+      const glm::dvec4 p0 = clip_[e.a] + (clip_[e.b] - clip_[e.a]) * t0;
+      const glm::dvec4 p1 = clip_[e.a] + (clip_[e.b] - clip_[e.a]) * t1;
+      const glm::dvec2 d{(p1.x / p1.w - p0.x / p0.w) * halfW_,
+                         (p1.y / p1.w - p0.y / p0.w) * halfH_};
+      const double len2 = d.x * d.x + d.y * d.y;
+      const double lim = (e.eastWest ? limitW : limitH) * (t1 - t0);
+      const double ratio = len2 / (lim * lim);
+      if (ratio > r.worstRatioSquared) r.worstRatioSquared = ratio;
+      if (len2 > lim * lim) r.split = true;
+      if (t0 > 0.0) border_[borderCount_++] = {e.a, e.b, t0, k0};
+      if (t1 < 1.0) border_[borderCount_++] = {e.a, e.b, t1, k1};
+    }
+  }
+  std::span<const BorderPoint> border() const noexcept {
+    return std::span<const BorderPoint>(border_.data(), borderCount_);
+  }
 
   bool projectCorner(std::size_t i, const glm::dvec3& p, glm::dvec2& px) noexcept {
     clip_[i] = camera_.toClip(p);
@@ -146,13 +248,22 @@ public:
    * rim point only on screen: a tilted view's nadir is out of sight, the ground points stand for
    * what is in sight), and it becomes the point length2 measures at. */
   bool admit(const SurfaceFrame& f, Point kind, std::size_t corner) noexcept {
+    bool in = true;
     if (kind == Point::Corner) {
       c_ = clip_[corner];
-      return true;
+      in = !onScreen_ || (std::abs(c_.x) <= c_.w && std::abs(c_.y) <= c_.w);
+    } else {
+      c_ = camera_.toClip(f.position);
+      if (!(c_.w >= camera_.nearM())) return false;
+      in = kind == Point::Ground || kind == Point::Border ||
+           (std::abs(c_.x) <= c_.w && std::abs(c_.y) <= c_.w);
     }
-    c_ = camera_.toClip(f.position);
-    if (!(c_.w >= camera_.nearM())) return false;
-    return kind == Point::Ground || (std::abs(c_.x) <= c_.w && std::abs(c_.y) <= c_.w);
+    if (in && onScreen_ && !facing_) {
+      const glm::dvec3& p = f.position;
+      const glm::dvec3 n(p.x * invA2_, p.y * invA2_, p.z * invB2_);
+      facing_ = glm::dot(camera_.position() - p, n) > 0.0;
+    }
+    return in;
   }
   double length2(const glm::dvec3& v) const noexcept {
     return projectedLength2(rows_, c_, v, halfW_, halfH_);
@@ -164,6 +275,11 @@ private:
   ClipRows rows_;
   std::array<glm::dvec4, 4> clip_{};
   glm::dvec4 c_{0.0};
+  bool onScreen_;
+  double invA2_, invB2_;
+  bool facing_ = false;
+  std::array<BorderPoint, 8> border_{};
+  std::size_t borderCount_ = 0;
 };
 
 /** A fisheye's pixels: the same corner edges and local texels, measured in the fisheye's pixels
@@ -177,6 +293,11 @@ public:
   static constexpr EdgeSplit kEdgeSplit = EdgeSplit::RatioOverOne;
 
   explicit FisheyeProbe(const Camera& camera) noexcept : camera_(camera) {}
+
+  void testEdges(const std::array<glm::dvec2, 4>& px, const LodParams& params, LodResult& r) const {
+    testWholeEdges(px, params, kEdgeSplit, r);
+  }
+  std::span<const BorderPoint> border() const noexcept { return {}; }
 
   bool projectCorner(std::size_t, const glm::dvec3& p, glm::dvec2& px) const noexcept {
     return camera_.projectPx(p, px);
@@ -253,6 +374,31 @@ void testTexels(const Camera& camera,
   // has no corner but one: its point at the camera's longitude, the nearest, counts as well.
   if (s.east - s.west >= 360.0)
     sample(at(s.north == 90.0 ? s.south : s.north, nearLon), Point::Rim);
+  // Where an edge crosses the viewport's border (onScreenOnly): the visible part's corners.
+  const std::array<std::array<double, 2>, 4> cornerLatLon{
+      {{s.south, s.west}, {s.south, s.east}, {s.north, s.east}, {s.north, s.west}}};
+  // The crossing was found on the chord between the corners; the surface above it bulges
+  // toward the camera (a 1,000 km edge by 20 km) and may lie off screen: a few secant steps on
+  // the crossed plane's distance move it onto the border along the edge itself.
+  for (const BorderPoint& bp : probe.border()) {
+    const auto& p = cornerLatLon[bp.a];
+    const auto& q = cornerLatLon[bp.b];
+    auto pointAt = [&](double t) { return at(p[0] + (q[0] - p[0]) * t, p[1] + (q[1] - p[1]) * t); };
+    auto dist = [&](double t) {
+      return planeDistance(camera.toClip(pointAt(t).position), bp.plane, camera.nearM());
+    };
+    double ta = bp.t, tb = std::clamp(bp.t + (bp.t < 0.5 ? 1e-3 : -1e-3), 0.0, 1.0);
+    double fa = dist(ta), fb = dist(tb);
+    for (int i = 0; i < 4 && std::abs(fa) > 1e-9 * glm::length(pointAt(ta).position) && fa != fb;
+         ++i) {
+      const double tc = std::clamp(ta - fa * (ta - tb) / (fa - fb), 0.0, 1.0);
+      tb = ta;
+      fb = fa;
+      ta = tc;
+      fa = dist(ta);
+    }
+    if (std::isfinite(ta)) sample(pointAt(ta), Point::Border);
+  }
   for (const Camera::GroundPoint& gp : probe.ground()) {
     if (!gp.hit || gp.latDeg < s.south || gp.latDeg > s.north || gp.lonDeg < s.west ||
         gp.lonDeg > s.east)
@@ -269,7 +415,7 @@ template <class Probe>
 LodResult evaluateWith(const Camera& camera,
                        const NodeGeometry& node,
                        const LodParams& params,
-                       Probe probe) noexcept {
+                       Probe& probe) noexcept {
   const Lift lift(camera, node);
   LodResult r;
   std::array<glm::dvec2, 4> px{};
@@ -279,7 +425,7 @@ LodResult evaluateWith(const Camera& camera,
       r.split = true;
       return r;
     }
-  testEdges(px, params, Probe::kEdgeSplit, r);
+  probe.testEdges(px, params, r);
   if (r.split || !params.perspectiveAware) return r;
   testTexels(camera, node, params, lift, probe, r);
   return r;
@@ -287,13 +433,27 @@ LodResult evaluateWith(const Camera& camera,
 
 } // namespace
 
-LodResult
-evaluateLod(const Camera& camera, const NodeGeometry& node, const LodParams& params) noexcept {
+LodResult evaluateLod(const Camera& camera,
+                      const NodeGeometry& node,
+                      const LodParams& params,
+                      bool merged) noexcept {
   if (params.tileWidthPx < 1 || params.tileHeightPx < 1 || !(params.threshold > 0.0) ||
       !std::isfinite(params.threshold))
     return LodResult{};
-  if (camera.isFisheye()) return evaluateWith(camera, node, params, FisheyeProbe(camera));
-  return evaluateWith(camera, node, params, PerspectiveProbe(camera));
+  if (camera.isFisheye()) {
+    FisheyeProbe fisheye(camera);
+    return evaluateWith(camera, node, params, fisheye);
+  }
+  // A merged polar row or cap keeps the whole-node test: a cap's corner quad is a line (its rim's
+  // point at 180 degrees and the pole), and the rows' widening (Quadtree's fitsEastWest) measures
+  // whole half edges; the two must agree, or a row made wide by one is split by the other.
+  if (params.onScreenOnly && params.perspectiveAware && !merged) {
+    PerspectiveProbe visible(camera, true, node.equatorialRadiusM(), node.polarRadiusM());
+    const LodResult r = evaluateWith(camera, node, params, visible);
+    if (r.split || visible.sawFacing()) return r;
+  }
+  PerspectiveProbe whole(camera, false);
+  return evaluateWith(camera, node, params, whole);
 }
 
 } // namespace tellus::planet

@@ -113,7 +113,8 @@ bool Quadtree::widerPaysOff(const NodeKey& wide, std::int64_t span, const Camera
   // a ring's static nodes can be twice as many as the texel test needs, and the ring one level
   // down, closer to the pole, may fit wide (the least-node cover of the pole view does this).
   if (wide.level + 1 >= grid_.numLevels()) return false;
-  const LodResult lod = evaluateLod(camera, NodeGeometry(geodesy_, sectorOf(wide)), params_.lod);
+  const LodResult lod =
+      evaluateLod(camera, NodeGeometry(geodesy_, sectorOf(wide)), params_.lod, true);
   if (!lod.split || lod.cornerBehindCamera) return false;
   int statics = 0;
   for (std::int64_t c = wide.col; c < wide.col + wide.span; c += span)

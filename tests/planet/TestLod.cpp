@@ -2,9 +2,12 @@
 
 #include <tellus/planet/Culling.hpp>
 #include <tellus/planet/Lod.hpp>
+#include <tellus/planet/Pick.hpp>
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 
 using namespace tellus;
@@ -158,4 +161,76 @@ TEST(LodExtremes, OutputsFiniteOverACameraSweep) {
           }
         }
   EXPECT_GT(evaluated, 10000);
+}
+
+namespace {
+
+/** The largest texel side (east-west or north-south, pixels) of a node's on-screen points, by
+ * brute force over a 96 x 96 grid of its points (one texel's finite step projected). */
+double largestVisibleTexel(const Camera& cam, const Geodesy& g, const Sector& s) {
+  const double a = g.equatorialRadius(), b = g.polarRadius();
+  const double dLon = (s.east - s.west) / 512.0, dLat = (s.north - s.south) / 512.0;
+  const double w = cam.viewport().width, h = cam.viewport().height;
+  auto px = [&](double lat, double lon, glm::dvec2& out) {
+    const glm::dvec4 c = cam.toClip(surfaceFrame(a, b, lat, lon).position);
+    if (!(c.w >= cam.nearM())) return false;
+    out = {c.x / c.w * 0.5 * w, c.y / c.w * 0.5 * h};
+    return std::abs(c.x) <= c.w && std::abs(c.y) <= c.w;
+  };
+  double worst = 0.0;
+  constexpr int n = 96;
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j) {
+      const double lat = s.south + (s.north - s.south) * i / n;
+      const double lon = s.west + (s.east - s.west) * j / n;
+      glm::dvec2 p{0.0}, e{0.0}, q{0.0};
+      if (!px(lat, lon, p)) continue;
+      px(lat, lon + (j < n ? dLon : -dLon), e); // sets e wherever it is in front of the camera
+      px(lat + (i < n ? dLat : -dLat), lon, q);
+      worst = std::max({worst, glm::length(e - p), glm::length(q - p)});
+    }
+  return worst;
+}
+
+} // namespace
+
+// Issue 29: a tilted view's nodes along the screen's border reach off screen, toward the camera
+// and sideways, where perspective stretches texels most. Only their visible part counts now: a
+// node splits when its largest visible texel exceeds the threshold, and not otherwise.
+TEST(Lod, OnlyTheVisiblePartCounts) {
+  const Geodesy g;
+  const TileGrid grid = test::globalGrid();
+  const Camera cam(g, {46.5, 9.0, 5000.0, 0.0, 70.0}, {1280, 720}, 35.98);
+  const double t = 2.0;
+  int decided = 0, coarser = 0;
+  // Ground points along the bottom, the sides and the centre of the screen.
+  for (const auto& [x, y] : std::array<std::array<double, 2>, 6>{
+           {{0.5, 0.99}, {0.02, 0.98}, {0.98, 0.9}, {0.02, 0.5}, {0.5, 0.5}, {0.7, 0.3}}}) {
+    const auto hit = pickGlobe(cam, g, (x - 0.5) * 1280.0, (0.5 - y) * 720.0);
+    ASSERT_TRUE(hit.has_value());
+    const double lat = hit->latDeg, lon = hit->lonDeg;
+    for (int level = 4; level <= 14; ++level) {
+      const auto key = grid.keyAt(lat, lon, level);
+      ASSERT_TRUE(key.has_value());
+      const Sector s = grid.sectorOf(*key);
+      const double visible = largestVisibleTexel(cam, g, s);
+      const NodeGeometry node(g, s);
+      const bool split = evaluateLod(cam, node, {512, 512, t}).split;
+      LodParams whole{512, 512, t};
+      whole.onScreenOnly = false;
+      const bool splitWhole = evaluateLod(cam, node, whole).split;
+      // The sampled extremes may miss the brute force's by a few per cent (curvature).
+      if (visible > 1.03 * t) {
+        EXPECT_TRUE(split) << level << " " << x << "," << y << " " << visible;
+        ++decided;
+      } else if (visible < 0.97 * t) {
+        EXPECT_FALSE(split) << level << " " << x << "," << y << " " << visible;
+        ++decided;
+        if (splitWhole) ++coarser;
+      }
+      EXPECT_TRUE(splitWhole || !split); // never finer than the whole-node test
+    }
+  }
+  EXPECT_GE(decided, 50);
+  EXPECT_GE(coarser, 3); // nodes the whole-node test split for off-screen texels
 }

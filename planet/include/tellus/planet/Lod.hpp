@@ -35,6 +35,18 @@ struct LodParams {
    * point below the camera or the viewport's ground points in the node (see the file comment);
    * false: the thesis's corner-edge test alone (for comparison). */
   bool perspectiveAware = true;
+  /** With perspectiveAware, in a perspective view: only what the viewport shows counts. A corner
+   * off screen is no sample; an edge counts by its part inside the frustum, against that part's
+   * share of the tile's texels, and where it crosses the viewport's border the crossing is a
+   * sample of the local test (the largest visible texel of a node lies at a vertex of its visible
+   * part: a visible corner, a border crossing, or a viewport corner's ground point). Off-screen
+   * corners are where perspective stretches texels most (1 / cos^2 of the angle off the axis)
+   * and, in a tilted view, where the ground is nearest: counting them refined every node of the
+   * Alps view one level deeper than the screen needs (issue 29). Merged polar rows and caps
+   * (evaluateLod's merged), the fisheye, and a node whose on-screen samples all lie on the
+   * globe's far side (hidden; culling's bounds are conservative) keep the whole-node test.
+   * false: every corner and whole edges (for comparison). */
+  bool onScreenOnly = true;
 };
 
 struct LodResult {
@@ -57,8 +69,11 @@ struct LodResult {
 
 /** Never produces NaN: a node whose corners cannot all be projected (behind the near plane, or a
  * non-finite clip position) is treated as needing refinement. Invalid params (tile size < 1,
- * threshold not > 0 or not finite) split nothing. */
-LodResult
-evaluateLod(const Camera& camera, const NodeGeometry& node, const LodParams& params) noexcept;
+ * threshold not > 0 or not finite) split nothing. merged: the node is a merged polar row or a
+ * cap (NodeKey::span > 1), which keeps the whole-node test (LodParams::onScreenOnly). */
+LodResult evaluateLod(const Camera& camera,
+                      const NodeGeometry& node,
+                      const LodParams& params,
+                      bool merged = false) noexcept;
 
 } // namespace tellus::planet
