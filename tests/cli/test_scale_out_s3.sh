@@ -62,10 +62,12 @@ server:
   cdn: {purge: [$1]}
 upstreams:
   - {name: counted, type: wms, url: "http://127.0.0.1:$up/wms", version: 1.1.1, retries: 0}
-  # one GetMap per tile: the refresh (4.) compares a tile with its refetch, both the upstream's bytes
+  # one GetMap per tile: the counting upstream draws one colour per GetMap, so a tile fetched alone
+  # and in a metatile differ; the S3 outage (3.) checks one body per tile, and the refresh (4.)
+  # compares a tile with its refetch (metatiles on a shared index: test_scale_out.sh)
   - {name: single, type: wms, url: "http://127.0.0.1:$up/wms", version: 1.1.1, retries: 0, meta_tiles: 1}
 layers:
-  - {name: shared, upstream: counted, format: image/png, grid: {level_zero_delta: 36, tile_size: 64, levels: 4}}
+  - {name: shared, upstream: single, format: image/png, grid: {level_zero_delta: 36, tile_size: 64, levels: 4}}
   - {name: fresh, upstream: single, format: image/png, cache: {ttl: 3s}, grid: {level_zero_delta: 36, tile_size: 64, levels: 4}}
 YAML
 }
