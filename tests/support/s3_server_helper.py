@@ -56,7 +56,7 @@ def put_bucket(endpoint, bucket, key, secret, region):
 
 def bucket(endpoint, name, key, secret, region):
     code = 0
-    deadline = time.monotonic() + 30
+    deadline = time.monotonic() + 90
     while time.monotonic() < deadline:
         code = put_bucket(endpoint, name, key, secret, region)
         if code in (200, 409):  # 409: BucketAlreadyOwnedByYou
