@@ -141,6 +141,23 @@ TEST(TileCacheIntegration, TwoProcessesShareOneCache) {
   EXPECT_TRUE(cache->verify()->ok());
 }
 
+TEST(TileCacheIntegration, ProcessesOpeningOneFreshCacheAtOnceAllOpenIt) {
+  // Six processes (a cluster's ranks, servers started together) creating one cache in the same
+  // instant: SQLite answers the first switch to WAL with "database is locked" without waiting.
+  for (int round = 0; round < 10; ++round) {
+    test::TempDir dir("fresh");
+    std::vector<pid_t> kids;
+    for (int i = 0; i < 6; ++i) {
+      kids.push_back(spawn([&] {
+        auto cache = openCache(dir.path());
+        return cache ? 0 : 3;
+      }));
+    }
+    for (const pid_t k : kids)
+      EXPECT_EQ(waitExit(k), 0) << "round " << round;
+  }
+}
+
 TEST(TileCacheIntegration, CrashMidWriteNeverLeavesACorruptTile) {
   test::TempDir dir("crash");
   {

@@ -61,14 +61,31 @@ Result probe(sqlite3* db) {
                 "checking index");
 }
 
-Result configure(sqlite3* db, bool readOnly) {
+/** The switch to WAL. A new database's first switch needs it to itself, and SQLite answers a
+ * process opening it in the same instant "database is locked" at once, not through the busy
+ * handler: tried again, 10 ms apart, within the busy timeout. */
+Result switchToWal(sqlite3* db, int busyMs) {
+  for (int waitedMs = 0;; waitedMs += 10) {
+    sql::Stmt s(db, "PRAGMA journal_mode = WAL");
+    int rc = s.prepareRc();
+    if (s.ok()) {
+      sql::Stmt::Use u(s);
+      rc = u.step();
+      if (rc == SQLITE_ROW || rc == SQLITE_DONE) return {};
+    }
+    if ((rc & 0xff) != SQLITE_BUSY || waitedMs >= busyMs)
+      return std::unexpected(sql::errorFrom(db, rc, "configuring index"));
+    sqlite3_sleep(10);
+  }
+}
+
+Result configure(sqlite3* db, bool readOnly, int busyMs) {
   if (readOnly) return {};
+  if (Result r = switchToWal(db, busyMs); !r) return r;
   // The WAL persists (openDb); it is cut back to 64 MiB when it is reset, so one huge transaction
   // (a rebuild) does not keep its size forever.
   return runAll(db,
-                {"PRAGMA journal_mode = WAL",
-                 "PRAGMA synchronous = NORMAL",
-                 "PRAGMA journal_size_limit = 67108864"},
+                {"PRAGMA synchronous = NORMAL", "PRAGMA journal_size_limit = 67108864"},
                 "configuring index");
 }
 
@@ -154,7 +171,7 @@ Result SqliteTileIndex::openWriteConnection() {
     int rc = 0;
     writeDb_ = openDb(path_, readOnly, true, static_cast<int>(options_.busyTimeout.count()), &rc);
     if (!writeDb_) return std::unexpected(sql::errorFrom(nullptr, rc, "opening " + path_.string()));
-    Result r = configure(writeDb_.get(), readOnly);
+    Result r = configure(writeDb_.get(), readOnly, static_cast<int>(options_.busyTimeout.count()));
     if (r && !readOnly) r = schema::ensure(writeDb_.get());
     if (r) r = probe(writeDb_.get());
     if (r) return {};
