@@ -224,20 +224,10 @@ int runCluster(const cli::Args& a) {
   if (ec) return say(c.out.string() + ": " + ec.message(), kExitError);
   planet::RendererOptions ro;
   ro.decodeNice = 0;
-  // The master opens (on a first run: creates) the cache before the channels do: ranks creating
-  // one fresh cache at once raced, and a rank that failed left the others waiting for it. Then
-  // every rank says whether it opened it, so that all stop together when one could not.
-  std::optional<decltype(openPlanetTiles(a, "cluster", ro))> opened;
-  if (!comm || rank == 0) opened.emplace(openPlanetTiles(a, "cluster", ro));
-  if (comm) {
-    const bool masterOpened = comm->allWell(rank != 0 || opened->has_value());
-    if (rank != 0 && masterOpened) opened.emplace(openPlanetTiles(a, "cluster", ro));
-    if (!comm->allWell(opened && opened->has_value())) {
-      if (opened && !opened->has_value()) return opened->error();
-      return kExitError; // another rank said why
-    }
-  }
-  auto& tiles = *opened;
+  auto tiles = openPlanetTiles(a, "cluster", ro);
+  // Every rank says whether it opened the cache, so that all stop together when one could not:
+  // the others would wait for its first answer for ever.
+  if (comm && !comm->allWell(tiles.has_value())) return tiles ? kExitError : tiles.error();
   if (!tiles) return tiles.error();
   if (auto bad = applySceneTime(a, tiles->sceneTime, kDefaultRenderTime, ro))
     return say(*bad, kExitUsage);
