@@ -55,6 +55,24 @@ TEST(PgTileLeases, OneHolderAtATimeAndItsReleaseWakesTheWaitersAtOnce) {
   b->release(kTile);
 }
 
+TEST(PgTileLeases, ProgressWakesTheWaitersAtOnceAndTheLeaseStaysHeld) {
+  // A metatile's holder announces each tile stored: the other instances look again at once.
+  auto a = openLeases();
+  auto b = openLeases();
+  ASSERT_TRUE(a && b);
+  ASSERT_EQ(a->acquireOrWait(kTile, 60s, [] {}), LeaseOutcome::Acquired);
+  std::promise<void> woke, again;
+  ASSERT_EQ(b->acquireOrWait(kTile, 60s, [&] { woke.set_value(); }), LeaseOutcome::Waiting);
+  a->progress(kTile);
+  ASSERT_EQ(woke.get_future().wait_for(30s), std::future_status::ready) << "long before 60 s";
+  // Still a's: b waits again, until a's release.
+  ASSERT_EQ(b->acquireOrWait(kTile, 60s, [&] { again.set_value(); }), LeaseOutcome::Waiting);
+  a->release(kTile);
+  ASSERT_EQ(again.get_future().wait_for(30s), std::future_status::ready);
+  EXPECT_EQ(b->acquireOrWait(kTile, 60s, [] {}), LeaseOutcome::Acquired);
+  b->release(kTile);
+}
+
 TEST(PgTileLeases, ALeaseOfAProcessThatDiesIsFreeAtOnceAndItsWaitersTakeItAtTheirRecheck) {
   auto a = openLeases();
   auto b = openLeases();

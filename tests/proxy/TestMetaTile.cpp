@@ -117,6 +117,37 @@ TEST(MetaTile, APngMetaTileIsSplitLosslessly) {
         << "row " << y;
 }
 
+TEST(MetaTile, ALazySplitEncodesEachTileOnItsOwnAsTheEagerSplitDoes) {
+  // The service encodes a decoded metatile's tiles one task each, the asked-for tile first.
+  for (const ImageKind kind : {ImageKind::Png, ImageKind::Jpeg}) {
+    const auto px = testPixels(400, 400, 3);
+    const auto body = kind == ImageKind::Png ? *encodeImage("image/png", 400, 400, 3, px.data())
+                                             : encodeTestJpeg(400, 400, 3, px.data());
+    auto eager = splitMetaTile(body, kind, 2, 2, 200, 200);
+    auto lazy = splitMetaTileLazily(body, kind, 2, 2, 200, 200);
+    ASSERT_TRUE(eager && lazy);
+    EXPECT_EQ(lazy->how, MetaSplit::Decoded);
+    EXPECT_TRUE(lazy->tiles.empty());
+    ASSERT_TRUE(lazy->decoded);
+    ASSERT_EQ(eager->tiles.size(), 4u);
+    for (std::size_t i : {3U, 0U, 2U, 1U}) { // any order
+      auto part = encodeMetaTilePart(*lazy->decoded, i);
+      ASSERT_TRUE(part) << part.error();
+      EXPECT_EQ(*part, eager->tiles[i]) << "tile " << i;
+    }
+  }
+  // An aligned JPEG is cut at once (no pixels), a broken image refused before any tile.
+  const auto aligned = encodeTestJpeg(512, 256, 3, testPixels(512, 256, 3).data());
+  auto cut = splitMetaTileLazily(aligned, ImageKind::Jpeg, 2, 1, 256, 256);
+  ASSERT_TRUE(cut);
+  EXPECT_EQ(cut->how, MetaSplit::Dct);
+  EXPECT_EQ(cut->tiles.size(), 2u);
+  EXPECT_FALSE(cut->decoded);
+  auto png = *encodeImage("image/png", 512, 256, 3, testPixels(512, 256, 3).data());
+  png.resize(png.size() / 2);
+  EXPECT_FALSE(splitMetaTileLazily(png, ImageKind::Png, 2, 1, 256, 256));
+}
+
 // ------------------------------------------------------------------------------ block arithmetic
 
 TEST(MetaTile, BlocksAreAlignedAndClippedAtTheGridsEdges) {

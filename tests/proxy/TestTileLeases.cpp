@@ -44,6 +44,11 @@ public:
     std::lock_guard lock(mutex_);
     released.push_back(key);
   }
+  void progress(const LeaseKey& key) override {
+    if (onProgress) onProgress(key);
+    std::lock_guard lock(mutex_);
+    progressed.push_back(key);
+  }
   bool healthy() const override { return true; }
 
   /** Waits until someone waits for a lease. */
@@ -66,8 +71,8 @@ public:
     return true;
   }
 
-  std::vector<LeaseKey> asked, released;
-  std::function<void(const LeaseKey&)> onRelease;
+  std::vector<LeaseKey> asked, released, progressed;
+  std::function<void(const LeaseKey&)> onRelease, onProgress;
 
 private:
   std::mutex mutex_;
@@ -85,7 +90,8 @@ struct Service {
   Service(const std::string& url,
           std::shared_ptr<ITileLeases> leases,
           int metaTiles = 1,
-          bool metaTilesOnMiss = false) {
+          bool metaTilesOnMiss = false,
+          int workers = 2) {
     UpstreamSpec u;
     u.name = "up";
     u.type = UpstreamSpec::Type::Wms;
@@ -100,6 +106,7 @@ struct Service {
     TileServiceOptions o;
     o.leases = std::move(leases);
     o.metaTilesOnMiss = metaTilesOnMiss;
+    o.renderThreads = workers;
     auto t = TileService::create(*cache, fetcher, {u}, {l}, o);
     EXPECT_TRUE(t) << (t ? "" : t.error());
     if (t) tiles = std::move(*t);
@@ -201,7 +208,7 @@ TEST(TileLeases, AMissFetchesItsWholeMetatileUnderTheMetatilesLeaseReleasedOnceE
   // ask for one lease, the metatile's, so that one of them fetches it all.
   test::FakeUpstream up(sizedPngReply);
   auto leases = std::make_shared<ScriptedLeases>(LeaseOutcome::Acquired);
-  Service s(up.url("/wms"), leases, 4, true);
+  Service s(up.url("/wms"), leases, 4, true, 1); // one worker: the tiles stored in their order
   const TileKey k{1, 2, 3}; // level 1: 10 x 5 tiles; its metatile is rows 0-3, columns 0-3
   std::size_t storedAtRelease = 0;
   std::promise<void> releasedOnce;
@@ -213,11 +220,27 @@ TEST(TileLeases, AMissFetchesItsWholeMetatileUnderTheMetatilesLeaseReleasedOnceE
       }
     releasedOnce.set_value();
   };
+  // Each tile stored while the lease is held is announced (progress): the other instances' waiters
+  // look again then, and serve the asked-for tile before the whole block is stored.
+  std::promise<bool> firstProgress;
+  bool announced = false;
+  leases->onProgress = [&](const LeaseKey& key) {
+    if (announced) return;
+    announced = true;
+    EXPECT_EQ(key.key, (TileKey{1, 0, 0}));
+    auto row = s.cache->peek(s.datasetId(), k);
+    firstProgress.set_value(row && row->kind == CacheLookup::Kind::Hit);
+  };
   auto answer = s.get(k);
   ASSERT_EQ(answer.wait_for(30s), std::future_status::ready);
   EXPECT_EQ(answer.get().kind, TileAnswer::Kind::Tile);
   // The tile's own answer may come before its neighbours are stored; the lease goes back after.
   ASSERT_EQ(releasedOnce.get_future().wait_for(30s), std::future_status::ready);
+  auto first = firstProgress.get_future();
+  ASSERT_EQ(first.wait_for(0s), std::future_status::ready) << "no tile announced before release";
+  EXPECT_TRUE(first.get()) << "the asked-for tile is stored (and announced) first";
+  EXPECT_GE(leases->progressed.size(), 1u);
+  EXPECT_LE(leases->progressed.size(), 16u);
   EXPECT_EQ(up.requests(), 1u);
   EXPECT_EQ(s.tiles->metaTileFetches(), 1u);
   ASSERT_EQ(leases->asked.size(), 1u);

@@ -89,6 +89,16 @@ public:
                    "giving a lease back");
   }
 
+  void progress(const LeaseKey& key) override {
+    const std::int64_t n = leaseNumber(key);
+    pg::Params p;
+    p.add(std::string_view(std::to_string(n)));
+    std::lock_guard lock(lockMutex_);
+    if (!held_.contains(n) || pg::broken(lockConn_.get())) return;
+    // The same NOTIFY as a release's: a waiter woken looks again, and waits again for the rest.
+    (void)pg::exec(lockConn_.get(), "SELECT pg_notify('tellus_tiles', $1)", p, "announcing a tile");
+  }
+
   bool healthy() const override { return listening_.load(); }
 
 private:

@@ -56,63 +56,90 @@ Sector blockSector(const TileGrid& grid, const TileBlock& b) noexcept {
 
 namespace {
 
-/** Decoded once, encoded per tile: for PNG, and for a JPEG whose tiles are not iMCU-aligned. */
-std::expected<SplitTiles, std::string> splitDecoded(std::span<const std::byte> body,
+std::expected<DecodedMetaTile, std::string> decodeMetaTile(std::span<const std::byte> body,
+                                                           ImageKind kind,
+                                                           int cols,
+                                                           int rows,
+                                                           int tileWidth,
+                                                           int tileHeight) {
+  DecodedMetaTile d{kind, cols, rows, tileWidth, tileHeight, {}};
+  // The validation's own decoders (a warning is a failure): JPEG into RGB, PNG into RGBA.
+  const int width = cols * tileWidth, height = rows * tileHeight;
+  auto checked = kind == ImageKind::Jpeg ? codec::checkJpeg(body, width, height, d.pixels)
+                                         : codec::checkPng(body, width, height, d.pixels);
+  if (!checked) return std::unexpected(checked.error());
+  return d;
+}
+
+std::expected<SplitTiles, std::string> checkedSplit(std::span<const std::byte> body,
                                                     ImageKind kind,
                                                     int cols,
                                                     int rows,
                                                     int tileWidth,
-                                                    int tileHeight) {
-  const int width = cols * tileWidth;
-  const int height = rows * tileHeight;
-  std::vector<std::uint8_t> pixels;
-  // The validation's own decoders (a warning is a failure): JPEG into RGB, PNG into RGBA.
-  auto checked = kind == ImageKind::Jpeg ? codec::checkJpeg(body, width, height, pixels)
-                                         : codec::checkPng(body, width, height, pixels);
-  if (!checked) return std::unexpected(checked.error());
-  const int channels = kind == ImageKind::Jpeg ? 3 : 4;
+                                                    int tileHeight,
+                                                    bool lazily) {
+  if (cols <= 0 || rows <= 0 || tileWidth <= 0 || tileHeight <= 0 ||
+      static_cast<long>(cols) * tileWidth > 16384 || static_cast<long>(rows) * tileHeight > 16384)
+    return std::unexpected(std::string("metatile size out of range"));
+  if (kind == ImageKind::Jpeg) {
+    auto cut = codec::splitJpegDct(body, cols, rows, tileWidth, tileHeight);
+    if (cut) return SplitTiles{std::move(*cut), MetaSplit::Dct, nullptr};
+    if (cut.error().code == codec::JpegSplitErrc::Invalid)
+      return std::unexpected(cut.error().message);
+  } else if (kind != ImageKind::Png) {
+    return std::unexpected(std::string("metatiles of ") + toString(kind) + " are not split");
+  }
+  auto decoded = decodeMetaTile(body, kind, cols, rows, tileWidth, tileHeight);
+  if (!decoded) return std::unexpected(decoded.error());
   SplitTiles out;
   out.how = MetaSplit::Decoded;
-  out.tiles.reserve(static_cast<std::size_t>(cols) * static_cast<std::size_t>(rows));
-  const auto tw = static_cast<std::size_t>(tileWidth);
-  const auto th = static_cast<std::size_t>(tileHeight);
-  const auto ch = static_cast<std::size_t>(channels);
-  std::vector<std::uint8_t> tile(tw * th * ch);
-  const std::size_t rowBytes = tw * ch;
-  const std::size_t stride = static_cast<std::size_t>(width) * ch;
-  for (std::size_t tr = 0; tr < static_cast<std::size_t>(rows); ++tr) {
-    for (std::size_t tc = 0; tc < static_cast<std::size_t>(cols); ++tc) {
-      const std::uint8_t* from = pixels.data() + tr * th * stride + tc * rowBytes;
-      for (std::size_t y = 0; y < th; ++y)
-        std::memcpy(tile.data() + y * rowBytes, from + y * stride, rowBytes);
-      std::expected<std::vector<std::byte>, std::string> encoded;
-      if (kind == ImageKind::Jpeg) {
-        encoded = codec::encodeJpeg(tileWidth,
-                                    tileHeight,
-                                    3,
-                                    tile.data(),
-                                    {.restartInterval = codec::kTileRestartInterval});
-      } else {
-        bool opaque = true;
-        for (std::size_t i = 3; i < tile.size() && opaque; i += 4)
-          opaque = tile[i] == 255;
-        if (opaque) { // RGB in place: a smaller file for the same pixels
-          for (std::size_t i = 0, o = 0; i < tile.size(); i += 4, o += 3) {
-            tile[o] = tile[i];
-            tile[o + 1] = tile[i + 1];
-            tile[o + 2] = tile[i + 2];
-          }
-        }
-        encoded = codec::encodePng(tileWidth, tileHeight, opaque ? 3 : 4, tile.data());
-      }
-      if (!encoded) return std::unexpected(encoded.error());
-      out.tiles.push_back(std::move(*encoded));
-    }
+  out.decoded = std::make_shared<const DecodedMetaTile>(std::move(*decoded));
+  if (lazily) return out;
+  const std::size_t n = static_cast<std::size_t>(cols) * static_cast<std::size_t>(rows);
+  out.tiles.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    auto encoded = encodeMetaTilePart(*out.decoded, i);
+    if (!encoded) return std::unexpected(encoded.error());
+    out.tiles.push_back(std::move(*encoded));
   }
+  out.decoded.reset();
   return out;
 }
 
 } // namespace
+
+std::expected<std::vector<std::byte>, std::string> encodeMetaTilePart(const DecodedMetaTile& d,
+                                                                      std::size_t index) {
+  const int channels = d.kind == ImageKind::Jpeg ? 3 : 4;
+  const auto tw = static_cast<std::size_t>(d.tileWidth);
+  const auto th = static_cast<std::size_t>(d.tileHeight);
+  const auto ch = static_cast<std::size_t>(channels);
+  const auto cols = static_cast<std::size_t>(d.cols);
+  const std::size_t tr = index / cols, tc = index % cols;
+  std::vector<std::uint8_t> tile(tw * th * ch);
+  const std::size_t rowBytes = tw * ch;
+  const std::size_t stride = cols * rowBytes;
+  const std::uint8_t* from = d.pixels.data() + tr * th * stride + tc * rowBytes;
+  for (std::size_t y = 0; y < th; ++y)
+    std::memcpy(tile.data() + y * rowBytes, from + y * stride, rowBytes);
+  if (d.kind == ImageKind::Jpeg)
+    return codec::encodeJpeg(d.tileWidth,
+                             d.tileHeight,
+                             3,
+                             tile.data(),
+                             {.restartInterval = codec::kTileRestartInterval});
+  bool opaque = true;
+  for (std::size_t i = 3; i < tile.size() && opaque; i += 4)
+    opaque = tile[i] == 255;
+  if (opaque) { // RGB in place: a smaller file for the same pixels
+    for (std::size_t i = 0, o = 0; i < tile.size(); i += 4, o += 3) {
+      tile[o] = tile[i];
+      tile[o + 1] = tile[i + 1];
+      tile[o + 2] = tile[i + 2];
+    }
+  }
+  return codec::encodePng(d.tileWidth, d.tileHeight, opaque ? 3 : 4, tile.data());
+}
 
 std::expected<SplitTiles, std::string> splitMetaTile(std::span<const std::byte> body,
                                                      ImageKind kind,
@@ -120,18 +147,16 @@ std::expected<SplitTiles, std::string> splitMetaTile(std::span<const std::byte> 
                                                      int rows,
                                                      int tileWidth,
                                                      int tileHeight) {
-  if (cols <= 0 || rows <= 0 || tileWidth <= 0 || tileHeight <= 0 ||
-      static_cast<long>(cols) * tileWidth > 16384 || static_cast<long>(rows) * tileHeight > 16384)
-    return std::unexpected(std::string("metatile size out of range"));
-  if (kind == ImageKind::Jpeg) {
-    auto cut = codec::splitJpegDct(body, cols, rows, tileWidth, tileHeight);
-    if (cut) return SplitTiles{std::move(*cut), MetaSplit::Dct};
-    if (cut.error().code == codec::JpegSplitErrc::Invalid)
-      return std::unexpected(cut.error().message);
-    return splitDecoded(body, kind, cols, rows, tileWidth, tileHeight);
-  }
-  if (kind == ImageKind::Png) return splitDecoded(body, kind, cols, rows, tileWidth, tileHeight);
-  return std::unexpected(std::string("metatiles of ") + toString(kind) + " are not split");
+  return checkedSplit(body, kind, cols, rows, tileWidth, tileHeight, false);
+}
+
+std::expected<SplitTiles, std::string> splitMetaTileLazily(std::span<const std::byte> body,
+                                                           ImageKind kind,
+                                                           int cols,
+                                                           int rows,
+                                                           int tileWidth,
+                                                           int tileHeight) {
+  return checkedSplit(body, kind, cols, rows, tileWidth, tileHeight, true);
 }
 
 } // namespace tellus

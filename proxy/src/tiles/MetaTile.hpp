@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <expected>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -52,10 +53,20 @@ Sector blockSector(const TileGrid& grid, const TileBlock& block) noexcept;
 
 enum class MetaSplit { Dct, Decoded };
 
+/** A metatile decoded once, whose tiles are encoded one by one (on any thread, each on its own):
+ * so that the tile a client waits for is encoded and stored first, not after all of its block. */
+struct DecodedMetaTile {
+  ImageKind kind = ImageKind::Png; ///< Png: RGBA pixels; Jpeg: RGB
+  int cols = 0, rows = 0, tileWidth = 0, tileHeight = 0;
+  std::vector<std::uint8_t> pixels; ///< cols x tileWidth by rows x tileHeight, from the top
+};
+
 struct SplitTiles {
   std::vector<std::vector<std::byte>>
-      tiles; ///< row-major from the top-left (TileBlock::imageIndex)
+      tiles; ///< row-major from the top-left (TileBlock::imageIndex); empty when `decoded`
   MetaSplit how = MetaSplit::Dct;
+  /** Decoded, from splitMetaTileLazily: the tiles are encodeMetaTilePart's to make. */
+  std::shared_ptr<const DecodedMetaTile> decoded;
 };
 
 /**
@@ -73,5 +84,20 @@ std::expected<SplitTiles, std::string> splitMetaTile(std::span<const std::byte> 
                                                      int rows,
                                                      int tileWidth,
                                                      int tileHeight);
+
+/** splitMetaTile, but an image that must be decoded is returned decoded (SplitTiles::decoded),
+ * checked the same way, its tiles left to encodeMetaTilePart; a JPEG cut in the DCT domain is
+ * returned cut, as splitMetaTile does. */
+std::expected<SplitTiles, std::string> splitMetaTileLazily(std::span<const std::byte> body,
+                                                           ImageKind kind,
+                                                           int cols,
+                                                           int rows,
+                                                           int tileWidth,
+                                                           int tileHeight);
+
+/** Tile `index` (TileBlock::imageIndex) of a decoded metatile, encoded: JPEG quality 90 with the
+ * tiles' restart interval; PNG RGB when the tile is opaque, else RGBA. */
+std::expected<std::vector<std::byte>, std::string> encodeMetaTilePart(const DecodedMetaTile& meta,
+                                                                      std::size_t index);
 
 } // namespace tellus

@@ -118,6 +118,10 @@ void TileService::Impl::land(const FlightKey& k, TileAnswer&& answer) {
       flights.erase(it);
     }
   }
+  // A metatile's lease is shared by its tiles' flights: while others still hold it, this tile's
+  // being stored is announced, so that other processes waiting for it need not wait for all.
+  if (lease && lease.use_count() > 1 && answer.kind == TileAnswer::Kind::Tile && !answer.notStored)
+    lease->leases->progress(lease->key);
   lease.reset(); // the last flight holding it: released (the tile is stored), waiters wake
   for (std::size_t i = 0; i + 1 < waiters.size(); ++i) {
     TileAnswer copy = answer;

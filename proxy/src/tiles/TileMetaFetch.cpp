@@ -218,7 +218,7 @@ void TileService::Impl::onBlockFetched(const std::vector<TileKey>& owned,
     landAll(error("the upstream did not send a tile: " + kind.error()));
     return;
   }
-  auto split = splitMetaTile(
+  auto split = splitMetaTileLazily(
       resp.body, *kind, block.cols, block.rows, g.spec().tileWidth, g.spec().tileHeight);
   if (!split) {
     landAll(error("the upstream did not send a tile: " + split.error()));
@@ -229,12 +229,27 @@ void TileService::Impl::onBlockFetched(const std::vector<TileKey>& owned,
   // The metatile's ETag names another resource than any tile's GetMap: not kept. Its
   // Last-Modified is true of every tile in it.
   m.lastModified = resp.lastModified;
+  // Each tile encoded (when the image had to be decoded) and stored on its own task, in the order
+  // of `owned`, whose first is the tile a client asked for: it is answered, and under a shared
+  // lease announced to the other instances (land), before the rest of its block is encoded.
   for (const TileKey& k : owned) {
+    const std::size_t i = block.imageIndex(k);
+    std::vector<std::byte> cut =
+        split->decoded ? std::vector<std::byte>{} : std::move(split->tiles[i]);
     workers->post([this,
                    fk = FlightKey{id, k},
                    folder,
                    m,
-                   bytes = std::move(split->tiles[block.imageIndex(k)])]() mutable {
+                   i,
+                   decoded = split->decoded,
+                   bytes = std::move(cut)]() mutable {
+      if (decoded) {
+        auto encoded = encodeMetaTilePart(*decoded, i);
+        decoded.reset();
+        if (!encoded)
+          return land(fk, error("a tile of the metatile could not be encoded: " + encoded.error()));
+        bytes = std::move(*encoded);
+      }
       store(fk, folder, std::move(bytes), std::move(m));
     });
   }

@@ -15,7 +15,8 @@
  *
  * The protocol, for one flight:
  *   acquireOrWait(key, recheck, retry):
- *     Acquired    -> fetch, store (the index row committed), then release(key): waiters wake;
+ *     Acquired    -> fetch, store (the index row committed), then release(key): waiters wake
+ *                    (and after each tile of a metatile stored, progress(key): they wake too);
  *     Waiting     -> `retry` is called once, on another thread, when the lease is released or
  *                    after `recheck` (a holder that died wakes nobody); look at the cache again,
  *                    and if the tile is still missing, call acquireOrWait again;
@@ -52,6 +53,10 @@ public:
                                      std::function<void()> retry) = 0;
   /** Gives back a lease taken here and wakes its waiters in every process. */
   virtual void release(const LeaseKey& key) = 0;
+  /** Part of what a lease held here covers is stored (a tile of its metatile): its waiters in
+   * every process are woken now, as by a release (they look at the cache again and wait again for
+   * what is still missing), and the lease stays held. Nothing to do where nothing waits. */
+  virtual void progress(const LeaseKey& key) { (void)key; }
   /** Whether the shared lease service answers (false: leases are Unavailable). */
   virtual bool healthy() const = 0;
 };
