@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The cluster's synchronisation per frame (issue 28): MPI_Bcast of the frame state + the barrier
-# before the swap, with 2, 4 and 8 ranks on this machine, in one run (bench/RESULTS.md).
+# The cluster's synchronisation per frame (issue 28), both protocols side by side: the collective
+# one (MPI_Bcast of the frame state + the barrier before the swap) and the live one `tellus cluster`
+# runs (point to point with deadlines), with 2, 4 and 8 ranks on this machine (bench/RESULTS.md).
 #   bench/cluster.sh [BUILD_DIR] [FRAMES] [RUNS]
 set -euo pipefail
 build=${1:-build}
