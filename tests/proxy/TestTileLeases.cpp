@@ -8,6 +8,7 @@
 #include "../support/FakeUpstream.hpp"
 #include "../support/TempDir.hpp"
 
+#include <tellus/cache/Clock.hpp>
 #include <tellus/cache/TileLeases.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
@@ -91,7 +92,9 @@ struct Service {
           std::shared_ptr<ITileLeases> leases,
           int metaTiles = 1,
           bool metaTilesOnMiss = false,
-          int workers = 2) {
+          int workers = 2,
+          const Clock* clock = nullptr,
+          std::chrono::milliseconds ttl = 0ms) {
     UpstreamSpec u;
     u.name = "up";
     u.type = UpstreamSpec::Type::Wms;
@@ -103,7 +106,9 @@ struct Service {
     l.upstream = "up";
     l.dataset.grid = GridSpec{Sector{}, 36.0, 64, 64, 3};
     l.dataset.mimeType = "image/png";
+    l.ttl = ttl;
     TileServiceOptions o;
+    if (clock) o.clock = clock;
     o.leases = std::move(leases);
     o.metaTilesOnMiss = metaTilesOnMiss;
     o.renderThreads = workers;
@@ -252,6 +257,32 @@ TEST(TileLeases, AMissFetchesItsWholeMetatileUnderTheMetatilesLeaseReleasedOnceE
   EXPECT_EQ(other.get().origin, TileOrigin::Hit);
   EXPECT_EQ(up.requests(), 1u);
   EXPECT_EQ(leases->asked.size(), 1u);
+}
+
+TEST(TileLeases, ARefreshOnASharedIndexTakesItsMetatilesLease) {
+  // A tile refreshed alone (a conditional GetMap) must not overlap another instance's fetch of its
+  // metatile: it takes the metatile's lease, not its own tile's.
+  test::FakeUpstream up(sizedPngReply);
+  auto leases = std::make_shared<ScriptedLeases>(LeaseOutcome::Acquired);
+  // The service's clock is a day behind the cache's: every tile it stores (TTL 100 ms) has
+  // expired when the cache is asked for it again.
+  ManualClock aDayAgo(std::chrono::steady_clock::now(), std::chrono::system_clock::now() - 24h);
+  Service s(up.url("/wms"), leases, 4, true, 2, &aDayAgo, 100ms);
+  const TileKey k{1, 2, 3};
+  std::promise<void> released;
+  leases->onRelease = [&](const LeaseKey&) { released.set_value(); };
+  auto miss = s.get(k);
+  ASSERT_EQ(miss.wait_for(30s), std::future_status::ready);
+  ASSERT_EQ(miss.get().kind, TileAnswer::Kind::Tile);
+  ASSERT_EQ(released.get_future().wait_for(30s), std::future_status::ready);
+  leases->onRelease = nullptr;
+  auto refreshed = s.get(k);
+  ASSERT_EQ(refreshed.wait_for(30s), std::future_status::ready);
+  EXPECT_EQ(refreshed.get().kind, TileAnswer::Kind::Tile);
+  EXPECT_EQ(up.requests(), 2u) << "the metatile, then the one tile refreshed";
+  ASSERT_EQ(leases->asked.size(), 2u);
+  EXPECT_EQ(leases->asked[0].key, (TileKey{1, 0, 0}));
+  EXPECT_EQ(leases->asked[1].key, (TileKey{1, 0, 0})) << "the refresh took its tile's own lease";
 }
 
 TEST(TileLeases, AMissWaitingForTheMetatilesHolderServesWhatItStoredAndFetchesNothing) {

@@ -338,7 +338,12 @@ void TileService::Impl::fetchUnderLease(const FlightKey& fk,
                                         const std::string& folder,
                                         const std::string& time,
                                         std::optional<CacheLookup> stale) {
-  const LeaseKey lease{folder, fk.key};
+  // On a shared index a miss fetches its metatile under the metatile's lease (TileMetaFetch.cpp);
+  // a refresh (one tile, conditional) takes that same lease, so that it never overlaps another
+  // instance's fetch of the block it is in.
+  const bool inMeta = options.metaTilesOnMiss && metaCapable(l, u);
+  const TileBlock meta = metaTileOf(g, fk.key, inMeta ? u.metaTiles : 1);
+  const LeaseKey lease{folder, TileKey{meta.level, meta.row0, meta.col0}};
   auto kept = std::make_shared<std::optional<CacheLookup>>(std::move(stale));
   // Woken on the lease service's thread: the look at the cache and the next try run on a worker.
   auto retry = [weak = weak_from_this(), fk, &l, &u, &g, folder, time, kept] {
