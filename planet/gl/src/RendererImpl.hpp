@@ -27,6 +27,7 @@
 #include "NodeMeshes.hpp"
 #include "NodeTextures.hpp"
 #include "Overview.hpp"
+#include "ProjectorWarp.hpp"
 #include "SceneDraw.hpp"
 #include "TerrainState.hpp"
 #include "TextureDecoder.hpp"
@@ -72,6 +73,8 @@ struct Renderer::Impl {
   void buildMeshes(View& view);
   /** The draw phase: the scene (SceneDraw) and, for a visible window, the presentation. */
   void draw(const Camera& camera, const DrawList& list);
+  /** The presented image to the window, swapped (RendererPresent.cpp). */
+  void present();
   /** The legends of the visible layers of values, into the scene's framebuffer. */
   void drawLegends();
   /** The end of the frame's work: tiles that arrived for nodes gone from view are dropped after a
@@ -100,6 +103,7 @@ struct Renderer::Impl {
   GlobePass* globePass = nullptr; ///< the scene's globe pass (owned by scene): its morph scale
   LegendOverlay legends;          ///< the layers of values' legends (RendererOptions::legend)
   WindowPresenter presenter;
+  std::unique_ptr<ProjectorWarp> projector; ///< RendererOptions::projectorWarp's pass, else null
   RenderStats stats;
   bool lastComplete = false;
   /** The last frame's draw list (Renderer::redrawLast), while what it points to lives: reset when
