@@ -87,7 +87,8 @@ std::string Renderer::Impl::openGl() {
     auto made = GlContext::create({.visible = opt.visibleWindow,
                                    .width = opt.width,
                                    .height = opt.height,
-                                   .title = opt.windowTitle});
+                                   .title = opt.windowTitle,
+                                   .vsync = opt.vsync});
     if (!made) return made.error();
     context = std::move(*made);
   }

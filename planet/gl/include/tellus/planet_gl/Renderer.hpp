@@ -298,6 +298,9 @@ struct RendererOptions {
   /** With visibleWindow: frame() draws but does not show; Renderer::present() does (a cluster's
    * channel swaps only after the master's go, docs/design/cluster-live.md). */
   bool presentOnRequest = false;
+  /** With visibleWindow: the swap waits for the display's refresh (swap interval 1); false: it
+   * does not (the cluster master's preview, which must not hold up the frame lock). */
+  bool vsync = true;
   /** A projector channel's warp and blend on the GPU (issue 28; ChannelWarp.hpp's conventions,
    * planet/gl/src/ProjectorWarp.hpp): after the scene, its image drawn through the warp mesh
    * (none: unwarped) and multiplied by the blend mask (none: 1; width x height weights) into a
