@@ -4,7 +4,7 @@
 # and warped and blended on the GPU, write the same PNGs as the headless run's CPU pass (PSNR at
 # least BOUND each); the master's preview window writes preview.png, the domemaster `tellus render
 # --dome` draws of the same view (PSNR at least BOUND). Without a display both are refused with a
-# message. KEEP=1 keeps the work folder.
+# message, as are a preview too small and an unknown option. KEEP=1 keeps the work folder.
 set -euo pipefail
 tellus=$1
 here=$(cd "$(dirname "$0")" && pwd) # png_pixels.py
@@ -97,5 +97,13 @@ for opt in --window --preview; do
   set -e
   [ $rc -ne 0 ] && echo "$msg" | grep -q -- "$opt opens a window and there is no display" ||
     fail "$opt without a display not refused: $rc $msg"
+done
+# Refused: a preview too small, an unknown option.
+for bad in "--preview=8:--preview=SIZE must be a whole number" "--windows:unknown option --windows"; do
+  set +e
+  msg=$(cluster "$work/dome.json" "${view[@]}" "${bad%%:*}" --out "$work/u" 2>&1)
+  rc=$?
+  set -e
+  [ $rc -ne 0 ] && echo "$msg" | grep -q -- "${bad#*:}" || fail "${bad%%:*} not refused: $rc $msg"
 done
 echo "ok"
