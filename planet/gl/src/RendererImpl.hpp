@@ -11,8 +11,9 @@
  *   plan     what is drawn, and whether that is what the LOD asks for (DrawList.hpp)
  *   upload   banded uploads under the pacer's budget (UploadQueue.hpp), then evictions (LayerSet)
  *   mesh     node meshes, edge fixing, coarse first (NodeMeshes.hpp); the camera lifted again
- *   draw     the scene passes into the framebuffer, or the dome's (SceneDraw.hpp, Dome.hpp), and
- *            the window (WindowPresenter.hpp)
+ *   draw     the scene passes into the framebuffer, or the dome's (SceneDraw.hpp, Dome.hpp), a
+ *            projector's warp and blend (ProjectorWarp.hpp), and the window (WindowPresenter.hpp;
+ *            or later, on request: RendererPresent.cpp)
  *   end      old tiles and meshes dropped, glFinish, ready layer times swapped in (LayerSet), the
  *            statistics
  *
