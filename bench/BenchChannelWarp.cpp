@@ -1,6 +1,11 @@
-// A projector channel's warp and blend on the CPU (issue 28, planet/ChannelWarp.hpp): what the
-// headless cluster does to each channel's image before it writes it, at the projector sizes of
-// docs/design/cluster.md "A real dome, on paper". Figures in bench/RESULTS.md.
+// A projector channel's warp and blend (issue 28): on the CPU (planet/ChannelWarp.hpp), what the
+// headless cluster does to each channel's image before it writes it, and on the GL
+// (planet/gl/src/ProjectorWarp.hpp), what `tellus cluster --window` does each frame before the
+// swap, in the same run at the projector sizes of docs/design/cluster.md "A real dome, on paper".
+// The GL side needs a display (xvfb-run); it is skipped without one. Figures in bench/RESULTS.md.
+
+#include "GlContext.hpp"
+#include "ProjectorWarp.hpp"
 
 #include <tellus/planet/ChannelWarp.hpp>
 
@@ -8,6 +13,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
 #include <vector>
 
 namespace {
@@ -25,11 +31,62 @@ void BM_WarpAndBlend(benchmark::State& state) {
   state.counters["MP"] = static_cast<double>(n) / 1e6;
 }
 
+/** The GL pass: the scene's colour copied, warped, blended (glFinish: the frame's end). With
+ * range(2) = 1 the projector image read back too (the channel's PNG). */
+void BM_GlWarpAndBlend(benchmark::State& state) {
+  using namespace tellus::planet;
+  const char* display = std::getenv("DISPLAY");
+  if (display == nullptr || *display == '\0') {
+    state.SkipWithError("no DISPLAY: run under xvfb-run");
+    return;
+  }
+  const int w = static_cast<int>(state.range(0)), h = static_cast<int>(state.range(1));
+  const auto n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  auto context = GlContext::create({});
+  if (!context) {
+    state.SkipWithError(context.error().c_str());
+    return;
+  }
+  auto pass = ProjectorWarp::create((*context)->capabilities().glslHeader(),
+                                    w,
+                                    h,
+                                    WarpMesh::identity(65, 41),
+                                    std::vector<float>(n, 0.5f));
+  if (!pass) {
+    state.SkipWithError(pass.error().c_str());
+    return;
+  }
+  GlRenderbuffer colour;
+  glBindRenderbuffer(GL_RENDERBUFFER, colour.id());
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
+  GlFramebuffer scene;
+  glBindFramebuffer(GL_FRAMEBUFFER, scene.id());
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, colour.id());
+  glClearColor(0.4f, 0.4f, 0.4f, 1.0f);
+  glClear(GL_COLOR_BUFFER_BIT);
+  for (auto _ : state) {
+    (*pass)->apply(scene.id());
+    if (state.range(2) != 0) {
+      auto out = (*pass)->readPixels();
+      benchmark::DoNotOptimize(out.data());
+    }
+    glFinish();
+  }
+  state.counters["MP"] = static_cast<double>(n) / 1e6;
+  state.SetLabel((*context)->capabilities().version);
+}
+
 } // namespace
 
 BENCHMARK(BM_WarpAndBlend)
     ->Args({1024, 717})
     ->Args({1920, 1200})
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(2.0);
+BENCHMARK(BM_GlWarpAndBlend)
+    ->Args({1024, 717, 0})
+    ->Args({1920, 1200, 0})
+    ->Args({1920, 1200, 1})
     ->Unit(benchmark::kMillisecond)
     ->MinTime(2.0);
 

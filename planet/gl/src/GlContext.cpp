@@ -84,7 +84,7 @@ GlContext::create(const GlContextOptions& options) {
   if (c->window_ == nullptr)
     return std::unexpected("cannot create an OpenGL 4.5 or 3.3 core context: " + glfwLastError);
   glfwMakeContextCurrent(c->window_);
-  glfwSwapInterval(options.visible ? 1 : 0);
+  glfwSwapInterval(options.visible && options.vsync ? 1 : 0);
   c->caps_ = queryCapabilities(gl45);
   return c;
 }

@@ -25,6 +25,7 @@ struct GlContextOptions {
   int width = 16;
   int height = 16;
   std::string title = "tellus";
+  bool vsync = true; ///< visible: the swap waits for the display's refresh
 };
 
 /** What the context's GL offers (queried once, at creation). */
@@ -41,8 +42,8 @@ struct GlCapabilities {
 
 class GlContext {
 public:
-  /** Opens the window and its context and makes it current (swap interval 1 when visible, else
-   * 0). Fails with a message: no display (GLFW), no 4.5 or 3.3 core context. */
+  /** Opens the window and its context and makes it current (swap interval 1 when visible with
+   * vsync, else 0). Fails with a message: no display (GLFW), no 4.5 or 3.3 core context. */
   static std::expected<std::unique_ptr<GlContext>, std::string>
   create(const GlContextOptions& options);
   ~GlContext();

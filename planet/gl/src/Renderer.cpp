@@ -87,7 +87,8 @@ std::string Renderer::Impl::openGl() {
     auto made = GlContext::create({.visible = opt.visibleWindow,
                                    .width = opt.width,
                                    .height = opt.height,
-                                   .title = opt.windowTitle});
+                                   .title = opt.windowTitle,
+                                   .vsync = opt.vsync});
     if (!made) return made.error();
     context = std::move(*made);
   }
@@ -138,6 +139,12 @@ std::string Renderer::Impl::openGl() {
     if (!air) return air.error();
     stats.atmospherePrecomputeMs = (*air)->precomputeSeconds() * 1000.0;
     scene->addPass(std::move(*air));
+  }
+  if (opt.projectorWarp) {
+    auto made = ProjectorWarp::create(
+        gl.glslHeader(), opt.width, opt.height, opt.projectorWarp->mesh, opt.projectorWarp->blend);
+    if (!made) return made.error();
+    projector = std::move(*made);
   }
   globalTexture = makeGlobalTexture(opt.globalImage);
   if (glGetError() != GL_NO_ERROR) return "OpenGL error while setting up";
@@ -304,10 +311,8 @@ void Renderer::Impl::draw(const Camera& camera, const DrawList& list) {
                    terrain.heightAt(camera.pose().latDeg, camera.pose().lonDeg),
                    stats);
   if (opt.legend) drawLegends();
-  if (opt.visibleWindow) {
-    const SceneFramebuffer& fb = scene->framebuffer();
-    presenter.present(context->window(), fb.id(), fb.width(), fb.height());
-  }
+  if (projector) projector->apply(scene->framebuffer().id());
+  if (opt.visibleWindow && !opt.presentOnRequest) present();
 }
 
 void Renderer::Impl::drawLegends() {
@@ -490,7 +495,8 @@ std::optional<double> Renderer::time() const noexcept {
 
 void Renderer::resize(int width, int height) {
   Impl& m = *impl_;
-  if (width <= 0 || height <= 0 || (width == m.opt.width && height == m.opt.height)) return;
+  if (width <= 0 || height <= 0 || (width == m.opt.width && height == m.opt.height) || m.projector)
+    return;
   m.context->makeCurrent();
   m.opt.width = width;
   m.opt.height = height;

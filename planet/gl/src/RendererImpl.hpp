@@ -11,8 +11,9 @@
  *   plan     what is drawn, and whether that is what the LOD asks for (DrawList.hpp)
  *   upload   banded uploads under the pacer's budget (UploadQueue.hpp), then evictions (LayerSet)
  *   mesh     node meshes, edge fixing, coarse first (NodeMeshes.hpp); the camera lifted again
- *   draw     the scene passes into the framebuffer, or the dome's (SceneDraw.hpp, Dome.hpp), and
- *            the window (WindowPresenter.hpp)
+ *   draw     the scene passes into the framebuffer, or the dome's (SceneDraw.hpp, Dome.hpp), a
+ *            projector's warp and blend (ProjectorWarp.hpp), and the window (WindowPresenter.hpp;
+ *            or later, on request: RendererPresent.cpp)
  *   end      old tiles and meshes dropped, glFinish, ready layer times swapped in (LayerSet), the
  *            statistics
  *
@@ -27,6 +28,7 @@
 #include "NodeMeshes.hpp"
 #include "NodeTextures.hpp"
 #include "Overview.hpp"
+#include "ProjectorWarp.hpp"
 #include "SceneDraw.hpp"
 #include "TerrainState.hpp"
 #include "TextureDecoder.hpp"
@@ -72,6 +74,8 @@ struct Renderer::Impl {
   void buildMeshes(View& view);
   /** The draw phase: the scene (SceneDraw) and, for a visible window, the presentation. */
   void draw(const Camera& camera, const DrawList& list);
+  /** The presented image to the window, swapped (RendererPresent.cpp). */
+  void present();
   /** The legends of the visible layers of values, into the scene's framebuffer. */
   void drawLegends();
   /** The end of the frame's work: tiles that arrived for nodes gone from view are dropped after a
@@ -100,6 +104,7 @@ struct Renderer::Impl {
   GlobePass* globePass = nullptr; ///< the scene's globe pass (owned by scene): its morph scale
   LegendOverlay legends;          ///< the layers of values' legends (RendererOptions::legend)
   WindowPresenter presenter;
+  std::unique_ptr<ProjectorWarp> projector; ///< RendererOptions::projectorWarp's pass, else null
   RenderStats stats;
   bool lastComplete = false;
   /** The last frame's draw list (Renderer::redrawLast), while what it points to lives: reset when

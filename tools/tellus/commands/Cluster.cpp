@@ -10,6 +10,7 @@
 
 #include "ClusterArgs.hpp"
 #include "ClusterControl.hpp"
+#include "ClusterPreview.hpp"
 #include "Commands.hpp"
 #include "Context.hpp"
 #include "GlobeArgs.hpp"
@@ -114,7 +115,7 @@ std::string parseCluster(const cli::Args& a, ClusterArgs& c) {
       return "--join " + *j + ": no such channel in " + a.positional[0];
     c.join = *j;
   }
-  return {};
+  return parseWindows(a, c);
 }
 
 bool appendLine(const fs::path& file, const std::string& line) {
@@ -146,6 +147,11 @@ int startChannel(cluster::Comm* comm,
       tiles.body == "earth" && fs::exists(global))
     ro.globalImage = global;
   addSceneBodies(ro, tiles.sceneBodies, dataDir(a), tiles.earth);
+  if (c.window) {
+    ro.visibleWindow = true;
+    ro.presentOnRequest = true; // after the master's go
+    ro.windowTitle = "tellus cluster: channel " + channel.name;
+  }
   Calibration cal;
   std::string problem;
   if (channel.warpMesh) cal.warp = *channel.warpMesh; // an MPCDI file's, in memory
@@ -162,6 +168,8 @@ int startChannel(cluster::Comm* comm,
     else
       problem = b.error();
   }
+  if (c.window && (cal.warp || cal.blend)) // the warp and blend on the GPU
+    ro.projectorWarp = planet::RendererOptions::ProjectorCalibration{cal.warp, cal.blend};
   auto renderer = planet::Renderer::create(*tiles.source, geodesy, ro);
   if (!renderer) problem = renderer.error();
   if (!problem.empty())
@@ -247,7 +255,16 @@ int runCluster(const cli::Args& a) {
       std::printf("tellus cluster: control on http://127.0.0.1:%u\n", console->port());
       std::fflush(stdout);
     }
-    return runMaster(*comm, c, geodesy.body(), ro.timeUnixSeconds, console.get());
+    std::unique_ptr<Preview> preview;
+    if (c.preview > 0) {
+      auto opened = Preview::open(a, c, *tiles, ro);
+      if (!opened) {
+        std::fprintf(stderr, "tellus cluster: %s\n", opened.error().c_str());
+        comm->abort(kExitError); // the channels wait for the master's first frame
+      }
+      preview = std::move(*opened);
+    }
+    return runMaster(*comm, c, geodesy.body(), ro.timeUnixSeconds, console.get(), preview.get());
   }
   const auto byName = [&](const planet::Channel& ch) { return ch.name == c.join; };
   const planet::Channel& channel =
@@ -275,7 +292,9 @@ Command clusterCommand() {
                     {"channel-timeout", K::Value},
                     {"port", K::Value},
                     {"join", K::Value},
-                    {"control", K::Value}});
+                    {"control", K::Value},
+                    {"window", K::Flag},
+                    {"preview", K::OptionalValue}});
   return c;
 }
 

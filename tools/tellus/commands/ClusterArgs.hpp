@@ -53,6 +53,10 @@ struct ClusterArgs {
   std::filesystem::path port; ///< --port FILE: the master's port for channels to rejoin
   std::string join;           ///< --join NAME: this process rejoins as channel NAME
   std::string control;        ///< --control HOST:PORT: the master's HTTP/JSON console
+  /// --window: each channel shows its projector image (warped and blended on the GPU) in a
+  /// window, swapped after the master's go
+  bool window = false;
+  int preview = 0; ///< --preview [SIZE]: the master's domemaster window, SIZE x SIZE; 0: none
 };
 
 /** The arguments checked; an empty string, else what is wrong. */
@@ -60,12 +64,24 @@ std::string parseCluster(const cli::Args& a, ClusterArgs& c);
 
 bool appendLine(const std::filesystem::path& file, const std::string& line);
 
+/** --window and --preview [SIZE] (ClusterPreview.cpp): "" or what is wrong (no display). */
+std::string parseWindows(const cli::Args& a, ClusterArgs& c);
+
+/** Frames of one state until complete (--wait-complete, up to its seconds) or one; whether the
+ * last is complete. */
+bool renderState(planet::Renderer& r, const planet::CameraPose& pose, const ClusterArgs& c);
+
+/** The master's preview window (--preview, ClusterPreview.cpp): the whole dome as a domemaster
+ * of the state it broadcasts. */
+class Preview;
+
 /** The master (rank 0): each frame's state to the channels, their answers, the go to swap. */
 int runMaster(cluster::Comm& comm,
               const ClusterArgs& c,
               const planet::Body& body,
               std::optional<double> sceneTime,
-              Console* console);
+              Console* console,
+              Preview* preview);
 
 /** The channel's warp mesh and blend mask (none when not configured). */
 struct Calibration {

@@ -1,6 +1,7 @@
 // A channel of `tellus cluster` (rank >= 1, or a restarted one joined through the master's
 // port; docs/design/cluster.md): the master's state drawn, its answer, the go, then the swap:
-// the image warped and blended (when calibrated) and written.
+// the image warped and blended (when calibrated; on the GPU and shown in its window with
+// --window) and written.
 
 #include "ClusterArgs.hpp"
 
@@ -14,10 +15,7 @@
 namespace fs = std::filesystem;
 
 namespace tellus::commands {
-namespace {
-
-/** Frames until complete (--wait-complete, up to its seconds) or one; whether it is complete. */
-bool renderOne(planet::Renderer& r, const planet::CameraPose& pose, const ClusterArgs& c) {
+bool renderState(planet::Renderer& r, const planet::CameraPose& pose, const ClusterArgs& c) {
   const auto begin = std::chrono::steady_clock::now();
   for (;;) {
     r.frame(pose);
@@ -29,8 +27,6 @@ bool renderOne(planet::Renderer& r, const planet::CameraPose& pose, const Cluste
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
 }
-
-} // namespace
 
 int runChannel(cluster::Comm& comm,
                const ClusterArgs& c,
@@ -61,7 +57,7 @@ int runChannel(cluster::Comm& comm,
       return kExitOk;
     }
     renderer->setTime(s->hasSceneTime ? std::optional<double>(s->sceneTimeUnixS) : std::nullopt);
-    bool well = renderOne(*renderer, s->pose(), c) || !c.waitComplete;
+    bool well = renderState(*renderer, s->pose(), c) || !c.waitComplete;
     if (!well)
       std::fprintf(stderr,
                    "tellus cluster: channel %s: frame %lld not complete after %g s\n",
@@ -83,8 +79,14 @@ int runChannel(cluster::Comm& comm,
     char name[32];
     std::snprintf(name, sizeof name, "-%05lld.png", static_cast<long long>(s->frame));
     std::string err;
-    planet::ChannelImage image{renderer->width(), renderer->height(), renderer->readPixels()};
-    if (cal.warp || cal.blend) // the warp and blend pass (ChannelWarp.hpp)
+    planet::ChannelImage image{renderer->width(), renderer->height(), {}};
+    if (c.window) { // warped and blended on the GPU (ProjectorWarp.hpp): shown, then read
+      renderer->present();
+      image.rgba = renderer->readPresented();
+    } else {
+      image.rgba = renderer->readPixels();
+    }
+    if (!c.window && (cal.warp || cal.blend)) // the warp and blend pass (ChannelWarp.hpp)
       image = planet::warpAndBlend(image,
                                    image.width,
                                    image.height,

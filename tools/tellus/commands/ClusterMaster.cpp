@@ -5,6 +5,7 @@
 
 #include "ClusterArgs.hpp"
 #include "ClusterControl.hpp"
+#include "ClusterPreview.hpp"
 
 #include <tellus/cluster/Comm.hpp>
 #include <tellus/planet/FlightBodies.hpp>
@@ -175,7 +176,8 @@ int runMaster(cluster::Comm& comm,
               const ClusterArgs& c,
               const planet::Body& body,
               std::optional<double> sceneTime,
-              Console* console) {
+              Console* console,
+              Preview* preview) {
   const fs::path digests = c.out / "digest-master.txt";
   fs::remove(digests);
   std::vector<ChannelStatus> channels;
@@ -229,6 +231,7 @@ int runMaster(cluster::Comm& comm,
         peers.push_back(channels[i].peer);
       }
     bool well = appendLine(digests, cluster::digestLine(s));
+    if (preview) preview->draw(s); // while the channels draw theirs
     const std::vector<int> answers = comm.collect(peers, c.frameDeadline());
     for (std::size_t k = 0; k < asked.size(); ++k) {
       if (answers[k] < 0) lose(comm, channels[asked[k]], n, "no answer in time");
@@ -239,6 +242,7 @@ int runMaster(cluster::Comm& comm,
         comm.postGo(channels[asked[k]].peer, well);
         channels[asked[k]].lastFrame = n;
       }
+    if (preview && well) preview->show();
     if (!well) {
       std::fprintf(stderr,
                    "tellus cluster: frame %lld failed on a rank (its message above); stopped\n",
@@ -259,6 +263,7 @@ int runMaster(cluster::Comm& comm,
                       std::chrono::duration<double>(static_cast<double>(n + 1) / c.fps)));
   }
   endShow(comm, channels, lostRank);
+  const bool previewWritten = !preview || preview->writeLast(c.out / "preview.png");
   std::size_t lost = 0;
   for (const ChannelStatus& ch : channels)
     lost += live(ch) ? 0u : 1u;
@@ -268,7 +273,7 @@ int runMaster(cluster::Comm& comm,
               c.out.string().c_str(),
               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
               lost > 0 ? "; channels lost (above)" : "");
-  return lost > 0 ? kExitError : kExitOk;
+  return lost > 0 || !previewWritten ? kExitError : kExitOk;
 }
 
 } // namespace tellus::commands

@@ -57,6 +57,10 @@ commands:
              mpirun -n 1 tellus cluster CONFIG.json --join NAME --port FILE (as the master);
              [--control 127.0.0.1:PORT] the console: GET /status, POST /camera, /time,
              /path (HTTP/JSON on loopback; PORT 0: any, printed)
+             [--window] each channel in a window of its size, warped and blended on the
+             GPU, swapped after the master's go (PNGs as without it);
+             [--preview [SIZE]] the master's window: the dome as a domemaster (render
+             --dome --size SIZE; 512), DIR/preview.png its last frame (both need a display)
   view     the interactive globe (a GLFW window)
              [--camera LAT,LON,ALT[,HEADING,TILT]] [--size WxH] [--layer NAME] [--threshold T]
              [--earth wgs84|sphere] [--offline | --server URL] [--dome [FOV]] [--dome-tilt DEG] [--dome-method direct|cube]; drag, wheel, W/S tilt, A/D heading, R reset, P screenshot, Esc

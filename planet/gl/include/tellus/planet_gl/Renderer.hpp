@@ -23,6 +23,7 @@
 #include <tellus/cache/TileSource.hpp>
 #include <tellus/planet/Atmosphere.hpp>
 #include <tellus/planet/Camera.hpp>
+#include <tellus/planet/ChannelWarp.hpp>
 #include <tellus/planet/Geodesy.hpp>
 #include <tellus/planet/HeightStreamer.hpp>
 #include <tellus/planet/StarCatalogue.hpp>
@@ -294,6 +295,22 @@ struct RendererOptions {
   };
   std::vector<SceneBody> sceneBodies;
   bool visibleWindow = false; ///< a window the user sees (`tellus view`); else hidden
+  /** With visibleWindow: frame() draws but does not show; Renderer::present() does (a cluster's
+   * channel swaps only after the master's go, docs/design/cluster-live.md). */
+  bool presentOnRequest = false;
+  /** With visibleWindow: the swap waits for the display's refresh (swap interval 1); false: it
+   * does not (the cluster master's preview, which must not hold up the frame lock). */
+  bool vsync = true;
+  /** A projector channel's warp and blend on the GPU (issue 28; ChannelWarp.hpp's conventions,
+   * planet/gl/src/ProjectorWarp.hpp): after the scene, its image drawn through the warp mesh
+   * (none: unwarped) and multiplied by the blend mask (none: 1; width x height weights) into a
+   * projector image of the framebuffer's size, which the window shows and readPresented() reads.
+   * readPixels() still reads the scene. resize() keeps the old size while this is set. */
+  struct ProjectorCalibration {
+    std::optional<WarpMesh> mesh;
+    std::optional<std::vector<float>> blend;
+  };
+  std::optional<ProjectorCalibration> projectorWarp;
   std::string windowTitle = "tellus";
   /** Another renderer whose window and GL context this one draws in (issue 26: `view`'s B, the
    * next body in the same window), instead of opening its own; the window stays while either
@@ -458,6 +475,12 @@ public:
   bool busy() const noexcept;
   /** The framebuffer as RGBA8, rows from the top. */
   std::vector<std::uint8_t> readPixels() const;
+  /** What the window shows (or would): the projector's image (RendererOptions::projectorWarp),
+   * else the framebuffer; RGBA8, rows from the top, width() x height(). */
+  std::vector<std::uint8_t> readPresented() const;
+  /** Shows the last frame in the visible window and swaps (RendererOptions::presentOnRequest;
+   * frame() does it otherwise). No-op without a visible window. */
+  void present();
   const RenderStats& stats() const noexcept;
   int width() const noexcept;
   int height() const noexcept;

@@ -1,0 +1,135 @@
+// A projector channel's warp and blend on the GPU (issue 28, label gl; planet/gl/src/
+// ProjectorWarp.hpp): the image a renderer presents through a curved warp mesh and a soft blend
+// mask is the CPU pass's (planet::warpAndBlend of readPixels()) to rounding, and not the image of
+// the same mesh upside down (GL counts rows from the bottom, the mesh and mask from the top).
+#include "GlTestSupport.hpp"
+
+#include <tellus/planet/ChannelWarp.hpp>
+#include <tellus/planet/Geodesy.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <vector>
+
+using namespace tellus;
+using namespace tellus::planet;
+using namespace tellus::planet::gltest;
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+constexpr int kWidth = 320, kHeight = 200; // not square: a transposed lookup shows
+
+/** A mesh that is not affine: the rows bow down, the columns bend, more at the top. */
+WarpMesh curvedMesh() {
+  WarpMesh m{11, 8, {}};
+  for (int j = 0; j < m.rows; ++j)
+    for (int i = 0; i < m.columns; ++i) {
+      const double x = static_cast<double>(i) / (m.columns - 1);
+      const double y = static_cast<double>(j) / (m.rows - 1);
+      m.uv.emplace_back(0.1 + 0.8 * x + 0.06 * std::sin(kPi * y) * (1.0 - y),
+                        0.05 + 0.85 * y * y + 0.08 * std::sin(kPi * x));
+    }
+  return m;
+}
+
+/** The same mesh with its rows in the opposite order. */
+WarpMesh flipped(const WarpMesh& m) {
+  WarpMesh f{m.columns, m.rows, {}};
+  for (int j = m.rows - 1; j >= 0; --j)
+    for (int i = 0; i < m.columns; ++i)
+      f.uv.push_back(m.uv[static_cast<std::size_t>(j * m.columns + i)]);
+  return f;
+}
+
+/** Soft edges: 0 at the left and the top, 1 inside, ramps of a fifth of the image. */
+std::vector<float> softMask() {
+  std::vector<float> w;
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) {
+      const double a = std::clamp((x + 0.5) / (0.2 * kWidth), 0.0, 1.0);
+      const double b = std::clamp((y + 0.5) / (0.2 * kHeight), 0.0, 1.0);
+      w.push_back(static_cast<float>(a * a * (3 - 2 * a) * b * b * (3 - 2 * b)));
+    }
+  return w;
+}
+
+double psnr(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) {
+  double se = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (i % 4 == 3) continue;
+    const double d = static_cast<double>(a[i]) - static_cast<double>(b[i]);
+    se += d * d;
+  }
+  const double mse = se / (static_cast<double>(a.size()) * 0.75);
+  return mse == 0.0 ? 99.0 : 10.0 * std::log10(255.0 * 255.0 / mse);
+}
+
+struct Images {
+  std::vector<std::uint8_t> scene, presented;
+};
+
+Images drawWarped(Renderer& r) {
+  const CameraPose pose{20.0, 10.0, 2.0e6, 15.0, 50.0}; // the horizon: sky at the top only
+  const Rendered out = renderComplete(r, pose, 120.0);
+  EXPECT_TRUE(out.complete);
+  return {out.pixels, r.readPresented()};
+}
+
+RendererOptions warpedOptions(std::optional<WarpMesh> mesh, std::optional<std::vector<float>> w) {
+  RendererOptions o = options("ramp", kWidth, kHeight);
+  o.projectorWarp = RendererOptions::ProjectorCalibration{std::move(mesh), std::move(w)};
+  return o;
+}
+
+} // namespace
+
+TEST(ProjectorWarpGl, PresentedImageIsTheCpuWarpAndBlend) {
+  const Geodesy g(EarthModel::Wgs84);
+  FakeTileSource source(rampLayer(GridSpec{Sector{}, 36.0, 256, 256, 8}));
+  const WarpMesh mesh = curvedMesh();
+  const std::vector<float> mask = softMask();
+  OPEN_RENDERER(r, source, g, warpedOptions(mesh, mask));
+  const Images im = drawWarped(r);
+  const ChannelImage cpu = warpAndBlend({kWidth, kHeight, im.scene}, kWidth, kHeight, &mesh, &mask);
+  ASSERT_EQ(im.presented.size(), cpu.rgba.size());
+  const double p = psnr(im.presented, cpu.rgba);
+  std::printf("GPU vs CPU warp and blend: PSNR %.2f dB\n", p);
+  EXPECT_GE(p, 40.0);
+  // The warp did something: the presented image is not the scene.
+  EXPECT_LT(psnr(im.presented, im.scene), 30.0);
+  // The mask's top-left corner is 0: black there.
+  EXPECT_EQ(im.presented[0] + im.presented[1] + im.presented[2], 0);
+}
+
+TEST(ProjectorWarpGl, MeshAndMaskAreNotUpsideDown) {
+  const Geodesy g(EarthModel::Wgs84);
+  FakeTileSource source(rampLayer(GridSpec{Sector{}, 36.0, 256, 256, 8}));
+  const WarpMesh mesh = curvedMesh();
+  OPEN_RENDERER(r, source, g, warpedOptions(mesh, std::nullopt));
+  const Images im = drawWarped(r);
+  const WarpMesh upsideDown = flipped(mesh);
+  const ChannelImage right =
+      warpAndBlend({kWidth, kHeight, im.scene}, kWidth, kHeight, &mesh, nullptr);
+  const ChannelImage wrong =
+      warpAndBlend({kWidth, kHeight, im.scene}, kWidth, kHeight, &upsideDown, nullptr);
+  const double good = psnr(im.presented, right.rgba), bad = psnr(im.presented, wrong.rgba);
+  std::printf("mesh as given: PSNR %.2f dB; upside down: %.2f dB\n", good, bad);
+  EXPECT_GE(good, 40.0);
+  EXPECT_LT(bad, 25.0);
+  // The mask alone, 0 on the top rows: the presented top row is black, the bottom row not.
+  OPEN_RENDERER(m, source, g, warpedOptions(std::nullopt, softMask()));
+  const Images masked = drawWarped(m);
+  std::uint64_t top = 0;
+  for (int x = 0; x < kWidth; ++x)
+    for (int k = 0; k < 3; ++k)
+      top += masked.presented[static_cast<std::size_t>(x * 4 + k)];
+  EXPECT_LT(top, static_cast<std::uint64_t>(kWidth)); // the mask's top row: ~0.0006
+  const std::vector<float> mask = softMask();
+  const ChannelImage cpu =
+      warpAndBlend({kWidth, kHeight, masked.scene}, kWidth, kHeight, nullptr, &mask);
+  EXPECT_GE(psnr(masked.presented, cpu.rgba), 40.0);
+}
