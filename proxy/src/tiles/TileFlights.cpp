@@ -118,9 +118,13 @@ void TileService::Impl::land(const FlightKey& k, TileAnswer&& answer) {
       flights.erase(it);
     }
   }
-  // A metatile's lease is shared by its tiles' flights: while others still hold it, this tile's
-  // being stored is announced, so that other processes waiting for it need not wait for all.
-  if (lease && lease.use_count() > 1 && answer.kind == TileAnswer::Kind::Tile && !answer.notStored)
+  // A metatile's lease is shared by its tiles' flights: while others still hold it, the first tile
+  // stored (the one a client asked for: it is stored first) is announced, so that other processes
+  // waiting for it need not wait for the whole block. Only the first: each announcement wakes every
+  // waiter to look up all of its tiles again, which cost more than it saved when every tile was
+  // announced (bench/RESULTS.md, issue 27).
+  if (lease && lease.use_count() > 1 && answer.kind == TileAnswer::Kind::Tile &&
+      !answer.notStored && !lease->announced.exchange(true))
     lease->leases->progress(lease->key);
   lease.reset(); // the last flight holding it: released (the tile is stored), waiters wake
   for (std::size_t i = 0; i + 1 < waiters.size(); ++i) {

@@ -40,6 +40,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
   struct LeaseHold {
     std::shared_ptr<ITileLeases> leases;
     LeaseKey key;
+    std::atomic<bool> announced{false}; ///< a tile landed under it was announced (progress)
     LeaseHold(std::shared_ptr<ITileLeases> l, LeaseKey k)
         : leases(std::move(l)), key(std::move(k)) {}
     LeaseHold(const LeaseHold&) = delete;
