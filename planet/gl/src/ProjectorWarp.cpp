@@ -1,9 +1,9 @@
 #include "ProjectorWarp.hpp"
 
 #include "GlShader.hpp"
+#include "SceneDraw.hpp"
 #include "Shaders.hpp"
 
-#include <algorithm>
 
 namespace tellus::planet {
 namespace {
@@ -123,14 +123,7 @@ void ProjectorWarp::apply(GLuint sceneFbo) {
 }
 
 std::vector<std::uint8_t> ProjectorWarp::readPixels() const {
-  const auto w = static_cast<std::size_t>(width_), h = static_cast<std::size_t>(height_);
-  std::vector<std::uint8_t> bottomUp(w * h * 4), out(w * h * 4);
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, outFbo_.id());
-  glPixelStorei(GL_PACK_ALIGNMENT, 4);
-  glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, bottomUp.data());
-  for (std::size_t y = 0; y < h; ++y)
-    std::copy_n(bottomUp.data() + (h - 1 - y) * w * 4, w * 4, out.data() + y * w * 4);
-  return out;
+  return readFramebufferTopDown(outFbo_.id(), width_, height_);
 }
 
 } // namespace tellus::planet

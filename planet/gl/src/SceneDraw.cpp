@@ -43,15 +43,19 @@ SceneFramebuffer::SceneFramebuffer(int width, int height)
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_.id());
 }
 
-std::vector<std::uint8_t> SceneFramebuffer::readPixels() const {
-  const auto w = static_cast<std::size_t>(width_), h = static_cast<std::size_t>(height_);
+std::vector<std::uint8_t> readFramebufferTopDown(GLuint fbo, int width, int height) {
+  const auto w = static_cast<std::size_t>(width), h = static_cast<std::size_t>(height);
   std::vector<std::uint8_t> bottomUp(w * h * 4), out(w * h * 4);
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_.id());
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo);
   glPixelStorei(GL_PACK_ALIGNMENT, 4);
-  glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, bottomUp.data());
+  glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, bottomUp.data());
   for (std::size_t y = 0; y < h; ++y)
     std::copy_n(bottomUp.data() + (h - 1 - y) * w * 4, w * 4, out.data() + y * w * 4);
   return out;
+}
+
+std::vector<std::uint8_t> SceneFramebuffer::readPixels() const {
+  return readFramebufferTopDown(fbo_.id(), width_, height_);
 }
 
 SceneDraw::SceneDraw(const RendererOptions& options,

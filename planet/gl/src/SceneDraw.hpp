@@ -32,6 +32,10 @@
 
 namespace tellus::planet {
 
+/** A framebuffer's colour (RGBA8, width x height) read back, rows from the top (GL's are from
+ * the bottom): what readPixels gives, of the scene and of a projector's warped image. */
+std::vector<std::uint8_t> readFramebufferTopDown(GLuint fbo, int width, int height);
+
 /** The framebuffer every frame is drawn into and readPixels reads: RGBA8 colour and a 32-bit
  * float depth buffer (Depth.hpp), both renderbuffers. */
 class SceneFramebuffer {
