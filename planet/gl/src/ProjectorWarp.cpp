@@ -4,7 +4,6 @@
 #include "SceneDraw.hpp"
 #include "Shaders.hpp"
 
-
 namespace tellus::planet {
 namespace {
 
