@@ -6,7 +6,9 @@
 #
 # Three instances of each server, one cache shared by the three:
 #   tellus    three `tellus serve` on one PostgreSQL index (tests/support/postgres.sh: leases are
-#             advisory locks, waiters woken by LISTEN/NOTIFY) and one shared cache folder
+#             advisory locks, waiters woken by LISTEN/NOTIFY) and one shared cache folder, or with
+#             BURST_STORE=s3 one S3 bucket (tests/support/s3-server.sh: Swift + s3api) behind
+#             each instance's own local tier
 #   MapCache  three private Apaches (mod_mapcache, MAPCACHE_PROCS x MAPCACHE_THREADS each) on one
 #             disk cache, with MapCache's memcache locker on one memcached (Debian memcached;
 #             retry MC_LOCK_RETRY s, MapCache's default 0.1)
@@ -29,6 +31,7 @@ BURST="${BURST:-300}"
 BURST_LEVEL="${BURST_LEVEL:-6}"
 BURST_AT="${BURST_AT:-12,0}" # lon,lat: central Africa, land (ocean tiles are all one colour)
 MC_LOCK_RETRY="${MC_LOCK_RETRY:-0.1}"
+BURST_STORE="${BURST_STORE:-folder}" # folder: one shared cache folder; s3: one S3 bucket
 TELLUS_THREADS="${TELLUS_THREADS:-}"
 burst_py="$repo/tests/cli/burst.py"
 b="$work/burst"
@@ -38,8 +41,18 @@ mkdir -p "$b"
 pg_dir="$b/pg"
 pg_uri="$("$repo/tests/support/postgres.sh" start "$pg_dir")" || die "PostgreSQL did not start"
 mkdir -p "$b/tellus"
+if [[ "$BURST_STORE" == s3 ]]; then # one bucket (Swift + s3api), each instance its local tier
+  s3_dir="$b/s3"
+  "$repo/tests/support/s3-server.sh" start "$s3_dir" >/dev/null || die "the S3 server did not start"
+  # shellcheck disable=SC1091
+  . "$s3_dir/s3.env"
+  export AWS_ACCESS_KEY_ID AWS_SECRET_ACCESS_KEY
+  cache_line="cache: {index: \"$pg_uri\", store: \"s3://$S3_BUCKET/burst\", s3: {endpoint: \"$S3_ENDPOINT\", region: $S3_REGION}}"
+else
+  cache_line="cache: {index: \"$pg_uri\"}"
+fi
 {
-  echo "cache: {index: \"$pg_uri\"}"
+  echo "$cache_line"
   cat "$here/tellus.yaml"
 } >"$b/tellus/tellus.tmpl"
 fill "$b/tellus/tellus.tmpl" "$b/tellus/tellus.yaml" "UPSTREAM_URL=$upstream_url" "SEED_CONCURRENCY=$SEED_CONCURRENCY"
@@ -47,7 +60,9 @@ tellus_ports=()
 threads=()
 [[ -z "$TELLUS_THREADS" ]] || threads=(--threads "$TELLUS_THREADS")
 for k in 0 1 2; do
-  "$tellus" serve --config "$b/tellus/tellus.yaml" --cache "$b/tellus/cache" --listen 127.0.0.1:0 \
+  root="$b/tellus/cache"
+  [[ "$BURST_STORE" != s3 ]] || root="$b/tellus/cache$k" # the local tiers are each its own
+  "$tellus" serve --config "$b/tellus/tellus.yaml" --cache "$root" --listen 127.0.0.1:0 \
     "${threads[@]}" >"$b/tellus/serve$k.log" 2>&1 &
   pids+=($!)
 done

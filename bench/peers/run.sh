@@ -221,6 +221,7 @@ cleanup() {
   for c in "${apache_confs[@]}"; do apache2 -f "$c" -k stop 2>/dev/null || true; done
   for p in "${pids[@]}"; do wait "$p" 2>/dev/null || true; done
   [[ -z "${pg_dir:-}" ]] || "$repo/tests/support/postgres.sh" stop "$pg_dir" || true
+  [[ -z "${s3_dir:-}" ]] || "$repo/tests/support/s3-server.sh" stop "$s3_dir" || true
   # Apache stops its children (and mod_fcgid its mapserv processes) after the parent got TERM
   for c in "${apache_confs[@]}"; do
     for _ in $(seq 1 100); do

@@ -87,6 +87,40 @@ struct Shared {
     return std::make_shared<const TileFile>(fd, static_cast<std::int64_t>(bytes.size()));
   }
 
+  /** Stores `bytes` at `key` unless an object with other bytes is there (a refresh: left to
+   * store(), in the writer's transaction, which keeps the old bytes for a rollback). `done`: the
+   * object holds these bytes now; `created`: this call made it. Run when the tile is staged, on
+   * the caller's thread: the PUTs of many tiles go out in parallel, not one after another on the
+   * index's writer thread (bench/RESULTS.md, issue 27). */
+  Result storeIfAbsent(const std::string& key,
+                       std::span<const std::byte> bytes,
+                       bool& done,
+                       bool& created) {
+    done = created = false;
+    if (conditionalPut.load() >= 0) {
+      const auto r = put(key, bytes, true);
+      if (r.ok()) {
+        conditionalPut.store(1);
+        done = created = true;
+        return {};
+      }
+      if (r.status == 412) return {}; // an object is there: store() compares
+      if (r.status != 501) return std::unexpected(error("PUT", key, r));
+      conditionalPut.store(-1);
+    }
+    const auto old = get(key);
+    if (old.ok()) {
+      const auto oldBytes = bytesOf(old.body);
+      done = std::equal(oldBytes.begin(), oldBytes.end(), bytes.begin(), bytes.end());
+      return {};
+    }
+    if (old.status != 404) return std::unexpected(error("GET", key, old));
+    const auto r = put(key, bytes, false);
+    if (!r.ok()) return std::unexpected(error("PUT", key, r));
+    done = created = true;
+    return {};
+  }
+
   /** Puts `bytes` at `key`; says what was there before (nullopt: nothing) in `previous`. */
   Result store(const std::string& key,
                std::span<const std::byte> bytes,
@@ -122,14 +156,21 @@ struct Shared {
 
 class S3StagedTile final : public StagedTile {
 public:
+  /** `done`, `created`: what Shared::storeIfAbsent did when the tile was staged. */
   S3StagedTile(std::shared_ptr<Shared> shared,
                std::string key,
                Bytes bytes,
-               std::shared_ptr<const TileFile> file)
+               std::shared_ptr<const TileFile> file,
+               bool done,
+               bool created)
       : shared_(std::move(shared)), key_(std::move(key)), bytes_(std::move(bytes)),
-        file_(std::move(file)) {}
+        file_(std::move(file)), created_(created), done_(done) {}
 
   Result install() override {
+    if (done_) { // stored when staged: a rollback removes what that made
+      installed_ = created_;
+      return {};
+    }
     auto r = shared_->store(key_, bytes_, previous_, created_);
     installed_ = r.has_value();
     return r;
@@ -156,6 +197,7 @@ private:
   std::shared_ptr<const TileFile> file_;
   std::optional<Bytes> previous_;
   bool created_ = false;
+  bool done_ = false;
   bool installed_ = false;
 };
 
@@ -235,8 +277,11 @@ public:
     auto key = s_->layout.tile(at);
     auto file = s_->localFile(bytes, key);
     if (!file) return std::unexpected(file.error());
+    bool done = false, created = false;
+    if (auto stored = s_->storeIfAbsent(key, bytes, done, created); !stored)
+      return std::unexpected(stored.error());
     return std::make_shared<S3StagedTile>(
-        s_, std::move(key), Bytes(bytes.begin(), bytes.end()), std::move(*file));
+        s_, std::move(key), Bytes(bytes.begin(), bytes.end()), std::move(*file), done, created);
   }
 
   std::shared_ptr<StagedRemoval> stageRemoval(const TileLocation& at) override {

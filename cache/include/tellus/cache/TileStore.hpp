@@ -9,9 +9,10 @@
  * Implementations: the World Wind file tree under the cache root (openFileTileStore, the embedded
  * default: `<root>/<folder>/<level>/<row>/<row>_<col>.<ext>`, temp files in `<folder>/.tmp`) and
  * an in-memory one for tests (tests/support/MemoryTileStore.hpp). S3-compatible object storage
- * (issue 27) is the next one: stage = an object under a temporary key or the final one written
- * with If-None-Match, open = one GET into a local tier file (a TileFile is a descriptor), the
- * changes lock = nothing to lock where objects are immutable.
+ * (cache/s3): stage = a new tile's object written at once with If-None-Match (deleted by
+ * finish(false) if its row is not committed), install = only a refresh's replacement, open = one
+ * GET into a local tier file (a TileFile is a descriptor), the changes lock = nothing to lock
+ * where objects are immutable.
  *
  * Thread safety: every method may be called from any thread at once, except that install() and
  * finish() of staged changes, and lockChanges()/unlockChanges(), come from the cache's writer (one

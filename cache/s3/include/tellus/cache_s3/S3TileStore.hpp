@@ -10,7 +10,10 @@
  * PUT `If-None-Match: *` (a 412 means another instance stored it: success when the bytes are the
  * same; a refresh with other bytes replaces it, keeping the old bytes for a rollback); where the
  * server refuses conditional PUTs (Swift's s3api answers 501), a GET first tells whether it is
- * there. A PUT is atomic in S3: a failed or cut upload leaves the old object or none, never part
+ * there. A new tile is PUT when it is staged, on the caller's thread (many at once), and deleted
+ * again if its index row is not committed; only a refresh that replaces other bytes waits for the
+ * index's writer thread (install), which kept every PUT one after another before.
+ * A PUT is atomic in S3: a failed or cut upload leaves the old object or none, never part
  * of one, and the payload's SHA-256 (x-amz-content-sha256) makes the server refuse bytes that are
  * not the ones signed. A tile is read with one GET (no HEAD first) into an unlinked file of the
  * local folder (a TileFile is a descriptor, sent with sendfile(2)). The changes lock is nothing:
