@@ -105,6 +105,27 @@ TEST_F(S3StoreIntegration, AnotherInstanceStoringTheSameTileSucceedsAndARefreshR
   EXPECT_FALSE(a->stat(fresh));
 }
 
+TEST_F(S3StoreIntegration, ANewTileIsPutWhenStagedAndARollbackWithoutInstallRemovesIt) {
+  // The PUT is made on the storing thread (stage), not on the index's writer thread (install):
+  // tiles of many workers go out at once. A row never committed leaves no object behind.
+  auto s = open();
+  ASSERT_TRUE(s);
+  const TileLocation t{"srv/ds", "jpg", TileKey{4, 2, 7}};
+  auto staged = s->stage(t, bytes("early"));
+  ASSERT_TRUE(staged) << staged.error().message;
+  const auto st = s->stat(t);
+  ASSERT_TRUE(st) << "not stored when staged";
+  EXPECT_EQ(st->size, 5);
+  (*staged)->finish(false); // the writer failed before it installed anything
+  EXPECT_FALSE(s->stat(t)) << "a tile without a row was left in the bucket";
+  // Staged, installed and committed: kept.
+  auto kept = s->stage(t, bytes("kept!"));
+  ASSERT_TRUE(kept);
+  ASSERT_TRUE((*kept)->install());
+  (*kept)->finish(true);
+  EXPECT_EQ(text(*s->open(t, 5)), "kept!");
+}
+
 TEST_F(S3StoreIntegration, AStagedRemovalHidesTheTileAndARollbackPutsItBack) {
   auto s = open();
   ASSERT_TRUE(put(*s, kTile, "keep"));

@@ -164,13 +164,10 @@ public:
                bool done,
                bool created)
       : shared_(std::move(shared)), key_(std::move(key)), bytes_(std::move(bytes)),
-        file_(std::move(file)), created_(created), done_(done) {}
+        file_(std::move(file)), created_(created), done_(done), installed_(created) {}
 
   Result install() override {
-    if (done_) { // stored when staged: a rollback removes what that made
-      installed_ = created_;
-      return {};
-    }
+    if (done_) return {}; // stored when staged: a rollback (install or not) removes what it made
     auto r = shared_->store(key_, bytes_, previous_, created_);
     installed_ = r.has_value();
     return r;
