@@ -91,23 +91,30 @@ private:
  * each projection keeps the test it has always had. */
 enum class EdgeSplit { LengthOverLimit, RatioOverOne };
 
-/** The thesis's test on the corners' pixels: SW-SE and NW-NE run east-west, SE-NE and NW-SW
- * north-south; a pole edge has length 0. */
+/** A node's four edges by their corners: SW-SE and NW-NE run east-west, SE-NE and NW-SW
+ * north-south. */
+struct CornerEdge {
+  std::size_t a, b;
+  bool eastWest;
+};
+constexpr std::array<CornerEdge, 4> kCornerEdges{
+    {{SW, SE, true}, {NW, NE, true}, {SE, NE, false}, {SW, NW, false}}};
+
+/** The most pixels an edge may cover: its texels times the threshold (east-west, north-south). */
+glm::dvec2 edgeLimits(const LodParams& params) noexcept {
+  return {static_cast<double>(params.tileWidthPx) * params.threshold,
+          static_cast<double>(params.tileHeightPx) * params.threshold};
+}
+
+/** The thesis's test on the corners' pixels (kCornerEdges); a pole edge has length 0. */
 void testWholeEdges(const std::array<glm::dvec2, 4>& px,
                     const LodParams& params,
                     EdgeSplit rule,
                     LodResult& r) noexcept {
-  const double limitW = static_cast<double>(params.tileWidthPx) * params.threshold;
-  const double limitH = static_cast<double>(params.tileHeightPx) * params.threshold;
-  const double limitW2 = limitW * limitW;
-  const double limitH2 = limitH * limitH;
-  struct Edge {
-    std::size_t a, b;
-    bool eastWest;
-  };
-  constexpr std::array<Edge, 4> edges{
-      {{SW, SE, true}, {NW, NE, true}, {SE, NE, false}, {SW, NW, false}}};
-  for (const Edge& e : edges) {
+  const glm::dvec2 limit = edgeLimits(params);
+  const double limitW2 = limit.x * limit.x;
+  const double limitH2 = limit.y * limit.y;
+  for (const CornerEdge& e : kCornerEdges) {
     const glm::dvec2 d = px[e.b] - px[e.a];
     const double len2 = d.x * d.x + d.y * d.y;
     const double lim2 = e.eastWest ? limitW2 : limitH2;
@@ -205,15 +212,8 @@ public:
       testWholeEdges(px, params, kEdgeSplit, r);
       return;
     }
-    const double limitW = static_cast<double>(params.tileWidthPx) * params.threshold;
-    const double limitH = static_cast<double>(params.tileHeightPx) * params.threshold;
-    struct Edge {
-      std::size_t a, b;
-      bool eastWest;
-    };
-    constexpr std::array<Edge, 4> edges{
-        {{SW, SE, true}, {NW, NE, true}, {SE, NE, false}, {SW, NW, false}}};
-    for (const Edge& e : edges) {
+    const glm::dvec2 limit = edgeLimits(params);
+    for (const CornerEdge& e : kCornerEdges) {
       double t0 = 0.0, t1 = 1.0;
       int k0 = 0, k1 = 0;
       if (!clipSegment(clip_[e.a], clip_[e.b], camera_.nearM(), t0, t1, &k0, &k1)) continue;
@@ -222,7 +222,7 @@ public:
       const glm::dvec2 d{(p1.x / p1.w - p0.x / p0.w) * halfW_,
                          (p1.y / p1.w - p0.y / p0.w) * halfH_};
       const double len2 = d.x * d.x + d.y * d.y;
-      const double lim = (e.eastWest ? limitW : limitH) * (t1 - t0);
+      const double lim = (e.eastWest ? limit.x : limit.y) * (t1 - t0);
       const double ratio = len2 / (lim * lim);
       if (ratio > r.worstRatioSquared) r.worstRatioSquared = ratio;
       if (len2 > lim * lim) r.split = true;
