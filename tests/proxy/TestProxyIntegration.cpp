@@ -52,6 +52,13 @@ namespace fs = std::filesystem;
 
 namespace {
 
+/** A metric's value in a /metrics body (its name with any labels); -1 when it is not there. */
+long long metricValue(const std::string& body, const std::string& name) {
+  const auto at = body.find("\n" + name + " ");
+  if (at == std::string::npos) return -1;
+  return std::stoll(body.substr(at + name.size() + 2));
+}
+
 /** A real JPEG whose colour depends on the request, so different tiles have different bytes. */
 std::string jpegFor(const std::string& target, int size = 256) {
   const auto h = stableHash64(target);
@@ -1158,11 +1165,7 @@ TEST(ComposeIntegration, CoarseMapsComeFromTheSameDataOnACoarserGrid) {
   EXPECT_EQ(up.requests(), 14u);
   const auto m = p.get("/metrics");
   ASSERT_EQ(m.status, 200);
-  const auto value = [&](const std::string& name) -> long long {
-    const auto at = m.body.find("\n" + name + " ");
-    if (at == std::string::npos) return -1;
-    return std::stoll(m.body.substr(at + name.size() + 2));
-  };
+  const auto value = [&](const std::string& name) { return metricValue(m.body, name); };
   EXPECT_EQ(value("tellus_compose_output_texels_total"), 360 * 180 + 350 * 250) << m.body;
   EXPECT_EQ(value("tellus_compose_source_texels_total{origin=\"upstream\"}"), 14 * 256 * 256);
   EXPECT_EQ(value("tellus_compose_source_texels_total{origin=\"cache\"}"), 0);
@@ -1406,11 +1409,7 @@ TEST(ComposeIntegration, MetricsShowTheDecodedTilesKept) {
     ASSERT_EQ(p.get(map).status, 200);
   const auto m = p.get("/metrics");
   ASSERT_EQ(m.status, 200);
-  const auto value = [&](const std::string& name) -> long long {
-    const auto at = m.body.find("\n" + name + " ");
-    if (at == std::string::npos) return -1;
-    return std::stoll(m.body.substr(at + name.size() + 2));
-  };
+  const auto value = [&](const std::string& name) { return metricValue(m.body, name); };
   const long long decoded = value("tellus_composed_map_tiles_total{source=\"decoded\"}");
   const long long kept = value("tellus_composed_map_tiles_total{source=\"kept\"}");
   EXPECT_GT(kept, 0) << m.body;
