@@ -34,9 +34,11 @@ wait_for() {
 lines() { [ -f "$1" ] && wc -l <"$1" || echo 0; }
 at_least() { [ "$(lines "$1")" -ge "$2" ]; }
 # rank_pid MPIRUN_PID RANK: the pid of that rank (mpirun's child with it in its environment).
+# grep -z reads the NUL-separated file itself: `tr | grep -q` under pipefail failed whenever
+# grep quit before tr had written a large environment (tr's SIGPIPE; once in CI).
 rank_pid() {
   for p in $(pgrep -P "$1"); do
-    if tr '\0' '\n' <"/proc/$p/environ" | grep -qx "OMPI_COMM_WORLD_RANK=$2"; then
+    if grep -qxz "OMPI_COMM_WORLD_RANK=$2" "/proc/$p/environ"; then
       echo "$p"
       return 0
     fi
