@@ -130,7 +130,7 @@ done
   >"$work/export.txt" || fail "export: $(cat "$work/export.txt")"
 grep -q "exported bluemarble: 3 tiles" "$work/export.txt" || fail "export said: $(cat "$work/export.txt")"
 command -v gdallocationinfo >/dev/null || fail "gdallocationinfo (gdal-bin) is needed for the GeoPackage check"
-gdalinfo "$work/bm.gpkg" | grep -q "Size is 10240, 5120" || fail "GDAL does not see a 10240x5120 raster"
+grep -q "Size is 10240, 5120" <<<"$(gdalinfo "$work/bm.gpkg")" || fail "GDAL does not see a 10240x5120 raster"
 # Level 1, row 7 (from the south), column 10: 18 degrees, lat 36..54, lon 0..18 (Europe). The same
 # JPEG with a world file must give GDAL the same pixel as the GeoPackage (rows flipped right).
 tile=$(ls "$work"/gcache/*/bluemarble-*/1/7/7_10.jpg)

@@ -57,7 +57,7 @@ cat >"$work/ww.xml" <<XML
   <BandsCount>3</BandsCount>
 </GDAL_WMS>
 XML
-gdalinfo "$work/ww.xml" | grep -q "Size is 20480, 10240" || fail "GDAL sees another raster size"
+grep -q "Size is 20480, 10240" <<<"$(gdalinfo "$work/ww.xml")" || fail "GDAL sees another raster size"
 # Block (column 10, row 2 from the top) is tellus's level-2 tile row 17, column 10.
 gdal_translate -q -srcwin 5120 1024 512 512 -of GTiff "$work/ww.xml" "$work/block.tif" \
   || fail "gdal_translate through the WorldWind mini-driver"
@@ -81,7 +81,7 @@ for want in "layer=bluemarble,tilematrixset=WorldWind_bluemarble" \
 done
 # The own set at tile matrix 2 is the World Wind level 2: the same block as above, the same pixels.
 own="$wmts,layer=bluemarble,tilematrixset=WorldWind_bluemarble,tilematrix=2"
-gdalinfo "$own" | grep -q "Size is 20480, 10240" || fail "WMTS: GDAL sees another raster size: $(gdalinfo "$own")"
+grep -q "Size is 20480, 10240" <<<"$(gdalinfo "$own")" || fail "WMTS: GDAL sees another raster size: $(gdalinfo "$own")"
 gdal_translate -q -srcwin 5120 1024 512 512 -of GTiff "$own" "$work/wmts-block.tif" \
   || fail "gdal_translate through the WMTS driver"
 grep -q 'target=/wmts/1.0.0/bluemarble/default/WorldWind_bluemarble/2/2/10.jpg status=200 .* cache=HIT' \
@@ -200,7 +200,7 @@ PY
 # picture for imagery (RGBA with TRANSPARENT). GDAL's own TIFF reader judges the files.
 map="$base/wms?SERVICE=WMS&VERSION=1.1.1&REQUEST=GetMap&STYLES=&SRS=EPSG:4326&BBOX=60,10,100,40&WIDTH=80&HEIGHT=60&FORMAT=image/tiff"
 curl -sf -o "$work/heights.tif" "$map&LAYERS=etopo" || fail "GetMap etopo as image/tiff"
-gdalinfo "$work/heights.tif" | grep -q "Band 1 Block=.* Type=Int16" || fail "heights as TIFF: $(gdalinfo "$work/heights.tif")"
+grep -q "Band 1 Block=.* Type=Int16" <<<"$(gdalinfo "$work/heights.tif")" || fail "heights as TIFF: $(gdalinfo "$work/heights.tif")"
 [ "$(gdalinfo "$work/heights.tif" | grep -c '^Band ')" = 1 ] || fail "heights as TIFF: more than one band"
 curl -sf -o "$work/picture.tif" "$map&LAYERS=bluemarble&TRANSPARENT=TRUE" || fail "GetMap bluemarble as image/tiff"
 info=$(gdalinfo "$work/picture.tif")
