@@ -50,6 +50,8 @@ void BM_GlWarpAndBlend(benchmark::State& state) {
   auto pass = ProjectorWarp::create((*context)->capabilities().glslHeader(),
                                     w,
                                     h,
+                                    w,
+                                    h,
                                     WarpMesh::identity(65, 41),
                                     std::vector<float>(n, 0.5f));
   if (!pass) {

@@ -36,6 +36,9 @@ void main() {
     vec2 uv = (a * (1.0 - fx) + b * fx) * (1.0 - fy) + (c * (1.0 - fx) + d * fx) * fy;
     sx = uv.x * float(uSource.x);
     sy = uv.y * float(uSource.y);
+  } else if (uSource != uOut) { // no warp: the rendered image scaled to the projector's
+    sx = sx / float(uOut.x) * float(uSource.x);
+    sy = sy / float(uOut.y) * float(uSource.y);
   }
   float x = clamp(sx - 0.5, 0.0, float(uSource.x - 1));
   float y = clamp(sy - 0.5, 0.0, float(uSource.y - 1));

@@ -215,7 +215,7 @@ makeChannel(Profile profile, const RegionInput& r, const std::string& origin) {
   for (std::size_t i = 0; i < uv.size(); ++i) {
     glm::dvec2 px;
     if (!std::isnan((*dirs)[i].x) && planet::projectToChannel(c, (*dirs)[i], px))
-      uv[i] = {px.x / c.width, px.y / c.height};
+      uv[i] = {px.x / c.renderedWidth(), px.y / c.renderedHeight()};
     else
       uv[i] = glm::dvec2(kNaN);
   }

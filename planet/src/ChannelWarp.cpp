@@ -124,6 +124,9 @@ ChannelImage warpAndBlend(const ChannelImage& rendered,
                               (v(i0, j0 + 1) * (1 - fx) + v(i0 + 1, j0 + 1) * fx) * fy;
         sx = uv.x * rendered.width;
         sy = uv.y * rendered.height;
+      } else if (rendered.width != width || rendered.height != height) { // scaled, nothing else
+        sx = sx / width * rendered.width;
+        sy = sy / height * rendered.height;
       }
       const double weight =
           blend != nullptr ? static_cast<double>((*blend)[index(px, py, width)]) : 1.0;

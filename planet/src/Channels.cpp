@@ -62,8 +62,17 @@ std::string readSize(const Json& object, const char* key, int& out) {
 
 std::string readChannel(const Json& j, Channel& c) {
   if (!j.is_object()) return "not an object";
-  static const std::set<std::string> known{
-      "name", "azimuth", "elevation", "hfov", "vfov", "roll", "width", "height", "warp", "blend"};
+  static const std::set<std::string> known{"name",
+                                           "azimuth",
+                                           "elevation",
+                                           "hfov",
+                                           "vfov",
+                                           "roll",
+                                           "width",
+                                           "height",
+                                           "render",
+                                           "warp",
+                                           "blend"};
   for (const auto& [key, value] : j.items()) {
     (void)value;
     if (!known.contains(key)) return "unknown key \"" + key + "\"";
@@ -90,12 +99,25 @@ std::string readChannel(const Json& j, Channel& c) {
       *out = it->get<std::string>();
     }
   }
-  const double aspect = static_cast<double>(c.width) / c.height;
+  if (const auto it = j.find("render"); it != j.end()) {
+    if (!it->is_array() || it->size() != 2)
+      return "render: [width, height] of the rendered image is required";
+    const Json size{{"width", (*it)[0]}, {"height", (*it)[1]}};
+    for (const auto& message :
+         {readSize(size, "width", c.renderWidth), readSize(size, "height", c.renderHeight)})
+      if (!message.empty()) return "render: " + message;
+  }
+  const double aspect = static_cast<double>(c.renderedWidth()) / c.renderedHeight();
   const double fovAspect = std::tan(c.hfovDeg * kDeg / 2.0) / std::tan(c.vfovDeg * kDeg / 2.0);
+  const std::string what = c.renderWidth > 0 ? "render" : "width / height";
   if (std::abs(fovAspect / aspect - 1.0) > 0.01) {
-    return "pixels not square: width / height is " + std::to_string(aspect) +
+    return "pixels not square: " + what + " is " + std::to_string(aspect) +
            " but tan(hfov / 2) / tan(vfov / 2) is " + std::to_string(fovAspect);
   }
+  const double projector = static_cast<double>(c.width) / c.height;
+  if (c.warp.empty() && std::abs(projector / aspect - 1.0) > 0.01)
+    return "without a warp the projector shows the rendered image scaled: width / height is " +
+           std::to_string(projector) + " but render's is " + std::to_string(aspect);
   return {};
 }
 
@@ -125,14 +147,16 @@ bool projectToChannel(const Channel& channel, const glm::dvec3& domeDir, glm::dv
   if (!(z > 1e-9)) return false;
   const double x = glm::dot(domeDir, f.right) / z / std::tan(channel.hfovDeg * kDeg / 2.0);
   const double y = glm::dot(domeDir, f.up) / z / std::tan(channel.vfovDeg * kDeg / 2.0);
-  px = {(1.0 + x) * channel.width / 2.0, (1.0 - y) * channel.height / 2.0};
+  px = {(1.0 + x) * channel.renderedWidth() / 2.0, (1.0 - y) * channel.renderedHeight() / 2.0};
   return true;
 }
 
 glm::dvec3 channelPixelDirection(const Channel& channel, const glm::dvec2& px) noexcept {
   const ChannelFrame f = channelFrame(channel);
-  const double x = (2.0 * px.x / channel.width - 1.0) * std::tan(channel.hfovDeg * kDeg / 2.0);
-  const double y = (1.0 - 2.0 * px.y / channel.height) * std::tan(channel.vfovDeg * kDeg / 2.0);
+  const double x =
+      (2.0 * px.x / channel.renderedWidth() - 1.0) * std::tan(channel.hfovDeg * kDeg / 2.0);
+  const double y =
+      (1.0 - 2.0 * px.y / channel.renderedHeight()) * std::tan(channel.vfovDeg * kDeg / 2.0);
   return glm::normalize(f.forward + x * f.right + y * f.up);
 }
 

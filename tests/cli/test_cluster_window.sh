@@ -3,8 +3,10 @@
 # xvfb-run): three channels, two with curved warp meshes and soft blend masks, shown in windows
 # and warped and blended on the GPU, write the same PNGs as the headless run's CPU pass (PSNR at
 # least BOUND each); the master's preview window writes preview.png, the domemaster `tellus render
-# --dome` draws of the same view (PSNR at least BOUND). Without a display both are refused with a
-# message, as are a preview too small and an unknown option. KEEP=1 keeps the work folder.
+# --dome` draws of the same view (PSNR at least BOUND). Rendered at 1.5 x the projectors' sizes
+# (--render-scale), the windows' images are still the CPU pass's. Without a display both are
+# refused with a message, as are a preview too small, a scale out of range and an unknown option.
+# KEEP=1 keeps the work folder.
 set -euo pipefail
 tellus=$1
 here=$(cd "$(dirname "$0")" && pwd) # png_pixels.py
@@ -80,6 +82,21 @@ done
 p=$(psnr "$work/north-plain.png" "$work/gl/channel-north-00000.png")
 atleast "$p" 30 && fail "north's warp changed nothing: $p dB"
 
+# Rendered at 1.5 x the projectors' sizes (--render-scale; CONFIG.json's "render" per channel):
+# each channel's image is still its projector's size, the GPU's the CPU's (the zenith, without a
+# warp, only scaled), and the view the same as at 1 x.
+cluster "$work/dome.json" "${view[@]}" --render-scale 1.5 --out "$work/cpu15" >/dev/null ||
+  fail "cluster --render-scale 1.5"
+cluster "$work/dome.json" "${view[@]}" --render-scale 1.5 --window --out "$work/gl15" >/dev/null ||
+  fail "cluster --render-scale 1.5 --window"
+for n in north east zenith; do
+  p=$(psnr "$work/cpu15/channel-$n-00000.png" "$work/gl15/channel-$n-00000.png")
+  q=$(psnr "$work/cpu/channel-$n-00000.png" "$work/cpu15/channel-$n-00000.png")
+  echo "channel $n rendered at 1.5 x: --window against the CPU pass $p dB, against 1 x $q dB"
+  atleast "$p" "$bound" || fail "channel $n at 1.5 x: --window differs from the CPU pass: $p dB"
+  atleast "$q" 25 || fail "channel $n at 1.5 x shows another view than at 1 x: $q dB"
+done
+
 # The preview: the domemaster of the same view.
 [ -f "$work/gl/preview.png" ] || fail "no preview.png"
 "$tellus" render "${view[@]}" --dome --size 160 --out "$work/dome.png" >/dev/null ||
@@ -99,11 +116,12 @@ for opt in --window --preview; do
     fail "$opt without a display not refused: $rc $msg"
 done
 # Refused: a preview too small, an unknown option.
-for bad in "--preview=8:--preview=SIZE must be a whole number" "--windows:unknown option --windows"; do
+for bad in "--preview=8:--preview=SIZE must be a whole number" "--windows:unknown option --windows" \
+  "--render-scale=5:--render-scale must be in [0.25, 4]"; do
   set +e
   msg=$(cluster "$work/dome.json" "${view[@]}" "${bad%%:*}" --out "$work/u" 2>&1)
   rc=$?
   set -e
-  [ $rc -ne 0 ] && echo "$msg" | grep -q -- "${bad#*:}" || fail "${bad%%:*} not refused: $rc $msg"
+  [ $rc -ne 0 ] && echo "$msg" | grep -qF -- "${bad#*:}" || fail "${bad%%:*} not refused: $rc $msg"
 done
 echo "ok"

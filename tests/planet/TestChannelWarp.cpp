@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -42,6 +43,30 @@ TEST(ChannelWarp, IdentityWarpIsNoWarp) {
     const WarpMesh identity = WarpMesh::identity(n, n + 1);
     EXPECT_EQ(warpAndBlend(im, 64, 40, &identity, nullptr).rgba, im.rgba) << n;
   }
+}
+
+TEST(ChannelWarp, WithoutAWarpARenderOfAnotherSizeIsScaled) {
+  // Rendered at twice the projector's size, each pixel of the pattern as a 2 x 2 block: each
+  // projector pixel's centre falls between its block's four pixels, which are its colour.
+  const ChannelImage small = pattern(64, 40);
+  ChannelImage big{128, 80, std::vector<std::uint8_t>(index(0, 80, 128) * 4)};
+  for (int y = 0; y < 80; ++y)
+    for (int x = 0; x < 128; ++x)
+      for (int k = 0; k < 4; ++k)
+        big.rgba[index(x, y, 128) * 4 + static_cast<std::size_t>(k)] = at(small, x / 2, y / 2, k);
+  EXPECT_EQ(warpAndBlend(big, 64, 40, nullptr, nullptr).rgba, small.rgba);
+  // And up: the projector at twice the rendered size samples between the rendered pixels.
+  const ChannelImage up = warpAndBlend(small, 128, 80, nullptr, nullptr);
+  ASSERT_EQ(up.rgba.size(), index(0, 80, 128) * 4);
+  for (int y = 0; y < 40; y += 7)
+    for (int x = 0; x < 64; x += 5) // (2x + 1 + 0.5) / 2 - 0.5 = x + 0.25 of the rendered image
+      EXPECT_NEAR(at(up, 2 * x + 1, 2 * y + 1, 0),
+                  0.75 * 0.75 * at(small, x, y, 0) +
+                      0.25 * 0.75 * at(small, std::min(x + 1, 63), y, 0) +
+                      0.75 * 0.25 * at(small, x, std::min(y + 1, 39), 0) +
+                      0.25 * 0.25 * at(small, std::min(x + 1, 63), std::min(y + 1, 39), 0),
+                  0.51)
+          << x << "," << y;
 }
 
 TEST(ChannelWarp, ShiftedMeshShiftsTheImage) {

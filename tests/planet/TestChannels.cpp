@@ -156,6 +156,48 @@ TEST(Channels, RefusesMalformedConfigurations) {
             std::string::npos);
 }
 
+TEST(Channels, ARenderSizeOtherThanTheProjectorsIsTheFrustumsPixels) {
+  // A 200 x 140 projector fed by a 400 x 280 image: the frustum's pixels are the rendered ones.
+  const auto parsed = parseChannels(
+      R"({"channels": [{"name": "a", "azimuth": 45, "elevation": 20, "hfov": 110, "vfov": 90,)"
+      R"( "roll": 10, "width": 200, "height": 140, "render": [400, 280]}]})");
+  ASSERT_TRUE(parsed.has_value()) << parsed.error();
+  const Channel& c = parsed->front();
+  EXPECT_EQ(c.width, 200);
+  EXPECT_EQ(c.renderedWidth(), 400);
+  EXPECT_EQ(c.renderedHeight(), 280);
+  glm::dvec2 px;
+  ASSERT_TRUE(projectToChannel(c, domeDirection(45, 20), px));
+  EXPECT_NEAR(px.x, 200.0, 1e-9); // the centre of 400 x 280
+  EXPECT_NEAR(px.y, 140.0, 1e-9);
+  const Channel same = channel(45, 20, 110, 90, 10, 200, 140);
+  for (const glm::dvec2 p : {glm::dvec2{0.5, 0.5}, glm::dvec2{199.5, 3.25}, glm::dvec2{61, 139}}) {
+    // The same direction at twice the pixel coordinates.
+    expectNear(channelPixelDirection(c, 2.0 * p), channelPixelDirection(same, p), 1e-12);
+  }
+  EXPECT_EQ(same.renderedWidth(), 200); // no render size: the projector's
+  const std::string head = R"({"channels": [{"name": "a", "azimuth": 0, "elevation": 20,)"
+                           R"( "hfov": 90, "vfov": 90, "width": 100, "height": 100, )";
+  // Square pixels are asked of the rendered image; without a warp the aspects must agree.
+  EXPECT_NE(errorOf(head + R"("render": [200, 150]}]})").find("pixels not square: render is"),
+            std::string::npos);
+  EXPECT_NE(errorOf(R"({"channels": [{"name": "a", "azimuth": 0, "elevation": 20, "hfov": 90,)"
+                    R"( "vfov": 90, "width": 160, "height": 100, "render": [200, 200]}]})")
+                .find("without a warp the projector shows the rendered image scaled"),
+            std::string::npos);
+  // With a warp the projector's pixels are the warp's business.
+  EXPECT_TRUE(parseChannels(R"({"channels": [{"name": "a", "azimuth": 0, "elevation": 20,)"
+                            R"( "hfov": 90, "vfov": 90, "width": 160, "height": 100,)"
+                            R"( "render": [200, 200], "warp": "w.json"}]})")
+                  .has_value());
+  EXPECT_EQ(errorOf(head + R"("render": 2}]})"),
+            "dome.json: channels[0]: render: [width, height] of the rendered image is required");
+  EXPECT_EQ(errorOf(head + R"("render": [0, 100]}]})"),
+            "dome.json: channels[0]: render: width: 0 not in [1, 16384]");
+  EXPECT_EQ(errorOf(head + R"("render": [100, 1.5]}]})"),
+            "dome.json: channels[0]: render: height: not an integer");
+}
+
 TEST(Channels, ReadsAFileAndNamesItInErrors) {
   const auto dir = std::filesystem::temp_directory_path() / "tellus-channels-test";
   std::filesystem::create_directories(dir);

@@ -79,9 +79,13 @@ Images drawWarped(Renderer& r) {
   return {out.pixels, r.readPresented()};
 }
 
-RendererOptions warpedOptions(std::optional<WarpMesh> mesh, std::optional<std::vector<float>> w) {
-  RendererOptions o = options("ramp", kWidth, kHeight);
-  o.projectorWarp = RendererOptions::ProjectorCalibration{std::move(mesh), std::move(w)};
+RendererOptions warpedOptions(std::optional<WarpMesh> mesh,
+                              std::optional<std::vector<float>> w,
+                              int renderWidth = kWidth,
+                              int renderHeight = kHeight) {
+  RendererOptions o = options("ramp", renderWidth, renderHeight);
+  o.projectorWarp =
+      RendererOptions::ProjectorCalibration{std::move(mesh), std::move(w), kWidth, kHeight};
   return o;
 }
 
@@ -132,4 +136,31 @@ TEST(ProjectorWarpGl, MeshAndMaskAreNotUpsideDown) {
   const ChannelImage cpu =
       warpAndBlend({kWidth, kHeight, masked.scene}, kWidth, kHeight, nullptr, &mask);
   EXPECT_GE(psnr(masked.presented, cpu.rgba), 40.0);
+}
+
+TEST(ProjectorWarpGl, ARenderLargerThanTheProjectorIsWarpedDownAsOnTheCpu) {
+  // Rendered at 1.5 x the projector's 320 x 200 (as `"render"` or --render-scale asks): the
+  // projector's image is the CPU pass's of the larger scene, with the curved mesh and without.
+  const Geodesy g(EarthModel::Wgs84);
+  FakeTileSource source(rampLayer(GridSpec{Sector{}, 36.0, 256, 256, 8}));
+  const int w = kWidth * 3 / 2, h = kHeight * 3 / 2;
+  const WarpMesh mesh = curvedMesh();
+  const std::vector<float> mask = softMask();
+  for (const bool warped : {true, false}) {
+    OPEN_RENDERER(r,
+                  source,
+                  g,
+                  warpedOptions(warped ? std::optional(mesh) : std::nullopt,
+                                warped ? std::optional(mask) : std::nullopt,
+                                w,
+                                h));
+    const Images im = drawWarped(r);
+    ASSERT_EQ(im.scene.size(), static_cast<std::size_t>(w * h * 4));
+    ASSERT_EQ(im.presented.size(), static_cast<std::size_t>(kWidth * kHeight * 4));
+    const ChannelImage cpu = warpAndBlend(
+        {w, h, im.scene}, kWidth, kHeight, warped ? &mesh : nullptr, warped ? &mask : nullptr);
+    const double p = psnr(im.presented, cpu.rgba);
+    std::printf("%s: GPU vs CPU at 1.5x: PSNR %.2f dB\n", warped ? "warped" : "scaled", p);
+    EXPECT_GE(p, 40.0);
+  }
 }

@@ -31,6 +31,8 @@ GlFramebuffer framebufferOf(const GlTexture& colour) {
 
 std::expected<std::unique_ptr<ProjectorWarp>, std::string>
 ProjectorWarp::create(const std::string& glslHeader,
+                      int sourceWidth,
+                      int sourceHeight,
                       int width,
                       int height,
                       const std::optional<WarpMesh>& mesh,
@@ -58,9 +60,12 @@ ProjectorWarp::create(const std::string& glslHeader,
   w->uMeshSize_ = glGetUniformLocation(p, "uMeshSize");
   w->uHasBlend_ = glGetUniformLocation(p, "uHasBlend");
   w->vao_ = GlVertexArray();
+  w->sourceWidth_ = sourceWidth;
+  w->sourceHeight_ = sourceHeight;
   w->width_ = width;
   w->height_ = height;
-  w->rendered_ = makeTexture(GL_RGBA8, width, height, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+  w->rendered_ =
+      makeTexture(GL_RGBA8, sourceWidth, sourceHeight, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
   w->renderedFbo_ = framebufferOf(w->rendered_);
   w->out_ = makeTexture(GL_RGBA8, width, height, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
   w->outFbo_ = framebufferOf(w->out_);
@@ -95,8 +100,19 @@ ProjectorWarp::create(const std::string& glslHeader,
 void ProjectorWarp::apply(GLuint sceneFbo) {
   glBindFramebuffer(GL_READ_FRAMEBUFFER, sceneFbo);
   glBindFramebuffer(GL_DRAW_FRAMEBUFFER, renderedFbo_.id());
-  glBlitFramebuffer(0, 0, width_, height_, 0, 0, width_, height_, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  glBlitFramebuffer(0,
+                    0,
+                    sourceWidth_,
+                    sourceHeight_,
+                    0,
+                    0,
+                    sourceWidth_,
+                    sourceHeight_,
+                    GL_COLOR_BUFFER_BIT,
+                    GL_NEAREST);
   glBindFramebuffer(GL_FRAMEBUFFER, outFbo_.id());
+  GLint viewport[4] = {0, 0, 0, 0};
+  glGetIntegerv(GL_VIEWPORT, viewport);
   glViewport(0, 0, width_, height_);
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_BLEND);
@@ -109,7 +125,7 @@ void ProjectorWarp::apply(GLuint sceneFbo) {
     glBindTexture(GL_TEXTURE_2D, textures[i]);
     glUniform1i(units[i], static_cast<GLint>(i));
   }
-  glUniform2i(uSource_, width_, height_);
+  glUniform2i(uSource_, sourceWidth_, sourceHeight_);
   glUniform2i(uOut_, width_, height_);
   glUniform2i(uMeshSize_, meshColumns_, meshRows_);
   glUniform1i(uHasBlend_, hasBlend_ ? 1 : 0);
@@ -118,6 +134,7 @@ void ProjectorWarp::apply(GLuint sceneFbo) {
   glBindVertexArray(0);
   glActiveTexture(GL_TEXTURE0);
   glEnable(GL_DEPTH_TEST); // as the other passes leave it
+  glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
   glBindFramebuffer(GL_FRAMEBUFFER, sceneFbo);
 }
 

@@ -26,16 +26,20 @@ namespace tellus::planet {
 
 class ProjectorWarp {
 public:
-  /** The pass for a width x height rendered image and projector (the warp's mesh and the blend's
-   * weights, either optional; the blend width x height). A message when it cannot be made. */
+  /** The pass for a sourceWidth x sourceHeight rendered image and a width x height projector
+   * (the warp's mesh and the blend's weights, either optional; the blend width x height; no
+   * mesh: the image scaled). A message when it cannot be made. */
   static std::expected<std::unique_ptr<ProjectorWarp>, std::string>
   create(const std::string& glslHeader,
+         int sourceWidth,
+         int sourceHeight,
          int width,
          int height,
          const std::optional<WarpMesh>& mesh,
          const std::optional<std::vector<float>>& blend);
 
-  /** The scene framebuffer (sceneFbo, width x height) warped and blended into the pass's own. */
+  /** The scene framebuffer (sceneFbo, sourceWidth x sourceHeight) warped and blended into the
+   * pass's own (width x height); the viewport is restored. */
   void apply(GLuint sceneFbo);
   /** The projector's framebuffer (what the window shows). */
   GLuint framebuffer() const noexcept { return outFbo_.id(); }
@@ -46,6 +50,7 @@ public:
 
 private:
   ProjectorWarp() = default;
+  int sourceWidth_ = 0, sourceHeight_ = 0;
   int width_ = 0, height_ = 0;
   int meshColumns_ = 0, meshRows_ = 0;
   bool hasBlend_ = false;

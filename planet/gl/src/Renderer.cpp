@@ -53,6 +53,10 @@ private:
 std::optional<std::string> invalidOptions(const RendererOptions& o) {
   if (o.width <= 0 || o.height <= 0 || o.width > 16384 || o.height > 16384)
     return "the image size must be 1 to 16384 pixels each way";
+  if (const auto& p = o.projectorWarp;
+      p && (p->width < 0 || p->height < 0 || p->width > 16384 || p->height > 16384 ||
+            (p->width == 0) != (p->height == 0)))
+    return "the projector's size must be 1 to 16384 pixels each way (or 0 x 0: the image's)";
   if (!(o.lodThreshold > 0.0) || !std::isfinite(o.lodThreshold))
     return "the LOD threshold must be a positive number";
   const int n = o.meshSize;
@@ -84,9 +88,10 @@ std::string Renderer::Impl::openGl() {
     context = opt.shareWindowOf->impl_->context;
     context->makeCurrent();
   } else {
+    const bool projectorSize = opt.projectorWarp && opt.projectorWarp->width > 0;
     auto made = GlContext::create({.visible = opt.visibleWindow,
-                                   .width = opt.width,
-                                   .height = opt.height,
+                                   .width = projectorSize ? opt.projectorWarp->width : opt.width,
+                                   .height = projectorSize ? opt.projectorWarp->height : opt.height,
                                    .title = opt.windowTitle,
                                    .vsync = opt.vsync});
     if (!made) return made.error();
@@ -141,8 +146,14 @@ std::string Renderer::Impl::openGl() {
     scene->addPass(std::move(*air));
   }
   if (opt.projectorWarp) {
-    auto made = ProjectorWarp::create(
-        gl.glslHeader(), opt.width, opt.height, opt.projectorWarp->mesh, opt.projectorWarp->blend);
+    const RendererOptions::ProjectorCalibration& p = *opt.projectorWarp;
+    auto made = ProjectorWarp::create(gl.glslHeader(),
+                                      opt.width,
+                                      opt.height,
+                                      p.width > 0 ? p.width : opt.width,
+                                      p.height > 0 ? p.height : opt.height,
+                                      p.mesh,
+                                      p.blend);
     if (!made) return made.error();
     projector = std::move(*made);
   }

@@ -47,6 +47,16 @@ std::string parseCluster(const cli::Args& a, ClusterArgs& c) {
   auto channels = mpcdiFile ? mpcdi::readMpcdi(*mpcdiFile) : planet::readChannels(a.positional[0]);
   if (!channels) return channels.error();
   c.channels = std::move(*channels);
+  if (const auto scale = a.get("render-scale")) { // the rendered images against the projectors'
+    const auto v = cli::parseNumbers(*scale, 1, 1);
+    if (!v || !((*v)[0] >= 0.25) || (*v)[0] > 4.0)
+      return "--render-scale must be in [0.25, 4]: " + *scale;
+    for (planet::Channel& ch : c.channels)
+      if (ch.renderWidth == 0) { // a size of its own in CONFIG.json stays
+        ch.renderWidth = std::clamp(static_cast<int>(std::lround(ch.width * (*v)[0])), 1, 16384);
+        ch.renderHeight = std::clamp(static_cast<int>(std::lround(ch.height * (*v)[0])), 1, 16384);
+      }
+  }
   if (a.flag("dome") || a.get("dome-method") || a.get("size"))
     return "--dome, --dome-method and --size are the domemaster's: each channel has its own view "
            "and size (--dome-tilt turns the dome the channels are given in)";
@@ -139,8 +149,8 @@ int startChannel(cluster::Comm* comm,
       frame.forward, frame.up, ro.dome ? ro.dome->tiltDeg : 0.0};
   if (const auto d = domeArgs(a); d && d->tiltDeg) ro.channelView->domeTiltDeg = *d->tiltDeg;
   ro.dome.reset();
-  ro.width = channel.width;
-  ro.height = channel.height;
+  ro.width = channel.renderedWidth(); // the projector's pixels come out of the warp pass
+  ro.height = channel.renderedHeight();
   ro.verticalFovDeg = channel.vfovDeg;
   if (c.background) ro.background = *c.background;
   if (const fs::path global = dataDir(a) / "bmng_2048x1024.jpg";
@@ -168,8 +178,9 @@ int startChannel(cluster::Comm* comm,
     else
       problem = b.error();
   }
-  if (c.window && (cal.warp || cal.blend)) // the warp and blend on the GPU
-    ro.projectorWarp = planet::RendererOptions::ProjectorCalibration{cal.warp, cal.blend};
+  if (c.window && (cal.warp || cal.blend || scaled(channel))) // the warp and blend on the GPU
+    ro.projectorWarp = planet::RendererOptions::ProjectorCalibration{
+        cal.warp, cal.blend, channel.width, channel.height};
   auto renderer = planet::Renderer::create(*tiles.source, geodesy, ro);
   if (!renderer) problem = renderer.error();
   if (!problem.empty())
@@ -294,6 +305,7 @@ Command clusterCommand() {
                     {"join", K::Value},
                     {"control", K::Value},
                     {"window", K::Flag},
+                    {"render-scale", K::Value},
                     {"preview", K::OptionalValue}});
   return c;
 }

@@ -59,6 +59,12 @@ struct ClusterArgs {
   int preview = 0; ///< --preview [SIZE]: the master's domemaster window, SIZE x SIZE; 0: none
 };
 
+/** Whether the channel renders another size than its projector's (CONFIG.json's "render",
+ * --render-scale): the warp pass then scales, even with no warp or blend. */
+inline bool scaled(const planet::Channel& ch) {
+  return ch.renderedWidth() != ch.width || ch.renderedHeight() != ch.height;
+}
+
 /** The arguments checked; an empty string, else what is wrong. */
 std::string parseCluster(const cli::Args& a, ClusterArgs& c);
 

@@ -83,13 +83,15 @@ int runChannel(cluster::Comm& comm,
     if (c.window) { // warped and blended on the GPU (ProjectorWarp.hpp): shown, then read
       renderer->present();
       image.rgba = renderer->readPresented();
+      image.width = channel.width; // the projector's image
+      image.height = channel.height;
     } else {
       image.rgba = renderer->readPixels();
     }
-    if (!c.window && (cal.warp || cal.blend)) // the warp and blend pass (ChannelWarp.hpp)
+    if (!c.window && (cal.warp || cal.blend || scaled(channel))) // the pass (ChannelWarp.hpp)
       image = planet::warpAndBlend(image,
-                                   image.width,
-                                   image.height,
+                                   channel.width,
+                                   channel.height,
                                    cal.warp ? &*cal.warp : nullptr,
                                    cal.blend ? &*cal.blend : nullptr);
     if (!planet::writePngRgb(c.out / ("channel-" + channel.name + name),

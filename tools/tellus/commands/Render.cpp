@@ -398,8 +398,8 @@ std::string applyChannelArg(const cli::Args& a, planet::RendererOptions& ro) {
       planet::RendererOptions::ChannelView{f.forward, f.up, ro.dome ? ro.dome->tiltDeg : 0.0};
   if (const auto d = domeArgs(a); d && d->tiltDeg) ro.channelView->domeTiltDeg = *d->tiltDeg;
   ro.dome.reset();
-  ro.width = c->width;
-  ro.height = c->height;
+  ro.width = c->renderedWidth(); // the rendered image, before the cluster's warp pass
+  ro.height = c->renderedHeight();
   ro.verticalFovDeg = c->vfovDeg;
   return {};
 }

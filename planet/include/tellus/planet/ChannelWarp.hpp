@@ -50,8 +50,9 @@ std::expected<WarpMesh, std::string> readWarpMesh(const std::filesystem::path& f
 std::expected<std::vector<float>, std::string>
 readBlendMask(const std::filesystem::path& file, int width, int height);
 
-/** The projector's width x height image: the warp (null: none, the rendered image must then be
- * that size) and the blend mask (null: none; else width x height weights). */
+/** The projector's width x height image: the warp (null: none, the rendered image scaled to
+ * that size: a projector pixel's centre at the same fraction of the rendered image) and the
+ * blend mask (null: none; else width x height weights). */
 ChannelImage warpAndBlend(const ChannelImage& rendered,
                           int width,
                           int height,

@@ -11,8 +11,8 @@
  * (degrees up from the rim's plane: 90 is the axis). A channel looks along its centre direction
  * with a symmetric frustum of hfov x vfov degrees; with roll 0 its up is the direction of rising
  * elevation (at the zenith: the limit of that, away from the azimuth), and roll turns its up
- * towards its right by that many degrees. Pixels are square: the resolution's aspect must match
- * tan(hfov / 2) / tan(vfov / 2) within 1%.
+ * towards its right by that many degrees. Pixels are square: the rendered image's aspect must
+ * match tan(hfov / 2) / tan(vfov / 2) within 1%.
  *
  * Vectors in dome coordinates are GL eye-space style, as Dome.hpp's cube frame: x the image's
  * right, y its up, z back (the dome's axis is -z); a channel's right is forward x up.
@@ -39,8 +39,16 @@ struct Channel {
   double hfovDeg = 90.0;     ///< (0, 170]
   double vfovDeg = 90.0;     ///< (0, 170]
   double rollDeg = 0.0;
-  int width = 640; ///< [1, 16384]
+  int width = 640; ///< [1, 16384]: the projector's pixels (what the warp and blend put out)
   int height = 640;
+  /** The rendered image's size, when it is not the projector's (0: the projector's): rendered
+   * larger and warped down is sharper after a warp that magnifies parts of the image (SGCT's
+   * viewport resolution, MPCDI's buffer against its region). Without a warp the projector shows
+   * the rendered image scaled, so their aspects must agree. */
+  int renderWidth = 0;
+  int renderHeight = 0;
+  int renderedWidth() const noexcept { return renderWidth > 0 ? renderWidth : width; }
+  int renderedHeight() const noexcept { return renderHeight > 0 ? renderHeight : height; }
   /** Optional (empty: none): the warp mesh (ChannelWarp.hpp, JSON) and the blend mask (a PNG of
    * width x height) applied to the rendered image; relative paths are taken from the
    * configuration file's folder by readChannels. */
@@ -63,7 +71,8 @@ struct ChannelFrame {
 /** The unit direction of (azimuth, elevation) in dome coordinates. */
 glm::dvec3 domeDirection(double azimuthDeg, double elevationDeg) noexcept;
 ChannelFrame channelFrame(const Channel& channel) noexcept;
-/** Where a dome direction lands in the channel's image: pixels from the top-left corner (x right,
+/** Where a dome direction lands in the channel's rendered image (renderedWidth() x
+ * renderedHeight()): pixels from the top-left corner (x right,
  * y down; pixel centres at +0.5), the pinhole map of the frustum. False when the direction is at
  * or behind the channel's image plane; true also outside the image (px beyond [0, size]). */
 bool projectToChannel(const Channel& channel, const glm::dvec3& domeDir, glm::dvec2& px) noexcept;
@@ -72,7 +81,8 @@ glm::dvec3 channelPixelDirection(const Channel& channel, const glm::dvec2& px) n
 
 /** Parses a channel configuration (docs/design/cluster.md):
  * {"channels": [{"name", "azimuth", "elevation", "hfov", "vfov", "roll", "width", "height",
- * "warp", "blend"}]} (roll optional, 0; warp and blend optional file names). Unknown keys, missing
+ * "render", "warp", "blend"}]} (roll optional, 0; render optional [width, height]; warp and blend
+ * optional file names). Unknown keys, missing
  * or out-of-range values, duplicate names and pixels that are not square are refused; the message
  * says which channel and key. `origin` prefixes messages (the file). */
 std::expected<std::vector<Channel>, std::string> parseChannels(std::string_view json,

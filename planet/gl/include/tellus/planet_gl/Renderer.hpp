@@ -303,12 +303,15 @@ struct RendererOptions {
   bool vsync = true;
   /** A projector channel's warp and blend on the GPU (issue 28; ChannelWarp.hpp's conventions,
    * planet/gl/src/ProjectorWarp.hpp): after the scene, its image drawn through the warp mesh
-   * (none: unwarped) and multiplied by the blend mask (none: 1; width x height weights) into a
-   * projector image of the framebuffer's size, which the window shows and readPresented() reads.
-   * readPixels() still reads the scene. resize() keeps the old size while this is set. */
+   * (none: scaled) and multiplied by the blend mask (none: 1; weights of the projector's pixels)
+   * into the projector's image (width x height; 0: the framebuffer's size), which the window (of
+   * that size) shows and readPresented() reads. readPixels() still reads the scene. resize()
+   * keeps the old size while this is set. */
   struct ProjectorCalibration {
     std::optional<WarpMesh> mesh;
     std::optional<std::vector<float>> blend;
+    int width = 0;
+    int height = 0;
   };
   std::optional<ProjectorCalibration> projectorWarp;
   std::string windowTitle = "tellus";
