@@ -2,7 +2,8 @@
 # `tellus cluster --window --preview` end to end (issue 28; labels gl and integration: run under
 # xvfb-run): three channels, two with curved warp meshes and soft blend masks, shown in windows
 # and warped and blended on the GPU, write the same PNGs as the headless run's CPU pass (PSNR at
-# least BOUND each); the master's preview window writes preview.png, the domemaster `tellus render
+# least BOUND each), and the windows show those pixels (grabbed from the X server); the master's
+# preview window writes preview.png, the domemaster `tellus render
 # --dome` draws of the same view (PSNR at least BOUND). Rendered at 1.5 x the projectors' sizes
 # (--render-scale), the windows' images are still the CPU pass's. Without a display both are
 # refused with a message, as are a preview too small, a scale out of range and an unknown option.
@@ -81,6 +82,38 @@ done
   >/dev/null || fail "render --channel"
 p=$(psnr "$work/north-plain.png" "$work/gl/channel-north-00000.png")
 atleast "$p" 30 && fail "north's warp changed nothing: $p dB"
+
+# What the windows show, grabbed from the X server (Debian's PIL), is each channel's PNG: the
+# show looped on the same view, each window raised in turn (no window manager: they overlap at the
+# top left) and grabbed once later frames have been swapped into it.
+mpirun --oversubscribe -n 4 "$tellus" cluster "$work/dome.json" "${view[@]}" --window --loop \
+  --realtime --out "$work/shown" >"$work/shown.out" 2>&1 &
+show=$!
+frames() { [ -f "$work/shown/digest-master.txt" ] && wc -l <"$work/shown/digest-master.txt" || echo 0; }
+until [ "$(frames)" -ge 3 ]; do
+  kill -0 $show 2>/dev/null || fail "the looped show ended: $(cat "$work/shown.out")"
+  sleep 0.2
+done
+for n in north east zenith; do
+  win=$(timeout 30 xdotool search --sync --name "^tellus cluster: channel $n\$") || fail "no window $n"
+  xdotool windowraise "$win"
+  seen=$(frames)
+  until [ "$(frames)" -ge $((seen + 3)) ]; do sleep 0.1; done
+  eval "$(xdotool getwindowgeometry --shell "$win")"
+  /usr/bin/python3 - "$work/window-$n.png" "$X" "$Y" "$WIDTH" "$HEIGHT" <<'PY'
+import os, sys
+from PIL import ImageGrab
+x, y, w, h = map(int, sys.argv[2:])
+ImageGrab.grab(bbox=(x, y, x + w, y + h), xdisplay=os.environ["DISPLAY"]).save(sys.argv[1])
+PY
+  p=$(psnr "$work/cpu/channel-$n-00000.png" "$work/window-$n.png")
+  echo "channel $n: its window's pixels against the CPU pass: $p dB"
+  atleast "$p" "$bound" || fail "channel $n's window shows other pixels: $p dB"
+done
+for p in $(pgrep -P $show); do # the master ends the show
+  grep -qxz "OMPI_COMM_WORLD_RANK=0" "/proc/$p/environ" && kill -TERM "$p"
+done
+wait $show || fail "the looped show: $(cat "$work/shown.out")"
 
 # Rendered at 1.5 x the projectors' sizes (--render-scale; CONFIG.json's "render" per channel):
 # each channel's image is still its projector's size, the GPU's the CPU's (the zenith, without a
