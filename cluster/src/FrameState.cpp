@@ -24,6 +24,8 @@ std::uint64_t digest(const FrameState& s) noexcept {
        {s.latDeg, s.lonDeg, s.altitudeM, s.headingDeg, s.tiltDeg, s.sceneTimeUnixS})
     mix(h, v);
   mix(h, s.hasSceneTime);
+  mix(h, s.layerTimesAtS);
+  mix(h, s.hasLayerTimes);
   return h;
 }
 

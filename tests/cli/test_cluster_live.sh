@@ -104,6 +104,9 @@ wait_for 10 channel_state east rejoined || fail "the status: $(curl -s "$api/sta
   fail "an unknown field: $(cat "$work/answer")"
 [ "$(post /camera '{"tilt": 200}')" = 400 ] || fail "a tilt out of range"
 [ "$(post /path '{"action": "play", "file": "'"$work"'/none.json"}')" = 400 ] || fail "a missing path file"
+sed 's/"time": 0,/"time": 0, "times": {"bluemarble": "x"},/' "$work/path.json" >"$work/timed.json"
+[ "$(post /path '{"action": "play", "file": "'"$work"'/timed.json"}')" = 400 ] &&
+  grep -q 'are not sent to channels' "$work/answer" || fail "a path with times: $(cat "$work/answer")"
 [ "$(curl -s -o /dev/null -w '%{http_code}' "$api/nothing")" = 404 ] || fail "an unknown path"
 [ "$(post /camera '{"lat": 10, "lon": 20, "altitude": 5e6}')" = 202 ] || fail "camera"
 [ "$(post /time '{"unix": 1700000000}')" = 202 ] || fail "time"

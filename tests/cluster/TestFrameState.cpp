@@ -16,10 +16,12 @@ TEST(FrameState, DigestSeesEveryField) {
   s.setPose({45.0, 7.0, 1.5e6, 10.0, 20.0});
   s.sceneTimeUnixS = 1.7e9;
   s.hasSceneTime = 1;
+  s.layerTimesAtS = 2.5;
+  s.hasLayerTimes = 1;
   const FrameState copy = s;
   EXPECT_EQ(digest(copy), digest(s));
   std::set<std::uint64_t> seen{digest(s)};
-  for (int field = 0; field < 8; ++field) {
+  for (int field = 0; field < 10; ++field) {
     FrameState t = s;
     switch (field) {
     case 0:
@@ -43,8 +45,14 @@ TEST(FrameState, DigestSeesEveryField) {
     case 6:
       t.sceneTimeUnixS += 1.0;
       break;
-    default:
+    case 7:
       t.hasSceneTime = 0;
+      break;
+    case 8:
+      t.layerTimesAtS = 2.0;
+      break;
+    default:
+      t.hasLayerTimes = 0;
       break;
     }
     EXPECT_TRUE(seen.insert(digest(t)).second) << "field " << field;
@@ -66,4 +74,4 @@ TEST(FrameState, DigestLeavesRanksLostOut) {
 
 // The state goes over the wire as bytes (MPI_BYTE): a POD of fixed size, no hidden padding.
 static_assert(std::is_trivially_copyable_v<FrameState>);
-static_assert(sizeof(FrameState) == 8 + 6 * 8 + 4 + 4);
+static_assert(sizeof(FrameState) == 8 + 6 * 8 + 4 + 4 + 8 + 4 + 4);

@@ -72,8 +72,8 @@ std::string parseCluster(const cli::Args& a, ClusterArgs& c) {
     auto read = planet::FlightPath::read(*path);
     if (!read) return *path + ": " + read.error();
     for (const planet::Keyframe& k : read->keyframes())
-      if (!k.layerTimes.empty() || !k.body.empty())
-        return *path + ": a keyframe's \"times\" and \"body\" are not broadcast to channels yet";
+      if (!k.body.empty())
+        return *path + ": a keyframe's \"body\" is not broadcast to channels yet";
     c.flight = std::move(*read);
     c.pathFile = *path;
     if (const auto f = a.get("fps")) {
@@ -251,6 +251,13 @@ int runCluster(const cli::Args& a) {
   if (auto bad = applySceneTime(a, tiles->sceneTime, kDefaultRenderTime, ro))
     return say(*bad, kExitUsage);
   hideNightLayers(a, tiles->night, ro);
+  if (c.flight) // a keyframe's "times" name layers the channels draw (the base or an overlay)
+    for (const planet::Keyframe& k : c.flight->keyframes())
+      for (const auto& [name, value] : k.layerTimes)
+        if (ro.layer != name && std::none_of(ro.overlays.begin(),
+                                             ro.overlays.end(),
+                                             [&](const auto& o) { return o.layer == name; }))
+          return say("a keyframe's \"times\" names a layer that is not drawn: " + name, kExitUsage);
   ro.legend = false;
   ro.fadeInSeconds = 0.0; // a channel's image must not depend on how long it took to draw
   if (comm && rank == 0) {

@@ -10,6 +10,7 @@
 
 #include <tellus/cli/Values.hpp>
 #include <tellus/cluster/Comm.hpp>
+#include <tellus/cluster/FrameState.hpp>
 #include <tellus/planet/ChannelWarp.hpp>
 #include <tellus/planet/Channels.hpp>
 #include <tellus/planet/FlightPath.hpp>
@@ -72,6 +73,10 @@ bool appendLine(const std::filesystem::path& file, const std::string& line);
 
 /** --window and --preview [SIZE] (ClusterPreview.cpp): "" or what is wrong (no display). */
 std::string parseWindows(const cli::Args& a, ClusterArgs& c);
+
+/** The state's scene time and layer times (those of --path's keyframes at its layerTimesAtS; a
+ * layer switches once its new time's tiles are there: Renderer::setLayerTime) set on r. */
+void applyFrameState(planet::Renderer& r, const ClusterArgs& c, const cluster::FrameState& s);
 
 /** Frames of one state until complete (--wait-complete, up to its seconds) or one; whether the
  * last is complete. */

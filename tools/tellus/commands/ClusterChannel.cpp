@@ -10,6 +10,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <map>
+#include <string>
 #include <thread>
 
 namespace fs = std::filesystem;
@@ -26,6 +28,17 @@ bool renderState(planet::Renderer& r, const planet::CameraPose& pose, const Clus
     if (!r.busy() || r.stats().uploadsPending == 0)
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
+}
+
+void applyFrameState(planet::Renderer& r, const ClusterArgs& c, const cluster::FrameState& s) {
+  r.setTime(s.hasSceneTime ? std::optional<double>(s.sceneTimeUnixS) : std::nullopt);
+  if (s.hasLayerTimes == 0 || !c.flight) return;
+  const std::map<std::string, std::string> times = c.flight->layerTimesAt(s.layerTimesAtS);
+  const auto& layers = r.stats().layers;
+  for (const auto& [name, time] : times)
+    for (std::size_t i = 0; i < layers.size(); ++i)
+      if (layers[i].name == name && layers[i].time != time && layers[i].pendingTime != time)
+        r.setLayerTime(i, time);
 }
 
 int runChannel(cluster::Comm& comm,
@@ -56,7 +69,7 @@ int runChannel(cluster::Comm& comm,
       if (s->ranksLost != 0 && !joined) comm.skipFinalize(); // a rank of its own job died
       return kExitOk;
     }
-    renderer->setTime(s->hasSceneTime ? std::optional<double>(s->sceneTimeUnixS) : std::nullopt);
+    applyFrameState(*renderer, c, *s);
     bool well = renderState(*renderer, s->pose(), c) || !c.waitComplete;
     if (!well)
       std::fprintf(stderr,

@@ -54,9 +54,11 @@ std::expected<std::unique_ptr<Console>, std::string> Console::start(const std::s
       if (!flight) return respond(json(400, cluster::errorJson(flight.error())));
       for (const planet::Keyframe& k : flight->keyframes())
         if (!k.layerTimes.empty() || !k.body.empty())
-          return respond(json(400,
-                              cluster::errorJson(p->file + ": a keyframe's \"times\" and "
-                                                           "\"body\" are not sent to channels")));
+          return respond(
+              json(400,
+                   cluster::errorJson(p->file +
+                                      ": a keyframe's \"times\" and \"body\" are not sent to "
+                                      "channels (the layer times of --path's keyframes are)")));
       c.flight = std::move(*flight);
     }
     {

@@ -90,6 +90,10 @@ struct Show {
   planet::CameraPose camera;
   std::optional<double> sceneTime;
   double fps = 25.0;
+  /// The flight is --path's, which every rank read: its keyframes' layer times apply (a flight
+  /// the console loads has none: ClusterControl.cpp refuses them).
+  bool ranksHaveFlight = false;
+  std::optional<double> layerTimesAtS; ///< where along --path the layer times were last taken
 
   std::int64_t count() const { return flight ? flight->frameCount(fps) : 1; }
 
@@ -100,10 +104,13 @@ struct Show {
       const double at = flight->frameTimeS(pathFrame, fps);
       camera = planet::flightPoseOver(*flight, at, body);
       if (const auto t = flight->sceneTimeAt(at)) sceneTime = t;
+      if (ranksHaveFlight) layerTimesAtS = at;
     }
     s.setPose(camera);
     s.hasSceneTime = sceneTime ? 1 : 0;
     s.sceneTimeUnixS = sceneTime.value_or(0.0);
+    s.hasLayerTimes = layerTimesAtS ? 1 : 0;
+    s.layerTimesAtS = layerTimesAtS.value_or(0.0);
     return s;
   }
 
@@ -134,6 +141,7 @@ struct Show {
         flight = std::move(command.flight);
         file = p->file;
         pathFrame = 0;
+        ranksHaveFlight = false; // the layer times stay as they were
       }
       if (!flight) return; // nothing to play
       cameraMode = false;
@@ -208,6 +216,7 @@ int runMaster(cluster::Comm& comm,
   std::signal(SIGTERM, onStopSignal);
   Show show;
   show.flight = c.flight;
+  show.ranksHaveFlight = c.flight.has_value();
   show.file = c.pathFile;
   show.playing = c.flight.has_value();
   show.cameraMode = !c.flight;

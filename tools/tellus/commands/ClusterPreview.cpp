@@ -60,7 +60,7 @@ std::expected<std::unique_ptr<Preview>, std::string> Preview::open(const cli::Ar
 }
 
 void Preview::draw(const cluster::FrameState& s) {
-  renderer_->setTime(s.hasSceneTime ? std::optional<double>(s.sceneTimeUnixS) : std::nullopt);
+  applyFrameState(*renderer_, args_, s);
   if (!renderState(*renderer_, s.pose(), args_) && args_.waitComplete)
     std::fprintf(stderr,
                  "tellus cluster: the preview of frame %lld not complete after %g s\n",

@@ -2,7 +2,8 @@
 /**
  * @file FrameState.hpp
  * @brief What the master of a cluster (issue 28, docs/design/cluster.md) broadcasts each frame:
- * the frame's number, the camera's pose and the scene's time, a small POD that every channel
+ * the frame's number, the camera's pose, the scene's time and where along --path the layer times
+ * are taken, a small POD that every channel
  * draws from; and its digest, which every rank writes per frame so that a test can check that
  * all ranks drew the same state for the same frame (frame lock). MPI-free.
  */
@@ -27,6 +28,12 @@ struct FrameState {
   /// MPI_Finalize (Open MPI 4.1's waits for the dead one); 0 otherwise (also: no uninitialised
   /// padding goes over the wire). Not in the digest.
   std::int32_t ranksLost = 0;
+  /// The layer times in effect are those of --path's keyframes at this time along it
+  /// (planet::FlightPath::layerTimesAt): every rank read that file, so the times need not travel.
+  /// Meaningful when hasLayerTimes (the show played --path's flight at least once).
+  double layerTimesAtS = 0.0;
+  std::int32_t hasLayerTimes = 0;
+  std::int32_t reserved = 0; ///< 0 (no uninitialised padding goes over the wire)
 
   planet::CameraPose pose() const noexcept {
     return {latDeg, lonDeg, altitudeM, headingDeg, tiltDeg};
