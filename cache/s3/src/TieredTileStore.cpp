@@ -29,10 +29,22 @@ struct TierId {
   bool operator==(const TierId&) const = default;
 };
 
+/** splitmix64's finalizer over each field in turn: neighbouring tiles (rows, columns counted up)
+ * spread over the buckets (a boost-style combine of TileKeyHash left chains of 30 and more). */
 struct TierIdHash {
+  static std::uint64_t mix(std::uint64_t x) noexcept {
+    x ^= x >> 30;
+    x *= 0xBF58476D1CE4E5B9ULL;
+    x ^= x >> 27;
+    x *= 0x94D049BB133111EBULL;
+    return x ^ (x >> 31);
+  }
   std::size_t operator()(const TierId& id) const noexcept {
-    const std::size_t h = TileKeyHash{}(id.key);
-    return h ^ ((static_cast<std::size_t>(id.folder) << 20) + id.extension + (h << 6) + (h >> 2));
+    std::uint64_t h = mix((static_cast<std::uint64_t>(id.folder) << 32) ^
+                          (static_cast<std::uint64_t>(id.extension) << 8) ^
+                          static_cast<std::uint64_t>(static_cast<std::uint32_t>(id.key.level)));
+    h = mix(h ^ static_cast<std::uint64_t>(id.key.row));
+    return static_cast<std::size_t>(mix(h ^ static_cast<std::uint64_t>(id.key.col)));
   }
 };
 
