@@ -62,8 +62,9 @@ std::size_t descriptorBudget(int maxConnections) {
 namespace {
 
 /** The tile store `cache.store` names: the file tree under the root (the embedded default), or
- * S3-compatible object storage (issue 27) with the file tree in front (`cache.s3.local_tier`);
- * read tiles land in `<root>/s3-local` (unlinked files) on their way. */
+ * S3-compatible object storage (issue 27) with the file tree in front (`cache.s3.local_tier`,
+ * bounded by `cache.s3.local_tier_limit`); read tiles land in `<root>/s3-local` (unlinked files)
+ * on their way. */
 std::expected<std::shared_ptr<ITileStore>, CacheError> openStore(const Config& config,
                                                                  const TileCache::Options& o) {
   const auto& c = config.cache;
@@ -88,7 +89,10 @@ std::expected<std::shared_ptr<ITileStore>, CacheError> openStore(const Config& c
   if (c.s3.localTier) { // the file tree under the root in front of the bucket
     auto local = openFileTileStore(FileTileStoreOptions{o.root, o.readOnly, o.fsyncTiles});
     if (!local) return std::unexpected(local.error());
-    store = makeTieredTileStore(std::move(*local), std::move(store));
+    LocalTierOptions tier;
+    tier.limitBytes = o.readOnly ? 0 : c.s3.localTierLimitBytes; // offline media: kept whole
+    tier.root = o.root;
+    store = makeTieredTileStore(std::move(*local), std::move(store), tier);
   }
   return store;
 }
