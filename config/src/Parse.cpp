@@ -53,8 +53,11 @@ void readCache(Reader& r, const Map& root, const fs::path& baseDir, CacheSetting
                  c.store + "'");
   }
   const auto [sn, swhere] = m.child("s3");
-  const Map sm(
-      r, sn, m.path("s3"), swhere, {"endpoint", "region", "credentials_file", "local_tier", "local_tier_limit"});
+  const Map sm(r,
+               sn,
+               m.path("s3"),
+               swhere,
+               {"endpoint", "region", "credentials_file", "local_tier", "local_tier_limit"});
   if (auto v = sm.get("endpoint")) {
     c.s3.endpoint = text(r, *v, sm.path("endpoint"));
     while (c.s3.endpoint.ends_with('/'))
