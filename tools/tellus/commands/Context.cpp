@@ -65,9 +65,9 @@ namespace {
  * S3-compatible object storage (issue 27) with the file tree in front (`cache.s3.local_tier`,
  * bounded by `cache.s3.local_tier_limit`); read tiles land in `<root>/s3-local` (unlinked files)
  * on their way. */
-std::expected<std::shared_ptr<ITileStore>, CacheError> openStore(const Config& config,
+std::expected<std::shared_ptr<ITileStore>, CacheError> openStore(Context& ctx,
                                                                  const TileCache::Options& o) {
-  const auto& c = config.cache;
+  const auto& c = ctx.config.cache;
   if (c.store.empty()) {
     auto files = openFileTileStore(FileTileStoreOptions{o.root, o.readOnly, o.fsyncTiles});
     if (!files) return std::unexpected(files.error());
@@ -92,7 +92,10 @@ std::expected<std::shared_ptr<ITileStore>, CacheError> openStore(const Config& c
     LocalTierOptions tier;
     tier.limitBytes = o.readOnly ? 0 : c.s3.localTierLimitBytes; // offline media: kept whole
     tier.root = o.root;
-    store = makeTieredTileStore(std::move(*local), std::move(store), tier);
+    std::shared_ptr<TieredTileStore> tiered =
+        makeTieredTileStore(std::move(*local), std::move(store), tier);
+    if (tier.limitBytes > 0) ctx.boundedTier = tiered;
+    store = std::move(tiered);
   }
   return store;
 }
@@ -104,7 +107,7 @@ std::expected<std::unique_ptr<TileCache>, CacheError> openScaledOut(Context& ctx
                                                                     const TileCache::Options& o) {
   std::error_code ec;
   if (!o.readOnly) fs::create_directories(o.root, ec); // the local index's, tier's folder
-  auto store = openStore(ctx.config, o);
+  auto store = openStore(ctx, o);
   if (!store) return std::unexpected(store.error());
   if (ctx.config.cache.index.empty()) {
     auto index = openSqliteTileIndex(
@@ -131,7 +134,7 @@ std::expected<std::unique_ptr<TileCache>, CacheError> openScaledOut(Context& ctx
 std::optional<Context> setUp(const cli::Args& a, CacheUse use) {
   auto config = loadConfiguration(a);
   if (!config) return std::nullopt;
-  Context ctx{std::move(*config), nullptr, nullptr};
+  Context ctx{std::move(*config), nullptr, nullptr, nullptr};
   TileCache::Options o;
   o.root = ctx.config.cache.root;
   o.sizeLimitBytes = ctx.config.cache.sizeLimitBytes;
