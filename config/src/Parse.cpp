@@ -53,8 +53,11 @@ void readCache(Reader& r, const Map& root, const fs::path& baseDir, CacheSetting
                  c.store + "'");
   }
   const auto [sn, swhere] = m.child("s3");
-  const Map sm(
-      r, sn, m.path("s3"), swhere, {"endpoint", "region", "credentials_file", "local_tier"});
+  const Map sm(r,
+               sn,
+               m.path("s3"),
+               swhere,
+               {"endpoint", "region", "credentials_file", "local_tier", "local_tier_limit"});
   if (auto v = sm.get("endpoint")) {
     c.s3.endpoint = text(r, *v, sm.path("endpoint"));
     while (c.s3.endpoint.ends_with('/'))
@@ -75,11 +78,23 @@ void readCache(Reader& r, const Map& root, const fs::path& baseDir, CacheSetting
   if (auto v = sm.get("credentials_file"))
     c.s3.credentialsFile = resolvePath(text(r, *v, sm.path("credentials_file")), baseDir);
   if (auto v = sm.get("local_tier")) c.s3.localTier = boolean(r, *v, sm.path("local_tier"));
+  if (auto v = sm.get("local_tier_limit")) {
+    c.s3.localTierLimitBytes = size(r, *v, sm.path("local_tier_limit"));
+    if (c.store.empty())
+      r.fail(v->Mark(),
+             sm.path("local_tier_limit"),
+             "local_tier_limit bounds the local copies in front of cache.store (s3://...), and "
+             "there is no cache.store: cache.size_limit bounds a cache of its own");
+    else if (!c.s3.localTier && c.s3.localTierLimitBytes > 0)
+      r.fail(v->Mark(),
+             sm.path("local_tier_limit"),
+             "local_tier_limit bounds the local tier, and cache.s3.local_tier is false");
+  }
   if (!c.store.empty() && c.sizeLimitBytes > 0)
     r.fail(node.Mark(),
            m.path("size_limit"),
-           "size_limit evicts tiles from the store, here the bucket other instances share: it "
-           "cannot be combined with cache.store yet");
+           "size_limit evicts tiles from the store, here the bucket other instances share: bound "
+           "this instance's local copies with cache.s3.local_tier_limit instead");
   if (!c.store.empty() && c.s3.endpoint.empty())
     r.fail(
         node.Mark(), m.path("s3"), "cache.store is " + c.store + ": cache.s3.endpoint is needed");

@@ -20,6 +20,7 @@
 #include <sys/resource.h>
 
 using namespace tellus;
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -387,4 +388,42 @@ TEST_F(S3StoreIntegration, ALocalCopyOlderThanItsRowIsReplacedFromTheSharedStore
   const auto copy = local->open(kTile, 11); // the local copy replaced
   ASSERT_TRUE(copy);
   EXPECT_EQ(text(*copy), "version two");
+}
+
+TEST_F(S3StoreIntegration, ALocalTierLimitKeepsTheTreeUnderItAndEveryTileIsStillServed) {
+  std::shared_ptr<ITileStore> shared = open();
+  ASSERT_TRUE(shared);
+  const fs::path root = dir.path() / "tier";
+  std::shared_ptr<ITileStore> local =
+      std::move(*openFileTileStore(FileTileStoreOptions{root, false, false}));
+  constexpr std::uint64_t kLimit = 20000; // 20 of the 60 tiles of 1,000 bytes
+  auto tiered = makeTieredTileStore(local, shared, LocalTierOptions{kLimit, 0.9, root});
+  ASSERT_TRUE(tiered->prepareDataset("srv/ds"));
+  auto at = [](int i) { return TileLocation{"srv/ds", "jpg", TileKey{6, 1, i}}; };
+  auto body = [](int i) { return std::to_string(1000000 + i) + std::string(993, 'b'); };
+  // The local tile files really on disk (not the record): every file that is not a temp or a
+  // descriptor under the dataset folder.
+  auto onDisk = [&] {
+    std::uint64_t bytes = 0;
+    for (const auto& e : fs::recursive_directory_iterator(root / "srv/ds")) {
+      const std::string name = e.path().filename().string();
+      if (e.is_regular_file() && !name.starts_with('.') && name != "dataset.txt")
+        bytes += e.file_size();
+    }
+    return bytes;
+  };
+  for (int i = 0; i < 60; ++i)
+    ASSERT_TRUE(put(*tiered, at(i), body(i)));
+  tiered->settle();
+  EXPECT_LE(onDisk(), kLimit);
+  EXPECT_GE(tiered->localTier().evictions, 40U);
+  for (int i = 0; i < 60; ++i) { // every tile served: from the local tier or the bucket
+    const auto t = tiered->open(at(i), 1000);
+    ASSERT_TRUE(t) << i;
+    EXPECT_EQ(text(*t), body(i)) << i;
+    EXPECT_TRUE(shared->stat(at(i))) << i; // the bucket keeps them all
+  }
+  tiered->settle();
+  EXPECT_LE(onDisk(), kLimit);
+  EXPECT_LE(tiered->localTier().bytes, kLimit);
 }

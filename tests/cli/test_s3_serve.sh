@@ -3,7 +3,8 @@
 # loopback (tests/support/s3-server.sh: Swift + s3api; TELLUS_S3_ENV names a running one's s3.env,
 # else one is started here) and the fake GIBS of test_wmts.sh as the upstream. Checked:
 #   - a tile fetched upstream is served and stored in the bucket and in the local tier (the file
-#     tree under the cache root; the index stays local, SQLite);
+#     tree under the cache root; the index stays local, SQLite), whose bytes /metrics shows (the
+#     tier is bounded: cache.s3.local_tier_limit);
 #   - with the local tier, index and folder gone, `tellus cache rebuild` finds the tile in the
 #     bucket and `serve --offline` serves it from there, byte for byte, the upstream not asked;
 #   - wrong credentials stop the start with a message that names the bucket and the endpoint but
@@ -48,7 +49,7 @@ up=$(cat "$work/port")
 cat >"$work/tellus.yaml" <<YAML
 cache:
   store: s3://$S3_BUCKET/$prefix
-  s3: {endpoint: $S3_ENDPOINT, region: $S3_REGION}
+  s3: {endpoint: $S3_ENDPOINT, region: $S3_REGION, local_tier_limit: 64 MiB}
 upstreams:
   - name: gibs
     type: wmts
@@ -88,6 +89,10 @@ start "$work/serve.txt"
 cmp -s "$work/a.png" "$work/tiles/2014-02-04_3_4_3.png" || fail "the tile is not the upstream's bytes"
 asked=$(grep -c '/2014-02-04/EPSG4326_1km/3/4/3.png$' "$work/upstream.log")
 [ "$asked" = 1 ] || fail "the upstream was asked $asked times"
+[ "$(get /metrics "$work/metrics.txt")" = 200 ] || fail "/metrics"
+grep -q '^tellus_cache_local_tier_bytes [1-9]' "$work/metrics.txt" ||
+  fail "no local tier bytes in /metrics: $(grep local_tier "$work/metrics.txt")"
+grep -q '^tellus_cache_local_tier_evictions_total 0$' "$work/metrics.txt" || fail "evictions"
 stop
 [ -n "$(find "$work/cache" -name '*.png')" ] || fail "no copy in the local tier"
 

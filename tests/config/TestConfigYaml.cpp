@@ -1353,3 +1353,31 @@ TEST(ConfigYaml, CacheStoreInS3) {
   }
   EXPECT_EQ(errorOf("cache: {s3: {secret: x}}\n" + std::string(kMinimal)).key, "cache.s3.secret");
 }
+
+TEST(ConfigYaml, CacheS3LocalTierLimit) {
+  const std::string store = "cache: {store: 's3://b', s3: {endpoint: 'http://h'";
+  const auto c = parse(store + ", local_tier_limit: 20 GiB}}\n" + std::string(kMinimal));
+  ASSERT_TRUE(c) << c.error().toString();
+  EXPECT_EQ(c->cache.s3.localTierLimitBytes, 20ULL << 30);
+  EXPECT_EQ(parse(store + "}}\n" + std::string(kMinimal))->cache.s3.localTierLimitBytes, 0U);
+
+  const ConfigError bad = errorOf(store + ", local_tier_limit: lots}}\n" + std::string(kMinimal));
+  EXPECT_EQ(bad.key, "cache.s3.local_tier_limit");
+  EXPECT_NE(bad.message.find("'lots' is not a size"), std::string::npos) << bad.message;
+  EXPECT_EQ(errorOf(store + ", local_tier_limit: -1GiB}}\n" + std::string(kMinimal)).key,
+            "cache.s3.local_tier_limit");
+  // Without a store there is no local tier to bound (cache.size_limit bounds such a cache).
+  const ConfigError noStore =
+      errorOf("cache: {s3: {local_tier_limit: 1GiB}}\n" + std::string(kMinimal));
+  EXPECT_EQ(noStore.key, "cache.s3.local_tier_limit");
+  EXPECT_NE(noStore.message.find("cache.size_limit"), std::string::npos) << noStore.message;
+  const ConfigError noTier =
+      errorOf(store + ", local_tier: false, local_tier_limit: 1GiB}}\n" + std::string(kMinimal));
+  EXPECT_EQ(noTier.key, "cache.s3.local_tier_limit");
+  EXPECT_NE(noTier.message.find("local_tier is false"), std::string::npos) << noTier.message;
+  // size_limit stays refused with a store (it would evict from the shared bucket) and says what
+  // bounds the local copies instead.
+  const ConfigError shared = errorOf(store + "}, size_limit: 1GiB}\n" + std::string(kMinimal));
+  EXPECT_EQ(shared.key, "cache.size_limit");
+  EXPECT_NE(shared.message.find("local_tier_limit"), std::string::npos) << shared.message;
+}

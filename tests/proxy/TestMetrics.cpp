@@ -105,3 +105,13 @@ TEST(Metrics, UpstreamHistogramIsCumulativeAndEndsAtItsCount) {
   EXPECT_NE(text.find("# TYPE tellus_upstream_request_duration_seconds histogram\n"),
             std::string::npos);
 }
+
+TEST(Metrics, ABoundedLocalTierShowsItsBytesAndEvictions) {
+  ProxyMetrics m({});
+  CacheHealthMetrics h;
+  EXPECT_EQ(m.render({}, 0, 0, {}, h).find("local_tier"), std::string::npos); // none: no lines
+  h.localTier = LocalTierMetrics{123456, 7};
+  const auto s = samples(m.render({}, 0, 0, {}, h));
+  EXPECT_EQ(s.at("tellus_cache_local_tier_bytes"), 123456);
+  EXPECT_EQ(s.at("tellus_cache_local_tier_evictions_total"), 7);
+}

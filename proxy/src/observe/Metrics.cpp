@@ -306,6 +306,20 @@ void ProxyMetrics::renderCache(std::string& out,
              "Inodes free for tellus on the file system of the cache root.");
       out += "tellus_cache_free_inodes " + std::to_string(*cacheHealth->freeInodes) + "\n";
     }
+    if (const auto& tier = cacheHealth->localTier) {
+      header(out,
+             "tellus_cache_local_tier_bytes",
+             "gauge",
+             "Bytes of the local copies in front of the shared store (cache.s3.local_tier_limit "
+             "bounds them).");
+      out += "tellus_cache_local_tier_bytes " + std::to_string(tier->bytes) + "\n";
+      header(out,
+             "tellus_cache_local_tier_evictions_total",
+             "counter",
+             "Local copies removed to stay under cache.s3.local_tier_limit (the shared store keeps "
+             "them).");
+      out += "tellus_cache_local_tier_evictions_total " + std::to_string(tier->evictions) + "\n";
+    }
   }
 }
 

@@ -266,6 +266,7 @@ CacheHealthMetrics TileService::cacheHealth() const {
     h.freeBytes = space->freeBytes;
     h.freeInodes = space->freeInodes;
   }
+  if (impl_->options.localTier) h.localTier = impl_->options.localTier();
   return h;
 }
 

@@ -62,11 +62,12 @@ std::size_t descriptorBudget(int maxConnections) {
 namespace {
 
 /** The tile store `cache.store` names: the file tree under the root (the embedded default), or
- * S3-compatible object storage (issue 27) with the file tree in front (`cache.s3.local_tier`);
- * read tiles land in `<root>/s3-local` (unlinked files) on their way. */
-std::expected<std::shared_ptr<ITileStore>, CacheError> openStore(const Config& config,
+ * S3-compatible object storage (issue 27) with the file tree in front (`cache.s3.local_tier`,
+ * bounded by `cache.s3.local_tier_limit`); read tiles land in `<root>/s3-local` (unlinked files)
+ * on their way. */
+std::expected<std::shared_ptr<ITileStore>, CacheError> openStore(Context& ctx,
                                                                  const TileCache::Options& o) {
-  const auto& c = config.cache;
+  const auto& c = ctx.config.cache;
   if (c.store.empty()) {
     auto files = openFileTileStore(FileTileStoreOptions{o.root, o.readOnly, o.fsyncTiles});
     if (!files) return std::unexpected(files.error());
@@ -88,7 +89,13 @@ std::expected<std::shared_ptr<ITileStore>, CacheError> openStore(const Config& c
   if (c.s3.localTier) { // the file tree under the root in front of the bucket
     auto local = openFileTileStore(FileTileStoreOptions{o.root, o.readOnly, o.fsyncTiles});
     if (!local) return std::unexpected(local.error());
-    store = makeTieredTileStore(std::move(*local), std::move(store));
+    LocalTierOptions tier;
+    tier.limitBytes = o.readOnly ? 0 : c.s3.localTierLimitBytes; // offline media: kept whole
+    tier.root = o.root;
+    std::shared_ptr<TieredTileStore> tiered =
+        makeTieredTileStore(std::move(*local), std::move(store), tier);
+    if (tier.limitBytes > 0) ctx.boundedTier = tiered;
+    store = std::move(tiered);
   }
   return store;
 }
@@ -100,7 +107,7 @@ std::expected<std::unique_ptr<TileCache>, CacheError> openScaledOut(Context& ctx
                                                                     const TileCache::Options& o) {
   std::error_code ec;
   if (!o.readOnly) fs::create_directories(o.root, ec); // the local index's, tier's folder
-  auto store = openStore(ctx.config, o);
+  auto store = openStore(ctx, o);
   if (!store) return std::unexpected(store.error());
   if (ctx.config.cache.index.empty()) {
     auto index = openSqliteTileIndex(
@@ -127,7 +134,7 @@ std::expected<std::unique_ptr<TileCache>, CacheError> openScaledOut(Context& ctx
 std::optional<Context> setUp(const cli::Args& a, CacheUse use) {
   auto config = loadConfiguration(a);
   if (!config) return std::nullopt;
-  Context ctx{std::move(*config), nullptr, nullptr};
+  Context ctx{std::move(*config), nullptr, nullptr, nullptr};
   TileCache::Options o;
   o.root = ctx.config.cache.root;
   o.sizeLimitBytes = ctx.config.cache.sizeLimitBytes;

@@ -7,6 +7,7 @@
 
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/cache/TileLeases.hpp>
+#include <tellus/cache_s3/TieredTileStore.hpp>
 #include <tellus/config/CommandLine.hpp>
 #include <tellus/config/Config.hpp>
 
@@ -36,6 +37,9 @@ struct Context {
   /// Single-flight leases across instances: PostgreSQL's when cache.index is one (issue 27), else
   /// null (this process alone). Serve hands them to the tile service.
   std::shared_ptr<ITileLeases> leases;
+  /// The local tier in front of an S3 store when `cache.s3.local_tier_limit` bounds it, else null.
+  /// Serve shows its figures at /metrics.
+  std::shared_ptr<TieredTileStore> boundedTier;
 };
 
 /** The bundled data: --data, else $TELLUS_DATA_DIR, else the source tree's data/. */

@@ -126,6 +126,12 @@ int runServe(const cli::Args& a) {
   // Several instances: a miss fetches its metatile under the metatile's lease (one upstream
   // request for the tiles of a metatile however they are spread over the instances).
   tileOptions.metaTilesOnMiss = ctx->leases != nullptr;
+  if (auto tier = ctx->boundedTier) {
+    tileOptions.localTier = [tier] {
+      const auto s = tier->localTier();
+      return LocalTierMetrics{s.bytes, s.evictions};
+    };
+  }
   auto tiles = TileService::create(*ctx->cache,
                                    fetcher,
                                    std::move(specs.upstreams),

@@ -281,6 +281,10 @@ struct CacheSettings {
     /** "" = $AWS_SHARED_CREDENTIALS_FILE, else ~/.aws/credentials. */
     std::filesystem::path credentialsFile;
     bool localTier = true; ///< the file tree under root in front of the bucket (a local copy)
+    /** YAML `local_tier_limit`: the local tier's tiles are kept under this many bytes by removing
+     * local copies only, least recently used first (the bucket and the index keep them); 0 =
+     * unbounded. */
+    std::uint64_t localTierLimitBytes = 0;
   } s3;
 };
 

@@ -33,6 +33,12 @@ enum class TileOutcome : std::uint8_t { Hit, Miss, Stale, Offline, Absent, Error
 inline constexpr std::size_t kTileOutcomeCount = 7;
 const char* toString(TileOutcome o) noexcept;
 
+/** A bounded local tier in front of a shared store (`cache.s3.local_tier_limit`, issue 27). */
+struct LocalTierMetrics {
+  std::uint64_t bytes = 0;     ///< of the local copies recorded
+  std::uint64_t evictions = 0; ///< local copies removed for the limit since the start
+};
+
 /** The cache as /metrics shows it: whether it stores tiles, how many fetched tiles it refused for
  * lack of space (they were served all the same), and the free space under its root. */
 struct CacheHealthMetrics {
@@ -44,6 +50,7 @@ struct CacheHealthMetrics {
   std::uint64_t servedWithoutIndex = 0; ///< requests answered from the store alone (index down)
   std::optional<std::uint64_t> freeBytes;
   std::optional<std::uint64_t> freeInodes;
+  std::optional<LocalTierMetrics> localTier; ///< nullopt: none, or not bounded
 };
 
 /** The per-client budget of upstream fetches (FetchBudget) as /metrics shows it. */

@@ -126,6 +126,9 @@ struct TileServiceOptions {
   /// missing different tiles of one metatile cause one upstream request. False: one GetMap per
   /// missed tile (the embedded default; an expired tile is always refreshed alone).
   bool metaTilesOnMiss = false;
+  /// The bounded local tier's figures for /metrics (issue 27, `cache.s3.local_tier_limit`); empty:
+  /// none.
+  std::function<LocalTierMetrics()> localTier;
 };
 
 class TileService final : public ITileSource {

@@ -1,0 +1,281 @@
+// The local tier's bound (TieredTileStore.hpp, `cache.s3.local_tier_limit`): the local tier a real
+// folder (the file store), the shared store one in memory that counts what it is asked. No S3
+// server: these are unit tests (the one against the server is in TestS3TileStore.cpp).
+
+#include "../support/MemoryTileStore.hpp"
+#include "../support/TempDir.hpp"
+
+#include <tellus/cache/TilePath.hpp>
+#include <tellus/cache_s3/TieredTileStore.hpp>
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <fcntl.h>
+#include <fstream>
+#include <sys/stat.h>
+#include <thread>
+
+using namespace tellus;
+namespace fs = std::filesystem;
+
+namespace {
+
+/** The shared store: tiles in memory; how often it was asked to open and to remove. */
+class CountingStore final : public ITileStore {
+public:
+  test::MemoryTileStore inner;
+  std::atomic<int> opens{0};
+  std::atomic<int> removals{0};
+
+  Result prepareDataset(std::string_view f) override { return inner.prepareDataset(f); }
+  std::optional<std::string> readDescriptor(std::string_view f) override {
+    return inner.readDescriptor(f);
+  }
+  Result writeDescriptor(std::string_view f, std::string_view t) override {
+    return inner.writeDescriptor(f, t);
+  }
+  std::optional<StoredTile> open(const TileLocation& at, std::int64_t size) override {
+    ++opens;
+    return inner.open(at, size);
+  }
+  std::optional<TileStat> stat(const TileLocation& at) override { return inner.stat(at); }
+  std::expected<std::shared_ptr<StagedTile>, CacheError>
+  stage(const TileLocation& at, std::span<const std::byte> bytes) override {
+    return inner.stage(at, bytes);
+  }
+  std::shared_ptr<StagedRemoval> stageRemoval(const TileLocation& at) override {
+    ++removals;
+    return inner.stageRemoval(at);
+  }
+  void remove(const TileLocation& at) override {
+    ++removals;
+    inner.remove(at);
+  }
+  Result lockChanges(std::chrono::milliseconds t) override { return inner.lockChanges(t); }
+  void unlockChanges() override { inner.unlockChanges(); }
+  std::optional<DiskSpace> freeSpace() const override { return inner.freeSpace(); }
+  std::size_t removeDeadTemps(std::string_view f) override { return inner.removeDeadTemps(f); }
+  std::vector<std::string> datasetFolders() override { return inner.datasetFolders(); }
+  void scan(std::string_view f, const EntryVisitor& v) override { inner.scan(f, v); }
+  void removeEntry(std::string_view f, std::string_view p) override {
+    ++removals;
+    inner.removeEntry(f, p);
+  }
+};
+
+constexpr std::string_view kFolder = "srv/ds-0000abcd";
+
+TileLocation tile(int i) {
+  return TileLocation{kFolder, "png", TileKey{5, 7, i}};
+}
+
+/** `n` bytes, the tile's number in the first. */
+std::vector<std::byte> body(int i, std::size_t n = 100) {
+  std::vector<std::byte> b(n, std::byte{'x'});
+  b[0] = static_cast<std::byte>(i);
+  return b;
+}
+
+void put(ITileStore& s, const TileLocation& at, const std::vector<std::byte>& bytes) {
+  auto staged = s.stage(at, bytes);
+  ASSERT_TRUE(staged) << staged.error().message;
+  const auto r = (*staged)->install();
+  ASSERT_TRUE(r) << r.error().message;
+  (*staged)->finish(true);
+}
+
+/** Bytes and number of the tile files under a local tree (what is really on disk). */
+std::pair<std::uint64_t, int> tilesOnDisk(const fs::path& root) {
+  std::uint64_t bytes = 0;
+  int files = 0;
+  for (auto it = fs::recursive_directory_iterator(root); it != fs::recursive_directory_iterator();
+       ++it) {
+    const std::string rel = fs::relative(it->path(), root).generic_string();
+    const auto slash = rel.find('/', rel.find('/') + 1); // past <server>/<dataset>/
+    if (!it->is_regular_file() || slash == std::string::npos) continue;
+    if (parseTileRelativePath(std::string_view(rel).substr(slash + 1))) {
+      bytes += it->file_size();
+      ++files;
+    }
+  }
+  return {bytes, files};
+}
+
+class LocalTier : public ::testing::Test {
+protected:
+  test::TempDir dir{"tier"};
+  std::shared_ptr<CountingStore> shared = std::make_shared<CountingStore>();
+  std::shared_ptr<ITileStore> local;
+
+  void SetUp() override {
+    auto l = openFileTileStore(FileTileStoreOptions{dir.path(), false, false});
+    ASSERT_TRUE(l) << l.error().message;
+    local = std::move(*l);
+  }
+
+  std::unique_ptr<TieredTileStore> tiered(std::uint64_t limit) {
+    auto t = makeTieredTileStore(local, shared, LocalTierOptions{limit, 0.9, dir.path()});
+    EXPECT_TRUE(t->prepareDataset(kFolder));
+    return t;
+  }
+
+  bool localHas(int i) { return local->stat(tile(i)).has_value(); }
+};
+
+} // namespace
+
+TEST_F(LocalTier, OverTheLimitTheLeastRecentlyUsedLocalCopiesGoDownToTheLowWaterMark) {
+  auto t = tiered(1000);
+  for (int i = 0; i < 10; ++i)
+    put(*t, tile(i), body(i));
+  ASSERT_TRUE(t->open(tile(0), 100)); // a local hit: tile 0 is now the most recently used
+  t->settle();
+  EXPECT_EQ(t->localTier().bytes, 1000U); // at the limit, not over it
+  EXPECT_EQ(t->localTier().evictions, 0U);
+
+  put(*t, tile(10), body(10)); // 1,100 bytes: over; down to 900, the two least recently used
+  t->settle();
+  const auto s = t->localTier();
+  EXPECT_EQ(s.bytes, 900U);
+  EXPECT_EQ(s.files, 9U);
+  EXPECT_EQ(s.evictions, 2U);
+  EXPECT_EQ(s.evictedBytes, 200U);
+  EXPECT_FALSE(localHas(1));
+  EXPECT_FALSE(localHas(2));
+  EXPECT_TRUE(localHas(0)); // read recently: it survives
+  for (int i = 3; i <= 10; ++i)
+    EXPECT_TRUE(localHas(i)) << i;
+  EXPECT_EQ(tilesOnDisk(dir.path()), std::make_pair(std::uint64_t{900}, 9));
+  // The shared store untouched: asked to remove nothing, holding every tile.
+  EXPECT_EQ(shared->removals.load(), 0);
+  EXPECT_EQ(shared->inner.usedBytes(), 1100U);
+  for (int i = 0; i <= 10; ++i)
+    EXPECT_TRUE(shared->inner.stat(tile(i))) << i;
+}
+
+TEST_F(LocalTier, AReadAfterEvictionComesFromTheSharedStoreAndIsCopiedBack) {
+  auto t = tiered(500);
+  for (int i = 0; i < 6; ++i)
+    put(*t, tile(i), body(i));
+  t->settle();
+  ASSERT_FALSE(localHas(0)); // 600 > 500: tiles 0 and 1 went (down to 450 at most)
+  ASSERT_FALSE(localHas(1));
+  const int before = shared->opens.load();
+  for (int i : {0, 1}) {
+    const auto read = t->open(tile(i), 100);
+    ASSERT_TRUE(read);
+    const auto bytes = read->file->readAll();
+    ASSERT_TRUE(bytes);
+    EXPECT_EQ(*bytes, body(i));
+    EXPECT_TRUE(localHas(i)); // copied back
+  }
+  EXPECT_EQ(shared->opens.load(), before + 2); // from the shared store
+  t->settle();                                 // 600 again: the least recently used went
+  EXPECT_TRUE(localHas(0));
+  EXPECT_TRUE(localHas(1));
+  EXPECT_FALSE(localHas(2));
+  EXPECT_FALSE(localHas(3));
+  ASSERT_TRUE(t->open(tile(0), 100));
+  EXPECT_EQ(shared->opens.load(), before + 2); // the next read a local hit
+  EXPECT_EQ(t->localTier().bytes, 400U);
+  EXPECT_EQ(shared->removals.load(), 0);
+}
+
+TEST_F(LocalTier, TheScanAtStartCountsTheFilesThereOldestFirstAndOnlyTiles) {
+  for (int i = 0; i < 5; ++i)
+    put(*local, tile(i), body(i, 100 + static_cast<std::size_t>(i)));
+  // Modified in the order 3 (oldest), 1, 0, 2, 4: set, not waited for.
+  const int order[] = {3, 1, 0, 2, 4};
+  for (int k = 0; k < 5; ++k) {
+    const fs::path p = dir.path() / kFolder / tileRelativePath(tile(order[k]).key, "png");
+    const timespec times[2] = {{1'000'000 + k, 0}, {1'000'000 + k, 0}};
+    ASSERT_EQ(::utimensat(AT_FDCWD, p.c_str(), times, 0), 0) << p;
+  }
+  // What is no tile is neither counted nor ever removed.
+  ASSERT_TRUE(local->writeDescriptor(kFolder, std::string(5000, 'd')));
+  fs::create_directories(dir.path() / kFolder / ".tmp");
+  std::ofstream(dir.path() / kFolder / ".tmp" / ".0_1.png.1-2.3.tmp") << std::string(5000, 't');
+  std::ofstream(dir.path() / "index.sqlite") << std::string(5000, 'i');
+  std::ofstream(dir.path() / kFolder / "5" / "notes.txt") << std::string(5000, 'n');
+
+  auto t = tiered(600);
+  t->settle();
+  auto s = t->localTier();
+  EXPECT_TRUE(s.scanned);
+  EXPECT_EQ(s.files, 5U);
+  EXPECT_EQ(s.bytes, 510U); // 100 + 101 + 102 + 103 + 104
+  EXPECT_EQ(s.evictions, 0U);
+
+  put(*t, tile(5), body(5)); // 610: over; down to 540 at most, the oldest modified first
+  t->settle();
+  EXPECT_FALSE(localHas(3));
+  EXPECT_TRUE(localHas(1));
+  EXPECT_EQ(t->localTier().bytes, 507U);
+  put(*t, tile(6), body(6)); // 607: the next oldest
+  t->settle();
+  EXPECT_FALSE(localHas(1));
+  EXPECT_TRUE(localHas(0));
+  EXPECT_EQ(local->readDescriptor(kFolder), std::string(5000, 'd'));
+  EXPECT_TRUE(fs::exists(dir.path() / kFolder / ".tmp" / ".0_1.png.1-2.3.tmp"));
+  EXPECT_TRUE(fs::exists(dir.path() / "index.sqlite"));
+  EXPECT_TRUE(fs::exists(dir.path() / kFolder / "5" / "notes.txt"));
+}
+
+TEST_F(LocalTier, RemovalsRollbacksAndRewritesKeepTheRecordTrue) {
+  auto t = tiered(10000);
+  put(*t, tile(0), body(0));
+  put(*t, tile(1), body(1));
+  EXPECT_EQ(t->localTier().bytes, 200U);
+  put(*t, tile(1), body(1, 300)); // a refresh: the new size
+  EXPECT_EQ(t->localTier().bytes, 400U);
+  t->remove(tile(0));
+  EXPECT_EQ(t->localTier().bytes, 300U);
+  auto staged = t->stage(tile(2), body(2));
+  ASSERT_TRUE(staged);
+  ASSERT_TRUE((*staged)->install());
+  (*staged)->finish(false); // rolled back: no file, no record
+  EXPECT_EQ(t->localTier().bytes, 300U);
+  auto removal = t->stageRemoval(tile(1));
+  ASSERT_TRUE(removal->hide());
+  removal->finish(true);
+  EXPECT_EQ(t->localTier().bytes, 0U);
+  EXPECT_EQ(t->localTier().files, 0U);
+  EXPECT_EQ(tilesOnDisk(dir.path()).second, 0);
+}
+
+TEST_F(LocalTier, WithoutALimitNothingIsRecordedOrRemoved) {
+  auto t = tiered(0);
+  for (int i = 0; i < 20; ++i)
+    put(*t, tile(i), body(i));
+  t->settle();
+  EXPECT_EQ(t->localTier().files, 0U);
+  EXPECT_EQ(tilesOnDisk(dir.path()).second, 20);
+}
+
+TEST_F(LocalTier, ManyThreadsReadWhileItEvicts) {
+  constexpr int kTiles = 64;
+  auto t = tiered(2000); // 20 of the 64 tiles
+  for (int i = 0; i < kTiles; ++i)
+    put(*shared, tile(i), body(i)); // stored by another instance: every first read copies
+  std::atomic<int> wrong{0};
+  std::vector<std::thread> readers;
+  for (int r = 0; r < 4; ++r) {
+    readers.emplace_back([&, r] {
+      for (int n = 0; n < 200; ++n) {
+        const int i = (n * 7 + r * 13) % kTiles;
+        const auto got = t->open(tile(i), 100);
+        const auto bytes = got ? got->file->readAll() : std::nullopt;
+        if (!bytes || *bytes != body(i)) ++wrong;
+      }
+    });
+  }
+  for (auto& th : readers)
+    th.join();
+  t->settle();
+  EXPECT_EQ(wrong.load(), 0);
+  EXPECT_LE(t->localTier().bytes, 2000U);
+  EXPECT_LE(tilesOnDisk(dir.path()).first, t->localTier().bytes); // never more than recorded
+  EXPECT_GT(t->localTier().evictions, 0U);
+  EXPECT_EQ(shared->removals.load(), 0);
+}
