@@ -19,26 +19,8 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 pixel() { python3 "$here/png_pixels.py" "$@"; }
 near() { python3 -c "import sys; v=list(map(int,sys.argv[1:7])); t=int(sys.argv[7]); sys.exit(0 if all(abs(a-b)<=t for a,b in zip(v[:3],v[3:])) else 1)" "$@"; }
 
-python3 "$here/time_upstream.py" "$work/port" "$work/upstream.log" &
-upstream_pid=$!
-for _ in $(seq 100); do [ -s "$work/port" ] && break; sleep 0.1; done
-[ -s "$work/port" ] || fail "the upstream did not start"
-port=$(cat "$work/port")
-
-cat >"$work/animate.yaml" <<YAML
-data_dir: $data
-cache: {root: $work/cache}
-upstreams:
-  - {name: local, type: local, path: bmng_2048x1024.jpg}
-  - {name: months, type: wms, url: "http://127.0.0.1:$port/wms", version: 1.1.1, crs: "EPSG:4326"}
-layers:
-  - {name: bluemarble, upstream: local, format: image/jpeg, grid: {levels: 3}}
-  - name: monthly
-    upstream: months
-    format: image/png
-    grid: {level_zero_delta: 36, tile_size: 64, levels: 2}
-    time: {period: 2024-01-01/2024-04-01/P1M}
-YAML
+. "$here/time_upstream.sh"
+time_upstream_config "$work/animate.yaml"
 cat >"$work/path.json" <<'JSON'
 [{"time": 0, "lat": 10, "lon": 20, "alt": 8e6}, {"time": 2, "lat": 10, "lon": 20, "alt": 8e6}]
 JSON

@@ -23,24 +23,8 @@ pixel() { python3 "$here/png_pixels.py" "$@"; }
 near() { python3 -c "import sys; v=list(map(int,sys.argv[1:7])); t=int(sys.argv[7]); sys.exit(0 if all(abs(a-b)<=t for a,b in zip(v[:3],v[3:])) else 1)" "$@"; }
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 # CI runs as root
 
-python3 "$here/time_upstream.py" "$work/port" "$work/upstream.log" &
-upstream_pid=$!
-for _ in $(seq 100); do [ -s "$work/port" ] && break; sleep 0.1; done
-[ -s "$work/port" ] || fail "the upstream did not start"
-cat >"$work/times.yaml" <<YAML
-data_dir: $data
-cache: {root: $work/cache}
-upstreams:
-  - {name: local, type: local, path: bmng_2048x1024.jpg}
-  - {name: months, type: wms, url: "http://127.0.0.1:$(cat "$work/port")/wms", version: 1.1.1, crs: "EPSG:4326"}
-layers:
-  - {name: bluemarble, upstream: local, format: image/jpeg, grid: {levels: 3}}
-  - name: monthly
-    upstream: months
-    format: image/png
-    grid: {level_zero_delta: 36, tile_size: 64, levels: 2}
-    time: {period: 2024-01-01/2024-04-01/P1M}
-YAML
+. "$here/time_upstream.sh"
+time_upstream_config "$work/times.yaml"
 # Two channels looking at the globe below the camera (the dome's axis: the view direction).
 echo '{"channels": [
  {"name": "a", "azimuth": 0, "elevation": 80, "hfov": 20, "vfov": 20, "width": 32, "height": 32},
