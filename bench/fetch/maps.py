@@ -7,13 +7,15 @@ Two sets, each group on a fresh server and cache:
   - tiles: a client's block of 4 x 4 adjacent 256-px EPSG:4326 tiles (CesiumJS's geographic tiling,
     levels 3-16, around 7 E 45 N), one group per level;
   - maps: 1024 x 768 maps at assorted scales (pixels of 2^-k level zero's texel times 1, 1.19,
-    1.41 and 1.68, k = 0-14), each alone on its server, at a place drawn per map.
+    1.41 and 1.68, k = 0-14), each alone on its server, at a place drawn per map;
+  - mercator: GoogleMapsCompatible's 256-px tiles as EPSG:3857 GetMaps, every tile of zooms 0-2
+    and a 4 x 4 block around 7 E 45 N at zooms 3-8, one group per zoom.
 Per group: GetMaps answered, texels answered (the client's sum of WIDTH x HEIGHT; the server's
 tellus_compose_output_texels_total in maps.json), upstream
 texels (the upstream's own count, and the server's tellus_compose_source_texels_total
 {origin="upstream"}) and their ratio (goal: at most 2).
 Usage: bench/fetch/maps.py [TELLUS] (default build/tools/tellus/tellus); env OUT (default a new
-temporary directory), SETS (default "tiles maps"). Prints Markdown tables, writes OUT/maps.json."""
+temporary directory), SETS (default "tiles maps"), CONFIG (another template than fetch.yaml). Prints Markdown tables, writes OUT/maps.json."""
 import json
 import os
 import random
@@ -54,9 +56,9 @@ class Server:
             except OSError:
                 time.sleep(0.1)
 
-    def getmap(self, west, south, east, north, width, height):
+    def getmap(self, west, south, east, north, width, height, srs="EPSG:4326"):
         q = (f"/wms?SERVICE=WMS&VERSION=1.1.1&REQUEST=GetMap&LAYERS=synthetic-imagery&STYLES="
-             f"&SRS=EPSG:4326&BBOX={west!r},{south!r},{east!r},{north!r}&WIDTH={width}"
+             f"&SRS={srs}&BBOX={west!r},{south!r},{east!r},{north!r}&WIDTH={width}"
              f"&HEIGHT={height}&FORMAT=image/png")
         status, _ = fetch(self.base + q)
         return status
@@ -112,6 +114,31 @@ def maps_set(tellus, config, upstream, out):
     return rows
 
 
+MERCATOR_MAX = 20037508.342789244  # the Web Mercator square's half side, metres
+
+
+def mercator_set(tellus, config, upstream, out):
+    """GoogleMapsCompatible's 256-px tiles as EPSG:3857 GetMaps (OpenLayers', Leaflet's tiling):
+    every tile of zooms 0-2 (a world view), then a 4 x 4 block around 7 E 45 N at zooms 3-8."""
+    import math
+    rows = []
+    for z in range(0, 9):
+        n = 2 ** z
+        size = 2 * MERCATOR_MAX / n
+        if z <= 2:
+            cells = [(i, j) for j in range(n) for i in range(n)]
+        else:
+            x = (7.0 + 180.0) / 360.0 * n
+            y = (1 - math.log(math.tan(math.radians(45.0)) + 1 / math.cos(math.radians(45.0)))
+                 / math.pi) / 2 * n
+            cells = [(int(x) - 1 + i, int(y) - 1 + j) for j in range(4) for i in range(4)]
+        maps = [(-MERCATOR_MAX + i * size, MERCATOR_MAX - (j + 1) * size,
+                 -MERCATOR_MAX + (i + 1) * size, MERCATOR_MAX - j * size, 256, 256, "EPSG:3857")
+                for i, j in cells]
+        rows.append(group(tellus, config, upstream, out, f"mercator-z{z}", maps))
+    return rows
+
+
 def table(rows):
     print("| group | GetMaps | texels answered | upstream GetMaps | upstream texels (server's "
           "count) | upstream / answered |")
@@ -139,13 +166,15 @@ def main():
             time.sleep(0.1)
         url = f"http://127.0.0.1:{open(portfile).read().strip()}"
         config = os.path.join(out, "fetch.yaml")
-        with open(os.path.join(HERE, "fetch.yaml")) as f:
-            text = f.read().replace("@URL@", url + "/wms").replace("@OVERVIEW@", "# no overview")
+        with open(os.environ.get("CONFIG", os.path.join(HERE, "fetch.yaml"))) as f:
+            text = f.read().replace("@URL@", url + "/wms").replace(
+                "@OVERVIEW@", os.environ.get("RENDERER_OVERVIEW", "# no overview"))
         with open(config, "w") as f:
             f.write(text)
         results = {}
         for name in os.environ.get("SETS", "tiles maps").split():
-            results[name] = {"tiles": tiles_set, "maps": maps_set}[name](tellus, config, url, out)
+            sets = {"tiles": tiles_set, "maps": maps_set, "mercator": mercator_set}
+            results[name] = sets[name](tellus, config, url, out)
         with open(os.path.join(out, "maps.json"), "w") as f:
             json.dump(results, f, indent=1)
         print(f"\n{out}\n")

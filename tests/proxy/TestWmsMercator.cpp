@@ -121,7 +121,8 @@ struct Server {
   std::unique_ptr<ProxyFrontEnd> front;
   std::unique_ptr<HttpServer> server;
 
-  Server() {
+  /** With `overview`: "pic-overview", the same upstream layer as "pic" on 90-degree tiles. */
+  explicit Server(bool overview = false) {
     cache = test::openTestCache(dir.path());
     fetcher = std::make_unique<Fetcher>();
     UpstreamSpec u;
@@ -132,8 +133,14 @@ struct Server {
     u.crs = "EPSG:4326";
     u.policy.timeout = 2000ms;
     u.policy.retries = 0;
-    auto t = TileService::create(
-        *cache, *fetcher, {u}, {latitudeLayer(), pictureLayer()}, TileServiceOptions{});
+    std::vector<LayerSpec> layers{latitudeLayer(), pictureLayer()};
+    if (overview) {
+      LayerSpec o = pictureLayer();
+      o.name = "pic-overview";
+      o.dataset.grid = GridSpec{Sector{}, 90.0, 64, 64, 1};
+      layers.push_back(o);
+    }
+    auto t = TileService::create(*cache, *fetcher, {u}, layers, TileServiceOptions{});
     EXPECT_TRUE(t) << (t ? "" : t.error());
     tiles = std::move(*t);
     front = std::make_unique<ProxyFrontEnd>(*tiles, FrontEndOptions{});
@@ -284,5 +291,30 @@ TEST(WmsMercatorIntegration, JpegMapsOnThePlanesAreTheSameRows) {
     const auto at = (std::size_t(row) * 64 + 30);
     EXPECT_NEAR(p->pixels[at * std::size_t(p->channels) + 1], greyOf(lat), 2.5) << row;
     EXPECT_NEAR(j->pixels[at * std::size_t(j->channels) + 1], greyOf(lat), 3.5) << row;
+  }
+}
+
+// Issue 29: a Web Mercator map of the world, 64 x 64 pixels (5.6 degrees of longitude a pixel): its
+// rows up to 79.8 degrees of latitude are coarser than the overview's 1.4-degree texels times
+// sqrt 2, and come from "pic-overview" (8 tiles); the rows nearer the poles from "pic"'s level
+// zero (its polar rows of tiles, 20); without the overview all 50 of level zero. Every row is the
+// grey of its latitude, whichever layer drew it.
+TEST(WmsMercatorIntegration, AWorldMapTakesItsCoarseRowsFromACoarserLayer) {
+  const std::string q = "SERVICE=WMS&VERSION=1.3.0&REQUEST=GetMap&LAYERS=pic&STYLES=&CRS=EPSG:3857"
+                        "&FORMAT=image/png&BBOX=" +
+                        std::to_string(-kMaxY) + "," + std::to_string(-kMaxY) + "," +
+                        std::to_string(kMaxY) + "," + std::to_string(kMaxY) + "&WIDTH=64&HEIGHT=64";
+  for (const bool overview : {false, true}) {
+    Server s(overview);
+    const auto r = s.get(q);
+    ASSERT_EQ(r.status, 200) << r.body.substr(0, 300);
+    EXPECT_EQ(s.up.requests(), overview ? 8u + 20u : 50u) << overview;
+    auto p = codec::decodePng(span(r.body));
+    ASSERT_TRUE(p);
+    for (int row = 0; row < 64; ++row) {
+      const double lat = latitudeOfY(kMaxY - (row + 0.5) * 2.0 * kMaxY / 64);
+      const auto at = (std::size_t(row) * 64 + 21) * std::size_t(p->channels) + 1;
+      EXPECT_NEAR(p->pixels[at], greyOf(lat), 3.0) << "row " << row << ", overview " << overview;
+    }
   }
 }

@@ -11,7 +11,11 @@
 #include <algorithm>
 #include <cstdlib>
 #include <mutex>
+#include <optional>
+#include <set>
 #include <string_view>
+#include <tuple>
+#include <vector>
 
 namespace tellus {
 
@@ -102,6 +106,112 @@ const LayerSpec* coarserSource(const TileService& tiles,
   return best;
 }
 
+/** The coarsest level of `g` whose texels are at most kMaxUpsampling times a pixel of px x py
+ * degrees on both axes (composeLevel's rule); -1 when none is fine enough. */
+std::int32_t fineEnoughLevel(const TileGrid& g, double px, double py) {
+  const double x = px * kMaxUpsampling * (1.0 + 1e-9), y = py * kMaxUpsampling * (1.0 + 1e-9);
+  for (std::int32_t level = 0; level < g.numLevels(); ++level)
+    if (g.deltaDeg(level) / g.spec().tileWidth <= x && g.deltaDeg(level) / g.spec().tileHeight <= y)
+      return level;
+  return -1;
+}
+
+/** A Web Mercator map's rows split between `l` and a coarser layer (mercatorSplit). */
+struct MercatorSplit {
+  const LayerSpec* coarser = nullptr;
+  std::vector<ComposeBand> coarserBands; ///< the rows composed from `coarser`
+  std::vector<ComposeBand> rest;         ///< the other rows, from `l` at its bands' levels
+};
+
+/**
+ * coarserSource for a Web Mercator map (issue 29): its rows' pixels shrink in latitude towards the
+ * poles (composeBands), so a world map's equatorial rows are far coarser than `l`'s level zero and
+ * its polar rows are not. Each row that takes `l`'s level zero and that a level of another layer
+ * of the same upstream data on a coarser global grid is fine enough for (kMaxUpsampling), with
+ * texels coarser than `l`'s level zero on both axes, is composed from that layer (of several, the
+ * one whose texels over those rows are largest); the other rows stay with `l`. Nothing when no
+ * row gains.
+ */
+std::optional<MercatorSplit> mercatorSplit(const TileService& tiles,
+                                           const LayerSpec& l,
+                                           const TileGrid& g,
+                                           const ComposeRequest& r,
+                                           const std::vector<ComposeBand>& bands) {
+  if (r.bbox.rows != MapRows::Mercator || r.width <= 0 || r.height <= 0) return std::nullopt;
+  const std::int32_t h = r.height;
+  std::vector<std::int32_t> levelOf(static_cast<std::size_t>(h), 0); // `l`'s level of each row
+  for (const ComposeBand& b : bands)
+    for (std::int32_t j = std::max(b.box.rowBegin, 0); j < std::min(b.box.rowEnd, h); ++j)
+      levelOf[static_cast<std::size_t>(j)] = b.level;
+  if (std::find(levelOf.begin(), levelOf.end(), 0) == levelOf.end()) return std::nullopt;
+  std::vector<double> pixelY(static_cast<std::size_t>(h));
+  for (std::int32_t j = 0; j < h; ++j)
+    pixelY[static_cast<std::size_t>(j)] =
+        r.bbox.rowEdgeLatitude(j, h) - r.bbox.rowEdgeLatitude(j + 1, h);
+  const double pixelX = (r.bbox.east - r.bbox.west) / r.width;
+  const double lx = g.deltaDeg(0) / g.spec().tileWidth, ly = g.deltaDeg(0) / g.spec().tileHeight;
+  const LayerSpec* best = nullptr;
+  std::vector<std::int32_t> bestLevels; // per row: the coarser layer's level, -1: `l`
+  double bestScore = 0.0;
+  for (const LayerSpec& c : tiles.layers()) {
+    if (!sameSource(c, l)) continue;
+    const TileGrid* cg = tiles.grid(c.name);
+    if (!cg) continue;
+    const Sector& s = cg->spec().sector;
+    if (s.west > -180.0 || s.east < 180.0 || s.south > -90.0 || s.north < 90.0) continue;
+    std::vector<std::int32_t> levels(static_cast<std::size_t>(h), -1);
+    double score = 0.0; // the texels' area over the rows it takes: larger, fewer tiles
+    for (std::size_t j = 0; j < levels.size(); ++j) {
+      if (levelOf[j] != 0 || !(pixelY[j] > 0.0)) continue;
+      const std::int32_t level = fineEnoughLevel(*cg, pixelX, pixelY[j]);
+      if (level < 0) continue;
+      const double cx = cg->deltaDeg(level) / cg->spec().tileWidth;
+      const double cy = cg->deltaDeg(level) / cg->spec().tileHeight;
+      if (cx <= lx || cy <= ly) continue;
+      levels[j] = level;
+      score += cx * cy;
+    }
+    if (score > bestScore) {
+      best = &c;
+      bestLevels = std::move(levels);
+      bestScore = score;
+    }
+  }
+  if (!best) return std::nullopt;
+  MercatorSplit split;
+  split.coarser = best;
+  // Runs of rows of one source and level are bands; a row past the square (it draws nothing)
+  // stays with `l`'s band around it.
+  for (std::int32_t j = 0; j < h; ++j) {
+    const std::int32_t c = bestLevels[static_cast<std::size_t>(j)];
+    std::vector<ComposeBand>& into = c >= 0 ? split.coarserBands : split.rest;
+    const std::int32_t level = c >= 0 ? c : levelOf[static_cast<std::size_t>(j)];
+    if (!into.empty() && into.back().box.rowEnd == j && into.back().level == level) {
+      into.back().box.rowEnd = j + 1;
+      continue;
+    }
+    MapBox box = r.bbox;
+    box.rowBegin = j;
+    box.rowEnd = j + 1;
+    into.push_back(ComposeBand{box, level});
+  }
+  return split;
+}
+
+/** The texels of the tiles `grid`'s `bands` of the map need (each tile once). */
+std::uint64_t tileTexels(const TileGrid& grid,
+                         const std::vector<ComposeBand>& bands,
+                         const ComposeRequest& r,
+                         std::size_t maxTiles) {
+  std::set<std::tuple<std::int32_t, std::int32_t, std::int32_t>> keys;
+  for (const ComposeBand& b : bands)
+    if (auto tiles = composeTiles(grid, b.box, r.width, r.height, b.level, maxTiles))
+      for (const ComposeTile& t : *tiles)
+        keys.emplace(t.key.level, t.key.row, t.key.col);
+  return keys.size() * static_cast<std::uint64_t>(grid.spec().tileWidth) *
+         static_cast<std::uint64_t>(grid.spec().tileHeight);
+}
+
 } // namespace
 
 std::size_t MapComposer::decodedCacheBytes() const {
@@ -132,31 +242,49 @@ MapComposer::compose(ComposeRequest request,
              r.layers.front().opacity >= 1.0 - 1.0 / 512 && !yccDisabled_;
   std::size_t total = 0;
   for (const ComposeLayer& cl : r.layers) {
-    Job::Layer l;
-    l.spec = cl;
-    l.grid = tiles_.grid(cl.layer->name);
-    if (!l.grid) return std::unexpected("no layer '" + cl.layer->name + "'");
-    if (const LayerSpec* coarser = coarserSource(tiles_, *cl.layer, *l.grid, r)) {
-      l.spec.layer = coarser;
-      l.grid = tiles_.grid(coarser->name);
+    Job::Layer whole;
+    whole.spec = cl;
+    whole.grid = tiles_.grid(cl.layer->name);
+    if (!whole.grid) return std::unexpected("no layer '" + cl.layer->name + "'");
+    if (const LayerSpec* coarser = coarserSource(tiles_, *cl.layer, *whole.grid, r)) {
+      whole.spec.layer = coarser;
+      whole.grid = tiles_.grid(coarser->name);
     }
-    l.bands = composeBands(*l.grid, r.bbox, r.width, r.height, 0);
-    // The planes' chroma rows straddle two bands' rows: a map of several bands on the RGB path.
-    if (l.bands.size() > 1) job->ycc = false;
-    for (const ComposeBand& band : l.bands) {
-      const std::size_t left = maxTiles_ > total ? maxTiles_ - total : 0;
-      auto keys = job->ycc ? composeTilesYcc(*l.grid, band.box, r.width, r.height, band.level, left)
-                           : composeTiles(*l.grid, band.box, r.width, r.height, band.level, left);
-      if (!keys) {
-        return std::unexpected("the map needs more than " + std::to_string(maxTiles_) +
-                               " tiles (level " + std::to_string(band.level) + " of layer '" +
-                               cl.layer->name + "'); ask for a smaller box or fewer pixels");
+    whole.bands = composeBands(*whole.grid, r.bbox, r.width, r.height, 0);
+    // A Web Mercator map: the rows coarser than level zero from a coarser layer, drawn as a layer
+    // of their own before the other rows (none of them overlaps).
+    std::vector<Job::Layer> parts;
+    if (auto split = mercatorSplit(tiles_, *cl.layer, *whole.grid, r, whole.bands);
+        split && tileTexels(*tiles_.grid(split->coarser->name), split->coarserBands, r, maxTiles_) +
+                         tileTexels(*whole.grid, split->rest, r, maxTiles_) <
+                     tileTexels(*whole.grid, whole.bands, r, maxTiles_)) { // and it costs less
+      Job::Layer coarse = whole;
+      coarse.spec.layer = split->coarser;
+      coarse.grid = tiles_.grid(split->coarser->name);
+      coarse.bands = std::move(split->coarserBands);
+      parts.push_back(std::move(coarse));
+      whole.bands = std::move(split->rest);
+    }
+    if (!whole.bands.empty()) parts.push_back(std::move(whole));
+    for (Job::Layer& l : parts) {
+      // The planes' chroma rows straddle two bands' rows: a map of several bands on the RGB path.
+      if (l.bands.size() > 1 || parts.size() > 1) job->ycc = false;
+      for (const ComposeBand& band : l.bands) {
+        const std::size_t left = maxTiles_ > total ? maxTiles_ - total : 0;
+        auto keys = job->ycc
+                        ? composeTilesYcc(*l.grid, band.box, r.width, r.height, band.level, left)
+                        : composeTiles(*l.grid, band.box, r.width, r.height, band.level, left);
+        if (!keys) {
+          return std::unexpected("the map needs more than " + std::to_string(maxTiles_) +
+                                 " tiles (level " + std::to_string(band.level) + " of layer '" +
+                                 cl.layer->name + "'); ask for a smaller box or fewer pixels");
+        }
+        total += keys->size();
+        appendTiles(l.keys, std::move(*keys));
       }
-      total += keys->size();
-      appendTiles(l.keys, std::move(*keys));
+      l.answers.resize(l.keys.size());
+      job->layers.push_back(std::move(l));
     }
-    l.answers.resize(l.keys.size());
-    job->layers.push_back(std::move(l));
   }
   total = 0;
   for (const Job::Layer& l : job->layers)
