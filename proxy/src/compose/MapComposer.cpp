@@ -15,6 +15,7 @@
 #include <set>
 #include <string_view>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 namespace tellus {
@@ -71,6 +72,22 @@ bool sameSource(const LayerSpec& c, const LayerSpec& l) {
          c.timePeriod == l.timePeriod;
 }
 
+/** The layers a map of `l` may take its coarse rows from: the same upstream data (sameSource) on
+ * a global grid. */
+std::vector<std::pair<const LayerSpec*, const TileGrid*>>
+coarserCandidates(const TileService& tiles, const LayerSpec& l) {
+  std::vector<std::pair<const LayerSpec*, const TileGrid*>> out;
+  for (const LayerSpec& c : tiles.layers()) {
+    if (!sameSource(c, l)) continue;
+    const TileGrid* cg = tiles.grid(c.name);
+    if (!cg) continue;
+    const Sector& s = cg->spec().sector;
+    if (s.west > -180.0 || s.east < 180.0 || s.south > -90.0 || s.north < 90.0) continue;
+    out.emplace_back(&c, cg);
+  }
+  return out;
+}
+
 /**
  * The layer a map of latitude rows coarser than `l`'s level zero is composed from (issue 29):
  * another layer of the same upstream data on a global grid (e.g. the one `renderer.overview`
@@ -89,17 +106,12 @@ const LayerSpec* coarserSource(const TileService& tiles,
   double bestX = g.deltaDeg(0) / g.spec().tileWidth;
   double bestY = g.deltaDeg(0) / g.spec().tileHeight;
   const LayerSpec* best = nullptr;
-  for (const LayerSpec& c : tiles.layers()) {
-    if (!sameSource(c, l)) continue;
-    const TileGrid* cg = tiles.grid(c.name);
-    if (!cg) continue;
-    const Sector& s = cg->spec().sector;
-    if (s.west > -180.0 || s.east < 180.0 || s.south > -90.0 || s.north < 90.0) continue;
+  for (const auto& [c, cg] : coarserCandidates(tiles, l)) {
     const std::int32_t level = composeLevel(*cg, r.bbox, r.width, r.height, 0);
     const double cx = cg->deltaDeg(level) / cg->spec().tileWidth;
     const double cy = cg->deltaDeg(level) / cg->spec().tileHeight;
     if (cx > px || cy > py || cx <= bestX || cy <= bestY) continue;
-    best = &c;
+    best = c;
     bestX = cx;
     bestY = cy;
   }
@@ -153,12 +165,7 @@ std::optional<MercatorSplit> mercatorSplit(const TileService& tiles,
   const LayerSpec* best = nullptr;
   std::vector<std::int32_t> bestLevels; // per row: the coarser layer's level, -1: `l`
   double bestScore = 0.0;
-  for (const LayerSpec& c : tiles.layers()) {
-    if (!sameSource(c, l)) continue;
-    const TileGrid* cg = tiles.grid(c.name);
-    if (!cg) continue;
-    const Sector& s = cg->spec().sector;
-    if (s.west > -180.0 || s.east < 180.0 || s.south > -90.0 || s.north < 90.0) continue;
+  for (const auto& [c, cg] : coarserCandidates(tiles, l)) {
     std::vector<std::int32_t> levels(static_cast<std::size_t>(h), -1);
     double score = 0.0; // the texels' area over the rows it takes: larger, fewer tiles
     for (std::size_t j = 0; j < levels.size(); ++j) {
@@ -172,7 +179,7 @@ std::optional<MercatorSplit> mercatorSplit(const TileService& tiles,
       score += cx * cy;
     }
     if (score > bestScore) {
-      best = &c;
+      best = c;
       bestLevels = std::move(levels);
       bestScore = score;
     }
