@@ -57,7 +57,8 @@ TEST(Metrics, CountsRequestsByProtocolAndStatus) {
   m.composedTiles(6, 0);
   m.composedTiles(2, 4);
   m.composedTexels(65536, 2 * 262144, 0);
-  m.composedTexels(0, 0, 262144); // a 304: nothing returned
+  m.composedTexels(0, 0, 262144);        // a 304: nothing returned
+  m.composedTexels(65536, 0, 0, 262144); // from a fetch another map started
   const auto s = samples(m.render({}, 4096, 3u << 20));
   EXPECT_EQ(s.at("tellus_http_requests_total{protocol=\"worldwind\",code=\"200\"}"), 1);
   EXPECT_EQ(s.at("tellus_http_requests_total{protocol=\"worldwind\",code=\"304\"}"), 1);
@@ -73,9 +74,10 @@ TEST(Metrics, CountsRequestsByProtocolAndStatus) {
   EXPECT_EQ(s.at("tellus_composed_map_tiles_total{source=\"decoded\"}"), 8);
   EXPECT_EQ(s.at("tellus_composed_map_tiles_total{source=\"kept\"}"), 4);
   EXPECT_EQ(s.at("tellus_decoded_tile_cache_bytes"), 3 << 20);
-  EXPECT_EQ(s.at("tellus_compose_output_texels_total"), 65536);
+  EXPECT_EQ(s.at("tellus_compose_output_texels_total"), 2 * 65536);
   EXPECT_EQ(s.at("tellus_compose_source_texels_total{origin=\"upstream\"}"), 524288);
   EXPECT_EQ(s.at("tellus_compose_source_texels_total{origin=\"cache\"}"), 262144);
+  EXPECT_EQ(s.at("tellus_compose_source_texels_total{origin=\"joined\"}"), 262144);
 }
 
 TEST(Metrics, UpstreamHistogramIsCumulativeAndEndsAtItsCount) {

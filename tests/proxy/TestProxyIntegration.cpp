@@ -1417,6 +1417,41 @@ TEST(ComposeIntegration, MetricsShowTheDecodedTilesKept) {
   EXPECT_GT(value("tellus_decoded_tile_cache_bytes"), 0) << m.body;
 }
 
+// Issue 29: two maps that need the same missing tiles at once cause one fetch of each; the first
+// map counts them as fetched upstream, the second as joined in flight, so that the upstream
+// texels /metrics adds up are what the upstream served.
+TEST(ComposeIntegration, AFetchJoinedInFlightIsCountedUpstreamOnce) {
+  const auto held = std::make_shared<test::Gate>();
+  test::FakeUpstream up([&](const test::FakeRequest& r) {
+    auto reply = tileReply(r);
+    reply.holdUntilOpen = held;
+    return reply;
+  });
+  Proxy p(up.url("/wms"));
+  MapComposer c(*p.tiles, 2, 256, 0);
+  ComposeRequest r;
+  r.layers = {ComposeLayer{p.tiles->layer("sat"), "", 1.0}};
+  r.bbox = Sector{-170, -80, -100, -30};
+  r.width = 300;
+  r.height = 200;
+  r.format = MapFormat::Png;
+  std::promise<ComposedMap> first, second;
+  // Both ask for their tiles (compose() registers them before it returns) while no answer can
+  // come back: the second joins the first's fetches.
+  ASSERT_TRUE(c.compose(r, nullptr, [&](ComposedMap&& m) { first.set_value(std::move(m)); }));
+  ASSERT_TRUE(c.compose(r, nullptr, [&](ComposedMap&& m) { second.set_value(std::move(m)); }));
+  held->open();
+  const ComposedMap a = first.get_future().get(), b = second.get_future().get();
+  ASSERT_EQ(a.kind, ComposedMap::Kind::Map) << a.message;
+  ASSERT_EQ(b.kind, ComposedMap::Kind::Map) << b.message;
+  EXPECT_EQ(up.requests(), 6u);
+  EXPECT_EQ(a.upstreamTexels, 6u * 256 * 256);
+  EXPECT_EQ(a.joinedTexels, 0u);
+  EXPECT_EQ(b.upstreamTexels, 0u);
+  EXPECT_EQ(b.joinedTexels, 6u * 256 * 256);
+  EXPECT_EQ(b.bytes, a.bytes);
+}
+
 TEST(ComposeIntegration, DecodedTilesAreReusedAndGiveTheSameMap) {
   test::FakeUpstream up(tileReply);
   Proxy p(up.url("/wms"));

@@ -323,14 +323,16 @@ MapComposer::compose(ComposeRequest request,
 namespace {
 
 /** The texels of the tiles a map was asked to be made of, into `map` (upstreamTexels,
- * cachedTexels), and the map's own (outputTexels). */
+ * cachedTexels, joinedTexels), and the map's own (outputTexels). */
 void countSourceTexels(const MapComposer::Job& job, ComposedMap& map) {
   for (const MapComposer::Job::Layer& l : job.layers) {
     const auto texels = static_cast<std::uint64_t>(l.grid->spec().tileWidth) *
                         static_cast<std::uint64_t>(l.grid->spec().tileHeight);
     for (const TileAnswer& a : l.answers) {
       if (a.kind != TileAnswer::Kind::Tile) continue;
-      (a.origin == TileOrigin::Miss ? map.upstreamTexels : map.cachedTexels) += texels;
+      (a.origin != TileOrigin::Miss ? map.cachedTexels
+       : a.joinedInFlight           ? map.joinedTexels
+                                    : map.upstreamTexels) += texels;
     }
   }
   if (map.kind == ComposedMap::Kind::Map) {

@@ -70,9 +70,11 @@ struct ComposedMap {
   std::size_t decodedTiles = 0; ///< of those, decoded for this map (the rest came decoded)
   std::size_t fallbackPixels = 0;
   /// Texels of the tiles asked for the map (all layers): fetched from the upstream for it
-  /// (TileOrigin::Miss), or found in the cache (issue 29: its upstream cost against its pixels).
+  /// (TileOrigin::Miss), found in the cache, or fetched for another answer whose fetch this map
+  /// joined in flight (issue 29: its upstream cost against its pixels, each fetch counted once).
   std::uint64_t upstreamTexels = 0;
   std::uint64_t cachedTexels = 0;
+  std::uint64_t joinedTexels = 0;
   std::uint64_t outputTexels = 0; ///< width x height of a Map, else 0
 };
 

@@ -371,7 +371,8 @@ void WmsFrontEnd::compose(const HttpRequest& req,
       [this, ctx, keys = std::move(keys), ttl, maxAge, respond](ComposedMap&& map) {
         fe_.metrics.composedTiles(map.decodedTiles,
                                   map.tiles > map.decodedTiles ? map.tiles - map.decodedTiles : 0);
-        fe_.metrics.composedTexels(map.outputTexels, map.upstreamTexels, map.cachedTexels);
+        fe_.metrics.composedTexels(
+            map.outputTexels, map.upstreamTexels, map.cachedTexels, map.joinedTexels);
         if (map.kind == ComposedMap::Kind::Error) {
           return exception(ctx,
                            OgcException{std::string(ogc::kNoApplicableCode), "", map.message},

@@ -115,7 +115,8 @@ void WmtsFrontEnd::composedTile(const HttpRequest& req,
        respond](ComposedMap&& map) {
         fe_.metrics.composedTiles(map.decodedTiles,
                                   map.tiles > map.decodedTiles ? map.tiles - map.decodedTiles : 0);
-        fe_.metrics.composedTexels(map.outputTexels, map.upstreamTexels, map.cachedTexels);
+        fe_.metrics.composedTexels(
+            map.outputTexels, map.upstreamTexels, map.cachedTexels, map.joinedTexels);
         if (map.kind != ComposedMap::Kind::Map) {
           return exception(OgcException{std::string(ogc::kNoApplicableCode), "", map.message},
                            respond,

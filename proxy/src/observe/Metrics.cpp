@@ -120,10 +120,12 @@ void ProxyMetrics::composedTiles(std::uint64_t decoded, std::uint64_t kept) noex
 
 void ProxyMetrics::composedTexels(std::uint64_t output,
                                   std::uint64_t fromUpstream,
-                                  std::uint64_t fromCache) noexcept {
+                                  std::uint64_t fromCache,
+                                  std::uint64_t joined) noexcept {
   outputTexels_.fetch_add(output, std::memory_order_relaxed);
   upstreamTexels_.fetch_add(fromUpstream, std::memory_order_relaxed);
   cachedTexels_.fetch_add(fromCache, std::memory_order_relaxed);
+  joinedTexels_.fetch_add(joined, std::memory_order_relaxed);
 }
 
 std::string ProxyMetrics::render(const std::vector<UpstreamMetrics>& upstreams,
@@ -344,11 +346,14 @@ void ProxyMetrics::renderComposer(std::string& out, std::uint64_t decodedTileCac
          "tellus_compose_source_texels_total",
          "counter",
          "Texels of the tiles composed answers were made from: fetched from the upstream for the "
-         "answer, or found in the cache (a tile counted once per answer that samples it).");
+         "answer, found in the cache, or fetched for another answer whose fetch it joined in "
+         "flight (each upstream fetch counted once as upstream).");
   out += "tellus_compose_source_texels_total{origin=\"upstream\"} " +
          std::to_string(upstreamTexels_.load(std::memory_order_relaxed)) + "\n";
   out += "tellus_compose_source_texels_total{origin=\"cache\"} " +
          std::to_string(cachedTexels_.load(std::memory_order_relaxed)) + "\n";
+  out += "tellus_compose_source_texels_total{origin=\"joined\"} " +
+         std::to_string(joinedTexels_.load(std::memory_order_relaxed)) + "\n";
   header(out,
          "tellus_decoded_tile_cache_bytes",
          "gauge",

@@ -127,10 +127,13 @@ void TileService::Impl::land(const FlightKey& k, TileAnswer&& answer) {
       !answer.notStored && !lease->announced.exchange(true))
     lease->leases->progress(lease->key);
   lease.reset(); // the last flight holding it: released (the tile is stored), waiters wake
+  // The first waiter started the fetch; the others joined it in flight.
   for (std::size_t i = 0; i + 1 < waiters.size(); ++i) {
     TileAnswer copy = answer;
+    copy.joinedInFlight = i > 0;
     waiters[i](std::move(copy));
   }
+  answer.joinedInFlight = waiters.size() > 1;
   if (!waiters.empty()) waiters.back()(std::move(answer));
 }
 

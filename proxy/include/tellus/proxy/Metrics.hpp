@@ -78,11 +78,13 @@ public:
    * the composer's decoded-tile cache. */
   void composedTiles(std::uint64_t decoded, std::uint64_t kept) noexcept;
   /** A composed answer of `output` texels (width x height; 0 for a 304 or an error) made from
-   * tiles of `fromUpstream` texels fetched from the upstream for it and `fromCache` texels found
-   * cached (issue 29: what a composed map costs upstream against what it returns). */
+   * tiles of `fromUpstream` texels fetched from the upstream for it, `fromCache` texels found
+   * cached and `joined` texels fetched for another answer whose fetch it joined in flight (issue
+   * 29: what a composed map costs upstream against what it returns). */
   void composedTexels(std::uint64_t output,
                       std::uint64_t fromUpstream,
-                      std::uint64_t fromCache) noexcept;
+                      std::uint64_t fromCache,
+                      std::uint64_t joined = 0) noexcept;
 
   /** The exposition: these counters plus the upstreams' and the cache's figures, the bytes
    * held by the decoded-tile cache and the per-client fetch budget. */
@@ -114,7 +116,7 @@ private:
   std::array<std::atomic<std::int64_t>, kProtocolCount> inFlight_{};
   std::unique_ptr<std::array<Counter, kTileOutcomeCount>[]> tiles_;
   Counter composedDecoded_{0}, composedKept_{0};
-  Counter outputTexels_{0}, upstreamTexels_{0}, cachedTexels_{0};
+  Counter outputTexels_{0}, upstreamTexels_{0}, cachedTexels_{0}, joinedTexels_{0};
 };
 
 /** A Prometheus label value with `\`, `"` and newlines escaped. */

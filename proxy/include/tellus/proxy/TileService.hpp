@@ -99,6 +99,9 @@ struct TileAnswer {
   std::string message;      ///< Absent/Error: why (safe to show a client)
   /// Tile fetched or rendered now that the cache did not keep (why: DiskFull for lack of space).
   std::optional<CacheError> notStored;
+  /// The answer of a fetch another request started: this request joined it in flight (its
+  /// upstream cost is the first request's; composed maps count it apart, issue 29).
+  bool joinedInFlight = false;
 };
 
 struct TileServiceOptions {
