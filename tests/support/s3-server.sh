@@ -79,16 +79,6 @@ if [[ $(id -u) == 0 ]]; then
   chmod 755 "$dir"
 fi
 
-# Four free loopback ports (bound to port 0, read back, released).
-read -r p_proxy p_obj p_cont p_acct < <(/usr/bin/python3 - <<'EOF'
-import socket
-socks = [socket.socket() for _ in range(4)]
-for s in socks:
-    s.bind(("127.0.0.1", 0))
-print(*[s.getsockname()[1] for s in socks])
-EOF
-)
-
 etc=$dir/etc
 cat >"$etc/swift.conf" <<EOF
 [swift-hash]
@@ -104,6 +94,7 @@ common() { # $1 port
 [DEFAULT]
 bind_ip = 127.0.0.1
 bind_port = $1
+bind_timeout = 2
 workers = 0
 user = $user
 swift_dir = $etc
@@ -114,19 +105,40 @@ log_udp_host = 127.0.0.1
 log_udp_port = 9
 EOF
 }
-for kind in object container account; do
-  case $kind in object) port=$p_obj ;; container) port=$p_cont ;; account) port=$p_acct ;; esac
-  {
-    common "$port"
-    printf '[pipeline:main]\npipeline = %s-server\n' "$kind"
-    printf '[app:%s-server]\nuse = egg:swift#%s\n' "$kind" "$kind"
-  } >"$etc/$kind-server.conf"
-done
-/usr/bin/python3 "$here/s3_server_helper.py" rings "$etc" "$p_obj" "$p_cont" "$p_acct"
 
-{
-  common "$p_proxy"
-  cat <<'EOF'
+fail() {
+  echo "s3-server: $1" >&2
+  tail -n 20 "$dir"/log/*.log >&2 || true
+  [[ -n ${S3_KEEP:-} ]] || "$0" stop "$dir"
+  exit 1
+}
+
+# One try: four free loopback ports (bound to port 0, read back, released: another process
+# starting beside this one may take one first; a server that cannot bind its port within
+# bind_timeout exits, and the try fails early), their configurations and rings, the servers, each
+# seen listening on its own port, then the bucket created through S3.
+# Sets code: the bucket's HTTP status (200 or 409: made), else why not.
+try_start() {
+  read -r p_proxy p_obj p_cont p_acct < <(/usr/bin/python3 - <<'EOF'
+import socket
+socks = [socket.socket() for _ in range(4)]
+for s in socks:
+    s.bind(("127.0.0.1", 0))
+print(*[s.getsockname()[1] for s in socks])
+EOF
+  )
+  for kind in object container account; do
+    case $kind in object) port=$p_obj ;; container) port=$p_cont ;; account) port=$p_acct ;; esac
+    {
+      common "$port"
+      printf '[pipeline:main]\npipeline = %s-server\n' "$kind"
+      printf '[app:%s-server]\nuse = egg:swift#%s\n' "$kind" "$kind"
+    } >"$etc/$kind-server.conf"
+  done
+  /usr/bin/python3 "$here/s3_server_helper.py" rings "$etc" "$p_obj" "$p_cont" "$p_acct"
+  {
+    common "$p_proxy"
+    cat <<'EOF'
 [pipeline:main]
 pipeline = catch_errors proxy-logging cache s3api tempauth proxy-logging proxy-server
 [app:proxy-server]
@@ -146,18 +158,23 @@ force_swift_request_proxy_log = false
 use = egg:swift#tempauth
 user_tellus_s3 = tellus-test-secret .admin
 EOF
-} >"$etc/proxy-server.conf"
+  } >"$etc/proxy-server.conf"
 
-[[ $user == "$(id -un)" ]] || chown -R "$user" "$etc"
-pids=""
-for kind in object container account proxy; do
-  PYTHONPATH=$here "swift-$kind-server" "$etc/$kind-server.conf" -v >"$dir/log/$kind.log" 2>&1 &
-  pids="$pids $!"
-done
-pids=${pids# }
+  [[ $user == "$(id -un)" ]] || chown -R "$user" "$etc"
+  pids=""
+  local listeners=""
+  for kind in object container account proxy; do
+    PYTHONPATH=$here "swift-$kind-server" "$etc/$kind-server.conf" -v >>"$dir/log/$kind.log" 2>&1 &
+    pids="$pids $!"
+    case $kind in
+      object) listeners="$listeners $!:$p_obj" ;; container) listeners="$listeners $!:$p_cont" ;;
+      account) listeners="$listeners $!:$p_acct" ;; proxy) listeners="$listeners $!:$p_proxy" ;;
+    esac
+  done
+  pids=${pids# }
 
-endpoint=http://127.0.0.1:$p_proxy
-cat >"$dir/s3.env" <<EOF
+  endpoint=http://127.0.0.1:$p_proxy
+  cat >"$dir/s3.env" <<EOF
 S3_ENDPOINT=$endpoint
 S3_REGION=us-east-1
 S3_BUCKET=tellus
@@ -165,17 +182,25 @@ AWS_ACCESS_KEY_ID=tellus:s3
 AWS_SECRET_ACCESS_KEY=tellus-test-secret
 S3_PIDS="$pids"
 EOF
-
-fail() {
-  echo "s3-server: $1" >&2
-  tail -n 20 "$dir"/log/*.log >&2 || true
-  [[ -n ${S3_KEEP:-} ]] || "$0" stop "$dir"
-  exit 1
+  # Every server listening on its own port (the bucket needs the proxy, account and container
+  # servers only: an object server whose port was taken would fail every object later).
+  code=$(/usr/bin/python3 "$here/s3_server_helper.py" listening 45 "$listeners") || true
+  [[ $code == yes ]] || return 0
+  code=$(/usr/bin/python3 "$here/s3_server_helper.py" bucket "$endpoint" tellus tellus:s3 \
+    tellus-test-secret us-east-1 45 "$pids") || true
 }
 
-# Wait for the proxy (and, through it, the storage servers) and create the bucket through S3.
-code=$(/usr/bin/python3 "$here/s3_server_helper.py" bucket "$endpoint" tellus tellus:s3 \
-  tellus-test-secret us-east-1) || true
+# Three tries, each on fresh ports; the servers of a failed one are stopped (the data folder
+# kept: it is empty until the bucket exists).
+code=none
+for try in 1 2 3; do
+  try_start
+  [[ $code == 200 || $code == 409 ]] && break
+  echo "s3-server: try $try on port $p_proxy failed ($code); the logs:" >&2
+  tail -n 5 "$dir"/log/*.log >&2 || true
+  for p in $pids; do kill -9 "$p" 2>/dev/null || true; done
+  wait 2>/dev/null || true
+done
 [[ $code == 200 || $code == 409 ]] || fail "could not create the bucket on $endpoint (HTTP $code)"
 
 ms=$((($(date +%s%N) - start_ns) / 1000000))

@@ -11,6 +11,7 @@
 import datetime
 import hashlib
 import hmac
+import os
 import sys
 import time
 import urllib.error
@@ -54,16 +55,74 @@ def put_bucket(endpoint, bucket, key, secret, region):
         return 0
 
 
-def bucket(endpoint, name, key, secret, region):
+def exited(pid):
+    """Whether the process is gone or a zombie (a server that could not bind its port)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] == "Z"
+    except OSError:
+        return True
+
+
+def bucket(endpoint, name, key, secret, region, seconds="90", pids=""):
+    """Prints the status of the bucket's PUT once it is 200 or 409 (made), the last one after
+    `seconds`, or "exited" as soon as one of the servers `pids` names has."""
     code = 0
-    deadline = time.monotonic() + 90
+    deadline = time.monotonic() + float(seconds)
     while time.monotonic() < deadline:
         code = put_bucket(endpoint, name, key, secret, region)
         if code in (200, 409):  # 409: BucketAlreadyOwnedByYou
+            break
+        if any(exited(p) for p in pids.split()):
+            code = "exited"
             break
         time.sleep(0.1)
     print(code)
 
 
+def listens(pid, port):
+    """Whether process `pid` holds a socket listening on 127.0.0.1:`port` (its own, not another
+    process's that took the port first)."""
+    inodes = set()
+    try:
+        for fd in os.listdir(f"/proc/{pid}/fd"):
+            try:
+                link = os.readlink(f"/proc/{pid}/fd/{fd}")
+            except OSError:
+                continue
+            if link.startswith("socket:["):
+                inodes.add(link[8:-1])
+    except OSError:
+        return False
+    with open("/proc/net/tcp") as f:
+        for line in f.readlines()[1:]:
+            parts = line.split()
+            if parts[3] == "0A" and int(parts[1].split(":")[1], 16) == port and parts[9] in inodes:
+                return True
+    return False
+
+
+def listening(seconds, pairs):
+    """Prints "yes" once every server of `pairs` ("PID:PORT ...") listens on its port, or what
+    went wrong: one exited (its port was taken and it gave up), or `seconds` passed."""
+    deadline = time.monotonic() + float(seconds)
+    while True:
+        waiting = []
+        for pair in pairs.split():
+            pid, port = pair.split(":")
+            if exited(pid):
+                print(f"server {pid} exited (port {port})")
+                return
+            if not listens(pid, int(port)):
+                waiting.append(pair)
+        if not waiting:
+            print("yes")
+            return
+        if time.monotonic() > deadline:
+            print("not listening after " + seconds + " s: " + " ".join(waiting))
+            return
+        time.sleep(0.05)
+
+
 if __name__ == "__main__":
-    {"rings": rings, "bucket": bucket}[sys.argv[1]](*sys.argv[2:])
+    {"rings": rings, "bucket": bucket, "listening": listening}[sys.argv[1]](*sys.argv[2:])
