@@ -370,12 +370,8 @@ std::expected<std::vector<ComposeTile>, std::size_t> composeTilesYcc(const TileG
   return keys;
 }
 
-namespace {
-
-/** The level from `firstLevel` a pixel of pixelX x pixelY degrees is composed from: the coarsest
- * whose texels are at most kMaxUpsampling times the pixel on both axes (composeLevel); the
- * deepest when none is. */
-std::int32_t levelFor(const TileGrid& grid, double pixelX, double pixelY, std::int32_t firstLevel) {
+std::optional<std::int32_t>
+fineEnoughLevel(const TileGrid& grid, double pixelX, double pixelY, std::int32_t firstLevel) {
   const GridSpec& spec = grid.spec();
   const std::int32_t first = std::clamp(firstLevel, 0, grid.numLevels() - 1);
   // A relative tolerance: a map of exactly a level's resolution (times the bound) takes it.
@@ -384,7 +380,15 @@ std::int32_t levelFor(const TileGrid& grid, double pixelX, double pixelY, std::i
   for (std::int32_t l = first; l < grid.numLevels(); ++l) {
     if (grid.deltaDeg(l) / spec.tileWidth <= x && grid.deltaDeg(l) / spec.tileHeight <= y) return l;
   }
-  return grid.numLevels() - 1;
+  return std::nullopt;
+}
+
+namespace {
+
+/** The level from `firstLevel` a pixel of pixelX x pixelY degrees is composed from
+ * (composeLevel): fineEnoughLevel's, the deepest when none is fine enough. */
+std::int32_t levelFor(const TileGrid& grid, double pixelX, double pixelY, std::int32_t firstLevel) {
+  return fineEnoughLevel(grid, pixelX, pixelY, firstLevel).value_or(grid.numLevels() - 1);
 }
 
 } // namespace

@@ -118,16 +118,6 @@ const LayerSpec* coarserSource(const TileService& tiles,
   return best;
 }
 
-/** The coarsest level of `g` whose texels are at most kMaxUpsampling times a pixel of px x py
- * degrees on both axes (composeLevel's rule); -1 when none is fine enough. */
-std::int32_t fineEnoughLevel(const TileGrid& g, double px, double py) {
-  const double x = px * kMaxUpsampling * (1.0 + 1e-9), y = py * kMaxUpsampling * (1.0 + 1e-9);
-  for (std::int32_t level = 0; level < g.numLevels(); ++level)
-    if (g.deltaDeg(level) / g.spec().tileWidth <= x && g.deltaDeg(level) / g.spec().tileHeight <= y)
-      return level;
-  return -1;
-}
-
 /** A Web Mercator map's rows split between `l` and a coarser layer (mercatorSplit). */
 struct MercatorSplit {
   const LayerSpec* coarser = nullptr;
@@ -170,8 +160,9 @@ std::optional<MercatorSplit> mercatorSplit(const TileService& tiles,
     double score = 0.0; // the texels' area over the rows it takes: larger, fewer tiles
     for (std::size_t j = 0; j < levels.size(); ++j) {
       if (levelOf[j] != 0 || !(pixelY[j] > 0.0)) continue;
-      const std::int32_t level = fineEnoughLevel(*cg, pixelX, pixelY[j]);
-      if (level < 0) continue;
+      const auto fine = fineEnoughLevel(*cg, pixelX, pixelY[j]);
+      if (!fine) continue;
+      const std::int32_t level = *fine;
       const double cx = cg->deltaDeg(level) / cg->spec().tileWidth;
       const double cy = cg->deltaDeg(level) / cg->spec().tileHeight;
       if (cx <= lx || cy <= ly) continue;

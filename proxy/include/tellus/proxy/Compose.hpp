@@ -46,6 +46,12 @@ namespace tellus {
  * the two alone would cost 1 to 4. */
 inline constexpr double kMaxUpsampling = 1.4142135623730951;
 
+/** The coarsest level from `firstLevel` whose texels are at most kMaxUpsampling times a pixel of
+ * pixelX x pixelY degrees on both axes (the rule of composeLevel and composeBands); none when
+ * even the deepest level's are not. */
+std::optional<std::int32_t>
+fineEnoughLevel(const TileGrid& grid, double pixelX, double pixelY, std::int32_t firstLevel = 0);
+
 /** The level a map of `width` x `height` pixels over `box` is composed from (a Mercator map's:
  * the finest of its bands', composeBands): the coarsest level whose texels are at most
  * kMaxUpsampling times the map's pixels on both axes (a pixel of exactly a level's texel takes
