@@ -16,9 +16,12 @@ using namespace std::chrono_literals;
 
 namespace {
 
-std::shared_ptr<ITileLeases> openLeases() {
+// Each test's leases live in a database of its own: ctest runs tests side by side, and advisory
+// locks and notifications are per database (a shared one let a test find its tile leased by
+// another).
+std::shared_ptr<ITileLeases> openLeases(const std::string& uri) {
   PgConnectOptions o;
-  o.conninfo = test::pgAdminUri();
+  o.conninfo = uri;
   auto l = openPgTileLeases(o);
   EXPECT_TRUE(l) << (l ? "" : l.error().message);
   return l ? *l : nullptr;
@@ -29,9 +32,10 @@ const LeaseKey kTile{"gibs/bluemarble", TileKey{5, 17, 40}};
 } // namespace
 
 TEST(PgTileLeases, OneHolderAtATimeAndItsReleaseWakesTheWaitersAtOnce) {
-  auto a = openLeases();
-  auto b = openLeases();
-  auto c = openLeases();
+  const std::string db = test::pgCreateDatabase();
+  auto a = openLeases(db);
+  auto b = openLeases(db);
+  auto c = openLeases(db);
   ASSERT_TRUE(a && b && c);
   EXPECT_TRUE(a->healthy());
   ASSERT_EQ(a->acquireOrWait(kTile, 60s, [] { FAIL() << "the holder is never woken"; }),
@@ -56,9 +60,10 @@ TEST(PgTileLeases, OneHolderAtATimeAndItsReleaseWakesTheWaitersAtOnce) {
 }
 
 TEST(PgTileLeases, ProgressWakesTheWaitersAtOnceAndTheLeaseStaysHeld) {
+  const std::string db = test::pgCreateDatabase();
   // A metatile's holder announces each tile stored: the other instances look again at once.
-  auto a = openLeases();
-  auto b = openLeases();
+  auto a = openLeases(db);
+  auto b = openLeases(db);
   ASSERT_TRUE(a && b);
   ASSERT_EQ(a->acquireOrWait(kTile, 60s, [] {}), LeaseOutcome::Acquired);
   std::promise<void> woke, again;
@@ -74,8 +79,9 @@ TEST(PgTileLeases, ProgressWakesTheWaitersAtOnceAndTheLeaseStaysHeld) {
 }
 
 TEST(PgTileLeases, ALeaseOfAProcessThatDiesIsFreeAtOnceAndItsWaitersTakeItAtTheirRecheck) {
-  auto a = openLeases();
-  auto b = openLeases();
+  const std::string db = test::pgCreateDatabase();
+  auto a = openLeases(db);
+  auto b = openLeases(db);
   ASSERT_TRUE(a && b);
   ASSERT_EQ(a->acquireOrWait(kTile, 60s, [] {}), LeaseOutcome::Acquired);
   std::promise<void> woke;
@@ -87,7 +93,8 @@ TEST(PgTileLeases, ALeaseOfAProcessThatDiesIsFreeAtOnceAndItsWaitersTakeItAtThei
 }
 
 TEST(PgTileLeases, OneProcessAskingTwiceForItsOwnLeaseWaitsLikeTheOthers) {
-  auto a = openLeases();
+  const std::string db = test::pgCreateDatabase();
+  auto a = openLeases(db);
   ASSERT_TRUE(a);
   ASSERT_EQ(a->acquireOrWait(kTile, 60s, [] {}), LeaseOutcome::Acquired);
   std::promise<void> woke;
