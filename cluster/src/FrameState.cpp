@@ -26,6 +26,7 @@ std::uint64_t digest(const FrameState& s) noexcept {
   mix(h, s.hasSceneTime);
   mix(h, s.layerTimesAtS);
   mix(h, s.hasLayerTimes);
+  mix(h, s.body);
   return h;
 }
 

@@ -21,7 +21,7 @@ TEST(FrameState, DigestSeesEveryField) {
   const FrameState copy = s;
   EXPECT_EQ(digest(copy), digest(s));
   std::set<std::uint64_t> seen{digest(s)};
-  for (int field = 0; field < 10; ++field) {
+  for (int field = 0; field < 11; ++field) {
     FrameState t = s;
     switch (field) {
     case 0:
@@ -51,8 +51,11 @@ TEST(FrameState, DigestSeesEveryField) {
     case 8:
       t.layerTimesAtS = 2.0;
       break;
-    default:
+    case 9:
       t.hasLayerTimes = 0;
+      break;
+    default:
+      t.body = 1;
       break;
     }
     EXPECT_TRUE(seen.insert(digest(t)).second) << "field " << field;

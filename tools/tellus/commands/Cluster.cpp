@@ -13,6 +13,7 @@
 #include "ClusterPreview.hpp"
 #include "Commands.hpp"
 #include "Context.hpp"
+#include "FlightRenderers.hpp"
 #include "GlobeArgs.hpp"
 #include "PlanetTiles.hpp"
 
@@ -71,9 +72,6 @@ std::string parseCluster(const cli::Args& a, ClusterArgs& c) {
   if (path) {
     auto read = planet::FlightPath::read(*path);
     if (!read) return *path + ": " + read.error();
-    for (const planet::Keyframe& k : read->keyframes())
-      if (!k.body.empty())
-        return *path + ": a keyframe's \"body\" is not broadcast to channels yet";
     c.flight = std::move(*read);
     c.pathFile = *path;
     if (const auto f = a.get("fps")) {
@@ -181,12 +179,26 @@ int startChannel(cluster::Comm* comm,
   if (c.window && (cal.warp || cal.blend || scaled(channel))) // the warp and blend on the GPU
     ro.projectorWarp = planet::RendererOptions::ProjectorCalibration{
         cal.warp, cal.blend, channel.width, channel.height};
-  auto renderer = planet::Renderer::create(*tiles.source, geodesy, ro);
-  if (!renderer) problem = renderer.error();
-  if (!problem.empty())
+  // A renderer for each body the flight orbits (one unless its keyframes name others), as
+  // `tellus render --path` makes them; the master's state says which one draws.
+  std::vector<BodyRenderer> bodies;
+  std::vector<planet::Renderer*> renderers;
+  if (problem.empty()) {
+    auto made = makeBodyRenderers(a, "cluster", tiles, c.bodies, geodesy, ro, tiles.earth);
+    if (made)
+      bodies = std::move(*made);
+    else
+      problem = "a renderer could not be made (above)";
+  }
+  if (!problem.empty()) {
     std::fprintf(stderr, "tellus cluster: channel %s: %s\n", channel.name.c_str(), problem.c_str());
-  else // a first frame off the clock (shaders, the global image): the master's come in time
-    (*renderer)->frame(c.flight ? planet::flightPoseOver(*c.flight, 0.0, geodesy.body()) : c.pose);
+  } else { // a first frame off the clock (shaders, the global image): the master's come in time
+    for (BodyRenderer& b : bodies) {
+      const planet::Body& over = b.renderer->geodesy().body();
+      b.renderer->frame(c.flight ? planet::flightPoseOver(*c.flight, 0.0, over) : c.pose);
+      renderers.push_back(b.renderer.get());
+    }
+  }
   std::unique_ptr<cluster::Comm> joined;
   if (comm == nullptr) { // --join: the renderer is ready, the master's next frame is drawn
     if (!problem.empty()) return kExitError;
@@ -199,12 +211,7 @@ int startChannel(cluster::Comm* comm,
     joined = std::move(*j);
     comm = joined.get();
   }
-  return runChannel(*comm,
-                    c,
-                    channel,
-                    renderer && problem.empty() ? renderer->get() : nullptr,
-                    cal,
-                    joined != nullptr);
+  return runChannel(*comm, c, channel, renderers, cal, joined != nullptr);
 }
 
 int runCluster(const cli::Args& a) {
@@ -260,8 +267,19 @@ int runCluster(const cli::Args& a) {
           return say("a keyframe's \"times\" names a layer that is not drawn: " + name, kExitUsage);
   ro.legend = false;
   ro.fadeInSeconds = 0.0; // a channel's image must not depend on how long it took to draw
+  // Keyframes on other bodies (issue 26): every rank derives the same bodies from --path; the
+  // master picks the one orbited each frame (planet::OrbitSwitcher) and says which (FrameState's
+  // body); each channel draws it with that body's renderer.
+  const Geodesy first(tiles->bodyFor(tiles->earth));
+  if (c.flight)
+    if (auto bad = planet::flightBodiesProblem(*c.flight, first.body()))
+      return say(*bad, kExitUsage);
+  c.bodies = orbitableBodies(a, c.flight ? &*c.flight : nullptr, tiles->body);
+  if (c.flight) addFlightSceneBodies(*tiles, *c.flight, c.bodies);
   if (comm && rank == 0) {
-    const Geodesy geodesy(tiles->bodyFor(tiles->earth));
+    std::vector<planet::Body> bodies{first.body()};
+    for (std::size_t i = 1; i < c.bodies.size(); ++i)
+      bodies.push_back(resolveBody(c.bodies[i], nullptr, tiles->earth));
     std::unique_ptr<Console> console;
     if (!c.control.empty()) {
       auto started = Console::start(c.control);
@@ -282,7 +300,7 @@ int runCluster(const cli::Args& a) {
       }
       preview = std::move(*opened);
     }
-    return runMaster(*comm, c, geodesy.body(), ro.timeUnixSeconds, console.get(), preview.get());
+    return runMaster(*comm, c, std::move(bodies), ro.timeUnixSeconds, console.get(), preview.get());
   }
   const auto byName = [&](const planet::Channel& ch) { return ch.name == c.join; };
   const planet::Channel& channel =

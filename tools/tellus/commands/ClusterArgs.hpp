@@ -58,6 +58,9 @@ struct ClusterArgs {
   /// window, swapped after the master's go
   bool window = false;
   int preview = 0; ///< --preview [SIZE]: the master's domemaster window, SIZE x SIZE; 0: none
+  /// The bodies the camera may orbit (FlightRenderers.hpp's orbitableBodies: the configuration's,
+  /// then each other body --path's keyframes name); FrameState::body indexes them.
+  std::vector<std::string> bodies;
 };
 
 /** Whether the channel renders another size than its projector's (CONFIG.json's "render",
@@ -89,7 +92,7 @@ class Preview;
 /** The master (rank 0): each frame's state to the channels, their answers, the go to swap. */
 int runMaster(cluster::Comm& comm,
               const ClusterArgs& c,
-              const planet::Body& body,
+              std::vector<planet::Body> bodies,
               std::optional<double> sceneTime,
               Console* console,
               Preview* preview);
@@ -100,12 +103,13 @@ struct Calibration {
   std::optional<std::vector<float>> blend;
 };
 
-/** A channel: the master's state drawn, its answer, the go, then the image warped and blended
- * (when calibrated) and written. renderer null: it could not start (the master is told). */
+/** A channel: the master's state drawn by the renderer of the body it is over (one per
+ * c.bodies), its answer, the go, then the image warped and blended (when calibrated) and
+ * written. renderers empty: it could not start (the master is told). */
 int runChannel(cluster::Comm& comm,
                const ClusterArgs& c,
                const planet::Channel& channel,
-               planet::Renderer* renderer,
+               const std::vector<planet::Renderer*>& renderers,
                const Calibration& cal,
                bool joined);
 

@@ -44,15 +44,15 @@ void applyFrameState(planet::Renderer& r, const ClusterArgs& c, const cluster::F
 int runChannel(cluster::Comm& comm,
                const ClusterArgs& c,
                const planet::Channel& channel,
-               planet::Renderer* renderer,
+               const std::vector<planet::Renderer*>& renderers,
                const Calibration& cal,
                bool joined) {
   const fs::path digests = c.out / ("digest-" + channel.name + ".txt");
   if (!joined) { // a channel restarted goes on with its file
     fs::remove(digests);
-    comm.answer(renderer != nullptr);
+    comm.answer(!renderers.empty());
   }
-  if (renderer == nullptr) return kExitError;
+  if (renderers.empty()) return kExitError;
   // The master waits up to --channel-timeout (and --wait-complete's) for every channel's answer;
   // silence longer than that means it is gone, or it dropped this channel.
   const double wait = 2.0 * c.frameDeadline() + 10.0 + (c.realtime ? 1.0 / c.fps : 0.0);
@@ -69,6 +69,17 @@ int runChannel(cluster::Comm& comm,
       if (s->ranksLost != 0 && !joined) comm.skipFinalize(); // a rank of its own job died
       return kExitOk;
     }
+    if (s->body < 0 || static_cast<std::size_t>(s->body) >= renderers.size()) {
+      std::fprintf(stderr,
+                   "tellus cluster: channel %s: frame %lld is over body %d; it draws %zu\n",
+                   channel.name.c_str(),
+                   static_cast<long long>(s->frame),
+                   static_cast<int>(s->body),
+                   renderers.size());
+      comm.answer(false);
+      return kExitError;
+    }
+    planet::Renderer* renderer = renderers[static_cast<std::size_t>(s->body)];
     applyFrameState(*renderer, c, *s);
     bool well = renderState(*renderer, s->pose(), c) || !c.waitComplete;
     if (!well)

@@ -8,7 +8,7 @@
 #include "ClusterPreview.hpp"
 
 #include <tellus/cluster/Comm.hpp>
-#include <tellus/planet/FlightBodies.hpp>
+#include <tellus/planet/OrbitChoice.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -97,12 +97,14 @@ struct Show {
 
   std::int64_t count() const { return flight ? flight->frameCount(fps) : 1; }
 
-  cluster::FrameState state(std::int64_t n, const planet::Body& body) {
+  /** Frame n's state; the body orbited chosen by `orbit` along the flight (the console's camera
+   * is over the body orbited when it took over). */
+  cluster::FrameState state(std::int64_t n, planet::OrbitSwitcher& orbit) {
     cluster::FrameState s;
     s.frame = n;
     if (flight && !cameraMode) {
       const double at = flight->frameTimeS(pathFrame, fps);
-      camera = planet::flightPoseOver(*flight, at, body);
+      camera = orbit.flightPose(*flight, at);
       if (const auto t = flight->sceneTimeAt(at)) sceneTime = t;
       if (ranksHaveFlight) layerTimesAtS = at;
     }
@@ -111,6 +113,7 @@ struct Show {
     s.sceneTimeUnixS = sceneTime.value_or(0.0);
     s.hasLayerTimes = layerTimesAtS ? 1 : 0;
     s.layerTimesAtS = layerTimesAtS.value_or(0.0);
+    s.body = static_cast<std::int32_t>(orbit.current());
     return s;
   }
 
@@ -182,7 +185,7 @@ void endShow(cluster::Comm& comm, const std::vector<ChannelStatus>& channels, bo
 
 int runMaster(cluster::Comm& comm,
               const ClusterArgs& c,
-              const planet::Body& body,
+              std::vector<planet::Body> bodies,
               std::optional<double> sceneTime,
               Console* console,
               Preview* preview) {
@@ -223,6 +226,7 @@ int runMaster(cluster::Comm& comm,
   show.camera = c.pose;
   show.sceneTime = sceneTime;
   show.fps = c.fps;
+  planet::OrbitSwitcher orbit(std::move(bodies));
   const auto start = std::chrono::steady_clock::now();
   std::int64_t n = 0;
   for (bool more = true; more && gStop == 0; ++n) {
@@ -230,7 +234,7 @@ int runMaster(cluster::Comm& comm,
     if (console)
       for (ConsoleCommand& command : console->take())
         show.apply(command);
-    const cluster::FrameState s = show.state(n, body);
+    const cluster::FrameState s = show.state(n, orbit);
     std::vector<std::size_t> asked;
     peers.clear();
     for (std::size_t i = 0; i < channels.size(); ++i)

@@ -4,6 +4,7 @@
 #include "ClusterPreview.hpp"
 
 #include "Bodies.hpp"
+#include "FlightRenderers.hpp"
 #include "GlobeArgs.hpp"
 
 #include <cstdio>
@@ -53,13 +54,17 @@ std::expected<std::unique_ptr<Preview>, std::string> Preview::open(const cli::Ar
   ro.presentOnRequest = true; // after the go
   ro.vsync = false;           // its swap must not hold up the frame lock
   ro.windowTitle = "tellus cluster: the dome";
-  auto made = planet::Renderer::create(*tiles.source, p->geodesy_, ro);
-  if (!made) return std::unexpected("--preview: " + made.error());
-  p->renderer_ = std::move(*made);
+  // A renderer per body the flight orbits, as each channel has (one window between them).
+  auto made = makeBodyRenderers(a, "cluster", tiles, c.bodies, p->geodesy_, ro, tiles.earth);
+  if (!made) return std::unexpected("--preview: a renderer could not be made (above)");
+  p->bodies_ = std::move(*made);
+  p->renderer_ = p->bodies_.front().renderer.get();
   return p;
 }
 
 void Preview::draw(const cluster::FrameState& s) {
+  if (s.body >= 0 && static_cast<std::size_t>(s.body) < bodies_.size())
+    renderer_ = bodies_[static_cast<std::size_t>(s.body)].renderer.get();
   applyFrameState(*renderer_, args_, s);
   if (!renderState(*renderer_, s.pose(), args_) && args_.waitComplete)
     std::fprintf(stderr,

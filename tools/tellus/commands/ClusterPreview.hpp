@@ -9,6 +9,7 @@
  */
 
 #include "ClusterArgs.hpp"
+#include "FlightRenderers.hpp"
 #include "PlanetTiles.hpp"
 
 #include <tellus/cluster/FrameState.hpp>
@@ -19,6 +20,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace tellus::commands {
 
@@ -40,7 +42,8 @@ private:
   Preview(const ClusterArgs& c, const planet::Body& body) : args_(c), geodesy_(body) {}
   const ClusterArgs& args_;
   Geodesy geodesy_;
-  std::unique_ptr<planet::Renderer> renderer_;
+  std::vector<BodyRenderer> bodies_;     ///< one per ClusterArgs::bodies (FlightRenderers.hpp)
+  planet::Renderer* renderer_ = nullptr; ///< the one that drew last
   bool drawn_ = false;
 };
 

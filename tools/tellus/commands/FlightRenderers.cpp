@@ -28,6 +28,17 @@ orbitableBodies(const cli::Args& a, const planet::FlightPath* flight, const std:
   return bodies;
 }
 
+void addFlightSceneBodies(PlanetTiles& t,
+                          const planet::FlightPath& flight,
+                          const std::vector<std::string>& bodies) {
+  auto& scene = t.sceneBodies;
+  for (const planet::Keyframe& k : flight.keyframes())
+    if (!k.body.empty() && std::find(scene.begin(), scene.end(), k.body) == scene.end())
+      scene.push_back(k.body);
+  if (bodies.size() > 1 && std::find(scene.begin(), scene.end(), t.body) == scene.end())
+    scene.push_back(t.body);
+}
+
 std::expected<std::vector<BodyRenderer>, int>
 makeBodyRenderers(const cli::Args& a,
                   const char* cmd,

@@ -35,6 +35,13 @@ struct BodyRenderer {
 std::vector<std::string>
 orbitableBodies(const cli::Args& a, const planet::FlightPath* flight, const std::string& first);
 
+/** The bodies a flight's keyframes name added to t.sceneBodies (each drawn as a coarse globe by
+ * the others' renderers; a renderer skips its own body's entry), and t.body too when the camera
+ * may orbit another of `bodies` (orbitableBodies). */
+void addFlightSceneBodies(PlanetTiles& t,
+                          const planet::FlightPath& flight,
+                          const std::vector<std::string>& bodies);
+
 /** A renderer for each body of `bodies` (the first from `first` and `ro` over t.source, as a
  * single-body render makes it; the others from tilesForBody with ro's other settings, the Blue
  * Marble as the Earth's global texture from the data directory; with ro.visibleWindow they draw

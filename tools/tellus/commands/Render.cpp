@@ -448,12 +448,7 @@ int runRender(const cli::Args& a) {
   if (ra->flight) {
     if (auto bad = planet::flightBodiesProblem(*ra->flight, geodesy.body()))
       return usage(bad->c_str(), "");
-    auto& scene = tiles->sceneBodies;
-    for (const planet::Keyframe& k : ra->flight->keyframes())
-      if (!k.body.empty() && std::find(scene.begin(), scene.end(), k.body) == scene.end())
-        scene.push_back(k.body); // the drawn body's entry is skipped by its own renderer
-    if (bodies.size() > 1 && std::find(scene.begin(), scene.end(), tiles->body) == scene.end())
-      scene.push_back(tiles->body);
+    addFlightSceneBodies(*tiles, *ra->flight, bodies);
   }
   addSceneBodies(ro, tiles->sceneBodies, dataDir(a), ra->earth.value_or(tiles->earth));
   auto renderers =

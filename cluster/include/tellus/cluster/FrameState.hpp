@@ -33,7 +33,10 @@ struct FrameState {
   /// Meaningful when hasLayerTimes (the show played --path's flight at least once).
   double layerTimesAtS = 0.0;
   std::int32_t hasLayerTimes = 0;
-  std::int32_t reserved = 0; ///< 0 (no uninitialised padding goes over the wire)
+  /// The body orbited (a flight whose keyframes name bodies): an index into the bodies every rank
+  /// derives from --path alike (the first body, then each other one the keyframes name); 0 the
+  /// first. The pose is over that body.
+  std::int32_t body = 0;
 
   planet::CameraPose pose() const noexcept {
     return {latDeg, lonDeg, altitudeM, headingDeg, tiltDeg};
