@@ -45,7 +45,8 @@ commands:
              mpirun -n K tellus cluster CONFIG.json --out DIR (K = channels + 1)
              (or --mpcdi FILE.mpcdi for CONFIG.json: a VESA MPCDI calibration,
               profiles "2d" and "3d", one channel a region)
-             --camera LAT,LON,ALT[,HEADING,TILT] | --path PATH.json [--fps N]
+             --camera LAT,LON,ALT[,HEADING,TILT] | --path PATH.json [--fps N] (render's
+             keyframes: "times", "utc", "body": each rank a renderer per body)
              [--wait-complete[=SECONDS]] [--background R,G,B] [--dome-tilt DEG] and
              render's globe options;
              rank 0 sends each frame's state, rank i draws channel i:
