@@ -154,10 +154,15 @@ void Comm::post(int peer, const FrameState& state) {
   sendWithout(&l.sent, static_cast<int>(sizeof l.sent), l.comm, l.rank, kTagState, l.sending);
 }
 
-void Comm::postGo(int peer, bool swap) {
+// The go's values: stop, swap, stop when a rank of the job died (no MPI_Finalize).
+constexpr int kGoStop = 0;
+constexpr int kGoSwap = 1;
+constexpr int kGoStopRanksLost = 2;
+
+void Comm::postGo(int peer, bool swap, bool ranksLost) {
   Peers::Link& l = peers_->links.at(static_cast<std::size_t>(peer));
   complete(l.going);
-  l.go = swap ? 1 : 0;
+  l.go = swap ? kGoSwap : ranksLost ? kGoStopRanksLost : kGoStop;
   sendWithout(&l.go, static_cast<int>(sizeof l.go), l.comm, l.rank, kTagGo, l.going);
 }
 
@@ -290,7 +295,8 @@ std::optional<bool> Comm::receiveGo(double timeoutS) {
   int go = 0;
   if (!receiveWithin(&go, static_cast<int>(sizeof go), l.comm, l.rank, kTagGo, timeoutS))
     return std::nullopt;
-  return go != 0;
+  if (go == kGoStopRanksLost && !l.joined) skipFinalize(); // a joined channel's job lost none
+  return go == kGoSwap;
 }
 
 } // namespace tellus::cluster

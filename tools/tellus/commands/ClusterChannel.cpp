@@ -99,7 +99,9 @@ int runChannel(cluster::Comm& comm,
                    static_cast<long long>(s->frame));
       return kExitError;
     }
-    if (!*go) return kExitError; // the show stopped: a rank failed (its message on its stderr)
+    if (!*go)
+      return kExitError; // the show stopped: a rank failed (its message on its stderr;
+                         // a rank of the job lost: no MPI_Finalize, receiveGo)
     char name[32];
     std::snprintf(name, sizeof name, "-%05lld.png", static_cast<long long>(s->frame));
     std::string err;

@@ -252,7 +252,7 @@ int runMaster(cluster::Comm& comm,
     }
     for (std::size_t k = 0; k < asked.size(); ++k) // the swap (or the stop)
       if (answers[k] >= 0) {
-        comm.postGo(channels[asked[k]].peer, well);
+        comm.postGo(channels[asked[k]].peer, well, lostRank);
         channels[asked[k]].lastFrame = n;
       }
     if (preview && well) preview->show();

@@ -57,8 +57,9 @@ public:
   // --- the master's side of the live cluster ---
   /** Sends the state to a peer without waiting (a lost peer's send fails quietly). */
   void post(int peer, const FrameState& state);
-  /** Tells a peer that answered whether to swap (true) or stop (false); without waiting. */
-  void postGo(int peer, bool swap);
+  /** Tells a peer that answered whether to swap (true) or stop (false); without waiting. A stop
+   * with ranksLost: a rank of the job died, so the peer must not finalize MPI (skipFinalize). */
+  void postGo(int peer, bool swap, bool ranksLost = false);
   /** Every peer's answer to the state last posted, waited for until timeoutS: 1 well, 0 not
    * well, -1 none in time (the peer is then lost: its pending receive is cancelled). */
   std::vector<int> collect(const std::vector<int>& peers, double timeoutS);
@@ -79,7 +80,10 @@ public:
   std::optional<FrameState> receiveState(double timeoutS);
   /** The answer to the state drawn: whether this channel is well. */
   void answer(bool well);
-  /** The master's go: true swap, false stop; nullopt when none came in timeoutS. */
+  /** The master's go: true swap, false stop; nullopt when none came in timeoutS. A stop that
+   * says a rank of the master's job died calls skipFinalize() here (not in a channel joined
+   * through the port: its own job lost none), so that the exit does not wait in MPI_Finalize
+   * for the dead rank. */
   std::optional<bool> receiveGo(double timeoutS);
 
 private:
