@@ -20,10 +20,14 @@ namespace {
 
 void BM_WarpAndBlend(benchmark::State& state) {
   const int w = static_cast<int>(state.range(0)), h = static_cast<int>(state.range(1));
+  const int scale = static_cast<int>(state.range(2)); // rendered at scale x the projector's size
   const auto n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
-  tellus::planet::ChannelImage image{w, h, std::vector<std::uint8_t>(n * 4, 100)};
+  const auto rendered = n * static_cast<std::size_t>(scale * scale);
+  tellus::planet::ChannelImage image{
+      w * scale, h * scale, std::vector<std::uint8_t>(rendered * 4, 100)};
   const auto mesh = tellus::planet::WarpMesh::identity(65, 41);
   const std::vector<float> blend(n, 0.5f);
+  state.counters["samples"] = tellus::planet::warpSubsamples(w * scale, h * scale, w, h);
   for (auto _ : state) {
     auto out = tellus::planet::warpAndBlend(image, w, h, &mesh, &blend);
     benchmark::DoNotOptimize(out.rgba.data());
@@ -41,6 +45,7 @@ void BM_GlWarpAndBlend(benchmark::State& state) {
     return;
   }
   const int w = static_cast<int>(state.range(0)), h = static_cast<int>(state.range(1));
+  const int scale = static_cast<int>(state.range(3)); // rendered at scale x the projector's size
   const auto n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
   auto context = GlContext::create({});
   if (!context) {
@@ -48,8 +53,8 @@ void BM_GlWarpAndBlend(benchmark::State& state) {
     return;
   }
   auto pass = ProjectorWarp::create((*context)->capabilities().glslHeader(),
-                                    w,
-                                    h,
+                                    w * scale,
+                                    h * scale,
                                     w,
                                     h,
                                     WarpMesh::identity(65, 41),
@@ -60,7 +65,7 @@ void BM_GlWarpAndBlend(benchmark::State& state) {
   }
   GlRenderbuffer colour;
   glBindRenderbuffer(GL_RENDERBUFFER, colour.id());
-  glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w * scale, h * scale);
   GlFramebuffer scene;
   glBindFramebuffer(GL_FRAMEBUFFER, scene.id());
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, colour.id());
@@ -75,20 +80,27 @@ void BM_GlWarpAndBlend(benchmark::State& state) {
     glFinish();
   }
   state.counters["MP"] = static_cast<double>(n) / 1e6;
+  state.counters["samples"] = warpSubsamples(w * scale, h * scale, w, h);
   state.SetLabel((*context)->capabilities().version);
 }
 
 } // namespace
 
+// Arguments: the projector's width and height, (GL: whether read back), the render scale (1, 2;
+// 3: more than twice, filtered with 2 x 2 samples a pixel).
 BENCHMARK(BM_WarpAndBlend)
-    ->Args({1024, 717})
-    ->Args({1920, 1200})
+    ->Args({1024, 717, 1})
+    ->Args({1920, 1200, 1})
+    ->Args({1920, 1200, 2})
+    ->Args({1920, 1200, 3})
     ->Unit(benchmark::kMillisecond)
     ->MinTime(2.0);
 BENCHMARK(BM_GlWarpAndBlend)
-    ->Args({1024, 717, 0})
-    ->Args({1920, 1200, 0})
-    ->Args({1920, 1200, 1})
+    ->Args({1024, 717, 0, 1})
+    ->Args({1920, 1200, 0, 1})
+    ->Args({1920, 1200, 1, 1})
+    ->Args({1920, 1200, 0, 2})
+    ->Args({1920, 1200, 0, 3})
     ->Unit(benchmark::kMillisecond)
     ->MinTime(2.0);
 

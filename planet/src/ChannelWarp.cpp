@@ -104,37 +104,51 @@ readBlendMask(const std::filesystem::path& file, int width, int height) {
   return w;
 }
 
+int warpSubsamples(int renderedWidth, int renderedHeight, int width, int height) {
+  const double ratio = std::max(static_cast<double>(renderedWidth) / std::max(width, 1),
+                                static_cast<double>(renderedHeight) / std::max(height, 1));
+  return ratio <= 2.0 ? 1 : std::min(8, static_cast<int>(std::ceil(ratio / 2.0)));
+}
+
 ChannelImage warpAndBlend(const ChannelImage& rendered,
                           int width,
                           int height,
                           const WarpMesh* warp,
                           const std::vector<float>* blend) {
   ChannelImage out{width, height, std::vector<std::uint8_t>(index(0, height, width) * 4)};
+  // Where in the rendered image a point (sx, sy) of the projector's image lies, in pixels.
+  auto source = [&](double sx, double sy) {
+    if (warp != nullptr) {
+      const double gx = std::clamp(sx / width * (warp->columns - 1), 0.0, warp->columns - 1.0);
+      const double gy = std::clamp(sy / height * (warp->rows - 1), 0.0, warp->rows - 1.0);
+      const int i0 = std::min(static_cast<int>(gx), warp->columns - 2);
+      const int j0 = std::min(static_cast<int>(gy), warp->rows - 2);
+      const double fx = gx - i0, fy = gy - j0;
+      auto v = [&](int i, int j) { return warp->uv[index(i, j, warp->columns)]; };
+      const glm::dvec2 uv = (v(i0, j0) * (1 - fx) + v(i0 + 1, j0) * fx) * (1 - fy) +
+                            (v(i0, j0 + 1) * (1 - fx) + v(i0 + 1, j0 + 1) * fx) * fy;
+      return glm::dvec2(uv.x * rendered.width, uv.y * rendered.height);
+    }
+    if (rendered.width != width || rendered.height != height) // scaled, nothing else
+      return glm::dvec2(sx / width * rendered.width, sy / height * rendered.height);
+    return glm::dvec2(sx, sy);
+  };
+  const int n = warpSubsamples(rendered.width, rendered.height, width, height);
   for (int py = 0; py < height; ++py)
     for (int px = 0; px < width; ++px) {
-      double sx = px + 0.5, sy = py + 0.5; // where in the rendered image
-      if (warp != nullptr) {
-        const double gx = std::clamp(sx / width * (warp->columns - 1), 0.0, warp->columns - 1.0);
-        const double gy = std::clamp(sy / height * (warp->rows - 1), 0.0, warp->rows - 1.0);
-        const int i0 = std::min(static_cast<int>(gx), warp->columns - 2);
-        const int j0 = std::min(static_cast<int>(gy), warp->rows - 2);
-        const double fx = gx - i0, fy = gy - j0;
-        auto v = [&](int i, int j) { return warp->uv[index(i, j, warp->columns)]; };
-        const glm::dvec2 uv = (v(i0, j0) * (1 - fx) + v(i0 + 1, j0) * fx) * (1 - fy) +
-                              (v(i0, j0 + 1) * (1 - fx) + v(i0 + 1, j0 + 1) * fx) * fy;
-        sx = uv.x * rendered.width;
-        sy = uv.y * rendered.height;
-      } else if (rendered.width != width || rendered.height != height) { // scaled, nothing else
-        sx = sx / width * rendered.width;
-        sy = sy / height * rendered.height;
-      }
+      double c[4] = {0, 0, 0, 0};
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+          const glm::dvec2 s = source(px + (i + 0.5) / n, py + (j + 0.5) / n);
+          for (int k = 0; k < 4; ++k)
+            c[k] += sample(rendered, s.x, s.y, k);
+        }
       const double weight =
           blend != nullptr ? static_cast<double>((*blend)[index(px, py, width)]) : 1.0;
       for (int k = 0; k < 4; ++k) {
-        double c = sample(rendered, sx, sy, k);
-        if (k < 3) c *= weight;
+        const double v = c[k] / (n * n) * (k < 3 ? weight : 1.0);
         out.rgba[index(px, py, width) * 4 + static_cast<std::size_t>(k)] =
-            static_cast<std::uint8_t>(std::clamp(std::lround(c), 0l, 255l));
+            static_cast<std::uint8_t>(std::clamp(std::lround(v), 0l, 255l));
       }
     }
   return out;

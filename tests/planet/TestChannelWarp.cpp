@@ -69,6 +69,37 @@ TEST(ChannelWarp, WithoutAWarpARenderOfAnotherSizeIsScaled) {
           << x << "," << y;
 }
 
+TEST(ChannelWarp, ARenderMoreThanTwiceTheProjectorsIsFilteredNotSkipped) {
+  EXPECT_EQ(warpSubsamples(64, 40, 64, 40), 1);
+  EXPECT_EQ(warpSubsamples(128, 80, 64, 40), 1); // 2x: one bilinear sample reads them all
+  EXPECT_EQ(warpSubsamples(129, 80, 64, 40), 2);
+  EXPECT_EQ(warpSubsamples(256, 160, 64, 40), 2);
+  EXPECT_EQ(warpSubsamples(64, 161, 64, 40), 3); // the larger ratio of the two axes
+  EXPECT_EQ(warpSubsamples(16384, 16384, 64, 40), 8);
+  // Rendered at 4x: one white pixel in each 4 x 4 block, the rest black. A bilinear sample at a
+  // projector pixel's centre falls between four black pixels (the dots vanish); the filtered
+  // image is their mean over the footprint, 255 / 16, everywhere; with a warp (the identity mesh)
+  // as without one.
+  const int w = 32, h = 20;
+  ChannelImage dots{4 * w, 4 * h, std::vector<std::uint8_t>(index(0, 4 * h, 4 * w) * 4, 0)};
+  for (int y = 0; y < 4 * h; ++y)
+    for (int x = 0; x < 4 * w; ++x) {
+      const std::uint8_t v = x % 4 == 0 && y % 4 == 0 ? 255 : 0;
+      for (int k = 0; k < 3; ++k)
+        dots.rgba[index(x, y, 4 * w) * 4 + static_cast<std::size_t>(k)] = v;
+      dots.rgba[index(x, y, 4 * w) * 4 + 3] = 255;
+    }
+  const WarpMesh identity = WarpMesh::identity(3, 3);
+  for (const WarpMesh* warp : {static_cast<const WarpMesh*>(nullptr), &identity}) {
+    const ChannelImage out = warpAndBlend(dots, w, h, warp, nullptr);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        ASSERT_EQ(at(out, x, y, 0), 16) << x << "," << y; // lround(255 / 16)
+        ASSERT_EQ(at(out, x, y, 3), 255);
+      }
+  }
+}
+
 TEST(ChannelWarp, ShiftedMeshShiftsTheImage) {
   const ChannelImage im = pattern(64, 40);
   WarpMesh shift = WarpMesh::identity(5, 5);

@@ -164,3 +164,45 @@ TEST(ProjectorWarpGl, ARenderLargerThanTheProjectorIsWarpedDownAsOnTheCpu) {
     EXPECT_GE(p, 40.0);
   }
 }
+
+TEST(ProjectorWarpGl, ARenderFourTimesTheProjectorsIsFilteredAsOnTheCpu) {
+  // Rendered at 4 x the projector's 320 x 200, a layer of one-texel checks drawn with texels of
+  // up to 3 rendered pixels (so that a projector pixel's footprint spans checks): each projector
+  // pixel is the mean of 2 x 2 bilinear samples over it (warpSubsamples), on the GPU as on the
+  // CPU. One sample a pixel skips three rendered pixels in four and aliases the checks: 29-33 dB
+  // from the CPU's filtered image.
+  const Geodesy g(EarthModel::Wgs84);
+  const GridSpec grid{Sector{}, 36.0, 256, 256, 8};
+  FakeTileSource source({"checks", grid, "image/png", [grid](const TileAddress& a) {
+                           const int w = grid.tileWidth, h = grid.tileHeight;
+                           std::vector<std::uint8_t> px(static_cast<std::size_t>(w * h * 4));
+                           for (int y = 0; y < h; ++y)
+                             for (int x = 0; x < w; ++x) {
+                               auto* p = &px[static_cast<std::size_t>((y * w + x) * 4)];
+                               p[0] = p[1] = (x + y) % 2 == 0 ? 255 : 0;
+                               p[2] = static_cast<std::uint8_t>(a.key.level * 20);
+                               p[3] = 255;
+                             }
+                           return FakeTileSource::result(
+                               TileStatus::Ok, encodePngRgba(w, h, px), "image/png");
+                         }});
+  const int w = kWidth * 4, h = kHeight * 4;
+  ASSERT_EQ(warpSubsamples(w, h, kWidth, kHeight), 2);
+  const WarpMesh mesh = curvedMesh();
+  const std::vector<float> mask = softMask();
+  for (const bool warped : {true, false}) {
+    RendererOptions o = warpedOptions(warped ? std::optional(mesh) : std::nullopt,
+                                      warped ? std::optional(mask) : std::nullopt,
+                                      w,
+                                      h);
+    o.lodThreshold = 3.0; // texels of up to 3 rendered pixels: checks a projector pixel spans
+    OPEN_RENDERER(r, source, g, o);
+    const Images im = drawWarped(r);
+    ASSERT_EQ(im.presented.size(), static_cast<std::size_t>(kWidth * kHeight * 4));
+    const ChannelImage cpu = warpAndBlend(
+        {w, h, im.scene}, kWidth, kHeight, warped ? &mesh : nullptr, warped ? &mask : nullptr);
+    const double p = psnr(im.presented, cpu.rgba);
+    std::printf("%s: GPU vs CPU at 4x: PSNR %.2f dB\n", warped ? "warped" : "scaled", p);
+    EXPECT_GE(p, 40.0);
+  }
+}

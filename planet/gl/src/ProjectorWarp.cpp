@@ -59,6 +59,7 @@ ProjectorWarp::create(const std::string& glslHeader,
   w->uOut_ = glGetUniformLocation(p, "uOut");
   w->uMeshSize_ = glGetUniformLocation(p, "uMeshSize");
   w->uHasBlend_ = glGetUniformLocation(p, "uHasBlend");
+  w->uSamples_ = glGetUniformLocation(p, "uSamples");
   w->vao_ = GlVertexArray();
   w->sourceWidth_ = sourceWidth;
   w->sourceHeight_ = sourceHeight;
@@ -129,6 +130,7 @@ void ProjectorWarp::apply(GLuint sceneFbo) {
   glUniform2i(uOut_, width_, height_);
   glUniform2i(uMeshSize_, meshColumns_, meshRows_);
   glUniform1i(uHasBlend_, hasBlend_ ? 1 : 0);
+  glUniform1i(uSamples_, warpSubsamples(sourceWidth_, sourceHeight_, width_, height_));
   glBindVertexArray(vao_.id());
   glDrawArrays(GL_TRIANGLES, 0, 3);
   glBindVertexArray(0);

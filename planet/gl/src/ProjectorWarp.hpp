@@ -59,7 +59,7 @@ private:
   GlTexture rendered_{NoCreate}, mesh_{NoCreate}, blend_{NoCreate}, out_{NoCreate};
   GlFramebuffer renderedFbo_{NoCreate}, outFbo_{NoCreate};
   GLint uRendered_ = -1, uMesh_ = -1, uBlend_ = -1, uSource_ = -1, uOut_ = -1, uMeshSize_ = -1,
-        uHasBlend_ = -1;
+        uHasBlend_ = -1, uSamples_ = -1;
 };
 
 } // namespace tellus::planet

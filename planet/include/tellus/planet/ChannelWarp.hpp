@@ -10,9 +10,11 @@
  * rendered image (0..1 across its width and height, from the top left) that the projector shows
  * there. A projector pixel's centre is placed in the grid, its (u, v) interpolated bilinearly, and
  * the rendered image sampled there bilinearly (clamped at the edges). The identity mesh (u = x,
- * v = y over images of one size) gives the rendered image back unchanged. The blend mask, one
- * weight in [0, 1] per projector pixel, then multiplies the colour (soft edges where projectors
- * overlap).
+ * v = y over images of one size) gives the rendered image back unchanged. A rendered image more
+ * than twice the projector's along an axis is filtered down: each projector pixel is the mean of
+ * N x N such samples spread evenly over it (warpSubsamples), so that no rendered pixel is skipped.
+ * The blend mask, one weight in [0, 1] per projector pixel, then multiplies the colour (soft
+ * edges where projectors overlap).
  */
 
 #include <glm/vec2.hpp>
@@ -50,9 +52,16 @@ std::expected<WarpMesh, std::string> readWarpMesh(const std::filesystem::path& f
 std::expected<std::vector<float>, std::string>
 readBlendMask(const std::filesystem::path& file, int width, int height);
 
+/** N, the samples per projector pixel along each axis: 1 while the rendered image is at most
+ * twice the projector's along both axes (a bilinear sample at each pixel's centre then reads
+ * every rendered pixel), else ceil(ratio / 2), at most 8: the N x N samples at (i + 0.5) / N
+ * across the pixel, each bilinear over 2 x 2 rendered pixels, together cover its footprint (a
+ * tent-filtered box; over a warp, the footprint of the mean scale). */
+int warpSubsamples(int renderedWidth, int renderedHeight, int width, int height);
+
 /** The projector's width x height image: the warp (null: none, the rendered image scaled to
- * that size: a projector pixel's centre at the same fraction of the rendered image) and the
- * blend mask (null: none; else width x height weights). */
+ * that size: a projector pixel's centre at the same fraction of the rendered image), filtered as
+ * warpSubsamples says, and the blend mask (null: none; else width x height weights). */
 ChannelImage warpAndBlend(const ChannelImage& rendered,
                           int width,
                           int height,
