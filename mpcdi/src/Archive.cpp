@@ -1,11 +1,40 @@
 #include "Archive.hpp"
 
+#include <fstream>
+#include <iterator>
 #include <zip.h>
 
 namespace tellus::mpcdi::detail {
+namespace {
+
+/** The file's bytes; why not when it cannot be read or is larger than maxBytes. */
+std::expected<std::string, std::string> slurp(const std::filesystem::path& file,
+                                              std::size_t maxBytes) {
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(file, ec);
+  if (ec) return std::unexpected(std::string("cannot be read"));
+  if (size > maxBytes) return std::unexpected("larger than " + std::to_string(maxBytes) + " bytes");
+  std::ifstream in(file, std::ios::binary);
+  std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  if (!in.good() && !in.eof()) return std::unexpected(std::string("cannot be read"));
+  return bytes;
+}
+
+/** Whether FILE begins, after blanks, with '<' (an XML document, not a zip's "PK"). */
+bool looksLikeXml(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  char c = 0;
+  while (in.get(c))
+    if (c != ' ' && c != '\t' && c != '\r' && c != '\n') return c == '<' || c == '\xef'; // BOM
+  return false;
+}
+
+} // namespace
 
 struct Archive::Impl {
   zip_t* zip = nullptr;
+  std::filesystem::path folder; ///< unpacked: where the entries are
+  std::string xml;              ///< unpacked: mpcdi.xml's bytes
   ~Impl() {
     if (zip != nullptr) zip_discard(zip);
   }
@@ -18,6 +47,14 @@ Archive& Archive::operator=(Archive&&) noexcept = default;
 Archive::~Archive() = default;
 
 std::expected<Archive, std::string> Archive::open(const std::filesystem::path& file) {
+  if (looksLikeXml(file)) { // an unpacked MPCDI: this file is its mpcdi.xml
+    auto xml = slurp(file, std::size_t{64} << 20);
+    if (!xml) return std::unexpected(file.string() + ": " + xml.error());
+    auto impl = std::make_unique<Impl>();
+    impl->folder = file.parent_path();
+    impl->xml = std::move(*xml);
+    return Archive(std::move(impl), file.string());
+  }
   int code = 0;
   zip_t* z = zip_open(file.c_str(), ZIP_RDONLY | ZIP_CHECKCONS, &code);
   if (z == nullptr) {
@@ -49,6 +86,17 @@ std::expected<Archive, std::string> Archive::open(const std::filesystem::path& f
 
 std::expected<std::string, std::string> Archive::read(const std::string& name,
                                                       std::size_t maxBytes) const {
+  if (impl_->zip == nullptr) { // unpacked: mpcdi.xml, then files in its folder, never outside
+    if (name == "mpcdi.xml") return impl_->xml;
+    const std::filesystem::path rel(name);
+    if (name.empty() || rel.is_absolute() || rel.has_root_name())
+      return std::unexpected(name + ": not a path in the MPCDI's folder");
+    for (const auto& part : rel)
+      if (part == "..") return std::unexpected(name + ": not a path in the MPCDI's folder");
+    auto bytes = slurp(impl_->folder / rel, maxBytes);
+    if (!bytes) return std::unexpected(name + ": " + bytes.error() + " (beside the mpcdi.xml)");
+    return bytes;
+  }
   zip_stat_t st;
   zip_stat_init(&st);
   if (zip_stat(impl_->zip, name.c_str(), 0, &st) != 0)

@@ -1,5 +1,7 @@
 #pragma once
-// A zip archive read whole entry by entry (libzip; PRIVATE to tellus::mpcdi).
+// A zip archive read whole entry by entry (libzip; PRIVATE to tellus::mpcdi), or an unpacked
+// one: an mpcdi.xml given itself (exporters such as Christie's Mystique write FILE.mpcdi.xml),
+// its entries the files beside it.
 
 #include <expected>
 #include <filesystem>
@@ -10,7 +12,9 @@ namespace tellus::mpcdi::detail {
 
 class Archive {
 public:
-  /** Opens FILE; refused with "FILE: not a zip archive" and the like. */
+  /** Opens FILE: a zip, or an XML document (its first byte after blanks '<'), which is then the
+   * entry mpcdi.xml and the other entries files in its folder. Refused with "FILE: not a zip
+   * archive" and the like. */
   static std::expected<Archive, std::string> open(const std::filesystem::path& file);
   Archive(Archive&&) noexcept;
   Archive& operator=(Archive&&) noexcept;

@@ -122,10 +122,14 @@ std::expected<detail::Alpha, std::string> readAlpha(const std::string& png, doub
   return a;
 }
 
-const Element* fileset(const Element* files, const std::string& region) {
-  if (files == nullptr) return nullptr;
-  for (const Element* f : files->all("fileset"))
-    if (const std::string* r = f->attribute("region"); r != nullptr && *r == region) return f;
+/** The region's <fileset> in <files> (the standard's place), else beside <files> under <MPCDI>
+ * (where Christie's Mystique 2.3 writes them). */
+const Element* fileset(const Element& root, const std::string& region) {
+  for (const Element* parent : {root.child("files"), &root}) {
+    if (parent == nullptr) continue;
+    for (const Element* f : parent->all("fileset"))
+      if (const std::string* r = f->attribute("region"); r != nullptr && *r == region) return f;
+  }
   return nullptr;
 }
 
@@ -156,7 +160,6 @@ readMpcdi(const std::filesystem::path& file) {
                     "simulation), not \"a3\" (advanced 3D) or \"sl\" (shader lamp)");
   const Element* display = (*root)->child("display");
   if (display == nullptr) return fail(doc, "no <display>");
-  const Element* files = (*root)->child("files");
   std::vector<planet::Channel> channels;
   std::set<std::string> ids, names;
   for (const Element* buffer : display->all("buffer"))
@@ -184,7 +187,7 @@ readMpcdi(const std::filesystem::path& file) {
         if (!frame) return fail(where, frame.error());
         in.frame = *frame;
       }
-      const Element* set = fileset(files, *id);
+      const Element* set = fileset(**root, *id);
       if (set == nullptr) return fail(where, "no <fileset region=\"" + *id + "\"> in <files>");
       const Element* warp = set->child("geometryWarpFile");
       const Element* warpPath = warp != nullptr ? warp->child("path") : nullptr;

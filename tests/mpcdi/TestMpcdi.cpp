@@ -317,9 +317,7 @@ TEST(Mpcdi, MalformedFilesAreRefusedNamingTheFileAndWhatIsWrong) {
       test::documentXml("3d", test::regionXml(c), test::filesetXml(c.name, "w.pfm"));
   const fs::path text = tmp("text.mpcdi");
   std::ofstream(text) << "<MPCDI/>";
-  EXPECT_EQ(refusal(text),
-            text.string() + ": not a zip archive (an .mpcdi file is a zip of mpcdi.xml and "
-                            "its files)");
+  EXPECT_EQ(refusal(text), text.string() + ": mpcdi.xml: <MPCDI> has no profile"); // unpacked
   EXPECT_EQ(refusal(tmp("absent.mpcdi")), tmp("absent.mpcdi").string() + ": cannot be read");
   const fs::path noXml = zip("noxml.mpcdi", {{"w.pfm", warp}});
   EXPECT_EQ(refusal(noXml), noXml.string() + ": no mpcdi.xml in the archive");
