@@ -33,9 +33,10 @@ run: build
 	fi
 
 # Every test: the format check first (seconds), then Release (every test; GL tests under
-# xvfb-run, one at a time: the TerrainViewGl tests give their loading 60 s of wall clock and ran
-# out of it at -j2 on a loaded 2-core machine; the interop tests: GDAL, OWSLib, Chromium), then the
-# ASan+UBSan configuration (every test but gl, slow and interop: those programs are not ours to
+# xvfb-run with -noreset (an X server resets when its last client leaves, and a test opening the
+# display again meanwhile failed: DomeGl once), one at a time: the TerrainViewGl tests give their
+# loading 60 s of wall clock and ran out of it at -j2 on a loaded 2-core machine; the interop
+# tests: GDAL, OWSLib, Chromium), then the ASan+UBSan configuration (every test but gl, slow and interop: those programs are not ours to
 # sanitize, and repeating them there only timed out) and the TSan one (of those, the tests whose
 # code runs threads: TELLUS_THREAD_TESTS_ONLY in its preset, tests/CMakeLists.txt), then a short
 # fuzzing run of the request parsers. The page at / is bundled once, in the Release tree, and
@@ -64,7 +65,7 @@ test-release: build
 	cd build && ctest --output-on-failure -j$(JOBS) -LE gl --output-junit test-times.xml; rc=$$?; \
 	../tools/test-times test-times.xml; [ $$rc = 0 ] || exit $$rc; \
 	if [ -n "$$(ctest -N -L gl | grep 'Test #')" ]; then \
-	  xvfb-run -a -s '-screen 0 1280x1024x24' ctest --output-on-failure -L gl \
+	  xvfb-run -a -s '-screen 0 1280x1024x24 -noreset' ctest --output-on-failure -L gl \
 	    --output-junit test-times-gl.xml; rc=$$?; ../tools/test-times test-times-gl.xml; \
 	  [ $$rc = 0 ] || exit $$rc; fi; \
 	echo "test-release: tests took $$(( $$(date +%s) - start )) s"

@@ -5,7 +5,10 @@
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 
+#include <chrono>
+#include <cstdlib>
 #include <mutex>
+#include <thread>
 
 namespace tellus::planet {
 
@@ -24,7 +27,16 @@ bool acquireGlfw(std::string* error) {
   std::lock_guard lock(glfwMutex);
   if (glfwUsers == 0) {
     glfwSetErrorCallback(onGlfwError);
-    if (glfwInit() != GLFW_TRUE) {
+    // An X server without -noreset resets when its last client leaves (glfwTerminate, below),
+    // and refuses connections meanwhile: a display opened again at once may fail a few times.
+    bool opened = glfwInit() == GLFW_TRUE;
+    const char* display = std::getenv("DISPLAY");
+    const bool named = display != nullptr && *display != '\0';
+    for (int i = 0; !opened && named && i < 20; ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      opened = glfwInit() == GLFW_TRUE;
+    }
+    if (!opened) {
       *error =
           "cannot open a display for OpenGL (is DISPLAY set? run under xvfb-run): " + glfwLastError;
       return false;
