@@ -36,8 +36,9 @@ run: build
 # xvfb-run with -noreset (an X server resets when its last client leaves, and a test opening the
 # display again meanwhile failed: DomeGl once), one at a time: the TerrainViewGl tests give their
 # loading 60 s of wall clock and ran out of it at -j2 on a loaded 2-core machine; the interop
-# tests: GDAL, OWSLib, Chromium), then the ASan+UBSan configuration (every test but gl, slow and interop: those programs are not ours to
-# sanitize, and repeating them there only timed out) and the TSan one (of those, the tests whose
+# tests: GDAL, OWSLib, Chromium), then the ASan+UBSan configuration (every test but gl, slow and
+# interop: those programs are not ours to sanitize, and repeating them there only timed out) and
+# the TSan one (of those, the tests whose
 # code runs threads: TELLUS_THREAD_TESTS_ONLY in its preset, tests/CMakeLists.txt), then a short
 # fuzzing run of the request parsers. The page at / is bundled once, in the Release tree, and
 # embedded from there by the sanitizer trees (TELLUS_WEB_DIST_FROM); the fuzz tree builds only
