@@ -104,6 +104,30 @@ std::expected<ControlRequest, ControlError> path(std::string_view body) {
   return p;
 }
 
+std::expected<ControlRequest, ControlError> layer(std::string_view body) {
+  auto j = object(body, {"layer", "opacity", "visible", "time"});
+  if (!j) return std::unexpected(j.error());
+  if (!j->contains("layer") || !(*j)["layer"].is_string() ||
+      (*j)["layer"].get<std::string>().empty())
+    return bad("layer (a drawn layer's name) is required");
+  LayerCommand c;
+  c.layer = (*j)["layer"].get<std::string>();
+  auto o = number(*j, "opacity", 0.0, 1.0);
+  if (!o) return std::unexpected(o.error());
+  c.opacity = *o;
+  if (j->contains("visible")) {
+    if (!(*j)["visible"].is_boolean()) return bad("visible must be true or false");
+    c.visible = (*j)["visible"].get<bool>();
+  }
+  if (j->contains("time")) {
+    if (!(*j)["time"].is_string() || (*j)["time"].get<std::string>().empty())
+      return bad("time must be one of the layer's times (a string)");
+    c.time = (*j)["time"].get<std::string>();
+  }
+  if (!c.opacity && !c.visible && !c.time) return bad("no field: opacity, visible, time");
+  return c;
+}
+
 } // namespace
 
 std::expected<ControlRequest, ControlError>
@@ -113,11 +137,12 @@ parseControl(std::string_view method, std::string_view target, std::string_view 
     if (!get) return bad("GET /status", 405);
     return StatusQuery{};
   }
-  if (target != "/camera" && target != "/time" && target != "/path")
-    return bad("no such path: GET /status, POST /camera, /time, /path", 404);
+  if (target != "/camera" && target != "/time" && target != "/path" && target != "/layer")
+    return bad("no such path: GET /status, POST /camera, /time, /path, /layer", 404);
   if (!post) return bad("POST " + std::string(target), 405);
   if (target == "/camera") return camera(body);
   if (target == "/time") return time(body);
+  if (target == "/layer") return layer(body);
   return path(body);
 }
 
@@ -134,6 +159,10 @@ std::string statusJson(const StatusReport& s) {
   json channels = json::array();
   for (const ChannelReport& c : s.channels)
     channels.push_back({{"name", c.name}, {"state", c.state}, {"last_frame", c.lastFrame}});
+  json layers = json::array();
+  for (const LayerReport& l : s.layers)
+    layers.push_back(
+        {{"name", l.name}, {"opacity", l.opacity}, {"visible", l.visible}, {"time", l.time}});
   json j = {{"frame", s.frame},
             {"camera",
              {{"lat", s.camera.latDeg},
@@ -143,7 +172,8 @@ std::string statusJson(const StatusReport& s) {
               {"tilt", s.camera.tiltDeg}}},
             {"time", s.timeUnixS ? json(*s.timeUnixS) : json(nullptr)},
             {"path", {{"file", s.path}, {"playing", s.playing}, {"seconds", s.pathSeconds}}},
-            {"channels", channels}};
+            {"channels", channels},
+            {"layers", layers}};
   return j.dump() + "\n";
 }
 

@@ -27,6 +27,11 @@ std::uint64_t digest(const FrameState& s) noexcept {
   mix(h, s.layerTimesAtS);
   mix(h, s.hasLayerTimes);
   mix(h, s.body);
+  for (int i = 0; i < kFrameLayers; ++i) {
+    mix(h, s.layerOpacity[i]);
+    mix(h, s.layerTime[i]);
+    mix(h, s.layerVisible[i]);
+  }
   return h;
 }
 

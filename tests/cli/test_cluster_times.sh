@@ -5,16 +5,21 @@
 # upstream whose every time is a solid colour of its own (time_upstream.py); with
 # --wait-complete each channel's frames show January until the keyframe at 0.5 s, March from it,
 # and the channels' digests equal the master's. A keyframe naming a layer that is not drawn is a
-# usage error (a path the console loads with "times" gets a 400: test_cluster_live.sh). KEEP=1
-# keeps the work folder.
+# usage error (a path the console loads with "times" gets a 400: test_cluster_live.sh). Then the
+# console sets the layers of a looping show (POST /layer): a time (April), hidden, shown at half
+# opacity: the channels' next frames show each; names, times and the base's opacity that are not
+# the layers' are refused with a 400; the digests of every rank agree. KEEP=1 keeps the work
+# folder.
 set -euo pipefail
 tellus=$1
 here=$(cd "$(dirname "$0")" && pwd)
 data=$(cd "$here/../../data" && pwd)
 work=$(mktemp -d "${TMPDIR:-/tmp}/tellus-cluster-times.XXXXXX")
 upstream_pid=
+job=
 cleanup() {
   [ -n "$upstream_pid" ] && kill "$upstream_pid" 2>/dev/null || true
+  [ -n "$job" ] && kill "$job" 2>/dev/null || true
   [ -n "${KEEP:-}" ] || rm -rf "$work"
 }
 trap cleanup EXIT
@@ -64,4 +69,73 @@ rc=$?
 set -e
 [ $rc -ne 0 ] && grep -qF "a keyframe's \"times\" names a layer that is not drawn: nope" <<<"$msg" ||
   fail "a time for a layer not drawn: $rc $msg"
+
+# The console sets the layer while the show loops (a still path: January by its keyframe; the
+# console's time wins over it).
+echo '[{"time": 0, "lat": 10, "lon": 20, "alt": 8e6, "times": {"monthly": "2024-01-01"}},
+ {"time": 1, "lat": 10, "lon": 20, "alt": 8e6}]' >"$work/still.json"
+wait_for() { # wait_for SECONDS COMMAND...: polls until it succeeds (false after SECONDS)
+  local end=$((SECONDS + $1))
+  shift
+  until "$@"; do
+    [ $SECONDS -lt $end ] || return 1
+    sleep 0.2
+  done
+}
+rank_pid() { # rank_pid MPIRUN_PID RANK (grep -z: no pipe; see test_cluster_live.sh)
+  for p in $(pgrep -P "$1"); do
+    if grep -qxz "OMPI_COMM_WORLD_RANK=$2" "/proc/$p/environ"; then
+      echo "$p"
+      return 0
+    fi
+  done
+  return 1
+}
+mpirun --oversubscribe -n 3 "$tellus" cluster "$work/dome.json" --config "$work/times.yaml" \
+  --overlay monthly,1 --no-sun --no-atmosphere --no-stars --path "$work/still.json" --loop \
+  --wait-complete --control 127.0.0.1:0 --out "$work/l" >"$work/master.out" 2>"$work/master.err" &
+job=$!
+port_of() { sed -n 's|^tellus cluster: control on http://127.0.0.1:\([0-9]*\)$|\1|p' "$work/master.out"; }
+has_port() { [ -n "$(port_of)" ]; }
+wait_for 60 has_port || fail "no console: $(cat "$work/master.err")"
+api="http://127.0.0.1:$(port_of)"
+post() { curl -s -o "$work/answer" -w '%{http_code}' -X POST -d "$1" "$api/layer"; }
+# The newest frame of channel a, and its centre pixel.
+latest() { find "$work/l" -name 'channel-a-*.png' | sort | tail -n 1; }
+centre() { pixel "$(latest)" 16 16; }
+newer() { [ "$(latest)" != "$1" ]; }
+shows() { # shows R G B TOLERANCE: a frame drawn after now shows it
+  local f
+  f=$(latest)
+  wait_for 30 newer "$f" || return 1
+  read -r r g b < <(centre)
+  near "$r" "$g" "$b" "$1" "$2" "$3" "$4"
+}
+has_frame() { [ -n "$(latest)" ]; }
+wait_for 60 has_frame || fail "no frame: $(cat "$work/master.err")"
+curl -s "$api/status" | grep -qF '"name":"monthly"' || fail "no layers in the status"
+[ "$(post '{"layer": "monthly", "time": "2024-04-01"}')" = 202 ] || fail "time: $(cat "$work/answer")"
+wait_for 30 shows 240 230 20 3 || fail "not April after /layer: $(centre)"
+grep -qF '"time":"2024-04-01"' <<<"$(curl -s "$api/status")" || fail "the status has no April"
+[ "$(post '{"layer": "monthly", "visible": false}')" = 202 ] || fail "hide: $(cat "$work/answer")"
+hidden() { read -r r g b < <(centre); ! near "$r" "$g" "$b" 240 230 20 40; }
+wait_for 30 hidden || fail "still April when hidden: $(centre)"
+read -r br bg bb < <(centre) # the Blue Marble beneath
+[ "$(post '{"layer": "monthly", "visible": true, "opacity": 0.5}')" = 202 ] ||
+  fail "half: $(cat "$work/answer")"
+half() { shows $(((240 + br) / 2)) $(((230 + bg) / 2)) $(((20 + bb) / 2)) 4; }
+wait_for 30 half || fail "not half April over the base: $(centre) (base $br $bg $bb)"
+for bad in '{"layer": "nope", "opacity": 1}|no drawn layer nope (drawn: bluemarble, monthly)' \
+  '{"layer": "monthly", "time": "2024-05-01"}|monthly has no time 2024-05-01' \
+  '{"layer": "bluemarble", "opacity": 0.5}|bluemarble is the base layer'; do
+  [ "$(post "${bad%%|*}")" = 400 ] && grep -qF "${bad#*|}" "$work/answer" ||
+    fail "not refused: ${bad%%|*}: $(cat "$work/answer")"
+done
+kill -TERM "$(rank_pid "$job" 0)" # the master ends the show
+wait "$job" || fail "the show did not end well: $(cat "$work/master.err")"
+job=
+for ch in a b; do
+  cmp -s "$work/l/digest-master.txt" "$work/l/digest-$ch.txt" ||
+    fail "channel $ch drew other states than the console's"
+done
 echo "ok"

@@ -68,11 +68,37 @@ TEST(Control, TimeAndPath) {
   EXPECT_EQ(seek.seconds, 2.5);
 }
 
+TEST(Control, LayerKeepsWhatIsNotGiven) {
+  const auto r = parseControl("POST", "/layer", R"({"layer": "sst", "opacity": 0.25})");
+  ASSERT_TRUE(r.has_value());
+  const auto& c = std::get<LayerCommand>(*r);
+  EXPECT_EQ(c.layer, "sst");
+  EXPECT_EQ(c.opacity, 0.25);
+  EXPECT_FALSE(c.visible);
+  EXPECT_FALSE(c.time);
+  const auto t = std::get<LayerCommand>(*parseControl(
+      "POST", "/layer", R"({"layer": "sst", "visible": false, "time": "2024-03-01"})"));
+  EXPECT_EQ(t.visible, false);
+  EXPECT_EQ(t.time, "2024-03-01");
+  EXPECT_EQ(refused("POST", "/layer", R"({"opacity": 1})").message,
+            "layer (a drawn layer's name) is required");
+  EXPECT_EQ(refused("POST", "/layer", R"({"layer": "sst"})").message,
+            "no field: opacity, visible, time");
+  EXPECT_EQ(refused("POST", "/layer", R"({"layer": "sst", "opacity": 1.5})").status, 400);
+  EXPECT_EQ(refused("POST", "/layer", R"({"layer": "sst", "visible": 1})").message,
+            "visible must be true or false");
+  EXPECT_EQ(refused("POST", "/layer", R"({"layer": "sst", "time": ""})").status, 400);
+  EXPECT_EQ(refused("POST", "/layer", R"({"layer": "sst", "colour": "red"})").message,
+            "unknown field \"colour\"");
+  EXPECT_EQ(refused("GET", "/layer", "").status, 405);
+}
+
 TEST(Control, StatusJson) {
   StatusReport s;
   s.frame = 12;
   s.camera = {45.0, 7.0, 3e5, 0.0, 0.0};
   s.channels = {{"north", "alive", 12}, {"east", "lost", 4}};
+  s.layers = {{"bluemarble", 1.0, true, ""}, {"sst", 0.5, false, "2024-03-01"}};
   const auto j = nlohmann::json::parse(statusJson(s));
   EXPECT_EQ(j["frame"], 12);
   EXPECT_EQ(j["camera"]["altitude"], 3e5);
@@ -80,5 +106,9 @@ TEST(Control, StatusJson) {
   EXPECT_EQ(j["channels"][1]["name"], "east");
   EXPECT_EQ(j["channels"][1]["state"], "lost");
   EXPECT_EQ(j["channels"][1]["last_frame"], 4);
+  EXPECT_EQ(j["layers"][1]["name"], "sst");
+  EXPECT_EQ(j["layers"][1]["opacity"], 0.5);
+  EXPECT_EQ(j["layers"][1]["visible"], false);
+  EXPECT_EQ(j["layers"][1]["time"], "2024-03-01");
   EXPECT_EQ(nlohmann::json::parse(errorJson("no"))["error"], "no");
 }

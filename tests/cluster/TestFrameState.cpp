@@ -21,7 +21,7 @@ TEST(FrameState, DigestSeesEveryField) {
   const FrameState copy = s;
   EXPECT_EQ(digest(copy), digest(s));
   std::set<std::uint64_t> seen{digest(s)};
-  for (int field = 0; field < 11; ++field) {
+  for (int field = 0; field < 14; ++field) {
     FrameState t = s;
     switch (field) {
     case 0:
@@ -54,8 +54,17 @@ TEST(FrameState, DigestSeesEveryField) {
     case 9:
       t.hasLayerTimes = 0;
       break;
-    default:
+    case 10:
       t.body = 1;
+      break;
+    case 11:
+      t.layerOpacity[7] = 0.5f;
+      break;
+    case 12:
+      t.layerTime[1] = 3;
+      break;
+    default:
+      t.layerVisible[2] = 0;
       break;
     }
     EXPECT_TRUE(seen.insert(digest(t)).second) << "field " << field;
@@ -77,4 +86,4 @@ TEST(FrameState, DigestLeavesRanksLostOut) {
 
 // The state goes over the wire as bytes (MPI_BYTE): a POD of fixed size, no hidden padding.
 static_assert(std::is_trivially_copyable_v<FrameState>);
-static_assert(sizeof(FrameState) == 8 + 6 * 8 + 4 + 4 + 8 + 4 + 4);
+static_assert(sizeof(FrameState) == 8 + 6 * 8 + 4 + 4 + 8 + 4 + 4 + 8 * (4 + 4 + 1));

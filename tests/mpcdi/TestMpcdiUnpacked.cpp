@@ -30,7 +30,7 @@ fs::path folder(const std::string& name, const std::map<std::string, std::string
   return dir;
 }
 
-std::string refusal(const fs::path& f) {
+std::string unpackedRefusal(const fs::path& f) {
   const auto r = readMpcdi(f);
   return r ? std::string() : r.error();
 }
@@ -70,7 +70,7 @@ TEST(MpcdiUnpacked, ItsPathsStayInItsFolder) {
                {{"mpcdi.xml",
                  test::documentXml("3d", test::regionXml(c), test::filesetXml(c.name, path))}});
     std::ofstream(dir.parent_path() / "w.pfm", std::ios::binary) << warp; // there, but outside
-    EXPECT_EQ(refusal(dir / "mpcdi.xml"),
+    EXPECT_EQ(unpackedRefusal(dir / "mpcdi.xml"),
               (dir / "mpcdi.xml").string() + ": mpcdi.xml: region \"north\": geometryWarpFile: " +
                   path + ": not a path in the MPCDI's folder");
   }
@@ -78,13 +78,13 @@ TEST(MpcdiUnpacked, ItsPathsStayInItsFolder) {
       folder("missing",
              {{"mpcdi.xml",
                test::documentXml("3d", test::regionXml(c), test::filesetXml(c.name, "w.pfm"))}});
-  EXPECT_EQ(refusal(dir / "mpcdi.xml"),
+  EXPECT_EQ(unpackedRefusal(dir / "mpcdi.xml"),
             (dir / "mpcdi.xml").string() +
                 ": mpcdi.xml: region \"north\": geometryWarpFile: w.pfm: cannot be read (beside "
                 "the mpcdi.xml)");
   // Neither a zip nor XML: said so.
   std::ofstream(dir / "junk.mpcdi") << "junk";
-  EXPECT_EQ(refusal(dir / "junk.mpcdi"),
+  EXPECT_EQ(unpackedRefusal(dir / "junk.mpcdi"),
             (dir / "junk.mpcdi").string() +
                 ": not a zip archive (an .mpcdi file is a zip of mpcdi.xml and its files)");
 }
@@ -113,7 +113,7 @@ std::string mystiqueDocument(const std::string& profile, const std::string& warp
 
 TEST(MpcdiUnpacked, AMystiqueExportIsReadOrRefusedByItsProfile) {
   const fs::path sl = folder("mystique-sl", {{"show.mpcdi.xml", mystiqueDocument("sl", "")}});
-  EXPECT_EQ(refusal(sl / "show.mpcdi.xml"),
+  EXPECT_EQ(unpackedRefusal(sl / "show.mpcdi.xml"),
             (sl / "show.mpcdi.xml").string() +
                 ": mpcdi.xml: profile \"sl\" is not read: tellus reads \"2d\" (2D media) and "
                 "\"3d\" (3D simulation), not \"a3\" (advanced 3D) or \"sl\" (shader lamp)");
@@ -130,7 +130,7 @@ TEST(MpcdiUnpacked, AMystiqueExportIsReadOrRefusedByItsProfile) {
   EXPECT_EQ(read->front().warpMesh->columns, 5);
   // Its empty path: refused as a missing warp.
   const fs::path empty = folder("mystique-empty", {{"show.mpcdi.xml", mystiqueDocument("3d", "")}});
-  EXPECT_EQ(refusal(empty / "show.mpcdi.xml"),
+  EXPECT_EQ(unpackedRefusal(empty / "show.mpcdi.xml"),
             (empty / "show.mpcdi.xml").string() +
                 ": mpcdi.xml: region \"north\": no geometryWarpFile with a <path>");
 }

@@ -275,6 +275,12 @@ int runCluster(const cli::Args& a) {
     if (auto bad = planet::flightBodiesProblem(*c.flight, first.body()))
       return say(*bad, kExitUsage);
   c.bodies = orbitableBodies(a, c.flight ? &*c.flight : nullptr, tiles->body);
+  // The layers the console may set, every rank alike: the base, then the overlays.
+  c.layers.push_back({ro.layer, 1.0, true, {}});
+  for (const auto& o : ro.overlays)
+    c.layers.push_back({o.layer, o.opacity, o.visible, {}});
+  for (std::size_t i = 0; i < c.layers.size() && i < tiles->layerTimes.size(); ++i)
+    c.layers[i].times = tiles->layerTimes[i];
   if (c.flight) addFlightSceneBodies(*tiles, *c.flight, c.bodies);
   if (comm && rank == 0) {
     std::vector<planet::Body> bodies{first.body()};
@@ -282,7 +288,10 @@ int runCluster(const cli::Args& a) {
       bodies.push_back(resolveBody(c.bodies[i], nullptr, tiles->earth));
     std::unique_ptr<Console> console;
     if (!c.control.empty()) {
-      auto started = Console::start(c.control);
+      std::vector<ConsoleLayer> layers;
+      for (const ClusterLayer& l : c.layers)
+        layers.push_back({l.name, l.times});
+      auto started = Console::start(c.control, std::move(layers));
       if (!started) {
         std::fprintf(stderr, "tellus cluster: %s\n", started.error().c_str());
         comm->abort(kExitUsage); // the channels wait for the master's first frame

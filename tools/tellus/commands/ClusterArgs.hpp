@@ -31,6 +31,14 @@ namespace tellus::commands {
 
 class Console;
 
+/** A drawn layer as the console may set it (0 the base, then the overlays). */
+struct ClusterLayer {
+  std::string name;
+  double opacity = 1.0; ///< as configured (overlays)
+  bool visible = true;
+  std::vector<std::string> times; ///< its TIME values: FrameState::layerTime indexes them
+};
+
 /** The arguments every rank parses alike (mpirun gives each the same command line). */
 struct ClusterArgs {
   std::vector<planet::Channel> channels;
@@ -61,6 +69,8 @@ struct ClusterArgs {
   /// The bodies the camera may orbit (FlightRenderers.hpp's orbitableBodies: the configuration's,
   /// then each other body --path's keyframes name); FrameState::body indexes them.
   std::vector<std::string> bodies;
+  /// The layers the first body's renderers draw, as configured; the console changes them.
+  std::vector<ClusterLayer> layers;
 };
 
 /** Whether the channel renders another size than its projector's (CONFIG.json's "render",
@@ -77,8 +87,9 @@ bool appendLine(const std::filesystem::path& file, const std::string& line);
 /** --window and --preview [SIZE] (ClusterPreview.cpp): "" or what is wrong (no display). */
 std::string parseWindows(const cli::Args& a, ClusterArgs& c);
 
-/** The state's scene time and layer times (those of --path's keyframes at its layerTimesAtS; a
- * layer switches once its new time's tiles are there: Renderer::setLayerTime) set on r. */
+/** The state's scene time and layer times (those of --path's keyframes at its layerTimesAtS, or
+ * the console's; a layer switches once its new time's tiles are there: Renderer::setLayerTime)
+ * and the console's opacity and visibility set on r (on the layers named as c.layers). */
 void applyFrameState(planet::Renderer& r, const ClusterArgs& c, const cluster::FrameState& s);
 
 /** Frames of one state until complete (--wait-complete, up to its seconds) or one; whether the

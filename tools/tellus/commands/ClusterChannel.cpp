@@ -32,13 +32,27 @@ bool renderState(planet::Renderer& r, const planet::CameraPose& pose, const Clus
 
 void applyFrameState(planet::Renderer& r, const ClusterArgs& c, const cluster::FrameState& s) {
   r.setTime(s.hasSceneTime ? std::optional<double>(s.sceneTimeUnixS) : std::nullopt);
-  if (s.hasLayerTimes == 0 || !c.flight) return;
-  const std::map<std::string, std::string> times = c.flight->layerTimesAt(s.layerTimesAtS);
   const auto& layers = r.stats().layers;
-  for (const auto& [name, time] : times)
-    for (std::size_t i = 0; i < layers.size(); ++i)
-      if (layers[i].name == name && layers[i].time != time && layers[i].pendingTime != time)
-        r.setLayerTime(i, time);
+  std::map<std::size_t, std::string> wanted; // by layer: the keyframes' time, else the console's
+  if (s.hasLayerTimes != 0 && c.flight)
+    for (const auto& [name, time] : c.flight->layerTimesAt(s.layerTimesAtS))
+      for (std::size_t i = 0; i < layers.size(); ++i)
+        if (layers[i].name == name) wanted[i] = time;
+  // The console's: on the layers of c.layers (the first body's renderers draw them).
+  const std::size_t n =
+      std::min({layers.size(), c.layers.size(), std::size_t{cluster::kFrameLayers}});
+  for (std::size_t i = 0; i < n; ++i) {
+    if (layers[i].name != c.layers[i].name) continue;
+    const auto& times = c.layers[i].times;
+    if (const int t = s.layerTime[i]; t >= 0 && static_cast<std::size_t>(t) < times.size())
+      wanted[i] = times[static_cast<std::size_t>(t)];
+    if (i == 0) continue; // the base has neither
+    const double opacity = static_cast<double>(s.layerOpacity[i]);
+    if (layers[i].opacity != opacity) r.setLayerOpacity(i, opacity);
+    if (layers[i].visible != (s.layerVisible[i] != 0)) r.setLayerVisible(i, s.layerVisible[i] != 0);
+  }
+  for (const auto& [i, time] : wanted)
+    if (layers[i].time != time && layers[i].pendingTime != time) r.setLayerTime(i, time);
 }
 
 int runChannel(cluster::Comm& comm,

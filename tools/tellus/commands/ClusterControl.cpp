@@ -2,8 +2,10 @@
 
 #include "ClusterControl.hpp"
 
+#include <tellus/cluster/FrameState.hpp>
 #include <tellus/proxy/HttpServer.hpp>
 
+#include <algorithm>
 #include <charconv>
 
 namespace tellus::commands {
@@ -13,9 +15,38 @@ HttpResponse json(int status, std::string_view body) {
   return HttpResponse::text(status, "application/json", body);
 }
 
+/** The layer command checked against the layers: their indexes, else why not. */
+std::expected<std::pair<int, int>, std::string>
+resolveLayer(const cluster::LayerCommand& l, const std::vector<ConsoleLayer>& layers) {
+  for (std::size_t i = 0; i < layers.size(); ++i) {
+    if (layers[i].name != l.layer) continue;
+    if (i >= static_cast<std::size_t>(cluster::kFrameLayers))
+      return std::unexpected(l.layer + ": a frame carries the first " +
+                             std::to_string(cluster::kFrameLayers) + " layers only");
+    if (i == 0 && (l.opacity || l.visible))
+      return std::unexpected(l.layer + " is the base layer: only its time can be set");
+    int time = -1;
+    if (l.time) {
+      const auto& t = layers[i].times;
+      const auto it = std::find(t.begin(), t.end(), *l.time);
+      if (it == t.end())
+        return std::unexpected(l.layer + " has no time " + *l.time +
+                               (t.empty() ? std::string(" (it has no times)")
+                                          : " (" + t.front() + " ... " + t.back() + ")"));
+      time = static_cast<int>(it - t.begin());
+    }
+    return std::pair{static_cast<int>(i), time};
+  }
+  std::string names;
+  for (const ConsoleLayer& x : layers)
+    names += (names.empty() ? "" : ", ") + x.name;
+  return std::unexpected("no drawn layer " + l.layer + " (drawn: " + names + ")");
+}
+
 } // namespace
 
-std::expected<std::unique_ptr<Console>, std::string> Console::start(const std::string& hostPort) {
+std::expected<std::unique_ptr<Console>, std::string>
+Console::start(const std::string& hostPort, std::vector<ConsoleLayer> layers) {
   const auto colon = hostPort.rfind(':');
   if (colon == std::string::npos)
     return std::unexpected("--control must be HOST:PORT: " + hostPort);
@@ -30,6 +61,7 @@ std::expected<std::unique_ptr<Console>, std::string> Console::start(const std::s
   if (digits.empty() || ec != std::errc() || end != digits.data() + digits.size() || port > 65535)
     return std::unexpected("--control's port must be 0-65535: " + hostPort);
   std::unique_ptr<Console> console(new Console());
+  console->layers_ = std::move(layers);
   HttpServerOptions o;
   o.host = host == "localhost" ? "127.0.0.1" : host;
   o.port = static_cast<std::uint16_t>(port);
@@ -49,6 +81,12 @@ std::expected<std::unique_ptr<Console>, std::string> Console::start(const std::s
       return respond(json(200, self->status_));
     }
     ConsoleCommand c{std::move(*parsed), std::nullopt};
+    if (const auto* l = std::get_if<cluster::LayerCommand>(&c.request)) {
+      const auto at = resolveLayer(*l, self->layers_);
+      if (!at) return respond(json(400, cluster::errorJson(at.error())));
+      c.layer = at->first;
+      c.time = at->second;
+    }
     if (const auto* p = std::get_if<cluster::PathCommand>(&c.request); p && !p->file.empty()) {
       auto flight = planet::FlightPath::read(p->file);
       if (!flight) return respond(json(400, cluster::errorJson(flight.error())));

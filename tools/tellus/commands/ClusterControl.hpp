@@ -28,12 +28,23 @@ namespace tellus::commands {
 struct ConsoleCommand {
   cluster::ControlRequest request;
   std::optional<planet::FlightPath> flight; ///< PathCommand Play with a file: the file read
+  int layer = -1; ///< LayerCommand: the layer's index (0 the base, then the overlays)
+  int time = -1;  ///< LayerCommand with a time: its index in the layer's TIME values
+};
+
+/** A layer the console may set: its name and TIME values. */
+struct ConsoleLayer {
+  std::string name;
+  std::vector<std::string> times;
 };
 
 class Console {
 public:
-  /** Listens on HOST:PORT (loopback only; PORT 0: any free one). */
-  static std::expected<std::unique_ptr<Console>, std::string> start(const std::string& hostPort);
+  /** Listens on HOST:PORT (loopback only; PORT 0: any free one). POST /layer names one of
+   * `layers` (those a frame's state carries; opacity and visibility for overlays only), its
+   * time one of the layer's: else a 400 saying so. */
+  static std::expected<std::unique_ptr<Console>, std::string>
+  start(const std::string& hostPort, std::vector<ConsoleLayer> layers);
   ~Console();
   std::uint16_t port() const;
   /** The commands queued since the last call, in order. */
@@ -47,6 +58,7 @@ private:
   std::mutex mutex_;
   std::vector<ConsoleCommand> queue_;
   std::string status_ = "{}\n";
+  std::vector<ConsoleLayer> layers_;
 };
 
 } // namespace tellus::commands

@@ -94,6 +94,15 @@ struct Show {
   /// the console loads has none: ClusterControl.cpp refuses them).
   bool ranksHaveFlight = false;
   std::optional<double> layerTimesAtS; ///< where along --path the layer times were last taken
+  /// The layers as the console set them (from ClusterArgs::layers): opacity, visibility, and the
+  /// time's index in the layer's TIME values (-1: not set).
+  struct LayerState {
+    double opacity = 1.0;
+    bool visible = true;
+    int time = -1;
+  };
+  std::vector<LayerState> layers;
+  const std::vector<ClusterLayer>* layerList = nullptr;
 
   std::int64_t count() const { return flight ? flight->frameCount(fps) : 1; }
 
@@ -114,6 +123,11 @@ struct Show {
     s.hasLayerTimes = layerTimesAtS ? 1 : 0;
     s.layerTimesAtS = layerTimesAtS.value_or(0.0);
     s.body = static_cast<std::int32_t>(orbit.current());
+    for (std::size_t i = 0; i < layers.size() && i < std::size_t{cluster::kFrameLayers}; ++i) {
+      s.layerOpacity[i] = static_cast<float>(layers[i].opacity);
+      s.layerVisible[i] = layers[i].visible ? 1 : 0;
+      s.layerTime[i] = layers[i].time;
+    }
     return s;
   }
 
@@ -136,6 +150,11 @@ struct Show {
       camera = cluster::applyCamera(*cam, camera);
       cameraMode = true;
       playing = false;
+    } else if (const auto* l = std::get_if<cluster::LayerCommand>(&command.request)) {
+      LayerState& layer = layers.at(static_cast<std::size_t>(command.layer)); // the console's
+      layer.opacity = l->opacity.value_or(layer.opacity);
+      layer.visible = l->visible.value_or(layer.visible);
+      if (command.time >= 0) layer.time = command.time;
     } else if (const auto* t = std::get_if<cluster::TimeCommand>(&command.request)) {
       sceneTime = t->unixS;
     } else if (const auto* p = std::get_if<cluster::PathCommand>(&command.request)) {
@@ -163,6 +182,14 @@ struct Show {
     r.path = file;
     r.playing = playing && !cameraMode;
     r.pathSeconds = flight ? flight->frameTimeS(pathFrame, fps) - flight->startS() : 0.0;
+    for (std::size_t i = 0; i < layers.size(); ++i) {
+      const ClusterLayer& l = (*layerList)[i];
+      const int t = layers[i].time;
+      r.layers.push_back({l.name,
+                          layers[i].opacity,
+                          layers[i].visible,
+                          t >= 0 ? l.times[static_cast<std::size_t>(t)] : std::string()});
+    }
     return r;
   }
 };
@@ -226,6 +253,9 @@ int runMaster(cluster::Comm& comm,
   show.camera = c.pose;
   show.sceneTime = sceneTime;
   show.fps = c.fps;
+  show.layerList = &c.layers;
+  for (const ClusterLayer& l : c.layers)
+    show.layers.push_back({l.opacity, l.visible, -1});
   planet::OrbitSwitcher orbit(std::move(bodies));
   const auto start = std::chrono::steady_clock::now();
   std::int64_t n = 0;

@@ -57,7 +57,7 @@ commands:
              jobs under mpirun --ompi-server file:URI); a channel restarted alone:
              mpirun -n 1 tellus cluster CONFIG.json --join NAME --port FILE (as the master);
              [--control 127.0.0.1:PORT] the console: GET /status, POST /camera, /time,
-             /path (HTTP/JSON on loopback; PORT 0: any, printed)
+             /path, /layer (HTTP/JSON on loopback; PORT 0: any, printed)
              [--render-scale S] each channel rendered at S x its projector's size (0.25-4;
              CONFIG.json's "render" [W, H] per channel), warped down to the projector's;
              [--window] each channel in a window of its size, warped and blended on the

@@ -12,6 +12,8 @@
  *   POST /time   {"unix": SECONDS}   the scene's time (UTC, POSIX seconds)
  *   POST /path   {"action": "play", "file": PATH.json}   plays a path from its start
  *                {"action": "play"} | {"action": "pause"} | {"action": "seek", "seconds": S}
+ *   POST /layer  {"layer": NAME, "opacity": 0-1, "visible": B, "time": T}  any of the last three:
+ *                                    a drawn layer's (the base's time only)
  */
 
 #include <tellus/planet/Camera.hpp>
@@ -38,7 +40,14 @@ struct PathCommand {
   std::string file;     ///< Play: a path file to load ("" resumes the one there is)
   double seconds = 0.0; ///< Seek: from the path's start
 };
-using ControlRequest = std::variant<StatusQuery, CameraCommand, TimeCommand, PathCommand>;
+struct LayerCommand { ///< the fields given; the others stay as they are
+  std::string layer;
+  std::optional<double> opacity;
+  std::optional<bool> visible;
+  std::optional<std::string> time;
+};
+using ControlRequest =
+    std::variant<StatusQuery, CameraCommand, TimeCommand, PathCommand, LayerCommand>;
 
 struct ControlError {
   int status = 400; ///< 400 bad body, 404 no such path, 405 the wrong method
@@ -59,6 +68,13 @@ struct ChannelReport {
   std::int64_t lastFrame = -1;
 };
 
+struct LayerReport {
+  std::string name;
+  double opacity = 1.0;
+  bool visible = true;
+  std::string time; ///< "" the layer's own (or its keyframes')
+};
+
 struct StatusReport {
   std::int64_t frame = 0;
   planet::CameraPose camera;
@@ -67,6 +83,7 @@ struct StatusReport {
   bool playing = false;
   double pathSeconds = 0.0;
   std::vector<ChannelReport> channels;
+  std::vector<LayerReport> layers;
 };
 
 /** GET /status's body. */

@@ -15,6 +15,9 @@
 
 namespace tellus::cluster {
 
+/** The layers a frame's state carries (the base and seven overlays). */
+inline constexpr int kFrameLayers = 8;
+
 struct FrameState {
   std::int64_t frame = 0; ///< 0, 1, ...; -1: the show is over (the channels stop)
   double latDeg = 0.0;    ///< the camera's pose (planet::CameraPose), in double
@@ -37,6 +40,13 @@ struct FrameState {
   /// derives from --path alike (the first body, then each other one the keyframes name); 0 the
   /// first. The pose is over that body.
   std::int32_t body = 0;
+  /// The drawn layers (0 the base, then the overlays; the first kFrameLayers) as the console set
+  /// them: opacity and visibility (overlays), and the time as an index into the layer's TIME
+  /// values (which every rank lists from the same configuration; -1: not set by the console, the
+  /// layer's own or its keyframes').
+  float layerOpacity[kFrameLayers] = {1, 1, 1, 1, 1, 1, 1, 1};
+  std::int32_t layerTime[kFrameLayers] = {-1, -1, -1, -1, -1, -1, -1, -1};
+  std::uint8_t layerVisible[kFrameLayers] = {1, 1, 1, 1, 1, 1, 1, 1};
 
   planet::CameraPose pose() const noexcept {
     return {latDeg, lonDeg, altitudeM, headingDeg, tiltDeg};
