@@ -12,7 +12,7 @@ tellus=$1
 work=$(mktemp -d "${TMPDIR:-/tmp}/tellus-cluster-stop.XXXXXX")
 mpirun_pid=
 cleanup() {
-  [ -n "$mpirun_pid" ] && kill -9 "$mpirun_pid" 2>/dev/null
+  if [ -n "$mpirun_pid" ]; then kill -9 "$mpirun_pid" 2>/dev/null || true; fi
   pkill -9 -f "$work/dome.json" 2>/dev/null || true
   [ -n "${KEEP:-}" ] || rm -rf "$work"
 }
