@@ -7,25 +7,10 @@
 set -uo pipefail
 tellus=$(realpath "${1:-build/tools/tellus/tellus}")
 runs=${2:-5}
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+. "$(dirname "$0")/../tests/cli/cluster_support.sh" # wait_for, rank_pid
 lines() { [ -f "$1" ] && wc -l <"$1" || echo 0; }
-# until_true SECONDS COMMAND...: polls the command until it succeeds (false after SECONDS).
-until_true() {
-  local end=$((SECONDS + $1))
-  shift
-  until "$@"; do
-    [ $SECONDS -lt $end ] || return 1
-    sleep 0.2
-  done
-}
 at_least() { [ "$(lines "$1")" -ge "$2" ]; }
 said() { [ "$(grep -c "$1" "$2")" -ge "$3" ]; }
-rank_pid() {
-  for p in $(pgrep -P "$1"); do
-    grep -qxz "OMPI_COMM_WORLD_RANK=$2" "/proc/$p/environ" && { echo "$p"; return 0; }
-  done
-  return 1
-}
 one_run() {
   local work ok=1
   work=$(mktemp -d "${TMPDIR:-/tmp}/tellus-rejoin.XXXXXX")
@@ -39,21 +24,21 @@ one_run() {
     --fps 20 --realtime --loop --channel-timeout 5 --port "$work/port" --out "$work/o")
   ompi-server --no-daemonize -r "$work/uri" &
   local server=$!
-  until_true 20 test -s "$work/uri" || ok=0
+  wait_for 20 test -s "$work/uri" || ok=0
   local mpi=(--oversubscribe --ompi-server "file:$work/uri")
   mpirun "${mpi[@]}" --enable-recovery -n 3 "$tellus" cluster "$work/dome.json" "${opts[@]}" \
     >"$work/master.out" 2>"$work/master.err" &
   local job=$! joiners=() frames
-  until_true 120 at_least "$work/o/digest-master.txt" 10 || ok=0
+  wait_for 120 at_least "$work/o/digest-master.txt" 10 || ok=0
   kill -9 "$(rank_pid "$job" 2)" 2>/dev/null
   for round in 1 2; do
-    until_true 30 said "channel east lost" "$work/master.err" "$round" || ok=0
+    wait_for 30 said "channel east lost" "$work/master.err" "$round" || ok=0
     mpirun "${mpi[@]}" -n 1 "$tellus" cluster "$work/dome.json" "${opts[@]}" --join east \
       >"$work/east$round.out" 2>&1 &
     joiners+=($!)
-    until_true 60 said "channel east rejoined" "$work/master.err" "$round" || ok=0
+    wait_for 60 said "channel east rejoined" "$work/master.err" "$round" || ok=0
     frames=$(lines "$work/o/digest-master.txt")
-    until_true 30 at_least "$work/o/digest-master.txt" $((frames + 20)) || ok=0
+    wait_for 30 at_least "$work/o/digest-master.txt" $((frames + 20)) || ok=0
     [ "$round" = 2 ] || kill -9 $(pgrep -P "${joiners[0]}") 2>/dev/null
   done
   kill -0 "$job" 2>/dev/null || ok=0

@@ -21,30 +21,9 @@ fail() {
   tail -n 20 "$work"/*.err >&2 || true
   exit 1
 }
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 # CI runs as root
-# wait_for SECONDS COMMAND...: polls the command until it succeeds (false after SECONDS).
-wait_for() {
-  local end=$((SECONDS + $1))
-  shift
-  until "$@"; do
-    [ $SECONDS -lt $end ] || return 1
-    sleep 0.1
-  done
-}
+. "$(dirname "$0")/cluster_support.sh"
 lines() { [ -f "$1" ] && wc -l <"$1" || echo 0; }
 at_least() { [ "$(lines "$1")" -ge "$2" ]; }
-# rank_pid MPIRUN_PID RANK: the pid of that rank (mpirun's child with it in its environment).
-# grep -z reads the NUL-separated file itself: `tr | grep -q` under pipefail failed whenever
-# grep quit before tr had written a large environment (tr's SIGPIPE; once in CI).
-rank_pid() {
-  for p in $(pgrep -P "$1"); do
-    if grep -qxz "OMPI_COMM_WORLD_RANK=$2" "/proc/$p/environ"; then
-      echo "$p"
-      return 0
-    fi
-  done
-  return 1
-}
 
 echo '{"channels": [
  {"name": "north", "azimuth": 0, "elevation": 20, "hfov": 110, "vfov": 90, "width": 40, "height": 28},

@@ -22,24 +22,7 @@ fail() {
   tail -n 20 "$work/err" >&2 || true
   exit 1
 }
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 # CI runs as root
-wait_for() { # wait_for SECONDS COMMAND...: polls until it succeeds (false after SECONDS)
-  local end=$((SECONDS + $1))
-  shift
-  until "$@"; do
-    [ $SECONDS -lt $end ] || return 1
-    sleep 0.1
-  done
-}
-rank_pid() { # rank_pid MPIRUN_PID RANK (grep -z: no pipe; see test_cluster_live.sh)
-  for p in $(pgrep -P "$1"); do
-    if grep -qxz "OMPI_COMM_WORLD_RANK=$2" "/proc/$p/environ"; then
-      echo "$p"
-      return 0
-    fi
-  done
-  return 1
-}
+. "$(dirname "$0")/cluster_support.sh"
 
 echo '{"channels": [
  {"name": "a", "azimuth": 0, "elevation": 80, "hfov": 20, "vfov": 20, "width": 32, "height": 32},

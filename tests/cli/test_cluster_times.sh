@@ -26,7 +26,7 @@ trap cleanup EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
 pixel() { python3 "$here/png_pixels.py" "$@"; }
 near() { python3 -c "import sys; v=list(map(int,sys.argv[1:7])); t=int(sys.argv[7]); sys.exit(0 if all(abs(a-b)<=t for a,b in zip(v[:3],v[3:])) else 1)" "$@"; }
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 # CI runs as root
+. "$here/cluster_support.sh"
 
 . "$here/time_upstream.sh"
 time_upstream_config "$work/times.yaml"
@@ -74,23 +74,6 @@ set -e
 # console's time wins over it).
 echo '[{"time": 0, "lat": 10, "lon": 20, "alt": 8e6, "times": {"monthly": "2024-01-01"}},
  {"time": 1, "lat": 10, "lon": 20, "alt": 8e6}]' >"$work/still.json"
-wait_for() { # wait_for SECONDS COMMAND...: polls until it succeeds (false after SECONDS)
-  local end=$((SECONDS + $1))
-  shift
-  until "$@"; do
-    [ $SECONDS -lt $end ] || return 1
-    sleep 0.2
-  done
-}
-rank_pid() { # rank_pid MPIRUN_PID RANK (grep -z: no pipe; see test_cluster_live.sh)
-  for p in $(pgrep -P "$1"); do
-    if grep -qxz "OMPI_COMM_WORLD_RANK=$2" "/proc/$p/environ"; then
-      echo "$p"
-      return 0
-    fi
-  done
-  return 1
-}
 mpirun --oversubscribe -n 3 "$tellus" cluster "$work/dome.json" --config "$work/times.yaml" \
   --overlay monthly,1 --no-sun --no-atmosphere --no-stars --path "$work/still.json" --loop \
   --wait-complete --control 127.0.0.1:0 --out "$work/l" >"$work/master.out" 2>"$work/master.err" &
