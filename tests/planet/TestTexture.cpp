@@ -633,3 +633,57 @@ TEST(TextureFallback, APolarCapIsNeverDrawnInParts) {
   EXPECT_EQ(ringUv.scale.y, 0.5);
   EXPECT_EQ(ringUv.offset, glm::dvec2(0.0, 0.0));
 }
+
+// Where the source gives polar rows whole (NodeTiles, issue 29), a drawn cap asks for ONE tile,
+// `<layer>@caps` at (level, row, 0), instead of its row's tiles; it is kept under the reserved
+// column (one past the row's last) and makes the cap's texture once received. Both poles.
+TEST(TextureStreamer, AWholeRowCapAsksForOneTileOfTheCapsLayer) {
+  const Geodesy g;
+  for (const double lat : {90.0, -90.0}) {
+    SCOPED_TRACE(lat);
+    Quadtree tree(g, planet::test::globalGrid(), treeParams());
+    ASSERT_TRUE(tree.capsEnabled());
+    FakeTileSource src;
+    answerAll(src, TileStatus::Ok);
+    TextureStreamer streamer(src, {"l", "", 1000000, 1.0, 120.0});
+    streamer.setNodeTiles({planet::test::globalGrid().colCount(0)});
+    TextureStreamer composed(src, {"l", "", 1000000, 1.0, 120.0});
+    TextureLru lru(std::size_t{1} << 40);
+    const Camera cam(g, {lat, 0.0, 3.0e6, 0.0, 0.0}, {1024, 768});
+    converge(tree, cam);
+    std::vector<Node*> caps;
+    for (Node* n : tree.drawList())
+      if (n->isCap()) caps.push_back(n);
+    ASSERT_FALSE(caps.empty());
+    streamer.update(tree, cam, 0.0, &lru);
+    std::size_t capRequests = 0;
+    for (const auto& r : src.requests()) {
+      if (r.address.layer == "l@caps") {
+        ++capRequests;
+        EXPECT_EQ(r.address.key.col, 0);
+        continue;
+      }
+      for (const Node* c : caps) // no tile of a drawn cap's row
+        EXPECT_FALSE(r.address.key.level == c->level() && r.address.key.row == c->key().row);
+    }
+    EXPECT_EQ(capRequests, caps.size());
+    streamer.update(tree, cam, 1.0, &lru);
+    for (Node* c : caps) {
+      const TileKey whole{c->level(), c->key().row, c->key().span};
+      EXPECT_EQ(streamer.state(whole), TileFetch::Received);
+      EXPECT_EQ(c->texture, TextureState::Decoding);
+    }
+    // The same view composed asks for each cap's row tiles, min(span, 80) of them.
+    src.forgetRequests();
+    composed.update(tree, cam, 0.0, &lru);
+    std::size_t rowTiles = 0;
+    for (const auto& r : src.requests())
+      for (const Node* c : caps)
+        rowTiles += r.address.layer == "l" && r.address.key.level == c->level() &&
+                    r.address.key.row == c->key().row;
+    std::size_t expected = 0;
+    for (const Node* c : caps)
+      expected += static_cast<std::size_t>(textureTileCount(c->key()));
+    EXPECT_EQ(rowTiles, expected);
+  }
+}
