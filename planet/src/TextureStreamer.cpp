@@ -76,6 +76,12 @@ void TextureStreamer::drain(double nowS) {
       ++stats_.absent;
       break;
     case TileStatus::Failed: {
+      // A whole row refused (a WMS's size limit, an error): the layer's caps are composed of
+      // their rows' tiles from now on, as where the source cannot fetch rows whole.
+      if (nodeTiles_.isWholeRow(key)) {
+        nodeTiles_.wholeRowRootCols = 0;
+        ++stats_.wholeRowsRefused;
+      }
       e.state = TileFetch::Failed;
       ++e.failures;
       ++stats_.failed;
