@@ -9,16 +9,20 @@
 #include <tellus/cache/TileCache.hpp>
 #include <tellus/cache/TilePath.hpp>
 #include <tellus/proxy/Fetcher.hpp>
+#include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
+#include <tellus/proxy/ProxyFrontEnd.hpp>
 #include <tellus/proxy/TileService.hpp>
 
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
 #include <condition_variable>
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
+#include <span>
 
 using namespace tellus;
 using namespace std::chrono_literals;
@@ -192,4 +196,41 @@ TEST(WholeRows, ABadAnswerIsRefusedAndNothingIsCached) {
   ASSERT_TRUE(stats);
   for (const auto& d : *stats)
     EXPECT_EQ(d.tiles, 0) << d.dataset.spec.name;
+}
+
+// Through `tellus serve`: a renderer's tile service whose WMS upstream is another tellus's /wms
+// asks it for the whole row with the same one GetMap; that server composes it from its own tiles
+// (a 2048 x 256 map of the row), and the picture is the synthetic source's (PSNR >= 35 dB).
+TEST(WholeRows, ThroughTellusServeTheSameOneGetMapIsComposedThere) {
+  test::FakeUpstream up([](const test::FakeRequest& r) { return test::syntheticReply(r); });
+  Service server(up.url("/wms"), UpstreamSpec::Type::Wms);
+  ProxyFrontEnd front(*server.tiles, {});
+  HttpServerOptions so;
+  so.threads = 1;
+  HttpServer http(so, [&](HttpRequest&& r, Responder respond) {
+    front.handle(std::move(r), std::move(respond));
+  });
+  ASSERT_TRUE(http.start());
+  Service renderer("http://127.0.0.1:" + std::to_string(http.port()) + "/wms",
+                   UpstreamSpec::Type::Wms);
+  const TileResult r = renderer.get("sat@caps", {0, 4, 0});
+  ASSERT_EQ(r.status, TileStatus::Ok) << r.message;
+  EXPECT_EQ(renderer.tiles->upstreamFetches(), 1u);
+  EXPECT_GE(up.requests(), 10u); // the server's own tiles of the row, from the synthetic WMS
+  const auto got = decodeImagery(r.bytes, "image/jpeg", 2048, 256);
+  ASSERT_TRUE(got) << got.error();
+  const std::string ref = test::syntheticJpeg(-180, 54, 180, 90, 2048, 256); // row 4: 54..90
+  const auto want =
+      decodeImagery(std::as_bytes(std::span(ref.data(), ref.size())), "image/jpeg", 2048, 256);
+  ASSERT_TRUE(want);
+  double sum = 0.0;
+  for (std::size_t i = 0; i < got->pixels.size(); ++i) {
+    const double d = static_cast<double>(got->pixels[i]) - static_cast<double>(want->pixels[i]);
+    sum += d * d;
+  }
+  const double psnr =
+      10.0 * std::log10(255.0 * 255.0 * static_cast<double>(got->pixels.size()) / sum);
+  std::printf("through tellus serve: PSNR %.1f dB against the source\n", psnr);
+  EXPECT_GE(psnr, 35.0);
+  http.stop();
 }
