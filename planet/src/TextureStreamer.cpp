@@ -64,6 +64,13 @@ void TextureStreamer::drain(double nowS) {
     Entry& e = tiles_[key];
     if (e.state != TileFetch::InFlight || e.token != token) continue;
     --stats_.inFlight;
+    // A whole row refused (a WMS's size limit, an error) or not there (offline, not cached): the
+    // layer's caps are composed of their rows' tiles from now on, as where the source cannot
+    // give rows whole.
+    if (result.status != TileStatus::Ok && nodeTiles_.isWholeRow(key)) {
+      nodeTiles_.wholeRowRootCols = 0;
+      ++stats_.wholeRowsRefused;
+    }
     switch (result.status) {
     case TileStatus::Ok:
       e.state = TileFetch::Received;
@@ -76,12 +83,6 @@ void TextureStreamer::drain(double nowS) {
       ++stats_.absent;
       break;
     case TileStatus::Failed: {
-      // A whole row refused (a WMS's size limit, an error): the layer's caps are composed of
-      // their rows' tiles from now on, as where the source cannot fetch rows whole.
-      if (nodeTiles_.isWholeRow(key)) {
-        nodeTiles_.wholeRowRootCols = 0;
-        ++stats_.wholeRowsRefused;
-      }
       e.state = TileFetch::Failed;
       ++e.failures;
       ++stats_.failed;

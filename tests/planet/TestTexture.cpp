@@ -688,35 +688,39 @@ TEST(TextureStreamer, AWholeRowCapAsksForOneTileOfTheCapsLayer) {
   }
 }
 
-// A whole row the source fails (a WMS's size limit, an error page) turns whole rows off: the
-// cap is then composed of its row's tiles, as where the source cannot give rows whole.
+// A whole row the source fails (a WMS's size limit, an error page) or does not have (offline,
+// not cached) turns whole rows off: the cap is then composed of its row's tiles, as where the
+// source cannot give rows whole.
 TEST(TextureStreamer, AFailedWholeRowFallsBackToComposingTheCap) {
-  const Geodesy g;
-  Quadtree tree(g, planet::test::globalGrid(), treeParams());
-  FakeTileSource src;
-  src.setFallbackAnswer([](const TileAddress& a) {
-    return tile(a.layer == "l@caps" ? TileStatus::Failed : TileStatus::Ok);
-  });
-  TextureStreamer streamer(src, {"l", "", 1000000, 1.0, 120.0});
-  streamer.setNodeTiles({planet::test::globalGrid().colCount(0)});
-  TextureLru lru(std::size_t{1} << 40);
-  const Camera cam(g, {90.0, 0.0, 3.0e5, 0.0, 0.0}, {1024, 768});
-  converge(tree, cam);
-  const Node* cap = nullptr;
-  for (const Node* n : tree.drawList())
-    if (n->isCap()) cap = n;
-  ASSERT_NE(cap, nullptr);
-  streamer.update(tree, cam, 0.0, &lru);
-  EXPECT_EQ(src.requestsFor("l@caps"), 1u);
-  streamer.update(tree, cam, 1.0, &lru); // the failure arrives: the row's tiles are asked for
-  EXPECT_EQ(streamer.stats().wholeRowsRefused, 1u);
-  EXPECT_EQ(streamer.nodeTiles().wholeRowRootCols, 0);
-  std::size_t rowTiles = 0;
-  for (const auto& r : src.requests())
-    rowTiles += r.address.layer == "l" && r.address.key.level == cap->level() &&
-                r.address.key.row == cap->key().row;
-  EXPECT_EQ(rowTiles, static_cast<std::size_t>(textureTileCount(cap->key())));
-  streamer.update(tree, cam, 2.0, &lru);
-  EXPECT_EQ(src.requestsFor("l@caps"), 1u); // never again
-  EXPECT_EQ(cap->texture, TextureState::Decoding);
+  for (const TileStatus refused : {TileStatus::Failed, TileStatus::Absent}) {
+    SCOPED_TRACE(static_cast<int>(refused));
+    const Geodesy g;
+    Quadtree tree(g, planet::test::globalGrid(), treeParams());
+    FakeTileSource src;
+    src.setFallbackAnswer([refused](const TileAddress& a) {
+      return tile(a.layer == "l@caps" ? refused : TileStatus::Ok);
+    });
+    TextureStreamer streamer(src, {"l", "", 1000000, 1.0, 120.0});
+    streamer.setNodeTiles({planet::test::globalGrid().colCount(0)});
+    TextureLru lru(std::size_t{1} << 40);
+    const Camera cam(g, {90.0, 0.0, 3.0e5, 0.0, 0.0}, {1024, 768});
+    converge(tree, cam);
+    const Node* cap = nullptr;
+    for (const Node* n : tree.drawList())
+      if (n->isCap()) cap = n;
+    ASSERT_NE(cap, nullptr);
+    streamer.update(tree, cam, 0.0, &lru);
+    EXPECT_EQ(src.requestsFor("l@caps"), 1u);
+    streamer.update(tree, cam, 1.0, &lru); // the failure arrives: the row's tiles are asked for
+    EXPECT_EQ(streamer.stats().wholeRowsRefused, 1u);
+    EXPECT_EQ(streamer.nodeTiles().wholeRowRootCols, 0);
+    std::size_t rowTiles = 0;
+    for (const auto& r : src.requests())
+      rowTiles += r.address.layer == "l" && r.address.key.level == cap->level() &&
+                  r.address.key.row == cap->key().row;
+    EXPECT_EQ(rowTiles, static_cast<std::size_t>(textureTileCount(cap->key())));
+    streamer.update(tree, cam, 2.0, &lru);
+    EXPECT_EQ(src.requestsFor("l@caps"), 1u); // never again
+    EXPECT_EQ(cap->texture, TextureState::Decoding);
+  }
 }

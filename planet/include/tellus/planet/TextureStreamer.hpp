@@ -65,7 +65,7 @@ struct StreamStats {
   std::size_t failed = 0;
   std::size_t inFlight = 0;         ///< now
   std::size_t candidates = 0;       ///< nodes wanting a texture in the last update
-  std::size_t wholeRowsRefused = 0; ///< whole-row failures (caps are composed since the first)
+  std::size_t wholeRowsRefused = 0; ///< whole rows failed or absent (caps composed since)
 };
 
 class TextureStreamer {
@@ -96,8 +96,8 @@ public:
 
   TileFetch state(const TileKey& key) const noexcept;
   /** Which tiles make a node's texture (a cap: one whole row where the source gives it); set
-   * before the first update. A whole row that fails turns it off for good: caps are then
-   * composed of their rows' tiles, and the node shows its parent cap or the global texture
+   * before the first update. A whole row that fails or is absent turns it off for good: caps are
+   * then composed of their rows' tiles, and the node shows its parent cap or the global texture
    * until they arrive. */
   void setNodeTiles(NodeTiles tiles) noexcept { nodeTiles_ = tiles; }
   const NodeTiles& nodeTiles() const noexcept { return nodeTiles_; }
