@@ -16,27 +16,27 @@ using namespace tellus::planet;
 
 namespace {
 
-QuadtreeParams treeParams() {
+QuadtreeParams capTreeParams() {
   QuadtreeParams p;
   p.lod = {512, 512, 1.0};
   p.maxSplitsPerFrame = 100000;
   return p;
 }
 
-void converge(Quadtree& tree, const Camera& cam) {
+void settleCaps(Quadtree& tree, const Camera& cam) {
   for (int i = 0; i < 100; ++i)
     if (tree.update(cam).created == 0) break;
 }
 
 using tellus::test::FakeTileSource;
 
-TileResult tile(TileStatus status) {
+TileResult capTile(TileStatus status) {
   return FakeTileSource::result(
       status, status == TileStatus::Ok ? std::vector<std::byte>(16) : std::vector<std::byte>{});
 }
 
-void answerAll(FakeTileSource& src, TileStatus status) {
-  src.setFallbackAnswer([status](const TileAddress&) { return tile(status); });
+void answerAllCaps(FakeTileSource& src, TileStatus status) {
+  src.setFallbackAnswer([status](const TileAddress&) { return capTile(status); });
 }
 
 } // namespace
@@ -48,16 +48,16 @@ TEST(TextureStreamer, AWholeRowCapAsksForOneTileOfTheCapsLayer) {
   const Geodesy g;
   for (const double lat : {90.0, -90.0}) {
     SCOPED_TRACE(lat);
-    Quadtree tree(g, planet::test::globalGrid(), treeParams());
+    Quadtree tree(g, planet::test::globalGrid(), capTreeParams());
     ASSERT_TRUE(tree.capsEnabled());
     FakeTileSource src;
-    answerAll(src, TileStatus::Ok);
+    answerAllCaps(src, TileStatus::Ok);
     TextureStreamer streamer(src, {"l", "", 1000000, 1.0, 120.0});
     streamer.setNodeTiles({planet::test::globalGrid().colCount(0)});
     TextureStreamer composed(src, {"l", "", 1000000, 1.0, 120.0});
     TextureLru lru(std::size_t{1} << 40);
     const Camera cam(g, {lat, 0.0, 3.0e6, 0.0, 0.0}, {1024, 768});
-    converge(tree, cam);
+    settleCaps(tree, cam);
     std::vector<Node*> caps;
     for (Node* n : tree.drawList())
       if (n->isCap()) caps.push_back(n);
@@ -102,16 +102,16 @@ TEST(TextureStreamer, AFailedWholeRowFallsBackToComposingTheCap) {
   for (const TileStatus refused : {TileStatus::Failed, TileStatus::Absent}) {
     SCOPED_TRACE(static_cast<int>(refused));
     const Geodesy g;
-    Quadtree tree(g, planet::test::globalGrid(), treeParams());
+    Quadtree tree(g, planet::test::globalGrid(), capTreeParams());
     FakeTileSource src;
     src.setFallbackAnswer([refused](const TileAddress& a) {
-      return tile(a.layer == "l@caps" ? refused : TileStatus::Ok);
+      return capTile(a.layer == "l@caps" ? refused : TileStatus::Ok);
     });
     TextureStreamer streamer(src, {"l", "", 1000000, 1.0, 120.0});
     streamer.setNodeTiles({planet::test::globalGrid().colCount(0)});
     TextureLru lru(std::size_t{1} << 40);
     const Camera cam(g, {90.0, 0.0, 3.0e5, 0.0, 0.0}, {1024, 768});
-    converge(tree, cam);
+    settleCaps(tree, cam);
     const Node* cap = nullptr;
     for (const Node* n : tree.drawList())
       if (n->isCap()) cap = n;

@@ -33,13 +33,13 @@ constexpr int kLevels = 4;
 
 /** A tile service over one upstream: layer "sat" (global, 36-degree, 256-px JPEG, 4 levels) and
  * layer "band" (every longitude, latitudes -54..54: no pole). */
-struct Service {
+struct RowService {
   test::TempDir dir{"whole-rows"};
   std::unique_ptr<TileCache> cache = test::openTestCache(dir.path());
   Fetcher fetcher;
   std::unique_ptr<TileService> tiles;
 
-  Service(const std::string& url, UpstreamSpec::Type type) {
+  RowService(const std::string& url, UpstreamSpec::Type type) {
     UpstreamSpec u;
     u.name = "up";
     u.type = type;
@@ -92,7 +92,7 @@ std::int64_t lastRow(int level) {
 // (8 tiles of 256 px), kept under the "sat@caps" dataset, served from the cache the second time.
 TEST(WholeRows, ACapIsOneGetMapOfItsRowCachedUnderItsOwnKey) {
   test::FakeUpstream up([](const test::FakeRequest& r) { return test::syntheticReply(r); });
-  Service s(up.url("/wms"), UpstreamSpec::Type::Wms);
+  RowService s(up.url("/wms"), UpstreamSpec::Type::Wms);
   EXPECT_TRUE(s.tiles->wholePolarRows("sat"));
   for (const int level : {0, kLevels - 1})
     for (const bool north : {true, false}) {
@@ -148,7 +148,7 @@ TEST(WholeRows, ACapIsOneGetMapOfItsRowCachedUnderItsOwnKey) {
 // Only rows on a pole, at column 0, exist; a layer without a pole has none.
 TEST(WholeRows, OnlyPolarRowsOfLayersThatReachAPole) {
   test::FakeUpstream up([](const test::FakeRequest& r) { return test::syntheticReply(r); });
-  Service s(up.url("/wms"), UpstreamSpec::Type::Wms);
+  RowService s(up.url("/wms"), UpstreamSpec::Type::Wms);
   EXPECT_FALSE(s.tiles->wholePolarRows("band"));
   EXPECT_EQ(s.get("band@caps", {0, 0, 0}).status, TileStatus::Failed);      // no such layer
   EXPECT_EQ(s.get("sat@caps", {0, 2, 0}).status, TileStatus::Absent);       // not a polar row
@@ -162,7 +162,7 @@ TEST(WholeRows, OnlyPolarRowsOfLayersThatReachAPole) {
 // A World Wind server serves only its grid: no whole rows, the renderer composes.
 TEST(WholeRows, ATileOnlyUpstreamHasNone) {
   test::FakeUpstream up([](const test::FakeRequest& r) { return test::syntheticReply(r); });
-  Service s(up.url("/tiles"), UpstreamSpec::Type::WorldWind);
+  RowService s(up.url("/tiles"), UpstreamSpec::Type::WorldWind);
   EXPECT_FALSE(s.tiles->wholePolarRows("sat"));
   EXPECT_EQ(s.get("sat@caps", {0, 4, 0}).status, TileStatus::Failed);
   EXPECT_EQ(s.get("sat", {0, 4, 0}).status, TileStatus::Ok);
@@ -184,7 +184,7 @@ TEST(WholeRows, ABadAnswerIsRefusedAndNothingIsCached) {
       return test::FakeReply::ok("not a jpeg at all", "image/jpeg");
     }
   });
-  Service s(up.url("/wms"), UpstreamSpec::Type::Wms);
+  RowService s(up.url("/wms"), UpstreamSpec::Type::Wms);
   for (int m = 0; m < 4; ++m) {
     mode = m;
     SCOPED_TRACE(m);
@@ -203,7 +203,7 @@ TEST(WholeRows, ABadAnswerIsRefusedAndNothingIsCached) {
 // (a 2048 x 256 map of the row), and the picture is the synthetic source's (PSNR >= 35 dB).
 TEST(WholeRows, ThroughTellusServeTheSameOneGetMapIsComposedThere) {
   test::FakeUpstream up([](const test::FakeRequest& r) { return test::syntheticReply(r); });
-  Service server(up.url("/wms"), UpstreamSpec::Type::Wms);
+  RowService server(up.url("/wms"), UpstreamSpec::Type::Wms);
   ProxyFrontEnd front(*server.tiles, {});
   HttpServerOptions so;
   so.threads = 1;
@@ -211,8 +211,8 @@ TEST(WholeRows, ThroughTellusServeTheSameOneGetMapIsComposedThere) {
     front.handle(std::move(r), std::move(respond));
   });
   ASSERT_TRUE(http.start());
-  Service renderer("http://127.0.0.1:" + std::to_string(http.port()) + "/wms",
-                   UpstreamSpec::Type::Wms);
+  RowService renderer("http://127.0.0.1:" + std::to_string(http.port()) + "/wms",
+                      UpstreamSpec::Type::Wms);
   const TileResult r = renderer.get("sat@caps", {0, 4, 0});
   ASSERT_EQ(r.status, TileStatus::Ok) << r.message;
   EXPECT_EQ(renderer.tiles->upstreamFetches(), 1u);
