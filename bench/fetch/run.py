@@ -39,6 +39,7 @@ VIEWS = [  # name, lat, lon, alt (m), heading, tilt
     ("globe", 0.0, 0.0, 2e7, 0.0, 0.0),
     ("alps", 46.5, 9.0, 5e3, 0.0, 70.0),
     ("pole", 90.0, 0.0, 5e5, 0.0, 0.0),
+    ("equator", 0.0, 0.0, 5e5, 0.0, 0.0),  # the pole's view at the equator (issue 5's 1.5x)
     ("antimeridian", 0.0, 180.0, 2e5, 0.0, 0.0),
     ("paris", 48.8584, 2.2945, 10.0, 0.0, 80.0),
     ("descent", 45.0, 7.0, 5e5, 30.0, 40.0),

@@ -126,6 +126,10 @@ void CacheTileSource::start() {
   impl_->startLocked();
 }
 
+bool CacheTileSource::wholePolarRows(std::string_view layer) const {
+  return impl_->find(std::string(layer) + std::string(kWholeRowLayerSuffix), "").has_value();
+}
+
 std::optional<DatasetSpec> CacheTileSource::describe(std::string_view layer,
                                                      std::string_view time) const {
   auto d = impl_->find(layer, time);

@@ -43,8 +43,8 @@ std::vector<ReceivedTile> TextureStreamer::takeReceived() {
 }
 
 void TextureStreamer::forget(const NodeKey& key) {
-  for (std::int64_t i = 0; i < textureTileCount(key); ++i) {
-    const auto it = tiles_.find(textureTile(key, i));
+  for (std::int64_t i = 0; i < nodeTiles_.count(key); ++i) {
+    const auto it = tiles_.find(nodeTiles_.tile(key, i));
     if (it != tiles_.end() && it->second.state == TileFetch::Received)
       it->second.state = TileFetch::Idle;
   }
@@ -64,6 +64,13 @@ void TextureStreamer::drain(double nowS) {
     Entry& e = tiles_[key];
     if (e.state != TileFetch::InFlight || e.token != token) continue;
     --stats_.inFlight;
+    // A whole row refused (a WMS's size limit, an error) or not there (offline, not cached): the
+    // layer's caps are composed of their rows' tiles from now on, as where the source cannot
+    // give rows whole.
+    if (result.status != TileStatus::Ok && nodeTiles_.isWholeRow(key)) {
+      nodeTiles_.wholeRowRootCols = 0;
+      ++stats_.wholeRowsRefused;
+    }
     switch (result.status) {
     case TileStatus::Ok:
       e.state = TileFetch::Received;
@@ -89,8 +96,8 @@ void TextureStreamer::drain(double nowS) {
 
 void TextureStreamer::want(const Node& node, double score, double nowS) {
   const NodeKey& k = node.key();
-  for (std::int64_t i = 0; i < textureTileCount(k); ++i) {
-    Entry& e = tiles_[textureTile(k, i)];
+  for (std::int64_t i = 0; i < nodeTiles_.count(k); ++i) {
+    Entry& e = tiles_[nodeTiles_.tile(k, i)];
     if (e.wantedFrame != frame_) {
       e.wantedFrame = frame_;
       e.score = score;
@@ -130,8 +137,8 @@ void TextureStreamer::refreshState(Node& n, const TextureLru* resident) const {
   }
   if (n.texture == TextureState::Uploading) return; // the owner's step
   bool allAbsent = true, anyInFlight = false, allReceived = true;
-  for (std::int64_t i = 0; i < textureTileCount(n.key()); ++i) {
-    const TileFetch f = state(textureTile(n.key(), i));
+  for (std::int64_t i = 0; i < nodeTiles_.count(n.key()); ++i) {
+    const TileFetch f = state(nodeTiles_.tile(n.key(), i));
     allAbsent = allAbsent && f == TileFetch::Absent;
     anyInFlight = anyInFlight || f == TileFetch::InFlight;
     allReceived = allReceived && (f == TileFetch::Received || f == TileFetch::Absent);
@@ -229,8 +236,8 @@ void TextureStreamer::request(const TileKey& key) {
   ++stats_.inFlight;
   ++stats_.requested;
   std::weak_ptr<Inbox> weak = inbox_;
-  e.id =
-      source_.request({params_.layer, params_.time, key}, e.score, [weak, token](TileResult&& r) {
+  e.id = source_.request(
+      nodeTiles_.address(params_.layer, params_.time, key), e.score, [weak, token](TileResult&& r) {
         if (auto inbox = weak.lock()) {
           std::lock_guard lock(inbox->mutex);
           inbox->done.emplace_back(token, std::move(r));

@@ -74,8 +74,8 @@ void TimePrefetcher::update(const Quadtree& tree, std::span<const std::string> t
   for (const std::string& time : times) {
     TimeTiles& tiles = times_[time];
     for (const Node* n : tree.drawList()) {
-      for (std::int64_t i = 0; i < textureTileCount(n->key()); ++i) {
-        const TileKey key = textureTile(n->key(), i);
+      for (std::int64_t i = 0; i < nodeTiles_.count(n->key()); ++i) {
+        const TileKey key = nodeTiles_.tile(n->key(), i);
         ++stats_.wanted;
         if (const auto e = tiles.find(key); e != tiles.end()) {
           if (!e->second.open) ++stats_.settled;
@@ -90,13 +90,14 @@ void TimePrefetcher::update(const Quadtree& tree, std::span<const std::string> t
         ++stats_.requested;
         stats_.maxInFlightSeen = std::max(stats_.maxInFlightSeen, stats_.inFlight);
         std::weak_ptr<Inbox> weak = inbox_;
-        e.id = source_.request(
-            {params_.layer, time, key}, params_.priority, [weak, token](TileResult&& r) {
-              if (auto inbox = weak.lock()) {
-                std::lock_guard lock(inbox->mutex);
-                inbox->done.emplace_back(token, std::move(r));
-              }
-            });
+        e.id = source_.request(nodeTiles_.address(params_.layer, time, key),
+                               params_.priority,
+                               [weak, token](TileResult&& r) {
+                                 if (auto inbox = weak.lock()) {
+                                   std::lock_guard lock(inbox->mutex);
+                                   inbox->done.emplace_back(token, std::move(r));
+                                 }
+                               });
       }
     }
   }

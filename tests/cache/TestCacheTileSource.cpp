@@ -135,3 +135,29 @@ TEST(CacheTileSource, ManyClientsEveryCallbackOnce) {
   EXPECT_EQ(calls, 400);
   EXPECT_EQ(ok, 4 * 60); // columns 0..19 of i % 40 over i < 100
 }
+
+// A cache a tile service filled with whole polar rows (`<layer>@caps`, issue 29) gives them to an
+// offline renderer; without that dataset it has none (caps are composed of the rows' tiles).
+TEST(CacheTileSource, WholeRowsWhereTheCacheHasThem) {
+  Fixture f;
+  CacheTileSource src(*f.cache, 1);
+  EXPECT_FALSE(src.wholePolarRows("bluemarble"));
+  DatasetSpec caps = test::imagerySpec("bluemarble@caps");
+  caps.grid.tileWidth *= kWholeRowWidthFactor;
+  const DatasetId id = *f.cache->registerDataset(caps);
+  const std::vector<std::byte> bytes(500, std::byte{7});
+  ASSERT_TRUE(f.cache->put(id, TileKey{0, 4, 0}, bytes, {}));
+  EXPECT_TRUE(src.wholePolarRows("bluemarble"));
+  Sink sink;
+  src.request({"bluemarble@caps", "", {0, 4, 0}}, 1.0, sink.callback({0, 4, 0}));
+  src.request({"bluemarble@caps", "", {1, 9, 0}}, 1.0, sink.callback({1, 9, 0}));
+  sink.waitFor(2);
+  for (auto& [k, r] : sink.got) {
+    if (k.level == 0) {
+      EXPECT_EQ(r.status, TileStatus::Ok);
+      EXPECT_EQ(r.bytes, bytes);
+    } else {
+      EXPECT_EQ(r.status, TileStatus::Absent); // not cached: the renderer composes that cap
+    }
+  }
+}

@@ -57,8 +57,9 @@ bool LayerTextures::ready() const {
   const auto settled = [&](const Node& n) {
     if (done(n)) return true;
     if (uploading.contains(n.key()) || decoding.contains(n.key())) return false;
-    for (std::int64_t i = 0; i < textureTileCount(n.key()); ++i)
-      if (streamer->state(textureTile(n.key(), i)) == TileFetch::Failed) return true;
+    const NodeTiles& tiles = streamer->nodeTiles();
+    for (std::int64_t i = 0; i < tiles.count(n.key()); ++i)
+      if (streamer->state(tiles.tile(n.key(), i)) == TileFetch::Failed) return true;
     return false;
   };
   for (const Node* n : tree->drawList())
@@ -132,7 +133,10 @@ LayerSet::make(const std::string& name, const std::string& time, bool overlay, i
   sp.layer = name;
   sp.time = time;
   sp.maxInFlight = options_.maxInFlight;
+  // A cap as one whole row where the source can fetch it (issue 29, docs/design/poles.md).
   l->streamer = std::make_unique<TextureStreamer>(source_, sp);
+  if (l->tree->capsEnabled() && source_.wholePolarRows(name))
+    l->streamer->setNodeTiles({g->colCount(0)});
   return l;
 }
 
@@ -221,6 +225,7 @@ void LayerSet::animate(std::size_t layer, std::optional<TimeAnimation> animation
   p.layer = slot.opt.layer;
   p.maxInFlight = slot.animation->options().aheadInFlight;
   slot.prefetch = std::make_unique<TimePrefetcher>(source_, p);
+  if (slot.current) slot.prefetch->setNodeTiles(slot.current->streamer->nodeTiles());
 }
 
 void LayerSet::swapReady() {

@@ -22,9 +22,10 @@ std::optional<DecodeJob> takeDecodeJob(LayerTextures& l, Node& node) {
   if (node.texture != TextureState::Decoding || l.decoding.contains(k) || l.undecodable.contains(k))
     return std::nullopt;
   if (l.lru.resident(k)) return std::nullopt;
+  const NodeTiles& tiles = l.streamer->nodeTiles();
   bool missing = false;
-  for (std::int64_t i = 0; i < textureTileCount(k); ++i) {
-    const TileKey t = textureTile(k, i);
+  for (std::int64_t i = 0; i < tiles.count(k); ++i) {
+    const TileKey t = tiles.tile(k, i);
     if (l.streamer->state(t) != TileFetch::Absent && !l.received.contains(t)) {
       // Its bytes went into an earlier texture that was since evicted: ask again.
       l.streamer->forget({t.level, t.row, t.col, 1});
@@ -36,13 +37,13 @@ std::optional<DecodeJob> takeDecodeJob(LayerTextures& l, Node& node) {
   job.key = k;
   job.width = node.isCap() ? l.texWidth * kCapTextureWidthFactor : l.texWidth;
   job.height = l.texHeight;
-  job.tileWidth = l.texWidth;
+  job.tileWidth = tiles.wholeCap(k) ? job.width : l.texWidth; // a whole row: one image
   job.tileHeight = l.texHeight;
   job.transparent = l.overlay;
   job.tag = l.tag;
   job.valueFormat = l.valueFormat;
-  for (std::int64_t i = 0; i < textureTileCount(k); ++i) {
-    const auto it = l.received.find(textureTile(k, i));
+  for (std::int64_t i = 0; i < tiles.count(k); ++i) {
+    const auto it = l.received.find(tiles.tile(k, i));
     if (it == l.received.end()) {
       job.tiles.emplace_back(std::nullopt);
       job.contentTypes.emplace_back();

@@ -13,8 +13,11 @@ void TileService::Impl::renderLocal(const FlightKey& fk,
                                     std::optional<CacheLookup> stale) {
   workers->post([this, fk, &l, &g, folder, stale = std::move(stale)]() mutable {
     const auto& src = rasters.at(l.upstream);
-    auto bytes = src.renderTile(
-        g.sectorOf(fk.key), g.spec().tileWidth, g.spec().tileHeight, l.dataset.mimeType, l.noData);
+    auto bytes = src.renderTile(requestSector(l, g, fk.key),
+                                g.spec().tileWidth,
+                                g.spec().tileHeight,
+                                l.dataset.mimeType,
+                                l.noData);
     if (!bytes) {
       if (stale) {
         land(fk, staleTile(std::move(*stale), folder, fk.key));
@@ -40,7 +43,7 @@ void TileService::Impl::fetchRemote(const FlightKey& fk,
   }
   FetchRequest req;
   req.upstream = u.name;
-  req.url = upstreamUrl(u, l, g.sectorOf(fk.key), fk.key, time);
+  req.url = upstreamUrl(u, l, requestSector(l, g, fk.key), fk.key, time);
   if (req.url.empty()) { // a WMTS tile outside the upstream's matrix: there is none to fetch
     land(fk, absent(TileOrigin::Miss, "the upstream has no tile here"));
     return;

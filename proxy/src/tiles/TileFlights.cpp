@@ -231,16 +231,20 @@ void TileService::Impl::getTile(std::string_view layerName,
                                 Done done,
                                 FetchGate gate) {
   const auto li = layerIndex.find(layerName);
-  if (li == layerIndex.end()) return done(error("no layer '" + std::string(layerName) + "'"));
-  const LayerSpec& l = layers[li->second];
-  const TileGrid& g = grids[li->second];
-  if (key.level < 0 || key.level >= g.numLevels() || !g.isValid(key)) {
+  const auto ci = li == layerIndex.end() ? capIndex.find(layerName) : capIndex.end();
+  if (li == layerIndex.end() && ci == capIndex.end())
+    return done(error("no layer '" + std::string(layerName) + "'"));
+  const bool whole = ci != capIndex.end(); // a polar row fetched whole (TileWholeRows.cpp)
+  const LayerSpec& l = whole ? capLayers[ci->second] : layers[li->second];
+  const TileGrid& g = whole ? capGrids[ci->second] : grids[li->second];
+  if (whole ? !isPolarRowKey(g, key)
+            : key.level < 0 || key.level >= g.numLevels() || !g.isValid(key)) {
     return done(absent(TileOrigin::Hit, "outside the layer's coverage"));
   }
   // Layers without TIME (most requests) use the dataset registered at start: no lock, no copy.
   std::pair<DatasetId, std::string> timed;
-  const std::pair<DatasetId, std::string>* ds = &defaultDatasets[li->second];
-  if (!time.empty()) {
+  const std::pair<DatasetId, std::string>* ds = whole ? nullptr : &defaultDatasets[li->second];
+  if (!time.empty() || whole) {
     auto found = dataset(l, time);
     if (!found) return done(error(found.error()));
     timed = std::move(*found);

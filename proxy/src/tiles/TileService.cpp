@@ -127,6 +127,12 @@ TileService::create(TileCache& cache,
     impl->grids.push_back(*grid);
     impl->layers.push_back(std::move(l));
   }
+  for (const auto& l : impl->layers)
+    if (auto c = Impl::wholeRowLayer(l, impl->upstreams.at(l.upstream))) {
+      impl->capIndex.emplace(c->name, impl->capLayers.size());
+      impl->capGrids.push_back(*TileGrid::create(c->dataset.grid));
+      impl->capLayers.push_back(std::move(*c));
+    }
   for (const auto& l : impl->layers) {
     // On a full disk a new layer starts unregistered: served from its upstream, not kept.
     auto ds = impl->dataset(l, "");

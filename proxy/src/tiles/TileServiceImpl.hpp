@@ -56,6 +56,12 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
   std::vector<UnixMillis> layerSince; // per layer: its dataset's registration time
   std::vector<std::pair<DatasetId, std::string>> defaultDatasets; // per layer: time "" (id, folder)
   std::vector<TileGrid> grids;                                    // parallel to layers
+  // Whole polar rows (TileSource.hpp, kWholeRowLayerSuffix): `<layer>@caps` of each layer that
+  // has them, on its grid kWholeRowWidthFactor tiles wide; not in `layers` (no client sees them),
+  // their datasets registered on first use.
+  std::vector<LayerSpec> capLayers;
+  std::vector<TileGrid> capGrids; // parallel to capLayers
+  std::map<std::string, std::size_t, std::less<>> capIndex;
   std::map<std::string, UpstreamSpec, std::less<>> upstreams;
   std::map<std::string, LocalRasterSource, std::less<>> rasters; // by upstream name
   std::atomic<bool> forcedOffline{false};
@@ -110,6 +116,24 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
   bool remoteReachable(const UpstreamSpec& u) const {
     return u.type == UpstreamSpec::Type::Local || fetcher.reachable(u.name);
   }
+
+  /** The `<layer>@caps` of a layer that has whole polar rows (wholeRowLayer), if it may. */
+  static std::optional<LayerSpec> wholeRowLayer(const LayerSpec& l, const UpstreamSpec& u);
+  static bool isWholeRow(const LayerSpec& l) noexcept {
+    return l.name.ends_with(kWholeRowLayerSuffix);
+  }
+  /** The box a tile's request asks for: a whole polar row's is every longitude of its row. */
+  static Sector requestSector(const LayerSpec& l, const TileGrid& g, const TileKey& k) {
+    Sector s = g.sectorOf(k);
+    if (isWholeRow(l)) {
+      s.west = -180.0;
+      s.east = 180.0;
+    }
+    return s;
+  }
+  /** Whether a key of a whole-row layer is its level's first or last row, at column 0, and on
+   * the pole. */
+  static bool isPolarRowKey(const TileGrid& g, const TileKey& k) noexcept;
 
   /** Joins a flight; true when the caller is the first and must start the work. */
   bool join(const FlightKey& k, Done done);
@@ -295,7 +319,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
 
   /** Whether tiles of this layer can be fetched as one GetMap of a block and split. */
   static bool metaCapable(const LayerSpec& l, const UpstreamSpec& u) {
-    return u.type == UpstreamSpec::Type::Wms && u.metaTiles > 1 && !l.elevation &&
+    return u.type == UpstreamSpec::Type::Wms && u.metaTiles > 1 && !l.elevation && !isWholeRow(l) &&
            (l.dataset.mimeType == "image/jpeg" || l.dataset.mimeType == "image/png");
   }
 

@@ -64,6 +64,9 @@ public:
   TileRequestId request(const TileAddress& address, double priority, Callback done) override;
   void reprioritize(TileRequestId id, double priority) override;
   bool cancel(TileRequestId id) override;
+  bool wholePolarRows(std::string_view layer) const override {
+    return inner_.wholePolarRows(layer);
+  }
 
 private:
   ITileSource& inner_;

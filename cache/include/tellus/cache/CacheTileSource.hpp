@@ -28,6 +28,10 @@ public:
   TileRequestId request(const TileAddress& address, double priority, Callback done) override;
   void reprioritize(TileRequestId id, double priority) override;
   bool cancel(TileRequestId id) override;
+  /** True when the cache holds `<layer>@caps` (a tile service fetched polar rows whole, issue
+   * 29): they are read from there; one that is not is Absent, and the renderer then composes the
+   * caps of their rows' tiles. */
+  bool wholePolarRows(std::string_view layer) const override;
 
   /** Requests queued and not yet started. */
   std::size_t queued() const;

@@ -46,6 +46,17 @@ struct TileResult {
 using TileRequestId = std::uint64_t;
 
 /**
+ * A polar row fetched whole (issue 29, docs/design/poles.md): a source that can fetch any box
+ * (a WMS upstream, a local raster) answers the layer `<layer>@caps` ('@' is never in a layer's
+ * name) at key (level, row, 0), row the level's first or last, with ONE image of that whole row:
+ * every longitude, the row's latitudes, kWholeRowWidthFactor tiles wide and one tile tall. It is
+ * cached as the tile (level, row, 0) of a dataset of its own, `<layer>@caps` on the layer's grid
+ * with kWholeRowWidthFactor times its tile width, so it can never be taken for a grid tile.
+ */
+inline constexpr std::string_view kWholeRowLayerSuffix = "@caps";
+inline constexpr std::int32_t kWholeRowWidthFactor = 8;
+
+/**
  * @brief The asynchronous tile interface. Thread safety: every method may be called from any
  * thread.
  *
@@ -69,6 +80,9 @@ public:
   virtual void reprioritize(TileRequestId id, double priority) = 0;
   /** Removes a queued request; true when its callback will never be called. */
   virtual bool cancel(TileRequestId id) = 0;
+  /** Whether `layer + kWholeRowLayerSuffix` gives its polar rows whole (see there). Sources that
+   * serve only a tile grid say no: the renderer then composes a cap from the row's tiles. */
+  virtual bool wholePolarRows(std::string_view /*layer*/) const { return false; }
 };
 
 } // namespace tellus

@@ -43,6 +43,10 @@ public:
   TileRequestId request(const TileAddress& address, double priority, Callback done) override;
   void reprioritize(TileRequestId id, double priority) override;
   bool cancel(TileRequestId id) override;
+  /** A layer that is not combined passes through; a combined one's caps are composed. */
+  bool wholePolarRows(std::string_view layer) const override {
+    return find(layer) == nullptr && inner_.wholePolarRows(layer);
+  }
 
   /** The dataset a tile of a combined layer comes from; nullopt when none covers it. A layer that
    * is not combined passes through (its own name). */

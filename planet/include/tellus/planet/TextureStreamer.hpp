@@ -7,8 +7,9 @@
  * is not drawn is not fetched: what a drawn node lacks shows the global texture, issue 29), and
  * the nearest ancestor of an absent one that may have a texture. A candidate's score is its clipped
  * projected area in pixels (ScreenArea.hpp) times (1 + the levels its displayed texture lacks: own
- * 0, ancestor level difference, global level + 1). A node needs its tiles (one, or the
- * textureTileCount(key) <= 16 tiles of a merged polar node, Quadtree.hpp); a tile takes its best
+ * 0, ancestor level difference, global level + 1). A node needs its tiles (one, the
+ * textureTileCount(key) tiles of a merged polar node or cap, Quadtree.hpp, or a cap's one whole
+ * row, NodeTiles.hpp); a tile takes its best
  * node's score. At most `maxInFlight` requests are out; in-flight requests are re-scored every
  * frame (reprioritize) and cancelled once no candidate wants them. A tile the source calls absent
  * is never asked for again in this session; a failed one waits retryBaseS * 2^(failures - 1)
@@ -21,6 +22,7 @@
 
 #include <tellus/cache/TileSource.hpp>
 #include <tellus/planet/Camera.hpp>
+#include <tellus/planet/NodeTiles.hpp>
 #include <tellus/planet/Quadtree.hpp>
 #include <tellus/planet/TextureLru.hpp>
 
@@ -61,8 +63,9 @@ struct StreamStats {
   std::size_t received = 0;
   std::size_t absent = 0;
   std::size_t failed = 0;
-  std::size_t inFlight = 0;   ///< now
-  std::size_t candidates = 0; ///< nodes wanting a texture in the last update
+  std::size_t inFlight = 0;         ///< now
+  std::size_t candidates = 0;       ///< nodes wanting a texture in the last update
+  std::size_t wholeRowsRefused = 0; ///< whole rows failed or absent (caps composed since)
 };
 
 class TextureStreamer {
@@ -92,6 +95,12 @@ public:
   double overviewFactor() const noexcept { return overviewFactor_; }
 
   TileFetch state(const TileKey& key) const noexcept;
+  /** Which tiles make a node's texture (a cap: one whole row where the source gives it); set
+   * before the first update. A whole row that fails or is absent turns it off for good: caps are
+   * then composed of their rows' tiles, and the node shows its parent cap or the global texture
+   * until they arrive. */
+  void setNodeTiles(NodeTiles tiles) noexcept { nodeTiles_ = tiles; }
+  const NodeTiles& nodeTiles() const noexcept { return nodeTiles_; }
   const StreamStats& stats() const noexcept { return stats_; }
   /** The score the tile was last given (0 when none); for tests and the statistics line. */
   double score(const TileKey& key) const noexcept;
@@ -127,6 +136,7 @@ private:
 
   ITileSource& source_;
   StreamParams params_;
+  NodeTiles nodeTiles_;
   double overviewFactor_ = 0.0;
   std::shared_ptr<Inbox> inbox_;
   std::unordered_map<TileKey, Entry, TileKeyHash> tiles_;

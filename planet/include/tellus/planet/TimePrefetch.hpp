@@ -16,6 +16,7 @@
  */
 
 #include <tellus/cache/TileSource.hpp>
+#include <tellus/planet/NodeTiles.hpp>
 #include <tellus/planet/Quadtree.hpp>
 
 #include <cstddef>
@@ -63,6 +64,8 @@ public:
    * there is room. */
   void update(const Quadtree& tree, std::span<const std::string> times);
   const PrefetchStats& stats() const noexcept { return stats_; }
+  /** The layer streamer's tiles of a node (a cap may be one whole row, NodeTiles.hpp). */
+  void setNodeTiles(NodeTiles tiles) noexcept { nodeTiles_ = tiles; }
 
 private:
   struct Entry {
@@ -76,6 +79,7 @@ private:
 
   ITileSource& source_;
   PrefetchParams params_;
+  NodeTiles nodeTiles_;
   std::shared_ptr<Inbox> inbox_;
   std::map<std::string, TimeTiles> times_; ///< per time ahead, its tiles asked for
   std::unordered_map<std::uint64_t, std::pair<std::string, TileKey>> byToken_;

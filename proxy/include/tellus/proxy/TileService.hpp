@@ -214,6 +214,10 @@ public:
   TileRequestId request(const TileAddress& address, double priority, Callback done) override;
   void reprioritize(TileRequestId id, double priority) override;
   bool cancel(TileRequestId id) override;
+  /** True for an imagery layer (JPEG or PNG) of a WMS or local upstream whose grid spans every
+   * longitude and reaches a pole: `<layer>@caps` is then fetched as ONE GetMap (or render) of the
+   * polar row's box at kWholeRowWidthFactor x 1 tiles (TileSource.hpp). */
+  bool wholePolarRows(std::string_view layer) const override;
 
   /** The WMS, World Wind or WMTS URL that fetches a tile from a remote upstream (for tests and
    * logs); "" for a WMTS tile outside the upstream's matrix (there is no such tile). */

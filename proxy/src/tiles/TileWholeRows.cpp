@@ -1,0 +1,36 @@
+// TileService: polar rows fetched whole (issue 29, docs/design/poles.md). A renderer's polar cap
+// is a whole row of its level, 8 tiles wide in texels; where the upstream can make any box (a WMS,
+// a local raster) the row is ONE request of its box at that size, kept as the tile (level, row, 0)
+// of the dataset `<layer>@caps`, instead of up to 80 of the row's tiles.
+
+#include "tiles/TileServiceImpl.hpp"
+
+namespace tellus {
+
+std::optional<LayerSpec> TileService::Impl::wholeRowLayer(const LayerSpec& l,
+                                                          const UpstreamSpec& u) {
+  const bool anyBox = u.type == UpstreamSpec::Type::Wms || u.type == UpstreamSpec::Type::Local;
+  const bool imagery = !l.elevation && !l.values &&
+                       (l.dataset.mimeType == "image/jpeg" || l.dataset.mimeType == "image/png");
+  const Sector& s = l.dataset.grid.sector;
+  const bool polar = s.west == -180.0 && s.east == 180.0 && (s.north == 90.0 || s.south == -90.0);
+  if (!anyBox || !imagery || !polar || l.wmts) return std::nullopt;
+  LayerSpec c = l;
+  c.name += kWholeRowLayerSuffix;
+  c.dataset.name = c.name;
+  c.dataset.grid.tileWidth *= kWholeRowWidthFactor;
+  if (!TileGrid::create(c.dataset.grid)) return std::nullopt; // wider than any grid may be
+  return c;
+}
+
+bool TileService::Impl::isPolarRowKey(const TileGrid& g, const TileKey& k) noexcept {
+  if (k.level < 0 || k.level >= g.numLevels() || k.col != 0 || !g.isValid(k)) return false;
+  const Sector s = g.sectorOf(k);
+  return (k.row == 0 && s.south == -90.0) || (k.row == g.rowCount(k.level) - 1 && s.north == 90.0);
+}
+
+bool TileService::wholePolarRows(std::string_view layer) const {
+  return impl_->capIndex.contains(std::string(layer) + std::string(kWholeRowLayerSuffix));
+}
+
+} // namespace tellus

@@ -1,0 +1,236 @@
+// Polar rows fetched whole (issue 29, docs/design/poles.md): `<layer>@caps` is ONE GetMap of the
+// row's box at 8 x 1 tiles, cached as a tile of its own dataset; against a real loopback server.
+
+#include "../support/CacheFixtures.hpp"
+#include "../support/SyntheticWms.hpp"
+#include "../support/TempDir.hpp"
+
+#include <tellus/cache/CacheMaintenance.hpp>
+#include <tellus/cache/TileCache.hpp>
+#include <tellus/cache/TilePath.hpp>
+#include <tellus/proxy/Fetcher.hpp>
+#include <tellus/proxy/HttpServer.hpp>
+#include <tellus/proxy/ImageCodec.hpp>
+#include <tellus/proxy/ProxyFrontEnd.hpp>
+#include <tellus/proxy/TileService.hpp>
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <span>
+
+using namespace tellus;
+using namespace std::chrono_literals;
+
+namespace {
+
+constexpr int kLevels = 4;
+
+/** A tile service over one upstream: layer "sat" (global, 36-degree, 256-px JPEG, 4 levels) and
+ * layer "band" (every longitude, latitudes -54..54: no pole). */
+struct RowService {
+  test::TempDir dir{"whole-rows"};
+  std::unique_ptr<TileCache> cache = test::openTestCache(dir.path());
+  Fetcher fetcher;
+  std::unique_ptr<TileService> tiles;
+
+  RowService(const std::string& url, UpstreamSpec::Type type) {
+    UpstreamSpec u;
+    u.name = "up";
+    u.type = type;
+    u.url = url;
+    u.policy.retries = 0;
+    u.policy.timeout = 5000ms;
+    LayerSpec l;
+    l.name = "sat";
+    l.upstream = "up";
+    l.dataset.grid = GridSpec{Sector{}, 36.0, 256, 256, kLevels};
+    l.dataset.mimeType = "image/jpeg";
+    LayerSpec band = l;
+    band.name = "band";
+    band.dataset.grid.sector = Sector{-180.0, -54.0, 180.0, 54.0};
+    auto t = TileService::create(*cache, fetcher, {u}, {l, band}, {});
+    EXPECT_TRUE(t) << (t ? "" : t.error());
+    tiles = std::move(*t);
+  }
+
+  TileResult get(const std::string& layer, const TileKey& key) {
+    std::mutex m;
+    std::condition_variable cv;
+    std::optional<TileResult> got;
+    tiles->request({layer, "", key}, 1.0, [&](TileResult&& r) {
+      std::lock_guard lock(m);
+      got = std::move(r);
+      cv.notify_all();
+    });
+    std::unique_lock lock(m);
+    EXPECT_TRUE(cv.wait_for(lock, 10s, [&] { return got.has_value(); }));
+    return got ? std::move(*got) : TileResult{};
+  }
+
+  /** The file a whole row is kept in: tile (level, row, 0) of dataset "sat@caps". */
+  std::filesystem::path capFile(const TileKey& key) const {
+    DatasetSpec s = tiles->layer("sat")->dataset;
+    s.name = "sat@caps";
+    s.grid.tileWidth *= kWholeRowWidthFactor;
+    return dir.path() / datasetFolder(s) / tileRelativePath(key, "jpg");
+  }
+};
+
+std::int64_t lastRow(int level) {
+  return (std::int64_t{5} << level) - 1;
+}
+
+} // namespace
+
+// Both poles at level 0 and at the deepest level: one GetMap of the row's whole box at 2048 x 256
+// (8 tiles of 256 px), kept under the "sat@caps" dataset, served from the cache the second time.
+TEST(WholeRows, ACapIsOneGetMapOfItsRowCachedUnderItsOwnKey) {
+  test::FakeUpstream up([](const test::FakeRequest& r) { return test::syntheticReply(r); });
+  RowService s(up.url("/wms"), UpstreamSpec::Type::Wms);
+  EXPECT_TRUE(s.tiles->wholePolarRows("sat"));
+  for (const int level : {0, kLevels - 1})
+    for (const bool north : {true, false}) {
+      SCOPED_TRACE(std::to_string(level) + (north ? " north" : " south"));
+      const TileKey key{level, north ? lastRow(level) : 0, 0};
+      const std::size_t before = up.requests();
+      const TileResult first = s.get("sat@caps", key);
+      ASSERT_EQ(first.status, TileStatus::Ok) << first.message;
+      ASSERT_EQ(up.requests(), before + 1);
+      const auto p = test::queryParams(up.received().back().target);
+      const double d = std::ldexp(36.0, -level);
+      char expected[96];
+      std::snprintf(expected,
+                    sizeof expected,
+                    "%g,-180,%g,180",
+                    north ? 90.0 - d : -90.0,
+                    north ? 90.0 : -90.0 + d);
+      EXPECT_EQ(p.at("BBOX"), expected);
+      EXPECT_EQ(p.at("WIDTH"), "2048");
+      EXPECT_EQ(p.at("HEIGHT"), "256");
+      const auto img = decodeImagery(first.bytes, "image/jpeg", 2048, 256);
+      ASSERT_TRUE(img) << img.error();
+      EXPECT_TRUE(std::filesystem::exists(s.capFile(key))) << s.capFile(key);
+      const TileResult again = s.get("sat@caps", key);
+      ASSERT_EQ(again.status, TileStatus::Ok);
+      EXPECT_EQ(up.requests(), before + 1); // from the cache
+      EXPECT_EQ(again.bytes, first.bytes);
+    }
+  // Its own dataset: verify finds the index and the tree in step, rebuild finds its tiles again,
+  // a prune of it removes them.
+  CacheMaintenance m(*s.cache);
+  const auto report = m.verify();
+  ASSERT_TRUE(report);
+  EXPECT_TRUE(report->ok());
+  const auto rebuilt = m.rebuild(); // the index refilled from the tree alone
+  ASSERT_TRUE(rebuilt);
+  EXPECT_EQ(*rebuilt, 4);
+  const auto stats = m.stats();
+  ASSERT_TRUE(stats);
+  bool listed = false;
+  for (const auto& d : *stats)
+    if (d.dataset.spec.name == "sat@caps")
+      listed = d.tiles == 4 && d.dataset.spec.grid.tileWidth == 2048;
+  EXPECT_TRUE(listed);
+  PruneOptions prune;
+  prune.datasetName = "sat@caps";
+  const auto removed = m.prune(prune);
+  ASSERT_TRUE(removed);
+  EXPECT_EQ(*removed, 4);
+  EXPECT_FALSE(std::filesystem::exists(s.capFile({0, 0, 0})));
+}
+
+// Only rows on a pole, at column 0, exist; a layer without a pole has none.
+TEST(WholeRows, OnlyPolarRowsOfLayersThatReachAPole) {
+  test::FakeUpstream up([](const test::FakeRequest& r) { return test::syntheticReply(r); });
+  RowService s(up.url("/wms"), UpstreamSpec::Type::Wms);
+  EXPECT_FALSE(s.tiles->wholePolarRows("band"));
+  EXPECT_EQ(s.get("band@caps", {0, 0, 0}).status, TileStatus::Failed);      // no such layer
+  EXPECT_EQ(s.get("sat@caps", {0, 2, 0}).status, TileStatus::Absent);       // not a polar row
+  EXPECT_EQ(s.get("sat@caps", {0, 4, 1}).status, TileStatus::Absent);       // not column 0
+  EXPECT_EQ(s.get("sat@caps", {kLevels, 0, 0}).status, TileStatus::Absent); // below the deepest
+  EXPECT_EQ(up.requests(), 0u);
+  EXPECT_EQ(s.tiles->layers().size(), 2u); // no client sees "sat@caps"
+  EXPECT_EQ(s.tiles->layer("sat@caps"), nullptr);
+}
+
+// A World Wind server serves only its grid: no whole rows, the renderer composes.
+TEST(WholeRows, ATileOnlyUpstreamHasNone) {
+  test::FakeUpstream up([](const test::FakeRequest& r) { return test::syntheticReply(r); });
+  RowService s(up.url("/tiles"), UpstreamSpec::Type::WorldWind);
+  EXPECT_FALSE(s.tiles->wholePolarRows("sat"));
+  EXPECT_EQ(s.get("sat@caps", {0, 4, 0}).status, TileStatus::Failed);
+  EXPECT_EQ(s.get("sat", {0, 4, 0}).status, TileStatus::Ok);
+}
+
+// A failing or hostile answer for a whole row is never kept: 500, an error page, a JPEG of the
+// wrong size, bytes that are no image.
+TEST(WholeRows, ABadAnswerIsRefusedAndNothingIsCached) {
+  std::atomic<int> mode = 0;
+  test::FakeUpstream up([&](const test::FakeRequest&) {
+    switch (mode) {
+    case 0:
+      return test::FakeReply::withStatus(500, "down");
+    case 1:
+      return test::FakeReply::ok("<html>error</html>", "text/html");
+    case 2:
+      return test::FakeReply::ok(test::syntheticJpeg(-180, 72, 180, 90, 2048, 255), "image/jpeg");
+    default:
+      return test::FakeReply::ok("not a jpeg at all", "image/jpeg");
+    }
+  });
+  RowService s(up.url("/wms"), UpstreamSpec::Type::Wms);
+  for (int m = 0; m < 4; ++m) {
+    mode = m;
+    SCOPED_TRACE(m);
+    const TileResult r = s.get("sat@caps", {0, 4, 0});
+    EXPECT_EQ(r.status, TileStatus::Failed);
+    EXPECT_FALSE(std::filesystem::exists(s.capFile({0, 4, 0})));
+  }
+  const auto stats = CacheMaintenance(*s.cache).stats();
+  ASSERT_TRUE(stats);
+  for (const auto& d : *stats)
+    EXPECT_EQ(d.tiles, 0) << d.dataset.spec.name;
+}
+
+// Through `tellus serve`: a renderer's tile service whose WMS upstream is another tellus's /wms
+// asks it for the whole row with the same one GetMap; that server composes it from its own tiles
+// (a 2048 x 256 map of the row), and the picture is the synthetic source's (PSNR >= 35 dB).
+TEST(WholeRows, ThroughTellusServeTheSameOneGetMapIsComposedThere) {
+  test::FakeUpstream up([](const test::FakeRequest& r) { return test::syntheticReply(r); });
+  RowService server(up.url("/wms"), UpstreamSpec::Type::Wms);
+  ProxyFrontEnd front(*server.tiles, {});
+  HttpServerOptions so;
+  so.threads = 1;
+  HttpServer http(so, [&](HttpRequest&& r, Responder respond) {
+    front.handle(std::move(r), std::move(respond));
+  });
+  ASSERT_TRUE(http.start());
+  RowService renderer("http://127.0.0.1:" + std::to_string(http.port()) + "/wms",
+                      UpstreamSpec::Type::Wms);
+  const TileResult r = renderer.get("sat@caps", {0, 4, 0});
+  ASSERT_EQ(r.status, TileStatus::Ok) << r.message;
+  EXPECT_EQ(renderer.tiles->upstreamFetches(), 1u);
+  EXPECT_GE(up.requests(), 10u); // the server's own tiles of the row, from the synthetic WMS
+  const auto got = decodeImagery(r.bytes, "image/jpeg", 2048, 256);
+  ASSERT_TRUE(got) << got.error();
+  const std::string ref = test::syntheticJpeg(-180, 54, 180, 90, 2048, 256); // row 4: 54..90
+  const auto want =
+      decodeImagery(std::as_bytes(std::span(ref.data(), ref.size())), "image/jpeg", 2048, 256);
+  ASSERT_TRUE(want);
+  double sum = 0.0;
+  for (std::size_t i = 0; i < got->pixels.size(); ++i) {
+    const double d = static_cast<double>(got->pixels[i]) - static_cast<double>(want->pixels[i]);
+    sum += d * d;
+  }
+  const double psnr =
+      10.0 * std::log10(255.0 * 255.0 * static_cast<double>(got->pixels.size()) / sum);
+  std::printf("through tellus serve: PSNR %.1f dB against the source\n", psnr);
+  EXPECT_GE(psnr, 35.0);
+  http.stop();
+}
