@@ -64,12 +64,12 @@ void TextureStreamer::drain(double nowS) {
     Entry& e = tiles_[key];
     if (e.state != TileFetch::InFlight || e.token != token) continue;
     --stats_.inFlight;
-    // A whole row refused (a WMS's size limit, an error) or not there (offline, not cached): the
-    // layer's caps are composed of their rows' tiles from now on, as where the source cannot
-    // give rows whole.
-    if (result.status != TileStatus::Ok && nodeTiles_.isWholeRow(key)) {
-      nodeTiles_.wholeRowRootCols = 0;
-      ++stats_.wholeRowsRefused;
+    // A whole row or span refused (a WMS's size limit, an error) or not there (offline, not
+    // cached): the layer's caps (merged nodes) are composed of their rows' tiles from now on, as
+    // where the source cannot give them whole.
+    if (result.status != TileStatus::Ok) {
+      const bool row = nodeTiles_.isWholeRow(key);
+      if (nodeTiles_.refused(key)) ++(row ? stats_.wholeRowsRefused : stats_.wholeSpansRefused);
     }
     switch (result.status) {
     case TileStatus::Ok:

@@ -1,5 +1,6 @@
 // Polar rows fetched whole (issue 29, docs/design/poles.md): `<layer>@caps` is ONE GetMap of the
-// row's box at 8 x 1 tiles, cached as a tile of its own dataset; against a real loopback server.
+// row's box at 8 x 1 tiles, `<layer>@span<k>` ONE GetMap of k tiles' box at one tile's size, each
+// cached as a tile of its own dataset; against a real loopback server.
 
 #include "../support/CacheFixtures.hpp"
 #include "../support/SyntheticWms.hpp"
@@ -84,6 +85,16 @@ struct RowService {
 
 std::int64_t lastRow(int level) {
   return (std::int64_t{5} << level) - 1;
+}
+
+/** PSNR of two decoded images of the same size. */
+double rowPsnr(const DecodedImage& a, const DecodedImage& b) {
+  double sum = 0.0;
+  for (std::size_t i = 0; i < a.pixels.size(); ++i) {
+    const double d = static_cast<double>(a.pixels[i]) - static_cast<double>(b.pixels[i]);
+    sum += d * d;
+  }
+  return 10.0 * std::log10(255.0 * 255.0 * static_cast<double>(a.pixels.size()) / sum);
 }
 
 } // namespace
@@ -223,14 +234,69 @@ TEST(WholeRows, ThroughTellusServeTheSameOneGetMapIsComposedThere) {
   const auto want =
       decodeImagery(std::as_bytes(std::span(ref.data(), ref.size())), "image/jpeg", 2048, 256);
   ASSERT_TRUE(want);
-  double sum = 0.0;
-  for (std::size_t i = 0; i < got->pixels.size(); ++i) {
-    const double d = static_cast<double>(got->pixels[i]) - static_cast<double>(want->pixels[i]);
-    sum += d * d;
-  }
-  const double psnr =
-      10.0 * std::log10(255.0 * 255.0 * static_cast<double>(got->pixels.size()) / sum);
+  const double psnr = rowPsnr(*got, *want);
   std::printf("through tellus serve: PSNR %.1f dB against the source\n", psnr);
   EXPECT_GE(psnr, 35.0);
   http.stop();
+}
+
+// A merged row's node of k tiles (k = 2, 4, 8 at the deepest level, by both poles and at the
+// row's east end): one GetMap of the k tiles' box at one tile's size (256 x 256), whose picture is
+// the source's there; kept under "sat@span<k>" and served from the cache the second time. Keys
+// that start no aligned run inside the row, spans wider than a level-zero column's widest row
+// and layers without whole rows are refused without asking upstream.
+TEST(WholeRows, AMergedNodeIsOneGetMapOfItsBoxAtOneTilesSize) {
+  test::FakeUpstream up([](const test::FakeRequest& r) { return test::syntheticReply(r); });
+  RowService s(up.url("/wms"), UpstreamSpec::Type::Wms);
+  const int level = kLevels - 1;
+  const double d = std::ldexp(36.0, -level);
+  const std::int64_t cols = std::int64_t{10} << level;
+  for (const std::int64_t k : {2, 4, 8})
+    for (const std::int64_t row : {lastRow(level), std::int64_t{0}, lastRow(level) - 3})
+      for (const std::int64_t col : {std::int64_t{0}, 2 * k, cols - k}) {
+        SCOPED_TRACE(std::to_string(k) + " " + std::to_string(row) + " " + std::to_string(col));
+        const std::string layer = wholeSpanLayer("sat", k);
+        const TileKey key{level, row, col};
+        const std::size_t before = up.requests();
+        const TileResult first = s.get(layer, key);
+        ASSERT_EQ(first.status, TileStatus::Ok) << first.message;
+        ASSERT_EQ(up.requests(), before + 1);
+        const double west = -180.0 + static_cast<double>(col) * d;
+        const double east = west + static_cast<double>(k) * d;
+        const double south = -90.0 + static_cast<double>(row) * d;
+        char expected[128];
+        std::snprintf(expected, sizeof expected, "%g,%g,%g,%g", south, west, south + d, east);
+        const auto p = test::queryParams(up.received().back().target);
+        EXPECT_EQ(p.at("BBOX"), expected);
+        EXPECT_EQ(p.at("WIDTH"), "256");
+        EXPECT_EQ(p.at("HEIGHT"), "256");
+        const auto got = decodeImagery(first.bytes, "image/jpeg", 256, 256);
+        ASSERT_TRUE(got) << got.error();
+        const std::string ref = test::syntheticJpeg(west, south, east, south + d, 256, 256);
+        const auto want =
+            decodeImagery(std::as_bytes(std::span(ref.data(), ref.size())), "image/jpeg", 256, 256);
+        ASSERT_TRUE(want);
+        EXPECT_GE(rowPsnr(*got, *want), 35.0);
+        DatasetSpec spec = s.tiles->layer("sat")->dataset;
+        spec.name = layer;
+        EXPECT_TRUE(std::filesystem::exists(s.dir.path() / datasetFolder(spec) /
+                                            tileRelativePath(key, "jpg")));
+        const TileResult again = s.get(layer, key);
+        ASSERT_EQ(again.status, TileStatus::Ok);
+        EXPECT_EQ(up.requests(), before + 1); // from the cache
+        EXPECT_EQ(again.bytes, first.bytes);
+      }
+  const std::size_t asked = up.requests();
+  EXPECT_EQ(s.get("sat@span4", {level, 0, 2}).status, TileStatus::Absent);    // unaligned
+  EXPECT_EQ(s.get("sat@span4", {level, 0, cols}).status, TileStatus::Absent); // past the row
+  EXPECT_EQ(s.get("sat@span2", {level, 40, 0}).status, TileStatus::Absent);   // past the pole
+  EXPECT_EQ(s.get("sat@span2", {kLevels, 0, 0}).status, TileStatus::Absent);  // too deep
+  EXPECT_EQ(s.get("sat@span16", {level, 0, 0}).status, TileStatus::Failed);   // wider than any
+  EXPECT_EQ(s.get("sat@span3", {level, 0, 0}).status, TileStatus::Failed);    // not a power
+  EXPECT_EQ(s.get("band@span2", {level, 10, 0}).status, TileStatus::Failed);  // no pole
+  EXPECT_EQ(up.requests(), asked);
+  EXPECT_EQ(s.tiles->layers().size(), 2u); // no client sees them
+  EXPECT_EQ(s.tiles->layer("sat@span2"), nullptr);
+  RowService ww(up.url("/tiles"), UpstreamSpec::Type::WorldWind);
+  EXPECT_EQ(ww.get("sat@span2", {level, 0, 0}).status, TileStatus::Failed); // a grid only
 }

@@ -22,6 +22,7 @@ void fetchAhead(LayerSet& layers) {
         slot.animation->state() == PlayState::Ended
             ? std::vector<std::string>{}
             : slot.animation->ahead(slot.animation->options().fetchAhead);
+    slot.prefetch->followNodeTiles(l.streamer->nodeTiles()); // its fallback (NodeTiles.hpp)
     slot.prefetch->update(*l.tree, ahead);
   }
 }

@@ -133,10 +133,11 @@ LayerSet::make(const std::string& name, const std::string& time, bool overlay, i
   sp.layer = name;
   sp.time = time;
   sp.maxInFlight = options_.maxInFlight;
-  // A cap as one whole row where the source can fetch it (issue 29, docs/design/poles.md).
+  // A cap as one whole row, a merged node as one image of its box, where the source can fetch
+  // them (issue 29, docs/design/poles.md).
   l->streamer = std::make_unique<TextureStreamer>(source_, sp);
-  if (l->tree->capsEnabled() && source_.wholePolarRows(name))
-    l->streamer->setNodeTiles({g->colCount(0)});
+  if (source_.wholePolarRows(name))
+    l->streamer->setNodeTiles(NodeTiles::whole(g->colCount(0), l->tree->capsEnabled()));
   return l;
 }
 

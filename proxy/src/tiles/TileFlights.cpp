@@ -237,8 +237,10 @@ void TileService::Impl::getTile(std::string_view layerName,
   const bool whole = ci != capIndex.end(); // a polar row fetched whole (TileWholeRows.cpp)
   const LayerSpec& l = whole ? capLayers[ci->second] : layers[li->second];
   const TileGrid& g = whole ? capGrids[ci->second] : grids[li->second];
-  if (whole ? !isPolarRowKey(g, key)
-            : key.level < 0 || key.level >= g.numLevels() || !g.isValid(key)) {
+  const std::int64_t span = whole ? wholeSpanOf(l) : 0;
+  if (span > 0 ? !isSpanKey(g, key, span)
+      : whole  ? !isPolarRowKey(g, key)
+               : key.level < 0 || key.level >= g.numLevels() || !g.isValid(key)) {
     return done(absent(TileOrigin::Hit, "outside the layer's coverage"));
   }
   // Layers without TIME (most requests) use the dataset registered at start: no lock, no copy.

@@ -132,6 +132,18 @@ TileService::create(TileCache& cache,
       impl->capIndex.emplace(c->name, impl->capLayers.size());
       impl->capGrids.push_back(*TileGrid::create(c->dataset.grid));
       impl->capLayers.push_back(std::move(*c));
+      // Its merged rows' nodes whole too: `<layer>@span<k>` for every span a row of its levels
+      // may have (a node never spans more than one level-zero column).
+      const TileGrid& g = impl->grids[impl->layerIndex.at(l.name)];
+      for (std::int64_t k = 2; k <= (std::int64_t{1} << (g.numLevels() - 1)) && k <= kMaxWholeSpan;
+           k *= 2) {
+        LayerSpec s = l;
+        s.name = wholeSpanLayer(l.name, k);
+        s.dataset.name = s.name;
+        impl->capIndex.emplace(s.name, impl->capLayers.size());
+        impl->capGrids.push_back(g);
+        impl->capLayers.push_back(std::move(s));
+      }
     }
   for (const auto& l : impl->layers) {
     // On a full disk a new layer starts unregistered: served from its upstream, not kept.

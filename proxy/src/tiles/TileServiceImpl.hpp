@@ -122,18 +122,32 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
   static bool isWholeRow(const LayerSpec& l) noexcept {
     return l.name.ends_with(kWholeRowLayerSuffix);
   }
-  /** The box a tile's request asks for: a whole polar row's is every longitude of its row. */
+  /** A whole span's k (`<layer>@span<k>`), 0 for any other layer. */
+  static std::int64_t wholeSpanOf(const LayerSpec& l) noexcept {
+    const auto s = parseWholeSpanLayer(l.name);
+    return s ? s->span : 0;
+  }
+  /** Whether a layer is made of boxes no grid tile is: whole rows and spans (no metatiles). */
+  static bool isWholeBox(const LayerSpec& l) noexcept {
+    return isWholeRow(l) || wholeSpanOf(l) > 0;
+  }
+  /** The box a tile's request asks for: a whole polar row's is every longitude of its row, a
+   * whole span's the k tiles from its key. */
   static Sector requestSector(const LayerSpec& l, const TileGrid& g, const TileKey& k) {
     Sector s = g.sectorOf(k);
     if (isWholeRow(l)) {
       s.west = -180.0;
       s.east = 180.0;
+    } else if (const std::int64_t span = wholeSpanOf(l); span > 0) {
+      s.east = g.sectorOf({k.level, k.row, k.col + span - 1}).east;
     }
     return s;
   }
   /** Whether a key of a whole-row layer is its level's first or last row, at column 0, and on
    * the pole. */
   static bool isPolarRowKey(const TileGrid& g, const TileKey& k) noexcept;
+  /** Whether a key of a whole-span layer starts an aligned run of k tiles of the grid. */
+  static bool isSpanKey(const TileGrid& g, const TileKey& k, std::int64_t span) noexcept;
 
   /** Joins a flight; true when the caller is the first and must start the work. */
   bool join(const FlightKey& k, Done done);
@@ -319,7 +333,7 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
 
   /** Whether tiles of this layer can be fetched as one GetMap of a block and split. */
   static bool metaCapable(const LayerSpec& l, const UpstreamSpec& u) {
-    return u.type == UpstreamSpec::Type::Wms && u.metaTiles > 1 && !l.elevation && !isWholeRow(l) &&
+    return u.type == UpstreamSpec::Type::Wms && u.metaTiles > 1 && !l.elevation && !isWholeBox(l) &&
            (l.dataset.mimeType == "image/jpeg" || l.dataset.mimeType == "image/png");
   }
 

@@ -1,7 +1,9 @@
 // TileService: polar rows fetched whole (issue 29, docs/design/poles.md). A renderer's polar cap
 // is a whole row of its level, 8 tiles wide in texels; where the upstream can make any box (a WMS,
 // a local raster) the row is ONE request of its box at that size, kept as the tile (level, row, 0)
-// of the dataset `<layer>@caps`, instead of up to 80 of the row's tiles.
+// of the dataset `<layer>@caps`, instead of up to 80 of the row's tiles. Likewise a merged row's
+// node of k tiles is ONE request of its box at one tile's size, kept as the tile (level, row, col)
+// of `<layer>@span<k>`, instead of up to 16 tiles shrunk into one.
 
 #include "tiles/TileServiceImpl.hpp"
 
@@ -27,6 +29,12 @@ bool TileService::Impl::isPolarRowKey(const TileGrid& g, const TileKey& k) noexc
   if (k.level < 0 || k.level >= g.numLevels() || k.col != 0 || !g.isValid(k)) return false;
   const Sector s = g.sectorOf(k);
   return (k.row == 0 && s.south == -90.0) || (k.row == g.rowCount(k.level) - 1 && s.north == 90.0);
+}
+
+bool TileService::Impl::isSpanKey(const TileGrid& g, const TileKey& k, std::int64_t span) noexcept {
+  if (k.level < 0 || k.level >= g.numLevels() || k.col < 0 || k.col % span != 0) return false;
+  if (span >= g.colCount(k.level) || k.col + span > g.colCount(k.level)) return false;
+  return g.isValid(k) && g.isValid({k.level, k.row, k.col + span - 1});
 }
 
 bool TileService::wholePolarRows(std::string_view layer) const {

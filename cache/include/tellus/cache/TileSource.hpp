@@ -57,6 +57,41 @@ inline constexpr std::string_view kWholeRowLayerSuffix = "@caps";
 inline constexpr std::int32_t kWholeRowWidthFactor = 8;
 
 /**
+ * A merged polar row's node fetched whole (issue 29, docs/design/poles.md): where polar rows are
+ * given whole, the layer `<layer>@span<k>` (k a power of two, at least 2) at key (level, row,
+ * col), col a multiple of k, answers ONE image of the box of the k tiles from col, one tile in
+ * size (its texels k times as wide east-west), instead of the k tiles (up to 16 of them) the
+ * renderer would shrink into one. Cached as the tile (level, row, col) of a dataset of its own,
+ * `<layer>@span<k>` on the layer's grid. wholeSpanLayer() names one; parseWholeSpanLayer() reads
+ * one back (only the canonical spelling: no sign, no leading zero).
+ */
+inline constexpr std::string_view kWholeSpanLayerMark = "@span";
+inline constexpr std::int64_t kMaxWholeSpan = std::int64_t{1} << 40;
+
+inline std::string wholeSpanLayer(std::string_view layer, std::int64_t span) {
+  return std::string(layer) + std::string(kWholeSpanLayerMark) + std::to_string(span);
+}
+
+struct WholeSpanName {
+  std::string_view layer;
+  std::int64_t span = 0;
+};
+
+inline std::optional<WholeSpanName> parseWholeSpanLayer(std::string_view name) {
+  const auto at = name.rfind(kWholeSpanLayerMark);
+  if (at == std::string_view::npos || at == 0) return std::nullopt;
+  const std::string_view digits = name.substr(at + kWholeSpanLayerMark.size());
+  if (digits.empty() || digits.size() > 13 || digits.front() == '0') return std::nullopt;
+  std::int64_t span = 0;
+  for (const char c : digits) {
+    if (c < '0' || c > '9') return std::nullopt;
+    span = span * 10 + (c - '0');
+  }
+  if (span < 2 || span > kMaxWholeSpan || (span & (span - 1)) != 0) return std::nullopt;
+  return WholeSpanName{name.substr(0, at), span};
+}
+
+/**
  * @brief The asynchronous tile interface. Thread safety: every method may be called from any
  * thread.
  *
@@ -80,8 +115,9 @@ public:
   virtual void reprioritize(TileRequestId id, double priority) = 0;
   /** Removes a queued request; true when its callback will never be called. */
   virtual bool cancel(TileRequestId id) = 0;
-  /** Whether `layer + kWholeRowLayerSuffix` gives its polar rows whole (see there). Sources that
-   * serve only a tile grid say no: the renderer then composes a cap from the row's tiles. */
+  /** Whether `layer + kWholeRowLayerSuffix` gives its polar rows whole, and
+   * wholeSpanLayer(layer, k) its merged rows' nodes (see there). Sources that serve only a tile
+   * grid say no: the renderer then composes caps and merged nodes from the row's tiles. */
   virtual bool wholePolarRows(std::string_view /*layer*/) const { return false; }
 };
 

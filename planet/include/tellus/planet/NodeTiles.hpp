@@ -4,16 +4,23 @@
  * @brief Which tiles a node's texture is made of, for one layer's source.
  *
  * Normally textureTileCount(key) tiles of the node's own dataset (Quadtree.hpp): one, a merged
- * row's up to 16, a polar cap's up to 80. Where the source gives a polar row whole
- * (ITileSource::wholePolarRows, issue 29), a cap is ONE tile instead: (level, row, wholeRowColumn)
- * here, asked for as the layer `<layer>@caps` at (level, row, 0) (TileSource.hpp). The column, one
- * past the level's last, is no tile of the grid, so the streamer's and intake's maps keyed by tile
- * keep it apart from the row's own tiles. See docs/design/poles.md.
+ * row's up to 16, a polar cap's up to 80. Where the source gives polar rows whole
+ * (ITileSource::wholePolarRows, issue 29) a node is ONE tile instead:
+ * - a cap: (level, row, cols), cols the level's columns, asked for as `<layer>@caps` at
+ *   (level, row, 0);
+ * - a merged row's node of span k (aligned: col a multiple of k): (level, row, cols + 2 col + k),
+ *   asked for as wholeSpanLayer(layer, k) at (level, row, col). 2 col + k - 1 numbers the aligned
+ *   power-of-two runs of a row in order (k - 1 in binary is the run's trailing ones), so each has
+ *   a column of its own past the cap's.
+ * These columns are no tile of the grid, so the streamer's and intake's maps keyed by tile keep
+ * them apart from the row's own tiles. A refusal turns caps or spans off for the layer (refused).
+ * See docs/design/poles.md.
  */
 
 #include <tellus/cache/TileSource.hpp>
 #include <tellus/planet/Quadtree.hpp>
 
+#include <bit>
 #include <cstdint>
 #include <string>
 
@@ -22,28 +29,72 @@ namespace tellus::planet {
 static_assert(kCapTextureWidthFactor == kWholeRowWidthFactor, "a cap is a whole row's image");
 
 struct NodeTiles {
-  /// Level zero's columns when the source gives polar rows whole; 0: caps are composed.
-  std::int64_t wholeRowRootCols = 0;
+  std::int64_t rootCols = 0; ///< level zero's columns; below 2: every node is composed
+  bool caps = false;         ///< a cap is one whole row
+  bool spans = false;        ///< a merged row's node is one image of its box
 
+  /** Caps (where the tree has them) and spans whole, on a grid of rootCols level-zero columns. */
+  static NodeTiles whole(std::int64_t rootCols, bool caps) noexcept {
+    return {rootCols, caps, true};
+  }
+
+  std::int64_t cols(std::int32_t level) const noexcept { return rootCols << level; }
   /** Whether the node (key) is a cap whose texture is one whole-row tile. */
   bool wholeCap(const NodeKey& k) const noexcept {
-    return wholeRowRootCols >= 2 && k.col == 0 && k.span == (wholeRowRootCols << k.level);
+    return caps && rootCols >= 2 && k.col == 0 && k.span == cols(k.level);
+  }
+  /** Whether the node is a merged row's whose texture is one image of its box. */
+  bool wholeSpan(const NodeKey& k) const noexcept {
+    return spans && rootCols >= 2 && k.span >= 2 && k.span < cols(k.level) &&
+           k.span <= kMaxWholeSpan && std::has_single_bit(static_cast<std::uint64_t>(k.span)) &&
+           k.col % k.span == 0;
   }
   std::int64_t count(const NodeKey& k) const noexcept {
-    return wholeCap(k) ? 1 : textureTileCount(k);
+    return wholeCap(k) || wholeSpan(k) ? 1 : textureTileCount(k);
   }
-  /** The i-th of them, west to east; a whole cap's one tile has the reserved column. */
+  /** The i-th of them, west to east; a whole cap's or span's one tile has a reserved column. */
   TileKey tile(const NodeKey& k, std::int64_t i) const noexcept {
-    return wholeCap(k) ? TileKey{k.level, k.row, k.span} : textureTile(k, i);
+    if (wholeCap(k)) return {k.level, k.row, cols(k.level)};
+    if (wholeSpan(k)) return {k.level, k.row, cols(k.level) + 2 * k.col + k.span};
+    return textureTile(k, i);
   }
   /** Whether a tile key is a whole row's (the reserved column). */
   bool isWholeRow(const TileKey& t) const noexcept {
-    return wholeRowRootCols >= 2 && t.col == (wholeRowRootCols << t.level);
+    return rootCols >= 2 && t.col == cols(t.level);
   }
-  /** What the source is asked for: `<layer>@caps` at column 0 for a whole row. */
+  /** Whether a tile key is a whole span's (a reserved column past the row's). */
+  bool isWholeSpan(const TileKey& t) const noexcept {
+    return rootCols >= 2 && t.col > cols(t.level);
+  }
+  /** A whole span's node (isWholeSpan(t)). */
+  NodeKey spanNode(const TileKey& t) const noexcept {
+    const auto run = static_cast<std::uint64_t>(t.col - cols(t.level) - 1); // 2 col + span - 1
+    const std::int64_t span = std::int64_t{1} << std::countr_one(run);
+    return {t.level, t.row, (static_cast<std::int64_t>(run) - span + 1) / 2, span};
+  }
+  /** What the source is asked for: `<layer>@caps` at column 0 for a whole row, `<layer>@span<k>`
+   * at the node's first column for a whole span. */
   TileAddress address(const std::string& layer, const std::string& time, const TileKey& t) const {
-    if (!isWholeRow(t)) return {layer, time, t};
-    return {layer + std::string(kWholeRowLayerSuffix), time, TileKey{t.level, t.row, 0}};
+    if (isWholeRow(t))
+      return {layer + std::string(kWholeRowLayerSuffix), time, TileKey{t.level, t.row, 0}};
+    if (isWholeSpan(t)) {
+      const NodeKey n = spanNode(t);
+      return {wholeSpanLayer(layer, n.span), time, n.firstTile()};
+    }
+    return {layer, time, t};
+  }
+  /** The source refused or lacks the tile t: if it is a whole row (span), the layer's caps
+   * (merged nodes) are composed of their row's tiles from now on. True when that changed. */
+  bool refused(const TileKey& t) noexcept {
+    bool& flag = isWholeRow(t) ? caps : spans;
+    if (!(isWholeRow(t) || isWholeSpan(t)) || !flag) return false;
+    flag = false;
+    return true;
+  }
+  /** What `other` turned off is off here too (a prefetcher following its streamer). */
+  void narrowTo(const NodeTiles& other) noexcept {
+    caps = caps && other.caps;
+    spans = spans && other.spans;
   }
 };
 

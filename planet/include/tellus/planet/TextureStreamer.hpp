@@ -8,8 +8,8 @@
  * the nearest ancestor of an absent one that may have a texture. A candidate's score is its clipped
  * projected area in pixels (ScreenArea.hpp) times (1 + the levels its displayed texture lacks: own
  * 0, ancestor level difference, global level + 1). A node needs its tiles (one, the
- * textureTileCount(key) tiles of a merged polar node or cap, Quadtree.hpp, or a cap's one whole
- * row, NodeTiles.hpp); a tile takes its best
+ * textureTileCount(key) tiles of a merged polar node or cap, Quadtree.hpp, or one image of a
+ * cap's whole row or a merged node's box, NodeTiles.hpp); a tile takes its best
  * node's score. At most `maxInFlight` requests are out; in-flight requests are re-scored every
  * frame (reprioritize) and cancelled once no candidate wants them. A tile the source calls absent
  * is never asked for again in this session; a failed one waits retryBaseS * 2^(failures - 1)
@@ -63,9 +63,10 @@ struct StreamStats {
   std::size_t received = 0;
   std::size_t absent = 0;
   std::size_t failed = 0;
-  std::size_t inFlight = 0;         ///< now
-  std::size_t candidates = 0;       ///< nodes wanting a texture in the last update
-  std::size_t wholeRowsRefused = 0; ///< whole rows failed or absent (caps composed since)
+  std::size_t inFlight = 0;          ///< now
+  std::size_t candidates = 0;        ///< nodes wanting a texture in the last update
+  std::size_t wholeRowsRefused = 0;  ///< whole rows failed or absent (caps composed since)
+  std::size_t wholeSpansRefused = 0; ///< whole spans failed or absent (merged nodes composed)
 };
 
 class TextureStreamer {

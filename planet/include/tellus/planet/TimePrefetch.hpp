@@ -64,8 +64,12 @@ public:
    * there is room. */
   void update(const Quadtree& tree, std::span<const std::string> times);
   const PrefetchStats& stats() const noexcept { return stats_; }
-  /** The layer streamer's tiles of a node (a cap may be one whole row, NodeTiles.hpp). */
+  /** The layer streamer's tiles of a node (a cap may be one whole row, NodeTiles.hpp). A whole
+   * row or span refused here turns them off as in the streamer (NodeTiles::refused). */
   void setNodeTiles(NodeTiles tiles) noexcept { nodeTiles_ = tiles; }
+  /** What the streamer has turned off since (its fallback) is off here too. */
+  void followNodeTiles(const NodeTiles& streamer) noexcept { nodeTiles_.narrowTo(streamer); }
+  const NodeTiles& nodeTiles() const noexcept { return nodeTiles_; }
 
 private:
   struct Entry {
