@@ -56,7 +56,12 @@ std::string withReplaced(const std::string& from, const std::string& to) {
 
 TEST(LayersJson, WhatThePageWritesARemoteReadsBack) {
   const std::vector<LayerSpec> layers = someLayers();
-  const auto read = parseLayersJson(layersJson("my cache", layers), "host:8080");
+  // The first layer's polar rows and spans given whole (issue 29), the others' not.
+  const auto whole = [&](const LayerSpec& l) { return l.name == layers.front().name; };
+  const std::string json = layersJson("my cache", layers, whole);
+  EXPECT_EQ(json.find("\"wholeRows\":true"), json.rfind("\"wholeRows\":true"));
+  EXPECT_EQ(layersJson("my cache", layers).find("wholeRows"), std::string::npos);
+  const auto read = parseLayersJson(json, "host:8080");
   ASSERT_TRUE(read) << read.error();
   ASSERT_EQ(read->size(), layers.size());
   for (std::size_t i = 0; i < layers.size(); ++i) {
@@ -64,6 +69,7 @@ TEST(LayersJson, WhatThePageWritesARemoteReadsBack) {
     const RemoteLayer& r = (*read)[i];
     EXPECT_EQ(r.name, layers[i].name);
     EXPECT_EQ(r.elevation, layers[i].elevation);
+    EXPECT_EQ(r.wholeRows, i == 0);
     EXPECT_EQ(r.dataset.body, layers[i].dataset.body);
     EXPECT_EQ(r.dataset.server, "host:8080");
     EXPECT_EQ(r.dataset.name, layers[i].name);

@@ -13,6 +13,7 @@
 #include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
 #include <tellus/proxy/ProxyFrontEnd.hpp>
+#include <tellus/proxy/RemoteTileSource.hpp>
 #include <tellus/proxy/TileService.hpp>
 
 #include <gtest/gtest.h>
@@ -24,6 +25,7 @@
 #include <filesystem>
 #include <mutex>
 #include <span>
+#include <tuple>
 
 using namespace tellus;
 using namespace std::chrono_literals;
@@ -299,4 +301,76 @@ TEST(WholeRows, AMergedNodeIsOneGetMapOfItsBoxAtOneTilesSize) {
   EXPECT_EQ(s.tiles->layer("sat@span2"), nullptr);
   RowService ww(up.url("/tiles"), UpstreamSpec::Type::WorldWind);
   EXPECT_EQ(ww.get("sat@span2", {level, 0, 0}).status, TileStatus::Failed); // a grid only
+}
+
+namespace {
+
+/** A RemoteTileSource's answer to one address. */
+TileResult remoteGet(RemoteTileSource& src, const std::string& layer, const TileKey& key) {
+  std::mutex m;
+  std::condition_variable cv;
+  std::optional<TileResult> got;
+  src.request({layer, "", key}, 1.0, [&](TileResult&& r) {
+    std::lock_guard lock(m);
+    got = std::move(r);
+    cv.notify_all();
+  });
+  std::unique_lock lock(m);
+  EXPECT_TRUE(cv.wait_for(lock, 10s, [&] { return got.has_value(); }));
+  return got ? std::move(*got) : TileResult{};
+}
+
+} // namespace
+
+// A renderer's `--server` source over `tellus serve`: /layers.json says which layers give whole
+// rows and spans, and `/tiles/<layer>@caps/...` and `/tiles/<layer>@span<k>/...` fetch them
+// through the server's tile service (one GetMap upstream each, the second time from its cache),
+// the same bytes an in-process service makes. A server over a World Wind upstream offers none.
+TEST(WholeRows, ARemoteSourceGetsThemFromTellusServe) {
+  test::FakeUpstream up([](const test::FakeRequest& r) { return test::syntheticReply(r); });
+  for (const auto type : {UpstreamSpec::Type::Wms, UpstreamSpec::Type::WorldWind}) {
+    const bool wms = type == UpstreamSpec::Type::Wms;
+    SCOPED_TRACE(wms ? "wms" : "world wind");
+    RowService server(up.url(wms ? "/wms" : "/tiles"), type);
+    ProxyFrontEnd front(*server.tiles, {});
+    HttpServerOptions so;
+    so.threads = 1;
+    HttpServer http(so, [&](HttpRequest&& r, Responder respond) {
+      front.handle(std::move(r), std::move(respond));
+    });
+    ASSERT_TRUE(http.start());
+    auto src = RemoteTileSource::connect("http://127.0.0.1:" + std::to_string(http.port()));
+    ASSERT_TRUE(src) << src.error();
+    EXPECT_EQ((*src)->wholePolarRows("sat"), wms);
+    EXPECT_FALSE((*src)->wholePolarRows("band"));
+    if (!wms) {
+      EXPECT_EQ(remoteGet(**src, "sat@caps", {0, 4, 0}).status, TileStatus::Failed);
+      EXPECT_EQ(remoteGet(**src, "sat", {0, 4, 0}).status, TileStatus::Ok);
+      http.stop();
+      continue;
+    }
+    RowService local(up.url("/wms"), UpstreamSpec::Type::Wms); // in-process, for the bytes
+    for (const auto& [layer, key, width] :
+         {std::tuple{std::string("sat@caps"), TileKey{0, 4, 0}, 2048},
+          std::tuple{std::string("sat@caps"), TileKey{kLevels - 1, 0, 0}, 2048},
+          std::tuple{
+              wholeSpanLayer("sat", 4), TileKey{kLevels - 1, lastRow(kLevels - 1), 8}, 256}}) {
+      SCOPED_TRACE(layer);
+      const std::size_t before = up.requests();
+      const TileResult r = remoteGet(**src, layer, key);
+      ASSERT_EQ(r.status, TileStatus::Ok) << r.message;
+      EXPECT_EQ(up.requests(), before + 1);
+      EXPECT_EQ(test::queryParams(up.received().back().target).at("WIDTH"), std::to_string(width));
+      EXPECT_TRUE(decodeImagery(r.bytes, "image/jpeg", width, 256));
+      EXPECT_EQ(remoteGet(**src, layer, key).bytes, r.bytes); // from the server's cache
+      EXPECT_EQ(up.requests(), before + 1);
+      EXPECT_EQ(local.get(layer, key).bytes, r.bytes);
+    }
+    const std::size_t asked = up.requests();
+    EXPECT_EQ(remoteGet(**src, "sat@span3", {kLevels - 1, 0, 0}).status, TileStatus::Failed);
+    EXPECT_EQ(remoteGet(**src, "band@caps", {0, 0, 0}).status, TileStatus::Failed);
+    EXPECT_EQ(remoteGet(**src, "sat@caps", {0, 2, 0}).status, TileStatus::Absent); // no pole
+    EXPECT_EQ(up.requests(), asked);
+    http.stop();
+  }
 }

@@ -625,6 +625,9 @@ TEST(StaticTilePath, ParsesTheWorldWindLayout) {
   EXPECT_EQ(dotted->layer, "Blue.Marble_2004-08");
   EXPECT_EQ(parseStaticTilePath("e/30/9663676415/9663676415_19327352831.bil")->key,
             (TileKey{30, 9663676415, 19327352831}));
+  // A layer's whole polar rows and spans (issue 29): the name as the renderer asks for it.
+  EXPECT_EQ(parseStaticTilePath("bmng@caps/3/39/39_0.jpg")->layer, "bmng@caps");
+  EXPECT_EQ(parseStaticTilePath("bmng@span16/3/39/39_32.jpg")->layer, "bmng@span16");
 }
 
 TEST(StaticTilePathExtremes, RejectsUnsafeOrMalformedPaths) {
@@ -654,7 +657,16 @@ TEST(StaticTilePathExtremes, RejectsUnsafeOrMalformedPaths) {
                           "bmng/0/0/0_-0.jpg", // negative zero: one tile, two paths (fuzz)
                           "bmng/-0/-0/-0_-00.jpg",
                           "bmng/0/99999999999999999999/99999999999999999999_0.jpg",
-                          "\xCE\xA9/0/0/0_0.jpg"}) {
+                          "\xCE\xA9/0/0/0_0.jpg",
+                          "bmng@/0/0/0_0.jpg",
+                          "@caps/0/0/0_0.jpg",
+                          "..@caps/0/0/0_0.jpg",
+                          "bmng@caps@caps/0/0/0_0.jpg",
+                          "bmng@span3/0/0/0_0.jpg",
+                          "bmng@span1/0/0/0_0.jpg",
+                          "bmng@span016/0/0/0_0.jpg",
+                          "bmng@CAPS/0/0/0_0.jpg",
+                          "a b@span2/0/0/0_0.jpg"}) {
     EXPECT_FALSE(parseStaticTilePath(bad).has_value()) << bad;
   }
   EXPECT_TRUE(parseStaticTilePath(std::string(kMaxStaticLayerName, 'a') + "/0/0/0_0.jpg"));

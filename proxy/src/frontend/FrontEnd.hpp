@@ -218,8 +218,10 @@ public:
   void staticTile(const HttpRequest& req, const Responder& respond);
 
 private:
+  /** The tile `name` asks for (the layer's own, or its whole row's or span's) as the layer's. */
   void serveTilePath(const HttpRequest& req,
-                     const std::string& layerName,
+                     const LayerSpec& layer,
+                     const std::string& name,
                      const TileKey& key,
                      const Responder& respond,
                      const std::string* time = nullptr);

@@ -8,7 +8,10 @@ namespace tellus {
 
 void PagesFrontEnd::index(const HttpRequest& req, const Responder& respond) const {
   if (req.path == "/layers.json") {
-    auto r = layersJsonResponse(req, fe_.options.title, fe_.tiles.layers());
+    auto r =
+        layersJsonResponse(req, fe_.options.title, fe_.tiles.layers(), [&](const LayerSpec& l) {
+          return fe_.tiles.wholePolarRows(l.name);
+        });
     fe_.common(r);
     return respond(std::move(r));
   }

@@ -1,7 +1,9 @@
 // World Wind tiles (`/wwtile?T=&L=&X=&Y=`) and the static World Wind layout
 // (`/tiles/<layer>/<level>/<row>/<row>_<col>.<ext>[?time=T]`): the cached file as it is, or 404
 // when there is no such tile, 503/429 with Retry-After when it may come later, 502 when the
-// upstream's answer was not a tile.
+// upstream's answer was not a tile. `/tiles/` also serves a layer's whole polar rows and spans
+// (`<layer>@caps`, `<layer>@span<k>`, issue 29) to a renderer's `--server` source; they are the
+// layer's in everything but the tile (its time, counters and surrogate keys).
 #include "frontend/FrontEnd.hpp"
 
 #include <tellus/proxy/Query.hpp>
@@ -13,7 +15,9 @@ void TileFrontEnd::worldWind(const HttpRequest& req, const Responder& respond) {
   if (!params) return respond(fe_.errorText(400, "bad query: " + params.error()));
   auto ww = parseWorldWindTile(*params);
   if (!ww) return respond(fe_.errorText(400, ww.error()));
-  serveTilePath(req, ww->dataset, TileKey{ww->level, ww->row, ww->col}, respond);
+  const LayerSpec* l = fe_.tiles.layer(ww->dataset);
+  if (!l) return respond(fe_.plain(404, "no such layer\n"));
+  serveTilePath(req, *l, ww->dataset, TileKey{ww->level, ww->row, ww->col}, respond);
 }
 
 void TileFrontEnd::staticTile(const HttpRequest& req, const Responder& respond) {
@@ -23,6 +27,7 @@ void TileFrontEnd::staticTile(const HttpRequest& req, const Responder& respond) 
     return respond(
         fe_.plain(404, "not a tile path: /tiles/<layer>/<level>/<row>/<row>_<col>.<ext>\n"));
   const LayerSpec* l = fe_.tiles.layer(parsed->layer);
+  if (!l) l = fe_.tiles.wholeBoxBase(parsed->layer);
   if (!l || parsed->extension != l->dataset.extension)
     return respond(fe_.plain(404, "no such layer\n"));
   // `?time=T` picks another time of a layer with a TIME dimension (the remote tile source of
@@ -41,22 +46,22 @@ void TileFrontEnd::staticTile(const HttpRequest& req, const Responder& respond) 
       timeOrDefault = &time;
     }
   }
-  serveTilePath(req, parsed->layer, parsed->key, respond, timeOrDefault);
+  serveTilePath(req, *l, parsed->layer, parsed->key, respond, timeOrDefault);
 }
 
 void TileFrontEnd::serveTilePath(const HttpRequest& req,
-                                 const std::string& layerName,
+                                 const LayerSpec& layer,
+                                 const std::string& name,
                                  const TileKey& key,
                                  const Responder& respond,
                                  const std::string* time) {
-  const LayerSpec* l = fe_.tiles.layer(layerName);
-  if (!l) return respond(fe_.plain(404, "no such layer\n"));
-  const std::string& t = time ? *time : l->timeDefault;
+  const std::string& t = time ? *time : layer.timeDefault;
   fe_.tiles.getTile(
-      layerName,
+      name,
       t,
       key,
-      [this, v = FrontEnd::Validators(req), l, t, level = key.level, respond](TileAnswer&& a) {
+      [this, v = FrontEnd::Validators(req), l = &layer, t, level = key.level, respond](
+          TileAnswer&& a) {
         fe_.countTile(l, a);
         const std::string keys = layerKeys(l->name, t, level);
         if (a.kind == TileAnswer::Kind::Tile)

@@ -1,4 +1,5 @@
 #include <tellus/cache/TilePath.hpp>
+#include <tellus/cache/TileSource.hpp>
 #include <tellus/proxy/BodyCrs.hpp>
 #include <tellus/proxy/Wms.hpp>
 
@@ -765,7 +766,13 @@ std::expected<WorldWindTileRequest, std::string> parseWorldWindTile(const QueryP
 std::optional<StaticTilePath> parseStaticTilePath(std::string_view pathAfterPrefix) {
   const std::size_t slash = pathAfterPrefix.find('/');
   if (slash == std::string_view::npos) return std::nullopt;
-  const std::string_view layer = pathAfterPrefix.substr(0, slash);
+  const std::string_view name = pathAfterPrefix.substr(0, slash);
+  std::string_view layer = name; // without a whole row's or span's suffix (TileSource.hpp)
+  if (name.ends_with(kWholeRowLayerSuffix)) {
+    layer.remove_suffix(kWholeRowLayerSuffix.size());
+  } else if (const auto span = parseWholeSpanLayer(name)) {
+    layer = span->layer;
+  }
   if (layer.empty() || layer.size() > kMaxStaticLayerName || layer == "." || layer == "..") {
     return std::nullopt;
   }
@@ -778,7 +785,7 @@ std::optional<StaticTilePath> parseStaticTilePath(std::string_view pathAfterPref
   for (const char c : out.extension) {
     if (!isAlnum(c)) return std::nullopt;
   }
-  out.layer = std::string(layer);
+  out.layer = std::string(name);
   out.key = *key;
   return out;
 }

@@ -37,6 +37,14 @@ bool TileService::Impl::isSpanKey(const TileGrid& g, const TileKey& k, std::int6
   return g.isValid(k) && g.isValid({k.level, k.row, k.col + span - 1});
 }
 
+const LayerSpec* TileService::wholeBoxBase(std::string_view name) const noexcept {
+  if (!impl_->capIndex.contains(name)) return nullptr;
+  if (name.ends_with(kWholeRowLayerSuffix))
+    return layer(name.substr(0, name.size() - kWholeRowLayerSuffix.size()));
+  const auto span = parseWholeSpanLayer(name);
+  return span ? layer(span->layer) : nullptr;
+}
+
 bool TileService::wholePolarRows(std::string_view layer) const {
   return impl_->capIndex.contains(std::string(layer) + std::string(kWholeRowLayerSuffix));
 }

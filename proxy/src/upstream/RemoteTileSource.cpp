@@ -147,6 +147,9 @@ std::expected<RemoteLayer, std::string> readLayer(const Json& o, std::string_vie
   if (auto g = TileGrid::create(l.dataset.grid); !g) return std::unexpected(g.error());
   if (const Json* el = member(o, "elevation"); el && el->is_boolean())
     l.elevation = el->get<bool>();
+  // Whole polar rows and spans served (issue 29; absent from older servers: no).
+  if (const Json* wr = member(o, "wholeRows"); wr && wr->is_boolean())
+    l.wholeRows = wr->get<bool>();
   // The body (issue 26; absent from older servers: the Earth).
   if (const Json* b = member(o, "body"); b && b->is_string() && !b->get<std::string>().empty())
     l.dataset.body = b->get<std::string>();
@@ -232,14 +235,35 @@ struct RemoteTileSource::Impl {
     return nullptr;
   }
 
+  /** A layer's whole row or span (`<layer>@caps`, `<layer>@span<k>`): the layer, if it has
+   * them, and the suffix; else null. */
+  const RemoteLayer*
+  wholeBox(std::string_view name, std::size_t* index, std::string_view* suffix) const {
+    std::string_view own = name;
+    if (name.ends_with(kWholeRowLayerSuffix)) {
+      own.remove_suffix(kWholeRowLayerSuffix.size());
+    } else if (const auto span = parseWholeSpanLayer(name)) {
+      own = span->layer;
+    } else {
+      return nullptr;
+    }
+    const RemoteLayer* l = layer(own, index);
+    if (!l || !l->wholeRows) return nullptr;
+    *suffix = name.substr(own.size());
+    return l;
+  }
+
   std::string url(const TileAddress& a) const {
     std::size_t i = 0;
+    std::string_view suffix; // '@' is a path character: sent as it is
     const RemoteLayer* l = layer(a.layer, &i);
+    if (!l) l = wholeBox(a.layer, &i, &suffix);
     if (!l || !grids[i].isValid(a.key)) return {};
     const TileKey& k = a.key;
-    std::string u = base + "/tiles/" + urlEncode(l->name) + "/" + std::to_string(k.level) + "/" +
-                    std::to_string(k.row) + "/" + std::to_string(k.row) + "_" +
-                    std::to_string(k.col) + "." + l->dataset.extension;
+    std::string u = base + "/tiles/" + urlEncode(l->name) + std::string(suffix) + "/" +
+                    std::to_string(k.level) + "/" + std::to_string(k.row) + "/" +
+                    std::to_string(k.row) + "_" + std::to_string(k.col) + "." +
+                    l->dataset.extension;
     if (!a.time.empty()) u += "?time=" + urlEncode(a.time);
     return u;
   }
@@ -349,6 +373,11 @@ RemoteTileSource::connect(const std::string& baseUrl, RemoteSourceOptions option
   return std::unique_ptr<RemoteTileSource>(new RemoteTileSource(std::move(impl)));
 }
 
+bool RemoteTileSource::wholePolarRows(std::string_view layer) const {
+  const RemoteLayer* l = impl_->layer(layer);
+  return l && l->wholeRows;
+}
+
 const std::vector<RemoteLayer>& RemoteTileSource::layers() const noexcept {
   return impl_->layers;
 }
@@ -367,7 +396,10 @@ RemoteTileSource::request(const TileAddress& address, double priority, Callback 
   std::string url = impl_->url(address);
   if (url.empty()) {
     TileResult r;
-    r.status = impl_->layer(address.layer) ? TileStatus::Absent : TileStatus::Failed;
+    std::size_t i = 0;
+    std::string_view suffix;
+    const bool known = impl_->layer(address.layer) || impl_->wholeBox(address.layer, &i, &suffix);
+    r.status = known ? TileStatus::Absent : TileStatus::Failed;
     r.message = r.status == TileStatus::Absent ? "outside the layer's grid"
                                                : "no layer " + address.layer + " on the server";
     impl_->answerLater(std::move(done), std::move(r));

@@ -166,24 +166,26 @@ std::string jsonObject(std::initializer_list<std::pair<std::string_view, std::st
   return out + "}";
 }
 
-std::string layerJson(const LayerSpec& l) {
+std::string layerJson(const LayerSpec& l, bool wholeRows) {
   const GridSpec& g = l.dataset.grid;
-  return jsonObject({{"name", jsonString(l.name)},
-                     {"title", jsonString(l.title.empty() ? l.name : l.title)},
-                     {"format", jsonString(l.dataset.mimeType)},
-                     {"extension", jsonString(l.dataset.extension)},
-                     {"elevation", l.elevation ? "true" : "false"},
-                     {"body", jsonString(l.dataset.body)},
-                     {"levelZeroDelta", jsonNumber(g.levelZeroDeltaDeg)},
-                     {"tileWidth", std::to_string(g.tileWidth)},
-                     {"tileHeight", std::to_string(g.tileHeight)},
-                     {"levels", std::to_string(g.numLevels)},
-                     {"firstLevel", std::to_string(l.firstLevel)},
-                     {"sector",
-                      jsonObject({{"west", jsonNumber(g.sector.west)},
-                                  {"south", jsonNumber(g.sector.south)},
-                                  {"east", jsonNumber(g.sector.east)},
-                                  {"north", jsonNumber(g.sector.north)}})}});
+  std::string j = jsonObject({{"name", jsonString(l.name)},
+                              {"title", jsonString(l.title.empty() ? l.name : l.title)},
+                              {"format", jsonString(l.dataset.mimeType)},
+                              {"extension", jsonString(l.dataset.extension)},
+                              {"elevation", l.elevation ? "true" : "false"},
+                              {"body", jsonString(l.dataset.body)},
+                              {"levelZeroDelta", jsonNumber(g.levelZeroDeltaDeg)},
+                              {"tileWidth", std::to_string(g.tileWidth)},
+                              {"tileHeight", std::to_string(g.tileHeight)},
+                              {"levels", std::to_string(g.numLevels)},
+                              {"firstLevel", std::to_string(l.firstLevel)},
+                              {"sector",
+                               jsonObject({{"west", jsonNumber(g.sector.west)},
+                                           {"south", jsonNumber(g.sector.south)},
+                                           {"east", jsonNumber(g.sector.east)},
+                                           {"north", jsonNumber(g.sector.north)}})}});
+  if (wholeRows) j.insert(j.size() - 1, ",\"wholeRows\":true");
+  return j;
 }
 
 } // namespace
@@ -206,18 +208,20 @@ std::optional<HttpResponse> webAssetResponse(const HttpRequest& request) {
   return std::nullopt;
 }
 
-std::string layersJson(std::string_view title, std::span<const LayerSpec> layers) {
+std::string
+layersJson(std::string_view title, std::span<const LayerSpec> layers, const WholeRowsOf& whole) {
   // One layer a line, as the page has always been served (and its ETag computed).
   std::string j = "{\"title\":" + jsonString(title) + ",\"layers\":[";
   for (std::size_t i = 0; i < layers.size(); ++i)
-    j += (i == 0 ? "\n" : ",\n") + layerJson(layers[i]);
+    j += (i == 0 ? "\n" : ",\n") + layerJson(layers[i], whole && whole(layers[i]));
   return j + "\n]}\n";
 }
 
 HttpResponse layersJsonResponse(const HttpRequest& request,
                                 std::string_view title,
-                                std::span<const LayerSpec> layers) {
-  const std::string json = layersJson(title, layers);
+                                std::span<const LayerSpec> layers,
+                                const WholeRowsOf& whole) {
+  const std::string json = layersJson(title, layers, whole);
   const Representation body{json, quotedHash(json)};
   return answer(request, "application/json", kRevalidate, body, false);
 }

@@ -35,6 +35,8 @@ struct RemoteLayer {
   std::string name;
   DatasetSpec dataset;
   bool elevation = false;
+  /** The server gives its polar rows and spans whole (`"wholeRows"`, issue 29). */
+  bool wholeRows = false;
 };
 
 /** Parses a tellus `/layers.json` document (the format of proxy/src/web/WebPage.cpp's layersJson);
@@ -61,6 +63,9 @@ public:
   TileRequestId request(const TileAddress& address, double priority, Callback done) override;
   void reprioritize(TileRequestId id, double priority) override;
   bool cancel(TileRequestId id) override;
+  /** What the server's /layers.json says (`"wholeRows"`): `<layer>@caps` and `<layer>@span<k>`
+   * are then `/tiles/<layer>@caps/...` and `/tiles/<layer>@span<k>/...`. */
+  bool wholePolarRows(std::string_view layer) const override;
 
   /** The URL a tile is fetched from (for tests and logs); empty for an unknown layer. */
   std::string tileUrl(const TileAddress& address) const;

@@ -150,6 +150,9 @@ public:
 
   const std::vector<LayerSpec>& layers() const noexcept;
   const LayerSpec* layer(std::string_view name) const noexcept;
+  /** The layer whose whole polar rows or spans `name` is (`<layer>@caps`, `<layer>@span<k>`,
+   * wholePolarRows), or null: what `/tiles/` serves them as (issue 29). */
+  const LayerSpec* wholeBoxBase(std::string_view name) const noexcept;
   /** When the layer's dataset (as now defined) was first registered in the cache: stable across
    * restarts, new when the definition changes (the capabilities' LastUpdate). 0 if unknown. */
   UnixMillis layerSince(std::string_view layer) const noexcept;

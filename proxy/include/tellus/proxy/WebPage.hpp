@@ -13,6 +13,7 @@
 #include <tellus/proxy/HttpServer.hpp>
 #include <tellus/proxy/TileService.hpp>
 
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -35,16 +36,24 @@ bool webPageEmbedded() noexcept;
  */
 std::optional<HttpResponse> webAssetResponse(const HttpRequest& request);
 
+/** Whether a layer's whole polar rows and spans are served (TileService::wholePolarRows). */
+using WholeRowsOf = std::function<bool(const LayerSpec&)>;
+
 /**
  * `/layers.json`: the title and, per layer, what the page needs to draw its tiles: name, title,
  * format, extension, elevation, levelZeroDelta (degrees), tileWidth/tileHeight (pixels), levels,
- * firstLevel and the sector. Strings are JSON-escaped (any byte is safe).
+ * firstLevel and the sector; and `"wholeRows":true` for a layer whose `/tiles/<layer>@caps/...`
+ * and `/tiles/<layer>@span<k>/...` are served (issue 29; absent: not). Strings are JSON-escaped
+ * (any byte is safe).
  */
-std::string layersJson(std::string_view title, std::span<const LayerSpec> layers);
+std::string layersJson(std::string_view title,
+                       std::span<const LayerSpec> layers,
+                       const WholeRowsOf& whole = {});
 
 /** `layersJson` as an answer: application/json, ETag of the body, revalidated every time. */
 HttpResponse layersJsonResponse(const HttpRequest& request,
                                 std::string_view title,
-                                std::span<const LayerSpec> layers);
+                                std::span<const LayerSpec> layers,
+                                const WholeRowsOf& whole = {});
 
 } // namespace tellus

@@ -320,9 +320,10 @@ struct StaticTilePath {
 };
 
 /** Parses the path after the service prefix. The layer is [A-Za-z0-9_.-]{1,128} and never "."
- * or ".."; the rest follows parseTileRelativePath (no padding, no signs, level <= kMaxLevel) with
- * an extension of 1 to 16 ASCII letters and digits. No percent-decoding: '%' is not a layer
- * character. std::nullopt for anything else. */
+ * or "..", optionally followed by `@caps` or `@span<k>` (a layer's whole polar rows or spans,
+ * TileSource.hpp: k a power of two, canonical); the rest follows parseTileRelativePath (no padding,
+ * no signs, level <= kMaxLevel) with an extension of 1 to 16 ASCII letters and digits. No
+ * percent-decoding: '%' is not a layer character. std::nullopt for anything else. */
 std::optional<StaticTilePath> parseStaticTilePath(std::string_view pathAfterPrefix);
 
 } // namespace tellus
