@@ -2,6 +2,7 @@
 
 #include <tellus/cache/GeoPackage.hpp>
 #include <tellus/cache/TileGrid.hpp>
+#include <tellus/cache/TileSource.hpp>
 
 #include <algorithm>
 #include <cctype>
@@ -289,6 +290,18 @@ std::expected<void, CacheError> earthOnly(const DatasetSpec& spec, const char* w
                                  " as GeoPackages (EPSG:4326)"));
 }
 
+/** A renderer's whole polar rows or spans (`<layer>@caps`, `<layer>@span<k>`, TileSource.hpp)
+ * are images of boxes no tile of their grid is: written as tiles they would lie. */
+std::expected<void, CacheError> gridTiles(const DatasetSpec& spec, const char* what) {
+  const bool whole =
+      spec.name.ends_with(kWholeRowLayerSuffix) || parseWholeSpanLayer(spec.name).has_value();
+  if (!whole) return {};
+  return std::unexpected(invalid("dataset '" + spec.name +
+                                 "' holds a renderer's whole polar rows or spans, not a tile "
+                                 "pyramid: it is not " +
+                                 what + " as a GeoPackage (export its layer)"));
+}
+
 } // namespace
 
 std::expected<GpkgReport, CacheError> exportGeoPackage(TileCache& cache,
@@ -301,6 +314,7 @@ std::expected<GpkgReport, CacheError> exportGeoPackage(TileCache& cache,
   if (!info) return std::unexpected(invalid("unknown dataset id " + std::to_string(dataset)));
   const DatasetSpec& spec = info->spec;
   if (auto b = earthOnly(spec, "exported"); !b) return std::unexpected(b.error());
+  if (auto g = gridTiles(spec, "exported"); !g) return std::unexpected(g.error());
   if (spec.mimeType != "image/jpeg" && spec.mimeType != "image/png")
     return std::unexpected(invalid("a GeoPackage tile pyramid holds JPEG or PNG tiles; '" +
                                    spec.name + "' is " + spec.mimeType));
@@ -335,6 +349,7 @@ importGeoPackage(TileCache& cache, DatasetId dataset, const fs::path& file, std:
   if (!info) return std::unexpected(invalid("unknown dataset id " + std::to_string(dataset)));
   const DatasetSpec& spec = info->spec;
   if (auto b = earthOnly(spec, "imported"); !b) return std::unexpected(b.error());
+  if (auto g = gridTiles(spec, "imported"); !g) return std::unexpected(g.error());
   auto grid = TileGrid::create(spec.grid);
   if (!grid) return std::unexpected(invalid(grid.error()));
   auto opened = openGpkg(file, false);

@@ -129,3 +129,28 @@ TEST(GeoPackage, RefusesADatasetOnAnotherBody) {
   ASSERT_FALSE(m);
   EXPECT_NE(m.error().message.find("moon"), std::string::npos) << m.error().message;
 }
+
+// A renderer's whole polar rows and spans (issue 29) are boxes no tile of their grid is: neither
+// exported nor imported as a GeoPackage, with a message that says why.
+TEST(GeoPackage, RefusesWholeRowsAndSpans) {
+  test::TempDir dir("gpkg");
+  auto cache = test::openTestCache(dir.path() / "a");
+  const fs::path file = dir.path() / "x.gpkg";
+  const auto earth = *cache->registerDataset(test::imagerySpec());
+  ASSERT_TRUE(cache->put(earth, TileKey{0, 1, 1}, jpegLike({0, 1, 1}), {}));
+  ASSERT_TRUE(exportGeoPackage(*cache, earth, file));
+  for (const char* name : {"bluemarble@caps", "bluemarble@span4"}) {
+    SCOPED_TRACE(name);
+    const auto id = *cache->registerDataset(test::imagerySpec(name));
+    ASSERT_TRUE(cache->put(id, TileKey{0, 4, 0}, jpegLike({0, 4, 0}), {}));
+    const fs::path out = dir.path() / "whole.gpkg";
+    auto e = exportGeoPackage(*cache, id, out);
+    ASSERT_FALSE(e);
+    EXPECT_EQ(e.error().code, CacheErrc::InvalidArgument);
+    EXPECT_NE(e.error().message.find("not a tile pyramid"), std::string::npos) << e.error().message;
+    EXPECT_FALSE(fs::exists(out));
+    auto m = importGeoPackage(*cache, id, file);
+    ASSERT_FALSE(m);
+    EXPECT_NE(m.error().message.find("not a tile pyramid"), std::string::npos) << m.error().message;
+  }
+}
