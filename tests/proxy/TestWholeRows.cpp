@@ -34,6 +34,21 @@ namespace {
 
 constexpr int kLevels = 4;
 
+/** A tile source's answer to one address (the in-process service or a remote one). */
+TileResult awaitTile(ITileSource& src, const std::string& layer, const TileKey& key) {
+  std::mutex m;
+  std::condition_variable cv;
+  std::optional<TileResult> got;
+  src.request({layer, "", key}, 1.0, [&](TileResult&& r) {
+    std::lock_guard lock(m);
+    got = std::move(r);
+    cv.notify_all();
+  });
+  std::unique_lock lock(m);
+  EXPECT_TRUE(cv.wait_for(lock, 10s, [&] { return got.has_value(); }));
+  return got ? std::move(*got) : TileResult{};
+}
+
 /** A tile service over one upstream: layer "sat" (global, 36-degree, 256-px JPEG, 4 levels) and
  * layer "band" (every longitude, latitudes -54..54: no pole). */
 struct RowService {
@@ -63,17 +78,7 @@ struct RowService {
   }
 
   TileResult get(const std::string& layer, const TileKey& key) {
-    std::mutex m;
-    std::condition_variable cv;
-    std::optional<TileResult> got;
-    tiles->request({layer, "", key}, 1.0, [&](TileResult&& r) {
-      std::lock_guard lock(m);
-      got = std::move(r);
-      cv.notify_all();
-    });
-    std::unique_lock lock(m);
-    EXPECT_TRUE(cv.wait_for(lock, 10s, [&] { return got.has_value(); }));
-    return got ? std::move(*got) : TileResult{};
+    return awaitTile(*tiles, layer, key);
   }
 
   /** The file a whole row is kept in: tile (level, row, 0) of dataset "sat@caps". */
@@ -303,25 +308,6 @@ TEST(WholeRows, AMergedNodeIsOneGetMapOfItsBoxAtOneTilesSize) {
   EXPECT_EQ(ww.get("sat@span2", {level, 0, 0}).status, TileStatus::Failed); // a grid only
 }
 
-namespace {
-
-/** A RemoteTileSource's answer to one address. */
-TileResult remoteGet(RemoteTileSource& src, const std::string& layer, const TileKey& key) {
-  std::mutex m;
-  std::condition_variable cv;
-  std::optional<TileResult> got;
-  src.request({layer, "", key}, 1.0, [&](TileResult&& r) {
-    std::lock_guard lock(m);
-    got = std::move(r);
-    cv.notify_all();
-  });
-  std::unique_lock lock(m);
-  EXPECT_TRUE(cv.wait_for(lock, 10s, [&] { return got.has_value(); }));
-  return got ? std::move(*got) : TileResult{};
-}
-
-} // namespace
-
 // A renderer's `--server` source over `tellus serve`: /layers.json says which layers give whole
 // rows and spans, and `/tiles/<layer>@caps/...` and `/tiles/<layer>@span<k>/...` fetch them
 // through the server's tile service (one GetMap upstream each, the second time from its cache),
@@ -344,8 +330,8 @@ TEST(WholeRows, ARemoteSourceGetsThemFromTellusServe) {
     EXPECT_EQ((*src)->wholePolarRows("sat"), wms);
     EXPECT_FALSE((*src)->wholePolarRows("band"));
     if (!wms) {
-      EXPECT_EQ(remoteGet(**src, "sat@caps", {0, 4, 0}).status, TileStatus::Failed);
-      EXPECT_EQ(remoteGet(**src, "sat", {0, 4, 0}).status, TileStatus::Ok);
+      EXPECT_EQ(awaitTile(**src, "sat@caps", {0, 4, 0}).status, TileStatus::Failed);
+      EXPECT_EQ(awaitTile(**src, "sat", {0, 4, 0}).status, TileStatus::Ok);
       http.stop();
       continue;
     }
@@ -357,19 +343,19 @@ TEST(WholeRows, ARemoteSourceGetsThemFromTellusServe) {
               wholeSpanLayer("sat", 4), TileKey{kLevels - 1, lastRow(kLevels - 1), 8}, 256}}) {
       SCOPED_TRACE(layer);
       const std::size_t before = up.requests();
-      const TileResult r = remoteGet(**src, layer, key);
+      const TileResult r = awaitTile(**src, layer, key);
       ASSERT_EQ(r.status, TileStatus::Ok) << r.message;
       EXPECT_EQ(up.requests(), before + 1);
       EXPECT_EQ(test::queryParams(up.received().back().target).at("WIDTH"), std::to_string(width));
       EXPECT_TRUE(decodeImagery(r.bytes, "image/jpeg", width, 256));
-      EXPECT_EQ(remoteGet(**src, layer, key).bytes, r.bytes); // from the server's cache
+      EXPECT_EQ(awaitTile(**src, layer, key).bytes, r.bytes); // from the server's cache
       EXPECT_EQ(up.requests(), before + 1);
       EXPECT_EQ(local.get(layer, key).bytes, r.bytes);
     }
     const std::size_t asked = up.requests();
-    EXPECT_EQ(remoteGet(**src, "sat@span3", {kLevels - 1, 0, 0}).status, TileStatus::Failed);
-    EXPECT_EQ(remoteGet(**src, "band@caps", {0, 0, 0}).status, TileStatus::Failed);
-    EXPECT_EQ(remoteGet(**src, "sat@caps", {0, 2, 0}).status, TileStatus::Absent); // no pole
+    EXPECT_EQ(awaitTile(**src, "sat@span3", {kLevels - 1, 0, 0}).status, TileStatus::Failed);
+    EXPECT_EQ(awaitTile(**src, "band@caps", {0, 0, 0}).status, TileStatus::Failed);
+    EXPECT_EQ(awaitTile(**src, "sat@caps", {0, 2, 0}).status, TileStatus::Absent); // no pole
     EXPECT_EQ(up.requests(), asked);
     http.stop();
   }
