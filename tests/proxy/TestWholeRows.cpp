@@ -90,6 +90,28 @@ struct RowService {
   }
 };
 
+/** A RowService behind `tellus serve`'s front end on a loopback port. */
+struct ServedRows {
+  ServedRows(const std::string& url, UpstreamSpec::Type type)
+      : rows(url, type), front(*rows.tiles, {}),
+        http(oneThread(), [this](HttpRequest&& r, Responder respond) {
+          front.handle(std::move(r), std::move(respond));
+        }) {
+    EXPECT_TRUE(http.start());
+  }
+  ~ServedRows() { http.stop(); }
+  static HttpServerOptions oneThread() {
+    HttpServerOptions so;
+    so.threads = 1;
+    return so;
+  }
+  std::string base() const { return "http://127.0.0.1:" + std::to_string(http.port()); }
+
+  RowService rows;
+  ProxyFrontEnd front;
+  HttpServer http;
+};
+
 std::int64_t lastRow(int level) {
   return (std::int64_t{5} << level) - 1;
 }
@@ -221,16 +243,8 @@ TEST(WholeRows, ABadAnswerIsRefusedAndNothingIsCached) {
 // (a 2048 x 256 map of the row), and the picture is the synthetic source's (PSNR >= 35 dB).
 TEST(WholeRows, ThroughTellusServeTheSameOneGetMapIsComposedThere) {
   test::FakeUpstream up([](const test::FakeRequest& r) { return test::syntheticReply(r); });
-  RowService server(up.url("/wms"), UpstreamSpec::Type::Wms);
-  ProxyFrontEnd front(*server.tiles, {});
-  HttpServerOptions so;
-  so.threads = 1;
-  HttpServer http(so, [&](HttpRequest&& r, Responder respond) {
-    front.handle(std::move(r), std::move(respond));
-  });
-  ASSERT_TRUE(http.start());
-  RowService renderer("http://127.0.0.1:" + std::to_string(http.port()) + "/wms",
-                      UpstreamSpec::Type::Wms);
+  ServedRows server(up.url("/wms"), UpstreamSpec::Type::Wms);
+  RowService renderer(server.base() + "/wms", UpstreamSpec::Type::Wms);
   const TileResult r = renderer.get("sat@caps", {0, 4, 0});
   ASSERT_EQ(r.status, TileStatus::Ok) << r.message;
   EXPECT_EQ(renderer.tiles->upstreamFetches(), 1u);
@@ -244,7 +258,6 @@ TEST(WholeRows, ThroughTellusServeTheSameOneGetMapIsComposedThere) {
   const double psnr = rowPsnr(*got, *want);
   std::printf("through tellus serve: PSNR %.1f dB against the source\n", psnr);
   EXPECT_GE(psnr, 35.0);
-  http.stop();
 }
 
 // A merged row's node of k tiles (k = 2, 4, 8 at the deepest level, by both poles and at the
@@ -317,22 +330,14 @@ TEST(WholeRows, ARemoteSourceGetsThemFromTellusServe) {
   for (const auto type : {UpstreamSpec::Type::Wms, UpstreamSpec::Type::WorldWind}) {
     const bool wms = type == UpstreamSpec::Type::Wms;
     SCOPED_TRACE(wms ? "wms" : "world wind");
-    RowService server(up.url(wms ? "/wms" : "/tiles"), type);
-    ProxyFrontEnd front(*server.tiles, {});
-    HttpServerOptions so;
-    so.threads = 1;
-    HttpServer http(so, [&](HttpRequest&& r, Responder respond) {
-      front.handle(std::move(r), std::move(respond));
-    });
-    ASSERT_TRUE(http.start());
-    auto src = RemoteTileSource::connect("http://127.0.0.1:" + std::to_string(http.port()));
+    ServedRows server(up.url(wms ? "/wms" : "/tiles"), type);
+    auto src = RemoteTileSource::connect(server.base());
     ASSERT_TRUE(src) << src.error();
     EXPECT_EQ((*src)->wholePolarRows("sat"), wms);
     EXPECT_FALSE((*src)->wholePolarRows("band"));
     if (!wms) {
       EXPECT_EQ(awaitTile(**src, "sat@caps", {0, 4, 0}).status, TileStatus::Failed);
       EXPECT_EQ(awaitTile(**src, "sat", {0, 4, 0}).status, TileStatus::Ok);
-      http.stop();
       continue;
     }
     RowService local(up.url("/wms"), UpstreamSpec::Type::Wms); // in-process, for the bytes
@@ -357,6 +362,5 @@ TEST(WholeRows, ARemoteSourceGetsThemFromTellusServe) {
     EXPECT_EQ(awaitTile(**src, "band@caps", {0, 0, 0}).status, TileStatus::Failed);
     EXPECT_EQ(awaitTile(**src, "sat@caps", {0, 2, 0}).status, TileStatus::Absent); // no pole
     EXPECT_EQ(up.requests(), asked);
-    http.stop();
   }
 }
