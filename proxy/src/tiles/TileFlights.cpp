@@ -358,30 +358,38 @@ void TileService::Impl::fetchUnderLease(const FlightKey& fk,
   const TileBlock meta = metaTileOf(g, fk.key, inMeta ? u.metaTiles : 1);
   const LeaseKey lease{folder, TileKey{meta.level, meta.row0, meta.col0}};
   auto kept = std::make_shared<std::optional<CacheLookup>>(std::move(stale));
-  // Woken on the lease service's thread: the look at the cache and the next try run on a worker.
-  auto retry = [weak = weak_from_this(), fk, &l, &u, &g, folder, time, kept] {
-    const auto self = weak.lock();
-    if (!self) return;
-    self->workers->post([im = self.get(), fk, &l, &u, &g, folder, time, kept] {
-      if (im->landIfCachedNow(fk, folder)) return; // the holder stored it
-      im->fetchUnderLease(fk, l, u, g, folder, time, std::move(*kept));
-    });
-  };
-  const LeaseOutcome got =
-      options.leases->acquireOrWait(lease, options.leaseRecheck, std::move(retry));
-  if (got == LeaseOutcome::Waiting) {
-    leaseWaits.fetch_add(1, std::memory_order_relaxed);
-    return;
-  }
-  if (got == LeaseOutcome::Acquired) {
+  const auto hold = takeLease(lease, [fk, &l, &u, &g, folder, time, kept](Impl& im) {
+    if (im.landIfCachedNow(fk, folder)) return; // the holder stored it
+    im.fetchUnderLease(fk, l, u, g, folder, time, std::move(*kept));
+  });
+  if (!hold) return; // waiting
+  if (*hold) {
     {
       std::lock_guard lock(flightsMutex);
-      heldLeases.insert_or_assign(fk, std::make_shared<LeaseHold>(options.leases, lease));
+      heldLeases.insert_or_assign(fk, *hold);
     }
     // Another process may have stored it between our look and the lease.
     if (landIfCachedNow(fk, folder)) return;
   }
   fetchRemote(fk, l, u, g, folder, time, std::move(*kept));
+}
+
+std::optional<std::shared_ptr<TileService::Impl::LeaseHold>>
+TileService::Impl::takeLease(const LeaseKey& lease, std::function<void(Impl&)> again) {
+  // Woken on the lease service's thread: the look at the cache and the next try run on a worker.
+  auto retry = [weak = weak_from_this(), again = std::move(again)] {
+    const auto self = weak.lock();
+    if (!self) return;
+    self->workers->post([im = self.get(), again] { again(*im); });
+  };
+  const LeaseOutcome got =
+      options.leases->acquireOrWait(lease, options.leaseRecheck, std::move(retry));
+  if (got == LeaseOutcome::Waiting) {
+    leaseWaits.fetch_add(1, std::memory_order_relaxed);
+    return std::nullopt;
+  }
+  if (got == LeaseOutcome::Acquired) return std::make_shared<LeaseHold>(options.leases, lease);
+  return std::shared_ptr<LeaseHold>{};
 }
 
 } // namespace tellus

@@ -81,29 +81,18 @@ void TileService::Impl::fetchBlockUnderLease(std::vector<TileKey> owned,
   if (!options.leases) return fetchBlock(std::move(owned), l, u, g, id, folder, time);
   const TileBlock meta = metaTileOf(g, owned.front(), u.metaTiles);
   const LeaseKey lease{folder, TileKey{meta.level, meta.row0, meta.col0}};
-  // Woken on the lease service's thread: the look at the cache and the next try run on a worker.
-  auto retry = [weak = weak_from_this(), owned, &l, &u, &g, id, folder, time] {
-    const auto self = weak.lock();
-    if (!self) return;
-    self->workers->post([im = self.get(), owned, &l, &u, &g, id, folder, time] {
-      std::vector<TileKey> left;
-      for (const TileKey& k : owned)
-        if (!im->landIfCachedNow(FlightKey{id, k}, folder)) left.push_back(k);
-      if (!left.empty()) im->fetchBlockUnderLease(std::move(left), l, u, g, id, folder, time);
-    });
-  };
-  const LeaseOutcome got =
-      options.leases->acquireOrWait(lease, options.leaseRecheck, std::move(retry));
-  if (got == LeaseOutcome::Waiting) {
-    leaseWaits.fetch_add(1, std::memory_order_relaxed);
-    return;
-  }
-  if (got == LeaseOutcome::Acquired) {
-    const auto hold = std::make_shared<LeaseHold>(options.leases, lease);
+  const auto hold = takeLease(lease, [owned, &l, &u, &g, id, folder, time](Impl& im) {
+    std::vector<TileKey> left;
+    for (const TileKey& k : owned)
+      if (!im.landIfCachedNow(FlightKey{id, k}, folder)) left.push_back(k);
+    if (!left.empty()) im.fetchBlockUnderLease(std::move(left), l, u, g, id, folder, time);
+  });
+  if (!hold) return; // waiting
+  if (*hold) {
     {
       std::lock_guard lock(flightsMutex);
       for (const TileKey& k : owned) // a tile's own lease, if one is held, stays its flight's
-        heldLeases.try_emplace(FlightKey{id, k}, hold);
+        heldLeases.try_emplace(FlightKey{id, k}, *hold);
     }
     // Another process may have stored some between our look and the lease.
     std::erase_if(owned, [&](const TileKey& k) {

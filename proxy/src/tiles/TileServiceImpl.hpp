@@ -174,6 +174,12 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
   /** A lookup in a shared index that failed: the store's tile, or 503 (read-only meanwhile). */
   void serveWithoutIndex(DatasetId id, const std::string& folder, const TileKey& key, Done done);
 
+  /** Takes options.leases' lease, or waits for it: nullopt while another process holds it (then
+   * `again` runs on a worker once the holder lets go, to look at the cache and try again); else
+   * the hold, or null when the lease service is down (each instance fetches alone). */
+  std::optional<std::shared_ptr<LeaseHold>> takeLease(const LeaseKey& lease,
+                                                      std::function<void(Impl&)> again);
+
   /** A remote miss under options.leases: fetches when the lease is taken (or the lease service is
    * down), or waits for the holder's release and then looks at the cache again. */
   void fetchUnderLease(const FlightKey& fk,
