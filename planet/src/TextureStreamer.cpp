@@ -64,12 +64,13 @@ void TextureStreamer::drain(double nowS) {
     Entry& e = tiles_[key];
     if (e.state != TileFetch::InFlight || e.token != token) continue;
     --stats_.inFlight;
-    // A whole row or span refused (a WMS's size limit, an error) or not there (offline, not
-    // cached): the layer's caps (merged nodes) are composed of their rows' tiles from now on, as
-    // where the source cannot give them whole.
+    // A whole row or span refused (a WMS's size limit, an error): the layer's caps (merged
+    // nodes) are composed of their rows' tiles from now on, as where the source cannot give them
+    // whole; not there (offline, not cached): that node's.
     if (result.status != TileStatus::Ok) {
       const bool row = nodeTiles_.isWholeRow(key);
-      if (nodeTiles_.refused(key)) ++(row ? stats_.wholeRowsRefused : stats_.wholeSpansRefused);
+      if (nodeTiles_.refused(key, result.status == TileStatus::Failed))
+        ++(row ? stats_.wholeRowsRefused : stats_.wholeSpansRefused);
     }
     switch (result.status) {
     case TileStatus::Ok:

@@ -35,7 +35,7 @@ void TimePrefetcher::drain() {
     const auto t = times_.find(it->second.first);
     if (t != times_.end())
       if (auto e = t->second.find(it->second.second); e != t->second.end()) e->second.open = false;
-    if (result.status != TileStatus::Ok) nodeTiles_.refused(it->second.second);
+    if (result.status == TileStatus::Failed) nodeTiles_.refused(it->second.second, true);
     byToken_.erase(it);
     --stats_.inFlight;
     switch (result.status) {

@@ -100,9 +100,9 @@ TEST(TextureStreamer, AWholeRowCapAsksForOneTileOfTheCapsLayer) {
   }
 }
 
-// A whole row the source fails (a WMS's size limit, an error page) or does not have (offline,
-// not cached) turns whole rows off: the cap is then composed of its row's tiles, as where the
-// source cannot give rows whole.
+// A whole row the source fails (a WMS's size limit, an error page) turns whole rows off: the cap
+// is then composed of its row's tiles, as where the source cannot give rows whole. One it does
+// not have (offline, not cached) has that cap composed alone.
 TEST(TextureStreamer, AFailedWholeRowFallsBackToComposingTheCap) {
   for (const TileStatus refused : {TileStatus::Failed, TileStatus::Absent}) {
     SCOPED_TRACE(static_cast<int>(refused));
@@ -124,8 +124,10 @@ TEST(TextureStreamer, AFailedWholeRowFallsBackToComposingTheCap) {
     streamer.update(tree, cam, 0.0, &lru);
     EXPECT_EQ(src.requestsFor("l@caps"), 1u);
     streamer.update(tree, cam, 1.0, &lru); // the failure arrives: the row's tiles are asked for
-    EXPECT_EQ(streamer.stats().wholeRowsRefused, 1u);
-    EXPECT_FALSE(streamer.nodeTiles().caps);
+    const bool failed = refused == TileStatus::Failed;
+    EXPECT_EQ(streamer.stats().wholeRowsRefused, failed ? 1u : 0u);
+    EXPECT_EQ(streamer.nodeTiles().caps, !failed);
+    EXPECT_FALSE(streamer.nodeTiles().wholeCap(cap->key()));
     EXPECT_TRUE(streamer.nodeTiles().spans); // a refused row says nothing of spans
     std::size_t rowTiles = 0;
     for (const auto& r : src.requests())
@@ -189,6 +191,27 @@ TEST(NodeTiles, EveryAlignedRunHasAColumnOfItsOwn) {
   EXPECT_TRUE(eight.wholeCap({2, 0, 0, 32}));
   EXPECT_FALSE(eight.wholeSpan({2, 0, 0, 32}));
   EXPECT_EQ(eight.tile({2, 0, 0, 32}, 0), (TileKey{2, 0, 32}));
+}
+
+// A failure turns the layer's caps or spans off; an absence that one node's whole tile only.
+TEST(NodeTiles, AnAbsenceComposesOneNodeAFailureTheLayers) {
+  NodeTiles t = NodeTiles::whole(10, true);
+  const NodeKey a{3, 79, 0, 16}, b{3, 79, 16, 16}, cap{3, 79, 0, 80};
+  EXPECT_FALSE(t.refused(t.tile(a, 0), false));
+  EXPECT_FALSE(t.wholeSpan(a));
+  EXPECT_EQ(t.count(a), 16);
+  EXPECT_TRUE(t.wholeSpan(b));
+  EXPECT_TRUE(t.spans);
+  EXPECT_FALSE(t.refused(t.tile(cap, 0), false));
+  EXPECT_FALSE(t.wholeCap(cap));
+  EXPECT_TRUE(t.caps);
+  EXPECT_TRUE(t.wholeCap({4, 159, 0, 160})); // the next level's cap
+  EXPECT_TRUE(t.refused(t.tile(b, 0), true));
+  EXPECT_FALSE(t.spans);
+  EXPECT_FALSE(t.wholeSpan(b));
+  EXPECT_FALSE(t.refused(t.tile(b, 0), true)); // already off
+  EXPECT_FALSE(t.refused({3, 79, 5}, true));   // a grid tile: nothing to turn off
+  EXPECT_TRUE(t.caps);
 }
 
 // The layer names of whole spans read back only in their one spelling.
@@ -275,9 +298,9 @@ TEST(TextureStreamer, AWholeSpanAsksForOneImageOfTheMergedNodesBox) {
   }
 }
 
-// A span the source refuses or lacks turns spans off (merged nodes composed of their tiles from
-// then on) and leaves caps whole; the time prefetcher follows its own refusals and its
-// streamer's.
+// A span the source fails turns spans off (merged nodes composed of their tiles from then on)
+// and leaves caps whole; one it lacks has that node composed alone. The time prefetcher follows
+// its own failures and its streamer's.
 TEST(TextureStreamer, AFailedWholeSpanFallsBackToComposingTheMergedNode) {
   for (const TileStatus refused : {TileStatus::Failed, TileStatus::Absent}) {
     SCOPED_TRACE(static_cast<int>(refused));
@@ -297,10 +320,13 @@ TEST(TextureStreamer, AFailedWholeSpanFallsBackToComposingTheMergedNode) {
     streamer.update(tree, cam, 0.0, &lru);
     const std::size_t asked = src.requestCount();
     streamer.update(tree, cam, 1.0, &lru); // the refusals arrive: the merged nodes' tiles asked
-    EXPECT_EQ(streamer.stats().wholeSpansRefused, 1u);
+    const bool failed = refused == TileStatus::Failed;
+    EXPECT_EQ(streamer.stats().wholeSpansRefused, failed ? 1u : 0u);
     EXPECT_EQ(streamer.stats().wholeRowsRefused, 0u);
-    EXPECT_FALSE(streamer.nodeTiles().spans);
+    EXPECT_EQ(streamer.nodeTiles().spans, !failed);
     EXPECT_TRUE(streamer.nodeTiles().caps);
+    for (const Node* m : merged)
+      EXPECT_FALSE(streamer.nodeTiles().wholeSpan(m->key()));
     std::set<TileKey> tiles;
     for (const auto& r : src.requests())
       if (r.address.layer == "l") tiles.insert(r.address.key);
@@ -326,8 +352,9 @@ TEST(TextureStreamer, AFailedWholeSpanFallsBackToComposingTheMergedNode) {
     EXPECT_EQ(ahead.requestsFor("l@span" + std::to_string(merged.front()->key().span), "t1") > 0,
               true);
     p.update(tree, std::vector<std::string>{}); // the answers taken in, t1 forgotten
-    EXPECT_FALSE(p.nodeTiles().spans);
+    EXPECT_EQ(p.nodeTiles().spans, !failed);    // an absence at one time says nothing of others
     EXPECT_TRUE(p.nodeTiles().caps);
+    if (!failed) continue;
     // ... and follows its streamer's: a fresh one told the streamer has turned spans off.
     TimePrefetcher q(ahead, {"l", 1000000, -1.0});
     q.setNodeTiles(NodeTiles::whole(planet::test::globalGrid().colCount(0), true));

@@ -65,8 +65,8 @@ struct StreamStats {
   std::size_t failed = 0;
   std::size_t inFlight = 0;          ///< now
   std::size_t candidates = 0;        ///< nodes wanting a texture in the last update
-  std::size_t wholeRowsRefused = 0;  ///< whole rows failed or absent (caps composed since)
-  std::size_t wholeSpansRefused = 0; ///< whole spans failed or absent (merged nodes composed)
+  std::size_t wholeRowsRefused = 0;  ///< whole rows failed (caps composed since)
+  std::size_t wholeSpansRefused = 0; ///< whole spans failed (merged nodes composed since)
 };
 
 class TextureStreamer {
@@ -100,7 +100,7 @@ public:
    * before the first update. A whole row that fails or is absent turns it off for good: caps are
    * then composed of their rows' tiles, and the node shows its parent cap or the global texture
    * until they arrive. */
-  void setNodeTiles(NodeTiles tiles) noexcept { nodeTiles_ = tiles; }
+  void setNodeTiles(NodeTiles tiles) noexcept { nodeTiles_ = std::move(tiles); }
   const NodeTiles& nodeTiles() const noexcept { return nodeTiles_; }
   const StreamStats& stats() const noexcept { return stats_; }
   /** The score the tile was last given (0 when none); for tests and the statistics line. */

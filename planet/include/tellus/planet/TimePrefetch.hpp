@@ -65,8 +65,11 @@ public:
   void update(const Quadtree& tree, std::span<const std::string> times);
   const PrefetchStats& stats() const noexcept { return stats_; }
   /** The layer streamer's tiles of a node (a cap may be one whole row, NodeTiles.hpp). A whole
-   * row or span refused here turns them off as in the streamer (NodeTiles::refused). */
-  void setNodeTiles(NodeTiles tiles) noexcept { nodeTiles_ = tiles; }
+   * row or span that fails here turns them off as in the streamer (NodeTiles::refused). */
+  void setNodeTiles(NodeTiles tiles) noexcept {
+    nodeTiles_ = std::move(tiles);
+    nodeTiles_.absent.clear(); // the streamer's time's: other times may have them
+  }
   /** What the streamer has turned off since (its fallback) is off here too. */
   void followNodeTiles(const NodeTiles& streamer) noexcept { nodeTiles_.narrowTo(streamer); }
   const NodeTiles& nodeTiles() const noexcept { return nodeTiles_; }
