@@ -222,6 +222,58 @@ TEST_F(LocalTier, TheScanAtStartCountsTheFilesThereOldestFirstAndOnlyTiles) {
   EXPECT_TRUE(fs::exists(dir.path() / kFolder / "5" / "notes.txt"));
 }
 
+// A clean stop saves the record's order of use (`<root>/.local-tier-order`); the next start's scan
+// takes it over the files' mtimes (a read does not change a file's mtime), reads it once and
+// removes it. A file that is not one is ignored: the mtimes decide, as after a crash.
+TEST_F(LocalTier, TheOrderOfUseOutlivesACleanRestart) {
+  const fs::path order = dir.path() / ".local-tier-order";
+  {
+    auto t = tiered(600);
+    for (int i = 0; i < 5; ++i)
+      put(*t, tile(i), body(i)); // modified 0 (oldest) to 4
+    t->settle();
+    for (const int i : {4, 3, 2, 1, 0}) // read: 0 is now the most recently used, 4 the least
+      ASSERT_TRUE(t->open(tile(i), 100));
+    ASSERT_FALSE(fs::exists(order));
+  }
+  ASSERT_TRUE(fs::exists(order));
+  // mtimes that say the opposite: 0 the oldest.
+  for (int i = 0; i < 5; ++i) {
+    const fs::path p = dir.path() / kFolder / tileRelativePath(tile(i).key, "png");
+    const timespec times[2] = {{2'000'000 + i, 0}, {2'000'000 + i, 0}};
+    ASSERT_EQ(::utimensat(AT_FDCWD, p.c_str(), times, 0), 0) << p;
+  }
+  {
+    auto t = tiered(600);
+    t->settle();
+    EXPECT_FALSE(fs::exists(order)); // read once
+    EXPECT_EQ(t->localTier().files, 5U);
+    put(*t, tile(5), body(5)); // 600 -> over at the next: 700 with tile 6
+    put(*t, tile(6), body(6));
+    t->settle();
+    EXPECT_FALSE(localHas(4)); // the least recently used by the record, the newest by mtime
+    EXPECT_FALSE(localHas(3));
+    EXPECT_TRUE(localHas(0)); // the oldest by mtime, the most recently used
+    EXPECT_TRUE(localHas(1));
+    EXPECT_TRUE(localHas(2));
+  }
+  // Not an order file: ignored, removed when read, and the mtimes decide.
+  std::ofstream(order) << "not an order\n" << kFolder << "\t5/7/7_0.png\n";
+  {
+    auto t = tiered(600);
+    t->settle();
+    EXPECT_EQ(t->localTier().files, 5U);
+    EXPECT_FALSE(fs::exists(order));
+    put(*t, tile(7), body(7)); // 700: the two oldest by mtime go (by the record: 2 and 1)
+    put(*t, tile(8), body(8));
+    t->settle();
+    EXPECT_FALSE(localHas(0));
+    EXPECT_FALSE(localHas(1));
+    EXPECT_TRUE(localHas(2));
+    EXPECT_TRUE(localHas(5));
+  }
+}
+
 TEST_F(LocalTier, RemovalsRollbacksAndRewritesKeepTheRecordTrue) {
   auto t = tiered(10000);
   put(*t, tile(0), body(0));

@@ -6,12 +6,14 @@
 
 #include <algorithm>
 #include <condition_variable>
+#include <fstream>
 #include <list>
 #include <mutex>
 #include <stop_token>
 #include <string>
 #include <sys/stat.h>
 #include <thread>
+#include <unistd.h>
 #include <unordered_map>
 #include <vector>
 
@@ -69,6 +71,7 @@ public:
   ~LocalTier() {
     thread_.request_stop();
     thread_.join();
+    saveOrder();
   }
 
   /** `at` was used (a hit, a copy, a write) and is `bytes` long. */
@@ -149,8 +152,63 @@ private:
                   at.key};
   }
 
+  /** Where a clean stop writes the record's order (a name starting with '.': never a tile). */
+  static constexpr std::string_view kOrderFile = ".local-tier-order";
+  static constexpr std::string_view kOrderHeader = "tellus local tier order 1";
+
+  /** At a clean stop, after a whole scan: the record's tiles, most recently used first, one
+   * `<server>/<dataset>\t<level>/<row>/<row>_<col>.<ext>` a line, written to a temp file and
+   * renamed (a crash leaves none or the whole). Best effort: a failure writes nothing. */
+  void saveOrder() noexcept {
+    if (root_.empty() || !scanComplete_) return;
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::path file = root_ / kOrderFile;
+    const fs::path temp = root_ / (std::string(kOrderFile) + ".tmp-" + std::to_string(::getpid()));
+    try {
+      std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+      out << kOrderHeader << '\n';
+      for (const Entry& e : lru_)
+        out << folders_[e.id.folder] << '\t'
+            << tileRelativePath(e.id.key, extensions_[e.id.extension]) << '\n';
+      out.close();
+      if (!out) throw std::ios_base::failure("write");
+      fs::rename(temp, file, ec);
+    } catch (...) {
+      ec = std::make_error_code(std::errc::io_error);
+    }
+    if (ec) fs::remove(temp, ec);
+  }
+
+  /** The order a clean stop saved (saveOrder), by tile: 0 the most recently used. The file is
+   * removed once read, so that a later crash does not bring back an old order; a file that is
+   * not one gives nothing. */
+  std::unordered_map<TierId, std::size_t, TierIdHash> readOrder() {
+    std::unordered_map<TierId, std::size_t, TierIdHash> rank;
+    const std::filesystem::path file = root_ / kOrderFile;
+    std::ifstream in(file, std::ios::binary);
+    if (!in) return rank;
+    std::string line, extension;
+    const bool ours = std::getline(in, line) && line == kOrderHeader;
+    while (ours && std::getline(in, line)) {
+      const auto tab = line.find('\t');
+      if (tab == std::string::npos) continue;
+      const auto key = parseTileRelativePath(std::string_view(line).substr(tab + 1), &extension);
+      if (!key) continue;
+      std::lock_guard lock(mutex_);
+      const TierId id{intern(folderIds_, folders_, std::string_view(line).substr(0, tab)),
+                      intern(extensionIds_, extensions_, extension),
+                      *key};
+      rank.try_emplace(id, rank.size());
+    }
+    in.close();
+    std::error_code ec;
+    std::filesystem::remove(file, ec);
+    return rank;
+  }
+
   void run(std::stop_token stop) {
-    if (!root_.empty()) scan(stop);
+    if (!root_.empty()) scanComplete_ = scan(stop);
     {
       std::lock_guard lock(mutex_);
       scanned_ = true;
@@ -179,9 +237,10 @@ private:
   }
 
   /** The tiles already in the tree: every `<root>/<server>/<dataset>/<level>/<row>/<row>_<col>.ext`
-   * (names starting with '.', the temp files and folders, skipped), oldest modified recorded as
-   * least recently used, behind whatever was used since the start. */
-  void scan(const std::stop_token& stop) {
+   * (names starting with '.', the temp files and folders, skipped), behind whatever was used since
+   * the start: in the order the last clean stop saved (readOrder), then the others oldest
+   * modified last. False when stopped before the end. */
+  bool scan(const std::stop_token& stop) {
     namespace fs = std::filesystem;
     std::vector<Found> found;
     std::error_code ec;
@@ -199,11 +258,17 @@ private:
                     server->path().filename().native() + "/" + ds->path().filename().native(),
                     stop,
                     found);
-        if (stop.stop_requested()) return;
+        if (stop.stop_requested()) return false;
       }
     }
-    std::sort(found.begin(), found.end(), [](const Found& a, const Found& b) {
-      return a.modifiedNs > b.modifiedNs;
+    const auto rank = readOrder();
+    const auto rankOf = [&](const Found& f) {
+      const auto it = rank.find(f.id);
+      return it == rank.end() ? rank.size() : it->second;
+    };
+    std::sort(found.begin(), found.end(), [&](const Found& a, const Found& b) {
+      const std::size_t ra = rankOf(a), rb = rankOf(b);
+      return ra != rb ? ra < rb : a.modifiedNs > b.modifiedNs;
     });
     constexpr std::size_t kBatch = 4096; // entries recorded per hold of the lock
     for (std::size_t i = 0; i < found.size() && !stop.stop_requested(); i += kBatch) {
@@ -215,6 +280,7 @@ private:
         bytes_ += found[j].bytes;
       }
     }
+    return !stop.stop_requested();
   }
 
   void scanDataset(const std::filesystem::path& dir,
@@ -278,6 +344,7 @@ private:
   std::uint64_t evictedBytes_ = 0;
   bool scanned_ = false;
   bool evicting_ = false;
+  bool scanComplete_ = false; // the thread's, read after it is joined
 
   std::jthread thread_; // last: started once everything above is there
 };

@@ -14,14 +14,16 @@
  *
  * With a limit (`cache.s3.local_tier_limit`) the local tier is bounded: an in-memory record of its
  * tile files (bytes, and their order of last use: a read that hits, a copy, a write) is kept,
- * filled at start by a scan of the tree on a thread of its own (the oldest files, by mtime, count
- * as least recently used) and kept up to date by every read, copy, write and removal through this
- * store. When the tiles recorded pass the limit, that thread unlinks the local copies of the least
- * recently used ones until they are under the low-water mark (90 % of the limit). Only local tile
- * files are ever removed: never an index row, never a shared object, never a temp file, a
- * descriptor or the changes lock (none of them is recorded). A later read of an evicted tile misses
- * the local tier and is read from the shared store (and copied back). A reader holding the evicted
- * file open (the cache's RowCache) keeps reading it: unlink leaves an open file whole (POSIX).
+ * filled at start by a scan of the tree on a thread of its own (in the order of use a clean stop
+ * saved in `<root>/.local-tier-order`, read once and removed; files it does not list, or all of
+ * them after a crash, by mtime, the oldest as least recently used) and kept up to date by every
+ * read, copy, write and removal through this store. When the tiles recorded pass the limit, that
+ * thread unlinks the local copies of the least recently used ones until they are under the
+ * low-water mark (90 % of the limit). Only local tile files are ever removed: never an index row,
+ * never a shared object, never a temp file, a descriptor or the changes lock (none of them is
+ * recorded). A later read of an evicted tile misses the local tier and is read from the shared
+ * store (and copied back). A reader holding the evicted file open (the cache's RowCache) keeps
+ * reading it: unlink leaves an open file whole (POSIX).
  *
  * The record follows the files closely, not exactly: a file changed behind this store (or in a race
  * of a removal with a copy of the same tile) is recorded as it was last seen until it is read,
