@@ -7,6 +7,7 @@
 #include "FuzzCheck.hpp"
 
 #include <tellus/cache/TilePath.hpp>
+#include <tellus/cache/TileSource.hpp>
 #include <tellus/proxy/Wms.hpp>
 #include <tellus/proxy/Wmts.hpp>
 
@@ -92,9 +93,17 @@ void checkRelativePath(std::string_view path) {
 void checkStaticPath(std::string_view path) {
   const auto p = parseStaticTilePath(path);
   if (!p) return;
-  TELLUS_FUZZ_CHECK(!p->layer.empty() && p->layer.size() <= kMaxStaticLayerName);
-  TELLUS_FUZZ_CHECK(p->layer != "." && p->layer != "..");
-  for (const char c : p->layer)
+  // The layer, or its whole rows or spans (`<layer>@caps`, `<layer>@span<k>`, issue 29).
+  std::string_view layer = p->layer;
+  if (layer.ends_with(kWholeRowLayerSuffix)) {
+    layer.remove_suffix(kWholeRowLayerSuffix.size());
+  } else if (const auto span = parseWholeSpanLayer(layer)) {
+    TELLUS_FUZZ_CHECK(wholeSpanLayer(span->layer, span->span) == p->layer); // canonical
+    layer = span->layer;
+  }
+  TELLUS_FUZZ_CHECK(!layer.empty() && layer.size() <= kMaxStaticLayerName);
+  TELLUS_FUZZ_CHECK(layer != "." && layer != "..");
+  for (const char c : layer)
     TELLUS_FUZZ_CHECK(isLayerChar(c));
   TELLUS_FUZZ_CHECK(!p->extension.empty() && p->extension.size() <= 16);
   for (const char c : p->extension)
