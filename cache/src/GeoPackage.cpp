@@ -293,9 +293,7 @@ std::expected<void, CacheError> earthOnly(const DatasetSpec& spec, const char* w
 /** A renderer's whole polar rows or spans (`<layer>@caps`, `<layer>@span<k>`, TileSource.hpp)
  * are images of boxes no tile of their grid is: written as tiles they would lie. */
 std::expected<void, CacheError> gridTiles(const DatasetSpec& spec, const char* what) {
-  const bool whole =
-      spec.name.ends_with(kWholeRowLayerSuffix) || parseWholeSpanLayer(spec.name).has_value();
-  if (!whole) return {};
+  if (!wholeBoxLayer(spec.name)) return {};
   return std::unexpected(invalid("dataset '" + spec.name +
                                  "' holds a renderer's whole polar rows or spans, not a tile "
                                  "pyramid: it is not " +

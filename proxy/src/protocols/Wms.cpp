@@ -767,12 +767,8 @@ std::optional<StaticTilePath> parseStaticTilePath(std::string_view pathAfterPref
   const std::size_t slash = pathAfterPrefix.find('/');
   if (slash == std::string_view::npos) return std::nullopt;
   const std::string_view name = pathAfterPrefix.substr(0, slash);
-  std::string_view layer = name; // without a whole row's or span's suffix (TileSource.hpp)
-  if (name.ends_with(kWholeRowLayerSuffix)) {
-    layer.remove_suffix(kWholeRowLayerSuffix.size());
-  } else if (const auto span = parseWholeSpanLayer(name)) {
-    layer = span->layer;
-  }
+  // Without a whole row's or span's suffix (TileSource.hpp).
+  const std::string_view layer = wholeBoxLayer(name).value_or(name);
   if (layer.empty() || layer.size() > kMaxStaticLayerName || layer == "." || layer == "..") {
     return std::nullopt;
   }

@@ -39,10 +39,8 @@ bool TileService::Impl::isSpanKey(const TileGrid& g, const TileKey& k, std::int6
 
 const LayerSpec* TileService::wholeBoxBase(std::string_view name) const noexcept {
   if (!impl_->capIndex.contains(name)) return nullptr;
-  if (name.ends_with(kWholeRowLayerSuffix))
-    return layer(name.substr(0, name.size() - kWholeRowLayerSuffix.size()));
-  const auto span = parseWholeSpanLayer(name);
-  return span ? layer(span->layer) : nullptr;
+  const auto base = wholeBoxLayer(name);
+  return base ? layer(*base) : nullptr;
 }
 
 bool TileService::wholePolarRows(std::string_view layer) const {

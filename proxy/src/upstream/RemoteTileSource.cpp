@@ -239,17 +239,11 @@ struct RemoteTileSource::Impl {
    * them, and the suffix; else null. */
   const RemoteLayer*
   wholeBox(std::string_view name, std::size_t* index, std::string_view* suffix) const {
-    std::string_view own = name;
-    if (name.ends_with(kWholeRowLayerSuffix)) {
-      own.remove_suffix(kWholeRowLayerSuffix.size());
-    } else if (const auto span = parseWholeSpanLayer(name)) {
-      own = span->layer;
-    } else {
-      return nullptr;
-    }
-    const RemoteLayer* l = layer(own, index);
+    const auto own = wholeBoxLayer(name);
+    if (!own) return nullptr;
+    const RemoteLayer* l = layer(*own, index);
     if (!l || !l->wholeRows) return nullptr;
-    *suffix = name.substr(own.size());
+    *suffix = name.substr(own->size());
     return l;
   }
 

@@ -91,6 +91,15 @@ inline std::optional<WholeSpanName> parseWholeSpanLayer(std::string_view name) {
   return WholeSpanName{name.substr(0, at), span};
 }
 
+/** The layer whose whole row or span `name` is (`<layer>@caps`, `<layer>@span<k>`), else nullopt.
+ */
+inline std::optional<std::string_view> wholeBoxLayer(std::string_view name) {
+  if (name.size() > kWholeRowLayerSuffix.size() && name.ends_with(kWholeRowLayerSuffix))
+    return name.substr(0, name.size() - kWholeRowLayerSuffix.size());
+  if (const auto span = parseWholeSpanLayer(name)) return span->layer;
+  return std::nullopt;
+}
+
 /**
  * @brief The asynchronous tile interface. Thread safety: every method may be called from any
  * thread.
