@@ -16,7 +16,9 @@
 #             workers x MAPPROXY_THREADS) on one cache directory, with MapProxy's file locks in it
 # Every round, each server in turn (the order reversed every other round) gets two bursts of
 # BURST (300) connected clients let go at once, round-robin over its three instances
-# (tests/cli/burst.py):
+# (BURST_CLIENT: build/bench/tellus_bench_burst, one thread per client, built beside TELLUS; or
+# BURST_CLIENT=python, tests/cli/burst.py, whose threads take turns on Python's one lock to read
+# their answers, adding tens of milliseconds to every server's tail: bench/RESULTS.md):
 #   tile  every client asks for one missing tile (level BURST_LEVEL, a tile inside a metatile, east
 #         of BURST_AT);
 #   meta  the clients ask for the 16 tiles of one missing 4x4 metatile, client i for tile i mod 16.
@@ -34,6 +36,13 @@ MC_LOCK_RETRY="${MC_LOCK_RETRY:-0.1}"
 BURST_STORE="${BURST_STORE:-folder}" # folder: one shared cache folder; s3: one S3 bucket
 TELLUS_THREADS="${TELLUS_THREADS:-}"
 burst_py="$repo/tests/cli/burst.py"
+BURST_CLIENT="${BURST_CLIENT:-$(dirname "$TELLUS")/../../bench/tellus_bench_burst}"
+if [[ "$BURST_CLIENT" == python ]]; then
+  burst_client=(python3 "$burst_py")
+else
+  [[ -x "$BURST_CLIENT" ]] || die "no burst client $BURST_CLIENT (cmake --build build --target tellus_bench_burst, or BURST_CLIENT=python)"
+  burst_client=("$BURST_CLIENT")
+fi
 b="$work/burst"
 mkdir -p "$b"
 
@@ -170,7 +179,7 @@ print(r + (-r) % 4, c + (-c) % 4)")
 # warm-up: every instance answers, its processes started (a level-1 tile, not counted)
 for s in tellus MapCache MapProxy; do
   # shellcheck disable=SC2046
-  python3 "$burst_py" 30 "$(burst_url "$s" 1 3 3)" $(burst_ports "$s") >"$b/warm-$s.json" ||
+  "${burst_client[@]}" 30 "$(burst_url "$s" 1 3 3)" $(burst_ports "$s") >"$b/warm-$s.json" ||
     die "$s: the warm-up burst failed: $(cat "$b/warm-$s.json")"
 done
 bursts="$b/bursts.tsv"
@@ -194,7 +203,7 @@ for round in $(seq 1 "$ROUNDS"); do
       u0=$(upstream_requests)
       ok=1
       # shellcheck disable=SC2046
-      res="$(python3 "$burst_py" "$BURST" "@$list" $(burst_ports "$s"))" || ok=0
+      res="$("${burst_client[@]}" "$BURST" "@$list" $(burst_ports "$s"))" || ok=0
       u1=$(upstream_requests)
       echo -e "$s\t$kind\t$round\t$((u1 - u0))\t$ok\t$res" >>"$bursts"
       echo "   $s $kind: $((u1 - u0)) upstream requests, $res"
@@ -206,9 +215,9 @@ done
 mkdir -p "$OUT_DIR"
 summary="$OUT_DIR/peers-burst-summary.txt"
 cp "$bursts" "$OUT_DIR/peers-bursts.tsv"
-python3 - "$bursts" "$BURST" "$BURST_LEVEL" "$MC_LOCK_RETRY" <<'EOF' | tee "$summary"
+python3 - "$bursts" "$BURST" "$BURST_LEVEL" "$MC_LOCK_RETRY" "$(basename "${burst_client[-1]}")" <<'EOF' | tee "$summary"
 import json, statistics, sys
-path, n, level, retry = sys.argv[1:5]
+path, n, level, retry, client = sys.argv[1:6]
 rows = {}
 for line in open(path):
     s, kind, rnd, up, ok, res = line.rstrip("\n").split("\t", 5)
@@ -217,7 +226,7 @@ for line in open(path):
     rows.setdefault((kind, s), []).append(r)
 print()
 print(f"== Single flight across 3 instances: {n} clients let go at once, level {level}; "
-      f"medians of {max(len(v) for v in rows.values())} rounds (MapCache's lock retry {retry} s)")
+      f"medians of {max(len(v) for v in rows.values())} rounds (MapCache's lock retry {retry} s; client {client})")
 print(f"{'burst':<6}{'server':<10}{'upstream req':>13}{'p50 ms':>9}{'p99 ms':>9}{'max ms':>9}  answers")
 p99 = {}
 for kind in ("tile", "meta"):
