@@ -18,8 +18,8 @@ own count, and tellus_compose_source_texels_total{origin="upstream"}) and their 
 goal: at most 2).
 Usage: bench/fetch/run.py [TELLUS] (default build/tools/tellus/tellus); env THRESHOLDS (default
 "1 2"), OVERVIEW (default "0 1": without and with renderer.overview, issue 29), VIEWS (names,
-default all), NO_CESIUM=1, PROXY=1, NODE_MODULES (default build/tests/web-npm/node_modules), OUT
-(default a new temporary directory). Prints a Markdown table and writes OUT/results.json."""
+default all), NO_CESIUM=1, PROXY=1, NODE_MODULES (default build/tests/web-npm/node_modules), CONFIG
+(default bench/fetch/fetch.yaml: a copy with another grid), OUT (default a new temporary directory). Prints a Markdown table and writes OUT/results.json."""
 import json
 import math
 import os
@@ -285,7 +285,7 @@ def main():
                 break
             time.sleep(0.1)
         url = f"http://127.0.0.1:{open(portfile).read().strip()}"
-        with open(os.path.join(HERE, "fetch.yaml")) as f:
+        with open(os.environ.get("CONFIG") or os.path.join(HERE, "fetch.yaml")) as f:
             config = f.read().replace("@URL@", url + "/wms")
         cfgs = {}
         for ov in ("0", "1"):
