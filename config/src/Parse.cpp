@@ -30,11 +30,12 @@ void readCache(Reader& r, const Map& root, const fs::path& baseDir, CacheSetting
               node,
               root.path("cache"),
               where,
-              {"root", "size_limit", "index", "index_password_file", "store", "s3"});
+              {"root", "size_limit", "keep_unstored", "index", "index_password_file", "store", "s3"});
   std::string rootText;
   if (auto v = m.get("root")) rootText = text(r, *v, m.path("root"));
   c.root = rootText.empty() ? defaultCacheRoot() : resolvePath(rootText, baseDir);
   if (auto v = m.get("size_limit")) c.sizeLimitBytes = size(r, *v, m.path("size_limit"));
+  if (auto v = m.get("keep_unstored")) c.keepUnstoredBytes = size(r, *v, m.path("keep_unstored"));
   if (auto v = m.get("index")) {
     c.index = text(r, *v, m.path("index"));
     if (auto bad = checkIndexUri(c.index)) r.fail(v->Mark(), m.path("index"), *bad);

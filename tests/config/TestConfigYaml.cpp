@@ -282,6 +282,7 @@ TEST(ConfigYaml, DefaultsAreApplied) {
   EXPECT_EQ(c->server.limits.requestsPerSecond, 0.0);
   EXPECT_EQ(c->cache.root, defaultCacheRoot());
   EXPECT_EQ(c->cache.sizeLimitBytes, 0U);
+  EXPECT_EQ(c->cache.keepUnstoredBytes, 64ULL << 20);
 
   const UpstreamConfig& u = c->upstreams.at(0);
   EXPECT_EQ(u.wmsVersion, "1.3.0");
@@ -340,6 +341,7 @@ server:
 cache:
   root: cache/here
   size_limit: 10GiB
+  keep_unstored: 8MiB
 renderer:
   lod_threshold: 1.5
   mesh_size: 17
@@ -442,6 +444,7 @@ layers:
   EXPECT_EQ(s.jpegQuality, 85);
   EXPECT_EQ(c->cache.root, "/srv/conf/cache/here");
   EXPECT_EQ(c->cache.sizeLimitBytes, 10ULL << 30);
+  EXPECT_EQ(c->cache.keepUnstoredBytes, 8ULL << 20);
   EXPECT_EQ(c->renderer.lodThreshold, 1.5);
   EXPECT_EQ(c->renderer.meshSize, 17);
   EXPECT_EQ(c->renderer.fovDeg, 60.0);

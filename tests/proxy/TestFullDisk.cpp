@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 using namespace tellus;
 using namespace std::chrono_literals;
@@ -85,7 +86,9 @@ struct Stack {
       l.dataset.mimeType = "image/jpeg";
       layers.push_back(std::move(l));
     }
-    auto t = TileService::create(*cache, *fetcher, {u}, std::move(layers), TileServiceOptions{});
+    TileServiceOptions to;
+    to.clock = o.clock.get(); // the kept tiles' retry interval on the same clock
+    auto t = TileService::create(*cache, *fetcher, {u}, std::move(layers), to);
     EXPECT_TRUE(t) << (t ? "" : t.error());
     if (!t) return;
     tiles = std::move(*t);
@@ -202,14 +205,18 @@ TEST(ProxyFullDiskIntegration, ServingFromAFullDiskAnswersEverythingAndStoresAga
     }
     const std::size_t before = upstream.requests();
     const TileKey miss{1, 0, 0};
-    for (int i = 0; i < 2; ++i) {
+    std::string missBody;
+    for (int i = 0; i < 3; ++i) {
       const auto r = s.get(wwtile(miss));
       EXPECT_EQ(r.status, 200) << "a miss on a full disk is still answered";
-      EXPECT_EQ(r.header("x-cache"), "MISS");
+      EXPECT_EQ(r.header("x-cache"), i == 0 ? "MISS" : "HIT") << i;
       EXPECT_EQ(r.body.substr(0, 2), "\xFF\xD8");
+      if (i == 0) missBody = r.body;
+      EXPECT_EQ(r.body, missBody) << i;
     }
     EXPECT_FALSE(s.stored(miss));
-    EXPECT_EQ(upstream.requests(), before + 2); // not kept, so asked again
+    // Not stored, but kept in memory: the upstream is asked once, not once per request.
+    EXPECT_EQ(upstream.requests(), before + 1);
     EXPECT_EQ(s.get(wwtile({1, 0, 1})).status, 200);
     const auto fresh = s.get(wwtile({0, 0, 0}, "new"));
     EXPECT_EQ(fresh.status, 200) << "a layer the full cache cannot register is still served";
@@ -217,12 +224,27 @@ TEST(ProxyFullDiskIntegration, ServingFromAFullDiskAnswersEverythingAndStoresAga
     EXPECT_FALSE(s.stored({0, 0, 0}, "new"));
     auto metrics = s.get("/metrics").body;
     EXPECT_NE(metrics.find("\ntellus_cache_writable 0\n"), std::string::npos) << metrics;
-    EXPECT_NE(metrics.find("\ntellus_cache_store_refused_total 4\n"), std::string::npos) << metrics;
+    EXPECT_NE(metrics.find("\ntellus_cache_store_refused_total 3\n"), std::string::npos) << metrics;
+    EXPECT_NE(metrics.find("\ntellus_cache_kept_unstored_tiles 3\n"), std::string::npos) << metrics;
+    EXPECT_NE(metrics.find("\ntellus_cache_kept_unstored_served_total 2\n"), std::string::npos)
+        << metrics;
     EXPECT_NE(metrics.find("\ntellus_cache_free_bytes 0\n"), std::string::npos) << metrics;
 
-    // Room again: after the recheck interval the next miss is stored.
+    // Room again: after the recheck interval the next miss is stored, and a kept tile is stored
+    // from memory on its next request, without the upstream.
     fs::remove(filler);
     clock->advance(11s);
+    const std::size_t beforeRoom = upstream.requests();
+    const auto kept = s.get(wwtile(miss));
+    EXPECT_EQ(kept.status, 200);
+    EXPECT_EQ(kept.body, missBody);
+    for (int i = 0; i < 200 && !s.stored(miss); ++i)
+      std::this_thread::sleep_for(10ms); // stored on a worker after the answer
+    EXPECT_TRUE(s.stored(miss)) << "a kept tile was not stored once there was room";
+    EXPECT_EQ(upstream.requests(), beforeRoom) << "a kept tile was fetched again";
+    const auto fromCache = s.get(wwtile(miss));
+    EXPECT_EQ(fromCache.header("x-cache"), "HIT");
+    EXPECT_EQ(fromCache.body, missBody);
     const TileKey later{1, 1, 0};
     EXPECT_EQ(s.get(wwtile(later)).status, 200);
     EXPECT_TRUE(s.stored(later)) << "storing did not resume";
@@ -231,6 +253,7 @@ TEST(ProxyFullDiskIntegration, ServingFromAFullDiskAnswersEverythingAndStoresAga
         << "the new layer was not registered once there was room";
     metrics = s.get("/metrics").body;
     EXPECT_NE(metrics.find("\ntellus_cache_writable 1\n"), std::string::npos) << metrics;
+    EXPECT_NE(metrics.find("\ntellus_cache_stored_later_total 1\n"), std::string::npos) << metrics;
 
     // The log says each change once, not once per tile.
     logger().setEventStream(stderr);

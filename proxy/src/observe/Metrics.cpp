@@ -272,6 +272,28 @@ void ProxyMetrics::renderCache(std::string& out,
         "counter",
         "Fetched tiles the cache did not keep for lack of space (each was served all the same).");
     out += "tellus_cache_store_refused_total " + std::to_string(cacheHealth->refusedStores) + "\n";
+    header(out,
+           "tellus_cache_kept_unstored_tiles",
+           "gauge",
+           "Fetched tiles the cache could not store (a full disk, an unreachable shared store), "
+           "kept in memory to answer their next requests without the upstream.");
+    out +=
+        "tellus_cache_kept_unstored_tiles " + std::to_string(cacheHealth->keptUnstoredTiles) + "\n";
+    header(out, "tellus_cache_kept_unstored_bytes", "gauge", "Their bytes.");
+    out +=
+        "tellus_cache_kept_unstored_bytes " + std::to_string(cacheHealth->keptUnstoredBytes) + "\n";
+    header(
+        out,
+        "tellus_cache_kept_unstored_served_total",
+        "counter",
+        "Tile requests answered from the tiles kept unstored (none of them asked the upstream).");
+    out += "tellus_cache_kept_unstored_served_total " +
+           std::to_string(cacheHealth->servedKeptUnstored) + "\n";
+    header(out,
+           "tellus_cache_stored_later_total",
+           "counter",
+           "Tiles kept unstored that were stored once the cache took tiles again.");
+    out += "tellus_cache_stored_later_total " + std::to_string(cacheHealth->storedLater) + "\n";
     if (cacheHealth->sharedIndexUp) {
       header(
           out,

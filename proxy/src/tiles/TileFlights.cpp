@@ -219,10 +219,41 @@ void TileService::Impl::store(const FlightKey& fk,
   } else {
     noticeStoreState(nullptr);
   }
+  if (notStored) {
+    if (meta.fetchedAt == 0) meta.fetchedAt = nowMillis();
+    unstored.keep(folder, fk.key, bytes, meta, nowMillis());
+  } else {
+    unstored.stored(folder, fk.key, false);
+  }
   TileAnswer a =
       tile(TileOrigin::Miss, std::move(bytes), meta.contentType, meta.fetchedAt, folder, fk.key);
   a.notStored = std::move(notStored);
   land(fk, std::move(a));
+}
+
+void TileService::Impl::serveKept(DatasetId id,
+                                  const std::string& folder,
+                                  const TileKey& key,
+                                  UnstoredTiles::Kept& kept,
+                                  const Done& done) {
+  // Fetched before but not stored: answered from memory, and stored now if the cache takes it
+  // (on a worker; once per retry interval), without asking the upstream again.
+  if (kept.storeNow && id >= 0) {
+    workers->post(
+        [self = shared_from_this(), id, folder, key, bytes = kept.bytes, meta = kept.meta] {
+          if (self->cache.put(id, key, bytes, meta)) {
+            self->unstored.stored(folder, key, true);
+            self->noticeStoreState(nullptr);
+          }
+        });
+  }
+  const UnixMillis fetchedAt = kept.meta.fetchedAt;
+  done(tile(TileOrigin::Hit,
+            std::move(kept.bytes),
+            std::move(kept.meta.contentType),
+            fetchedAt,
+            folder,
+            key));
 }
 
 void TileService::Impl::getTile(std::string_view layerName,
@@ -278,6 +309,9 @@ void TileService::Impl::getTile(std::string_view layerName,
   }
   if (found->kind == CacheLookup::Kind::Absent && found->retryAfter > now) {
     return done(absent(TileOrigin::Hit, "the upstream has no tile here"));
+  }
+  if (found->kind == CacheLookup::Kind::Miss) {
+    if (auto kept = unstored.find(folder, key, now)) return serveKept(id, folder, key, *kept, done);
   }
   const UpstreamSpec& u = upstreams.at(l.upstream);
   const bool forced = forcedOffline.load();

@@ -275,6 +275,11 @@ CacheHealthMetrics TileService::cacheHealth() const {
   CacheHealthMetrics h;
   h.writable = impl_->cache.storeStatus().writable;
   h.refusedStores = impl_->refusedStores.load(std::memory_order_relaxed);
+  const auto kept = impl_->unstored.stats();
+  h.keptUnstoredTiles = kept.tiles;
+  h.keptUnstoredBytes = kept.bytes;
+  h.servedKeptUnstored = kept.served;
+  h.storedLater = kept.storedLater;
   if (impl_->options.leases) {
     h.sharedIndexUp = impl_->options.leases->healthy() && !impl_->indexDown.load();
     h.leaseWaits = impl_->leaseWaits.load(std::memory_order_relaxed);

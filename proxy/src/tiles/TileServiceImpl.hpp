@@ -6,6 +6,7 @@
 // TileMetaFetch.cpp (metatiles: getTiles) and UpstreamUrls.cpp (the upstream request URLs).
 
 #include "tiles/MetaTile.hpp"
+#include "tiles/UnstoredTiles.hpp"
 #include "tiles/WorkerPool.hpp"
 #include "upstream/WmtsCompose.hpp"
 
@@ -70,6 +71,9 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
   // Fetched tiles served but not kept for lack of space, and whether the log last said "storing".
   std::atomic<std::uint64_t> refusedStores{0};
   std::atomic<bool> storingLogged{true};
+  // What could not be stored (full disk, store unreachable), kept in memory (options.keepUnstored).
+  UnstoredTiles unstored;
+  static constexpr UnixMillis kStoreKeptEveryMs = 1000; // a kept tile's next try to be stored
 
   // (layer, time) -> dataset id, registered on first use.
   std::mutex datasetsMutex;
@@ -97,7 +101,8 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
 
   std::unique_ptr<WorkerPool> workers; // last member: destroyed first, while the rest still lives
 
-  Impl(TileCache& c, Fetcher& f, TileServiceOptions o) : cache(c), fetcher(f), options(o) {}
+  Impl(TileCache& c, Fetcher& f, TileServiceOptions o)
+      : cache(c), fetcher(f), options(o), unstored(o.keepUnstoredBytes, kStoreKeptEveryMs) {}
 
   /** A stand-in id for a dataset the cache could not register (a full disk): negative, never a
    * real id, and one per folder so that flights of different datasets stay apart. Its tiles are
@@ -106,6 +111,12 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     return -1 - static_cast<DatasetId>(stableHash64(folder) >> 2);
   }
 
+  /** Answers from a tile kept unstored (UnstoredTiles), and tries to store it when due. */
+  void serveKept(DatasetId id,
+                 const std::string& folder,
+                 const TileKey& key,
+                 UnstoredTiles::Kept& kept,
+                 const Done& done);
   std::expected<std::pair<DatasetId, std::string>, std::string> dataset(const LayerSpec& l,
                                                                         std::string_view time);
 

@@ -274,6 +274,7 @@ openLocal(const cli::Args& a, const char* cmd, planet::RendererOptions& ro) {
   auto specs = cli::proxySpecs(config);
   TileServiceOptions tso = cli::tileServiceOptions(config.server);
   tso.offline = a.flag("offline") || tso.offline;
+  tso.keepUnstoredBytes = config.cache.keepUnstoredBytes;
   // Tiles rendered from local rasters (a cold cache) are background work here: at the decoders'
   // priority, below the thread that draws (on llvmpipe they competed with rasterising).
   tso.workerNice = ro.decodeNice;

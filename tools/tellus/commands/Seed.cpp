@@ -290,6 +290,7 @@ seedingService(Context& ctx, Fetcher& fetcher, const SeedArgs& s) {
   options.renderThreads = std::max(options.renderThreads, s.remote.concurrency);
   // A shared index: each metatile (or tile) fetched under its lease, as `serve` fetches them.
   options.leases = ctx.leases;
+  options.keepUnstoredBytes = 0; // a seeder asks for each tile once: nothing to keep it for
   return TileService::create(
       *ctx.cache, fetcher, std::move(specs.upstreams), std::move(specs.layers), options);
 }

@@ -123,6 +123,7 @@ int runServe(const cli::Args& a) {
   auto specs = cli::proxySpecs(ctx->config);
   TileServiceOptions tileOptions = cli::tileServiceOptions(server);
   tileOptions.leases = ctx->leases;
+  tileOptions.keepUnstoredBytes = ctx->config.cache.keepUnstoredBytes;
   // Several instances: a miss fetches its metatile under the metatile's lease (one upstream
   // request for the tiles of a metatile however they are spread over the instances).
   tileOptions.metaTilesOnMiss = ctx->leases != nullptr;

@@ -264,6 +264,9 @@ struct RendererSettings {
 struct CacheSettings {
   std::filesystem::path root;       ///< cache root (index.sqlite + the tile tree)
   std::uint64_t sizeLimitBytes = 0; ///< 0 = unlimited
+  /// YAML `keep_unstored`: fetched tiles the cache could not store (a full disk, an unreachable
+  /// store) kept in memory up to this many bytes (TileServiceOptions::keepUnstoredBytes); 0: none.
+  std::uint64_t keepUnstoredBytes = 64u << 20;
   /// YAML `index` (issue 27): "" = SQLite in the root (the embedded default); a postgresql:// URI
   /// = a PostgreSQL index shared by several instances, with single-flight leases. Never holds a
   /// password (refused): that comes from PGPASSWORD, PGPASSFILE or `indexPasswordFile`.

@@ -44,6 +44,11 @@ struct LocalTierMetrics {
 struct CacheHealthMetrics {
   bool writable = true;
   std::uint64_t refusedStores = 0;
+  /// Fetched tiles the cache did not store, kept in memory (TileServiceOptions::keepUnstoredBytes).
+  std::uint64_t keptUnstoredTiles = 0;
+  std::uint64_t keptUnstoredBytes = 0;
+  std::uint64_t servedKeptUnstored = 0; ///< answers from them, none asked of the upstream
+  std::uint64_t storedLater = 0;        ///< of them stored once the cache took tiles again
   /// A shared index (cache.index, issue 27): whether its server answers; nullopt: none.
   std::optional<bool> sharedIndexUp;
   std::uint64_t leaseWaits = 0;         ///< misses that waited for another instance's fetch

@@ -132,6 +132,11 @@ struct TileServiceOptions {
   /// The bounded local tier's figures for /metrics (issue 27, `cache.s3.local_tier_limit`); empty:
   /// none.
   std::function<LocalTierMetrics()> localTier;
+  /// Tiles fetched that the cache could not store (a full disk, a shared store that cannot be
+  /// reached) are kept in memory up to this many bytes, least recently used out: the next request
+  /// for one is answered from there instead of the upstream, and it is stored from there once the
+  /// cache takes tiles again. 0: none kept (each request fetches again).
+  std::size_t keepUnstoredBytes = 64u << 20;
 };
 
 class TileService final : public ITileSource {
