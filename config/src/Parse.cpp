@@ -26,11 +26,12 @@ constexpr std::uintmax_t kMaxFileBytes = 16U << 20;
 
 void readCache(Reader& r, const Map& root, const fs::path& baseDir, CacheSettings& c) {
   const auto [node, where] = root.child("cache");
-  const Map m(r,
-              node,
-              root.path("cache"),
-              where,
-              {"root", "size_limit", "keep_unstored", "index", "index_password_file", "store", "s3"});
+  const Map m(
+      r,
+      node,
+      root.path("cache"),
+      where,
+      {"root", "size_limit", "keep_unstored", "index", "index_password_file", "store", "s3"});
   std::string rootText;
   if (auto v = m.get("root")) rootText = text(r, *v, m.path("root"));
   c.root = rootText.empty() ? defaultCacheRoot() : resolvePath(rootText, baseDir);
