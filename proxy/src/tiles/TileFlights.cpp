@@ -239,13 +239,14 @@ void TileService::Impl::serveKept(DatasetId id,
   // Fetched before but not stored: answered from memory, and stored now if the cache takes it
   // (on a worker; once per retry interval), without asking the upstream again.
   if (kept.storeNow && id >= 0) {
-    workers->post(
-        [self = shared_from_this(), id, folder, key, bytes = kept.bytes, meta = kept.meta] {
-          if (self->cache.put(id, key, bytes, meta)) {
-            self->unstored.stored(folder, key, true);
-            self->noticeStoreState(nullptr);
-          }
-        });
+    // `this`, not a shared_ptr: the workers finish their jobs before Impl's other members go, and
+    // a job must never hold the last reference (its pool would join itself).
+    workers->post([this, id, folder, key, bytes = kept.bytes, meta = kept.meta] {
+      if (cache.put(id, key, bytes, meta)) {
+        unstored.stored(folder, key, true);
+        noticeStoreState(nullptr);
+      }
+    });
   }
   const UnixMillis fetchedAt = kept.meta.fetchedAt;
   done(tile(TileOrigin::Hit,
