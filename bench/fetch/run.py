@@ -19,7 +19,8 @@ goal: at most 2).
 Usage: bench/fetch/run.py [TELLUS] (default build/tools/tellus/tellus); env THRESHOLDS (default
 "1 2"), OVERVIEW (default "0 1": without and with renderer.overview, issue 29), VIEWS (names,
 default all), NO_CESIUM=1, PROXY=1, NODE_MODULES (default build/tests/web-npm/node_modules), CONFIG
-(default bench/fetch/fetch.yaml: a copy with another grid), OUT (default a new temporary directory). Prints a Markdown table and writes OUT/results.json."""
+(default bench/fetch/fetch.yaml; a copy of it with another grid), OUT (default a new temporary
+directory). Prints a Markdown table and writes OUT/results.json."""
 import json
 import math
 import os
