@@ -60,7 +60,8 @@ struct Stack {
         const std::string& upstreamUrl,
         bool writeBehind = false,
         std::shared_ptr<ManualClock> clock = nullptr,
-        const std::vector<std::string>& layerNames = {"sat"}) {
+        const std::vector<std::string>& layerNames = {"sat"},
+        std::chrono::seconds ttl = 0s) {
     TileCache::Options o;
     o.root = root;
     o.fsyncTiles = false;
@@ -84,6 +85,7 @@ struct Stack {
       l.upstream = "up";
       l.dataset.grid = GridSpec{Sector{}, 36.0, 256, 256, 4};
       l.dataset.mimeType = "image/jpeg";
+      l.ttl = ttl;
       layers.push_back(std::move(l));
     }
     TileServiceOptions to;
@@ -265,5 +267,48 @@ TEST(ProxyFullDiskIntegration, ServingFromAFullDiskAnswersEverythingAndStoresAga
     const auto report = s.cache->verify();
     ASSERT_TRUE(report);
     EXPECT_TRUE(report->ok());
+  });
+}
+
+TEST(ProxyFullDiskIntegration, AnExpiredTileRefreshedOnAFullDiskIsFetchedOnceAndStoredLater) {
+  TELLUS_ON_TMPFS(1 << 20, 4096, [&](const fs::path& mnt) {
+    test::FakeUpstream upstream(noisyTile);
+    auto clock = std::make_shared<ManualClock>();
+    Stack s(mnt / "cache", upstream.url("/wms"), false, clock, {"sat"}, 60s);
+    ASSERT_TRUE(s.up());
+    const TileKey k{1, 0, 0};
+    const auto first = s.get(wwtile(k));
+    ASSERT_EQ(first.status, 200);
+    ASSERT_TRUE(s.stored(k));
+    const fs::path filler = test::fillDisk(mnt);
+    clock->advance(61s); // the tile expires: each request would refresh it
+    const std::size_t before = upstream.requests();
+    for (int i = 0; i < 3; ++i) {
+      const auto r = s.get(wwtile(k));
+      EXPECT_EQ(r.status, 200) << i;
+      EXPECT_EQ(r.body, first.body) << i; // the fake upstream answers the same bytes again
+    }
+    // The refresh could not be stored; its copy is kept, so it is fetched once, not per request.
+    EXPECT_EQ(upstream.requests(), before + 1);
+
+    // Room again: the kept refresh is stored from memory, not fetched again, and is fresh.
+    fs::remove(filler);
+    clock->advance(11s);
+    EXPECT_EQ(s.get(wwtile(k)).status, 200);
+    const auto fresh = [&] {
+      for (const auto& d : s.cache->datasets()) {
+        if (d.spec.name != "sat") continue;
+        const auto r = s.cache->peek(d.id, k);
+        return r && r->kind == CacheLookup::Kind::Hit && !r->stale;
+      }
+      return false;
+    };
+    for (int i = 0; i < 200 && !fresh(); ++i)
+      std::this_thread::sleep_for(10ms); // stored on a worker after the answer
+    EXPECT_TRUE(fresh()) << "the kept refresh was not stored once there was room";
+    EXPECT_EQ(upstream.requests(), before + 1);
+    const auto after = s.get(wwtile(k));
+    EXPECT_EQ(after.header("x-cache"), "HIT");
+    EXPECT_EQ(upstream.requests(), before + 1);
   });
 }

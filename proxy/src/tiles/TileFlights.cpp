@@ -311,7 +311,9 @@ void TileService::Impl::getTile(std::string_view layerName,
   if (found->kind == CacheLookup::Kind::Absent && found->retryAfter > now) {
     return done(absent(TileOrigin::Hit, "the upstream has no tile here"));
   }
-  if (found->kind == CacheLookup::Kind::Miss) {
+  // Nothing cached, or an expired tile whose refresh could not be stored: a copy kept since
+  // (newer than the row: a store of the tile drops it) is answered without another fetch.
+  if (found->kind == CacheLookup::Kind::Miss || found->kind == CacheLookup::Kind::Hit) {
     if (auto kept = unstored.find(folder, key, now)) return serveKept(id, folder, key, *kept, done);
   }
   const UpstreamSpec& u = upstreams.at(l.upstream);
