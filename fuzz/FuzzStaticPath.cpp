@@ -94,13 +94,9 @@ void checkStaticPath(std::string_view path) {
   const auto p = parseStaticTilePath(path);
   if (!p) return;
   // The layer, or its whole rows or spans (`<layer>@caps`, `<layer>@span<k>`, issue 29).
-  std::string_view layer = p->layer;
-  if (layer.ends_with(kWholeRowLayerSuffix)) {
-    layer.remove_suffix(kWholeRowLayerSuffix.size());
-  } else if (const auto span = parseWholeSpanLayer(layer)) {
+  const std::string_view layer = wholeBoxLayer(p->layer).value_or(p->layer);
+  if (const auto span = parseWholeSpanLayer(p->layer))
     TELLUS_FUZZ_CHECK(wholeSpanLayer(span->layer, span->span) == p->layer); // canonical
-    layer = span->layer;
-  }
   TELLUS_FUZZ_CHECK(!layer.empty() && layer.size() <= kMaxStaticLayerName);
   TELLUS_FUZZ_CHECK(layer != "." && layer != "..");
   for (const char c : layer)

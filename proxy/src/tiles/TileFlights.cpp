@@ -220,8 +220,9 @@ void TileService::Impl::store(const FlightKey& fk,
     noticeStoreState(nullptr);
   }
   if (notStored) {
-    if (meta.fetchedAt == 0) meta.fetchedAt = nowMillis();
-    unstored.keep(folder, fk.key, bytes, meta, nowMillis());
+    const UnixMillis now = nowMillis();
+    if (meta.fetchedAt == 0) meta.fetchedAt = now;
+    unstored.keep(folder, fk.key, bytes, meta, now);
   } else {
     unstored.stored(folder, fk.key, false);
   }

@@ -44,12 +44,11 @@ public:
             const TileMeta& meta,
             UnixMillis now) {
     if (limit_ == 0 || bytes.size() > limit_) return;
+    std::string n = name(folder, key);
     std::lock_guard lock(mutex_);
-    dropLocked(name(folder, key));
-    order_.push_front(Entry{name(folder, key),
-                            std::vector<std::byte>(bytes.begin(), bytes.end()),
-                            meta,
-                            now + retryEvery_});
+    dropLocked(n);
+    order_.push_front(Entry{
+        std::move(n), std::vector<std::byte>(bytes.begin(), bytes.end()), meta, now + retryEvery_});
     index_.emplace(order_.front().name, order_.begin());
     empty_.store(false, std::memory_order_relaxed);
     bytes_ += bytes.size();
