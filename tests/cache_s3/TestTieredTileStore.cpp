@@ -13,6 +13,7 @@
 #include <atomic>
 #include <fcntl.h>
 #include <fstream>
+#include <future>
 #include <sys/stat.h>
 #include <thread>
 
@@ -114,8 +115,10 @@ protected:
     local = std::move(*l);
   }
 
-  std::unique_ptr<TieredTileStore> tiered(std::uint64_t limit) {
-    auto t = makeTieredTileStore(local, shared, LocalTierOptions{limit, 0.9, dir.path()});
+  std::unique_ptr<TieredTileStore> tiered(std::uint64_t limit,
+                                          std::function<void()> beforeScan = {}) {
+    auto t = makeTieredTileStore(
+        local, shared, LocalTierOptions{limit, 0.9, dir.path(), std::move(beforeScan)});
     EXPECT_TRUE(t->prepareDataset(kFolder));
     return t;
   }
@@ -180,6 +183,31 @@ TEST_F(LocalTier, AReadAfterEvictionComesFromTheSharedStoreAndIsCopiedBack) {
   EXPECT_EQ(shared->opens.load(), before + 2); // the next read a local hit
   EXPECT_EQ(t->localTier().bytes, 400U);
   EXPECT_EQ(shared->removals.load(), 0);
+}
+
+// A write the start's scan finds installed before its use is recorded (CI saw it once, under ASan):
+// the scan put that newest tile at the back of the order, its first victim, and counted it twice.
+TEST_F(LocalTier, AWriteFinishingWhileTheScanRunsIsRecordedByTheWriteNotTheScan) {
+  std::promise<void> go;
+  auto t = tiered(500, [released = go.get_future().share()] { released.wait(); });
+  for (int i = 0; i < 5; ++i)
+    put(*t, tile(i), body(i)); // 500: at the limit, tile 0 the least recently used
+  const auto bytes = body(5);
+  auto staged = t->stage(tile(5), bytes);
+  ASSERT_TRUE(staged);
+  ASSERT_TRUE((*staged)->install()); // on disk, its use not recorded yet
+  go.set_value();                    // the scan finds tiles 0 to 5 there
+  t->settle();
+  EXPECT_EQ(t->localTier().bytes, 500U); // tile 5 is the write's to record, not the scan's
+  EXPECT_EQ(t->localTier().evictions, 0U);
+  EXPECT_TRUE(localHas(5));
+  (*staged)->finish(true); // 600: the least recently used go, down to 400
+  t->settle();
+  EXPECT_TRUE(localHas(5));
+  EXPECT_FALSE(localHas(0));
+  EXPECT_FALSE(localHas(1));
+  EXPECT_EQ(t->localTier().bytes, 400U);
+  EXPECT_EQ(t->localTier().files, 4U);
 }
 
 TEST_F(LocalTier, TheScanAtStartCountsTheFilesThereOldestFirstAndOnlyTiles) {

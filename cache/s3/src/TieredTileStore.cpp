@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <condition_variable>
 #include <fstream>
+#include <functional>
 #include <list>
 #include <mutex>
 #include <stop_token>
@@ -15,6 +16,7 @@
 #include <thread>
 #include <unistd.h>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 namespace tellus {
@@ -65,7 +67,7 @@ public:
       : local_(std::move(local)), root_(o.root), limit_(o.limitBytes),
         lowWater_(static_cast<std::uint64_t>(static_cast<double>(o.limitBytes) *
                                              std::clamp(o.lowWater, 0.0, 1.0))),
-        thread_([this](std::stop_token stop) { run(stop); }) {}
+        beforeScan_(o.beforeScan), thread_([this](std::stop_token stop) { run(stop); }) {}
   LocalTier(const LocalTier&) = delete;
   LocalTier& operator=(const LocalTier&) = delete;
   ~LocalTier() {
@@ -81,6 +83,7 @@ public:
     {
       std::lock_guard lock(mutex_);
       const TierId id = idOf(at);
+      touch(id);
       if (auto it = where_.find(id); it != where_.end()) {
         lru_.splice(lru_.begin(), lru_, it->second);
         bytes_ = bytes_ - it->second->bytes + size;
@@ -99,11 +102,19 @@ public:
   void forget(const TileLocation& at) {
     std::lock_guard lock(mutex_);
     const TierId id = idOf(at);
+    touch(id);
     if (auto it = where_.find(id); it != where_.end()) {
       bytes_ -= it->second->bytes;
       lru_.erase(it->second);
       where_.erase(it);
     }
+  }
+
+  /** `at`'s local file is about to change (a write, a copy, a removal; refresh or forget follow).
+   * While the start's scan runs, what it finds of that file is left to them. */
+  void writing(const TileLocation& at) {
+    std::lock_guard lock(mutex_);
+    touch(idOf(at));
   }
 
   /** After a change of `at`'s local file that may or may not have happened (a write or a removal
@@ -144,6 +155,12 @@ private:
     names.emplace_back(name);
     ids.emplace(std::string(name), id);
     return id;
+  }
+  /** Under the lock. Before the start's scan is recorded, `id` is one whose file this process
+   * uses or changes: the scan's record of that file (maybe taken before the change, or of a file
+   * installed whose use is not recorded yet) would count it twice or at the back of the order. */
+  void touch(const TierId& id) {
+    if (!scanned_) touched_.insert(id);
   }
   /** Under the lock. */
   TierId idOf(const TileLocation& at) {
@@ -208,10 +225,12 @@ private:
   }
 
   void run(std::stop_token stop) {
+    if (beforeScan_) beforeScan_();
     if (!root_.empty()) scanComplete_ = scan(stop);
     {
       std::lock_guard lock(mutex_);
       scanned_ = true;
+      touched_ = {};
     }
     idle_.notify_all();
     std::unique_lock lock(mutex_);
@@ -274,7 +293,8 @@ private:
     for (std::size_t i = 0; i < found.size() && !stop.stop_requested(); i += kBatch) {
       std::lock_guard lock(mutex_);
       for (std::size_t j = i; j < std::min(found.size(), i + kBatch); ++j) {
-        if (where_.contains(found[j].id)) continue; // used since the start: that counts
+        // Used or changed since the start: what that recorded (or will) counts.
+        if (where_.contains(found[j].id) || touched_.contains(found[j].id)) continue;
         lru_.push_back(Entry{found[j].id, found[j].bytes});
         where_.emplace(found[j].id, std::prev(lru_.end()));
         bytes_ += found[j].bytes;
@@ -335,6 +355,7 @@ private:
   std::condition_variable idle_;     // settle(): scanned, not evicting
   std::list<Entry> lru_;             // front: the most recently used
   std::unordered_map<TierId, std::list<Entry>::iterator, TierIdHash> where_;
+  std::unordered_set<TierId, TierIdHash> touched_; // touch(): until the scan is recorded
   Names folderIds_;
   Names extensionIds_;
   std::vector<std::string> folders_;
@@ -346,6 +367,7 @@ private:
   bool evicting_ = false;
   bool scanComplete_ = false; // the thread's, read after it is joined
 
+  const std::function<void()> beforeScan_;
   std::jthread thread_; // last: started once everything above is there
 };
 
@@ -461,6 +483,7 @@ public:
     if (!remote) return std::nullopt;
     // Copied into the local tier as it is read; a tier that cannot take it (full) is skipped.
     if (const auto bytes = remote->file->readAll()) {
+      if (tier_) tier_->writing(at);
       if (auto staged = local_->stage(at, *bytes)) {
         const bool ok = (*staged)->install().has_value();
         (*staged)->finish(ok);
@@ -482,6 +505,7 @@ public:
   }
   std::expected<std::shared_ptr<StagedTile>, CacheError>
   stage(const TileLocation& at, std::span<const std::byte> bytes) override {
+    if (tier_) tier_->writing(at);
     auto local = local_->stage(at, bytes);
     if (!local) return std::unexpected(local.error());
     auto shared = shared_->stage(at, bytes);
@@ -489,10 +513,12 @@ public:
     return std::make_shared<TieredStagedTile>(std::move(*local), std::move(*shared), tier_, at);
   }
   std::shared_ptr<StagedRemoval> stageRemoval(const TileLocation& at) override {
+    if (tier_) tier_->writing(at);
     return std::make_shared<TieredRemoval>(
         local_->stageRemoval(at), shared_->stageRemoval(at), tier_, at);
   }
   void remove(const TileLocation& at) override {
+    if (tier_) tier_->writing(at);
     shared_->remove(at);
     local_->remove(at);
     if (tier_) tier_->forget(at);

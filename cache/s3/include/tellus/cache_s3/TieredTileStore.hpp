@@ -34,6 +34,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 
 namespace tellus {
@@ -45,6 +46,9 @@ struct LocalTierOptions {
   /** The local tree's root, scanned at start for the tiles already there (its dataset folders,
    * `<root>/<server>/<dataset>`); empty: no scan. */
   std::filesystem::path root;
+  /** Called on the tier's thread just before the start's scan; tests hold the scan there to
+   * write while it has not looked. Empty: nothing. */
+  std::function<void()> beforeScan;
 };
 
 /** What the local tier holds, as recorded. */
