@@ -113,7 +113,7 @@ int main(int argc, char** argv) {
   {
     const long before = residentKiB();
     start = Steady::now();
-    auto bounded = makeTieredTileStore(local, shared, LocalTierOptions{1ULL << 40, 0.9, root});
+    auto bounded = makeTieredTileStore(local, shared, LocalTierOptions{1ULL << 40, 0.9, root, {}});
     const double opened = msSince(start);
     bounded->settle();
     const double scanned = msSince(start);
@@ -148,7 +148,7 @@ int main(int argc, char** argv) {
     std::error_code ec;
     const auto orderBytes = fs::file_size(root / ".local-tier-order", ec);
     start = Steady::now();
-    auto again = makeTieredTileStore(local, shared, LocalTierOptions{1ULL << 40, 0.9, root});
+    auto again = makeTieredTileStore(local, shared, LocalTierOptions{1ULL << 40, 0.9, root, {}});
     again->settle();
     std::printf("clean stop: the order of use written in %.0f ms (%llu bytes); the next scan, "
                 "reading it, done after %.0f ms\n",
@@ -159,7 +159,7 @@ int main(int argc, char** argv) {
   {
     start = Steady::now();
     const auto half = static_cast<std::uint64_t>(files) * kTileBytes / 2;
-    auto bounded = makeTieredTileStore(local, shared, LocalTierOptions{half, 0.9, root});
+    auto bounded = makeTieredTileStore(local, shared, LocalTierOptions{half, 0.9, root, {}});
     bounded->settle();
     const auto s = bounded->localTier();
     std::printf("scan and eviction to 90 %% of half: %llu files (%llu bytes) removed, %llu bytes "

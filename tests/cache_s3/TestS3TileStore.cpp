@@ -397,7 +397,7 @@ TEST_F(S3StoreIntegration, ALocalTierLimitKeepsTheTreeUnderItAndEveryTileIsStill
   std::shared_ptr<ITileStore> local =
       std::move(*openFileTileStore(FileTileStoreOptions{root, false, false}));
   constexpr std::uint64_t kLimit = 20000; // 20 of the 60 tiles of 1,000 bytes
-  auto tiered = makeTieredTileStore(local, shared, LocalTierOptions{kLimit, 0.9, root});
+  auto tiered = makeTieredTileStore(local, shared, LocalTierOptions{kLimit, 0.9, root, {}});
   ASSERT_TRUE(tiered->prepareDataset("srv/ds"));
   auto at = [](int i) { return TileLocation{"srv/ds", "jpg", TileKey{6, 1, i}}; };
   auto body = [](int i) { return std::to_string(1000000 + i) + std::string(993, 'b'); };
