@@ -182,3 +182,92 @@ TEST(CacheFullDiskIntegration, NoInodesLeftIsADiskFullThatNamesTheInodes) {
     EXPECT_TRUE(report->ok());
   });
 }
+
+// A metatile's tiles stored together (putMany): when some of its files do not fit, none is kept,
+// no temp file is left, and the whole fits once there is room again.
+TEST(CacheFullDiskIntegration, AMetatileThatDoesNotFitKeepsNoneOfItsTiles) {
+  TELLUS_ON_TMPFS(1 << 20, 1000, [&](const fs::path& mnt) {
+    const fs::path root = mnt / "cache";
+    auto cache = openOn(root, nullptr, 0ms);
+    ASSERT_TRUE(cache);
+    const auto id = *cache->registerDataset(test::imagerySpec());
+    std::vector<std::vector<std::byte>> bytes;
+    std::vector<TileCache::TileBytes> tiles;
+    bytes.reserve(16);
+    for (std::int64_t c = 0; c < 16; ++c) {
+      const TileKey k{4, 2, c};
+      bytes.push_back(test::payload(k, 20000));
+      tiles.push_back(TileCache::TileBytes{k, bytes.back()});
+    }
+    ASSERT_TRUE(cache->put(id, tiles[0].key, test::payload(tiles[0].key, 100), {}));
+    const fs::path filler = test::fillDisk(mnt);
+    fs::resize_file(filler, fs::file_size(filler) - 6 * 5 * 4096); // room for 6 of the 16
+
+    auto p = cache->putMany(id, tiles, {});
+    ASSERT_FALSE(p);
+    EXPECT_EQ(p.error().code, CacheErrc::DiskFull) << p.error().message;
+    EXPECT_EQ(cache->get(id, tiles[0].key)->bytes, test::payload(tiles[0].key, 100)); // kept
+    for (std::size_t i = 1; i < tiles.size(); ++i) {
+      EXPECT_EQ(cache->get(id, tiles[i].key)->kind, CacheLookup::Kind::Miss) << i;
+      EXPECT_FALSE(fs::exists(root / cache->datasets().at(0).folder /
+                              tileRelativePath(tiles[i].key, "jpg")));
+    }
+    EXPECT_EQ(countTempFiles(root), 0u);
+    EXPECT_FALSE(cache->storeStatus().writable);
+
+    fs::remove(filler);
+    ASSERT_TRUE(cache->putMany(id, tiles, {}));
+    for (std::size_t i = 0; i < tiles.size(); ++i)
+      EXPECT_EQ(cache->get(id, tiles[i].key)->bytes, bytes[i]) << i;
+    EXPECT_EQ(countTempFiles(root), 0u);
+    const auto report = cache->verify();
+    ASSERT_TRUE(report);
+    EXPECT_TRUE(report->ok());
+  });
+}
+
+// Room for every file and none for the index: the one transaction of their rows fails, and every
+// tile it put into place is taken back out.
+TEST(CacheFullDiskIntegration, AMetatileWhoseRowsCannotBeCommittedLeavesNoFileAndNoRow) {
+  TELLUS_ON_TMPFS(2 << 20, 1000, [&](const fs::path& mnt) {
+    const fs::path root = mnt / "cache";
+    auto cache = openOn(root, nullptr, 0ms);
+    ASSERT_TRUE(cache);
+    const auto id = *cache->registerDataset(test::imagerySpec());
+    const TileKey first{4, 2, 3};
+    ASSERT_TRUE(cache->put(id, first, test::payload(first, 100), {}));
+    sqlite3* reader = nullptr; // its snapshot keeps the WAL from starting over
+    ASSERT_EQ(
+        sqlite3_open_v2((root / "index.sqlite").c_str(), &reader, SQLITE_OPEN_READONLY, nullptr),
+        SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(reader, "BEGIN; SELECT count(*) FROM tiles;", nullptr, nullptr, nullptr),
+              SQLITE_OK);
+    std::vector<std::vector<std::byte>> bytes;
+    std::vector<TileCache::TileBytes> tiles;
+    bytes.reserve(16);
+    for (std::int64_t c = 4; c < 20; ++c) {
+      const TileKey k{4, 2, c};
+      bytes.push_back(test::payload(k, 33000)); // 9 pages each
+      tiles.push_back(TileCache::TileBytes{k, bytes.back()});
+    }
+    const fs::path filler = test::fillDisk(mnt);
+    fs::resize_file(filler, fs::file_size(filler) - 16 * 9 * 4096);
+
+    auto p = cache->putMany(id, tiles, {});
+    ASSERT_FALSE(p) << "the commit should have found no room";
+    EXPECT_EQ(p.error().code, CacheErrc::DiskFull) << p.error().message;
+    for (const auto& t : tiles) {
+      EXPECT_EQ(cache->get(id, t.key)->kind, CacheLookup::Kind::Miss);
+      EXPECT_FALSE(
+          fs::exists(root / cache->datasets().at(0).folder / tileRelativePath(t.key, "jpg")));
+    }
+    EXPECT_EQ(cache->get(id, first)->bytes, test::payload(first, 100));
+    EXPECT_EQ(countTempFiles(root), 0u);
+
+    sqlite3_exec(reader, "COMMIT", nullptr, nullptr, nullptr);
+    sqlite3_close(reader);
+    const auto report = cache->verify();
+    ASSERT_TRUE(report);
+    EXPECT_TRUE(report->ok());
+  });
+}

@@ -509,8 +509,32 @@ public:
     auto local = local_->stage(at, bytes);
     if (!local) return std::unexpected(local.error());
     auto shared = shared_->stage(at, bytes);
-    if (!shared) return std::unexpected(shared.error());
+    if (!shared) {
+      (*local)->finish(false); // its temp file goes
+      return std::unexpected(shared.error());
+    }
     return std::make_shared<TieredStagedTile>(std::move(*local), std::move(*shared), tier_, at);
+  }
+  std::expected<std::vector<std::shared_ptr<StagedTile>>, CacheError>
+  stageMany(std::span<const TileToStage> tiles) override {
+    if (tier_) {
+      for (const TileToStage& t : tiles)
+        tier_->writing(t.at);
+    }
+    auto local = local_->stageMany(tiles);
+    if (!local) return std::unexpected(local.error());
+    auto shared = shared_->stageMany(tiles);
+    if (!shared) {
+      for (const auto& t : *local)
+        t->finish(false);
+      return std::unexpected(shared.error());
+    }
+    std::vector<std::shared_ptr<StagedTile>> both;
+    both.reserve(tiles.size());
+    for (std::size_t i = 0; i < tiles.size(); ++i)
+      both.push_back(std::make_shared<TieredStagedTile>(
+          std::move((*local)[i]), std::move((*shared)[i]), tier_, tiles[i].at));
+    return both;
   }
   std::shared_ptr<StagedRemoval> stageRemoval(const TileLocation& at) override {
     if (tier_) tier_->writing(at);

@@ -122,35 +122,89 @@ bool tempOwnerAlive(const std::string& name) {
   return ::kill(pid, 0) == 0 || errno == EPERM;
 }
 
-std::expected<void, CacheError> writeTemp(const std::filesystem::path& temp,
-                                          std::span<const std::byte> bytes,
-                                          bool fsyncFile,
-                                          const std::filesystem::path& target) {
+namespace {
+
+/** `temp` created exclusively and `bytes` written to it; its descriptor, open. On failure the
+ * file is removed. */
+std::expected<int, CacheError> writeOpen(const std::filesystem::path& temp,
+                                         std::span<const std::byte> bytes,
+                                         const std::filesystem::path& target) {
   const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) return std::unexpected(errnoError(errno, "cannot create a temp file for", target));
-  auto failWith = [&](int err, const char* what) -> std::expected<void, CacheError> {
-    ::close(fd);
-    ::unlink(temp.c_str());
-    return std::unexpected(errnoError(err, what, target));
-  };
   const auto* p = reinterpret_cast<const char*>(bytes.data());
   std::size_t left = bytes.size();
   while (left > 0) {
     const ssize_t n = ::write(fd, p, left);
     if (n < 0) {
       if (errno == EINTR) continue;
-      return failWith(errno, "cannot write");
+      const int err = errno;
+      ::close(fd);
+      ::unlink(temp.c_str());
+      return std::unexpected(errnoError(err, "cannot write", target));
     }
     p += n;
     left -= static_cast<std::size_t>(n);
   }
-  if (fsyncFile && ::fsync(fd) != 0) return failWith(errno, "cannot fsync");
+  return fd;
+}
+
+/** Optionally fsyncs and closes a file writeOpen wrote; on failure the file is removed. */
+std::expected<void, CacheError> syncAndClose(int fd,
+                                             bool fsyncFile,
+                                             const std::filesystem::path& temp,
+                                             const std::filesystem::path& target) {
+  if (fsyncFile && ::fsync(fd) != 0) {
+    const int err = errno;
+    ::close(fd);
+    ::unlink(temp.c_str());
+    return std::unexpected(errnoError(err, "cannot fsync", target));
+  }
   if (::close(fd) != 0) {
     const int err = errno;
     ::unlink(temp.c_str());
     return std::unexpected(errnoError(err, "cannot close", target));
   }
   return {};
+}
+
+} // namespace
+
+std::expected<void, CacheError> writeTemp(const std::filesystem::path& temp,
+                                          std::span<const std::byte> bytes,
+                                          bool fsyncFile,
+                                          const std::filesystem::path& target) {
+  const auto fd = writeOpen(temp, bytes, target);
+  if (!fd) return std::unexpected(fd.error());
+  return syncAndClose(*fd, fsyncFile, temp, target);
+}
+
+std::expected<void, CacheError> writeTemps(std::span<const TempWrite> files, bool fsyncFiles) {
+  std::vector<int> fds;
+  fds.reserve(files.size());
+  std::optional<CacheError> failed;
+  for (const TempWrite& f : files) {
+    auto fd = writeOpen(f.temp, f.bytes, f.target);
+    if (!fd) {
+      failed = std::move(fd.error());
+      break;
+    }
+    fds.push_back(*fd);
+  }
+  // Every file's write-back under way before the first fsync: the first one's journal commit then
+  // carries the others' blocks too, and their fsyncs find little left to do. Its errors, if any,
+  // come back from the fsync.
+  if (fsyncFiles && !failed) {
+    for (const int fd : fds)
+      (void)::sync_file_range(fd, 0, 0, SYNC_FILE_RANGE_WRITE);
+  }
+  for (std::size_t i = 0; i < fds.size(); ++i) {
+    auto done = syncAndClose(fds[i], fsyncFiles && !failed, files[i].temp, files[i].target);
+    if (!done && !failed) failed = std::move(done.error());
+  }
+  if (!failed) return {};
+  for (std::size_t i = 0; i < fds.size(); ++i)
+    ::unlink(files[i].temp.c_str());
+  return std::unexpected(std::move(*failed));
 }
 
 std::expected<void, CacheError> writeFileAtomic(const std::filesystem::path& target,

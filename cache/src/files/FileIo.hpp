@@ -37,6 +37,19 @@ std::expected<void, CacheError> writeTemp(const std::filesystem::path& temp,
                                           bool fsyncFile,
                                           const std::filesystem::path& target);
 
+/** One file of writeTemps. */
+struct TempWrite {
+  std::filesystem::path temp;
+  std::span<const std::byte> bytes;
+  std::filesystem::path target; ///< named by messages
+};
+
+/** writeTemp for several files, all or none, their fsyncs together: every file written, then the
+ * write-back of each started (sync_file_range), then each fsynced, so that the file system commits
+ * them in one journal transaction instead of one each. On any failure every temp file is removed
+ * and the first error returned. */
+std::expected<void, CacheError> writeTemps(std::span<const TempWrite> files, bool fsyncFiles);
+
 /**
  * Writes bytes to a temp file beside target (tempNameFor), optionally fsyncs it, and renames it
  * onto target. On any failure the temp file is removed and target is untouched. The target's

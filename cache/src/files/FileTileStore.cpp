@@ -210,20 +210,30 @@ public:
 
   std::expected<std::shared_ptr<StagedTile>, CacheError>
   stage(const TileLocation& at, std::span<const std::byte> bytes) override {
-    fs::path target = pathOf(at);
-    const fs::path tempDir = dirOf(at.folder) / kTempDirName;
-    const std::string tileName = target.filename().string();
-    auto placement = std::make_shared<TilePlacement>(tempDir / fileio::tempNameFor(tileName),
-                                                     std::move(target),
-                                                     tempDir / fileio::tempNameFor(tileName));
-    if (auto r = ensureDir(placement->target().parent_path()); !r)
-      return std::unexpected(r.error());
-    if (auto r = ensureDir(tempDir); !r) return std::unexpected(r.error());
-    if (auto r =
-            fileio::writeTemp(placement->temp(), bytes, options_.fsyncTiles, placement->target());
+    auto placement = placementFor(at);
+    if (!placement) return std::unexpected(placement.error());
+    if (auto r = fileio::writeTemp(
+            (*placement)->temp(), bytes, options_.fsyncTiles, (*placement)->target());
         !r)
       return std::unexpected(r.error());
-    return placement;
+    return *placement;
+  }
+
+  std::expected<std::vector<std::shared_ptr<StagedTile>>, CacheError>
+  stageMany(std::span<const TileToStage> tiles) override {
+    std::vector<std::shared_ptr<TilePlacement>> placements;
+    std::vector<fileio::TempWrite> writes;
+    placements.reserve(tiles.size());
+    writes.reserve(tiles.size());
+    for (const TileToStage& t : tiles) {
+      auto placement = placementFor(t.at);
+      if (!placement) return std::unexpected(placement.error());
+      writes.push_back(fileio::TempWrite{(*placement)->temp(), t.bytes, (*placement)->target()});
+      placements.push_back(std::move(*placement));
+    }
+    if (auto r = fileio::writeTemps(writes, options_.fsyncTiles); !r)
+      return std::unexpected(r.error());
+    return std::vector<std::shared_ptr<StagedTile>>(placements.begin(), placements.end());
   }
 
   std::shared_ptr<StagedRemoval> stageRemoval(const TileLocation& at) override {
@@ -332,6 +342,19 @@ public:
   }
 
 private:
+  /** Where a new version of `at` is written before install(), its folders made. */
+  std::expected<std::shared_ptr<TilePlacement>, CacheError> placementFor(const TileLocation& at) {
+    fs::path target = pathOf(at);
+    const fs::path tempDir = dirOf(at.folder) / kTempDirName;
+    const std::string tileName = target.filename().string();
+    auto placement = std::make_shared<TilePlacement>(tempDir / fileio::tempNameFor(tileName),
+                                                     std::move(target),
+                                                     tempDir / fileio::tempNameFor(tileName));
+    if (auto r = ensureDir(placement->target().parent_path()); !r)
+      return std::unexpected(r.error());
+    if (auto r = ensureDir(tempDir); !r) return std::unexpected(r.error());
+    return placement;
+  }
   fs::path dirOf(std::string_view folder) const {
     return folder.empty() ? options_.root : options_.root / fs::path(folder);
   }

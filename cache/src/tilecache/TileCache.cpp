@@ -284,6 +284,41 @@ TileCache::forEachTile(DatasetId id,
 
 // ---------------------------------------------------------------------------------- changes
 
+namespace {
+
+/** In the writer's transaction, under the changes lock: a staged tile goes into place and its row
+ * is written; after the commit (or the rollback) the staged tile keeps or undoes what it did. */
+Result install(TileCache::Impl& im,
+               DatasetId id,
+               const TileKey& key,
+               std::int64_t n,
+               const TileMeta& m,
+               StagedTile& tile) {
+  if (auto r = tile.install(); !r) return r;
+  return im.writeRow(id, key, TileRow{true, n, m, std::nullopt});
+}
+
+/** Write-behind: visible to this process at once through the pending overlay (from the staged
+ * bytes until they are in place), put into place and committed by the writer with whatever else
+ * is queued. Counted, not printed: the seeder reports how many were dropped (storeStatus). */
+void putBehind(TileCache::Impl& im,
+               DatasetId id,
+               const TileKey& key,
+               std::int64_t n,
+               const TileMeta& m,
+               const std::shared_ptr<StagedTile>& tile) {
+  const RowKey rk{id, key};
+  const std::uint64_t generation = im.pending.add(rk, n, m, tile);
+  im.writer.submitDetached([&im, id, key, n, m, tile] { return install(im, id, key, n, m, *tile); },
+                           [&im, rk, generation, tile](const Result& r) {
+                             tile->finish(r.has_value());
+                             im.pending.dropIfStill(rk, generation);
+                             im.gate.writeBehindOutcome(r);
+                           });
+}
+
+} // namespace
+
 std::expected<void, CacheError> TileCache::put(DatasetId id,
                                                const TileKey& key,
                                                std::span<const std::byte> bytes,
@@ -299,28 +334,59 @@ std::expected<void, CacheError> TileCache::put(DatasetId id,
   if (m.contentType.empty()) m.contentType = (*d)->info.spec.mimeType;
   if (m.fetchedAt == 0) m.fetchedAt = im.clock->now();
   const auto n = static_cast<std::int64_t>(bytes.size());
-  // In the writer's transaction, under the changes lock: the tile goes into place and its row is
-  // written; after the commit (or the rollback) the staged tile keeps or undoes what it did.
-  auto apply = [&im, id, key, n, m, tile = *staged]() -> Result {
-    if (auto r = tile->install(); !r) return r;
-    return im.writeRow(id, key, TileRow{true, n, m, std::nullopt});
-  };
-  if (!im.options.indexWriteBehind) {
-    return im.gate.putOutcome(im.writer.submit(
-        std::move(apply), [tile = *staged](const Result& r) { tile->finish(r.has_value()); }));
+  if (im.options.indexWriteBehind) {
+    putBehind(im, id, key, n, m, *staged);
+    return {};
   }
-  // Write-behind: visible to this process at once through the pending overlay (from the staged
-  // bytes until they are in place), put into place and committed by the writer with whatever else
-  // is queued. Counted, not printed: the seeder reports how many were dropped (storeStatus).
-  const RowKey rk{id, key};
-  const std::uint64_t generation = im.pending.add(rk, n, m, *staged);
-  im.writer.submitDetached(std::move(apply),
-                           [&im, rk, generation, tile = *staged](const Result& r) {
-                             tile->finish(r.has_value());
-                             im.pending.dropIfStill(rk, generation);
-                             im.gate.writeBehindOutcome(r);
-                           });
-  return {};
+  return im.gate.putOutcome(im.writer.submit(
+      [&im, id, key, n, m, tile = *staged] { return install(im, id, key, n, m, *tile); },
+      [tile = *staged](const Result& r) { tile->finish(r.has_value()); }));
+}
+
+std::expected<void, CacheError>
+TileCache::putMany(DatasetId id, std::span<const TileBytes> tiles, const TileMeta& meta) {
+  Impl& im = *impl_;
+  if (im.options.readOnly) return std::unexpected(readOnlyError());
+  if (tiles.empty()) return {};
+  std::shared_ptr<const detail::DatasetEntry> d;
+  for (const TileBytes& t : tiles) {
+    auto checked = im.datasets.checked(id, t.key);
+    if (!checked) return std::unexpected(checked.error());
+    d = std::move(*checked);
+  }
+  if (auto refused = im.gate.refuseWhileFull(); !refused) return refused;
+  std::vector<TileToStage> toStage;
+  toStage.reserve(tiles.size());
+  for (const TileBytes& t : tiles)
+    toStage.push_back(TileToStage{d->at(t.key), t.bytes});
+  auto staged = im.store->stageMany(toStage);
+  if (!staged) return im.gate.putOutcome(std::unexpected(staged.error()));
+  TileMeta m = meta;
+  if (m.contentType.empty()) m.contentType = d->info.spec.mimeType;
+  if (m.fetchedAt == 0) m.fetchedAt = im.clock->now();
+  if (im.options.indexWriteBehind) { // as put(), tile by tile: nobody waits for the rows
+    for (std::size_t i = 0; i < tiles.size(); ++i) {
+      const auto n = static_cast<std::int64_t>(tiles[i].bytes.size());
+      putBehind(im, id, tiles[i].key, n, m, (*staged)[i]);
+    }
+    return {};
+  }
+  // Every tile into place and its row written in one of the writer's transactions: a failure of
+  // any rolls back all, and each staged tile undoes what it did.
+  std::vector<std::pair<TileKey, std::int64_t>> rows;
+  rows.reserve(tiles.size());
+  for (const TileBytes& t : tiles)
+    rows.emplace_back(t.key, static_cast<std::int64_t>(t.bytes.size()));
+  auto apply = [&im, id, m, rows = std::move(rows), all = *staged]() -> Result {
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      if (auto r = install(im, id, rows[i].first, rows[i].second, m, *all[i]); !r) return r;
+    }
+    return Result{};
+  };
+  return im.gate.putOutcome(im.writer.submit(std::move(apply), [all = *staged](const Result& r) {
+    for (const auto& tile : all)
+      tile->finish(r.has_value());
+  }));
 }
 
 std::expected<void, CacheError>

@@ -146,6 +146,16 @@ public:
    * or at once while storeStatus().writable is false and Options::fullRecheck has not passed. */
   std::expected<void, CacheError>
   put(DatasetId id, const TileKey& key, std::span<const std::byte> bytes, const TileMeta& meta);
+  /** One of the tiles of putMany. */
+  struct TileBytes {
+    TileKey key;
+    std::span<const std::byte> bytes;
+  };
+  /** put() for several tiles of one dataset (a metatile's), all or none, with one `meta`: their
+   * files flushed to disk together and their rows in one transaction, where one put each costs an
+   * fsync and a commit each. */
+  std::expected<void, CacheError>
+  putMany(DatasetId id, std::span<const TileBytes> tiles, const TileMeta& meta);
   /** Records a successful revalidation (HTTP 304): new expiry, ETag, Last-Modified, fetched-at;
    * the bytes stay. A tile that is not present is not an error (nothing to update). */
   std::expected<void, CacheError>

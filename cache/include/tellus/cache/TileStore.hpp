@@ -50,6 +50,12 @@ struct TileLocation {
   UnixMillis notBefore = 0;
 };
 
+/** One of several tiles staged together (ITileStore::stageMany). */
+struct TileToStage {
+  TileLocation at;
+  std::span<const std::byte> bytes;
+};
+
 /** Which version of a tile is stored: changes whenever the tile is replaced (files: device and
  * inode). */
 struct TileVersion {
@@ -137,6 +143,25 @@ public:
    * (nothing is left behind); messages name the tile. */
   virtual std::expected<std::shared_ptr<StagedTile>, CacheError>
   stage(const TileLocation& at, std::span<const std::byte> bytes) = 0;
+  /** stage() for several tiles (a metatile's), all or none: on a failure nothing stays staged.
+   * Where the store can, their flush is shared (the file store starts every file's write-back
+   * before the first fsync, so that one journal commit carries them all, not one each). The
+   * default stages them one after another. */
+  virtual std::expected<std::vector<std::shared_ptr<StagedTile>>, CacheError>
+  stageMany(std::span<const TileToStage> tiles) {
+    std::vector<std::shared_ptr<StagedTile>> staged;
+    staged.reserve(tiles.size());
+    for (const TileToStage& t : tiles) {
+      auto one = stage(t.at, t.bytes);
+      if (!one) {
+        for (const auto& s : staged)
+          s->finish(false);
+        return std::unexpected(std::move(one.error()));
+      }
+      staged.push_back(std::move(*one));
+    }
+    return staged;
+  }
   /** Prepares the removal of a tile (there may be none). */
   virtual std::shared_ptr<StagedRemoval> stageRemoval(const TileLocation& at) = 0;
   /** Removes a tile now (prune and eviction after their rows are gone; a tile of a wrong size). */
