@@ -197,17 +197,53 @@ TileService::Impl::staleTile(CacheLookup&& old, const std::string& folder, const
               std::move(old.file));
 }
 
+namespace {
+
+CacheError unregisteredDataset() {
+  return CacheError{CacheErrc::DiskFull,
+                    "the cache is full: the layer's dataset could not be registered"};
+}
+
+} // namespace
+
 void TileService::Impl::store(const FlightKey& fk,
                               const std::string& folder,
                               std::vector<std::byte> bytes,
                               TileMeta meta) {
   std::optional<CacheError> notStored;
   if (fk.dataset < 0) {
-    notStored = CacheError{CacheErrc::DiskFull,
-                           "the cache is full: the layer's dataset could not be registered"};
+    notStored = unregisteredDataset();
   } else if (auto put = cache.put(fk.dataset, fk.key, bytes, meta); !put) {
     notStored = std::move(put.error());
   }
+  landStored(fk, folder, std::move(bytes), std::move(meta), std::move(notStored));
+}
+
+void TileService::Impl::storeMany(const std::vector<FlightKey>& fks,
+                                  const std::string& folder,
+                                  std::vector<std::vector<std::byte>> bytes,
+                                  const TileMeta& meta) {
+  if (fks.empty()) return;
+  std::optional<CacheError> notStored;
+  if (fks.front().dataset < 0) {
+    notStored = unregisteredDataset();
+  } else {
+    std::vector<TileCache::TileBytes> tiles;
+    tiles.reserve(fks.size());
+    for (std::size_t i = 0; i < fks.size(); ++i)
+      tiles.push_back(TileCache::TileBytes{fks[i].key, bytes[i]});
+    if (auto put = cache.putMany(fks.front().dataset, tiles, meta); !put)
+      notStored = std::move(put.error());
+  }
+  for (std::size_t i = 0; i < fks.size(); ++i)
+    landStored(fks[i], folder, std::move(bytes[i]), meta, notStored);
+}
+
+void TileService::Impl::landStored(const FlightKey& fk,
+                                   const std::string& folder,
+                                   std::vector<std::byte> bytes,
+                                   TileMeta meta,
+                                   std::optional<CacheError> notStored) {
   if (notStored && notStored->code == CacheErrc::DiskFull) {
     refusedStores.fetch_add(1, std::memory_order_relaxed);
     noticeStoreState(&*notStored); // logged once per change, not once per tile

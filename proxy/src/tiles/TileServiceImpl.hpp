@@ -278,6 +278,19 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
              const std::string& folder,
              std::vector<std::byte> bytes,
              TileMeta meta);
+  /** store() for tiles of one dataset fetched together (a metatile's), all or none: their files
+   * flushed together and their rows in one transaction (TileCache::putMany); each flight landed
+   * after. */
+  void storeMany(const std::vector<FlightKey>& fks,
+                 const std::string& folder,
+                 std::vector<std::vector<std::byte>> bytes,
+                 const TileMeta& meta);
+  /** After store()'s put: kept in memory when not stored, and the flight landed. */
+  void landStored(const FlightKey& fk,
+                  const std::string& folder,
+                  std::vector<std::byte> bytes,
+                  TileMeta meta,
+                  std::optional<CacheError> notStored);
 
   /** Wall time in Unix milliseconds, by the injected clock (TileServiceOptions::clock). */
   UnixMillis nowMillis() const { return (options.clock ? *options.clock : Clock::system()).now(); }
