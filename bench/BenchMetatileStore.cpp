@@ -43,8 +43,11 @@ void must(const std::expected<void, CacheError>& r) {
   }
 }
 
-void putRange(TileCache& c, DatasetId id, const std::vector<TileCache::TileBytes>& t,
-              std::size_t from, std::size_t to) {
+void putRange(TileCache& c,
+              DatasetId id,
+              const std::vector<TileCache::TileBytes>& t,
+              std::size_t from,
+              std::size_t to) {
   for (std::size_t i = from; i < to; ++i)
     must(c.put(id, t[i].key, t[i].bytes, {}));
 }
@@ -86,23 +89,28 @@ int main(int argc, char** argv) {
 
   std::vector<Way> ways = {
       {"put x16, 1 thread",
-       [](TileCache& c, DatasetId d, const auto& t) { putRange(c, d, t, 0, t.size()); }, {}},
+       [](TileCache& c, DatasetId d, const auto& t) { putRange(c, d, t, 0, t.size()); },
+       {}},
       {"put x16, 2 threads",
        [](TileCache& c, DatasetId d, const auto& t) {
          std::jthread other([&] { putRange(c, d, t, t.size() / 2, t.size()); });
          putRange(c, d, t, 0, t.size() / 2);
-       }, {}},
+       },
+       {}},
       {"put + putMany(15)",
        [](TileCache& c, DatasetId d, const auto& t) {
          std::jthread other([&] { must(c.putMany(d, std::span(t).subspan(1), {})); });
          putRange(c, d, t, 0, 1);
-       }, {}},
+       },
+       {}},
       {"put, then putMany(15)",
        [](TileCache& c, DatasetId d, const auto& t) {
          putRange(c, d, t, 0, 1);
          must(c.putMany(d, std::span(t).subspan(1), {}));
-       }, {}},
-      {"putMany(16)", [](TileCache& c, DatasetId d, const auto& t) { must(c.putMany(d, t, {})); },
+       },
+       {}},
+      {"putMany(16)",
+       [](TileCache& c, DatasetId d, const auto& t) { must(c.putMany(d, t, {})); },
        {}},
   };
   std::vector<std::byte> bytes(tileBytes);
@@ -123,12 +131,14 @@ int main(int argc, char** argv) {
     }
   }
   const double base = percentile(ways[1].ms, 0.5);
-  std::printf("%d rounds, 16 tiles of %zu bytes, fsync on, %s\n", rounds, tileBytes,
-              work.c_str());
+  std::printf("%d rounds, 16 tiles of %zu bytes, fsync on, %s\n", rounds, tileBytes, work.c_str());
   std::printf("%-22s %10s %10s %22s\n", "way", "p50 ms", "p90 ms", "p50 / put x16 2 thr");
   for (const Way& w : ways)
-    std::printf("%-22s %10.2f %10.2f %22.2f\n", w.name, percentile(w.ms, 0.5),
-                percentile(w.ms, 0.9), percentile(w.ms, 0.5) / base);
+    std::printf("%-22s %10.2f %10.2f %22.2f\n",
+                w.name,
+                percentile(w.ms, 0.5),
+                percentile(w.ms, 0.9),
+                percentile(w.ms, 0.5) / base);
   opened->reset();
   fs::remove_all(work);
   return 0;

@@ -6,10 +6,12 @@
 
 #include "../support/CacheFixtures.hpp"
 #include "../support/FakeUpstream.hpp"
+#include "../support/MemoryTileIndex.hpp"
 #include "../support/TempDir.hpp"
 
 #include <tellus/cache/Clock.hpp>
 #include <tellus/cache/TileLeases.hpp>
+#include <tellus/cache/TileStore.hpp>
 #include <tellus/proxy/Fetcher.hpp>
 #include <tellus/proxy/ImageCodec.hpp>
 #include <tellus/proxy/TileService.hpp>
@@ -84,7 +86,7 @@ private:
 
 struct Service {
   test::TempDir dir{"leases"};
-  std::unique_ptr<TileCache> cache = test::openTestCache(dir.path());
+  std::unique_ptr<TileCache> cache;
   Fetcher fetcher;
   std::unique_ptr<TileService> tiles;
 
@@ -94,7 +96,9 @@ struct Service {
           bool metaTilesOnMiss = false,
           int workers = 2,
           const Clock* clock = nullptr,
-          std::chrono::milliseconds ttl = 0ms) {
+          std::chrono::milliseconds ttl = 0ms,
+          std::shared_ptr<ITileIndex> index = nullptr)
+      : cache(index ? openOn(dir.path(), std::move(index)) : test::openTestCache(dir.path())) {
     UpstreamSpec u;
     u.name = "up";
     u.type = UpstreamSpec::Type::Wms;
@@ -117,6 +121,19 @@ struct Service {
     if (t) tiles = std::move(*t);
   }
   ~Service() { tiles.reset(); }
+
+  /** A cache of `index` and a folder of files. */
+  static std::unique_ptr<TileCache> openOn(const std::filesystem::path& root,
+                                           std::shared_ptr<ITileIndex> index) {
+    auto files = openFileTileStore(FileTileStoreOptions{root, false, false});
+    EXPECT_TRUE(files);
+    TileCache::Options o;
+    o.root = root;
+    o.fsyncTiles = false;
+    auto c = TileCache::open(o, std::move(index), std::move(*files));
+    EXPECT_TRUE(c) << (c ? "" : c.error().message);
+    return c ? std::move(*c) : nullptr;
+  }
 
   DatasetId datasetId() { return *cache->registerDataset(tiles->layer("sat")->dataset); }
 
@@ -352,4 +369,39 @@ TEST(TileLeases, SeedingsMetatilesTakeTheMetatilesLease) {
   EXPECT_EQ(up.requests(), 1u);
   ASSERT_EQ(leases->asked.size(), 1u);
   EXPECT_EQ(leases->asked[0].key, (TileKey{1, 0, 4}));
+}
+
+// The shared index out of reach after a fetched tile could not be stored (its commit failed as the
+// database went): the copy kept in memory is served, not a 503, and the upstream is not asked
+// again; a tile neither stored nor kept is still unavailable.
+TEST(TileLeases, ATileKeptUnstoredIsServedWhileTheSharedIndexIsOutOfReach) {
+  test::FakeUpstream up(pngReply);
+  auto leases = std::make_shared<ScriptedLeases>(LeaseOutcome::Acquired);
+  auto index = std::make_shared<test::MemoryTileIndex>();
+  Service s(up.url("/wms"), leases, 1, false, 2, nullptr, 0ms, index);
+  ASSERT_TRUE(s.cache && s.tiles);
+  const TileKey k{1, 2, 3};
+  const CacheError gone{CacheErrc::Io, "the database went away"};
+  index->failCommits(gone);
+  auto first = s.get(k);
+  ASSERT_EQ(first.wait_for(30s), std::future_status::ready);
+  const TileAnswer fetched = first.get();
+  ASSERT_EQ(fetched.kind, TileAnswer::Kind::Tile) << fetched.message;
+  ASSERT_TRUE(fetched.notStored);
+  EXPECT_EQ(up.requests(), 1u);
+
+  index->failLookups(gone);
+  auto again = s.get(k);
+  ASSERT_EQ(again.wait_for(30s), std::future_status::ready);
+  const TileAnswer kept = again.get();
+  ASSERT_EQ(kept.kind, TileAnswer::Kind::Tile) << kept.message;
+  EXPECT_EQ(kept.bytes, fetched.bytes);
+  EXPECT_EQ(up.requests(), 1u);
+
+  auto other = s.get(TileKey{1, 2, 4});
+  ASSERT_EQ(other.wait_for(30s), std::future_status::ready);
+  const TileAnswer none = other.get();
+  EXPECT_EQ(none.kind, TileAnswer::Kind::Error);
+  EXPECT_EQ(none.failure, TileAnswer::Failure::Unavailable) << none.message;
+  EXPECT_EQ(up.requests(), 1u);
 }

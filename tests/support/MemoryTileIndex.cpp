@@ -18,6 +18,7 @@ CacheError noTransaction() {
 std::expected<std::optional<TileRow>, CacheError> MemoryTileIndex::lookup(DatasetId id,
                                                                           const TileKey& key) {
   std::shared_lock lock(mutex_);
+  if (failLookups_) return std::unexpected(*failLookups_);
   const auto it = committed_.tiles.find(idOf(id, key));
   if (it == committed_.tiles.end()) return std::nullopt;
   return it->second.row;
@@ -155,6 +156,11 @@ void MemoryTileIndex::rollbackToSavepoint() {
 void MemoryTileIndex::failCommits(std::optional<CacheError> error) {
   std::unique_lock lock(mutex_);
   failCommits_ = std::move(error);
+}
+
+void MemoryTileIndex::failLookups(std::optional<CacheError> error) {
+  std::unique_lock lock(mutex_);
+  failLookups_ = std::move(error);
 }
 
 MemoryTileIndex::Tables& MemoryTileIndex::working() {

@@ -61,6 +61,8 @@ public:
 
   /** Makes the next commits fail with `error` (a full index, ...) until cleared with nullopt. */
   void failCommits(std::optional<CacheError> error);
+  /** Makes lookups fail with `error` (a database out of reach) until cleared with nullopt. */
+  void failLookups(std::optional<CacheError> error);
 
 private:
   using RowId = std::tuple<DatasetId, std::int32_t, std::int64_t, std::int64_t>;
@@ -74,6 +76,7 @@ private:
     DatasetId nextId = 1;
   };
 
+  std::optional<CacheError> failLookups_; // under mutex_
   static RowId idOf(DatasetId id, const TileKey& key) { return {id, key.level, key.row, key.col}; }
   static TileKey keyOf(const RowId& id) {
     return TileKey{std::get<1>(id), std::get<2>(id), std::get<3>(id)};

@@ -402,6 +402,13 @@ void TileService::Impl::serveWithoutIndex(DatasetId id,
                  {});
   }
   servedWithoutIndex.fetch_add(1, std::memory_order_relaxed);
+  // A tile fetched but not stored (its commit failed as the index went away, or the store was
+  // full) is newer than whatever the store holds: served from memory; stored once the index is
+  // back (a request then finds it kept, getTile).
+  if (auto kept = unstored.find(folder, key, nowMillis())) {
+    kept->storeNow = false;
+    return serveKept(id, folder, key, *kept, done);
+  }
   auto stored = cache.openFromStore(id, key);
   if (stored && stored->kind == CacheLookup::Kind::Hit) {
     return done(tile(TileOrigin::Hit,
