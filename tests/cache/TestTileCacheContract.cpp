@@ -390,6 +390,41 @@ TEST_P(TileCacheContract, PutsErasesAbsentMarkersAndPrunesOnTheSameTilesKeepRows
   }
 }
 
+// A metatile's tiles stored together (TileCache::putMany: the file store flushes them together,
+// the S3 store PUTs them in parallel), read back one by one, and replaced together.
+TEST_P(TileCacheContract, PutManyStoresEveryTileOfAMetatile) {
+  auto cache = open();
+  const auto id = *cache->registerDataset(imagery());
+  std::vector<std::vector<std::byte>> bytes;
+  std::vector<TileCache::TileBytes> tiles;
+  bytes.reserve(16);
+  for (std::int64_t r = 4; r < 8; ++r) {
+    for (std::int64_t c = 8; c < 12; ++c) {
+      const TileKey k{4, r, c};
+      bytes.push_back(payload(k));
+      tiles.push_back(TileCache::TileBytes{k, bytes.back()});
+    }
+  }
+  TileMeta meta;
+  meta.etag = "\"metatile\"";
+  auto put = cache->putMany(id, tiles, meta);
+  ASSERT_TRUE(put) << put.error().message;
+  for (std::size_t i = 0; i < tiles.size(); ++i) {
+    const auto got = cache->get(id, tiles[i].key);
+    ASSERT_TRUE(got);
+    ASSERT_EQ(got->kind, CacheLookup::Kind::Hit) << i;
+    EXPECT_EQ(got->bytes, bytes[i]);
+    EXPECT_EQ(got->meta.etag, meta.etag);
+  }
+  for (auto& b : bytes)
+    b.back() = static_cast<std::byte>(0x5A); // a refresh: new bytes for every tile
+  ASSERT_TRUE(cache->putMany(id, tiles, {}));
+  for (std::size_t i = 0; i < tiles.size(); ++i)
+    EXPECT_EQ(cache->get(id, tiles[i].key)->bytes, bytes[i]) << i;
+  EXPECT_EQ(cache->stats()->at(0).tiles, 16);
+  EXPECT_TRUE(cache->verify()->ok());
+}
+
 TEST_P(TileCacheContract, WriteBehindIsVisibleAtOnceAndCommittedSoon) {
   DatasetId id = 0;
   {

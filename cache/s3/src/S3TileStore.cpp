@@ -5,11 +5,13 @@
 
 #include <tellus/cache/TilePath.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <fcntl.h>
 #include <sys/statvfs.h>
+#include <thread>
 #include <unistd.h>
 
 namespace tellus {
@@ -279,6 +281,38 @@ public:
       return std::unexpected(stored.error());
     return std::make_shared<S3StagedTile>(
         s_, std::move(key), Bytes(bytes.begin(), bytes.end()), std::move(*file), done, created);
+  }
+
+  /** A metatile's PUTs in parallel (one after another they cost a round trip each, and the last
+   * tile's clients wait for all): up to kParallelPuts threads take the tiles in turn. */
+  std::expected<std::vector<std::shared_ptr<StagedTile>>, CacheError>
+  stageMany(std::span<const TileToStage> tiles) override {
+    constexpr std::size_t kParallelPuts = 8;
+    std::vector<std::expected<std::shared_ptr<StagedTile>, CacheError>> out(
+        tiles.size(), std::unexpected(CacheError{CacheErrc::Io, "not staged"}));
+    std::atomic<std::size_t> next{0};
+    auto work = [&] {
+      for (std::size_t i = next++; i < tiles.size(); i = next++)
+        out[i] = stage(tiles[i].at, tiles[i].bytes);
+    };
+    {
+      std::vector<std::jthread> helpers;
+      for (std::size_t n = 1; n < std::min(kParallelPuts, tiles.size()); ++n)
+        helpers.emplace_back(work);
+      work();
+    }
+    std::vector<std::shared_ptr<StagedTile>> staged;
+    std::optional<CacheError> failed;
+    for (auto& r : out) {
+      if (r)
+        staged.push_back(std::move(*r));
+      else if (!failed)
+        failed = std::move(r.error());
+    }
+    if (!failed) return staged;
+    for (const auto& t : staged)
+      t->finish(false); // what its PUT made goes again
+    return std::unexpected(std::move(*failed));
   }
 
   std::shared_ptr<StagedRemoval> stageRemoval(const TileLocation& at) override {
