@@ -218,20 +218,13 @@ void TileService::Impl::onBlockFetched(const std::vector<TileKey>& owned,
   // The metatile's ETag names another resource than any tile's GetMap: not kept. Its
   // Last-Modified is true of every tile in it.
   m.lastModified = resp.lastModified;
-  // The first of `owned` is the tile a client asked for: stored on its own task, it is answered,
-  // and under a shared lease announced to the other instances (land), before the rest of its block
-  // is stored. Tiles cut without decoding (JPEG): the rest on one task, their files flushed
-  // together and their rows in one commit (storeMany), where a task each cost an fsync each.
+  // The first of `owned` is the tile a client asked for: stored first, it is answered, and under a
+  // shared lease announced to the other instances (land), before the rest of its block is stored.
+  // Tiles cut without decoding (JPEG): the rest after it on the same task, their files flushed
+  // together and their rows in one commit (storeMany), where a task each cost an fsync each. Not
+  // beside it on another task: its fsync would then wait for their data in the same journal
+  // commit (bench/RESULTS.md, issue 27).
   if (!split->decoded) {
-    const FlightKey first{id, owned.front()};
-    workers->post([this,
-                   first,
-                   folder,
-                   m,
-                   bytes = std::move(split->tiles[block.imageIndex(owned.front())])]() mutable {
-      store(first, folder, std::move(bytes), std::move(m));
-    });
-    if (owned.size() == 1) return;
     std::vector<FlightKey> rest;
     std::vector<std::vector<std::byte>> restBytes;
     for (std::size_t j = 1; j < owned.size(); ++j) {
@@ -239,10 +232,13 @@ void TileService::Impl::onBlockFetched(const std::vector<TileKey>& owned,
       restBytes.push_back(std::move(split->tiles[block.imageIndex(owned[j])]));
     }
     workers->post([this,
+                   first = FlightKey{id, owned.front()},
+                   bytes = std::move(split->tiles[block.imageIndex(owned.front())]),
                    rest = std::move(rest),
+                   restBytes = std::move(restBytes),
                    folder,
-                   m = std::move(m),
-                   restBytes = std::move(restBytes)]() mutable {
+                   m = std::move(m)]() mutable {
+      store(first, folder, std::move(bytes), m);
       storeMany(rest, folder, std::move(restBytes), m);
     });
     return;
