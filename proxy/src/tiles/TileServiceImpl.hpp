@@ -392,8 +392,8 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                   const std::string& folder,
                   std::string_view time);
 
-  /** A metatile's answer (worker thread): validated and split once; its tiles are stored (each
-   * on a worker, so that their fsyncs overlap) or, when anything is wrong, none is. */
+  /** A metatile's answer (worker thread): validated and split once; its tiles are stored (the
+   * asked-for one first, the others with one putMany) or, when anything is wrong, none is. */
   void onBlockFetched(const std::vector<TileKey>& owned,
                       const TileBlock& block,
                       const LayerSpec& l,
