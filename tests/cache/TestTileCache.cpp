@@ -112,6 +112,41 @@ TEST(TileCache, VerifyFindsBothKindsOfDriftAndRebuildRepairs) {
   EXPECT_EQ(cache->get(id, TileKey{3, 7, 9})->kind, CacheLookup::Kind::Hit);
 }
 
+// A tile file's mtime is the fetched-at it was stored with (TileLocation::fetchedAt), so an index
+// rebuilt from the tree keeps each tile's age (before: the time its file was written).
+TEST(TileCache, ARebuiltIndexKeepsEachTilesFetchedAt) {
+  test::TempDir dir("cache");
+  auto cache = openCache(dir.path());
+  const auto id = *cache->registerDataset(imagery());
+  constexpr UnixMillis kFetched = 1'600'000'000'000; // 2020: long before the files were written
+  for (std::int64_t c = 0; c < 3; ++c) {
+    TileMeta m;
+    m.fetchedAt = kFetched + 1000 * c + 7;
+    ASSERT_TRUE(cache->put(id, TileKey{1, 0, c}, payload({1, 0, c}), m));
+  }
+  std::vector<TileCache::TileBytes> many;
+  const auto a = payload({2, 0, 0}), b = payload({2, 0, 1});
+  many.push_back({TileKey{2, 0, 0}, a});
+  many.push_back({TileKey{2, 0, 1}, b});
+  TileMeta together;
+  together.fetchedAt = kFetched + 99;
+  ASSERT_TRUE(cache->putMany(id, many, together));
+  cache.reset();
+  fs::remove(dir.path() / "index.sqlite");
+  cache = openCache(dir.path());
+  ASSERT_TRUE(cache);
+  EXPECT_EQ(*cache->rebuild(), 5);
+  const auto all = cache->datasets();
+  ASSERT_EQ(all.size(), 1u);
+  for (std::int64_t c = 0; c < 3; ++c) {
+    const auto got = cache->get(all[0].id, TileKey{1, 0, c});
+    ASSERT_TRUE(got);
+    EXPECT_EQ(got->meta.fetchedAt, kFetched + 1000 * c + 7) << c;
+  }
+  for (std::int64_t c = 0; c < 2; ++c)
+    EXPECT_EQ(cache->get(all[0].id, TileKey{2, 0, c})->meta.fetchedAt, kFetched + 99) << c;
+}
+
 TEST(TileCache, CorruptIndexIsMovedAsideAndRebuilt) {
   test::TempDir dir("cache");
   DatasetId id = 0;

@@ -361,7 +361,7 @@ TEST_F(S3StoreIntegration, TheLocalTierTakesACopyOfWhatItReadsFromTheSharedStore
   EXPECT_FALSE(shared->stat(other));
 }
 
-TEST_F(S3StoreIntegration, ALocalCopyOlderThanItsRowIsReplacedFromTheSharedStore) {
+TEST_F(S3StoreIntegration, ALocalCopyOfAnotherVersionIsReplacedFromTheSharedStore) {
   std::shared_ptr<ITileStore> shared = open();
   ASSERT_TRUE(shared);
   std::shared_ptr<ITileStore> local =
@@ -370,18 +370,18 @@ TEST_F(S3StoreIntegration, ALocalCopyOlderThanItsRowIsReplacedFromTheSharedStore
   ASSERT_TRUE(tiered->prepareDataset("srv/ds"));
   ASSERT_TRUE(put(*tiered, kTile, "version one"));
   // Another instance refreshes the tile: new bytes of the same size in the shared store, a row
-  // fetched after this instance's copy was written (a minute ahead: no clock needed).
+  // whose fetched-at is not the copy's (a minute behind it: only equality counts).
   ASSERT_TRUE(put(*shared, kTile, "version two"));
   const auto rowFetchedAt = std::chrono::duration_cast<std::chrono::milliseconds>(
                                 std::chrono::system_clock::now().time_since_epoch())
-                                .count() +
+                                .count() -
                             60000;
   TileLocation unknown = kTile; // no row's time: the local copy is served
   const auto old = tiered->open(unknown, 11);
   ASSERT_TRUE(old);
   EXPECT_EQ(text(*old), "version one");
   TileLocation newer = kTile;
-  newer.notBefore = rowFetchedAt;
+  newer.fetchedAt = rowFetchedAt;
   const auto fresh = tiered->open(newer, 11);
   ASSERT_TRUE(fresh);
   EXPECT_EQ(text(*fresh), "version two");

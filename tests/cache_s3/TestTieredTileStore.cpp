@@ -210,6 +210,59 @@ TEST_F(LocalTier, AWriteFinishingWhileTheScanRunsIsRecordedByTheWriteNotTheScan)
   EXPECT_EQ(t->localTier().files, 4U);
 }
 
+/** The mtime of a tile's local copy, in milliseconds. */
+UnixMillis copyModified(ITileStore& local, const TileLocation& at) {
+  const auto t = local.open(at, 100); // every tile of these tests is 100 bytes
+  struct stat st {};
+  if (!t || ::fstat(t->file->fd(), &st) != 0) return -1;
+  return static_cast<UnixMillis>(st.st_mtim.tv_sec) * 1000 + st.st_mtim.tv_nsec / 1000000;
+}
+
+std::vector<std::byte> bytesOf(const std::optional<StoredTile>& t) {
+  if (!t) return {};
+  auto b = t->file->readAll();
+  return b ? *b : std::vector<std::byte>{};
+}
+
+// A tile refreshed by another instance whose clock runs behind this one's (issue 27): a copy's
+// mtime is the fetched-at it was written for, and only equality with the row's counts. The first
+// rule (a copy older than its row is stale) served the old copy here.
+TEST_F(LocalTier, ACopyOfAnotherVersionIsReplacedWhateverTheClocksSay) {
+  auto t = tiered(0);
+  TileLocation mine = tile(0);
+  mine.fetchedAt = 1'900'000'000'123; // this instance's clock
+  put(*t, mine, body(1));
+  EXPECT_EQ(copyModified(*local, tile(0)), mine.fetchedAt); // the copy names its version
+  // Refreshed elsewhere: new bytes of the same size in the shared store, the row's fetched-at two
+  // minutes before this copy's (the refreshing machine's clock behind).
+  TileLocation row = tile(0);
+  row.fetchedAt = mine.fetchedAt - 120'000;
+  put(shared->inner, row, body(2));
+  const int before = shared->opens.load();
+  EXPECT_EQ(bytesOf(t->open(tile(0), 100)), body(1)); // no row to compare (the index down)
+  EXPECT_EQ(bytesOf(t->open(mine, 100)), body(1));    // the copy's own version
+  EXPECT_EQ(shared->opens.load(), before);
+  EXPECT_EQ(bytesOf(t->open(row, 100)), body(2)); // another version: the shared store's
+  EXPECT_EQ(shared->opens.load(), before + 1);
+  EXPECT_EQ(bytesOf(local->open(tile(0), 100)), body(2)); // the copy replaced, with its version
+  EXPECT_EQ(copyModified(*local, tile(0)), row.fetchedAt);
+  EXPECT_EQ(bytesOf(t->open(row, 100)), body(2));
+  EXPECT_EQ(shared->opens.load(), before + 1); // then a local hit
+  // Tiles stored together name their version too (putMany's stageMany).
+  std::vector<std::vector<std::byte>> bodies{body(3), body(4)};
+  std::vector<TileToStage> many{{tile(3), bodies[0]}, {tile(4), bodies[1]}};
+  for (auto& m : many)
+    m.at.fetchedAt = 1'800'000'000'456;
+  auto staged = t->stageMany(many);
+  ASSERT_TRUE(staged);
+  for (const auto& s : *staged) {
+    ASSERT_TRUE(s->install());
+    s->finish(true);
+  }
+  EXPECT_EQ(copyModified(*local, tile(3)), 1'800'000'000'456);
+  EXPECT_EQ(copyModified(*local, tile(4)), 1'800'000'000'456);
+}
+
 TEST_F(LocalTier, TheScanAtStartCountsTheFilesThereOldestFirstAndOnlyTiles) {
   for (int i = 0; i < 5; ++i)
     put(*local, tile(i), body(i, 100 + static_cast<std::size_t>(i)));

@@ -435,16 +435,20 @@ private:
   OwnedLocation at_;
 };
 
-/** Whether the local copy was written before its index row (whose fetched-at the reader passes):
- * the tile was refreshed by another instance since, through the shared store; the local copy is
- * replaced from there. Costs one fstat on the slow path only (rows a reader remembers skip it). */
-bool olderThanRow(const StoredTile& t, const TileLocation& at) {
-  if (at.notBefore <= 0) return false;
+/** Whether the local copy is of another version of the tile than the index row the reader found
+ * (whose fetched-at it passes): the tile was refreshed by another instance since, through the
+ * shared store, and the copy is replaced from there. A copy's mtime is its version's fetched-at
+ * (set when it is written, TileLocation::fetchedAt), so only equality counts: the writers' clocks
+ * need not agree. A file system that keeps whole seconds only (FAT, ext3) matches on the second.
+ * Costs one fstat on the slow path only (rows a reader remembers skip it). */
+bool otherVersion(const StoredTile& t, const TileLocation& at) {
+  if (at.fetchedAt <= 0) return false;
   struct stat st {};
   if (::fstat(t.file->fd(), &st) != 0) return true;
-  const auto ms =
-      static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1000 + st.st_mtim.tv_nsec / 1000000;
-  return ms < at.notBefore;
+  const UnixMillis ms =
+      static_cast<UnixMillis>(st.st_mtim.tv_sec) * 1000 + st.st_mtim.tv_nsec / 1000000;
+  if (ms == at.fetchedAt) return false;
+  return st.st_mtim.tv_nsec != 0 || ms != at.fetchedAt - at.fetchedAt % 1000;
 }
 
 class TieredStore final : public TieredTileStore {
@@ -475,10 +479,11 @@ public:
   }
 
   std::optional<StoredTile> open(const TileLocation& at, std::int64_t size) override {
-    if (auto t = local_->open(at, size); t && !olderThanRow(*t, at)) {
+    if (auto t = local_->open(at, size); t && !otherVersion(*t, at)) {
       if (tier_) tier_->use(at, size);
       return t;
     }
+    // Not an old copy under the row's headers (its ETag): the shared store's or none.
     auto remote = shared_->open(at, size);
     if (!remote) return std::nullopt;
     // Copied into the local tier as it is read; a tier that cannot take it (full) is skipped.

@@ -128,7 +128,8 @@ namespace {
  * file is removed. */
 std::expected<int, CacheError> writeOpen(const std::filesystem::path& temp,
                                          std::span<const std::byte> bytes,
-                                         const std::filesystem::path& target) {
+                                         const std::filesystem::path& target,
+                                         UnixMillis modified) {
   const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) return std::unexpected(errnoError(errno, "cannot create a temp file for", target));
   const auto* p = reinterpret_cast<const char*>(bytes.data());
@@ -144,6 +145,17 @@ std::expected<int, CacheError> writeOpen(const std::filesystem::path& temp,
     }
     p += n;
     left -= static_cast<std::size_t>(n);
+  }
+  if (modified > 0) {
+    const timespec times[2] = {
+        {0, UTIME_OMIT},
+        {static_cast<time_t>(modified / 1000), static_cast<long>(modified % 1000) * 1000000L}};
+    if (::futimens(fd, times) != 0) {
+      const int err = errno;
+      ::close(fd);
+      ::unlink(temp.c_str());
+      return std::unexpected(errnoError(err, "cannot set the mtime of", target));
+    }
   }
   return fd;
 }
@@ -169,11 +181,16 @@ std::expected<void, CacheError> syncAndClose(int fd,
 
 } // namespace
 
+UnixMillis modifiedMillis(const struct stat& st) noexcept {
+  return static_cast<UnixMillis>(st.st_mtim.tv_sec) * 1000 + st.st_mtim.tv_nsec / 1000000;
+}
+
 std::expected<void, CacheError> writeTemp(const std::filesystem::path& temp,
                                           std::span<const std::byte> bytes,
                                           bool fsyncFile,
-                                          const std::filesystem::path& target) {
-  const auto fd = writeOpen(temp, bytes, target);
+                                          const std::filesystem::path& target,
+                                          UnixMillis modified) {
+  const auto fd = writeOpen(temp, bytes, target, modified);
   if (!fd) return std::unexpected(fd.error());
   return syncAndClose(*fd, fsyncFile, temp, target);
 }
@@ -183,7 +200,7 @@ std::expected<void, CacheError> writeTemps(std::span<const TempWrite> files, boo
   fds.reserve(files.size());
   std::optional<CacheError> failed;
   for (const TempWrite& f : files) {
-    auto fd = writeOpen(f.temp, f.bytes, f.target);
+    auto fd = writeOpen(f.temp, f.bytes, f.target, f.modified);
     if (!fd) {
       failed = std::move(fd.error());
       break;

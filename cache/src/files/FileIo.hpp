@@ -2,6 +2,7 @@
 // Crash-safe file writes, plain reads and the names of temp files (private to cache/).
 
 #include <tellus/cache/CacheError.hpp>
+#include <tellus/cache/Clock.hpp>
 
 #include <cstddef>
 #include <cstdint>
@@ -10,6 +11,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <sys/stat.h>
 #include <vector>
 
 namespace tellus::fileio {
@@ -30,19 +32,25 @@ bool isTempName(const std::string& fileName);
  * parse counts as owned (never removed by a cleaner). */
 bool tempOwnerAlive(const std::string& fileName);
 
-/** Writes bytes to `temp` (created exclusively) and optionally fsyncs it. On failure the temp file
- * is removed. ENOSPC, EFBIG and EDQUOT give CacheErrc::DiskFull; messages name `target`. */
+/** Writes bytes to `temp` (created exclusively) and optionally fsyncs it; a `modified` above 0
+ * becomes its mtime (the tile's version, TileLocation::fetchedAt). On failure the temp file is
+ * removed. ENOSPC, EFBIG and EDQUOT give CacheErrc::DiskFull; messages name `target`. */
 std::expected<void, CacheError> writeTemp(const std::filesystem::path& temp,
                                           std::span<const std::byte> bytes,
                                           bool fsyncFile,
-                                          const std::filesystem::path& target);
+                                          const std::filesystem::path& target,
+                                          UnixMillis modified = 0);
 
 /** One file of writeTemps. */
 struct TempWrite {
   std::filesystem::path temp;
   std::span<const std::byte> bytes;
   std::filesystem::path target; ///< named by messages
+  UnixMillis modified = 0;      ///< above 0: its mtime
 };
+
+/** A file's mtime in milliseconds, as writeTemp sets it. */
+UnixMillis modifiedMillis(const struct stat& st) noexcept;
 
 /** writeTemp for several files, all or none, their fsyncs together: every file written, then the
  * write-back of each started (sync_file_range), then each fsynced, so that the file system commits

@@ -153,10 +153,6 @@ std::size_t removeDeadTempFiles(const fs::path& dir) {
   return removed;
 }
 
-UnixMillis modifiedMillis(const struct stat& st) {
-  return static_cast<UnixMillis>(st.st_mtim.tv_sec) * 1000 + st.st_mtim.tv_nsec / 1000000;
-}
-
 class FileTileStore final : public ITileStore {
 public:
   explicit FileTileStore(const FileTileStoreOptions& options) : options_(options) {}
@@ -213,7 +209,7 @@ public:
     auto placement = placementFor(at);
     if (!placement) return std::unexpected(placement.error());
     if (auto r = fileio::writeTemp(
-            (*placement)->temp(), bytes, options_.fsyncTiles, (*placement)->target());
+            (*placement)->temp(), bytes, options_.fsyncTiles, (*placement)->target(), at.fetchedAt);
         !r)
       return std::unexpected(r.error());
     return *placement;
@@ -228,7 +224,8 @@ public:
     for (const TileToStage& t : tiles) {
       auto placement = placementFor(t.at);
       if (!placement) return std::unexpected(placement.error());
-      writes.push_back(fileio::TempWrite{(*placement)->temp(), t.bytes, (*placement)->target()});
+      writes.push_back(
+          fileio::TempWrite{(*placement)->temp(), t.bytes, (*placement)->target(), t.at.fetchedAt});
       placements.push_back(std::move(*placement));
     }
     if (auto r = fileio::writeTemps(writes, options_.fsyncTiles); !r)
@@ -330,7 +327,7 @@ public:
         struct stat st {};
         if (::stat(it->path().c_str(), &st) != 0) continue; // gone meanwhile
         e.size = st.st_size;
-        e.modified = modifiedMillis(st);
+        e.modified = fileio::modifiedMillis(st);
       }
       visit(e);
     }

@@ -229,7 +229,7 @@ std::expected<CacheLookup, CacheError> TileCache::openTile(DatasetId id, const T
   auto found = peek(id, key);
   if (!found || found->kind != CacheLookup::Kind::Hit) return found;
   auto at = (*d)->at(key);
-  at.notBefore = found->meta.fetchedAt; // a local tier's copy older than the row is stale
+  at.fetchedAt = found->meta.fetchedAt; // a local tier's copy of another version is stale
   auto tile = im.store->open(at, found->size);
   if (!tile) {
     // The tile vanished or changed under us: report a miss, and let the writer drop the row if
@@ -328,11 +328,13 @@ std::expected<void, CacheError> TileCache::put(DatasetId id,
   auto d = im.datasets.checked(id, key);
   if (!d) return std::unexpected(d.error());
   if (auto refused = im.gate.refuseWhileFull(); !refused) return refused;
-  auto staged = im.store->stage((*d)->at(key), bytes);
-  if (!staged) return im.gate.putOutcome(std::unexpected(staged.error()));
   TileMeta m = meta;
   if (m.contentType.empty()) m.contentType = (*d)->info.spec.mimeType;
   if (m.fetchedAt == 0) m.fetchedAt = im.clock->now();
+  auto at = (*d)->at(key);
+  at.fetchedAt = m.fetchedAt; // the stored copy's version (TileLocation::fetchedAt)
+  auto staged = im.store->stage(at, bytes);
+  if (!staged) return im.gate.putOutcome(std::unexpected(staged.error()));
   const auto n = static_cast<std::int64_t>(bytes.size());
   if (im.options.indexWriteBehind) {
     putBehind(im, id, key, n, m, *staged);
@@ -355,15 +357,17 @@ TileCache::putMany(DatasetId id, std::span<const TileBytes> tiles, const TileMet
     d = std::move(*checked);
   }
   if (auto refused = im.gate.refuseWhileFull(); !refused) return refused;
-  std::vector<TileToStage> toStage;
-  toStage.reserve(tiles.size());
-  for (const TileBytes& t : tiles)
-    toStage.push_back(TileToStage{d->at(t.key), t.bytes});
-  auto staged = im.store->stageMany(toStage);
-  if (!staged) return im.gate.putOutcome(std::unexpected(staged.error()));
   TileMeta m = meta;
   if (m.contentType.empty()) m.contentType = d->info.spec.mimeType;
   if (m.fetchedAt == 0) m.fetchedAt = im.clock->now();
+  std::vector<TileToStage> toStage;
+  toStage.reserve(tiles.size());
+  for (const TileBytes& t : tiles) {
+    toStage.push_back(TileToStage{d->at(t.key), t.bytes});
+    toStage.back().at.fetchedAt = m.fetchedAt;
+  }
+  auto staged = im.store->stageMany(toStage);
+  if (!staged) return im.gate.putOutcome(std::unexpected(staged.error()));
   if (im.options.indexWriteBehind) { // as put(), tile by tile: nobody waits for the rows
     for (std::size_t i = 0; i < tiles.size(); ++i) {
       const auto n = static_cast<std::int64_t>(tiles[i].bytes.size());

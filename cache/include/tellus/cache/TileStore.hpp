@@ -44,10 +44,11 @@ struct TileLocation {
   std::string_view folder;    ///< the dataset's folder (DatasetInfo::folder)
   std::string_view extension; ///< the dataset's extension ("jpg")
   TileKey key;
-  /** The index row's fetched-at, where the reader knows it (0: not known): a copy a tier made
-   * before this is of an older version of the tile (refreshed elsewhere since) and is not served.
-   */
-  UnixMillis notBefore = 0;
+  /** Which version of the tile: its index row's fetched-at, where the caller knows it (0: not
+   * known). A writer passes the one it stores (a file store makes it the file's mtime); a reader
+   * the row's: a tier's copy of another version (refreshed elsewhere since) is not served. Only
+   * equality counts, never order, so that writers' clocks need not agree. */
+  UnixMillis fetchedAt = 0;
 };
 
 /** One of several tiles staged together (ITileStore::stageMany). */

@@ -16,7 +16,8 @@
  * tile files (bytes, and their order of last use: a read that hits, a copy, a write) is kept,
  * filled at start by a scan of the tree on a thread of its own (in the order of use a clean stop
  * saved in `<root>/.local-tier-order`, read once and removed; files it does not list, or all of
- * them after a crash, by mtime, the oldest as least recently used) and kept up to date by every
+ * them after a crash, by mtime (a copy's fetched-at), the oldest as least recently used) and kept
+ * up to date by every
  * read, copy, write and removal through this store. When the tiles recorded pass the limit, that
  * thread unlinks the local copies of the least recently used ones until they are under the
  * low-water mark (90 % of the limit). Only local tile files are ever removed: never an index row,
