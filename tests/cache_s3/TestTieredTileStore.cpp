@@ -263,6 +263,20 @@ TEST_F(LocalTier, ACopyOfAnotherVersionIsReplacedWhateverTheClocksSay) {
   EXPECT_EQ(copyModified(*local, tile(4)), 1'800'000'000'456);
 }
 
+TEST(TileVersion, AnMtimeNamesTheMillisecondOrOnAWholeSecondFileSystemTheSecond) {
+  constexpr UnixMillis v = 1'900'000'000'123;
+  EXPECT_TRUE(mtimeNamesVersion(1'900'000'000, 123'000'000, v));
+  EXPECT_TRUE(mtimeNamesVersion(1'900'000'000, 123'999'999, v)); // the same millisecond
+  EXPECT_FALSE(mtimeNamesVersion(1'900'000'000, 124'000'000, v));
+  EXPECT_FALSE(mtimeNamesVersion(1'900'000'000, 122'999'999, v));
+  EXPECT_FALSE(mtimeNamesVersion(1'899'999'880, 123'000'000, v)); // two minutes before: another
+  EXPECT_TRUE(mtimeNamesVersion(1'900'000'000, 0, v));  // whole seconds kept: the same second
+  EXPECT_FALSE(mtimeNamesVersion(1'900'000'001, 0, v)); // another second
+  EXPECT_FALSE(mtimeNamesVersion(1'899'999'999, 0, v));
+  EXPECT_TRUE(mtimeNamesVersion(1'900'000'000, 0, 1'900'000'000'000));
+  EXPECT_FALSE(mtimeNamesVersion(1'900'000'000, 1'000'000, 1'900'000'000'000));
+}
+
 TEST_F(LocalTier, TheScanAtStartCountsTheFilesThereOldestFirstAndOnlyTiles) {
   for (int i = 0; i < 5; ++i)
     put(*local, tile(i), body(i, 100 + static_cast<std::size_t>(i)));

@@ -439,16 +439,13 @@ private:
  * (whose fetched-at it passes): the tile was refreshed by another instance since, through the
  * shared store, and the copy is replaced from there. A copy's mtime is its version's fetched-at
  * (set when it is written, TileLocation::fetchedAt), so only equality counts: the writers' clocks
- * need not agree. A file system that keeps whole seconds only (FAT, ext3) matches on the second.
- * Costs one fstat on the slow path only (rows a reader remembers skip it). */
+ * need not agree (mtimeNamesVersion). Costs one fstat on the slow path only (rows a reader
+ * remembers skip it). */
 bool otherVersion(const StoredTile& t, const TileLocation& at) {
   if (at.fetchedAt <= 0) return false;
   struct stat st {};
   if (::fstat(t.file->fd(), &st) != 0) return true;
-  const UnixMillis ms =
-      static_cast<UnixMillis>(st.st_mtim.tv_sec) * 1000 + st.st_mtim.tv_nsec / 1000000;
-  if (ms == at.fetchedAt) return false;
-  return st.st_mtim.tv_nsec != 0 || ms != at.fetchedAt - at.fetchedAt % 1000;
+  return !mtimeNamesVersion(st.st_mtim.tv_sec, st.st_mtim.tv_nsec, at.fetchedAt);
 }
 
 class TieredStore final : public TieredTileStore {

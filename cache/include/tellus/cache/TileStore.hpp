@@ -51,6 +51,15 @@ struct TileLocation {
   UnixMillis fetchedAt = 0;
 };
 
+/** Whether a file's mtime (seconds, nanoseconds) names the version `fetchedAt`, as a file store
+ * writes it (TileLocation::fetchedAt): the same millisecond; on a file system that keeps whole
+ * seconds only (FAT, ext3), the same second. */
+constexpr bool
+mtimeNamesVersion(std::int64_t sec, std::int64_t nsec, UnixMillis fetchedAt) noexcept {
+  const UnixMillis ms = sec * 1000 + nsec / 1000000;
+  return ms == fetchedAt || (nsec == 0 && ms == fetchedAt - fetchedAt % 1000);
+}
+
 /** One of several tiles staged together (ITileStore::stageMany). */
 struct TileToStage {
   TileLocation at;
