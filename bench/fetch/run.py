@@ -5,6 +5,7 @@ Starts the synthetic WMS of upstream.py (detail at every level; blue = each map'
 then for every view (1280x720, 35.98 degrees vertically: CesiumJS's default 60 across):
   - `tellus render --wait-complete` with a new cache (and --threshold T for each T of THRESHOLDS),
   - CesiumJS 1.145 in headless Chromium, a new browser context (cesium_views.mjs), unless NO_CESIUM,
+and for every dome (DOMES: a 180-degree domemaster, tellus only) `tellus render --dome`;
 and reports per view and renderer: GetMaps asked of the upstream, texels fetched per screen pixel
 (sum of WIDTH x HEIGHT / 1280 x 720), the texel size on screen at the centre (pixels, N-S/E-W) and
 over the screen (p10/p50/p90 of the larger and of the smaller side, on a 32 x 18 grid of samples
@@ -44,6 +45,11 @@ VIEWS = [  # name, lat, lon, alt (m), heading, tilt
     ("antimeridian", 0.0, 180.0, 2e5, 0.0, 0.0),
     ("paris", 48.8584, 2.2945, 10.0, 0.0, 80.0),
     ("descent", 45.0, 7.0, 5e5, 30.0, 40.0),
+]
+# Domes (tellus only: CesiumJS draws no fisheye): name, lat, lon, alt, heading, tilt, the dome's
+# tilt (its axis turned up from the view), the domemaster's size; 180 degrees, the direct method.
+DOMES = [
+    ("dome", 45.0, 7.0, 2e4, 30.0, 60.0, 0.0, 1024),  # over the Alps, nadir to horizon
 ]
 A, F = 6378137.0, 1 / 298.257223563
 B = A * (1 - F)
@@ -99,10 +105,15 @@ class Rays:
         self.ty = math.tan(math.radians(VFOV) / 2)
         self.tx = self.ty * W / H
 
+    def direction(self, px, py):
+        nx, ny = 2 * px / W - 1, 1 - 2 * py / H
+        return add(add(self.fwd, self.right, nx * self.tx), self.up, ny * self.ty)
+
     def ground(self, px, py):
         """(lat, lon) where the ray through window point (px, py) meets the ellipsoid, or None."""
-        nx, ny = 2 * px / W - 1, 1 - 2 * py / H
-        d = add(add(self.fwd, self.right, nx * self.tx), self.up, ny * self.ty)
+        d = self.direction(px, py)
+        if d is None:
+            return None
         # Scale z so that the ellipsoid is the sphere of radius A.
         o = (self.eye[0], self.eye[1], self.eye[2] * A / B)
         d = (d[0], d[1], d[2] * A / B)
@@ -119,6 +130,29 @@ class Rays:
         return geodetic((p[0], p[1], p[2] * B / A))
 
 
+class DomeRays(Rays):
+    """The fisheye camera of Camera.cpp (Fisheye): the axis turned up by the dome's tilt, an
+    azimuthal equidistant map of 180 degrees onto the inscribed circle of a size x size image."""
+
+    def __init__(self, lat, lon, alt, heading, tilt, dome_tilt, size):
+        super().__init__(lat, lon, alt, heading, tilt)
+        sd, cd = math.sin(math.radians(dome_tilt)), math.cos(math.radians(dome_tilt))
+        f, u = self.fwd, self.up
+        self.fwd = unit(add(tuple(cd * v for v in f), u, sd))
+        self.up = unit(add(tuple(cd * v for v in u), f, -sd))
+        self.right = unit(cross(self.fwd, self.up))
+        self.size = size
+
+    def direction(self, px, py):
+        nx, ny = 2 * px / self.size - 1, 1 - 2 * py / self.size
+        r = math.hypot(nx, ny)
+        if r > 1:
+            return None
+        theta = r * math.pi / 2
+        side = add(tuple(nx / r * v for v in self.right), self.up, ny / r) if r > 0 else self.up
+        return add(tuple(math.cos(theta) * v for v in self.fwd), side, math.sin(theta))
+
+
 def texel_sizes(rays, image, px, py):
     """(N-S, E-W) size in pixels of the texel drawn at window point (px, py), or None."""
     # Forward differences over one pixel (a central one is 0 at a pole under the camera).
@@ -126,7 +160,7 @@ def texel_sizes(rays, image, px, py):
     gx1, gy1 = rays.ground(px + 1, py), rays.ground(px, py + 1)
     if None in (c, gx1, gy1):
         return None
-    code = image.getpixel((min(W - 1, int(px)), min(H - 1, int(py))))[2]
+    code = image.getpixel((min(image.width - 1, int(px)), min(image.height - 1, int(py))))[2]
     if code == 0:
         return None
     res = 2.0 ** -(code / 8.0 - 4.0)
@@ -141,14 +175,25 @@ def pct(values, p):
     return v[min(len(v) - 1, int(p / 100 * len(v)))] if v else float("nan")
 
 
+def is_dome(view):
+    return len(view) == 8
+
+
+def pixels(view):
+    """The pixels a view shows: the screen's, or the domemaster's circle."""
+    return math.pi * (view[7] / 2) ** 2 if is_dome(view) else W * H
+
+
 def measure(view, png):
-    rays = Rays(*view[1:])
+    rays = DomeRays(*view[1:]) if is_dome(view) else Rays(*view[1:])
     image = Image.open(png).convert("RGB")
-    centre = texel_sizes(rays, image, W / 2, H / 2)
+    w, h = image.width, image.height
+    cols, rows = (24, 24) if is_dome(view) else (32, 18)  # a dome's samples off its circle: none
+    centre = texel_sizes(rays, image, w / 2, h / 2)
     big, small = [], []
-    for j in range(18):
-        for i in range(32):
-            s = texel_sizes(rays, image, (i + 0.5) * W / 32, (j + 0.5) * H / 18)
+    for j in range(rows):
+        for i in range(cols):
+            s = texel_sizes(rays, image, (i + 0.5) * w / cols, (j + 0.5) * h / rows)
             if s and all(math.isfinite(x) for x in s):
                 big.append(max(s))
                 small.append(min(s))
@@ -176,7 +221,7 @@ def table(rows):
         m = r["measure"] or {"centre": None, "larger": [None] * 3, "smaller": [None] * 3}
         c = "/".join(fmt(x) for x in m["centre"]) if m["centre"] else "-"
         print(f"| {r['view']} | {r['renderer']}{'' if r['rc'] == 0 else ' (failed)'} | "
-              f"{r['requests']} | {r['texels'] / (W * H):.2f} | {c} | "
+              f"{r['requests']} | {r['texels'] / r.get('pixels', W * H):.2f} | {c} | "
               f"{'/'.join(fmt(x) for x in m['larger'])} | "
               f"{'/'.join(fmt(x) for x in m['smaller'])} | {r['seconds']:.1f} |")
 
@@ -262,7 +307,7 @@ def remeasure(out):
     with open(os.path.join(out, "results.json")) as f:
         rows = json.load(f)
     for r in rows:
-        v = next(x for x in VIEWS if x[0] == r["view"])
+        v = next(x for x in VIEWS + DOMES if x[0] == r["view"])
         if r["rc"] == 0:
             r["measure"] = measure(v, png_of(out, r))
     table(rows)
@@ -277,7 +322,7 @@ def main():
     os.makedirs(out, exist_ok=True)
     thresholds = os.environ.get("THRESHOLDS", "1 2").split()
     names = os.environ.get("VIEWS", "").split()
-    views = [v for v in VIEWS if not names or v[0] in names]
+    views = [v for v in VIEWS + DOMES if not names or v[0] in names]
     portfile = os.path.join(out, "port")
     upstream = subprocess.Popen([sys.executable, os.path.join(HERE, "upstream.py"), portfile])
     try:
@@ -296,7 +341,8 @@ def main():
                                        else "# no overview"))
         nm = os.environ.get("NODE_MODULES", os.path.join(ROOT, "build/tests/web-npm/node_modules"))
         if os.environ.get("PROXY"):
-            rows = through_serve(tellus, url, cfgs["0"], views, out, nm)
+            flat = [v for v in views if not is_dome(v)]
+            rows = through_serve(tellus, url, cfgs["0"], flat, out, nm)
             with open(os.path.join(out, "results.json"), "w") as f:
                 json.dump(rows, f, indent=1)
             print(f"\n{out}\n")
@@ -312,8 +358,10 @@ def main():
                 png = os.path.join(out, f"tellus-{tag}-{v[0]}.png")
                 stats = os.path.join(out, f"tellus-{tag}-{v[0]}.json")
                 get(url + "/reset")
+                shape = (["--size", str(v[7]), "--dome", "180", "--dome-tilt", str(v[6])]
+                         if is_dome(v) else ["--size", f"{W}x{H}"])
                 cmd = [tellus, "render", "--config", cfg, "--cache", cache, "--data", out,
-                       "--camera", ",".join(str(x) for x in v[1:]), "--size", f"{W}x{H}",
+                       "--camera", ",".join(str(x) for x in v[1:6]), *shape,
                        "--threshold", t, "--no-terrain", "--no-sun", "--background", "0,0,0",
                        "--wait-complete=600", "--out", png, "--stats", stats]
                 started = time.monotonic()
@@ -322,13 +370,14 @@ def main():
                 counts = get(url + "/stats")
                 m = measure(v, png) if rc == 0 else None
                 rows.append({"view": v[0], "renderer": f"tellus {tag}", "rc": rc,
-                             "seconds": seconds, **counts, "measure": m})
+                             "seconds": seconds, **counts, "pixels": pixels(v), "measure": m})
                 print(json.dumps(rows[-1]), flush=True)
         if not os.environ.get("NO_CESIUM"):
             vfile = os.path.join(out, "views.json")
             with open(vfile, "w") as f:
                 json.dump([{"name": v[0], "lat": v[1], "lon": v[2], "alt": v[3], "heading": v[4],
-                            "tilt": v[5], "width": W, "height": H} for v in views], f)
+                            "tilt": v[5], "width": W, "height": H}
+                           for v in views if not is_dome(v)], f)
             run = subprocess.run(["node", os.path.join(HERE, "cesium_views.mjs"), nm, url, vfile, out],
                                  stdout=subprocess.PIPE, text=True)
             for line in run.stdout.splitlines():
