@@ -1171,6 +1171,41 @@ TEST(ComposeIntegration, CoarseMapsComeFromTheSameDataOnACoarserGrid) {
   EXPECT_EQ(value("tellus_compose_source_texels_total{origin=\"cache\"}"), 0);
 }
 
+// Issue 29: a GetMap that is exactly one tile of another layer of the same upstream data (here on
+// CesiumJS's geographic grid: 180-degree roots of 256 px) is that layer's tile, fetched once as it
+// is and then served from the cache, whichever of the two names it asks for. Composed from "sat"
+// (36-degree roots) the same map took four of its level-1 tiles.
+TEST(ComposeIntegration, AGetMapThatIsATileOfTheSameDataOnAnotherGridIsThatTile) {
+  test::FakeUpstream up(tileReply);
+  LayerSpec geo;
+  geo.name = "sat-geographic";
+  geo.upstreamLayer = "upsat";
+  geo.dataset.grid = GridSpec{Sector{}, 180.0, 256, 256, 8};
+  geo.dataset.mimeType = "image/jpeg";
+  geo.maxAge = 3600s;
+  Proxy p(up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, Proxy::fastPolicy(), "upsat", {}, {geo});
+  const std::string box = "0,0,22.5,22.5"; // level 3 of that grid: row 4, column 8
+  const auto r = p.get(getMap("sat", box, 256, 256, "image/jpeg"));
+  ASSERT_EQ(r.status, 200) << r.body.substr(0, 400);
+  EXPECT_EQ(r.header("content-type"), "image/jpeg");
+  ASSERT_EQ(up.requests(), 1u);
+  const std::string asked = up.received().front().target;
+  EXPECT_NE(asked.find("WIDTH=256&HEIGHT=256"), std::string::npos) << asked;
+  EXPECT_EQ(r.body, jpegFor(asked)) << "the upstream's bytes as they are, not composed";
+  EXPECT_EQ(p.get("/tiles/sat-geographic/3/4/4_8.jpg").body, r.body);
+  for (const char* name : {"sat", "sat-geographic"}) {
+    const auto again = p.get(getMap(name, box, 256, 256, "image/jpeg"));
+    EXPECT_EQ(again.header("x-cache"), "HIT") << name;
+    EXPECT_EQ(again.body, r.body) << name;
+  }
+  EXPECT_EQ(up.requests(), 1u);
+  // In another format, or a box that is no tile of either: composed from "sat", as before.
+  ASSERT_EQ(p.get(getMap("sat", box, 256, 256, "image/png")).status, 200);
+  EXPECT_EQ(up.requests(), 5u);
+  ASSERT_EQ(p.get(getMap("sat", "0,0,22,22", 256, 256, "image/jpeg")).status, 200);
+  EXPECT_EQ(up.requests(), 5u) << "the same four tiles of sat";
+}
+
 TEST(ComposeIntegration, LayersAreDrawnInOrderWithTheirOpacity) {
   // The overlay answers an opaque blue PNG; "sat" a JPEG of its own colour.
   test::FakeUpstream up([](const test::FakeRequest& req) {

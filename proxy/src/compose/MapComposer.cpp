@@ -63,22 +63,13 @@ void appendTiles(std::vector<ComposeTile>& keys, std::vector<ComposeTile>&& more
   }
 }
 
-/** Whether `c` serves the same upstream data as `l` (upstream, upstream layer, style, body, kind,
- * times) on another grid. */
-bool sameSource(const LayerSpec& c, const LayerSpec& l) {
-  return c.name != l.name && c.upstream == l.upstream && c.upstreamLayer == l.upstreamLayer &&
-         c.dataset.style == l.dataset.style && c.dataset.body == l.dataset.body &&
-         c.elevation == l.elevation && !c.values && !l.values && c.timeValues == l.timeValues &&
-         c.timePeriod == l.timePeriod;
-}
-
-/** The layers a map of `l` may take its coarse rows from: the same upstream data (sameSource) on
- * a global grid. */
+/** The layers a map of `l` may take its coarse rows from: the same upstream data
+ * (sameUpstreamData) on a global grid. */
 std::vector<std::pair<const LayerSpec*, const TileGrid*>>
 coarserCandidates(const TileService& tiles, const LayerSpec& l) {
   std::vector<std::pair<const LayerSpec*, const TileGrid*>> out;
   for (const LayerSpec& c : tiles.layers()) {
-    if (!sameSource(c, l)) continue;
+    if (!sameUpstreamData(c, l)) continue;
     const TileGrid* cg = tiles.grid(c.name);
     if (!cg) continue;
     const Sector& s = cg->spec().sector;

@@ -294,8 +294,15 @@ bool WmsFrontEnd::sendOneTile(const HttpRequest& req,
       (kind.values && l->values->format.byteOrder != values::ByteOrder::Little) ||
       !(m.opacities.empty() || m.opacities.front() >= 1.0) || m.crs == kWebMercator)
     return false;
-  const TileGrid* g = fe_.tiles.grid(l->name);
-  const auto key = g->keyForBbox(m.bbox, m.width, m.height);
+  auto key = fe_.tiles.grid(l->name)->keyForBbox(m.bbox, m.width, m.height);
+  // Exactly one tile of another layer of the same upstream data, in this format: that tile (a
+  // layer on CesiumJS's grid beside World Wind's serves CesiumJS's GetMaps of either name as
+  // tiles, issue 29), the first such layer in the configuration's order.
+  for (const LayerSpec& o : fe_.tiles.layers()) {
+    if (key) break;
+    if (!sameUpstreamData(o, *l) || o.dataset.mimeType != m.format) continue;
+    if ((key = fe_.tiles.grid(o.name)->keyForBbox(m.bbox, m.width, m.height))) l = &o;
+  }
   if (!key) return false;
   const FetchGate gate = fe_.gateFor(req);
   fe_.tiles.getTile(

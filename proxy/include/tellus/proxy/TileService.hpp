@@ -73,6 +73,16 @@ struct LayerSpec {
   std::shared_ptr<const WmtsTiles> wmts;
 };
 
+/** Whether two layers serve the same upstream data (upstream, upstream layer, style, body, kind,
+ * times) on two grids: a map of one may be made of the other's tiles (issue 29: coarser rows from
+ * an overview, a GetMap that is exactly one of the other's tiles). Value layers never are. */
+inline bool sameUpstreamData(const LayerSpec& a, const LayerSpec& b) noexcept {
+  return a.name != b.name && a.upstream == b.upstream && a.upstreamLayer == b.upstreamLayer &&
+         a.dataset.style == b.dataset.style && a.dataset.body == b.dataset.body &&
+         a.elevation == b.elevation && !a.values && !b.values && a.timeValues == b.timeValues &&
+         a.timePeriod == b.timePeriod;
+}
+
 /** Where an answer came from (the X-Cache header). */
 enum class TileOrigin { Hit, Miss, Stale, Offline };
 
