@@ -277,8 +277,9 @@ def through_serve(tellus, url, config, views, out, node_modules):
             c = json.loads(line)
             maps = sum(x for k, x in m.items() if k.startswith(
                 'tellus_http_requests_total{protocol="wms",code="200"'))
-            # CesiumJS's maps are 256 x 256 (the count for a binary without the counter).
-            served = m.get("tellus_compose_output_texels_total", maps * 256 * 256)
+            # CesiumJS's maps are 256 x 256, composed or served as tiles (the compose counter
+            # counts the former only).
+            served = maps * 256 * 256
             row = {"view": c["name"], "settled": c["settled"], "seconds": c["seconds"],
                    "maps": int(maps), "served_texels": served,
                    "upstream_requests": c["requests"], "upstream_texels": c["texels"],
