@@ -1087,6 +1087,17 @@ std::string getMap(const std::string& layers,
          "&HEIGHT=" + std::to_string(h) + "&FORMAT=" + format + extra;
 }
 
+/** A layer of "sat"'s upstream data (JPEG) on another grid (issue 29). */
+LayerSpec satDataOn(const std::string& name, const GridSpec& grid) {
+  LayerSpec l;
+  l.name = name;
+  l.upstreamLayer = "upsat";
+  l.dataset.grid = grid;
+  l.dataset.mimeType = "image/jpeg";
+  l.maxAge = 3600s;
+  return l;
+}
+
 } // namespace
 
 TEST(ComposeIntegration, AnyBoxIsComposedFromTilesFetchedOnce) {
@@ -1150,12 +1161,7 @@ TEST(ComposeIntegration, AntimeridianBoxJoinsBothSides) {
 // coarser grid would magnify more than sqrt 2 times still comes from "sat".
 TEST(ComposeIntegration, CoarseMapsComeFromTheSameDataOnACoarserGrid) {
   test::FakeUpstream up(tileReply);
-  LayerSpec ov;
-  ov.name = "sat-overview";
-  ov.upstreamLayer = "upsat";
-  ov.dataset.grid = GridSpec{Sector{}, 90.0, 256, 256, 1};
-  ov.dataset.mimeType = "image/jpeg";
-  ov.maxAge = 3600s;
+  const LayerSpec ov = satDataOn("sat-overview", GridSpec{Sector{}, 90.0, 256, 256, 1});
   Proxy p(up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, Proxy::fastPolicy(), "upsat", {}, {ov});
   // 1-degree pixels: the overview's 0.35-degree texels.
   ASSERT_EQ(p.get(getMap("sat", "-180,-90,180,90", 360, 180, "image/png")).status, 200);
@@ -1177,12 +1183,7 @@ TEST(ComposeIntegration, CoarseMapsComeFromTheSameDataOnACoarserGrid) {
 // (36-degree roots) the same map took four of its level-1 tiles.
 TEST(ComposeIntegration, AGetMapThatIsATileOfTheSameDataOnAnotherGridIsThatTile) {
   test::FakeUpstream up(tileReply);
-  LayerSpec geo;
-  geo.name = "sat-geographic";
-  geo.upstreamLayer = "upsat";
-  geo.dataset.grid = GridSpec{Sector{}, 180.0, 256, 256, 8};
-  geo.dataset.mimeType = "image/jpeg";
-  geo.maxAge = 3600s;
+  const LayerSpec geo = satDataOn("sat-geographic", GridSpec{Sector{}, 180.0, 256, 256, 8});
   Proxy p(up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, Proxy::fastPolicy(), "upsat", {}, {geo});
   const std::string box = "0,0,22.5,22.5"; // level 3 of that grid: row 4, column 8
   const auto r = p.get(getMap("sat", box, 256, 256, "image/jpeg"));
