@@ -1207,6 +1207,32 @@ TEST(ComposeIntegration, AGetMapThatIsATileOfTheSameDataOnAnotherGridIsThatTile)
   EXPECT_EQ(up.requests(), 5u) << "the same four tiles of sat";
 }
 
+// CesiumJS asks for PNG; World Wind's imagery is often JPEG: a PNG GetMap of "sat" (JPEG) that is
+// exactly a tile of a PNG layer of the same data is that layer's tile. Before, its format being
+// not "sat"'s, it was composed from "sat"'s tiles.
+TEST(ComposeIntegration, AGetMapInAnotherFormatIsATileOfTheSameDataInThatFormat) {
+  test::FakeUpstream up([](const test::FakeRequest& req) {
+    if (req.target.find("png") == std::string::npos) return tileReply(req); // FORMAT, encoded
+    std::vector<std::uint8_t> px(256 * 256 * 3, 77);
+    const auto png = *encodeImage("image/png", 256, 256, 3, px.data());
+    return test::FakeReply::ok(std::string(reinterpret_cast<const char*>(png.data()), png.size()),
+                               "image/png");
+  });
+  LayerSpec geo = satDataOn("sat-geographic", GridSpec{Sector{}, 180.0, 256, 256, 8});
+  geo.dataset.mimeType = "image/png";
+  Proxy p(up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, Proxy::fastPolicy(), "upsat", {}, {geo});
+  const auto r = p.get(getMap("sat", "0,0,22.5,22.5", 256, 256, "image/png"));
+  ASSERT_EQ(r.status, 200) << r.body.substr(0, 400);
+  EXPECT_EQ(r.header("content-type"), "image/png");
+  EXPECT_EQ(up.requests(), 1u);
+  EXPECT_EQ(p.get("/tiles/sat-geographic/3/4/4_8.png").body, r.body);
+  EXPECT_EQ(p.get(getMap("sat", "0,0,22.5,22.5", 256, 256, "image/png")).body, r.body);
+  EXPECT_EQ(up.requests(), 1u);
+  // In "sat"'s own JPEG: composed from its tiles (no JPEG layer on that grid).
+  ASSERT_EQ(p.get(getMap("sat", "0,0,22.5,22.5", 256, 256, "image/jpeg")).status, 200);
+  EXPECT_EQ(up.requests(), 5u);
+}
+
 TEST(ComposeIntegration, LayersAreDrawnInOrderWithTheirOpacity) {
   // The overlay answers an opaque blue PNG; "sat" a JPEG of its own colour.
   test::FakeUpstream up([](const test::FakeRequest& req) {

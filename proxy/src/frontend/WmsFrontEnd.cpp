@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <optional>
 
 namespace tellus {
 
@@ -289,17 +290,19 @@ bool WmsFrontEnd::sendOneTile(const HttpRequest& req,
   // One layer, its own format (as what it is: heights as heights), exactly one tile: the cached
   // file itself (the fast path).
   const LayerSpec* l = layers.front().layer;
-  if (layers.size() != 1 || layers.front().colourMap != nullptr ||
-      m.format != l->dataset.mimeType || kind.heights != l->elevation ||
-      (kind.values && l->values->format.byteOrder != values::ByteOrder::Little) ||
+  if (layers.size() != 1 || layers.front().colourMap != nullptr || kind.heights != l->elevation ||
       !(m.opacities.empty() || m.opacities.front() >= 1.0) || m.crs == kWebMercator)
     return false;
-  auto key = fe_.tiles.grid(l->name)->keyForBbox(m.bbox, m.width, m.height);
-  // Exactly one tile of another layer of the same upstream data, in this format: that tile (a
-  // layer on CesiumJS's grid beside World Wind's serves CesiumJS's GetMaps of either name as
-  // tiles, issue 29), the first such layer in the configuration's order.
+  std::optional<TileKey> key;
+  if (m.format == l->dataset.mimeType && // a values format is a value layer's own
+      !(kind.values && l->values->format.byteOrder != values::ByteOrder::Little))
+    key = fe_.tiles.grid(l->name)->keyForBbox(m.bbox, m.width, m.height);
+  // Else exactly one tile of another layer of the same upstream data in its own format: that tile
+  // (a layer on CesiumJS's grid beside World Wind's serves CesiumJS's GetMaps of either name as
+  // tiles, issue 29; CesiumJS asks for PNG, World Wind's imagery is often JPEG), the first such
+  // layer in the configuration's order. Never a value layer's.
   for (const LayerSpec& o : fe_.tiles.layers()) {
-    if (key) break;
+    if (key || kind.values) break;
     if (!sameUpstreamData(o, *l) || o.dataset.mimeType != m.format) continue;
     if ((key = fe_.tiles.grid(o.name)->keyForBbox(m.bbox, m.width, m.height))) l = &o;
   }
