@@ -1207,9 +1207,9 @@ TEST(ComposeIntegration, AGetMapThatIsATileOfTheSameDataOnAnotherGridIsThatTile)
   EXPECT_EQ(up.requests(), 5u) << "the same four tiles of sat";
 }
 
-// CesiumJS asks for PNG; World Wind's imagery is often JPEG: a PNG GetMap of "sat" (JPEG) that is
-// exactly a tile of a PNG layer of the same data is that layer's tile. Before, its format being
-// not "sat"'s, it was composed from "sat"'s tiles.
+// A client asking for another format than the layer's (World Wind's imagery JPEG, a CesiumJS set
+// up for PNG): a PNG GetMap of "sat" (JPEG) that is exactly a tile of a PNG layer of the same
+// data is that layer's tile. Before, its format being not "sat"'s, it was composed from "sat"'s.
 TEST(ComposeIntegration, AGetMapInAnotherFormatIsATileOfTheSameDataInThatFormat) {
   test::FakeUpstream up([](const test::FakeRequest& req) {
     if (req.target.find("png") == std::string::npos) return tileReply(req); // FORMAT, encoded

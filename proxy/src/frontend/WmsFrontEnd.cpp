@@ -299,8 +299,8 @@ bool WmsFrontEnd::sendOneTile(const HttpRequest& req,
     key = fe_.tiles.grid(l->name)->keyForBbox(m.bbox, m.width, m.height);
   // Else exactly one tile of another layer of the same upstream data in its own format: that tile
   // (a layer on CesiumJS's grid beside World Wind's serves CesiumJS's GetMaps of either name as
-  // tiles, issue 29; CesiumJS asks for PNG, World Wind's imagery is often JPEG), the first such
-  // layer in the configuration's order. Never a value layer's.
+  // tiles, issue 29, whether the client asks for that layer's format or this one's), the first
+  // such layer in the configuration's order. Never a value layer's.
   for (const LayerSpec& o : fe_.tiles.layers()) {
     if (key || kind.values) break;
     if (!sameUpstreamData(o, *l) || o.dataset.mimeType != m.format) continue;
