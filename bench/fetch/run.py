@@ -325,7 +325,8 @@ def main():
     names = os.environ.get("VIEWS", "").split()
     views = [v for v in VIEWS + DOMES if not names or v[0] in names]
     portfile = os.path.join(out, "port")
-    upstream = subprocess.Popen([sys.executable, os.path.join(HERE, "upstream.py"), portfile])
+    upstream = subprocess.Popen([sys.executable, os.path.join(HERE, "upstream.py"), portfile,
+                                 os.path.join(out, "upstream.log")])
     try:
         for _ in range(100):
             if os.path.exists(portfile):

@@ -11,8 +11,9 @@ A GetMap (EPSG:4326 or CRS:84, 1.1.1 or 1.3.0, any BBOX, WIDTH, HEIGHT) answers 
   a screenshot tells at every pixel the texel size the renderer drew there.
 GET /stats answers {"requests": N, "texels": T} (GetMaps since the last /reset, T = sum of
 WIDTH x HEIGHT); GET /reset zeroes them. Every answer carries Access-Control-Allow-Origin: *.
-Usage: upstream.py PORTFILE (binds 127.0.0.1 on a free port, writes the port, serves until
-killed)."""
+Usage: upstream.py PORTFILE [LOG] (binds 127.0.0.1 on a free port, writes the port, serves until
+killed; with LOG, appends "west south east north WIDTH HEIGHT" of each GetMap to it, and
+"reset" at each /reset)."""
 import io
 import json
 import math
@@ -25,6 +26,7 @@ from PIL import Image, ImageDraw
 
 LOCK = threading.Lock()
 COUNTS = {"requests": 0, "texels": 0}
+LOG = open(sys.argv[2], "a") if len(sys.argv) > 2 else None  # a line per GetMap, when asked
 
 
 def resolution_code(res):
@@ -88,6 +90,8 @@ class Handler(BaseHTTPRequestHandler):
         if url.path == "/reset":
             with LOCK:
                 COUNTS.update(requests=0, texels=0)
+                if LOG:
+                    LOG.write("reset\n")
             return self.answer(200, b"{}", "application/json")
         q = {k.upper(): v for k, v in parse_qsl(url.query)}
         if q.get("REQUEST", "").lower() != "getmap":
@@ -106,6 +110,9 @@ class Handler(BaseHTTPRequestHandler):
         with LOCK:
             COUNTS["requests"] += 1
             COUNTS["texels"] += width * height
+            if LOG:
+                LOG.write(f"{box[0]:.9g} {box[1]:.9g} {box[2]:.9g} {box[3]:.9g} {width} {height}\n")
+                LOG.flush()
         self.answer(200, body, "image/png")
 
 
