@@ -11,6 +11,10 @@ namespace tellus::planet {
 
 namespace {
 
+/** Points of a polar cap's rim the local test samples besides the one at the camera's longitude:
+ * a tilted view sees the rim's largest texels off the camera's meridian too. */
+constexpr int kCapRimSamples = 15;
+
 /** The rows of the view-projection matrix's linear part that give clip x, y and w. */
 struct ClipRows {
   glm::dvec3 x, y, w;
@@ -338,10 +342,26 @@ void testTexels(const Camera& camera,
   const double texLon = (s.east - s.west) / static_cast<double>(params.tileWidthPx);
   const double texLat = (s.north - s.south) / static_cast<double>(params.tileHeightPx);
   const double t2 = params.threshold * params.threshold;
+  const double a = node.equatorialRadiusM(), b = node.polarRadiusM();
+  auto at = [&](double lat, double lon) { return lift(surfaceFrame(a, b, lat, lon)); };
+  // A polar cap (a whole top or bottom row) may be drawn from bands of its row each only as wide
+  // as its parallels need (proxy/src/tiles/CapBands.hpp): its texels are as long east-west on
+  // every parallel as on its rim. Its step east is that length everywhere; at the pole, where
+  // east is every horizontal direction, the longer of two.
+  const bool cap = s.east - s.west >= 360.0;
+  const double rimLat = s.north == 90.0 ? s.south : s.north;
+  const double capEastM = cap ? glm::length(at(rimLat, 0.0).perDegLon) * texLon : 0.0;
+  auto eastStep2 = [&](const SurfaceFrame& f) {
+    if (!cap) return probe.length2(f.perDegLon * texLon);
+    const double len = glm::length(f.perDegLon);
+    if (len > 0.0) return probe.length2(f.perDegLon * (capEastM / len));
+    return std::max(probe.length2(glm::dvec3(capEastM, 0.0, 0.0)),
+                    probe.length2(glm::dvec3(0.0, capEastM, 0.0)));
+  };
   double worst = 0.0;
   auto sample = [&](const SurfaceFrame& f, Point kind, std::size_t corner = 0) {
     if (!probe.admit(f, kind, corner)) return;
-    const double e = probe.length2(f.perDegLon * texLon);
+    const double e = eastStep2(f);
     const double n = probe.length2(f.perDegLat * texLat);
     if (!(e <= t2)) r.eastWestOver = true; // NaN (not projectable) too: refine
     if (!(n <= t2)) r.northSouthOver = true;
@@ -351,8 +371,6 @@ void testTexels(const Camera& camera,
     else if (m > worst)
       worst = m;
   };
-  const double a = node.equatorialRadiusM(), b = node.polarRadiusM();
-  auto at = [&](double lat, double lon) { return lift(surfaceFrame(a, b, lat, lon)); };
   for (std::size_t i = 0; i < 4; ++i)
     sample(lift(node.cornerFrames()[i]), Point::Corner, i);
   if constexpr (Probe::kMidpoints) {
@@ -372,8 +390,11 @@ void testTexels(const Camera& camera,
   if (interior) sample(at(nearLat, nearLon), Point::Nearest); // else it is a corner, sampled above
   // A polar cap (a whole top or bottom row) has its largest east-west texels along its rim, which
   // has no corner but one: its point at the camera's longitude, the nearest, counts as well.
-  if (s.east - s.west >= 360.0)
-    sample(at(s.north == 90.0 ? s.south : s.north, nearLon), Point::Rim);
+  if (cap) {
+    sample(at(rimLat, nearLon), Point::Rim);
+    for (int i = 0; i < kCapRimSamples; ++i)
+      sample(at(rimLat, nearLon + 360.0 * (i + 1) / (kCapRimSamples + 1)), Point::Rim);
+  }
   // Where an edge crosses the viewport's border (onScreenOnly): the visible part's corners.
   const std::array<std::array<double, 2>, 4> cornerLatLon{
       {{s.south, s.west}, {s.south, s.east}, {s.north, s.east}, {s.north, s.west}}};
