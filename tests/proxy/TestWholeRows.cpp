@@ -1,7 +1,9 @@
-// Polar rows fetched whole (issue 29, docs/design/poles.md): `<layer>@caps` is ONE GetMap of the
-// row's box at 8 x 1 tiles, `<layer>@span<k>` ONE GetMap of k tiles' box at one tile's size, each
-// cached as a tile of its own dataset; against a real loopback server.
+// Polar rows fetched whole (issue 29, docs/design/poles.md): `<layer>@caps` is the row's box at
+// 8 x 1 tiles, asked for in kCapBands bands (CapBands.hpp), `<layer>@span<k>` ONE GetMap of k
+// tiles' box at one tile's size, each cached as a tile of its own dataset; against a real
+// loopback server.
 
+#include "../../proxy/src/tiles/CapBands.hpp"
 #include "../support/CacheFixtures.hpp"
 #include "../support/SyntheticWms.hpp"
 #include "../support/TempDir.hpp"
@@ -18,12 +20,15 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
+#include <charconv>
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
+#include <set>
 #include <span>
 #include <tuple>
 
@@ -116,6 +121,12 @@ std::int64_t lastRow(int level) {
   return (std::int64_t{5} << level) - 1;
 }
 
+/** A number as a URL writes it: the shortest form that reads back the same. */
+std::string shortest(double v) {
+  char buf[32];
+  return {buf, std::to_chars(buf, buf + sizeof buf, v).ptr};
+}
+
 /** PSNR of two decoded images of the same size. */
 double rowPsnr(const DecodedImage& a, const DecodedImage& b) {
   double sum = 0.0;
@@ -128,9 +139,11 @@ double rowPsnr(const DecodedImage& a, const DecodedImage& b) {
 
 } // namespace
 
-// Both poles at level 0 and at the deepest level: one GetMap of the row's whole box at 2048 x 256
-// (8 tiles of 256 px), kept under the "sat@caps" dataset, served from the cache the second time.
-TEST(WholeRows, ACapIsOneGetMapOfItsRowCachedUnderItsOwnKey) {
+// Both poles at level 0 and at the deepest level: the row's whole box at 2048 x 256 (8 tiles of
+// 256 px) asked for in its bands (capBands: boxes and sizes as that function makes them), the
+// cap's picture the source's (PSNR >= 35 dB against one GetMap of the row), kept under the
+// "sat@caps" dataset, served from the cache the second time.
+TEST(WholeRows, ACapIsItsRowInBandsCachedUnderItsOwnKey) {
   test::FakeUpstream up([](const test::FakeRequest& r) { return test::syntheticReply(r); });
   RowService s(up.url("/wms"), UpstreamSpec::Type::Wms);
   EXPECT_TRUE(s.tiles->wholePolarRows("sat"));
@@ -138,27 +151,35 @@ TEST(WholeRows, ACapIsOneGetMapOfItsRowCachedUnderItsOwnKey) {
     for (const bool north : {true, false}) {
       SCOPED_TRACE(std::to_string(level) + (north ? " north" : " south"));
       const TileKey key{level, north ? lastRow(level) : 0, 0};
+      const double d = std::ldexp(36.0, -level);
+      const Sector row{-180.0, north ? 90.0 - d : -90.0, 180.0, north ? 90.0 : -90.0 + d};
+      const auto bands = capBands(row, 2048, 256);
+      ASSERT_EQ(bands.size(), static_cast<std::size_t>(kCapBands));
       const std::size_t before = up.requests();
       const TileResult first = s.get("sat@caps", key);
       ASSERT_EQ(first.status, TileStatus::Ok) << first.message;
-      ASSERT_EQ(up.requests(), before + 1);
-      const auto p = test::queryParams(up.received().back().target);
-      const double d = std::ldexp(36.0, -level);
-      char expected[96];
-      std::snprintf(expected,
-                    sizeof expected,
-                    "%g,-180,%g,180",
-                    north ? 90.0 - d : -90.0,
-                    north ? 90.0 : -90.0 + d);
-      EXPECT_EQ(p.at("BBOX"), expected);
-      EXPECT_EQ(p.at("WIDTH"), "2048");
-      EXPECT_EQ(p.at("HEIGHT"), "256");
+      ASSERT_EQ(up.requests(), before + bands.size());
+      std::multiset<std::string> asked, expected;
+      for (std::size_t i = before; i < up.requests(); ++i) {
+        const auto p = test::queryParams(up.received()[i].target);
+        asked.insert(p.at("BBOX") + " " + p.at("WIDTH") + "x" + p.at("HEIGHT"));
+      }
+      for (const CapBand& b : bands)
+        expected.insert(shortest(b.box.south) + ",-180," + shortest(b.box.north) + ",180 " +
+                        std::to_string(b.width) + "x" + std::to_string(b.height));
+      EXPECT_EQ(asked, expected);
       const auto img = decodeImagery(first.bytes, "image/jpeg", 2048, 256);
       ASSERT_TRUE(img) << img.error();
+      const std::string ref =
+          test::syntheticJpeg(row.west, row.south, row.east, row.north, 2048, 256);
+      const auto want =
+          decodeImagery(std::as_bytes(std::span(ref.data(), ref.size())), "image/jpeg", 2048, 256);
+      ASSERT_TRUE(want);
+      EXPECT_GE(rowPsnr(*img, *want), 35.0);
       EXPECT_TRUE(std::filesystem::exists(s.capFile(key))) << s.capFile(key);
       const TileResult again = s.get("sat@caps", key);
       ASSERT_EQ(again.status, TileStatus::Ok);
-      EXPECT_EQ(up.requests(), before + 1); // from the cache
+      EXPECT_EQ(up.requests(), before + bands.size()); // from the cache
       EXPECT_EQ(again.bytes, first.bytes);
     }
   // Its own dataset: verify finds the index and the tree in step, rebuild finds its tiles again,
@@ -209,11 +230,17 @@ TEST(WholeRows, ATileOnlyUpstreamHasNone) {
 }
 
 // A failing or hostile answer for a whole row is never kept: 500, an error page, a JPEG of the
-// wrong size, bytes that are no image.
+// wrong size, bytes that are no image, or one band of eight failing (the band at the pole) while
+// the others answer; the next request, all bands answering, stores the cap.
 TEST(WholeRows, ABadAnswerIsRefusedAndNothingIsCached) {
   std::atomic<int> mode = 0;
-  test::FakeUpstream up([&](const test::FakeRequest&) {
+  test::FakeUpstream up([&](const test::FakeRequest& r) {
+    const bool pole = test::queryParams(r.target).at("BBOX").ends_with(",90,180");
     switch (mode) {
+    case 4:
+      return pole ? test::FakeReply::withStatus(500, "down") : test::syntheticReply(r);
+    case 5:
+      return test::syntheticReply(r);
     case 0:
       return test::FakeReply::withStatus(500, "down");
     case 1:
@@ -224,30 +251,39 @@ TEST(WholeRows, ABadAnswerIsRefusedAndNothingIsCached) {
       return test::FakeReply::ok("not a jpeg at all", "image/jpeg");
     }
   });
-  RowService s(up.url("/wms"), UpstreamSpec::Type::Wms);
-  for (int m = 0; m < 4; ++m) {
+  for (int m = 0; m < 5; ++m) {
     mode = m;
     SCOPED_TRACE(m);
+    // A service each: eight failed bands open the upstream's breaker (five failures in a row).
+    RowService s(up.url("/wms"), UpstreamSpec::Type::Wms);
     const TileResult r = s.get("sat@caps", {0, 4, 0});
     EXPECT_EQ(r.status, TileStatus::Failed);
+    EXPECT_NE(r.message.find(m == 0 || m == 4 ? "HTTP 500" : "did not send a tile"),
+              std::string::npos)
+        << r.message;
     EXPECT_FALSE(std::filesystem::exists(s.capFile({0, 4, 0})));
+    const auto stats = CacheMaintenance(*s.cache).stats();
+    ASSERT_TRUE(stats);
+    for (const auto& d : *stats)
+      EXPECT_EQ(d.tiles, 0) << d.dataset.spec.name;
+    if (m != 4) continue;
+    mode = 5;
+    const TileResult ok = s.get("sat@caps", {0, 4, 0});
+    EXPECT_EQ(ok.status, TileStatus::Ok) << ok.message;
+    EXPECT_TRUE(std::filesystem::exists(s.capFile({0, 4, 0})));
   }
-  const auto stats = CacheMaintenance(*s.cache).stats();
-  ASSERT_TRUE(stats);
-  for (const auto& d : *stats)
-    EXPECT_EQ(d.tiles, 0) << d.dataset.spec.name;
 }
 
 // Through `tellus serve`: a renderer's tile service whose WMS upstream is another tellus's /wms
-// asks it for the whole row with the same one GetMap; that server composes it from its own tiles
-// (a 2048 x 256 map of the row), and the picture is the synthetic source's (PSNR >= 35 dB).
-TEST(WholeRows, ThroughTellusServeTheSameOneGetMapIsComposedThere) {
+// asks it for the whole row's bands; that server composes each from its own tiles, and the
+// picture is the synthetic source's (PSNR >= 35 dB).
+TEST(WholeRows, ThroughTellusServeTheSameBandsAreComposedThere) {
   test::FakeUpstream up([](const test::FakeRequest& r) { return test::syntheticReply(r); });
   ServedRows server(up.url("/wms"), UpstreamSpec::Type::Wms);
   RowService renderer(server.base() + "/wms", UpstreamSpec::Type::Wms);
   const TileResult r = renderer.get("sat@caps", {0, 4, 0});
   ASSERT_EQ(r.status, TileStatus::Ok) << r.message;
-  EXPECT_EQ(renderer.tiles->upstreamFetches(), 1u);
+  EXPECT_EQ(renderer.tiles->upstreamFetches(), static_cast<std::size_t>(kCapBands));
   EXPECT_GE(up.requests(), 10u); // the server's own tiles of the row, from the synthetic WMS
   const auto got = decodeImagery(r.bytes, "image/jpeg", 2048, 256);
   ASSERT_TRUE(got) << got.error();
@@ -323,8 +359,9 @@ TEST(WholeRows, AMergedNodeIsOneGetMapOfItsBoxAtOneTilesSize) {
 
 // A renderer's `--server` source over `tellus serve`: /layers.json says which layers give whole
 // rows and spans, and `/tiles/<layer>@caps/...` and `/tiles/<layer>@span<k>/...` fetch them
-// through the server's tile service (one GetMap upstream each, the second time from its cache),
-// the same bytes an in-process service makes. A server over a World Wind upstream offers none.
+// through the server's tile service (a cap's bands, a span's one GetMap, the second time from its
+// cache), the same bytes an in-process service makes. A server over a World Wind upstream offers
+// none.
 TEST(WholeRows, ARemoteSourceGetsThemFromTellusServe) {
   test::FakeUpstream up([](const test::FakeRequest& r) { return test::syntheticReply(r); });
   for (const auto type : {UpstreamSpec::Type::Wms, UpstreamSpec::Type::WorldWind}) {
@@ -341,20 +378,27 @@ TEST(WholeRows, ARemoteSourceGetsThemFromTellusServe) {
       continue;
     }
     RowService local(up.url("/wms"), UpstreamSpec::Type::Wms); // in-process, for the bytes
-    for (const auto& [layer, key, width] :
-         {std::tuple{std::string("sat@caps"), TileKey{0, 4, 0}, 2048},
-          std::tuple{std::string("sat@caps"), TileKey{kLevels - 1, 0, 0}, 2048},
-          std::tuple{
-              wholeSpanLayer("sat", 4), TileKey{kLevels - 1, lastRow(kLevels - 1), 8}, 256}}) {
+    const auto caps = static_cast<std::size_t>(kCapBands);
+    for (const auto& [layer, key, width, fetches] :
+         {std::tuple{std::string("sat@caps"), TileKey{0, 4, 0}, 2048, caps},
+          std::tuple{std::string("sat@caps"), TileKey{kLevels - 1, 0, 0}, 2048, caps},
+          std::tuple{wholeSpanLayer("sat", 4),
+                     TileKey{kLevels - 1, lastRow(kLevels - 1), 8},
+                     256,
+                     std::size_t{1}}}) {
       SCOPED_TRACE(layer);
       const std::size_t before = up.requests();
       const TileResult r = awaitTile(**src, layer, key);
       ASSERT_EQ(r.status, TileStatus::Ok) << r.message;
-      EXPECT_EQ(up.requests(), before + 1);
-      EXPECT_EQ(test::queryParams(up.received().back().target).at("WIDTH"), std::to_string(width));
+      ASSERT_EQ(up.requests(), before + fetches);
+      int widest = 0; // a cap's rim band is the cap's whole width
+      for (std::size_t i = before; i < up.requests(); ++i)
+        widest =
+            std::max(widest, std::stoi(test::queryParams(up.received()[i].target).at("WIDTH")));
+      EXPECT_EQ(widest, width);
       EXPECT_TRUE(decodeImagery(r.bytes, "image/jpeg", width, 256));
       EXPECT_EQ(awaitTile(**src, layer, key).bytes, r.bytes); // from the server's cache
-      EXPECT_EQ(up.requests(), before + 1);
+      EXPECT_EQ(up.requests(), before + fetches);
       EXPECT_EQ(local.get(layer, key).bytes, r.bytes);
     }
     const std::size_t asked = up.requests();

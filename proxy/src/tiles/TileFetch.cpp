@@ -41,6 +41,13 @@ void TileService::Impl::fetchRemote(const FlightKey& fk,
     composeRemote(fk, l, u, g, folder, time, std::move(stale));
     return;
   }
+  if (isWholeRow(l) && u.type == UpstreamSpec::Type::Wms) {
+    auto bands = capBands(requestSector(l, g, fk.key), g.spec().tileWidth, g.spec().tileHeight);
+    if (bands.size() > 1) {
+      fetchCapBands(fk, l, u, g, folder, time, std::move(stale), std::move(bands));
+      return;
+    }
+  }
   FetchRequest req;
   req.upstream = u.name;
   req.url = upstreamUrl(u, l, requestSector(l, g, fk.key), fk.key, time);

@@ -5,6 +5,7 @@
 // revalidating one tile), TileWmtsCompose.cpp (WMTS tiles composed of several upstream tiles),
 // TileMetaFetch.cpp (metatiles: getTiles) and UpstreamUrls.cpp (the upstream request URLs).
 
+#include "tiles/CapBands.hpp"
 #include "tiles/MetaTile.hpp"
 #include "tiles/UnstoredTiles.hpp"
 #include "tiles/WorkerPool.hpp"
@@ -336,6 +337,34 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                      const std::string& folder,
                      const std::string& time,
                      std::optional<CacheLookup> stale);
+
+  /** The answers gathered for a polar cap fetched in bands (CapBands.hpp). */
+  struct CapGather {
+    std::mutex mutex;
+    std::vector<CapBand> bands;
+    std::vector<std::optional<FetchResult>> answers;
+    std::size_t left = 0;
+    std::optional<CacheLookup> stale;
+  };
+
+  /** A whole polar row of a WMS upstream: its bands fetched at once, then checked, stretched
+   * and stacked on a worker (onCapBandsFetched) and stored as the cap; the first band that is
+   * not an image of its size answers for the cap (onFetched: a stale cap, an absence or an
+   * error), and nothing is stored. */
+  void fetchCapBands(const FlightKey& fk,
+                     const LayerSpec& l,
+                     const UpstreamSpec& u,
+                     const TileGrid& g,
+                     const std::string& folder,
+                     const std::string& time,
+                     std::optional<CacheLookup> stale,
+                     std::vector<CapBand> bands);
+
+  void onCapBandsFetched(const FlightKey& fk,
+                         const LayerSpec& l,
+                         const TileGrid& g,
+                         const std::string& folder,
+                         CapGather& gather);
 
   void onComposedFetched(const FlightKey& fk,
                          const LayerSpec& l,

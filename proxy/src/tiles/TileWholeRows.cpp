@@ -3,9 +3,12 @@
 // a local raster) the row is ONE request of its box at that size, kept as the tile (level, row, 0)
 // of the dataset `<layer>@caps`, instead of up to 80 of the row's tiles. Likewise a merged row's
 // node of k tiles is ONE request of its box at one tile's size, kept as the tile (level, row, col)
-// of `<layer>@span<k>`, instead of up to 16 tiles shrunk into one.
+// of `<layer>@span<k>`, instead of up to 16 tiles shrunk into one. A WMS's cap is asked for in
+// bands, each only as wide as its parallels need (CapBands.hpp).
 
 #include "tiles/TileServiceImpl.hpp"
+
+#include <tellus/proxy/TileValidation.hpp>
 
 namespace tellus {
 
@@ -23,6 +26,69 @@ std::optional<LayerSpec> TileService::Impl::wholeRowLayer(const LayerSpec& l,
   c.dataset.grid.tileWidth *= kWholeRowWidthFactor;
   if (!TileGrid::create(c.dataset.grid)) return std::nullopt; // wider than any grid may be
   return c;
+}
+
+void TileService::Impl::fetchCapBands(const FlightKey& fk,
+                                      const LayerSpec& l,
+                                      const UpstreamSpec& u,
+                                      const TileGrid& g,
+                                      const std::string& folder,
+                                      const std::string& time,
+                                      std::optional<CacheLookup> stale,
+                                      std::vector<CapBand> bands) {
+  auto gather = std::make_shared<CapGather>();
+  gather->bands = std::move(bands);
+  gather->answers.resize(gather->bands.size());
+  gather->left = gather->bands.size();
+  gather->stale = std::move(stale);
+  fetches.fetch_add(gather->bands.size());
+  for (std::size_t i = 0; i < gather->bands.size(); ++i) {
+    const CapBand& b = gather->bands[i];
+    FetchRequest req;
+    req.upstream = u.name;
+    req.url = wmsUrl(u, l, b.box, b.width, b.height, time);
+    fetcher.fetch(std::move(req),
+                  [weak = weak_from_this(), gather, i, fk, &l, &g, folder](FetchResult&& r) {
+                    {
+                      std::lock_guard lock(gather->mutex);
+                      gather->answers[i] = std::move(r);
+                      if (--gather->left > 0) return;
+                    }
+                    const auto self = weak.lock();
+                    if (!self) return;
+                    self->workers->post([im = self.get(), gather, fk, &l, &g, folder] {
+                      im->onCapBandsFetched(fk, l, g, folder, *gather);
+                    });
+                  });
+  }
+}
+
+void TileService::Impl::onCapBandsFetched(const FlightKey& fk,
+                                          const LayerSpec& l,
+                                          const TileGrid& g,
+                                          const std::string& folder,
+                                          CapGather& gather) {
+  std::vector<std::vector<std::byte>> images;
+  images.reserve(gather.bands.size());
+  for (std::size_t i = 0; i < gather.bands.size(); ++i) {
+    FetchResult& r = *gather.answers[i];
+    // A failure, an absence or an answer that is no image of the band's size: the cap's answer.
+    if (!r || r->status != 200)
+      return onFetched(fk, l, g, folder, std::move(gather.stale), std::move(r));
+    const CapBand& b = gather.bands[i];
+    if (auto ok = validateTile(*r, l.dataset.mimeType, b.width, b.height); !ok) {
+      if (gather.stale) return land(fk, staleTile(std::move(*gather.stale), folder, fk.key));
+      return land(fk, error("the upstream did not send a tile: " + ok.error()));
+    }
+    images.push_back(std::move(r->body));
+  }
+  auto cap = composeCapBands(
+      gather.bands, images, g.spec().tileWidth, g.spec().tileHeight, l.dataset.mimeType);
+  if (!cap) {
+    if (gather.stale) return land(fk, staleTile(std::move(*gather.stale), folder, fk.key));
+    return land(fk, error("the cap's bands could not be composed: " + cap.error()));
+  }
+  store(fk, folder, std::move(*cap), freshMeta(l));
 }
 
 bool TileService::Impl::isPolarRowKey(const TileGrid& g, const TileKey& k) noexcept {
