@@ -232,8 +232,10 @@ void Quadtree::visit(Node& node, bool insideFrustum, const Camera& camera) {
   if (!passesCulling(node, insideFrustum, camera)) return;
   ++stats_.visible;
   node.lastVisible_ = frame_;
-  const LodResult lod = evaluateLod(
-      camera, node.geometry_, node.cap_ ? lodFor(node.key_) : params_.lod, node.key_.span > 1);
+  const LodResult lod = evaluateLod(camera,
+                                    node.geometry_,
+                                    node.key_.span > 1 ? lodFor(node.key_) : params_.lod,
+                                    node.key_.span > 1);
   if (descends(node, lod, refines(node, lod, camera))) {
     for (auto& ch : node.children_)
       if (ch) visit(*ch, insideFrustum, camera);

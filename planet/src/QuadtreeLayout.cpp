@@ -1,3 +1,4 @@
+#include <tellus/cache/TileSource.hpp>
 #include <tellus/planet/Quadtree.hpp>
 
 #include <algorithm>
@@ -23,7 +24,13 @@ bool Quadtree::isCapKey(const NodeKey& key) const noexcept {
 
 LodParams Quadtree::lodFor(const NodeKey& key) const noexcept {
   LodParams p = params_.lod;
-  if (isCapKey(key)) p.tileWidthPx *= kCapTextureWidthFactor;
+  if (isCapKey(key)) {
+    p.tileWidthPx *= kCapTextureWidthFactor;
+  } else if (key.span > 1) {
+    // A merged node's image may hold only the texels east-west its parallels need (a WMS gives
+    // them so, TileSource.hpp): its texels are measured at that width, whatever its source.
+    p.tileWidthPx = wholeSpanTexelWidth(sectorOf(key), p.tileWidthPx, p.tileHeightPx);
+  }
   return p;
 }
 

@@ -111,7 +111,7 @@ TEST(CapBands, TheCapOfItsBandsIsTheWholeRowsPicture) {
       for (const CapBand& b : bands)
         images.push_back(bytesOf(test::syntheticJpeg(
             b.box.west, b.box.south, b.box.east, b.box.north, b.width, b.height)));
-      const auto cap = composeCapBands(bands, images, 2048, 256, "image/jpeg");
+      const auto cap = composeBands(bands, images, 2048, 256, "image/jpeg");
       ASSERT_TRUE(cap) << cap.error();
       const auto got = decodeImagery(*cap, "image/jpeg", 2048, 256);
       ASSERT_TRUE(got) << got.error();
@@ -136,7 +136,7 @@ TEST(CapBands, TheStretchWrapsAndKeepsAlpha) {
   const std::uint8_t b1[] = {255, 0, 0, 255, 0, 0, 0, 0};
   const std::vector<std::vector<std::byte>> images = {*encodeImage("image/png", 2, 1, 3, b0),
                                                       *encodeImage("image/png", 2, 1, 4, b1)};
-  const auto cap = composeCapBands(bands, images, 4, 2, "image/png");
+  const auto cap = composeBands(bands, images, 4, 2, "image/png");
   ASSERT_TRUE(cap) << cap.error();
   const auto img = decodeImagery(*cap, "image/png", 4, 2);
   ASSERT_TRUE(img) << img.error();
@@ -163,8 +163,8 @@ TEST(CapBands, TheStretchWrapsAndKeepsAlpha) {
   const std::uint8_t three[9] = {};
   const std::vector<std::vector<std::byte>> wrong = {images[0],
                                                      *encodeImage("image/png", 3, 1, 3, three)};
-  EXPECT_FALSE(composeCapBands(bands, wrong, 4, 2, "image/png"));
+  EXPECT_FALSE(composeBands(bands, wrong, 4, 2, "image/png"));
   const std::vector<std::vector<std::byte>> junk = {images[0], bytesOf("no image")};
-  EXPECT_FALSE(composeCapBands(bands, junk, 4, 2, "image/png"));
-  EXPECT_FALSE(composeCapBands(bands, std::span(images).first(1), 4, 2, "image/png"));
+  EXPECT_FALSE(composeBands(bands, junk, 4, 2, "image/png"));
+  EXPECT_FALSE(composeBands(bands, std::span(images).first(1), 4, 2, "image/png"));
 }

@@ -297,16 +297,19 @@ TEST(WholeRows, ThroughTellusServeTheSameBandsAreComposedThere) {
 }
 
 // A merged row's node of k tiles (k = 2, 4, 8 at the deepest level, by both poles and at the
-// row's east end): one GetMap of the k tiles' box at one tile's size (256 x 256), whose picture is
-// the source's there; kept under "sat@span<k>" and served from the cache the second time. Keys
-// that start no aligned run inside the row, spans wider than a level-zero column's widest row
-// and layers without whole rows are refused without asking upstream.
-TEST(WholeRows, AMergedNodeIsOneGetMapOfItsBoxAtOneTilesSize) {
+// row's east end): one GetMap of the k tiles' box, one tile tall and as wide as its equatorward
+// parallel needs (wholeSpanTexelWidth: a tile's 256 where k is too wide for the row, 41 for two
+// tiles by the pole), stretched to one tile's size (256 x 256), whose picture is the source's
+// there; kept under "sat@span<k>" and served from the cache the second time. Keys that start no
+// aligned run inside the row, spans wider than a level-zero column's widest row and layers
+// without whole rows are refused without asking upstream.
+TEST(WholeRows, AMergedNodeIsOneGetMapOfItsBoxAtItsOwnWidth) {
   test::FakeUpstream up([](const test::FakeRequest& r) { return test::syntheticReply(r); });
   RowService s(up.url("/wms"), UpstreamSpec::Type::Wms);
   const int level = kLevels - 1;
   const double d = std::ldexp(36.0, -level);
   const std::int64_t cols = std::int64_t{10} << level;
+  std::set<int> widths;
   for (const std::int64_t k : {2, 4, 8})
     for (const std::int64_t row : {lastRow(level), std::int64_t{0}, lastRow(level) - 3})
       for (const std::int64_t col : {std::int64_t{0}, 2 * k, cols - k}) {
@@ -324,7 +327,9 @@ TEST(WholeRows, AMergedNodeIsOneGetMapOfItsBoxAtOneTilesSize) {
         std::snprintf(expected, sizeof expected, "%g,%g,%g,%g", south, west, south + d, east);
         const auto p = test::queryParams(up.received().back().target);
         EXPECT_EQ(p.at("BBOX"), expected);
-        EXPECT_EQ(p.at("WIDTH"), "256");
+        const int width = wholeSpanTexelWidth(Sector{west, south, east, south + d}, 256, 256);
+        widths.insert(width);
+        EXPECT_EQ(p.at("WIDTH"), std::to_string(width));
         EXPECT_EQ(p.at("HEIGHT"), "256");
         const auto got = decodeImagery(first.bytes, "image/jpeg", 256, 256);
         ASSERT_TRUE(got) << got.error();
@@ -342,6 +347,7 @@ TEST(WholeRows, AMergedNodeIsOneGetMapOfItsBoxAtOneTilesSize) {
         EXPECT_EQ(up.requests(), before + 1); // from the cache
         EXPECT_EQ(again.bytes, first.bytes);
       }
+  EXPECT_EQ(widths, (std::set<int>{41, 81, 159, 161, 256})); // by the pole, 2 tiles: 256 x 0.156
   const std::size_t asked = up.requests();
   EXPECT_EQ(s.get("sat@span4", {level, 0, 2}).status, TileStatus::Absent);    // unaligned
   EXPECT_EQ(s.get("sat@span4", {level, 0, cols}).status, TileStatus::Absent); // past the row
@@ -379,23 +385,26 @@ TEST(WholeRows, ARemoteSourceGetsThemFromTellusServe) {
     }
     RowService local(up.url("/wms"), UpstreamSpec::Type::Wms); // in-process, for the bytes
     const auto caps = static_cast<std::size_t>(kCapBands);
-    for (const auto& [layer, key, width, fetches] :
-         {std::tuple{std::string("sat@caps"), TileKey{0, 4, 0}, 2048, caps},
-          std::tuple{std::string("sat@caps"), TileKey{kLevels - 1, 0, 0}, 2048, caps},
+    // What is asked for: a cap's bands, the rim's as wide as the cap; a merged node's box by the
+    // pole at its own width (81 texels for 4 tiles at 85.5 degrees), stretched to 256.
+    for (const auto& [layer, key, width, fetches, asked] :
+         {std::tuple{std::string("sat@caps"), TileKey{0, 4, 0}, 2048, caps, 2048},
+          std::tuple{std::string("sat@caps"), TileKey{kLevels - 1, 0, 0}, 2048, caps, 2048},
           std::tuple{wholeSpanLayer("sat", 4),
                      TileKey{kLevels - 1, lastRow(kLevels - 1), 8},
                      256,
-                     std::size_t{1}}}) {
+                     std::size_t{1},
+                     81}}) {
       SCOPED_TRACE(layer);
       const std::size_t before = up.requests();
       const TileResult r = awaitTile(**src, layer, key);
       ASSERT_EQ(r.status, TileStatus::Ok) << r.message;
       ASSERT_EQ(up.requests(), before + fetches);
-      int widest = 0; // a cap's rim band is the cap's whole width
+      int widest = 0;
       for (std::size_t i = before; i < up.requests(); ++i)
         widest =
             std::max(widest, std::stoi(test::queryParams(up.received()[i].target).at("WIDTH")));
-      EXPECT_EQ(widest, width);
+      EXPECT_EQ(widest, asked);
       EXPECT_TRUE(decodeImagery(r.bytes, "image/jpeg", width, 256));
       EXPECT_EQ(awaitTile(**src, layer, key).bytes, r.bytes); // from the server's cache
       EXPECT_EQ(up.requests(), before + fetches);

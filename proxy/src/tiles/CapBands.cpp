@@ -43,11 +43,12 @@ std::vector<CapBand> capBands(const Sector& row, int width, int height) {
 }
 
 std::expected<std::vector<std::byte>, std::string>
-composeCapBands(std::span<const CapBand> bands,
-                std::span<const std::vector<std::byte>> images,
-                int width,
-                int height,
-                std::string_view mimeType) {
+composeBands(std::span<const CapBand> bands,
+             std::span<const std::vector<std::byte>> images,
+             int width,
+             int height,
+             std::string_view mimeType,
+             bool wrap) {
   if (bands.size() != images.size()) return std::unexpected("a band is missing");
   std::vector<DecodedImage> decoded;
   decoded.reserve(bands.size());
@@ -72,13 +73,18 @@ composeCapBands(std::span<const CapBand> bands,
           img.pixels.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(w) * ch;
       std::uint8_t* dst = px.data() + static_cast<std::size_t>(b.row0 + y) * W * out;
       for (std::size_t x = 0; x < W; ++x) {
-        // The output column's centre in the band's columns; a whole parallel wraps around.
+        // The output column's centre in the band's columns; a whole parallel wraps around, a box's
+        // edge texels hold.
         const double u = (static_cast<double>(x) + 0.5) * static_cast<double>(w) / width - 0.5;
         const double uf = std::floor(u);
         const double f = u - uf;
         const auto i0 = static_cast<std::int64_t>(uf);
-        const auto a = static_cast<std::size_t>((i0 % w + w) % w) * ch;
-        const auto c = static_cast<std::size_t>(((i0 + 1) % w + w) % w) * ch;
+        const auto col = [&](std::int64_t at) {
+          return static_cast<std::size_t>(wrap ? (at % w + w) % w
+                                               : std::clamp<std::int64_t>(at, 0, w - 1)) *
+                 ch;
+        };
+        const std::size_t a = col(i0), c = col(i0 + 1);
         const double wa = ch == 4 ? (1.0 - f) * src[a + 3] / 255.0 : 1.0 - f;
         const double wc = ch == 4 ? f * src[c + 3] / 255.0 : f;
         const double sum = wa + wc;

@@ -45,16 +45,18 @@ struct CapBand {
 std::vector<CapBand> capBands(const Sector& row, int width, int height);
 
 /**
- * The cap's image from its bands' images (decoded JPEG or PNG of exactly each band's size, in
- * the order of capBands): each band stretched east-west to `width` (linear, wrapping at the
- * antimeridian: the row is a whole parallel; premultiplied by alpha), stacked, encoded as
- * `mimeType` ("image/jpeg": RGB; "image/png": RGBA if any band has alpha, else RGB) as a tile.
+ * An image from its bands' images (decoded JPEG or PNG of exactly each band's size, in the order
+ * of capBands; a merged node's one band, wholeSpanTexelWidth wide): each band stretched east-west
+ * to `width` (linear, premultiplied by alpha; `wrap`: around the antimeridian, the row being a
+ * whole parallel, else the edge texels held), stacked, encoded as `mimeType` ("image/jpeg": RGB;
+ * "image/png": RGBA if any band has alpha, else RGB) as a tile.
  */
 std::expected<std::vector<std::byte>, std::string>
-composeCapBands(std::span<const CapBand> bands,
-                std::span<const std::vector<std::byte>> images,
-                int width,
-                int height,
-                std::string_view mimeType);
+composeBands(std::span<const CapBand> bands,
+             std::span<const std::vector<std::byte>> images,
+             int width,
+             int height,
+             std::string_view mimeType,
+             bool wrap = true);
 
 } // namespace tellus

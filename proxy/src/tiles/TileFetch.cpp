@@ -41,10 +41,15 @@ void TileService::Impl::fetchRemote(const FlightKey& fk,
     composeRemote(fk, l, u, g, folder, time, std::move(stale));
     return;
   }
-  if (isWholeRow(l) && u.type == UpstreamSpec::Type::Wms) {
-    auto bands = capBands(requestSector(l, g, fk.key), g.spec().tileWidth, g.spec().tileHeight);
-    if (bands.size() > 1) {
-      fetchCapBands(fk, l, u, g, folder, time, std::move(stale), std::move(bands));
+  if (u.type == UpstreamSpec::Type::Wms && isWholeBox(l)) {
+    // A cap in bands, a merged node at the texels east-west it needs (CapBands.hpp): each
+    // stretched back to the image's width.
+    const Sector box = requestSector(l, g, fk.key);
+    const int tw = g.spec().tileWidth, th = g.spec().tileHeight;
+    auto bands = isWholeRow(l) ? capBands(box, tw, th)
+                               : std::vector{CapBand{box, wholeSpanTexelWidth(box, tw, th), th, 0}};
+    if (bands.size() > 1 || bands.front().width < tw) {
+      fetchBands(fk, l, u, g, folder, time, std::move(stale), std::move(bands));
       return;
     }
   }

@@ -338,8 +338,8 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
                      const std::string& time,
                      std::optional<CacheLookup> stale);
 
-  /** The answers gathered for a polar cap fetched in bands (CapBands.hpp). */
-  struct CapGather {
+  /** The answers gathered for a cap fetched in bands, or a merged node at its own width. */
+  struct BandGather {
     std::mutex mutex;
     std::vector<CapBand> bands;
     std::vector<std::optional<FetchResult>> answers;
@@ -347,24 +347,25 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
     std::optional<CacheLookup> stale;
   };
 
-  /** A whole polar row of a WMS upstream: its bands fetched at once, then checked, stretched
-   * and stacked on a worker (onCapBandsFetched) and stored as the cap; the first band that is
-   * not an image of its size answers for the cap (onFetched: a stale cap, an absence or an
-   * error), and nothing is stored. */
-  void fetchCapBands(const FlightKey& fk,
-                     const LayerSpec& l,
-                     const UpstreamSpec& u,
-                     const TileGrid& g,
-                     const std::string& folder,
-                     const std::string& time,
-                     std::optional<CacheLookup> stale,
-                     std::vector<CapBand> bands);
+  /** A WMS's whole polar row in bands, or a merged node's box at the texels east-west it needs
+   * (CapBands.hpp): the bands fetched at once, then checked, stretched to the image's width
+   * (wrapping around a cap's parallels) and stacked on a worker (onBandsFetched), and stored as
+   * the tile; the first band that is not an image of its size answers for the tile
+   * (onFetched: a stale tile, an absence or an error), and nothing is stored. */
+  void fetchBands(const FlightKey& fk,
+                  const LayerSpec& l,
+                  const UpstreamSpec& u,
+                  const TileGrid& g,
+                  const std::string& folder,
+                  const std::string& time,
+                  std::optional<CacheLookup> stale,
+                  std::vector<CapBand> bands);
 
-  void onCapBandsFetched(const FlightKey& fk,
-                         const LayerSpec& l,
-                         const TileGrid& g,
-                         const std::string& folder,
-                         CapGather& gather);
+  void onBandsFetched(const FlightKey& fk,
+                      const LayerSpec& l,
+                      const TileGrid& g,
+                      const std::string& folder,
+                      BandGather& gather);
 
   void onComposedFetched(const FlightKey& fk,
                          const LayerSpec& l,

@@ -3,8 +3,9 @@
 // a local raster) the row is ONE request of its box at that size, kept as the tile (level, row, 0)
 // of the dataset `<layer>@caps`, instead of up to 80 of the row's tiles. Likewise a merged row's
 // node of k tiles is ONE request of its box at one tile's size, kept as the tile (level, row, col)
-// of `<layer>@span<k>`, instead of up to 16 tiles shrunk into one. A WMS's cap is asked for in
-// bands, each only as wide as its parallels need (CapBands.hpp).
+// of `<layer>@span<k>`, instead of up to 16 tiles shrunk into one. From a WMS, a cap is asked for
+// in bands and a merged node at its own width, each only as wide as its parallels need
+// (CapBands.hpp), and stretched back.
 
 #include "tiles/TileServiceImpl.hpp"
 
@@ -28,15 +29,15 @@ std::optional<LayerSpec> TileService::Impl::wholeRowLayer(const LayerSpec& l,
   return c;
 }
 
-void TileService::Impl::fetchCapBands(const FlightKey& fk,
-                                      const LayerSpec& l,
-                                      const UpstreamSpec& u,
-                                      const TileGrid& g,
-                                      const std::string& folder,
-                                      const std::string& time,
-                                      std::optional<CacheLookup> stale,
-                                      std::vector<CapBand> bands) {
-  auto gather = std::make_shared<CapGather>();
+void TileService::Impl::fetchBands(const FlightKey& fk,
+                                   const LayerSpec& l,
+                                   const UpstreamSpec& u,
+                                   const TileGrid& g,
+                                   const std::string& folder,
+                                   const std::string& time,
+                                   std::optional<CacheLookup> stale,
+                                   std::vector<CapBand> bands) {
+  auto gather = std::make_shared<BandGather>();
   gather->bands = std::move(bands);
   gather->answers.resize(gather->bands.size());
   gather->left = gather->bands.size();
@@ -57,17 +58,17 @@ void TileService::Impl::fetchCapBands(const FlightKey& fk,
                     const auto self = weak.lock();
                     if (!self) return;
                     self->workers->post([im = self.get(), gather, fk, &l, &g, folder] {
-                      im->onCapBandsFetched(fk, l, g, folder, *gather);
+                      im->onBandsFetched(fk, l, g, folder, *gather);
                     });
                   });
   }
 }
 
-void TileService::Impl::onCapBandsFetched(const FlightKey& fk,
-                                          const LayerSpec& l,
-                                          const TileGrid& g,
-                                          const std::string& folder,
-                                          CapGather& gather) {
+void TileService::Impl::onBandsFetched(const FlightKey& fk,
+                                       const LayerSpec& l,
+                                       const TileGrid& g,
+                                       const std::string& folder,
+                                       BandGather& gather) {
   std::vector<std::vector<std::byte>> images;
   images.reserve(gather.bands.size());
   for (std::size_t i = 0; i < gather.bands.size(); ++i) {
@@ -82,11 +83,15 @@ void TileService::Impl::onCapBandsFetched(const FlightKey& fk,
     }
     images.push_back(std::move(r->body));
   }
-  auto cap = composeCapBands(
-      gather.bands, images, g.spec().tileWidth, g.spec().tileHeight, l.dataset.mimeType);
+  auto cap = composeBands(gather.bands,
+                          images,
+                          g.spec().tileWidth,
+                          g.spec().tileHeight,
+                          l.dataset.mimeType,
+                          /*wrap=*/isWholeRow(l));
   if (!cap) {
     if (gather.stale) return land(fk, staleTile(std::move(*gather.stale), folder, fk.key));
-    return land(fk, error("the cap's bands could not be composed: " + cap.error()));
+    return land(fk, error("the bands could not be composed: " + cap.error()));
   }
   store(fk, folder, std::move(*cap), freshMeta(l));
 }

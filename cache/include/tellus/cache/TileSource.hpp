@@ -12,9 +12,12 @@
 #include <tellus/cache/Dataset.hpp>
 #include <tellus/cache/TileKey.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -89,6 +92,22 @@ inline std::optional<WholeSpanName> parseWholeSpanLayer(std::string_view name) {
   }
   if (span < 2 || span > kMaxWholeSpan || (span & (span - 1)) != 0) return std::nullopt;
   return WholeSpanName{name.substr(0, at), span};
+}
+
+/**
+ * The texels east-west a merged node's image needs (issue 29, docs/design/poles.md): enough that
+ * along its equatorward parallel, its widest, a texel is no longer east-west in metres than its
+ * rows are tall; at most the tile width (a node widened past that keeps the tile's texels, as the
+ * LOD expects). `box` is the node's (k tiles), the image tileWidth x tileHeight in full. A source
+ * that makes any box fetches this many and stretches them to tileWidth; the renderer's LOD
+ * measures a merged node's texels by it (Quadtree::lodFor), whatever its source.
+ */
+inline int wholeSpanTexelWidth(const Sector& box, int tileWidth, int tileHeight) {
+  const double equatorward = box.south > 0.0 ? box.south : box.north < 0.0 ? -box.north : 0.0;
+  const double need = tileHeight * (box.east - box.west) *
+                      std::cos(equatorward * std::numbers::pi / 180.0) / (box.north - box.south);
+  if (!(need < tileWidth)) return tileWidth;
+  return std::clamp(static_cast<int>(std::ceil(need - 1e-9)), 1, tileWidth);
 }
 
 /** The layer whose whole row or span `name` is (`<layer>@caps`, `<layer>@span<k>`), else nullopt.
