@@ -1207,6 +1207,35 @@ TEST(ComposeIntegration, AGetMapThatIsATileOfTheSameDataOnAnotherGridIsThatTile)
   EXPECT_EQ(up.requests(), 5u) << "the same four tiles of sat";
 }
 
+// The same through WMTS: a WorldCRS84Quad tile (256 px, rows from the north) that is exactly one
+// tile of a layer of the same upstream data on a grid that lines up is that tile, served as it is
+// and cached once, whichever of the two layers it names; composed from "sat"'s tiles before.
+TEST(ComposeIntegration, AWmtsQuadTileThatIsATileOfTheSameDataOnAnotherGridIsThatTile) {
+  test::FakeUpstream up(tileReply);
+  const LayerSpec geo = satDataOn("sat-geographic", GridSpec{Sector{}, 180.0, 256, 256, 8});
+  Proxy p(up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, Proxy::fastPolicy(), "upsat", {}, {geo});
+  // WorldCRS84Quad level 3 is 22.5-degree tiles: row 3 (from 90 N), column 8 is 0..22.5 E, 0..22.5
+  // N, tile (3, 4, 8) of "sat-geographic".
+  const auto r = p.get("/wmts/1.0.0/sat/default/WorldCRS84Quad/3/3/8.jpg");
+  ASSERT_EQ(r.status, 200) << r.body.substr(0, 400);
+  ASSERT_EQ(up.requests(), 1u);
+  const std::string asked = up.received().front().target;
+  EXPECT_NE(asked.find("WIDTH=256&HEIGHT=256"), std::string::npos) << asked;
+  EXPECT_EQ(r.body, jpegFor(asked)) << "the upstream's bytes as they are, not composed";
+  EXPECT_EQ(p.get("/tiles/sat-geographic/3/4/4_8.jpg").body, r.body);
+  for (const char* name : {"sat", "sat-geographic"}) {
+    const auto again =
+        p.get("/wmts/1.0.0/" + std::string(name) + "/default/WorldCRS84Quad/3/3/8.jpg");
+    EXPECT_EQ(again.header("x-cache"), "HIT") << name;
+    EXPECT_EQ(again.body, r.body) << name;
+  }
+  EXPECT_EQ(up.requests(), 1u);
+  // Without the layer on that grid: composed from four of "sat"'s level-1 tiles.
+  Proxy alone(up.url("/wms"), UpstreamSpec::Type::Wms, 0ms, Proxy::fastPolicy(), "upsat");
+  ASSERT_EQ(alone.get("/wmts/1.0.0/sat/default/WorldCRS84Quad/3/3/8.jpg").status, 200);
+  EXPECT_EQ(up.requests(), 5u);
+}
+
 // A client asking for another format than the layer's (World Wind's imagery JPEG, a CesiumJS set
 // up for PNG): a PNG GetMap of "sat" (JPEG) that is exactly a tile of a PNG layer of the same
 // data is that layer's tile. Before, its format being not "sat"'s, it was composed from "sat"'s.

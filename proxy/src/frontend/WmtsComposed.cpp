@@ -73,6 +73,18 @@ void WmtsFrontEnd::composedTile(const HttpRequest& req,
                                 std::string time,
                                 std::int32_t levels,
                                 const Responder& respond) {
+  // Exactly one tile of this layer or another of the same upstream data, on a grid that lines up
+  // with WorldCRS84Quad (CesiumJS's geographic grid: 180-degree roots of 256 px): that tile, not
+  // a composed copy of it (issue 29; WmsFrontEnd::sendOneTile does the same for GetMaps).
+  if (kind == WmtsSetKind::WorldCRS84Quad) {
+    const Sector box = wmtsTileBox(m, row, col);
+    for (const LayerSpec& o : fe_.tiles.layers()) {
+      if ((o.name != l.name && !sameUpstreamData(o, l)) || o.dataset.mimeType != l.dataset.mimeType)
+        continue;
+      if (const auto k = fe_.tiles.grid(o.name)->keyForBbox(box, m.tileWidth, m.tileHeight))
+        return worldWindTile(req, o, *k, std::move(time), respond);
+    }
+  }
   const TileKey key = crs84QuadCacheKey(level, row, col);
   const auto ds = composedDataset(l, kind, time, levels);
   TileCache& cache = fe_.tiles.cache();
