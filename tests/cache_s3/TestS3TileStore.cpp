@@ -90,6 +90,37 @@ TEST_F(S3StoreIntegration, StoresReadsListsAndRemovesATile) {
   EXPECT_FALSE(s->stat(kTile));
 }
 
+// A listing is a page of at most 1,000 keys (the servers' limit): a scan and a folder search
+// follow the continuation tokens. Pages of 3 keys here: 11 entries of a dataset in 4 pages, and
+// 7 dataset folders found through paged delimited listings.
+TEST_F(S3StoreIntegration, ListingsFollowEveryPage) {
+  auto& server = test::S3Server::get();
+  ASSERT_TRUE(server.ok()) << server.error();
+  auto options = server.options(prefix, dir.path() / "local");
+  options.listPageKeys = 3;
+  auto opened = openS3TileStore(options);
+  ASSERT_TRUE(opened) << opened.error().message;
+  ITileStore& s = **opened;
+  std::vector<std::string> folders;
+  for (int d = 0; d < 7; ++d) {
+    folders.push_back("srv/ds" + std::to_string(d));
+    ASSERT_TRUE(s.writeDescriptor(folders.back(), "name: ds\n"));
+  }
+  std::vector<std::string> expected{"dataset.txt"};
+  for (std::int64_t c = 0; c < 10; ++c) {
+    ASSERT_TRUE(put(s, TileLocation{"srv/ds0", "jpg", TileKey{3, 5, c}}, "tile"));
+    expected.push_back("3/5/5_" + std::to_string(c) + ".jpg");
+  }
+  std::vector<std::string> paths;
+  s.scan("srv/ds0", [&](const StoreEntry& e) { paths.push_back(e.path); });
+  std::sort(paths.begin(), paths.end());
+  std::sort(expected.begin(), expected.end());
+  EXPECT_EQ(paths, expected);
+  auto found = s.datasetFolders();
+  std::sort(found.begin(), found.end());
+  EXPECT_EQ(found, folders);
+}
+
 TEST_F(S3StoreIntegration, AnotherInstanceStoringTheSameTileSucceedsAndARefreshReplacesIt) {
   auto a = open();
   auto b = open();

@@ -391,7 +391,8 @@ public:
       std::string q;
       if (token) q += "continuation-token=" + s3::uriEncode(*token, false) + "&";
       if (delimited) q += "delimiter=%2F&";
-      q += "list-type=2&prefix=" + s3::uriEncode(prefix, false);
+      q += "list-type=2&max-keys=" + std::to_string(std::clamp(s_->options.listPageKeys, 1, 1000));
+      q += "&prefix=" + s3::uriEncode(prefix, false);
       const auto r = s_->client.send(s3::Request{"GET", "", q, {}, {}});
       if (!r.ok()) return false;
       const auto page = s3::parseListPage(r.body);

@@ -65,6 +65,9 @@ struct S3TileStoreOptions {
   S3Credentials credentials;                ///< never logged
   std::filesystem::path localFolder;        ///< where read tiles land (unlinked files); created
   std::chrono::milliseconds timeout{10000}; ///< per request
+  /** Keys a listing page asks for (ListObjectsV2's max-keys, 1-1000; servers send at most 1,000):
+   * the pages of a scan or a folder search are followed by their continuation tokens. */
+  int listPageKeys = 1000;
 };
 
 /** Opens the store; checks the folder (created if missing) and that the bucket answers (one
