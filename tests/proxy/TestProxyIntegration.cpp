@@ -376,11 +376,18 @@ TEST(ProxyIntegration, ExpiredTilesAreRevalidatedOrServedStale) {
   ASSERT_EQ(first.status, 200);
   EXPECT_EQ(first.header("x-cache"), "MISS");
   mode = 1;
+  aDayAgo.advance(5s); // the revalidation comes later than the fetch
   const auto revalidated = p.get("/wwtile?T=sat&L=0&X=0&Y=0");
   EXPECT_EQ(revalidated.status, 200);
   EXPECT_EQ(revalidated.header("x-cache"), "HIT");
   EXPECT_EQ(revalidated.body, first.body);
   EXPECT_EQ(up.received().back().header("if-none-match"), "\"v1\"");
+  // Unchanged upstream, unchanged tile: its ETag and Last-Modified stay, so a client (or a CDN)
+  // revalidating its copy gets a 304, not the same bytes again (they moved with each 304 before).
+  EXPECT_EQ(revalidated.header("etag"), first.header("etag"));
+  EXPECT_EQ(revalidated.header("last-modified"), first.header("last-modified"));
+  EXPECT_EQ(p.get("/wwtile?T=sat&L=0&X=0&Y=0", {{"If-None-Match", first.header("etag")}}).status,
+            304);
   mode = 2;
   const auto stale = p.get("/wwtile?T=sat&L=0&X=0&Y=0");
   EXPECT_EQ(stale.status, 200);

@@ -102,7 +102,11 @@ void TileService::Impl::onFetched(const FlightKey& fk,
   }
   FetchResponse& resp = *r;
   if (resp.status == 304 && stale) {
+    // The same bytes: a new expiry, the same version. Its fetched-at (the tile's Last-Modified
+    // and part of its ETag, and what a local tier's copy is checked against) stays, so that the
+    // clients, a CDN and the other instances' copies revalidating it find it unchanged.
     TileMeta m = freshMeta(l);
+    if (stale->meta.fetchedAt != 0) m.fetchedAt = stale->meta.fetchedAt;
     m.etag = resp.etag.empty() ? stale->meta.etag : resp.etag;
     m.lastModified = resp.lastModified.empty() ? stale->meta.lastModified : resp.lastModified;
     (void)cache.revalidated(fk.dataset, fk.key, m);
