@@ -1105,6 +1105,16 @@ LayerSpec satDataOn(const std::string& name, const GridSpec& grid) {
   return l;
 }
 
+/** The answer is tile (3, 4, 8) of "sat-geographic" as the upstream sent it: the one GetMap made,
+ * of 256 x 256 pixels, its bytes untouched, the same as that layer's /tiles/ answer. */
+void expectTheGeographicTile(test::FakeUpstream& up, Proxy& p, const auto& r) {
+  ASSERT_EQ(up.requests(), 1u);
+  const std::string asked = up.received().front().target;
+  EXPECT_NE(asked.find("WIDTH=256&HEIGHT=256"), std::string::npos) << asked;
+  EXPECT_EQ(r.body, jpegFor(asked)) << "the upstream's bytes as they are, not composed";
+  EXPECT_EQ(p.get("/tiles/sat-geographic/3/4/4_8.jpg").body, r.body);
+}
+
 } // namespace
 
 TEST(ComposeIntegration, AnyBoxIsComposedFromTilesFetchedOnce) {
@@ -1196,11 +1206,7 @@ TEST(ComposeIntegration, AGetMapThatIsATileOfTheSameDataOnAnotherGridIsThatTile)
   const auto r = p.get(getMap("sat", box, 256, 256, "image/jpeg"));
   ASSERT_EQ(r.status, 200) << r.body.substr(0, 400);
   EXPECT_EQ(r.header("content-type"), "image/jpeg");
-  ASSERT_EQ(up.requests(), 1u);
-  const std::string asked = up.received().front().target;
-  EXPECT_NE(asked.find("WIDTH=256&HEIGHT=256"), std::string::npos) << asked;
-  EXPECT_EQ(r.body, jpegFor(asked)) << "the upstream's bytes as they are, not composed";
-  EXPECT_EQ(p.get("/tiles/sat-geographic/3/4/4_8.jpg").body, r.body);
+  expectTheGeographicTile(up, p, r);
   for (const char* name : {"sat", "sat-geographic"}) {
     const auto again = p.get(getMap(name, box, 256, 256, "image/jpeg"));
     EXPECT_EQ(again.header("x-cache"), "HIT") << name;
@@ -1225,11 +1231,7 @@ TEST(ComposeIntegration, AWmtsQuadTileThatIsATileOfTheSameDataOnAnotherGridIsTha
   // N, tile (3, 4, 8) of "sat-geographic".
   const auto r = p.get("/wmts/1.0.0/sat/default/WorldCRS84Quad/3/3/8.jpg");
   ASSERT_EQ(r.status, 200) << r.body.substr(0, 400);
-  ASSERT_EQ(up.requests(), 1u);
-  const std::string asked = up.received().front().target;
-  EXPECT_NE(asked.find("WIDTH=256&HEIGHT=256"), std::string::npos) << asked;
-  EXPECT_EQ(r.body, jpegFor(asked)) << "the upstream's bytes as they are, not composed";
-  EXPECT_EQ(p.get("/tiles/sat-geographic/3/4/4_8.jpg").body, r.body);
+  expectTheGeographicTile(up, p, r);
   for (const char* name : {"sat", "sat-geographic"}) {
     const auto again =
         p.get("/wmts/1.0.0/" + std::string(name) + "/default/WorldCRS84Quad/3/3/8.jpg");
