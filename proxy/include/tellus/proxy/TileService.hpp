@@ -233,9 +233,11 @@ public:
   void reprioritize(TileRequestId id, double priority) override;
   bool cancel(TileRequestId id) override;
   /** True for an imagery layer (JPEG or PNG) of a WMS or local upstream whose grid spans every
-   * longitude and reaches a pole: `<layer>@caps` is then fetched as ONE GetMap (or render) of the
-   * polar row's box at kWholeRowWidthFactor x 1 tiles, and `<layer>@span<k>` as ONE of the box
-   * of k tiles at one tile's size (TileSource.hpp). */
+   * longitude and reaches a pole: `<layer>@caps` is then ONE image of the polar row's box at
+   * kWholeRowWidthFactor x 1 tiles (a render of it; from a WMS, GetMaps of its bands stretched
+   * and stacked: proxy/src/tiles/CapBands.hpp), and `<layer>@span<k>` ONE of the box of k tiles
+   * at one tile's size (from a WMS, one GetMap at wholeSpanTexelWidth, stretched; TileSource.hpp).
+   */
   bool wholePolarRows(std::string_view layer) const override;
 
   /** The WMS, World Wind or WMTS URL that fetches a tile from a remote upstream (for tests and
