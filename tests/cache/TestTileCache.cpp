@@ -96,7 +96,9 @@ TEST(TileCache, VerifyFindsBothKindsOfDriftAndRebuildRepairs) {
   fs::remove(ds / "1/0/0_1.jpg");
   fs::create_directories(ds / "3/7");
   std::ofstream(ds / "3/7/7_9.jpg") << "orphan";
-  std::ofstream(ds / "1/0/.0_2.jpg.999.0.tmp") << "partial";
+  // A dead writer's: no pid can be above Linux's PID_MAX_LIMIT (4,194,304); pid 999, used before,
+  // ran now and then on a busy machine, and its temp file then counted as in use.
+  std::ofstream(ds / "1/0/.0_2.jpg.2147483646.0.tmp") << "partial";
   report = cache->verify();
   ASSERT_TRUE(report);
   EXPECT_FALSE(report->ok());
