@@ -84,7 +84,8 @@
 #                                 burst: burst.sh alone (BURST=300 BURST_LEVEL=6 MC_LOCK_RETRY=0.1);
 #                                 mercator: tellus and MapProxy seeded once, then mercator.sh (its
 #                                 settings: MERC_ZOOMS=3-7 MERC_CONNECTIONS=16)
-#   KEEP=0                        1: keep the work folder (configs, logs, caches, URL lists)
+#   KEEP=0                        1: keep the work folder (configs, logs, caches, URL lists,
+#                                 PostgreSQL's log as postgres.log)
 #   UPSTREAM_CPUS=                CPU list (taskset -c, e.g. 0): the upstream (Apache and its mapserv
 #                                 processes) runs on these CPUs, and the seeders and the ceiling's
 #                                 wrk on the others: the upstream's own limit without the seeder's
@@ -220,6 +221,8 @@ cleanup() {
   for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
   for c in "${apache_confs[@]}"; do apache2 -f "$c" -k stop 2>/dev/null || true; done
   for p in "${pids[@]}"; do wait "$p" 2>/dev/null || true; done
+  # KEEP=1 keeps the database's log too (the folder goes with the server).
+  if [[ "$KEEP" == 1 && -f "${pg_dir:-}/server.log" ]]; then cp "$pg_dir/server.log" "$work/postgres.log"; fi
   [[ -z "${pg_dir:-}" ]] || "$repo/tests/support/postgres.sh" stop "$pg_dir" || true
   [[ -z "${s3_dir:-}" ]] || "$repo/tests/support/s3-server.sh" stop "$s3_dir" || true
   # Apache stops its children (and mod_fcgid its mapserv processes) after the parent got TERM

@@ -11,6 +11,7 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <future>
 #include <thread>
 #include <vector>
 
@@ -118,6 +119,37 @@ TEST(PgTileIndex, InstancesOnOneDatabaseShareRowsAndNoticeEachOthersCommits) {
   EXPECT_EQ(db->createdAt, 1000);
   EXPECT_EQ(b->totalBytes().value(), 1234);
   EXPECT_EQ(a->integrity(), "ok");
+}
+
+// Last-access times are advisory: an instance's touch of a row another instance's transaction
+// holds skips it at once. It used to wait for that transaction, and three instances touching the
+// same hot tiles in their own orders deadlocked, each writer standing still for PostgreSQL's
+// deadlock_timeout (a second) with its tiles' stores behind it.
+TEST(PgTileIndex, ATouchNeverWaitsForAnotherInstancesLock) {
+  const std::string uri = test::pgCreateDatabase();
+  auto a = openAt(uri);
+  auto b = openAt(uri);
+  ASSERT_TRUE(a && b);
+  ASSERT_TRUE(a->begin());
+  auto d = a->upsertDataset(test::imagerySpec("bm"), "local/bm", 1);
+  ASSERT_TRUE(d);
+  TileRow row;
+  row.bytes = 10;
+  for (std::int64_t c = 0; c < 2; ++c)
+    ASSERT_TRUE(a->putRow(d->id, TileKey{0, 0, c}, row));
+  ASSERT_TRUE(a->commit());
+  ASSERT_TRUE(a->begin());
+  a->touch(d->id, TileKey{0, 0, 0}, 100); // holds tile (0, 0, 0) until its commit
+  auto other = std::async(std::launch::async, [&] {
+    if (!b->begin()) return false;
+    b->touch(d->id, TileKey{0, 0, 0}, 200); // held: skipped
+    b->touch(d->id, TileKey{0, 0, 1}, 200); // free: touched
+    return b->commit().has_value();
+  });
+  const bool prompt = other.wait_for(std::chrono::seconds(2)) == std::future_status::ready;
+  EXPECT_TRUE(prompt) << "the touch waited for the other instance's transaction";
+  ASSERT_TRUE(a->commit());
+  EXPECT_TRUE(other.get());
 }
 
 TEST(PgTileIndex, ARolledBackSavepointUndoesItsOperationOnly) {

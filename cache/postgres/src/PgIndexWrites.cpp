@@ -106,8 +106,14 @@ Result PgTileIndex::revalidate(DatasetId id, const TileKey& key, const TileMeta&
 void PgTileIndex::touch(DatasetId id, const TileKey& key, UnixMillis when) {
   auto p = pg::keyParams(id, key);
   p.add(when);
-  (void)write("UPDATE tiles SET last_access = greatest(last_access, $5) WHERE dataset = $1 "
-              "AND level = $2 AND row = $3 AND col = $4 AND last_access < $5",
+  // Last-access times are advisory: a row another transaction holds is skipped, never waited
+  // for. Three instances touching the same hot tiles in their own orders deadlocked, and each
+  // writer thread (its tiles' stores behind the touches) stood still for PostgreSQL's
+  // deadlock_timeout, a second (bench/RESULTS.md, issue 27's bursts).
+  (void)write("UPDATE tiles t SET last_access = $5 FROM (SELECT 1 FROM tiles WHERE dataset = $1 "
+              "AND level = $2 AND row = $3 AND col = $4 AND last_access < $5 "
+              "FOR UPDATE SKIP LOCKED) free WHERE t.dataset = $1 AND t.level = $2 AND t.row = $3 "
+              "AND t.col = $4",
               p,
               "touching");
 }
