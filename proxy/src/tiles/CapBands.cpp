@@ -63,28 +63,35 @@ composeBands(std::span<const CapBand> bands,
   const auto W = static_cast<std::size_t>(width);
   std::vector<std::uint8_t> px(W * static_cast<std::size_t>(height) *
                                static_cast<std::size_t>(out));
+  struct Column {
+    std::size_t a = 0, c = 0; ///< the two source texels' offsets in a row
+    double f = 0.0;           ///< the weight of c
+  };
+  std::vector<Column> cols(W);
   for (std::size_t i = 0; i < bands.size(); ++i) {
     const CapBand& b = bands[i];
     const DecodedImage& img = decoded[i];
     const auto w = static_cast<std::int64_t>(img.width);
     const auto ch = static_cast<std::size_t>(img.channels);
+    // Each output column's centre in the band's columns, the same on every row: a whole parallel
+    // wraps around, a box's edge texels hold.
+    const auto offset = [&](std::int64_t at) {
+      return static_cast<std::size_t>(wrap ? (at % w + w) % w
+                                           : std::clamp<std::int64_t>(at, 0, w - 1)) *
+             ch;
+    };
+    for (std::size_t x = 0; x < W; ++x) {
+      const double u = (static_cast<double>(x) + 0.5) * static_cast<double>(w) / width - 0.5;
+      const double uf = std::floor(u);
+      const auto i0 = static_cast<std::int64_t>(uf);
+      cols[x] = Column{offset(i0), offset(i0 + 1), u - uf};
+    }
     for (int y = 0; y < b.height; ++y) {
       const std::uint8_t* src =
           img.pixels.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(w) * ch;
       std::uint8_t* dst = px.data() + static_cast<std::size_t>(b.row0 + y) * W * out;
       for (std::size_t x = 0; x < W; ++x) {
-        // The output column's centre in the band's columns; a whole parallel wraps around, a box's
-        // edge texels hold.
-        const double u = (static_cast<double>(x) + 0.5) * static_cast<double>(w) / width - 0.5;
-        const double uf = std::floor(u);
-        const double f = u - uf;
-        const auto i0 = static_cast<std::int64_t>(uf);
-        const auto col = [&](std::int64_t at) {
-          return static_cast<std::size_t>(wrap ? (at % w + w) % w
-                                               : std::clamp<std::int64_t>(at, 0, w - 1)) *
-                 ch;
-        };
-        const std::size_t a = col(i0), c = col(i0 + 1);
+        const auto [a, c, f] = cols[x];
         const double wa = ch == 4 ? (1.0 - f) * src[a + 3] / 255.0 : 1.0 - f;
         const double wc = ch == 4 ? f * src[c + 3] / 255.0 : f;
         const double sum = wa + wc;

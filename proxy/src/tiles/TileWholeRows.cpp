@@ -73,11 +73,11 @@ void TileService::Impl::onBandsFetched(const FlightKey& fk,
   images.reserve(gather.bands.size());
   for (std::size_t i = 0; i < gather.bands.size(); ++i) {
     FetchResult& r = *gather.answers[i];
-    // A failure, an absence or an answer that is no image of the band's size: the cap's answer.
+    // A failure, an absence or an answer that is no image: the tile's answer. The image's size
+    // is checked where it is decoded, once (composeBands), as a metatile's.
     if (!r || r->status != 200)
       return onFetched(fk, l, g, folder, std::move(gather.stale), std::move(r));
-    const CapBand& b = gather.bands[i];
-    if (auto ok = validateTile(*r, l.dataset.mimeType, b.width, b.height); !ok) {
+    if (auto ok = validateImageResponse(*r, l.dataset.mimeType); !ok) {
       if (gather.stale) return land(fk, staleTile(std::move(*gather.stale), folder, fk.key));
       return land(fk, error("the upstream did not send a tile: " + ok.error()));
     }
@@ -89,9 +89,9 @@ void TileService::Impl::onBandsFetched(const FlightKey& fk,
                           g.spec().tileHeight,
                           l.dataset.mimeType,
                           /*wrap=*/isWholeRow(l));
-  if (!cap) {
+  if (!cap) { // a band of another size, or that does not decode
     if (gather.stale) return land(fk, staleTile(std::move(*gather.stale), folder, fk.key));
-    return land(fk, error("the bands could not be composed: " + cap.error()));
+    return land(fk, error("the upstream did not send a tile: " + cap.error()));
   }
   store(fk, folder, std::move(*cap), freshMeta(l));
 }
