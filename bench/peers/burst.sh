@@ -68,11 +68,13 @@ fill "$b/tellus/tellus.tmpl" "$b/tellus/tellus.yaml" "UPSTREAM_URL=$upstream_url
 tellus_ports=()
 threads=()
 [[ -z "$TELLUS_THREADS" ]] || threads=(--threads "$TELLUS_THREADS")
+access=() # KEEP=1: each instance's access log (latency and cache outcome of every answer)
 for k in 0 1 2; do
   root="$b/tellus/cache"
   [[ "$BURST_STORE" != s3 ]] || root="$b/tellus/cache$k" # the local tiers are each its own
+  [[ -z "${KEEP:-}" ]] || access=(--access-log "$b/tellus/access$k.log")
   "$tellus" serve --config "$b/tellus/tellus.yaml" --cache "$root" --listen 127.0.0.1:0 \
-    "${threads[@]}" >"$b/tellus/serve$k.log" 2>&1 &
+    "${threads[@]}" "${access[@]}" >"$b/tellus/serve$k.log" 2>&1 &
   pids+=($!)
 done
 for k in 0 1 2; do

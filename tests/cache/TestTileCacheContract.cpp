@@ -451,3 +451,68 @@ TEST_P(TileCacheContract, WriteBehindIsVisibleAtOnceAndCommittedSoon) {
   EXPECT_TRUE(cache->verify()->ok());
   EXPECT_EQ(cache->storeStatus().dropped, 0u);
 }
+
+TEST_P(TileCacheContract, OpenTilesAndPeekManyAnswerEachTileAsOpenTileAndPeekDo) {
+  for (const bool writeBehind : {false, true}) {
+    SCOPED_TRACE(writeBehind ? "write-behind" : "committed");
+    auto o = options();
+    o.indexWriteBehind = writeBehind;
+    auto cache = open(o);
+    const auto id = *cache->registerDataset(imagery(writeBehind ? "wb" : "direct"));
+    // A metatile's block with every kind of row: stored, absent, expired, vanished, unknown.
+    TileMeta expired;
+    expired.expiresAt = clock->now() - 1;
+    ASSERT_TRUE(cache->put(id, TileKey{5, 8, 12}, payload({5, 8, 12}), {}));
+    ASSERT_TRUE(cache->put(id, TileKey{5, 9, 15}, payload({5, 9, 15}), expired));
+    ASSERT_TRUE(cache->put(id, TileKey{5, 11, 13}, payload({5, 11, 13}), {}));
+    ASSERT_TRUE(cache->putAbsent(id, TileKey{5, 10, 14}, clock->now() + 5000));
+    cache->flush();
+    store().remove(at(*cache->dataset(id), TileKey{5, 11, 13}));
+    ASSERT_TRUE(cache->put(id, TileKey{5, 8, 13}, payload({5, 8, 13}), {})); // maybe pending
+    // The block's tiles out of order, a tile far away and one of another level (each a lookup
+    // of its own on a block-scanning index), and a tile outside the block's rows but in range.
+    const std::vector<std::vector<TileKey>> sets = {
+        {{5, 9, 15}, {5, 8, 12}, {5, 10, 14}, {5, 11, 13}, {5, 8, 13}, {5, 9, 12}},
+        {{5, 8, 12}, {5, 20, 31}, {5, 10, 14}},
+        {{5, 8, 12}, {4, 4, 6}, {5, 9, 15}},
+        {{5, 8, 13}},
+        {}};
+    for (const auto& keys : sets) {
+      auto peeked = cache->peekMany(id, keys);
+      ASSERT_TRUE(peeked) << peeked.error().message;
+      ASSERT_EQ(peeked->size(), keys.size());
+      for (std::size_t i = 0; i < keys.size(); ++i) {
+        const auto one = cache->peek(id, keys[i]);
+        ASSERT_TRUE(one);
+        EXPECT_EQ((*peeked)[i].kind, one->kind) << i;
+        EXPECT_EQ((*peeked)[i].stale, one->stale) << i;
+        EXPECT_EQ((*peeked)[i].retryAfter, one->retryAfter) << i;
+        EXPECT_EQ((*peeked)[i].meta.fetchedAt, one->meta.fetchedAt) << i;
+      }
+      auto opened = cache->openTiles(id, keys);
+      ASSERT_TRUE(opened) << opened.error().message;
+      ASSERT_EQ(opened->size(), keys.size());
+      for (std::size_t i = 0; i < keys.size(); ++i) {
+        const auto one = cache->openTile(id, keys[i]);
+        ASSERT_TRUE(one);
+        const CacheLookup& many = (*opened)[i];
+        EXPECT_EQ(many.kind, one->kind) << i;
+        EXPECT_EQ(many.stale, one->stale) << i;
+        if (many.kind != CacheLookup::Kind::Hit) continue;
+        ASSERT_TRUE(many.file) << i;
+        EXPECT_EQ(many.file->readAll().value(), payload(keys[i])) << i;
+      }
+    }
+    const auto kinds = *cache->openTiles(id, sets[0]);
+    EXPECT_EQ(kinds[0].kind, CacheLookup::Kind::Hit);
+    EXPECT_TRUE(kinds[0].stale);
+    EXPECT_EQ(kinds[1].kind, CacheLookup::Kind::Hit);
+    EXPECT_EQ(kinds[2].kind, CacheLookup::Kind::Absent);
+    EXPECT_EQ(kinds[3].kind, CacheLookup::Kind::Miss) << "its file vanished";
+    EXPECT_EQ(kinds[4].kind, CacheLookup::Kind::Hit);
+    EXPECT_EQ(kinds[5].kind, CacheLookup::Kind::Miss);
+    // A dataset the cache does not know is an error, as for one tile.
+    EXPECT_FALSE(cache->peekMany(id + 1000, sets[3]));
+    EXPECT_FALSE(cache->openTiles(id + 1000, sets[3]));
+  }
+}

@@ -124,29 +124,82 @@ PgTileIndex::read(const char* sql, const pg::Params& params, const char* what) {
 
 // ---------------------------------------------------------------------------------- reads
 
+namespace {
+
+constexpr const char* kRowColumns =
+    "SELECT state, bytes, content_type, etag, last_modified, expires, fetched_at, retry_after";
+
+/** The row at `i` of a result whose columns are kRowColumns's. */
+TileRow rowAt(const PGresult* r, int i) {
+  TileRow row;
+  row.bytes = pg::i64(r, i, 1);
+  if (pg::i64(r, i, 0) == pg::kStateAbsent) {
+    row.present = false;
+    row.retryAfter = pg::optI64(r, i, 7);
+    return row;
+  }
+  row.meta.contentType = pg::text(r, i, 2);
+  row.meta.etag = pg::text(r, i, 3);
+  row.meta.lastModified = pg::text(r, i, 4);
+  row.meta.expiresAt = pg::optI64(r, i, 5);
+  row.meta.fetchedAt = pg::i64(r, i, 6);
+  return row;
+}
+
+} // namespace
+
 std::expected<std::optional<TileRow>, CacheError> PgTileIndex::lookup(DatasetId id,
                                                                       const TileKey& key) {
-  auto res = read("SELECT state, bytes, content_type, etag, last_modified, expires, fetched_at, "
-                  "retry_after FROM tiles WHERE dataset = $1 AND level = $2 AND row = $3 "
-                  "AND col = $4",
+  auto res = read((std::string(kRowColumns) + " FROM tiles WHERE dataset = $1 AND level = $2 AND "
+                                              "row = $3 AND col = $4")
+                      .c_str(),
                   pg::keyParams(id, key),
                   "looking up tile");
   if (!res) return std::unexpected(res.error());
-  const PGresult* r = res->get();
-  if (PQntuples(r) == 0) return std::nullopt;
-  TileRow row;
-  row.bytes = pg::i64(r, 0, 1);
-  if (pg::i64(r, 0, 0) == pg::kStateAbsent) {
-    row.present = false;
-    row.retryAfter = pg::optI64(r, 0, 7);
-    return row;
+  if (PQntuples(res->get()) == 0) return std::nullopt;
+  return rowAt(res->get(), 0);
+}
+
+std::expected<std::vector<std::optional<TileRow>>, CacheError>
+PgTileIndex::lookupMany(DatasetId id, std::span<const TileKey> keys) {
+  std::vector<std::optional<TileRow>> rows(keys.size());
+  if (keys.empty()) return rows;
+  if (keys.size() == 1) {
+    auto one = lookup(id, keys.front());
+    if (!one) return std::unexpected(one.error());
+    rows.front() = std::move(*one);
+    return rows;
   }
-  row.meta.contentType = pg::text(r, 0, 2);
-  row.meta.etag = pg::text(r, 0, 3);
-  row.meta.lastModified = pg::text(r, 0, 4);
-  row.meta.expiresAt = pg::optI64(r, 0, 5);
-  row.meta.fetchedAt = pg::i64(r, 0, 6);
-  return row;
+  // The tiles of a metatile (one level, a small block): one range scan of the primary key for
+  // their bounding block, where a lookup each cost a round trip each (16 a metatile, several
+  // times over in a burst of misses; bench/RESULTS.md, issue 27).
+  const std::int32_t level = keys.front().level;
+  std::int64_t r0 = keys.front().row, r1 = r0, c0 = keys.front().col, c1 = c0;
+  for (const TileKey& k : keys) {
+    if (k.level != level) return ITileIndex::lookupMany(id, keys);
+    r0 = std::min(r0, k.row);
+    r1 = std::max(r1, k.row);
+    c0 = std::min(c0, k.col);
+    c1 = std::max(c1, k.col);
+  }
+  if ((r1 - r0 + 1) * (c1 - c0 + 1) > 4 * static_cast<std::int64_t>(keys.size()) + 64)
+    return ITileIndex::lookupMany(id, keys); // scattered keys: a block scan would read too much
+  pg::Params p;
+  p.add(std::int64_t{id}).add(std::int64_t{level}).add(r0).add(r1).add(c0).add(c1);
+  auto res = read((std::string(kRowColumns) +
+                   ", row, col FROM tiles WHERE dataset = $1 AND level = $2 AND row BETWEEN $3 "
+                   "AND $4 AND col BETWEEN $5 AND $6")
+                      .c_str(),
+                  p,
+                  "looking up tiles");
+  if (!res) return std::unexpected(res.error());
+  const PGresult* r = res->get();
+  for (int i = 0; i < PQntuples(r); ++i) {
+    const std::int64_t row = pg::i64(r, i, 8), col = pg::i64(r, i, 9);
+    for (std::size_t j = 0; j < keys.size(); ++j)
+      if (keys[j].row == row && keys[j].col == col) rows[j] = rowAt(r, i);
+  }
+  return rows;
 }
 
 std::expected<std::vector<DatasetInfo>, CacheError> PgTileIndex::datasets() {

@@ -33,6 +33,8 @@ public:
   // reads (PgTileIndex.cpp)
   std::expected<std::optional<TileRow>, CacheError> lookup(DatasetId id,
                                                            const TileKey& key) override;
+  std::expected<std::vector<std::optional<TileRow>>, CacheError>
+  lookupMany(DatasetId id, std::span<const TileKey> keys) override;
   std::expected<std::vector<DatasetInfo>, CacheError> datasets() override;
   std::expected<std::optional<DatasetInfo>, CacheError>
   datasetInFolder(std::string_view folder) override;

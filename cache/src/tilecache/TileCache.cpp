@@ -172,6 +172,39 @@ std::expected<CacheLookup, CacheError> TileCache::peek(DatasetId id, const TileK
   return hitOf(std::move((*row)->meta), (*row)->bytes, im.clock->now());
 }
 
+std::expected<std::vector<CacheLookup>, CacheError>
+TileCache::peekMany(DatasetId id, std::span<const TileKey> keys) const {
+  Impl& im = *impl_;
+  for (const TileKey& k : keys)
+    if (auto d = im.datasets.checked(id, k); !d) return std::unexpected(d.error());
+  const UnixMillis now = im.clock->now();
+  std::vector<CacheLookup> out(keys.size());
+  // As peek(): rows written behind and not yet committed first, then the index (a row committed
+  // in between is found there).
+  std::vector<bool> pending(keys.size(), false);
+  if (im.options.indexWriteBehind) {
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      if (const auto p = im.pending.find(RowKey{id, keys[i]})) {
+        out[i] = hitOf(p->meta, p->size, now);
+        pending[i] = true;
+      }
+    }
+  }
+  auto rows = im.index->lookupMany(id, keys);
+  if (!rows) return std::unexpected(rows.error());
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    auto& row = (*rows)[i];
+    if (pending[i] || !row) continue;
+    if (!row->present) {
+      out[i].kind = CacheLookup::Kind::Absent;
+      out[i].retryAfter = row->retryAfter.value_or(0);
+      continue;
+    }
+    out[i] = hitOf(std::move(row->meta), row->bytes, now);
+  }
+  return out;
+}
+
 namespace {
 
 /** A remembered row for a tile just opened. */
@@ -189,11 +222,23 @@ rememberedRow(StoredTile tile, const CacheLookup& row, std::int64_t steadyNs) {
 } // namespace
 
 std::expected<CacheLookup, CacheError> TileCache::openTile(DatasetId id, const TileKey& key) {
+  auto one = openTiles(id, std::span<const TileKey>(&key, 1));
+  if (!one) return std::unexpected(one.error());
+  return std::move(one->front());
+}
+
+std::expected<std::vector<CacheLookup>, CacheError>
+TileCache::openTiles(DatasetId id, std::span<const TileKey> keys) {
   Impl& im = *impl_;
-  auto d = im.datasets.checked(id, key);
-  if (!d) return std::unexpected(d.error());
-  const RowKey rk{id, key};
-  auto hit = [&](const detail::CachedRow& r) {
+  std::shared_ptr<const detail::DatasetEntry> entry;
+  for (const TileKey& k : keys) {
+    auto d = im.datasets.checked(id, k);
+    if (!d) return std::unexpected(d.error());
+    entry = std::move(*d);
+  }
+  if (!entry) return std::vector<CacheLookup>{};
+  const detail::DatasetEntry& d = *entry;
+  auto hit = [&](const RowKey& rk, const detail::CachedRow& r) {
     const UnixMillis now = im.clock->now();
     CacheLookup out = hitOf(r.meta, r.size, now);
     out.file = r.file;
@@ -205,41 +250,71 @@ std::expected<CacheLookup, CacheError> TileCache::openTile(DatasetId id, const T
     return out;
   };
   im.noticeOtherWriters();
-  const auto pendingRow =
-      im.options.indexWriteBehind ? im.pending.find(rk) : std::optional<detail::PendingRow>{};
-  if (pendingRow) {
-    // Written, not yet committed: the bytes are staged, or already in place.
-    CacheLookup row = hitOf(pendingRow->meta, pendingRow->size, 0);
-    if (auto t = pendingRow->staged->open(pendingRow->size))
-      return hit(*rememberedRow(std::move(*t), row, im.steadyNs()));
-    // Neither: committed (or dropped) meanwhile; the index says which.
-  } else if (auto r = im.rows.find(rk)) {
-    const auto recheck = im.options.fileRecheck.count() * 1000000;
-    const std::int64_t now = im.steadyNs();
-    if (now - r->checkedAtNs.load(std::memory_order_relaxed) < recheck) return hit(*r);
-    // Still the tile the index names? (replaced or deleted behind the cache's back otherwise)
-    const auto stored = im.store->stat((*d)->at(key));
-    if (stored && stored->version == r->version) {
-      r->checkedAtNs.store(now, std::memory_order_relaxed);
-      return hit(*r);
+  std::vector<CacheLookup> out(keys.size());
+  std::vector<std::size_t> looked; // those the index is asked for
+  std::vector<bool> pending(keys.size(), false);
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    const RowKey rk{id, keys[i]};
+    const auto pendingRow =
+        im.options.indexWriteBehind ? im.pending.find(rk) : std::optional<detail::PendingRow>{};
+    if (pendingRow) {
+      pending[i] = true;
+      // Written, not yet committed: the bytes are staged, or already in place.
+      CacheLookup row = hitOf(pendingRow->meta, pendingRow->size, 0);
+      if (auto t = pendingRow->staged->open(pendingRow->size)) {
+        out[i] = hit(rk, *rememberedRow(std::move(*t), row, im.steadyNs()));
+        continue;
+      }
+      // Neither: committed (or dropped) meanwhile; the index says which.
+    } else if (auto r = im.rows.find(rk)) {
+      const auto recheck = im.options.fileRecheck.count() * 1000000;
+      const std::int64_t now = im.steadyNs();
+      if (now - r->checkedAtNs.load(std::memory_order_relaxed) < recheck) {
+        out[i] = hit(rk, *r);
+        continue;
+      }
+      // Still the tile the index names? (replaced or deleted behind the cache's back otherwise)
+      const auto stored = im.store->stat(d.at(keys[i]));
+      if (stored && stored->version == r->version) {
+        r->checkedAtNs.store(now, std::memory_order_relaxed);
+        out[i] = hit(rk, *r);
+        continue;
+      }
+      im.rows.invalidate(rk);
     }
-    im.rows.invalidate(rk);
+    looked.push_back(i);
   }
+  if (looked.empty()) return out;
+  // One index round trip for the rest (a metatile's tiles at once: peekMany).
   const std::uint64_t generation = im.rows.generation();
-  auto found = peek(id, key);
-  if (!found || found->kind != CacheLookup::Kind::Hit) return found;
-  auto at = (*d)->at(key);
-  at.fetchedAt = found->meta.fetchedAt; // a local tier's copy of another version is stale
-  auto tile = im.store->open(at, found->size);
-  if (!tile) {
-    // The tile vanished or changed under us: report a miss, and let the writer drop the row if
-    // it still names no such tile (self-healing).
-    im.writer.submitDetached([&im, id, key] { return im.healRow(id, key); });
-    return CacheLookup{};
+  std::vector<TileKey> lookedKeys;
+  lookedKeys.reserve(looked.size());
+  for (const std::size_t i : looked)
+    lookedKeys.push_back(keys[i]);
+  auto found = peekMany(id, lookedKeys);
+  if (!found) return std::unexpected(found.error());
+  for (std::size_t j = 0; j < looked.size(); ++j) {
+    const std::size_t i = looked[j];
+    CacheLookup& f = (*found)[j];
+    if (f.kind != CacheLookup::Kind::Hit) {
+      out[i] = std::move(f);
+      continue;
+    }
+    auto at = d.at(keys[i]);
+    at.fetchedAt = f.meta.fetchedAt; // a local tier's copy of another version is stale
+    auto tile = im.store->open(at, f.size);
+    if (!tile) {
+      // The tile vanished or changed under us: report a miss, and let the writer drop the row if
+      // it still names no such tile (self-healing).
+      im.writer.submitDetached([&im, id, key = keys[i]] { return im.healRow(id, key); });
+      continue; // a Miss
+    }
+    const RowKey rk{id, keys[i]};
+    auto row = rememberedRow(std::move(*tile), f, im.steadyNs());
+    if (!pending[i]) im.rows.insert(rk, row, generation);
+    out[i] = hit(rk, *row);
   }
-  auto row = rememberedRow(std::move(*tile), *found, im.steadyNs());
-  if (!pendingRow) im.rows.insert(rk, row, generation);
-  return hit(*row);
+  return out;
 }
 
 std::expected<CacheLookup, CacheError> TileCache::openFromStore(DatasetId id, const TileKey& key) {

@@ -104,6 +104,27 @@ bool TileService::Impl::landIfCachedNow(const FlightKey& fk, const std::string& 
   return true;
 }
 
+void TileService::Impl::landCachedNow(std::vector<TileKey>& keys,
+                                      DatasetId id,
+                                      const std::string& folder) {
+  if (id < 0 || keys.empty()) return;
+  auto found = cache.openTiles(id, keys);
+  if (!found) return; // the index did not answer: none is known to be stored
+  std::erase_if(keys, [&, i = std::size_t{0}](const TileKey& k) mutable {
+    CacheLookup& f = (*found)[i++];
+    if (f.kind != CacheLookup::Kind::Hit || f.stale) return false;
+    land(FlightKey{id, k},
+         tile(TileOrigin::Hit,
+              {},
+              std::move(f.meta.contentType),
+              f.meta.fetchedAt,
+              folder,
+              k,
+              std::move(f.file)));
+    return true;
+  });
+}
+
 void TileService::Impl::land(const FlightKey& k, TileAnswer&& answer) {
   std::vector<Done> waiters;
   std::shared_ptr<LeaseHold> lease;

@@ -51,22 +51,28 @@ void TileService::Impl::missUnderMetaLease(const FlightKey& fk,
                                            const std::string& time) {
   const TileBlock meta = metaTileOf(g, fk.key, u.metaTiles);
   const UnixMillis now = nowMillis();
-  std::vector<TileKey> owned{fk.key};
+  std::vector<TileKey> others;
   for (std::int64_t r = meta.row0; r < meta.row0 + meta.rows; ++r) {
     for (std::int64_t c = meta.col0; c < meta.col0 + meta.cols; ++c) {
       const TileKey k{fk.key.level, r, c};
-      if (k == fk.key || !g.isValid(k)) continue;
-      const auto known = cache.peek(fk.dataset, k);
-      const bool missing = known && known->kind != CacheLookup::Kind::Hit &&
-                           !(known->kind == CacheLookup::Kind::Absent && known->retryAfter > now);
-      if (!missing) continue;
-      // Every missing tile is fetched, also one whose flight another request of this process
-      // opened a moment ago: that request's own try waits for this lease, then finds its tile
-      // stored (a tile left out would cost a second GetMap). A tile nobody asked for gets a flight
-      // with no waiter, so that a request meanwhile joins it.
-      (void)join(FlightKey{fk.dataset, k}, [](TileAnswer&&) {});
-      owned.push_back(k);
+      if (k != fk.key && g.isValid(k)) others.push_back(k);
     }
+  }
+  // One look at the index for the block's other tiles (peekMany), not one each.
+  const auto known = cache.peekMany(fk.dataset, others);
+  std::vector<TileKey> owned{fk.key};
+  for (std::size_t i = 0; known && i < others.size(); ++i) {
+    const TileKey& k = others[i];
+    const CacheLookup& found = (*known)[i];
+    const bool missing = found.kind != CacheLookup::Kind::Hit &&
+                         !(found.kind == CacheLookup::Kind::Absent && found.retryAfter > now);
+    if (!missing) continue;
+    // Every missing tile is fetched, also one whose flight another request of this process
+    // opened a moment ago: that request's own try waits for this lease, then finds its tile
+    // stored (a tile left out would cost a second GetMap). A tile nobody asked for gets a flight
+    // with no waiter, so that a request meanwhile joins it.
+    (void)join(FlightKey{fk.dataset, k}, [](TileAnswer&&) {});
+    owned.push_back(k);
   }
   fetchBlockUnderLease(std::move(owned), l, u, g, fk.dataset, folder, time);
 }
@@ -82,9 +88,8 @@ void TileService::Impl::fetchBlockUnderLease(std::vector<TileKey> owned,
   const TileBlock meta = metaTileOf(g, owned.front(), u.metaTiles);
   const LeaseKey lease{folder, TileKey{meta.level, meta.row0, meta.col0}};
   const auto hold = takeLease(lease, [owned, &l, &u, &g, id, folder, time](Impl& im) {
-    std::vector<TileKey> left;
-    for (const TileKey& k : owned)
-      if (!im.landIfCachedNow(FlightKey{id, k}, folder)) left.push_back(k);
+    std::vector<TileKey> left = owned;
+    im.landCachedNow(left, id, folder);
     if (!left.empty()) im.fetchBlockUnderLease(std::move(left), l, u, g, id, folder, time);
   });
   if (!hold) return; // waiting
@@ -95,9 +100,7 @@ void TileService::Impl::fetchBlockUnderLease(std::vector<TileKey> owned,
         heldLeases.try_emplace(FlightKey{id, k}, *hold);
     }
     // Another process may have stored some between our look and the lease.
-    std::erase_if(owned, [&](const TileKey& k) {
-      return landIfCachedNow(FlightKey{id, k}, folder);
-    });
+    landCachedNow(owned, id, folder);
     if (owned.empty()) return;
   }
   fetchBlock(std::move(owned), l, u, g, id, folder, time);

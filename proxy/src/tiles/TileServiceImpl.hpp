@@ -178,6 +178,9 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
    * second upstream request for one tile. Lands the flight with the cached tile when it is
    * there and fresh now. */
   bool landIfCachedNow(const FlightKey& fk, const std::string& folder);
+  /** landIfCachedNow() for tiles of one dataset, with one index round trip for those not stored
+   * (TileCache::openTiles): removes those landed from `keys`. */
+  void landCachedNow(std::vector<TileKey>& keys, DatasetId id, const std::string& folder);
 
   /** Answers a flight's waiters; gives its lease back (after the tile was stored: the waiters of
    * other processes find it). */

@@ -134,8 +134,16 @@ public:
    * for readers that want the bytes later. Repeated lookups of a tile cost neither SQLite nor
    * open(2): rows and descriptors are remembered (see Options::rowCacheEntries). */
   std::expected<CacheLookup, CacheError> openTile(DatasetId id, const TileKey& key);
+  /** openTile() for several tiles of one dataset, in the order of `keys`; those not remembered
+   * are looked up in one index round trip (peekMany). */
+  std::expected<std::vector<CacheLookup>, CacheError> openTiles(DatasetId id,
+                                                                std::span<const TileKey> keys);
   /** Index-only check (no file access): Hit/Absent/Miss kind and staleness, no bytes, no touch. */
   std::expected<CacheLookup, CacheError> peek(DatasetId id, const TileKey& key) const;
+  /** peek() for several tiles of one dataset, in the order of `keys`: one index round trip for a
+   * metatile's tiles on a networked index (ITileIndex::lookupMany). */
+  std::expected<std::vector<CacheLookup>, CacheError> peekMany(DatasetId id,
+                                                               std::span<const TileKey> keys) const;
   /** The store alone, for when the index cannot be reached (a shared index's server down, issue
    * 27): the tile file held open as openTile() does, with the dataset's content type and no
    * validators or expiry (never stale); Miss when the store has none. Tiles are written whole

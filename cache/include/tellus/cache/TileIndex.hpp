@@ -37,6 +37,7 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -98,6 +99,19 @@ public:
   /** The row of a tile; nullopt when the index knows nothing of it. */
   virtual std::expected<std::optional<TileRow>, CacheError> lookup(DatasetId id,
                                                                    const TileKey& key) = 0;
+  /** The rows of several tiles of one dataset, in the order of `keys` (nullopt: unknown). One
+   * lookup() each here; a networked index answers a metatile's tiles in one round trip. */
+  virtual std::expected<std::vector<std::optional<TileRow>>, CacheError>
+  lookupMany(DatasetId id, std::span<const TileKey> keys) {
+    std::vector<std::optional<TileRow>> rows;
+    rows.reserve(keys.size());
+    for (const TileKey& k : keys) {
+      auto r = lookup(id, k);
+      if (!r) return std::unexpected(r.error());
+      rows.push_back(std::move(*r));
+    }
+    return rows;
+  }
   /** Every dataset, by id. */
   virtual std::expected<std::vector<DatasetInfo>, CacheError> datasets() = 0;
   /** The dataset stored in `folder`, if any. */
