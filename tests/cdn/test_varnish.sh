@@ -8,6 +8,9 @@
 #   - an error is not kept: a failing upstream (503 from tellus), then a working one: the same
 #     URL is a 200 at once;
 #   - PURGE with an xkey-purge header of a layer's key removes that layer's tiles, not others';
+#   - revalidation end to end: a tile past its ttl (Varnish's s-maxage too) is asked of tellus
+#     again with its ETag; tellus revalidates upstream (304), the tile's version and ETag stay,
+#     and tellus answers Varnish 304 (its access log): no body crosses either hop;
 #   - `tellus cache prune --layer` with server.cdn.purge pointing at Varnish: the pruned layer's
 #     tile leaves Varnish (the next request reaches tellus), the other layer's stays; and so does
 #     `tellus seed --refresh` of that layer; a purge that fails exits 1 and shows no token.
@@ -53,11 +56,16 @@ layers:
     upstream: ww
     format: image/png
     grid: {level_zero_delta: 36, tile_size: 256, levels: 3}
+  - name: rev
+    upstream: ww
+    format: image/png
+    grid: {level_zero_delta: 36, tile_size: 256, levels: 3}
+    cache: {ttl: 1s}
 YAML
 }
 config "" >"$work/serve.yaml"
 "$tellus" serve --config "$work/serve.yaml" --cache "$work/cache" --listen 127.0.0.1:0 \
-  >"$work/serve.log" 2>&1 &
+  --access-log "$work/access.log" >"$work/serve.log" 2>&1 &
 server=$!
 for _ in $(seq 100); do grep -qs "listening on" "$work/serve.log" && break; sleep 0.1; done
 tport=$(grep -o "127.0.0.1:[0-9]*" "$work/serve.log" | head -n 1 | cut -d: -f2)
@@ -100,6 +108,31 @@ field cache-control <<<"$t" | grep -q "s-maxage=86400, stale-while-revalidate=86
 etag=$(field etag <<<"$b")
 c=$(head_of "$v/wwtile?T=sat&L=1&X=2&Y=3" -H "If-None-Match: $etag")
 [ "$(status_of <<<"$c")" = 304 ] || fail "If-None-Match through Varnish: $c"
+
+# 2b. Revalidation through both hops. rev's tiles expire after 1 s, and so do Varnish's copies
+# (s-maxage=1, grace 1 s, kept for stale-if-error): past that Varnish asks tellus with the ETag it
+# has, tellus asks the upstream with the upstream's (304: the tile is the same), keeps the tile's
+# version (so its ETag) and answers Varnish 304. Real processes on real clocks: a short sleep.
+rev="wwtile?T=rev&L=1&X=2&Y=3"
+r1=$(head_of "$v/$rev")
+[ "$(status_of <<<"$r1")" = 200 ] || fail "rev's tile: $r1"
+etag1=$(field etag <<<"$r1")
+field cache-control <<<"$r1" | grep -q "s-maxage=1," || fail "rev's Cache-Control: $r1"
+sleep 2.5
+r2=$(head_of "$v/$rev")
+[ "$(status_of <<<"$r2")" = 200 ] || fail "rev's tile past its ttl: $r2"
+for _ in $(seq 50); do # Varnish may have answered from grace and revalidate in the background
+  grep -q "target=\"/$rev\" status=304" "$work/access.log" && break
+  sleep 0.1
+done
+grep -q "target=\"/$rev\" status=304" "$work/access.log" ||
+  fail "Varnish's revalidation did not get 304 from tellus: $(grep "T=rev" "$work/access.log")"
+[ "$(grep -c "^T=rev&L=1&X=2&Y=3 304\$" "$work/upstream.log")" -ge 1 ] ||
+  fail "tellus did not revalidate upstream: $(grep "T=rev" "$work/upstream.log")"
+[ "$(asked 'T=rev&L=1&X=2&Y=3')" = 1 ] || fail "the upstream sent rev's tile again"
+r3=$(head_of "$v/$rev")
+[ "$(field etag <<<"$r3")" = "$etag1" ] || fail "the ETag changed at revalidation: $r1 / $r3"
+cmp -s "$work/body" <(curl -s "http://127.0.0.1:$tport/$rev") || fail "Varnish's body differs"
 
 # 3. Errors are not kept: a failing upstream, then a working one.
 touch "$work/fail"
@@ -164,4 +197,4 @@ fi
 grep -q "purging server.cdn.purge\[0\] (http://127.0.0.1:1) failed" "$work/bad-purge.log" ||
   fail "the failed purge is not reported: $(cat "$work/bad-purge.log")"
 ! grep -q "s3cr3t" "$work/bad-purge.log" || fail "the purge URL's token was shown"
-echo "ok: Varnish in front of tellus serve: hits, 304, no error kept, purge by key, by prune and by refresh"
+echo "ok: Varnish in front of tellus serve: hits, 304, revalidation, no error kept, purge by key, by prune and by refresh"
