@@ -196,3 +196,73 @@ TEST(PgTileIndex, InstancesStartedAtOnceOnAnEmptyDatabaseCreateTheSchemaOnce) {
       EXPECT_EQ(e, "");
   }
 }
+
+TEST(PgTileIndex, PutRowsWritesWhatPutRowWritesInOneStatement) {
+  // A metatile's rows in one INSERT (putRows) against the same rows one by one: the same rows
+  // back, the usage triggers counting each, a replaced row replaced, a key given twice the last.
+  const std::string uri = test::pgCreateDatabase();
+  auto a = openAt(uri);
+  ASSERT_TRUE(a);
+  ASSERT_TRUE(a->begin());
+  const auto many = a->upsertDataset(test::imagerySpec("many"), "local/many", 1000).value();
+  const auto single = a->upsertDataset(test::imagerySpec("single"), "local/single", 1000).value();
+  ASSERT_TRUE(a->commit());
+  std::vector<std::pair<TileKey, TileRow>> rows;
+  for (std::int64_t c = 0; c < 300; ++c) { // more rows than one statement takes
+    TileRow r;
+    r.bytes = 1000 + c;
+    r.meta.contentType = c % 2 ? "image/png" : "image/jpeg";
+    r.meta.etag = c % 3 ? "\"e" + std::to_string(c) + "\"" : "";
+    r.meta.lastModified = "Tue, 01 Jun 2004 00:00:00 GMT";
+    r.meta.expiresAt = c % 4 ? std::optional<std::int64_t>(9000 + c) : std::nullopt;
+    r.meta.fetchedAt = 5000 + c;
+    if (c % 5 == 0) {
+      r.present = false;
+      r.retryAfter = 7000 + c;
+    }
+    rows.emplace_back(TileKey{4, c / 16, c % 16}, r);
+  }
+  ASSERT_TRUE(a->begin());
+  ASSERT_TRUE(a->putRows(many.id, rows));
+  for (const auto& [k, r] : rows)
+    ASSERT_TRUE(a->putRow(single.id, k, r));
+  ASSERT_TRUE(a->commit());
+  for (const auto& [k, r] : rows) {
+    const auto x = a->lookup(many.id, k).value();
+    const auto y = a->lookup(single.id, k).value();
+    ASSERT_TRUE(x && y);
+    EXPECT_EQ(x->present, y->present);
+    EXPECT_EQ(x->bytes, y->bytes);
+    EXPECT_EQ(x->retryAfter, y->retryAfter);
+    EXPECT_EQ(x->meta.contentType, y->meta.contentType);
+    EXPECT_EQ(x->meta.etag, y->meta.etag);
+    EXPECT_EQ(x->meta.expiresAt, y->meta.expiresAt);
+    EXPECT_EQ(x->meta.fetchedAt, y->meta.fetchedAt);
+  }
+  LevelStats sums[2];
+  const auto counts = a->levelCounts();
+  ASSERT_TRUE(counts);
+  for (const auto& c : *counts) {
+    LevelStats& s = sums[c.dataset == many.id ? 0 : 1];
+    s.tiles += c.level.tiles;
+    s.absent += c.level.absent;
+    s.bytes += c.level.bytes;
+  }
+  EXPECT_EQ(sums[0].tiles, 300); // every row, the 60 absent ones too
+  EXPECT_EQ(sums[0].absent, 60);
+  EXPECT_EQ(sums[0].tiles, sums[1].tiles);
+  EXPECT_EQ(sums[0].absent, sums[1].absent);
+  EXPECT_EQ(sums[0].bytes, sums[1].bytes);
+  EXPECT_EQ(a->totalBytes().value(), sums[0].bytes + sums[1].bytes); // the usage triggers
+  // Replaced rows, and one key twice (the last wins).
+  rows.resize(3);
+  rows[0].second.bytes = 1;
+  rows[1].second.bytes = 2;
+  rows[2] = rows[0];
+  rows[2].second.bytes = 3;
+  ASSERT_TRUE(a->begin());
+  ASSERT_TRUE(a->putRows(many.id, rows));
+  ASSERT_TRUE(a->commit());
+  EXPECT_EQ(a->lookup(many.id, rows[0].first).value()->bytes, 3);
+  EXPECT_EQ(a->lookup(many.id, rows[1].first).value()->bytes, 2);
+}

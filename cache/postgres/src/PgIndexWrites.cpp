@@ -2,6 +2,9 @@
 
 #include "PgTileIndex.hpp"
 
+#include <algorithm>
+#include <string>
+
 namespace tellus {
 
 namespace {
@@ -9,6 +12,8 @@ namespace {
 using Result = std::expected<void, CacheError>;
 
 constexpr int kFetchRows = 1000;
+/** Rows per INSERT of putRows (12 parameters each, far below PostgreSQL's 65,535). */
+constexpr std::size_t kMaxRowsPerStatement = 256;
 
 Result done(const std::expected<pg::ResultPtr, CacheError>& r) {
   if (!r) return std::unexpected(r.error());
@@ -68,23 +73,62 @@ void PgTileIndex::rollbackToSavepoint() {
 
 // ---------------------------------------------------------------------------------- rows
 
-Result PgTileIndex::putRow(DatasetId id, const TileKey& key, const TileRow& row) {
-  auto p = pg::keyParams(id, key);
+namespace {
+
+constexpr int kRowParams = 12;
+
+/** Binds one row's twelve values (dataset, key, state, bytes, validators, times). */
+void addRow(pg::Params& p, DatasetId id, const TileKey& key, const TileRow& row) {
+  p.add(std::int64_t{id}).add(std::int64_t{key.level}).add(key.row).add(key.col);
   p.add(std::int64_t{row.present ? pg::kStatePresent : pg::kStateAbsent}).add(row.bytes);
   p.add(std::string_view(row.meta.contentType)).add(std::string_view(row.meta.etag));
   p.add(std::string_view(row.meta.lastModified)).add(row.meta.expiresAt);
   p.add(row.meta.fetchedAt).add(row.retryAfter);
-  return done(write("INSERT INTO tiles(dataset, level, row, col, state, bytes, content_type, etag, "
-                    "last_modified, expires, fetched_at, last_access, retry_after) VALUES "
-                    "($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $11, $12) "
-                    "ON CONFLICT (dataset, level, row, col) DO UPDATE SET "
-                    "state = excluded.state, bytes = excluded.bytes, "
-                    "content_type = excluded.content_type, etag = excluded.etag, "
-                    "last_modified = excluded.last_modified, expires = excluded.expires, "
-                    "fetched_at = excluded.fetched_at, last_access = excluded.last_access, "
-                    "retry_after = excluded.retry_after",
-                    p,
-                    "indexing tile"));
+}
+
+/** INSERT ... ON CONFLICT of `n` rows bound by addRow, in one statement. */
+std::string putRowsSql(std::size_t n) {
+  std::string sql = "INSERT INTO tiles(dataset, level, row, col, state, bytes, content_type, etag, "
+                    "last_modified, expires, fetched_at, last_access, retry_after) VALUES ";
+  for (std::size_t i = 0; i < n; ++i) {
+    const int b = static_cast<int>(i) * kRowParams;
+    auto at = [b](int k) { return "$" + std::to_string(b + k); };
+    sql += (i ? ", (" : "(") + at(1) + ", " + at(2) + ", " + at(3) + ", " + at(4) + ", " + at(5) +
+           ", " + at(6) + ", " + at(7) + ", " + at(8) + ", " + at(9) + ", " + at(10) + ", " +
+           at(11) + ", " + at(11) + ", " + at(12) + ")";
+  }
+  sql += " ON CONFLICT (dataset, level, row, col) DO UPDATE SET "
+         "state = excluded.state, bytes = excluded.bytes, "
+         "content_type = excluded.content_type, etag = excluded.etag, "
+         "last_modified = excluded.last_modified, expires = excluded.expires, "
+         "fetched_at = excluded.fetched_at, last_access = excluded.last_access, "
+         "retry_after = excluded.retry_after";
+  return sql;
+}
+
+} // namespace
+
+Result PgTileIndex::putRow(DatasetId id, const TileKey& key, const TileRow& row) {
+  pg::Params p;
+  addRow(p, id, key, row);
+  return done(write(putRowsSql(1).c_str(), p, "indexing tile"));
+}
+
+Result PgTileIndex::putRows(DatasetId id, std::span<const std::pair<TileKey, TileRow>> rows) {
+  // A metatile's rows in one statement, where one each cost a round trip each (15 of them in
+  // the transaction that a burst's waiters wait for; bench/RESULTS.md, issue 27). One statement
+  // may not touch a row twice: a key given twice is written row by row, the last one winning.
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    for (std::size_t j = i + 1; j < rows.size(); ++j)
+      if (rows[i].first == rows[j].first) return ITileIndex::putRows(id, rows);
+  for (std::size_t from = 0; from < rows.size(); from += kMaxRowsPerStatement) {
+    const std::size_t n = std::min(kMaxRowsPerStatement, rows.size() - from);
+    pg::Params p;
+    for (std::size_t i = from; i < from + n; ++i)
+      addRow(p, id, rows[i].first, rows[i].second);
+    if (auto r = done(write(putRowsSql(n).c_str(), p, "indexing tiles")); !r) return r;
+  }
+  return {};
 }
 
 Result PgTileIndex::deleteRow(DatasetId id, const TileKey& key) {

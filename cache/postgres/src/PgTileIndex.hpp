@@ -56,6 +56,7 @@ public:
   void releaseSavepoint() override;
   void rollbackToSavepoint() override;
   Result putRow(DatasetId id, const TileKey& key, const TileRow& row) override;
+  Result putRows(DatasetId id, std::span<const std::pair<TileKey, TileRow>> rows) override;
   Result deleteRow(DatasetId id, const TileKey& key) override;
   Result revalidate(DatasetId id, const TileKey& key, const TileMeta& meta) override;
   void touch(DatasetId id, const TileKey& key, UnixMillis when) override;

@@ -66,6 +66,8 @@ struct TileCache::Impl {
   // --- inside writer operations (under the writer lock) ------------------------------------------
   /** Writes a row (fetched-at 0 becomes now) and marks it changed for the row cache. */
   Result writeRow(DatasetId id, const TileKey& key, TileRow row);
+  /** writeRow() for several tiles (distinct keys) of one dataset, in one ITileIndex::putRows. */
+  Result writeRows(DatasetId id, std::vector<std::pair<TileKey, TileRow>> many);
   Result deleteRow(DatasetId id, const TileKey& key);
   /** A reader found a present row whose tile is missing or of another size: drops the row if that
    * is still so now, under the changes lock (where a row and its tile agree unless something

@@ -80,6 +80,14 @@ Result TileCache::Impl::writeRow(DatasetId id, const TileKey& key, TileRow row) 
   return index->putRow(id, key, row);
 }
 
+Result TileCache::Impl::writeRows(DatasetId id, std::vector<std::pair<TileKey, TileRow>> many) {
+  for (auto& [key, row] : many) {
+    if (row.meta.fetchedAt == 0) row.meta.fetchedAt = clock->now();
+    writer.rowChanged(id, key);
+  }
+  return index->putRows(id, many);
+}
+
 Result TileCache::Impl::deleteRow(DatasetId id, const TileKey& key) {
   writer.rowChanged(id, key);
   return index->deleteRow(id, key);
@@ -457,10 +465,14 @@ TileCache::putMany(DatasetId id, std::span<const TileBytes> tiles, const TileMet
   for (const TileBytes& t : tiles)
     rows.emplace_back(t.key, static_cast<std::int64_t>(t.bytes.size()));
   auto apply = [&im, id, m, rows = std::move(rows), all = *staged]() -> Result {
+    // Every tile into place, then their rows in one putRows (one statement on PostgreSQL).
+    std::vector<std::pair<TileKey, TileRow>> indexed;
+    indexed.reserve(all.size());
     for (std::size_t i = 0; i < all.size(); ++i) {
-      if (auto r = install(im, id, rows[i].first, rows[i].second, m, *all[i]); !r) return r;
+      if (auto r = all[i]->install(); !r) return r;
+      indexed.emplace_back(rows[i].first, TileRow{true, rows[i].second, m, std::nullopt});
     }
-    return Result{};
+    return im.writeRows(id, std::move(indexed));
   };
   return im.gate.putOutcome(im.writer.submit(std::move(apply), [all = *staged](const Result& r) {
     for (const auto& tile : all)

@@ -40,6 +40,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace tellus {
@@ -146,6 +147,13 @@ public:
 
   /** Inserts or replaces a row; its last access becomes row.meta.fetchedAt. */
   virtual Result putRow(DatasetId id, const TileKey& key, const TileRow& row) = 0;
+  /** putRow() for several tiles of one dataset (distinct keys): one putRow each here; a networked
+   * index writes a metatile's rows in one statement. */
+  virtual Result putRows(DatasetId id, std::span<const std::pair<TileKey, TileRow>> rows) {
+    for (const auto& [key, row] : rows)
+      if (auto r = putRow(id, key, row); !r) return r;
+    return {};
+  }
   /** Removes a row (none is not an error). */
   virtual Result deleteRow(DatasetId id, const TileKey& key) = 0;
   /** A present row's new expiry, validators and fetched-at (none, or absent: nothing happens). */
