@@ -111,7 +111,8 @@ std::string putRowsSql(std::size_t n) {
 Result PgTileIndex::putRow(DatasetId id, const TileKey& key, const TileRow& row) {
   pg::Params p;
   addRow(p, id, key, row);
-  return done(write(putRowsSql(1).c_str(), p, "indexing tile"));
+  static const std::string sql = putRowsSql(1);
+  return done(write(sql.c_str(), p, "indexing tile"));
 }
 
 Result PgTileIndex::putRows(DatasetId id, std::span<const std::pair<TileKey, TileRow>> rows) {

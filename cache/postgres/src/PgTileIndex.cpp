@@ -150,11 +150,10 @@ TileRow rowAt(const PGresult* r, int i) {
 
 std::expected<std::optional<TileRow>, CacheError> PgTileIndex::lookup(DatasetId id,
                                                                       const TileKey& key) {
-  auto res = read((std::string(kRowColumns) + " FROM tiles WHERE dataset = $1 AND level = $2 AND "
-                                              "row = $3 AND col = $4")
-                      .c_str(),
-                  pg::keyParams(id, key),
-                  "looking up tile");
+  static const std::string sql = std::string(kRowColumns) +
+                                 " FROM tiles WHERE dataset = $1 AND level = $2 AND row = $3 AND "
+                                 "col = $4";
+  auto res = read(sql.c_str(), pg::keyParams(id, key), "looking up tile");
   if (!res) return std::unexpected(res.error());
   if (PQntuples(res->get()) == 0) return std::nullopt;
   return rowAt(res->get(), 0);
@@ -186,12 +185,10 @@ PgTileIndex::lookupMany(DatasetId id, std::span<const TileKey> keys) {
     return ITileIndex::lookupMany(id, keys); // scattered keys: a block scan would read too much
   pg::Params p;
   p.add(std::int64_t{id}).add(std::int64_t{level}).add(r0).add(r1).add(c0).add(c1);
-  auto res = read((std::string(kRowColumns) +
-                   ", row, col FROM tiles WHERE dataset = $1 AND level = $2 AND row BETWEEN $3 "
-                   "AND $4 AND col BETWEEN $5 AND $6")
-                      .c_str(),
-                  p,
-                  "looking up tiles");
+  static const std::string sql = std::string(kRowColumns) +
+                                 ", row, col FROM tiles WHERE dataset = $1 AND level = $2 AND row "
+                                 "BETWEEN $3 AND $4 AND col BETWEEN $5 AND $6";
+  auto res = read(sql.c_str(), p, "looking up tiles");
   if (!res) return std::unexpected(res.error());
   const PGresult* r = res->get();
   for (int i = 0; i < PQntuples(r); ++i) {

@@ -161,23 +161,9 @@ bool TileCache::wasRebuiltAtOpen() const noexcept {
 // ---------------------------------------------------------------------------------- lookups
 
 std::expected<CacheLookup, CacheError> TileCache::peek(DatasetId id, const TileKey& key) const {
-  Impl& im = *impl_;
-  auto d = im.datasets.checked(id, key);
-  if (!d) return std::unexpected(d.error());
-  if (im.options.indexWriteBehind) {
-    if (const auto p = im.pending.find(RowKey{id, key}))
-      return hitOf(p->meta, p->size, im.clock->now());
-  }
-  auto row = im.index->lookup(id, key);
-  if (!row) return std::unexpected(row.error());
-  if (!*row) return CacheLookup{};
-  if (!(*row)->present) {
-    CacheLookup out;
-    out.kind = CacheLookup::Kind::Absent;
-    out.retryAfter = (*row)->retryAfter.value_or(0);
-    return out;
-  }
-  return hitOf(std::move((*row)->meta), (*row)->bytes, im.clock->now());
+  auto one = peekMany(id, std::span<const TileKey>(&key, 1));
+  if (!one) return std::unexpected(one.error());
+  return std::move(one->front());
 }
 
 std::expected<std::vector<CacheLookup>, CacheError>
@@ -187,28 +173,33 @@ TileCache::peekMany(DatasetId id, std::span<const TileKey> keys) const {
     if (auto d = im.datasets.checked(id, k); !d) return std::unexpected(d.error());
   const UnixMillis now = im.clock->now();
   std::vector<CacheLookup> out(keys.size());
-  // As peek(): rows written behind and not yet committed first, then the index (a row committed
-  // in between is found there).
-  std::vector<bool> pending(keys.size(), false);
-  if (im.options.indexWriteBehind) {
-    for (std::size_t i = 0; i < keys.size(); ++i) {
+  // Rows written behind and not yet committed first, then the index for the others (a row
+  // committed in between is found there).
+  std::vector<std::size_t> looked;
+  std::vector<TileKey> lookedKeys;
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    if (im.options.indexWriteBehind) {
       if (const auto p = im.pending.find(RowKey{id, keys[i]})) {
         out[i] = hitOf(p->meta, p->size, now);
-        pending[i] = true;
+        continue;
       }
     }
+    looked.push_back(i);
+    lookedKeys.push_back(keys[i]);
   }
-  auto rows = im.index->lookupMany(id, keys);
+  if (looked.empty()) return out;
+  auto rows = im.index->lookupMany(id, lookedKeys);
   if (!rows) return std::unexpected(rows.error());
-  for (std::size_t i = 0; i < keys.size(); ++i) {
-    auto& row = (*rows)[i];
-    if (pending[i] || !row) continue;
+  for (std::size_t j = 0; j < looked.size(); ++j) {
+    auto& row = (*rows)[j];
+    CacheLookup& o = out[looked[j]];
+    if (!row) continue;
     if (!row->present) {
-      out[i].kind = CacheLookup::Kind::Absent;
-      out[i].retryAfter = row->retryAfter.value_or(0);
+      o.kind = CacheLookup::Kind::Absent;
+      o.retryAfter = row->retryAfter.value_or(0);
       continue;
     }
-    out[i] = hitOf(std::move(row->meta), row->bytes, now);
+    o = hitOf(std::move(row->meta), row->bytes, now);
   }
   return out;
 }

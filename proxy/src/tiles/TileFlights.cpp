@@ -90,18 +90,9 @@ TileService::Impl::joinGated(const FlightKey& k, Done& done, FetchGate gate) {
 }
 
 bool TileService::Impl::landIfCachedNow(const FlightKey& fk, const std::string& folder) {
-  if (fk.dataset < 0) return false;
-  auto again = cache.openTile(fk.dataset, fk.key);
-  if (!again || again->kind != CacheLookup::Kind::Hit || again->stale) return false;
-  land(fk,
-       tile(TileOrigin::Hit,
-            {},
-            std::move(again->meta.contentType),
-            again->meta.fetchedAt,
-            folder,
-            fk.key,
-            std::move(again->file)));
-  return true;
+  std::vector<TileKey> one{fk.key};
+  landCachedNow(one, fk.dataset, folder);
+  return one.empty();
 }
 
 void TileService::Impl::landCachedNow(std::vector<TileKey>& keys,
