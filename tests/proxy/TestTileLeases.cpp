@@ -202,6 +202,51 @@ TEST(TileLeases, AMissWaitingForAnotherProcessServesTheTileItStoredAndFetchesNot
   EXPECT_TRUE(leases->released.empty()) << "a waiter holds no lease";
 }
 
+// A burst for one missing tile: the requests after the first join its flight without asking the
+// index (on a shared index each lookup is a round trip, and the fetch's own waited behind them).
+TEST(TileLeases, RequestsForATileInFlightJoinItWithoutLookingItUp) {
+  test::FakeUpstream up(sizedPngReply);
+  auto leases = std::make_shared<ScriptedLeases>(LeaseOutcome::Waiting);
+  auto index = std::make_shared<test::MemoryTileIndex>();
+  Service s(up.url("/wms"), leases, 4, true, 2, nullptr, 0ms, index);
+  ASSERT_TRUE(s.cache && s.tiles);
+  const TileKey k{1, 2, 3};
+  std::vector<std::future<TileAnswer>> answers;
+  answers.push_back(s.get(k));
+  ASSERT_TRUE(leases->waiterArrived());
+  const std::int64_t lookedUp = index->lookups();
+  EXPECT_GT(lookedUp, 0);
+  for (int i = 0; i < 20; ++i)
+    answers.push_back(s.get(k));
+  // Another tile of the metatile: its flight was opened by the first miss, which fetches the block.
+  answers.push_back(s.get(TileKey{1, 0, 1}));
+  EXPECT_EQ(index->lookups(), lookedUp) << "a request for a tile in flight asked the index";
+  EXPECT_EQ(leases->asked.size(), 1u);
+  // The holder stores the metatile and releases: every request gets its tile, nothing is fetched.
+  const std::string theirs = "stored by the holder";
+  std::vector<std::byte> bytes(theirs.size());
+  std::memcpy(bytes.data(), theirs.data(), theirs.size());
+  TileMeta meta;
+  meta.contentType = "image/png";
+  for (std::int64_t r = 0; r < 4; ++r)
+    for (std::int64_t c = 0; c < 4; ++c)
+      ASSERT_TRUE(s.cache->put(s.datasetId(), TileKey{1, r, c}, bytes, meta));
+  ASSERT_TRUE(leases->wakeOneWaiter());
+  for (auto& answer : answers) {
+    ASSERT_EQ(answer.wait_for(30s), std::future_status::ready);
+    const TileAnswer a = answer.get();
+    ASSERT_EQ(a.kind, TileAnswer::Kind::Tile) << a.message;
+    ASSERT_TRUE(a.file);
+    EXPECT_EQ(text(*a.file->readAll()), theirs);
+  }
+  EXPECT_EQ(up.requests(), 0u);
+  // Once landed, a request looks the tile up again (a hit).
+  auto later = s.get(k);
+  ASSERT_EQ(later.wait_for(30s), std::future_status::ready);
+  EXPECT_EQ(later.get().kind, TileAnswer::Kind::Tile);
+  EXPECT_GT(index->lookups(), lookedUp);
+}
+
 TEST(TileLeases, AMissThatTakesTheLeaseFetchesStoresThenReleasesIt) {
   test::FakeUpstream up(pngReply);
   auto leases = std::make_shared<ScriptedLeases>(LeaseOutcome::Acquired);

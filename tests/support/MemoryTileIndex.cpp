@@ -17,6 +17,7 @@ CacheError noTransaction() {
 
 std::expected<std::optional<TileRow>, CacheError> MemoryTileIndex::lookup(DatasetId id,
                                                                           const TileKey& key) {
+  ++lookups_;
   std::shared_lock lock(mutex_);
   if (failLookups_) return std::unexpected(*failLookups_);
   const auto it = committed_.tiles.find(idOf(id, key));

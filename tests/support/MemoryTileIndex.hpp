@@ -12,6 +12,7 @@
 
 #include <tellus/cache/TileIndex.hpp>
 
+#include <atomic>
 #include <map>
 #include <optional>
 #include <shared_mutex>
@@ -63,6 +64,8 @@ public:
   void failCommits(std::optional<CacheError> error);
   /** Makes lookups fail with `error` (a database out of reach) until cleared with nullopt. */
   void failLookups(std::optional<CacheError> error);
+  /** How many rows were looked up so far (what a database would be asked). */
+  std::int64_t lookups() const { return lookups_.load(); }
 
 private:
   using RowId = std::tuple<DatasetId, std::int32_t, std::int64_t, std::int64_t>;
@@ -77,6 +80,7 @@ private:
   };
 
   std::optional<CacheError> failLookups_; // under mutex_
+  std::atomic<std::int64_t> lookups_{0};
   static RowId idOf(DatasetId id, const TileKey& key) { return {id, key.level, key.row, key.col}; }
   static TileKey keyOf(const RowId& id) {
     return TileKey{std::get<1>(id), std::get<2>(id), std::get<3>(id)};

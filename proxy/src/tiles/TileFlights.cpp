@@ -72,7 +72,18 @@ bool TileService::Impl::join(const FlightKey& k, Done done) {
   std::lock_guard lock(flightsMutex);
   auto [it, inserted] = flights.try_emplace(k);
   it->second.push_back(std::move(done));
+  if (inserted) openFlights.fetch_add(1, std::memory_order_relaxed);
   return inserted;
+}
+
+bool TileService::Impl::joinUnderWay(const FlightKey& k, Done& done) {
+  // A stale count only sends the caller the long way (a lookup, then joinGated).
+  if (openFlights.load(std::memory_order_relaxed) == 0) return false;
+  std::lock_guard lock(flightsMutex);
+  const auto it = flights.find(k);
+  if (it == flights.end()) return false;
+  it->second.push_back(std::move(done));
+  return true;
 }
 
 TileService::Impl::Joined
@@ -86,6 +97,7 @@ TileService::Impl::joinGated(const FlightKey& k, Done& done, FetchGate gate) {
     if (auto wait = gate.budget->take(gate.client)) return {false, wait};
   }
   flights[k].push_back(std::move(done));
+  openFlights.fetch_add(1, std::memory_order_relaxed);
   return {true, std::nullopt};
 }
 
@@ -128,6 +140,7 @@ void TileService::Impl::land(const FlightKey& k, TileAnswer&& answer) {
     if (const auto it = flights.find(k); it != flights.end()) {
       waiters = std::move(it->second);
       flights.erase(it);
+      openFlights.fetch_sub(1, std::memory_order_relaxed);
     }
   }
   // A metatile's lease is shared by its tiles' flights: while others still hold it, the first tile
@@ -340,6 +353,10 @@ void TileService::Impl::getTile(std::string_view layerName,
     ds = &timed;
   }
   const auto& [id, folder] = *ds;
+  // A tile this process is fetching, or waiting for under another's lease, is joined without a
+  // look at the index: a burst of requests for one missing tile looked it up once each, and on a
+  // shared index the fetch's own lookups waited behind theirs (bench/RESULTS.md, issue 27).
+  if (id >= 0 && joinUnderWay(FlightKey{id, key}, done)) return;
   // The file held open, not read: the HTTP server sends it with sendfile(2). A dataset the
   // cache could not register has nothing cached.
   auto found =

@@ -82,6 +82,8 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
 
   std::mutex flightsMutex;
   std::unordered_map<FlightKey, std::vector<Done>, FlightKeyHash> flights;
+  // flights.size(), read without the lock: a hit skips the lock while nothing is in flight.
+  std::atomic<std::size_t> openFlights{0};
   // Leases held by flights of this process (options.leases), given back when the last flight
   // holding one lands.
   std::unordered_map<FlightKey, std::shared_ptr<LeaseHold>, FlightKeyHash> heldLeases;
@@ -163,6 +165,9 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
 
   /** Joins a flight; true when the caller is the first and must start the work. */
   bool join(const FlightKey& k, Done done);
+  /** Joins the flight of `k` if one is under way (taking `done`); false, with `done` kept, if
+   * none is. */
+  bool joinUnderWay(const FlightKey& k, Done& done);
 
   struct Joined {
     bool first = false;                               ///< the caller starts the work
