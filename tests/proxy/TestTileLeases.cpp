@@ -97,7 +97,8 @@ struct Service {
           int workers = 2,
           const Clock* clock = nullptr,
           std::chrono::milliseconds ttl = 0ms,
-          std::shared_ptr<ITileIndex> index = nullptr)
+          std::shared_ptr<ITileIndex> index = nullptr,
+          const std::string& mime = "image/png")
       : cache(index ? openOn(dir.path(), std::move(index)) : test::openTestCache(dir.path())) {
     UpstreamSpec u;
     u.name = "up";
@@ -109,7 +110,7 @@ struct Service {
     l.name = "sat";
     l.upstream = "up";
     l.dataset.grid = GridSpec{Sector{}, 36.0, 64, 64, 3};
-    l.dataset.mimeType = "image/png";
+    l.dataset.mimeType = mime;
     l.ttl = ttl;
     TileServiceOptions o;
     if (clock) o.clock = clock;
@@ -164,6 +165,23 @@ test::FakeReply sizedPngReply(const test::FakeRequest& r) {
   const auto bytes = *encodeImage("image/png", w, h, 3, px.data());
   return test::FakeReply::ok(std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
                              "image/png");
+}
+
+/** A JPEG of the GetMap's WIDTH x HEIGHT (4:2:0, so that 64 px tiles are cut without decoding). */
+test::FakeReply sizedJpegReply(const test::FakeRequest& r) {
+  auto param = [&](const std::string& name) {
+    const auto at = r.target.find(name + "=");
+    return at == std::string::npos ? 0 : std::atoi(r.target.c_str() + at + name.size() + 1);
+  };
+  const int w = param("WIDTH"), h = param("HEIGHT");
+  if (w <= 0 || h <= 0 || w > 1024 || h > 1024) return test::FakeReply::withStatus(400, "size");
+  std::vector<std::uint8_t> px(static_cast<std::size_t>(w * h * 3));
+  for (std::size_t i = 0; i < px.size(); ++i)
+    px[i] = static_cast<std::uint8_t>((i / 3 % static_cast<std::size_t>(w)) * 255 /
+                                      static_cast<std::size_t>(w));
+  const auto bytes = *encodeImage("image/jpeg", w, h, 3, px.data());
+  return test::FakeReply::ok(std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
+                             "image/jpeg");
 }
 
 std::string text(const std::vector<std::byte>& b) {
@@ -318,6 +336,49 @@ TEST(TileLeases, AMissFetchesItsWholeMetatileUnderTheMetatilesLeaseReleasedOnceE
   EXPECT_EQ(other.get().origin, TileOrigin::Hit);
   EXPECT_EQ(up.requests(), 1u);
   EXPECT_EQ(leases->asked.size(), 1u);
+}
+
+// A metatile cut without decoding (JPEG): its other tiles are stored together, and their lease
+// goes back before their clients in this process are answered, so that the clients waiting in
+// other processes (most of a burst's) are woken first.
+TEST(TileLeases, AMetatilesLeaseGoesBackBeforeTheClientsHereOfItsOtherTilesAreAnswered) {
+  std::promise<void> go;
+  std::shared_future<void> released = go.get_future().share();
+  test::FakeUpstream up([released](const test::FakeRequest& r) {
+    released.wait(); // the fetch is under way until the test lets it answer
+    return sizedJpegReply(r);
+  });
+  auto leases = std::make_shared<ScriptedLeases>(LeaseOutcome::Acquired);
+  // One worker: the asked-for tile is stored and answered, then the others.
+  Service s(up.url("/wms"), leases, 4, true, 1, nullptr, 0ms, nullptr, "image/jpeg");
+  ASSERT_TRUE(s.cache && s.tiles);
+  auto asked = s.get(TileKey{1, 2, 3});
+  ASSERT_TRUE(up.waitForRequests(1));
+  auto other = s.get(TileKey{1, 0, 0}); // joins the flight the miss opened for it
+  bool otherAnsweredAtRelease = true;
+  std::size_t storedAtRelease = 0;
+  leases->onRelease = [&](const LeaseKey&) {
+    otherAnsweredAtRelease = other.wait_for(0s) == std::future_status::ready;
+    for (std::int64_t r = 0; r < 4; ++r)
+      for (std::int64_t c = 0; c < 4; ++c)
+        if (auto row = s.cache->peek(s.datasetId(), TileKey{1, r, c});
+            row && row->kind == CacheLookup::Kind::Hit)
+          ++storedAtRelease;
+  };
+  go.set_value();
+  for (auto* f : {&asked, &other}) {
+    ASSERT_EQ(f->wait_for(30s), std::future_status::ready);
+    const TileAnswer a = f->get();
+    EXPECT_EQ(a.kind, TileAnswer::Kind::Tile) << a.message;
+    EXPECT_EQ(a.contentType, "image/jpeg");
+  }
+  EXPECT_EQ(up.requests(), 1u);
+  EXPECT_EQ(s.tiles->metaTileFetches(), 1u);
+  ASSERT_EQ(leases->released.size(), 1u);
+  EXPECT_EQ(leases->released[0].key, (TileKey{1, 0, 0}));
+  EXPECT_EQ(storedAtRelease, 16u) << "the lease went back before the metatile was stored";
+  EXPECT_FALSE(otherAnsweredAtRelease) << "a client here was answered before the release";
+  ASSERT_EQ(leases->progressed.size(), 1u) << "the asked-for tile is announced once stored";
 }
 
 TEST(TileLeases, ARefreshOnASharedIndexTakesItsMetatilesLease) {

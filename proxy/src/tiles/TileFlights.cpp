@@ -235,13 +235,17 @@ void TileService::Impl::store(const FlightKey& fk,
                               const std::string& folder,
                               std::vector<std::byte> bytes,
                               TileMeta meta) {
-  std::optional<CacheError> notStored;
-  if (fk.dataset < 0) {
-    notStored = unregisteredDataset();
-  } else if (auto put = cache.put(fk.dataset, fk.key, bytes, meta); !put) {
-    notStored = std::move(put.error());
-  }
+  std::optional<CacheError> notStored = put(fk, bytes, meta);
   landStored(fk, folder, std::move(bytes), std::move(meta), std::move(notStored));
+}
+
+std::optional<CacheError> TileService::Impl::put(const FlightKey& fk,
+                                                 std::span<const std::byte> bytes,
+                                                 const TileMeta& meta) {
+  if (fk.dataset < 0) return unregisteredDataset();
+  if (auto stored = cache.put(fk.dataset, fk.key, bytes, meta); !stored)
+    return std::move(stored.error());
+  return std::nullopt;
 }
 
 void TileService::Impl::storeMany(const std::vector<FlightKey>& fks,
@@ -257,9 +261,22 @@ void TileService::Impl::storeMany(const std::vector<FlightKey>& fks,
     tiles.reserve(fks.size());
     for (std::size_t i = 0; i < fks.size(); ++i)
       tiles.push_back(TileCache::TileBytes{fks[i].key, bytes[i]});
-    if (auto put = cache.putMany(fks.front().dataset, tiles, meta); !put)
-      notStored = std::move(put.error());
+    if (auto stored = cache.putMany(fks.front().dataset, tiles, meta); !stored)
+      notStored = std::move(stored.error());
   }
+  // Their lease back before their clients here are answered: most of a burst's clients wait in
+  // other instances, woken by the release (bench/RESULTS.md, issue 27).
+  std::vector<std::shared_ptr<LeaseHold>> holds;
+  {
+    std::lock_guard lock(flightsMutex);
+    for (const FlightKey& fk : fks) {
+      if (const auto h = heldLeases.find(fk); h != heldLeases.end()) {
+        holds.push_back(std::move(h->second));
+        heldLeases.erase(h);
+      }
+    }
+  }
+  holds.clear(); // released here if no other flight holds it
   for (std::size_t i = 0; i < fks.size(); ++i)
     landStored(fks[i], folder, std::move(bytes[i]), meta, notStored);
 }

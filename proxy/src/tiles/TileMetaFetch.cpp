@@ -222,11 +222,11 @@ void TileService::Impl::onBlockFetched(const std::vector<TileKey>& owned,
   // Last-Modified is true of every tile in it.
   m.lastModified = resp.lastModified;
   // The first of `owned` is the tile a client asked for: stored first, it is answered, and under a
-  // shared lease announced to the other instances (land), before the rest of its block is stored.
-  // Tiles cut without decoding (JPEG): the rest after it on the same task, their files flushed
-  // together and their rows in one commit (storeMany), where a task each cost an fsync each. Not
-  // beside it on another task: its fsync would then wait for their data in the same journal
-  // commit (bench/RESULTS.md, issue 27).
+  // shared lease announced to the other instances (land), while the rest of its block is stored.
+  // Tiles cut without decoding (JPEG): the rest on another task once the first is stored, their
+  // files flushed together and their rows in one commit (storeMany), where a task each cost an
+  // fsync each. Not before the first is stored: its fsync would then wait for their data in the
+  // same journal commit (bench/RESULTS.md, issue 27).
   if (!split->decoded) {
     std::vector<FlightKey> rest;
     std::vector<std::vector<std::byte>> restBytes;
@@ -241,8 +241,12 @@ void TileService::Impl::onBlockFetched(const std::vector<TileKey>& owned,
                    restBytes = std::move(restBytes),
                    folder,
                    m = std::move(m)]() mutable {
-      store(first, folder, std::move(bytes), m);
-      storeMany(rest, folder, std::move(restBytes), m);
+      auto notStored = put(first, bytes, m);
+      workers->post(
+          [this, rest = std::move(rest), restBytes = std::move(restBytes), folder, m]() mutable {
+            storeMany(rest, folder, std::move(restBytes), m);
+          });
+      landStored(first, folder, std::move(bytes), std::move(m), std::move(notStored));
     });
     return;
   }

@@ -287,9 +287,12 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
              const std::string& folder,
              std::vector<std::byte> bytes,
              TileMeta meta);
+  /** The cache's put of store(), without landing: why the tile was not stored, if it was not. */
+  std::optional<CacheError>
+  put(const FlightKey& fk, std::span<const std::byte> bytes, const TileMeta& meta);
   /** store() for tiles of one dataset fetched together (a metatile's), all or none: their files
-   * flushed together and their rows in one transaction (TileCache::putMany); each flight landed
-   * after. */
+   * flushed together and their rows in one transaction (TileCache::putMany); their lease given
+   * back (if no other flight holds it), then each flight landed. */
   void storeMany(const std::vector<FlightKey>& fks,
                  const std::string& folder,
                  std::vector<std::vector<std::byte>> bytes,
