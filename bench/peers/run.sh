@@ -81,7 +81,8 @@
 #                                 LOAD_WAIT_S s for a 1-minute load below MAX_LOAD
 #   OUT_DIR=build/bench           peers-runs.tsv, peers-summary.txt
 #   ONLY=                         seed: step 1 alone (the seeders and the ceilings), then the summary;
-#                                 burst: burst.sh alone (BURST=300 BURST_LEVEL=6 MC_LOCK_RETRY=0.1);
+#                                 burst: burst.sh alone (BURST=300 BURST_LEVEL=6 MC_LOCK_RETRY=0.1
+#                                 WARM_MISSES=8 WARM_SERVERS="tellus MapProxy");
 #                                 mercator: tellus and MapProxy seeded once, then mercator.sh (its
 #                                 settings: MERC_ZOOMS=3-7 MERC_CONNECTIONS=16)
 #   KEEP=0                        1: keep the work folder (configs, logs, caches, URL lists,
