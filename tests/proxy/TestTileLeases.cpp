@@ -18,6 +18,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <condition_variable>
 #include <cstring>
 #include <future>
@@ -36,6 +37,7 @@ public:
   LeaseOutcome acquireOrWait(const LeaseKey& key,
                              std::chrono::milliseconds,
                              std::function<void()> retry) override {
+    if (onAsk) onAsk(key);
     std::lock_guard lock(mutex_);
     asked.push_back(key);
     if (outcome_ == LeaseOutcome::Waiting) retries_.push_back(std::move(retry));
@@ -75,7 +77,7 @@ public:
   }
 
   std::vector<LeaseKey> asked, released, progressed;
-  std::function<void(const LeaseKey&)> onRelease, onProgress;
+  std::function<void(const LeaseKey&)> onAsk, onRelease, onProgress;
 
 private:
   std::mutex mutex_;
@@ -379,6 +381,49 @@ TEST(TileLeases, AMetatilesLeaseGoesBackBeforeTheClientsHereOfItsOtherTilesAreAn
   EXPECT_EQ(storedAtRelease, 16u) << "the lease went back before the metatile was stored";
   EXPECT_FALSE(otherAnsweredAtRelease) << "a client here was answered before the release";
   ASSERT_EQ(leases->progressed.size(), 1u) << "the asked-for tile is announced once stored";
+}
+
+// Before the lease of a missing tile's metatile, each of its tiles is looked up once (the tile as
+// the request arrives, the others together); under the lease all are looked up again, and those
+// another process stored meanwhile are served from the cache, their lease given back before their
+// clients are answered.
+TEST(TileLeases, AMetatileStoredByAnotherProcessBeforeTheLeaseIsServedAndItsLeaseGivenBackFirst) {
+  test::FakeUpstream up(sizedJpegReply);
+  auto leases = std::make_shared<ScriptedLeases>(LeaseOutcome::Acquired);
+  auto index = std::make_shared<test::MemoryTileIndex>();
+  Service s(up.url("/wms"), leases, 4, true, 2, nullptr, 0ms, index, "image/jpeg");
+  ASSERT_TRUE(s.cache && s.tiles);
+  const DatasetId id = s.datasetId();
+  const std::string theirs = "stored by another process";
+  std::vector<std::byte> bytes(theirs.size());
+  std::memcpy(bytes.data(), theirs.data(), theirs.size());
+  std::int64_t lookedUpBeforeTheLease = -1;
+  leases->onAsk = [&](const LeaseKey&) {
+    lookedUpBeforeTheLease = index->lookups();
+    TileMeta meta;
+    meta.contentType = "image/jpeg";
+    for (std::int64_t r = 0; r < 4; ++r)
+      for (std::int64_t c = 0; c < 4; ++c)
+        ASSERT_TRUE(s.cache->put(id, TileKey{1, r, c}, bytes, meta));
+  };
+  std::atomic<bool> answered{false};
+  bool answeredAtRelease = true;
+  leases->onRelease = [&](const LeaseKey&) { answeredAtRelease = answered.load(); };
+  auto p = std::make_shared<std::promise<TileAnswer>>();
+  std::future<TileAnswer> answer = p->get_future();
+  s.tiles->getTile("sat", "", TileKey{1, 2, 3}, [p, &answered](TileAnswer&& a) {
+    answered = true;
+    p->set_value(std::move(a));
+  });
+  ASSERT_EQ(answer.wait_for(30s), std::future_status::ready);
+  const TileAnswer a = answer.get();
+  ASSERT_EQ(a.kind, TileAnswer::Kind::Tile) << a.message;
+  ASSERT_TRUE(a.file);
+  EXPECT_EQ(text(*a.file->readAll()), theirs);
+  EXPECT_EQ(up.requests(), 0u);
+  EXPECT_EQ(lookedUpBeforeTheLease, 16) << "the asked-for tile once, the 15 others once";
+  ASSERT_EQ(leases->released.size(), 1u);
+  EXPECT_FALSE(answeredAtRelease) << "the client was answered before the lease went back";
 }
 
 TEST(TileLeases, ARefreshOnASharedIndexTakesItsMetatilesLease) {

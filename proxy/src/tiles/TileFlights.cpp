@@ -113,6 +113,11 @@ void TileService::Impl::landCachedNow(std::vector<TileKey>& keys,
   if (id < 0 || keys.empty()) return;
   auto found = cache.openTiles(id, keys);
   if (!found) return; // the index did not answer: none is known to be stored
+  std::vector<FlightKey> stored;
+  for (std::size_t i = 0; i < keys.size(); ++i)
+    if ((*found)[i].kind == CacheLookup::Kind::Hit && !(*found)[i].stale)
+      stored.push_back(FlightKey{id, keys[i]});
+  releaseLeasesOf(stored); // before their clients are answered, as storeMany does
   std::erase_if(keys, [&, i = std::size_t{0}](const TileKey& k) mutable {
     CacheLookup& f = (*found)[i++];
     if (f.kind != CacheLookup::Kind::Hit || f.stale) return false;
@@ -126,6 +131,20 @@ void TileService::Impl::landCachedNow(std::vector<TileKey>& keys,
               std::move(f.file)));
     return true;
   });
+}
+
+void TileService::Impl::releaseLeasesOf(std::span<const FlightKey> fks) {
+  std::vector<std::shared_ptr<LeaseHold>> holds;
+  {
+    std::lock_guard lock(flightsMutex);
+    for (const FlightKey& fk : fks) {
+      if (const auto h = heldLeases.find(fk); h != heldLeases.end()) {
+        holds.push_back(std::move(h->second));
+        heldLeases.erase(h);
+      }
+    }
+  }
+  holds.clear(); // a lease no other flight holds is given back here
 }
 
 void TileService::Impl::land(const FlightKey& k, TileAnswer&& answer) {
@@ -266,17 +285,7 @@ void TileService::Impl::storeMany(const std::vector<FlightKey>& fks,
   }
   // Their lease back before their clients here are answered: most of a burst's clients wait in
   // other instances, woken by the release (bench/RESULTS.md, issue 27).
-  std::vector<std::shared_ptr<LeaseHold>> holds;
-  {
-    std::lock_guard lock(flightsMutex);
-    for (const FlightKey& fk : fks) {
-      if (const auto h = heldLeases.find(fk); h != heldLeases.end()) {
-        holds.push_back(std::move(h->second));
-        heldLeases.erase(h);
-      }
-    }
-  }
-  holds.clear(); // released here if no other flight holds it
+  releaseLeasesOf(fks);
   for (std::size_t i = 0; i < fks.size(); ++i)
     landStored(fks[i], folder, std::move(bytes[i]), meta, notStored);
 }
@@ -423,10 +432,14 @@ void TileService::Impl::getTile(std::string_view layerName,
     return done(overBudget(*joined.refused));
   }
   if (!joined.first) return; // someone is already fetching it
-  if (landIfCachedNow(fk, folder)) return;
+  const bool metaMiss =
+      u.type != UpstreamSpec::Type::Local && options.metaTilesOnMiss && !stale && metaCapable(l, u);
+  // A metatile's tiles are looked up again once its shared lease is held (fetchBlockUnderLease),
+  // or when its holder wakes this one: not here too, a round trip before the upstream is asked.
+  if (!(metaMiss && options.leases) && landIfCachedNow(fk, folder)) return;
   if (u.type == UpstreamSpec::Type::Local) {
     renderLocal(fk, l, g, folder, std::move(stale));
-  } else if (options.metaTilesOnMiss && !stale && metaCapable(l, u)) {
+  } else if (metaMiss) {
     missUnderMetaLease(fk, l, u, g, folder, std::string(time));
   } else if (options.leases) {
     fetchUnderLease(fk, l, u, g, folder, std::string(time), std::move(stale));

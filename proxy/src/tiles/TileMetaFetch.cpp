@@ -87,18 +87,20 @@ void TileService::Impl::fetchBlockUnderLease(std::vector<TileKey> owned,
   if (!options.leases) return fetchBlock(std::move(owned), l, u, g, id, folder, time);
   const TileBlock meta = metaTileOf(g, owned.front(), u.metaTiles);
   const LeaseKey lease{folder, TileKey{meta.level, meta.row0, meta.col0}};
-  const auto hold = takeLease(lease, [owned, &l, &u, &g, id, folder, time](Impl& im) {
+  auto hold = takeLease(lease, [owned, &l, &u, &g, id, folder, time](Impl& im) {
     std::vector<TileKey> left = owned;
     im.landCachedNow(left, id, folder);
     if (!left.empty()) im.fetchBlockUnderLease(std::move(left), l, u, g, id, folder, time);
   });
   if (!hold) return; // waiting
   if (*hold) {
+    bool placed = false;
     {
       std::lock_guard lock(flightsMutex);
       for (const TileKey& k : owned) // a tile's own lease, if one is held, stays its flight's
-        heldLeases.try_emplace(FlightKey{id, k}, *hold);
+        placed = heldLeases.try_emplace(FlightKey{id, k}, *hold).second || placed;
     }
+    if (placed) hold->reset(); // its flights hold it: given back when the last of them lands
     // Another process may have stored some between our look and the lease.
     landCachedNow(owned, id, folder);
     if (owned.empty()) return;

@@ -187,6 +187,9 @@ struct TileService::Impl : std::enable_shared_from_this<TileService::Impl> {
    * (TileCache::openTiles): removes those landed from `keys`. */
   void landCachedNow(std::vector<TileKey>& keys, DatasetId id, const std::string& folder);
 
+  /** Drops the lease shares of these flights (given back if no other flight holds them), so that
+   * the processes waiting for them wake before this one answers its own clients. */
+  void releaseLeasesOf(std::span<const FlightKey> fks);
   /** Answers a flight's waiters; gives its lease back (after the tile was stored: the waiters of
    * other processes find it). */
   void land(const FlightKey& k, TileAnswer&& answer);
