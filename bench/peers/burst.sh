@@ -192,7 +192,7 @@ for s in tellus MapCache MapProxy; do
   "${burst_client[@]}" 30 "$(burst_url "$s" 1 3 3)" $(burst_ports "$s") >"$b/warm-$s.json" ||
     die "$s: the warm-up burst failed: $(cat "$b/warm-$s.json")"
   k=0
-  [[ " $WARM_SERVERS " == *" $s "* ]] || continue
+  [[ " $WARM_SERVERS " == *" $s "* && $WARM_MISSES -gt 0 ]] || continue
   for port in $(burst_ports "$s"); do
     for pass in 0 1; do
       list="$b/warm-$s-$k-$pass.txt"
