@@ -155,22 +155,9 @@ test::FakeReply pngReply(const test::FakeRequest&) {
                              "image/png");
 }
 
-/** A PNG of the GetMap's WIDTH x HEIGHT (a metatile's, split by the service). */
-test::FakeReply sizedPngReply(const test::FakeRequest& r) {
-  auto param = [&](const std::string& name) {
-    const auto at = r.target.find(name + "=");
-    return at == std::string::npos ? 0 : std::atoi(r.target.c_str() + at + name.size() + 1);
-  };
-  const int w = param("WIDTH"), h = param("HEIGHT");
-  if (w <= 0 || h <= 0 || w > 1024 || h > 1024) return test::FakeReply::withStatus(400, "size");
-  const std::vector<std::uint8_t> px(static_cast<std::size_t>(w * h * 3), 90);
-  const auto bytes = *encodeImage("image/png", w, h, 3, px.data());
-  return test::FakeReply::ok(std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
-                             "image/png");
-}
-
-/** A JPEG of the GetMap's WIDTH x HEIGHT (4:2:0, so that 64 px tiles are cut without decoding). */
-test::FakeReply sizedJpegReply(const test::FakeRequest& r) {
+/** An image of the GetMap's WIDTH x HEIGHT (a metatile's, split by the service): a grey ramp, as
+ * `mime` (a JPEG is 4:2:0, so that 64 px tiles are cut without decoding). */
+test::FakeReply sizedReply(const test::FakeRequest& r, const std::string& mime) {
   auto param = [&](const std::string& name) {
     const auto at = r.target.find(name + "=");
     return at == std::string::npos ? 0 : std::atoi(r.target.c_str() + at + name.size() + 1);
@@ -181,13 +168,39 @@ test::FakeReply sizedJpegReply(const test::FakeRequest& r) {
   for (std::size_t i = 0; i < px.size(); ++i)
     px[i] = static_cast<std::uint8_t>((i / 3 % static_cast<std::size_t>(w)) * 255 /
                                       static_cast<std::size_t>(w));
-  const auto bytes = *encodeImage("image/jpeg", w, h, 3, px.data());
+  const auto bytes = *encodeImage(mime, w, h, 3, px.data());
   return test::FakeReply::ok(std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
-                             "image/jpeg");
+                             mime);
+}
+
+test::FakeReply sizedPngReply(const test::FakeRequest& r) {
+  return sizedReply(r, "image/png");
+}
+
+test::FakeReply sizedJpegReply(const test::FakeRequest& r) {
+  return sizedReply(r, "image/jpeg");
 }
 
 std::string text(const std::vector<std::byte>& b) {
   return std::string(reinterpret_cast<const char*>(b.data()), b.size());
+}
+
+std::vector<std::byte> bytesOf(const std::string& s) {
+  std::vector<std::byte> b(s.size());
+  std::memcpy(b.data(), s.data(), s.size());
+  return b;
+}
+
+/** Stores `content` as every tile of the level-1 metatile at (0, 0), as its holder (another
+ * process on the same index) does. */
+void storeMetatileAsHolder(Service& s, const std::string& content, const std::string& mime) {
+  const std::vector<std::byte> bytes = bytesOf(content);
+  const DatasetId id = s.datasetId();
+  TileMeta meta;
+  meta.contentType = mime;
+  for (std::int64_t r = 0; r < 4; ++r)
+    for (std::int64_t c = 0; c < 4; ++c)
+      ASSERT_TRUE(s.cache->put(id, TileKey{1, r, c}, bytes, meta));
 }
 
 } // namespace
@@ -202,11 +215,9 @@ TEST(TileLeases, AMissWaitingForAnotherProcessServesTheTileItStoredAndFetchesNot
   EXPECT_NE(answer.wait_for(0s), std::future_status::ready);
   // The holder, another process on the same index, stores the tile and releases its lease.
   const std::string theirs = "stored by the holder";
-  std::vector<std::byte> bytes(theirs.size());
-  std::memcpy(bytes.data(), theirs.data(), theirs.size());
   TileMeta meta;
   meta.contentType = "image/png";
-  ASSERT_TRUE(s.cache->put(s.datasetId(), k, bytes, meta));
+  ASSERT_TRUE(s.cache->put(s.datasetId(), k, bytesOf(theirs), meta));
   ASSERT_TRUE(leases->wakeOneWaiter());
   ASSERT_EQ(answer.wait_for(30s), std::future_status::ready);
   const TileAnswer a = answer.get();
@@ -244,13 +255,7 @@ TEST(TileLeases, RequestsForATileInFlightJoinItWithoutLookingItUp) {
   EXPECT_EQ(leases->asked.size(), 1u);
   // The holder stores the metatile and releases: every request gets its tile, nothing is fetched.
   const std::string theirs = "stored by the holder";
-  std::vector<std::byte> bytes(theirs.size());
-  std::memcpy(bytes.data(), theirs.data(), theirs.size());
-  TileMeta meta;
-  meta.contentType = "image/png";
-  for (std::int64_t r = 0; r < 4; ++r)
-    for (std::int64_t c = 0; c < 4; ++c)
-      ASSERT_TRUE(s.cache->put(s.datasetId(), TileKey{1, r, c}, bytes, meta));
+  storeMetatileAsHolder(s, theirs, "image/png");
   ASSERT_TRUE(leases->wakeOneWaiter());
   for (auto& answer : answers) {
     ASSERT_EQ(answer.wait_for(30s), std::future_status::ready);
@@ -393,18 +398,11 @@ TEST(TileLeases, AMetatileStoredByAnotherProcessBeforeTheLeaseIsServedAndItsLeas
   auto index = std::make_shared<test::MemoryTileIndex>();
   Service s(up.url("/wms"), leases, 4, true, 2, nullptr, 0ms, index, "image/jpeg");
   ASSERT_TRUE(s.cache && s.tiles);
-  const DatasetId id = s.datasetId();
   const std::string theirs = "stored by another process";
-  std::vector<std::byte> bytes(theirs.size());
-  std::memcpy(bytes.data(), theirs.data(), theirs.size());
   std::int64_t lookedUpBeforeTheLease = -1;
   leases->onAsk = [&](const LeaseKey&) {
     lookedUpBeforeTheLease = index->lookups();
-    TileMeta meta;
-    meta.contentType = "image/jpeg";
-    for (std::int64_t r = 0; r < 4; ++r)
-      for (std::int64_t c = 0; c < 4; ++c)
-        ASSERT_TRUE(s.cache->put(id, TileKey{1, r, c}, bytes, meta));
+    storeMetatileAsHolder(s, theirs, "image/jpeg");
   };
   std::atomic<bool> answered{false};
   bool answeredAtRelease = true;
@@ -463,13 +461,7 @@ TEST(TileLeases, AMissWaitingForTheMetatilesHolderServesWhatItStoredAndFetchesNo
   EXPECT_EQ(leases->asked[0].key, (TileKey{1, 0, 0}));
   // The holder (another instance, asked for another tile of the metatile) stores them all.
   const std::string theirs = "stored by the holder";
-  std::vector<std::byte> bytes(theirs.size());
-  std::memcpy(bytes.data(), theirs.data(), theirs.size());
-  TileMeta meta;
-  meta.contentType = "image/png";
-  for (std::int64_t r = 0; r < 4; ++r)
-    for (std::int64_t c = 0; c < 4; ++c)
-      ASSERT_TRUE(s.cache->put(s.datasetId(), TileKey{1, r, c}, bytes, meta));
+  storeMetatileAsHolder(s, theirs, "image/png");
   ASSERT_TRUE(leases->wakeOneWaiter());
   ASSERT_EQ(answer.wait_for(30s), std::future_status::ready);
   const TileAnswer a = answer.get();
