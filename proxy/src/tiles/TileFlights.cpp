@@ -113,14 +113,14 @@ void TileService::Impl::landCachedNow(std::vector<TileKey>& keys,
   if (id < 0 || keys.empty()) return;
   auto found = cache.openTiles(id, keys);
   if (!found) return; // the index did not answer: none is known to be stored
+  auto fresh = [](const CacheLookup& f) { return f.kind == CacheLookup::Kind::Hit && !f.stale; };
   std::vector<FlightKey> stored;
   for (std::size_t i = 0; i < keys.size(); ++i)
-    if ((*found)[i].kind == CacheLookup::Kind::Hit && !(*found)[i].stale)
-      stored.push_back(FlightKey{id, keys[i]});
+    if (fresh((*found)[i])) stored.push_back(FlightKey{id, keys[i]});
   releaseLeasesOf(stored); // before their clients are answered, as storeMany does
   std::erase_if(keys, [&, i = std::size_t{0}](const TileKey& k) mutable {
     CacheLookup& f = (*found)[i++];
-    if (f.kind != CacheLookup::Kind::Hit || f.stale) return false;
+    if (!fresh(f)) return false;
     land(FlightKey{id, k},
          tile(TileOrigin::Hit,
               {},
@@ -134,6 +134,7 @@ void TileService::Impl::landCachedNow(std::vector<TileKey>& keys,
 }
 
 void TileService::Impl::releaseLeasesOf(std::span<const FlightKey> fks) {
+  if (fks.empty()) return; // a miss's look at the cache, most often: no lock taken
   std::vector<std::shared_ptr<LeaseHold>> holds;
   {
     std::lock_guard lock(flightsMutex);
